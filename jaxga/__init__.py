@@ -1,0 +1,15 @@
+"""jaxga: genetic-algorithm path planning for mobile robots on grid maps, in JAX."""
+
+from jaxga.errors import EndpointError, JaxgaError, MapFormatError, NoPathError, ParameterError
+from jaxga.grid import CORNER_RULES, Grid
+
+__all__ = [
+    "CORNER_RULES",
+    "EndpointError",
+    "Grid",
+    "JaxgaError",
+    "MapFormatError",
+    "NoPathError",
+    "ParameterError",
+]
+__version__ = "0.1.0"

@@ -1,0 +1,498 @@
+"""Read and write grid maps: 0/1 text, Moving AI ``.map``, ASCII art and PNG images.
+
+Every loader returns a :class:`jaxga.Grid` in the library's convention (SPEC 1):
+``blocked[y, x]`` with ``y = 0`` the **bottom** row. The file formats differ in which
+row comes first:
+
+* ``"01"`` - ``0``/``1`` per cell (``1`` = obstacle), separated by spaces, tabs or
+  commas or by nothing (``0 1 0`` or ``010``). **File line 1 is row y = 0, the
+  bottom**, as in the classic GA maps and the papers' matrices.
+* ``"movingai"`` - header ``type octile`` / ``height H`` / ``width W`` / ``map``, then H
+  rows of W characters; ``.`` ``G`` ``S`` passable, ``@`` ``O`` ``T`` ``W`` blocked.
+  **The first map row is the top** (Moving AI convention); it is flipped.
+* ``"ascii"`` - ASCII art: ``.`` free, ``#`` or ``@`` blocked, at most one ``S``
+  (start) and one ``G`` (goal), both free cells. **The first text line is the top
+  row**, as a human draws it; it is flipped.
+* ``"png"`` - an image: a pixel darker than half luminance (ITU-R BT.601 luma) is
+  blocked, transparent pixels count as white (free). **The image's top row is the top
+  of the map**; it is flipped.
+
+The format is chosen from the file's content and extension (see :func:`detect_format`)
+unless ``fmt=`` names it. Anything malformed - a missing or empty file, ragged rows, an
+unknown character, a wrong Moving AI header, two ``S`` markers, an unreadable image -
+raises :class:`~jaxga.errors.MapFormatError` with a one-line message that names the file,
+the problem and, where it helps, the line.
+
+Endpoints: ``start`` defaults to ``(0, 0)`` and ``goal`` to ``(W - 1, H - 1)`` unless the
+file names them (ASCII ``S``/``G``); explicit ``start=``/``goal=`` override both. Loaders
+check that endpoints lie on the map but *not* that they are free (Moving AI maps have
+blocked borders); :meth:`jaxga.Grid.check_endpoints` does that later.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import os
+from pathlib import Path
+
+import numpy as np
+
+from jaxga.errors import EndpointError, MapFormatError
+from jaxga.grid import DEFAULT_CORNER_RULE, Grid, check_corner_rule
+
+__all__ = [
+    "FORMATS",
+    "MapInfo",
+    "detect_format",
+    "load_map",
+    "load_map_info",
+    "map_name",
+    "parse_01",
+    "parse_ascii",
+    "parse_movingai",
+    "save_map",
+]
+
+FORMATS: tuple[str, ...] = ("01", "movingai", "ascii", "png")
+"""The map formats :func:`load_map` reads and :func:`save_map` writes."""
+
+MOVINGAI_PASSABLE = frozenset(".GS")
+MOVINGAI_BLOCKED = frozenset("@OTW")
+ASCII_FREE = frozenset(".SG")
+ASCII_BLOCKED = frozenset("#@")
+
+_PNG_MAGIC = b"\x89PNG\r\n\x1a\n"
+_ZERO_ONE = frozenset("01")
+_SEPARATORS = frozenset(" \t,")
+
+Source = str | os.PathLike
+XY = tuple[int, int]
+
+
+@dataclasses.dataclass(frozen=True)
+class MapInfo:
+    """A loaded map together with where it came from.
+
+    Attributes:
+        name: short name for display: the built-in name, or the file name without its
+            extension (see :func:`map_name`).
+        path: the file that was read.
+        format: one of :data:`FORMATS`.
+        builtin: True when ``source`` was the name of a built-in map.
+        grid: the loaded :class:`~jaxga.Grid`.
+    """
+
+    name: str
+    path: Path
+    format: str
+    builtin: bool
+    grid: Grid
+
+
+# --------------------------------------------------------------------------- public
+def map_name(source: Source) -> str:
+    """Short display name of a map source: a built-in name itself, else the file stem.
+
+    ``map_name("den312d") == "den312d"``, ``map_name("maps/arena.map") == "arena"``.
+    Does not read the file.
+    """
+    from jaxga.maps import builtin  # local import: builtin imports this module
+
+    if isinstance(source, str) and source in builtin.builtin_names():
+        return source
+    return Path(os.fspath(source)).stem
+
+
+def load_map(
+    source: Source,
+    *,
+    start: XY | None = None,
+    goal: XY | None = None,
+    corner_rule: str | None = None,
+    fmt: str | None = None,
+) -> Grid:
+    """Load a map file or a built-in map as a :class:`~jaxga.Grid`.
+
+    Args:
+        source: a path (``str`` or ``os.PathLike``) or the name of a built-in map (see
+            :func:`jaxga.maps.builtin_names`). A ``str`` that is a built-in name is the
+            built-in map even if a file of that name exists in the working directory
+            (write ``./name`` for the file); a ``Path`` is always a file.
+        start: ``(x, y)`` start (y counted from the bottom); default: the file's ``S``
+            marker (ASCII), else ``(0, 0)``.
+        goal: ``(x, y)`` goal; default: the file's ``G`` marker, else ``(W - 1, H - 1)``.
+        corner_rule: ``"free"``, ``"no_squeeze"`` or ``"strict"``; default
+            :data:`jaxga.grid.DEFAULT_CORNER_RULE` (``"strict"``).
+        fmt: force a format from :data:`FORMATS` instead of detecting it.
+
+    Raises:
+        MapFormatError: missing, unreadable or malformed file; unknown built-in name.
+        EndpointError: an endpoint off the map. (Blocked endpoints are *not* checked
+            here; see :meth:`jaxga.Grid.check_endpoints`.)
+    """
+    return load_map_info(source, start=start, goal=goal, corner_rule=corner_rule, fmt=fmt).grid
+
+
+def load_map_info(
+    source: Source,
+    *,
+    start: XY | None = None,
+    goal: XY | None = None,
+    corner_rule: str | None = None,
+    fmt: str | None = None,
+) -> MapInfo:
+    """Like :func:`load_map` but return a :class:`MapInfo` (name, path, format, grid)."""
+    from jaxga.maps import builtin  # local import: builtin imports this module
+
+    rule = check_corner_rule(DEFAULT_CORNER_RULE if corner_rule is None else corner_rule)
+    if fmt is not None and fmt not in FORMATS:
+        raise MapFormatError(f"unknown map format {fmt!r}: expected one of {', '.join(FORMATS)}")
+    is_builtin = isinstance(source, str) and source in builtin.builtin_names()
+    if is_builtin:
+        path = builtin.builtin_path(source)  # type: ignore[arg-type]
+    else:
+        if not isinstance(source, (str, os.PathLike)):
+            raise MapFormatError(
+                f"a map source must be a file path or a built-in map name, got {source!r}"
+            )
+        path = Path(os.fspath(source))
+    label = str(source) if is_builtin else str(path)
+
+    bare_name = isinstance(source, str) and not is_builtin and Path(source).name == source
+    raw = _read_bytes(path, label, builtin_hint=bare_name and not Path(source).suffix)
+    kind = fmt or detect_format(path, raw)
+    if kind == "png":
+        blocked = _parse_png(path, label)
+        file_start = file_goal = None
+    else:
+        text = _decode(raw, label)
+        if kind == "movingai":
+            blocked = parse_movingai(text, label)
+            file_start = file_goal = None
+        elif kind == "ascii":
+            blocked, file_start, file_goal = parse_ascii(text, label)
+        else:
+            blocked = parse_01(text, label)
+            file_start = file_goal = None
+
+    s = start if start is not None else file_start
+    g = goal if goal is not None else file_goal
+    try:
+        grid = Grid.create(blocked, start=s, goal=g, corner_rule=rule)
+    except EndpointError as e:
+        raise EndpointError(f"{label}: {e}") from None
+    name = str(source) if is_builtin else path.stem
+    return MapInfo(name=name, path=path, format=kind, builtin=is_builtin, grid=grid)
+
+
+def detect_format(path: Source, raw: bytes | None = None) -> str:
+    """Guess a map file's format from its content and extension.
+
+    PNG signature or ``.png`` extension -> ``"png"``; ``.map`` extension or a first
+    non-blank line starting with ``type`` -> ``"movingai"``; a first non-blank line
+    starting with ``0`` or ``1`` -> ``"01"``; anything else -> ``"ascii"``
+    (whose parser then reports any unknown character). ``raw`` is the file content if
+    already read.
+    """
+    p = Path(os.fspath(path))
+    if raw is None:
+        raw = _read_bytes(p, str(p))
+    suffix = p.suffix.lower()
+    if raw.startswith(_PNG_MAGIC) or suffix == ".png":
+        return "png"
+    if suffix == ".map":
+        return "movingai"
+    first = ""
+    for line in raw.decode("utf-8", errors="replace").splitlines():
+        if line.strip():
+            first = line.strip()
+            break
+    if first.split(maxsplit=1)[:1] == ["type"]:
+        return "movingai"
+    if first[:1] in _ZERO_ONE:  # the 0/1 parser reports any other character
+        return "01"
+    return "ascii"
+
+
+# -------------------------------------------------------------------------- parsers
+def parse_01(text: str, label: str = "<text>") -> np.ndarray:
+    """Parse 0/1 text (file line 1 = row y = 0, the bottom); return ``bool[H, W]``.
+
+    Cells are ``0`` (free) or ``1`` (obstacle), separated by spaces, tabs or commas, or
+    written without separators (``0101``). Leading and trailing blank lines are ignored.
+    ``label`` names the file in error messages.
+    """
+    rows: list[list[bool]] = []
+    for lineno, line in _body_lines(text, label):
+        if any(c in _SEPARATORS for c in line):
+            tokens = line.replace(",", " ").split()
+            for col, tok in enumerate(tokens, 1):
+                if tok not in ("0", "1"):
+                    raise MapFormatError(
+                        f"{label}: line {lineno}, cell {col}: expected 0 or 1, got {tok!r}"
+                    )
+        else:
+            tokens = list(line)
+            for col, tok in enumerate(tokens, 1):
+                if tok not in _ZERO_ONE:
+                    raise MapFormatError(
+                        f"{label}: line {lineno}, column {col}: expected 0 or 1, got {tok!r}"
+                    )
+        rows.append([t == "1" for t in tokens])
+        _check_ragged(rows, lineno, label)
+    return np.array(rows, dtype=bool)
+
+
+def parse_movingai(text: str, label: str = "<text>") -> np.ndarray:
+    """Parse a Moving AI ``.map`` (row 0 = top) and return ``bool[H, W]`` with row 0 = bottom.
+
+    ``.``, ``G`` and ``S`` (swamp) are passable; ``@``, ``O``, ``T`` (trees) and ``W``
+    (water) are blocked (https://movingai.com/benchmarks/formats.html). The header must be
+    ``type octile``, ``height H``, ``width W`` (in any order) and then the line ``map``.
+    """
+    lines = text.splitlines()
+    header: dict[str, int | str] = {}
+    i = 0
+    while True:
+        while i < len(lines) and not lines[i].strip():
+            i += 1
+        if i == len(lines):
+            missing = [k for k in ("type", "height", "width") if k not in header]
+            what = f"header line(s) {', '.join(missing)} and " if missing else ""
+            raise MapFormatError(f"{label}: missing {what}the 'map' line of a Moving AI map")
+        words = lines[i].split()
+        lineno = i + 1
+        i += 1
+        key = words[0].lower()
+        if key == "map" and len(words) == 1:
+            break
+        if key not in ("type", "height", "width") or len(words) != 2:
+            raise MapFormatError(
+                f"{label}: line {lineno}: unexpected header line {lines[i - 1].strip()!r} "
+                "(a Moving AI map starts with 'type octile', 'height H', 'width W', 'map')"
+            )
+        if key in header:
+            raise MapFormatError(f"{label}: line {lineno}: duplicate header line {key!r}")
+        if key == "type":
+            if words[1] != "octile":
+                raise MapFormatError(
+                    f"{label}: line {lineno}: unsupported map type {words[1]!r} (expected 'octile')"
+                )
+            header[key] = words[1]
+        else:
+            try:
+                value = int(words[1])
+            except ValueError:
+                value = 0
+            if value < 1:
+                raise MapFormatError(
+                    f"{label}: line {lineno}: {key} must be a positive integer, got {words[1]!r}"
+                )
+            header[key] = value
+    missing = [k for k in ("type", "height", "width") if k not in header]
+    if missing:
+        raise MapFormatError(
+            f"{label}: Moving AI header is missing {', '.join(missing)} before the 'map' line"
+        )
+    h, w = int(header["height"]), int(header["width"])
+    body = lines[i:]
+    while body and not body[-1].strip():
+        body.pop()
+    if len(body) < h:
+        raise MapFormatError(f"{label}: header says height {h} but the file has {len(body)} rows")
+    if len(body) > h:
+        raise MapFormatError(
+            f"{label}: line {i + h + 1}: header says height {h} but the file has {len(body)} rows"
+        )
+    out = np.zeros((h, w), dtype=bool)
+    allowed = MOVINGAI_PASSABLE | MOVINGAI_BLOCKED
+    for r, line in enumerate(body):
+        lineno = i + r + 1
+        row = line.rstrip()
+        if len(row) != w:
+            raise MapFormatError(
+                f"{label}: line {lineno}: row has {len(row)} cells but the header says width {w}"
+            )
+        for col, c in enumerate(row, 1):
+            if c not in allowed:
+                raise MapFormatError(
+                    f"{label}: line {lineno}, column {col}: unknown map character {c!r} "
+                    "(expected one of . G S @ O T W)"
+                )
+        out[h - 1 - r] = [c in MOVINGAI_BLOCKED for c in row]
+    return out
+
+
+def parse_ascii(text: str, label: str = "<text>") -> tuple[np.ndarray, XY | None, XY | None]:
+    """Parse ASCII art; return ``(blocked[H, W], start, goal)`` in the bottom-up convention.
+
+    The **first text line is the top row** of the map, as a human draws it. ``.`` is
+    free, ``#`` and ``@`` are blocked, ``S`` and ``G`` mark the start and the goal (free
+    cells; at most one of each; ``None`` when absent). Trailing whitespace on a line and
+    leading/trailing blank lines are ignored; a space inside a row is an error.
+    """
+    rows: list[list[bool]] = []
+    marks: dict[str, tuple[int, int, int]] = {}  # marker -> (lineno, column, row from top)
+    for lineno, line in _body_lines(text, label):
+        cells = []
+        for col, c in enumerate(line, 1):
+            if c in ("S", "G"):
+                if c in marks:
+                    raise MapFormatError(
+                        f"{label}: line {lineno}, column {col}: a second {c!r} marker "
+                        f"(the first is on line {marks[c][0]})"
+                    )
+                marks[c] = (lineno, col, len(rows))
+            elif c not in ASCII_FREE and c not in ASCII_BLOCKED:
+                raise MapFormatError(
+                    f"{label}: line {lineno}, column {col}: unknown map character {c!r} "
+                    "(expected . # @ S G)"
+                )
+            cells.append(c in ASCII_BLOCKED)
+        rows.append(cells)
+        _check_ragged(rows, lineno, label)
+    h = len(rows)
+    blocked = np.array(rows[::-1], dtype=bool)
+    found = {k: (col - 1, h - 1 - r) for k, (_, col, r) in marks.items()}
+    return blocked, found.get("S"), found.get("G")
+
+
+# -------------------------------------------------------------------------- writers
+def save_map(grid: Grid | np.ndarray, path: Source, *, fmt: str | None = None) -> Path:
+    """Write a grid (or a ``bool[H, W]`` array, row 0 = bottom) as a map file.
+
+    ``fmt`` is one of :data:`FORMATS`; by default it follows the extension (``.map`` ->
+    Moving AI, ``.png`` -> PNG, ``.ascii``/``.asc`` -> ASCII art, anything else -> 0/1
+    text). Each format is written in the orientation its loader expects, so
+    ``load_map(save_map(g, p))`` gives back the same ``blocked`` array. ASCII art marks
+    the grid's start ``S`` and goal ``G`` when they are free and distinct, so those
+    round-trip too; the other formats do not store endpoints. Returns the path.
+    """
+    p = Path(os.fspath(path))
+    if fmt is None:
+        fmt = {".map": "movingai", ".png": "png", ".ascii": "ascii", ".asc": "ascii"}.get(
+            p.suffix.lower(), "01"
+        )
+    if fmt not in FORMATS:
+        raise MapFormatError(f"unknown map format {fmt!r}: expected one of {', '.join(FORMATS)}")
+    if isinstance(grid, Grid):
+        blocked = grid.blocked_np()
+        endpoints = (grid.start_xy, grid.goal_xy)
+    else:
+        blocked = np.asarray(grid, dtype=bool)
+        endpoints = None
+    if blocked.ndim != 2 or blocked.size == 0:
+        raise MapFormatError(f"cannot save a map of shape {blocked.shape}: need a 2-D array")
+    h, w = blocked.shape
+    if fmt == "png":
+        import matplotlib.image as mpimg
+
+        mpimg.imsave(p, (~blocked).astype(float), cmap="gray", vmin=0.0, vmax=1.0, origin="lower")
+        return p
+    if fmt == "01":
+        lines = [" ".join("1" if b else "0" for b in row) for row in blocked]
+    elif fmt == "movingai":
+        rows = ["".join("@" if b else "." for b in row) for row in blocked[::-1]]
+        lines = ["type octile", f"height {h}", f"width {w}", "map", *rows]
+    else:
+        chars = np.where(blocked, "#", ".").astype("<U1")
+        if endpoints is not None and endpoints[0] != endpoints[1]:
+            for mark, (x, y) in zip("SG", endpoints, strict=True):
+                if not blocked[y, x]:
+                    chars[y, x] = mark
+        lines = ["".join(row) for row in chars[::-1]]
+    p.write_text("\n".join(lines) + "\n", encoding="utf-8")
+    return p
+
+
+# -------------------------------------------------------------------------- helpers
+def _read_bytes(path: Path, label: str, builtin_hint: bool = False) -> bytes:
+    try:
+        raw = path.read_bytes()
+    except FileNotFoundError:
+        hint = ""
+        if builtin_hint:
+            from jaxga.maps import builtin
+
+            hint = f" and it is not a built-in map ({', '.join(builtin.builtin_names())})"
+        raise MapFormatError(f"{label}: map file not found{hint}") from None
+    except IsADirectoryError:
+        raise MapFormatError(f"{label}: is a directory, not a map file") from None
+    except OSError as e:
+        raise MapFormatError(f"{label}: cannot read map file ({e.strerror or e})") from None
+    if not raw.strip():
+        raise MapFormatError(f"{label}: map file is empty")
+    return raw
+
+
+def _decode(raw: bytes, label: str) -> str:
+    if raw.startswith(_PNG_MAGIC):
+        raise MapFormatError(f"{label}: is a PNG image, not a text map")
+    try:
+        text = raw.decode("utf-8-sig")
+    except UnicodeDecodeError as e:
+        raise MapFormatError(
+            f"{label}: not a text map file (byte {e.start} is not valid UTF-8)"
+        ) from None
+    if "\x00" in text:
+        raise MapFormatError(f"{label}: not a text map file (contains NUL bytes)")
+    first = next((ln.strip() for ln in text.splitlines() if ln.strip()), "")
+    if first.split(maxsplit=1)[:1] == ["version"]:
+        raise MapFormatError(
+            f"{label}: is a Moving AI scenario file, not a map (read it with read_scen)"
+        )
+    return text
+
+
+def _body_lines(text: str, label: str) -> list[tuple[int, str]]:
+    """Non-blank lines (1-based line number, right-stripped), no blank line in between."""
+    lines = [ln.rstrip() for ln in text.splitlines()]
+    numbered = [(n, ln) for n, ln in enumerate(lines, 1) if ln]
+    if not numbered:
+        raise MapFormatError(f"{label}: map file is empty")
+    first, last = numbered[0][0], numbered[-1][0]
+    if len(numbered) != last - first + 1:
+        gap = next(n for n in range(first, last + 1) if not lines[n - 1])
+        raise MapFormatError(f"{label}: line {gap}: blank line inside the map")
+    return numbered
+
+
+def _check_ragged(rows: list[list[bool]], lineno: int, label: str) -> None:
+    if len(rows) > 1 and len(rows[-1]) != len(rows[0]):
+        raise MapFormatError(
+            f"{label}: line {lineno}: row has {len(rows[-1])} cells but the first row "
+            f"has {len(rows[0])} (ragged rows)"
+        )
+
+
+def _parse_png(path: Path, label: str) -> np.ndarray:
+    """Threshold an image at half luminance; image top row -> top of the map (row H-1)."""
+    import matplotlib.image as mpimg
+
+    try:
+        img = np.asarray(mpimg.imread(path))
+    except Exception as e:  # Pillow/matplotlib raise many types for bad images
+        msg = str(e).splitlines()[0] if str(e) else type(e).__name__
+        raise MapFormatError(f"{label}: unreadable PNG image ({msg})") from None
+    if (
+        img.ndim not in (2, 3)
+        or img.size == 0
+        or (img.ndim == 3 and img.shape[2] not in (1, 2, 3, 4))
+    ):
+        raise MapFormatError(f"{label}: unsupported image shape {img.shape}")
+    if np.issubdtype(img.dtype, np.integer):
+        img = img.astype(np.float64) / np.iinfo(img.dtype).max
+    img = img.astype(np.float64)
+    if img.ndim == 2:
+        lum = img
+    else:
+        c = img.shape[2]
+        alpha = img[..., c - 1] if c in (2, 4) else None
+        color = img[..., : (1 if c in (1, 2) else 3)]
+        if color.shape[2] == 3:
+            lum = color @ np.array([0.299, 0.587, 0.114])  # ITU-R BT.601 luma
+        else:
+            lum = color[..., 0]
+        if alpha is not None:  # composite over white: transparent = free
+            lum = lum * alpha + (1.0 - alpha)
+    return np.ascontiguousarray((lum < 0.5)[::-1])

@@ -1,0 +1,165 @@
+"""Map preprocessing (AGACD section 2, MPMGA section 3) and reachability.
+
+Both papers prepare a map before planning: the robot is reduced to a point and the
+obstacles are *expanded* by the robot's radius plus a safety distance (AGACD §2, MPMGA
+§3 step 1) - :func:`inflate`; and a free cell whose eight neighbours are all obstacles is
+marked as an obstacle too (MPMGA §3 step 3) - :func:`fill_enclosed`. Both return new
+grids (the input is never changed) with the same start, goal and corner rule; they do not
+check that the endpoints stay free - :meth:`jaxga.Grid.check_endpoints` does.
+
+:func:`reachable` is a host-side (NumPy) flood fill over legal moves under the grid's
+corner rule, used by the map generators to guarantee connected endpoints.
+"""
+
+from __future__ import annotations
+
+import math
+import numbers
+from collections import deque
+
+import numpy as np
+
+from jaxga.errors import ParameterError
+from jaxga.grid import DIRECTIONS, Grid, check_corner_rule
+
+__all__ = [
+    "endpoints_connected",
+    "fill_enclosed",
+    "inflate",
+    "legal_moves",
+    "preprocess",
+    "reachable",
+]
+
+
+# ----------------------------------------------------------------------- reachability
+def legal_moves(blocked: np.ndarray, corner_rule: str) -> np.ndarray:
+    """``bool[8, H, W]``: whether the move from ``(x, y)`` in direction ``d`` is legal.
+
+    Directions are :data:`jaxga.grid.DIRECTIONS`. A move is legal when both cells are on
+    the map and free and, for a diagonal move, the two side cells satisfy ``corner_rule``
+    (SPEC 1) - the same rule as :func:`jaxga.grid.move_legal`, for every cell at once.
+    """
+    check_corner_rule(corner_rule)
+    b = np.asarray(blocked, dtype=bool)
+    h, w = b.shape
+    pad = np.pad(b, 1, constant_values=True)  # off the map counts as blocked
+
+    def at(dx: int, dy: int) -> np.ndarray:
+        return pad[1 + dy : 1 + dy + h, 1 + dx : 1 + dx + w]
+
+    out = np.empty((len(DIRECTIONS), h, w), dtype=bool)
+    for d, (dx, dy) in enumerate(DIRECTIONS.tolist()):
+        ok = ~b & ~at(dx, dy)
+        if dx and dy:
+            s1, s2 = at(dx, 0), at(0, dy)
+            if corner_rule == "no_squeeze":
+                ok &= ~(s1 & s2)
+            elif corner_rule == "strict":
+                ok &= ~(s1 | s2)
+        out[d] = ok
+    return out
+
+
+def _reachable_np(blocked: np.ndarray, source: tuple[int, int], corner_rule: str) -> np.ndarray:
+    b = np.asarray(blocked, dtype=bool)
+    h, w = b.shape
+    seen = np.zeros(h * w, dtype=bool)
+    x0, y0 = source
+    if b[y0, x0]:
+        return seen.reshape(h, w)
+    legal = legal_moves(b, corner_rule).reshape(len(DIRECTIONS), -1)
+    steps = [(d, int(dy) * w + int(dx)) for d, (dx, dy) in enumerate(DIRECTIONS)]
+    legal_lists = [legal[d].tolist() for d in range(len(DIRECTIONS))]
+    seen_l = [False] * (h * w)
+    p0 = y0 * w + x0
+    seen_l[p0] = True
+    queue = deque([p0])
+    while queue:
+        p = queue.popleft()
+        for d, off in steps:
+            if legal_lists[d][p]:
+                q = p + off
+                if not seen_l[q]:
+                    seen_l[q] = True
+                    queue.append(q)
+    return np.array(seen_l, dtype=bool).reshape(h, w)
+
+
+def reachable(grid: Grid, source: tuple[int, int] | None = None) -> np.ndarray:
+    """``bool[H, W]``: the cells reachable from ``source`` (default: the grid's start).
+
+    Breadth-first flood fill over legal 8-connected moves under ``grid.corner_rule``
+    (host NumPy, not for use under ``jit``). A blocked source reaches nothing (all
+    False); otherwise the source itself is True.
+    """
+    x, y = grid.start_xy if source is None else (int(source[0]), int(source[1]))
+    if not (0 <= x < grid.width and 0 <= y < grid.height):
+        raise ParameterError(f"source ({x}, {y}) is off the {grid.width} x {grid.height} map")
+    return _reachable_np(grid.blocked_np(), (x, y), grid.corner_rule)
+
+
+def endpoints_connected(grid: Grid) -> bool:
+    """True when the start and goal are free and the goal is reachable from the start."""
+    gx, gy = grid.goal_xy
+    return bool(reachable(grid)[gy, gx])
+
+
+# ---------------------------------------------------------------------- preprocessing
+def inflate(grid: Grid, radius: float) -> Grid:
+    """Expand the obstacles by ``radius`` cells (AGACD §2, MPMGA §3 step 1).
+
+    Every cell whose centre lies within Euclidean distance ``radius`` (in cells, centre
+    to centre, inclusive) of a blocked cell's centre becomes blocked. ``radius`` is the
+    robot radius plus the safety distance, in cells; it may be fractional (1 adds the
+    4 orthogonal neighbours, 1.5 adds all 8). ``radius = 0`` returns an unchanged copy.
+    The map border is not an obstacle (only blocked cells are inflated). The endpoints
+    are not protected: call :meth:`jaxga.Grid.check_endpoints` afterwards.
+
+    Raises :class:`~jaxga.errors.ParameterError` for a negative or non-finite radius.
+    """
+    if isinstance(radius, bool) or not isinstance(radius, numbers.Real):
+        raise ParameterError(f"inflate radius must be a number of cells, got {radius!r}")
+    r = float(radius)
+    if not math.isfinite(r) or r < 0:
+        raise ParameterError(f"inflate radius must be finite and >= 0, got {radius!r}")
+    b = grid.blocked_np()
+    h, w = b.shape
+    r = min(r, math.hypot(h, w))  # a larger radius cannot add anything
+    k = int(math.floor(r + 1e-9))
+    ky, kx = min(k, h - 1), min(k, w - 1)  # shifts beyond the map add nothing
+    out = b.copy()
+    r2 = r * r + 1e-9
+    for dy in range(-ky, ky + 1):
+        for dx in range(-kx, kx + 1):
+            if (dx or dy) and dx * dx + dy * dy <= r2:
+                # out[y, x] |= b[y - dy, x - dx] wherever both are on the map
+                ys, yd = slice(max(0, -dy), h - max(0, dy)), slice(max(0, dy), h - max(0, -dy))
+                xs, xd = slice(max(0, -dx), w - max(0, dx)), slice(max(0, dx), w - max(0, -dx))
+                out[yd, xd] |= b[ys, xs]
+    return grid.replace(blocked=out)
+
+
+def fill_enclosed(grid: Grid) -> Grid:
+    """Block every free cell whose 8 neighbours are all blocked (MPMGA §3 step 3).
+
+    Cells off the map count as blocked, so a free corner cell whose three on-map
+    neighbours are blocked is filled (and a 1 x 1 map becomes fully blocked). Such a cell
+    cannot be entered or left by any move, so filling it changes no path between other
+    cells. One pass reaches the fixed point: filling a cell only affects its neighbours,
+    which are already blocked. The endpoints are not protected.
+    """
+    b = grid.blocked_np()
+    h, w = b.shape
+    pad = np.pad(b, 1, constant_values=True)
+    enclosed = ~b
+    for dx, dy in DIRECTIONS.tolist():
+        enclosed &= pad[1 + dy : 1 + dy + h, 1 + dx : 1 + dx + w]
+    return grid.replace(blocked=b | enclosed)
+
+
+def preprocess(grid: Grid, radius: float = 0.0, fill: bool = True) -> Grid:
+    """The papers' preprocessing in order: :func:`inflate` by ``radius``, then (if
+    ``fill``) :func:`fill_enclosed` (AGACD §2, MPMGA §3)."""
+    out = inflate(grid, radius)
+    return fill_enclosed(out) if fill else out

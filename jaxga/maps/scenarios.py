@@ -1,0 +1,138 @@
+"""Moving AI scenario (``.scen``) files.
+
+A scenario file (https://movingai.com/benchmarks/formats.html) starts with ``version 1``
+and then has one problem per line with 9 tab-separated fields: bucket, map file, map
+width, map height, start x, start y, goal x, goal y, optimal length. Moving AI counts y
+from the **top**; :func:`read_scen` converts it to the library's bottom-up convention,
+``y_ours = height - 1 - y_movingai``. The optimal length is the 8-connected shortest path
+without corner cutting (``corner_rule="strict"``).
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import math
+import os
+from pathlib import Path
+
+from jaxga.errors import MapFormatError
+from jaxga.grid import Grid
+
+__all__ = ["Scenario", "parse_scen", "read_scen"]
+
+
+@dataclasses.dataclass(frozen=True)
+class Scenario:
+    """One Moving AI problem, with coordinates in the bottom-up convention (SPEC 1).
+
+    Attributes:
+        bucket: the file's bucket number (``floor(optimal_length / 4)`` in these files).
+        map_name: the map field as written in the file (e.g. ``"maze-32-32-2.map"``).
+        width: map width W.
+        height: map height H.
+        start: ``(x, y)`` start, y counted from the bottom.
+        goal: ``(x, y)`` goal, y counted from the bottom.
+        optimal_length: the file's optimal 8-connected length (strict corner rule).
+    """
+
+    bucket: int
+    map_name: str
+    width: int
+    height: int
+    start: tuple[int, int]
+    goal: tuple[int, int]
+    optimal_length: float
+
+    def apply(self, grid: Grid) -> Grid:
+        """Return ``grid`` with this problem's start and goal (the map sizes must match)."""
+        if (grid.width, grid.height) != (self.width, self.height):
+            raise MapFormatError(
+                f"scenario for {self.map_name} is {self.width} x {self.height} but the grid is "
+                f"{grid.width} x {grid.height}"
+            )
+        return grid.replace(start=self.start, goal=self.goal)
+
+
+def read_scen(path: str | os.PathLike) -> list[Scenario]:
+    """Read a Moving AI ``.scen`` file; y is converted to count from the bottom.
+
+    Raises :class:`~jaxga.errors.MapFormatError` for a missing or unreadable file, a
+    missing ``version`` header, a line without 9 fields, a non-numeric field or a start
+    or goal off its map, naming the file and line.
+    """
+    p = Path(os.fspath(path))
+    label = str(p)
+    try:
+        text = p.read_text(encoding="utf-8-sig")
+    except FileNotFoundError:
+        raise MapFormatError(f"{label}: scenario file not found") from None
+    except IsADirectoryError:
+        raise MapFormatError(f"{label}: is a directory, not a scenario file") from None
+    except UnicodeDecodeError as e:
+        raise MapFormatError(
+            f"{label}: not a text scenario file (byte {e.start} is not valid UTF-8)"
+        ) from None
+    except OSError as e:
+        raise MapFormatError(f"{label}: cannot read scenario file ({e.strerror or e})") from None
+    return parse_scen(text, label)
+
+
+def parse_scen(text: str, label: str = "<scen>") -> list[Scenario]:
+    """Parse the text of a ``.scen`` file (see :func:`read_scen`); ``label`` names it."""
+    lines = text.splitlines()
+    numbered = [(n, ln.strip("\r\n")) for n, ln in enumerate(lines, 1) if ln.strip()]
+    if not numbered:
+        raise MapFormatError(f"{label}: scenario file is empty")
+    n0, head = numbered[0]
+    words = head.split()
+    if len(words) != 2 or words[0].lower() != "version" or not _is_version_1(words[1]):
+        raise MapFormatError(
+            f"{label}: line {n0}: expected the header 'version 1', got {head.strip()!r}"
+        )
+    out: list[Scenario] = []
+    for lineno, line in numbered[1:]:
+        fields = line.split("\t") if "\t" in line else line.split()
+        fields = [f.strip() for f in fields]
+        while fields and fields[-1] == "":  # trailing tab
+            fields.pop()
+        if len(fields) != 9:
+            raise MapFormatError(
+                f"{label}: line {lineno}: expected 9 tab-separated fields, got {len(fields)}"
+            )
+        bucket_s, map_s, *nums, opt_s = fields
+        try:
+            bucket = int(bucket_s)
+            w, h, sx, sy, gx, gy = (int(v) for v in nums)
+            opt = float(opt_s)
+        except ValueError:
+            raise MapFormatError(
+                f"{label}: line {lineno}: non-numeric field in {line.strip()!r}"
+            ) from None
+        if w < 1 or h < 1:
+            raise MapFormatError(f"{label}: line {lineno}: map size {w} x {h} is not positive")
+        for what, x, y in (("start", sx, sy), ("goal", gx, gy)):
+            if not (0 <= x < w and 0 <= y < h):
+                raise MapFormatError(
+                    f"{label}: line {lineno}: {what} ({x}, {y}) is off the {w} x {h} map"
+                )
+        if not math.isfinite(opt) or opt < 0:
+            raise MapFormatError(f"{label}: line {lineno}: bad optimal length {opt_s!r}")
+        out.append(
+            Scenario(
+                bucket=bucket,
+                map_name=map_s,
+                width=w,
+                height=h,
+                start=(sx, h - 1 - sy),
+                goal=(gx, h - 1 - gy),
+                optimal_length=opt,
+            )
+        )
+    return out
+
+
+def _is_version_1(s: str) -> bool:
+    try:
+        return float(s) == 1.0
+    except ValueError:
+        return False

@@ -1,0 +1,24 @@
+"""Shared test configuration: JAX's persistent compilation cache and hypothesis profiles."""
+
+from __future__ import annotations
+
+import os
+from pathlib import Path
+
+import jax
+from hypothesis import HealthCheck, settings
+
+_CACHE = Path(os.environ.get("JAXGA_TEST_JAX_CACHE", Path(__file__).parent / ".jax_cache"))
+jax.config.update("jax_compilation_cache_dir", str(_CACHE))
+jax.config.update("jax_persistent_cache_min_compile_time_secs", 0.5)
+
+settings.register_profile(
+    "jaxga",
+    deadline=None,
+    max_examples=60,
+    suppress_health_check=[HealthCheck.too_slow, HealthCheck.function_scoped_fixture],
+    derandomize=True,
+)
+settings.load_profile(os.environ.get("HYPOTHESIS_PROFILE", "jaxga"))
+
+DATA = Path(__file__).parent / "data"

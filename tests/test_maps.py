@@ -1,0 +1,583 @@
+"""Tests of jaxga.maps: loaders, scenarios, built-in maps, generators, preprocessing."""
+
+from __future__ import annotations
+
+import heapq
+import math
+import tempfile
+from pathlib import Path
+
+import numpy as np
+import pytest
+from hypothesis import HealthCheck, given, settings
+from hypothesis import strategies as st
+from hypothesis.extra import numpy as hnp
+
+from jaxga import EndpointError, Grid, MapFormatError, ParameterError
+from jaxga.grid import CORNER_RULES, move_legal
+from jaxga.maps import (
+    FORMATS,
+    builtin_names,
+    builtin_path,
+    builtin_scenario_path,
+    builtin_scenarios,
+    detect_format,
+    endpoints_connected,
+    fill_enclosed,
+    inflate,
+    load_map,
+    load_map_info,
+    map_name,
+    maze_map,
+    preprocess,
+    random_map,
+    reachable,
+    read_scen,
+    rectangles_map,
+    rooms_map,
+    save_map,
+)
+
+DATA = Path(__file__).parent / "data"
+EXT = {"01": "txt", "movingai": "map", "ascii": "ascii", "png": "png"}
+FAST = settings(max_examples=25, deadline=None, suppress_health_check=[HealthCheck.too_slow])
+
+blocked_arrays = hnp.arrays(
+    bool, hnp.array_shapes(min_dims=2, max_dims=2, min_side=1, max_side=9), elements=st.booleans()
+)
+
+
+def write(tmp_path: Path, name: str, text: str) -> Path:
+    p = tmp_path / name
+    p.write_text(text)
+    return p
+
+
+def dijkstra(blocked: np.ndarray, start: tuple[int, int], goal: tuple[int, int], rule: str):
+    """Independent 8-connected shortest path length (octile costs) for cross-checks."""
+    h, w = blocked.shape
+
+    def free(x, y):
+        return 0 <= x < w and 0 <= y < h and not blocked[y, x]
+
+    dist = {start: 0.0}
+    heap = [(0.0, start)]
+    while heap:
+        d, (x, y) = heapq.heappop(heap)
+        if (x, y) == goal:
+            return d
+        if d > dist[(x, y)]:
+            continue
+        for dx in (-1, 0, 1):
+            for dy in (-1, 0, 1):
+                if (dx or dy) and free(x + dx, y + dy):
+                    if dx and dy:
+                        s1, s2 = not free(x + dx, y), not free(x, y + dy)
+                        if (rule == "strict" and (s1 or s2)) or (
+                            rule == "no_squeeze" and s1 and s2
+                        ):
+                            continue
+                    nd = d + (math.sqrt(2) if dx and dy else 1.0)
+                    if nd < dist.get((x + dx, y + dy), math.inf):
+                        dist[(x + dx, y + dy)] = nd
+                        heapq.heappush(heap, (nd, (x + dx, y + dy)))
+    return math.inf
+
+
+# ------------------------------------------------------------------------ round trips
+@FAST
+@given(blocked=blocked_arrays, fmt=st.sampled_from(FORMATS))
+def test_round_trip_every_format(blocked, fmt):
+    with tempfile.TemporaryDirectory() as d:
+        p = save_map(blocked, Path(d) / f"m.{EXT[fmt]}")
+        assert detect_format(p) == fmt
+        g = load_map(p)
+        np.testing.assert_array_equal(g.blocked_np(), blocked)
+        assert g.start_xy == (0, 0) and g.goal_xy == (blocked.shape[1] - 1, blocked.shape[0] - 1)
+
+
+def test_round_trip_ascii_keeps_endpoints(tmp_path):
+    g = random_map(6, 8, 0.3, seed=4, start=(2, 1), goal=(6, 4))
+    g2 = load_map(save_map(g, tmp_path / "m.ascii"))
+    np.testing.assert_array_equal(g2.blocked_np(), g.blocked_np())
+    assert (g2.start_xy, g2.goal_xy) == ((2, 1), (6, 4))
+
+
+def test_forced_format_and_unknown_format(tmp_path):
+    p = write(tmp_path, "m.dat", "..#\n...\n")
+    assert load_map(p, fmt="ascii").blocked_np()[1, 2]
+    with pytest.raises(MapFormatError, match="unknown map format"):
+        load_map(p, fmt="bmp")
+
+
+# ------------------------------------------------------------------------ orientation
+def test_orientation_01_text_first_line_is_bottom(tmp_path):
+    g = load_map(write(tmp_path, "m.txt", "1 0 0\n0 0 0\n0 0 0\n0 0 0\n"))
+    b = g.blocked_np()
+    assert b.shape == (4, 3) and b[0, 0] and b.sum() == 1
+
+
+def test_orientation_01_without_separators_and_commas(tmp_path):
+    a = load_map(write(tmp_path, "a.txt", "010\n001\n")).blocked_np()
+    b = load_map(write(tmp_path, "b.txt", "0 1 0\n0 0 1\n")).blocked_np()
+    c = load_map(write(tmp_path, "c.txt", "0,1,0\n0,0,1\n")).blocked_np()
+    np.testing.assert_array_equal(a, b)
+    np.testing.assert_array_equal(a, c)
+    assert a[0, 1] and a[1, 2]
+
+
+def test_orientation_movingai_first_row_is_top(tmp_path):
+    text = "type octile\nheight 4\nwidth 3\nmap\n@..\n...\n...\n...\n"
+    b = load_map(write(tmp_path, "m.map", text)).blocked_np()
+    assert b.shape == (4, 3) and b[3, 0] and b.sum() == 1
+
+
+def test_movingai_characters(tmp_path):
+    text = "type octile\nheight 1\nwidth 7\nmap\n.GS@OTW\n"
+    b = load_map(write(tmp_path, "m.map", text)).blocked_np()
+    assert b.tolist() == [[False, False, False, True, True, True, True]]
+
+
+def test_orientation_ascii_first_line_is_top(tmp_path):
+    b = load_map(write(tmp_path, "m.txt", "#..\n...\n...\n...\n")).blocked_np()
+    assert b.shape == (4, 3) and b[3, 0] and b.sum() == 1
+    assert load_map(write(tmp_path, "n.txt", "@..\n...\n")).blocked_np()[1, 0]
+
+
+def test_ascii_markers_and_overrides(tmp_path):
+    p = write(tmp_path, "m.txt", "..G\n.#.\nS..\n")
+    g = load_map(p)
+    assert g.start_xy == (0, 0) and g.goal_xy == (2, 2) and g.blocked_np()[1, 1]
+    p = write(tmp_path, "n.txt", "S..\n.#G\n...\n")
+    g = load_map(p)
+    assert g.start_xy == (0, 2) and g.goal_xy == (2, 1)
+    g = load_map(p, start=(1, 0), goal=(0, 0), corner_rule="free")
+    assert (g.start_xy, g.goal_xy, g.corner_rule) == ((1, 0), (0, 0), "free")
+    only_s = load_map(write(tmp_path, "o.txt", "...\n.S.\n"))
+    assert only_s.start_xy == (1, 0) and only_s.goal_xy == (2, 1)
+
+
+def _write_png(path: Path, pixels: np.ndarray, mode: str) -> None:
+    from PIL import Image
+
+    Image.fromarray(pixels, mode=mode).save(path)
+
+
+@pytest.mark.parametrize("mode", ["L", "RGB", "RGBA", "LA"])
+def test_orientation_png_top_row_is_top(tmp_path, mode):
+    h, w = 4, 3
+    grey = np.full((h, w), 255, np.uint8)
+    grey[0, 0] = 0  # image top-left pixel dark
+    grey[2, 1] = 100  # dark enough (100/255 < 0.5)
+    grey[3, 2] = 200  # light
+    if mode == "L":
+        px = grey
+    elif mode == "LA":
+        px = np.stack([grey, np.full_like(grey, 255)], -1)
+        px[1, 2] = (0, 0)  # transparent black -> free
+    else:
+        px = np.repeat(grey[..., None], 3, -1)
+        if mode == "RGBA":
+            px = np.concatenate([px, np.full((h, w, 1), 255, np.uint8)], -1)
+            px[1, 2] = (0, 0, 0, 0)  # transparent black -> free
+    _write_png(tmp_path / "m.png", px, mode)
+    b = load_map(tmp_path / "m.png").blocked_np()
+    expected = np.zeros((h, w), bool)
+    expected[h - 1, 0] = True
+    expected[h - 1 - 2, 1] = True
+    np.testing.assert_array_equal(b, expected)
+
+
+def test_png_detected_by_content(tmp_path):
+    p = save_map(np.eye(3, dtype=bool), tmp_path / "m.png")
+    q = tmp_path / "no_extension"
+    q.write_bytes(p.read_bytes())
+    np.testing.assert_array_equal(load_map(q).blocked_np(), np.eye(3, dtype=bool))
+
+
+# -------------------------------------------------------------------------- malformed
+MALFORMED = [
+    ("ragged.txt", "0 1 0\n0 1\n", "line 2: row has 2 cells"),
+    ("ragged2.txt", "010\n01\n", "ragged"),
+    ("token.txt", "0 1 2\n0 0 0\n", "line 1, cell 3: expected 0 or 1, got '2'"),
+    ("char.txt", "010\n0x0\n", "line 2, column 2: expected 0 or 1"),
+    ("blank.txt", "010\n\n010\n", "line 2: blank line"),
+    ("empty.txt", "", "empty"),
+    ("spaces.txt", "  \n\n", "empty"),
+    ("ascii_char.txt", "..#\n.x.\n", "line 2, column 2: unknown map character 'x'"),
+    ("ascii_ragged.txt", "...\n..\n", "ragged"),
+    ("two_s.txt", "S..\n..S\n", "second 'S' marker"),
+    ("two_g.txt", "G.G\n...\n", "second 'G' marker"),
+    ("bad_header.map", "type octile\nheigth 2\nwidth 2\nmap\n..\n..\n", "unexpected header"),
+    ("bad_type.map", "type hex\nheight 1\nwidth 1\nmap\n.\n", "unsupported map type 'hex'"),
+    ("no_map_line.map", "type octile\nheight 1\nwidth 1\n.\n", "unexpected header"),
+    ("missing_width.map", "type octile\nheight 1\nmap\n.\n", "missing width"),
+    ("bad_height.map", "type octile\nheight x\nwidth 1\nmap\n.\n", "height must be a positive"),
+    ("zero_height.map", "type octile\nheight 0\nwidth 1\nmap\n", "height must be a positive"),
+    ("dup.map", "type octile\nheight 1\nheight 1\nwidth 1\nmap\n.\n", "duplicate header"),
+    ("short.map", "type octile\nheight 3\nwidth 2\nmap\n..\n..\n", "height 3 but the file has 2"),
+    ("long.map", "type octile\nheight 1\nwidth 2\nmap\n..\n..\n", "line 6: header says height 1"),
+    ("wide.map", "type octile\nheight 2\nwidth 2\nmap\n...\n..\n", "line 5: row has 3 cells"),
+    ("char.map", "type octile\nheight 2\nwidth 2\nmap\n..\n.#\n", "line 6, column 2: unknown"),
+    ("header_only.map", "type octile\nheight 2\nwidth 2\n", "missing the 'map' line"),
+    ("scen_as_map.txt", "version 1\n", "scenario file, not a map"),
+    ("bad.png", "this is not a png", "unreadable PNG"),
+]
+
+
+@pytest.mark.parametrize("name,text,message", MALFORMED, ids=[m[0] for m in MALFORMED])
+def test_malformed_files_raise_map_format_error(tmp_path, name, text, message):
+    p = write(tmp_path, name, text)
+    with pytest.raises(MapFormatError) as info:
+        load_map(p)
+    msg = str(info.value)
+    assert message in msg
+    assert name in msg and "\n" not in msg
+
+
+def test_missing_file_directory_and_binary(tmp_path):
+    with pytest.raises(MapFormatError, match=r"nope\.txt: map file not found$"):
+        load_map(tmp_path / "nope.txt")
+    with pytest.raises(MapFormatError, match="not a built-in map .*den312d"):
+        load_map("no_such_map_name")
+    with pytest.raises(MapFormatError, match="is a directory"):
+        load_map(tmp_path)
+    (tmp_path / "bin.txt").write_bytes(b"\xff\xfe\x00\x01garbage")
+    with pytest.raises(MapFormatError, match="bin.txt: not a text map file"):
+        load_map(tmp_path / "bin.txt")
+    with pytest.raises(MapFormatError, match="file path or a built-in map name"):
+        load_map(42)  # type: ignore[arg-type]
+
+
+def test_endpoint_off_map_is_endpoint_error_naming_file(tmp_path):
+    p = write(tmp_path, "m.txt", "000\n000\n")
+    with pytest.raises(EndpointError, match=r"m\.txt: goal \(3, 0\) is off the 3 x 2 map"):
+        load_map(p, goal=(3, 0))
+    # blocked endpoints are NOT checked at load time
+    g = load_map(write(tmp_path, "b.txt", "100\n000\n"))
+    assert g.blocked_np()[0, 0]
+    with pytest.raises(EndpointError):
+        g.check_endpoints()
+
+
+# -------------------------------------------------------------------------- scenarios
+def test_read_scen_converts_y_on_tiny_file(tmp_path):
+    p = write(
+        tmp_path,
+        "t.scen",
+        "version 1\n0\tt.map\t3\t4\t0\t0\t2\t3\t3.5\n1\tt.map\t3\t4\t1\t2\t1\t1\t1\n",
+    )
+    sc = read_scen(p)
+    assert len(sc) == 2
+    assert sc[0].start == (0, 3) and sc[0].goal == (2, 0)
+    assert sc[1].start == (1, 1) and sc[1].goal == (1, 2)
+    assert (sc[0].bucket, sc[0].map_name, sc[0].width, sc[0].height) == (0, "t.map", 3, 4)
+    assert sc[0].optimal_length == 3.5
+    with pytest.raises(AttributeError):
+        sc[0].bucket = 3  # type: ignore[misc]  # frozen
+
+
+def test_read_scen_maze_copy_endpoints_free_and_lengths_match():
+    grid = load_map(DATA / "maze-32-32-2.map")
+    b = grid.blocked_np()
+    scen = read_scen(DATA / "maze-32-32-2-random-1.scen")
+    assert len(scen) == 333
+    for s in scen:
+        assert (s.width, s.height) == (32, 32) and s.map_name == "maze-32-32-2.map"
+        assert not b[s.start[1], s.start[0]], s
+        assert not b[s.goal[1], s.goal[0]], s
+    # the test has teeth: without the y conversion many endpoints would be walls
+    assert any(b[31 - s.start[1], s.start[0]] for s in scen)
+    for s in scen[:25]:
+        g = s.apply(grid)
+        assert g.start_xy == s.start and g.goal_xy == s.goal
+        assert dijkstra(b, s.start, s.goal, "strict") == pytest.approx(s.optimal_length, abs=1e-3)
+
+
+SCEN_BAD = [
+    ("", "empty"),
+    ("1\tm.map\t3\t3\t0\t0\t1\t1\t1\n", "expected the header 'version 1'"),
+    ("version 2\n", "expected the header 'version 1'"),
+    ("version 1\n1\tm.map\t3\t3\t0\t0\t1\n", "line 2: expected 9 tab-separated fields, got 7"),
+    ("version 1\n1\tm.map\t3\t3\ta\t0\t1\t1\t1\n", "line 2: non-numeric"),
+    ("version 1\n1\tm.map\t3\t3\t0\t3\t1\t1\t1\n", "line 2: start (0, 3) is off the 3 x 3 map"),
+    ("version 1\n1\tm.map\t3\t3\t0\t0\t-1\t1\t1\n", "goal (-1, 1) is off"),
+    ("version 1\n1\tm.map\t0\t3\t0\t0\t0\t0\t1\n", "not positive"),
+    ("version 1\n1\tm.map\t3\t3\t0\t0\t1\t1\tnan\n", "bad optimal length"),
+]
+
+
+@pytest.mark.parametrize("text,message", SCEN_BAD)
+def test_malformed_scen(tmp_path, text, message):
+    p = write(tmp_path, "bad.scen", text)
+    with pytest.raises(MapFormatError) as info:
+        read_scen(p)
+    assert message in str(info.value) and "bad.scen" in str(info.value)
+
+
+def test_scen_missing_and_version_variants(tmp_path):
+    with pytest.raises(MapFormatError, match="scenario file not found"):
+        read_scen(tmp_path / "x.scen")
+    p = write(tmp_path, "v.scen", "version 1.0\n2 m.map 3 3 0 0 1 1 1.41\n")  # spaces tolerated
+    assert read_scen(p)[0].goal == (1, 1)
+    assert read_scen(write(tmp_path, "e.scen", "version 1\n")) == []
+    grid = Grid.create(np.zeros((2, 2), bool))
+    with pytest.raises(MapFormatError, match="3 x 3 but the grid is 2 x 2"):
+        read_scen(p)[0].apply(grid)
+
+
+# ---------------------------------------------------------------------------- builtin
+CLASSIC = [
+    "aco_classic_20x20_v1_lihongxin",
+    "acoga_skolayat_G_20x20",
+    "classic_ga_gapp3_20x20",
+    "fealpy_grid0_20x20",
+    "routeplanning_yangbo_20x20",
+    "routeplanning_zhangzheng_paper_20x20",
+]
+MOVINGAI = {  # name -> (H, W)
+    "random-32-32-20": (32, 32),
+    "maze-32-32-2": (32, 32),
+    "room-32-32-4": (32, 32),
+    "den312d": (81, 65),
+}
+
+
+def test_builtin_listing_and_loading():
+    names = builtin_names()
+    assert names == sorted(names) and set(names) == set(CLASSIC) | set(MOVINGAI)
+    for n in CLASSIC:
+        info = load_map_info(n)
+        assert info.builtin and info.name == n and info.format == "01"
+        g = info.grid
+        assert g.shape == (20, 20) and g.start_xy == (0, 0) and g.goal_xy == (19, 19)
+        assert g.corner_rule == "strict"
+        g.check_endpoints()
+        assert map_name(n) == n
+        with pytest.raises(MapFormatError, match="no scenario file"):
+            builtin_scenarios(n)
+        assert builtin_scenario_path(n) is None
+    for n, shape in MOVINGAI.items():
+        g = load_map(n)
+        assert g.shape == shape and load_map_info(n).format == "movingai"
+        scen = builtin_scenarios(n)
+        b = g.blocked_np()
+        assert scen and all(not b[s.start[1], s.start[0]] for s in scen)
+        assert all(not b[s.goal[1], s.goal[0]] for s in scen)
+    assert builtin_path("den312d").name == "den312d.map"
+    with pytest.raises(MapFormatError, match="unknown built-in map 'nope'.*maze-32-32-2"):
+        builtin_path("nope")
+    with pytest.raises(MapFormatError, match="unknown built-in map"):
+        builtin_scenarios("nope")
+    assert (Path(builtin_path("den312d")).parent / "SOURCES.md").exists()
+
+
+@pytest.mark.parametrize(
+    "name,free,strict",
+    [
+        ("classic_ga_gapp3_20x20", 30.9706, 31.5563),
+        ("routeplanning_yangbo_20x20", 30.3848, 32.7279),
+    ],
+)
+def test_classic_orientation_matches_reference_optima(name, free, strict):
+    b = load_map(name).blocked_np()
+    assert dijkstra(b, (0, 0), (19, 19), "free") == pytest.approx(free, abs=1e-3)
+    assert dijkstra(b, (0, 0), (19, 19), "strict") == pytest.approx(strict, abs=1e-3)
+
+
+def test_map_name_of_paths_and_builtin_over_cwd(tmp_path, monkeypatch):
+    assert map_name("maps/arena.map") == "arena"
+    assert map_name(Path("/x/y/z.png")) == "z"
+    monkeypatch.chdir(tmp_path)
+    (tmp_path / "den312d").write_text("000\n")
+    assert load_map("den312d").shape == (81, 65)  # a built-in name wins over a file
+    assert load_map("./den312d").shape == (1, 3)
+    assert load_map(Path("den312d")).shape == (1, 3)  # a Path is always a file
+
+
+# ------------------------------------------------------------------------- generators
+def _check_generated(g: Grid, h: int, w: int) -> None:
+    assert g.shape == (h, w)
+    g.check_endpoints()
+    assert endpoints_connected(g)
+    gx, gy = g.goal_xy
+    assert dijkstra(g.blocked_np(), g.start_xy, g.goal_xy, g.corner_rule) < math.inf
+    assert reachable(g)[gy, gx]
+
+
+@FAST
+@given(
+    seed=st.integers(0, 2**31 - 1),
+    h=st.integers(2, 14),
+    w=st.integers(2, 14),
+    density=st.floats(0.0, 0.45),
+    rule=st.sampled_from(CORNER_RULES),
+)
+def test_random_map_free_connected_endpoints(seed, h, w, density, rule):
+    g = random_map(h, w, density, seed, corner_rule=rule)
+    _check_generated(g, h, w)
+    assert g.corner_rule == rule
+    assert int(g.blocked_np().sum()) == min(round(density * h * w), h * w - 2)
+
+
+@FAST
+@given(
+    seed=st.integers(0, 2**31 - 1),
+    h=st.integers(1, 20),
+    w=st.integers(1, 20),
+    kind=st.sampled_from(["maze", "maze2", "rooms", "rects"]),
+    rule=st.sampled_from(CORNER_RULES),
+    data=st.data(),
+)
+def test_structured_generators_free_connected_endpoints(seed, h, w, kind, rule, data):
+    start = data.draw(st.tuples(st.integers(0, w - 1), st.integers(0, h - 1)))
+    goal = data.draw(st.tuples(st.integers(0, w - 1), st.integers(0, h - 1)))
+    kw = dict(start=start, goal=goal, corner_rule=rule)
+    if kind == "maze":
+        g = maze_map(h, w, seed, **kw)
+    elif kind == "maze2":
+        g = maze_map(h, w, seed, corridor_width=2, wall_width=2, **kw)
+    elif kind == "rooms":
+        g = rooms_map(h, w, seed, room_size=3, door_width=2, **kw)
+    else:
+        n = 3 if min(h, w) >= 5 else 0  # tiny maps may have no room for a rectangle
+        g = rectangles_map(h, w, n, seed, max_size=2, **kw)
+    assert g.start_xy == start and g.goal_xy == goal
+    _check_generated(g, h, w)
+
+
+def test_generators_are_deterministic_and_seed_dependent():
+    makers = [
+        lambda s: random_map(16, 16, 0.3, s),
+        lambda s: maze_map(16, 16, s),
+        lambda s: rooms_map(16, 16, s, room_size=3),
+        lambda s: rectangles_map(16, 16, 6, s),
+    ]
+    for make in makers:
+        a, b, c = make(7).blocked_np(), make(7).blocked_np(), make(8).blocked_np()
+        np.testing.assert_array_equal(a, b)
+        assert not np.array_equal(a, c)
+
+
+def test_maze_is_a_maze():
+    g = maze_map(21, 21, 3)
+    b = g.blocked_np()
+    assert b[1::2, 1::2].all()  # wall posts between lattice cells
+    assert not b[::2, ::2].any()  # lattice cells are open
+    # a perfect maze on an 11 x 11 lattice opens exactly 120 walls
+    assert int((~b).sum()) == 11 * 11 + 120
+
+
+def test_generator_errors():
+    with pytest.raises(ParameterError, match="lower the density"):
+        random_map(6, 6, 0.95, 0, max_attempts=3)
+    with pytest.raises(ParameterError, match="density must be in"):
+        random_map(6, 6, 1.0, 0)
+    with pytest.raises(ParameterError, match="height must be >= 1"):
+        maze_map(0, 5, 0)
+    with pytest.raises(ParameterError, match="seed must be an integer"):
+        rooms_map(5, 5, 1.5)  # type: ignore[arg-type]
+    with pytest.raises(ParameterError, match="rectangles"):
+        rectangles_map(4, 4, 50, 0, min_size=3, max_size=3, max_attempts=30)
+    with pytest.raises(EndpointError, match="off the 5 x 5 map"):
+        maze_map(5, 5, 0, goal=(5, 0))
+
+
+# ---------------------------------------------------------------------- reachability
+@settings(max_examples=20, deadline=None)
+@given(blocked=hnp.arrays(bool, (4, 5), elements=st.booleans()), rule=st.sampled_from(CORNER_RULES))
+def test_reachable_matches_move_legal_closure(blocked, rule):
+    # one fixed shape: move_legal runs eagerly in JAX, and every new shape recompiles
+    h, w = blocked.shape
+    blocked = blocked.copy()
+    blocked[0, 0] = False
+    g = Grid.create(blocked, corner_rule=rule)
+    n = h * w
+    a, b = np.meshgrid(np.arange(n), np.arange(n), indexing="ij")
+    adj = np.asarray(move_legal(g, a, b))
+    seen = {0}
+    frontier = [0]
+    while frontier:
+        frontier = [q for p in frontier for q in np.flatnonzero(adj[p]) if q not in seen]
+        seen.update(frontier)
+    expected = np.zeros(n, bool)
+    expected[list(seen)] = True
+    np.testing.assert_array_equal(reachable(g), expected.reshape(h, w))
+
+
+def test_reachable_blocked_source_and_corner_rules():
+    b = np.array([[0, 1], [1, 0]], bool)  # two free cells touching diagonally
+    for rule, ok in (("free", True), ("no_squeeze", False), ("strict", False)):
+        assert endpoints_connected(Grid.create(b, corner_rule=rule)) is ok
+    g = Grid.create(np.array([[1, 0]], bool))
+    assert not reachable(g).any()
+    assert reachable(g, source=(1, 0)).tolist() == [[False, True]]
+    with pytest.raises(ParameterError):
+        reachable(g, source=(2, 0))
+
+
+# ----------------------------------------------------------------------- preprocessing
+def test_inflate_hand_made():
+    b = np.zeros((7, 7), bool)
+    b[3, 3] = True
+    g = Grid.create(b, start=(0, 0), goal=(6, 6), corner_rule="free")
+    plus = inflate(g, 1).blocked_np()
+    assert plus.sum() == 5 and plus[3, 2:5].all() and plus[2:5, 3].all()
+    square = inflate(g, 1.5).blocked_np()
+    np.testing.assert_array_equal(square, np.pad(np.ones((3, 3), bool), 2))
+    r2 = inflate(g, 2).blocked_np()
+    assert r2.sum() == 13 and r2[3, 1] and not r2[2, 1]
+    out = inflate(g, 2)
+    assert (out.start_xy, out.goal_xy, out.corner_rule) == ((0, 0), (6, 6), "free")
+    np.testing.assert_array_equal(inflate(g, 0).blocked_np(), b)
+    np.testing.assert_array_equal(g.blocked_np(), b)  # pure
+    assert inflate(g, 100).blocked_np().all()
+    for bad in (-1, -0.5, float("nan"), float("inf"), "1", None, True):
+        with pytest.raises(ParameterError, match="radius"):
+            inflate(g, bad)  # type: ignore[arg-type]
+
+
+@FAST
+@given(blocked=blocked_arrays, radius=st.floats(0, 4))
+def test_inflate_matches_brute_force(blocked, radius):
+    g = Grid.create(blocked)
+    h, w = blocked.shape
+    ys, xs = np.nonzero(blocked)
+    yy, xx = np.mgrid[0:h, 0:w]
+    expected = np.zeros_like(blocked)
+    for y, x in zip(ys, xs, strict=True):
+        expected |= (yy - y) ** 2 + (xx - x) ** 2 <= radius**2 + 1e-9
+    np.testing.assert_array_equal(inflate(g, radius).blocked_np(), expected)
+
+
+def test_fill_enclosed_hand_made():
+    b = np.array(
+        [
+            [0, 1, 0, 0, 0],
+            [1, 1, 1, 1, 1],
+            [1, 0, 1, 0, 1],
+            [1, 1, 1, 1, 0],
+        ],
+        bool,
+    )
+    g = Grid.create(b, start=(4, 0), goal=(4, 0))
+    out = fill_enclosed(g).blocked_np()
+    expected = b.copy()
+    expected[0, 0] = True  # corner cell: 3 on-map neighbours all blocked, off-map = blocked
+    expected[2, 1] = True  # fully enclosed
+    # (3, 2) has the free diagonal neighbour (4, 3); (2..4, 0) are free
+    np.testing.assert_array_equal(out, expected)
+    np.testing.assert_array_equal(g.blocked_np(), b)  # pure
+    np.testing.assert_array_equal(fill_enclosed(fill_enclosed(g)).blocked_np(), out)
+    assert fill_enclosed(Grid.create(np.zeros((1, 1), bool))).blocked_np().all()
+    assert not fill_enclosed(Grid.create(np.zeros((3, 3), bool))).blocked_np().any()
+
+
+def test_preprocess_combines_inflate_and_fill():
+    b = np.pad(np.zeros((3, 3), bool), 1, constant_values=True)  # a walled 5 x 5 room
+    g = Grid.create(b, start=(2, 2), goal=(2, 2))
+    inflated = inflate(g, 1).blocked_np()
+    assert inflated.sum() == 24 and not inflated[2, 2]  # the centre is 2 cells from any wall
+    assert preprocess(g, radius=1).blocked_np().all()  # ... and then enclosed
+    np.testing.assert_array_equal(preprocess(g, 1, fill=False).blocked_np(), inflated)
+    np.testing.assert_array_equal(preprocess(g).blocked_np(), b)

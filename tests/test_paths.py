@@ -1,0 +1,126 @@
+"""The masked path representation (SPEC 2) and loop removal (MPMGA deletion operator)."""
+
+from __future__ import annotations
+
+import jax
+import jax.numpy as jnp
+import numpy as np
+import pytest
+from hypothesis import given
+from hypothesis import strategies as st
+
+from jaxga import Grid, ParameterError
+from jaxga.grid import DIRECTIONS
+from jaxga.paths import (
+    Population,
+    cells_to_xy,
+    from_coords,
+    has_endpoints,
+    is_continuous,
+    is_feasible,
+    is_loop_free,
+    pad,
+    population_map,
+    remove_loops,
+    to_coords,
+)
+
+N = 8  # 8 x 8 open map
+CAP = 40
+OPEN = Grid.create(np.zeros((N, N), bool), corner_rule="strict")
+
+_remove_table = jax.jit(jax.vmap(lambda c, n: remove_loops(c, n, N * N)))
+_remove_sort = jax.jit(jax.vmap(lambda c, n: remove_loops(c, n)))
+_continuous = jax.jit(population_map(is_continuous))
+_loop_free = jax.jit(jax.vmap(is_loop_free))
+
+
+def test_mpmga_loop_deletion_example():
+    """MPMGA section 4.3: 0, 20, 40, 21, 41, 40, 60 -> 0, 20, 40, 60 (20 x 20 map)."""
+    cells, n = from_coords([(p % 20, p // 20) for p in (0, 20, 40, 21, 41, 40, 60)], 20, 10)
+    for n_cells in (None, 400):
+        out, k = remove_loops(cells, n, n_cells)
+        assert int(k) == 4
+        assert np.asarray(out).tolist() == [0, 20, 40, 60] + [60] * 6
+
+
+@st.composite
+def walks(draw):
+    """Random 8-connected walks on the open map, with revisits (loops) allowed."""
+    n = draw(st.integers(1, CAP))
+    x, y = draw(st.integers(0, N - 1)), draw(st.integers(0, N - 1))
+    cells = [y * N + x]
+    for d in draw(st.lists(st.integers(0, 7), min_size=n - 1, max_size=n - 1)):
+        dx, dy = DIRECTIONS[d]
+        if 0 <= x + dx < N and 0 <= y + dy < N:
+            x, y = x + int(dx), y + int(dy)
+        else:
+            x, y = x - int(dx), y - int(dy)
+        cells.append(y * N + x)
+    return cells
+
+
+@given(st.lists(walks(), min_size=1, max_size=6))
+def test_remove_loops_properties(paths):
+    """Loop-free, continuous, same endpoints, an ordered subsequence; both variants agree."""
+    pop = Population.from_paths(paths, CAP)
+    cells, length = _remove_table(pop.cells, pop.length)
+    cells2, length2 = _remove_sort(pop.cells, pop.length)
+    assert np.array_equal(cells, cells2) and np.array_equal(length, length2)
+    assert bool(jnp.all(_loop_free(cells, length)))
+    assert bool(jnp.all(_continuous(OPEN, cells, length)))
+    out = Population(cells, length).to_lists()
+    for before, after, row in zip(paths, out, np.asarray(cells)):
+        assert after[0] == before[0] and after[-1] == before[-1]
+        it = iter(before)
+        assert all(c in it for c in after)  # ordered subsequence
+        assert set(row[len(after):].tolist()) <= {after[-1]}  # padding repeats the last cell
+        if len(set(before)) == len(before):
+            assert after == before
+
+
+def test_checks_on_hand_made_paths():
+    blocked = np.zeros((4, 4), bool)
+    blocked[1, 1] = True
+    grid = Grid.create(blocked, corner_rule="strict")  # start (0,0) goal (3,3)
+    good, n = from_coords([(0, 0), (1, 0), (2, 0), (3, 1), (3, 2), (3, 3)], 4, 8)
+    assert bool(is_continuous(grid, good, n)) and bool(has_endpoints(grid, good, n))
+    # (1,0)->(2,1) passes side cell (1,1): illegal under "strict", legal under "free".
+    cut, n2 = from_coords([(0, 0), (1, 0), (2, 1)], 4, 8)
+    assert not bool(is_continuous(grid, cut, n2))
+    assert bool(is_continuous(grid.replace(corner_rule="free"), cut, n2))
+    # A gap is not continuous but can be feasible (waypoint path).
+    jump, n3 = from_coords([(0, 0), (3, 0), (3, 3)], 4, 8)
+    assert not bool(is_continuous(grid, jump, n3))
+    assert bool(is_feasible(grid, jump, n3)) and bool(has_endpoints(grid, jump, n3))
+    through, n4 = from_coords([(0, 0), (2, 2), (3, 3)], 4, 8)
+    assert not bool(is_feasible(grid, through, n4))
+    assert not bool(has_endpoints(grid, cut, n2))
+    # Loops.
+    loop, n5 = from_coords([(0, 0), (1, 0), (0, 0)], 4, 8)
+    assert not bool(is_loop_free(loop, n5)) and bool(is_loop_free(good, n))
+    # Lengths outside [1, L] are never valid.
+    assert not bool(is_continuous(grid, good, 0)) and not bool(is_feasible(grid, good, 9))
+
+
+def test_coordinates_round_trip_and_capacity():
+    xy = [(0, 0), (1, 1), (2, 1)]
+    cells, n = from_coords(xy, 5, 6)
+    assert cells.dtype == jnp.int32 and int(n) == 3
+    assert np.asarray(cells).tolist() == [0, 6, 7, 7, 7, 7]
+    assert to_coords(cells, n, 5) == xy
+    assert np.asarray(cells_to_xy(cells[:3], 5)).tolist() == [list(p) for p in xy]
+    with pytest.raises(ParameterError, match="capacity"):
+        from_coords(xy, 5, 2)
+    with pytest.raises(ParameterError, match="off a map"):
+        from_coords([(5, 0)], 5, 4)
+    assert np.asarray(pad(jnp.array([1, 2, 3, 9, 9], jnp.int32), 3)).tolist() == [1, 2, 3, 3, 3]
+
+
+def test_remove_loops_under_x64():
+    """Dtypes stay int32 with JAX_ENABLE_X64 (PERFORMANCE_NOTES: a promoted carry broke a loop)."""
+    with jax.enable_x64(True):
+        cells = jnp.array([0, 20, 40, 21, 41, 40, 60, 60], jnp.int32)
+        out, k = jax.jit(remove_loops, static_argnums=2)(cells, 7, 400)
+        assert out.dtype == jnp.int32 and k.dtype == jnp.int32
+        assert np.asarray(out[: int(k)]).tolist() == [0, 20, 40, 60]
