@@ -1,0 +1,234 @@
+"""Connecting cells into continuous paths: median insertion without rounds x capacity.
+
+IMGA section 4.1 ("median insertion"), MPMGA section 4.2 (the connection operator) and
+Zhu & Pan section 4 (connecting the cells chosen by the column crossover) all close a
+gap between two cells ``a`` and ``b`` the same way: while some adjacent pair has
+Chebyshev distance > 1, insert the median cell ``((x_a + x_b) // 2, (y_a + y_b) // 2)``;
+if the median is blocked, insert a uniformly random free 8-neighbour of it instead; if it
+has none, the connection fails.
+
+Gaps are independent of each other, so :func:`connect` runs the paper's loop in rounds
+that insert a median into every open gap at once, keeping the path as a linked list and
+the open gaps as a small work queue: a round costs ``O(open gaps)``, not ``O(capacity)``,
+and only one final pass is proportional to the capacity.
+
+The papers' GAs allow squeezing diagonally between obstacles (corner rule ``"free"``).
+Under ``"strict"``, a diagonal step past a blocked side cell is made legal by inserting
+the free side cell (two orthogonal steps); under ``"no_squeeze"`` and ``"strict"``, a
+diagonal step with both side cells blocked makes the connection fail. This is jaxga's
+extension for the stricter corner rules (SPEC 1).
+"""
+
+from __future__ import annotations
+
+import jax
+import jax.numpy as jnp
+
+from jaxga.grid import Grid, blocked_at, diagonal_legal
+
+__all__ = ["concat", "connect", "pad_cells", "random_free_neighbour"]
+
+_OFFSETS = jnp.array(
+    [[1, 0], [1, 1], [0, 1], [-1, 1], [-1, 0], [-1, -1], [0, -1], [1, -1]], dtype=jnp.int32
+)
+
+
+def random_free_neighbour(key: jax.Array, grid: Grid, cell: jax.Array) -> tuple[jax.Array, jax.Array]:
+    """A uniformly random free 8-neighbour of ``cell`` and whether one exists (IMGA 4.1)."""
+    return _pick_free_neighbour(jax.random.bits(key, (), jnp.uint32), grid, cell)
+
+
+def _pick_free_neighbour(
+    bits: jax.Array, grid: Grid, cell: jax.Array
+) -> tuple[jax.Array, jax.Array]:
+    """The ``(bits mod n_free)``-th free 8-neighbour of ``cell``: uniform over the free ones.
+
+    One random word per cell instead of eight uniforms (random bits dominate the cost).
+    """
+    w = grid.width
+    x, y = (cell % w)[..., None], (cell // w)[..., None]
+    nx, ny = x + _OFFSETS[:, 0], y + _OFFSETS[:, 1]
+    free = ~blocked_at(grid.blocked, nx, ny)
+    n_free = jnp.sum(free, axis=-1, dtype=jnp.int32)
+    rank = (bits % jnp.maximum(n_free, 1).astype(jnp.uint32)).astype(jnp.int32)
+    hit = free & (jnp.cumsum(free, axis=-1, dtype=jnp.int32) - 1 == rank[..., None])
+    pick = jnp.sum(jnp.where(hit, ny * w + nx, 0), axis=-1)
+    return pick, n_free > 0
+
+
+def _chebyshev(a: jax.Array, b: jax.Array, w: int) -> jax.Array:
+    return jnp.maximum(jnp.abs(a % w - b % w), jnp.abs(a // w - b // w))
+
+
+def connect(
+    key: jax.Array,
+    grid: Grid,
+    anchors: jax.Array,
+    n_anchors: jax.Array,
+    capacity: int,
+    max_rounds: int = 64,
+    queue: int = 64,
+) -> tuple[jax.Array, jax.Array, jax.Array]:
+    """Join ``anchors[:n_anchors]`` into one continuous path by median insertion.
+
+    IMGA section 4.1 eq. 2-3 / MPMGA section 4.2 (the connection operator): while two
+    consecutive cells are more than one step apart (Chebyshev distance, IMGA eq. 2),
+    insert their median (eq. 3) or, if it is blocked, a random free 8-neighbour of it.
+
+    Implementation: the path is a linked list in a node table of ``capacity`` entries and
+    the open gaps are a work queue. One round inserts a median into EVERY open gap at
+    once (gaps are independent, so this has the distribution of the paper's one-at-a-time
+    loop) and queues the (at most two) sub-gaps that are still open. A round costs
+    ``O(queue)``; rounds stop when no gap is open (``lax.while_loop``), after at most
+    ``max_rounds``; one final ``O(capacity)`` pass follows the links. So the cost does not
+    grow with rounds x capacity, only with rounds x open gaps.
+
+    Args:
+        key: PRNG key (random free neighbours of blocked medians).
+        grid: the map; its corner rule is enforced on every step of the result.
+        anchors: ``int32[K]`` cells to pass through in order (need not be adjacent).
+        n_anchors: how many of them are used (1 <= n_anchors <= K).
+        capacity: static length of the output (and of the node table).
+        max_rounds: static bound on insertion rounds (the paper's loop is unbounded).
+        queue: static bound on simultaneously open gaps.
+
+    Returns:
+        ``(cells int32[capacity], length int32, ok bool)``. ``ok`` is False when an anchor
+        is blocked, a blocked median had no free neighbour (IMGA: "the individual is
+        directly discarded"), a gap was still open after ``max_rounds``, more than
+        ``queue`` gaps were open at once, the path outgrew ``capacity``, or a diagonal
+        step could not be made legal under the corner rule; the cells are then
+        meaningless. The path may contain loops: remove them with
+        :func:`jaxga.paths.remove_loops`.
+    """
+    anchors = jnp.asarray(anchors, jnp.int32)
+    n_anchors = jnp.asarray(n_anchors, jnp.int32)
+    k_max = anchors.shape[0]
+    w = grid.width
+    i32 = jnp.int32
+    if k_max > capacity:
+        raise ValueError(f"{k_max} anchors cannot fit capacity {capacity}")
+    used = jnp.arange(k_max, dtype=i32) < n_anchors
+    ok0 = jnp.all(~blocked_at(grid.blocked, anchors % w, anchors // w) | ~used)
+
+    node = jnp.zeros((capacity,), i32).at[:k_max].set(anchors)
+    nxt = jnp.full((capacity,), -1, i32)
+    nxt = nxt.at[: k_max - 1].set(
+        jnp.where(used[1:], jnp.arange(1, k_max, dtype=i32), -1)
+    )
+    # Initial queue: every open gap between consecutive used anchors.
+    open0 = used[1:] & (_chebyshev(anchors[:-1], anchors[1:], w) > 1)
+    q_pos = jnp.cumsum(open0, dtype=i32) - 1
+    q0 = jnp.full((queue,), -1, i32).at[jnp.where(open0, q_pos, queue)].set(
+        jnp.arange(k_max - 1, dtype=i32), mode="drop"
+    )
+    qlen0 = jnp.sum(open0, dtype=i32)
+    ok0 &= qlen0 <= queue
+    count0 = jnp.maximum(n_anchors, 1)
+
+    def cond(c):
+        _, _, _, qlen, _, r, ok, _ = c
+        return (qlen > 0) & (r < max_rounds) & ok
+
+    def body(c):
+        node, nxt, q, qlen, count, r, ok, key = c
+        key, sub = jax.random.split(key)
+        active = jnp.arange(queue, dtype=i32) < qlen
+        left = jnp.where(active, q, 0)
+        right = nxt[left]
+        lo, hi = node[left], node[jnp.maximum(right, 0)]
+        mx = (lo % w + hi % w) // 2
+        my = (lo // w + hi // w) // 2
+        med_blocked = blocked_at(grid.blocked, mx, my)
+        alt, has_alt = _pick_free_neighbour(
+            jax.random.bits(sub, (queue,), jnp.uint32), grid, my * w + mx
+        )
+        mid = jnp.where(med_blocked, alt, my * w + mx)
+        ok &= ~jnp.any(active & med_blocked & ~has_alt)
+        new_id = count + jnp.cumsum(active, dtype=i32) - 1
+        ok &= count + qlen <= capacity
+        slot = jnp.where(active & (new_id < capacity), new_id, capacity)
+        node = node.at[slot].set(mid, mode="drop")
+        nxt = nxt.at[slot].set(right, mode="drop")
+        nxt = nxt.at[jnp.where(active, left, capacity)].set(slot, mode="drop")
+        # Sub-gaps still open: (left, mid) and (mid, right).
+        cand = jnp.stack([left, slot], axis=1).reshape(-1)
+        open_ = jnp.stack(
+            [active & (_chebyshev(lo, mid, w) > 1), active & (_chebyshev(mid, hi, w) > 1)],
+            axis=1,
+        ).reshape(-1)
+        pos = jnp.cumsum(open_, dtype=i32) - 1
+        q = jnp.full((queue,), -1, i32).at[jnp.where(open_, pos, queue)].set(cand, mode="drop")
+        new_qlen = jnp.sum(open_, dtype=i32)
+        ok &= new_qlen <= queue
+        return node, nxt, q, jnp.minimum(new_qlen, queue), count + qlen, r + 1, ok, key
+
+    carry = (node, nxt, q0, qlen0, count0, jnp.int32(0), ok0, key)
+    node, nxt, _, qlen, _, _, ok, _ = jax.lax.while_loop(cond, body, carry)
+    ok &= qlen == 0
+
+    # Follow the links from node 0: one O(capacity) pass.
+    def follow(ptr, _):
+        alive = ptr >= 0
+        p = jnp.maximum(ptr, 0)
+        return jnp.where(alive, nxt[p], -1), (node[p], alive)
+
+    _, (seq, keep) = jax.lax.scan(follow, jnp.int32(0), None, length=capacity)
+
+    # Make every diagonal step legal under the corner rule (strict: via the free side).
+    there = jnp.concatenate([seq[1:], seq[-1:]])
+    has_next = jnp.concatenate([keep[1:], jnp.array([False])])
+    hx, hy, tx, ty = seq % w, seq // w, there % w, there // w
+    diagonal = has_next & (hx != tx) & (hy != ty)
+    side_a = blocked_at(grid.blocked, tx, hy)
+    side_b = blocked_at(grid.blocked, hx, ty)
+    legal = diagonal_legal(side_a, side_b, grid.corner_rule)
+    ok &= ~jnp.any(diagonal & ~legal & side_a & side_b)
+    insert = diagonal & ~legal
+    if grid.corner_rule == "free":  # never needed: skip the second compaction
+        length = jnp.sum(keep, dtype=i32)
+        return pad_cells(seq, length), length, ok
+    vals = jnp.stack([seq, jnp.where(side_a, ty * w + hx, hy * w + tx)], axis=1).reshape(-1)
+    valid = jnp.stack([keep, insert], axis=1).reshape(-1)
+    out_pos = jnp.cumsum(valid, dtype=i32) - 1
+    total = jnp.sum(valid, dtype=i32)
+    ok &= total <= capacity
+    cells = jnp.zeros((capacity,), i32).at[jnp.where(valid, out_pos, capacity)].set(
+        vals, mode="drop"
+    )
+    length = jnp.minimum(total, capacity)
+    return pad_cells(cells, length), length, ok
+
+
+def pad_cells(cells: jax.Array, length: jax.Array) -> jax.Array:
+    """Repeat ``cells[length - 1]`` over the padding (SPEC 2)."""
+    idx = jnp.arange(cells.shape[0], dtype=jnp.int32)
+    return jnp.where(idx < length, cells, cells[jnp.maximum(length - 1, 0)])
+
+
+def concat(
+    parts: list[tuple[jax.Array, jax.Array, jax.Array]], capacity: int
+) -> tuple[jax.Array, jax.Array, jax.Array]:
+    """Concatenate slices ``cells[start:stop]`` of several paths into one padded path.
+
+    Args:
+        parts: ``(cells, start, stop)`` triples (traced ``start``/``stop`` allowed).
+        capacity: static output length.
+
+    Returns:
+        ``(cells int32[capacity], length int32, ok bool)``; ``ok`` is False when the
+        total exceeds ``capacity`` (the output is then truncated and must not be used).
+        One gather per part over ``capacity`` lanes (no scatter).
+    """
+    j = jnp.arange(capacity, dtype=jnp.int32)
+    out = jnp.zeros((capacity,), jnp.int32)
+    offset = jnp.int32(0)
+    for cells, start, stop in parts:
+        n = jnp.maximum(jnp.asarray(stop, jnp.int32) - start, 0)
+        src = jnp.clip(j - offset + start, 0, cells.shape[0] - 1)
+        out = jnp.where((j >= offset) & (j < offset + n), cells[src], out)
+        offset = offset + n
+    length = jnp.minimum(offset, capacity)
+    last = out[jnp.maximum(length - 1, 0)]
+    out = jnp.where(j < length, out, last)
+    return out, length, offset <= capacity

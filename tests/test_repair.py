@@ -1,0 +1,100 @@
+"""Median-insertion connection (IMGA 4.1 eq. 2-3, MPMGA 4.2) and path concatenation."""
+
+from __future__ import annotations
+
+import jax
+import jax.numpy as jnp
+import numpy as np
+from hypothesis import given
+from hypothesis import strategies as st
+
+from jaxga import Grid
+from jaxga.grid import CORNER_RULES
+from jaxga.paths import has_endpoints, is_continuous, is_loop_free, remove_loops
+from jaxga.repair import concat, connect
+
+N = 10
+CAP = 64
+
+
+def test_mpmga_connection_example():
+    """MPMGA section 4.2: the intermittent path 0, 60 becomes 0, 20, 40, 60 (20 x 20)."""
+    grid = Grid.create(np.zeros((20, 20), bool), corner_rule="free")
+    cells, n, ok = connect(jax.random.PRNGKey(0), grid, jnp.array([0, 60], jnp.int32), 2, 8)
+    assert bool(ok) and np.asarray(cells[: int(n)]).tolist() == [0, 20, 40, 60]
+
+
+def test_medians_on_an_open_map_are_deterministic():
+    """No obstacle: the result is the recursive floor-median line (IMGA eq. 3)."""
+    grid = Grid.create(np.zeros((20, 20), bool), corner_rule="free")
+    out = []
+    for seed in range(3):
+        cells, n, ok = connect(jax.random.PRNGKey(seed), grid, jnp.array([0, 5 + 20 * 2]), 2, 16)
+        assert bool(ok)
+        out.append(np.asarray(cells[: int(n)]).tolist())
+    # (0,0)->(5,2): median (2,1); (0,0)-(2,1): (1,0); (2,1)-(5,2): (3,1); (3,1)-(5,2): (4,1).
+    assert out[0] == out[1] == out[2] == [0, 1, 22, 23, 24, 45]
+
+
+_connect = jax.jit(jax.vmap(lambda k, g, a, n: connect(k, g, a, n, CAP), in_axes=(0, None, 0, 0)))
+_loops = jax.jit(jax.vmap(lambda c, n: remove_loops(c, n, N * N)))
+
+
+@given(
+    st.lists(st.booleans(), min_size=N * N, max_size=N * N),
+    st.sampled_from(CORNER_RULES),
+    st.lists(st.lists(st.integers(0, N * N - 1), min_size=2, max_size=5), min_size=4, max_size=4),
+    st.integers(0, 2**31 - 1),
+)
+def test_connect_properties(bits, rule, anchor_lists, seed):
+    """ok => after loop removal: continuous, loop-free, from first to last anchor, fits."""
+    blocked = np.array(bits, bool).reshape(N, N) & (np.random.default_rng(seed).random((N, N)) < 0.4)
+    grid = Grid.create(blocked, corner_rule=rule)
+    anchors = np.array([a + [a[-1]] * (5 - len(a)) for a in anchor_lists], np.int32)
+    n = np.array([len(a) for a in anchor_lists], np.int32)
+    keys = jax.random.split(jax.random.PRNGKey(seed), len(n))
+    cells, length, ok = _connect(keys, grid, jnp.asarray(anchors), jnp.asarray(n))
+    cells, length = _loops(cells, length)
+    free = ~blocked.reshape(-1)
+    for i in range(len(n)):
+        if not bool(ok[i]):
+            continue
+        g = grid.replace(start=(anchors[i, 0] % N, anchors[i, 0] // N),
+                         goal=(anchors[i, n[i] - 1] % N, anchors[i, n[i] - 1] // N))
+        assert bool(has_endpoints(g, cells[i], length[i]))
+        assert bool(is_continuous(g, cells[i], length[i]))
+        assert bool(is_loop_free(cells[i], length[i]))
+        assert free[np.asarray(cells[i])].all()
+    # An anchor on an obstacle can never be connected.
+    for i in range(len(n)):
+        if not free[anchors[i, : n[i]]].all():
+            assert not bool(ok[i])
+
+
+def test_capacity_overflow_fails_instead_of_wrapping():
+    grid = Grid.create(np.zeros((20, 20), bool), corner_rule="free")
+    _, _, ok = connect(jax.random.PRNGKey(0), grid, jnp.array([0, 399], jnp.int32), 2, 10)
+    assert not bool(ok)
+    _, n, ok = connect(jax.random.PRNGKey(0), grid, jnp.array([0, 399], jnp.int32), 2, 20)
+    assert bool(ok) and int(n) == 20
+
+
+def test_strict_rule_goes_round_corners():
+    """Under "strict" a diagonal step past an obstacle becomes two orthogonal steps."""
+    blocked = np.zeros((3, 3), bool)
+    blocked[0, 1] = True  # (1, 0)
+    grid = Grid.create(blocked, corner_rule="strict")
+    cells, n, ok = connect(jax.random.PRNGKey(0), grid, jnp.array([0, 4], jnp.int32), 2, 8)
+    assert bool(ok) and np.asarray(cells[: int(n)]).tolist() == [0, 3, 4]
+    free = grid.replace(corner_rule="free")
+    cells, n, ok = connect(jax.random.PRNGKey(0), free, jnp.array([0, 4], jnp.int32), 2, 8)
+    assert bool(ok) and np.asarray(cells[: int(n)]).tolist() == [0, 4]
+
+
+def test_concat_and_overflow():
+    a = jnp.arange(10, dtype=jnp.int32)
+    cells, n, ok = concat([(a, 0, 3), (a + 100, 5, 8)], 8)
+    assert bool(ok) and int(n) == 6
+    assert np.asarray(cells).tolist() == [0, 1, 2, 105, 106, 107, 107, 107]
+    _, _, ok = concat([(a, 0, 6), (a, 0, 6)], 8)
+    assert not bool(ok)
