@@ -33,7 +33,9 @@ _OFFSETS = jnp.array(
 )
 
 
-def random_free_neighbour(key: jax.Array, grid: Grid, cell: jax.Array) -> tuple[jax.Array, jax.Array]:
+def random_free_neighbour(
+    key: jax.Array, grid: Grid, cell: jax.Array
+) -> tuple[jax.Array, jax.Array]:
     """A uniformly random free 8-neighbour of ``cell`` and whether one exists (IMGA 4.1)."""
     return _pick_free_neighbour(jax.random.bits(key, (), jnp.uint32), grid, cell)
 

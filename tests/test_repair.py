@@ -48,7 +48,8 @@ _loops = jax.jit(jax.vmap(lambda c, n: remove_loops(c, n, N * N)))
 )
 def test_connect_properties(bits, rule, anchor_lists, seed):
     """ok => after loop removal: continuous, loop-free, from first to last anchor, fits."""
-    blocked = np.array(bits, bool).reshape(N, N) & (np.random.default_rng(seed).random((N, N)) < 0.4)
+    sparse = np.random.default_rng(seed).random((N, N)) < 0.4
+    blocked = np.array(bits, bool).reshape(N, N) & sparse
     grid = Grid.create(blocked, corner_rule=rule)
     anchors = np.array([a + [a[-1]] * (5 - len(a)) for a in anchor_lists], np.int32)
     n = np.array([len(a) for a in anchor_lists], np.int32)
