@@ -95,12 +95,17 @@ def _crossing_checks(
     return jnp.all(ok | ~valid)
 
 
-def clear(grid: Grid, a: jax.Array, b: jax.Array) -> jax.Array:
+def clear(grid: Grid, a: jax.Array, b: jax.Array, max_span: int | None = None) -> jax.Array:
     """Exact line of sight between the centres of cells ``a`` and ``b`` (SPEC 1).
 
     Args:
         grid: the map; its ``corner_rule`` applies where the segment meets a grid vertex.
         a, b: int32 cell indices ``y * W + x``.
+        max_span: optional static bound on ``|dx|`` and ``|dy|``. The cost becomes
+            ``2 * max_span`` lanes instead of ``W + H - 2`` (4 us -> tens of ns per
+            segment on a 256 x 256 map); a segment longer than that is reported as NOT
+            clear, so pass it only where segments are short by construction (a mutation
+            radius, a knight move).
 
     Returns:
         A bool scalar: True when both end cells are on the map and free, every cell whose
@@ -120,10 +125,14 @@ def clear(grid: Grid, a: jax.Array, b: jax.Array) -> jax.Array:
     dx, dy = bx - ax, by - ay
     ends_free = ~blocked_at(grid.blocked, ax, ay) & ~blocked_at(grid.blocked, bx, by)
     ok = on_map & ends_free
-    if w > 1:
-        ok &= _crossing_checks(grid.blocked, grid.corner_rule, ax, ay, dx, dy, w - 1, False, True)
-    if h > 1:
-        ok &= _crossing_checks(grid.blocked, grid.corner_rule, ay, ax, dy, dx, h - 1, True, False)
+    lanes_x, lanes_y = w - 1, h - 1
+    if max_span is not None:
+        lanes_x, lanes_y = min(lanes_x, max_span), min(lanes_y, max_span)
+        ok &= (jnp.abs(dx) <= max_span) & (jnp.abs(dy) <= max_span)
+    if lanes_x > 0:
+        ok &= _crossing_checks(grid.blocked, grid.corner_rule, ax, ay, dx, dy, lanes_x, False, True)
+    if lanes_y > 0:
+        ok &= _crossing_checks(grid.blocked, grid.corner_rule, ay, ax, dy, dx, lanes_y, True, False)
     return ok
 
 

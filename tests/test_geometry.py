@@ -20,6 +20,7 @@ H, W = 6, 7  # one fixed shape, so each jitted function compiles once per corner
 
 _pairs_clear = jax.jit(jax.vmap(clear, in_axes=(None, 0, 0)))
 _pairs_legal = jax.jit(jax.vmap(move_legal, in_axes=(None, 0, 0)))
+_pairs_clear_span2 = jax.jit(jax.vmap(lambda g, a, b: clear(g, a, b, 2), in_axes=(None, 0, 0)))
 _pairs_trial = jax.jit(jax.vmap(linear_trial, in_axes=(None, 0, 0)))
 
 grids = st.lists(st.booleans(), min_size=H * W, max_size=H * W).map(
@@ -114,6 +115,17 @@ def test_clear_hand_cases():
     g = Grid.create(mid)
     assert not bool(clear_xy(g, (0, 0), (3, 0)))
     assert not bool(clear(g, 4, 4)) and bool(clear(g, 0, 0))
+
+
+@given(grids, pair_lists, rules)
+def test_max_span_is_exact_within_the_span(blocked, pairs, rule):
+    """With max_span, short segments get the exact answer and long ones are not clear."""
+    grid = Grid.create(blocked, corner_rule=rule)
+    full = _run(_pairs_clear, grid, pairs)
+    short = _run(_pairs_clear_span2, grid, pairs)
+    for (p, q), f, s in zip(pairs, full, short):
+        (ax, ay), (bx, by) = _xy(p), _xy(q)
+        assert s == (f and abs(ax - bx) <= 2 and abs(ay - by) <= 2)
 
 
 def test_segments_clear_masks_padding():

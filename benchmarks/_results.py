@@ -1,0 +1,60 @@
+"""Shared by the benchmark scripts: machine description and appending to RESULTS.md."""
+
+from __future__ import annotations
+
+import datetime as _dt
+import os
+import platform
+import shlex
+import sys
+from pathlib import Path
+
+RESULTS = Path(__file__).with_name("RESULTS.md")
+SHARED = Path(__file__).resolve().parents[1].parent / "shared" / "benchmarks"
+
+
+def machine() -> str:
+    """One line naming the machine, the software and the current load."""
+    import jax
+    import numpy as np
+
+    load = ", ".join(f"{v:.1f}" for v in os.getloadavg())
+    return (
+        f"{platform.platform()}, {platform.machine()}, os.cpu_count() = {os.cpu_count()}, "
+        f"python {platform.python_version()}, jax {jax.__version__} "
+        f"({jax.default_backend()}, {jax.device_count()} device(s)), numpy {np.__version__}, "
+        f"load average {load}"
+    )
+
+
+def command() -> str:
+    """The command line that is running, as a user would retype it."""
+    return "python " + " ".join(shlex.quote(a) for a in sys.argv)
+
+
+def markdown_table(headers: list[str], rows: list[list]) -> str:
+    """A GitHub markdown table (numbers right-aligned)."""
+    def fmt(v):
+        return f"{v:,.2f}" if isinstance(v, float) else str(v)
+
+    out = ["| " + " | ".join(headers) + " |",
+           "|" + "|".join("---:" if i else "---" for i in range(len(headers))) + "|"]
+    out += ["| " + " | ".join(fmt(v) for v in r) + " |" for r in rows]
+    return "\n".join(out)
+
+
+def append(title: str, body: str, *, write: bool = True) -> None:
+    """Append a section (title, date, command, machine, body) to ``RESULTS.md``."""
+    stamp = _dt.datetime.now(_dt.timezone.utc).strftime("%Y-%m-%d %H:%M UTC")
+    section = (
+        f"\n## {title} ({stamp})\n\n- command: `{command()}`\n- machine: {machine()}\n\n"
+        f"{body.strip()}\n"
+    )
+    print(section)
+    if write:
+        new = not RESULTS.exists()
+        with RESULTS.open("a", encoding="utf-8") as fh:
+            if new:
+                fh.write("# Benchmark results\n")
+            fh.write(section)
+        print(f"appended to {RESULTS}")
