@@ -1,0 +1,149 @@
+"""The ``jaxga`` command line.
+
+``jaxga optimum`` prints the exact 8-connected and any-angle optima of a map
+(SPEC 11, reference optima); ``jaxga maps`` lists the built-in maps. Bad input (a missing
+or malformed file, a start or goal off the map or blocked, an unreachable goal, an
+unknown corner rule) ends with a one-line message on stderr and a non-zero exit status,
+never a Python traceback.
+"""
+
+from __future__ import annotations
+
+import argparse
+import json
+import sys
+import time
+from collections.abc import Sequence
+
+from jaxga.errors import EndpointError, JaxgaError, NoPathError
+from jaxga.grid import CORNER_RULES
+
+EXIT_BAD_INPUT = 2
+EXIT_NO_PATH = 3
+
+
+def _parse_xy(text: str) -> tuple[int, int]:
+    try:
+        x, y = (int(v) for v in text.split(","))
+    except ValueError:
+        raise argparse.ArgumentTypeError(
+            f"expected X,Y (two integers separated by a comma), got {text!r}"
+        ) from None
+    return x, y
+
+
+def _add_map_arguments(p: argparse.ArgumentParser) -> None:
+    p.add_argument("--map", required=True, help="a map file (0/1 text, .map, ASCII, PNG) or a "
+                   "built-in map name (see `jaxga maps`)")
+    p.add_argument("--start", type=_parse_xy, metavar="X,Y",
+                   help="start cell; x = column, y = row from the bottom (default: the "
+                   "file's S or (0, 0))")
+    p.add_argument("--goal", type=_parse_xy, metavar="X,Y",
+                   help="goal cell (default: the file's G or (W-1, H-1))")
+    p.add_argument("--corner-rule", default=None, metavar="RULE",
+                   help=f"one of {', '.join(CORNER_RULES)} (default: strict)")
+
+
+def _load_grid(args: argparse.Namespace):
+    from jaxga.grid import check_corner_rule
+    from jaxga.maps import load_map_info
+
+    if args.corner_rule is not None:
+        check_corner_rule(args.corner_rule)
+    info = load_map_info(args.map, start=args.start, goal=args.goal, corner_rule=args.corner_rule)
+    return info, info.grid.check_endpoints()
+
+
+def _xy_list(path) -> list[list[int]]:
+    return [[int(x), int(y)] for x, y in path]
+
+
+def cmd_optimum(args: argparse.Namespace) -> int:
+    """``jaxga optimum``: exact 8-connected and any-angle optima of one map."""
+    from jaxga.reference import any_angle_shortest_path, shortest_path
+
+    info, grid = _load_grid(args)
+    t0 = time.perf_counter()
+    octile = shortest_path(grid).raise_if_missing()
+    t1 = time.perf_counter()
+    any_angle = any_angle_shortest_path(grid).raise_if_missing()
+    t2 = time.perf_counter()
+    print(f"map          {info.name} ({grid.width} x {grid.height}, corner rule "
+          f"{grid.corner_rule!r})")
+    print(f"start, goal  {grid.start_xy} -> {grid.goal_xy}")
+    print(f"8-connected  {octile.length:.4f}  ({octile.n_cells} cells, {t1 - t0:.3f} s)")
+    print(f"any-angle    {any_angle.length:.4f}  ({any_angle.n_cells} waypoints, "
+          f"{t2 - t1:.3f} s)")
+    if args.json:
+        out = {
+            "map": info.name,
+            "corner_rule": grid.corner_rule,
+            "start": list(grid.start_xy),
+            "goal": list(grid.goal_xy),
+            "length": float(octile.length),
+            "path": _xy_list(octile.path),
+            "any_angle_length": float(any_angle.length),
+            "any_angle_path": _xy_list(any_angle.path),
+        }
+        with open(args.json, "w", encoding="utf-8") as f:
+            json.dump(out, f)
+            f.write("\n")
+        print(f"wrote {args.json}")
+    return 0
+
+
+def cmd_maps(args: argparse.Namespace) -> int:
+    """``jaxga maps``: list the built-in maps with their sizes."""
+    from jaxga.maps import builtin_names, builtin_scenario_path, load_map
+
+    for name in builtin_names():
+        g = load_map(name)
+        scen = " (with scenarios)" if builtin_scenario_path(name) else ""
+        print(f"{name:44s} {g.width:4d} x {g.height:<4d}{scen}")
+    return 0
+
+
+def build_parser() -> argparse.ArgumentParser:
+    """The argument parser of the ``jaxga`` command."""
+    parser = argparse.ArgumentParser(
+        prog="jaxga", description="Genetic-algorithm path planning on grid maps, in JAX."
+    )
+    sub = parser.add_subparsers(dest="command", metavar="COMMAND")
+    sub.required = True
+
+    p = sub.add_parser("optimum", help="exact 8-connected and any-angle optima of a map")
+    _add_map_arguments(p)
+    p.add_argument("--json", metavar="OUT", help="write the optima and paths as JSON")
+    p.set_defaults(func=cmd_optimum)
+
+    p = sub.add_parser("maps", help="list the built-in maps")
+    p.set_defaults(func=cmd_maps)
+    return parser
+
+
+def main(argv: Sequence[str] | None = None) -> int:
+    """Entry point of the ``jaxga`` console script; returns the exit status."""
+    parser = build_parser()
+    args = parser.parse_args(argv)
+    try:
+        return args.func(args)
+    except NoPathError as e:
+        print(f"jaxga: no path: {e}", file=sys.stderr)
+        return EXIT_NO_PATH
+    except EndpointError as e:
+        print(f"jaxga: bad start or goal: {e}", file=sys.stderr)
+        return EXIT_BAD_INPUT
+    except JaxgaError as e:
+        print(f"jaxga: error: {e}", file=sys.stderr)
+        return EXIT_BAD_INPUT
+    except OSError as e:
+        print(f"jaxga: error: {e.strerror or e}: {e.filename or ''}".rstrip(": "),
+              file=sys.stderr)
+        return EXIT_BAD_INPUT
+    except KeyboardInterrupt:
+        print("jaxga: interrupted", file=sys.stderr)
+        return 130
+
+
+if __name__ == "__main__":  # pragma: no cover
+    sys.exit(main())

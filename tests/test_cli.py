@@ -1,0 +1,75 @@
+"""The ``jaxga`` command line: optimum JSON and one-line errors for bad input."""
+
+from __future__ import annotations
+
+import json
+import subprocess
+import sys
+
+import pytest
+
+from jaxga.cli import EXIT_BAD_INPUT, EXIT_NO_PATH, main
+
+
+def test_optimum_json_on_builtin_map(tmp_path, capsys):
+    out = tmp_path / "opt.json"
+    rc = main(["optimum", "--map", "classic_ga_gapp3_20x20", "--corner-rule", "free",
+               "--json", str(out)])
+    assert rc == 0
+    data = json.loads(out.read_text())
+    assert data["length"] == pytest.approx(30.9706, abs=1e-4)  # classic README, Zhu Map 3
+    assert data["path"][0] == [0, 0] and data["path"][-1] == [19, 19]
+    assert data["any_angle_path"][0] == [0, 0] and data["any_angle_path"][-1] == [19, 19]
+    assert data["any_angle_length"] <= data["length"] + 1e-9
+    assert "30.9706" in capsys.readouterr().out
+
+
+def test_optimum_uses_file_endpoints_and_overrides(tmp_path):
+    art = tmp_path / "m.txt"
+    art.write_text("S..#\n.#..\n...G\n")  # top row first
+    out = tmp_path / "o.json"
+    assert main(["optimum", "--map", str(art), "--json", str(out)]) == 0
+    data = json.loads(out.read_text())
+    assert data["start"] == [0, 2] and data["goal"] == [3, 0]
+    assert main(["optimum", "--map", str(art), "--start", "0,0", "--json", str(out)]) == 0
+    assert json.loads(out.read_text())["path"][0] == [0, 0]
+
+
+@pytest.mark.parametrize(
+    "args, code, words",
+    [
+        (["--map", "does-not-exist.txt"], EXIT_BAD_INPUT, "not found"),
+        (["--map", "classic_ga_gapp3_20x20", "--start", "20,0"], EXIT_BAD_INPUT, "off the"),
+        (["--map", "random-32-32-20"], EXIT_BAD_INPUT, "blocked"),
+        (["--map", "classic_ga_gapp3_20x20", "--corner-rule", "loose"], EXIT_BAD_INPUT,
+         "corner rule"),
+    ],
+)
+def test_bad_input_is_one_line(args, code, words, capsys):
+    assert main(["optimum", *args]) == code
+    err = capsys.readouterr().err.strip()
+    assert "\n" not in err and words in err and "Traceback" not in err
+
+
+def test_unreachable_goal_and_malformed_file(tmp_path, capsys):
+    walled = tmp_path / "walled.txt"
+    walled.write_text("S.#.\n..#G\n")
+    assert main(["optimum", "--map", str(walled)]) == EXIT_NO_PATH
+    assert "unreachable" in capsys.readouterr().err
+    ragged = tmp_path / "ragged.txt"
+    ragged.write_text("0 0 1\n0 1\n")
+    assert main(["optimum", "--map", str(ragged)]) == EXIT_BAD_INPUT
+    err = capsys.readouterr().err.strip()
+    assert "ragged.txt" in err and "\n" not in err
+
+
+def test_console_script_never_prints_a_traceback(tmp_path):
+    """The real entry point, in a subprocess: bad input gives exit 2 and one stderr line."""
+    bad = tmp_path / "bad.map"
+    bad.write_text("type octile\nheight 2\nwidth 3\nmap\n...\n..\n")
+    proc = subprocess.run(
+        [sys.executable, "-m", "jaxga.cli", "optimum", "--map", str(bad)],
+        capture_output=True, text=True, timeout=120,
+    )
+    assert proc.returncode == EXIT_BAD_INPUT
+    assert "Traceback" not in proc.stderr and len(proc.stderr.strip().splitlines()) == 1
