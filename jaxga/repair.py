@@ -82,7 +82,7 @@ def connect(
     once (gaps are independent, so this has the distribution of the paper's one-at-a-time
     loop) and queues the (at most two) sub-gaps that are still open. A round costs
     ``O(queue)``; rounds stop when no gap is open (``lax.while_loop``), after at most
-    ``max_rounds``; one final ``O(capacity)`` pass follows the links. So the cost does not
+    ``max_rounds``; a final pass follows the links (as long as the chain). So the cost does not
     grow with rounds x capacity, only with rounds x open gaps.
 
     Args:
@@ -169,13 +169,19 @@ def connect(
     node, nxt, _, qlen, _, _, ok, _ = jax.lax.while_loop(cond, body, carry)
     ok &= qlen == 0
 
-    # Follow the links from node 0: one O(capacity) pass.
-    def follow(ptr, _):
-        alive = ptr >= 0
-        p = jnp.maximum(ptr, 0)
-        return jnp.where(alive, nxt[p], -1), (node[p], alive)
+    # Follow the links from node 0. A while_loop, so that a batch of short bridges (the
+    # mutations' case) stops after the longest chain instead of after `capacity` steps.
+    def follow_cond(c):
+        return (c[0] >= 0) & (c[0] < capacity) & (c[1] < capacity)
 
-    _, (seq, keep) = jax.lax.scan(follow, jnp.int32(0), None, length=capacity)
+    def follow_body(c):
+        ptr, j, seq = c
+        return nxt[ptr], j + 1, jax.lax.dynamic_update_index_in_dim(seq, node[ptr], j, 0)
+
+    _, n_seq, seq = jax.lax.while_loop(
+        follow_cond, follow_body, (jnp.int32(0), jnp.int32(0), jnp.zeros((capacity,), i32))
+    )
+    keep = jnp.arange(capacity, dtype=i32) < n_seq
 
     # Make every diagonal step legal under the corner rule (strict: via the free side).
     there = jnp.concatenate([seq[1:], seq[-1:]])
