@@ -10,7 +10,7 @@ has none, the connection fails.
 Gaps are independent of each other, so :func:`connect` runs the paper's loop in rounds
 that insert a median into every open gap at once, keeping the path as a linked list and
 the open gaps as a small work queue: a round costs ``O(open gaps)``, not ``O(capacity)``,
-and only one final pass is proportional to the capacity.
+and only the final walk along the links is proportional to the length of the result.
 
 The papers' GAs allow squeezing diagonally between obstacles (corner rule ``"free"``).
 Under ``"strict"``, a diagonal step past a blocked side cell is made legal by inserting
