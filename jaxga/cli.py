@@ -103,6 +103,79 @@ def cmd_maps(args: argparse.Namespace) -> int:
     return 0
 
 
+def cmd_presets(args: argparse.Namespace) -> int:
+    """``jaxga presets``: list the presets with their papers."""
+    from jaxga.presets import preset_info
+
+    for name, paper, description in preset_info():
+        print(f"{name:10s} {paper}")
+        if description:
+            print(f"{'':10s} {description}")
+    return 0
+
+
+class _Progress:
+    """A one-line progress bar on stderr, shown only for runs longer than ~2 s."""
+
+    def __init__(self) -> None:
+        self.t0 = time.perf_counter()
+        self.shown = False
+
+    def __call__(self, stage: str, frac: float) -> None:
+        if time.perf_counter() - self.t0 < 2.0 and frac < 1.0 and not self.shown:
+            return
+        self.shown = True
+        bar = "#" * int(30 * frac)
+        print(f"\r{stage:8s} [{bar:30s}] {100 * frac:5.1f}%", end="", file=sys.stderr,
+              flush=True)
+        if stage == "evolve" and frac >= 1.0:
+            print(file=sys.stderr)
+
+
+def cmd_run(args: argparse.Namespace) -> int:
+    """``jaxga run``: many seeds of a preset on a map; summary table, JSON, plot."""
+    from jaxga.api import run
+
+    progress = None if args.quiet else _Progress()
+    result = run(
+        args.preset, _grid_for_run(args), seeds=args.seeds, generations=args.generations,
+        corner_rule=args.corner_rule, variant=args.variant, sets=args.set or (),
+        progress=progress, chunks=10 if progress else 1,
+    )
+    print(result.summary())
+    if args.json:
+        with open(args.json, "w", encoding="utf-8") as f:
+            json.dump(result.to_json(), f)
+            f.write("\n")
+        print(f"wrote {args.json}")
+    if args.plot:
+        from jaxga.plot import plot_result
+
+        plot_result(result, _grid_for_run(args, rule=result.corner_rule), args.plot)
+        print(f"wrote {args.plot}")
+    if not result.success.any():
+        print(f"jaxga: no path: {result.reason}", file=sys.stderr)
+        return EXIT_NO_PATH
+    return 0
+
+
+def _grid_for_run(args: argparse.Namespace, rule: str | None = None):
+    """The map as named on the command line (endpoints applied); the corner rule is the
+    run's (the preset's unless --corner-rule)."""
+    from jaxga.maps import load_map
+
+    if args.start is None and args.goal is None and rule is None:
+        return args.map
+    return load_map(args.map, start=args.start, goal=args.goal,
+                    corner_rule=rule or args.corner_rule or _preset_rule(args))
+
+
+def _preset_rule(args: argparse.Namespace) -> str:
+    from jaxga.presets import load_preset
+
+    return load_preset(args.preset, variant=args.variant, sets=args.set or ())["map.corner_rule"]
+
+
 def build_parser() -> argparse.ArgumentParser:
     """The argument parser of the ``jaxga`` command."""
     parser = argparse.ArgumentParser(
@@ -115,6 +188,22 @@ def build_parser() -> argparse.ArgumentParser:
     _add_map_arguments(p)
     p.add_argument("--json", metavar="OUT", help="write the optima and paths as JSON")
     p.set_defaults(func=cmd_optimum)
+
+    p = sub.add_parser("run", help="run a preset on a map for many seeds")
+    p.add_argument("--preset", required=True, help="a preset name (jaxga presets) or a TOML file")
+    _add_map_arguments(p)
+    p.add_argument("--variant", help="a preset variant, e.g. 50x50 for agacd")
+    p.add_argument("--seeds", type=int, default=10, help="number of seeded runs (default 10)")
+    p.add_argument("--generations", type=int, help="override the preset's generations")
+    p.add_argument("--set", action="append", metavar="KEY=VALUE",
+                   help="override a configuration key, e.g. crossover.probability=0.7")
+    p.add_argument("--json", metavar="OUT", help="write every run as JSON")
+    p.add_argument("--plot", metavar="OUT.png", help="plot the map, best paths and convergence")
+    p.add_argument("--quiet", action="store_true", help="no progress bar")
+    p.set_defaults(func=cmd_run)
+
+    p = sub.add_parser("presets", help="list the presets and their papers")
+    p.set_defaults(func=cmd_presets)
 
     p = sub.add_parser("maps", help="list the built-in maps")
     p.set_defaults(func=cmd_maps)

@@ -1,0 +1,438 @@
+"""The evolution engine: one generation as a composition of stages, a run as a ``lax.scan``.
+
+SPEC 8, 10. A generation is
+
+    selection -> crossover -> mutation -> (simplification) -> evaluation
+
+each stage a pure function chosen by the configuration (:mod:`jaxga.config`) from the
+operator families (:mod:`jaxga.selection`, :mod:`jaxga.crossover`,
+:mod:`jaxga.mutation`, :mod:`jaxga.postprocess`). A run is ``init`` followed by a
+``lax.scan`` over generations with no host round-trip; IMGA's stagnation rule freezes a
+run inside the scan. Many runs are a ``jax.vmap`` over PRNG keys and over the dynamic
+parameters (probabilities, weights, temperatures) and the active population size.
+
+Populations always carry an island axis: ``cells int32[I, P, L]``. A single-population
+GA is ``I = 1``; the multi-population model (MPMGA) is the same generation ``vmap``-ed
+over islands followed by a migration (:mod:`jaxga.islands`).
+
+The population size is a static *capacity* ``P`` plus a dynamic ``active`` count:
+individuals at positions ``>= active`` are computed but never selected, counted or
+reported, so a sweep over population sizes is one compiled call.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import functools
+from collections.abc import Callable
+from typing import Any
+
+import jax
+import jax.numpy as jnp
+
+from jaxga import crossover as cx
+from jaxga import mutation as mu
+from jaxga import objectives
+from jaxga import postprocess as post
+from jaxga import selection as sel
+from jaxga.batching import over_individuals
+from jaxga.config import Config
+from jaxga.errors import ParameterError
+from jaxga.grid import Grid
+from jaxga.init import get_initialiser, initialise
+from jaxga.paths import Population, has_endpoints, is_continuous, is_feasible, remove_loops
+
+F32 = jnp.float32
+I32 = jnp.int32
+
+# Fitness parameters of each combiner: config key suffix -> keyword of the objective.
+FITNESS_PARAMS: dict[str, tuple[str, ...]] = {
+    "sga": (),
+    "imga": ("a", "b", "c"),
+    "agacd": ("smoothness_floor",),
+    "mpmga": ("alpha", "beta", "c", "smoothness_floor"),
+    "iga_zhu": ("omega", "c1", "c2", "c3"),
+    "iga_zhang": ("a", "v", "v_t", "r"),
+}
+WAYPOINT_ALGORITHMS = ("cut_and_check",)  # crossovers that work on waypoint paths (AGACD)
+
+
+@dataclasses.dataclass(frozen=True)
+class Algorithm:
+    """The static part of a GA: which operators, which sizes (a hashable jit argument)."""
+
+    config: Config
+    population: int
+    capacity: int
+    generations: int
+    islands: int
+    waypoints: bool
+
+    def get(self, key: str, default: Any = None) -> Any:
+        return self.config.get(key, default)
+
+
+def default_capacity(grid: Grid) -> int:
+    """Path capacity used when the configuration says 0: ``4 * (H + W)`` nodes."""
+    return 4 * (grid.height + grid.width)
+
+
+def build(config: Config, grid: Grid, population: int | None = None) -> tuple[Algorithm, dict]:
+    """The static :class:`Algorithm` and the dynamic parameter pytree of a configuration.
+
+    ``population`` overrides the population capacity (for sweeps over sizes; the
+    ``active`` parameter then says how many are used).
+    """
+    size = int(config["population.size"])
+    cap_p = max(size, population or 0)
+    capacity = int(config["population.capacity"]) or default_capacity(grid)
+    islands = int(config["islands.count"])
+    algo = Algorithm(
+        config=config,
+        population=cap_p,
+        capacity=capacity,
+        generations=int(config["generations"]),
+        islands=islands,
+        waypoints=config["crossover.method"] in WAYPOINT_ALGORITHMS
+        or config["mutation.method"] == "point_checked",
+    )
+    return algo, default_params(config, islands)
+
+
+def default_params(config: Config, islands: int = 1) -> dict[str, jax.Array]:
+    """Dynamic parameters (float32 scalars, or ``[islands]`` arrays for per-island rates)."""
+    params: dict[str, jax.Array] = {
+        k: jnp.asarray(v, F32) for k, v in config.dynamic().items()
+    }
+    params["population.active"] = jnp.asarray(config["population.size"], I32)
+    method = config["fitness.method"]
+    if method == "agacd":
+        ratios = config.get("fitness.importance_ratios", (1.2, 1.4))
+        params["fitness.weights"] = objectives.delphi_weights(jnp.asarray(ratios, F32))
+    for key in ("crossover.probability", "mutation.probability"):
+        per_island = config.get(
+            "islands." + key.split(".")[0].replace("crossover", "crossover_probabilities")
+            .replace("mutation", "mutation_probabilities")
+        )
+        if per_island is not None:
+            if len(per_island) != islands:
+                raise ParameterError(
+                    f"islands.{key.split('.')[0]}_probabilities has {len(per_island)} entries "
+                    f"for {islands} islands"
+                )
+            params[key] = jnp.asarray(per_island, F32)
+    return params
+
+
+# ----------------------------------------------------------------------------- stages
+def fitness_function(algo: Algorithm, params: dict) -> Callable:
+    """``f(grid, cells, length, feasible) -> f32`` with the configured combiner and weights."""
+    method = algo.get("fitness.method")
+    fn = getattr(objectives, method)
+    kwargs = {}
+    for name in FITNESS_PARAMS[method]:
+        key = f"fitness.{name}"
+        if key in params:
+            kwargs[name] = params[key]
+    if method == "agacd":
+        kwargs["weights"] = params["fitness.weights"]
+    return functools.partial(fn, **kwargs)
+
+
+def feasibility(algo: Algorithm, grid: Grid, cells: jax.Array, length: jax.Array) -> jax.Array:
+    """Whether a path is a valid answer: from start to goal, continuous (or, for waypoint
+    algorithms, every segment clear)."""
+    ok = has_endpoints(grid, cells, length)
+    if algo.waypoints:
+        return ok & is_feasible(grid, cells, length)
+    return ok & is_continuous(grid, cells, length)
+
+
+def evaluate(algo: Algorithm, grid: Grid, params: dict, cells, length, active) -> tuple:
+    """``(fitness f32[P], feasible bool[P])``; infeasible or inactive -> fitness 0."""
+    fit = fitness_function(algo, params)
+    feas = jax.vmap(lambda c, n: feasibility(algo, grid, c, n))(cells, length)
+    f = jax.vmap(lambda c, n, ok: fit(grid, c, n, ok))(cells, length, feas)
+    return jnp.where(active, f, 0.0).astype(F32), feas & active
+
+
+def _select(algo: Algorithm, key, fitness, active) -> jax.Array:
+    method = algo.get("selection.method")
+    if method == "none":
+        return jnp.arange(fitness.shape[0], dtype=I32)
+    fn = sel.SELECTIONS[method]
+    if method == "tournament":
+        fn = functools.partial(fn, k=int(algo.get("selection.tournament_size")))
+    return fn(key, fitness, active)
+
+
+def _crossover(algo: Algorithm, key, grid, pop, fitness, active, t, params, fit_fn):
+    method = algo.get("crossover.method")
+    if method == "none":
+        return pop, jnp.int32(0)
+    if algo.get("crossover.adaptive"):
+        pc = cx.adaptive_pair_probability(
+            fitness, t, algo.generations, params["crossover.pc_low"],
+            params["crossover.pc_high"], active,
+        )
+    else:
+        pc = params["crossover.probability"]
+    if method == "zhu_mixed":
+        k_half, key = jax.random.split(key)
+        use_a = mu.split_half(k_half, pop.size // 2)
+        op = _either_pair(cx.common_point, functools.partial(cx.column, fitness_fn=fit_fn))
+        return cx.crossover_population(op)(key, grid, pop, pc, use_a)
+    op = cx.CROSSOVERS[method]
+    if method in ("heterologous", "column"):
+        op = functools.partial(op, fitness_fn=fit_fn)
+    return cx.crossover_population(op)(key, grid, pop, pc)
+
+
+def _either_pair(op_a: Callable, op_b: Callable) -> Callable:
+    """Zhu & Pan section 4.4: a pair goes through ``op_a`` where ``use_a`` else ``op_b``."""
+
+    def op(key, grid, c1, l1, c2, l2, use_a):
+        a = op_a(key, grid, c1, l1, c2, l2)
+        b = op_b(key, grid, c1, l1, c2, l2)
+        return tuple(jnp.where(use_a, x, y) for x, y in zip(a, b))
+
+    return op
+
+
+MUTATIONS: dict[str, Callable] = {
+    "neighbour_point": mu.neighbour_point,
+    "one_point": mu.one_point,
+    "range": mu.range_mutation,
+    "corner_cut": mu.corner_cut,
+}
+
+
+def _mutation(algo: Algorithm, key, grid, pop, fitness, active, t, params, fit_fn):
+    method = algo.get("mutation.method")
+    if method == "none":
+        return pop, jnp.int32(0)
+    if algo.get("mutation.adaptive"):
+        f_max = jnp.max(jnp.where(active, fitness, -jnp.inf))
+        f_avg = jnp.sum(jnp.where(active, fitness, 0.0)) / jnp.maximum(jnp.sum(active), 1)
+        pm = mu.adaptive_mutation_probability(
+            fitness, f_max, f_avg, t, algo.generations, params["mutation.pm_low"],
+            params["mutation.pm_high"],
+        )
+    else:
+        pm = jnp.broadcast_to(params["mutation.probability"], (pop.size,))
+    extra: tuple = ()
+    if method == "zhu_mixed":
+        k_half, key = jax.random.split(key)
+        op = mu.either(mu.one_point, mu.range_mutation)
+        extra = (mu.split_half(k_half, pop.size),)
+    elif method == "segment_sa":
+        temperature = params["mutation.temperature_c1"] * params["mutation.temperature_w"] ** t
+        op = functools.partial(mu.segment_sa, temperature=temperature, fitness_fn=fit_fn)
+    elif method == "point_checked":
+        op = functools.partial(mu.point_checked, radius=int(algo.get("mutation.radius", 2)))
+    else:
+        op = MUTATIONS[method]
+    gated = mu.with_probability(op)
+    return over_individuals(gated)(key, grid, pop, pm, *extra)
+
+
+def _simplify(algo: Algorithm, key, grid, pop, params):
+    method = algo.get("simplify.method")
+    if method == "none":
+        return pop, jnp.int32(0)
+    if method == "corner_cut":
+        op = mu.corner_cut
+    else:
+        def op(k, g, c, n):  # "nothing to simplify" is not a failure
+            c2, n2, _ = post.simplify_adjacent(k, g, c, n)
+            return c2, n2, jnp.bool_(False)
+    gated = mu.with_probability(op)
+    ps = jnp.broadcast_to(params["simplify.probability"], (pop.size,))
+    return over_individuals(gated)(key, grid, pop, ps)
+
+
+# ------------------------------------------------------------------------------ state
+@jax.tree_util.register_dataclass
+@dataclasses.dataclass(frozen=True)
+class IslandState:
+    """One population (one island): paths, fitness, feasibility."""
+
+    cells: jax.Array  # int32[P, L]
+    length: jax.Array  # int32[P]
+    fitness: jax.Array  # float32[P]
+    feasible: jax.Array  # bool[P]
+
+
+@jax.tree_util.register_dataclass
+@dataclasses.dataclass(frozen=True)
+class GAState:
+    """The state of one run: islands, the best path so far, counters."""
+
+    islands: IslandState  # leading axis I
+    best_cells: jax.Array  # int32[L]
+    best_length: jax.Array  # int32
+    best_fitness: jax.Array  # float32 (0 while no feasible path was seen)
+    generation: jax.Array  # int32
+    stall: jax.Array  # int32: generations without improvement
+    frozen: jax.Array  # bool: stagnation rule fired
+    failures: jax.Array  # int32[3]: crossover, mutation, simplification failures
+
+
+def _active(algo: Algorithm, params: dict) -> jax.Array:
+    return jnp.arange(algo.population, dtype=I32) < params["population.active"]
+
+
+def _best_of(state_islands: IslandState) -> tuple:
+    f = state_islands.fitness.reshape(-1)
+    k = jnp.argmax(f)
+    cells = state_islands.cells.reshape(-1, state_islands.cells.shape[-1])[k]
+    return cells, state_islands.length.reshape(-1)[k], f[k]
+
+
+def init_state(algo: Algorithm, key: jax.Array, grid: Grid, params: dict) -> tuple:
+    """Initial population of every island (SPEC 4) and its evaluation.
+
+    Returns ``(GAState, init_success_rate, n_unfilled)``.
+    """
+    init_fn = get_initialiser(algo.get("init.method"))
+    keys = jax.random.split(key, algo.islands)
+    active = _active(algo, params)
+
+    def one(k):
+        pop, stats = initialise(
+            k, grid, init_fn, algo.population, algo.capacity,
+            max_tries=int(algo.get("init.max_tries")),
+        )
+        fitness, feas = evaluate(algo, grid, params, pop.cells, pop.length, active)
+        return IslandState(pop.cells, pop.length, fitness, feas), stats
+
+    islands, stats = jax.vmap(one)(keys)
+    best_c, best_n, best_f = _best_of(islands)
+    state = GAState(
+        islands=islands, best_cells=best_c, best_length=best_n, best_fitness=best_f,
+        generation=jnp.int32(0), stall=jnp.int32(0), frozen=jnp.bool_(False),
+        failures=jnp.zeros(3, I32),
+    )
+    return state, stats
+
+
+def island_generation(algo: Algorithm, key, grid: Grid, isl: IslandState, t, params: dict):
+    """One generation of one island: selection -> crossover -> mutation -> simplify -> eval."""
+    active = _active(algo, params)
+    fit_fn = fitness_function(algo, params)
+    k_sel, k_cx, k_mu, k_si = jax.random.split(key, 4)
+    idx = _select(algo, k_sel, isl.fitness, active)
+    pop = Population(isl.cells[idx], isl.length[idx])
+    fitness = isl.fitness[idx]
+    pop, f_cx = _crossover(algo, k_cx, grid, pop, fitness, active, t, params, fit_fn)
+    if algo.get("mutation.adaptive") or algo.get("mutation.method") == "segment_sa":
+        fitness, _ = evaluate(algo, grid, params, pop.cells, pop.length, active)
+    pop, f_mu = _mutation(algo, k_mu, grid, pop, fitness, active, t, params, fit_fn)
+    pop, f_si = _simplify(algo, k_si, grid, pop, params)
+    new_fitness, feas = evaluate(algo, grid, params, pop.cells, pop.length, active)
+    return IslandState(pop.cells, pop.length, new_fitness, feas), jnp.stack([f_cx, f_mu, f_si])
+
+
+def _island_params(params: dict, islands: int) -> tuple[dict, dict]:
+    """Split params into per-island ones (leading axis I) and shared ones."""
+    per = {k: v for k, v in params.items() if jnp.ndim(v) == 1 and v.shape[0] == islands
+           and k.endswith("probability")}
+    shared = {k: v for k, v in params.items() if k not in per}
+    return per, shared
+
+
+def generation(algo: Algorithm, key, grid: Grid, state: GAState, params: dict):
+    """One generation of a run (every island, then migration); honours the freeze."""
+    from jaxga.islands import migrate
+
+    t = state.generation
+    per, shared = _island_params(params, algo.islands)
+    keys = jax.random.split(key, algo.islands + 1)
+
+    def one(k, isl, p_isl):
+        return island_generation(algo, k, grid, isl, t, {**shared, **p_isl})
+
+    islands, fails = jax.vmap(one)(keys[:-1], state.islands, per)
+    islands = migrate(algo, keys[-1], islands, t, _active(algo, params))
+    best_c, best_n, best_f = _best_of(islands)
+    better = best_f > state.best_fitness
+    new = GAState(
+        islands=islands,
+        best_cells=jnp.where(better, best_c, state.best_cells),
+        best_length=jnp.where(better, best_n, state.best_length),
+        best_fitness=jnp.where(better, best_f, state.best_fitness),
+        generation=t + 1,
+        stall=jnp.where(better, 0, state.stall + 1),
+        frozen=state.frozen,
+        failures=state.failures + jnp.sum(fails, axis=0),
+    )
+    k_stop = int(algo.get("termination.stagnation"))
+    if k_stop > 0:
+        new = dataclasses.replace(new, frozen=new.stall >= k_stop)
+    return jax.tree_util.tree_map(lambda old, nw: jnp.where(state.frozen, old, nw), state, new)
+
+
+def history_row(algo: Algorithm, state: GAState, params: dict) -> dict:
+    """Best-so-far, mean and sd of the active fitness (MPMGA Figs. 15-17)."""
+    active = jnp.broadcast_to(_active(algo, params), state.islands.fitness.shape)
+    f = state.islands.fitness
+    n = jnp.maximum(jnp.sum(active), 1)
+    mean = jnp.sum(jnp.where(active, f, 0.0)) / n
+    var = jnp.sum(jnp.where(active, (f - mean) ** 2, 0.0)) / n
+    return {"best": state.best_fitness, "mean": mean, "std": jnp.sqrt(var)}
+
+
+def evolve(algo: Algorithm, key, grid: Grid, state: GAState, params: dict,
+           generations: int | None = None):
+    """``lax.scan`` over generations; returns ``(final state, history)``.
+
+    Generation ``t`` uses the key ``fold_in(key, t)``, so running ``G`` generations in one
+    call or in chunks (for a progress bar) gives the same result. The history holds, per
+    generation, the best-so-far fitness and the mean and sd of the active fitness.
+    """
+    n = algo.generations if generations is None else generations
+    ts = state.generation + jnp.arange(n, dtype=I32)
+
+    def body(st, t):
+        st = generation(algo, jax.random.fold_in(key, t), grid, st, params)
+        return st, history_row(algo, st, params)
+
+    return jax.lax.scan(body, state, ts)
+
+
+def finish(algo: Algorithm, grid: Grid, state: GAState, history: dict, params: dict,
+           initial_best: jax.Array | None = None) -> dict:
+    """Post-optimise the best path and compute the reported metrics (SPEC 3, 9, 10).
+
+    ``convergence_generation`` is the first generation whose best-so-far fitness equals
+    the final best (AGACD Tables 8, 12): 0 when the initial population already held it
+    (pass ``initial_best``), -1 when no feasible path was found.
+    """
+    raw_c, raw_n = state.best_cells, state.best_length
+    success = state.best_fitness > 0
+    if algo.get("post.method") == "shortcut_greedy":
+        opt_c, opt_n = post.shortcut_greedy(grid, raw_c, raw_n)
+    else:
+        opt_c, opt_n = remove_loops(raw_c, raw_n, grid.n_cells)
+    best = history["best"]
+    if initial_best is not None:
+        best = jnp.concatenate([jnp.reshape(initial_best, (1,)), best])
+        offset = 0
+    else:
+        offset = 1
+    reached = best >= state.best_fitness
+    conv = jnp.argmax(reached).astype(I32) + offset
+    return {
+        "success": success,
+        "raw_cells": raw_c, "raw_length": raw_n,
+        "cells": opt_c, "length": opt_n,
+        "fitness": state.best_fitness,
+        "raw_path_length": objectives.path_length(grid, raw_c, raw_n),
+        "path_length": objectives.path_length(grid, opt_c, opt_n),
+        "raw_metrics": objectives.metrics(grid, raw_c, raw_n)._asdict(),
+        "metrics": objectives.metrics(grid, opt_c, opt_n)._asdict(),
+        "convergence_generation": jnp.where(success, conv, -1),
+        "generations_run": state.generation,
+        "failures": state.failures,
+        "feasible_post": is_feasible(grid, opt_c, opt_n) & has_endpoints(grid, opt_c, opt_n),
+    }
