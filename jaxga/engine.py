@@ -171,9 +171,15 @@ def _crossover(algo: Algorithm, key, grid, pop, fitness, active, t, params, fit_
     if method == "none":
         return pop, jnp.int32(0)
     if algo.get("crossover.adaptive"):
-        pc = cx.adaptive_pair_probability(
-            fitness, t, algo.generations, params["crossover.pc_low"],
-            params["crossover.pc_high"], active,
+        # AGACD eq. 26-27: f = the fitter of the pair; f_max, f_avg of the population
+        # (taken over the selected pool, which is the population entering crossover).
+        n_pairs = fitness.shape[0] // 2
+        f_max = jnp.max(jnp.where(active, fitness, -jnp.inf))
+        f_avg = jnp.sum(jnp.where(active, fitness, 0.0)) / jnp.maximum(jnp.sum(active), 1)
+        f_pair = jnp.maximum(fitness[0:2 * n_pairs:2], fitness[1:2 * n_pairs:2])
+        pc = cx.adaptive_crossover_probability(
+            f_pair, f_max, f_avg, t, algo.generations, params["crossover.pc_low"],
+            params["crossover.pc_high"],
         )
     else:
         pc = params["crossover.probability"]

@@ -54,7 +54,7 @@ def _pick_free_neighbour(
     n_free = jnp.sum(free, axis=-1, dtype=jnp.int32)
     rank = (bits % jnp.maximum(n_free, 1).astype(jnp.uint32)).astype(jnp.int32)
     hit = free & (jnp.cumsum(free, axis=-1, dtype=jnp.int32) - 1 == rank[..., None])
-    pick = jnp.sum(jnp.where(hit, ny * w + nx, 0), axis=-1)
+    pick = jnp.sum(jnp.where(hit, ny * w + nx, 0), axis=-1, dtype=jnp.int32)
     return pick, n_free > 0
 
 

@@ -9,6 +9,7 @@ from __future__ import annotations
 import jax
 import jax.numpy as jnp
 import numpy as np
+from hypothesis import reject
 from hypothesis import strategies as st
 
 from jaxga import Grid
@@ -64,4 +65,7 @@ def grids_and_parents(draw, n: int = 8, **grid_kwargs):
     """A random grid and ``n`` valid parents on it."""
     grid = draw(grids(**grid_kwargs))
     seed = draw(st.integers(0, 2**20))
-    return grid, random_parents(grid, n, seed)
+    try:
+        return grid, random_parents(grid, n, seed)
+    except RuntimeError:  # median insertion rarely closes on this grid: draw another
+        reject()

@@ -1,0 +1,189 @@
+"""Initialisation study: the layout of Zhu & Pan 2024 Table 2 for every jaxga initialiser.
+
+For each initialiser of :mod:`jaxga.init` (plus Zhu & Pan's "CGA", the unadjusted 1/d
+roulette = ``directional`` with ``factors=(1, 1)``) on each classic 20 x 20 built-in map
+(corner rule "free", as the papers; start cell 0, goal cell 399):
+
+* per-attempt success rate, from ``--attempts`` independent attempts (one vmapped call
+  at population-sized batches of keys; Zhu Table 2 reports successes per 100 attempts);
+* microseconds per attempt (jit + vmap over 100 keys, capacity 160, warm);
+* time to build a population of ``--size`` valid individuals with
+  :func:`jaxga.init.initialise` (redraws included), after compilation: median over
+  ``--repeats`` different keys; the compile time is reported separately;
+* mean and sd of the Euclidean lengths (:func:`jaxga.objectives.path_length`) of all
+  individuals built (sd over individuals, which is the scale of Zhu's Table 2 sd column).
+
+Usage::
+
+    PYTHONPATH=. python benchmarks/init_study.py [--size 200] [--repeats 5] [--no-append]
+
+Prints a markdown table and appends it to ``benchmarks/RESULTS.md`` with the command,
+date, machine and load average.
+"""
+
+from __future__ import annotations
+
+import argparse
+import datetime
+import functools
+import math
+import os
+import platform
+import sys
+import time
+from pathlib import Path
+
+import jax
+import numpy as np
+
+from jaxga import init as I
+from jaxga.maps import builtin_names, load_map
+from jaxga.objectives import path_length
+from jaxga.paths import population_map
+
+CAPACITY = 160
+
+METHODS = {
+    "random_walk (GA)": I.random_walk,
+    "directional 1/d (CGA)": functools.partial(I.directional, factors=(1.0, 1.0)),
+    "directional (Zhu IGA)": I.directional,
+    "median_insertion (IMGA)": I.median_insertion,
+    "intermittent_connect (MPMGA)": I.intermittent_connect,
+    "greedy_random_target (AGACD)": I.greedy_random_target,
+}
+
+
+def _block(x):
+    return jax.tree_util.tree_map(lambda a: a.block_until_ready(), x)
+
+
+def study(size: int, repeats: int, attempts: int, maps: list[str]) -> list[dict]:
+    rows = []
+    lengths_of = jax.jit(population_map(path_length))
+    for map_name in maps:
+        grid = load_map(map_name, corner_rule="free")
+        for label, fn in METHODS.items():
+            # Per-attempt success rate and cost per attempt (batches of 100 keys).
+            batch = jax.jit(jax.vmap(lambda k, fn=fn, grid=grid: fn(k, grid, CAPACITY)))
+            keys = jax.random.split(jax.random.PRNGKey(12345), attempts)
+            _block(batch(keys[:100]))
+            ok_total, times = 0, []
+            for i in range(0, attempts, 100):
+                t0 = time.perf_counter()
+                out = _block(batch(keys[i : i + 100]))
+                times.append(time.perf_counter() - t0)
+                ok_total += int(np.sum(np.asarray(out[2])))
+            rate = ok_total / attempts
+            us_attempt = float(np.median(times)) / 100 * 1e6
+            # Population of `size` valid individuals. Rounds of `chunk` candidates, chunk
+            # sized from the measured rate so that about one or two rounds suffice.
+            chunk = int(min(8000, max(size, math.ceil(1.3 * size / max(rate, 1e-3) / 100) * 100)))
+            max_tries = max(1, math.ceil(20 * chunk / size))
+
+            def build(key, fn=fn, grid=grid, chunk=chunk, max_tries=max_tries):
+                return I.initialise(key, grid, fn, size, CAPACITY, max_tries=max_tries,
+                                    chunk=chunk)
+
+            # Compile time: ahead-of-time lowering + compilation with empty caches (the
+            # jitted initialise would otherwise reuse the executable of the previous map).
+            jax.clear_caches()
+            t0 = time.perf_counter()
+            I.initialise.lower(jax.random.PRNGKey(0), grid, fn, size, CAPACITY,
+                               max_tries=max_tries, chunk=chunk).compile()
+            compile_s = time.perf_counter() - t0
+            _block(build(jax.random.PRNGKey(0)))  # warm the jit cache
+            build_times, lens, failed, init_rates = [], [], 0, []
+            for r in range(1, repeats + 1):
+                t0 = time.perf_counter()
+                pop, st = _block(build(jax.random.PRNGKey(r)))
+                build_times.append(time.perf_counter() - t0)
+                valid = np.asarray(st.valid)
+                failed += int(st.n_failed)
+                init_rates.append(float(st.success_rate))
+                lens.append(np.asarray(lengths_of(grid, pop.cells, pop.length))[valid])
+                if sum(build_times) > 30.0:  # very slow builds: fewer repeats
+                    break
+            lens = np.concatenate(lens) if lens else np.zeros(0)
+            rows.append(
+                dict(
+                    map=map_name, method=label, rate=rate, us_attempt=us_attempt,
+                    chunk=chunk, compile_s=compile_s,
+                    build_s=float(np.median(build_times)), failed=failed,
+                    mean=float(lens.mean()) if lens.size else float("nan"),
+                    sd=float(lens.std(ddof=1)) if lens.size > 1 else float("nan"),
+                    init_rate=float(np.mean(init_rates)), repeats=len(build_times),
+                )
+            )
+            r_ = rows[-1]
+            print(f"{map_name:40s} {label:30s} rate {100 * rate:6.2f}%  {us_attempt:7.1f} us/att  "
+                  f"build {r_['build_s']:.4f}s  compile {r_['compile_s']:.1f}s  "
+                  f"len {r_['mean']:.2f} +- {r_['sd']:.2f}  failed {failed}", flush=True)
+    return rows
+
+
+def table(rows: list[dict], size: int, repeats: int) -> str:
+    head = (
+        "| map | method | success per 100 attempts | us per attempt | "
+        f"time to build {size} (s) | builds timed | compile (s) | mean length | sd length | "
+        "unfilled |\n"
+        "|---|---|---:|---:|---:|---:|---:|---:|---:|---:|\n"
+    )
+    body = "".join(
+        f"| {r['map']} | {r['method']} | {100 * r['rate']:.2f} | {r['us_attempt']:.1f} | "
+        f"{r['build_s']:.4f} | {r['repeats']} | {r['compile_s']:.1f} | {r['mean']:.2f} | "
+        f"{r['sd']:.2f} | {r['failed']} |\n"
+        for r in rows
+    )
+    return head + body
+
+
+def main(argv=None) -> None:
+    ap = argparse.ArgumentParser(description=__doc__.split("\n")[0])
+    ap.add_argument("--size", type=int, default=200)
+    ap.add_argument("--repeats", type=int, default=5)
+    ap.add_argument("--attempts", type=int, default=2000)
+    ap.add_argument("--maps", nargs="*", default=None)
+    ap.add_argument("--no-append", action="store_true")
+    args = ap.parse_args(argv)
+    maps = args.maps or [n for n in builtin_names() if n.endswith("_20x20")]
+    start = datetime.datetime.now(datetime.timezone.utc)
+    rows = study(args.size, args.repeats, args.attempts, maps)
+    load = os.getloadavg()
+    md = table(rows, args.size, args.repeats)
+    print()
+    print(md)
+    machine = (
+        f"{platform.platform()}, {platform.machine()}, os.cpu_count() = {os.cpu_count()}, "
+        f"python {platform.python_version()}, jax {jax.__version__} "
+        f"({jax.default_backend()}), load average {load[0]:.1f}, {load[1]:.1f}, {load[2]:.1f} "
+        "at the end (other engineers' jobs share the 2 cores: times are upper bounds)"
+    )
+    section = (
+        f"\n## init_study ({start:%Y-%m-%d %H:%M} UTC)\n\n"
+        f"Zhu & Pan 2024 Table 2 layout for every initialiser of `jaxga.init` on the classic "
+        f"20 x 20 maps (corner rule \"free\", start 0, goal 399, capacity {CAPACITY}). "
+        f"Success rate from {args.attempts} independent attempts; us per attempt = jit + "
+        f"vmap over 100 keys, warm, median; time to build {args.size} valid individuals "
+        f"with `jaxga.init.initialise` (redraws included, rounds of `chunk` candidates "
+        f"sized from the measured rate), median over {args.repeats} keys after compilation "
+        f"(fewer when the builds took over 30 s; compile time = ahead-of-time compilation of "
+        f"`initialise` with empty caches); length = Euclidean path length of all individuals "
+        f"built, "
+        f"sd over individuals; unfilled = individuals still missing after the redraw budget "
+        f"(summed over the repeats).\n\n"
+        f"- command: `PYTHONPATH=. {Path(sys.executable).as_posix()} "
+        f"benchmarks/init_study.py {' '.join(argv if argv is not None else sys.argv[1:])}`\n"
+        f"- machine: {machine}\n"
+        "- paper (Zhu & Pan Table 2, MATLAB, 30 runs, their Map 3 = classic_ga_gapp3, "
+        "Map 4 = routeplanning_yangbo): GA 3.57 / 3.03 successes per 100, CGA 5.42 / 4.12, "
+        "IGA 34.1 / 24.15; IGA time for 200: 0.445 / 0.731 s; IGA mean length 71.4 / 81.3 "
+        "(sd 16.4 / 19.0)\n\n" + md
+    )
+    if not args.no_append:
+        with open(Path(__file__).parent / "RESULTS.md", "a") as f:
+            f.write(section)
+        print("appended to benchmarks/RESULTS.md")
+
+
+if __name__ == "__main__":
+    main()

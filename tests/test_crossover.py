@@ -1,0 +1,665 @@
+"""Crossover operators (SPEC 6): properties, the papers' worked examples, statistics.
+
+Every operator is run under ``jax.jit`` through :func:`jaxga.batching.over_pairs` (the
+vmap over pairs) and compared with an independent pure-Python reference that enumerates
+every possible crossing choice: the operator's output must be the outcome of one of them
+(children with loops cut, capacity failures keeping the parent, rejections keeping the
+parent), so loop removal, the failure contract and acceptance rules are checked exactly.
+"""
+
+from __future__ import annotations
+
+import functools
+
+import jax
+import jax.numpy as jnp
+import numpy as np
+import pytest
+import scipy.stats
+from hypothesis import given, reject, settings
+from hypothesis import strategies as st
+
+from jaxga import Grid
+from jaxga import crossover as X
+from jaxga.batching import over_pairs
+from jaxga.geometry import clear
+from jaxga.grid import DIRECTIONS
+from jaxga.maps.preprocess import legal_moves
+from jaxga.paths import (
+    Population,
+    has_endpoints,
+    is_continuous,
+    is_feasible,
+    is_loop_free,
+    remove_loops,
+)
+from jaxga.repair import connect
+from tests.strategies import CAP, SIZE, grids, random_parents
+
+N_CELLS = SIZE * SIZE
+
+
+@st.composite
+def grids_and_parents(draw, n: int = 8):
+    """tests.strategies.grids_and_parents, rejecting the rare grid on which
+    random_parents cannot build parents (it raises RuntimeError)."""
+    grid = draw(grids())
+    seed = draw(st.integers(0, 2**20))
+    try:
+        return grid, random_parents(grid, n, seed)
+    except RuntimeError:
+        reject()
+
+
+def _len_fitness(grid, cells, length):
+    """Fitness 1 / node count: exact float32 comparisons for the Python reference."""
+    return 1.0 / jnp.asarray(length, jnp.float32)
+
+
+_OPS = {
+    "common_point": X.common_point,
+    "cut_and_check": X.cut_and_check,
+    "heterologous": functools.partial(X.heterologous, fitness_fn=_len_fitness),
+    "column": functools.partial(X.column, fitness_fn=_len_fitness),
+}
+_POP_OPS = {name: jax.jit(over_pairs(op)) for name, op in _OPS.items()}
+
+
+def _checks(grid, cells, length):
+    return (
+        has_endpoints(grid, cells, length),
+        is_continuous(grid, cells, length),
+        is_feasible(grid, cells, length),
+        is_loop_free(cells, length),
+    )
+
+
+_HPAIRS = jax.jit(X.heterologous_pairs)
+_CHECK = jax.jit(jax.vmap(_checks, in_axes=(None, 0, 0)))
+_CLEAR_ALL = jax.jit(
+    lambda g: jax.vmap(lambda a: jax.vmap(lambda b: clear(g, a, b))(jnp.arange(N_CELLS)))(
+        jnp.arange(N_CELLS)
+    )
+)
+
+
+# ------------------------------------------------------------ Python reference
+def _rl(seq):
+    """remove_loops in plain Python (MPMGA deletion operator)."""
+    last = {c: k for k, c in enumerate(seq)}
+    out, k = [], 0
+    while k < len(seq):
+        out.append(seq[k])
+        k = last[seq[k]] + 1
+    return out
+
+
+def _adjacency(grid):
+    """Python set of legal (a, b) steps, from jaxga.maps.preprocess.legal_moves."""
+    lm = legal_moves(grid.blocked_np(), grid.corner_rule)
+    w = grid.width
+    adj = set()
+    for d, (dx, dy) in enumerate(DIRECTIONS.tolist()):
+        for y, x in zip(*np.nonzero(lm[d])):
+            adj.add((y * w + x, (y + dy) * w + x + dx))
+    return adj
+
+
+def _common_outcomes(grid, p1, p2, cap):
+    out = []
+    s, g = int(grid.start), int(grid.goal)
+    for i in range(1, len(p1) - 1):
+        if p1[i] in (s, g) or p1[i] not in p2[1:-1]:
+            continue
+        j = p2.index(p1[i])
+        out.append(_outcome(_rl(p1[:i] + p2[j:]), _rl(p2[:j] + p1[i:]), p1, p2, cap))
+    return out
+
+
+def _outcome(k1, k2, p1, p2, cap, take1=True, take2=True, need1=True, need2=True):
+    f = int(len(k1) > cap and need1) + int(len(k2) > cap and need2)
+    o1 = k1 if (take1 and len(k1) <= cap) else p1
+    o2 = k2 if (take2 and len(k2) <= cap) else p2
+    return o1, o2, f
+
+
+def _cut_outcomes(grid, p1, p2, cap, clr):
+    out = []
+    for i in range(len(p1) - 1):
+        for j in range(len(p2) - 1):
+            k1 = _rl(p1[: i + 1] + p2[j + 1 :])
+            k2 = _rl(p2[: j + 1] + p1[i + 1 :])
+            ok1 = all(clr[a, b] for a, b in zip(k1, k1[1:]))
+            ok2 = all(clr[a, b] for a, b in zip(k2, k2[1:]))
+            out.append(_outcome(k1, k2, p1, p2, cap, ok1, ok2, ok1, ok2))
+    return out
+
+
+def _hetero_pairs(p1, p2, adj):
+    def near(a, b):
+        return a == b or (a, b) in adj
+
+    return {
+        (i, j)
+        for i in range(len(p1) - 1)
+        for j in range(len(p2) - 1)
+        if near(p1[i], p2[j + 1]) and near(p1[i + 1], p2[j])
+        and (i, j) not in ((0, 0), (len(p1) - 2, len(p2) - 2))
+    }
+
+
+def _hetero_outcomes(p1, p2, cap, adj):
+    out = []
+    for i, j in sorted(_hetero_pairs(p1, p2, adj)):
+        k1 = _rl(p1[: i + 1] + p2[j + 1 :])
+        k2 = _rl(p2[: j + 1] + p1[i + 1 :])
+        out.append(_outcome(k1, k2, p1, p2, cap, len(k1) < len(p1), len(k2) < len(p2)))
+    return out
+
+
+def _lists(cells, length):
+    return [np.asarray(cells)[k, : int(length[k])].tolist() for k in range(len(length))]
+
+
+def _waypoints(pop: Population, clr, seed):
+    """Waypoint parents: drop random non-consecutive interior nodes whose bypass is clear."""
+    rng = np.random.default_rng(seed)
+    paths = []
+    for p in pop.to_lists():
+        out, k = [p[0]], 1
+        while k < len(p) - 1:
+            if rng.random() < 0.6 and clr[out[-1], p[k + 1]]:
+                out.append(p[k + 1])  # skip node k
+                k += 2
+            else:
+                out.append(p[k])
+                k += 1
+        if out[-1] != p[-1]:
+            out.append(p[-1])
+        paths.append(out)
+    return Population.from_paths(paths, pop.capacity)
+
+
+def _run(name, grid, pop, seed):
+    out, n_failed = _POP_OPS[name](jax.random.PRNGKey(seed), grid, pop)
+    return out, int(n_failed)
+
+
+def _assert_valid(grid, out: Population, waypoint=False):
+    ends, cont, feas, loop_free = (np.asarray(v) for v in _CHECK(grid, out.cells, out.length))
+    assert ends.all() and loop_free.all() and feas.all()
+    assert np.all(np.asarray(out.length) <= out.capacity)
+    if not waypoint:
+        assert cont.all()
+    # padding repeats the last cell
+    for row, n in zip(np.asarray(out.cells), np.asarray(out.length)):
+        assert (row[n:] == row[n - 1]).all()
+
+
+def _assert_matches(got, outcomes, p1, p2, n_failed_pair):
+    """``got`` = (o1, o2) must be one of the reference outcomes (or the parents if none)."""
+    if not outcomes:
+        assert got == (p1, p2) and n_failed_pair == 0
+        return
+    matches = [f for o1, o2, f in outcomes if (o1, o2) == got]
+    assert matches, f"output {got} is not a possible outcome"
+    return matches
+
+
+# ----------------------------------------------------------------- properties
+@settings(max_examples=30)
+@given(grids_and_parents(n=8), st.integers(0, 2**30))
+def test_common_point_properties(gp, seed):
+    grid, pop = gp
+    out, n_failed = _run("common_point", grid, pop, seed)
+    _assert_valid(grid, out)
+    parents, kids = pop.to_lists(), out.to_lists()
+    fails = []
+    for k in range(0, 8, 2):
+        p1, p2 = parents[k], parents[k + 1]
+        got = (kids[k], kids[k + 1])
+        m = _assert_matches(got, _common_outcomes(grid, p1, p2, CAP), p1, p2, 0)
+        fails.append(0 if m is None else min(m))
+    assert n_failed == sum(fails)
+
+
+@settings(max_examples=30)
+@given(grids_and_parents(n=8), st.integers(0, 2**30), st.booleans())
+def test_cut_and_check_properties(gp, seed, waypoint):
+    """Continuous parents and waypoint parents (random clear bypasses): every segment of
+    every output is clear, endpoints kept, loop-free, and the output is a reference
+    outcome (junction clear -> child, else parent)."""
+    grid, pop = gp
+    clr = np.asarray(_CLEAR_ALL(grid))
+    if waypoint:
+        pop = _waypoints(pop, clr, seed)
+        assert np.asarray(_CHECK(grid, pop.cells, pop.length)[2]).all()
+    out, n_failed = _run("cut_and_check", grid, pop, seed)
+    _assert_valid(grid, out, waypoint=True)
+    parents, kids = pop.to_lists(), out.to_lists()
+    for k in range(0, 8, 2):
+        p1, p2 = parents[k], parents[k + 1]
+        _assert_matches((kids[k], kids[k + 1]), _cut_outcomes(grid, p1, p2, CAP, clr), p1, p2, 0)
+    assert n_failed == 0  # parents of <= 32 cells cannot overflow CAP = 64 children
+
+
+@settings(max_examples=30)
+@given(grids_and_parents(n=8), st.integers(0, 2**30))
+def test_heterologous_properties(gp, seed):
+    grid, pop = gp
+    adj = _adjacency(grid)
+    out, n_failed = _run("heterologous", grid, pop, seed)
+    _assert_valid(grid, out)
+    parents, kids = pop.to_lists(), out.to_lists()
+    for k in range(0, 8, 2):
+        p1, p2 = parents[k], parents[k + 1]
+        # the pair table equals the O(L^2) brute force
+        jtab, valid = _HPAIRS(grid, pop.cells[k], pop.length[k],
+                                           pop.cells[k + 1], pop.length[k + 1])
+        got_pairs = {(int(i), int(jtab[i, o])) for i, o in zip(*np.nonzero(np.asarray(valid)))}
+        assert got_pairs == _hetero_pairs(p1, p2, adj)
+        _assert_matches((kids[k], kids[k + 1]), _hetero_outcomes(p1, p2, CAP, adj), p1, p2, 0)
+        # a child only replaces its parent when strictly fitter (here: shorter)
+        assert len(kids[k]) <= len(p1) and len(kids[k + 1]) <= len(p2)
+    assert n_failed == 0
+
+
+@settings(max_examples=25)
+@given(grids_and_parents(n=8), st.integers(0, 2**30))
+def test_column_properties(gp, seed):
+    """Outputs are valid paths drawn from {P1, P2, child}; a failed pair returns exactly
+    its parents; failures are counted two per failed pair."""
+    grid, pop = gp
+    out, n_failed = _run("column", grid, pop, seed)
+    _assert_valid(grid, out)
+    parents, kids = pop.to_lists(), out.to_lists()
+    unchanged = 0
+    for k in range(0, 8, 2):
+        p1, p2 = parents[k], parents[k + 1]
+        o1, o2 = kids[k], kids[k + 1]
+        new = {tuple(o) for o in (o1, o2) if o not in (p1, p2)}
+        assert len(new) <= 1  # at most one distinct child per pair
+        unchanged += (o1, o2) == (p1, p2)
+    assert n_failed % 2 == 0 and n_failed // 2 <= unchanged
+
+
+_COLUMN_CHILD = jax.jit(jax.vmap(X.column_child, in_axes=(0, None, 0, 0, 0, 0)))
+
+
+@settings(max_examples=20)
+@given(grids_and_parents(n=8), st.integers(0, 2**30))
+def test_column_child_is_valid_when_ok(gp, seed):
+    grid, pop = gp
+    keys = jax.random.split(jax.random.PRNGKey(seed), 4)
+    c, n, ok = _COLUMN_CHILD(keys, grid, pop.cells[0::2], pop.length[0::2],
+                             pop.cells[1::2], pop.length[1::2])
+    ends, cont, _, lf = (np.asarray(v) for v in _CHECK(grid, c, n))
+    ok = np.asarray(ok)
+    assert (ends | ~ok).all() and (cont | ~ok).all() and (lf | ~ok).all()
+
+
+# ------------------------------------------------------------- exact examples
+def _imga_grid():
+    return Grid.create(np.zeros((10, 10), bool), corner_rule="free")
+
+
+def _imga(label):
+    """IMGA numbers the cells of its 10 x 10 map 1..100 (S = N_1, G = N_100, section 4.1
+    (2)); jaxga's index is number - 1. The crossover example does not depend on it."""
+    return {"S": 0, "G": 99}.get(label, None) if isinstance(label, str) else label - 1
+
+
+def test_imga_crossover_example():
+    """IMGA section 4.3.2: S-2-12-67-69-89-G x S-11-22-67-78-80-G at 67 ->
+    S-2-12-67-78-80-G and S-11-22-67-69-89-G (67 is the only common cell)."""
+    m1 = [_imga(v) for v in ("S", 2, 12, 67, 69, 89, "G")]
+    m2 = [_imga(v) for v in ("S", 11, 22, 67, 78, 80, "G")]
+    e1 = [_imga(v) for v in ("S", 2, 12, 67, 78, 80, "G")]
+    e2 = [_imga(v) for v in ("S", 11, 22, 67, 69, 89, "G")]
+    pop = Population.from_paths([m1, m2] * 4, 16)
+    out, n_failed = jax.jit(over_pairs(X.common_point))(jax.random.PRNGKey(3), _imga_grid(), pop)
+    assert out.to_lists() == [e1, e2] * 4 and int(n_failed) == 0
+
+
+def test_common_point_without_common_cell_returns_parents():
+    pop = Population.from_paths([[0, 1, 2, 99], [0, 10, 20, 99]], 8)
+    out = X.common_point(jax.random.PRNGKey(0), _imga_grid(), pop.cells[0], pop.length[0],
+                         pop.cells[1], pop.length[1])
+    assert np.array_equal(out[0], pop.cells[0]) and np.array_equal(out[2], pop.cells[1])
+    assert int(out[4]) == 0
+
+
+def _snake_pair():
+    """On an empty 10 x 10 map: p1 snakes through rows 0-3 before reaching (5, 5), p2
+    reaches (5, 5) quickly and snakes through rows 6-9: crossing near (5, 5) gives one
+    child far over the capacity ``max(l1, l2)`` and one short child."""
+    w = 10
+    head1 = [y * w + (x if y % 2 == 0 else 9 - x) for y in range(4) for x in range(10)]
+    head1 += [4 * w + x for x in range(5)]
+    p1 = head1 + [55, 66, 77, 88, 99]
+    tail2 = [6 * w + x for x in range(4, -1, -1)] + [7 * w + x for x in range(10)]
+    tail2 += [8 * w + x for x in range(9, -1, -1)] + [9 * w + x for x in range(10)]
+    p2 = [0, 1, 12, 23, 34, 45, 55] + tail2
+    return p1, p2
+
+
+@pytest.mark.parametrize("name", ["common_point", "cut_and_check", "heterologous"])
+def test_capacity_overflow_keeps_the_parent_and_counts(name):
+    """Each of 64 pairs (different keys) gives a reference outcome, where a child over
+    the capacity keeps its parent; the failures are counted exactly."""
+    p1, p2 = _snake_pair()
+    grid = _imga_grid()
+    cap = max(len(p1), len(p2))
+    if name == "common_point":
+        ref = _common_outcomes(grid, p1, p2, cap)
+    elif name == "cut_and_check":
+        ref = _cut_outcomes(grid, p1, p2, cap, np.asarray(_CLEAR_ALL(grid)))
+    else:
+        ref = _hetero_outcomes(p1, p2, cap, _adjacency(grid))
+    assert any(f > 0 for *_, f in ref)
+    pop = Population.from_paths([p1, p2] * 64, cap)
+    out, n_failed = jax.jit(over_pairs(_OPS[name]))(jax.random.PRNGKey(1), grid, pop)
+    kids, lo, hi = out.to_lists(), 0, 0
+    for k in range(0, 128, 2):
+        m = _assert_matches((kids[k], kids[k + 1]), ref, p1, p2, 0)
+        lo, hi = lo + min(m), hi + max(m)
+    assert lo <= int(n_failed) <= hi and int(n_failed) > 0
+
+
+def test_zhu_figure5_column_candidates():
+    """Zhu & Pan section 4.4, Figure 5 (5 x 5 map numbered from the bottom left):
+    P1 = (0, 5, 10, 16, 17, 23, 24), P2 = (0, 1, 2, 8, 14, 19, 24); the second column's
+    min and max are 1 and 16, so its candidate set is (1, 6, 11, 16). Figure 5's
+    obstacles are not given in the text: the map here is obstacle-free."""
+    grid = Grid.create(np.zeros((5, 5), bool), corner_rule="free")
+    pop = Population.from_paths([[0, 5, 10, 16, 17, 23, 24], [0, 1, 2, 8, 14, 19, 24]], 16)
+    args = (grid, pop.cells[0], pop.length[0], pop.cells[1], pop.length[1])
+    sets = X.column_candidate_sets(*args)
+    assert sets[0] == [1, 6, 11, 16]
+    assert sets == [[1, 6, 11, 16], [2, 7, 12, 17], [8, 13, 18, 23]]
+    # The draws are uniform over each set (chi-square at a fixed key), and the paper's
+    # draw (6, 17, 18) is connected into the paper's child P(0, 6, 11, 17, 18, 24).
+    keys = jax.random.split(jax.random.PRNGKey(0), 4000)
+    k_anchor = jax.vmap(lambda k: jax.random.split(k)[0])(keys)  # column_child's split
+    anchors, n, ok = jax.jit(jax.vmap(X.column_anchors, in_axes=(0,) + (None,) * 5))(
+        k_anchor, *args
+    )
+    anchors = np.asarray(anchors)
+    assert np.asarray(ok).all() and (np.asarray(n) == 5).all()
+    assert (anchors[:, 0] == 0).all() and (anchors[:, 4] == 24).all()
+    for col, cand in enumerate(sets, start=1):
+        counts = [int(np.sum(anchors[:, col] == c)) for c in cand]
+        assert sum(counts) == len(anchors)
+        assert scipy.stats.chisquare(counts).pvalue > 1e-4
+    kids = [np.asarray(v) for v in
+            jax.jit(jax.vmap(X.column_child, in_axes=(0,) + (None,) * 5))(keys, *args)]
+    hit = np.flatnonzero((anchors[:, 1:4] == [6, 17, 18]).all(axis=1))
+    assert len(hit) > 20
+    for k in hit:
+        assert kids[0][k, : kids[1][k]].tolist() == [0, 6, 11, 17, 18, 24]
+
+
+def test_column_blocked_cells_are_never_candidates():
+    blocked = np.zeros((5, 5), bool)
+    blocked[1, 1] = blocked[2, 1] = True  # cells 6 and 11
+    grid = Grid.create(blocked, corner_rule="free")
+    pop = Population.from_paths([[0, 5, 10, 16, 17, 23, 24], [0, 1, 2, 8, 14, 19, 24]], 16)
+    args = (grid, pop.cells[0], pop.length[0], pop.cells[1], pop.length[1])
+    assert X.column_candidate_sets(*args)[0] == [1, 16]
+    keys = jax.random.split(jax.random.PRNGKey(1), 500)
+    anchors = jax.jit(jax.vmap(X.column_anchors, in_axes=(0,) + (None,) * 5))(keys, *args)[0]
+    anchors = np.asarray(anchors)
+    assert set(anchors[:, 1].tolist()) == {1, 16}
+
+
+def _sharp_fitness(grid, cells, length):
+    return (1.0 / jnp.asarray(length, jnp.float32)) ** 6
+
+
+@pytest.mark.parametrize("distinct", [False, True])
+def test_column_roulette_over_parents_and_child(distinct):
+    """On success two spins over {P1, P2, child} with weights = fitness (Zhu eq. 10).
+
+    The child of each pair is recomputed with the documented key split, so the expected
+    slot frequencies are known; chi-square at a fixed key, and equal weights rejected."""
+    grid = Grid.create(np.zeros((5, 5), bool), corner_rule="free")
+    p1, p2 = [0, 5, 10, 16, 17, 23, 24], [0, 1, 2, 8, 14, 19, 24]
+    n = 2000
+    pop = Population.from_paths([p1, p2] * n, 16)
+    op = functools.partial(X.column, fitness_fn=_sharp_fitness, distinct=distinct)
+    key = jax.random.PRNGKey(5)
+    out, n_failed = jax.jit(over_pairs(op))(key, grid, pop)
+    assert int(n_failed) == 0  # open map: the connection always closes
+    k_child = jax.vmap(lambda k: jax.random.split(k)[0])(jax.random.split(key, n))
+    args = (grid, pop.cells[0], pop.length[0], pop.cells[1], pop.length[1])
+    kc, kl, ok = (np.asarray(v) for v in
+                  jax.jit(jax.vmap(X.column_child, in_axes=(0,) + (None,) * 5))(k_child, *args))
+    assert ok.all()
+    kids = out.to_lists()
+    obs, exp = np.zeros(3), np.zeros(3)
+    for k in range(n):
+        child = kc[k, : kl[k]].tolist()
+        if child in (p1, p2):
+            continue
+        w = np.array([1 / 7, 1 / 7, 1 / len(child)]) ** 6
+        picks = [0 if o == p1 else 1 if o == p2 else 2 for o in (kids[2 * k], kids[2 * k + 1])]
+        assert all(o in (p1, p2, child) for o in (kids[2 * k], kids[2 * k + 1]))
+        if distinct:
+            assert picks[0] != picks[1]
+            q = w / w.sum()
+            # P(member m among the two) = q_m + sum_{a != m} q_a q_m / (1 - q_a)
+            exp += [q[m] + sum(q[a] * q[m] / (1 - q[a]) for a in range(3) if a != m)
+                    for m in range(3)]
+        else:
+            exp += 2 * w / w.sum()
+        for p in picks:
+            obs[p] += 1
+    assert scipy.stats.chisquare(obs, exp * obs.sum() / exp.sum()).pvalue > 1e-4
+    uniform = np.full(3, obs.sum() / 3)
+    assert scipy.stats.chisquare(obs, uniform).pvalue < 1e-6
+
+
+def test_column_failure_returns_both_parents():
+    """A connection that cannot close within max_rounds is Zhu's "crossover failure"."""
+    blocked = np.zeros((10, 10), bool)
+    blocked[2:9, 4] = True  # a wall the medians fall into
+    grid = Grid.create(blocked, corner_rule="free")
+    par = [[0, 1, 2, 3, 13, 23, 33, 43, 53, 63, 73, 83, 93, 94, 95, 96, 97, 98, 99],
+           [0, 10, 20, 30, 40, 50, 60, 70, 80, 90, 91, 92, 93, 94, 95, 96, 97, 98, 99]]
+    pop = Population.from_paths(par * 32, CAP)
+    op = functools.partial(X.column, fitness_fn=_len_fitness, max_rounds=1)
+    out, n_failed = jax.jit(over_pairs(op))(jax.random.PRNGKey(0), grid, pop)
+    kids = out.to_lists()
+    n_fail_pairs = sum(kids[k: k + 2] == par for k in range(0, 64, 2))
+    assert int(n_failed) > 0 and int(n_failed) % 2 == 0
+    assert int(n_failed) // 2 <= n_fail_pairs
+
+
+def test_heterologous_hand_made_pair():
+    """5 x 5 empty map; the parents share no interior cell (no homologous crossover).
+    By hand, the valid pairs are (0, 1): S~6, 5~1; (3, 3): 17~13, 18~12; (4, 5): 18~G,
+    23~19. With fitness 1 / nodes, (0, 1) and (4, 5) give a shorter child 1
+    (0-6-12-13-19-24, 0-5-11-17-18-24; accepted) and a longer child 2 (rejected);
+    (3, 3) gives two children of the parents' length (rejected: not strictly fitter)."""
+    grid = Grid.create(np.zeros((5, 5), bool), corner_rule="strict")
+    p1 = [0, 5, 11, 17, 18, 23, 24]
+    p2 = [0, 1, 6, 12, 13, 19, 24]
+    pop = Population.from_paths([p1, p2], 16)
+    args = (grid, pop.cells[0], pop.length[0], pop.cells[1], pop.length[1])
+    jtab, valid = _HPAIRS(*args)
+    pairs = {(int(i), int(jtab[i, o])) for i, o in zip(*np.nonzero(np.asarray(valid)))}
+    assert pairs == {(0, 1), (3, 3), (4, 5)} == _hetero_pairs(p1, p2, _adjacency(grid))
+    assert int(X.common_point(jax.random.PRNGKey(0), *args)[4]) == 0
+    outcomes = [
+        ([0, 6, 12, 13, 19, 24], p2),
+        (p1, p2),
+        ([0, 5, 11, 17, 18, 24], p2),
+    ]
+    keys = jax.random.split(jax.random.PRNGKey(0), 600)
+    op = jax.jit(jax.vmap(functools.partial(X.heterologous, fitness_fn=_len_fitness),
+                          in_axes=(0,) + (None,) * 5))
+    c1, l1, c2, l2, failed = (np.asarray(v) for v in op(keys, *args))
+    counts = np.zeros(3)
+    for k in range(600):
+        got = (c1[k, : l1[k]].tolist(), c2[k, : l2[k]].tolist())
+        counts[outcomes.index(got)] += 1
+    assert not np.asarray(failed).any()
+    assert scipy.stats.chisquare(counts).pvalue > 1e-4  # uniform over the valid pairs
+
+
+def test_heterologous_respects_the_corner_rule():
+    """(1, 1) -> (2, 2) squeezes between the blocked (2, 1) and (1, 2): adjacent under
+    "free" only; (2, 0) -> (3, 1) passes one blocked side: illegal under "strict"."""
+    blocked = np.zeros((5, 5), bool)
+    blocked[1, 2] = blocked[2, 1] = True  # cells 7 = (2, 1) and 11 = (1, 2)
+    p1 = [0, 5, 6, 2, 3, 4, 9, 14, 19, 24]
+    p2 = [0, 1, 2, 3, 8, 12, 17, 22, 23, 24]
+    pairs = {}
+    for rule in ("free", "no_squeeze", "strict"):
+        grid = Grid.create(blocked, corner_rule=rule)
+        pop = Population.from_paths([p1, p2], 16)
+        jtab, valid = _HPAIRS(grid, pop.cells[0], pop.length[0],
+                                           pop.cells[1], pop.length[1])
+        got = {(int(i), int(jtab[i, o])) for i, o in zip(*np.nonzero(np.asarray(valid)))}
+        assert got == _hetero_pairs(p1, p2, _adjacency(grid))
+        pairs[rule] = got
+    assert (2, 4) in pairs["free"] and (2, 4) not in pairs["no_squeeze"]
+    assert pairs["strict"] <= pairs["no_squeeze"] <= pairs["free"]
+
+
+# --------------------------------------------------- adaptive probability
+def test_adaptive_probability_exact_values():
+    """AGACD eq. 26-27 on hand-picked inputs."""
+    f = jnp.array([1.0, 0.7, 0.4, 0.2], jnp.float32)
+    pc = np.asarray(X.adaptive_crossover_probability(f, 1.0, 0.4, 0, 100, 0.3, 0.9))
+    np.testing.assert_allclose(pc, [0.0, 0.9 * 0.3 / 0.6, 0.9, 0.9], rtol=1e-6)
+    pc = np.asarray(X.adaptive_crossover_probability(f, 1.0, 0.4, 50, 100, 0.3, 0.9))
+    np.testing.assert_allclose(pc, np.array([0.0, 0.45, 0.9, 0.9]) * np.exp(-0.5), rtol=1e-6)
+    # converged population: pc_low, decayed
+    pc = X.adaptive_crossover_probability(0.5, 0.5, 0.5, 100, 100, 0.3, 0.9)
+    np.testing.assert_allclose(float(pc), 0.3 * np.exp(-1.0), rtol=1e-6)
+    assert pc.dtype == jnp.float32
+
+
+def test_adaptive_pair_probability():
+    fit = jnp.array([0.1, 0.5, 0.3, 0.2, 1.0, 0.0, 9.0], jnp.float32)
+    active = jnp.array([True] * 6 + [False])
+    pc = np.asarray(X.adaptive_pair_probability(fit, 10, 40, 0.2, 0.8, active))
+    f_max, f_avg = 1.0, 2.1 / 6
+    f = np.array([0.5, 0.3, 1.0])
+    want = np.where(f >= f_avg, 0.8 * (f_max - f) / (f_max - f_avg), 0.8) * np.exp(-0.25)
+    np.testing.assert_allclose(pc, want, rtol=1e-5)
+    # equal fitness everywhere: float32 mean == max up to an ulp -> pc_low
+    same = jnp.full((10,), 0.1, jnp.float32)
+    np.testing.assert_allclose(np.asarray(X.adaptive_pair_probability(same, 0, 10, 0.2, 0.8)),
+                               0.2, rtol=1e-6)
+
+
+def _swap(key, grid, c1, l1, c2, l2):
+    return c2, l2, c1, l1, jnp.int32(0)
+
+
+def test_crossover_rate_matches_pc():
+    """The gate crosses pair k with probability pc[k]: empirical counts at a fixed key."""
+    n = 4000
+    cells = jnp.broadcast_to(jnp.arange(n, dtype=jnp.int32)[:, None], (n, 4))
+    pop = Population(cells, jnp.full((n,), 4, jnp.int32))
+    grid = _imga_grid()
+    lifted = jax.jit(X.crossover_population(_swap))
+    fitness = jax.random.uniform(jax.random.PRNGKey(9), (n,))
+    pc = X.adaptive_pair_probability(fitness, 3, 10, 0.2, 0.9)
+    out, n_failed = lifted(jax.random.PRNGKey(0), grid, pop, pc)
+    swapped = np.asarray(out.cells[0::2, 0]) == np.arange(1, n, 2)
+    p = np.asarray(pc, np.float64)
+    mean, sd = p.sum(), np.sqrt(np.sum(p * (1 - p)))
+    assert abs(swapped.sum() - mean) < 4 * sd and int(n_failed) == 0
+    # a scalar pc: binomial test; and it must reject a neighbouring rate
+    out, _ = lifted(jax.random.PRNGKey(1), grid, pop, 0.35)
+    k = int((np.asarray(out.cells[0::2, 0]) == np.arange(1, n, 2)).sum())
+    assert scipy.stats.binomtest(k, n // 2, 0.35).pvalue > 1e-4
+    assert scipy.stats.binomtest(k, n // 2, 0.45).pvalue < 1e-6
+    # pc = 0 and 1
+    out, _ = lifted(jax.random.PRNGKey(2), grid, pop, 0.0)
+    assert np.array_equal(out.cells, pop.cells)
+    out, _ = lifted(jax.random.PRNGKey(2), grid, pop, 1.0)
+    assert np.array_equal(out.cells[0::2], pop.cells[1::2])
+
+
+def test_gate_reports_failures_only_when_crossing():
+    def always_fail(key, grid, c1, l1, c2, l2):
+        return c1, l1, c2, l2, jnp.int32(2)
+
+    pop = Population(jnp.zeros((1000, 4), jnp.int32), jnp.full((1000,), 4, jnp.int32))
+    _, n_failed = jax.jit(X.crossover_population(always_fail))(
+        jax.random.PRNGKey(0), _imga_grid(), pop, 0.5)
+    assert scipy.stats.binomtest(int(n_failed) // 2, 500, 0.5).pvalue > 1e-4
+
+
+def test_same_key_same_result_and_column_child_is_connect():
+    grid = Grid.create(np.zeros((5, 5), bool), corner_rule="strict")
+    pop = Population.from_paths([[0, 5, 10, 16, 17, 23, 24], [0, 1, 2, 8, 14, 19, 24]], 16)
+    args = (grid, pop.cells[0], pop.length[0], pop.cells[1], pop.length[1])
+    for name, op in _OPS.items():
+        f = jax.jit(op)
+        a, b = f(jax.random.PRNGKey(7), *args), f(jax.random.PRNGKey(7), *args)
+        assert all(np.array_equal(x, y) for x, y in zip(a, b)), name
+    # column child = remove_loops(connect(anchors)) with the documented key split and
+    # the default bounds for a 5 x 5 map (max_rounds 2 * 3 + 6, queue 2 * 5)
+    def ref(key):
+        k_anchor, k_conn = jax.random.split(key)
+        anchors, n, ok_a = X.column_anchors(k_anchor, *args)
+        c, m, ok = connect(k_conn, grid, anchors, n, 16, max_rounds=12, queue=10)
+        c, m = remove_loops(c, m, 25)
+        return c, m, ok & ok_a
+
+    keys = jax.random.split(jax.random.PRNGKey(3), 64)
+    want = jax.jit(jax.vmap(ref))(keys)
+    got = jax.jit(jax.vmap(lambda k: X.column_child(k, *args)))(keys)
+    assert np.asarray(got[2]).any()
+    for w_, g_ in zip(want, got):
+        assert np.array_equal(w_, g_)
+
+
+@pytest.mark.parametrize("x64", [False, True])
+def test_dtypes(x64):
+    grid = _imga_grid()
+    pop = Population.from_paths([[0, 11, 22, 99], [0, 1, 22, 99]], 16)
+    args = (grid, pop.cells[0], pop.length[0], pop.cells[1], pop.length[1])
+    with jax.enable_x64(x64):
+        for op in _OPS.values():
+            out = jax.jit(op)(jax.random.PRNGKey(0), *args)
+            assert [o.dtype for o in out] == [jnp.int32] * 5
+        pc = X.adaptive_crossover_probability(0.5, 1.0, 0.4, 1, 10, 0.2, 0.9)
+        assert pc.dtype == jnp.float32
+
+
+def test_large_map_code_paths():
+    """Maps above TABLE_MAX_CELLS use a sort for cell lookups and move_legal for the step
+    masks: same results as the table variants (the hand-made pair, moved onto 130 x 130)."""
+    from jaxga.paths import TABLE_MAX_CELLS
+
+    cells = jnp.array([5, 9, 2, 7, 7, 7], jnp.int32)
+    q = jnp.array([[2, 7, 3], [9, 5, -1]], jnp.int32)
+    small = X._position_lookup(cells, 4, 16)(q)
+    big = X._position_lookup(cells, 4, TABLE_MAX_CELLS + 1)(q)
+    np.testing.assert_array_equal(small, big)
+    np.testing.assert_array_equal(small, [[2, 3, -1], [1, 0, -1]])
+
+    w = 130
+    assert w * w > TABLE_MAX_CELLS
+    grid = Grid.create(np.zeros((w, w), bool), start=(0, 0), goal=(4, 4), corner_rule="strict")
+
+    def move(path):
+        return [(p // 5) * w + p % 5 for p in path]
+
+    p1 = move([0, 5, 11, 17, 18, 23, 24])
+    p2 = move([0, 1, 6, 12, 13, 19, 24])
+    pop = Population.from_paths([p1, p2], 16)
+    args = (grid, pop.cells[0], pop.length[0], pop.cells[1], pop.length[1])
+    jtab, valid = jax.jit(X.heterologous_pairs)(*args)
+    pairs = {(int(i), int(jtab[i, o])) for i, o in zip(*np.nonzero(np.asarray(valid)))}
+    assert pairs == {(0, 1), (3, 3), (4, 5)}
+    c1, l1, c2, l2, _ = jax.jit(functools.partial(X.heterologous, fitness_fn=_len_fitness))(
+        jax.random.PRNGKey(0), *args)
+    assert np.asarray(c1)[: int(l1)].tolist() in (move([0, 6, 12, 13, 19, 24]), p1,
+                                                  move([0, 5, 11, 17, 18, 24]))

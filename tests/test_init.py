@@ -1,0 +1,511 @@
+"""Initialisers (SPEC 4): Zhu & Pan Table 1, step distributions, properties, redraws.
+
+Maps have row y = 0 at the bottom and cells p = y * W + x (0-based), as in the papers.
+Every initialiser is run under ``jax.jit`` + ``jax.vmap``; each jitted function is built
+once at module level with fixed shapes.
+"""
+
+from __future__ import annotations
+
+import functools
+import os
+import subprocess
+import sys
+import textwrap
+
+import jax
+import jax.numpy as jnp
+import numpy as np
+import pytest
+from hypothesis import given, settings
+from hypothesis import strategies as st
+from scipy import stats
+
+from jaxga import Grid, NoPathError, ParameterError
+from jaxga import init as I
+from jaxga.maps import legal_moves, random_map
+from tests.strategies import CAP, SIZE, grids
+
+NAMES = tuple(I.INITIALISERS)
+WALKS = ("random_walk", "greedy_random_target", "directional")  # fail = goal not reached
+
+
+# ------------------------------------------------------------------------ helpers
+def table1_grid(rule: str = "free") -> Grid:
+    """Zhu & Pan Figure 3: 5 x 5, start 0, target 24, cells 8, 16 and 17 blocked."""
+    b = np.zeros((5, 5), bool)
+    for c in (8, 16, 17):
+        b[c // 5, c % 5] = True
+    return Grid.create(b, start=(0, 0), goal=(4, 4), corner_rule=rule)
+
+
+def check_paths(grid, cells, length, ok, source=None, target=None, exclude=(), cap=CAP):
+    """Independent NumPy check of every ok path; returns how many were checked."""
+    cells, length, ok = np.asarray(cells), np.asarray(length), np.asarray(ok)
+    b = grid.blocked_np()
+    w = b.shape[1]
+    legal = legal_moves(b, grid.corner_rule)
+    dirs = {(1, 0): 0, (1, 1): 1, (0, 1): 2, (-1, 1): 3, (-1, 0): 4, (-1, -1): 5, (0, -1): 6,
+            (1, -1): 7}
+    source = int(grid.start) if source is None else source
+    target = int(grid.goal) if target is None else target
+    excluded = set(int(c) for c in exclude) - {source, target}
+    for i in np.flatnonzero(ok):
+        n = int(length[i])
+        assert cells.shape[1] == cap and 1 <= n <= cap
+        p = cells[i, :n].tolist()
+        assert p[0] == source and p[-1] == target, p
+        assert len(set(p)) == n, f"loop in {p}"
+        assert not excluded & set(p), f"{p} enters an excluded cell"
+        assert (cells[i, n:] == p[-1]).all(), "padding must repeat the last cell"
+        for a, c in zip(p[:-1], p[1:]):
+            d = dirs.get((c % w - a % w, c // w - a // w))
+            assert d is not None and legal[d, a // w, a % w], f"illegal move {a}->{c} in {p}"
+        if n == 1:
+            assert not b[p[0] // w, p[0] % w]
+    return int(ok.sum())
+
+
+# ---------------------------------------------------------- Zhu & Pan Table 1
+# (current cell, cells already on the path) of Figure 3a, 3b, 3c; target 24.
+FIG3 = {
+    "3a": (12, (0, 1, 7), {6: 0.0668, 11: 0.0786, 13: 0.2535, 18: 0.6011}),
+    "3b": (13, (0, 1, 7), {9: 0.0546, 12: 0.058, 14: 0.1639, 18: 0.2318, 19: 0.4917}),
+    "3c": (7, (0, 1, 6, 11), {2: 0.0889, 3: 0.0964, 12: 0.2812, 13: 0.5335}),
+}
+# Table 1, column "Literature [28]'s Method" (plain 1/d roulette, factors (1, 1)).
+FIG3_CGA = {
+    "3a": {6: 0.1414, 11: 0.1664, 13: 0.2682, 18: 0.4243},
+    "3b": {9: 0.1152, 12: 0.1222, 14: 0.1728, 18: 0.2443, 19: 0.3455},
+    "3c": {2: 0.1765, 3: 0.1914, 12: 0.2791, 13: 0.353},
+}
+
+
+def _probs(fig, factors=(3.0, 2.0)):
+    cur, visited, _ = FIG3[fig]
+    nbr, prob = I.directional_probabilities(
+        table1_grid(), cur, 24, jnp.array(visited, jnp.int32), factors
+    )
+    return {int(c): float(q) for c, q in zip(np.asarray(nbr), np.asarray(prob)) if q > 0}
+
+
+@pytest.mark.parametrize("fig", sorted(FIG3))
+def test_zhu_table1_probabilities(fig):
+    """Zhu & Pan Table 1, "Paper's Method" column, to 1e-4 (the paper prints 4 digits)."""
+    got = _probs(fig)
+    want = FIG3[fig][2]
+    assert sorted(got) == sorted(want), "candidate list (Table 1 'Grid' column)"
+    for c, p in want.items():
+        assert abs(got[c] - p) <= 1e-4, (fig, c, got[c], p)
+    assert abs(sum(got.values()) - 1) < 1e-6
+
+
+@pytest.mark.parametrize("fig", sorted(FIG3))
+def test_zhu_table1_cga_column(fig):
+    """factors (1, 1) is the 1/d roulette of literature [28] (Table 1's middle column).
+
+    One printed value is off in the 4th digit: 3a / cell 18 is 0.7071 / 1.6674 = 0.4241,
+    printed 0.4243 (that column sums to 1.0003); it is checked to 3e-4, the rest to 1e-4.
+    """
+    got = _probs(fig, (1.0, 1.0))
+    for c, p in FIG3_CGA[fig].items():
+        tol = 3e-4 if (fig, c) == ("3a", 18) else 1e-4
+        assert abs(got[c] - p) <= tol, (fig, c, got[c], p)
+
+
+def test_directional_probabilities_edge_cases():
+    grid = table1_grid()
+    # Target adjacent and legal: the walk steps onto it with probability 1.
+    nbr, prob = I.directional_probabilities(grid, 18, 24)
+    assert dict(zip(np.asarray(nbr).tolist(), np.asarray(prob).tolist()))[24] == 1.0
+    assert float(jnp.sum(prob)) == 1.0
+    # No candidate: all zero. Cell 9 = (4, 1): neighbours 3, 4, 8 (blocked), 13, 14.
+    _, prob = I.directional_probabilities(grid, 9, 24, jnp.array([3, 4, 13, 14]))
+    assert float(jnp.sum(prob)) == 0.0
+    # A bool mask and a cell list are the same exclusion.
+    mask = np.zeros(25, bool)
+    mask[[0, 1, 7]] = True
+    a = I.directional_probabilities(grid, 12, 24, jnp.asarray(mask))[1]
+    b = I.directional_probabilities(grid, 12, 24, jnp.array([0, 1, 7, -1, -1]))[1]
+    c = I.directional_probabilities(grid, 12, 24, jnp.asarray(mask.reshape(5, 5)))[1]
+    np.testing.assert_array_equal(np.asarray(a), np.asarray(b))
+    np.testing.assert_array_equal(np.asarray(a), np.asarray(c))
+    with pytest.raises(ParameterError):
+        I.exclusion_mask(grid, jnp.zeros(7, bool))
+
+
+# ------------------------------------------------------- step distributions
+N_DRAWS = 20000
+
+
+@functools.partial(jax.jit, static_argnames=("kind",))
+def _first_steps(keys, grid, source, target, exclude, kind):
+    """The first move of many walks (capacity 2 = one step)."""
+    if kind == "directional":
+        f = lambda k: I.directional_walk(k, grid, source, target, 2, exclude)  # noqa: E731
+    elif kind == "cga":
+        f = lambda k: I.directional_walk(k, grid, source, target, 2, exclude, (1.0, 1.0))  # noqa: E731
+    elif kind == "uniform":
+        f = lambda k: I.uniform_walk(k, grid, source, target, 2, exclude)  # noqa: E731
+    else:
+        f = lambda k: I.greedy_walk(k, grid, source, target, 2, max_steps=1)  # noqa: E731
+    cells, length, _ = jax.vmap(f)(keys)
+    return cells[:, 1], length
+
+
+def _chi2(first, probs: dict[int, float]) -> float:
+    first = np.asarray(first)
+    assert set(np.unique(first).tolist()) <= set(probs), "a move outside the candidates"
+    cells = sorted(probs)
+    obs = np.array([(first == c).sum() for c in cells])
+    exp = np.array([probs[c] for c in cells])
+    return stats.chisquare(obs, exp / exp.sum() * obs.sum()).pvalue
+
+
+@pytest.mark.parametrize("fig", ["3a", "3c"])
+def test_directional_step_frequencies(fig):
+    """Empirical choices of the jitted, vmapped walk match Table 1 (chi-square), and a
+    wrong rule (the unadjusted 1/d roulette) is rejected by the same test."""
+    cur, visited, want = FIG3[fig]
+    keys = jax.random.split(jax.random.PRNGKey(2024), N_DRAWS)
+    excl = jnp.array(visited, jnp.int32)
+    first, length = _first_steps(keys, table1_grid(), cur, 24, excl, "directional")
+    assert (np.asarray(length) == 2).all()
+    exact = _probs(fig)
+    assert _chi2(first, exact) > 1e-3
+    assert _chi2(first, _probs(fig, (1.0, 1.0))) < 1e-9
+    # And the CGA variant follows its own column.
+    first_cga, _ = _first_steps(keys, table1_grid(), cur, 24, excl, "cga")
+    assert _chi2(first_cga, _probs(fig, (1.0, 1.0))) > 1e-3
+    assert _chi2(first_cga, exact) < 1e-9
+
+
+def test_uniform_walk_step_is_uniform():
+    cur, visited, want = FIG3["3b"]
+    keys = jax.random.split(jax.random.PRNGKey(7), N_DRAWS)
+    first, _ = _first_steps(keys, table1_grid(), cur, 24, jnp.array(visited, jnp.int32), "uniform")
+    uniform = {c: 1.0 for c in want}
+    assert _chi2(first, uniform) > 1e-3
+    assert _chi2(first, FIG3["3b"][2]) < 1e-9
+
+
+def _greedy_step_probs(grid: Grid, cur: int, target: int, p_goal: float = 0.5):
+    """AGACD 4.3 by enumeration: target w.p. 1/2, else each free cell w.p. 1/(2 n_free);
+    nearest legal neighbour, ties split evenly."""
+    b = grid.blocked_np()
+    h, w = b.shape
+    legal = legal_moves(b, grid.corner_rule)
+    from jaxga.grid import DIRECTIONS
+
+    nbrs = [(cur % w + dx, cur // w + dy) for d, (dx, dy) in enumerate(DIRECTIONS.tolist())
+            if legal[d, cur // w, cur % w]]
+    free = np.flatnonzero(~b.reshape(-1))
+    out: dict[int, float] = {}
+    for t, wt in [(target, p_goal)] + [(int(f), (1 - p_goal) / len(free)) for f in free]:
+        d2 = [(x - t % w) ** 2 + (y - t // w) ** 2 for x, y in nbrs]
+        best = [n for n, d in zip(nbrs, d2) if d == min(d2)]
+        for x, y in best:
+            out[y * w + x] = out.get(y * w + x, 0.0) + wt / len(best)
+    return out
+
+
+@pytest.mark.parametrize("rule", ["free", "strict"])
+def test_greedy_step_distribution(rule):
+    """AGACD's step: the empirical first moves match the exact enumeration."""
+    b = np.zeros((6, 6), bool)
+    for x, y in [(3, 3), (1, 3), (3, 1), (4, 2)]:
+        b[y, x] = True
+    grid = Grid.create(b, start=(0, 0), goal=(5, 5), corner_rule=rule)
+    cur = 2 * 6 + 2  # (2, 2)
+    keys = jax.random.split(jax.random.PRNGKey(11), N_DRAWS)
+    first, _ = _first_steps(keys, grid, cur, 35, jnp.zeros(1, jnp.int32), "greedy")
+    exact = _greedy_step_probs(grid, cur, 35)
+    assert _chi2(first, exact) > 1e-3
+    # A deterministic tie-break (first direction) would be rejected.
+    assert len(exact) > 2
+
+
+# ---------------------------------------------------------- MPMGA anchors
+def test_intermittent_anchors_one_free_cell_per_row():
+    rng = np.random.default_rng(3)
+    b = rng.random((12, 9)) < 0.3
+    b[0, 0] = b[11, 8] = False
+    b[5, :] = True  # a fully blocked row is skipped
+    grid = Grid.create(b, corner_rule="free")
+    f = jax.jit(jax.vmap(lambda k: I.intermittent_anchors(k, grid)))
+    anchors, n = f(jax.random.split(jax.random.PRNGKey(0), 4000))
+    anchors, n = np.asarray(anchors), np.asarray(n)
+    assert anchors.shape == (4000, 13) and (n == 2 + 9).all()  # rows 1..10 minus row 5
+    rows = anchors[:, : n[0]] // 9
+    assert (rows == np.array([0, 1, 2, 3, 4, 6, 7, 8, 9, 10, 11])).all()
+    assert (anchors[:, 0] == 0).all() and (anchors[:, n[0] - 1] == 107).all()
+    assert not b.reshape(-1)[anchors[:, : n[0]]].any()
+    assert (anchors[:, n[0]:] == 107).all()
+    # Uniform over the free cells of row 3.
+    free3 = np.flatnonzero(~b[3])
+    obs = np.array([(anchors[:, 3] % 9 == x).sum() for x in free3])
+    assert stats.chisquare(obs).pvalue > 1e-3
+
+
+def test_intermittent_anchors_orientation_and_same_row():
+    b = np.zeros((6, 8), bool)
+    # Goal below the start: rows in descending order.
+    grid = Grid.create(b, start=(1, 5), goal=(6, 0), corner_rule="free")
+    anchors, n = I.intermittent_anchors(jax.random.PRNGKey(1), grid)
+    rows = np.asarray(anchors)[: int(n)] // 8
+    assert rows.tolist() == [5, 4, 3, 2, 1, 0]
+    # Same row: falls back to the columns between (x = 2..5), in order.
+    grid = Grid.create(b, start=(1, 2), goal=(6, 2), corner_rule="free")
+    anchors, n = I.intermittent_anchors(jax.random.PRNGKey(1), grid)
+    a = np.asarray(anchors)[: int(n)]
+    assert (a % 8).tolist() == [1, 2, 3, 4, 5, 6]
+    # "major" picks the longer span; "columns" uses columns.
+    grid = Grid.create(b, start=(0, 0), goal=(7, 2), corner_rule="free")
+    a, n = I.intermittent_anchors(jax.random.PRNGKey(1), grid, "major")
+    assert (np.asarray(a)[: int(n)] % 8).tolist() == list(range(8))
+    a, n = I.intermittent_anchors(jax.random.PRNGKey(1), grid, "rows")
+    assert (np.asarray(a)[: int(n)] // 8).tolist() == [0, 1, 2]
+    with pytest.raises(ParameterError):
+        I.intermittent_anchors(jax.random.PRNGKey(1), grid, "diagonal")
+
+
+# ---------------------------------------------------------- property tests
+N_KEYS = 8
+
+
+@jax.jit
+def _all_initialisers(keys, grid):
+    return {name: jax.vmap(lambda k, f=f: f(k, grid, CAP))(keys)
+            for name, f in I.INITIALISERS.items()}
+
+
+@settings(max_examples=15)
+@given(grids(), st.integers(0, 2**31 - 1))
+def test_initialisers_properties(grid, seed):
+    """Every ok individual: start -> goal, continuous under the corner rule, loop-free,
+    within capacity, padded. A walk that fails never ends at the goal (failure is
+    reported, not hidden)."""
+    keys = jax.random.split(jax.random.PRNGKey(seed), N_KEYS)
+    out = _all_initialisers(keys, grid)
+    for name in NAMES:
+        cells, length, ok = (np.asarray(a) for a in out[name])
+        assert cells.dtype == np.int32 and length.dtype == np.int32 and ok.dtype == bool
+        check_paths(grid, cells, length, ok)
+        if name in WALKS:
+            last = cells[np.arange(N_KEYS), np.clip(length - 1, 0, CAP - 1)]
+            assert not ((last == int(grid.goal)) & ~ok).any(), name
+
+
+@jax.jit
+def _walks_between(keys, grid, src, dst, excl):
+    """The walk primitives between two cells; ``excl`` is int32[CAP] (-1 = padding). The
+    directional walk gets it as a bool mask, the uniform walks as a cell list."""
+    mask = I.exclusion_mask(grid, excl)
+    return {
+        "directional": jax.vmap(lambda k: I.directional_walk(k, grid, src, dst, CAP, mask))(keys),
+        "uniform": jax.vmap(lambda k: I.uniform_walk(k, grid, src, dst, CAP, excl))(keys),
+        "uniform_adj": jax.vmap(
+            lambda k: I.uniform_walk(k, grid, src, dst, CAP, excl, stop_adjacent=True))(keys),
+        "greedy": jax.vmap(lambda k: I.greedy_walk(k, grid, src, dst, CAP))(keys),
+    }
+
+
+@settings(max_examples=15)
+@given(grids(), st.integers(0, 2**31 - 1))
+def test_walks_between_cells_avoid_exclusion(grid, seed):
+    """The walk primitives (used by range mutation) from a random free cell to another,
+    with a random set of excluded cells: ok paths are valid and avoid the exclusion."""
+    rng = np.random.default_rng(seed)
+    free = np.flatnonzero(~grid.blocked_np().reshape(-1))
+    src, dst = (int(c) for c in rng.choice(free, 2))
+    excl = np.full(CAP, -1, np.int32)
+    excl[:12] = rng.choice(SIZE * SIZE, 12)
+    excl[:12][rng.random(12) < 0.3] = -1  # padding entries are ignored
+    keys = jax.random.split(jax.random.PRNGKey(seed % 1000), N_KEYS)
+    out = _walks_between(keys, grid, src, dst, jnp.asarray(excl))
+    for name, (cells, length, ok) in out.items():
+        ex = () if name == "greedy" else excl[excl >= 0]
+        check_paths(grid, cells, length, ok, source=src, target=dst, exclude=ex)
+        if src == dst:
+            assert np.asarray(ok).all() and (np.asarray(length) == 1).all()
+
+
+def test_range_mutation_style_regrowth_keeps_the_path_simple():
+    """Regrow the stretch between nodes i and j of a path with the rest excluded: the
+    spliced path is continuous and loop-free."""
+    grid = random_map(SIZE, SIZE, 0.2, 5, corner_rule="strict")
+    out = _all_initialisers(jax.random.split(jax.random.PRNGKey(3), N_KEYS), grid)
+    cells, length, ok = (np.asarray(a) for a in out["directional"])
+    k = int(np.argmax(np.where(ok, length, 0)))
+    cells, n = cells[k], int(length[k])
+    assert ok[k] and n > 6
+    i, j = 1, n - 2
+    idx = np.arange(CAP)
+    exclude = np.where((idx < i) | ((idx > j) & (idx < n)), cells, -1).astype(np.int32)
+    keys = jax.random.split(jax.random.PRNGKey(9), N_KEYS)
+    out = _walks_between(keys, grid, int(cells[i]), int(cells[j]), jnp.asarray(exclude))
+    seg_c, seg_l, seg_ok = (np.asarray(a) for a in out["directional"])
+    assert seg_ok.any()
+    p = cells[:n].tolist()
+    for c, ln, good in zip(seg_c, seg_l, seg_ok):
+        if good:
+            new = p[:i] + c[:ln].tolist() + p[j + 1:]
+            full = np.asarray(new + [new[-1]] * (CAP - len(new)), np.int32)
+            assert check_paths(grid, full[None], np.array([len(new)]), np.array([True])) == 1
+
+
+# ------------------------------------------------------------- failures
+def _walled(rule="free"):
+    b = np.zeros((SIZE, SIZE), bool)
+    b[4, :] = True  # a full wall: the goal is unreachable
+    return Grid.create(b, corner_rule=rule)
+
+
+def test_unreachable_goal_every_initialiser_fails():
+    grid = _walled()
+    out = _all_initialisers(jax.random.split(jax.random.PRNGKey(0), N_KEYS), grid)
+    for name in NAMES:
+        assert not np.asarray(out[name][2]).any(), name
+
+
+@jax.jit
+def _small_capacity(key, grid):
+    return [I.get_initialiser(name)(key, grid, SIZE - 1)[2]
+            for name in ("random_walk", "directional", "greedy_random_target", "median_insertion")]
+
+
+def test_capacity_too_small_fails():
+    """An open map needs SIZE cells from corner to corner: capacity SIZE - 1 must fail."""
+    grid = Grid.create(np.zeros((SIZE, SIZE), bool), corner_rule="free")
+    assert not np.asarray(_small_capacity(jax.random.PRNGKey(0), grid)).any()
+    with pytest.raises(ParameterError):
+        I.intermittent_connect(jax.random.PRNGKey(0), grid, SIZE - 1)
+    with pytest.raises(ParameterError):
+        I.get_initialiser("nope")
+
+
+def test_open_map_median_methods_always_succeed():
+    """No obstacle: every median is free, so IMGA and MPMGA never fail."""
+    grid = Grid.create(np.zeros((SIZE, SIZE), bool), corner_rule="free")
+    out = _all_initialisers(jax.random.split(jax.random.PRNGKey(1), N_KEYS), grid)
+    for name in ("median_insertion", "intermittent_connect", "directional",
+                 "greedy_random_target"):
+        assert np.asarray(out[name][2]).all(), name
+    for name in NAMES:
+        check_paths(grid, *out[name])
+
+
+# ------------------------------------------------------------- population
+P = 24
+
+
+def test_initialise_reports_total_failure():
+    pop, st_ = I.initialise(jax.random.PRNGKey(0), _walled(), "directional", P, CAP, max_tries=3)
+    assert int(st_.n_failed) == P and not np.asarray(st_.valid).any()
+    assert int(st_.successes) == 0 and float(st_.success_rate) == 0.0
+    assert int(st_.attempts) == 3 * P
+    assert (np.asarray(pop.length) == 1).all()  # [start]: not a path to the goal
+    with pytest.raises(NoPathError):
+        st_.raise_if_failed(allow_partial=True)
+
+
+def test_initialise_determinism_and_validity():
+    grid = random_map(SIZE, SIZE, 0.25, 17, corner_rule="no_squeeze")
+    a, sa = I.initialise(jax.random.PRNGKey(5), grid, "directional", P, CAP)
+    b, sb = I.initialise(jax.random.PRNGKey(5), grid, "directional", P, CAP)
+    c, _ = I.initialise(jax.random.PRNGKey(6), grid, "directional", P, CAP)
+    np.testing.assert_array_equal(np.asarray(a.cells), np.asarray(b.cells))
+    np.testing.assert_array_equal(np.asarray(a.length), np.asarray(b.length))
+    assert int(sa.attempts) == int(sb.attempts)
+    assert not np.array_equal(np.asarray(a.cells), np.asarray(c.cells))
+    assert int(sa.n_failed) == 0 and np.asarray(sa.valid).all()
+    assert check_paths(grid, a.cells, a.length, sa.valid) == P
+    sa.raise_if_failed()
+    # Individuals differ from each other (independent keys).
+    assert len({tuple(r) for r in np.asarray(a.cells).tolist()}) > P // 2
+
+
+def test_initialise_redraws_and_reports_the_success_rate():
+    """random_walk fails most single attempts here; the redraw fills the population and
+    the reported per-attempt rate agrees with a direct estimate (binomial bounds)."""
+    grid = random_map(SIZE, SIZE, 0.3, 23, corner_rule="free")
+    direct = jax.jit(jax.vmap(lambda k: I.random_walk(k, grid, CAP)))
+    _, _, ok = direct(jax.random.split(jax.random.PRNGKey(99), 4000))
+    p = float(np.mean(np.asarray(ok)))
+    assert 0.02 < p < 0.6, p  # single attempts often fail on this map
+    pop, st_ = I.initialise(jax.random.PRNGKey(1), grid, "random_walk", P, CAP, max_tries=200)
+    assert int(st_.n_failed) == 0 and int(st_.rounds) > 1
+    assert check_paths(grid, pop.cells, pop.length, st_.valid) == P
+    att, succ = int(st_.attempts), int(st_.successes)
+    assert att == int(st_.rounds) * P and succ >= P
+    assert abs(float(st_.success_rate) - succ / att) < 1e-6
+    lo, hi = stats.binom.ppf([1e-6, 1 - 1e-6], att, p)
+    assert lo <= succ <= hi, (succ, att, p)
+    # Budget too small: the shortfall is reported and flagged, never hidden.
+    pop, st_ = I.initialise(jax.random.PRNGKey(1), grid, "random_walk", P, CAP, max_tries=1)
+    nf = int(st_.n_failed)
+    valid = np.asarray(st_.valid)
+    assert nf == P - valid.sum() and 0 < nf < P
+    assert check_paths(grid, pop.cells, pop.length, valid) == P - nf
+    # Empty slots hold copies of valid individuals (so a GA can run), flagged invalid.
+    assert check_paths(grid, pop.cells, pop.length, np.ones(P, bool)) == P
+    st_.raise_if_failed(allow_partial=True)
+    with pytest.raises(NoPathError):
+        st_.raise_if_failed()
+
+
+_THREE = np.array([[0, 1, 2, 5, 8], [0, 3, 6, 7, 8], [0, 4, 8, 8, 8]], np.int32)
+
+
+def _one_of_three(key, grid, capacity):
+    """A toy initialiser on the open 3 x 3 map: one of three fixed paths."""
+    i = jax.random.randint(key, (), 0, 3)
+    cells = jnp.asarray(_THREE)[i]
+    cells = jnp.concatenate([cells, jnp.full((capacity - 5,), 8, jnp.int32)])
+    return cells, jnp.where(i == 2, 3, 5).astype(jnp.int32), jnp.bool_(True)
+
+
+def _liar(key, grid, capacity):
+    cells, n, ok = I.directional(key, grid, capacity)
+    return cells.at[1].set(grid.goal), n, ok  # breaks continuity / loop-freedom
+
+
+def test_initialise_unique_and_verify():
+    """unique=True gives distinct paths (IMGA's "nonrepeating chromosomes"); an
+    initialiser that claims ok for a broken path is caught by verify."""
+    grid = Grid.create(np.zeros((3, 3), bool), corner_rule="free")
+    pop, st_ = I.initialise(jax.random.PRNGKey(0), grid, _one_of_three, 3, 9, unique=True)
+    rows = {tuple(r[:n]) for r, n in zip(np.asarray(pop.cells).tolist(),
+                                         np.asarray(pop.length).tolist())}
+    assert int(st_.n_failed) == 0 and len(rows) == 3 and int(st_.duplicates) > 0
+    assert int(st_.successes) == int(st_.attempts)  # duplicates are not failures
+    pop, _ = I.initialise(jax.random.PRNGKey(0), grid, _one_of_three, 6, 9)
+    assert len({tuple(r) for r in np.asarray(pop.cells).tolist()}) <= 3
+    _, st_ = I.initialise(jax.random.PRNGKey(0), grid, _liar, 4, 9, max_tries=2)
+    assert int(st_.successes) == 0 and int(st_.n_failed) == 4
+
+
+def test_x64_mode_keeps_int32():
+    """Under JAX_ENABLE_X64=1 every output stays int32 / float32 (jitted, as in use)."""
+    code = textwrap.dedent("""
+        import sys, jax, numpy as np
+        jax.config.update("jax_compilation_cache_dir", sys.argv[1])
+        from jaxga import init as I
+        from jaxga.maps import random_map
+        g = random_map(10, 10, 0.2, 3, corner_rule="free")
+        names = ("directional", "greedy_random_target", "intermittent_connect")
+        f = jax.jit(lambda k: [I.get_initialiser(n)(k, g, 64) for n in names])
+        for name, (c, n, ok) in zip(names, f(jax.random.PRNGKey(0))):
+            assert c.dtype == np.int32 and n.dtype == np.int32 and ok.dtype == bool, name
+        pop, st = I.initialise(jax.random.PRNGKey(0), g, "directional", 4, 64)
+        assert pop.cells.dtype == np.int32 and pop.length.dtype == np.int32
+        assert st.success_rate.dtype == np.float32 and st.attempts.dtype == np.int32
+        assert int(st.n_failed) == 0
+        print("ok")
+    """)
+    env = dict(os.environ, JAX_ENABLE_X64="1", JAX_PLATFORMS="cpu")
+    cache = str(jax.config.jax_compilation_cache_dir or "")
+    res = subprocess.run([sys.executable, "-c", code, cache], env=env, capture_output=True,
+                         text=True, timeout=300,
+                         cwd=os.path.dirname(os.path.dirname(os.path.abspath(__file__))))
+    assert res.returncode == 0 and "ok" in res.stdout, res.stderr[-2000:]
