@@ -22,24 +22,18 @@ to ``benchmarks/RESULTS.md`` (created with a ``# Benchmark results`` heading if 
 from __future__ import annotations
 
 import argparse
-import datetime
 import functools
-import os
-import platform
-import sys
 import time
 from collections.abc import Callable
-from pathlib import Path
 
 import jax
 import jax.numpy as jnp
 import numpy as np
+from _results import append
 
 from jaxga import objectives as ob
 from jaxga.grid import DIRECTIONS, Grid
 from jaxga.paths import population_map
-
-RESULTS = Path(__file__).with_name("RESULTS.md")
 
 
 def random_population(
@@ -192,32 +186,16 @@ def main(argv: list[str] | None = None) -> None:
     table = "\n".join(lines)
     print(table)
 
-    if args.no_write:
-        return
-    command = "PYTHONPATH=. " + " ".join([sys.executable, *sys.argv])
-    now = datetime.datetime.now().astimezone().strftime("%Y-%m-%d %H:%M %Z")
-    machine = (
-        f"{platform.platform()}, {platform.processor() or platform.machine()}, "
-        f"os.cpu_count() = {os.cpu_count()}, python {platform.python_version()}, "
-        f"jax {jax.__version__} ({jax.default_backend()}), "
-        f"load average {', '.join(f'{v:.1f}' for v in os.getloadavg())} at the end "
-        "(other processes share the cores: compare the min column)"
-    )
-    section = (
-        f"\n## objectives ({now})\n\n"
+    mean_len = np.mean([np.mean(np.asarray(p[2])) for p in pops])
+    append(
+        "objectives",
         f"{args.paths} random continuous loop-free paths (self-avoiding random walks, "
-        f"mean length {np.mean([np.mean(np.asarray(p[2])) for p in pops]):.0f} nodes), "
-        f"capacity {args.capacity}, "
+        f"mean length {mean_len:.0f} nodes), capacity {args.capacity}, "
         f"{args.size} x {args.size} map with 20 % obstacles; median of {args.repeats} "
-        f"calls, each on a different population.\n\n"
-        f"- command: `{command}`\n- machine: {machine}\n\n{table}\n"
+        "calls, each on a different population (other processes may share the cores: "
+        f"compare the min column).\n\n{table}",
+        write=not args.no_write,
     )
-    new = not RESULTS.exists()
-    with RESULTS.open("a", encoding="utf-8") as fh:
-        if new:
-            fh.write("# Benchmark results\n")
-        fh.write(section)
-    print(f"appended to {RESULTS}")
 
 
 if __name__ == "__main__":

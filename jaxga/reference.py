@@ -44,6 +44,7 @@ import numpy as np
 
 from jaxga.errors import EndpointError, JaxgaError, NoPathError
 from jaxga.grid import CORNER_RULES, DIRECTIONS, Grid
+from jaxga.maps.preprocess import legal_moves
 
 __all__ = [
     "ReferencePath",
@@ -182,28 +183,7 @@ def legal_moves_np(blocked: np.ndarray, corner_rule: str) -> np.ndarray:
     the two orthogonal side cells satisfy ``corner_rule``: ``"free"`` ignores them,
     ``"no_squeeze"`` forbids both blocked, ``"strict"`` forbids either blocked.
     """
-    b = _as_blocked(blocked)
-    _check_rule(corner_rule)
-    h, w = b.shape
-    # pad with blocked cells so that off-map neighbours are blocked
-    pad = np.ones((h + 2, w + 2), bool)
-    pad[1:-1, 1:-1] = b
-
-    def at(dx: int, dy: int) -> np.ndarray:
-        return pad[1 + dy : 1 + dy + h, 1 + dx : 1 + dx + w]
-
-    free = ~b
-    out = np.zeros((8, h, w), bool)
-    for d, (dx, dy) in enumerate(DIRECTIONS.tolist()):
-        ok = free & ~at(dx, dy)
-        if dx and dy:
-            s1, s2 = at(dx, 0), at(0, dy)
-            if corner_rule == "no_squeeze":
-                ok &= ~(s1 & s2)
-            elif corner_rule == "strict":
-                ok &= ~(s1 | s2)
-        out[d] = ok
-    return out
+    return legal_moves(_as_blocked(blocked), _check_rule(corner_rule))
 
 
 class OctileGraph:
