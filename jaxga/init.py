@@ -43,8 +43,8 @@ Implementation notes shared by the walks
   ``H*W`` bytes per individual in the scan carry (P = 1000 on a 256 x 256 map: 65 MB);
   for much larger maps the walk primitives are not the right tool.
 * Cost per attempt (same setting, warm, median; ``benchmarks/init_study.py``):
-  random_walk / directional about 13-20 us, greedy_random_target 50-110 us (640 moves),
-  median_insertion 170 us and intermittent_connect 570 us, both dominated by
+  random_walk / directional about 13-20 us, greedy_random_target 75-130 us (640 moves),
+  median_insertion 160-400 us and intermittent_connect 580-1150 us, both dominated by
   :func:`jaxga.repair.connect` (its ``while_loop`` over insertion rounds runs, under
   ``vmap``, until the slowest lane stops, and a connection that cycles stops only at
   ``max_rounds``).
