@@ -151,14 +151,13 @@ def _seed_list(seeds: int | Sequence[int]) -> np.ndarray:
     return arr
 
 
-def _shard(x: jax.Array) -> jax.Array:
-    """Put the leading (seed) axis over all local devices (replicated if 1 device)."""
+def _seed_sharding() -> jax.sharding.NamedSharding | None:
+    """Leading (seed) axis split over all local devices; None with one device."""
     n = jax.device_count()
     if n == 1:
-        return x
-    mesh = jax.make_mesh((n,), ("seeds",))
-    spec = jax.sharding.PartitionSpec("seeds")
-    return jax.device_put(x, jax.sharding.NamedSharding(mesh, spec))
+        return None
+    mesh = jax.make_mesh((n,), ("seeds",), axis_types=(jax.sharding.AxisType.Auto,))
+    return jax.sharding.NamedSharding(mesh, jax.sharding.PartitionSpec("seeds"))
 
 
 def run(
@@ -220,7 +219,10 @@ def run(
     n_seeds = len(seed_arr)
     n_dev = jax.device_count()
     padded = np.concatenate([seed_arr, np.repeat(seed_arr[-1:], (-n_seeds) % n_dev)])
-    keys = _shard(jax.vmap(jax.random.PRNGKey)(jnp.asarray(padded, jnp.uint32)))
+    sh = _seed_sharding()
+    keys = jax.vmap(jax.random.PRNGKey)(jnp.asarray(padded, jnp.uint32))
+    if sh is not None:
+        keys = jax.device_put(keys, sh)
 
     def report(stage: str, frac: float) -> None:
         if progress is not None:
@@ -245,9 +247,14 @@ def run(
     def do_finish(state, hist, init_best):
         return finish(algo, grid, state, hist, params, init_best)
 
-    init_j = jax.jit(jax.vmap(do_init))
-    evolve_j = jax.jit(jax.vmap(do_evolve, in_axes=(0, 0, None)), static_argnums=2)
-    finish_j = jax.jit(jax.vmap(do_finish))
+    # Every input and output has the seed axis first: one sharding for all of them, so
+    # each device runs its share of the seeds and the result does not depend on the
+    # device count.
+    init_j = jax.jit(jax.vmap(do_init), in_shardings=sh, out_shardings=sh)
+    evolve_j = jax.jit(jax.vmap(do_evolve, in_axes=(0, 0, None)), static_argnums=2,
+                       in_shardings=(sh, sh) if sh else None, out_shardings=sh)
+    finish_j = jax.jit(jax.vmap(do_finish), in_shardings=(sh, sh, sh) if sh else None,
+                       out_shardings=sh)
 
     report("compile", 0.0)
     t0 = time.perf_counter()

@@ -40,3 +40,36 @@ def test_a_seed_gives_the_same_run_alone_or_with_others(tiny_runs):
     assert a.success[2] == b.success[0]
     assert np.array_equal(a.cells[2], b.cells[0])
     assert np.array_equal(a.history["best"][2], b.history["best"][0])
+
+
+_DEVICE_SCRIPT = """
+import json, jax
+from jaxga.api import run
+from jaxga.maps import random_map
+g = random_map(10, 10, 0.2, 3, corner_rule="free")
+r = run("sga", g, seeds=5, population__size=8, generations=3, init__max_tries=50)
+print(json.dumps({"devices": jax.device_count(), "cells": r.cells.tolist(),
+                  "best": r.history["best"].tolist(), "length": r.length.tolist()}))
+"""
+
+
+def test_results_do_not_depend_on_the_device_count():
+    """Seeds sharded over 4 forced host devices (5 seeds padded to 8) == one device."""
+    import json
+    import os
+    import subprocess
+    import sys
+    from pathlib import Path
+
+    root = str(Path(__file__).resolve().parents[1])
+    out = []
+    for n in (1, 4):
+        env = dict(os.environ, PYTHONPATH=root,
+                   XLA_FLAGS=f"--xla_force_host_platform_device_count={n}")
+        proc = subprocess.run([sys.executable, "-c", _DEVICE_SCRIPT], env=env, cwd=root,
+                              capture_output=True, text=True, timeout=600)
+        assert proc.returncode == 0, proc.stderr[-2000:]
+        out.append(json.loads(proc.stdout.strip().splitlines()[-1]))
+    assert [o["devices"] for o in out] == [1, 4]
+    assert out[0]["cells"] == out[1]["cells"]
+    assert out[0]["best"] == out[1]["best"] and out[0]["length"] == out[1]["length"]
