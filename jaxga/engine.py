@@ -109,16 +109,16 @@ def default_params(config: Config, islands: int = 1) -> dict[str, jax.Array]:
     if method == "agacd":
         ratios = config.get("fitness.importance_ratios", (1.2, 1.4))
         params["fitness.weights"] = objectives.delphi_weights(jnp.asarray(ratios, F32))
-    for key in ("crossover.probability", "mutation.probability"):
-        per_island = config.get(
-            "islands." + key.split(".")[0].replace("crossover", "crossover_probabilities")
-            .replace("mutation", "mutation_probabilities")
-        )
+    per_island_keys = {
+        "crossover.probability": "islands.crossover_probabilities",
+        "mutation.probability": "islands.mutation_probabilities",
+    }
+    for key, island_key in per_island_keys.items():
+        per_island = config.get(island_key)
         if per_island is not None:
             if len(per_island) != islands:
                 raise ParameterError(
-                    f"islands.{key.split('.')[0]}_probabilities has {len(per_island)} entries "
-                    f"for {islands} islands"
+                    f"{island_key} has {len(per_island)} entries for {islands} islands"
                 )
             params[key] = jnp.asarray(per_island, F32)
     return params
