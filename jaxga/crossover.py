@@ -48,11 +48,11 @@ import jax
 import jax.numpy as jnp
 import numpy as np
 
-from jaxga.batching import over_pairs
+from jaxga.batching import over_pairs_gated
 from jaxga.errors import ParameterError
 from jaxga.geometry import clear, linear_trial
 from jaxga.grid import Grid, move_legal
-from jaxga.paths import TABLE_MAX_CELLS, Population, remove_loops
+from jaxga.paths import TABLE_MAX_CELLS, remove_loops
 from jaxga.repair import concat, connect
 
 __all__ = [
@@ -686,8 +686,13 @@ def adaptive_crossover_probability(
     pc_low: jax.Array,
     pc_high: jax.Array,
     rtol: float = 1e-6,
+    schedule: Callable | None = None,
 ) -> jax.Array:
     """AGACD's adaptive crossover probability (AGACD section 4.6, eq. 26-27), float32.
+
+    ``schedule`` (an optax schedule, e.g. :func:`jaxga.schedules.agacd_crossover_decay`)
+    replaces the time factor ``exp(-t / T)`` by ``schedule(t)``; without it the factor is
+    computed directly (``T`` may then be traced).
 
     ``f`` is the larger fitness of the pair, ``f_max`` / ``f_avg`` the maximum / mean
     fitness of the population, ``t`` the current and ``T`` the total number of
@@ -714,7 +719,8 @@ def adaptive_crossover_probability(
     safe_gap = jnp.where(converged, _F32(1), gap)
     mid = jnp.clip(pc_high * (f_max - f) / safe_gap, 0, pc_high)
     pc_t = jnp.where(converged, pc_low, jnp.where(f >= f_avg, mid, pc_high))
-    return (pc_t * jnp.exp(-t / T)).astype(_F32)
+    factor = jnp.exp(-t / T) if schedule is None else jnp.asarray(schedule(t), _F32)
+    return (pc_t * factor).astype(_F32)
 
 
 def adaptive_pair_probability(
@@ -775,19 +781,11 @@ def crossover_population(op: Callable, *, in_axes_extra: tuple = ()) -> Callable
     per pair (AGACD: :func:`adaptive_pair_probability`). Built on
     :func:`jaxga.batching.over_pairs`; ``in_axes_extra`` gives the vmap axes of ``extra``
     (default: all mapped along axis 0). With an odd population the last individual
-    passes through. Since a gated-off pair still computes the operator under ``vmap``,
-    the cost does not depend on ``pc``.
+    passes through. Only the pairs that are crossed are computed
+    (:func:`jaxga.batching.over_pairs_gated`); the result is that of
+    ``over_pairs(with_probability(op))``.
     """
-    gated = with_probability(op)
-
-    def lifted(key: jax.Array, grid: Grid, pop: Population, pc, *extra):
-        n_pairs = pop.size // 2
-        pc = jnp.broadcast_to(jnp.asarray(pc, _F32), (n_pairs,))
-        axes = (0,) + (in_axes_extra or (0,) * len(extra))
-        return over_pairs(gated, in_axes_extra=axes)(key, grid, pop, pc, *extra)
-
-    lifted.__name__ = getattr(op, "__name__", "op") + "_population"
-    return lifted
+    return over_pairs_gated(op, in_axes_extra=in_axes_extra)
 
 
 CROSSOVERS: dict[str, Callable] = {

@@ -44,7 +44,7 @@ import jax
 import jax.numpy as jnp
 import numpy as np
 
-from jaxga.batching import keep_parent_on_failure, over_individuals
+from jaxga.batching import keep_parent_on_failure, over_individuals_gated
 from jaxga.errors import ParameterError
 from jaxga.grid import DIRECTIONS, Grid, blocked_at, move_legal
 from jaxga.init import directional_walk
@@ -470,8 +470,12 @@ def adaptive_mutation_probability(
     pm_high: float | jax.Array = 0.3,
     *,
     rtol: float = 1e-6,
+    schedule: Callable | None = None,
 ) -> jax.Array:
     """AGACD's adaptive mutation probability (eq. 28-29), float32, elementwise.
+
+    ``schedule`` (an optax schedule, e.g. :func:`jaxga.schedules.agacd_mutation_growth`)
+    replaces the time factor ``exp(t / T)`` by ``schedule(t)``.
 
     ::
 
@@ -507,7 +511,8 @@ def adaptive_mutation_probability(
     converged = gap <= f32(rtol) * jnp.abs(f_max)
     scaled = pm_low * (f_max - f) / jnp.where(converged, f32(1.0), gap)
     pm_temp = jnp.where(converged, pm_high, jnp.where(f >= f_avg, scaled, pm_high))
-    return jnp.minimum(f32(1.0), pm_temp * jnp.exp(t / T))
+    factor = jnp.exp(t / T) if schedule is None else jnp.asarray(schedule(t), f32)
+    return jnp.minimum(f32(1.0), pm_temp * factor)
 
 
 def with_probability(op: Callable) -> Callable:
@@ -547,19 +552,12 @@ def mutation_population(op: Callable, *, in_axes_extra: tuple = ()) -> Callable:
     ``i`` is mutated with probability ``pm[i]``; ``pm`` is a scalar (IMGA 0.2) or
     ``float32[P]`` (AGACD, :func:`adaptive_mutation_probability`). ``in_axes_extra`` are
     the vmap axes of ``extra`` (default: all mapped along axis 0). The counterpart of
-    :func:`jaxga.crossover.crossover_population`; built on :func:`with_probability` and
-    :func:`jaxga.batching.over_individuals`. ``n_failed`` counts failures of applied
-    mutations only.
+    :func:`jaxga.crossover.crossover_population`; equal to
+    ``over_individuals(with_probability(op))`` but only the mutated individuals are
+    computed (:func:`jaxga.batching.over_individuals_gated`). ``n_failed`` counts
+    failures of applied mutations only.
     """
-    gated = with_probability(op)
-
-    def lifted(key: jax.Array, grid: Grid, pop, pm, *extra):
-        pm = jnp.broadcast_to(jnp.asarray(pm, jnp.float32), (pop.size,))
-        axes = (0,) + (in_axes_extra or (0,) * len(extra))
-        return over_individuals(gated, in_axes_extra=axes)(key, grid, pop, pm, *extra)
-
-    lifted.__name__ = getattr(op, "__name__", "op") + "_population"
-    return lifted
+    return over_individuals_gated(op, in_axes_extra=in_axes_extra)
 
 
 def either(op_a: Callable, op_b: Callable) -> Callable:

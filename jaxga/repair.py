@@ -40,21 +40,44 @@ def random_free_neighbour(
     return _pick_free_neighbour(jax.random.bits(key, (), jnp.uint32), grid, cell)
 
 
+def neighbour_masks(grid: Grid) -> jax.Array:
+    """``int32[H * W]``: bit ``d`` (0-7) set when the 8-neighbour ``d`` of the cell (in
+    the order of ``_OFFSETS``) is on the map and free; bit 8 set when the cell itself is
+    free.
+
+    One table per map, computed once outside the insertion rounds: a round then needs
+    one gather per open gap instead of nine (gathers dominate a round on the CPU).
+    """
+    h, w = grid.blocked.shape
+    ys, xs = jnp.divmod(jnp.arange(h * w, dtype=jnp.int32), w)
+    free = ~blocked_at(grid.blocked, xs[:, None] + _OFFSETS[:, 0], ys[:, None] + _OFFSETS[:, 1])
+    bits = jnp.left_shift(jnp.int32(1), jnp.arange(8, dtype=jnp.int32))
+    masks = jnp.sum(jnp.where(free, bits, 0), axis=1, dtype=jnp.int32)
+    return masks | jnp.where(grid.blocked.reshape(-1), 0, 256).astype(jnp.int32)
+
+
 def _pick_free_neighbour(
-    bits: jax.Array, grid: Grid, cell: jax.Array
+    bits: jax.Array, grid: Grid, cell: jax.Array, masks: jax.Array | None = None
 ) -> tuple[jax.Array, jax.Array]:
     """The ``(bits mod n_free)``-th free 8-neighbour of ``cell``: uniform over the free ones.
 
-    One random word per cell instead of eight uniforms (random bits dominate the cost).
+    One random word per cell instead of eight uniforms (random bits dominate the cost);
+    the free neighbours come from :func:`neighbour_masks` (pass it when calling often).
     """
-    w = grid.width
-    x, y = (cell % w)[..., None], (cell // w)[..., None]
-    nx, ny = x + _OFFSETS[:, 0], y + _OFFSETS[:, 1]
-    free = ~blocked_at(grid.blocked, nx, ny)
+    if masks is None:
+        masks = neighbour_masks(grid)
+    return _pick_from_mask(bits, masks[cell], cell, grid.width)
+
+
+def _pick_from_mask(
+    bits: jax.Array, mask: jax.Array, cell: jax.Array, w: int
+) -> tuple[jax.Array, jax.Array]:
+    free = (mask[..., None] >> jnp.arange(8, dtype=jnp.int32)) & 1
     n_free = jnp.sum(free, axis=-1, dtype=jnp.int32)
     rank = (bits % jnp.maximum(n_free, 1).astype(jnp.uint32)).astype(jnp.int32)
-    hit = free & (jnp.cumsum(free, axis=-1, dtype=jnp.int32) - 1 == rank[..., None])
-    pick = jnp.sum(jnp.where(hit, ny * w + nx, 0), axis=-1, dtype=jnp.int32)
+    hit = (free == 1) & (jnp.cumsum(free, axis=-1, dtype=jnp.int32) - 1 == rank[..., None])
+    step = _OFFSETS[:, 1] * w + _OFFSETS[:, 0]
+    pick = cell + jnp.sum(jnp.where(hit, step, 0), axis=-1, dtype=jnp.int32)
     return pick, n_free > 0
 
 
@@ -128,31 +151,34 @@ def connect(
     ok0 &= qlen0 <= queue
     count0 = jnp.maximum(n_anchors, 1)
 
+    masks = neighbour_masks(grid)
+
     def cond(c):
-        _, _, _, qlen, _, r, ok, _ = c
+        _, _, _, qlen, _, r, ok = c
         return (qlen > 0) & (r < max_rounds) & ok
 
+    # All random words up front: one generator call instead of one per round.
+    bits_all = jax.random.bits(key, (max_rounds, queue), jnp.uint32)
+
     def body(c):
-        node, nxt, q, qlen, count, r, ok, key = c
-        key, sub = jax.random.split(key)
+        node, nxt, q, qlen, count, r, ok = c
         active = jnp.arange(queue, dtype=i32) < qlen
         left = jnp.where(active, q, 0)
         right = nxt[left]
         lo, hi = node[left], node[jnp.maximum(right, 0)]
         mx = (lo % w + hi % w) // 2
         my = (lo // w + hi // w) // 2
-        med_blocked = blocked_at(grid.blocked, mx, my)
-        alt, has_alt = _pick_free_neighbour(
-            jax.random.bits(sub, (queue,), jnp.uint32), grid, my * w + mx
-        )
+        med_mask = masks[my * w + mx]
+        med_blocked = med_mask < 256
+        alt, has_alt = _pick_from_mask(bits_all[r], med_mask, my * w + mx, w)
         mid = jnp.where(med_blocked, alt, my * w + mx)
         ok &= ~jnp.any(active & med_blocked & ~has_alt)
         new_id = count + jnp.cumsum(active, dtype=i32) - 1
         ok &= count + qlen <= capacity
         slot = jnp.where(active & (new_id < capacity), new_id, capacity)
-        node = node.at[slot].set(mid, mode="drop")
-        nxt = nxt.at[slot].set(right, mode="drop")
-        nxt = nxt.at[jnp.where(active, left, capacity)].set(slot, mode="drop")
+        node = _set(node, slot, mid)
+        nxt = _set(nxt, slot, right)
+        nxt = _set(nxt, jnp.where(active, left, capacity), slot)
         # Sub-gaps still open: (left, mid) and (mid, right).
         cand = jnp.stack([left, slot], axis=1).reshape(-1)
         open_ = jnp.stack(
@@ -160,23 +186,25 @@ def connect(
             axis=1,
         ).reshape(-1)
         pos = jnp.cumsum(open_, dtype=i32) - 1
-        q = jnp.full((queue,), -1, i32).at[jnp.where(open_, pos, queue)].set(cand, mode="drop")
+        q = _set(jnp.full((queue,), -1, i32), jnp.where(open_, pos, queue), cand)
         new_qlen = jnp.sum(open_, dtype=i32)
         ok &= new_qlen <= queue
-        return node, nxt, q, jnp.minimum(new_qlen, queue), count + qlen, r + 1, ok, key
+        return node, nxt, q, jnp.minimum(new_qlen, queue), count + qlen, r + 1, ok
 
-    carry = (node, nxt, q0, qlen0, count0, jnp.int32(0), ok0, key)
-    node, nxt, _, qlen, _, _, ok, _ = jax.lax.while_loop(cond, body, carry)
+    carry = (node, nxt, q0, qlen0, count0, jnp.int32(0), ok0)
+    node, nxt, _, qlen, _, _, ok = jax.lax.while_loop(cond, body, carry)
     ok &= qlen == 0
 
     # Follow the links from node 0. A while_loop, so that a batch of short bridges (the
     # mutations' case) stops after the longest chain instead of after `capacity` steps.
+    slots = jnp.arange(capacity, dtype=i32)
+
     def follow_cond(c):
         return (c[0] >= 0) & (c[0] < capacity) & (c[1] < capacity)
 
     def follow_body(c):
         ptr, j, seq = c
-        return nxt[ptr], j + 1, jax.lax.dynamic_update_index_in_dim(seq, node[ptr], j, 0)
+        return nxt[ptr], j + 1, jnp.where(slots == j, node[ptr], seq)
 
     _, n_seq, seq = jax.lax.while_loop(
         follow_cond, follow_body, (jnp.int32(0), jnp.int32(0), jnp.zeros((capacity,), i32))
@@ -206,6 +234,24 @@ def connect(
     )
     length = jnp.minimum(total, capacity)
     return pad_cells(cells, length), length, ok
+
+
+ONE_HOT_MAX = 1024
+"""Largest ``updates x table`` size written with one-hot selects instead of a scatter."""
+
+
+def _set(table: jax.Array, idx: jax.Array, vals: jax.Array) -> jax.Array:
+    """``table.at[idx].set(vals, mode="drop")`` for distinct in-range ``idx``.
+
+    Small tables (the mutations' bridges) use a one-hot select: under ``vmap`` XLA's CPU
+    scatter is a serial loop over every update of every lane, which dominated a round.
+    """
+    n, k = table.shape[0], idx.shape[0]
+    if n * k > ONE_HOT_MAX:
+        return table.at[idx].set(vals, mode="drop")
+    hit = idx[:, None] == jnp.arange(n, dtype=idx.dtype)[None, :]
+    new = jnp.sum(jnp.where(hit, vals[:, None], 0), axis=0, dtype=table.dtype)
+    return jnp.where(jnp.any(hit, axis=0), new, table)
 
 
 def pad_cells(cells: jax.Array, length: jax.Array) -> jax.Array:
