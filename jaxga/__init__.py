@@ -1,5 +1,6 @@
 """jaxga: genetic-algorithm path planning for mobile robots on grid maps, in JAX."""
 
+from jaxga.api import Result, run, sweep
 from jaxga.errors import EndpointError, JaxgaError, MapFormatError, NoPathError, ParameterError
 from jaxga.grid import CORNER_RULES, Grid
 
@@ -11,5 +12,8 @@ __all__ = [
     "MapFormatError",
     "NoPathError",
     "ParameterError",
+    "Result",
+    "run",
+    "sweep",
 ]
 __version__ = "0.1.0"

@@ -9,7 +9,9 @@ on its own.
 
 from __future__ import annotations
 
+import concurrent.futures
 import dataclasses
+import functools
 import math
 import time
 from collections.abc import Callable, Mapping, Sequence
@@ -20,8 +22,8 @@ import jax.numpy as jnp
 import numpy as np
 
 from jaxga.config import Config
-from jaxga.engine import build, evolve, finish, init_state
-from jaxga.errors import JaxgaError
+from jaxga.engine import Algorithm, build, default_params, evolve, finish, init_state, static_config
+from jaxga.errors import JaxgaError, ParameterError
 from jaxga.grid import Grid
 
 SUMMARY_METRICS = ("length", "raw_length", "angle_sum", "turns", "fitness",
@@ -59,6 +61,7 @@ class Result:
     generations: int
     width: int
     config: Config | None = None
+    point: dict[str, Any] = dataclasses.field(default_factory=dict)
 
     def path(self, i: int, raw: bool = False) -> list[tuple[int, int]]:
         """Seed ``i``'s best path as ``(x, y)`` cells (post-optimised unless ``raw``)."""
@@ -151,13 +154,261 @@ def _seed_list(seeds: int | Sequence[int]) -> np.ndarray:
     return arr
 
 
-def _seed_sharding() -> jax.sharding.NamedSharding | None:
-    """Leading (seed) axis split over all local devices; None with one device."""
+def _seed_sharding() -> tuple[jax.sharding.NamedSharding | None, Any]:
+    """(runs axis split over all local devices, replicated); (None, None) with one device."""
     n = jax.device_count()
     if n == 1:
-        return None
-    mesh = jax.make_mesh((n,), ("seeds",), axis_types=(jax.sharding.AxisType.Auto,))
-    return jax.sharding.NamedSharding(mesh, jax.sharding.PartitionSpec("seeds"))
+        return None, None
+    mesh = jax.make_mesh((n,), ("runs",), axis_types=(jax.sharding.AxisType.Auto,))
+    P = jax.sharding.PartitionSpec
+    return (jax.sharding.NamedSharding(mesh, P("runs")),
+            jax.sharding.NamedSharding(mesh, P()))
+
+
+def _spec(tree: Any) -> Any:
+    return jax.tree_util.tree_map(lambda x: jax.ShapeDtypeStruct(jnp.shape(x), x.dtype), tree)
+
+
+@dataclasses.dataclass(frozen=True)
+class _Programs:
+    """The three compiled programs of a batch of runs (and how long compiling took)."""
+
+    init: Any
+    evolve: dict[int, Any]
+    finish: Any
+    compile_s: float
+
+
+@functools.lru_cache(maxsize=16)
+def _programs(algo: Algorithm, grid_spec: Any, params_spec: Any, n_runs: int,
+              sizes: tuple[int, ...], n_devices: int) -> _Programs:
+    """Compile init / evolve (one per chunk size) / finish for ``n_runs`` runs.
+
+    Cached per (algorithm, map shape and corner rule, parameter shapes, run count, chunks,
+    devices): a second call with another map of the same shape, other seeds or other
+    dynamic parameter values (probabilities, weights, temperatures, population size
+    below the capacity) reuses the compiled programs (``jaxga.replan`` relies on it).
+    The three programs are compiled concurrently (XLA compiles outside the GIL).
+    """
+    del n_devices  # part of the cache key only
+    params_spec = dict(params_spec)
+    sh, rep = _seed_sharding()
+
+    def do_init(k, grid, params):
+        state, stats = init_state(algo, jax.random.fold_in(k, 0), grid, params)
+        return state, stats.success_rate, stats.n_failed
+
+    def do_evolve(k, grid, params, state, n):
+        return evolve(algo, jax.random.fold_in(k, 1), grid, state, params, n)
+
+    def do_finish(grid, params, state, hist, init_best):
+        return finish(algo, grid, state, hist, params, init_best)
+
+    # Every per-run input and output has the run axis first: one sharding for all of
+    # them, so each device runs its share and the result does not depend on the device
+    # count. The map is replicated.
+    def jit(fn, in_axes, n_in, static=()):
+        shard = {} if sh is None else dict(
+            in_shardings=tuple(rep if a is None else sh for a in in_axes[:n_in]),
+            out_shardings=sh)
+        return jax.jit(jax.vmap(fn, in_axes=in_axes), static_argnums=static, **shard)
+
+    t0 = time.perf_counter()
+    keys = jax.ShapeDtypeStruct((n_runs, 2), jnp.uint32)
+    init_t = jit(do_init, (0, None, 0), 3).trace(keys, grid_spec, params_spec)
+    state_spec = init_t.out_info[0]
+    evolve_j = jit(do_evolve, (0, None, 0, 0, None), 4, static=(4,))
+    evolve_t = {n: evolve_j.trace(keys, grid_spec, params_spec, state_spec, n)
+                for n in sorted(set(sizes))}
+    hist_spec = evolve_t[sizes[0]].out_info[1]
+    full_hist = jax.tree_util.tree_map(
+        lambda h: jax.ShapeDtypeStruct((n_runs, sum(sizes)), h.dtype), hist_spec)
+    finish_t = jit(do_finish, (None, 0, 0, 0, 0), 5).trace(
+        grid_spec, params_spec, state_spec, full_hist,
+        jax.ShapeDtypeStruct((n_runs,), jnp.float32))
+    traced = {"init": init_t, "finish": finish_t, **{f"evolve{n}": t
+                                                      for n, t in evolve_t.items()}}
+    with concurrent.futures.ThreadPoolExecutor(len(traced)) as pool:
+        futures = {name: pool.submit(lambda t=t: t.lower().compile())
+                   for name, t in traced.items()}
+        compiled = {name: f.result() for name, f in futures.items()}
+    return _Programs(
+        init=compiled["init"],
+        evolve={n: compiled[f"evolve{n}"] for n in evolve_t},
+        finish=compiled["finish"],
+        compile_s=time.perf_counter() - t0,
+    )
+
+
+def _stack_params(per_point: Sequence[dict], seeds: int) -> dict:
+    """Per-run parameters: every point repeated once per seed (run ``q * S + s``)."""
+    return {k: jnp.repeat(jnp.stack([jnp.asarray(p[k]) for p in per_point]), seeds, axis=0)
+            for k in per_point[0]}
+
+
+def _load(preset, grid, corner_rule, variant, sets, overrides, generations):
+    from jaxga.maps import load_map_info
+    from jaxga.presets import load_preset
+
+    ov: dict[str, Any] = {k.replace("__", "."): v for k, v in overrides.items()}
+    if generations is not None:
+        ov["generations"] = int(generations)
+    config = (preset.override(ov) if isinstance(preset, Config)
+              else load_preset(preset, variant=variant, overrides=ov, sets=sets))
+    if isinstance(grid, Grid):
+        map_name = "grid"
+        if corner_rule is not None:
+            grid = grid.replace(corner_rule=corner_rule)
+    else:
+        info = load_map_info(grid, corner_rule=corner_rule or config["map.corner_rule"])
+        grid, map_name = info.grid, info.name
+    grid.check_endpoints()
+    return config, grid, map_name
+
+
+def _point_configs(config: Config, points: Sequence[Mapping[str, Any]]) -> list[Config]:
+    """Validated configurations of the sweep points; only dynamic keys and the
+    population size may vary (they do not change the compiled program)."""
+    out = []
+    base = static_config(config)
+    for point in points:
+        cfg = config.override({k.replace("__", "."): v for k, v in point.items()})
+        if static_config(cfg) != base:
+            new = dict(static_config(cfg).items)
+            old = dict(base.items)
+            changed = sorted(k for k in new.keys() | old.keys() if new.get(k) != old.get(k))
+            raise ParameterError(
+                f"sweep point {dict(point)} changes {', '.join(changed)}: only dynamic keys "
+                "(probabilities, weights, temperatures) and population.size can be swept "
+                "in one compiled call; run the other values separately")
+        out.append(cfg)
+    return out
+
+
+def sweep(
+    preset: str | Config,
+    grid: Grid | str,
+    points: Sequence[Mapping[str, Any]],
+    seeds: int | Sequence[int] = 1,
+    *,
+    generations: int | None = None,
+    corner_rule: str | None = None,
+    variant: str | None = None,
+    sets: Sequence[str] = (),
+    progress: Callable[[str, float], None] | None = None,
+    chunks: int = 1,
+    **overrides: Any,
+) -> list[Result]:
+    """Run every point of a hyper-parameter sweep with every seed, in ONE compiled call.
+
+    ``points`` are mappings of configuration keys (``crossover.probability``, AGACD's
+    ``mutation.pm_low``, fitness weights, ``population.size``, ...) applied on top of the
+    preset and ``overrides``. Dynamic keys become per-run arrays of a ``jax.vmap``; the
+    population size becomes the engine's ``active`` count below a capacity equal to the
+    largest size swept. Keys that change the compiled program (operators, generations,
+    capacity) are refused with a :class:`ParameterError`. Run ``q * S + s`` is point
+    ``q`` with seed ``s``: every point sees the same seeds (common random numbers, as a
+    designed experiment wants). Returns one :class:`Result` per point; their ``timing``
+    is that of the whole sweep.
+    """
+    from jaxga.reference import any_angle_shortest_path, shortest_path
+
+    t_start = time.perf_counter()
+    if not points:
+        raise ParameterError("a sweep needs at least one point")
+    config, grid, map_name = _load(preset, grid, corner_rule, variant, sets, overrides,
+                                   generations)
+    configs = _point_configs(config, points)
+    seed_arr = _seed_list(seeds)
+    octile = shortest_path(grid)
+    if not octile.found:
+        return [_no_path_result(c, map_name, grid, seed_arr, build(c, grid)[0],
+                                octile.reason, time.perf_counter() - t_start)
+                for c in configs]
+    any_angle = any_angle_shortest_path(grid)
+    capacity = max(int(c["population.size"]) for c in configs)
+    algo, _ = build(config, grid, population=capacity)
+    per_point = [default_params(c, algo.islands) for c in configs]
+    n_seeds, n_points = len(seed_arr), len(configs)
+    n_runs = n_seeds * n_points
+    n_dev = jax.device_count()
+    pad = (-n_runs) % n_dev
+    run_seeds = np.concatenate([np.tile(seed_arr, n_points), np.repeat(seed_arr[-1:], pad)])
+    params = _stack_params(per_point, n_seeds)
+    if pad:
+        params = {k: jnp.concatenate([v, jnp.repeat(v[-1:], pad, axis=0)])
+                  for k, v in params.items()}
+    keys = jax.vmap(jax.random.PRNGKey)(jnp.asarray(run_seeds, jnp.uint32))
+    sh, rep = _seed_sharding()
+    if sh is not None:
+        keys, params = jax.device_put((keys, params), sh)
+        grid = jax.device_put(grid, rep)
+
+    def report(stage: str, frac: float) -> None:
+        if progress is not None:
+            progress(stage, frac)
+
+    n_chunks = max(1, min(int(chunks), algo.generations))
+    sizes = tuple(algo.generations // n_chunks + (1 if i < algo.generations % n_chunks
+                                                   else 0) for i in range(n_chunks))
+    report("compile", 0.0)
+    t0 = time.perf_counter()
+    progs = _programs(algo, _spec(grid), tuple(sorted(_spec(params).items())), len(run_seeds),
+                      sizes, n_dev)
+    compile_s = time.perf_counter() - t0
+    report("compile", 1.0)
+
+    t0 = time.perf_counter()
+    state, init_rate, unfilled = jax.block_until_ready(progs.init(keys, grid, params))
+    init_s = time.perf_counter() - t0
+    init_best = state.best_fitness
+
+    t0 = time.perf_counter()
+    hists = []
+    done = 0
+    for n in sizes:
+        state, h = progs.evolve[n](keys, grid, params, state)
+        jax.block_until_ready(state)
+        hists.append(h)
+        done += n
+        report("evolve", done / algo.generations)
+    history = {k: jnp.concatenate([h[k] for h in hists], axis=1) for k in hists[0]}
+    evolve_s = time.perf_counter() - t0
+
+    t0 = time.perf_counter()
+    out = jax.block_until_ready(progs.finish(grid, params, state, history, init_best))
+    post_s = time.perf_counter() - t0
+    timing = {"compile_s": compile_s, "init_s": init_s, "evolve_s": evolve_s,
+              "post_s": post_s, "total_s": time.perf_counter() - t_start}
+
+    host = jax.tree_util.tree_map(np.asarray, out)
+    hist = {k: np.asarray(v) for k, v in history.items()}
+    rate = np.asarray(init_rate).reshape(len(run_seeds), -1).mean(axis=1)
+    unf = np.asarray(unfilled).reshape(len(run_seeds), -1).sum(axis=1)
+    results = []
+    for q, cfg in enumerate(configs):
+        sl = slice(q * n_seeds, (q + 1) * n_seeds)
+        h = jax.tree_util.tree_map(lambda a, sl=sl: a[sl], host)
+        success = h["success"] & h["feasible_post"]
+        results.append(Result(
+            preset=config["name"], map_name=map_name, corner_rule=grid.corner_rule,
+            seeds=seed_arr, success=success,
+            reason="" if success.all() else "no feasible path found by some seeds",
+            cells=h["cells"], n_cells=h["length"],
+            raw_cells=h["raw_cells"], raw_n_cells=h["raw_length"],
+            length=h["path_length"].astype(float),
+            raw_length=h["raw_path_length"].astype(float),
+            fitness=h["fitness"].astype(float),
+            convergence_generation=h["convergence_generation"],
+            history={k: v[sl] for k, v in hist.items()},
+            metrics=h["metrics"], raw_metrics=h["raw_metrics"], failures=h["failures"],
+            init_success_rate=rate[sl], init_unfilled=unf[sl],
+            optimum=float(octile.length), any_angle_optimum=float(any_angle.length),
+            timing=dict(timing), population=int(cfg["population.size"]) * algo.islands,
+            generations=algo.generations, width=grid.width, config=cfg,
+            point={k.replace("__", "."): v for k, v in points[q].items()},
+        ))
+    return results
 
 
 def run(
@@ -181,11 +432,11 @@ def run(
             loaded with ``corner_rule`` or else the preset's ``map.corner_rule``; a Grid
             keeps its own unless ``corner_rule`` is given.
         seeds: a count ``N`` (seeds ``0..N-1``) or explicit integer seeds. Seed ``s``
-            always gives the same run, whatever other seeds run with it.
+            always gives the same run, whatever other seeds run with it and on however
+            many devices.
         generations: overrides the preset's generation count.
         overrides: configuration keys with ``.`` written as ``__`` (e.g.
-            ``crossover__probability=0.7``) or passed as a mapping in ``sets``-style
-            strings through ``sets=("crossover.probability=0.7",)``.
+            ``crossover__probability=0.7``), or ``sets=("crossover.probability=0.7",)``.
         progress: optional callback ``(stage, fraction)``; with ``chunks > 1`` the
             generations run in that many compiled chunks (same result) for a progress bar.
 
@@ -193,126 +444,15 @@ def run(
         A :class:`Result`. Seeds that found no feasible path have ``success`` False and
         are never reported with a path. An unreachable goal gives all seeds
         ``success = False`` and ``reason`` naming the cause (nothing is run).
+
+    The compiled programs are cached per algorithm, map shape and run count: calling
+    again with other seeds of the same count, another map of the same size or other
+    dynamic values (``crossover__probability=...``) does not compile again. For many
+    hyper-parameter values in one call use :func:`sweep`.
     """
-    from jaxga.maps import load_map_info
-    from jaxga.presets import load_preset
-    from jaxga.reference import any_angle_shortest_path, shortest_path
-
-    t_start = time.perf_counter()
-    ov: dict[str, Any] = {k.replace("__", "."): v for k, v in overrides.items()}
-    if generations is not None:
-        ov["generations"] = int(generations)
-    config = (preset.override(ov) if isinstance(preset, Config)
-              else load_preset(preset, variant=variant, overrides=ov, sets=sets))
-    if isinstance(grid, Grid):
-        map_name = "grid"
-        if corner_rule is not None:
-            grid = grid.replace(corner_rule=corner_rule)
-    else:
-        info = load_map_info(grid, corner_rule=corner_rule or config["map.corner_rule"])
-        grid, map_name = info.grid, info.name
-    grid.check_endpoints()
-    seed_arr = _seed_list(seeds)
-    octile = shortest_path(grid)
-    any_angle = any_angle_shortest_path(grid) if octile.found else octile
-    algo, params = build(config, grid)
-    n_seeds = len(seed_arr)
-    n_dev = jax.device_count()
-    padded = np.concatenate([seed_arr, np.repeat(seed_arr[-1:], (-n_seeds) % n_dev)])
-    sh = _seed_sharding()
-    keys = jax.vmap(jax.random.PRNGKey)(jnp.asarray(padded, jnp.uint32))
-    if sh is not None:
-        keys = jax.device_put(keys, sh)
-
-    def report(stage: str, frac: float) -> None:
-        if progress is not None:
-            progress(stage, frac)
-
-    if not octile.found:
-        return _no_path_result(config, map_name, grid, seed_arr, algo, octile.reason,
-                               time.perf_counter() - t_start)
-
-    def do_init(k):
-        k_init = jax.random.fold_in(k, 0)
-        state, stats = init_state(algo, k_init, grid, params)
-        return state, stats.success_rate, stats.n_failed
-
-    n_chunks = max(1, min(int(chunks), algo.generations))
-    sizes = [algo.generations // n_chunks + (1 if i < algo.generations % n_chunks else 0)
-             for i in range(n_chunks)]
-
-    def do_evolve(k, state, n):
-        return evolve(algo, jax.random.fold_in(k, 1), grid, state, params, n)
-
-    def do_finish(state, hist, init_best):
-        return finish(algo, grid, state, hist, params, init_best)
-
-    # Every input and output has the seed axis first: one sharding for all of them, so
-    # each device runs its share of the seeds and the result does not depend on the
-    # device count.
-    init_j = jax.jit(jax.vmap(do_init), in_shardings=sh, out_shardings=sh)
-    evolve_j = jax.jit(jax.vmap(do_evolve, in_axes=(0, 0, None)), static_argnums=2,
-                       in_shardings=(sh, sh) if sh else None, out_shardings=sh)
-    finish_j = jax.jit(jax.vmap(do_finish), in_shardings=(sh, sh, sh) if sh else None,
-                       out_shardings=sh)
-
-    report("compile", 0.0)
-    t0 = time.perf_counter()
-    init_c = init_j.lower(keys).compile()
-    state_shape = jax.eval_shape(init_j, keys)
-    evolve_c = {n: evolve_j.lower(keys, state_shape[0], n).compile() for n in set(sizes)}
-    hist_shape = jax.eval_shape(lambda k, s: evolve_j(k, s, sizes[0]), keys, state_shape[0])
-    full_hist = jax.tree_util.tree_map(
-        lambda h: jax.ShapeDtypeStruct((h.shape[0], algo.generations), h.dtype), hist_shape[1])
-    finish_c = finish_j.lower(hist_shape[0], full_hist,
-                              jax.ShapeDtypeStruct((len(padded),), jnp.float32)).compile()
-    compile_s = time.perf_counter() - t0
-    report("compile", 1.0)
-
-    t0 = time.perf_counter()
-    state, init_rate, unfilled = jax.block_until_ready(init_c(keys))
-    init_s = time.perf_counter() - t0
-    init_best = state.best_fitness
-
-    t0 = time.perf_counter()
-    hists = []
-    done = 0
-    for n in sizes:
-        state, h = evolve_c[n](keys, state)
-        jax.block_until_ready(state)
-        hists.append(h)
-        done += n
-        report("evolve", done / algo.generations)
-    history = {k: jnp.concatenate([h[k] for h in hists], axis=1) for k in hists[0]}
-    evolve_s = time.perf_counter() - t0
-
-    t0 = time.perf_counter()
-    out = jax.block_until_ready(finish_c(state, history, init_best))
-    post_s = time.perf_counter() - t0
-
-    sl = slice(0, n_seeds)
-    host = jax.tree_util.tree_map(lambda a: np.asarray(a)[sl], out)
-    hist = {k: np.asarray(v)[sl] for k, v in history.items()}
-    success = host["success"] & host["feasible_post"]
-    return Result(
-        preset=config["name"], map_name=map_name, corner_rule=grid.corner_rule,
-        seeds=seed_arr, success=success,
-        reason="" if success.all() else "no feasible path found by some seeds",
-        cells=host["cells"], n_cells=host["length"],
-        raw_cells=host["raw_cells"], raw_n_cells=host["raw_length"],
-        length=host["path_length"].astype(float), raw_length=host["raw_path_length"]
-        .astype(float), fitness=host["fitness"].astype(float),
-        convergence_generation=host["convergence_generation"],
-        history=hist, metrics=host["metrics"], raw_metrics=host["raw_metrics"],
-        failures=host["failures"],
-        init_success_rate=np.asarray(init_rate).reshape(len(padded), -1).mean(axis=1)[sl],
-        init_unfilled=np.asarray(unfilled).reshape(len(padded), -1).sum(axis=1)[sl],
-        optimum=float(octile.length), any_angle_optimum=float(any_angle.length),
-        timing={"compile_s": compile_s, "init_s": init_s, "evolve_s": evolve_s,
-                "post_s": post_s, "total_s": time.perf_counter() - t_start},
-        population=int(config["population.size"]) * algo.islands,
-        generations=algo.generations, width=grid.width, config=config,
-    )
+    return sweep(preset, grid, [{}], seeds, generations=generations,
+                 corner_rule=corner_rule, variant=variant, sets=sets, progress=progress,
+                 chunks=chunks, **overrides)[0]
 
 
 def _no_path_result(config, map_name, grid, seeds, algo, reason, elapsed) -> Result:

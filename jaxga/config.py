@@ -123,7 +123,9 @@ SCHEMA: dict[str, Field] = {
     "mutation.pm_high": Field(**P, doc="AGACD pm_high"),
     "mutation.radius": Field(int, "AGACD point mutation radius in cells", low=1, high=10_000),
     "mutation.temperature_c1": Field(**POS, doc="MPMGA annealing T = c1 * w**t: c1"),
-    "mutation.temperature_w": Field(**P, doc="MPMGA annealing T = c1 * w**t: w"),
+    "mutation.temperature_w": Field(float, low=0.0, high=1.0,
+                                    doc="MPMGA annealing T = c1 * w**t: w (static: optax "
+                                        "builds the schedule from it)"),
     "simplify.method": Field(str, "per-generation simplification (SPEC 9)", choices=SIMPLIFIERS),
     "simplify.probability": Field(**P, doc="simplification probability ps per individual"),
     "post.method": Field(str, "post-optimisation of the final best (SPEC 9)",

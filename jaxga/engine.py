@@ -32,11 +32,11 @@ import jax.numpy as jnp
 
 from jaxga import crossover as cx
 from jaxga import mutation as mu
-from jaxga import objectives
+from jaxga import objectives, schedules
 from jaxga import postprocess as post
 from jaxga import selection as sel
-from jaxga.batching import over_individuals
-from jaxga.config import Config
+from jaxga.batching import over_individuals_gated
+from jaxga.config import SCHEMA, Config
 from jaxga.errors import ParameterError
 from jaxga.grid import Grid
 from jaxga.init import get_initialiser, initialise
@@ -88,7 +88,7 @@ def build(config: Config, grid: Grid, population: int | None = None) -> tuple[Al
     capacity = int(config["population.capacity"]) or default_capacity(grid)
     islands = int(config["islands.count"])
     algo = Algorithm(
-        config=config,
+        config=static_config(config),
         population=cap_p,
         capacity=capacity,
         generations=int(config["generations"]),
@@ -97,6 +97,20 @@ def build(config: Config, grid: Grid, population: int | None = None) -> tuple[Al
         or config["mutation.method"] == "point_checked",
     )
     return algo, default_params(config, islands)
+
+
+NON_STRUCTURAL = ("name", "paper", "description", "population.size")
+"""Keys that never enter the compiled program (metadata; the size is ``active``)."""
+
+
+def static_config(config: Config) -> Config:
+    """The part of a configuration that is compiled in: operators, sizes, flags.
+
+    Dynamic values (probabilities, weights, temperatures) and metadata are left out, so
+    two configurations that differ only in them share one compiled program.
+    """
+    return Config(tuple((k, v) for k, v in config.items
+                        if not SCHEMA[k].dynamic and k not in NON_STRUCTURAL))
 
 
 def default_params(config: Config, islands: int = 1) -> dict[str, jax.Array]:
@@ -180,6 +194,7 @@ def _crossover(algo: Algorithm, key, grid, pop, fitness, active, t, params, fit_
         pc = cx.adaptive_crossover_probability(
             f_pair, f_max, f_avg, t, algo.generations, params["crossover.pc_low"],
             params["crossover.pc_high"],
+            schedule=schedules.agacd_crossover_decay(algo.generations),
         )
     else:
         pc = params["crossover.probability"]
@@ -223,6 +238,7 @@ def _mutation(algo: Algorithm, key, grid, pop, fitness, active, t, params, fit_f
         pm = mu.adaptive_mutation_probability(
             fitness, f_max, f_avg, t, algo.generations, params["mutation.pm_low"],
             params["mutation.pm_high"],
+            schedule=schedules.agacd_mutation_growth(algo.generations),
         )
     else:
         pm = jnp.broadcast_to(params["mutation.probability"], (pop.size,))
@@ -232,14 +248,14 @@ def _mutation(algo: Algorithm, key, grid, pop, fitness, active, t, params, fit_f
         op = mu.either(mu.one_point, mu.range_mutation)
         extra = (mu.split_half(k_half, pop.size),)
     elif method == "segment_sa":
-        temperature = params["mutation.temperature_c1"] * params["mutation.temperature_w"] ** t
+        temperature = schedules.mpmga_temperature(
+            params["mutation.temperature_c1"], algo.get("mutation.temperature_w"))(t)
         op = functools.partial(mu.segment_sa, temperature=temperature, fitness_fn=fit_fn)
     elif method == "point_checked":
         op = functools.partial(mu.point_checked, radius=int(algo.get("mutation.radius", 2)))
     else:
         op = MUTATIONS[method]
-    gated = mu.with_probability(op)
-    return over_individuals(gated)(key, grid, pop, pm, *extra)
+    return over_individuals_gated(op)(key, grid, pop, pm, *extra)
 
 
 def _simplify(algo: Algorithm, key, grid, pop, params):
@@ -252,9 +268,8 @@ def _simplify(algo: Algorithm, key, grid, pop, params):
         def op(k, g, c, n):  # "nothing to simplify" is not a failure
             c2, n2, _ = post.simplify_adjacent(k, g, c, n)
             return c2, n2, jnp.bool_(False)
-    gated = mu.with_probability(op)
     ps = jnp.broadcast_to(params["simplify.probability"], (pop.size,))
-    return over_individuals(gated)(key, grid, pop, ps)
+    return over_individuals_gated(op)(key, grid, pop, ps)
 
 
 # ------------------------------------------------------------------------------ state

@@ -1,0 +1,133 @@
+"""Every preset end to end, hyper-parameter sweeps in one compiled call, the compile cache,
+and the optax schedules of the adaptive operators."""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+import pytest
+
+from jaxga import api, schedules
+from jaxga.errors import ParameterError
+from jaxga.maps import load_map, random_map
+from jaxga.presets import preset_names
+from jaxga.reference import any_angle_shortest_path, clear_np, shortest_path
+
+SMALL = dict(population__size=8, generations=3, init__max_tries=40)
+
+
+@pytest.fixture(scope="module")
+def grid():
+    return random_map(10, 10, 0.2, 3, corner_rule="free")
+
+
+@pytest.fixture(scope="module", params=sorted(preset_names()))
+def preset_run(request, grid):
+    name = request.param
+    overrides = dict(SMALL)
+    if name == "mpmga":  # three islands of 8; migrants must fit the island
+        overrides["islands__migrants"] = 2
+    return name, api.run(name, grid, seeds=3, **overrides), overrides
+
+
+def test_every_preset_returns_only_feasible_paths(preset_run, grid):
+    name, r, _ = preset_run
+    blocked = grid.blocked_np()
+    octile = shortest_path(grid).length
+    bound = any_angle_shortest_path(grid).length
+    assert r.success.any(), name
+    for i in np.flatnonzero(r.success):
+        path = r.path(i)
+        assert path[0] == grid.start_xy and path[-1] == grid.goal_xy, name
+        assert all(clear_np(blocked, grid.corner_rule, p, q) for p, q in zip(path, path[1:]))
+        assert r.length[i] >= bound - 1e-4 and r.raw_length[i] >= bound - 1e-4
+        raw = r.path(i, raw=True)
+        assert raw[0] == grid.start_xy and raw[-1] == grid.goal_xy
+        assert all(clear_np(blocked, grid.corner_rule, p, q) for p, q in zip(raw, raw[1:]))
+        if name not in ("agacd",):  # grid-step presets: the raw path is 8-connected
+            assert all(max(abs(p[0] - q[0]), abs(p[1] - q[1])) == 1
+                       for p, q in zip(raw, raw[1:])), name
+            assert r.raw_length[i] >= octile - 1e-4
+    assert r.history["best"].shape == (3, 3)
+    assert np.all(np.diff(r.history["best"], axis=1) >= 0)
+    # the JSON layout of `jaxga run --json`
+    js = r.to_json()
+    assert js["preset"] == name and len(js["runs"]) == 3
+    assert {"compile_s", "init_s", "evolve_s", "post_s", "total_s"} <= set(js["timing"])
+
+
+def test_every_preset_is_deterministic(preset_run, grid):
+    name, r, overrides = preset_run
+    before = api._programs.cache_info().misses
+    again = api.run(name, grid, seeds=[2, 0, 1], **overrides)  # other order, same program
+    assert api._programs.cache_info().misses == before
+    for i, j in ((0, 2), (1, 0), (2, 1)):
+        assert again.success[i] == r.success[j]
+        assert np.array_equal(again.cells[i], r.cells[j])
+        # float reductions may differ in the last ulp with another batch layout
+        np.testing.assert_allclose(again.history["mean"][i], r.history["mean"][j], rtol=1e-5)
+
+
+def test_a_sweep_point_equals_a_run_with_those_values(grid):
+    points = [{"crossover.probability": 0.2, "mutation.probability": 0.9},
+              {"crossover.probability": 0.9, "mutation.probability": 0.1}]
+    results = api.sweep("sga", grid, points, seeds=2, **SMALL)
+    assert [r.config["crossover.probability"] for r in results] == [0.2, 0.9]
+    for point, res in zip(points, results):
+        single = api.run("sga", grid, seeds=2, **SMALL,
+                         crossover__probability=point["crossover.probability"],
+                         mutation__probability=point["mutation.probability"])
+        assert np.array_equal(single.cells, res.cells)
+        assert np.array_equal(single.history["best"], res.history["best"])
+    assert not np.array_equal(results[0].history["mean"], results[1].history["mean"])
+
+
+def test_population_size_sweep_uses_the_active_mask(grid):
+    results = api.sweep("sga", grid, [{"population.size": 4}, {"population.size": 12}],
+                        seeds=2, **SMALL)
+    assert [r.population for r in results] == [4, 12]
+    for r in results:
+        assert r.success.all()
+        assert r.history["best"].shape == (2, 3)
+
+
+def test_sweeping_a_structural_key_is_refused(grid):
+    with pytest.raises(ParameterError, match="mutation.method"):
+        api.sweep("sga", grid, [{"mutation.method": "one_point"}], seeds=1, **SMALL)
+    with pytest.raises(ParameterError, match="crossover.probability"):
+        api.sweep("sga", grid, [{"crossover.probability": 1.5}], seeds=1, **SMALL)
+
+
+def test_compiled_programs_are_reused_across_maps_seeds_and_values(grid):
+    api.run("sga", grid, seeds=[5, 6], **SMALL)
+    before = api._programs.cache_info()
+    other = random_map(10, 10, 0.25, 11, corner_rule="free")
+    r = api.run("sga", other, seeds=[7, 8], crossover__probability=0.5, **SMALL)
+    after = api._programs.cache_info()
+    assert after.misses == before.misses and after.hits == before.hits + 1
+    assert r.timing["compile_s"] < 1.0
+
+
+def test_unreachable_goal_is_a_no_path_result():
+    g = load_map("classic_ga_gapp3_20x20", corner_rule="free")
+    blocked = np.asarray(g.blocked).copy()
+    gx, gy = g.goal_xy
+    blocked[gy - 1:gy + 2, gx - 1:gx + 2] = True
+    blocked[gy, gx] = False
+    walled = g.replace(blocked=blocked)
+    r = api.run("sga", walled, seeds=2, **SMALL)
+    assert not r.success.any() and "unreachable" in r.reason
+    assert r.to_json()["runs"][0]["path"] == []
+
+
+@pytest.mark.parametrize("t", [0, 1, 7, 50, 100])
+def test_schedules_match_the_papers_formulas(t):
+    assert math.isclose(float(schedules.agacd_crossover_decay(100)(t)), math.exp(-t / 100),
+                        rel_tol=1e-5)
+    assert math.isclose(float(schedules.agacd_mutation_growth(100)(t)), math.exp(t / 100),
+                        rel_tol=1e-5)
+    assert math.isclose(float(schedules.mpmga_temperature(2.0, 0.7)(t)), 2.0 * 0.7 ** t,
+                        rel_tol=1e-5)
+    with pytest.raises(ValueError):
+        schedules.mpmga_temperature(1.0, 1.5)
