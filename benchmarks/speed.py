@@ -1,45 +1,153 @@
-"""Runs per second and individual-generations per second of the presets (first part of
-the engine issue's speed benchmark; the NumPy loop baseline is not written yet).
+"""Speed of every preset at the papers' settings, against a per-individual NumPy loop SGA.
 
-    python benchmarks/speed.py [--presets sga,imga] [--seeds 1,100] [--generations G]
+    python benchmarks/speed.py [--presets sga,imga,...] [--settings 20x20,50x50]
+        [--seeds 1,100,1000] [--max-generations-many 50] [--devices 1]
+
+For each preset and setting (20 x 20: population 60, 300 generations on
+``classic_ga_gapp3_20x20``; 50 x 50: population 80, 500 generations on
+``random_map(50, 50, 0.1, seed=0)`` from (0, 0) to (49, 49)) and each seed count, one
+child process (so that compile time is cold - no persistent cache - and peak memory is
+that configuration's) reports: compile time, initialisation / evolution / post-
+optimisation times, runs per second (init + evolve + post, after compilation) and
+individual-generations per second of the evolution (population x generations x seeds /
+evolve seconds), and the child's peak resident memory. Presets keep their operators and
+parameters; only population size and generations are set to the setting's (and with
+``--max-generations-many G`` the runs of 100 seeds or more evolve only ``G``
+generations: ind-gen/s is per generation, runs/s is then extrapolated to the full
+generation count).
+
+The same SGA written as a straightforward per-individual NumPy/Python loop
+(``benchmarks/numpy_sga.py``) runs in this (parent) process on the same maps; the
+ratio is its seconds per run over jaxga's sga seconds per run.
 """
 
 from __future__ import annotations
 
 import argparse
-import resource
+import json
+import os
+import subprocess
+import sys
+import time
+from pathlib import Path
 
+import numpy as np
 from _results import append, markdown_table
 
-from jaxga.api import run
+SETTINGS = {"20x20": (60, 300), "50x50": (80, 500)}
+HERE = Path(__file__).resolve().parent
+
+
+def grid_for(setting: str):
+    from jaxga.maps import load_map, random_map
+
+    if setting == "20x20":
+        return load_map("classic_ga_gapp3_20x20", corner_rule="free")
+    return random_map(50, 50, 0.1, seed=0, corner_rule="free")
+
+
+def child(preset: str, setting: str, seeds: int, generations: int) -> dict:
+    """One measurement (runs in a fresh process)."""
+    import resource
+
+    from jaxga.api import run
+
+    population, _ = SETTINGS[setting]
+    overrides = {"population__size": population, "generations": generations}
+    if preset == "mpmga":  # 3 islands: the setting's population is the total
+        overrides["population__size"] = population // 3
+    r = run(preset, grid_for(setting), seeds=seeds, **overrides)
+    t = r.timing
+    return {
+        "compile_s": t["compile_s"], "init_s": t["init_s"], "evolve_s": t["evolve_s"],
+        "post_s": t["post_s"], "population": r.population, "generations": r.generations,
+        "success": float(r.success.mean()),
+        "peak_mib": resource.getrusage(resource.RUSAGE_SELF).ru_maxrss / 1024,
+    }
+
+
+def measure(preset, setting, seeds, generations, devices) -> dict:
+    env = dict(os.environ, PYTHONPATH=f"{HERE.parent}{os.pathsep}{HERE}",
+               XLA_FLAGS=f"--xla_force_host_platform_device_count={devices}")
+    env.pop("JAXGA_CACHE_DIR", None)
+    cmd = [sys.executable, __file__, "--child", f"{preset}:{setting}:{seeds}:{generations}"]
+    proc = subprocess.run(cmd, env=env, capture_output=True, text=True)
+    if proc.returncode != 0:
+        raise RuntimeError(proc.stderr[-3000:])
+    return json.loads(proc.stdout.strip().splitlines()[-1])
+
+
+def numpy_baseline(setting: str, n: int) -> tuple[float, float]:
+    """Seconds per run of the NumPy loop SGA (mean of ``n`` seeds) and its ind-gen/s."""
+    from numpy_sga import run_sga
+
+    g = grid_for(setting)
+    population, generations = SETTINGS[setting]
+    runs = [run_sga(np.asarray(g.blocked), int(g.start), int(g.goal), population,
+                    generations, seed=seed) for seed in range(n)]
+    per_run = float(np.mean([r["init_s"] + r["evolve_s"] for r in runs]))
+    return per_run, population * generations / float(np.mean([r["evolve_s"] for r in runs]))
 
 
 def main() -> None:
     ap = argparse.ArgumentParser(description=__doc__)
-    ap.add_argument("--presets", default="sga")
-    ap.add_argument("--seeds", default="1,100")
-    ap.add_argument("--map", default="classic_ga_gapp3_20x20")
-    ap.add_argument("--generations", type=int, default=None)
+    ap.add_argument("--presets", default="sga,imga,agacd,iga_zhang,mpmga,iga_zhu")
+    ap.add_argument("--settings", default="20x20,50x50")
+    ap.add_argument("--seeds", default="1,100,1000")
+    ap.add_argument("--max-generations-many", type=int, default=0)
+    ap.add_argument("--devices", type=int, default=1)
+    ap.add_argument("--baseline-seeds", type=int, default=3)
+    ap.add_argument("--child")
     ap.add_argument("--no-write", action="store_true")
     args = ap.parse_args()
+    if args.child:
+        preset, setting, seeds, generations = args.child.split(":")
+        print(json.dumps(child(preset, setting, int(seeds), int(generations))))
+        return
+
+    t_all = time.perf_counter()
+    base = {}
+    for setting in args.settings.split(","):
+        base[setting] = numpy_baseline(setting, args.baseline_seeds)
+        print("numpy loop", setting, base[setting], flush=True)
     rows = []
     for preset in args.presets.split(","):
-        for n in (int(s) for s in args.seeds.split(",")):
-            r = run(preset, args.map, seeds=n, generations=args.generations)
-            t = r.timing
-            per_run = t["init_s"] + t["evolve_s"] + t["post_s"]
-            ind_gen = n * r.population * r.generations / t["evolve_s"]
-            rows.append([preset, n, r.population, r.generations, t["compile_s"],
-                         t["init_s"], t["evolve_s"], n / per_run, f"{ind_gen:,.0f}",
-                         f"{r.success.mean():.2f}"])
-            print(rows[-1], flush=True)
-    peak = resource.getrusage(resource.RUSAGE_SELF).ru_maxrss / 1024
-    body = (f"Map {args.map}; times in seconds after compilation.\n\n"
-            + markdown_table(["preset", "seeds", "population", "generations", "compile",
-                              "init", "evolve", "runs/s", "ind-gen/s (evolve)", "success"],
-                             rows)
-            + f"\n\nPeak resident memory of the process: {peak:,.0f} MiB.")
-    append("speed (engine, work in progress)", body, write=not args.no_write)
+        for setting in args.settings.split(","):
+            population, generations = SETTINGS[setting]
+            for seeds in (int(s) for s in args.seeds.split(",")):
+                gens = generations
+                if seeds >= 100 and args.max_generations_many:
+                    gens = min(generations, args.max_generations_many)
+                m = measure(preset, setting, seeds, gens, args.devices)
+                ind_gen = seeds * m["population"] * m["generations"] / m["evolve_s"]
+                per_run = (m["init_s"] + m["post_s"]
+                           + m["evolve_s"] * generations / m["generations"]) / seeds
+                ratio = (f"{base[setting][0] / per_run:,.1f}" if preset == "sga" else "")
+                rows.append([preset, setting, seeds, m["population"], m["generations"],
+                             m["compile_s"], m["init_s"], m["evolve_s"],
+                             f"{1 / per_run:,.2f}", f"{ind_gen:,.0f}", ratio,
+                             f"{m['peak_mib']:,.0f}", f"{m['success']:.2f}"])
+                print(rows[-1], flush=True)
+    base_rows = [[s, SETTINGS[s][0], SETTINGS[s][1], f"{b[0]:.3f}", f"{b[1]:,.0f}"]
+                 for s, b in base.items()]
+    body = (
+        f"{args.devices} XLA host device(s); 20x20 = classic_ga_gapp3_20x20, 50x50 = "
+        "random_map(50, 50, 0.1, seed=0), corner rule free. Times in seconds; compile is "
+        "cold (no persistent cache). runs/s counts init + evolve + post after compilation "
+        "(evolve extrapolated to the full generations when fewer were run). ind-gen/s = "
+        "seeds x population x generations / evolve seconds. x loop = NumPy loop seconds "
+        "per run / jaxga seconds per run (sga only). Peak memory: the child process's "
+        "maximum resident set.\n\n"
+        + markdown_table(["preset", "setting", "seeds", "population", "generations run",
+                          "compile", "init", "evolve", "runs/s", "ind-gen/s", "x loop",
+                          "peak MiB", "success"], rows)
+        + "\n\nNumPy/Python loop SGA (`benchmarks/numpy_sga.py`, same process as this "
+        f"script, mean of {args.baseline_seeds} seeds):\n\n"
+        + markdown_table(["setting", "population", "generations", "s per run",
+                          "ind-gen/s"], base_rows)
+        + f"\n\nWall time: {time.perf_counter() - t_all:.0f} s."
+    )
+    append("speed of every preset vs a NumPy loop SGA", body, write=not args.no_write)
 
 
 if __name__ == "__main__":
