@@ -142,7 +142,9 @@ def gated_map(
     return out
 
 
-def over_individuals_gated(op: Callable, *, in_axes_extra: tuple = ()) -> Callable:
+def over_individuals_gated(
+    op: Callable, *, alternative: Callable | None = None, in_axes_extra: tuple = ()
+) -> Callable:
     """Lift ``op(key, grid, cells, length, *extra)`` with a per-individual probability.
 
     Returns ``lifted(key, grid, pop, prob, *extra) -> (Population, n_failed)``: individual
@@ -152,9 +154,18 @@ def over_individuals_gated(op: Callable, *, in_axes_extra: tuple = ()) -> Callab
     key, so the result equals ``over_individuals(mutation.with_probability(op))``; the
     work is done only for the applied individuals (:func:`gated_map`).
     ``in_axes_extra``: 0 (per individual) or None (shared) for each extra argument.
+
+    With ``alternative``, the signature is ``lifted(key, grid, pop, prob, use_op,
+    *extra)``: an applied individual goes through ``op`` where ``use_op`` (bool[P]) and
+    through ``alternative`` elsewhere, with the same key, as
+    ``mutation.either(op, alternative)`` does, but each operator is computed only for
+    its own individuals (Zhu & Pan's half one-point, half range mutation).
     """
 
     def lifted(key: jax.Array, grid: Grid, pop: Population, prob, *extra):
+        use_op = None
+        if alternative is not None:
+            use_op, extra = jnp.asarray(extra[0], bool), extra[1:]
         n = pop.size
         prob = jnp.broadcast_to(jnp.asarray(prob, jnp.float32), (n,))
         keys = jax.random.split(key, n)
@@ -163,15 +174,21 @@ def over_individuals_gated(op: Callable, *, in_axes_extra: tuple = ()) -> Callab
         axes = in_axes_extra or (0,) * len(extra)
         mapped = [e for e, ax in zip(extra, axes) if ax == 0]
 
-        def one(k, c, ln, *per):
-            it = iter(per)
-            args = [next(it) if ax == 0 else e for e, ax in zip(extra, axes)]
-            return op(k, grid, c, ln, *args)
+        def one(fn):
+            def call(k, c, ln, *per):
+                it = iter(per)
+                args = [next(it) if ax == 0 else e for e, ax in zip(extra, axes)]
+                return fn(k, grid, c, ln, *args)
+            return call
 
-        cells, length, failed = gated_map(
-            one, apply, (k_op, pop.cells, pop.length, *mapped),
-            (pop.cells, pop.length, jnp.zeros((n,), bool)),
-        )
+        args = (k_op, pop.cells, pop.length, *mapped)
+        out = (pop.cells, pop.length, jnp.zeros((n,), bool))
+        if use_op is None:
+            out = gated_map(one(op), apply, args, out)
+        else:
+            out = gated_map(one(op), apply & use_op, args, out)
+            out = gated_map(one(alternative), apply & ~use_op, args, out)
+        cells, length, failed = out
         return Population(cells, length), jnp.sum(failed, dtype=jnp.int32)
 
     lifted.__name__ = getattr(op, "__name__", "op") + "_population"
@@ -179,7 +196,9 @@ def over_individuals_gated(op: Callable, *, in_axes_extra: tuple = ()) -> Callab
     return lifted
 
 
-def over_pairs_gated(op: Callable, *, in_axes_extra: tuple = ()) -> Callable:
+def over_pairs_gated(
+    op: Callable, *, alternative: Callable | None = None, in_axes_extra: tuple = ()
+) -> Callable:
     """Lift a pair operator with a per-pair probability (the pair form of
     :func:`over_individuals_gated`).
 
@@ -188,9 +207,15 @@ def over_pairs_gated(op: Callable, *, in_axes_extra: tuple = ()) -> Callable:
     (scalar or ``f32[P // 2]``); an odd last individual passes through. Keys as in
     :func:`over_pairs`, each split into a gate and an operator key (the result equals
     ``over_pairs(crossover.with_probability(op))``); only applied pairs are computed.
+    With ``alternative``: ``lifted(key, grid, pop, prob, use_op, *extra)``, pair ``k``
+    goes through ``op`` where ``use_op[k]`` else through ``alternative`` (Zhu & Pan's
+    half one-point, half column crossover), each computed only for its own pairs.
     """
 
     def lifted(key: jax.Array, grid: Grid, pop: Population, prob, *extra):
+        use_op = None
+        if alternative is not None:
+            use_op, extra = jnp.asarray(extra[0], bool), extra[1:]
         n_pairs = pop.size // 2
         prob = jnp.broadcast_to(jnp.asarray(prob, jnp.float32), (n_pairs,))
         keys = jax.random.split(key, max(n_pairs, 1))[:n_pairs]
@@ -202,16 +227,23 @@ def over_pairs_gated(op: Callable, *, in_axes_extra: tuple = ()) -> Callable:
         c1, l1 = c[0 : 2 * n_pairs : 2], ln[0 : 2 * n_pairs : 2]
         c2, l2 = c[1 : 2 * n_pairs : 2], ln[1 : 2 * n_pairs : 2]
 
-        def one(k, a, la, b, lb, *per):
-            it = iter(per)
-            args = [next(it) if ax == 0 else e for e, ax in zip(extra, axes)]
-            n1, m1, n2, m2, failed = op(k, grid, a, la, b, lb, *args)
-            return n1, m1, n2, m2, jnp.asarray(failed, jnp.int32)
+        def one(fn):
+            def call(k, a, la, b, lb, *per):
+                it = iter(per)
+                args = [next(it) if ax == 0 else e for e, ax in zip(extra, axes)]
+                n1, m1, n2, m2, failed = fn(k, grid, a, la, b, lb, *args)
+                return n1, m1, n2, m2, jnp.asarray(failed, jnp.int32)
+            return call
 
-        c1, l1, c2, l2, failed = gated_map(
-            one, apply, (k_op, c1, l1, c2, l2, *mapped),
-            (c1, l1, c2, l2, jnp.zeros((n_pairs,), jnp.int32)),
-        )
+        args = (k_op, c1, l1, c2, l2, *mapped)
+        out = (c1, l1, c2, l2, jnp.zeros((n_pairs,), jnp.int32))
+        if use_op is None:
+            out = gated_map(one(op), apply, args, out)
+        else:
+            use_op = use_op[:n_pairs]
+            out = gated_map(one(op), apply & use_op, args, out)
+            out = gated_map(one(alternative), apply & ~use_op, args, out)
+        c1, l1, c2, l2, failed = out
         cells = jnp.stack([c1, c2], axis=1).reshape(2 * n_pairs, -1)
         length = jnp.stack([l1, l2], axis=1).reshape(-1)
         if pop.size % 2:

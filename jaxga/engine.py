@@ -35,7 +35,7 @@ from jaxga import mutation as mu
 from jaxga import objectives, schedules
 from jaxga import postprocess as post
 from jaxga import selection as sel
-from jaxga.batching import over_individuals_gated
+from jaxga.batching import over_individuals_gated, over_pairs_gated
 from jaxga.config import SCHEMA, Config
 from jaxga.errors import ParameterError
 from jaxga.grid import Grid
@@ -198,26 +198,16 @@ def _crossover(algo: Algorithm, key, grid, pop, fitness, active, t, params, fit_
         )
     else:
         pc = params["crossover.probability"]
-    if method == "zhu_mixed":
+    if method == "zhu_mixed":  # Zhu & Pan 4.4: half the pairs one-point, half column
         k_half, key = jax.random.split(key)
         use_a = mu.split_half(k_half, pop.size // 2)
-        op = _either_pair(cx.common_point, functools.partial(cx.column, fitness_fn=fit_fn))
-        return cx.crossover_population(op)(key, grid, pop, pc, use_a)
+        lifted = over_pairs_gated(cx.common_point,
+                                  alternative=functools.partial(cx.column, fitness_fn=fit_fn))
+        return lifted(key, grid, pop, pc, use_a)
     op = cx.CROSSOVERS[method]
     if method in ("heterologous", "column"):
         op = functools.partial(op, fitness_fn=fit_fn)
     return cx.crossover_population(op)(key, grid, pop, pc)
-
-
-def _either_pair(op_a: Callable, op_b: Callable) -> Callable:
-    """Zhu & Pan section 4.4: a pair goes through ``op_a`` where ``use_a`` else ``op_b``."""
-
-    def op(key, grid, c1, l1, c2, l2, use_a):
-        a = op_a(key, grid, c1, l1, c2, l2)
-        b = op_b(key, grid, c1, l1, c2, l2)
-        return tuple(jnp.where(use_a, x, y) for x, y in zip(a, b))
-
-    return op
 
 
 MUTATIONS: dict[str, Callable] = {
@@ -242,12 +232,11 @@ def _mutation(algo: Algorithm, key, grid, pop, fitness, active, t, params, fit_f
         )
     else:
         pm = jnp.broadcast_to(params["mutation.probability"], (pop.size,))
-    extra: tuple = ()
-    if method == "zhu_mixed":
+    if method == "zhu_mixed":  # Zhu & Pan 4.5: half one-point, half range mutation
         k_half, key = jax.random.split(key)
-        op = mu.either(mu.one_point, mu.range_mutation)
-        extra = (mu.split_half(k_half, pop.size),)
-    elif method == "segment_sa":
+        lifted = over_individuals_gated(mu.one_point, alternative=mu.range_mutation)
+        return lifted(key, grid, pop, pm, mu.split_half(k_half, pop.size))
+    if method == "segment_sa":
         temperature = schedules.mpmga_temperature(
             params["mutation.temperature_c1"], algo.get("mutation.temperature_w"))(t)
         op = functools.partial(mu.segment_sa, temperature=temperature, fitness_fn=fit_fn)
@@ -255,7 +244,7 @@ def _mutation(algo: Algorithm, key, grid, pop, fitness, active, t, params, fit_f
         op = functools.partial(mu.point_checked, radius=int(algo.get("mutation.radius", 2)))
     else:
         op = MUTATIONS[method]
-    return over_individuals_gated(op)(key, grid, pop, pm, *extra)
+    return over_individuals_gated(op)(key, grid, pop, pm)
 
 
 def _simplify(algo: Algorithm, key, grid, pop, params):

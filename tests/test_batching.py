@@ -1,0 +1,97 @@
+"""The gated population helpers compute only the applied individuals and give exactly the
+result of the plain (compute everything, then select) formulation."""
+
+from __future__ import annotations
+
+import jax
+import jax.numpy as jnp
+import numpy as np
+import pytest
+
+from jaxga import crossover as cx
+from jaxga import mutation as mu
+from jaxga.batching import (
+    gated_map,
+    over_individuals,
+    over_individuals_gated,
+    over_pairs,
+    over_pairs_gated,
+)
+from jaxga.maps import load_map
+from jaxga.paths import Population, from_coords
+from jaxga.reference import shortest_path
+
+
+@pytest.fixture(scope="module")
+def setting():
+    grid = load_map("classic_ga_gapp3_20x20", corner_rule="free")
+    ref = shortest_path(grid)
+    path = [tuple(p) for p in ref.path.tolist()]
+    cells, length = from_coords(path, grid.width, 160)
+    n = 10
+    pop = Population(jnp.tile(jnp.asarray(cells), (n, 1)), jnp.full((n,), length, jnp.int32))
+    # diversify: a few rounds of mutation of the optimal path
+    mutate = jax.jit(lambda k, p: over_individuals(mu.neighbour_point)(k, grid, p)[0])
+    for i in range(3):
+        pop = mutate(jax.random.PRNGKey(i), pop)
+    return grid, pop
+
+
+def _same(a, b):
+    return all(np.array_equal(x, y) for x, y in zip(jax.tree.leaves(a), jax.tree.leaves(b)))
+
+
+@pytest.mark.parametrize("prob", [0.0, 0.35, 1.0])
+def test_gated_individuals_equal_compute_all_then_select(setting, prob):
+    grid, pop = setting
+    key = jax.random.PRNGKey(7)
+    gated = jax.jit(lambda k: over_individuals_gated(mu.neighbour_point)(k, grid, pop, prob))
+    plain = jax.jit(lambda k: over_individuals(mu.with_probability(mu.neighbour_point))(
+        k, grid, pop, jnp.full((pop.size,), prob)))
+    assert _same(gated(key), plain(key))
+
+
+def test_gated_alternative_equals_either(setting):
+    grid, pop = setting
+    key = jax.random.PRNGKey(3)
+    use_a = jnp.arange(pop.size) % 3 == 0
+    gated = over_individuals_gated(mu.one_point, alternative=mu.range_mutation)
+    plain = over_individuals(mu.with_probability(mu.either(mu.one_point, mu.range_mutation)))
+    a = jax.jit(lambda k: gated(k, grid, pop, 0.8, use_a))(key)
+    b = jax.jit(lambda k: plain(k, grid, pop, jnp.full((pop.size,), 0.8), use_a))(key)
+    assert _same(a, b)
+
+
+def _either_pair(op_a, op_b):
+    def op(key, grid, c1, l1, c2, l2, use_a):
+        a = op_a(key, grid, c1, l1, c2, l2)
+        b = op_b(key, grid, c1, l1, c2, l2)
+        return tuple(jnp.where(use_a, x, y) for x, y in zip(a, b))
+    return op
+
+
+def test_gated_pairs_with_alternative_equal_compute_all(setting):
+    grid, pop = setting
+    key = jax.random.PRNGKey(5)
+    use_a = jnp.arange(pop.size // 2) % 2 == 0
+
+    def swap(key, grid, c1, l1, c2, l2):  # a trivial second operator
+        return c2, l2, c1, l1, jnp.int32(0)
+
+    gated = over_pairs_gated(cx.common_point, alternative=swap)
+    plain = over_pairs(cx.with_probability(_either_pair(cx.common_point, swap)))
+    a = jax.jit(lambda k: gated(k, grid, pop, 0.6, use_a))(key)
+    b = jax.jit(lambda k: plain(k, grid, pop, jnp.full((pop.size // 2,), 0.6), use_a))(key)
+    assert _same(a, b)
+
+
+def test_gated_map_under_vmap_and_block_sizes():
+    x = jnp.arange(24, dtype=jnp.int32).reshape(2, 12)
+    apply = jnp.array([[True, False] * 6, [False] * 11 + [True]])
+
+    def f(v):
+        return (v * 10,)
+
+    for block in (1, 4, 5, 12):
+        out = jax.vmap(lambda a, v, b=block: gated_map(f, a, (v,), (v,), block=b)[0])(apply, x)
+        np.testing.assert_array_equal(out, np.where(apply, np.asarray(x) * 10, x))
