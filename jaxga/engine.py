@@ -162,10 +162,49 @@ def feasibility(algo: Algorithm, grid: Grid, cells: jax.Array, length: jax.Array
     return ok & is_continuous(grid, cells, length)
 
 
+SHORT_SPAN = 4
+"""Segments with ``|dx|, |dy| <= SHORT_SPAN`` get the cheap bounded line-of-sight test."""
+
+
+def waypoints_feasible(grid: Grid, cells: jax.Array, length: jax.Array) -> jax.Array:
+    """``bool[P]``: :func:`jaxga.paths.is_feasible` of a population of waypoint paths.
+
+    Same answer, less work: every segment of span at most :data:`SHORT_SPAN` is tested
+    with the bounded exact test (``clear(..., max_span=SHORT_SPAN)``, a few lanes), and
+    only the long segments (crossover junctions, typically one per child) with the full
+    exact test, gathered across the population by :func:`jaxga.batching.gated_map`
+    instead of testing all ``P x L`` segments at the cost of the longest possible one.
+    """
+    from jaxga.batching import gated_map
+    from jaxga.geometry import clear
+
+    p, cap = cells.shape
+    w = grid.width
+    a, b = cells[:, :-1], cells[:, 1:]
+    valid = jnp.arange(cap - 1, dtype=I32)[None, :] < (length[:, None] - 1)
+    span = jnp.maximum(jnp.abs(a % w - b % w), jnp.abs(a // w - b // w))
+    long_ = valid & (span > SHORT_SPAN)
+    short_ok = jax.vmap(jax.vmap(lambda u, v: clear(grid, u, v, max_span=SHORT_SPAN)))(a, b)
+    (long_ok,) = gated_map(
+        lambda u, v: (clear(grid, u, v),), long_.reshape(-1),
+        (a.reshape(-1), b.reshape(-1)), (jnp.ones((p * (cap - 1),), bool),), block=16,
+    )
+    seg_ok = jnp.where(long_, long_ok.reshape(p, cap - 1), short_ok | ~valid)
+    first = cells[:, 0]
+    on_map = jnp.all((cells >= 0) & (cells < grid.n_cells), axis=1)
+    first_free = ~grid.blocked.reshape(-1)[jnp.clip(first, 0, grid.n_cells - 1)]
+    sized = (length >= 1) & (length <= cap)
+    return sized & on_map & first_free & jnp.all(seg_ok, axis=1)
+
+
 def evaluate(algo: Algorithm, grid: Grid, params: dict, cells, length, active) -> tuple:
     """``(fitness f32[P], feasible bool[P])``; infeasible or inactive -> fitness 0."""
     fit = fitness_function(algo, params)
-    feas = jax.vmap(lambda c, n: feasibility(algo, grid, c, n))(cells, length)
+    ends = jax.vmap(lambda c, n: has_endpoints(grid, c, n))(cells, length)
+    if algo.waypoints:
+        feas = ends & waypoints_feasible(grid, cells, length)
+    else:
+        feas = ends & jax.vmap(lambda c, n: is_continuous(grid, c, n))(cells, length)
     f = jax.vmap(lambda c, n, ok: fit(grid, c, n, ok))(cells, length, feas)
     return jnp.where(active, f, 0.0).astype(F32), feas & active
 

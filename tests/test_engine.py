@@ -73,3 +73,32 @@ def test_results_do_not_depend_on_the_device_count():
     assert [o["devices"] for o in out] == [1, 4]
     assert out[0]["cells"] == out[1]["cells"]
     assert out[0]["best"] == out[1]["best"] and out[0]["length"] == out[1]["length"]
+
+
+def test_population_waypoint_feasibility_equals_the_per_path_check():
+    """The engine's two-tier check (bounded test for short segments, full test gathered
+    for long ones) gives exactly ``paths.is_feasible`` on random waypoint paths."""
+    import jax
+    import jax.numpy as jnp
+
+    from jaxga.engine import waypoints_feasible
+    from jaxga.paths import is_feasible
+
+    grid = random_map(12, 12, 0.25, 5, corner_rule="strict")
+    rng = np.random.default_rng(0)
+    p, cap = 64, 12
+    free = np.flatnonzero(~grid.blocked_np().reshape(-1))
+    cells = rng.choice(free, (p, cap)).astype(np.int32)
+    # short hops for half of the segments so that both tiers are exercised
+    hop = rng.integers(-2, 3, (p, cap, 2))
+    xs = np.clip(cells % 12 + hop[..., 0], 0, 11)
+    ys = np.clip(cells // 12 + hop[..., 1], 0, 11)
+    near = (ys * 12 + xs).astype(np.int32)
+    cells = np.where(rng.random((p, cap)) < 0.6, np.roll(near, 1, axis=1), cells)
+    cells[:, 0] = free[0]
+    length = rng.integers(1, cap + 1, p).astype(np.int32)
+    cells, length = jnp.asarray(cells), jnp.asarray(length)
+    got = jax.jit(waypoints_feasible)(grid, cells, length)
+    want = jax.vmap(lambda c, n: is_feasible(grid, c, n))(cells, length)
+    assert np.array_equal(np.asarray(got), np.asarray(want))
+    assert 0 < int(np.sum(want)) < p  # both outcomes occur
