@@ -66,6 +66,18 @@ def over_individuals(op: Callable, *, in_axes_extra: tuple = ()) -> Callable:
     return lifted
 
 
+def _interleave(pop: Population, c1, l1, c2, l2) -> Population:
+    """Children of pairs (0, 1), (2, 3), ... back in population order; an odd last
+    individual of ``pop`` passes through."""
+    n_pairs = c1.shape[0]
+    cells = jnp.stack([c1, c2], axis=1).reshape(2 * n_pairs, -1)
+    length = jnp.stack([l1, l2], axis=1).reshape(-1)
+    if pop.size % 2:
+        cells = jnp.concatenate([cells, pop.cells[-1:]], axis=0)
+        length = jnp.concatenate([length, pop.length[-1:]], axis=0)
+    return Population(cells, length)
+
+
 def over_pairs(op: Callable, *, in_axes_extra: tuple = ()) -> Callable:
     """Lift a pair operator to a population: pairs are (0, 1), (2, 3), ...
 
@@ -84,12 +96,7 @@ def over_pairs(op: Callable, *, in_axes_extra: tuple = ()) -> Callable:
             keys, grid, c[0 : 2 * n_pairs : 2], ln[0 : 2 * n_pairs : 2],
             c[1 : 2 * n_pairs : 2], ln[1 : 2 * n_pairs : 2], *extra,
         )
-        cells = jnp.stack([c1, c2], axis=1).reshape(2 * n_pairs, -1)
-        length = jnp.stack([l1, l2], axis=1).reshape(-1)
-        if pop.size % 2:
-            cells = jnp.concatenate([cells, c[-1:]], axis=0)
-            length = jnp.concatenate([length, ln[-1:]], axis=0)
-        return Population(cells, length), jnp.sum(failed, dtype=jnp.int32)
+        return _interleave(pop, c1, l1, c2, l2), jnp.sum(failed, dtype=jnp.int32)
 
     lifted.__name__ = getattr(op, "__name__", "op") + "_population"
     lifted.__doc__ = f"``{lifted.__name__[:-11]}`` applied to consecutive pairs (vmap)."
@@ -244,12 +251,7 @@ def over_pairs_gated(
             out = gated_map(one(op), apply & use_op, args, out)
             out = gated_map(one(alternative), apply & ~use_op, args, out)
         c1, l1, c2, l2, failed = out
-        cells = jnp.stack([c1, c2], axis=1).reshape(2 * n_pairs, -1)
-        length = jnp.stack([l1, l2], axis=1).reshape(-1)
-        if pop.size % 2:
-            cells = jnp.concatenate([cells, c[-1:]], axis=0)
-            length = jnp.concatenate([length, ln[-1:]], axis=0)
-        return Population(cells, length), jnp.sum(failed, dtype=jnp.int32)
+        return _interleave(pop, c1, l1, c2, l2), jnp.sum(failed, dtype=jnp.int32)
 
     lifted.__name__ = getattr(op, "__name__", "op") + "_population"
     return lifted
