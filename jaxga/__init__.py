@@ -3,6 +3,7 @@
 from jaxga.api import Result, run, sweep
 from jaxga.errors import EndpointError, JaxgaError, MapFormatError, NoPathError, ParameterError
 from jaxga.grid import CORNER_RULES, Grid
+from jaxga.replan import replan
 
 __all__ = [
     "CORNER_RULES",
@@ -13,6 +14,7 @@ __all__ = [
     "NoPathError",
     "ParameterError",
     "Result",
+    "replan",
     "run",
     "sweep",
 ]

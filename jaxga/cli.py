@@ -176,6 +176,83 @@ def _preset_rule(args: argparse.Namespace) -> str:
     return load_preset(args.preset, variant=args.variant, sets=args.set or ())["map.corner_rule"]
 
 
+def _parse_obstacles(text: str) -> list[tuple[int, int]]:
+    """``X,Y;X,Y;...`` (empty: none) as a list of ``(x, y)`` cells."""
+    cells = []
+    for part in text.replace(" ", "").split(";"):
+        if part:
+            cells.append(_parse_xy(part))
+    return cells
+
+
+def _read_path_json(path: str, run_index: int | None) -> list[tuple[int, int]]:
+    """The robot's path from a JSON file: a list of ``[x, y]``, an object with a
+    ``"path"`` list (``jaxga optimum --json``), or the JSON of ``jaxga run`` (the raw
+    8-connected path of run ``run_index``, default the successful run with the shortest
+    raw path)."""
+    from jaxga.errors import ParameterError
+
+    with open(path, encoding="utf-8") as f:
+        try:
+            data = json.load(f)
+        except ValueError as e:
+            raise ParameterError(f"{path}: not valid JSON ({e})") from None
+    if isinstance(data, dict) and "runs" in data:
+        runs = data["runs"]
+        if run_index is not None:
+            if not 0 <= run_index < len(runs):
+                raise ParameterError(f"{path}: --run {run_index} is outside 0..{len(runs) - 1}")
+            run = runs[run_index]
+        else:
+            ok = [r for r in runs if r.get("success") and r.get("raw_path")]
+            if not ok:
+                raise ParameterError(f"{path}: no successful run with a path")
+            run = min(ok, key=lambda r: r.get("raw_length") or float("inf"))
+        data = run.get("raw_path") or run.get("path")
+    elif isinstance(data, dict):
+        data = data.get("path")
+    try:
+        cells = [(int(x), int(y)) for x, y in data]
+    except (TypeError, ValueError):
+        raise ParameterError(f"{path}: expected a list of [x, y] cells, an object with a "
+                             "\"path\" list, or the JSON of `jaxga run`") from None
+    if not cells:
+        raise ParameterError(f"{path}: the path is empty")
+    return cells
+
+
+def cmd_replan(args: argparse.Namespace) -> int:
+    """``jaxga replan``: re-plan a path around new obstacles from the robot's cell
+    (MPMGA 5.2.1 / 5.3.1, SPEC 10)."""
+    from jaxga.grid import check_corner_rule
+    from jaxga.maps import load_map
+    from jaxga.replan import replan
+
+    use_compilation_cache()
+    path = _read_path_json(args.path_json, args.run)
+    obstacles = [xy for text in args.obstacles or () for xy in _parse_obstacles(text)]
+    if args.corner_rule is not None:
+        check_corner_rule(args.corner_rule)
+    rule = args.corner_rule or _preset_rule(args)
+    grid = load_map(args.map, corner_rule=rule)
+    result = replan(
+        grid, path, obstacles, args.position, args.preset, seeds=args.seeds,
+        generations=args.generations, population=args.population, window=args.window,
+        plan_from=args.plan_from, post=args.post, fallback=args.fallback,
+        variant=args.variant, sets=tuple(args.set or ()),
+    )
+    print(result.summary())
+    if args.json:
+        with open(args.json, "w", encoding="utf-8") as f:
+            json.dump(result.to_json(), f)
+            f.write("\n")
+        print(f"wrote {args.json}")
+    if not result.success:
+        print(f"jaxga: no path: {result.reason}", file=sys.stderr)
+        return EXIT_NO_PATH
+    return 0
+
+
 def build_parser() -> argparse.ArgumentParser:
     """The argument parser of the ``jaxga`` command."""
     parser = argparse.ArgumentParser(
@@ -201,6 +278,39 @@ def build_parser() -> argparse.ArgumentParser:
     p.add_argument("--plot", metavar="OUT.png", help="plot the map, best paths and convergence")
     p.add_argument("--quiet", action="store_true", help="no progress bar")
     p.set_defaults(func=cmd_run)
+
+    p = sub.add_parser("replan", help="re-plan a path around new obstacles (MPMGA 5.2.1)")
+    p.add_argument("--map", required=True, help="a map file (0/1 text, .map, ASCII, PNG) or a "
+                   "built-in map name (see `jaxga maps`)")
+    p.add_argument("--path-json", required=True, metavar="FILE",
+                   help="the planned path: a JSON list of [x, y], jaxga optimum's JSON, or "
+                   "jaxga run's JSON (its raw path)")
+    p.add_argument("--run", type=int, metavar="I", help="with jaxga run's JSON: the run to use "
+                   "(default: the successful run with the shortest raw path)")
+    p.add_argument("--obstacles", action="append", metavar="X,Y;X,Y...",
+                   help="cells that became blocked (repeatable)")
+    p.add_argument("--position", required=True, type=_parse_xy, metavar="X,Y",
+                   help="the robot's current cell on the path")
+    p.add_argument("--corner-rule", default=None, metavar="RULE",
+                   help=f"one of {', '.join(CORNER_RULES)} (default: the preset's)")
+    p.add_argument("--preset", default="mpmga", help="the GA preset (default mpmga)")
+    p.add_argument("--variant", help="a preset variant")
+    p.add_argument("--seeds", type=int, default=4, help="seeded GA runs (default 4)")
+    p.add_argument("--generations", type=int, default=20, help="GA generations (default 20)")
+    p.add_argument("--population", type=int, default=10,
+                   help="population size, per island for island presets (default 10)")
+    p.add_argument("--window", type=int, metavar="S",
+                   help="run the GA on an S x S crop around the re-planned part")
+    p.add_argument("--plan-from", choices=("robot", "blockage"), default="robot",
+                   help="plan from the robot's cell (default) or the cell before the blockage")
+    p.add_argument("--post", action="store_true",
+                   help="splice the post-optimised (waypoint) segment")
+    p.add_argument("--fallback", action="store_true",
+                   help="splice the exact A* segment if the GA finds none (flagged)")
+    p.add_argument("--set", action="append", metavar="KEY=VALUE",
+                   help="override a configuration key, e.g. crossover.probability=0.7")
+    p.add_argument("--json", metavar="OUT", help="write the result as JSON")
+    p.set_defaults(func=cmd_replan)
 
     p = sub.add_parser("presets", help="list the presets and their papers")
     p.set_defaults(func=cmd_presets)

@@ -1,0 +1,575 @@
+"""Local re-planning around obstacles that appear on a planned path (MPMGA 5.2.1, 5.3.1).
+
+SPEC 10, "Local re-planning": a robot follows a planned path; obstacles suddenly appear
+on it (MPMGA 5.2.1: two pedestrians at grid cells 320 and 345 of the 25 x 25 library map;
+5.3.1: a 3 x 3 block at cells 810-812, 860-862, 910-912 of the 50 x 50 map). From the
+robot's cell the GA plans to the first path cell beyond the blockage (295 -> 370 and
+759 -> 963 in the paper) and the new segment is spliced into the old path. The paper
+needed 0.3-0.4 s (25 x 25) and under 1 s (50 x 50) per re-plan in Matlab.
+
+:func:`replan` does this with a small GA budget:
+
+1. the robot's cell must be free and on the path (else :class:`~jaxga.errors.EndpointError`
+   / :class:`~jaxga.errors.ParameterError`);
+2. walking the remaining path from the robot's cell, the first *blocked step* is the first
+   pair of consecutive path cells whose segment is no longer clear (a cell now blocked, or
+   a diagonal step made illegal by the corner rule; :func:`jaxga.reference.clear_np`, so
+   waypoint paths work as well as 8-connected ones). Nothing blocked: the remaining path
+   is returned unchanged and no GA runs;
+3. the *rejoin cell* is the first path cell beyond the blocked step that is free and
+   reachable from the robot's cell on the updated map (an exact flood fill). If the goal
+   (the last path cell) is blocked or unreachable the result is an explicit no-path
+   result (``success=False``, ``status`` and ``reason`` name the cause); nothing is
+   raised from inside JAX;
+4. the preset (default ``mpmga``) runs ``seeds`` seeded runs in ONE compiled call
+   (:func:`jaxga.run`) from the robot's cell (or, with ``plan_from="blockage"``, from the
+   last path cell before the blocked step) to the rejoin cell, with a small population
+   and few generations. The best successful seed (shortest segment) is taken. Compiled
+   programs are cached per (algorithm, map shape, number of runs), so every re-plan on a
+   map of the same size - or in a window of the same size, see ``window`` - after the
+   first reuses them;
+5. splice: robot's cell -> GA segment -> the old path after the rejoin cell; loops are
+   cut out (MPMGA's deletion operator, SPEC 9 ``remove_loops``); the rest of the path is
+   checked again, and a later blocked step is re-planned the same way from the last clear
+   cell before it;
+6. the spliced path is verified step by step on the updated map before it is returned.
+
+Decisions (not in the paper):
+
+* The GA segment that is spliced is the seed's raw 8-connected best path (the robot's
+  path stays a sequence of legal moves); ``post=True`` splices the post-optimised
+  waypoint segment (feasible by line of sight) instead.
+* GA failure (no seed found a feasible segment) is reported honestly by default:
+  ``success=False``, ``status="ga_failed"``, a ``reason``. With ``fallback=True`` the
+  exact 8-connected A* segment (:func:`jaxga.reference.shortest_path`) is spliced
+  instead and the result says so (``used_fallback=True``, ``status="fallback"``).
+* ``latency_s`` is the wall time of the call minus the time spent compiling
+  (``compile_s``, non-zero only on the first call for a map/window size and seed count;
+  with JAX's persistent cache it is the time to load the compiled programs).
+* MPMGA numbers grid cells 0, 1, 2, ... from left to right and bottom to top (its
+  section 3 and Fig. 2; eq. 1-2 give 1-based coordinates ``x = mod(p, N) + 1``,
+  ``y = fix(p / N) + 1``). In jaxga's 0-based ``(x, y)`` with row 0 at the bottom that is
+  exactly ``p = y * W + x``: :func:`mpmga_cell` is ``(p % W, p // W)``. So cell 295 of the
+  25 x 25 map is ``(20, 11)``, 320 ``(20, 12)``, 345 ``(20, 13)``, 370 ``(20, 14)`` (a
+  vertical run of the path), and on the 50 x 50 map 759 is ``(9, 15)``, the block is
+  ``x`` 10-12 by ``y`` 16-18 and 963 is ``(13, 19)`` (a diagonal run).
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import math
+import time
+from collections.abc import Iterable, Sequence
+from typing import Any
+
+import numpy as np
+
+from jaxga.errors import EndpointError, JaxgaError, ParameterError
+from jaxga.grid import Grid
+from jaxga.maps.preprocess import reachable
+from jaxga.reference import clear_np, path_length, shortest_path_np
+
+__all__ = [
+    "MPMGA_SCENARIOS",
+    "ReplanResult",
+    "Scenario",
+    "first_blocked_step",
+    "mpmga_cell",
+    "mpmga_scenario",
+    "remove_loops_xy",
+    "replan",
+]
+
+XY = tuple[int, int]
+
+DEFAULT_SEEDS = 4
+DEFAULT_GENERATIONS = 20
+DEFAULT_POPULATION = 10
+"""Small GA budget of a re-plan: 4 seeds x 20 generations x population 10 (per island
+for ``mpmga``: 3 islands of 10). The paper re-planned with its global settings."""
+
+
+# =============================================================================== result
+@dataclasses.dataclass
+class ReplanResult:
+    """The outcome of :func:`replan` (MPMGA 5.2.1 / 5.3.1, SPEC 10).
+
+    Attributes:
+        success: True when ``path`` is a feasible path from the robot's cell to the goal.
+        status: ``"clear"`` (nothing blocked, path unchanged, no GA run), ``"replanned"``,
+            ``"fallback"`` (A* segment spliced, ``fallback=True``), ``"goal_blocked"``,
+            ``"unreachable"`` or ``"ga_failed"``.
+        reason: ``""`` on a plain success, else why (no path, GA failure, fallback used).
+        path: ``(x, y)`` cells from the robot's cell to the goal; ``[]`` when not success.
+        length: Euclidean length of ``path`` (``inf`` when not success).
+        segment: the (first) replanned part, from the cell planned from to the rejoin cell
+            inclusive; ``[]`` when nothing was replanned.
+        rejoin: the (first) rejoin cell, or None.
+        blockage: the first blocked step ``((x, y), (x, y))`` of the remaining path, or None.
+        segments: every splice made, as dicts (``start``, ``rejoin``, ``blockage``,
+            ``segment``, ``ga_success`` = seeds that found a segment, ``window``,
+            ``used_fallback``, ``wall_s``).
+        used_fallback: True when an exact A* segment replaced a failed GA.
+        latency_s: wall time of the call minus ``compile_s``.
+        compile_s: time spent compiling (or loading compiled) GA programs in this call.
+        wall_s: wall time of the whole call.
+        prefix: the travelled part of the old path, up to and including the robot's cell.
+        ga: the :class:`jaxga.Result` of every GA call (for inspection).
+    """
+
+    success: bool
+    status: str
+    reason: str
+    path: list[XY]
+    length: float
+    segment: list[XY]
+    rejoin: XY | None
+    blockage: tuple[XY, XY] | None
+    segments: list[dict[str, Any]]
+    used_fallback: bool
+    latency_s: float
+    compile_s: float
+    wall_s: float
+    prefix: list[XY]
+    ga: list[Any] = dataclasses.field(default_factory=list, repr=False)
+
+    def summary(self) -> str:
+        """A few lines: status, blockage, rejoin, segment, length and times."""
+        lines = [f"status      {self.status}" + (f" ({self.reason})" if self.reason else "")]
+        if self.blockage is not None:
+            lines.append(f"blocked     step {self.blockage[0]} -> {self.blockage[1]}")
+        for s in self.segments:
+            lines.append(
+                f"replanned   {s['start']} -> {s['rejoin']}: {len(s['segment'])} cells, "
+                f"{s['ga_success']}/{s['seeds']} seeds succeeded"
+                + (" (A* fallback)" if s["used_fallback"] else "")
+                + (f", window {s['window']}" if s["window"] else "")
+            )
+        if self.success:
+            lines.append(f"path        {len(self.path)} cells, length {self.length:.4f}, "
+                         f"{self.path[0]} -> {self.path[-1]}")
+        lines.append(f"time (s)    latency {self.latency_s:.3f}, compile {self.compile_s:.2f}, "
+                     f"wall {self.wall_s:.3f}")
+        return "\n".join(lines)
+
+    def to_json(self) -> dict[str, Any]:
+        """A JSON-serialisable dict (the ``--json`` layout of ``jaxga replan``)."""
+        def xy(p):
+            return None if p is None else [int(p[0]), int(p[1])]
+
+        return {
+            "success": self.success, "status": self.status, "reason": self.reason,
+            "path": [xy(p) for p in self.path],
+            "length": None if not math.isfinite(self.length) else float(self.length),
+            "segment": [xy(p) for p in self.segment], "rejoin": xy(self.rejoin),
+            "blockage": None if self.blockage is None else [xy(p) for p in self.blockage],
+            "segments": [{**s, "start": xy(s["start"]), "rejoin": xy(s["rejoin"]),
+                          "blockage": [xy(p) for p in s["blockage"]],
+                          "segment": [xy(p) for p in s["segment"]],
+                          "window": None if s["window"] is None else list(s["window"])}
+                         for s in self.segments],
+            "used_fallback": self.used_fallback, "latency_s": self.latency_s,
+            "compile_s": self.compile_s, "wall_s": self.wall_s,
+            "prefix": [xy(p) for p in self.prefix],
+        }
+
+
+# ============================================================================== helpers
+def mpmga_cell(p: int, width: int) -> XY:
+    """MPMGA's grid number ``p`` as jaxga ``(x, y)`` (MPMGA section 3, eq. 1-2; SPEC 1).
+
+    MPMGA numbers cells 0, 1, 2, ... from left to right and bottom to top, so its number
+    is jaxga's cell index ``y * W + x`` and this is ``(p % W, p // W)`` (the paper's eq. 1
+    adds 1 to both for its 1-based coordinates).
+    """
+    p, width = int(p), int(width)
+    if width < 1 or p < 0:
+        raise ParameterError(f"bad MPMGA cell {p} for width {width}")
+    return p % width, p // width
+
+
+def _as_xy_list(path: Any, name: str) -> list[XY]:
+    try:
+        arr = np.asarray(path, dtype=np.int64)
+    except (TypeError, ValueError):
+        raise ParameterError(f"{name} must be a list of (x, y) integer pairs") from None
+    if arr.ndim != 2 or arr.shape[1] != 2:
+        if arr.size == 0:
+            return []
+        raise ParameterError(f"{name} must be a list of (x, y) integer pairs, got shape "
+                             f"{arr.shape}")
+    return [(int(x), int(y)) for x, y in arr]
+
+
+def _on_map(xy: XY, w: int, h: int) -> bool:
+    return 0 <= xy[0] < w and 0 <= xy[1] < h
+
+
+def _obstacle_mask(new_obstacles: Any, h: int, w: int) -> np.ndarray:
+    """``bool[H, W]`` of the new obstacles: a mask of the map's shape or (x, y) cells."""
+    if new_obstacles is None:
+        return np.zeros((h, w), bool)
+    arr = np.asarray(new_obstacles)
+    if arr.dtype == np.bool_ and arr.ndim == 2:
+        if arr.shape != (h, w):
+            raise ParameterError(f"new_obstacles mask has shape {arr.shape}, the map is "
+                                 f"{(h, w)} (H, W)")
+        return arr.copy()
+    mask = np.zeros((h, w), bool)
+    for x, y in _as_xy_list(new_obstacles, "new_obstacles"):
+        if not _on_map((x, y), w, h):
+            raise ParameterError(f"new obstacle ({x}, {y}) is off the {w} x {h} map")
+        mask[y, x] = True
+    return mask
+
+
+def first_blocked_step(blocked: np.ndarray, corner_rule: str, path: Sequence[XY],
+                       start: int = 0) -> int | None:
+    """Index ``k >= start`` of the first step ``path[k] -> path[k+1]`` that is not clear.
+
+    A step is clear when its segment is (SPEC 1, :func:`jaxga.reference.clear_np`): for
+    8-adjacent cells, exactly when the move is legal under the corner rule. Returns None
+    when every step from ``start`` on is clear (MPMGA 5.2.1: "obstacles suddenly appear
+    ... blocking the path"; SPEC 10).
+    """
+    for k in range(start, len(path) - 1):
+        if not clear_np(blocked, corner_rule, path[k], path[k + 1]):
+            return k
+    return None
+
+
+def remove_loops_xy(path: Sequence[XY]) -> list[XY]:
+    """Cut out everything between two visits of the same cell (MPMGA 4.2 deletion
+    operator, SPEC 9 ``remove_loops``), keeping the first visit; host version.
+
+    Used after splicing (MPMGA 5.2.1 / SPEC 10): a detour that touches the old path
+    again must not make the robot walk a loop. Feasibility is kept (the cut joins a cell
+    to itself).
+    """
+    out: list[XY] = []
+    where: dict[XY, int] = {}
+    for c in path:
+        if c in where:
+            keep = where[c] + 1
+            for d in out[keep:]:
+                del where[d]
+            del out[keep:]
+        else:
+            where[c] = len(out)
+            out.append(c)
+    return out
+
+
+def _dedupe(path: Sequence[XY]) -> list[XY]:
+    out: list[XY] = []
+    for c in path:
+        if not out or out[-1] != c:
+            out.append(c)
+    return out
+
+
+def _window_box(a: XY, b: XY, size: int, h: int, w: int) -> tuple[int, int, int, int] | None:
+    """``(x0, y0, ww, hh)``: a ``size`` x ``size`` window (clipped to the map) holding
+    ``a`` and ``b`` with the pair centred as far as the map edge allows; None if they do
+    not fit."""
+    ww, hh = min(size, w), min(size, h)
+    if abs(a[0] - b[0]) >= ww or abs(a[1] - b[1]) >= hh:
+        return None
+    cx = (a[0] + b[0]) // 2
+    cy = (a[1] + b[1]) // 2
+    x0 = min(max(cx - ww // 2, 0), w - ww)
+    y0 = min(max(cy - hh // 2, 0), h - hh)
+    x0 = min(x0, min(a[0], b[0]))
+    x0 = max(x0, max(a[0], b[0]) - ww + 1)
+    y0 = min(y0, min(a[1], b[1]))
+    y0 = max(y0, max(a[1], b[1]) - hh + 1)
+    return x0, y0, ww, hh
+
+
+# ================================================================================ replan
+def replan(
+    grid: Grid,
+    path: Sequence[XY] | np.ndarray,
+    new_obstacles: Iterable[XY] | np.ndarray | None,
+    position: XY | int,
+    preset: Any = "mpmga",
+    *,
+    seeds: int | Sequence[int] = DEFAULT_SEEDS,
+    generations: int = DEFAULT_GENERATIONS,
+    population: int | None = DEFAULT_POPULATION,
+    window: int | None = None,
+    plan_from: str = "robot",
+    post: bool = False,
+    fallback: bool = False,
+    **overrides: Any,
+) -> ReplanResult:
+    """Re-plan the rest of ``path`` around ``new_obstacles`` from the robot's cell.
+
+    MPMGA 5.2.1 / 5.3.1 (local path re-planning against sudden obstacles), SPEC 10
+    ("Local re-planning"); the steps and decisions are in the module docstring.
+
+    Args:
+        grid: the map (its ``blocked`` array and ``corner_rule``; its start and goal are
+            ignored: the path's last cell is the goal).
+        path: the robot's planned path, ``(x, y)`` cells from its start to the goal
+            (e.g. ``Result.path(i, raw=True)``, any continuous path, or a feasible
+            waypoint path).
+        new_obstacles: cells ``(x, y)`` that became blocked, or a ``bool[H, W]`` mask.
+        position: the robot's current cell ``(x, y)`` (its first occurrence on ``path``)
+            or an index into ``path``.
+        preset: the GA (a preset name, TOML file or :class:`jaxga.config.Config`).
+        seeds: seeded GA runs in one compiled call; the best successful one is used.
+        generations: GA generations (small: this is a real-time re-plan).
+        population: ``population.size`` override (per island for island presets); None
+            keeps the preset's.
+        window: if given, the GA runs on a ``window`` x ``window`` crop of the map around
+            the planning start and the rejoin cell, so one compiled program serves every
+            map size; when they do not fit in the window or the crop cuts them apart,
+            the whole map is used.
+        plan_from: ``"robot"`` (MPMGA, SPEC 10: plan from the robot's cell) or
+            ``"blockage"`` (from the last path cell before the blocked step).
+        post: splice the GA's post-optimised waypoint segment instead of its raw
+            8-connected one.
+        fallback: if no seed finds a segment, splice the exact A* segment and flag it
+            (``used_fallback``) instead of returning ``success=False``.
+        overrides: further configuration overrides for :func:`jaxga.run`
+            (``crossover__probability=...``).
+
+    Returns:
+        A :class:`ReplanResult`. An unreachable or blocked goal and a GA failure are
+        results (``success=False`` with ``status`` and ``reason``), not exceptions.
+
+    Raises:
+        EndpointError: the robot's cell is off the map or blocked.
+        ParameterError: the robot's cell is not on the path, or bad arguments.
+    """
+    t_start = time.perf_counter()
+    if not isinstance(grid, Grid):
+        raise ParameterError(f"grid must be a jaxga.Grid, got {type(grid).__name__}")
+    if plan_from not in ("robot", "blockage"):
+        raise ParameterError(f"plan_from must be 'robot' or 'blockage', got {plan_from!r}")
+    if window is not None and (isinstance(window, bool) or not isinstance(window, int)
+                               or window < 2):
+        raise ParameterError(f"window must be an integer >= 2 or None, got {window!r}")
+    h, w = grid.height, grid.width
+    rule = grid.corner_rule
+    cells = _dedupe(_as_xy_list(path, "path"))
+    if not cells:
+        raise ParameterError("path is empty")
+    for c in cells:
+        if not _on_map(c, w, h):
+            raise ParameterError(f"path cell {c} is off the {w} x {h} map")
+    added = _obstacle_mask(new_obstacles, h, w)
+    blocked = grid.blocked_np() | added
+
+    # -- the robot's cell
+    if isinstance(position, (int, np.integer)) and not isinstance(position, bool):
+        if not 0 <= int(position) < len(cells):
+            raise ParameterError(f"position index {position} is outside the path "
+                                 f"(0..{len(cells) - 1})")
+        i = int(position)
+        robot = cells[i]
+    else:
+        robot_l = _as_xy_list([position], "position")
+        robot = robot_l[0]
+        if not _on_map(robot, w, h):
+            raise EndpointError(f"robot cell {robot} is off the {w} x {h} map")
+        if robot not in cells:
+            raise ParameterError(f"robot cell {robot} is not on the path")
+        i = cells.index(robot)
+    if blocked[robot[1], robot[0]]:
+        why = "a new obstacle" if added[robot[1], robot[0]] else "an obstacle of the map"
+        raise EndpointError(f"robot cell {robot} is blocked ({why})")
+    prefix = cells[: i + 1]
+    rest = cells[i:]
+    goal = rest[-1]
+
+    def done(success: bool, status: str, reason: str, out: list[XY],
+             segments: list[dict], compile_s: float, ga: list) -> ReplanResult:
+        wall = time.perf_counter() - t_start
+        first = segments[0] if segments else None
+        return ReplanResult(
+            success=success, status=status, reason=reason,
+            path=out if success else [],
+            length=path_length(np.asarray(out)) if success else math.inf,
+            segment=list(first["segment"]) if first else [],
+            rejoin=first["rejoin"] if first else None,
+            blockage=blockage0, segments=segments,
+            used_fallback=any(s["used_fallback"] for s in segments),
+            latency_s=wall - compile_s, compile_s=compile_s, wall_s=wall,
+            prefix=prefix, ga=ga)
+
+    k = first_blocked_step(blocked, rule, rest)
+    blockage0 = None if k is None else (rest[k], rest[k + 1])
+    if k is None:
+        return done(True, "clear", "", list(rest), [], 0.0, [])
+    if blocked[goal[1], goal[0]]:
+        why = "a new obstacle" if added[goal[1], goal[0]] else "an obstacle of the map"
+        return done(False, "goal_blocked", f"goal {goal} is blocked ({why})", [], [], 0.0, [])
+    work = grid.replace(blocked=blocked, start=robot, goal=robot)
+    reach = reachable(work, robot)
+    if not reach[goal[1], goal[0]]:
+        return done(False, "unreachable",
+                    f"goal {goal} is unreachable from the robot's cell {robot} after the "
+                    f"new obstacles (corner rule {rule!r})", [], [], 0.0, [])
+
+    segments: list[dict] = []
+    ga_results: list = []
+    compile_s = 0.0
+    current = list(rest)
+    for _ in range(len(cells) + 1):  # each pass splices past one blocked step
+        # rejoin: first cell after the blocked step that is free and reachable
+        j = next(j for j in range(k + 1, len(current))
+                 if not blocked[current[j][1], current[j][0]]
+                 and reach[current[j][1], current[j][0]])
+        s_idx = 0 if (plan_from == "robot" and not segments) else k
+        start, rejoin = current[s_idx], current[j]
+        seg, info, c_s = _plan_segment(
+            work, blocked, start, rejoin, preset, seeds=seeds, generations=generations,
+            population=population, window=window, post=post, fallback=fallback,
+            overrides=overrides)
+        compile_s += c_s
+        res = info.pop("result", None)
+        if res is not None:
+            ga_results.append(res)
+        info.update(blockage=(current[k], current[k + 1]))
+        segments.append(info)
+        if seg is None:
+            return done(False, "ga_failed", info["reason"], [], segments, compile_s,
+                        ga_results)
+        spliced = remove_loops_xy(current[:s_idx] + seg + current[j + 1:])
+        r_idx = spliced.index(rejoin) if rejoin in spliced else 0
+        current = spliced
+        k = first_blocked_step(blocked, rule, current, r_idx)
+        if k is None:
+            break
+    bad = first_blocked_step(blocked, rule, current)
+    if bad is not None or current[0] != robot or current[-1] != goal:  # pragma: no cover
+        raise JaxgaError(f"internal error: spliced path is not feasible at step {bad}")
+    used = any(s["used_fallback"] for s in segments)
+    return done(True, "fallback" if used else "replanned",
+                "GA found no segment; the exact A* segment was spliced" if used else "",
+                current, segments, compile_s, ga_results)
+
+
+def _plan_segment(work: Grid, blocked: np.ndarray, start: XY, rejoin: XY, preset: Any, *,
+                  seeds, generations, population, window, post, fallback, overrides
+                  ) -> tuple[list[XY] | None, dict[str, Any], float]:
+    """One GA call from ``start`` to ``rejoin`` (MPMGA 5.2.1; SPEC 10); returns the
+    segment (or None), a description and the compile time."""
+    from jaxga.api import run
+
+    t0 = time.perf_counter()
+    rule = work.corner_rule
+    h, w = blocked.shape
+    info: dict[str, Any] = {"start": start, "rejoin": rejoin, "window": None,
+                            "used_fallback": False, "reason": "", "result": None}
+    if start == rejoin:
+        info.update(segment=[start], ga_success=0, seeds=0, wall_s=0.0)
+        return [start], info, 0.0
+    ox = oy = 0
+    sub = blocked
+    if window is not None:
+        box = _window_box(start, rejoin, int(window), h, w)
+        if box is not None:
+            x0, y0, ww, hh = box
+            crop = blocked[y0:y0 + hh, x0:x0 + ww]
+            local = shortest_path_np(crop, (start[0] - x0, start[1] - y0),
+                                     (rejoin[0] - x0, rejoin[1] - y0), rule)
+            if local.found:
+                ox, oy, sub = x0, y0, crop
+                info["window"] = box
+    g = Grid.create(sub, start=(start[0] - ox, start[1] - oy),
+                    goal=(rejoin[0] - ox, rejoin[1] - oy), corner_rule=rule)
+    kw = dict(overrides)
+    if population is not None and "population__size" not in kw:
+        kw["population__size"] = int(population)
+    r = run(preset, g, seeds=seeds, generations=generations, **kw)
+    info["result"] = r
+    n_ok = int(np.sum(r.success))
+    info.update(ga_success=n_ok, seeds=len(r.seeds))
+    best: list[XY] | None = None
+    best_len = math.inf
+    for s in np.flatnonzero(r.success):
+        cand = [(x + ox, y + oy) for x, y in r.path(int(s), raw=not post)]
+        if (len(cand) < 1 or cand[0] != start or cand[-1] != rejoin
+                or first_blocked_step(blocked, rule, cand) is not None):
+            continue  # never splice a segment that is not feasible on the whole map
+        length = path_length(np.asarray(cand))
+        if length < best_len:
+            best, best_len = cand, length
+    if best is None:
+        info["reason"] = (f"the GA ({r.preset}, {len(r.seeds)} seeds x {r.generations} "
+                          f"generations) found no feasible segment {start} -> {rejoin}")
+        if fallback:
+            exact = shortest_path_np(blocked, start, rejoin, rule)
+            best = [tuple(int(v) for v in c) for c in exact.path]  # type: ignore[misc]
+            info["used_fallback"] = True
+    info.update(segment=list(best or []), wall_s=time.perf_counter() - t0)
+    return best, info, float(r.timing.get("compile_s", 0.0))
+
+
+# ============================================================================ scenarios
+@dataclasses.dataclass(frozen=True)
+class Scenario:
+    """A re-planning scenario: map, planned path, new obstacles, robot cell, expected
+    rejoin cell (MPMGA 5.2.1 / 5.3.1)."""
+
+    name: str
+    grid: Grid
+    path: list[XY]
+    new_obstacles: list[XY]
+    position: XY
+    rejoin: XY
+    description: str
+
+
+MPMGA_SCENARIOS: dict[str, dict[str, Any]] = {
+    # MPMGA 5.2.1, Fig. 14: 25 x 25 map, entry grid 10, exit grid 624; sudden obstacles
+    # at grids 320 and 345; the robot at grid 295 re-plans to grid 370.
+    "25x25": dict(size=25, start=10, goal=624, obstacles=[320, 345], position=295,
+                  rejoin=370, n_rects=8, seed=6),
+    # MPMGA 5.3.1, Fig. 20: 50 x 50 map, entry grid 0, exit grid 2499; a 3 x 3 block at
+    # grids 810-812, 860-862, 910-912; the robot at grid 759 re-plans to grid 963.
+    "50x50": dict(size=50, start=0, goal=2499,
+                  obstacles=[810, 811, 812, 860, 861, 862, 910, 911, 912], position=759,
+                  rejoin=963, n_rects=25, seed=16),
+}
+"""The paper's cell numbers; the maps are generated (the paper's maps are figures only)."""
+
+
+def mpmga_scenario(name: str) -> Scenario:
+    """MPMGA's re-planning scenario ``"25x25"`` (5.2.1) or ``"50x50"`` (5.3.1), SPEC 10.
+
+    The paper's maps exist only as figures, so the map is generated
+    (:func:`jaxga.maps.rectangles_map`, corner rule ``"free"`` as in the paper's GA, the
+    paper's entry and exit cells) with a seed chosen so that the exact 8-connected
+    shortest path - the "planned path" the robot follows - runs through the paper's
+    cells: 295 -> 320 -> 345 -> 370 on the 25 x 25 map and 759 -> 810 -> 861 -> 912 -> 963
+    on the 50 x 50 map. Cell numbers are converted by :func:`mpmga_cell`.
+    """
+    from jaxga.maps import rectangles_map
+    from jaxga.reference import shortest_path
+
+    if name not in MPMGA_SCENARIOS:
+        raise ParameterError(f"unknown scenario {name!r}: expected one of "
+                             f"{', '.join(MPMGA_SCENARIOS)}")
+    s = MPMGA_SCENARIOS[name]
+    n = s["size"]
+    grid = rectangles_map(n, n, s["n_rects"], s["seed"], min_size=2, max_size=n // 5,
+                          start=mpmga_cell(s["start"], n), goal=mpmga_cell(s["goal"], n),
+                          corner_rule="free")
+    planned = [(int(x), int(y)) for x, y in shortest_path(grid).path]
+    position, rejoin = mpmga_cell(s["position"], n), mpmga_cell(s["rejoin"], n)
+    obstacles = [mpmga_cell(p, n) for p in s["obstacles"]]
+    if position not in planned or rejoin not in planned:  # pragma: no cover - generator drift
+        raise JaxgaError(f"scenario {name}: the generated planned path no longer passes "
+                         f"through cells {s['position']} and {s['rejoin']}")
+    return Scenario(
+        name=name, grid=grid, path=planned, new_obstacles=obstacles, position=position,
+        rejoin=rejoin,
+        description=(f"MPMGA {'5.2.1' if n == 25 else '5.3.1'}: {n} x {n}, obstacles at "
+                     f"cells {s['obstacles']}, robot at {s['position']}, re-plan to "
+                     f"{s['rejoin']}"),
+    )

@@ -1,0 +1,260 @@
+"""Local re-planning (MPMGA 5.2.1 / 5.3.1, SPEC 10): splice feasibility, the paper's two
+scenarios, no-path results, errors and the ``jaxga replan`` command line.
+
+Every GA call here uses the same preset, map shape (25 x 25, the 50 x 50 scenario runs in a
+25 x 25 window), seed count and budget, so the whole file compiles ONE set of programs.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import json
+
+import numpy as np
+import pytest
+
+import jaxga.api
+from jaxga.cli import EXIT_BAD_INPUT, EXIT_NO_PATH, main
+from jaxga.errors import EndpointError, ParameterError
+from jaxga.maps import save_map
+from jaxga.reference import clear_np
+from jaxga.replan import (
+    first_blocked_step,
+    mpmga_cell,
+    mpmga_scenario,
+    remove_loops_xy,
+    replan,
+)
+
+BUDGET = dict(seeds=4, generations=10, population=10)  # one compiled program for the file
+
+
+@pytest.fixture(scope="module")
+def sc25():
+    return mpmga_scenario("25x25")
+
+
+@pytest.fixture(scope="module")
+def sc50():
+    return mpmga_scenario("50x50")
+
+
+def assert_feasible(grid, new_obstacles, path, robot, goal, continuous=True):
+    """Independent check: starts at the robot, ends at the goal, every step 8-adjacent
+    (when continuous) and clear under the corner rule on the updated map."""
+    blocked = grid.blocked_np().copy()
+    for x, y in new_obstacles:
+        blocked[y, x] = True
+    assert path[0] == robot and path[-1] == goal
+    for a, b in zip(path, path[1:], strict=False):
+        if continuous:
+            assert max(abs(a[0] - b[0]), abs(a[1] - b[1])) == 1, (a, b)
+        assert clear_np(blocked, grid.corner_rule, a, b), (a, b)
+    assert not set(path) & set(map(tuple, new_obstacles))
+    assert len(set(path)) == len(path)  # loop-free
+
+
+def test_mpmga_cell_numbering():
+    # MPMGA section 3: 0, 1, 2, ... left to right, bottom to top == jaxga y * W + x
+    assert mpmga_cell(0, 25) == (0, 0) and mpmga_cell(24, 25) == (24, 0)
+    assert mpmga_cell(25, 25) == (0, 1) and mpmga_cell(624, 25) == (24, 24)
+    assert [mpmga_cell(p, 25) for p in (295, 320, 345, 370)] == [
+        (20, 11), (20, 12), (20, 13), (20, 14)]
+    assert mpmga_cell(759, 50) == (9, 15) and mpmga_cell(963, 50) == (13, 19)
+    assert {mpmga_cell(p, 50) for p in (810, 811, 812, 860, 861, 862, 910, 911, 912)} == {
+        (x, y) for x in (10, 11, 12) for y in (16, 17, 18)}
+
+
+def test_scenarios_put_the_papers_cells_on_the_planned_path(sc25, sc50):
+    p = sc25.path
+    i = p.index((20, 11))
+    assert p[i:i + 4] == [(20, 11), (20, 12), (20, 13), (20, 14)]
+    assert p[0] == (10, 0) and p[-1] == (24, 24)  # entry grid 10, exit grid 624
+    q = sc50.path
+    j = q.index((9, 15))
+    assert q[j:j + 5] == [(9, 15), (10, 16), (11, 17), (12, 18), (13, 19)]
+    assert q[0] == (0, 0) and q[-1] == (49, 49)  # entry grid 0, exit grid 2499
+
+
+def test_mpmga_25x25_scenario(sc25):
+    """MPMGA 5.2.1: obstacles at 320 and 345, robot at 295, re-plan to 370."""
+    r = replan(sc25.grid, sc25.path, sc25.new_obstacles, sc25.position, **BUDGET)
+    assert r.success and r.status == "replanned" and not r.used_fallback
+    assert r.blockage == ((20, 11), (20, 12))
+    assert r.rejoin == (20, 14) == sc25.rejoin
+    assert r.segment[0] == (20, 11) and r.segment[-1] == (20, 14)
+    assert_feasible(sc25.grid, sc25.new_obstacles, r.path, sc25.position, sc25.path[-1])
+    assert_feasible(sc25.grid, sc25.new_obstacles, r.segment, (20, 11), (20, 14))
+    i = sc25.path.index(sc25.position)
+    assert r.prefix == sc25.path[:i + 1]
+    assert r.path[len(r.segment) - 1:] == sc25.path[sc25.path.index((20, 14)):]
+    assert r.length == pytest.approx(
+        sum(np.hypot(a[0] - b[0], a[1] - b[1]) for a, b in zip(r.path, r.path[1:],
+                                                             strict=False)))
+    assert r.latency_s >= 0 and r.compile_s >= 0 and r.wall_s >= r.latency_s
+    assert len(r.ga) == 1 and r.segments[0]["ga_success"] >= 1
+
+
+def test_mpmga_50x50_scenario_in_a_window(sc50):
+    """MPMGA 5.3.1: a 3 x 3 block at 810-812/860-862/910-912, robot at 759, re-plan to 963
+    (the GA runs on a 25 x 25 crop: the same compiled program as the 25 x 25 tests)."""
+    r = replan(sc50.grid, sc50.path, sc50.new_obstacles, sc50.position, window=25, **BUDGET)
+    assert r.success and r.status == "replanned"
+    assert r.rejoin == (13, 19) and r.blockage == ((9, 15), (10, 16))
+    assert r.segments[0]["window"] is not None and r.segments[0]["window"][2:] == (25, 25)
+    assert_feasible(sc50.grid, sc50.new_obstacles, r.path, (9, 15), (49, 49))
+    assert r.ga[0].width == 25
+
+
+def test_every_blocked_part_is_replanned_and_loops_removed(sc25):
+    """Two separate blockages: two splices (the second from the last clear cell before
+    it); the result is one feasible loop-free path."""
+    later = sc25.path[-4]  # a cell near the goal, far beyond the first blockage
+    obstacles = [*sc25.new_obstacles, later]
+    r = replan(sc25.grid, sc25.path, obstacles, sc25.position, **BUDGET)
+    assert r.success and len(r.segments) == 2
+    assert r.segments[1]["blockage"][1] == later
+    assert_feasible(sc25.grid, obstacles, r.path, sc25.position, sc25.path[-1])
+
+
+def test_plan_from_blockage_keeps_the_clear_prefix(sc25):
+    pos = sc25.path[sc25.path.index((20, 11)) - 3]
+    r = replan(sc25.grid, sc25.path, sc25.new_obstacles, pos, plan_from="blockage",
+               **BUDGET)
+    assert r.success and r.segments[0]["start"] == (20, 11)
+    i = sc25.path.index(pos)
+    assert r.path[:4] == sc25.path[i:i + 4]
+    assert_feasible(sc25.grid, sc25.new_obstacles, r.path, pos, sc25.path[-1])
+
+
+def test_nothing_blocked_returns_remaining_path_without_ga(sc25, monkeypatch):
+    def no_run(*a, **k):  # pragma: no cover - must not be called
+        raise AssertionError("the GA must not run when nothing is blocked")
+
+    monkeypatch.setattr(jaxga.api, "run", no_run)
+    i = sc25.path.index(sc25.position)
+    behind = [sc25.path[1], (0, 24)]  # on the travelled part, and off the path
+    for obstacles in ([], behind, np.zeros((25, 25), bool)):
+        r = replan(sc25.grid, sc25.path, obstacles, sc25.position)
+        assert r.success and r.status == "clear"
+        assert r.path == sc25.path[i:] and r.segments == [] and r.ga == []
+        assert r.rejoin is None and r.blockage is None and r.compile_s == 0.0
+    r = replan(sc25.grid, sc25.path, [], len(sc25.path) - 1)  # at the goal
+    assert r.success and r.path == [sc25.path[-1]] and r.length == 0.0
+
+
+def test_first_blocked_step_and_corner_rule():
+    b = np.zeros((3, 3), bool)
+    b[0, 1] = True  # side cell of the diagonal (0, 0) -> (1, 1)
+    path = [(0, 0), (1, 1), (2, 2)]
+    assert first_blocked_step(b, "free", path) is None
+    assert first_blocked_step(b, "no_squeeze", path) is None
+    assert first_blocked_step(b, "strict", path) == 0
+    b[2, 2] = True
+    assert first_blocked_step(b, "free", path) == 1
+    assert remove_loops_xy([(0, 0), (1, 0), (1, 1), (1, 0), (2, 0)]) == [
+        (0, 0), (1, 0), (2, 0)]
+
+
+def test_unreachable_and_blocked_goal_are_results(sc25):
+    goal = sc25.path[-1]  # (24, 24), the top-right corner
+    wall = [(23, 24), (23, 23), (24, 23)]
+    r = replan(sc25.grid, sc25.path, [*sc25.new_obstacles, *wall], sc25.position)
+    assert not r.success and r.status == "unreachable" and r.path == []
+    assert "unreachable" in r.reason and str(goal) in r.reason and r.length == np.inf
+    r = replan(sc25.grid, sc25.path, [goal], sc25.position)
+    assert not r.success and r.status == "goal_blocked" and "blocked" in r.reason
+
+
+def test_invalid_robot_cell_and_arguments(sc25):
+    g, p = sc25.grid, sc25.path
+    with pytest.raises(EndpointError, match="blocked"):
+        replan(g, p, [sc25.position], sc25.position)
+    with pytest.raises(ParameterError, match="not on the path"):
+        replan(g, p, [], (0, 24))
+    with pytest.raises(EndpointError, match="off the"):
+        replan(g, p, [], (30, 3))
+    with pytest.raises(ParameterError, match="off the"):
+        replan(g, p, [(25, 0)], sc25.position)
+    with pytest.raises(ParameterError, match="outside the path"):
+        replan(g, p, [], len(p))
+    with pytest.raises(ParameterError, match="shape"):
+        replan(g, p, np.zeros((3, 3), bool), sc25.position)
+    with pytest.raises(ParameterError):
+        replan(g, p, [], sc25.position, plan_from="nowhere")
+    with pytest.raises(ParameterError, match="empty"):
+        replan(g, [], [], sc25.position)
+
+
+def test_ga_failure_is_honest_and_fallback_is_flagged(sc25, monkeypatch):
+    real = jaxga.api.run
+
+    def failing(*a, **k):
+        r = real(*a, **k)
+        return dataclasses.replace(r, success=np.zeros_like(r.success))
+
+    monkeypatch.setattr(jaxga.api, "run", failing)
+    r = replan(sc25.grid, sc25.path, sc25.new_obstacles, sc25.position, **BUDGET)
+    assert not r.success and r.status == "ga_failed" and r.path == []
+    assert "no feasible segment" in r.reason and not r.used_fallback
+    r = replan(sc25.grid, sc25.path, sc25.new_obstacles, sc25.position, fallback=True,
+               **BUDGET)
+    assert r.success and r.status == "fallback" and r.used_fallback
+    assert "A*" in r.reason
+    assert_feasible(sc25.grid, sc25.new_obstacles, r.path, sc25.position, sc25.path[-1])
+
+
+def _cli_files(tmp_path, sc):
+    m = save_map(sc.grid, tmp_path / "map.txt")
+    plain = tmp_path / "path.json"
+    plain.write_text(json.dumps([list(c) for c in sc.path]))
+    run_json = tmp_path / "run.json"
+    run_json.write_text(json.dumps({"runs": [
+        {"success": False, "raw_path": [], "path": []},
+        {"success": True, "raw_path": [list(c) for c in sc.path], "raw_length": 30.0,
+         "path": [list(sc.path[0]), list(sc.path[-1])]}]}))
+    return str(m), str(plain), str(run_json)
+
+
+def test_cli_replan_end_to_end(tmp_path, sc25, capsys):
+    m, plain, run_json = _cli_files(tmp_path, sc25)
+    out = tmp_path / "out.json"
+    common = ["--map", m, "--obstacles", "20,12;20,13", "--position", "20,11",
+              "--seeds", "4", "--generations", "10", "--population", "10"]
+    assert main(["replan", "--path-json", plain, *common, "--json", str(out)]) == 0
+    data = json.loads(out.read_text())
+    assert data["success"] and data["status"] == "replanned" and data["rejoin"] == [20, 14]
+    path = [tuple(c) for c in data["path"]]
+    assert_feasible(sc25.grid, sc25.new_obstacles, path, (20, 11), (24, 24))
+    assert "replanned" in capsys.readouterr().out
+    # the JSON of `jaxga run` (its successful run's raw path), obstacles given twice
+    assert main(["replan", "--path-json", run_json, "--map", m, "--obstacles", "20,12",
+                 "--obstacles", "20,13", "--position", "20,11", "--seeds", "4",
+                 "--generations", "10", "--population", "10", "--json", str(out)]) == 0
+    assert json.loads(out.read_text())["rejoin"] == [20, 14]
+
+
+@pytest.mark.parametrize("extra, code, words", [
+    (["--position", "0,24"], EXIT_BAD_INPUT, "not on the path"),
+    (["--position", "20,11", "--obstacles", "20,11"], EXIT_BAD_INPUT, "blocked"),
+    (["--position", "20,11", "--obstacles", "23,24;23,23;24,23;20,12"], EXIT_NO_PATH,
+     "unreachable"),
+    (["--position", "20,11", "--corner-rule", "loose"], EXIT_BAD_INPUT, "corner rule"),
+])
+def test_cli_replan_errors(tmp_path, sc25, capsys, extra, code, words):
+    m, plain, _ = _cli_files(tmp_path, sc25)
+    assert main(["replan", "--map", m, "--path-json", plain, *extra]) == code
+    err = capsys.readouterr().err.strip()
+    assert "\n" not in err and words in err and "Traceback" not in err
+
+
+def test_cli_replan_bad_path_file(tmp_path, sc25, capsys):
+    m, _, _ = _cli_files(tmp_path, sc25)
+    bad = tmp_path / "bad.json"
+    bad.write_text("{not json")
+    args = ["replan", "--map", m, "--position", "20,11", "--path-json"]
+    assert main([*args, str(bad)]) == EXIT_BAD_INPUT
+    assert "not valid JSON" in capsys.readouterr().err
+    bad.write_text(json.dumps({"runs": [{"success": False}]}))
+    assert main([*args, str(bad)]) == EXIT_BAD_INPUT
+    assert main([*args, str(tmp_path / "missing.json")]) == EXIT_BAD_INPUT
