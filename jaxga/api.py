@@ -339,7 +339,8 @@ def sweep(
                 f"population_capacity {population_capacity} is below the largest "
                 f"population.size swept ({capacity})")
         capacity = int(population_capacity)
-    algo, _ = build(config, grid, population=capacity)
+    # the capacity is the largest size swept, also when it is below the preset's size
+    algo, _ = build(config.override({"population.size": capacity}), grid)
     per_point = [default_params(c, algo.islands) for c in configs]
     n_seeds, n_points = len(seed_arr), len(configs)
     n_runs = n_seeds * n_points
