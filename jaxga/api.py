@@ -297,6 +297,7 @@ def sweep(
     sets: Sequence[str] = (),
     progress: Callable[[str, float], None] | None = None,
     chunks: int = 1,
+    population_capacity: int | None = None,
     **overrides: Any,
 ) -> list[Result]:
     """Run every point of a hyper-parameter sweep with every seed, in ONE compiled call.
@@ -310,6 +311,11 @@ def sweep(
     ``q`` with seed ``s``: every point sees the same seeds (common random numbers, as a
     designed experiment wants). Returns one :class:`Result` per point; their ``timing``
     is that of the whole sweep.
+
+    ``population_capacity`` (default: the largest size swept) fixes the population
+    capacity. Results depend on it, so a sweep split into several calls (``jaxga.doe``'s
+    resumable blocks) passes the largest size of the WHOLE sweep to every call to get the
+    same results as one call. It must be at least every point's ``population.size``.
     """
     from jaxga.reference import any_angle_shortest_path, shortest_path
 
@@ -327,7 +333,14 @@ def sweep(
                 for c in configs]
     any_angle = any_angle_shortest_path(grid)
     capacity = max(int(c["population.size"]) for c in configs)
-    algo, _ = build(config, grid, population=capacity)
+    if population_capacity is not None:
+        if int(population_capacity) < capacity:
+            raise ParameterError(
+                f"population_capacity {population_capacity} is below the largest "
+                f"population.size swept ({capacity})")
+        capacity = int(population_capacity)
+    # the capacity is the largest size swept, also when it is below the preset's size
+    algo, _ = build(config.override({"population.size": capacity}), grid)
     per_point = [default_params(c, algo.islands) for c in configs]
     n_seeds, n_points = len(seed_arr), len(configs)
     n_runs = n_seeds * n_points

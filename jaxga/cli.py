@@ -159,6 +159,47 @@ def cmd_run(args: argparse.Namespace) -> int:
     return 0
 
 
+def cmd_doe(args: argparse.Namespace) -> int:
+    """``jaxga doe``: a designed experiment (AGACD 5.2.1) with its confirmation run."""
+    from jaxga.doe import AGACD_TABLE3, Factor, run_doe
+
+    if args.factor:
+        factors = [Factor.parse(text) for text in args.factor]
+    elif args.design == "agacd-table4":
+        factors = list(AGACD_TABLE3)
+    else:
+        raise JaxgaError("give the factors with --factor NAME=LOW,MID,HIGH (only "
+                         "--design agacd-table4 has default factors, AGACD Table 3)")
+
+    def progress(done: int, total: int) -> None:
+        if not args.quiet:
+            print(f"design points done: {done}/{total}", file=sys.stderr, flush=True)
+
+    result = run_doe(
+        args.preset, _grid_for_run(args), factors, design=args.design, seeds=args.seeds,
+        response=args.response, direction=args.direction, generations=args.generations,
+        corner_rule=args.corner_rule, variant=args.variant, sets=args.set or (),
+        checkpoint=args.checkpoint, block=args.block, progress=progress,
+    )
+    print(result.report())
+    data = result.to_json()
+    if args.json:
+        with open(args.json, "w", encoding="utf-8") as f:
+            json.dump(data, f)
+            f.write("\n")
+        print(f"wrote {args.json}")
+    if args.plot:
+        from jaxga.plot import plot_main_effects
+
+        ax = plot_main_effects(data)
+        ax.figure.savefig(args.plot, dpi=110)
+        import matplotlib.pyplot as plt
+
+        plt.close(ax.figure)
+        print(f"wrote {args.plot}")
+    return 0
+
+
 def _grid_for_run(args: argparse.Namespace, rule: str | None = None):
     """The map as named on the command line (endpoints applied); the corner rule is the
     run's (the preset's unless --corner-rule)."""
@@ -311,6 +352,35 @@ def build_parser() -> argparse.ArgumentParser:
                    help="override a configuration key, e.g. crossover.probability=0.7")
     p.add_argument("--json", metavar="OUT", help="write the result as JSON")
     p.set_defaults(func=cmd_replan)
+    from jaxga.doe import DESIGNS, RESPONSES
+
+    p = sub.add_parser("doe", help="a designed experiment over hyper-parameters (AGACD 5.2.1)")
+    p.add_argument("--preset", required=True, help="a preset name (jaxga presets) or a TOML file")
+    _add_map_arguments(p)
+    p.add_argument("--variant", help="a preset variant, e.g. 50x50 for agacd")
+    p.add_argument("--design", default="agacd-table4", choices=DESIGNS,
+                   help="AGACD's 9-run design (its Table 4), an orthogonal array or the "
+                   "full factorial (default agacd-table4)")
+    p.add_argument("--factor", action="append", metavar="NAME=LOW,MID,HIGH",
+                   help="a factor and its levels coded -1,0,1, e.g. population.size=40,50,60 "
+                   "(repeat; default for agacd-table4: AGACD Table 3)")
+    p.add_argument("--seeds", type=int, default=5, help="seeded runs per point (default 5)")
+    p.add_argument("--response", default="fitness", choices=tuple(RESPONSES),
+                   help="the response fitted (default fitness)")
+    p.add_argument("--direction", choices=("max", "min"),
+                   help="maximise or minimise the response (default: max for fitness and "
+                   "success, min for the others)")
+    p.add_argument("--generations", type=int, help="override the preset's generations")
+    p.add_argument("--set", action="append", metavar="KEY=VALUE",
+                   help="override a configuration key, e.g. crossover.probability=0.7")
+    p.add_argument("--checkpoint", metavar="DIR",
+                   help="write each finished point to DIR; rerun the same command to resume")
+    p.add_argument("--block", type=int,
+                   help="design points per compiled call (default: all; 1 with --checkpoint)")
+    p.add_argument("--json", metavar="OUT", help="write the design, responses and fit as JSON")
+    p.add_argument("--plot", metavar="OUT.png", help="main-effects plot")
+    p.add_argument("--quiet", action="store_true", help="no progress lines")
+    p.set_defaults(func=cmd_doe)
 
     p = sub.add_parser("presets", help="list the presets and their papers")
     p.set_defaults(func=cmd_presets)
@@ -345,7 +415,7 @@ def main(argv: Sequence[str] | None = None) -> int:
     """Entry point of the ``jaxga`` console script; returns the exit status."""
     parser = build_parser()
     args = parser.parse_args(argv)
-    if args.func is cmd_run:
+    if args.func in (cmd_run, cmd_doe):
         use_compilation_cache()
     try:
         return args.func(args)

@@ -13,7 +13,7 @@ import numpy as np
 
 from jaxga.grid import Grid
 
-__all__ = ["plot_convergence", "plot_map", "plot_result"]
+__all__ = ["plot_convergence", "plot_main_effects", "plot_map", "plot_result"]
 
 
 def _pyplot():
@@ -90,3 +90,37 @@ def plot_result(result, grid: Grid | str, out: str | Path | None = None):
         fig.savefig(out, dpi=110)
         plt.close(fig)
     return fig
+
+
+def plot_main_effects(doe_json: dict, ax=None):
+    """DOE main-effects plot (AGACD 5.2.1): mean response at coded level -1, 0, 1, one
+    line per factor (its real levels in the legend); dashed: the grand mean of the design
+    points.
+
+    ``doe_json`` is the ``jaxga doe --json`` layout (``factors``, ``points`` with
+    ``coded`` and ``mean``, ``response``); the level means are computed from the points
+    (points without a mean left out). Returns the axes.
+    """
+    plt = _pyplot()
+    if ax is None:
+        _, ax = plt.subplots(figsize=(6, 4))
+    points = [p for p in doe_json["points"] if p.get("mean") is not None]
+    levels = (-1, 0, 1)
+    for name, real in doe_json["factors"].items():
+        means = []
+        for level in levels:
+            v = [p["mean"] for p in points if p["coded"][name] == level]
+            means.append(float(np.mean(v)) if v else np.nan)
+        ax.plot(levels, means, marker="o",
+                label=f"{name} ({', '.join(f'{r:g}' for r in real)})")
+    if points:
+        ax.axhline(float(np.mean([p["mean"] for p in points])), color="grey", ls="--",
+                   lw=1, label="mean of the points")
+    ax.set_xticks(levels)
+    ax.set_xticklabels(["-1 (low)", "0 (mid)", "1 (high)"])
+    ax.set_xlabel("coded level")
+    ax.set_ylabel(f"mean {doe_json.get('response', 'response')}")
+    ax.set_title(f"main effects: {doe_json.get('preset', '')} on {doe_json.get('map', '')}",
+                 fontsize=9)
+    ax.legend(fontsize=7)
+    return ax

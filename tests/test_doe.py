@@ -1,0 +1,483 @@
+"""``jaxga.doe``: designs, AGACD Tables 4-5 and eq. 31, the fit, the sweep, checkpoints, CLI."""
+
+from __future__ import annotations
+
+import itertools
+import json
+import os
+import re
+import shutil
+import subprocess
+import sys
+import time
+from collections import Counter
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+import jaxga
+from jaxga.cli import EXIT_BAD_INPUT, main
+from jaxga.doe import (
+    AGACD_TABLE3,
+    AGACD_TABLE4,
+    L9,
+    L18,
+    L27,
+    Factor,
+    check_factors,
+    contrast_coefficients,
+    design_array,
+    design_points,
+    fit_linear,
+    main_effects,
+    predicted_best,
+    run_doe,
+)
+from jaxga.errors import ParameterError
+from jaxga.presets import load_preset
+
+ROOT = Path(__file__).resolve().parents[1]
+PAPER = ROOT.parent / "shared" / "papers" / "001_66b815cfd6d0fbaa.txt"
+
+# AGACD Table 4 as printed: run no., real values (population, pc_low, pc_high, pm_low,
+# pm_high), coded levels.
+PAPER_TABLE4 = [
+    (1, (40, 0.55, 0.7, 0.05, 0.25), (-1, -1, -1, -1, 0)),
+    (2, (40, 0.6, 0.75, 0.1, 0.3), (-1, 0, 0, 0, 1)),
+    (3, (40, 0.65, 0.8, 0.15, 0.2), (-1, 1, 1, 1, -1)),
+    (4, (50, 0.55, 0.75, 0.15, 0.3), (0, -1, 0, 1, 1)),
+    (5, (50, 0.6, 0.8, 0.05, 0.2), (0, 0, 1, -1, -1)),
+    (6, (50, 0.65, 0.7, 0.1, 0.25), (0, 1, -1, 0, 0)),
+    (7, (60, 0.55, 0.8, 0.1, 0.2), (1, -1, 1, 0, -1)),
+    (8, (60, 0.6, 0.7, 0.15, 0.25), (1, 0, -1, 1, 0)),
+    (9, (60, 0.65, 0.75, 0.05, 0.3), (1, 1, 0, -1, 1)),
+]
+# AGACD Table 5: the five trials of each run of Table 4 (fitness).
+PAPER_TABLE5 = np.array([
+    [0.1386, 0.2398, 0.2551, 0.2132, 0.2398],
+    [0.2398, 0.2398, 0.2336, 0.2286, 0.2169],
+    [0.2582, 0.2337, 0.2378, 0.2337, 0.2132],
+    [0.2398, 0.2398, 0.2336, 0.2804, 0.4392],
+    [0.2398, 0.2398, 0.1364, 0.2398, 0.1364],
+    [0.2857, 0.4392, 0.2112, 0.2400, 0.2398],
+    [0.2219, 0.2857, 0.1386, 0.2398, 0.2378],
+    [0.2398, 0.2378, 0.2398, 0.2114, 0.2398],
+    [0.2398, 0.2398, 0.2378, 0.2453, 0.4692],
+])
+PAPER_TABLE5_AVERAGE = [0.2173, 0.2317, 0.2353, 0.2866, 0.1984, 0.2832, 0.2248, 0.2337,
+                        0.2864]
+PAPER_EQ31 = [0.24416, 0.00673, 0.00847, -0.00841, 0.00594, 0.01624]
+
+# Textbook Taguchi L9 (levels 1, 2, 3).
+TEXTBOOK_L9 = [[1, 1, 1, 1], [1, 2, 2, 2], [1, 3, 3, 3], [2, 1, 2, 3], [2, 2, 3, 1],
+               [2, 3, 1, 2], [3, 1, 3, 2], [3, 2, 1, 3], [3, 3, 2, 1]]
+
+
+# ----------------------------------------------------------------------------- designs
+
+@pytest.mark.parametrize("array, shape", [(L9, (9, 4)), (L18, (18, 7)), (L27, (27, 13))])
+def test_orthogonal_arrays_are_orthogonal(array, shape):
+    assert array.shape == shape
+    n = shape[0]
+    for col in array.T:
+        assert Counter(col.tolist()) == {-1: n // 3, 0: n // 3, 1: n // 3}
+    for i, j in itertools.combinations(range(shape[1]), 2):
+        pairs = Counter(zip(array[:, i].tolist(), array[:, j].tolist()))
+        assert len(pairs) == 9 and set(pairs.values()) == {n // 9}, (i, j)
+
+
+def test_l9_is_the_textbook_array_and_designs_take_first_columns():
+    # the textbook L9 (Taguchi) has the columns in the same order up to level labels
+    # of column 4: compare the partitions of the runs each column induces
+    text = np.array(TEXTBOOK_L9) - 2
+    for j in range(4):
+        ours = {tuple(np.flatnonzero(L9[:, j] == v)) for v in (-1, 0, 1)}
+        book = {tuple(np.flatnonzero(text[:, j] == v)) for v in (-1, 0, 1)}
+        assert ours == book
+    np.testing.assert_array_equal(L9[:, :3], text[:, :3])
+    np.testing.assert_array_equal(design_array("L27", 3), L27[:, :3])
+    np.testing.assert_array_equal(design_array("L18", 7), L18)
+
+
+def test_full_factorial_is_every_combination_once():
+    full = design_array("full", 3)
+    assert full.shape == (27, 3)
+    assert set(map(tuple, full.tolist())) == set(itertools.product((-1, 0, 1), repeat=3))
+    np.testing.assert_array_equal(full[:, 0], np.repeat([-1, 0, 1], 9))  # first slowest
+
+
+def test_agacd_table4_equals_the_paper():
+    np.testing.assert_array_equal(AGACD_TABLE4, [c for _, _, c in PAPER_TABLE4])
+    values = design_points(AGACD_TABLE3, AGACD_TABLE4)
+    for (_, real, _), point in zip(PAPER_TABLE4, values):
+        assert tuple(point.values()) == pytest.approx(real, abs=1e-12)
+    assert isinstance(values[0]["population.size"], int)
+    # columns 1-4 are the L9; pm_high is balanced but confounded with pc_high
+    np.testing.assert_array_equal(AGACD_TABLE4[:, :4], L9)
+    pairs = Counter(zip(AGACD_TABLE4[:, 2].tolist(), AGACD_TABLE4[:, 4].tolist()))
+    assert pairs == {(-1, 0): 3, (0, 1): 3, (1, -1): 3}
+
+
+@pytest.mark.skipif(not PAPER.exists(), reason="the AGACD paper text is not available")
+def test_agacd_table4_equals_the_paper_text():
+    text = PAPER.read_text(encoding="utf-8")
+    block = text[text.index("TABLE 4:"):text.index("TABLE 5:")]
+    rows = [line.split("\t") for line in block.splitlines() if re.match(r"^[1-9]\t", line)]
+    assert len(rows) == 9
+    for row, (no, real, coded) in zip(rows, PAPER_TABLE4):
+        assert int(row[0]) == no
+        assert tuple(float(v) for v in row[1:6]) == pytest.approx(real)
+        assert tuple(int(v) for v in row[6:11]) == coded
+
+
+def test_agacd_eq31_from_its_table5():
+    """AGACD's coefficients (eq. 31) are the contrasts mean(F * y) of its Table 5;
+    maximal at (1, 1, -1, 1, 1) with 0.28995."""
+    y = PAPER_TABLE5.mean(axis=1)
+    np.testing.assert_allclose(y, PAPER_TABLE5_AVERAGE, atol=5e-5)
+    coef = contrast_coefficients(AGACD_TABLE4, np.array(PAPER_TABLE5_AVERAGE))
+    np.testing.assert_allclose(coef, PAPER_EQ31, atol=5e-6)
+    best, predicted = predicted_best(coef, "max")
+    np.testing.assert_array_equal(best, [1, 1, -1, 1, 1])
+    assert predicted == pytest.approx(0.28995, abs=2e-5)
+    # least squares on the same means: a different fit (the design is not orthogonal),
+    # same best combination
+    ls = fit_linear(AGACD_TABLE4, np.array(PAPER_TABLE5_AVERAGE))
+    assert ls[0] == pytest.approx(PAPER_EQ31[0], abs=1e-5)
+    np.testing.assert_array_equal(predicted_best(ls, "max")[0], [1, 1, -1, 1, 1])
+
+
+# ----------------------------------------------------------------------------- analysis
+
+@pytest.mark.parametrize("design, k", [("L9", 4), ("agacd-table4", 5), ("L18", 7),
+                                       ("full", 2)])
+def test_fit_recovers_exact_coefficients(design, k):
+    coded = design_array(design, k)
+    true = np.array([0.3, 0.1, -0.2, 0.05, 0.0, 0.07, -0.01, 0.02][:k + 1])
+    y = true[0] + coded @ true[1:]
+    np.testing.assert_allclose(fit_linear(coded, y), true, atol=1e-12)
+    # the reference: normal equations
+    X = np.column_stack([np.ones(len(coded)), coded])
+    np.testing.assert_allclose(np.linalg.solve(X.T @ X, X.T @ y), true, atol=1e-12)
+
+
+def test_fit_leaves_out_points_without_a_mean_and_refuses_too_few():
+    coded = design_array("full", 2)
+    y = 1.0 + 2.0 * coded[:, 0] - 0.5 * coded[:, 1]
+    y[[0, 4]] = np.nan
+    np.testing.assert_allclose(fit_linear(coded, y), [1.0, 2.0, -0.5], atol=1e-12)
+    y[2:] = np.nan
+    with pytest.raises(ParameterError, match="too few"):
+        fit_linear(coded, y)
+    with pytest.raises(ParameterError, match="rank"):  # both remaining rows at x1 = -1
+        fit_linear(coded[:3], np.array([1.0, 2.0, 3.0]))
+
+
+@pytest.mark.parametrize("direction", ["max", "min"])
+def test_predicted_best_on_an_additive_response(direction):
+    rng = np.random.default_rng(3)
+    true = rng.normal(size=5)
+    coded = design_array("L27", 4)
+    coef = fit_linear(coded, true[0] + coded @ true[1:])
+    best, predicted = predicted_best(coef, direction)
+    every = design_array("full", 4)
+    values = true[0] + every @ true[1:]
+    i = int(np.argmax(values) if direction == "max" else np.argmin(values))
+    np.testing.assert_array_equal(best, every[i])
+    assert predicted == pytest.approx(values[i])
+
+
+def test_flat_factor_goes_to_the_middle_level():
+    coded = design_array("L9", 3)
+    y = 0.1 + 0.02 * coded[:, 0] - 0.03 * coded[:, 2]  # factor 2 has no effect
+    best, predicted = predicted_best(fit_linear(coded, y), "max")
+    np.testing.assert_array_equal(best, [1, 0, -1])
+    assert predicted == pytest.approx(0.15)
+
+
+def test_main_effects_are_level_means():
+    coded = design_array("L9", 2)
+    y = np.arange(9, dtype=float)
+    eff = main_effects(coded, y)
+    np.testing.assert_allclose(eff[0], [1.0, 4.0, 7.0])  # rows 0-2, 3-5, 6-8
+    np.testing.assert_allclose(eff[1], [3.0, 4.0, 5.0])
+    y[0] = np.nan
+    assert main_effects(coded, y)[0, 0] == pytest.approx(1.5)
+
+
+# ----------------------------------------------------------------------------- factors
+
+def test_factor_coded_to_real():
+    f = Factor.parse("population.size=40,50,60")
+    assert (f.value(-1), f.value(0), f.value(1)) == (40, 50, 60)
+    assert isinstance(f.value(0), int)
+    g = Factor.parse(" crossover.pc_low = 0.55, 0.6 ,0.65")
+    assert g.name == "crossover.pc_low" and g.levels == (0.55, 0.6, 0.65)
+    with pytest.raises(ParameterError, match="-1, 0 or 1"):
+        f.value(2)
+
+
+@pytest.mark.parametrize("text, words", [
+    ("population.size=40,50", "three levels"),
+    ("population.size=40,50,60,70", "three levels"),
+    ("crossover.pc_low=0.5,x,0.7", "numbers"),
+    ("crossover.pc_low=0.7,0.6,0.5", "increase"),
+    ("crossover.pc_low", "NAME=LOW,MID,HIGH"),
+])
+def test_bad_factor_text(text, words):
+    with pytest.raises(ParameterError, match=words):
+        Factor.parse(text)
+
+
+@pytest.mark.parametrize("preset, factor, words", [
+    ("agacd", Factor("crossover.pc_lo", (0.1, 0.2, 0.3)), "unknown factor"),
+    ("sga", Factor("crossover.pc_low", (0.1, 0.2, 0.3)), "not set by preset"),
+    ("agacd", Factor("generations", (10, 20, 30)), "changes the compiled program"),
+    ("agacd", Factor("mutation.radius", (1, 2, 3)), "changes the compiled program"),
+    ("agacd", Factor("crossover.pc_low", (0.5, 0.9, 1.2)), "above its maximum"),
+    ("agacd", Factor("population.size", (10, 15.5, 20)), "integer"),
+    ("mpmga", Factor("crossover.probability", (0.5, 0.6, 0.7)), "not set by preset"),
+    ("mpmga+pc", Factor("crossover.probability", (0.5, 0.6, 0.7)), "islands.crossover"),
+])
+def test_factor_validation_against_the_preset(preset, factor, words):
+    name, _, extra = preset.partition("+")
+    config = load_preset(name)
+    if extra:  # a user --set that the per-island rates override
+        config = config.override({"crossover.probability": 0.5})
+    with pytest.raises(ParameterError, match=words):
+        check_factors(config, [factor])
+
+
+def test_design_errors():
+    with pytest.raises(ParameterError, match="4 columns, too few for 5 factors"):
+        design_array("L9", 5)
+    with pytest.raises(ParameterError, match="unknown design"):
+        design_array("L8", 2)
+    with pytest.raises(ParameterError, match="full factorial of 9"):
+        design_array("full", 9)
+    with pytest.raises(ParameterError, match="more than once"):
+        check_factors(load_preset("agacd"), [AGACD_TABLE3[0], AGACD_TABLE3[0]])
+
+
+# ----------------------------------------------------------------------------- running
+# Every run below: preset agacd on a built-in 20 x 20 map, corner rule free, 10
+# generations, population capacity 20, 3 seeds: two compiled program sets in all (27 runs
+# for the one-call design, 3 runs for blocks, confirmation and jaxga.run).
+
+MAP = "classic_ga_gapp3_20x20"
+SMALL = (Factor("population.size", (10, 15, 20)),) + AGACD_TABLE3[1:]
+KW = dict(generations=10, corner_rule="free")
+CLI_ARGS = ["doe", "--preset", "agacd", "--map", MAP, "--corner-rule", "free",
+            "--generations", "10", "--seeds", "3", "--design", "agacd-table4",
+            "--factor", "population.size=10,15,20", "--factor", "crossover.pc_low=0.55,0.6,0.65",
+            "--factor", "crossover.pc_high=0.7,0.75,0.8", "--factor",
+            "mutation.pm_low=0.05,0.1,0.15", "--factor", "mutation.pm_high=0.2,0.25,0.3"]
+
+
+@pytest.fixture(scope="session")
+def one_call():
+    """The whole design in one compiled call (27 runs), then the confirmation (3 runs)."""
+    return run_doe("agacd", MAP, SMALL, "agacd-table4", seeds=3, **KW)
+
+
+@pytest.fixture(scope="session")
+def blocked(tmp_path_factory):
+    """The same experiment checkpointed in blocks of one point (3 runs per call), not
+    interrupted."""
+    ckpt = tmp_path_factory.mktemp("doe") / "ckpt"
+    return ckpt, run_doe("agacd", MAP, SMALL, "agacd-table4", seeds=3, checkpoint=ckpt, **KW)
+
+
+def _without_timing(d: dict) -> dict:
+    return {k: v for k, v in d.items() if k != "timing"}
+
+
+def _assert_same_runs(a: dict[str, np.ndarray], b: dict[str, np.ndarray]) -> None:
+    """Same runs: fitness, success, turns and convergence generation bit for bit; the
+    float32 lengths and angle sums of the post-optimised paths within 1e-6 (XLA's
+    vectorised reductions may round the last bit differently for another number of runs
+    per call)."""
+    for key in ("fitness", "success", "turns", "convergence_generation"):
+        np.testing.assert_array_equal(a[key], b[key], err_msg=key)
+    for key in ("length", "raw_length", "smoothness"):
+        np.testing.assert_allclose(a[key], b[key], rtol=1e-6, err_msg=key)
+
+
+def test_doe_points_equal_separate_runs(one_call):
+    from jaxga.doe import seed_responses
+
+    r = one_call
+    assert r.responses.shape == (9, 3)
+    sizes = [v["population.size"] for v in r.values]
+    checked = 0
+    for q, point in enumerate(r.values):
+        if sizes[q] != max(sizes):  # jaxga.run's capacity is the point's own size
+            continue
+        single = jaxga.run("agacd", MAP, seeds=3, **KW,
+                           **{k.replace(".", "__"): v for k, v in point.items()})
+        _assert_same_runs({k: v[q] for k, v in r.all_responses.items()},
+                          seed_responses(single))
+        checked += 1
+    assert checked == 3
+    # the response of each point is the mean over its seeds; fitness-like: all seeds
+    np.testing.assert_allclose(r.means, r.responses.mean(axis=1))
+    assert r.direction == "max" and r.response == "fitness"
+    assert r.predicted == pytest.approx(r.coefficients[0] + np.abs(r.coefficients[1:]).sum())
+
+
+def test_json_layout(one_call):
+    d = json.loads(json.dumps(one_call.to_json(), allow_nan=False))
+    for key in ("preset", "map", "response", "factors", "points", "coefficients",
+                "predicted_best", "confirmation", "timing"):
+        assert key in d
+    assert d["preset"] == "agacd" and d["map"] == MAP and d["response"] == "fitness"
+    names = [f.name for f in SMALL]
+    assert list(d["factors"]) == names and d["factors"]["population.size"] == [10, 15, 20]
+    assert len(d["points"]) == 9
+    p = d["points"][3]
+    assert p["coded"] == dict(zip(names, [0, -1, 0, 1, 1]))
+    assert p["values"] == {"population.size": 15, "crossover.pc_low": 0.55,
+                           "crossover.pc_high": 0.75, "mutation.pm_low": 0.15,
+                           "mutation.pm_high": 0.3}
+    assert len(p["responses"]) == 3 and p["mean"] == pytest.approx(np.mean(p["responses"]))
+    assert list(d["coefficients"]) == ["X0", *names]
+    assert set(d["predicted_best"]) == {"coded", "values", "predicted"}
+    assert set(d["predicted_best"]["coded"].values()) <= {-1, 0, 1}
+    assert len(d["confirmation"]["responses"]) == 3
+    assert isinstance(d["confirmation"]["mean"], float)
+    assert d["timing"]["total_s"] > 0
+
+
+def test_failed_seeds_fitness_zero_lengths_excluded():
+    from jaxga.doe import point_means, seed_responses
+
+    class R:  # the fields of jaxga.api.Result that seed_responses reads
+        success = np.array([True, False, True])
+        fitness = np.array([0.3, -1.0, 0.2])
+        length = np.array([30.0, 99.0, 32.0])
+        raw_length = length
+        convergence_generation = np.array([4, -1, 6])
+        metrics = {"turns": np.array([3, 9, 5]), "angle_sum": np.array([1.0, 9.0, 2.0])}
+
+    s = seed_responses(R)
+    np.testing.assert_array_equal(s["fitness"], [0.3, 0.0, 0.2])
+    assert point_means(s["fitness"][None])[0] == pytest.approx(0.5 / 3)
+    assert point_means(s["length"][None])[0] == pytest.approx(31.0)
+    assert point_means(s["convergence_generation"][None])[0] == pytest.approx(5.0)
+    assert point_means(s["smoothness"][None])[0] == pytest.approx(1.5)
+    assert point_means(s["success"][None])[0] == pytest.approx(2 / 3)
+    assert np.isnan(point_means(np.full((1, 3), np.nan))[0])
+
+
+def test_checkpointed_blocks_equal_one_call_and_resume(one_call, blocked, tmp_path):
+    ckpt0, first = blocked
+    _assert_same_runs(first.all_responses, one_call.all_responses)
+    _assert_same_runs(first.confirmation_all, one_call.confirmation_all)
+    # the fitness response, its fit and its confirmation: identical
+    assert _without_timing(first.to_json()) == _without_timing(one_call.to_json())
+    ckpt = tmp_path / "ckpt"
+    shutil.copytree(ckpt0, ckpt)
+    files = sorted(ckpt.glob("point-*.json"))
+    assert len(files) == 9 and (ckpt / "manifest.json").exists()
+    assert len(list(ckpt.glob("confirm_*.json"))) == 1
+    for f in files[2:7]:
+        f.unlink()
+    seen = []
+    again = run_doe("agacd", MAP, SMALL, "agacd-table4", seeds=3, checkpoint=ckpt,
+                    progress=lambda done, total: seen.append(done), **KW)
+    assert seen[0] == 4 and seen[-1] == 9  # 4 points loaded, 5 run again
+    for key, v in first.all_responses.items():  # same blocks: bit for bit
+        np.testing.assert_array_equal(again.all_responses[key], v)
+    assert _without_timing(again.to_json()) == _without_timing(first.to_json())
+    # another configuration is refused before anything runs
+    with pytest.raises(ParameterError, match="different configuration.*seeds"):
+        run_doe("agacd", MAP, SMALL, "agacd-table4", seeds=2, checkpoint=ckpt, **KW)
+    with pytest.raises(ParameterError, match="different configuration.*config"):
+        run_doe("agacd", MAP, SMALL, "agacd-table4", seeds=3, checkpoint=ckpt,
+                generations=11, corner_rule="free")
+    with pytest.raises(ParameterError, match="different configuration.*factors"):
+        run_doe("agacd", MAP, (Factor("population.size", (10, 16, 20)),) + SMALL[1:],
+                "agacd-table4", seeds=3, checkpoint=ckpt, **KW)
+    with pytest.raises(ParameterError, match="different configuration.*block"):
+        run_doe("agacd", MAP, SMALL, "agacd-table4", seeds=3, checkpoint=ckpt, block=2,
+                **KW)
+
+
+def test_cli_errors_are_one_line(tmp_path, capsys):
+    cases = [
+        (["--factor", "generations=10,20,30"], "changes the compiled program"),
+        (["--design", "L9"], "4 columns, too few for 5 factors"),
+        (["--factor", "population.size=10,20"], "three levels"),
+    ]
+    for extra, words in cases:
+        assert main(CLI_ARGS + extra) == EXIT_BAD_INPUT
+        err = capsys.readouterr().err.strip()
+        assert "\n" not in err and words in err and "Traceback" not in err
+    assert main(["doe", "--preset", "agacd", "--map", MAP, "--design", "L9"]) == EXIT_BAD_INPUT
+    assert "--factor" in capsys.readouterr().err
+
+
+def test_cli_refuses_checkpoint_of_another_configuration(tmp_path, capsys):
+    ckpt = tmp_path / "ckpt"
+    ckpt.mkdir()
+    (ckpt / "manifest.json").write_text(json.dumps({"format": 1, "seeds": [0, 1]}))
+    assert main(CLI_ARGS + ["--checkpoint", str(ckpt)]) == EXIT_BAD_INPUT
+    err = capsys.readouterr().err.strip()
+    assert "different configuration" in err and "\n" not in err
+
+
+def test_killed_checkpointed_doe_resumes_to_the_same_result(blocked, tmp_path):
+    """Must-show (issue 5): kill a checkpointed ``jaxga doe`` subprocess midway, rerun
+    the same command, and get the JSON of an uninterrupted run of the same command."""
+    ckpt, out = tmp_path / "ckpt", tmp_path / "out.json"
+    cmd = [sys.executable, "-m", "jaxga.cli", *CLI_ARGS, "--checkpoint", str(ckpt),
+           "--json", str(out)]
+    env = dict(os.environ, PYTHONPATH=os.pathsep.join(
+        [str(ROOT), *filter(None, [os.environ.get("PYTHONPATH")])]))
+    for _attempt in range(3):
+        proc = subprocess.Popen(cmd, env=env, stdout=subprocess.DEVNULL,
+                                stderr=subprocess.DEVNULL)
+        deadline = time.monotonic() + 600
+        while (proc.poll() is None and time.monotonic() < deadline
+               and not any(ckpt.glob("point-*.json"))):
+            time.sleep(0.002)
+        proc.kill()
+        proc.wait()
+        n_done = len(list(ckpt.glob("point-*.json")))
+        if 1 <= n_done < 9:
+            break
+        shutil.rmtree(ckpt, ignore_errors=True)  # killed too late (or too early): again
+    else:
+        pytest.fail("could not kill the sweep between its first and last point")
+    assert not out.exists()
+    done = subprocess.run(cmd, env=env, capture_output=True, text=True, timeout=600)
+    assert done.returncode == 0, done.stderr
+    first = re.search(r"design points done: (\d+)/9", done.stderr)
+    assert first and int(first.group(1)) == n_done  # resumed, not recomputed
+    got = json.loads(out.read_text())
+    assert _without_timing(got) == _without_timing(
+        json.loads(json.dumps(blocked[1].to_json())))
+
+
+# ----------------------------------------------------------------------------- plot
+
+def test_plot_main_effects_draws_level_means():
+    from jaxga.plot import plot_main_effects
+
+    coded = design_array("L9", 2)
+    y = np.arange(9, dtype=float)
+    doe_json = {
+        "preset": "p", "map": "m", "response": "fitness",
+        "factors": {"a": [1, 2, 3], "b": [0.1, 0.2, 0.3]},
+        "points": [{"coded": {"a": int(r[0]), "b": int(r[1])}, "mean": float(v)}
+                   for r, v in zip(coded, y)],
+    }
+    ax = plot_main_effects(doe_json)
+    lines = {ln.get_label(): ln for ln in ax.get_lines()}
+    np.testing.assert_allclose(lines["a (1, 2, 3)"].get_ydata(), [1.0, 4.0, 7.0])
+    np.testing.assert_allclose(lines["b (0.1, 0.2, 0.3)"].get_ydata(), [3.0, 4.0, 5.0])
+    np.testing.assert_allclose(lines["mean of the points"].get_ydata(), [4.0, 4.0])
+    import matplotlib.pyplot as plt
+
+    plt.close(ax.figure)
