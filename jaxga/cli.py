@@ -159,6 +159,49 @@ def cmd_run(args: argparse.Namespace) -> int:
     return 0
 
 
+def cmd_compare(args: argparse.Namespace) -> int:
+    """``jaxga compare``: several presets on one map with the same seeds; per-preset
+    summary, pairwise tests with effect sizes (Holm-corrected), JSON, box plots."""
+    from jaxga.compare import TESTS, check_metric, compare
+    from jaxga.errors import ParameterError
+
+    presets = [p.strip() for p in args.presets.split(",") if p.strip()]
+    check_metric(args.metric)
+    if args.test not in TESTS:
+        raise ParameterError(f"unknown test {args.test!r}; choose from {', '.join(TESTS)}")
+    if args.corner_rule is not None:
+        from jaxga.grid import check_corner_rule
+
+        check_corner_rule(args.corner_rule)
+    grid = args.map
+    if args.start is not None or args.goal is not None:
+        from jaxga.maps import load_map
+        from jaxga.presets import load_preset
+
+        grid = load_map(args.map, start=args.start, goal=args.goal, corner_rule=(
+            args.corner_rule or load_preset(presets[0])["map.corner_rule"]))
+    progress = None if args.quiet else (lambda label: print(f"running {label} ...",
+                                                              file=sys.stderr, flush=True))
+    comp = compare(presets, grid, seeds=args.seeds, metric=args.metric, test=args.test,
+                   progress=progress, generations=args.generations,
+                   corner_rule=args.corner_rule, sets=args.set or ())
+    print(comp.summary())
+    if args.json:
+        with open(args.json, "w", encoding="utf-8") as f:
+            json.dump(comp.to_json(), f)
+            f.write("\n")
+        print(f"wrote {args.json}")
+    if args.plot:
+        from jaxga.plot import plot_comparison
+
+        plot_comparison(comp, args.plot)
+        print(f"wrote {args.plot}")
+    if not any(r.success.any() for r in comp.results.values()):
+        print("jaxga: no path: no preset found a path", file=sys.stderr)
+        return EXIT_NO_PATH
+    return 0
+
+
 def _grid_for_run(args: argparse.Namespace, rule: str | None = None):
     """The map as named on the command line (endpoints applied); the corner rule is the
     run's (the preset's unless --corner-rule)."""
@@ -202,6 +245,27 @@ def build_parser() -> argparse.ArgumentParser:
     p.add_argument("--quiet", action="store_true", help="no progress bar")
     p.set_defaults(func=cmd_run)
 
+    p = sub.add_parser("compare", help="compare presets on a map with statistical tests")
+    p.add_argument("--presets", required=True, metavar="A,B,...",
+                   help="comma-separated preset names (jaxga presets) or TOML files")
+    _add_map_arguments(p)
+    p.add_argument("--seeds", type=int, default=30,
+                   help="seeded runs per preset, the same seeds for all (default 30)")
+    p.add_argument("--metric", default="length",
+                   help="main metric: length (post-optimised, default), raw_length, gap, "
+                   "raw_gap, turns, angle_sum, convergence_generation")
+    p.add_argument("--test", default="mannwhitneyu",
+                   help="mannwhitneyu (default; independent samples) or wilcoxon (paired "
+                   "by seed; only when the presets share random numbers)")
+    p.add_argument("--generations", type=int, help="override every preset's generations")
+    p.add_argument("--set", action="append", metavar="KEY=VALUE",
+                   help="override a configuration key in every preset")
+    p.add_argument("--json", metavar="OUT", help="write the comparison as JSON")
+    p.add_argument("--plot", metavar="OUT.png",
+                   help="box plots of the metric per preset (optima as reference lines)")
+    p.add_argument("--quiet", action="store_true", help="no progress messages")
+    p.set_defaults(func=cmd_compare)
+
     p = sub.add_parser("presets", help="list the presets and their papers")
     p.set_defaults(func=cmd_presets)
 
@@ -235,7 +299,7 @@ def main(argv: Sequence[str] | None = None) -> int:
     """Entry point of the ``jaxga`` console script; returns the exit status."""
     parser = build_parser()
     args = parser.parse_args(argv)
-    if args.func is cmd_run:
+    if args.func in (cmd_run, cmd_compare):
         use_compilation_cache()
     try:
         return args.func(args)

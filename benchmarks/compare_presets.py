@@ -1,0 +1,133 @@
+"""All six presets compared on two classic maps and one Moving AI map, with statistics.
+
+    python benchmarks/compare_presets.py [--seeds 100] [--maps a,b] [--presets a,b]
+        [--cache DIR] [--report-only] [--no-write]
+
+Issue 5, must show: every preset at its preset settings, 100 seeds each, on
+``classic_ga_gapp3_20x20`` and ``routeplanning_yangbo_20x20`` (corner rule ``free``, as
+the papers) and the Moving AI map ``random-32-32-20`` (corner rule ``strict``). Per map:
+the per-preset summary (mean / sd / min / max of the post-optimised length, gap of the raw
+path to the exact 8-connected optimum and of the post-optimised path to the any-angle
+optimum, success rate, seconds per run after compilation) and the pairwise two-sided
+Mann-Whitney U tests (Holm-corrected within each metric, Vargha-Delaney A12) made by
+:func:`jaxga.compare.compare_results`.
+
+Heavy (tens of minutes): every finished (map, preset) batch is pickled in ``--cache``
+(default ``/tmp/jaxga_compare_presets``), so a killed run restarted with the same
+command skips what is done; ``--report-only`` reports the maps whose presets are all in
+the cache (and names the missing ones) without running anything.
+"""
+
+from __future__ import annotations
+
+import argparse
+import os
+import pickle
+import sys
+import time
+from pathlib import Path
+
+from _results import append
+
+MAPS = {
+    "classic_ga_gapp3_20x20": "free",
+    "routeplanning_yangbo_20x20": "free",
+    "random-32-32-20": "strict",
+}
+PRESETS = ("sga", "imga", "agacd", "iga_zhang", "mpmga", "iga_zhu")
+METRICS = ("length", "raw_length", "turns", "convergence_generation")
+
+
+def _cache_file(cache: Path, map_name: str, preset: str, seeds: int) -> Path:
+    return cache / f"{map_name}__{preset}__{seeds}.pkl"
+
+
+def _log(msg: str) -> None:
+    load = ", ".join(f"{v:.1f}" for v in os.getloadavg())
+    print(f"[{time.strftime('%H:%M:%S')} load {load}] {msg}", flush=True)
+
+
+def run_missing(maps, presets, seeds: int, cache: Path) -> None:
+    """Run every (map, preset) batch not yet in the cache; pickle each as it finishes."""
+    from jaxga.api import run
+    from jaxga.cli import use_compilation_cache
+
+    use_compilation_cache()
+    cache.mkdir(parents=True, exist_ok=True)
+    for map_name in maps:
+        for preset in presets:
+            f = _cache_file(cache, map_name, preset, seeds)
+            if f.exists():
+                _log(f"{map_name} {preset}: cached")
+                continue
+            _log(f"{map_name} {preset}: running {seeds} seeds")
+            r = run(preset, map_name, seeds=seeds, corner_rule=MAPS[map_name])
+            tmp = f.with_suffix(".tmp")
+            tmp.write_bytes(pickle.dumps(r))
+            tmp.replace(f)
+            t = r.timing
+            _log(f"{map_name} {preset}: done, success {int(r.success.sum())}/{seeds}, "
+                 f"compile {t['compile_s']:.1f} s, total {t['total_s']:.1f} s")
+
+
+def report(maps, presets, seeds: int, cache: Path, write: bool) -> None:
+    """One RESULTS.md section per map whose presets are all cached."""
+    from jaxga.compare import compare_results
+
+    missing_all = []
+    for map_name in maps:
+        results, missing = {}, []
+        for preset in presets:
+            f = _cache_file(cache, map_name, preset, seeds)
+            if f.exists():
+                results[preset] = pickle.loads(f.read_bytes())
+            else:
+                missing.append(preset)
+        if missing:
+            missing_all.append(f"{map_name}: {', '.join(missing)}")
+        if len(results) < 2:
+            continue
+        comp = compare_results(results, metric="length", metrics=METRICS)
+        note = (f"{seeds} seeds per preset (seeds 0..{seeds - 1}), every preset at its "
+                f"preset settings (its own population and generations), corner rule "
+                f"`{MAPS[map_name]}`. Gap 8-conn = raw (8-connected) length / exact "
+                "8-connected optimum - 1; gap any-angle = post-optimised length / any-angle "
+                "optimum - 1 (means over successful seeds). s/run = (init + evolve + post) "
+                "/ seeds, compilation excluded; timings are noisy (2 shared cores, other "
+                "jobs running; see the load average). Tests: two-sided Mann-Whitney U per "
+                "pair (independent samples: different algorithms do not share random "
+                "numbers, so seed i of one preset is not paired with seed i of another), "
+                "failed seeds excluded; p Holm-corrected over the pairs of each metric; "
+                "A12 = P(a > b) + P(a = b)/2 (lower length is better, so A12 < 0.5 "
+                "favours a); success rates by Fisher's exact test (Holm).")
+        if missing:
+            note += f"\n\nNOT RUN (did not finish in time): {', '.join(missing)}."
+        body = note + "\n\n" + comp.to_markdown()
+        append(f"compare presets on {map_name}", body, write=write)
+    if missing_all:
+        print("missing batches: " + "; ".join(missing_all), file=sys.stderr)
+
+
+def main() -> None:
+    ap = argparse.ArgumentParser(description=__doc__,
+                                 formatter_class=argparse.RawDescriptionHelpFormatter)
+    ap.add_argument("--seeds", type=int, default=100)
+    ap.add_argument("--maps", default=",".join(MAPS))
+    ap.add_argument("--presets", default=",".join(PRESETS))
+    ap.add_argument("--cache", default="/tmp/jaxga_compare_presets")
+    ap.add_argument("--report-only", action="store_true")
+    ap.add_argument("--no-write", action="store_true")
+    args = ap.parse_args()
+    maps = [m for m in args.maps.split(",") if m]
+    presets = [p for p in args.presets.split(",") if p]
+    unknown = [m for m in maps if m not in MAPS]
+    if unknown:
+        ap.error(f"unknown map(s) {unknown}; choose from {list(MAPS)}")
+    cache = Path(args.cache)
+    if not args.report_only:
+        run_missing(maps, presets, args.seeds, cache)
+    report(maps, presets, args.seeds, cache, write=not args.no_write)
+
+
+if __name__ == "__main__":
+    main()
