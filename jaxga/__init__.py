@@ -1,11 +1,13 @@
 """jaxga: genetic-algorithm path planning for mobile robots on grid maps, in JAX."""
 
 from jaxga.api import Result, run, sweep
+from jaxga.compare import Comparison, compare
 from jaxga.errors import EndpointError, JaxgaError, MapFormatError, NoPathError, ParameterError
 from jaxga.grid import CORNER_RULES, Grid
 
 __all__ = [
     "CORNER_RULES",
+    "Comparison",
     "EndpointError",
     "Grid",
     "JaxgaError",
@@ -13,6 +15,7 @@ __all__ = [
     "NoPathError",
     "ParameterError",
     "Result",
+    "compare",
     "run",
     "sweep",
 ]

@@ -175,7 +175,7 @@ def plot_box(data, metric: str | None = None, ax=None, reference: dict | None = 
         metric = metric or "value"
     clean = [v[np.isfinite(v)] for v in values.values()]
     ax.boxplot(clean, patch_artist=True, tick_labels=list(values),
-               boxprops={"facecolor": "#cfe2f3"}, medianprops={"color": "k"})
+               boxprops={"facecolor": "#cfe2f3"}, medianprops={"color": "k", "gid": "median"})
     for i, (label, y) in enumerate((reference or {}).items()):
         ax.axhline(y, color=f"C{(i + 3) % 10}", ls="--", lw=1, label=f"{label} ({y:.4g})")
     if reference:
@@ -188,8 +188,9 @@ def plot_box(data, metric: str | None = None, ax=None, reference: dict | None = 
 def plot_seed_scatter(results, y: str = "length", x: str = "seed", ax=None):
     """Per-seed results, one series per algorithm (AGACD Figs. 8-10).
 
-    ``x = "seed"`` puts the run index on the horizontal axis (AGACD plots the best
-    fitness, the convergence generation and the time of each of its 20 runs so);
+    ``x = "seed"`` puts the seed on the horizontal axis (AGACD plots the best fitness,
+    the convergence generation and the time of each of its 20 runs against the run
+    number);
     otherwise ``x`` is a second metric, e.g. ``x="convergence_generation"`` for length
     against convergence speed. ``y`` / ``x`` are :data:`jaxga.compare.METRICS` or
     ``"fitness"``; failed seeds are not drawn. (Per-run times do not exist: the seeds
@@ -203,12 +204,15 @@ def plot_seed_scatter(results, y: str = "length", x: str = "seed", ax=None):
     markers = "os^vDP*Xh<>"
     for i, (label, r) in enumerate(_labelled(results).items()):
         yv = metric_values(r, y)
-        xv = (np.arange(1, len(yv) + 1, dtype=float) if x == "seed"
-              else metric_values(r, x))
+        xv = np.asarray(r.seeds, float) if x == "seed" else metric_values(r, x)
         ok = np.isfinite(xv) & np.isfinite(yv)
         ax.scatter(xv[ok], yv[ok], s=18, marker=markers[i % len(markers)], label=label,
                    alpha=0.8)
-    ax.set_xlabel("run (seed index)" if x == "seed" else x.replace("_", " "))
+    if x in ("seed", "convergence_generation", "turns"):
+        from matplotlib.ticker import MaxNLocator
+
+        ax.xaxis.set_major_locator(MaxNLocator(integer=True))
+    ax.set_xlabel(x.replace("_", " "))
     ax.set_ylabel(y.replace("_", " "))
     ax.legend(fontsize=7)
     return ax
