@@ -235,11 +235,37 @@ class Comparison:
             parts += [r.summary() for r in self.results.values()]
         return "\n\n".join(parts)
 
-    def to_markdown(self) -> str:
-        """The same tables as :meth:`summary`, as GitHub markdown (for RESULTS.md)."""
+    def _compact_table(self, metrics: Sequence[str]) -> tuple[list[str], list[list[str]]]:
+        mw = self.test == "mannwhitneyu"
+        eff = "A12" if mw else "r"
+        head = ["a", "b"] + [f"{m}: p Holm / {eff}" for m in metrics]
+        by = {(t.metric, t.a, t.b): t for t in self.pairwise}
+        rows = []
+        for a, b in _pairs(self.labels):
+            cells = []
+            for m in metrics:
+                t = by[(m, a, b)]
+                e = t.result.a12 if mw else t.result.rank_biserial
+                cells.append(f"{_p(t.p_holm)} / {e:.2f}")
+            rows.append([a, b] + cells)
+        return head, rows
+
+    def to_markdown(self, compact: bool = True) -> str:
+        """The tables of :meth:`summary` as GitHub markdown (for RESULTS.md).
+
+        With ``compact`` the main metric has the full table and the other metrics one
+        table of Holm-corrected p-values and effect sizes (one row per pair).
+        """
         parts = [self._header().replace("\n", "; "), _md_table(*self._preset_table())]
-        for m in self.metrics:
-            parts.append(f"Pairwise tests on `{m}`:\n\n" + _md_table(*self._test_table(m)))
+        parts.append(f"Pairwise tests on `{self.metric}`:\n\n"
+                     + _md_table(*self._test_table(self.metric)))
+        others = [m for m in self.metrics if m != self.metric]
+        if compact and others:
+            parts.append("Other metrics (p Holm / effect size):\n\n"
+                         + _md_table(*self._compact_table(others)))
+        else:
+            for m in others:
+                parts.append(f"Pairwise tests on `{m}`:\n\n" + _md_table(*self._test_table(m)))
         if self.all_succeeded():
             parts.append("Every seed of every preset found a path (no success-rate tests).")
         else:

@@ -146,7 +146,10 @@ def test_compare_tests_are_those_of_the_per_seed_values(comparison):
     assert rows["sga"]["success_rate"] == ok.mean()
     text = c.summary()
     assert "pairwise tests on length" in text and "imga" in text
-    assert "| sga | imga |" in c.to_markdown()
+    md = c.to_markdown()
+    assert "| sga | imga |" in md and "turns: p Holm / A12" in md
+    assert md.count("| sga | imga |") == 2  # full table of length + compact table
+    assert c.to_markdown(compact=False).count("| sga | imga |") == len(c.metrics)
 
 
 def test_compare_json_layout(comparison):
