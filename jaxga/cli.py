@@ -1,7 +1,9 @@
 """The ``jaxga`` command line.
 
 ``jaxga optimum`` prints the exact 8-connected and any-angle optima of a map
-(SPEC 11, reference optima); ``jaxga maps`` lists the built-in maps. Bad input (a missing
+(SPEC 11, reference optima); ``jaxga run`` runs a preset for many seeds; ``jaxga
+compare`` compares presets with statistical tests (:mod:`jaxga.compare`); ``jaxga maps``
+lists the built-in maps. Bad input (a missing
 or malformed file, a start or goal off the map or blocked, an unreachable goal, an
 unknown corner rule) ends with a one-line message on stderr and a non-zero exit status,
 never a Python traceback.
