@@ -56,6 +56,14 @@ def _load_grid(args: argparse.Namespace):
     return info, info.grid.check_endpoints()
 
 
+def _write_json(path: str, obj) -> None:
+    """Write ``obj`` as one line of JSON to ``path`` and say so on stdout."""
+    with open(path, "w", encoding="utf-8") as f:
+        json.dump(obj, f)
+        f.write("\n")
+    print(f"wrote {path}")
+
+
 def _xy_list(path) -> list[list[int]]:
     return [[int(x), int(y)] for x, y in path]
 
@@ -87,10 +95,7 @@ def cmd_optimum(args: argparse.Namespace) -> int:
             "any_angle_length": float(any_angle.length),
             "any_angle_path": _xy_list(any_angle.path),
         }
-        with open(args.json, "w", encoding="utf-8") as f:
-            json.dump(out, f)
-            f.write("\n")
-        print(f"wrote {args.json}")
+        _write_json(args.json, out)
     return 0
 
 
@@ -146,10 +151,7 @@ def cmd_run(args: argparse.Namespace) -> int:
     )
     print(result.summary())
     if args.json:
-        with open(args.json, "w", encoding="utf-8") as f:
-            json.dump(result.to_json(), f)
-            f.write("\n")
-        print(f"wrote {args.json}")
+        _write_json(args.json, result.to_json())
     if args.plot:
         from jaxga.plot import plot_result
 
@@ -189,10 +191,7 @@ def cmd_compare(args: argparse.Namespace) -> int:
                    corner_rule=args.corner_rule, sets=args.set or ())
     print(comp.summary())
     if args.json:
-        with open(args.json, "w", encoding="utf-8") as f:
-            json.dump(comp.to_json(), f)
-            f.write("\n")
-        print(f"wrote {args.json}")
+        _write_json(args.json, comp.to_json())
     if args.plot:
         from jaxga.plot import plot_comparison
 

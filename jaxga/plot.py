@@ -229,10 +229,15 @@ def plot_comparison(comparison, out: str | Path | None = None, metric: str | Non
     a1.set_title(f"{metric} on {next(iter(comparison.results.values())).map_name}")
     plot_seed_scatter(comparison, y=metric, x="convergence_generation", ax=a2)
     a2.set_title(f"{len(next(iter(comparison.results.values())).seeds)} seeds per preset")
+    return _finish(fig, out)
+
+
+def _finish(fig, out: str | Path | None):
+    """Lay the figure out; with ``out``, save it there (110 dpi) and close it."""
     fig.tight_layout()
     if out is not None:
         fig.savefig(out, dpi=110)
-        plt.close(fig)
+        _pyplot().close(fig)
     return fig
 
 
@@ -244,8 +249,4 @@ def plot_result(result, grid: Grid | str, out: str | Path | None = None):
     if result.history["best"].shape[1]:
         plot_convergence(result.history, ax=a2)
     a2.set_title(f"{len(result.seeds)} seeds")
-    fig.tight_layout()
-    if out is not None:
-        fig.savefig(out, dpi=110)
-        plt.close(fig)
-    return fig
+    return _finish(fig, out)
