@@ -203,6 +203,18 @@ def test_paired_wilcoxon_option(comparison):
         compare_results({"sga": comparison.results["sga"], "imga": other}, test="wilcoxon")
 
 
+def test_compare_variants_of_one_preset_by_label(comparison, grid):
+    """A mapping label -> (preset, overrides): one preset with two mutation rates, the
+    paired design the Wilcoxon option is for; per-label overrides win over common ones."""
+    c = compare({"sga": "sga", "sga pm 0.9": ("sga", {"mutation__probability": 0.9})},
+                grid, seeds=SEEDS, test="wilcoxon", **SMALL)
+    assert c.labels == ["sga", "sga pm 0.9"] and c.test == "wilcoxon"
+    np.testing.assert_allclose(c.results["sga"].length, comparison.results["sga"].length)
+    alone = api.run("sga", grid, seeds=SEEDS, mutation__probability=0.9, **SMALL)
+    np.testing.assert_array_equal(c.results["sga pm 0.9"].cells, alone.cells)
+    assert c.results["sga pm 0.9"].config["mutation.probability"] == 0.9
+
+
 def test_compare_rejects_bad_requests(comparison, grid):
     with pytest.raises(ParameterError, match="unknown metric"):
         compare(["sga", "imga"], grid, seeds=2, metric="speed")
