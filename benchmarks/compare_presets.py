@@ -1,7 +1,7 @@
 """All six presets compared on two classic maps and one Moving AI map, with statistics.
 
     python benchmarks/compare_presets.py [--seeds 100] [--maps a,b] [--presets a,b]
-        [--cache DIR] [--report-only] [--no-write]
+        [--cache DIR] [--report-only] [--no-write] [--plot-dir DIR]
 
 Issue 5, must show: every preset at its preset settings, 100 seeds each, on
 ``classic_ga_gapp3_20x20`` and ``routeplanning_yangbo_20x20`` (corner rule ``free``, as
@@ -70,8 +70,9 @@ def run_missing(maps, presets, seeds: int, cache: Path) -> None:
                  f"compile {t['compile_s']:.1f} s, total {t['total_s']:.1f} s")
 
 
-def report(maps, presets, seeds: int, cache: Path, write: bool) -> None:
-    """One RESULTS.md section per map whose presets are all cached."""
+def report(maps, presets, seeds: int, cache: Path, write: bool,
+           plot_dir: Path | None = None) -> None:
+    """One RESULTS.md section per map (the presets that finished; the others named)."""
     from jaxga.compare import compare_results
 
     missing_all = []
@@ -88,6 +89,8 @@ def report(maps, presets, seeds: int, cache: Path, write: bool) -> None:
         if len(results) < 2:
             continue
         comp = compare_results(results, metric="length", metrics=METRICS)
+        if plot_dir is not None:
+            _plots(comp, map_name, plot_dir)
         note = (f"{seeds} seeds per preset (seeds 0..{seeds - 1}), every preset at its "
                 f"preset settings (its own population and generations), corner rule "
                 f"`{MAPS[map_name]}`. Gap 8-conn = raw (8-connected) length / exact "
@@ -108,6 +111,22 @@ def report(maps, presets, seeds: int, cache: Path, write: bool) -> None:
         print("missing batches: " + "; ".join(missing_all), file=sys.stderr)
 
 
+def _plots(comp, map_name: str, plot_dir: Path) -> None:
+    """Box plots + per-seed scatter, and the diversity curves (MPMGA Fig. 16), as PNGs."""
+    import matplotlib.pyplot as plt
+
+    from jaxga.plot import plot_comparison, plot_diversity
+
+    plot_dir.mkdir(parents=True, exist_ok=True)
+    plot_comparison(comp, plot_dir / f"compare_{map_name}.png")
+    ax = plot_diversity(comp, relative=True)
+    ax.set_title(f"population diversity on {map_name}")
+    ax.figure.tight_layout()
+    ax.figure.savefig(plot_dir / f"diversity_{map_name}.png", dpi=110)
+    plt.close(ax.figure)
+    print(f"wrote plots to {plot_dir}")
+
+
 def main() -> None:
     ap = argparse.ArgumentParser(description=__doc__,
                                  formatter_class=argparse.RawDescriptionHelpFormatter)
@@ -117,6 +136,7 @@ def main() -> None:
     ap.add_argument("--cache", default="/tmp/jaxga_compare_presets")
     ap.add_argument("--report-only", action="store_true")
     ap.add_argument("--no-write", action="store_true")
+    ap.add_argument("--plot-dir", help="also write box plots and diversity curves here")
     args = ap.parse_args()
     maps = [m for m in args.maps.split(",") if m]
     presets = [p for p in args.presets.split(",") if p]
@@ -126,7 +146,8 @@ def main() -> None:
     cache = Path(args.cache)
     if not args.report_only:
         run_missing(maps, presets, args.seeds, cache)
-    report(maps, presets, args.seeds, cache, write=not args.no_write)
+    report(maps, presets, args.seeds, cache, write=not args.no_write,
+           plot_dir=Path(args.plot_dir) if args.plot_dir else None)
 
 
 if __name__ == "__main__":
