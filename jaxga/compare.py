@@ -98,6 +98,7 @@ class PairTest:
     median_b: float
 
     def to_json(self) -> dict[str, Any]:
+        """One entry of the ``pairwise`` / ``success_tests`` lists of the JSON layout."""
         r = self.result
         return {"metric": self.metric, "a": self.a, "b": self.b, "test": r.test,
                 "statistic": _num(r.statistic), "p_value": _num(r.p_value),
@@ -137,14 +138,17 @@ class Comparison:
 
     @property
     def labels(self) -> list[str]:
+        """The preset labels, in the order given."""
         return list(self.results)
 
     @property
     def optimum(self) -> float:
+        """The exact 8-connected optimum of the map (under its corner rule)."""
         return next(iter(self.results.values())).optimum
 
     @property
     def any_angle_optimum(self) -> float:
+        """The exact any-angle optimum (lower bound of post-optimised lengths)."""
         return next(iter(self.results.values())).any_angle_optimum
 
     def values(self, label: str, metric: str | None = None) -> np.ndarray:
@@ -274,6 +278,7 @@ class Comparison:
         return "\n\n".join(parts)
 
     def all_succeeded(self) -> bool:
+        """True if every seed of every preset found a feasible path."""
         return all(bool(r.success.all()) for r in self.results.values())
 
     def to_json(self) -> dict[str, Any]:
