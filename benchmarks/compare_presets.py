@@ -5,7 +5,9 @@
 
 Issue 5, must show: every preset at its preset settings, 100 seeds each, on
 ``classic_ga_gapp3_20x20`` and ``routeplanning_yangbo_20x20`` (corner rule ``free``, as
-the papers) and the Moving AI map ``random-32-32-20`` (corner rule ``strict``). Per map:
+the papers) and the Moving AI map ``random-32-32-20`` (corner rule ``strict``, the Moving
+AI convention; its corner (0, 0) is blocked, so the endpoints are those of the longest
+scenario of its ``.scen`` file, as in ``benchmarks/feasibility.py``). Per map:
 the per-preset summary (mean / sd / min / max of the post-optimised length, gap of the raw
 path to the exact 8-connected optimum and of the post-optimised path to the any-angle
 optimum, success rate, seconds per run after compilation) and the pairwise two-sided
@@ -38,6 +40,28 @@ PRESETS = ("sga", "imga", "agacd", "iga_zhang", "mpmga", "iga_zhu")
 METRICS = ("length", "raw_length", "turns", "convergence_generation")
 
 
+def _grid(map_name: str):
+    """The map name itself for the classic maps (their own endpoints); for the Moving AI
+    map a Grid with the endpoints of its longest scenario."""
+    if not map_name.startswith("random-"):
+        return map_name
+    from jaxga.maps import load_map
+    from jaxga.maps.builtin import builtin_scenarios
+
+    scen = max(builtin_scenarios(map_name), key=lambda s: s.optimal_length)
+    return scen.apply(load_map(map_name, corner_rule=MAPS[map_name]))
+
+
+def _label(map_name: str) -> str:
+    if not map_name.startswith("random-"):
+        return map_name
+    from jaxga.maps.builtin import builtin_scenarios
+
+    scen = max(builtin_scenarios(map_name), key=lambda s: s.optimal_length)
+    return (f"{map_name} (longest scenario {scen.start} -> {scen.goal}, "
+            f"optimal {scen.optimal_length:.4f})")
+
+
 def _cache_file(cache: Path, map_name: str, preset: str, seeds: int) -> Path:
     return cache / f"{map_name}__{preset}__{seeds}.pkl"
 
@@ -61,7 +85,8 @@ def run_missing(maps, presets, seeds: int, cache: Path) -> None:
                 _log(f"{map_name} {preset}: cached")
                 continue
             _log(f"{map_name} {preset}: running {seeds} seeds")
-            r = run(preset, map_name, seeds=seeds, corner_rule=MAPS[map_name])
+            r = run(preset, _grid(map_name), seeds=seeds, corner_rule=MAPS[map_name])
+            r.map_name = _label(map_name)
             tmp = f.with_suffix(".tmp")
             tmp.write_bytes(pickle.dumps(r))
             tmp.replace(f)
