@@ -1,12 +1,14 @@
 """jaxga: genetic-algorithm path planning for mobile robots on grid maps, in JAX."""
 
 from jaxga.api import Result, run, sweep
+from jaxga.compare import Comparison, compare
 from jaxga.errors import EndpointError, JaxgaError, MapFormatError, NoPathError, ParameterError
 from jaxga.grid import CORNER_RULES, Grid
 from jaxga.replan import replan
 
 __all__ = [
     "CORNER_RULES",
+    "Comparison",
     "EndpointError",
     "Grid",
     "JaxgaError",
@@ -14,6 +16,7 @@ __all__ = [
     "NoPathError",
     "ParameterError",
     "Result",
+    "compare",
     "replan",
     "run",
     "sweep",

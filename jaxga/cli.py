@@ -1,10 +1,13 @@
 """The ``jaxga`` command line.
 
 ``jaxga optimum`` prints the exact 8-connected and any-angle optima of a map
-(SPEC 11, reference optima); ``jaxga maps`` lists the built-in maps. Bad input (a missing
-or malformed file, a start or goal off the map or blocked, an unreachable goal, an
-unknown corner rule) ends with a one-line message on stderr and a non-zero exit status,
-never a Python traceback.
+(SPEC 11, reference optima); ``jaxga run`` runs a preset for many seeds; ``jaxga doe``
+runs a designed experiment (:mod:`jaxga.doe`); ``jaxga compare`` compares presets with
+statistical tests (:mod:`jaxga.compare`); ``jaxga replan`` re-plans around new obstacles
+(:mod:`jaxga.replan`); ``jaxga presets`` and ``jaxga maps`` list the presets and the
+built-in maps. Bad input (a missing or malformed file, a start or goal off the map or
+blocked, an unreachable goal, an unknown corner rule) ends with a one-line message on
+stderr and a non-zero exit status, never a Python traceback.
 """
 
 from __future__ import annotations
@@ -54,6 +57,14 @@ def _load_grid(args: argparse.Namespace):
     return info, info.grid.check_endpoints()
 
 
+def _write_json(path: str, obj) -> None:
+    """Write ``obj`` as one line of JSON to ``path`` and say so on stdout."""
+    with open(path, "w", encoding="utf-8") as f:
+        json.dump(obj, f)
+        f.write("\n")
+    print(f"wrote {path}")
+
+
 def _xy_list(path) -> list[list[int]]:
     return [[int(x), int(y)] for x, y in path]
 
@@ -85,10 +96,7 @@ def cmd_optimum(args: argparse.Namespace) -> int:
             "any_angle_length": float(any_angle.length),
             "any_angle_path": _xy_list(any_angle.path),
         }
-        with open(args.json, "w", encoding="utf-8") as f:
-            json.dump(out, f)
-            f.write("\n")
-        print(f"wrote {args.json}")
+        _write_json(args.json, out)
     return 0
 
 
@@ -144,10 +152,7 @@ def cmd_run(args: argparse.Namespace) -> int:
     )
     print(result.summary())
     if args.json:
-        with open(args.json, "w", encoding="utf-8") as f:
-            json.dump(result.to_json(), f)
-            f.write("\n")
-        print(f"wrote {args.json}")
+        _write_json(args.json, result.to_json())
     if args.plot:
         from jaxga.plot import plot_result
 
@@ -197,6 +202,43 @@ def cmd_doe(args: argparse.Namespace) -> int:
 
         plt.close(ax.figure)
         print(f"wrote {args.plot}")
+def cmd_compare(args: argparse.Namespace) -> int:
+    """``jaxga compare``: several presets on one map with the same seeds; per-preset
+    summary, pairwise tests with effect sizes (Holm-corrected), JSON, box plots."""
+    from jaxga.compare import TESTS, check_metric, compare
+    from jaxga.errors import ParameterError
+
+    presets = [p.strip() for p in args.presets.split(",") if p.strip()]
+    check_metric(args.metric)
+    if args.test not in TESTS:
+        raise ParameterError(f"unknown test {args.test!r}; choose from {', '.join(TESTS)}")
+    if args.corner_rule is not None:
+        from jaxga.grid import check_corner_rule
+
+        check_corner_rule(args.corner_rule)
+    grid = args.map
+    if args.start is not None or args.goal is not None:
+        from jaxga.maps import load_map
+        from jaxga.presets import load_preset
+
+        grid = load_map(args.map, start=args.start, goal=args.goal, corner_rule=(
+            args.corner_rule or load_preset(presets[0])["map.corner_rule"]))
+    progress = None if args.quiet else (lambda label: print(f"running {label} ...",
+                                                              file=sys.stderr, flush=True))
+    comp = compare(presets, grid, seeds=args.seeds, metric=args.metric, test=args.test,
+                   progress=progress, generations=args.generations,
+                   corner_rule=args.corner_rule, sets=args.set or ())
+    print(comp.summary())
+    if args.json:
+        _write_json(args.json, comp.to_json())
+    if args.plot:
+        from jaxga.plot import plot_comparison
+
+        plot_comparison(comp, args.plot)
+        print(f"wrote {args.plot}")
+    if not any(r.success.any() for r in comp.results.values()):
+        print("jaxga: no path: no preset found a path", file=sys.stderr)
+        return EXIT_NO_PATH
     return 0
 
 
@@ -284,10 +326,7 @@ def cmd_replan(args: argparse.Namespace) -> int:
     )
     print(result.summary())
     if args.json:
-        with open(args.json, "w", encoding="utf-8") as f:
-            json.dump(result.to_json(), f)
-            f.write("\n")
-        print(f"wrote {args.json}")
+        _write_json(args.json, result.to_json())
     if not result.success:
         print(f"jaxga: no path: {result.reason}", file=sys.stderr)
         return EXIT_NO_PATH
@@ -381,6 +420,26 @@ def build_parser() -> argparse.ArgumentParser:
     p.add_argument("--plot", metavar="OUT.png", help="main-effects plot")
     p.add_argument("--quiet", action="store_true", help="no progress lines")
     p.set_defaults(func=cmd_doe)
+    p = sub.add_parser("compare", help="compare presets on a map with statistical tests")
+    p.add_argument("--presets", required=True, metavar="A,B,...",
+                   help="comma-separated preset names (jaxga presets) or TOML files")
+    _add_map_arguments(p)
+    p.add_argument("--seeds", type=int, default=30,
+                   help="seeded runs per preset, the same seeds for all (default 30)")
+    p.add_argument("--metric", default="length",
+                   help="main metric: length (post-optimised, default), raw_length, gap, "
+                   "raw_gap, turns, angle_sum, convergence_generation")
+    p.add_argument("--test", default="mannwhitneyu",
+                   help="mannwhitneyu (default; independent samples) or wilcoxon (paired "
+                   "by seed; only when the presets share random numbers)")
+    p.add_argument("--generations", type=int, help="override every preset's generations")
+    p.add_argument("--set", action="append", metavar="KEY=VALUE",
+                   help="override a configuration key in every preset")
+    p.add_argument("--json", metavar="OUT", help="write the comparison as JSON")
+    p.add_argument("--plot", metavar="OUT.png",
+                   help="box plots of the metric per preset (optima as reference lines)")
+    p.add_argument("--quiet", action="store_true", help="no progress messages")
+    p.set_defaults(func=cmd_compare)
 
     p = sub.add_parser("presets", help="list the presets and their papers")
     p.set_defaults(func=cmd_presets)
@@ -415,7 +474,7 @@ def main(argv: Sequence[str] | None = None) -> int:
     """Entry point of the ``jaxga`` console script; returns the exit status."""
     parser = build_parser()
     args = parser.parse_args(argv)
-    if args.func in (cmd_run, cmd_doe):
+    if args.func in (cmd_run, cmd_doe, cmd_compare):
         use_compilation_cache()
     try:
         return args.func(args)

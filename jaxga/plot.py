@@ -1,4 +1,7 @@
-"""Matplotlib figures: the map with paths, and convergence curves with sd bands.
+"""Matplotlib figures: the map with paths, convergence and diversity curves, comparisons.
+
+Every function takes ``ax=None`` (a new figure when None) and returns the axes (the
+``plot_result`` / ``plot_comparison`` figures return the figure).
 
 Maps are drawn with ``origin="lower"`` (row 0 at the bottom, SPEC 1); cell ``(x, y)`` is
 the unit square centred on ``(x, y)``.
@@ -13,7 +16,8 @@ import numpy as np
 
 from jaxga.grid import Grid
 
-__all__ = ["plot_convergence", "plot_main_effects", "plot_map", "plot_result"]
+__all__ = ["plot_box", "plot_comparison", "plot_convergence", "plot_diversity",
+           "plot_main_effects", "plot_map", "plot_paths", "plot_result", "plot_seed_scatter"]
 
 
 def _pyplot():
@@ -67,28 +71,173 @@ def plot_convergence(histories: dict[str, np.ndarray], ax=None, label: str = "")
     return ax
 
 
-def plot_result(result, grid: Grid | str, out: str | Path | None = None):
-    """Map with the best seed's raw and post-optimised paths, and the convergence curve."""
-    plt = _pyplot()
-    if not isinstance(grid, Grid):
-        from jaxga.maps import load_map
+def plot_paths(result, grid: Grid | str, seed: int | None = None, ax=None):
+    """The map with one run's raw and post-optimised paths and the start/goal markers.
 
-        grid = load_map(grid, corner_rule=result.corner_rule)
-    fig, (a1, a2) = plt.subplots(1, 2, figsize=(10, 4.6))
+    ``seed`` is an index into ``result.seeds`` (default: the successful run with the
+    shortest post-optimised length). Raw = the GA's own best path, post-optimised = after
+    the preset's post-optimiser (SPEC 9); the legend gives both lengths.
+    """
+    grid = _as_grid(grid, result.corner_rule)
     paths = []
-    if result.success.any():
-        i = int(np.nanargmin(np.where(result.success, result.length, np.nan)))
-        paths = [(result.path(i, raw=True), f"raw ({result.raw_length[i]:.2f})"),
-                 (result.path(i), f"post-optimised ({result.length[i]:.2f})")]
-    plot_map(grid, paths, ax=a1)
-    a1.set_title(f"{result.preset} on {result.map_name}")
-    if result.history["best"].shape[1]:
-        plot_convergence(result.history, ax=a2)
-    a2.set_title(f"{len(result.seeds)} seeds")
+    if seed is None and result.success.any():
+        seed = int(np.nanargmin(np.where(result.success, result.length, np.nan)))
+    if seed is not None and result.success[seed]:
+        paths = [(result.path(seed, raw=True), f"raw ({result.raw_length[seed]:.2f})"),
+                 (result.path(seed), f"post-optimised ({result.length[seed]:.2f})")]
+    ax = plot_map(grid, paths, ax=ax)
+    title = f"{result.preset} on {result.map_name}"
+    if seed is not None:
+        title += f", seed {int(result.seeds[seed])}"
+    ax.set_title(title)
+    return ax
+
+
+def _as_grid(grid: Grid | str, corner_rule: str) -> Grid:
+    if isinstance(grid, Grid):
+        return grid
+    from jaxga.maps import load_map
+
+    return load_map(grid, corner_rule=corner_rule)
+
+
+def _labelled(results) -> dict:
+    """A Result, a sequence of Results, a mapping label -> Result, or a Comparison."""
+    if hasattr(results, "results") and isinstance(results.results, dict):  # Comparison
+        return dict(results.results)
+    if hasattr(results, "history"):  # one Result
+        return {results.preset: results}
+    if isinstance(results, dict):
+        return dict(results)
+    return {r.preset: r for r in results}
+
+
+def plot_diversity(results, ax=None, per_run: bool = False, relative: bool = False):
+    """Population diversity per generation: the population's fitness sd (MPMGA Fig. 16).
+
+    One curve per algorithm on one axes (``results``: a Result, a mapping label -> Result
+    or a :class:`~jaxga.compare.Comparison`): the mean over seeds of the per-generation
+    fitness standard deviation with a +-1 sd band over seeds, or with ``per_run`` every
+    seed's curve (thin lines). MPMGA measures diversity by this sd. Fitness functions
+    differ between presets, so raw sds of different presets are on different scales;
+    ``relative`` divides each generation's sd by the population mean fitness (the
+    coefficient of variation), which is scale-free.
+    """
+    plt = _pyplot()
+    if ax is None:
+        _, ax = plt.subplots(figsize=(5.5, 3.5))
+    for i, (label, r) in enumerate(_labelled(results).items()):
+        sd = np.asarray(r.history["std"], float)
+        if relative:
+            sd = sd / np.asarray(r.history["mean"], float)
+        gens = np.arange(1, sd.shape[1] + 1)
+        colour = f"C{i % 10}"
+        if per_run:
+            for j, row in enumerate(sd):
+                ax.plot(gens, row, color=colour, lw=0.6, alpha=0.5,
+                        label=label if j == 0 else None)
+        else:
+            mean, spread = sd.mean(axis=0), sd.std(axis=0)
+            ax.plot(gens, mean, color=colour, label=label)
+            ax.fill_between(gens, mean - spread, mean + spread, color=colour, alpha=0.2)
+    ax.set_xlabel("generation")
+    ax.set_ylabel("fitness sd / mean fitness" if relative else "population fitness sd")
+    ax.legend(fontsize=7)
+    return ax
+
+
+def plot_box(data, metric: str | None = None, ax=None, reference: dict | None = None):
+    """Box plots of a metric, one box per preset (failed seeds left out).
+
+    ``data`` is a :class:`~jaxga.compare.Comparison` (``metric`` defaults to its main
+    metric, and the optima are drawn as horizontal reference lines: the any-angle
+    optimum for post-optimised lengths, the exact 8-connected optimum for raw and
+    post-optimised lengths, 0 for gaps) or a mapping label -> per-seed values (NaN =
+    failed) with optional ``reference`` lines ``{label: value}``.
+    """
+    plt = _pyplot()
+    if ax is None:
+        n = len(data.results) if hasattr(data, "results") else len(data)
+        _, ax = plt.subplots(figsize=(1.1 * max(4, n) + 1, 3.8))
+    if hasattr(data, "results"):
+        metric = metric or data.metric
+        values = {k: data.values(k, metric) for k in data.labels}
+        if reference is None:
+            reference = {}
+            if metric == "length":
+                reference["any-angle optimum"] = data.any_angle_optimum
+            if metric in ("length", "raw_length"):
+                reference["8-connected optimum"] = data.optimum
+            if metric in ("gap", "raw_gap"):
+                reference["optimum"] = 0.0
+    else:
+        values = {k: np.asarray(v, float) for k, v in data.items()}
+        metric = metric or "value"
+    clean = [v[np.isfinite(v)] for v in values.values()]
+    ax.boxplot(clean, patch_artist=True, tick_labels=list(values),
+               boxprops={"facecolor": "#cfe2f3"}, medianprops={"color": "k", "gid": "median"})
+    for i, (label, y) in enumerate((reference or {}).items()):
+        ax.axhline(y, color=f"C{(i + 3) % 10}", ls="--", lw=1, label=f"{label} ({y:.4g})")
+    if reference:
+        ax.legend(fontsize=7)
+    ax.set_xlabel("preset")
+    ax.set_ylabel(metric.replace("_", " "))
+    return ax
+
+
+def plot_seed_scatter(results, y: str = "length", x: str = "seed", ax=None):
+    """Per-seed results, one series per algorithm (AGACD Figs. 8-10).
+
+    ``x = "seed"`` puts the seed on the horizontal axis (AGACD plots the best fitness,
+    the convergence generation and the time of each of its 20 runs against the run
+    number);
+    otherwise ``x`` is a second metric, e.g. ``x="convergence_generation"`` for length
+    against convergence speed. ``y`` / ``x`` are :data:`jaxga.compare.METRICS` or
+    ``"fitness"``; failed seeds are not drawn. (Per-run times do not exist: the seeds
+    of a preset run in one vectorised call.)
+    """
+    from jaxga.compare import metric_values
+
+    plt = _pyplot()
+    if ax is None:
+        _, ax = plt.subplots(figsize=(5.5, 3.5))
+    markers = "os^vDP*Xh<>"
+    for i, (label, r) in enumerate(_labelled(results).items()):
+        yv = metric_values(r, y)
+        xv = np.asarray(r.seeds, float) if x == "seed" else metric_values(r, x)
+        ok = np.isfinite(xv) & np.isfinite(yv)
+        ax.scatter(xv[ok], yv[ok], s=18, marker=markers[i % len(markers)], label=label,
+                   alpha=0.8)
+    if x in ("seed", "convergence_generation", "turns"):
+        from matplotlib.ticker import MaxNLocator
+
+        ax.xaxis.set_major_locator(MaxNLocator(integer=True))
+    ax.set_xlabel(x.replace("_", " "))
+    ax.set_ylabel(y.replace("_", " "))
+    ax.legend(fontsize=7)
+    return ax
+
+
+def plot_comparison(comparison, out: str | Path | None = None, metric: str | None = None):
+    """``jaxga compare --plot``: box plots of the metric (optima as reference lines) and
+    the per-seed scatter of the metric against the convergence generation."""
+    plt = _pyplot()
+    n = len(comparison.results)
+    fig, (a1, a2) = plt.subplots(1, 2, figsize=(max(10, 1.2 * n + 6), 4.2))
+    metric = metric or comparison.metric
+    plot_box(comparison, metric, ax=a1)
+    a1.set_title(f"{metric} on {next(iter(comparison.results.values())).map_name}")
+    plot_seed_scatter(comparison, y=metric, x="convergence_generation", ax=a2)
+    a2.set_title(f"{len(next(iter(comparison.results.values())).seeds)} seeds per preset")
+    return _finish(fig, out)
+
+
+def _finish(fig, out: str | Path | None):
+    """Lay the figure out; with ``out``, save it there (110 dpi) and close it."""
     fig.tight_layout()
     if out is not None:
         fig.savefig(out, dpi=110)
-        plt.close(fig)
+        _pyplot().close(fig)
     return fig
 
 
@@ -124,3 +273,12 @@ def plot_main_effects(doe_json: dict, ax=None):
                  fontsize=9)
     ax.legend(fontsize=7)
     return ax
+def plot_result(result, grid: Grid | str, out: str | Path | None = None):
+    """Map with the best seed's raw and post-optimised paths, and the convergence curve."""
+    plt = _pyplot()
+    fig, (a1, a2) = plt.subplots(1, 2, figsize=(10, 4.6))
+    plot_paths(result, grid, ax=a1)
+    if result.history["best"].shape[1]:
+        plot_convergence(result.history, ax=a2)
+    a2.set_title(f"{len(result.seeds)} seeds")
+    return _finish(fig, out)

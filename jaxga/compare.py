@@ -1,0 +1,470 @@
+"""``jaxga.compare``: several presets on one map with the same seeds, with statistics.
+
+Issue 5 (comparisons). ``compare(presets, grid, seeds, **options) -> Comparison`` runs
+every preset with :func:`jaxga.api.run` and gives, per preset, the summary table of
+:meth:`Result.summary_rows` (AGACD Tables 8-9, Zhu & Pan Table 4), the success rate,
+the gap of the raw (8-connected) path to the exact 8-connected optimum and of the
+post-optimised path to the any-angle optimum, and the time per run; and, between every
+pair of presets, two-sided tests with effect sizes (:mod:`jaxga.stats`) on one or more
+metrics, Holm-corrected over the pairs of each metric, plus Fisher's exact test on the
+success rates.
+
+Decisions recorded here (the issue leaves them open):
+
+* **Which test.** The default is the Mann-Whitney U test of independent samples. Running
+  every preset with the same seeds does not make the design paired: different
+  algorithms consume their random keys differently, so seed ``i`` of one preset and
+  seed ``i`` of another share no random numbers and their results are not correlated
+  (the seed is a label, not a shared experimental unit such as a problem instance).
+  The Wilcoxon signed-rank test (``test="wilcoxon"``) is offered for designs where
+  the pairing is real, e.g. the same preset with other dynamic parameters, whose runs
+  with the same seed start from the same initial population (common random numbers,
+  as :func:`jaxga.api.sweep` uses); it needs the same seeds in every preset.
+* **Failed seeds** (no feasible path) have no length: they are excluded from the tests
+  and summaries of every metric (for Wilcoxon the pair is dropped), and counted in the
+  success rate, which is compared separately by Fisher's exact test.
+* **Metrics.** ``length`` (post-optimised, the default), ``raw_length`` (the GA's own
+  8-connected path, before post-optimisation), ``gap``, ``raw_gap``, ``turns`` and
+  ``angle_sum`` (of the post-optimised path) and ``convergence_generation``. The
+  fitness is not offered: its definition differs between presets, so fitness values of
+  two presets are not comparable.
+* **Multiple comparisons.** Holm's step-down correction over the k(k-1)/2 pairs of each
+  metric separately (each metric answers its own question); Fisher tests likewise.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import math
+from collections.abc import Callable, Mapping, Sequence
+from typing import Any
+
+import numpy as np
+
+from jaxga.api import Result, run
+from jaxga.config import Config
+from jaxga.errors import ParameterError
+from jaxga.grid import Grid
+from jaxga.stats import TwoSampleTest, fisher_success, holm, mann_whitney, wilcoxon_paired
+
+__all__ = ["METRICS", "TESTS", "Comparison", "PairTest", "compare", "compare_results",
+           "metric_values"]
+
+METRICS = ("length", "raw_length", "gap", "raw_gap", "turns", "angle_sum",
+           "convergence_generation")
+TESTS = ("mannwhitneyu", "wilcoxon")
+DEFAULT_METRICS = ("length", "raw_length", "turns", "convergence_generation")
+
+PresetSpec = str | Config | tuple[str | Config, Mapping[str, Any]]
+
+
+def check_metric(metric: str) -> str:
+    """``metric`` if it is one of :data:`METRICS`, else a :class:`ParameterError`."""
+    if metric not in METRICS:
+        extra = (" (fitness is not comparable between presets: each defines its own)"
+                 if metric == "fitness" else "")
+        raise ParameterError(f"unknown metric {metric!r}{extra}; choose from "
+                             f"{', '.join(METRICS)}")
+    return metric
+
+
+def metric_values(result: Result, metric: str) -> np.ndarray:
+    """Per-seed values of ``metric`` (float), NaN for failed seeds.
+
+    ``metric`` is one of :data:`METRICS` or ``"fitness"`` (for plots of one preset's
+    runs; not for tests between presets).
+    """
+    if metric != "fitness":
+        check_metric(metric)
+    if metric in ("gap", "raw_gap"):
+        v = getattr(result, metric)
+    elif metric in ("turns", "angle_sum"):
+        v = result.metrics.get(metric, np.full(len(result.seeds), np.nan))
+    else:
+        v = getattr(result, metric)
+    return np.where(result.success, np.asarray(v, float), np.nan)
+
+
+@dataclasses.dataclass(frozen=True)
+class PairTest:
+    """One pairwise test between presets ``a`` and ``b`` on ``metric``."""
+
+    metric: str
+    a: str
+    b: str
+    result: TwoSampleTest
+    p_holm: float
+    median_a: float
+    median_b: float
+
+    def to_json(self) -> dict[str, Any]:
+        """One entry of the ``pairwise`` / ``success_tests`` lists of the JSON layout."""
+        r = self.result
+        return {"metric": self.metric, "a": self.a, "b": self.b, "test": r.test,
+                "statistic": _num(r.statistic), "p_value": _num(r.p_value),
+                "p_holm": _num(self.p_holm), "a12": _num(r.a12),
+                "rank_biserial": _num(r.rank_biserial), "n_a": r.n_a, "n_b": r.n_b,
+                "median_a": _num(self.median_a), "median_b": _num(self.median_b)}
+
+
+def _num(x: float) -> float | None:
+    return None if x is None or not math.isfinite(x) else float(x)
+
+
+def _time_per_run(r: Result) -> float:
+    t = r.timing
+    return (t["init_s"] + t["evolve_s"] + t["post_s"]) / max(1, len(r.seeds))
+
+
+def _stats(v: np.ndarray) -> tuple[float, float, float, float]:
+    v = v[np.isfinite(v)]
+    if v.size == 0:
+        return (math.nan,) * 4
+    return (float(v.mean()), float(v.std(ddof=1)) if v.size > 1 else 0.0,
+            float(v.min()), float(v.max()))
+
+
+@dataclasses.dataclass
+class Comparison:
+    """Results of several presets on one map, with pairwise tests (see module doc)."""
+
+    results: dict[str, Result]
+    metric: str
+    metrics: tuple[str, ...]
+    test: str
+    alpha: float
+    pairwise: list[PairTest]
+    success_tests: list[PairTest]
+
+    @property
+    def labels(self) -> list[str]:
+        """The preset labels, in the order given."""
+        return list(self.results)
+
+    @property
+    def optimum(self) -> float:
+        """The exact 8-connected optimum of the map (under its corner rule)."""
+        return next(iter(self.results.values())).optimum
+
+    @property
+    def any_angle_optimum(self) -> float:
+        """The exact any-angle optimum (lower bound of post-optimised lengths)."""
+        return next(iter(self.results.values())).any_angle_optimum
+
+    def values(self, label: str, metric: str | None = None) -> np.ndarray:
+        """Per-seed values of ``metric`` (default the main one) for ``label``; NaN = failed."""
+        return metric_values(self.results[label], metric or self.metric)
+
+    def tests(self, metric: str | None = None) -> list[PairTest]:
+        """The pairwise tests on ``metric`` (default the main one)."""
+        m = metric or self.metric
+        return [t for t in self.pairwise if t.metric == m]
+
+    def preset_rows(self) -> list[dict[str, Any]]:
+        """Per preset: success, mean / sd / min / max of the main metric, mean gaps, s/run."""
+        rows = []
+        for label, r in self.results.items():
+            mean, sd, lo, hi = _stats(self.values(label))
+            rows.append({
+                "label": label, "preset": r.preset, "n": int(len(r.seeds)),
+                "n_success": int(r.success.sum()),
+                "success_rate": float(r.success.mean()),
+                "mean": mean, "sd": sd, "min": lo, "max": hi,
+                "raw_gap": _stats(metric_values(r, "raw_gap"))[0],
+                "gap": _stats(metric_values(r, "gap"))[0],
+                "time_per_run_s": _time_per_run(r),
+                "population": r.population, "generations": r.generations,
+            })
+        return rows
+
+    def _preset_table(self) -> tuple[list[str], list[list[str]]]:
+        head = ["preset", "pop x gen", "success", f"{self.metric} mean", "sd", "min", "max",
+                "gap 8-conn", "gap any-angle", "s/run"]
+        rows = [[r["label"], f"{r['population']} x {r['generations']}",
+                 f"{r['n_success']}/{r['n']}", f"{r['mean']:.4f}", f"{r['sd']:.4f}",
+                 f"{r['min']:.4f}", f"{r['max']:.4f}", f"{100 * r['raw_gap']:.2f}%",
+                 f"{100 * r['gap']:.2f}%", f"{r['time_per_run_s']:.3f}"]
+                for r in self.preset_rows()]
+        return head, rows
+
+    def _test_table(self, metric: str) -> tuple[list[str], list[list[str]]]:
+        mw = self.test == "mannwhitneyu"
+        head = ["a", "b", "n a", "n b", "median a", "median b",
+                "U" if mw else "W+", "p", "p Holm", "A12" if mw else "-", "r rank-biserial",
+                f"p Holm < {self.alpha}"]
+        rows = []
+        for t in self.tests(metric):
+            r = t.result
+            rows.append([t.a, t.b, str(r.n_a), str(r.n_b), f"{t.median_a:.4f}",
+                         f"{t.median_b:.4f}", f"{r.statistic:.1f}", _p(r.p_value),
+                         _p(t.p_holm), f"{r.a12:.3f}" if mw else "-",
+                         f"{r.rank_biserial:+.3f}",
+                         "yes" if t.p_holm < self.alpha else "no"])
+        return head, rows
+
+    def _success_table(self) -> tuple[list[str], list[list[str]]]:
+        head = ["a", "b", "success a", "success b", "odds ratio", "p", "p Holm"]
+        rows = []
+        for t in self.success_tests:
+            ka = int(self.results[t.a].success.sum())
+            kb = int(self.results[t.b].success.sum())
+            rows.append([t.a, t.b, f"{ka}/{t.result.n_a}", f"{kb}/{t.result.n_b}",
+                         f"{t.result.statistic:.3g}", _p(t.result.p_value), _p(t.p_holm)])
+        return head, rows
+
+    def _header(self) -> str:
+        r = next(iter(self.results.values()))
+        test = ("two-sided Mann-Whitney U (independent samples), A12 = P(a > b) + "
+                "P(a = b)/2" if self.test == "mannwhitneyu" else
+                "two-sided Wilcoxon signed-rank (paired by seed)")
+        return (f"map {r.map_name} (corner rule {r.corner_rule!r}), {len(r.seeds)} seeds; "
+                f"optimum: 8-connected {self.optimum:.4f}, any-angle "
+                f"{self.any_angle_optimum:.4f}\ntests: {test}; failed seeds excluded; p "
+                f"Holm-corrected over the {len(self.tests())} pairs of each metric")
+
+    def summary(self, verbose: bool = False) -> str:
+        """Text tables: per preset, then the pairwise tests of every metric.
+
+        ``verbose`` adds each preset's full :meth:`Result.summary`.
+        """
+        parts = [self._header(), _text_table(*self._preset_table())]
+        for m in self.metrics:
+            parts.append(f"pairwise tests on {m}:\n" + _text_table(*self._test_table(m)))
+        if self.all_succeeded():
+            parts.append("every seed of every preset found a path (no success-rate tests)")
+        else:
+            parts.append("success rates (Fisher's exact test):\n"
+                         + _text_table(*self._success_table()))
+        if verbose:
+            parts += [r.summary() for r in self.results.values()]
+        return "\n\n".join(parts)
+
+    def _compact_table(self, metrics: Sequence[str]) -> tuple[list[str], list[list[str]]]:
+        mw = self.test == "mannwhitneyu"
+        eff = "A12" if mw else "r"
+        head = ["a", "b"] + [f"{m}: p Holm / {eff}" for m in metrics]
+        by = {(t.metric, t.a, t.b): t for t in self.pairwise}
+        rows = []
+        for a, b in _pairs(self.labels):
+            cells = []
+            for m in metrics:
+                t = by[(m, a, b)]
+                e = t.result.a12 if mw else t.result.rank_biserial
+                cells.append(f"{_p(t.p_holm)} / {e:.2f}")
+            rows.append([a, b] + cells)
+        return head, rows
+
+    def to_markdown(self, compact: bool = True) -> str:
+        """The tables of :meth:`summary` as GitHub markdown (for RESULTS.md).
+
+        With ``compact`` the main metric has the full table and the other metrics one
+        table of Holm-corrected p-values and effect sizes (one row per pair).
+        """
+        parts = [self._header().replace("\n", "; "), _md_table(*self._preset_table())]
+        parts.append(f"Pairwise tests on `{self.metric}`:\n\n"
+                     + _md_table(*self._test_table(self.metric)))
+        others = [m for m in self.metrics if m != self.metric]
+        if compact and others:
+            parts.append("Other metrics (p Holm / effect size):\n\n"
+                         + _md_table(*self._compact_table(others)))
+        else:
+            for m in others:
+                parts.append(f"Pairwise tests on `{m}`:\n\n" + _md_table(*self._test_table(m)))
+        if self.all_succeeded():
+            parts.append("Every seed of every preset found a path (no success-rate tests).")
+        else:
+            parts.append("Success rates (Fisher's exact test):\n\n"
+                         + _md_table(*self._success_table()))
+        return "\n\n".join(parts)
+
+    def all_succeeded(self) -> bool:
+        """True if every seed of every preset found a feasible path."""
+        return all(bool(r.success.all()) for r in self.results.values())
+
+    def to_json(self) -> dict[str, Any]:
+        """The ``--json`` layout of ``jaxga compare`` (NaN written as null)."""
+        r0 = next(iter(self.results.values()))
+        presets = {}
+        for row in self.preset_rows():
+            r = self.results[row["label"]]
+            presets[row["label"]] = {
+                "preset": r.preset, "population": r.population,
+                "generations": r.generations, "n_seeds": row["n"],
+                "n_success": row["n_success"], "success_rate": row["success_rate"],
+                "summary": {name: {"mean": _num(m), "sd": _num(s), "min": _num(lo),
+                                   "max": _num(hi)}
+                            for name, m, s, lo, hi in r.summary_rows()},
+                "time_per_run_s": row["time_per_run_s"], "timing": dict(r.timing),
+                "values": {m: [_num(x) for x in metric_values(r, m)] for m in self.metrics},
+            }
+        return {
+            "map": r0.map_name, "corner_rule": r0.corner_rule,
+            "seeds": [int(s) for s in r0.seeds], "optimum": _num(self.optimum),
+            "any_angle_optimum": _num(self.any_angle_optimum), "metric": self.metric,
+            "metrics": list(self.metrics), "test": self.test, "alpha": self.alpha,
+            "correction": "holm", "presets": presets,
+            "pairwise": [t.to_json() for t in self.pairwise],
+            "success_tests": [t.to_json() for t in self.success_tests],
+        }
+
+
+def _p(p: float) -> str:
+    if not math.isfinite(p):
+        return "nan"
+    return f"{p:.2e}" if p < 1e-3 else f"{p:.4f}"
+
+
+def _text_table(head: list[str], rows: list[list[str]]) -> str:
+    widths = [max(len(h), *(len(r[i]) for r in rows)) if rows else len(h)
+              for i, h in enumerate(head)]
+    lines = ["  ".join(h.rjust(w) if i else h.ljust(w) for i, (h, w) in
+                       enumerate(zip(head, widths, strict=True)))]
+    for r in rows:
+        lines.append("  ".join(c.rjust(w) if i else c.ljust(w) for i, (c, w) in
+                               enumerate(zip(r, widths, strict=True))))
+    return "\n".join(lines)
+
+
+def _md_table(head: list[str], rows: list[list[str]]) -> str:
+    out = ["| " + " | ".join(head) + " |",
+           "|" + "|".join("---:" if i else "---" for i in range(len(head))) + "|"]
+    out += ["| " + " | ".join(r) + " |" for r in rows]
+    return "\n".join(out)
+
+
+def _pairs(labels: Sequence[str]) -> list[tuple[str, str]]:
+    return [(a, b) for i, a in enumerate(labels) for b in labels[i + 1:]]
+
+
+def compare_results(
+    results: Mapping[str, Result],
+    *,
+    metric: str = "length",
+    metrics: Sequence[str] | None = None,
+    test: str = "mannwhitneyu",
+    alpha: float = 0.05,
+) -> Comparison:
+    """Pairwise statistics of results already computed (one :class:`Result` per label).
+
+    Args:
+        results: label -> Result, all on the same map with the same corner rule (the
+            optima must agree).
+        metric: the main metric (preset table and the first tests).
+        metrics: every metric to test (default ``metric`` then ``raw_length``, ``turns``,
+            ``convergence_generation``); see :data:`METRICS`.
+        test: ``"mannwhitneyu"`` (default, independent samples) or ``"wilcoxon"``
+            (paired by seed; needs the same seeds in every result).
+        alpha: the family-wise level the tables mark significance at (Holm).
+    """
+    if len(results) < 2:
+        raise ParameterError(f"a comparison needs at least two presets, got {len(results)}")
+    check_metric(metric)
+    if test not in TESTS:
+        raise ParameterError(f"unknown test {test!r}; choose from {', '.join(TESTS)}")
+    if metrics is None:
+        metrics = (metric,) + tuple(m for m in DEFAULT_METRICS if m != metric)
+    metrics = tuple(dict.fromkeys(check_metric(m) for m in metrics))
+    if metric not in metrics:
+        metrics = (metric,) + metrics
+    rs = list(results.values())
+    keys = {(r.map_name, r.corner_rule, r.optimum, r.any_angle_optimum) for r in rs}
+    if len(keys) > 1:
+        raise ParameterError("the results to compare are on different maps or corner rules: "
+                             + "; ".join(f"{k[0]} ({k[1]})" for k in sorted(keys, key=str)))
+    if test == "wilcoxon" and any(not np.array_equal(r.seeds, rs[0].seeds) for r in rs):
+        raise ParameterError("the Wilcoxon signed-rank test pairs runs by seed: every "
+                             "preset must have run the same seeds")
+    labels = list(results)
+    pairs = _pairs(labels)
+    pairwise: list[PairTest] = []
+    for m in metrics:
+        vals = {k: metric_values(results[k], m) for k in labels}
+        raw = [mann_whitney(vals[a], vals[b]) if test == "mannwhitneyu"
+               else wilcoxon_paired(vals[a], vals[b]) for a, b in pairs]
+        adj = holm([t.p_value for t in raw])
+        pairwise += [PairTest(m, a, b, t, float(p), _median(vals[a]), _median(vals[b]))
+                     for (a, b), t, p in zip(pairs, raw, adj, strict=True)]
+    fish = [fisher_success(int(results[a].success.sum()), len(results[a].seeds),
+                           int(results[b].success.sum()), len(results[b].seeds))
+            for a, b in pairs]
+    adj = holm([t.p_value for t in fish])
+    success_tests = [PairTest("success", a, b, t, float(p), float(results[a].success.mean()),
+                              float(results[b].success.mean()))
+                     for (a, b), t, p in zip(pairs, fish, adj, strict=True)]
+    return Comparison(results=dict(results), metric=metric, metrics=metrics, test=test,
+                      alpha=alpha, pairwise=pairwise, success_tests=success_tests)
+
+
+def _median(v: np.ndarray) -> float:
+    v = v[np.isfinite(v)]
+    return float(np.median(v)) if v.size else math.nan
+
+
+def _normalise_presets(presets: Sequence[PresetSpec] | Mapping[str, PresetSpec]
+                       ) -> dict[str, tuple[str | Config, dict[str, Any]]]:
+    if isinstance(presets, Mapping):
+        items = list(presets.items())
+    else:
+        items = []
+        for p in presets:
+            base = p[0] if isinstance(p, tuple) else p
+            items.append((base if isinstance(base, str) else str(base["name"]), p))
+    out: dict[str, tuple[str | Config, dict[str, Any]]] = {}
+    for label, spec in items:
+        if label in out:
+            raise ParameterError(f"preset {label!r} given twice; use a mapping "
+                                 "{label: (preset, overrides)} to compare variants")
+        preset, ov = spec if isinstance(spec, tuple) else (spec, {})
+        out[str(label)] = (preset, dict(ov))
+    return out
+
+
+def compare(
+    presets: Sequence[PresetSpec] | Mapping[str, PresetSpec],
+    grid: Grid | str,
+    seeds: int | Sequence[int] = 30,
+    *,
+    metric: str = "length",
+    metrics: Sequence[str] | None = None,
+    test: str = "mannwhitneyu",
+    alpha: float = 0.05,
+    progress: Callable[[str], None] | None = None,
+    **common_options: Any,
+) -> Comparison:
+    """Run every preset on ``grid`` with the same ``seeds`` and compare them.
+
+    Args:
+        presets: preset names / TOML files / :class:`Config`s, or a mapping label ->
+            preset or ``(preset, overrides)`` to compare variants of one preset.
+        grid: a :class:`Grid`, map file or built-in map name (as :func:`jaxga.api.run`).
+        seeds: a count or explicit seeds, the same for every preset.
+        metric, metrics, test, alpha: see :func:`compare_results`.
+        progress: optional callback, called with the label before each preset runs.
+        common_options: passed to every :func:`jaxga.api.run` call (``generations``,
+            ``corner_rule``, ``variant``, ``sets``, overrides such as
+            ``population__size=10``); per-preset overrides win over them.
+
+    Returns:
+        A :class:`Comparison` (see the module docstring for the decisions on tests,
+        failed seeds and corrections). Each preset's :class:`Result` is exactly what
+        ``run(preset, grid, seeds, **common_options)`` returns.
+    """
+    check_metric(metric)
+    for m in metrics or ():
+        check_metric(m)
+    if test not in TESTS:
+        raise ParameterError(f"unknown test {test!r}; choose from {', '.join(TESTS)}")
+    specs = _normalise_presets(presets)
+    if len(specs) < 2:
+        raise ParameterError(f"a comparison needs at least two presets, got {len(specs)}")
+    from jaxga.presets import load_preset
+
+    for preset, _ in specs.values():  # unknown names fail before anything runs
+        if isinstance(preset, str):
+            load_preset(preset)
+    results = {}
+    for label, (preset, ov) in specs.items():
+        if progress is not None:
+            progress(label)
+        results[label] = run(preset, grid, seeds, **{**common_options, **ov})
+    return compare_results(results, metric=metric, metrics=metrics, test=test, alpha=alpha)

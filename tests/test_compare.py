@@ -1,0 +1,278 @@
+"""Comparisons between presets: the statistics against scipy and hand-computed values,
+``compare`` against separate ``run`` calls, the JSON layout and ``jaxga compare``."""
+
+from __future__ import annotations
+
+import dataclasses
+import json
+import math
+
+import numpy as np
+import pytest
+import scipy.stats
+
+from jaxga import api
+from jaxga.cli import EXIT_BAD_INPUT, main
+from jaxga.compare import METRICS, compare, compare_results
+from jaxga.errors import ParameterError
+from jaxga.maps import random_map, save_map
+from jaxga.stats import fisher_success, holm, mann_whitney, wilcoxon_paired
+
+# the map and settings of tests/test_api.py: the compiled programs are shared
+SMALL = dict(population__size=8, generations=3, init__max_tries=40)
+SEEDS = 3
+
+
+# ---------------------------------------------------------------- statistics
+
+
+def test_mann_whitney_fully_separated_samples():
+    a, b = [1.0, 2.0, 3.0, 4.0, 5.0], [6.0, 7.0, 8.0, 9.0, 10.0]
+    t = mann_whitney(a, b)
+    assert t.statistic == 0.0 and t.a12 == 0.0 and t.rank_biserial == -1.0
+    # exact two-sided p: 2 / C(10, 5)
+    assert t.p_value == pytest.approx(2 / math.comb(10, 5))
+    r = mann_whitney(b, a)
+    assert r.statistic == 25.0 and r.a12 == 1.0 and r.rank_biserial == 1.0
+    assert r.p_value == pytest.approx(t.p_value)
+
+
+def test_mann_whitney_with_ties_matches_hand_count_and_scipy():
+    a, b = [1.0, 2.0, 2.0, 3.0], [2.0, 3.0, 4.0]
+    # pairs a > b count 1, ties count 1/2: a=2 ties one 2 (x2), a=3 beats 2 and ties 3
+    u = 0 + 0.5 + 0.5 + 1.5
+    t = mann_whitney(a, b)
+    assert t.statistic == u
+    assert t.a12 == pytest.approx(u / 12) and t.rank_biserial == pytest.approx(2 * u / 12 - 1)
+    ref = scipy.stats.mannwhitneyu(a, b, alternative="two-sided")
+    assert t.p_value == pytest.approx(ref.pvalue) and t.statistic == ref.statistic
+    assert (t.n_a, t.n_b) == (4, 3)
+
+
+def test_mann_whitney_identical_and_constant_samples_have_no_effect():
+    x = [3.0, 1.0, 4.0, 1.5, 9.0]
+    t = mann_whitney(x, x)
+    assert t.a12 == 0.5 and t.rank_biserial == 0.0 and t.p_value == pytest.approx(1.0)
+    c = mann_whitney([2.0, 2.0, 2.0], [2.0, 2.0])
+    assert (c.a12, c.rank_biserial, c.p_value) == (0.5, 0.0, 1.0)
+
+
+def test_mann_whitney_drops_failed_seeds_and_survives_empty_samples():
+    t = mann_whitney([1.0, np.nan, 2.0], [3.0, 4.0])
+    assert (t.n_a, t.n_b) == (2, 2) and t.a12 == 0.0
+    e = mann_whitney([np.nan, np.nan], [1.0])
+    assert e.n_a == 0 and math.isnan(e.p_value) and math.isnan(e.a12)
+
+
+def test_wilcoxon_paired_matches_scipy_and_matched_pairs_rank_biserial():
+    a = np.array([10.0, 12.0, 9.0, 15.0, 11.0, 14.0, 13.0])
+    b = np.array([9.0, 10.0, 9.5, 11.0, 10.0, 13.5, 10.0])
+    t = wilcoxon_paired(a, b)
+    ref = scipy.stats.wilcoxon(a, b)
+    assert t.p_value == pytest.approx(ref.pvalue)
+    # differences 1, 2, -0.5, 4, 1, 0.5, 3: ranks of |d| 3.5, 5, 1.5, 7, 3.5, 1.5, 6
+    assert t.statistic == pytest.approx(28 - 1.5)
+    assert t.rank_biserial == pytest.approx((26.5 - 1.5) / 28)
+    assert wilcoxon_paired(b, a).rank_biserial == pytest.approx(-t.rank_biserial)
+    # all a larger: r = 1; pairs with a failure are dropped
+    s = wilcoxon_paired([2.0, 3.0, np.nan, 5.0], [1.0, 1.0, 1.0, 1.0])
+    assert s.rank_biserial == 1.0 and s.n_a == 3
+    z = wilcoxon_paired([1.0, 2.0], [1.0, 2.0])
+    assert z.p_value == 1.0 and z.rank_biserial == 0.0
+    with pytest.raises(ValueError):
+        wilcoxon_paired([1.0, 2.0], [1.0])
+
+
+def test_holm_on_known_p_values():
+    p = [0.01, 0.04, 0.03, 0.005]
+    # sorted: 0.005 x 4 = 0.02, 0.01 x 3 = 0.03, 0.03 x 2 = 0.06, 0.04 x 1 -> max 0.06
+    np.testing.assert_allclose(holm(p), [0.03, 0.06, 0.06, 0.02])
+    np.testing.assert_allclose(holm([0.5, 0.9]), [1.0, 1.0])  # clipped at 1
+    out = holm([0.02, np.nan, 0.01])  # NaN stays NaN and does not count in m
+    assert math.isnan(out[1]) and out[0] == pytest.approx(0.02) and out[2] == pytest.approx(0.02)
+    assert holm([0.2])[0] == 0.2
+
+
+def test_fisher_success_matches_scipy():
+    t = fisher_success(10, 10, 3, 10)
+    ref = scipy.stats.fisher_exact([[10, 0], [3, 7]])
+    assert t.p_value == pytest.approx(ref.pvalue) and t.statistic == ref.statistic
+    assert fisher_success(5, 5, 5, 5).p_value == 1.0
+
+
+# ---------------------------------------------------------------- compare()
+
+
+@pytest.fixture(scope="module")
+def grid():
+    return random_map(10, 10, 0.2, 3, corner_rule="free")
+
+
+@pytest.fixture(scope="module")
+def comparison(grid):
+    return compare(["sga", "imga"], grid, seeds=SEEDS, **SMALL)
+
+
+def test_compare_gives_the_results_of_separate_runs(comparison, grid):
+    for name in ("sga", "imga"):
+        alone = api.run(name, grid, seeds=SEEDS, **SMALL)
+        got = comparison.results[name]
+        np.testing.assert_array_equal(got.success, alone.success)
+        np.testing.assert_array_equal(got.cells, alone.cells)
+        np.testing.assert_allclose(got.length, alone.length)
+        np.testing.assert_allclose(got.raw_length, alone.raw_length)
+        np.testing.assert_array_equal(got.convergence_generation,
+                                      alone.convergence_generation)
+
+
+def test_compare_tests_are_those_of_the_per_seed_values(comparison):
+    c = comparison
+    assert c.labels == ["sga", "imga"] and c.test == "mannwhitneyu"
+    assert [t.metric for t in c.pairwise] == list(c.metrics)
+    assert c.metrics[0] == "length"
+    for t in c.pairwise:
+        a, b = c.values("sga", t.metric), c.values("imga", t.metric)
+        ref = scipy.stats.mannwhitneyu(a[np.isfinite(a)], b[np.isfinite(b)])
+        if np.ptp(np.concatenate([a, b])) > 0:
+            assert t.result.p_value == pytest.approx(ref.pvalue)
+            assert t.result.a12 == pytest.approx(ref.statistic / (t.result.n_a * t.result.n_b))
+        assert t.p_holm == pytest.approx(t.result.p_value)  # one pair: Holm = raw p
+    rows = {r["label"]: r for r in c.preset_rows()}
+    r = c.results["sga"]
+    ok = r.success
+    assert rows["sga"]["mean"] == pytest.approx(r.length[ok].mean())
+    assert rows["sga"]["gap"] == pytest.approx(np.mean(r.length[ok] / r.any_angle_optimum - 1))
+    assert rows["sga"]["raw_gap"] == pytest.approx(np.mean(r.raw_length[ok] / r.optimum - 1))
+    assert rows["sga"]["success_rate"] == ok.mean()
+    text = c.summary()
+    assert "pairwise tests on length" in text and "imga" in text
+    md = c.to_markdown()
+    assert "| sga | imga |" in md and "turns: p Holm / A12" in md
+    assert md.count("| sga | imga |") == 2  # full table of length + compact table
+    assert c.to_markdown(compact=False).count("| sga | imga |") == len(c.metrics)
+
+
+def test_compare_json_layout(comparison):
+    js = json.loads(json.dumps(comparison.to_json(), allow_nan=False))
+    assert {"map", "corner_rule", "seeds", "optimum", "any_angle_optimum", "metric",
+            "metrics", "test", "alpha", "correction", "presets", "pairwise",
+            "success_tests"} <= set(js)
+    assert js["seeds"] == list(range(SEEDS)) and js["correction"] == "holm"
+    assert set(js["presets"]) == {"sga", "imga"}
+    p = js["presets"]["imga"]
+    assert {"preset", "population", "generations", "n_seeds", "n_success", "success_rate",
+            "summary", "time_per_run_s", "timing", "values"} <= set(p)
+    assert set(p["summary"]["length"]) == {"mean", "sd", "min", "max"}
+    assert all(len(v) == SEEDS for v in p["values"].values())
+    assert len(js["pairwise"]) == len(js["metrics"])  # one pair per metric
+    first = js["pairwise"][0]
+    assert {"metric", "a", "b", "test", "statistic", "p_value", "p_holm", "a12",
+            "rank_biserial", "n_a", "n_b", "median_a", "median_b"} <= set(first)
+    assert len(js["success_tests"]) == 1
+
+
+def test_failed_seeds_are_excluded_from_tests_and_counted_in_success(comparison):
+    sga, imga = comparison.results["sga"], comparison.results["imga"]
+    failing = dataclasses.replace(sga, success=np.array([True] + [False] * (SEEDS - 1)))
+    third = dataclasses.replace(imga, preset="imga2")
+    c = compare_results({"sga": failing, "imga": imga, "imga2": third})
+    assert len(c.tests()) == 3  # three pairs
+    t = next(t for t in c.tests() if (t.a, t.b) == ("sga", "imga"))
+    assert (t.result.n_a, t.result.n_b) == (1, SEEDS)
+    raw = [t.result.p_value for t in c.tests()]
+    np.testing.assert_allclose([t.p_holm for t in c.tests()], holm(raw))
+    s = next(t for t in c.success_tests if (t.a, t.b) == ("sga", "imga"))
+    assert s.result.p_value == pytest.approx(
+        scipy.stats.fisher_exact([[1, SEEDS - 1], [SEEDS, 0]]).pvalue)
+    assert "Fisher" in c.summary()
+    row = {r["label"]: r for r in c.preset_rows()}["sga"]
+    assert row["n_success"] == 1 and row["mean"] == pytest.approx(sga.length[0])
+
+
+def test_paired_wilcoxon_option(comparison):
+    c = compare_results(comparison.results, test="wilcoxon", metrics=["raw_length"])
+    assert c.metrics == ("length", "raw_length")
+    for t in c.pairwise:
+        a, b = c.values("sga", t.metric), c.values("imga", t.metric)
+        ok = np.isfinite(a) & np.isfinite(b)
+        if np.any(a[ok] != b[ok]):
+            assert t.result.p_value == pytest.approx(scipy.stats.wilcoxon(a[ok], b[ok]).pvalue)
+    other = dataclasses.replace(comparison.results["imga"],
+                                seeds=comparison.results["imga"].seeds + 1)
+    with pytest.raises(ParameterError, match="same seeds"):
+        compare_results({"sga": comparison.results["sga"], "imga": other}, test="wilcoxon")
+
+
+def test_compare_variants_of_one_preset_by_label(comparison, grid):
+    """A mapping label -> (preset, overrides): one preset with two mutation rates, the
+    paired design the Wilcoxon option is for; per-label overrides win over common ones."""
+    c = compare({"sga": "sga", "sga pm 0.9": ("sga", {"mutation__probability": 0.9})},
+                grid, seeds=SEEDS, test="wilcoxon", **SMALL)
+    assert c.labels == ["sga", "sga pm 0.9"] and c.test == "wilcoxon"
+    np.testing.assert_allclose(c.results["sga"].length, comparison.results["sga"].length)
+    alone = api.run("sga", grid, seeds=SEEDS, mutation__probability=0.9, **SMALL)
+    np.testing.assert_array_equal(c.results["sga pm 0.9"].cells, alone.cells)
+    assert c.results["sga pm 0.9"].config["mutation.probability"] == 0.9
+
+
+def test_compare_rejects_bad_requests(comparison, grid):
+    with pytest.raises(ParameterError, match="unknown metric"):
+        compare(["sga", "imga"], grid, seeds=2, metric="speed")
+    with pytest.raises(ParameterError, match="not comparable"):
+        compare_results(comparison.results, metric="fitness")
+    with pytest.raises(ParameterError, match="unknown test"):
+        compare_results(comparison.results, test="t-test")
+    with pytest.raises(ParameterError, match="at least two"):
+        compare(["sga"], grid, seeds=2)
+    with pytest.raises(ParameterError, match="twice"):
+        compare(["sga", "sga"], grid, seeds=2)
+    with pytest.raises(ParameterError):  # unknown preset, before anything runs
+        compare(["sga", "no_such_preset"], grid, seeds=2)
+    assert "fitness" not in METRICS
+
+
+# ---------------------------------------------------------------- jaxga compare
+
+
+def _cli_args(map_file, *extra):
+    return ["compare", "--presets", "sga,imga", "--map", str(map_file), "--seeds", str(SEEDS),
+            "--generations", "3", "--set", "population.size=8", "--set", "init.max_tries=40",
+            "--corner-rule", "free", "--quiet", *extra]
+
+
+def test_cli_compare_end_to_end(tmp_path, grid, comparison, capsys):
+    map_file = save_map(grid, tmp_path / "m.ascii")
+    out, png = tmp_path / "c.json", tmp_path / "c.png"
+    assert main(_cli_args(map_file, "--json", str(out), "--plot", str(png))) == 0
+    text = capsys.readouterr().out
+    assert "pairwise tests on length" in text and f"wrote {out}" in text
+    js = json.loads(out.read_text())
+    assert set(js["presets"]) == {"sga", "imga"} and js["metric"] == "length"
+    # the CLI ran the same seeds as compare(): the same lengths
+    for name in ("sga", "imga"):
+        want = [None if not ok else x for ok, x in
+                zip(comparison.results[name].success, comparison.results[name].length)]
+        np.testing.assert_allclose(np.array(js["presets"][name]["values"]["length"], float),
+                                   np.array(want, float))
+    assert png.stat().st_size > 0
+
+
+@pytest.mark.parametrize("extra, message", [
+    (["--metric", "speed"], "unknown metric"),
+    (["--metric", "fitness"], "not comparable"),
+    (["--test", "anova"], "unknown test"),
+])
+def test_cli_compare_bad_options(tmp_path, grid, capsys, extra, message):
+    map_file = save_map(grid, tmp_path / "m.ascii")
+    assert main(_cli_args(map_file, *extra)) == EXIT_BAD_INPUT
+    err = capsys.readouterr().err.strip()
+    assert message in err and "\n" not in err
+
+
+def test_cli_compare_unknown_preset(tmp_path, grid, capsys):
+    map_file = save_map(grid, tmp_path / "m.ascii")
+    args = _cli_args(map_file)
+    args[2] = "sga,no_such_preset"
+    assert main(args) == EXIT_BAD_INPUT
+    err = capsys.readouterr().err.strip()
+    assert "no_such_preset" in err and "\n" not in err

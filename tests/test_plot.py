@@ -1,0 +1,136 @@
+"""Plots: each figure is rendered to a PNG and its artists (lines, boxes, markers, labels)
+are checked against the results they draw."""
+
+from __future__ import annotations
+
+import matplotlib
+
+matplotlib.use("Agg")
+
+import matplotlib.image as mpimg  # noqa: E402
+import matplotlib.pyplot as plt  # noqa: E402
+import numpy as np  # noqa: E402
+import pytest  # noqa: E402
+from matplotlib.collections import PathCollection, PolyCollection  # noqa: E402
+
+from jaxga.compare import compare_results  # noqa: E402
+from jaxga.maps import random_map  # noqa: E402
+from jaxga.plot import (  # noqa: E402
+    plot_box,
+    plot_comparison,
+    plot_diversity,
+    plot_paths,
+    plot_result,
+    plot_seed_scatter,
+)
+
+# the map and settings of tests/test_api.py and tests/test_compare.py (shared programs)
+SMALL = dict(population__size=8, generations=3, init__max_tries=40)
+SEEDS = 3
+
+
+@pytest.fixture(scope="module")
+def grid():
+    return random_map(10, 10, 0.2, 3, corner_rule="free")
+
+
+@pytest.fixture(scope="module")
+def comparison(grid):
+    from jaxga import api
+
+    return compare_results({name: api.run(name, grid, seeds=SEEDS, **SMALL)
+                            for name in ("sga", "imga")})
+
+
+def _save(ax_or_fig, path):
+    fig = ax_or_fig if hasattr(ax_or_fig, "savefig") else ax_or_fig.figure
+    fig.savefig(path)
+    plt.close(fig)
+    img = mpimg.imread(path)
+    assert img.ndim == 3 and img.shape[0] > 100 and img.shape[1] > 100
+    assert np.ptp(img[..., :3]) > 0  # not a blank image
+
+
+def test_plot_paths_draws_raw_and_post_optimised_paths_with_endpoints(comparison, grid,
+                                                                      tmp_path):
+    r = comparison.results["imga"]
+    i = int(np.nanargmin(np.where(r.success, r.length, np.nan)))
+    ax = plot_paths(r, grid)
+    lines = {ln.get_label(): ln for ln in ax.get_lines()}
+    raw = next(v for k, v in lines.items() if k.startswith("raw ("))
+    post = next(v for k, v in lines.items() if k.startswith("post-optimised ("))
+    np.testing.assert_array_equal(np.c_[raw.get_xdata(), raw.get_ydata()],
+                                  np.asarray(r.path(i, raw=True)))
+    np.testing.assert_array_equal(np.c_[post.get_xdata(), post.get_ydata()],
+                                  np.asarray(r.path(i)))
+    assert f"{r.length[i]:.2f}" in post.get_label()
+    assert tuple(lines["start"].get_xydata()[0]) == grid.start_xy
+    assert tuple(lines["goal"].get_xydata()[0]) == grid.goal_xy
+    assert len(ax.get_lines()) == 4 and f"seed {int(r.seeds[i])}" in ax.get_title()
+    _save(ax, tmp_path / "paths.png")
+    # another seed on a given axes
+    fig, given = plt.subplots()
+    assert plot_paths(r, grid, seed=0, ax=given) is given
+    plt.close(fig)
+
+
+def test_plot_diversity_one_curve_per_algorithm(comparison, tmp_path):
+    ax = plot_diversity(comparison)
+    assert [ln.get_label() for ln in ax.get_lines()] == ["sga", "imga"]
+    assert sum(isinstance(c, PolyCollection) for c in ax.collections) == 2  # sd bands
+    sd = comparison.results["sga"].history["std"]
+    np.testing.assert_allclose(ax.get_lines()[0].get_ydata(), sd.mean(axis=0))
+    np.testing.assert_allclose(ax.get_lines()[0].get_xdata(), np.arange(1, sd.shape[1] + 1))
+    assert ax.get_xlabel() == "generation" and ax.get_ylabel() == "population fitness sd"
+    _save(ax, tmp_path / "diversity.png")
+    runs = plot_diversity(comparison.results, per_run=True, relative=True)
+    assert len(runs.get_lines()) == 2 * SEEDS and "mean fitness" in runs.get_ylabel()
+    plt.close(runs.figure)
+
+
+def test_plot_box_one_box_per_preset_with_optima(comparison, tmp_path):
+    ax = plot_box(comparison)
+    assert len(ax.patches) == 2  # one box each
+    assert [t.get_text() for t in ax.get_xticklabels()] == ["sga", "imga"]
+    refs = [ln for ln in ax.get_lines() if ln.get_linestyle() == "--"]
+    assert sorted(ln.get_ydata()[0] for ln in refs) == pytest.approx(
+        sorted([comparison.any_angle_optimum, comparison.optimum]))
+    # the median line of each box is the median of the successful seeds
+    medians = [ln for ln in ax.get_lines() if ln.get_gid() == "median"]
+    assert [m.get_ydata()[0] for m in medians] == pytest.approx(
+        [np.nanmedian(comparison.values(k)) for k in ("sga", "imga")])
+    assert ax.get_ylabel() == "length"
+    _save(ax, tmp_path / "box.png")
+    plain = plot_box({"a": [1.0, 2.0, np.nan], "b": [3.0, 4.0], "c": [5.0]}, metric="x")
+    assert len(plain.patches) == 3 and not [ln for ln in plain.get_lines()
+                                            if ln.get_linestyle() == "--"]
+    plt.close(plain.figure)
+
+
+def test_plot_seed_scatter_series_per_algorithm(comparison, tmp_path):
+    ax = plot_seed_scatter(comparison)
+    pts = [c for c in ax.collections if isinstance(c, PathCollection)]
+    assert [c.get_label() for c in pts] == ["sga", "imga"]
+    for c, name in zip(pts, ("sga", "imga"), strict=True):
+        r = comparison.results[name]
+        off = c.get_offsets()
+        assert len(off) == int(r.success.sum())
+        np.testing.assert_allclose(off[:, 1], r.length[r.success])
+        np.testing.assert_allclose(off[:, 0], r.seeds[r.success])
+    assert ax.get_xlabel() == "seed" and ax.get_ylabel() == "length"
+    _save(ax, tmp_path / "scatter.png")
+    conv = plot_seed_scatter(comparison.results, y="fitness", x="convergence_generation")
+    assert conv.get_xlabel() == "convergence generation"
+    plt.close(conv.figure)
+
+
+def test_plot_comparison_and_plot_result_figures(comparison, grid, tmp_path):
+    fig = plot_comparison(comparison)
+    a1, a2 = fig.axes
+    assert len(a1.patches) == 2 and len(a2.collections) == 2
+    _save(fig, tmp_path / "comparison.png")
+    out = tmp_path / "result.png"
+    fig = plot_result(comparison.results["imga"], grid, out)
+    assert out.stat().st_size > 0
+    a1, a2 = fig.axes
+    assert len(a1.get_lines()) == 4 and a2.get_xlabel() == "generation"
