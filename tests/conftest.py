@@ -8,9 +8,9 @@ from pathlib import Path
 import jax
 from hypothesis import HealthCheck, settings
 
-_CACHE = Path(os.environ.get("JAXGA_TEST_JAX_CACHE", Path(__file__).parent / ".jax_cache"))
-jax.config.update("jax_compilation_cache_dir", str(_CACHE))
-os.environ["JAXGA_CACHE_DIR"] = str(_CACHE)  # the CLI's own cache, when run in-process
+CACHE_DIR = Path(os.environ.get("JAXGA_TEST_JAX_CACHE", Path(__file__).parent / ".jax_cache"))
+jax.config.update("jax_compilation_cache_dir", str(CACHE_DIR))
+os.environ["JAXGA_CACHE_DIR"] = str(CACHE_DIR)  # the CLI's own cache, when run in-process
 jax.config.update("jax_persistent_cache_min_compile_time_secs", 0.5)
 
 settings.register_profile(
