@@ -47,6 +47,16 @@ def _add_map_arguments(p: argparse.ArgumentParser) -> None:
                    help=f"one of {', '.join(CORNER_RULES)} (default: strict)")
 
 
+def _add_preset_arguments(p: argparse.ArgumentParser) -> None:
+    """The options of a GA experiment: preset, map, variant, generations, overrides."""
+    p.add_argument("--preset", required=True, help="a preset name (jaxga presets) or a TOML file")
+    _add_map_arguments(p)
+    p.add_argument("--variant", help="a preset variant, e.g. 50x50 for agacd")
+    p.add_argument("--generations", type=int, help="override the preset's generations")
+    p.add_argument("--set", action="append", metavar="KEY=VALUE",
+                   help="override a configuration key, e.g. crossover.probability=0.7")
+
+
 def _load_grid(args: argparse.Namespace):
     from jaxga.grid import check_corner_rule
     from jaxga.maps import load_map_info
@@ -347,13 +357,8 @@ def build_parser() -> argparse.ArgumentParser:
     p.set_defaults(func=cmd_optimum)
 
     p = sub.add_parser("run", help="run a preset on a map for many seeds")
-    p.add_argument("--preset", required=True, help="a preset name (jaxga presets) or a TOML file")
-    _add_map_arguments(p)
-    p.add_argument("--variant", help="a preset variant, e.g. 50x50 for agacd")
+    _add_preset_arguments(p)
     p.add_argument("--seeds", type=int, default=10, help="number of seeded runs (default 10)")
-    p.add_argument("--generations", type=int, help="override the preset's generations")
-    p.add_argument("--set", action="append", metavar="KEY=VALUE",
-                   help="override a configuration key, e.g. crossover.probability=0.7")
     p.add_argument("--json", metavar="OUT", help="write every run as JSON")
     p.add_argument("--plot", metavar="OUT.png", help="plot the map, best paths and convergence")
     p.add_argument("--quiet", action="store_true", help="no progress bar")
@@ -391,12 +396,11 @@ def build_parser() -> argparse.ArgumentParser:
                    help="override a configuration key, e.g. crossover.probability=0.7")
     p.add_argument("--json", metavar="OUT", help="write the result as JSON")
     p.set_defaults(func=cmd_replan)
+
     from jaxga.doe import DESIGNS, RESPONSES
 
     p = sub.add_parser("doe", help="a designed experiment over hyper-parameters (AGACD 5.2.1)")
-    p.add_argument("--preset", required=True, help="a preset name (jaxga presets) or a TOML file")
-    _add_map_arguments(p)
-    p.add_argument("--variant", help="a preset variant, e.g. 50x50 for agacd")
+    _add_preset_arguments(p)
     p.add_argument("--design", default="agacd-table4", choices=DESIGNS,
                    help="AGACD's 9-run design (its Table 4), an orthogonal array or the "
                    "full factorial (default agacd-table4)")
@@ -409,9 +413,6 @@ def build_parser() -> argparse.ArgumentParser:
     p.add_argument("--direction", choices=("max", "min"),
                    help="maximise or minimise the response (default: max for fitness and "
                    "success, min for the others)")
-    p.add_argument("--generations", type=int, help="override the preset's generations")
-    p.add_argument("--set", action="append", metavar="KEY=VALUE",
-                   help="override a configuration key, e.g. crossover.probability=0.7")
     p.add_argument("--checkpoint", metavar="DIR",
                    help="write each finished point to DIR; rerun the same command to resume")
     p.add_argument("--block", type=int,
