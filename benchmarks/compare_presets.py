@@ -132,7 +132,8 @@ def report(maps, presets, seeds: int, cache: Path, write: bool,
             note += (" The batches were run by this script without `--report-only` (each "
                      "pickled in the cache as it finished) and tabulated from the cache.")
         compile_s = ", ".join(f"{k} {r.timing['compile_s']:.0f}" for k, r in results.items())
-        note += f" Compile seconds (cold, under the same load): {compile_s}."
+        note += (f" Compile seconds (under the same load; ~0 = programs reused from the "
+                 f"previous map of the same size): {compile_s}.")
         if missing:
             note += f"\n\nNOT RUN (did not finish in time): {', '.join(missing)}."
         body = note + "\n\n" + comp.to_markdown()
