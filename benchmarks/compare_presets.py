@@ -96,7 +96,7 @@ def run_missing(maps, presets, seeds: int, cache: Path) -> None:
 
 
 def report(maps, presets, seeds: int, cache: Path, write: bool,
-           plot_dir: Path | None = None) -> None:
+           plot_dir: Path | None = None, report_only: bool = False) -> None:
     """One RESULTS.md section per map (the presets that finished; the others named)."""
     from jaxga.compare import compare_results
 
@@ -128,6 +128,12 @@ def report(maps, presets, seeds: int, cache: Path, write: bool,
                 "failed seeds excluded; p Holm-corrected over the pairs of each metric; "
                 "A12 = P(a > b) + P(a = b)/2 (lower length is better, so A12 < 0.5 "
                 "favours a); success rates by Fisher's exact test (Holm).")
+        if report_only:
+            note += (" The batches were run by this script without `--report-only` (each "
+                     "pickled in the cache as it finished) and tabulated from the cache.")
+        compile_s = ", ".join(f"{k} {r.timing['compile_s']:.0f}" for k, r in results.items())
+        note += (f" Compile seconds (under the same load; ~0 = programs reused from the "
+                 f"previous map of the same size): {compile_s}.")
         if missing:
             note += f"\n\nNOT RUN (did not finish in time): {', '.join(missing)}."
         body = note + "\n\n" + comp.to_markdown()
@@ -172,7 +178,8 @@ def main() -> None:
     if not args.report_only:
         run_missing(maps, presets, args.seeds, cache)
     report(maps, presets, args.seeds, cache, write=not args.no_write,
-           plot_dir=Path(args.plot_dir) if args.plot_dir else None)
+           plot_dir=Path(args.plot_dir) if args.plot_dir else None,
+           report_only=args.report_only)
 
 
 if __name__ == "__main__":
