@@ -11,12 +11,19 @@ from __future__ import annotations
 
 import argparse
 import json
+import os
 import sys
 import time
 from collections.abc import Sequence
 
 from jaxga.errors import EndpointError, JaxgaError, NoPathError
 from jaxga.grid import CORNER_RULES
+from jaxga.parallel import (
+    EXIT_PROCESS_LOST,
+    ProcessLostError,
+    add_parallel_arguments,
+    configure_from_args,
+)
 
 EXIT_BAD_INPUT = 2
 EXIT_NO_PATH = 3
@@ -134,14 +141,20 @@ class _Progress:
 
 def cmd_run(args: argparse.Namespace) -> int:
     """``jaxga run``: many seeds of a preset on a map; summary table, JSON, plot."""
+    from jaxga import parallel
     from jaxga.api import run
 
-    progress = None if args.quiet else _Progress()
+    lead = parallel.process_index() == 0
+    progress = None if args.quiet or not lead else _Progress()
     result = run(
         args.preset, _grid_for_run(args), seeds=args.seeds, generations=args.generations,
         corner_rule=args.corner_rule, variant=args.variant, sets=args.set or (),
         progress=progress, chunks=10 if progress else 1,
     )
+    if not lead:  # process 0 prints and writes the results of all processes
+        print(f"process {parallel.process_index()} of {parallel.process_count()}: done "
+              f"({len(result.seeds)} seeds; process 0 writes the results)")
+        return 0
     print(result.summary())
     if args.json:
         with open(args.json, "w", encoding="utf-8") as f:
@@ -200,6 +213,7 @@ def build_parser() -> argparse.ArgumentParser:
     p.add_argument("--json", metavar="OUT", help="write every run as JSON")
     p.add_argument("--plot", metavar="OUT.png", help="plot the map, best paths and convergence")
     p.add_argument("--quiet", action="store_true", help="no progress bar")
+    add_parallel_arguments(p)
     p.set_defaults(func=cmd_run)
 
     p = sub.add_parser("presets", help="list the presets and their papers")
@@ -235,10 +249,17 @@ def main(argv: Sequence[str] | None = None) -> int:
     """Entry point of the ``jaxga`` console script; returns the exit status."""
     parser = build_parser()
     args = parser.parse_args(argv)
-    if args.func is cmd_run:
-        use_compilation_cache()
     try:
+        if args.func is cmd_run:
+            configure_from_args(args)  # before JAX's backend starts
+            use_compilation_cache()
         return args.func(args)
+    except ProcessLostError as e:
+        # Exit at once: a normal exit would wait in jax.distributed's shutdown barrier
+        # for the lost process (up to --process-timeout).
+        print(f"jaxga: error: {e}", file=sys.stderr, flush=True)
+        sys.stdout.flush()
+        os._exit(EXIT_PROCESS_LOST)
     except NoPathError as e:
         print(f"jaxga: no path: {e}", file=sys.stderr)
         return EXIT_NO_PATH
