@@ -154,6 +154,8 @@ def cmd_run(args: argparse.Namespace) -> int:
     if not lead:  # process 0 prints and writes the results of all processes
         print(f"process {parallel.process_index()} of {parallel.process_count()}: done "
               f"({len(result.seeds)} seeds; process 0 writes the results)")
+        print("time (s): compile {compile_s:.2f}, total {total_s:.2f}".format(
+            **result.timing), file=sys.stderr)
         return 0
     print(result.summary())
     if args.json:
@@ -250,8 +252,9 @@ def main(argv: Sequence[str] | None = None) -> int:
     parser = build_parser()
     args = parser.parse_args(argv)
     try:
-        if args.func is cmd_run:
+        if hasattr(args, "devices"):  # subcommands with add_parallel_arguments
             configure_from_args(args)  # before JAX's backend starts
+        if args.func is cmd_run:
             use_compilation_cache()
         return args.func(args)
     except ProcessLostError as e:

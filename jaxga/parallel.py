@@ -35,18 +35,26 @@ module decides how that axis is split:
   identical to a single-process run (``tests/test_distributed.py`` checks it).
 
 * **Failures.** Within ``timeout`` seconds (``--process-timeout``, default 60):
-  a process that never joins makes the others exit (status 4) with a one-line message
-  (JAX itself would abort with a C++ stack trace after its initialisation timeout);
-  a process other than 0 that dies is noticed by the others while they wait for its share:
-  each process writes a heartbeat counter into the key-value store every second, and a
-  peer whose share is missing and whose counter has not moved for ``timeout`` seconds is
-  reported by :class:`ProcessLostError` naming it. This needs JAX's
-  ``jax_enable_recoverability`` (otherwise the coordination service aborts every process
-  as soon as one task misses its heartbeats, with a C++ stack trace) and the preemption
-  service off (it would make exit wait minutes for the dead peer). If process 0 (the
-  coordinator, which hosts the service) dies, JAX's runtime ends the other processes at
-  once (non-zero status, its own message "the JAX distributed service detected fatal
-  errors"); no Python code can run in them after that.
+  if a process never joins, the others print one line and exit with status 4 (JAX alone
+  would abort them with a C++ stack trace after its initialisation timeout); if a process
+  other than 0 dies or its host becomes unreachable, a monitor thread in every other
+  process notices that its heartbeat counter (written into the key-value store every
+  second) has stopped, prints one line naming it ("process 1 of 2 was lost") and ends the
+  process with status 4. JAX's own heartbeat check (which aborts every process with a
+  stack trace) is set to ``2 * timeout + 10`` seconds so that ours comes first. A process
+  that ends normally (even after an error of its own) writes ``exit`` instead of a
+  counter; a peer that exited without sending its share raises
+  :class:`ProcessLostError`. If process 0 (the coordinator, which hosts the service) dies,
+  JAX's runtime ends the other processes at once (non-zero status, its own message "the
+  JAX distributed service detected fatal errors"); no Python code runs in them after
+  that. (``jax_enable_recoverability`` would keep the survivors alive without the monitor,
+  but then JAX's shutdown does not wait for the other processes and a process that ends
+  after process 0 is aborted: worse.)
+
+* **GPU.** Nothing here is CPU-specific except the device count: with a CUDA build of
+  JAX (``pip install "jaxga[cuda]"``, i.e. ``jax[cuda12]``) each process shards its share
+  over its visible GPUs. Only the CPU path is tested (no GPU on CI); the GPU path is the
+  same code with another default backend.
 """
 
 from __future__ import annotations
