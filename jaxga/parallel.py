@@ -120,16 +120,16 @@ def user_device_setting() -> str | None:
     return None
 
 
-def set_local_devices(n: int | None = None) -> int | None:
+def set_local_devices(n: int | None = None, *, warn: bool = True) -> int | None:
     """Give this process ``n`` XLA CPU devices (default: one per core) for the runs.
 
     Must run before JAX's backend starts (before the first JAX array or ``jax.devices()``;
     importing JAX is fine). ``n=None`` keeps a user's explicit ``XLA_FLAGS``
     ``--xla_force_host_platform_device_count`` or ``JAX_NUM_CPU_DEVICES`` and otherwise
     uses :func:`cores`; an explicit ``n`` overrides them. If the backend has already
-    started with another device count, warns (results do not depend on the device count,
-    only the speed does) and leaves it. Returns the device count asked for, or None when
-    the user's own setting was kept.
+    started with another device count, warns (unless ``warn`` is False; results do not
+    depend on the device count, only the speed does) and leaves it. Returns the device
+    count asked for, or None when the user's own setting was kept.
     """
     import jax
 
@@ -144,7 +144,7 @@ def set_local_devices(n: int | None = None) -> int | None:
         jax.config.update("jax_num_cpu_devices", n)
     except RuntimeError:
         have = len(jax.local_devices(backend="cpu"))
-        if have != n:
+        if have != n and warn:
             warnings.warn(
                 f"jaxga.parallel: JAX is already running with {have} CPU device(s); asking "
                 f"for {n} has no effect. Call jaxga.parallel.use_all_cores() (or "
@@ -184,6 +184,7 @@ class _Session:
         self.num_processes = num_processes
         self.timeout = float(timeout)
         self.gathers = itertools.count()
+        self.broadcasts = itertools.count()
         self.beats: dict[int, str] = {}
         self._stop = threading.Event()
         self._thread = threading.Thread(target=self._monitor, name="jaxga-liveness",
@@ -382,6 +383,22 @@ def allgather_runs(tree: Any) -> Any:
         treedef, [np.concatenate(parts, axis=0) for parts in zip(*shares)])
 
 
+def broadcast(value: Any) -> Any:
+    """Process 0's ``value`` (anything JSON can write) in every process; ``value`` itself
+    with one process. For decisions only process 0 can make, e.g. which design points a
+    checkpoint on process 0's disk has already finished."""
+    import json
+
+    s = _current_session()
+    if s is None:
+        return value
+    key = f"jaxga/broadcast/{next(s.broadcasts)}"
+    if s.process_id == 0:
+        s.client.key_value_set(key, json.dumps(value))
+        return json.loads(json.dumps(value))
+    return json.loads(s.wait_for(key, 0, "process 0's broadcast"))
+
+
 def _pack(leaves: Sequence[np.ndarray]) -> bytes:
     buf = io.BytesIO()
     np.savez(buf, *leaves)
@@ -447,7 +464,7 @@ def configure_from_args(args: argparse.Namespace) -> None:
     the device count first, then :func:`initialize` when a coordinator and more than one
     process are given. Call it before the command's first JAX computation."""
     devices = args.devices if args.devices is not None else _env_int(ENV_DEVICES)
-    set_local_devices(devices)
+    set_local_devices(devices, warn=devices is not None)  # quiet if only the default
     coordinator = args.coordinator or os.environ.get(ENV_COORDINATOR) or None
     n = args.num_processes if args.num_processes is not None else _env_int(ENV_NUM_PROCESSES)
     pid = args.process_id if args.process_id is not None else _env_int(ENV_PROCESS_ID)

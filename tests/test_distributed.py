@@ -153,13 +153,15 @@ for r in results:
     d = r.to_json()
     d.pop("timing")
     out.append(d)
-print(json.dumps({"process": par.process_index(), "results": out}))
+told = par.broadcast({"from": par.process_index(), "points": [0.5, 0.9]})
+print(json.dumps({"process": par.process_index(), "told": told, "results": out}))
 """
 
 
 def test_a_sweep_in_two_processes_gives_the_single_process_result(tmp_path):
     """``jaxga.api.sweep`` (what ``jaxga doe`` is built on) over 2 points x 3 seeds in 2
-    processes: both processes return the single-process results."""
+    processes: both processes return the single-process results; ``broadcast`` gives
+    both process 0's value."""
     with _Procs(tmp_path) as procs:
         one = procs.start("one", ["-c", _SWEEP_SCRIPT])
         port = _free_port()
@@ -170,6 +172,7 @@ def test_a_sweep_in_two_processes_gives_the_single_process_result(tmp_path):
         got = [json.loads(procs.output(name)[0].strip().splitlines()[-1])
                for name in ("one", "p0", "p1")]
     assert [g["process"] for g in got] == [0, 0, 1]
+    assert [g["told"]["from"] for g in got] == [0, 0, 0]  # parallel.broadcast
     assert got[1]["results"] == got[0]["results"]
     assert got[2]["results"] == got[0]["results"]
     a, b = got[0]["results"]
@@ -281,3 +284,20 @@ def test_a_late_device_request_warns_and_an_explicit_xla_flag_is_kept():
     assert proc.returncode == 0, proc.stderr[-2000:]
     assert proc.stdout.split()[:2] == ["3", "1"]
     assert "already running with 3 CPU device(s)" in proc.stdout
+
+
+def test_incomplete_or_malformed_process_options_are_one_line_errors(capsys, monkeypatch):
+    from jaxga.cli import main
+
+    assert main([*RUN, "--coordinator", "127.0.0.1:1"]) == 2
+    assert capsys.readouterr().err.strip() == (
+        "jaxga: error: a multi-process run needs --num-processes, --process-id too (or "
+        "JAXGA_COORDINATOR, JAXGA_NUM_PROCESSES, JAXGA_PROCESS_ID)")
+    monkeypatch.setenv("JAXGA_NUM_PROCESSES", "two")
+    assert main(RUN) == 2
+    assert capsys.readouterr().err.strip() == (
+        "jaxga: error: JAXGA_NUM_PROCESSES must be an integer, got 'two'")
+    monkeypatch.delenv("JAXGA_NUM_PROCESSES")
+    assert main([*RUN, "--coordinator", "nohost", "--num-processes", "2",
+                 "--process-id", "2"]) == 2
+    assert "need 0 <= process id < number of processes" in capsys.readouterr().err
