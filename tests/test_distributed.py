@@ -210,7 +210,7 @@ def test_a_killed_process_is_named_by_the_survivor_within_the_timeout(tmp_path):
     assert rc == 4, err
     assert "jaxga: error: process 1 of 2 was lost: no heartbeat for 10 s" in err
     assert "Traceback" not in err
-    assert timeout <= elapsed < timeout + 30
+    assert timeout - 2 <= elapsed < timeout + 30  # last beat up to 1 s before the kill
     assert not (tmp_path / "x.json").exists()
 
 
