@@ -21,6 +21,7 @@ import jax
 import jax.numpy as jnp
 import numpy as np
 
+from jaxga import parallel
 from jaxga.config import Config
 from jaxga.engine import Algorithm, build, default_params, evolve, finish, init_state, static_config
 from jaxga.errors import JaxgaError, ParameterError
@@ -155,11 +156,15 @@ def _seed_list(seeds: int | Sequence[int]) -> np.ndarray:
 
 
 def _seed_sharding() -> tuple[jax.sharding.NamedSharding | None, Any]:
-    """(runs axis split over all local devices, replicated); (None, None) with one device."""
-    n = jax.device_count()
+    """(runs axis split over all local devices, replicated); (None, None) with one device.
+
+    Local devices only: with several processes each computes its own share of the runs
+    (``jaxga.parallel``), so no program spans processes."""
+    n = jax.local_device_count()
     if n == 1:
         return None, None
-    mesh = jax.make_mesh((n,), ("runs",), axis_types=(jax.sharding.AxisType.Auto,))
+    mesh = jax.make_mesh((n,), ("runs",), axis_types=(jax.sharding.AxisType.Auto,),
+                         devices=jax.local_devices())
     P = jax.sharding.PartitionSpec
     return (jax.sharding.NamedSharding(mesh, P("runs")),
             jax.sharding.NamedSharding(mesh, P()))
@@ -316,6 +321,10 @@ def sweep(
     capacity. Results depend on it, so a sweep split into several calls (``jaxga.doe``'s
     resumable blocks) passes the largest size of the WHOLE sweep to every call to get the
     same results as one call. It must be at least every point's ``population.size``.
+    The runs are split over this process's devices and, after
+    :func:`jaxga.parallel.initialize`, over several processes: each computes its share and
+    every process returns the whole, identical result (:mod:`jaxga.parallel`; a lost
+    process raises :class:`jaxga.parallel.ProcessLostError`).
     """
     from jaxga.reference import any_angle_shortest_path, shortest_path
 
@@ -344,13 +353,17 @@ def sweep(
     per_point = [default_params(c, algo.islands) for c in configs]
     n_seeds, n_points = len(seed_arr), len(configs)
     n_runs = n_seeds * n_points
-    n_dev = jax.device_count()
-    pad = (-n_runs) % n_dev
-    run_seeds = np.concatenate([np.tile(seed_arr, n_points), np.repeat(seed_arr[-1:], pad)])
+    # Runs padded (copies of the last run) to a multiple of processes x local devices;
+    # this process computes its contiguous share and allgather_runs joins the shares.
+    n_total, share = parallel.run_share(n_runs)
+    pad = n_total - n_runs
+    run_seeds = np.concatenate([np.tile(seed_arr, n_points),
+                                np.repeat(seed_arr[-1:], pad)])[share]
     params = _stack_params(per_point, n_seeds)
     if pad:
         params = {k: jnp.concatenate([v, jnp.repeat(v[-1:], pad, axis=0)])
                   for k, v in params.items()}
+    params = {k: v[share] for k, v in params.items()}
     keys = jax.vmap(jax.random.PRNGKey)(jnp.asarray(run_seeds, jnp.uint32))
     sh, rep = _seed_sharding()
     if sh is not None:
@@ -367,7 +380,7 @@ def sweep(
     report("compile", 0.0)
     t0 = time.perf_counter()
     progs = _programs(algo, _spec(grid), tuple(sorted(_spec(params).items())), len(run_seeds),
-                      sizes, n_dev)
+                      sizes, jax.local_device_count())
     compile_s = time.perf_counter() - t0
     report("compile", 1.0)
 
@@ -394,10 +407,11 @@ def sweep(
     timing = {"compile_s": compile_s, "init_s": init_s, "evolve_s": evolve_s,
               "post_s": post_s, "total_s": time.perf_counter() - t_start}
 
-    host = jax.tree_util.tree_map(np.asarray, out)
-    hist = {k: np.asarray(v) for k, v in history.items()}
-    rate = np.asarray(init_rate).reshape(len(run_seeds), -1).mean(axis=1)
-    unf = np.asarray(unfilled).reshape(len(run_seeds), -1).sum(axis=1)
+    host, hist, init_rate, unfilled = parallel.allgather_runs(
+        (out, history, init_rate, unfilled))
+    timing["total_s"] = time.perf_counter() - t_start
+    rate = init_rate.reshape(n_total, -1).mean(axis=1)
+    unf = unfilled.reshape(n_total, -1).sum(axis=1)
     results = []
     for q, cfg in enumerate(configs):
         sl = slice(q * n_seeds, (q + 1) * n_seeds)

@@ -14,12 +14,19 @@ from __future__ import annotations
 
 import argparse
 import json
+import os
 import sys
 import time
 from collections.abc import Sequence
 
 from jaxga.errors import EndpointError, JaxgaError, NoPathError
 from jaxga.grid import CORNER_RULES
+from jaxga.parallel import (
+    EXIT_PROCESS_LOST,
+    ProcessLostError,
+    add_parallel_arguments,
+    configure_from_args,
+)
 
 EXIT_BAD_INPUT = 2
 EXIT_NO_PATH = 3
@@ -152,14 +159,18 @@ class _Progress:
 
 def cmd_run(args: argparse.Namespace) -> int:
     """``jaxga run``: many seeds of a preset on a map; summary table, JSON, plot."""
+    from jaxga import parallel
     from jaxga.api import run
 
-    progress = None if args.quiet else _Progress()
+    lead = parallel.process_index() == 0
+    progress = None if args.quiet or not lead else _Progress()
     result = run(
         args.preset, _grid_for_run(args), seeds=args.seeds, generations=args.generations,
         corner_rule=args.corner_rule, variant=args.variant, sets=args.set or (),
         progress=progress, chunks=10 if progress else 1,
     )
+    if _not_lead(f"{len(result.seeds)} seeds", result.timing["total_s"]):
+        return 0
     print(result.summary())
     if args.json:
         _write_json(args.json, result.to_json())
@@ -196,13 +207,13 @@ def cmd_doe(args: argparse.Namespace) -> int:
         corner_rule=args.corner_rule, variant=args.variant, sets=args.set or (),
         checkpoint=args.checkpoint, block=args.block, progress=progress,
     )
+    if _not_lead(f"{len(result.coded)} design points x {len(result.seeds)} seeds",
+                 result.timing["total_s"]):
+        return 0
     print(result.report())
     data = result.to_json()
     if args.json:
-        with open(args.json, "w", encoding="utf-8") as f:
-            json.dump(data, f)
-            f.write("\n")
-        print(f"wrote {args.json}")
+        _write_json(args.json, data)
     if args.plot:
         from jaxga.plot import plot_main_effects
 
@@ -212,6 +223,22 @@ def cmd_doe(args: argparse.Namespace) -> int:
 
         plt.close(ax.figure)
         print(f"wrote {args.plot}")
+    return 0
+
+
+def _not_lead(what: str, seconds: float) -> bool:
+    """True (after a one-line note) on every process but process 0 of a multi-process
+    run: process 0 prints and writes the results of all processes (issue 7)."""
+    from jaxga import parallel
+
+    if parallel.process_index() == 0:
+        return False
+    print(f"process {parallel.process_index()} of {parallel.process_count()}: done "
+          f"({what}; process 0 writes the results)")
+    print(f"time (s): total {seconds:.2f}", file=sys.stderr)
+    return True
+
+
 def cmd_compare(args: argparse.Namespace) -> int:
     """``jaxga compare``: several presets on one map with the same seeds; per-preset
     summary, pairwise tests with effect sizes (Holm-corrected), JSON, box plots."""
@@ -238,6 +265,9 @@ def cmd_compare(args: argparse.Namespace) -> int:
     comp = compare(presets, grid, seeds=args.seeds, metric=args.metric, test=args.test,
                    progress=progress, generations=args.generations,
                    corner_rule=args.corner_rule, sets=args.set or ())
+    if _not_lead(f"{len(presets)} presets x {args.seeds} seeds",
+                 sum(r.timing["total_s"] for r in comp.results.values())):
+        return 0
     print(comp.summary())
     if args.json:
         _write_json(args.json, comp.to_json())
@@ -362,6 +392,7 @@ def build_parser() -> argparse.ArgumentParser:
     p.add_argument("--json", metavar="OUT", help="write every run as JSON")
     p.add_argument("--plot", metavar="OUT.png", help="plot the map, best paths and convergence")
     p.add_argument("--quiet", action="store_true", help="no progress bar")
+    add_parallel_arguments(p)
     p.set_defaults(func=cmd_run)
 
     p = sub.add_parser("replan", help="re-plan a path around new obstacles (MPMGA 5.2.1)")
@@ -420,7 +451,9 @@ def build_parser() -> argparse.ArgumentParser:
     p.add_argument("--json", metavar="OUT", help="write the design, responses and fit as JSON")
     p.add_argument("--plot", metavar="OUT.png", help="main-effects plot")
     p.add_argument("--quiet", action="store_true", help="no progress lines")
+    add_parallel_arguments(p)
     p.set_defaults(func=cmd_doe)
+
     p = sub.add_parser("compare", help="compare presets on a map with statistical tests")
     p.add_argument("--presets", required=True, metavar="A,B,...",
                    help="comma-separated preset names (jaxga presets) or TOML files")
@@ -440,6 +473,7 @@ def build_parser() -> argparse.ArgumentParser:
     p.add_argument("--plot", metavar="OUT.png",
                    help="box plots of the metric per preset (optima as reference lines)")
     p.add_argument("--quiet", action="store_true", help="no progress messages")
+    add_parallel_arguments(p)
     p.set_defaults(func=cmd_compare)
 
     p = sub.add_parser("presets", help="list the presets and their papers")
@@ -475,10 +509,18 @@ def main(argv: Sequence[str] | None = None) -> int:
     """Entry point of the ``jaxga`` console script; returns the exit status."""
     parser = build_parser()
     args = parser.parse_args(argv)
-    if args.func in (cmd_run, cmd_doe, cmd_compare):
-        use_compilation_cache()
     try:
+        if hasattr(args, "devices"):  # subcommands with add_parallel_arguments
+            configure_from_args(args)  # before JAX's backend starts
+        if args.func in (cmd_run, cmd_doe, cmd_compare):
+            use_compilation_cache()
         return args.func(args)
+    except ProcessLostError as e:
+        # Exit at once: a normal exit would wait in jax.distributed's shutdown barrier
+        # for the lost process (up to --process-timeout).
+        print(f"jaxga: error: {e}", file=sys.stderr, flush=True)
+        sys.stdout.flush()
+        os._exit(EXIT_PROCESS_LOST)
     except NoPathError as e:
         print(f"jaxga: no path: {e}", file=sys.stderr)
         return EXIT_NO_PATH

@@ -68,7 +68,9 @@ __all__ = [
 
 _I32 = jnp.int32
 _U32 = jnp.uint32
-_OFF8 = jnp.asarray(DIRECTIONS, jnp.int32)
+# NumPy, not jnp: importing jaxga must not start JAX's backend (jaxga.parallel sets the
+# device count first).
+_OFF8 = np.asarray(DIRECTIONS, np.int32)
 
 
 # ------------------------------------------------------------------------ helpers

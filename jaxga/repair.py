@@ -23,13 +23,15 @@ from __future__ import annotations
 
 import jax
 import jax.numpy as jnp
+import numpy as np
 
 from jaxga.grid import Grid, blocked_at, diagonal_legal
 
 __all__ = ["concat", "connect", "pad_cells", "random_free_neighbour"]
 
-_OFFSETS = jnp.array(
-    [[1, 0], [1, 1], [0, 1], [-1, 1], [-1, 0], [-1, -1], [0, -1], [1, -1]], dtype=jnp.int32
+# NumPy, not jnp: importing jaxga must not start JAX's backend (see jaxga.parallel).
+_OFFSETS = np.array(
+    [[1, 0], [1, 1], [0, 1], [-1, 1], [-1, 0], [-1, -1], [0, -1], [1, -1]], dtype=np.int32
 )
 
 
