@@ -27,6 +27,11 @@ the float32 lengths and angle sums of the post-optimised paths may differ in the
 ``block`` is therefore part of the checkpoint's fingerprint.
 ``DIR/manifest.json`` records what was run (preset configuration, map, factors, design,
 seeds, block, versions); a checkpoint written by another configuration is refused.
+With several processes (``jaxga doe --coordinator ...``, :mod:`jaxga.parallel`) every
+block is split over the processes; process 0 alone reads and writes ``DIR`` and tells
+the others which points are finished, so ``DIR`` need only be on process 0's disk. A lost
+process loses the block being computed, never a finished point: the restarted command
+completes the rest.
 
 Decisions where AGACD and the issue are silent:
 
@@ -536,49 +541,71 @@ class _Checkpoint:
     ``confirm-<coded>.json``."""
 
     def __init__(self, directory: str | Path, manifest: dict[str, Any]) -> None:
+        from jaxga import parallel
+
         self.dir = Path(directory)
+        # Several processes (jaxga.parallel): process 0 alone reads and writes the
+        # checkpoint; the others receive what it read (and its refusal) by broadcast, so
+        # every process agrees on which points remain even without a shared filesystem.
+        self.lead = parallel.process_index() == 0
+        error = self._check(manifest) if self.lead else None
+        error = parallel.broadcast(error)
+        if error:
+            raise ParameterError(error)
+
+    def _check(self, manifest: dict[str, Any]) -> str | None:
+        """Validate (or create) the manifest; the refusal message, or None."""
         self.dir.mkdir(parents=True, exist_ok=True)
         path = self.dir / "manifest.json"
         if path.exists():
             try:
                 old = json.loads(path.read_text(encoding="utf-8"))
             except (OSError, ValueError) as e:
-                raise ParameterError(f"checkpoint {self.dir}: unreadable manifest: {e}") from None
+                return f"checkpoint {self.dir}: unreadable manifest: {e}"
             if old != manifest:
                 keys = sorted(k for k in old.keys() | manifest.keys()
                               if old.get(k) != manifest.get(k))
-                raise ParameterError(
-                    f"checkpoint {self.dir} was written by a different configuration "
-                    f"(differs in {', '.join(keys)}); use another directory or delete it")
+                return (f"checkpoint {self.dir} was written by a different configuration "
+                        f"(differs in {', '.join(keys)}); use another directory or delete it")
         else:
             if any(self.dir.glob("point-*.json")):
-                raise ParameterError(f"checkpoint {self.dir} has points but no manifest")
+                return f"checkpoint {self.dir} has points but no manifest"
             _atomic_write_json(path, manifest)
+        return None
 
     def _point(self, q: int) -> Path:
         return self.dir / f"point-{q:04d}.json"
 
-    def load_point(self, q: int) -> dict[str, list] | None:
-        p = self._point(q)
-        if not p.exists():
-            return None
-        return json.loads(p.read_text(encoding="utf-8"))["responses"]
+    def load_points(self, n: int) -> list[dict[str, list] | None]:
+        """The saved responses of points ``0..n-1`` (None where not finished yet), as
+        process 0 read them."""
+        from jaxga import parallel
+
+        saved = None
+        if self.lead:
+            saved = [json.loads(p.read_text(encoding="utf-8"))["responses"]
+                     if (p := self._point(q)).exists() else None for q in range(n)]
+        return parallel.broadcast(saved)
 
     def save_point(self, q: int, responses: dict[str, np.ndarray]) -> None:
-        _atomic_write_json(self._point(q), {"point": q, "responses": _encode(responses)})
+        if self.lead:
+            _atomic_write_json(self._point(q), {"point": q, "responses": _encode(responses)})
 
     def _confirm(self, coded: np.ndarray) -> Path:
         return self.dir / ("confirm_" + "_".join(f"{int(c):+d}" for c in coded) + ".json")
 
     def load_confirmation(self, coded: np.ndarray) -> dict[str, list] | None:
-        p = self._confirm(coded)
-        if not p.exists():
-            return None
-        return json.loads(p.read_text(encoding="utf-8"))["responses"]
+        from jaxga import parallel
+
+        saved = None
+        if self.lead and (p := self._confirm(coded)).exists():
+            saved = json.loads(p.read_text(encoding="utf-8"))["responses"]
+        return parallel.broadcast(saved)
 
     def save_confirmation(self, coded: np.ndarray, responses: dict[str, np.ndarray]) -> None:
-        _atomic_write_json(self._confirm(coded), {"coded": [int(c) for c in coded],
-                                                  "responses": _encode(responses)})
+        if self.lead:
+            _atomic_write_json(self._confirm(coded), {"coded": [int(c) for c in coded],
+                                                      "responses": _encode(responses)})
 
 
 def _encode(responses: Mapping[str, np.ndarray]) -> dict[str, list]:
@@ -678,8 +705,7 @@ def run_doe(
 
     results: list[dict[str, np.ndarray] | None] = [None] * n_points
     if ckpt is not None:
-        for q in range(n_points):
-            saved = ckpt.load_point(q)
+        for q, saved in enumerate(ckpt.load_points(n_points)):
             if saved is not None:
                 results[q] = _decode(saved)
     done = sum(r is not None for r in results)

@@ -128,6 +128,31 @@ def test_two_processes_give_the_single_process_result(single_run, tmp_path):
     assert two == single_run
 
 
+DOE = ["doe", "--preset", "sga", "--map", MAP, "--corner-rule", "free", "--design", "L9",
+       "--factor", "crossover.probability=0.5,0.7,0.9",
+       "--factor", "mutation.probability=0.1,0.2,0.3", "--seeds", "2", "--generations", "5",
+       "--set", "population.size=10", "--block", "3", "--quiet", "--devices", "1"]
+
+
+def test_doe_in_two_processes_gives_the_single_process_result(tmp_path):
+    """``jaxga doe`` (9 points x 2 seeds in blocks of 3, checkpointed, and its
+    confirmation run) in 2 processes == in 1 process; process 0 alone writes the JSON and
+    the checkpoint, and the other process follows its list of finished points."""
+    with _Procs(tmp_path) as procs:
+        p = procs.start("single", _cli(*DOE, "--checkpoint", "ck1", "--json", "one.json"))
+        assert procs.wait(p) == 0, procs.output("single")
+        ps = _distributed(procs, _cli(*DOE, "--checkpoint", "ck2", "--json", "two.json"))
+        rcs = [procs.wait(p) for p in ps]
+        assert rcs == [0, 0], [procs.output(p.name) for p in ps]
+        out1, _ = procs.output("p1")
+    assert out1.strip().startswith("process 1 of 2: done (9 design points x 2 seeds")
+    one, two = _runs(tmp_path / "one.json"), _runs(tmp_path / "two.json")
+    assert len(two["points"]) == 9 and two == one
+    assert sorted(p.name for p in (tmp_path / "ck2").glob("point-*.json")) == sorted(
+        p.name for p in (tmp_path / "ck1").glob("point-*.json"))
+    assert len(list((tmp_path / "ck2").glob("point-*.json"))) == 9
+
+
 def test_two_devices_give_the_one_device_result(single_run, tmp_path):
     """``--devices 2`` (6 runs sharded over 2 XLA CPU devices) == ``--devices 1``."""
     with _Procs(tmp_path) as procs:
