@@ -24,7 +24,7 @@ import numpy as np
 
 from jaxga.errors import ParameterError
 from jaxga.geometry import segments_clear
-from jaxga.grid import DIRECTIONS, Grid, move_legal
+from jaxga.grid import Grid, move_legal
 
 __all__ = [
     "Population",
@@ -155,46 +155,6 @@ def has_endpoints(grid: Grid, cells: jax.Array, length: jax.Array) -> jax.Array:
     return _valid_length(cells, length) & (cells[0] == grid.start) & (last == grid.goal)
 
 
-def legal_step_table(grid: Grid) -> jax.Array:
-    """``int32[H * W]``: bit ``d`` set when the step from the cell in direction
-    ``DIRECTIONS[d]`` is a legal move (:func:`jaxga.grid.move_legal`, corner rule
-    included). One table per map, so that checking a step is one gather instead of
-    the divisions and four map lookups of ``move_legal`` (the evaluation's largest cost).
-    """
-    n, w = grid.n_cells, grid.width
-    a = jnp.arange(n, dtype=jnp.int32)[:, None]
-    legal = move_legal(grid, a, a + _step_offsets(w)[None, :])
-    bits = jnp.left_shift(jnp.int32(1), jnp.arange(8, dtype=jnp.int32))
-    return jnp.sum(jnp.where(legal, bits, 0), axis=1, dtype=jnp.int32)
-
-
-def _step_offsets(w: int) -> jax.Array:
-    d = np.asarray(DIRECTIONS, np.int64)
-    return jnp.asarray(d[:, 1] * w + d[:, 0], jnp.int32)
-
-
-def steps_legal(grid: Grid, a: jax.Array, b: jax.Array) -> jax.Array:
-    """``move_legal(grid, a, b)`` elementwise, by :func:`legal_step_table` (width >= 3,
-    where the eight index offsets of the directions are distinct; else ``move_legal``).
-
-    A difference ``b - a`` equal to a direction's offset is that move unless it wraps
-    around the map's edge, and then the direction leaves the map from ``a``, so its bit
-    is clear: the lookup is exact.
-    """
-    if grid.width < 3:
-        return move_legal(grid, a, b)
-    table = legal_step_table(grid)
-    offs = _step_offsets(grid.width)
-    a = jnp.asarray(a, jnp.int32)
-    diff = jnp.asarray(b, jnp.int32) - a
-    on_map = (a >= 0) & (a < grid.n_cells)
-    t = table[jnp.clip(a, 0, grid.n_cells - 1)]
-    bit = jnp.zeros(diff.shape, jnp.int32)
-    for d in range(8):
-        bit = bit | jnp.where(diff == offs[d], (t >> d) & 1, 0)
-    return on_map & (bit == 1)
-
-
 def is_continuous(grid: Grid, cells: jax.Array, length: jax.Array) -> jax.Array:
     """True when every valid step is a legal 8-connected move (SPEC 1).
 
@@ -203,7 +163,7 @@ def is_continuous(grid: Grid, cells: jax.Array, length: jax.Array) -> jax.Array:
     """
     cells = jnp.asarray(cells, jnp.int32)
     i = jnp.arange(cells.shape[0] - 1, dtype=jnp.int32)
-    legal = steps_legal(grid, cells[:-1], cells[1:]) | (i >= length - 1)
+    legal = move_legal(grid, cells[:-1], cells[1:]) | (i >= length - 1)
     first_free = ~grid.blocked.reshape(-1)[jnp.clip(cells[0], 0, grid.n_cells - 1)]
     on_map = jnp.all((cells >= 0) & (cells < grid.n_cells))
     return _valid_length(cells, length) & on_map & first_free & jnp.all(legal)

@@ -125,21 +125,3 @@ def test_remove_loops_under_x64():
         assert out.dtype == jnp.int32 and k.dtype == jnp.int32
         assert np.asarray(out[: int(k)]).tolist() == [0, 20, 40, 60]
 
-
-@pytest.mark.parametrize("rule", ["free", "no_squeeze", "strict"])
-@pytest.mark.parametrize("shape", [(7, 5), (6, 3), (4, 2)])
-def test_steps_legal_agrees_with_move_legal(rule, shape):
-    """The table lookup of ``is_continuous`` equals ``move_legal`` on every pair of
-    indices near each other (including off-map ones and steps wrapping an edge)."""
-    from jaxga.grid import move_legal
-    from jaxga.paths import steps_legal
-
-    h, w = shape
-    rng = np.random.default_rng(h * w)
-    grid = Grid.create(rng.random((h, w)) < 0.3, corner_rule=rule)
-    a = np.repeat(np.arange(-2, h * w + 2), 4 * w + 7)
-    b = a + np.tile(np.arange(-2 * w - 3, 2 * w + 4), h * w + 4)
-    want = np.asarray(move_legal(grid, jnp.asarray(a), jnp.asarray(b)))
-    got = np.asarray(steps_legal(grid, jnp.asarray(a), jnp.asarray(b)))
-    assert want.sum() > 0
-    np.testing.assert_array_equal(got, want)
