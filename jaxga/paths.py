@@ -240,8 +240,12 @@ def remove_loops(
     path stays continuous (the node after a last occurrence was adjacent to it).
 
     Cost: :func:`last_occurrence` (pass the static map size ``n_cells`` to get its fast
-    table variant on small maps) and a ``lax.scan`` of exactly ``L`` steps of two scalar
-    gathers, with no scatter.
+    table variant on small maps), then a ``lax.while_loop`` over the CUTS only (a walk
+    moves one position at a time except at a cell that occurs again later, so only those
+    "jump sources" need a sequential step; the next one after a position is a reverse
+    prefix minimum), each cut shifting the source index of the later output positions
+    (``O(L)`` vector work, no scatter), and one gather. A mutation's splice makes one or
+    two cuts; the former ``L``-step scan cost the same for every path.
 
     Returns:
         ``(cells, length)`` re-padded with the last cell.
@@ -249,14 +253,28 @@ def remove_loops(
     cells = jnp.asarray(cells, jnp.int32)
     n = cells.shape[0]
     length = jnp.asarray(length, jnp.int32)
-    nxt = last_occurrence(cells, length, n_cells) + 1
-    end = length - 1
+    i = jnp.arange(n, dtype=jnp.int32)
+    last = last_occurrence(cells, length, n_cells)
+    # next_jump[p]: the first position >= p whose cell occurs again later (n if none).
+    src = jnp.where(last > i, i, n)
+    next_jump = jax.lax.associative_scan(jnp.minimum, src, reverse=True)
+    next_jump = jnp.concatenate([next_jump, jnp.full((1,), n, jnp.int32)])
 
-    def step(pos, _):
-        done = pos > end
-        here = jnp.minimum(pos, end)
-        new_pos = jnp.where(done, pos, nxt[here])
-        return new_pos, (cells[here], ~done)
+    def cond(c):
+        q, _, _ = c
+        return q < n
 
-    _, (out, kept) = jax.lax.scan(step, jnp.int32(0), None, length=n)
-    return out, jnp.sum(kept, dtype=jnp.int32)
+    def body(c):
+        q, skipped, source = c
+        qc = jnp.minimum(q, n - 1)
+        d = last[qc] - qc  # positions q+1 .. last[q] are cut
+        out_q = qc - skipped  # output position of the kept node q
+        source = source + jnp.where(i > out_q, d, 0)
+        return next_jump[jnp.minimum(last[qc] + 1, n)], skipped + d, source
+
+    _, skipped, source = jax.lax.while_loop(
+        cond, body, (next_jump[0], jnp.int32(0), i)
+    )
+    new_length = jnp.maximum(jnp.minimum(length, n) - skipped, 0)
+    out = cells[jnp.clip(source, 0, n - 1)]
+    return pad(out, new_length), new_length

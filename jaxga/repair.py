@@ -74,13 +74,28 @@ def _pick_free_neighbour(
 def _pick_from_mask(
     bits: jax.Array, mask: jax.Array, cell: jax.Array, w: int
 ) -> tuple[jax.Array, jax.Array]:
-    free = (mask[..., None] >> jnp.arange(8, dtype=jnp.int32)) & 1
-    n_free = jnp.sum(free, axis=-1, dtype=jnp.int32)
+    # Population counts instead of a prefix sum over the 8 bits (jnp.cumsum lowers to a
+    # reduce_window that dominated a connection round on CPU): the rank of neighbour d
+    # among the free ones is the number of free neighbours below d.
+    dirs = jnp.arange(8, dtype=jnp.int32)
+    mask8 = mask & 255
+    free = (mask8[..., None] >> dirs) & 1
+    n_free = jax.lax.population_count(mask8)
     rank = (bits % jnp.maximum(n_free, 1).astype(jnp.uint32)).astype(jnp.int32)
-    hit = (free == 1) & (jnp.cumsum(free, axis=-1, dtype=jnp.int32) - 1 == rank[..., None])
+    below = jax.lax.population_count(mask8[..., None] & ((1 << dirs) - 1))
+    hit = (free == 1) & (below == rank[..., None])
     step = _OFFSETS[:, 1] * w + _OFFSETS[:, 0]
     pick = cell + jnp.sum(jnp.where(hit, step, 0), axis=-1, dtype=jnp.int32)
     return pick, n_free > 0
+
+
+def prefix_count(mask: jax.Array) -> jax.Array:
+    """``int32``: inclusive prefix count of a 1-D bool mask (``cumsum``).
+
+    ``jax.lax.associative_scan``: ``jnp.cumsum`` lowers to a ``reduce_window`` that is
+    O(n^2) on XLA's CPU backend and dominated the connection rounds.
+    """
+    return jax.lax.associative_scan(jnp.add, jnp.asarray(mask, jnp.int32))
 
 
 def _chebyshev(a: jax.Array, b: jax.Array, w: int) -> jax.Array:
@@ -145,7 +160,7 @@ def connect(
     )
     # Initial queue: every open gap between consecutive used anchors.
     open0 = used[1:] & (_chebyshev(anchors[:-1], anchors[1:], w) > 1)
-    q_pos = jnp.cumsum(open0, dtype=i32) - 1
+    q_pos = prefix_count(open0) - 1
     q0 = jnp.full((queue,), -1, i32).at[jnp.where(open0, q_pos, queue)].set(
         jnp.arange(k_max - 1, dtype=i32), mode="drop"
     )
@@ -175,7 +190,7 @@ def connect(
         alt, has_alt = _pick_from_mask(bits_all[r], med_mask, my * w + mx, w)
         mid = jnp.where(med_blocked, alt, my * w + mx)
         ok &= ~jnp.any(active & med_blocked & ~has_alt)
-        new_id = count + jnp.cumsum(active, dtype=i32) - 1
+        new_id = count + jnp.arange(queue, dtype=i32)  # active lanes are a prefix
         ok &= count + qlen <= capacity
         slot = jnp.where(active & (new_id < capacity), new_id, capacity)
         node = _set(node, slot, mid)
@@ -187,9 +202,7 @@ def connect(
             [active & (_chebyshev(lo, mid, w) > 1), active & (_chebyshev(mid, hi, w) > 1)],
             axis=1,
         ).reshape(-1)
-        pos = jnp.cumsum(open_, dtype=i32) - 1
-        q = _set(jnp.full((queue,), -1, i32), jnp.where(open_, pos, queue), cand)
-        new_qlen = jnp.sum(open_, dtype=i32)
+        q, new_qlen = _compact(open_, cand, queue)
         ok &= new_qlen <= queue
         return node, nxt, q, jnp.minimum(new_qlen, queue), count + qlen, r + 1, ok
 
@@ -228,7 +241,7 @@ def connect(
         return pad_cells(seq, length), length, ok
     vals = jnp.stack([seq, jnp.where(side_a, ty * w + hx, hy * w + tx)], axis=1).reshape(-1)
     valid = jnp.stack([keep, insert], axis=1).reshape(-1)
-    out_pos = jnp.cumsum(valid, dtype=i32) - 1
+    out_pos = prefix_count(valid) - 1
     total = jnp.sum(valid, dtype=i32)
     ok &= total <= capacity
     cells = jnp.zeros((capacity,), i32).at[jnp.where(valid, out_pos, capacity)].set(
@@ -236,6 +249,32 @@ def connect(
     )
     length = jnp.minimum(total, capacity)
     return pad_cells(cells, length), length, ok
+
+
+def _compact(flags: jax.Array, vals: jax.Array, size: int) -> tuple[jax.Array, jax.Array]:
+    """``(vals[flags] padded with -1 to size, number of flags)`` (first ``size`` kept).
+
+    Up to 32 flags: the flags packed into one word and the set bits extracted lowest
+    first (``x & -x``, ``x & (x - 1)``), a few elementwise operations per slot; XLA
+    otherwise fuses a prefix sum into every output slot of the one-hot scatter, which
+    dominated a connection round on the CPU. Longer: prefix count and scatter.
+    """
+    n = flags.shape[0]
+    count = jnp.sum(flags, dtype=jnp.int32)
+    if n > 32:
+        pos = prefix_count(flags) - 1
+        out = _set(jnp.full((size,), -1, jnp.int32), jnp.where(flags, pos, size), vals)
+        return out, count
+    bit = jnp.left_shift(jnp.uint32(1), jnp.arange(n, dtype=jnp.uint32))
+    x = jnp.sum(jnp.where(flags, bit, jnp.uint32(0)), dtype=jnp.uint32)
+    idx = []
+    for _ in range(size):
+        low = x & (jnp.uint32(0) - x)
+        idx.append(jax.lax.population_count(low - jnp.uint32(1)).astype(jnp.int32))
+        x = x & (x - jnp.uint32(1))
+    idx = jnp.minimum(jnp.stack(idx), n - 1)
+    out = jnp.where(jnp.arange(size, dtype=jnp.int32) < count, vals[idx], -1)
+    return out.astype(jnp.int32), count
 
 
 ONE_HOT_MAX = 1024
