@@ -31,6 +31,17 @@ SUMMARY_METRICS = ("length", "raw_length", "angle_sum", "turns", "fitness",
                    "convergence_generation")
 
 
+GAP_TOLERANCE = 1e-6
+"""Relative gaps smaller than this are reported as exactly 0: path lengths are summed in
+float32 on the device, so an optimal path can come out a few 1e-8 below the optimum."""
+
+
+def _relative_gap(length: np.ndarray, optimum: float, success: np.ndarray) -> np.ndarray:
+    gap = np.asarray(length, float) / optimum - 1.0
+    gap = np.where(np.abs(gap) < GAP_TOLERANCE, 0.0, gap)
+    return np.where(success, gap, np.nan)
+
+
 @dataclasses.dataclass
 class Result:
     """Per-seed results of :func:`run` (NumPy arrays, leading axis = seeds)."""
@@ -74,12 +85,13 @@ class Result:
     def gap(self) -> np.ndarray:
         """Relative gap of each post-optimised length to the any-angle optimum (its lower
         bound); NaN for failed seeds."""
-        return np.where(self.success, self.length / self.any_angle_optimum - 1.0, np.nan)
+        return _relative_gap(self.length, self.any_angle_optimum, self.success)
 
     @property
     def raw_gap(self) -> np.ndarray:
-        """Relative gap of each raw (8-connected) length to the 8-connected optimum."""
-        return np.where(self.success, self.raw_length / self.optimum - 1.0, np.nan)
+        """Relative gap of each raw (8-connected) length to the 8-connected optimum
+        (negative only for waypoint algorithms, whose raw paths are not 8-connected)."""
+        return _relative_gap(self.raw_length, self.optimum, self.success)
 
     def _column(self, name: str) -> np.ndarray:
         if name in self.metrics:

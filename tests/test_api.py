@@ -131,3 +131,16 @@ def test_schedules_match_the_papers_formulas(t):
                         rel_tol=1e-5)
     with pytest.raises(ValueError):
         schedules.mpmga_temperature(1.0, 1.5)
+
+
+def test_relative_gap_rounds_float32_noise_to_zero_but_keeps_real_gaps():
+    """An optimal path summed in float32 can be 1e-8 below the optimum: its gap is 0, not
+    -0.0000; real gaps (positive, or negative for waypoint paths) and failures are kept."""
+    from jaxga.api import _relative_gap
+
+    gap = _relative_gap(np.array([30.970598, 31.5, 29.0, 30.0]), 30.9706,
+                        np.array([True, True, True, False]))
+    assert gap[0] == 0.0 and not np.signbit(gap[0])
+    assert gap[1] == pytest.approx(31.5 / 30.9706 - 1)
+    assert gap[2] == pytest.approx(29.0 / 30.9706 - 1) and gap[2] < 0
+    assert np.isnan(gap[3])

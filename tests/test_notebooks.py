@@ -28,7 +28,9 @@ def test_every_notebook_is_listed():
 @pytest.mark.parametrize("path", NOTEBOOKS, ids=[p.stem for p in NOTEBOOKS])
 def test_notebook_runs(path: Path, monkeypatch, tmp_path):
     monkeypatch.setenv("JAXGA_NOTEBOOK_QUICK", "1")
-    monkeypatch.setenv("MPLBACKEND", "Agg")
+    # The kernel's inline backend turns figures into image/png outputs (checked below);
+    # a non-interactive MPLBACKEND such as Agg would suppress them.
+    monkeypatch.delenv("MPLBACKEND", raising=False)
     monkeypatch.setenv("JAX_COMPILATION_CACHE_DIR", str(CACHE_DIR))
     monkeypatch.setenv("JAX_PERSISTENT_CACHE_MIN_COMPILE_TIME_SECS", "0.5")
     book = nbformat.read(path, as_version=4)
