@@ -9,7 +9,6 @@ on its own.
 
 from __future__ import annotations
 
-import concurrent.futures
 import dataclasses
 import functools
 import math
@@ -205,7 +204,7 @@ def _programs(algo: Algorithm, grid_spec: Any, params_spec: Any, n_runs: int,
     devices): a second call with another map of the same shape, other seeds or other
     dynamic parameter values (probabilities, weights, temperatures, population size
     below the capacity) reuses the compiled programs (``jaxga.replan`` relies on it).
-    The three programs are compiled concurrently (XLA compiles outside the GIL).
+    The programs are compiled one after the other (see the comment in the code).
     """
     del n_devices  # part of the cache key only
     params_spec = dict(params_spec)
@@ -245,10 +244,10 @@ def _programs(algo: Algorithm, grid_spec: Any, params_spec: Any, n_runs: int,
         jax.ShapeDtypeStruct((n_runs,), jnp.float32))
     traced = {"init": init_t, "finish": finish_t, **{f"evolve{n}": t
                                                       for n, t in evolve_t.items()}}
-    with concurrent.futures.ThreadPoolExecutor(len(traced)) as pool:
-        futures = {name: pool.submit(lambda t=t: t.lower().compile())
-                   for name, t in traced.items()}
-        compiled = {name: f.result() for name, f in futures.items()}
+    # One after the other: compiling in threads was faster, but JAX's persistent cache
+    # write (compilation_cache.put_executable_and_time) crashed the process with a
+    # segmentation fault when two threads wrote at once (seen in the test suite, jax 0.10.2).
+    compiled = {name: t.lower().compile() for name, t in traced.items()}
     return _Programs(
         init=compiled["init"],
         evolve={n: compiled[f"evolve{n}"] for n in evolve_t},
