@@ -77,14 +77,13 @@ def default_capacity(grid: Grid) -> int:
     return 4 * (grid.height + grid.width)
 
 
-def build(config: Config, grid: Grid, population: int | None = None) -> tuple[Algorithm, dict]:
+def build(config: Config, grid: Grid) -> tuple[Algorithm, dict]:
     """The static :class:`Algorithm` and the dynamic parameter pytree of a configuration.
 
-    ``population`` overrides the population capacity (for sweeps over sizes; the
-    ``active`` parameter then says how many are used).
+    The population capacity is ``population.size`` (a sweep over sizes builds with its
+    largest size; the ``active`` parameter then says how many are used).
     """
-    size = int(config["population.size"])
-    cap_p = max(size, population or 0)
+    cap_p = int(config["population.size"])
     capacity = int(config["population.capacity"]) or default_capacity(grid)
     islands = int(config["islands.count"])
     algo = Algorithm(
