@@ -195,7 +195,11 @@ class _Programs:
     compile_s: float
 
 
-@functools.lru_cache(maxsize=16)
+PROGRAM_CACHE_SIZE = 8
+"""How many compiled program sets :func:`sweep` keeps (see :func:`clear_compiled`)."""
+
+
+@functools.lru_cache(maxsize=PROGRAM_CACHE_SIZE)
 def _programs(algo: Algorithm, grid_spec: Any, params_spec: Any, n_runs: int,
               sizes: tuple[int, ...], n_devices: int) -> _Programs:
     """Compile init / evolve (one per chunk size) / finish for ``n_runs`` runs.
@@ -254,6 +258,26 @@ def _programs(algo: Algorithm, grid_spec: Any, params_spec: Any, n_runs: int,
         finish=compiled["finish"],
         compile_s=time.perf_counter() - t0,
     )
+
+
+def clear_compiled() -> None:
+    """Free every compiled program this process holds (jaxga's and JAX's caches).
+
+    Each compiled XLA:CPU program maps a few thousand small memory regions (one code,
+    one constant and one data region per kernel). Linux limits a process to
+    ``vm.max_map_count`` regions (65,530 by default) and XLA crashes with a segmentation
+    fault, not an error, when that is exhausted: a notebook or a script that compiles
+    many different configurations (operators, map sizes, run counts) in one process
+    should call this between experiments. :func:`sweep` keeps at most
+    :data:`PROGRAM_CACHE_SIZE` program sets itself; JAX's own ``jit`` caches are not
+    bounded. The next call compiles again (from the persistent compilation cache, when
+    one is configured).
+    """
+    import gc
+
+    _programs.cache_clear()
+    jax.clear_caches()
+    gc.collect()
 
 
 def _stack_params(per_point: Sequence[dict], seeds: int) -> dict:

@@ -6,6 +6,7 @@ import os
 from pathlib import Path
 
 import jax
+import pytest
 from hypothesis import HealthCheck, settings
 
 CACHE_DIR = Path(os.environ.get("JAXGA_TEST_JAX_CACHE", Path(__file__).parent / ".jax_cache"))
@@ -26,3 +27,30 @@ settings.register_profile(
 settings.load_profile(os.environ.get("HYPOTHESIS_PROFILE", "jaxga"))
 
 DATA = Path(__file__).parent / "data"
+
+
+MAX_MAPPED_REGIONS = 30_000
+"""Free compiled programs when the process maps more regions than this.
+
+Every compiled XLA:CPU program keeps ~3 memory mappings per kernel alive; the whole suite
+in one process compiles several hundred programs, and at Linux's default
+``vm.max_map_count`` (65,530) XLA segfaults (it did, in ``put_executable_and_time``,
+~400 tests in). Programs compiled again later come from the persistent cache."""
+
+
+def _mapped_regions() -> int | None:
+    try:
+        with open("/proc/self/maps", "rb") as maps:
+            return sum(1 for _ in maps)
+    except OSError:  # not Linux
+        return None
+
+
+@pytest.fixture(autouse=True)
+def _bounded_compiled_programs():
+    yield
+    n = _mapped_regions()
+    if n is not None and n > MAX_MAPPED_REGIONS:
+        from jaxga.api import clear_compiled
+
+        clear_compiled()

@@ -4,6 +4,7 @@ and the optax schedules of the adaptive operators."""
 from __future__ import annotations
 
 import math
+from pathlib import Path
 
 import numpy as np
 import pytest
@@ -144,3 +145,21 @@ def test_relative_gap_rounds_float32_noise_to_zero_but_keeps_real_gaps():
     assert gap[1] == pytest.approx(31.5 / 30.9706 - 1)
     assert gap[2] == pytest.approx(29.0 / 30.9706 - 1) and gap[2] < 0
     assert np.isnan(gap[3])
+
+
+def test_clear_compiled_releases_the_programs_memory_mappings(grid):
+    """Long sessions stay below Linux's vm.max_map_count (a segfault inside XLA)."""
+    maps = Path("/proc/self/maps")
+    if not maps.exists():
+        pytest.skip("needs /proc (Linux)")
+
+    def regions() -> int:
+        return len(maps.read_bytes().splitlines())
+
+    api.clear_compiled()
+    before = regions()
+    api.run("sga", grid, seeds=1, **SMALL, mutation__method="one_point")
+    compiled = regions()
+    assert compiled > before + 300  # a few hundred kernels, ~3 regions each
+    api.clear_compiled()
+    assert regions() < before + 100
