@@ -13,10 +13,11 @@ the open gaps as a small work queue: a round costs ``O(open gaps)``, not ``O(cap
 and only the final walk along the links is proportional to the length of the result.
 
 The papers' GAs allow squeezing diagonally between obstacles (corner rule ``"free"``).
-Under ``"strict"``, a diagonal step past a blocked side cell is made legal by inserting
-the free side cell (two orthogonal steps); under ``"no_squeeze"`` and ``"strict"``, a
-diagonal step with both side cells blocked makes the connection fail. This is jaxga's
-extension for the stricter corner rules (SPEC 1).
+Under the stricter rules the connected path first loses its loops (its remaining steps
+are steps of the raw path); then, under ``"strict"``, a diagonal step past a blocked side
+cell is made legal by inserting the free side cell (two orthogonal steps), and under
+``"no_squeeze"`` and ``"strict"`` a diagonal step with both side cells blocked makes the
+connection fail. This is jaxga's extension for the stricter corner rules (SPEC 1).
 """
 
 from __future__ import annotations
@@ -26,6 +27,7 @@ import jax.numpy as jnp
 import numpy as np
 
 from jaxga.grid import Grid, blocked_at, diagonal_legal
+from jaxga.paths import remove_loops
 
 __all__ = ["concat", "connect", "pad_cells", "random_free_neighbour"]
 
@@ -140,8 +142,9 @@ def connect(
         directly discarded"), a gap was still open after ``max_rounds``, more than
         ``queue`` gaps were open at once, the path outgrew ``capacity``, or a diagonal
         step could not be made legal under the corner rule; the cells are then
-        meaningless. The path may contain loops: remove them with
-        :func:`jaxga.paths.remove_loops`.
+        meaningless. Under ``"free"`` the path may contain loops (remove them with
+        :func:`jaxga.paths.remove_loops`); under the stricter rules it has none, except
+        where a strict corner's inserted side cell was already on the path.
     """
     anchors = jnp.asarray(anchors, jnp.int32)
     n_anchors = jnp.asarray(n_anchors, jnp.int32)
@@ -225,6 +228,12 @@ def connect(
         follow_cond, follow_body, (jnp.int32(0), jnp.int32(0), jnp.zeros((capacity,), i32))
     )
     keep = jnp.arange(capacity, dtype=i32) < n_seq
+    if grid.corner_rule != "free":
+        # Judge the corners of the loop-free path: most squeezes of a raw connection lie
+        # on loops (a loop-free path's steps are a subset of the raw path's), and failing
+        # on them rejected ~99.9 % of connections on a 20 % random map.
+        seq, n_seq = remove_loops(seq, n_seq, grid.n_cells)
+        keep = jnp.arange(capacity, dtype=i32) < n_seq
 
     # Make every diagonal step legal under the corner rule (strict: via the free side).
     there = jnp.concatenate([seq[1:], seq[-1:]])

@@ -72,6 +72,63 @@ def test_connect_properties(bits, rule, anchor_lists, seed):
             assert not bool(ok[i])
 
 
+def _squeezes(blocked: np.ndarray, path: list[int]) -> list[tuple[bool, bool, int]]:
+    """Per diagonal step: (side a (x_to, y_from) blocked, side b blocked, side b's cell)."""
+    w = blocked.shape[1]
+    out = []
+    for h, t in zip(path, path[1:]):
+        hx, hy, tx, ty = h % w, h // w, t % w, t // w
+        if hx != tx and hy != ty:
+            out.append((bool(blocked[hy, tx]), bool(blocked[ty, hx]), ty * w + hx))
+    return out
+
+
+def _strict_reference(blocked: np.ndarray, path: list[int], rule: str, cap: int):
+    """The loop-free "free" connection judged under ``rule`` (None: the connection fails)."""
+    w = blocked.shape[1]
+    out = [path[0]]
+    for h, t in zip(path, path[1:]):
+        hx, hy, tx, ty = h % w, h // w, t % w, t // w
+        if hx != tx and hy != ty:
+            a, b = bool(blocked[hy, tx]), bool(blocked[ty, hx])
+            if a and b:
+                return None
+            if rule == "strict" and (a or b):
+                out.append(ty * w + hx if a else hy * w + tx)
+        out.append(t)
+    return out if len(out) <= cap else None
+
+
+def test_stricter_rules_judge_the_loop_free_connection():
+    """Under no_squeeze / strict, connect = the same key's "free" connection without its
+    loops, failing only on a squeeze left in the loop-free path (strict: a one-sided
+    corner becomes two orthogonal steps). Squeezes on loops no longer fail it."""
+    rng = np.random.default_rng(7)
+    blocked = rng.random((N, N)) < 0.3
+    free_cells = np.flatnonzero(~blocked.reshape(-1))
+    anchors = jnp.asarray(rng.choice(free_cells, size=(256, 5)), jnp.int32)  # intermittent
+    n = jnp.full((256,), 5, jnp.int32)
+    keys = jax.random.split(jax.random.PRNGKey(3), 256)
+    grid = Grid.create(blocked, corner_rule="free")
+    raw, raw_n, raw_ok = _connect(keys, grid, anchors, n)
+    looped, looped_n = _loops(raw, raw_n)
+    saved = 0
+    for rule in ("no_squeeze", "strict"):
+        cells, length, ok = _connect(keys, grid.replace(corner_rule=rule), anchors, n)
+        for i in range(256):
+            want = None
+            if bool(raw_ok[i]):
+                path = np.asarray(looped[i, : int(looped_n[i])]).tolist()
+                want = _strict_reference(blocked, path, rule, CAP)
+                raw_path = np.asarray(raw[i, : int(raw_n[i])]).tolist()
+                saved += want is not None and any(
+                    a and b for a, b, _ in _squeezes(blocked, raw_path))
+            assert bool(ok[i]) == (want is not None), (rule, i)
+            if want is not None:
+                assert np.asarray(cells[i, : int(length[i])]).tolist() == want, (rule, i)
+    assert saved > 0  # connections that the raw-path check used to reject
+
+
 def test_capacity_overflow_fails_instead_of_wrapping():
     grid = Grid.create(np.zeros((20, 20), bool), corner_rule="free")
     _, _, ok = connect(jax.random.PRNGKey(0), grid, jnp.array([0, 399], jnp.int32), 2, 10)
