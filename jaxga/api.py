@@ -208,7 +208,7 @@ def _programs(algo: Algorithm, grid_spec: Any, params_spec: Any, n_runs: int,
     devices): a second call with another map of the same shape, other seeds or other
     dynamic parameter values (probabilities, weights, temperatures, population size
     below the capacity) reuses the compiled programs (``jaxga.replan`` relies on it).
-    The programs are compiled one after the other (see the comment in the code).
+    The programs are compiled one after the other.
     """
     del n_devices  # part of the cache key only
     params_spec = dict(params_spec)
@@ -248,9 +248,9 @@ def _programs(algo: Algorithm, grid_spec: Any, params_spec: Any, n_runs: int,
         jax.ShapeDtypeStruct((n_runs,), jnp.float32))
     traced = {"init": init_t, "finish": finish_t, **{f"evolve{n}": t
                                                       for n, t in evolve_t.items()}}
-    # One after the other: compiling in threads was faster, but JAX's persistent cache
-    # write (compilation_cache.put_executable_and_time) crashed the process with a
-    # segmentation fault when two threads wrote at once (seen in the test suite, jax 0.10.2).
+    # One after the other. (Compiling them in threads was faster; it was dropped for a
+    # segfault in the persistent-cache write that turned out to be the process running out
+    # of memory mappings, see clear_compiled, not the threads. Not re-measured since.)
     compiled = {name: t.lower().compile() for name, t in traced.items()}
     return _Programs(
         init=compiled["init"],

@@ -38,7 +38,8 @@ in one process compiles several hundred programs, and at Linux's default
 ~400 tests in). Programs compiled again later come from the persistent cache."""
 
 
-def _mapped_regions() -> int | None:
+def mapped_regions() -> int | None:
+    """How many memory regions this process maps (None off Linux)."""
     try:
         with open("/proc/self/maps", "rb") as maps:
             return sum(1 for _ in maps)
@@ -49,7 +50,7 @@ def _mapped_regions() -> int | None:
 @pytest.fixture(autouse=True)
 def _bounded_compiled_programs():
     yield
-    n = _mapped_regions()
+    n = mapped_regions()
     if n is not None and n > MAX_MAPPED_REGIONS:
         from jaxga.api import clear_compiled
 

@@ -4,7 +4,6 @@ and the optax schedules of the adaptive operators."""
 from __future__ import annotations
 
 import math
-from pathlib import Path
 
 import numpy as np
 import pytest
@@ -149,13 +148,10 @@ def test_relative_gap_rounds_float32_noise_to_zero_but_keeps_real_gaps():
 
 def test_clear_compiled_releases_the_programs_memory_mappings(grid):
     """Long sessions stay below Linux's vm.max_map_count (a segfault inside XLA)."""
-    maps = Path("/proc/self/maps")
-    if not maps.exists():
+    from tests.conftest import mapped_regions as regions
+
+    if regions() is None:
         pytest.skip("needs /proc (Linux)")
-
-    def regions() -> int:
-        return len(maps.read_bytes().splitlines())
-
     api.clear_compiled()
     before = regions()
     api.run("sga", grid, seeds=1, **SMALL, mutation__method="one_point")

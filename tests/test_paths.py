@@ -124,4 +124,3 @@ def test_remove_loops_under_x64():
         out, k = jax.jit(remove_loops, static_argnums=2)(cells, 7, 400)
         assert out.dtype == jnp.int32 and k.dtype == jnp.int32
         assert np.asarray(out[: int(k)]).tolist() == [0, 20, 40, 60]
-
