@@ -48,9 +48,8 @@ from jaxga.batching import keep_parent_on_failure, over_individuals_gated
 from jaxga.errors import ParameterError
 from jaxga.grid import DIRECTIONS, Grid, blocked_at, move_legal
 from jaxga.init import directional_walk
-from jaxga.paths import remove_loops
 from jaxga.postprocess import compact, line_of_sight
-from jaxga.repair import concat, connect
+from jaxga.repair import concat, connect, splice_loop_free
 
 __all__ = [
     "adaptive_mutation_probability",
@@ -176,15 +175,10 @@ def neighbour_point(
 def _splice_loop_free(grid, cells, keep_to, seg, seg_len, resume, length):
     """``cells[:keep_to] + seg[:seg_len] + cells[resume:length]``, loops removed, in ``L``.
 
-    Built in a work buffer of ``L + len(seg)`` cells so that the capacity is checked on
-    the loop-free result. Returns ``(cells int32[L], length, fits)``.
+    :func:`jaxga.repair.splice_loop_free` (the capacity is checked on the loop-free
+    result). Returns ``(cells int32[L], length, fits)``.
     """
-    cap = cells.shape[0]
-    work, work_len, _ = concat(
-        [(cells, 0, keep_to), (seg, 0, seg_len), (cells, resume, length)], cap + seg.shape[0]
-    )
-    work, work_len = remove_loops(work, work_len, grid.n_cells)
-    return work[:cap], work_len, work_len <= cap
+    return splice_loop_free(cells, length, keep_to, seg, seg_len, resume, grid.n_cells)
 
 
 # ---------------------------------------------------------------- Zhu one point

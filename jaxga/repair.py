@@ -27,9 +27,9 @@ import jax.numpy as jnp
 import numpy as np
 
 from jaxga.grid import Grid, blocked_at, diagonal_legal
-from jaxga.paths import remove_loops
+from jaxga.paths import TABLE_MAX_CELLS, remove_loops
 
-__all__ = ["concat", "connect", "pad_cells", "random_free_neighbour"]
+__all__ = ["concat", "connect", "pad_cells", "random_free_neighbour", "splice_loop_free"]
 
 # NumPy, not jnp: importing jaxga must not start JAX's backend (see jaxga.parallel).
 _OFFSETS = np.array(
@@ -333,3 +333,85 @@ def concat(
     last = out[jnp.maximum(length - 1, 0)]
     out = jnp.where(j < length, out, last)
     return out, length, offset <= capacity
+
+
+SPLICE_LOCAL_MAX = 32
+"""Largest inserted segment :func:`splice_loop_free` handles without a full loop removal."""
+
+
+def splice_loop_free(
+    cells: jax.Array,
+    length: jax.Array,
+    keep_to: jax.Array,
+    seg: jax.Array,
+    seg_len: jax.Array,
+    resume: jax.Array,
+    n_cells: int | None = None,
+) -> tuple[jax.Array, jax.Array, jax.Array]:
+    """``remove_loops(cells[:keep_to] + seg[:seg_len] + cells[resume:length])`` in ``L``.
+
+    The splice of a mutation (IMGA 4.3.3: replace a stretch of the path by a new
+    connection, then remove the loops this creates; MPMGA 4.3 deletion operator).
+    Returns ``(cells int32[L], length, fits)``; ``fits`` is False when the loop-free
+    result is longer than ``L`` (the cells are then truncated and must not be used).
+
+    For a loop-free parent ``P`` (every GA population here is loop-free) the loops of
+    ``A + S + B`` (``A = P[:keep_to]``, ``S`` the segment, ``B = P[resume:length]``) can
+    only involve cells of ``S``, so the walk of :func:`jaxga.paths.remove_loops` is: keep
+    ``A`` up to its first cell that occurs in ``S`` (jump to that cell's last occurrence in
+    ``S``), then follow ``S`` by last occurrences until a cell that occurs in ``B`` (jump
+    there) or the end of ``S``, then keep the rest of ``B``. With a segment of at most
+    :data:`SPLICE_LOCAL_MAX` cells this costs ``len(seg) x L`` comparisons and a
+    ``len(seg)``-step walk instead of a map-sized table and a loop over the whole path;
+    the result is the same as the full loop removal (for a loop-free parent; a parent
+    with loops of its own keeps them). Longer segments take the full
+    :func:`~jaxga.paths.remove_loops` (``n_cells`` selects its table variant).
+    """
+    cells = jnp.asarray(cells, jnp.int32)
+    seg = jnp.asarray(seg, jnp.int32)
+    length = jnp.asarray(length, jnp.int32)
+    seg_len = jnp.asarray(seg_len, jnp.int32)
+    cap, m = cells.shape[0], seg.shape[0]
+    i32 = jnp.int32
+    if m > SPLICE_LOCAL_MAX:
+        work, work_len, _ = concat(
+            [(cells, 0, keep_to), (seg, 0, seg_len), (cells, resume, length)], cap + m
+        )
+        work, work_len = remove_loops(work, work_len, n_cells)
+        return work[:cap], work_len, work_len <= cap
+    j = jnp.arange(cap, dtype=i32)
+    t = jnp.arange(m, dtype=i32)
+    in_seg = t < seg_len
+    # Where each cell of S is in P (-1: nowhere); P is loop-free, so at most once.
+    if n_cells is not None and n_cells <= TABLE_MAX_CELLS:
+        table = jnp.full((n_cells,), -1, i32)
+        table = table.at[jnp.where(j < length, cells, n_cells)].set(j, mode="drop")
+        pos = jnp.where(in_seg, table[jnp.clip(seg, 0, n_cells - 1)], -1)
+    else:
+        match = (seg[:, None] == cells[None, :]) & (j < length)[None, :]  # [m, L]
+        pos = jnp.where(in_seg, jnp.max(jnp.where(match, j[None, :], -1), axis=1), -1)
+    pos_a = jnp.where((pos >= 0) & (pos < keep_to), pos, cap)
+    pos_b = jnp.where(pos >= resume, pos, -1)
+    same = (seg[:, None] == seg[None, :]) & in_seg[None, :]
+    last_s = jnp.max(jnp.where(same, t[None, :], -1), axis=1)  # last occurrence in S
+    # The first cell of A that occurs in S: A is kept up to it, S is entered at the
+    # cell's last occurrence there.
+    k_a = jnp.min(pos_a)
+    hit_a = k_a < cap
+    entry = jnp.max(jnp.where(pos_a == k_a, t, -1))
+    a_len = jnp.where(hit_a, k_a, keep_to)
+    t0 = jnp.where(hit_a, entry, 0)
+
+    def step(_, c):
+        cur, done, kept, b_from = c
+        here = ~done & (cur < seg_len)
+        cc = jnp.clip(cur, 0, m - 1)
+        kept = kept | (here & (t == cur))
+        into_b = here & (pos_b[cc] >= 0)
+        b_from = jnp.where(into_b, pos_b[cc] + 1, b_from)
+        return (jnp.where(here, last_s[cc] + 1, cur), done | ~here | into_b, kept, b_from)
+
+    init = (t0, jnp.bool_(False), jnp.zeros((m,), bool), jnp.asarray(resume, i32))
+    _, _, kept, b_from = jax.lax.fori_loop(0, m, step, init)
+    s_cells, s_len = _compact(kept, seg, m)
+    return concat([(cells, 0, a_len), (s_cells, 0, s_len), (cells, b_from, length)], cap)

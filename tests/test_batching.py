@@ -95,3 +95,26 @@ def test_gated_map_under_vmap_and_block_sizes():
     for block in (1, 4, 5, 12):
         out = jax.vmap(lambda a, v, b=block: gated_map(f, a, (v,), (v,), block=b)[0])(apply, x)
         np.testing.assert_array_equal(out, np.where(apply, np.asarray(x) * 10, x))
+
+
+@pytest.mark.parametrize("prob", [0.0, 0.8, 1.0])
+def test_dense_pairs_equal_gated_pairs_and_compute_all(setting, prob):
+    """``dense=True`` (every pair computed, then selected) gives the gated result."""
+    grid, pop = setting
+    key = jax.random.PRNGKey(11)
+    dense = jax.jit(lambda k: cx.crossover_population(cx.common_point, dense=True)(
+        k, grid, pop, prob))(key)
+    gated = jax.jit(lambda k: cx.crossover_population(cx.common_point)(k, grid, pop, prob))(key)
+    plain = jax.jit(lambda k: over_pairs(cx.with_probability(cx.common_point))(
+        k, grid, pop, jnp.full((pop.size // 2,), prob)))(key)
+    assert _same(dense, gated) and _same(dense, plain)
+    if prob == 0.0:
+        assert _same(dense[0], pop)
+
+
+def test_dense_gated_map_under_vmap():
+    x = jnp.arange(24, dtype=jnp.int32).reshape(2, 12)
+    apply = jnp.array([[True, False] * 6, [False] * 11 + [True]])
+    out = jax.vmap(lambda a, v: gated_map(lambda u: (u * 10,), a, (v,), (v,), dense=True)[0])(
+        apply, x)
+    np.testing.assert_array_equal(out, np.where(apply, np.asarray(x) * 10, x))

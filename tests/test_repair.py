@@ -2,6 +2,8 @@
 
 from __future__ import annotations
 
+import functools
+
 import jax
 import jax.numpy as jnp
 import numpy as np
@@ -11,7 +13,7 @@ from hypothesis import strategies as st
 from jaxga import Grid
 from jaxga.grid import CORNER_RULES
 from jaxga.paths import has_endpoints, is_continuous, is_loop_free, remove_loops
-from jaxga.repair import concat, connect
+from jaxga.repair import SPLICE_LOCAL_MAX, concat, connect, splice_loop_free
 
 N = 10
 CAP = 64
@@ -146,3 +148,55 @@ def test_concat_and_overflow():
     assert np.asarray(cells).tolist() == [0, 1, 2, 105, 106, 107, 107, 107]
     _, _, ok = concat([(a, 0, 6), (a, 0, 6)], 8)
     assert not bool(ok)
+
+
+def _loop_free_reference(path: list[int]) -> list[int]:
+    """From the start, keep a node and jump past the LAST visit of its cell."""
+    out, p = [], 0
+    while p < len(path):
+        last = max(k for k, c in enumerate(path) if c == path[p])
+        out.append(path[p])
+        p = last + 1
+    return out
+
+
+_SPLICE_L, _SPLICE_CELLS = 24, 40
+
+
+@functools.cache
+def _splice_fn(seg_cap: int, table: bool):
+    n_cells = _SPLICE_CELLS if table else None
+    return jax.jit(jax.vmap(lambda *a: splice_loop_free(*a, n_cells=n_cells)))
+
+
+@given(st.integers(0, 2**31 - 1), st.sampled_from([(4, True), (16, True), (16, False),
+                                                   (SPLICE_LOCAL_MAX + 8, True)]))
+def test_splice_loop_free_matches_the_loop_removal_of_the_splice(seed, variant):
+    """For loop-free parents, ``splice_loop_free`` is the loop removal of the raw splice
+    (NumPy reference), overflow included, with segments that revisit the parent's cells
+    and themselves; table and comparison variants, and the long-segment fallback."""
+    seg_cap, table = variant
+    rng = np.random.default_rng(seed)
+    b = 64
+    cells = np.stack([rng.permutation(_SPLICE_CELLS)[:_SPLICE_L] for _ in range(b)])
+    length = rng.integers(1, _SPLICE_L + 1, b)
+    keep_to = np.array([rng.integers(0, n + 1) for n in length])
+    resume = np.array([rng.integers(k, n + 1) for k, n in zip(keep_to, length)])
+    seg = rng.integers(0, _SPLICE_CELLS, (b, seg_cap))
+    from_parent = rng.random((b, seg_cap)) < 0.5
+    picks = rng.integers(0, _SPLICE_L, (b, seg_cap))
+    seg = np.where(from_parent, cells[np.arange(b)[:, None], picks], seg)
+    seg_len = rng.integers(0, seg_cap + 1, b)
+    args = [jnp.asarray(a, jnp.int32) for a in (cells, length, keep_to, seg, seg_len, resume)]
+    out, out_len, fits = _splice_fn(seg_cap, table)(*args)
+    out, out_len, fits = np.asarray(out), np.asarray(out_len), np.asarray(fits)
+    for i in range(b):
+        raw = (cells[i, : keep_to[i]].tolist() + seg[i, : seg_len[i]].tolist()
+               + cells[i, resume[i]: length[i]].tolist())
+        want = _loop_free_reference(raw)
+        assert bool(fits[i]) == (len(want) <= _SPLICE_L)
+        if fits[i]:
+            assert out_len[i] == len(want)
+            assert out[i, : out_len[i]].tolist() == want
+            if want:
+                assert (out[i, out_len[i]:] == want[-1]).all()
