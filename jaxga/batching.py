@@ -263,8 +263,8 @@ def over_pairs_gated(
             out = gated_map(one(op), apply, args, out, dense=dense)
         else:
             use_op = use_op[:n_pairs]
-            out = gated_map(one(op), apply & use_op, args, out)
-            out = gated_map(one(alternative), apply & ~use_op, args, out)
+            out = gated_map(one(op), apply & use_op, args, out, dense=dense)
+            out = gated_map(one(alternative), apply & ~use_op, args, out, dense=dense)
         c1, l1, c2, l2, failed = out
         return _interleave(pop, c1, l1, c2, l2), jnp.sum(failed, dtype=jnp.int32)
 

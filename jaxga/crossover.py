@@ -53,6 +53,7 @@ from jaxga.errors import ParameterError
 from jaxga.geometry import clear, linear_trial
 from jaxga.grid import Grid, move_legal
 from jaxga.paths import TABLE_MAX_CELLS, remove_loops
+from jaxga.paths import position_lookup as _position_lookup
 from jaxga.repair import concat, connect, prefix_count
 
 __all__ = [
@@ -80,33 +81,6 @@ _INT_MAX = np.iinfo(np.int32).max
 
 
 # ------------------------------------------------------------------- helpers
-def _position_lookup(cells: jax.Array, length: jax.Array, n_cells: int) -> Callable:
-    """``look(q)``: the last valid position of cell ``q`` in the path, or -1 (any shape)."""
-    n = cells.shape[0]
-    i = jnp.arange(n, dtype=_I32)
-    valid = i < length
-    if n_cells <= TABLE_MAX_CELLS:
-        table = jnp.full((n_cells,), -1, _I32)
-        table = table.at[jnp.where(valid, cells, n_cells)].max(i, mode="drop")
-
-        def look(q):
-            inside = (q >= 0) & (q < n_cells)
-            return jnp.where(inside, table[jnp.clip(q, 0, n_cells - 1)], -1)
-
-        return look
-    key = jnp.where(valid, cells, _INT_MAX)
-    order = jnp.argsort(key, stable=True).astype(_I32)
-    sk = key[order]
-
-    def look(q):
-        k = jnp.searchsorted(sk, q, side="right").astype(_I32) - 1
-        kc = jnp.clip(k, 0, n - 1)
-        found = (k >= 0) & (sk[kc] == q) & (q >= 0) & (q < n_cells)
-        return jnp.where(found, order[kc], -1)
-
-    return look
-
-
 def _kth_true(mask: jax.Array, r: jax.Array) -> jax.Array:
     """Index of the ``r``-th (0-based) True of a 1-D mask (0 if there are fewer)."""
     return jnp.argmax(prefix_count(mask) > r).astype(_I32)

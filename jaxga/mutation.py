@@ -168,17 +168,8 @@ def neighbour_point(
     j, has_cand = _pick(bits[1], free & (cand != prev) & (cand != nxt))
     anchors = jnp.stack([prev, cand[j], nxt])
     seg, seg_len, closed = connect(k_conn, grid, anchors, 3, seg_capacity, max_rounds, queue)
-    new, new_len, ok = _splice_loop_free(grid, cells, i - 1, seg, seg_len, i + 2, length)
+    new, new_len, ok = splice_loop_free(cells, length, i - 1, seg, seg_len, i + 2, grid.n_cells)
     return _finish(has_node & has_cand & closed & ok, new, new_len, cells, length)
-
-
-def _splice_loop_free(grid, cells, keep_to, seg, seg_len, resume, length):
-    """``cells[:keep_to] + seg[:seg_len] + cells[resume:length]``, loops removed, in ``L``.
-
-    :func:`jaxga.repair.splice_loop_free` (the capacity is checked on the loop-free
-    result). Returns ``(cells int32[L], length, fits)``.
-    """
-    return splice_loop_free(cells, length, keep_to, seg, seg_len, resume, grid.n_cells)
 
 
 # ---------------------------------------------------------------- Zhu one point
@@ -320,7 +311,7 @@ def segment_sa(
         k_conn, grid, jnp.stack([cells[i], cells[j]]), 2, seg_capacity or cap, max_rounds,
         queue or max(grid.shape) // 2 + 8,
     )
-    new, new_len, fits = _splice_loop_free(grid, cells, i, seg, seg_len, j + 1, length)
+    new, new_len, fits = splice_loop_free(cells, length, i, seg, seg_len, j + 1, grid.n_cells)
     ok = has_seg & closed & fits
     f_old = jnp.asarray(fitness_fn(grid, cells, length), jnp.float32)
     f_new = jnp.asarray(fitness_fn(grid, new, new_len), jnp.float32)

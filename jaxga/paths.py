@@ -229,6 +229,42 @@ def last_occurrence(
     return jnp.zeros(n, jnp.int32).at[order].set(order[end])
 
 
+def position_lookup(
+    cells: jax.Array, length: jax.Array, n_cells: int | None
+) -> Callable:
+    """``look(q)``: the last valid position of cell ``q`` in the path, or -1 (any shape).
+
+    A scatter table of ``n_cells`` entries on maps up to :data:`TABLE_MAX_CELLS` cells,
+    a sort and binary search otherwise (also without ``n_cells``). Used by the crossovers
+    (where one parent's cells are in the other) and :func:`jaxga.repair.splice_loop_free`.
+    """
+    n = cells.shape[0]
+    i = jnp.arange(n, dtype=jnp.int32)
+    valid = i < length
+    if n_cells is not None and n_cells <= TABLE_MAX_CELLS:
+        table = jnp.full((n_cells,), -1, jnp.int32)
+        table = table.at[jnp.where(valid, cells, n_cells)].max(i, mode="drop")
+
+        def look(q):
+            inside = (q >= 0) & (q < n_cells)
+            return jnp.where(inside, table[jnp.clip(q, 0, n_cells - 1)], -1)
+
+        return look
+    key = jnp.where(valid, cells, np.iinfo(np.int32).max)
+    order = jnp.argsort(key, stable=True).astype(jnp.int32)
+    sk = key[order]
+
+    def look(q):
+        k = jnp.searchsorted(sk, q, side="right").astype(jnp.int32) - 1
+        kc = jnp.clip(k, 0, n - 1)
+        found = (k >= 0) & (sk[kc] == q) & (q >= 0)
+        if n_cells is not None:
+            found &= q < n_cells
+        return jnp.where(found, order[kc], -1)
+
+    return look
+
+
 def remove_loops(
     cells: jax.Array, length: jax.Array, n_cells: int | None = None
 ) -> tuple[jax.Array, jax.Array]:

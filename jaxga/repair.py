@@ -27,7 +27,7 @@ import jax.numpy as jnp
 import numpy as np
 
 from jaxga.grid import Grid, blocked_at, diagonal_legal
-from jaxga.paths import TABLE_MAX_CELLS, remove_loops
+from jaxga.paths import position_lookup, remove_loops
 
 __all__ = ["concat", "connect", "pad_cells", "random_free_neighbour", "splice_loop_free"]
 
@@ -361,8 +361,8 @@ def splice_loop_free(
     ``A`` up to its first cell that occurs in ``S`` (jump to that cell's last occurrence in
     ``S``), then follow ``S`` by last occurrences until a cell that occurs in ``B`` (jump
     there) or the end of ``S``, then keep the rest of ``B``. With a segment of at most
-    :data:`SPLICE_LOCAL_MAX` cells this costs ``len(seg) x L`` comparisons and a
-    ``len(seg)``-step walk instead of a map-sized table and a loop over the whole path;
+    :data:`SPLICE_LOCAL_MAX` cells this costs one :func:`~jaxga.paths.position_lookup`
+    of the parent and a ``len(seg)``-step walk instead of a loop over the whole path;
     the result is the same as the full loop removal (for a loop-free parent; a parent
     with loops of its own keeps them). Longer segments take the full
     :func:`~jaxga.paths.remove_loops` (``n_cells`` selects its table variant).
@@ -379,17 +379,10 @@ def splice_loop_free(
         )
         work, work_len = remove_loops(work, work_len, n_cells)
         return work[:cap], work_len, work_len <= cap
-    j = jnp.arange(cap, dtype=i32)
     t = jnp.arange(m, dtype=i32)
     in_seg = t < seg_len
     # Where each cell of S is in P (-1: nowhere); P is loop-free, so at most once.
-    if n_cells is not None and n_cells <= TABLE_MAX_CELLS:
-        table = jnp.full((n_cells,), -1, i32)
-        table = table.at[jnp.where(j < length, cells, n_cells)].set(j, mode="drop")
-        pos = jnp.where(in_seg, table[jnp.clip(seg, 0, n_cells - 1)], -1)
-    else:
-        match = (seg[:, None] == cells[None, :]) & (j < length)[None, :]  # [m, L]
-        pos = jnp.where(in_seg, jnp.max(jnp.where(match, j[None, :], -1), axis=1), -1)
+    pos = jnp.where(in_seg, position_lookup(cells, length, n_cells)(seg), -1)
     pos_a = jnp.where((pos >= 0) & (pos < keep_to), pos, cap)
     pos_b = jnp.where(pos >= resume, pos, -1)
     same = (seg[:, None] == seg[None, :]) & in_seg[None, :]
