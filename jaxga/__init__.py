@@ -1,10 +1,16 @@
 """jaxga: genetic-algorithm path planning for mobile robots on grid maps, in JAX."""
 
+from jaxga import lowering
 from jaxga.api import Result, run, sweep
 from jaxga.compare import Comparison, compare
 from jaxga.errors import EndpointError, JaxgaError, MapFormatError, NoPathError, ParameterError
 from jaxga.grid import CORNER_RULES, Grid
 from jaxga.replan import replan
+
+# Threefry lowered without a loop on the CPU: the same random bits, faster compiles
+# (jaxga/lowering.py; JAXGA_THREEFRY=rolled keeps JAX's own lowering). Nothing is
+# lowered at import, so this holds for every program jaxga compiles.
+lowering.configure_from_environment()
 
 __all__ = [
     "CORNER_RULES",
