@@ -1,7 +1,7 @@
 """Speed of every preset at the papers' settings, against a per-individual NumPy loop SGA.
 
     python benchmarks/speed.py [--presets sga,imga,...] [--settings 20x20,50x50]
-        [--seeds 1,100,1000] [--max-generations-many 50] [--devices 1]
+        [--seeds 1,100,1000] [--max-generations-many 50] [--devices N]
 
 For each preset and setting (20 x 20: population 60, 300 generations on
 ``classic_ga_gapp3_20x20``; 50 x 50: population 80, 500 generations on
@@ -33,6 +33,8 @@ from pathlib import Path
 
 import numpy as np
 from _results import append, markdown_table
+
+from jaxga.parallel import cores
 
 SETTINGS = {"20x20": (60, 300), "50x50": (80, 500)}
 HERE = Path(__file__).resolve().parent
@@ -95,7 +97,8 @@ def main() -> None:
     ap.add_argument("--settings", default="20x20,50x50")
     ap.add_argument("--seeds", default="1,100,1000")
     ap.add_argument("--max-generations-many", type=int, default=0)
-    ap.add_argument("--devices", type=int, default=1)
+    # Default: one XLA host device per core, as jaxga itself runs (jaxga.parallel).
+    ap.add_argument("--devices", type=int, default=cores())
     ap.add_argument("--baseline-seeds", type=int, default=3)
     ap.add_argument("--child")
     ap.add_argument("--no-write", action="store_true")
