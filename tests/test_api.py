@@ -159,3 +159,44 @@ def test_clear_compiled_releases_the_programs_memory_mappings(grid):
     assert compiled > before + 300  # a few hundred kernels, ~3 regions each
     api.clear_compiled()
     assert regions() < before + 100
+
+
+def test_run_blocks_divide_each_device_share_into_blocks_of_at_most_the_block():
+    from jaxga.api import run_blocks
+
+    assert run_blocks(100, 1, 128) == 1  # fits one block
+    assert run_blocks(1000, 1, 128) == 8  # 8 blocks of 125
+    assert run_blocks(1000, 2, 128) == 4  # each device: 500 runs = 4 blocks of 125
+    assert run_blocks(1024, 2, 128) == 4  # 4 blocks of 128
+    assert run_blocks(997, 1, 128) == 1  # prime: no blocks of 64-128 runs
+    assert run_blocks(8, 4, 1) == 2
+    for n, d in [(1000, 1), (1000, 2), (600, 2), (5000, 4)]:
+        b = run_blocks(n, d, 128)
+        assert (n // d) % b == 0 and n // d // b <= 128
+
+
+def test_map_runs_in_blocks_equals_one_vmap():
+    """Blocked ``lax.map`` over runs == ``vmap`` over runs, run by run, with pytree
+    arguments, shared (None-axis) arguments and a static argument."""
+    import jax
+    import jax.numpy as jnp
+
+    from jaxga.api import map_runs
+
+    def fn(key, shared, state, n):
+        x = jax.random.uniform(key, (3,)) * shared["scale"] + state["a"]
+        return {"x": x, "s": jnp.sum(state["b"]) * n}, jnp.argmax(x)
+
+    n_runs = 12
+    keys = jax.vmap(jax.random.PRNGKey)(jnp.arange(n_runs, dtype=jnp.uint32))
+    shared = {"scale": jnp.float32(2.0)}
+    state = {"a": jnp.arange(n_runs, dtype=jnp.float32),
+             "b": jnp.arange(n_runs * 4, dtype=jnp.int32).reshape(n_runs, 4)}
+    axes = (0, None, 0, None)
+    ref = jax.vmap(fn, in_axes=axes)(keys, shared, state, 3)
+    blocked = map_runs(fn, axes, n_runs, 1, block=4)  # 3 blocks of 4
+    got = jax.jit(blocked, static_argnums=(3,))(keys, shared, state, 3)
+    for r, g in zip(jax.tree_util.tree_leaves(ref), jax.tree_util.tree_leaves(got)):
+        np.testing.assert_array_equal(np.asarray(r), np.asarray(g))
+    text = jax.jit(blocked, static_argnums=(3,)).lower(keys, shared, state, 3).as_text()
+    assert "stablehlo.while" in text  # really computed block by block

@@ -44,17 +44,21 @@ def test_a_seed_gives_the_same_run_alone_or_with_others(tiny_runs):
 
 _DEVICE_SCRIPT = """
 import json, jax
-from jaxga.api import run
+from jaxga import api
 from jaxga.maps import random_map
+if jax.device_count() > 1:  # and each device computes its runs one block at a time
+    api.RUN_BLOCK = 1
 g = random_map(10, 10, 0.2, 3, corner_rule="free")
-r = run("sga", g, seeds=5, population__size=8, generations=3, init__max_tries=50)
-print(json.dumps({"devices": jax.device_count(), "cells": r.cells.tolist(),
+r = api.run("sga", g, seeds=5, population__size=8, generations=3, init__max_tries=50)
+print(json.dumps({"devices": jax.device_count(), "blocks": api.run_blocks(8, jax.device_count()),
+                  "cells": r.cells.tolist(),
                   "best": r.history["best"].tolist(), "length": r.length.tolist()}))
 """
 
 
 def test_results_do_not_depend_on_the_device_count():
-    """Seeds sharded over 4 forced host devices (5 seeds padded to 8) == one device."""
+    """Seeds sharded over 4 forced host devices (5 seeds padded to 8), each device
+    computing its runs in blocks (``api.map_runs``), == one device, one ``vmap``."""
     import json
     import os
     import subprocess
@@ -71,6 +75,7 @@ def test_results_do_not_depend_on_the_device_count():
         assert proc.returncode == 0, proc.stderr[-2000:]
         out.append(json.loads(proc.stdout.strip().splitlines()[-1]))
     assert [o["devices"] for o in out] == [1, 4]
+    assert [o["blocks"] for o in out] == [1, 2]
     assert out[0]["cells"] == out[1]["cells"]
     assert out[0]["best"] == out[1]["best"] and out[0]["length"] == out[1]["length"]
 
