@@ -290,25 +290,35 @@ def _programs(algo: Algorithm, grid_spec: Any, params_spec: Any, n_runs: int,
 
     # Every per-run input and output has the run axis first: one sharding for all of
     # them, so each device runs its share and the result does not depend on the device
-    # count. The map is replicated.
-    def jit(fn, in_axes, n_in, static=()):
-        shard = {} if sh is None else dict(
-            in_shardings=tuple(rep if a is None else sh for a in in_axes[:n_in]),
-            out_shardings=sh)
-        mapped = map_runs(fn, in_axes, n_runs, jax.local_device_count())
-        return jax.jit(mapped, static_argnums=static, **shard)
+    # count. The map is replicated. With several devices the program is a shard_map: each
+    # device runs its own share as a program of its own. Under a jit sharded by XLA
+    # instead, every while_loop whose trip count depends on the runs (the operators'
+    # gated blocks, connection rounds) had to agree on its condition across devices at
+    # every iteration (RESULTS.md, 2026-11-23).
+    n_dev = 1 if sh is None else sh.mesh.size
+
+    def jit(fn, in_axes):
+        if sh is None:
+            return jax.jit(map_runs(fn, in_axes, n_runs))
+        P = jax.sharding.PartitionSpec
+        local = map_runs(fn, in_axes, n_runs // n_dev)
+        # check_vma=False: the loops' carries start as constants that the runs then vary.
+        per_device = jax.shard_map(
+            local, mesh=sh.mesh, out_specs=P("runs"), check_vma=False,
+            in_specs=tuple(P() if a is None else P("runs") for a in in_axes))
+        return jax.jit(per_device, out_shardings=sh,
+                       in_shardings=tuple(rep if a is None else sh for a in in_axes))
 
     t0 = time.perf_counter()
     keys = jax.ShapeDtypeStruct((n_runs, 2), jnp.uint32)
-    init_t = jit(do_init, (0, None, 0), 3).trace(keys, grid_spec, params_spec)
+    init_t = jit(do_init, (0, None, 0)).trace(keys, grid_spec, params_spec)
     state_spec = init_t.out_info[0]
-    evolve_j = jit(do_evolve, (0, None, 0, 0, None), 4, static=(4,))
-    evolve_t = {n: evolve_j.trace(keys, grid_spec, params_spec, state_spec, n)
-                for n in sorted(set(sizes))}
+    evolve_t = {n: jit(functools.partial(do_evolve, n=n), (0, None, 0, 0)).trace(
+        keys, grid_spec, params_spec, state_spec) for n in sorted(set(sizes))}
     hist_spec = evolve_t[sizes[0]].out_info[1]
     full_hist = jax.tree_util.tree_map(
         lambda h: jax.ShapeDtypeStruct((n_runs, sum(sizes)), h.dtype), hist_spec)
-    finish_t = jit(do_finish, (None, 0, 0, 0, 0), 5).trace(
+    finish_t = jit(do_finish, (None, 0, 0, 0, 0)).trace(
         grid_spec, params_spec, state_spec, full_hist,
         jax.ShapeDtypeStruct((n_runs,), jnp.float32))
     traced = {"init": init_t, "finish": finish_t, **{f"evolve{n}": t
