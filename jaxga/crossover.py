@@ -52,6 +52,7 @@ from jaxga.batching import over_pairs_gated
 from jaxga.errors import ParameterError
 from jaxga.geometry import clear, linear_trial
 from jaxga.grid import Grid, move_legal
+from jaxga.numerics import ordered_mean
 from jaxga.paths import TABLE_MAX_CELLS, remove_loops
 from jaxga.paths import position_lookup as _position_lookup
 from jaxga.repair import concat, connect, prefix_count
@@ -709,9 +710,8 @@ def adaptive_pair_probability(
     fitness = jnp.asarray(fitness, _F32)
     if active is None:
         active = jnp.ones(fitness.shape, bool)
-    m = jnp.maximum(jnp.sum(active, dtype=_I32), 1)
     f_max = jnp.max(jnp.where(active, fitness, -jnp.inf))
-    f_avg = jnp.sum(jnp.where(active, fitness, 0)) / m.astype(_F32)
+    f_avg = ordered_mean(fitness, active)
     n_pairs = fitness.shape[0] // 2
     f = jnp.maximum(fitness[0 : 2 * n_pairs : 2], fitness[1 : 2 * n_pairs : 2])
     return adaptive_crossover_probability(f, f_max, f_avg, t, T, pc_low, pc_high)

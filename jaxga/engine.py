@@ -40,6 +40,7 @@ from jaxga.config import SCHEMA, Config
 from jaxga.errors import ParameterError
 from jaxga.grid import Grid
 from jaxga.init import get_initialiser, initialise
+from jaxga.numerics import ordered_mean
 from jaxga.paths import Population, has_endpoints, is_continuous, is_feasible, remove_loops
 
 F32 = jnp.float32
@@ -227,7 +228,7 @@ def _crossover(algo: Algorithm, key, grid, pop, fitness, active, t, params, fit_
         # (taken over the selected pool, which is the population entering crossover).
         n_pairs = fitness.shape[0] // 2
         f_max = jnp.max(jnp.where(active, fitness, -jnp.inf))
-        f_avg = jnp.sum(jnp.where(active, fitness, 0.0)) / jnp.maximum(jnp.sum(active), 1)
+        f_avg = ordered_mean(fitness, active)
         f_pair = jnp.maximum(fitness[0:2 * n_pairs:2], fitness[1:2 * n_pairs:2])
         pc = cx.adaptive_crossover_probability(
             f_pair, f_max, f_avg, t, algo.generations, params["crossover.pc_low"],
@@ -264,7 +265,7 @@ def _mutation(algo: Algorithm, key, grid, pop, fitness, active, t, params, fit_f
         return pop, jnp.int32(0)
     if algo.get("mutation.adaptive"):
         f_max = jnp.max(jnp.where(active, fitness, -jnp.inf))
-        f_avg = jnp.sum(jnp.where(active, fitness, 0.0)) / jnp.maximum(jnp.sum(active), 1)
+        f_avg = ordered_mean(fitness, active)
         pm = mu.adaptive_mutation_probability(
             fitness, f_max, f_avg, t, algo.generations, params["mutation.pm_low"],
             params["mutation.pm_high"],
@@ -426,9 +427,11 @@ def history_row(algo: Algorithm, state: GAState, params: dict) -> dict:
     """Best-so-far, mean and sd of the active fitness (MPMGA Figs. 15-17)."""
     active = jnp.broadcast_to(_active(algo, params), state.islands.fitness.shape)
     f = state.islands.fitness
-    n = jnp.maximum(jnp.sum(active), 1)
-    mean = jnp.sum(jnp.where(active, f, 0.0)) / n
-    var = jnp.sum(jnp.where(active, (f - mean) ** 2, 0.0)) / n
+    # ordered (batch-invariant) sums: a seed's history does not depend on the runs
+    # computed alongside it (jaxga.numerics)
+    active, f = active.reshape(-1), f.reshape(-1)
+    mean = ordered_mean(f, active)
+    var = ordered_mean((f - mean) ** 2, active)
     return {"best": state.best_fitness, "mean": mean, "std": jnp.sqrt(var)}
 
 

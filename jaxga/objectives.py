@@ -66,6 +66,7 @@ import numpy as np
 
 from jaxga.errors import ParameterError
 from jaxga.grid import Grid
+from jaxga.numerics import ordered_sum
 
 __all__ = [
     "AGACD_WEIGHTS",
@@ -252,7 +253,7 @@ def path_length(grid: Grid, cells: jax.Array, length: jax.Array) -> jax.Array:
 
 def _path_length(g: _Geometry) -> jax.Array:
     sq = (g.dx * g.dx + g.dy * g.dy).astype(FLOAT)
-    return jnp.sum(jnp.sqrt(sq), dtype=FLOAT)
+    return ordered_sum(jnp.sqrt(sq))
 
 
 def turn_angles(grid: Grid, cells: jax.Array, length: jax.Array) -> jax.Array:
@@ -303,7 +304,7 @@ def angle_sum(grid: Grid, cells: jax.Array, length: jax.Array) -> jax.Array:
 
 
 def _angle_sum(g: _Geometry) -> jax.Array:
-    return jnp.sum(_turn_angles(g), dtype=FLOAT)
+    return ordered_sum(_turn_angles(g), dtype=FLOAT)
 
 
 def mpmga_penalty(grid: Grid, cells: jax.Array, length: jax.Array) -> jax.Array:
@@ -320,7 +321,7 @@ def _mpmga_penalty(g: _Geometry) -> jax.Array:
     pen = jnp.where(
         g.dot > 0, np.float32(5.0), jnp.where(g.dot == 0, np.float32(25.0), np.float32(125.0))
     )
-    return jnp.sum(jnp.where(g.turning, pen, jnp.zeros_like(pen)), dtype=FLOAT)
+    return ordered_sum(jnp.where(g.turning, pen, jnp.zeros_like(pen)), dtype=FLOAT)
 
 
 def zhu_penalty(
@@ -359,7 +360,7 @@ def _zhu_penalty(
         jnp.where(abs_cross <= g.dot, _f32(c1), _f32(c2)),
         jnp.where(abs_cross >= -g.dot, _f32(c3), _f32(c4)),
     )
-    return jnp.sum(jnp.where(g.turning, cost, jnp.zeros_like(cost)), dtype=FLOAT)
+    return ordered_sum(jnp.where(g.turning, cost, jnp.zeros_like(cost)), dtype=FLOAT)
 
 
 def imga_energy(grid: Grid, cells: jax.Array, length: jax.Array) -> jax.Array:
@@ -397,7 +398,7 @@ def _imga_energy(grid: Grid, g: _Geometry) -> jax.Array:
         np.float32(1.0),
         jnp.where((hx <= 0) & (hy <= 0), np.float32(10.0), np.float32(3.0)),
     )
-    return jnp.sum(jnp.where(g.turning, e, jnp.zeros_like(e)), dtype=FLOAT)
+    return ordered_sum(jnp.where(g.turning, e, jnp.zeros_like(e)), dtype=FLOAT)
 
 
 def _near_obstacle(blocked: jax.Array, border_blocked: bool) -> jax.Array:
@@ -755,7 +756,7 @@ def delphi_weights(ratios: Sequence[float] | jax.Array) -> jax.Array:
     # suffix products prod_{i=k}^{n-1} I_i for k = 1..n-1, then 1 for w_n itself
     suffix = jnp.cumprod(r[::-1])[::-1]
     rel = jnp.concatenate([suffix, jnp.ones((1,), FLOAT)])
-    return rel / jnp.sum(rel)
+    return rel / ordered_sum(rel)
 
 
 AGACD_WEIGHTS: tuple[float, float, float] = (1.2 * 1.4 / 4.08, 1.4 / 4.08, 1.0 / 4.08)
