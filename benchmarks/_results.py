@@ -32,6 +32,21 @@ def command() -> str:
     return "python " + " ".join(shlex.quote(a) for a in sys.argv)
 
 
+def result_hash(result) -> str:
+    """First 16 hex digits of a SHA-256 of every per-seed output of a ``jaxga.Result``
+    (paths, raw paths, fitness, lengths, histories): equal hashes = identical results."""
+    import hashlib
+
+    import numpy as np
+
+    h = hashlib.sha256()
+    for a in (result.cells, result.n_cells, result.raw_cells, result.raw_n_cells,
+              result.fitness, result.length, result.history["best"],
+              result.history["mean"], result.history["std"]):
+        h.update(np.ascontiguousarray(np.asarray(a)).tobytes())
+    return h.hexdigest()[:16]
+
+
 def markdown_table(headers: list[str], rows: list[list]) -> str:
     """A GitHub markdown table (numbers right-aligned)."""
     def fmt(v):

@@ -15,7 +15,6 @@ lowerings must be equal: the hash function is the same, only the program differs
 from __future__ import annotations
 
 import argparse
-import hashlib
 import json
 import os
 import re
@@ -23,8 +22,7 @@ import subprocess
 import sys
 from pathlib import Path
 
-import numpy as np
-from _results import append, markdown_table
+from _results import append, markdown_table, result_hash
 
 HERE = Path(__file__).resolve().parent
 PROGRAM = re.compile(r"Finished XLA compilation of jit\((do_\w+)\) in ([0-9.]+) sec")
@@ -39,13 +37,9 @@ def child(preset: str, seeds: int, generations: int) -> dict:
     grid = load_map("classic_ga_gapp3_20x20", corner_rule="free")
     size = 20 if preset == "mpmga" else 60
     r = run(preset, grid, seeds=seeds, population__size=size, generations=generations)
-    h = hashlib.sha256()
-    for a in (r.cells, r.n_cells, r.raw_cells, r.raw_n_cells, r.fitness,
-              r.history["best"], r.history["mean"], r.history["std"]):
-        h.update(np.ascontiguousarray(np.asarray(a)).tobytes())
     return {"unrolled": threefry_unrolled(), "compile_s": r.timing["compile_s"],
             "evolve_s": r.timing["evolve_s"], "population": r.population,
-            "hash": h.hexdigest()[:16]}
+            "hash": result_hash(r)}
 
 
 def measure(preset: str, seeds: int, generations: int, lowering: str) -> dict:

@@ -195,8 +195,15 @@ class _Programs:
     compile_s: float
 
 
-RUN_BLOCK = 128
-"""Largest number of runs one device computes together (see :func:`map_runs`)."""
+RUN_BLOCK = 64
+"""Largest number of runs one device computes together (see :func:`map_runs`).
+
+Measured (``benchmarks/run_block.py``, RESULTS.md 2026-11-23, sga 20 x 20, 2 devices,
+two sweeps on a noisy machine): 1000 seeds in blocks of 125, 50, 25 and 20 runs: 154k /
+134k, 195k / 180k, 205k / 144k and 209k / 180k individual-generations per second; 100
+seeds as one ``vmap`` of 50 per device: 8 % faster than 2 blocks of 25, and 4-5 s less
+compile. 64 keeps shares up to 64 runs in one ``vmap`` and splits larger ones into
+blocks of 32-64."""
 
 
 def run_blocks(n_runs: int, n_devices: int = 1, block: int | None = None) -> int:
@@ -228,8 +235,10 @@ def map_runs(fn: Callable, in_axes: tuple, n_runs: int, n_devices: int = 1,
     split over devices in contiguous shares, each device keeps its own runs (no
     communication) and computes ``N / (B x devices)`` of them at a time. Why: a
     thousand runs in one ``vmap`` work on arrays far larger than the caches (1000 x 60 x
-    160 cells are 38 MB), and measured 10 % slower per individual than blocks of 100
-    (RESULTS.md, 2026-11-23).
+    160 cells are 38 MB), and every ``while_loop`` under the ``vmap`` (the gated
+    operators' blocks, repair rounds, initialisation rounds) runs as many iterations as
+    the slowest run of its batch: smaller batches wait less. Blocks of 20-50 runs were
+    1.3x faster than blocks of 125 (:data:`RUN_BLOCK`).
     """
     n_blocks = run_blocks(n_runs, n_devices, block)
     vmapped = jax.vmap(fn, in_axes=in_axes)

@@ -169,6 +169,7 @@ def test_run_blocks_divide_each_device_share_into_blocks_of_at_most_the_block():
     assert run_blocks(1000, 2, 128) == 4  # each device: 500 runs = 4 blocks of 125
     assert run_blocks(1024, 2, 128) == 4  # 4 blocks of 128
     assert run_blocks(997, 1, 128) == 1  # prime: no blocks of 64-128 runs
+    assert run_blocks(1000, 2, 64) == 10  # 10 blocks of 50 (the default block)
     assert run_blocks(8, 4, 1) == 2
     for n, d in [(1000, 1), (1000, 2), (600, 2), (5000, 4)]:
         b = run_blocks(n, d, 128)

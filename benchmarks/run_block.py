@@ -1,0 +1,96 @@
+"""How many runs one device should compute together: ``jaxga.api.RUN_BLOCK`` swept.
+
+    python benchmarks/run_block.py [--preset sga] [--seeds 1000] [--generations 50]
+        [--blocks 128,64,32,24] [--devices N]
+
+Each block limit runs in a child process (cold compile, ``N`` XLA host devices, default
+one per core as jaxga uses) on ``classic_ga_gapp3_20x20`` (population 60; mpmga 3
+islands of 20): compile, initialisation and evolution seconds, evolution
+individual-generations per second, peak resident memory, and a SHA-256 of every per-seed
+output. The hashes must all be equal: the block size changes the schedule, never a
+result (``jaxga.numerics`` keeps float sums independent of the batch).
+"""
+
+from __future__ import annotations
+
+import argparse
+import json
+import os
+import subprocess
+import sys
+from pathlib import Path
+
+from _results import append, markdown_table, result_hash
+
+HERE = Path(__file__).resolve().parent
+
+
+def child(preset: str, seeds: int, generations: int, block: int) -> dict:
+    """One cold run with ``RUN_BLOCK = block`` (in a fresh process)."""
+    import resource
+
+    import jax
+
+    from jaxga import api
+    from jaxga.maps import load_map
+
+    api.RUN_BLOCK = block
+    grid = load_map("classic_ga_gapp3_20x20", corner_rule="free")
+    size = 20 if preset == "mpmga" else 60
+    r = api.run(preset, grid, seeds=seeds, population__size=size, generations=generations)
+    n_dev = jax.local_device_count()
+    blocks = api.run_blocks(-(-seeds // n_dev) * n_dev, n_dev)
+    return {"devices": n_dev, "blocks": blocks, "block_runs": -(-seeds // n_dev) // blocks,
+            "population": r.population, **{k: r.timing[k] for k in
+                                            ("compile_s", "init_s", "evolve_s")},
+            "peak_mib": resource.getrusage(resource.RUSAGE_SELF).ru_maxrss // 1024,
+            "hash": result_hash(r)}
+
+
+def main() -> None:
+    ap = argparse.ArgumentParser(description=__doc__)
+    ap.add_argument("--preset", default="sga")
+    ap.add_argument("--seeds", type=int, default=1000)
+    ap.add_argument("--generations", type=int, default=50)
+    ap.add_argument("--blocks", default="128,64,32,24")
+    ap.add_argument("--devices", type=int, default=os.cpu_count() or 1)
+    ap.add_argument("--child")
+    ap.add_argument("--no-write", action="store_true")
+    args = ap.parse_args()
+    if args.child:
+        preset, seeds, generations, block = args.child.split(":")
+        print(json.dumps(child(preset, int(seeds), int(generations), int(block))))
+        return
+
+    env = dict(os.environ, PYTHONPATH=f"{HERE.parent}{os.pathsep}{HERE}",
+               XLA_FLAGS=f"--xla_force_host_platform_device_count={args.devices}")
+    env.pop("JAXGA_CACHE_DIR", None)
+    rows, hashes = [], set()
+    for block in (int(b) for b in args.blocks.split(",")):
+        spec = f"{args.preset}:{args.seeds}:{args.generations}:{block}"
+        proc = subprocess.run([sys.executable, __file__, "--child", spec], env=env,
+                              capture_output=True, text=True)
+        if proc.returncode != 0:
+            raise RuntimeError(proc.stderr[-3000:])
+        m = json.loads(proc.stdout.strip().splitlines()[-1])
+        hashes.add(m["hash"])
+        rate = args.seeds * m["population"] * args.generations / m["evolve_s"]
+        rows.append([block, m["blocks"], m["block_runs"], m["compile_s"], m["init_s"],
+                     m["evolve_s"], f"{rate:,.0f}", f"{m['peak_mib']:,}", m["hash"]])
+        print(rows[-1], flush=True)
+    body = (
+        f"{args.preset}, classic_ga_gapp3_20x20 (corner rule free), {args.seeds} seeds, "
+        f"{args.generations} generations, {args.devices} XLA host device(s), cold compiles. "
+        "RUN_BLOCK: the largest block; blocks/device and runs/block: what "
+        "`api.run_blocks` made of each device's share. Times in seconds.\n\n"
+        + markdown_table(["RUN_BLOCK", "blocks/device", "runs/block", "compile", "init",
+                          "evolve", "ind-gen/s", "peak MiB", "results hash"], rows)
+        + f"\n\nAll results identical: {'yes' if len(hashes) == 1 else 'NO'}."
+    )
+    append("Runs per block (benchmarks/run_block.py)", body, write=not args.no_write)
+    if len(hashes) != 1:
+        sys.exit(1)
+
+
+if __name__ == "__main__":
+    main()
