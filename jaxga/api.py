@@ -198,12 +198,13 @@ class _Programs:
 RUN_BLOCK = 64
 """Largest number of runs one device computes together (see :func:`map_runs`).
 
-Measured (``benchmarks/run_block.py``, RESULTS.md 2026-11-23, sga 20 x 20, 2 devices,
-two sweeps on a noisy machine): 1000 seeds in blocks of 125, 50, 25 and 20 runs: 154k /
-134k, 195k / 180k, 205k / 144k and 209k / 180k individual-generations per second; 100
-seeds as one ``vmap`` of 50 per device: 8 % faster than 2 blocks of 25, and 4-5 s less
-compile. 64 keeps shares up to 64 runs in one ``vmap`` and splits larger ones into
-blocks of 32-64."""
+Measured (sga 20 x 20, 2 devices, a noisy machine; the second sweep is
+``benchmarks/run_block.py`` in RESULTS.md 2026-11-23, the first a scratch script doing
+the same): 1000 seeds in blocks of 125, 50, 25 and 20 runs: 154k / 134k, 195k / 180k,
+205k / 144k and 209k / 180k individual-generations per second. At 100 seeds, one
+``vmap`` of 50 per device against 2 blocks of 25 was within noise (+8 % in one pair of
+runs, -13 % in another). 64 keeps shares up to 64 runs in one ``vmap`` and splits
+larger ones into blocks of 32-64."""
 
 
 def run_blocks(n_runs: int, n_devices: int = 1, block: int | None = None) -> int:
