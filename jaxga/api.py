@@ -226,45 +226,38 @@ def run_blocks(n_runs: int, n_devices: int = 1, block: int | None = None) -> int
     return 1
 
 
-def map_runs(fn: Callable, in_axes: tuple, n_runs: int, n_devices: int = 1,
+def map_runs(fn: Callable, in_axes: tuple, n_runs: int,
              block: int | None = None) -> Callable:
-    """``jax.vmap(fn, in_axes)`` over ``n_runs`` runs, computed in blocks (``lax.map``).
+    """``jax.vmap(fn, in_axes)`` over ``n_runs`` runs, computed in blocks.
 
-    Every run is independent, so each run's result is the same whichever runs share its
-    block. With ``B = run_blocks(...) > 1`` the runs are reshaped to ``[N / B, B]`` and
-    transposed, so that block ``j`` holds runs ``j, j + B, ...``: with the runs axis
-    split over devices in contiguous shares, each device keeps its own runs (no
-    communication) and computes ``N / (B x devices)`` of them at a time. Why: a
-    thousand runs in one ``vmap`` work on arrays far larger than the caches (1000 x 60 x
-    160 cells are 38 MB), and every ``while_loop`` under the ``vmap`` (the gated
-    operators' blocks, repair rounds, initialisation rounds) runs as many iterations as
-    the slowest run of its batch: smaller batches wait less. Blocks of 20-50 runs were
-    1.3x faster than blocks of 125 (:data:`RUN_BLOCK`).
+    ``in_axes``: 0 (per run) or None (shared) for each argument. With
+    ``B = run_blocks(n_runs, 1, block) > 1`` this is ``jax.lax.map`` with
+    ``batch_size = n_runs / B``: a loop over ``B`` blocks of consecutive runs, each block
+    one ``vmap``. Every run is independent and float sums do not depend on the batch
+    (:mod:`jaxga.numerics`), so each run's result is the same whichever runs share its
+    block. With several devices it is applied to each device's share
+    (``jax.shard_map``). Why blocks: a thousand runs in one ``vmap`` work on arrays far
+    larger than the caches (1000 x 60 x 160 cells are 38 MB), and every ``while_loop``
+    under the ``vmap`` (the gated operators' blocks, repair rounds, initialisation
+    rounds) runs as many iterations as the slowest run of its batch: smaller batches
+    wait less. Blocks of 20-50 runs were 1.3x faster than blocks of 125
+    (:data:`RUN_BLOCK`).
     """
-    n_blocks = run_blocks(n_runs, n_devices, block)
-    vmapped = jax.vmap(fn, in_axes=in_axes)
+    n_blocks = run_blocks(n_runs, 1, block)
     if n_blocks == 1:
-        return vmapped
-
-    def to_blocks(x):
-        x = jnp.reshape(x, (n_runs // n_blocks, n_blocks) + x.shape[1:])
-        return jnp.swapaxes(x, 0, 1)
-
-    def from_blocks(x):
-        return jnp.reshape(jnp.swapaxes(x, 0, 1), (n_runs,) + x.shape[2:])
+        return jax.vmap(fn, in_axes=in_axes)
 
     def blocked(*args):
         mapped = [i for i, ax in enumerate(in_axes) if ax == 0 and i < len(args)]
-        xs = tuple(jax.tree_util.tree_map(to_blocks, args[i]) for i in mapped)
 
-        def one_block(block_args):
+        def one_run(per_run):
             full = list(args)
-            for i, a in zip(mapped, block_args):
+            for i, a in zip(mapped, per_run):
                 full[i] = a
-            return vmapped(*full)
+            return fn(*full)
 
-        out = jax.lax.map(one_block, xs)
-        return jax.tree_util.tree_map(from_blocks, out)
+        return jax.lax.map(one_run, tuple(args[i] for i in mapped),
+                           batch_size=n_runs // n_blocks)
 
     return blocked
 

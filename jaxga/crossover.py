@@ -699,13 +699,15 @@ def adaptive_pair_probability(
     pc_low: jax.Array,
     pc_high: jax.Array,
     active: jax.Array | None = None,
+    schedule: Callable | None = None,
 ) -> jax.Array:
     """``float32[P // 2]``: AGACD eq. 26-27 for the pairs ``(0, 1), (2, 3), ...``.
 
     ``f`` of pair ``k`` is ``max(fitness[2k], fitness[2k+1])`` (the pairs of
     :func:`jaxga.batching.over_pairs`); ``f_max`` and ``f_avg`` are taken over the
     active individuals (all if ``active`` is None). Pass the result as the per-pair
-    ``pc`` of :func:`crossover_population`.
+    ``pc`` of :func:`crossover_population`. ``schedule``: as in
+    :func:`adaptive_crossover_probability`.
     """
     fitness = jnp.asarray(fitness, _F32)
     if active is None:
@@ -714,7 +716,8 @@ def adaptive_pair_probability(
     f_avg = ordered_mean(fitness, active)
     n_pairs = fitness.shape[0] // 2
     f = jnp.maximum(fitness[0 : 2 * n_pairs : 2], fitness[1 : 2 * n_pairs : 2])
-    return adaptive_crossover_probability(f, f_max, f_avg, t, T, pc_low, pc_high)
+    return adaptive_crossover_probability(f, f_max, f_avg, t, T, pc_low, pc_high,
+                                          schedule=schedule)
 
 
 def with_probability(op: Callable) -> Callable:

@@ -226,13 +226,9 @@ def _crossover(algo: Algorithm, key, grid, pop, fitness, active, t, params, fit_
     if algo.get("crossover.adaptive"):
         # AGACD eq. 26-27: f = the fitter of the pair; f_max, f_avg of the population
         # (taken over the selected pool, which is the population entering crossover).
-        n_pairs = fitness.shape[0] // 2
-        f_max = jnp.max(jnp.where(active, fitness, -jnp.inf))
-        f_avg = ordered_mean(fitness, active)
-        f_pair = jnp.maximum(fitness[0:2 * n_pairs:2], fitness[1:2 * n_pairs:2])
-        pc = cx.adaptive_crossover_probability(
-            f_pair, f_max, f_avg, t, algo.generations, params["crossover.pc_low"],
-            params["crossover.pc_high"],
+        pc = cx.adaptive_pair_probability(
+            fitness, t, algo.generations, params["crossover.pc_low"],
+            params["crossover.pc_high"], active,
             schedule=schedules.agacd_crossover_decay(algo.generations),
         )
     else:

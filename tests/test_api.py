@@ -195,7 +195,7 @@ def test_map_runs_in_blocks_equals_one_vmap():
              "b": jnp.arange(n_runs * 4, dtype=jnp.int32).reshape(n_runs, 4)}
     axes = (0, None, 0, None)
     ref = jax.vmap(fn, in_axes=axes)(keys, shared, state, 3)
-    blocked = map_runs(fn, axes, n_runs, 1, block=4)  # 3 blocks of 4
+    blocked = map_runs(fn, axes, n_runs, block=4)  # 3 blocks of 4
     got = jax.jit(blocked, static_argnums=(3,))(keys, shared, state, 3)
     for r, g in zip(jax.tree_util.tree_leaves(ref), jax.tree_util.tree_leaves(got)):
         np.testing.assert_array_equal(np.asarray(r), np.asarray(g))
