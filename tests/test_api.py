@@ -70,26 +70,32 @@ def test_every_preset_is_deterministic(preset_run, grid):
 
 
 def test_a_sweep_point_equals_a_run_with_those_values(grid):
+    # 3 points x 1 seed and runs of 3 seeds: the same 3-run program as ``preset_run``
+    # (compiled programs are keyed by the run count; sharing one keeps the suite short).
     points = [{"crossover.probability": 0.2, "mutation.probability": 0.9},
-              {"crossover.probability": 0.9, "mutation.probability": 0.1}]
-    results = api.sweep("sga", grid, points, seeds=2, **SMALL)
-    assert [r.config["crossover.probability"] for r in results] == [0.2, 0.9]
+              {"crossover.probability": 0.9, "mutation.probability": 0.1},
+              {"crossover.probability": 0.5, "mutation.probability": 0.5}]
+    results = api.sweep("sga", grid, points, seeds=1, **SMALL)
+    assert [r.config["crossover.probability"] for r in results] == [0.2, 0.9, 0.5]
     for point, res in zip(points, results):
-        single = api.run("sga", grid, seeds=2, **SMALL,
+        single = api.run("sga", grid, seeds=[0, 1, 2], **SMALL,
                          crossover__probability=point["crossover.probability"],
                          mutation__probability=point["mutation.probability"])
-        assert np.array_equal(single.cells, res.cells)
-        assert np.array_equal(single.history["best"], res.history["best"])
+        assert np.array_equal(single.cells[:1], res.cells)
+        assert np.array_equal(single.history["best"][:1], res.history["best"])
+        assert np.array_equal(single.history["mean"][:1], res.history["mean"])
     assert not np.array_equal(results[0].history["mean"], results[1].history["mean"])
 
 
 def test_population_size_sweep_uses_the_active_mask(grid):
-    results = api.sweep("sga", grid, [{"population.size": 4}, {"population.size": 12}],
-                        seeds=2, **SMALL)
-    assert [r.population for r in results] == [4, 12]
+    results = api.sweep("sga", grid, [{"population.size": s} for s in (4, 6, 8)],
+                        seeds=1, **SMALL)
+    assert [r.population for r in results] == [4, 6, 8]
     for r in results:
         assert r.success.all()
-        assert r.history["best"].shape == (2, 3)
+        assert r.history["best"].shape == (1, 3)
+    # an inactive slot never counts: 4 active individuals cannot have the history of 8
+    assert not np.array_equal(results[0].history["mean"], results[2].history["mean"])
 
 
 def test_sweeping_a_structural_key_is_refused(grid):
@@ -100,10 +106,10 @@ def test_sweeping_a_structural_key_is_refused(grid):
 
 
 def test_compiled_programs_are_reused_across_maps_seeds_and_values(grid):
-    api.run("sga", grid, seeds=[5, 6], **SMALL)
+    api.run("sga", grid, seeds=[5, 6, 7], **SMALL)
     before = api._programs.cache_info()
     other = random_map(10, 10, 0.25, 11, corner_rule="free")
-    r = api.run("sga", other, seeds=[7, 8], crossover__probability=0.5, **SMALL)
+    r = api.run("sga", other, seeds=[7, 8, 9], crossover__probability=0.5, **SMALL)
     after = api._programs.cache_info()
     assert after.misses == before.misses and after.hits == before.hits + 1
     assert r.timing["compile_s"] < 1.0
@@ -154,7 +160,9 @@ def test_clear_compiled_releases_the_programs_memory_mappings(grid):
         pytest.skip("needs /proc (Linux)")
     api.clear_compiled()
     before = regions()
-    api.run("sga", grid, seeds=1, **SMALL, mutation__method="one_point")
+    # the module's 3-run sga program: after clear_compiled it is loaded again (from the
+    # persistent compilation cache when there is one), which maps its kernels again
+    api.run("sga", grid, seeds=3, **SMALL)
     compiled = regions()
     assert compiled > before + 300  # a few hundred kernels, ~3 regions each
     api.clear_compiled()

@@ -41,14 +41,21 @@ def _same(a, b):
     return all(np.array_equal(x, y) for x, y in zip(jax.tree.leaves(a), jax.tree.leaves(b)))
 
 
+# The map, the population and the probability are arguments (not constants closed over):
+# one compiled program serves every parameter of a test.
+_GATED_INDIVIDUALS = jax.jit(
+    lambda k, g, p, prob: over_individuals_gated(mu.neighbour_point)(k, g, p, prob))
+_PLAIN_INDIVIDUALS = jax.jit(
+    lambda k, g, p, prob: over_individuals(mu.with_probability(mu.neighbour_point))(
+        k, g, p, jnp.full((p.size,), prob)))
+
+
 @pytest.mark.parametrize("prob", [0.0, 0.35, 1.0])
 def test_gated_individuals_equal_compute_all_then_select(setting, prob):
     grid, pop = setting
     key = jax.random.PRNGKey(7)
-    gated = jax.jit(lambda k: over_individuals_gated(mu.neighbour_point)(k, grid, pop, prob))
-    plain = jax.jit(lambda k: over_individuals(mu.with_probability(mu.neighbour_point))(
-        k, grid, pop, jnp.full((pop.size,), prob)))
-    assert _same(gated(key), plain(key))
+    assert _same(_GATED_INDIVIDUALS(key, grid, pop, prob),
+                 _PLAIN_INDIVIDUALS(key, grid, pop, prob))
 
 
 def test_gated_alternative_equals_either(setting):
@@ -97,16 +104,23 @@ def test_gated_map_under_vmap_and_block_sizes():
         np.testing.assert_array_equal(out, np.where(apply, np.asarray(x) * 10, x))
 
 
+_DENSE_PAIRS = jax.jit(
+    lambda k, g, p, prob: cx.crossover_population(cx.common_point, dense=True)(k, g, p, prob))
+_GATED_PAIRS = jax.jit(
+    lambda k, g, p, prob: cx.crossover_population(cx.common_point)(k, g, p, prob))
+_PLAIN_PAIRS = jax.jit(
+    lambda k, g, p, prob: over_pairs(cx.with_probability(cx.common_point))(
+        k, g, p, jnp.full((p.size // 2,), prob)))
+
+
 @pytest.mark.parametrize("prob", [0.0, 0.8, 1.0])
 def test_dense_pairs_equal_gated_pairs_and_compute_all(setting, prob):
     """``dense=True`` (every pair computed, then selected) gives the gated result."""
     grid, pop = setting
     key = jax.random.PRNGKey(11)
-    dense = jax.jit(lambda k: cx.crossover_population(cx.common_point, dense=True)(
-        k, grid, pop, prob))(key)
-    gated = jax.jit(lambda k: cx.crossover_population(cx.common_point)(k, grid, pop, prob))(key)
-    plain = jax.jit(lambda k: over_pairs(cx.with_probability(cx.common_point))(
-        k, grid, pop, jnp.full((pop.size // 2,), prob)))(key)
+    dense = _DENSE_PAIRS(key, grid, pop, prob)
+    gated = _GATED_PAIRS(key, grid, pop, prob)
+    plain = _PLAIN_PAIRS(key, grid, pop, prob)
     assert _same(dense, gated) and _same(dense, plain)
     if prob == 0.0:
         assert _same(dense[0], pop)

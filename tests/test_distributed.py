@@ -131,13 +131,14 @@ def test_two_processes_give_the_single_process_result(single_run, tmp_path):
 DOE = ["doe", "--preset", "sga", "--map", MAP, "--corner-rule", "free", "--design", "L9",
        "--factor", "crossover.probability=0.5,0.7,0.9",
        "--factor", "mutation.probability=0.1,0.2,0.3", "--seeds", "2", "--generations", "5",
-       "--set", "population.size=10", "--block", "3", "--quiet", "--devices", "1"]
+       "--set", "population.size=10", "--block", "1", "--quiet", "--devices", "1"]
 
 
 def test_doe_in_two_processes_gives_the_single_process_result(tmp_path):
-    """``jaxga doe`` (9 points x 2 seeds in blocks of 3, checkpointed, and its
+    """``jaxga doe`` (9 points x 2 seeds in blocks of one point, checkpointed, and its
     confirmation run) in 2 processes == in 1 process; process 0 alone writes the JSON and
-    the checkpoint, and the other process follows its list of finished points."""
+    the checkpoint, and the other process follows its list of finished points. Blocks of
+    one point are 2 runs, like the confirmation: one compiled program per process."""
     with _Procs(tmp_path) as procs:
         p = procs.start("single", _cli(*DOE, "--checkpoint", "ck1", "--json", "one.json"))
         assert procs.wait(p) == 0, procs.output("single")
