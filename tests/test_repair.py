@@ -101,11 +101,18 @@ def test_stricter_rules_judge_the_loop_free_connection():
     n = jnp.full((256,), 5, jnp.int32)
     keys = jax.random.split(jax.random.PRNGKey(3), 256)
     grid = Grid.create(blocked, corner_rule="free")
-    raw, raw_n, raw_ok = _connect(keys, grid, anchors, n)
-    looped, looped_n = _loops(raw, raw_n)
+
+    def connect_all(g):  # batches of 4: the programs test_connect_properties compiled
+        parts = [_connect(keys[j:j + 4], g, anchors[j:j + 4], n[j:j + 4])
+                 for j in range(0, 256, 4)]
+        return [jnp.concatenate(x) for x in zip(*parts)]
+
+    raw, raw_n, raw_ok = connect_all(grid)
+    looped, looped_n = (jnp.concatenate(x) for x in zip(
+        *[_loops(raw[j:j + 4], raw_n[j:j + 4]) for j in range(0, 256, 4)]))
     saved = 0
     for rule in ("no_squeeze", "strict"):
-        cells, length, ok = _connect(keys, grid.replace(corner_rule=rule), anchors, n)
+        cells, length, ok = connect_all(grid.replace(corner_rule=rule))
         for i in range(256):
             want = None
             if bool(raw_ok[i]):
