@@ -102,14 +102,16 @@ def test_stricter_rules_judge_the_loop_free_connection():
     keys = jax.random.split(jax.random.PRNGKey(3), 256)
     grid = Grid.create(blocked, corner_rule="free")
 
-    def connect_all(g):  # batches of 4: the programs test_connect_properties compiled
-        parts = [_connect(keys[j:j + 4], g, anchors[j:j + 4], n[j:j + 4])
-                 for j in range(0, 256, 4)]
+    def in_fours(fn, *arrays):
+        """``fn`` on batches of 4 (the programs test_connect_properties compiled)."""
+        parts = [fn(*(a[j:j + 4] for a in arrays)) for j in range(0, 256, 4)]
         return [jnp.concatenate(x) for x in zip(*parts)]
 
+    def connect_all(g):
+        return in_fours(lambda k, a, m, g=g: _connect(k, g, a, m), keys, anchors, n)
+
     raw, raw_n, raw_ok = connect_all(grid)
-    looped, looped_n = (jnp.concatenate(x) for x in zip(
-        *[_loops(raw[j:j + 4], raw_n[j:j + 4]) for j in range(0, 256, 4)]))
+    looped, looped_n = in_fours(_loops, raw, raw_n)
     saved = 0
     for rule in ("no_squeeze", "strict"):
         cells, length, ok = connect_all(grid.replace(corner_rule=rule))
