@@ -24,7 +24,8 @@ import numpy as np
 
 from jaxga.errors import ParameterError
 from jaxga.geometry import segments_clear
-from jaxga.grid import Grid, move_legal
+from jaxga.grid import Grid, blocked_at, diagonal_legal
+from jaxga.scatter import position_table
 
 __all__ = [
     "Population",
@@ -161,12 +162,26 @@ def is_continuous(grid: Grid, cells: jax.Array, length: jax.Array) -> jax.Array:
     Checks the cells themselves too: a one-cell path is continuous iff that cell is free.
     The endpoints are not compared with the grid's start and goal (:func:`has_endpoints`).
     """
+    # Equal to ``move_legal(grid, cells[:-1], cells[1:])`` per step, with the per-cell work
+    # (one free-cell lookup, one division) done once per cell instead of once per end of
+    # each step: the fitness evaluation runs this on every individual every generation.
     cells = jnp.asarray(cells, jnp.int32)
+    n, w = grid.n_cells, grid.width
+    inside = (cells >= 0) & (cells < n)
+    cc = jnp.clip(cells, 0, n - 1)
+    free = inside & ~grid.blocked.reshape(-1)[cc]
+    x, y = cc % w, cc // w
+    dx, dy = x[1:] - x[:-1], y[1:] - y[:-1]
+    step = (jnp.maximum(jnp.abs(dx), jnp.abs(dy)) == 1) & free[:-1] & free[1:]
+    if grid.corner_rule != "free":
+        corner_ok = diagonal_legal(
+            blocked_at(grid.blocked, x[1:], y[:-1]), blocked_at(grid.blocked, x[:-1], y[1:]),
+            grid.corner_rule,
+        )
+        step &= ((dx == 0) | (dy == 0)) | corner_ok
     i = jnp.arange(cells.shape[0] - 1, dtype=jnp.int32)
-    legal = move_legal(grid, cells[:-1], cells[1:]) | (i >= length - 1)
-    first_free = ~grid.blocked.reshape(-1)[jnp.clip(cells[0], 0, grid.n_cells - 1)]
-    on_map = jnp.all((cells >= 0) & (cells < grid.n_cells))
-    return _valid_length(cells, length) & on_map & first_free & jnp.all(legal)
+    legal = step | (i >= length - 1)
+    return _valid_length(cells, length) & jnp.all(inside) & free[0] & jnp.all(legal)
 
 
 def is_feasible(grid: Grid, cells: jax.Array, length: jax.Array) -> jax.Array:
@@ -218,8 +233,7 @@ def last_occurrence(
     i = jnp.arange(n, dtype=jnp.int32)
     valid = i < length
     if n_cells is not None and n_cells <= TABLE_MAX_CELLS:
-        table = jnp.full((n_cells,), -1, jnp.int32)
-        table = table.at[jnp.where(valid, cells, n_cells)].max(i, mode="drop")
+        table = position_table(jnp.where(valid, cells, n_cells), n_cells)
         return jnp.where(valid, table[jnp.clip(cells, 0, n_cells - 1)], i)
     key = jnp.where(valid, cells, -1 - i)
     order = jnp.argsort(key, stable=True).astype(jnp.int32)
@@ -242,8 +256,7 @@ def position_lookup(
     i = jnp.arange(n, dtype=jnp.int32)
     valid = i < length
     if n_cells is not None and n_cells <= TABLE_MAX_CELLS:
-        table = jnp.full((n_cells,), -1, jnp.int32)
-        table = table.at[jnp.where(valid, cells, n_cells)].max(i, mode="drop")
+        table = position_table(jnp.where(valid, cells, n_cells), n_cells)
 
         def look(q):
             inside = (q >= 0) & (q < n_cells)

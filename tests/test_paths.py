@@ -11,6 +11,7 @@ from hypothesis import strategies as st
 
 from jaxga import Grid, ParameterError
 from jaxga.grid import DIRECTIONS
+from jaxga.maps import random_map
 from jaxga.paths import (
     Population,
     cells_to_xy,
@@ -24,6 +25,7 @@ from jaxga.paths import (
     remove_loops,
     to_coords,
 )
+from jaxga.reference import clear_np
 
 N = 8  # 8 x 8 open map
 CAP = 40
@@ -124,3 +126,35 @@ def test_remove_loops_under_x64():
         out, k = jax.jit(remove_loops, static_argnums=2)(cells, 7, 400)
         assert out.dtype == jnp.int32 and k.dtype == jnp.int32
         assert np.asarray(out[: int(k)]).tolist() == [0, 20, 40, 60]
+
+
+@pytest.mark.parametrize("rule", ["free", "no_squeeze", "strict"])
+def test_is_continuous_agrees_with_the_exact_segment_reference(rule):
+    """Random walks with jumps and off-map cells on a map with obstacles: continuous iff
+    the length is in [1, L], every cell (padding too) is on the map, the first cell is
+    free and every valid step is 8-adjacent and clear (jaxga.reference.clear_np)."""
+    grid = random_map(7, 6, 0.3, seed=2, corner_rule=rule)
+    blocked, w, n = grid.blocked_np(), grid.width, grid.n_cells
+    rng = np.random.default_rng(rule.encode()[0])
+    cap, batch = 6, 3000
+    steps = rng.integers(-1, 2, (batch, cap - 1)) + w * rng.integers(-1, 2, (batch, cap - 1))
+    start = rng.integers(0, n, (batch, 1))
+    cells = np.concatenate([start, start + np.cumsum(steps, axis=1)], axis=1)
+    jumps = rng.random(cells.shape) < 0.03
+    cells[jumps] = rng.integers(-2, n + 2, int(jumps.sum()))
+    length = rng.integers(0, cap + 2, batch)
+    got = np.asarray(_continuous(grid, jnp.asarray(cells, jnp.int32),
+                                 jnp.asarray(length, jnp.int32)))
+
+    def expected(c, k):
+        if not 1 <= k <= cap or not all(0 <= v < n for v in c):
+            return False
+        xy = [(int(v) % w, int(v) // w) for v in c[:k]]
+        if blocked[xy[0][1], xy[0][0]]:
+            return False
+        return all(max(abs(a[0] - b[0]), abs(a[1] - b[1])) == 1
+                   and clear_np(blocked, rule, a, b) for a, b in zip(xy, xy[1:]))
+
+    want = np.array([expected(c, k) for c, k in zip(cells, length)])
+    assert np.array_equal(got, want)
+    assert 50 < want.sum() < batch - 50  # both outcomes are exercised
