@@ -32,6 +32,7 @@ __all__ = [
     "over_individuals_gated",
     "over_pairs",
     "over_pairs_gated",
+    "true_first_order",
 ]
 
 
@@ -70,7 +71,9 @@ def _interleave(pop: Population, c1, l1, c2, l2) -> Population:
     """Children of pairs (0, 1), (2, 3), ... back in population order; an odd last
     individual of ``pop`` passes through."""
     n_pairs = c1.shape[0]
-    cells = jnp.stack([c1, c2], axis=1).reshape(2 * n_pairs, -1)
+    # [pairs, 2L] rows c1[i] ++ c2[i], reshaped to [2 pairs, L]: the same rows as stacking on
+    # a new axis 1, but one contiguous copy (the stack was a transposing copy on XLA:CPU)
+    cells = jnp.concatenate([c1, c2], axis=-1).reshape(2 * n_pairs, -1)
     length = jnp.stack([l1, l2], axis=1).reshape(-1)
     if pop.size % 2:
         cells = jnp.concatenate([cells, pop.cells[-1:]], axis=0)
@@ -101,6 +104,22 @@ def over_pairs(op: Callable, *, in_axes_extra: tuple = ()) -> Callable:
     lifted.__name__ = getattr(op, "__name__", "op") + "_population"
     lifted.__doc__ = f"``{lifted.__name__[:-11]}`` applied to consecutive pairs (vmap)."
     return lifted
+
+
+def true_first_order(flags: jax.Array) -> jax.Array:
+    """``int32[n]``: the indices of the True entries of ``flags`` in order, then those of
+    the False entries in order; equal to ``jnp.argsort(~flags, stable=True)``.
+
+    Two prefix counts and one scatter of a permutation instead of a comparison sort:
+    XLA's CPU sort took about 3 ms for the 9,540 segments of one AGACD population (60 x
+    159), half of an AGACD generation (RESULTS.md).
+    """
+    flags = jnp.asarray(flags, bool)
+    n = flags.shape[0]
+    i = jnp.arange(n, dtype=jnp.int32)
+    trues = jax.lax.associative_scan(jnp.add, flags.astype(jnp.int32))  # inclusive
+    pos = jnp.where(flags, trues - 1, trues[-1] + i - trues)
+    return jnp.zeros((n,), jnp.int32).at[pos].set(i, unique_indices=True)
 
 
 def gated_map(
@@ -139,7 +158,7 @@ def gated_map(
     n = apply.shape[0]
     b = block or max(4, -(-n // 4))
     n_blocks = -(-n // b)
-    order = jnp.argsort(~apply, stable=True).astype(jnp.int32)
+    order = true_first_order(apply)
     order = jnp.concatenate([order, jnp.full((n_blocks * b - n,), n, jnp.int32)])
     n_apply = jnp.sum(apply, dtype=jnp.int32)
     lane = jnp.arange(b, dtype=jnp.int32)

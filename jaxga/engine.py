@@ -169,32 +169,53 @@ SHORT_SPAN = 4
 def waypoints_feasible(grid: Grid, cells: jax.Array, length: jax.Array) -> jax.Array:
     """``bool[P]``: :func:`jaxga.paths.is_feasible` of a population of waypoint paths.
 
-    Same answer, less work: every segment of span at most :data:`SHORT_SPAN` is tested
-    with the bounded exact test (``clear(..., max_span=SHORT_SPAN)``, a few lanes), and
-    only the long segments (crossover junctions, typically one per child) with the full
-    exact test, gathered across the population by :func:`jaxga.batching.gated_map`
-    instead of testing all ``P x L`` segments at the cost of the longest possible one.
+    Same answer, less work. A segment of span at most 1 (a grid step, or a repeated node)
+    is clear exactly when its cells are free and, for a diagonal step, its side cells
+    satisfy the corner rule (:func:`jaxga.geometry.clear` on 8-adjacent pairs is
+    :func:`jaxga.grid.move_legal`): one lookup per cell, computed for every slot. Only
+    the longer segments get a line-of-sight test, gathered across the population by
+    :func:`jaxga.batching.gated_map`: the bounded exact test
+    (``clear(..., max_span=SHORT_SPAN)``) for spans up to :data:`SHORT_SPAN`, the full
+    exact test beyond (crossover junctions, simplified corners). After 30 generations
+    of AGACD on a 20 x 20 map, 86 % of the valid segments are single steps and 87 % of
+    the ``P x (L - 1)`` slots are padding; testing every slot with the bounded test was
+    two thirds of an AGACD generation.
     """
     from jaxga.batching import gated_map
     from jaxga.geometry import clear
+    from jaxga.grid import blocked_at, diagonal_legal
 
     p, cap = cells.shape
-    w = grid.width
-    a, b = cells[:, :-1], cells[:, 1:]
+    w, n = grid.width, grid.n_cells
+    inside = (cells >= 0) & (cells < n)
+    cc = jnp.clip(cells, 0, n - 1)
+    free = ~grid.blocked.reshape(-1)[cc]
+    x, y = cc % w, cc // w
+    dx, dy = x[:, 1:] - x[:, :-1], y[:, 1:] - y[:, :-1]
+    span = jnp.maximum(jnp.abs(dx), jnp.abs(dy))
+    step_ok = free[:, :-1] & free[:, 1:]
+    if grid.corner_rule != "free":
+        corner_ok = diagonal_legal(
+            blocked_at(grid.blocked, x[:, 1:], y[:, :-1]),
+            blocked_at(grid.blocked, x[:, :-1], y[:, 1:]), grid.corner_rule,
+        )
+        step_ok &= (dx == 0) | (dy == 0) | corner_ok
     valid = jnp.arange(cap - 1, dtype=I32)[None, :] < (length[:, None] - 1)
-    span = jnp.maximum(jnp.abs(a % w - b % w), jnp.abs(a // w - b // w))
+    medium = valid & (span > 1) & (span <= SHORT_SPAN)
     long_ = valid & (span > SHORT_SPAN)
-    short_ok = jax.vmap(jax.vmap(lambda u, v: clear(grid, u, v, max_span=SHORT_SPAN)))(a, b)
-    (long_ok,) = gated_map(
-        lambda u, v: (clear(grid, u, v),), long_.reshape(-1),
-        (a.reshape(-1), b.reshape(-1)), (jnp.ones((p * (cap - 1),), bool),), block=16,
+    a, b = cells[:, :-1].reshape(-1), cells[:, 1:].reshape(-1)
+    ones = (jnp.ones((p * (cap - 1),), bool),)
+    (medium_ok,) = gated_map(lambda u, v: (clear(grid, u, v, max_span=SHORT_SPAN),),
+                             medium.reshape(-1), (a, b), ones, block=16)
+    (long_ok,) = gated_map(lambda u, v: (clear(grid, u, v),), long_.reshape(-1), (a, b),
+                           ones, block=16)
+    seg_ok = jnp.where(
+        long_, long_ok.reshape(p, cap - 1),
+        jnp.where(medium, medium_ok.reshape(p, cap - 1), step_ok | ~valid),
     )
-    seg_ok = jnp.where(long_, long_ok.reshape(p, cap - 1), short_ok | ~valid)
-    first = cells[:, 0]
-    on_map = jnp.all((cells >= 0) & (cells < grid.n_cells), axis=1)
-    first_free = ~grid.blocked.reshape(-1)[jnp.clip(first, 0, grid.n_cells - 1)]
+    on_map = jnp.all(inside, axis=1)
     sized = (length >= 1) & (length <= cap)
-    return sized & on_map & first_free & jnp.all(seg_ok, axis=1)
+    return sized & on_map & free[:, 0] & jnp.all(seg_ok, axis=1)
 
 
 def evaluate(algo: Algorithm, grid: Grid, params: dict, cells, length, active) -> tuple:

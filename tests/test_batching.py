@@ -16,6 +16,7 @@ from jaxga.batching import (
     over_individuals_gated,
     over_pairs,
     over_pairs_gated,
+    true_first_order,
 )
 from jaxga.maps import load_map
 from jaxga.paths import Population, from_coords
@@ -132,3 +133,15 @@ def test_dense_gated_map_under_vmap():
     out = jax.vmap(lambda a, v: gated_map(lambda u: (u * 10,), a, (v,), (v,), dense=True)[0])(
         apply, x)
     np.testing.assert_array_equal(out, np.where(apply, np.asarray(x) * 10, x))
+
+
+@pytest.mark.parametrize("n", [1, 2, 61, 9540])
+def test_true_first_order_is_the_stable_argsort(n):
+    """The gate order of gated_map: True entries first, each group in index order,
+    exactly ``argsort(~flags, stable=True)``, also under vmap; all-False and all-True rows
+    included."""
+    rng = np.random.default_rng(n)
+    flags = rng.random((6, n)) < np.array([0.0, 0.03, 0.5, 0.97, 1.0, 0.3])[:, None]
+    got = np.asarray(jax.jit(jax.vmap(true_first_order))(jnp.asarray(flags)))
+    want = np.argsort(~flags, axis=1, kind="stable")
+    assert got.dtype == np.int32 and np.array_equal(got, want)

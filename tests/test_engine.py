@@ -87,30 +87,38 @@ def test_results_do_not_depend_on_the_device_count():
         np.testing.assert_array_equal(out[0][field], out[1][field], err_msg=field)  # NaN == NaN
 
 
-def test_population_waypoint_feasibility_equals_the_per_path_check():
-    """The engine's two-tier check (bounded test for short segments, full test gathered
-    for long ones) gives exactly ``paths.is_feasible`` on random waypoint paths."""
+@pytest.mark.parametrize("rule", ["free", "no_squeeze", "strict"])
+def test_population_waypoint_feasibility_equals_the_per_path_check(rule):
+    """The engine's three-tier check (single steps by cell lookups, the bounded test
+    gathered for spans 2-4, the full test gathered for longer ones) gives exactly
+    ``paths.is_feasible`` on random waypoint paths with every kind of segment: repeated
+    nodes, straight and diagonal steps (corner rule), short and long hops, blocked and
+    off-map cells, and padding."""
     import jax
     import jax.numpy as jnp
 
-    from jaxga.engine import waypoints_feasible
+    from jaxga.engine import SHORT_SPAN, waypoints_feasible
     from jaxga.paths import is_feasible
 
-    grid = random_map(12, 12, 0.25, 5, corner_rule="strict")
-    rng = np.random.default_rng(0)
-    p, cap = 64, 12
-    free = np.flatnonzero(~grid.blocked_np().reshape(-1))
-    cells = rng.choice(free, (p, cap)).astype(np.int32)
-    # short hops for half of the segments so that both tiers are exercised
-    hop = rng.integers(-2, 3, (p, cap, 2))
-    xs = np.clip(cells % 12 + hop[..., 0], 0, 11)
-    ys = np.clip(cells // 12 + hop[..., 1], 0, 11)
-    near = (ys * 12 + xs).astype(np.int32)
-    cells = np.where(rng.random((p, cap)) < 0.6, np.roll(near, 1, axis=1), cells)
-    cells[:, 0] = free[0]
+    grid = random_map(12, 12, 0.25, 5, corner_rule=rule)
+    rng = np.random.default_rng(len(rule))
+    p, cap, w = 400, 5, 12
+    # random walks whose hops are 0-1 cells (most), 2-4 or up to 9 cells along each axis
+    size = rng.choice([1, 4, 9], (p, cap - 1), p=[0.6, 0.25, 0.15])
+    hop = rng.integers(-size[..., None], size[..., None] + 1, (p, cap - 1, 2))
+    xy = np.concatenate([rng.integers(0, w, (p, 1, 2)), hop], axis=1).cumsum(axis=1)
+    xy = np.clip(xy, 0, w - 1)
+    cells = (xy[..., 1] * w + xy[..., 0]).astype(np.int32)
+    off = rng.random((p, cap)) < 0.01
+    cells[off] = rng.choice([-1, w * w], int(off.sum()))
     length = rng.integers(1, cap + 1, p).astype(np.int32)
-    cells, length = jnp.asarray(cells), jnp.asarray(length)
-    got = jax.jit(waypoints_feasible)(grid, cells, length)
-    want = jax.vmap(lambda c, n: is_feasible(grid, c, n))(cells, length)
+    got = jax.jit(waypoints_feasible)(grid, jnp.asarray(cells), jnp.asarray(length))
+    want = jax.vmap(lambda c, n: is_feasible(grid, c, n))(jnp.asarray(cells), jnp.asarray(length))
     assert np.array_equal(np.asarray(got), np.asarray(want))
-    assert 0 < int(np.sum(want)) < p  # both outcomes occur
+    # every tier is exercised, with both outcomes overall
+    a, b = cells[:, :-1], cells[:, 1:]
+    span = np.maximum(abs(a % w - b % w), abs(a // w - b // w))
+    valid = np.arange(cap - 1)[None, :] < length[:, None] - 1
+    for lo, hi in [(0, 0), (1, 1), (2, SHORT_SPAN), (SHORT_SPAN + 1, w)]:
+        assert np.sum(valid & (span >= lo) & (span <= hi)) > 20, (lo, hi)
+    assert 50 < int(np.sum(want)) < p - 50
