@@ -28,6 +28,7 @@ import numpy as np
 
 from jaxga.grid import Grid, blocked_at, diagonal_legal
 from jaxga.paths import position_lookup, remove_loops
+from jaxga.scatter import set_drop
 
 __all__ = ["concat", "connect", "pad_cells", "random_free_neighbour", "splice_loop_free"]
 
@@ -263,9 +264,19 @@ def _compact(flags: jax.Array, vals: jax.Array, size: int) -> tuple[jax.Array, j
     Up to 32 flags: the flags packed into one word and the set bits extracted lowest
     first (``x & -x``, ``x & (x - 1)``), a few elementwise operations per slot; XLA
     otherwise fuses a prefix sum into every output slot of the one-hot scatter, which
-    dominated a connection round on the CPU. Longer: prefix count and scatter.
+    dominated a connection round on the CPU. Up to 64: two words. Longer: prefix count
+    and scatter.
     """
     n = flags.shape[0]
+    if 32 < n <= 64:
+        # two words: compact each half and append the second half's values after the
+        # first half's (one small gather) instead of the prefix count and one-hot set
+        # below, which were a quarter of an MPMGA generation (queue 18, 36 flags)
+        first, n_first = _compact(flags[:32], vals[:32], size)
+        second, n_second = _compact(flags[32:], vals[32:], size)
+        k = jnp.arange(size, dtype=jnp.int32)
+        out = jnp.where(k < n_first, first, second[jnp.clip(k - n_first, 0, size - 1)])
+        return out, n_first + n_second
     count = jnp.sum(flags, dtype=jnp.int32)
     if n > 32:
         pos = prefix_count(flags) - 1
@@ -295,7 +306,7 @@ def _set(table: jax.Array, idx: jax.Array, vals: jax.Array) -> jax.Array:
     """
     n, k = table.shape[0], idx.shape[0]
     if n * k > ONE_HOT_MAX:
-        return table.at[idx].set(vals, mode="drop")
+        return set_drop(table, idx, vals)  # one flat scatter under vmap
     hit = idx[:, None] == jnp.arange(n, dtype=idx.dtype)[None, :]
     new = jnp.sum(jnp.where(hit, vals[:, None], 0), axis=0, dtype=table.dtype)
     return jnp.where(jnp.any(hit, axis=0), new, table)
@@ -319,15 +330,19 @@ def concat(
     Returns:
         ``(cells int32[capacity], length int32, ok bool)``; ``ok`` is False when the
         total exceeds ``capacity`` (the output is then truncated and must not be used).
-        One gather per part over ``capacity`` lanes (no scatter).
+        One gather per part over ``capacity`` lanes (none for a first part that starts at
+        0 of a path of length ``capacity``), no scatter.
     """
     j = jnp.arange(capacity, dtype=jnp.int32)
     out = jnp.zeros((capacity,), jnp.int32)
     offset = jnp.int32(0)
-    for cells, start, stop in parts:
+    for k, (cells, start, stop) in enumerate(parts):
         n = jnp.maximum(jnp.asarray(stop, jnp.int32) - start, 0)
-        src = jnp.clip(j - offset + start, 0, cells.shape[0] - 1)
-        out = jnp.where((j >= offset) & (j < offset + n), cells[src], out)
+        if k == 0 and isinstance(start, int) and start == 0 and cells.shape[0] == capacity:
+            out = jnp.where(j < n, cells, out)  # a prefix in place: no gather
+        else:
+            src = jnp.clip(j - offset + start, 0, cells.shape[0] - 1)
+            out = jnp.where((j >= offset) & (j < offset + n), cells[src], out)
         offset = offset + n
     length = jnp.minimum(offset, capacity)
     last = out[jnp.maximum(length - 1, 0)]

@@ -7,6 +7,7 @@ import functools
 import jax
 import jax.numpy as jnp
 import numpy as np
+import pytest
 from hypothesis import given
 from hypothesis import strategies as st
 
@@ -209,3 +210,22 @@ def test_splice_loop_free_matches_the_loop_removal_of_the_splice(seed, variant):
             assert out[i, : out_len[i]].tolist() == want
             if want:
                 assert (out[i, out_len[i]:] == want[-1]).all()
+
+
+@pytest.mark.parametrize("n, size", [(8, 8), (32, 18), (36, 18), (64, 40), (70, 30)])
+def test_compact_keeps_the_flagged_values_in_order(n, size):
+    """The connection's work-queue compaction (one word, two words, prefix count):
+    ``vals[flags]`` in order, padded with -1, the first ``size`` kept, and the count."""
+    from jaxga.repair import _compact
+
+    rng = np.random.default_rng(n)
+    density = np.array([0.0, 0.1, 0.5, 0.9, 1.0])[:, None]
+    flags = rng.random((5, n)) < density
+    vals = rng.integers(0, 1000, (5, n)).astype(np.int32)
+    out, count = jax.jit(jax.vmap(lambda f, v: _compact(f, v, size)))(
+        jnp.asarray(flags), jnp.asarray(vals))
+    for f, v, o, c in zip(flags, vals, np.asarray(out), np.asarray(count)):
+        want = np.full(size, -1)
+        kept = v[f][:size]
+        want[: len(kept)] = kept
+        assert c == f.sum() and np.array_equal(o, want)
