@@ -532,7 +532,7 @@ def sweep(
         results.append(Result(
             preset=config["name"], map_name=map_name, corner_rule=grid.corner_rule,
             seeds=seed_arr, success=success,
-            reason="" if success.all() else "no feasible path found by some seeds",
+            reason=_failure_reason(success, rate[sl], config),
             cells=h["cells"], n_cells=h["length"],
             raw_cells=h["raw_cells"], raw_n_cells=h["raw_length"],
             length=h["path_length"].astype(float),
@@ -592,6 +592,24 @@ def run(
     return sweep(preset, grid, [{}], seeds, generations=generations,
                  corner_rule=corner_rule, variant=variant, sets=sets, progress=progress,
                  chunks=chunks, **overrides)[0]
+
+
+def _failure_reason(success: np.ndarray, init_rate: np.ndarray, config) -> str:
+    """Why some runs returned no path: how many, and whether the initialiser ever made a
+    path (a paper's initialiser can fail on every attempt on some maps, e.g. median
+    insertion through a wall three cells thick)."""
+    failed = ~np.asarray(success)
+    if not failed.any():
+        return ""
+    n, total = int(failed.sum()), failed.size
+    text = f"no feasible path found by {n} of {total} seeds"
+    no_init = failed & (np.asarray(init_rate) == 0)
+    if no_init.any():
+        method = config.get("init.method")
+        text += (f"; {int(no_init.sum())} of them got no initial path: the initialiser "
+                 f"{method!r} succeeded in none of its attempts on this map (raise "
+                 f"init.max_tries or choose another init.method)")
+    return text
 
 
 def _no_path_result(config, map_name, grid, seeds, algo, reason, elapsed) -> Result:

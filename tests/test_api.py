@@ -129,6 +129,19 @@ def test_unreachable_goal_is_a_no_path_result():
     assert r.to_json()["runs"][0]["path"] == []
 
 
+def test_failure_reason_counts_the_seeds_and_names_an_initialiser_that_never_succeeded():
+    from jaxga.presets import load_preset
+
+    cfg = load_preset("mpmga")
+    ok = np.array([True, True, True])
+    assert api._failure_reason(ok, np.array([0.2, 0.1, 0.3]), cfg) == ""
+    some = api._failure_reason(np.array([True, False, True]), np.array([0.2, 0.1, 0.3]), cfg)
+    assert some == "no feasible path found by 1 of 3 seeds"
+    none = api._failure_reason(np.array([False, False, True]), np.array([0.0, 0.1, 0.3]), cfg)
+    assert none.startswith("no feasible path found by 2 of 3 seeds; 1 of them got no initial")
+    assert "'intermittent_connect'" in none and "init.max_tries" in none
+
+
 @pytest.mark.parametrize("t", [0, 1, 7, 50, 100])
 def test_schedules_match_the_papers_formulas(t):
     assert math.isclose(float(schedules.agacd_crossover_decay(100)(t)), math.exp(-t / 100),
