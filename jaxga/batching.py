@@ -110,9 +110,10 @@ def true_first_order(flags: jax.Array) -> jax.Array:
     """``int32[n]``: the indices of the True entries of ``flags`` in order, then those of
     the False entries in order; equal to ``jnp.argsort(~flags, stable=True)``.
 
-    Two prefix counts and one scatter of a permutation instead of a comparison sort:
-    XLA's CPU sort took about 3 ms for the 9,540 segments of one AGACD population (60 x
-    159), half of an AGACD generation (RESULTS.md).
+    A prefix count and one scatter of a permutation instead of a comparison sort: for
+    the 9,540 segments of an AGACD population (60 x 159) XLA's CPU sort took 1.2 ms per
+    population, 14x longer (``benchmarks/batched_ops.py``, RESULTS.md), and in a profile
+    of AGACD's evolution it was half of a generation.
     """
     flags = jnp.asarray(flags, bool)
     n = flags.shape[0]

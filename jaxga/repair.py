@@ -28,7 +28,6 @@ import numpy as np
 
 from jaxga.grid import Grid, blocked_at, diagonal_legal
 from jaxga.paths import position_lookup, remove_loops
-from jaxga.scatter import set_drop
 
 __all__ = ["concat", "connect", "pad_cells", "random_free_neighbour", "splice_loop_free"]
 
@@ -306,7 +305,7 @@ def _set(table: jax.Array, idx: jax.Array, vals: jax.Array) -> jax.Array:
     """
     n, k = table.shape[0], idx.shape[0]
     if n * k > ONE_HOT_MAX:
-        return set_drop(table, idx, vals)  # one flat scatter under vmap
+        return table.at[idx].set(vals, mode="drop")
     hit = idx[:, None] == jnp.arange(n, dtype=idx.dtype)[None, :]
     new = jnp.sum(jnp.where(hit, vals[:, None], 0), axis=0, dtype=table.dtype)
     return jnp.where(jnp.any(hit, axis=0), new, table)

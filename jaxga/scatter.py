@@ -5,15 +5,17 @@ individuals, islands and seeds (SPEC 2). ``vmap`` turns a scatter into a batched
 scatter, and XLA's CPU backend then builds an index vector per batch dimension for
 every update (a ``[updates, batch dims + 1]`` concatenation) before a serial update
 loop: for the crossovers' position tables that index construction cost more than the
-scatter itself (RESULTS.md, 2026-11-24). The functions here carry a
+scatter itself. :func:`position_table` carries a
 :func:`jax.custom_batching.custom_vmap` rule that folds every ``vmap`` level into one
 more leading dimension, and compute all rows with a single 1-D scatter into a flat
 table of ``rows * n`` entries, offsetting each row's indices by ``row * n``.
 
 Results are bit-for-bit those of the plain ``.at[]`` scatter (integer maxima are
-order-independent; :func:`set_drop` requires distinct indices, as a deterministic
-``.at[].set`` does anyway). Indices follow ``.at[]``: negative ones count from the end,
-others outside the table are dropped.
+order-independent). Indices follow ``.at[]``: negative ones count from the end, others
+outside the table are dropped. Not every scatter gains: a flat version of the
+connection's small node-table set (18 updates into 160 entries, 10 x 3 x 15 rows) was
+slower than the batched scatter (0.28 against 0.16 ms, measured once and not kept), so
+only the map-sized position tables use this.
 """
 
 from __future__ import annotations
@@ -26,7 +28,7 @@ import jax.numpy as jnp
 import numpy as np
 from jax.custom_batching import custom_vmap
 
-__all__ = ["position_table", "set_drop"]
+__all__ = ["position_table"]
 
 
 def _flat_indices(idx: jax.Array, n: int) -> tuple[jax.Array, int]:
@@ -47,8 +49,9 @@ def position_table(keys: jax.Array, n_cells: int) -> jax.Array:
     ``keys`` is ``int32[L]``. Equal to ``full(n_cells, -1).at[keys].max(arange(L),
     mode="drop")``. Used by :func:`jaxga.paths.position_lookup` and
     :func:`jaxga.paths.last_occurrence` (the crossovers' "where is this cell in the other
-    parent" and loop removal): 2-3x faster than the batched scatter for 100 seeds x 30
-    pairs x 160 cells on a 20 x 20 map.
+    parent" and loop removal): 2.4x faster than the batched scatter for 100 seeds x 30
+    pairs x 160 cells on a 20 x 20 map and 1.7x for 32 seeds x 40 pairs x 400 cells on a
+    50 x 50 map (``benchmarks/batched_ops.py``, RESULTS.md).
     """
     return _position_table_fn(int(n_cells))(jnp.asarray(keys, jnp.int32))
 
@@ -74,33 +77,3 @@ def _position_table_fn(n_cells: int) -> Callable:
         return table(keys), True
 
     return table
-
-
-def set_drop(table: jax.Array, idx: jax.Array, vals: jax.Array) -> jax.Array:
-    """``table.at[idx].set(vals, mode="drop")`` for a 1-D ``table`` and DISTINCT ``idx``.
-
-    One flat scatter however many ``vmap`` levels surround it (the connection
-    operator's node table, :func:`jaxga.repair.connect`).
-    """
-    table = jnp.asarray(table)
-    idx = jnp.asarray(idx, jnp.int32)
-    vals = jnp.asarray(vals, table.dtype)
-    return _set_drop(table, idx, vals)
-
-
-@custom_vmap
-def _set_drop(table: jax.Array, idx: jax.Array, vals: jax.Array) -> jax.Array:
-    # table [..., n], idx and vals [..., k] with the same leading dimensions
-    n = table.shape[-1]
-    flat, _ = _flat_indices(idx, n)
-    out = table.reshape(-1).at[flat].set(vals.reshape(-1), mode="drop")
-    return out.reshape(table.shape)
-
-
-@_set_drop.def_vmap
-def _set_drop_batched(axis_size, in_batched, table, idx, vals):
-    table, idx, vals = (
-        x if b else jnp.broadcast_to(x, (axis_size,) + x.shape)
-        for x, b in zip((table, idx, vals), in_batched)
-    )
-    return _set_drop(table, idx, vals), True

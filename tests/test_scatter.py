@@ -1,4 +1,4 @@
-"""Flat scatters under vmap (jaxga.scatter): the same tables as the plain .at[] scatters."""
+"""Flat scatters under vmap (jaxga.scatter): the same tables as the plain .at[] scatter."""
 
 from __future__ import annotations
 
@@ -7,7 +7,7 @@ import jax.numpy as jnp
 import numpy as np
 import pytest
 
-from jaxga.scatter import position_table, set_drop
+from jaxga.scatter import position_table
 
 
 def _nest(fn, depth):
@@ -33,32 +33,3 @@ def test_position_table_is_the_scatter_max_at_any_vmap_depth(shape):
     assert got.dtype == np.int32 and got.shape == shape[:-1] + (n_cells,)
     assert np.array_equal(got, want)
     assert (want >= 0).any() and (want == -1).any()  # both outcomes are exercised
-
-
-@pytest.mark.parametrize("depth", [0, 1, 2])
-@pytest.mark.parametrize("shared_table", [False, True])
-def test_set_drop_is_the_plain_set(depth, shared_table):
-    """``table.at[idx].set(vals, mode="drop")`` for distinct indices, in and out of range
-    and negative, with the table batched or shared across the vmap."""
-    rng = np.random.default_rng(depth)
-    batch = (4, 3)[:depth]
-    n, k = 16, 6
-    # distinct after wrapping: -3..-1 stand for n-3..n-1, which are left out
-    pool = np.concatenate([np.arange(-3, n - 3), np.arange(n, n + 3)])
-    idx = np.stack([rng.permutation(pool)[:k]
-                    for _ in range(int(np.prod(batch)))]).reshape(batch + (k,))
-    vals = rng.integers(100, 200, batch + (k,))
-    table = rng.integers(0, 9, (n,) if shared_table else batch + (n,))
-
-    def ref(t, i, v):
-        return t.at[i].set(v, mode="drop")
-
-    axes = (None if shared_table else 0, 0, 0)
-    f_ref, f_new = ref, set_drop
-    for _ in range(depth):
-        f_ref, f_new = jax.vmap(f_ref, in_axes=axes), jax.vmap(f_new, in_axes=axes)
-    args = [jnp.asarray(a, jnp.int32) for a in (table, idx, vals)]
-    want = np.asarray(f_ref(*args))
-    got = np.asarray(jax.jit(f_new)(*args))
-    assert np.array_equal(got, want)
-    assert (want >= 100).any() and (want < 100).any()
