@@ -73,3 +73,20 @@ def append(title: str, body: str, *, write: bool = True) -> None:
                 fh.write("# Benchmark results\n")
             fh.write(section)
         print(f"appended to {RESULTS}")
+
+
+def timed(fn, *args, repeats: int = 5) -> float:
+    """Median wall seconds of ``fn(*args)`` (after one warm-up call), results blocked on."""
+    import time
+
+    import jax
+    import numpy as np
+
+    jax.block_until_ready(fn(*args))
+    times = []
+    for _ in range(repeats):
+        t0 = time.perf_counter()
+        jax.block_until_ready(fn(*args))
+        times.append(time.perf_counter() - t0)
+    return float(np.median(times))
+

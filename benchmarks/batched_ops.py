@@ -16,25 +16,14 @@ pairs or seeds x segments) and checks that both give the same array:
 from __future__ import annotations
 
 import argparse
-import time
 
 import jax
 import jax.numpy as jnp
 import numpy as np
-from _results import append, markdown_table
+from _results import append, markdown_table, timed
 
 from jaxga.batching import true_first_order
 from jaxga.scatter import position_table
-
-
-def _time(fn, args, repeats: int) -> float:
-    jax.block_until_ready(fn(*args))
-    times = []
-    for _ in range(repeats):
-        t0 = time.perf_counter()
-        jax.block_until_ready(fn(*args))
-        times.append(time.perf_counter() - t0)
-    return float(np.median(times))
 
 
 def _nest(fn, depth, in_axes=0):
@@ -69,7 +58,8 @@ def main() -> None:
     rows = []
     for name, plain, ours, xs in cases(np.random.default_rng(0)):
         same = bool(np.array_equal(np.asarray(plain(*xs)), np.asarray(ours(*xs))))
-        t_plain, t_ours = _time(plain, xs, args.repeats), _time(ours, xs, args.repeats)
+        t_plain = timed(plain, *xs, repeats=args.repeats)
+        t_ours = timed(ours, *xs, repeats=args.repeats)
         rows.append([name, f"{t_plain * 1e3:.2f}", f"{t_ours * 1e3:.2f}",
                      f"{t_plain / t_ours:.1f}", "yes" if same else "NO"])
         print(rows[-1], flush=True)

@@ -10,27 +10,15 @@ continuity / feasibility / loop removal on populations of 1000 paths of capacity
 from __future__ import annotations
 
 import argparse
-import time
 
 import jax
 import jax.numpy as jnp
 import numpy as np
-from _results import SHARED, append, markdown_table
+from _results import SHARED, append, markdown_table, timed
 
 from jaxga.geometry import clear, linear_trial
 from jaxga.maps import load_map, random_map
 from jaxga.paths import is_continuous, is_feasible, remove_loops
-
-
-def timed(fn, *args, repeats: int = 5) -> float:
-    """Median seconds of a jitted call (after a warm-up), results blocked on."""
-    jax.block_until_ready(fn(*args))
-    ts = []
-    for _ in range(repeats):
-        t = time.perf_counter()
-        jax.block_until_ready(fn(*args))
-        ts.append(time.perf_counter() - t)
-    return float(np.median(ts))
 
 
 def main() -> None:

@@ -11,27 +11,16 @@ mutation (gaps of 2 cells).
 from __future__ import annotations
 
 import argparse
-import time
 
 import jax
 import jax.numpy as jnp
 import numpy as np
-from _results import append, markdown_table
+from _results import append, markdown_table, timed
 
 from jaxga.maps import load_map
 from jaxga.repair import connect
 
 P = 100
-
-
-def timed(f, *a, repeats: int = 7) -> float:
-    jax.block_until_ready(f(*a))
-    ts = []
-    for _ in range(repeats):
-        t = time.perf_counter()
-        jax.block_until_ready(f(*a))
-        ts.append(time.perf_counter() - t)
-    return float(np.median(ts))
 
 
 def main() -> None:
@@ -54,7 +43,7 @@ def main() -> None:
         for cap in (160, 400, 1600):
             for rounds in (16, 64):
                 f = jax.jit(jax.vmap(lambda k, x, c=cap, r=rounds: connect(k, grid, x, 3, c, r)))
-                t = timed(f, keys, anchors)
+                t = timed(f, keys, anchors, repeats=7)
                 ok = float(jnp.mean(f(keys, anchors)[2]))
                 rows.append([label, cap, rounds, t / P * 1e6, f"{ok:.2f}"])
     body = (f"{P} connections, jit + vmap, median of 7 calls.\n\n"
