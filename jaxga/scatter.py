@@ -7,7 +7,7 @@ every update (a ``[updates, batch dims + 1]`` concatenation) before a serial upd
 loop: for the crossovers' position tables that index construction cost more than the
 scatter itself. :func:`position_table` carries a
 :func:`jax.custom_batching.custom_vmap` rule that folds every ``vmap`` level into one
-more leading dimension, and compute all rows with a single 1-D scatter into a flat
+more leading dimension, and computes all rows with a single 1-D scatter into a flat
 table of ``rows * n`` entries, offsetting each row's indices by ``row * n``.
 
 Results are bit-for-bit those of the plain ``.at[]`` scatter (integer maxima are
@@ -29,6 +29,10 @@ import numpy as np
 from jax.custom_batching import custom_vmap
 
 __all__ = ["position_table"]
+
+MAX_FLAT_ENTRIES = int(np.iinfo(np.int32).max)
+"""Flat tables must stay below this many entries (int32 indices); larger batches of rows
+fall back to one batched scatter."""
 
 
 def _flat_indices(idx: jax.Array, n: int) -> tuple[jax.Array, int]:
@@ -56,16 +60,36 @@ def position_table(keys: jax.Array, n_cells: int) -> jax.Array:
     return _position_table_fn(int(n_cells))(jnp.asarray(keys, jnp.int32))
 
 
+def _rows_flat(keys: jax.Array, n_cells: int) -> jax.Array:
+    """``int32[..., L] -> int32[..., n_cells]``: every row's table from one flat scatter."""
+    flat, r = _flat_indices(keys, n_cells)
+    pos = jnp.broadcast_to(jnp.arange(keys.shape[-1], dtype=jnp.int32), keys.shape)
+    table = jnp.full((r * n_cells,), -1, jnp.int32)
+    table = table.at[flat].max(pos.reshape(-1), mode="drop")
+    return table.reshape(keys.shape[:-1] + (n_cells,))
+
+
+def _rows_batched(keys: jax.Array, n_cells: int) -> jax.Array:
+    """The same tables from one batched scatter (no flat index can overflow)."""
+
+    def one_row(k: jax.Array) -> jax.Array:
+        i = jnp.arange(k.shape[-1], dtype=jnp.int32)
+        return jnp.full((n_cells,), -1, jnp.int32).at[k].max(i, mode="drop")
+
+    r = int(np.prod(keys.shape[:-1], dtype=np.int64))
+    tables = jax.vmap(one_row)(keys.reshape(r, keys.shape[-1]))
+    return tables.reshape(keys.shape[:-1] + (n_cells,))
+
+
 @functools.cache
 def _position_table_fn(n_cells: int) -> Callable:
     """The ``custom_vmap`` function of :func:`position_table` for one table size."""
 
     def rows(keys: jax.Array) -> jax.Array:  # int32[..., L] -> int32[..., n_cells]
-        flat, r = _flat_indices(keys, n_cells)
-        pos = jnp.broadcast_to(jnp.arange(keys.shape[-1], dtype=jnp.int32), keys.shape)
-        table = jnp.full((r * n_cells,), -1, jnp.int32)
-        table = table.at[flat].max(pos.reshape(-1), mode="drop")
-        return table.reshape(keys.shape[:-1] + (n_cells,))
+        r = int(np.prod(keys.shape[:-1], dtype=np.int64))
+        if r * n_cells >= MAX_FLAT_ENTRIES:  # flat int32 indices would overflow
+            return _rows_batched(keys, n_cells)
+        return _rows_flat(keys, n_cells)
 
     @custom_vmap
     def table(keys: jax.Array) -> jax.Array:

@@ -33,3 +33,16 @@ def test_position_table_is_the_scatter_max_at_any_vmap_depth(shape):
     assert got.dtype == np.int32 and got.shape == shape[:-1] + (n_cells,)
     assert np.array_equal(got, want)
     assert (want >= 0).any() and (want == -1).any()  # both outcomes are exercised
+
+
+def test_the_flat_and_the_batched_rows_give_the_same_tables():
+    """position_table computes a batch of rows with one flat scatter, or (beyond
+    MAX_FLAT_ENTRIES = 2**31 - 1 entries, where int32 flat indices would overflow) with
+    one batched scatter: both equal the per-row scatter."""
+    from jaxga.scatter import MAX_FLAT_ENTRIES, _rows_batched, _rows_flat
+
+    assert MAX_FLAT_ENTRIES == 2**31 - 1
+    keys = jnp.asarray(np.random.default_rng(5).integers(-13, 12, (4, 6, 9)), jnp.int32)
+    want = np.asarray(jax.vmap(jax.vmap(lambda k: position_table(k, 10)))(keys))
+    assert np.array_equal(np.asarray(_rows_flat(keys, 10)), want)
+    assert np.array_equal(np.asarray(_rows_batched(keys, 10)), want)
