@@ -41,7 +41,14 @@ from jaxga.errors import ParameterError
 from jaxga.grid import Grid
 from jaxga.init import get_initialiser, initialise
 from jaxga.numerics import ordered_mean
-from jaxga.paths import Population, has_endpoints, is_continuous, is_feasible, remove_loops
+from jaxga.paths import (
+    Population,
+    cell_steps,
+    has_endpoints,
+    is_continuous,
+    is_feasible,
+    remove_loops,
+)
 
 F32 = jnp.float32
 I32 = jnp.int32
@@ -183,23 +190,9 @@ def waypoints_feasible(grid: Grid, cells: jax.Array, length: jax.Array) -> jax.A
     """
     from jaxga.batching import gated_map
     from jaxga.geometry import clear
-    from jaxga.grid import blocked_at, diagonal_legal
 
     p, cap = cells.shape
-    w, n = grid.width, grid.n_cells
-    inside = (cells >= 0) & (cells < n)
-    cc = jnp.clip(cells, 0, n - 1)
-    free = ~grid.blocked.reshape(-1)[cc]
-    x, y = cc % w, cc // w
-    dx, dy = x[:, 1:] - x[:, :-1], y[:, 1:] - y[:, :-1]
-    span = jnp.maximum(jnp.abs(dx), jnp.abs(dy))
-    step_ok = free[:, :-1] & free[:, 1:]
-    if grid.corner_rule != "free":
-        corner_ok = diagonal_legal(
-            blocked_at(grid.blocked, x[:, 1:], y[:, :-1]),
-            blocked_at(grid.blocked, x[:, :-1], y[:, 1:]), grid.corner_rule,
-        )
-        step_ok &= (dx == 0) | (dy == 0) | corner_ok
+    inside, free, span, step_ok = cell_steps(grid, cells)
     valid = jnp.arange(cap - 1, dtype=I32)[None, :] < (length[:, None] - 1)
     medium = valid & (span > 1) & (span <= SHORT_SPAN)
     long_ = valid & (span > SHORT_SPAN)

@@ -29,6 +29,7 @@ from jaxga.scatter import position_table
 
 __all__ = [
     "Population",
+    "cell_steps",
     "cells_to_xy",
     "from_coords",
     "has_endpoints",
@@ -162,26 +163,40 @@ def is_continuous(grid: Grid, cells: jax.Array, length: jax.Array) -> jax.Array:
     Checks the cells themselves too: a one-cell path is continuous iff that cell is free.
     The endpoints are not compared with the grid's start and goal (:func:`has_endpoints`).
     """
-    # Equal to ``move_legal(grid, cells[:-1], cells[1:])`` per step, with the per-cell work
-    # (one free-cell lookup, one division) done once per cell instead of once per end of
-    # each step: the fitness evaluation runs this on every individual every generation.
     cells = jnp.asarray(cells, jnp.int32)
+    inside, free, span, step_ok = cell_steps(grid, cells)
+    i = jnp.arange(cells.shape[0] - 1, dtype=jnp.int32)
+    legal = ((span == 1) & step_ok) | (i >= length - 1)
+    return _valid_length(cells, length) & jnp.all(inside) & free[0] & jnp.all(legal)
+
+
+def cell_steps(grid: Grid, cells: jax.Array) -> tuple[jax.Array, ...]:
+    """Per-cell and per-step facts of paths ``cells int32[..., L]`` (SPEC 1).
+
+    Returns ``(inside bool[..., L], free bool[..., L], span int32[..., L-1],
+    step_ok bool[..., L-1])``: whether each cell is on the map, whether it is on the map
+    and free, the Chebyshev length of each step, and whether both ends of the step are
+    free and, for a diagonal, its side cells satisfy the corner rule. A step with
+    ``span == 1`` is a legal move exactly when ``step_ok`` (``move_legal``); a span-0
+    step (a repeated node) is clear exactly when ``step_ok``. Each cell is looked up and
+    divided once, not once per end of each step: the fitness evaluation runs this on
+    every individual every generation.
+    """
     n, w = grid.n_cells, grid.width
     inside = (cells >= 0) & (cells < n)
     cc = jnp.clip(cells, 0, n - 1)
     free = inside & ~grid.blocked.reshape(-1)[cc]
     x, y = cc % w, cc // w
-    dx, dy = x[1:] - x[:-1], y[1:] - y[:-1]
-    step = (jnp.maximum(jnp.abs(dx), jnp.abs(dy)) == 1) & free[:-1] & free[1:]
+    dx, dy = x[..., 1:] - x[..., :-1], y[..., 1:] - y[..., :-1]
+    span = jnp.maximum(jnp.abs(dx), jnp.abs(dy))
+    step_ok = free[..., :-1] & free[..., 1:]
     if grid.corner_rule != "free":
         corner_ok = diagonal_legal(
-            blocked_at(grid.blocked, x[1:], y[:-1]), blocked_at(grid.blocked, x[:-1], y[1:]),
-            grid.corner_rule,
+            blocked_at(grid.blocked, x[..., 1:], y[..., :-1]),
+            blocked_at(grid.blocked, x[..., :-1], y[..., 1:]), grid.corner_rule,
         )
-        step &= ((dx == 0) | (dy == 0)) | corner_ok
-    i = jnp.arange(cells.shape[0] - 1, dtype=jnp.int32)
-    legal = step | (i >= length - 1)
-    return _valid_length(cells, length) & jnp.all(inside) & free[0] & jnp.all(legal)
+        step_ok &= (dx == 0) | (dy == 0) | corner_ok
+    return inside, free, span, step_ok
 
 
 def is_feasible(grid: Grid, cells: jax.Array, length: jax.Array) -> jax.Array:
