@@ -27,6 +27,7 @@ import jax.numpy as jnp
 import numpy as np
 
 from jaxga.grid import Grid, blocked_at, diagonal_legal
+from jaxga.lanes import lane_while_loop
 from jaxga.paths import position_lookup, remove_loops
 
 __all__ = ["concat", "connect", "pad_cells", "random_free_neighbour", "splice_loop_free"]
@@ -211,7 +212,9 @@ def connect(
         return node, nxt, q, jnp.minimum(new_qlen, queue), count + qlen, r + 1, ok
 
     carry = (node, nxt, q0, qlen0, count0, jnp.int32(0), ok0)
-    node, nxt, _, qlen, _, _, ok = jax.lax.while_loop(cond, body, carry)
+    # A per-lane while_loop whose unfinished lanes are compacted under vmap: most
+    # connections close in a round or two, a few take many more (jaxga.lanes).
+    node, nxt, _, qlen, _, _, ok = lane_while_loop(cond, body, carry)
     ok &= qlen == 0
 
     # Follow the links from node 0. A while_loop, so that a batch of short bridges (the
