@@ -65,6 +65,7 @@ import numpy as np
 
 from jaxga.errors import NoPathError, ParameterError
 from jaxga.grid import DIRECTIONS, Grid, in_bounds, move_legal
+from jaxga.lanes import lane_while_loop
 from jaxga.paths import (
     Population,
     has_endpoints,
@@ -813,8 +814,8 @@ def initialise(
 ) -> tuple[Population, InitStats]:
     """A population of ``size`` initial paths, failed individuals redrawn (SPEC 4).
 
-    Works in rounds (a ``lax.while_loop`` over rounds, each a ``vmap`` of ``init_fn``
-    over ``chunk`` fresh keys): the k-th successful candidate of a round fills the k-th
+    Works in rounds (a :func:`jaxga.lanes.lane_while_loop` over rounds, each a ``vmap`` of
+    ``init_fn`` over ``chunk`` fresh keys): the k-th successful candidate of a round fills the k-th
     still-empty slot, in slot order; rounds stop when every slot is filled or after
     ``ceil(size * max_tries / chunk)`` rounds, i.e. a budget of ``max_tries`` attempts per
     individual on average. With a low success rate, a larger ``chunk`` (e.g.
@@ -853,7 +854,8 @@ def initialise(
         ``(Population(cells int32[size, capacity], length int32[size]), InitStats)``.
 
     ``initialise`` is itself jittable and ``vmap``-able over keys (many seeded runs): the
-    rounds then continue until every run's population is full (or the budget is spent).
+    rounds then continue until every run's population is full (or the budget is spent),
+    the last unfinished runs in a compacted batch (:mod:`jaxga.lanes`).
     """
     fn = get_initialiser(init_fn)
     capacity = _check_capacity(capacity)
@@ -915,7 +917,7 @@ def initialise(
         jnp.int32(0),
         jnp.int32(0),
     )
-    cells, length, _, filled, rounds, attempts, successes, dups = jax.lax.while_loop(
+    cells, length, _, filled, rounds, attempts, successes, dups = lane_while_loop(
         cond, body, state0
     )
     # Fill the empty slots with copies of valid individuals (flagged invalid).
