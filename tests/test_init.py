@@ -330,6 +330,26 @@ def test_walks_between_cells_avoid_exclusion(grid, seed):
             assert np.asarray(ok).all() and (np.asarray(length) == 1).all()
 
 
+@pytest.mark.parametrize("walk", ["uniform_walk", "directional_walk"])
+def test_batched_walks_equal_walks_one_at_a_time(walk):
+    """Under vmap the walk's step loop compacts its unfinished lanes (jaxga.lanes): every
+    walk of a batch equals the same walk run alone, cells past its length (copies of
+    its last cell) included."""
+    grid = random_map(12, 12, 0.2, seed=4)
+    free = np.flatnonzero(~grid.blocked_np().reshape(-1))
+    src, dst = int(free[0]), int(free[-1])
+    fn = jax.jit(lambda k: getattr(I, walk)(k, grid, src, dst, 48))
+    keys = jax.random.split(jax.random.PRNGKey(7), 64)
+    cells, length, ok = jax.jit(jax.vmap(lambda k: getattr(I, walk)(k, grid, src, dst, 48)))(keys)
+    lengths = np.asarray(length)
+    assert lengths.min() < 8 and lengths.max() > 30  # walks of very different lengths
+    for i in range(keys.shape[0]):
+        c1, l1, ok1 = fn(keys[i])
+        assert np.array_equal(np.asarray(c1), np.asarray(cells[i]))
+        assert int(l1) == lengths[i] and bool(ok1) == bool(ok[i])
+        assert (np.asarray(c1)[lengths[i]:] == np.asarray(c1)[lengths[i] - 1]).all()
+
+
 def test_range_mutation_style_regrowth_keeps_the_path_simple():
     """Regrow the stretch between nodes i and j of a path with the rest excluded: the
     spliced path is continuous and loop-free."""
