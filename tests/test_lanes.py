@@ -95,3 +95,21 @@ def test_without_vmap_it_is_the_while_loop():
 def test_invalid_shrink_is_rejected():
     with pytest.raises(ValueError, match="shrink"):
         lane_while_loop(lambda c: c < 1, lambda c: c + 1, jnp.int32(0), shrink=1)
+
+
+def test_unmasked_loop_with_a_body_that_keeps_finished_lanes():
+    """masked=False skips the per-lane select: correct for a body that leaves a lane
+    whose condition is false as it is (here: a counter that stops at its target)."""
+    target = jnp.asarray(np.random.default_rng(2).integers(0, 60, 48), jnp.int32)
+
+    def one(loop, t, **kw):
+        def body(c):
+            live = c[0] < t
+            return c[0] + live.astype(jnp.int32), jnp.where(live, c[1] * 5 + c[0], c[1])
+
+        return loop(lambda c: c[0] < t, body, (jnp.int32(0), jnp.int32(3)), **kw)
+
+    want = jax.vmap(lambda t: one(jax.lax.while_loop, t))(target)
+    got = jax.jit(jax.vmap(lambda t: one(lane_while_loop, t, masked=False)))(target)
+    for g, w in zip(got, want):
+        assert np.array_equal(np.asarray(g), np.asarray(w))
