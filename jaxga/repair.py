@@ -213,8 +213,9 @@ def connect(
 
     carry = (node, nxt, q0, qlen0, count0, jnp.int32(0), ok0)
     # A per-lane while_loop whose unfinished lanes are compacted under vmap: most
-    # connections close in a round or two, a few take many more (jaxga.lanes).
-    node, nxt, _, qlen, _, _, ok = lane_while_loop(cond, body, carry)
+    # connections close in a round or two, a few take many more (jaxga.lanes). Narrow:
+    # one loop at the compacted width (the round body is compiled once).
+    node, nxt, _, qlen, _, _, ok = lane_while_loop(cond, body, carry, narrow=True)
     ok &= qlen == 0
 
     # Follow the links from node 0. A while_loop, so that a batch of short bridges (the

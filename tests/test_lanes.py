@@ -1,6 +1,9 @@
-"""lane_while_loop (jaxga.lanes): the plain while_loop's results under any vmap nesting."""
+"""lane_while_loop (jaxga.lanes): the plain while_loop's results under any vmap nesting,
+in its two-phase and its narrow form."""
 
 from __future__ import annotations
+
+import functools
 
 import jax
 import jax.numpy as jnp
@@ -28,8 +31,9 @@ def _collatz(loop, x, table, bound):
 
 
 
+@pytest.mark.parametrize("narrow", [False, True])
 @pytest.mark.parametrize("shape", [(40,), (5, 9), (3, 4, 6)])
-def test_equals_the_while_loop_at_any_vmap_depth(shape):
+def test_equals_the_while_loop_at_any_vmap_depth(shape, narrow):
     """Same carries, bit for bit, as lax.while_loop under 1-3 nested vmaps, with a shared
     operand (table) and a per-lane one (bound) both closed over."""
     rng = np.random.default_rng(0)
@@ -44,7 +48,7 @@ def test_equals_the_while_loop_at_any_vmap_depth(shape):
         return jax.jit(fn)(xs, bounds)
 
     want = run(jax.lax.while_loop)
-    got = run(lane_while_loop)
+    got = run(functools.partial(lane_while_loop, narrow=narrow))
     for g, w in zip(got, want):
         assert g.dtype == w.dtype and g.shape == shape
         assert np.array_equal(np.asarray(g), np.asarray(w))
@@ -67,8 +71,9 @@ def test_operand_batched_at_one_level_only():
         assert np.array_equal(np.asarray(g), np.asarray(w))
 
 
+@pytest.mark.parametrize("narrow", [False, True])
 @pytest.mark.parametrize("finish", ["none_run", "all_at_once", "most_slow"])
-def test_every_split_between_the_full_and_the_compact_phase(finish):
+def test_every_split_between_the_full_and_the_compact_phase(finish, narrow):
     """No lane runs, all lanes stop together, and more lanes than the compact buffer
     holds run long (the full-width phase then continues)."""
     n = 64
@@ -81,7 +86,8 @@ def test_every_split_between_the_full_and_the_compact_phase(finish):
                     (jnp.int32(0), jnp.int32(1)))
 
     want = jax.vmap(lambda t: one(jax.lax.while_loop, t))(target)
-    got = jax.jit(jax.vmap(lambda t: one(lane_while_loop, t)))(target)
+    loop = functools.partial(lane_while_loop, narrow=narrow)
+    got = jax.jit(jax.vmap(lambda t: one(loop, t)))(target)
     assert np.array_equal(np.asarray(got[0]), rounds)
     for g, w in zip(got, want):
         assert np.array_equal(np.asarray(g), np.asarray(w))
