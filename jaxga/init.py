@@ -70,12 +70,10 @@ from jaxga.errors import NoPathError, ParameterError
 from jaxga.grid import DIRECTIONS, Grid, in_bounds, move_legal
 from jaxga.lanes import lane_while_loop
 from jaxga.paths import (
-    TABLE_MAX_CELLS,
     Population,
     has_endpoints,
     is_continuous,
     is_loop_free,
-    last_occurrence,
     pad,
     remove_loops,
 )
@@ -810,23 +808,8 @@ def _valid_path(grid: Grid, cells: jax.Array, length: jax.Array) -> jax.Array:
     return (
         has_endpoints(grid, cells, length)
         & is_continuous(grid, cells, length)
-        & _on_map_and_loop_free(grid, cells, length)
+        & is_loop_free(cells, length, grid.n_cells)
     )
-
-
-def _on_map_and_loop_free(grid: Grid, cells: jax.Array, length: jax.Array) -> jax.Array:
-    """Every valid node on the map and none twice: :func:`jaxga.paths.is_loop_free` for
-    on-map paths, by a last-occurrence table instead of a sort on maps of at most
-    :data:`jaxga.paths.TABLE_MAX_CELLS` cells (the sort was 14 % of an SGA
-    initialisation's time)."""
-    n = grid.n_cells
-    if n > TABLE_MAX_CELLS:
-        return is_loop_free(cells, length)
-    i = jnp.arange(cells.shape[0], dtype=_I32)
-    valid = i < length
-    on_map = (cells >= 0) & (cells < n)
-    last = last_occurrence(cells, length, n)
-    return jnp.all(~valid | (on_map & (last == i)))
 
 
 _HASH_A = np.uint32(0x9E3779B1)

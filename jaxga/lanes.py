@@ -137,6 +137,7 @@ def _run(cond_fun, body_fun, carry_tree, op_tree, carry_leaves, op_leaves, op_le
     """The loop over ``k`` folded ``vmap`` levels (leading dimensions of the carry);
     ``mode = (masked, narrow)``."""
     masked, narrow = mode
+
     def tree(leaves, treedef=carry_tree):
         return jax.tree_util.tree_unflatten(treedef, leaves)
 
@@ -170,40 +171,44 @@ def _run(cond_fun, body_fun, carry_tree, op_tree, carry_leaves, op_leaves, op_le
     def active(c, o):
         return jax.vmap(one_cond, in_axes=(0, axes))(c, o)
 
-    def step(c, o):
+    def step(c, o, act):
+        """One iteration of the lanes ``c`` whose condition is ``act``: the carry and
+        the lanes' conditions after it (evaluated once per iteration)."""
         new = jax.vmap(one_body, in_axes=(0, axes))(c, o)
-        if not masked:
-            return [b.astype(a.dtype) for b, a in zip(new, c)]
-        act = active(c, o)
-        return [jnp.where(act.reshape((-1,) + (1,) * (a.ndim - 1)), b.astype(a.dtype), a)
-                for b, a in zip(new, c)]
+        if masked:
+            new = [jnp.where(act.reshape((-1,) + (1,) * (a.ndim - 1)), b, a)
+                   for b, a in zip(new, c)]
+        new = [b.astype(a.dtype) for b, a in zip(new, c)]
+        return new, active(new, o)
+
+    def loop(cond, c, o):
+        """``while cond(act): c, act = step(c, o, act)``, the flags carried along."""
+        _, c = jax.lax.while_loop(lambda s: cond(s[0]), lambda s: step(s[1], o, s[0])[::-1],
+                                  (active(c, o), c))
+        return c
 
     m = n // shrink
     if m < 1:
-        flat_c = jax.lax.while_loop(lambda c: jnp.any(active(c, flat_o)),
-                                    lambda c: step(c, flat_o), flat_c)
+        flat_c = loop(jnp.any, flat_c, flat_o)
     elif narrow:
-        # One loop at width m: each iteration advances the first m unfinished lanes.
+        # One loop at width m: each iteration advances the first m unfinished lanes and
+        # evaluates the condition of those m lanes only.
         def narrow_body(s):
-            _, c = s
-            idx = true_first_order(active(c, flat_o))[:m]
-            sub_c = step([x[idx] for x in c],
-                         [x if ax is None else x[idx] for x, ax in zip(flat_o, axes)])
+            act, c = s
+            idx = true_first_order(act)[:m]
+            sub_o = [x if ax is None else x[idx] for x, ax in zip(flat_o, axes)]
+            sub_c, sub_act = step([x[idx] for x in c], sub_o, act[idx])
             c = [x.at[idx].set(sc, unique_indices=True) for x, sc in zip(c, sub_c)]
-            return jnp.any(active(c, flat_o)), c
+            return act.at[idx].set(sub_act, unique_indices=True), c
 
-        _, flat_c = jax.lax.while_loop(lambda s: s[0], narrow_body,
-                                       (jnp.any(active(flat_c, flat_o)), flat_c))
+        _, flat_c = jax.lax.while_loop(lambda s: jnp.any(s[0]), narrow_body,
+                                       (active(flat_c, flat_o), flat_c))
     else:
         # Full width while more than m lanes are unfinished ...
-        flat_c = jax.lax.while_loop(
-            lambda c: jnp.sum(active(c, flat_o), dtype=jnp.int32) > m,
-            lambda c: step(c, flat_o), flat_c)
+        flat_c = loop(lambda act: jnp.sum(act, dtype=jnp.int32) > m, flat_c, flat_o)
         # ... then the (at most m) unfinished lanes, moved to the front, in m lanes.
         idx = true_first_order(active(flat_c, flat_o))[:m]
-        sub_c = [x[idx] for x in flat_c]
         sub_o = [x if ax is None else x[idx] for x, ax in zip(flat_o, axes)]
-        sub_c = jax.lax.while_loop(lambda c: jnp.any(active(c, sub_o)),
-                                   lambda c: step(c, sub_o), sub_c)
+        sub_c = loop(jnp.any, [x[idx] for x in flat_c], sub_o)
         flat_c = [x.at[idx].set(s, unique_indices=True) for x, s in zip(flat_c, sub_c)]
     return [x.reshape(lead + x.shape[1:]) for x in flat_c]

@@ -216,11 +216,21 @@ def is_feasible(grid: Grid, cells: jax.Array, length: jax.Array) -> jax.Array:
     )
 
 
-def is_loop_free(cells: jax.Array, length: jax.Array) -> jax.Array:
-    """True when no cell occurs twice among the valid nodes (sort, O(L log L))."""
+def is_loop_free(cells: jax.Array, length: jax.Array, n_cells: int | None = None) -> jax.Array:
+    """True when no cell occurs twice among the valid nodes.
+
+    Without ``n_cells``: a sort, O(L log L). With ``n_cells`` (the map size, static) at
+    most :data:`TABLE_MAX_CELLS`: the last-occurrence table of :func:`last_occurrence`
+    (the sort was 14 % of an SGA initialisation's time); then a valid node outside
+    ``[0, n_cells)`` (off the map) also makes the result False.
+    """
     cells = jnp.asarray(cells, jnp.int32)
     n = cells.shape[0]
     i = jnp.arange(n, dtype=jnp.int32)
+    if n_cells is not None and n_cells <= TABLE_MAX_CELLS:
+        on_map = (cells >= 0) & (cells < n_cells)
+        last = last_occurrence(cells, length, n_cells)
+        return jnp.all((i >= length) | (on_map & (last == i)))
     # Padding gets distinct negative keys so that it never collides with a cell.
     key = jnp.where(i < length, cells, -1 - i)
     s = jnp.sort(key)

@@ -101,6 +101,17 @@ def test_checks_on_hand_made_paths():
     # Loops.
     loop, n5 = from_coords([(0, 0), (1, 0), (0, 0)], 4, 8)
     assert not bool(is_loop_free(loop, n5)) and bool(is_loop_free(good, n))
+    # The table form (n_cells) agrees with the sort, and rejects an off-map node.
+    assert not bool(is_loop_free(loop, n5, 16)) and bool(is_loop_free(good, n, 16))
+    off = good.at[1].set(-3)
+    assert bool(is_loop_free(off, n)) and not bool(is_loop_free(off, n, 16))
+    rng = np.random.default_rng(5)
+    keys = jnp.asarray(rng.integers(0, 12, (200, 8)), jnp.int32)
+    lens = jnp.asarray(rng.integers(1, 9, 200), jnp.int32)
+    by_sort = jax.vmap(is_loop_free)(keys, lens)
+    by_table = jax.vmap(lambda c, ln: is_loop_free(c, ln, 12))(keys, lens)
+    assert np.array_equal(np.asarray(by_sort), np.asarray(by_table))
+    assert np.asarray(by_sort).any() and not np.asarray(by_sort).all()
     # Lengths outside [1, L] are never valid.
     assert not bool(is_continuous(grid, good, 0)) and not bool(is_feasible(grid, good, 9))
 
