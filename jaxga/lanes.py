@@ -10,7 +10,7 @@ a block of 1,500 connections (100 seeds x 15 mutants) runs about 14 rounds at fu
 
 :func:`lane_while_loop` has the semantics of ``lax.while_loop`` for one lane. It carries
 a :func:`jax.custom_batching.custom_vmap` rule that folds every ``vmap`` level into one
-more leading dimension (as :func:`jaxga.scatter.position_table` does), so that the loop
+flat batch of lanes (:func:`jaxga.folding.fold_call`), so that the loop
 sees all its lanes at once, however many ``vmap`` levels (mutants, runs, islands) are
 stacked. It then runs the rounds at full width only while more than ``1 / shrink`` of
 the lanes are unfinished, moves the unfinished ones to the front of a buffer of
@@ -25,12 +25,11 @@ from collections.abc import Callable
 from typing import Any
 
 import jax
-import jax.extend.core
 import jax.numpy as jnp
 import numpy as np
-from jax.custom_batching import custom_vmap
 
 from jaxga.batching import true_first_order
+from jaxga.folding import fold_call, hoist
 
 __all__ = ["lane_while_loop"]
 
@@ -82,91 +81,38 @@ def lane_while_loop(
     carry_leaves = [jnp.asarray(x) for x in carry_leaves]
     init_val = jax.tree_util.tree_unflatten(carry_tree, carry_leaves)
     # Closed-over values become operands (custom_vmap cannot batch closed-over values).
-    cond_j = jax.make_jaxpr(cond_fun)(init_val)
-    body_j = jax.make_jaxpr(body_fun)(init_val)
+    cond_op, cond_consts = hoist(cond_fun, init_val)
+    body_op, body_consts = hoist(body_fun, init_val)
+    n_cond = len(cond_consts)
 
-    def cond_op(carry, consts):
-        fn = jax.extend.core.jaxpr_as_fun(jax.extend.core.ClosedJaxpr(cond_j.jaxpr, consts[0]))
-        return fn(*jax.tree_util.tree_leaves(carry))[0]
+    def client(lead, lanes, operands, axes):
+        return _run(lambda c, o: cond_op(o[:n_cond], c), lambda c, o: body_op(o[n_cond:], c),
+                    carry_tree, lead, lanes, operands, axes, int(shrink),
+                    bool(masked), bool(narrow))
 
-    def body_op(carry, consts):
-        fn = jax.extend.core.jaxpr_as_fun(jax.extend.core.ClosedJaxpr(body_j.jaxpr, consts[1]))
-        return jax.tree_util.tree_unflatten(carry_tree, fn(*jax.tree_util.tree_leaves(carry)))
-
-    operands = (list(cond_j.consts), list(body_j.consts))
-    op_leaves, op_tree = jax.tree_util.tree_flatten(operands)
-    op_leaves = [jnp.asarray(x) for x in op_leaves]
-    base = tuple(np.ndim(x) for x in carry_leaves)
-    fn = _lane_loop(cond_op, body_op, carry_tree, op_tree, base,
-                    tuple(() for _ in op_leaves), int(shrink), (bool(masked), bool(narrow)))
-    out = fn(carry_leaves, op_leaves)
+    out = fold_call(client, carry_leaves, cond_consts + body_consts, len(carry_leaves))
     return jax.tree_util.tree_unflatten(carry_tree, out)
 
 
-def _lane_loop(cond_fun, body_fun, carry_tree, op_tree, base, op_levels, shrink, mode):
-    """The ``custom_vmap`` function for one stack of ``vmap`` levels.
+def _run(cond_fun, body_fun, carry_tree, lead, flat_c, flat_o, axes, shrink, masked, narrow):
+    """The loop over the lanes ``flat_c`` (the folded ``vmap`` levels ``lead``; a plain
+    ``while_loop`` without ``vmap``). ``cond_fun(carry, operands)`` and
+    ``body_fun(carry, operands)`` are one lane's."""
 
-    ``cond_fun(carry, operands)`` and ``body_fun(carry, operands)`` are one lane's.
-    ``op_levels[j]`` records, outermost level first, whether operand leaf ``j`` is
-    batched at each level already folded in; every carry leaf is batched at all of them
-    (the rule broadcasts an unbatched carry, which is small).
-    """
+    def tree(leaves):
+        return jax.tree_util.tree_unflatten(carry_tree, leaves)
 
-    def loop(carry_leaves, op_leaves):
-        k = np.ndim(carry_leaves[0]) - base[0]
-        return _run(cond_fun, body_fun, carry_tree, op_tree, carry_leaves, op_leaves,
-                    op_levels, k, shrink, mode)
-
-    fn = custom_vmap(loop)
-
-    @fn.def_vmap
-    def _rule(axis_size, in_batched, carry_leaves, op_leaves):
-        carry_b, op_b = in_batched
-        carry_leaves = [x if b else jnp.broadcast_to(x, (axis_size,) + x.shape)
-                        for x, b in zip(carry_leaves, carry_b)]
-        levels = tuple((bool(b),) + lv for b, lv in zip(op_b, op_levels))
-        inner = _lane_loop(cond_fun, body_fun, carry_tree, op_tree, base, levels, shrink,
-                           mode)
-        return inner(carry_leaves, op_leaves), [True] * len(carry_leaves)
-
-    return fn
-
-
-def _run(cond_fun, body_fun, carry_tree, op_tree, carry_leaves, op_leaves, op_levels, k,
-         shrink, mode):
-    """The loop over ``k`` folded ``vmap`` levels (leading dimensions of the carry);
-    ``mode = (masked, narrow)``."""
-    masked, narrow = mode
-
-    def tree(leaves, treedef=carry_tree):
-        return jax.tree_util.tree_unflatten(treedef, leaves)
-
-    if k == 0:
-        ops = tree(op_leaves, op_tree)
-        out = jax.lax.while_loop(lambda c: cond_fun(c, ops), lambda c: body_fun(c, ops),
-                                 tree(carry_leaves))
+    if not lead:
+        out = jax.lax.while_loop(lambda c: cond_fun(c, flat_o), lambda c: body_fun(c, flat_o),
+                                 tree(flat_c))
         return jax.tree_util.tree_leaves(out)
-    lead = np.shape(carry_leaves[0])[:k]
     n = int(np.prod(lead, dtype=np.int64))
-    flat_c = [x.reshape((n,) + x.shape[k:]) for x in carry_leaves]
-    flat_o, axes = [], []
-    for x, lv in zip(op_leaves, op_levels):
-        if not any(lv):  # shared by every lane: stays one copy
-            flat_o.append(x)
-            axes.append(None)
-            continue
-        if not all(lv):  # batched at some levels only: broadcast to every lane
-            rest = x.shape[sum(lv):]
-            shape = tuple(d if b else 1 for d, b in zip(lead, lv))
-            x = jnp.broadcast_to(x.reshape(shape + rest), lead + rest)
-        flat_o.append(x.reshape((n,) + x.shape[k:]))
-        axes.append(0)
 
     def one_cond(c1, o1):
-        return cond_fun(tree(c1), tree(o1, op_tree))
+        return cond_fun(tree(c1), o1)
 
     def one_body(c1, o1):
-        return jax.tree_util.tree_leaves(body_fun(tree(c1), tree(o1, op_tree)))
+        return jax.tree_util.tree_leaves(body_fun(tree(c1), o1))
 
     def active(c, o):
         return jax.vmap(one_cond, in_axes=(0, axes))(c, o)
@@ -211,4 +157,4 @@ def _run(cond_fun, body_fun, carry_tree, op_tree, carry_leaves, op_leaves, op_le
         sub_o = [x if ax is None else x[idx] for x, ax in zip(flat_o, axes)]
         sub_c = loop(jnp.any, [x[idx] for x in flat_c], sub_o)
         flat_c = [x.at[idx].set(s, unique_indices=True) for x, s in zip(flat_c, sub_c)]
-    return [x.reshape(lead + x.shape[1:]) for x in flat_c]
+    return flat_c

@@ -105,6 +105,53 @@ def test_gated_map_under_vmap_and_block_sizes():
         np.testing.assert_array_equal(out, np.where(apply, np.asarray(x) * 10, x))
 
 
+@pytest.mark.parametrize("block", [1, 3, 16])
+def test_pooled_gated_map_under_nested_vmap_with_closed_over_operands(block):
+    """Under two and three ``vmap`` levels the applied entries of all calls are pooled;
+    every entry still sees its own call's closed-over values (one batched at every
+    level, one at the outer level only, one shared) and gets exactly ``fn`` of its
+    arguments; unapplied entries keep their defaults, whatever the dtypes."""
+    rng = np.random.default_rng(0)
+    a, r, n = 3, 4, 10
+    x = jnp.asarray(rng.integers(0, 100, (a, r, n)), jnp.int32)
+    y = jnp.asarray(rng.normal(size=(a, r, n, 2)), jnp.float32)
+    apply = jnp.asarray(rng.random((a, r, n)) < 0.3).at[0, 1].set(False).at[2, 3].set(True)
+    per_call = jnp.asarray(rng.integers(0, 1000, (a, r)), jnp.int32)
+    per_outer = jnp.asarray(rng.integers(0, 1000, (a,)), jnp.int32)
+    shared = jnp.arange(7, dtype=jnp.int32)
+
+    def call(ap, xs, ys, s, o):
+        def f(u, v):
+            return u * 3 + s + o + shared[u % 7], v * 2.0
+        return gated_map(f, ap, (xs, ys), (-xs, ys), block=block)
+
+    out = jax.jit(jax.vmap(jax.vmap(call, in_axes=(0, 0, 0, 0, None))))(
+        apply, x, y, per_call, per_outer)
+    want_x = np.where(apply, x * 3 + per_call[..., None] + per_outer[:, None, None]
+                      + np.asarray(shared)[np.asarray(x) % 7], -x)
+    want_y = np.where(apply[..., None], y * 2.0, y)
+    np.testing.assert_array_equal(out[0], want_x)
+    np.testing.assert_array_equal(out[1], want_y)
+    # three levels: the same calls split into an extra level
+    out3 = jax.jit(jax.vmap(jax.vmap(jax.vmap(call, in_axes=(0, 0, 0, 0, None)),
+                                     in_axes=(0, 0, 0, 0, None))))(
+        apply.reshape(a, 2, 2, n), x.reshape(a, 2, 2, n), y.reshape(a, 2, 2, n, 2),
+        per_call.reshape(a, 2, 2), per_outer)
+    np.testing.assert_array_equal(out3[0].reshape(a, r, n), want_x)
+
+
+def test_pooled_mutation_of_many_runs_equals_each_run_alone(setting):
+    """The mutation of 6 runs in one ``vmap`` (the applied individuals of all runs pooled,
+    the connections' rounds compacted) equals each run's mutation computed alone."""
+    grid, pop = setting
+    keys = jax.random.split(jax.random.PRNGKey(2), 6)
+    probs = jnp.array([0.0, 0.2, 0.5, 1.0, 0.35, 0.9], jnp.float32)
+    batched = jax.vmap(lambda k, p: _GATED_INDIVIDUALS(k, grid, pop, p))(keys, probs)
+    for i in range(6):
+        alone = _GATED_INDIVIDUALS(keys[i], grid, pop, probs[i])
+        assert _same(jax.tree.map(lambda v, i=i: v[i], batched), alone)
+
+
 _DENSE_PAIRS = jax.jit(
     lambda k, g, p, prob: cx.crossover_population(cx.common_point, dense=True)(k, g, p, prob))
 _GATED_PAIRS = jax.jit(

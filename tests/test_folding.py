@@ -1,0 +1,62 @@
+"""jaxga.folding: every vmap level above a call folded into one flat batch of lanes."""
+
+from __future__ import annotations
+
+import jax
+import jax.numpy as jnp
+import numpy as np
+
+from jaxga.folding import fold_call, hoist
+
+
+def _probe(seen):
+    """A client that records what it was given and returns, per lane,
+    ``lane + operand`` (operands broadcast to the flat lanes when batched)."""
+
+    def client(lead, lanes, operands, axes):
+        seen.append((lead, [x.shape for x in lanes], [None if a is None else x.shape
+                                                       for x, a in zip(operands, axes)]))
+        (x,) = lanes
+        total = x
+        for o, a in zip(operands, axes):
+            total = total + (o if a is None else o.reshape(o.shape + (1,) * (x.ndim - o.ndim)))
+        return [total]
+
+    return client
+
+
+def test_without_vmap_the_client_sees_the_call_itself():
+    seen = []
+    out = fold_call(_probe(seen), [jnp.arange(3)], [jnp.int32(5)], 1)
+    assert seen == [((), [(3,)], [None])]
+    np.testing.assert_array_equal(out[0], [5, 6, 7])
+
+
+def test_two_levels_fold_into_one_leading_dimension_and_operands_broadcast():
+    seen = []
+    x = jnp.arange(2 * 3 * 4).reshape(2, 3, 4)
+    outer = jnp.array([100, 200])  # batched at the outer level only
+    shared = jnp.int32(7)  # batched at no level: stays one copy
+
+    def call(xi, o):
+        return fold_call(_probe(seen), [xi], [o, shared], 1)[0]
+
+    out = jax.vmap(jax.vmap(call, in_axes=(0, None)))(x, outer)
+    lead, lane_shapes, op_shapes = seen[-1]
+    assert lead == (2, 3) and lane_shapes == [(6, 4)]
+    assert op_shapes == [(6,), None]  # the outer-only operand broadcast to all 6 lanes
+    np.testing.assert_array_equal(out, np.asarray(x) + np.asarray(outer)[:, None, None] + 7)
+
+
+def test_hoist_turns_closed_over_values_into_operands():
+    table = jnp.array([3, 1, 4, 1, 5])
+
+    def fn(i, j):
+        return {"a": table[i] * j}
+
+    fn_op, consts = hoist(fn, jnp.int32(0), jnp.int32(0))
+    assert any(np.array_equal(c, table) for c in consts)
+    other = [jnp.array([10, 20, 30, 40, 50]) if np.array_equal(c, table) else c
+             for c in consts]
+    assert int(fn_op(consts, jnp.int32(2), jnp.int32(3))["a"]) == 12
+    assert int(fn_op(other, jnp.int32(2), jnp.int32(3))["a"]) == 90
