@@ -663,3 +663,19 @@ def test_large_map_code_paths():
         jax.random.PRNGKey(0), *args)
     assert np.asarray(c1)[: int(l1)].tolist() in (move([0, 6, 12, 13, 19, 24]), p1,
                                                   move([0, 5, 11, 17, 18, 24]))
+
+
+_KTH = jax.jit(jax.vmap(X._kth_true))
+
+
+@pytest.mark.parametrize("n", [1, 32, 33, 160, 400])
+def test_kth_true_is_the_rth_true_index_or_zero(n):
+    """The two-level search of long masks (rows of 16) gives NumPy's r-th True index,
+    and 0 when the mask has r or fewer Trues, as the one-level prefix search does."""
+    rng = np.random.default_rng(n)
+    for p in (0.0, 0.03, 0.4, 1.0):
+        mask = rng.random((300, n)) < p
+        r = rng.integers(0, n + 2, 300)
+        got = np.asarray(_KTH(jnp.asarray(mask), jnp.asarray(r, jnp.int32)))
+        want = [np.flatnonzero(m)[k] if k < m.sum() else 0 for m, k in zip(mask, r)]
+        np.testing.assert_array_equal(got, want)
