@@ -25,7 +25,7 @@ import numpy as np
 from jaxga.errors import ParameterError
 from jaxga.geometry import segments_clear
 from jaxga.grid import Grid, blocked_at, diagonal_legal
-from jaxga.scatter import position_table
+from jaxga.scatter import position_table, table_lookup
 
 __all__ = [
     "Population",
@@ -281,11 +281,10 @@ def position_lookup(
     i = jnp.arange(n, dtype=jnp.int32)
     valid = i < length
     if n_cells is not None and n_cells <= TABLE_MAX_CELLS:
-        table = position_table(jnp.where(valid, cells, n_cells), n_cells)
+        keys = jnp.where(valid, cells, n_cells)
 
         def look(q):
-            inside = (q >= 0) & (q < n_cells)
-            return jnp.where(inside, table[jnp.clip(q, 0, n_cells - 1)], -1)
+            return table_lookup(keys, q, n_cells)
 
         return look
     key = jnp.where(valid, cells, np.iinfo(np.int32).max)

@@ -7,7 +7,8 @@ import jax.numpy as jnp
 import numpy as np
 import pytest
 
-from jaxga.scatter import position_table
+from jaxga import scatter
+from jaxga.scatter import position_table, table_lookup
 
 
 def _nest(fn, depth):
@@ -46,3 +47,48 @@ def test_the_flat_and_the_batched_rows_give_the_same_tables():
     want = np.asarray(jax.vmap(jax.vmap(lambda k: position_table(k, 10)))(keys))
     assert np.array_equal(np.asarray(_rows_flat(keys, 10)), want)
     assert np.array_equal(np.asarray(_rows_batched(keys, 10)), want)
+
+
+def _lookup_reference(keys: np.ndarray, queries: np.ndarray, n_cells: int) -> np.ndarray:
+    """Last position of each query among the row's keys (-1: absent or off the table)."""
+    out = np.full(queries.shape, -1, np.int32)
+    for idx in np.ndindex(queries.shape[:-1]):
+        row = keys[idx]
+        for j, q in enumerate(queries[idx]):
+            hits = np.flatnonzero(row == q)
+            if 0 <= q < n_cells and hits.size:
+                out[idx + (j,)] = hits[-1]
+    return out
+
+
+@pytest.mark.parametrize("chunked", [False, True])
+def test_table_lookup_is_the_table_gather_at_any_vmap_depth(monkeypatch, chunked):
+    """``table_lookup`` returns what building ``position_table`` and gathering from it
+    returns, with -1 for queries off the table; built at once or, above
+    ``LOOKUP_DIRECT_MAX`` entries, in chunks of rows (a row count that is not a
+    multiple of the chunk included)."""
+    if chunked:
+        monkeypatch.setattr(scatter, "LOOKUP_DIRECT_MAX", 64)
+        monkeypatch.setattr(scatter, "LOOKUP_CHUNK_ENTRIES", 3 * 50)
+    n_cells = 50
+    rng = np.random.default_rng(7)
+    keys = rng.integers(0, n_cells + 3, (3, 7, 20)).astype(np.int32)  # repeats, off-table
+    queries = rng.integers(-2, n_cells + 2, (3, 7, 9)).astype(np.int32)
+    want = _lookup_reference(keys, queries, n_cells)
+    one = jax.jit(lambda k, q: table_lookup(k, q, n_cells))
+    two = jax.jit(jax.vmap(jax.vmap(lambda k, q: table_lookup(k, q, n_cells))))
+    np.testing.assert_array_equal(two(keys, queries), want)
+    np.testing.assert_array_equal(one(keys[1, 2], queries[1, 2]), want[1, 2])
+    # negative keys count from the end, as in position_table
+    neg = keys.copy()
+    neg[:, :, ::5] = -1
+    table = np.asarray(jax.vmap(jax.vmap(lambda k: position_table(k, n_cells)))(neg))
+    gathered = np.take_along_axis(table, np.clip(queries, 0, n_cells - 1), axis=-1)
+    np.testing.assert_array_equal(
+        two(neg, queries), np.where((queries >= 0) & (queries < n_cells), gathered, -1))
+    # shared queries, per-row keys; 2-D queries
+    shared = jax.jit(jax.vmap(lambda k: table_lookup(k, queries[0, 0].reshape(3, 3), n_cells)))
+    got = shared(keys[0])
+    np.testing.assert_array_equal(
+        got.reshape(7, 9), _lookup_reference(keys[0], np.broadcast_to(queries[0, 0], (7, 9)),
+                                             n_cells))
