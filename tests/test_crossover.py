@@ -636,13 +636,15 @@ def test_dtypes(x64):
 def test_large_map_code_paths():
     """Maps above TABLE_MAX_CELLS use a sort for cell lookups and move_legal for the step
     masks: same results as the table variants (the hand-made pair, moved onto 130 x 130)."""
-    from jaxga.paths import TABLE_MAX_CELLS
+    from jaxga.paths import CHUNKED_LOOKUP_CELLS, TABLE_MAX_CELLS
 
     cells = jnp.array([5, 9, 2, 7, 7, 7], jnp.int32)
     q = jnp.array([[2, 7, 3], [9, 5, -1]], jnp.int32)
     small = X._position_lookup(cells, 4, 16)(q)
     big = X._position_lookup(cells, 4, TABLE_MAX_CELLS + 1)(q)
+    chunked = X._position_lookup(cells, 4, CHUNKED_LOOKUP_CELLS + 1)(q)  # table_lookup
     np.testing.assert_array_equal(small, big)
+    np.testing.assert_array_equal(small, chunked)
     np.testing.assert_array_equal(small, [[2, 3, -1], [1, 0, -1]])
 
     w = 130
