@@ -122,7 +122,8 @@ def table_lookup(keys: jax.Array, queries: jax.Array, n_cells: int) -> jax.Array
     chunk's tables stay in the cache between the scatter and the gather: for 4,000
     common-point crossovers on a 50 x 50 map (tables of 2,500 cells, 40 MB per parent)
     the two lookups took 48 ms at once, nearly all of a generation, and about 19 ms in
-    chunks. Smaller batches (20 x 20 maps) are faster at once.
+    chunks. :func:`jaxga.paths.position_lookup` uses it on maps of more than
+    :data:`jaxga.paths.CHUNKED_LOOKUP_CELLS` cells.
     """
     queries = jnp.asarray(queries, jnp.int32)
     flat = _table_lookup_fn(int(n_cells))(jnp.asarray(keys, jnp.int32), queries.reshape(-1))
@@ -131,14 +132,14 @@ def table_lookup(keys: jax.Array, queries: jax.Array, n_cells: int) -> jax.Array
 
 def _lookup_rows(keys: jax.Array, queries: jax.Array, n_cells: int) -> jax.Array:
     """``int32[R, L], int32[R, Q] -> int32[R, Q]``: each row's lookups in its own table."""
-    if keys.shape[0] * n_cells >= MAX_FLAT_ENTRIES:
-        table = _rows_batched(keys, n_cells)
-    else:
-        table = _rows_flat(keys, n_cells)
     inside = (queries >= 0) & (queries < n_cells)
-    # one flat 1-D gather (a batched gather builds an index vector per lookup)
-    rows = jnp.arange(keys.shape[0], dtype=jnp.int32)[:, None] * n_cells
-    val = table.reshape(-1)[rows + jnp.clip(queries, 0, n_cells - 1)]
+    q = jnp.clip(queries, 0, n_cells - 1)
+    if keys.shape[0] * n_cells >= MAX_FLAT_ENTRIES:  # flat int32 indices would overflow
+        val = jax.vmap(lambda t, qq: t[qq])(_rows_batched(keys, n_cells), q)
+    else:
+        # one flat 1-D gather (a batched gather builds an index vector per lookup)
+        rows = jnp.arange(keys.shape[0], dtype=jnp.int32)[:, None] * n_cells
+        val = _rows_flat(keys, n_cells).reshape(-1)[rows + q]
     return jnp.where(inside, val, -1)
 
 

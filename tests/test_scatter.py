@@ -61,15 +61,17 @@ def _lookup_reference(keys: np.ndarray, queries: np.ndarray, n_cells: int) -> np
     return out
 
 
-@pytest.mark.parametrize("chunked", [False, True])
-def test_table_lookup_is_the_table_gather_at_any_vmap_depth(monkeypatch, chunked):
+@pytest.mark.parametrize("mode", ["at_once", "chunked", "batched_rows"])
+def test_table_lookup_is_the_table_gather_at_any_vmap_depth(monkeypatch, mode):
     """``table_lookup`` returns what building ``position_table`` and gathering from it
-    returns, with -1 for queries off the table; built at once or, above
-    ``LOOKUP_DIRECT_MAX`` entries, in chunks of rows (a row count that is not a
-    multiple of the chunk included)."""
-    if chunked:
+    returns, with -1 for queries off the table; built at once, above
+    ``LOOKUP_DIRECT_MAX`` entries in chunks of rows (a row count that is not a multiple
+    of the chunk included), and with per-row tables where flat indices would overflow."""
+    if mode == "chunked":
         monkeypatch.setattr(scatter, "LOOKUP_DIRECT_MAX", 64)
         monkeypatch.setattr(scatter, "LOOKUP_CHUNK_ENTRIES", 3 * 50)
+    if mode == "batched_rows":
+        monkeypatch.setattr(scatter, "MAX_FLAT_ENTRIES", 10)
     n_cells = 50
     rng = np.random.default_rng(7)
     keys = rng.integers(0, n_cells + 3, (3, 7, 20)).astype(np.int32)  # repeats, off-table
