@@ -169,3 +169,21 @@ def test_is_continuous_agrees_with_the_exact_segment_reference(rule):
     want = np.array([expected(c, k) for c, k in zip(cells, length)])
     assert np.array_equal(got, want)
     assert 50 < want.sum() < batch - 50  # both outcomes are exercised
+
+
+def test_last_occurrence_is_the_same_for_every_table_variant():
+    """The last valid position of each node's cell (padding: itself), computed by a sort
+    (no map size), a small-map table, and on a map above CHUNKED_LOOKUP_CELLS by
+    ``scatter.table_lookup`` (batched rows, so its folded rule runs too)."""
+    from jaxga.paths import CHUNKED_LOOKUP_CELLS, last_occurrence
+
+    rng = np.random.default_rng(3)
+    cells = jnp.asarray(rng.integers(0, 40, (5, 30)), jnp.int32)  # many repeats
+    length = jnp.array([30, 17, 1, 0, 29], jnp.int32)
+    want = []
+    for c, n in zip(np.asarray(cells), np.asarray(length)):
+        row = [max(j for j in range(n) if c[j] == c[i]) if i < n else i for i in range(30)]
+        want.append(row)
+    for n_cells in (None, 64, CHUNKED_LOOKUP_CELLS + 1):
+        got = jax.jit(jax.vmap(lambda c, n, m=n_cells: last_occurrence(c, n, m)))(cells, length)
+        np.testing.assert_array_equal(got, want)
