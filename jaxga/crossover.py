@@ -92,7 +92,7 @@ def _kth_true(mask: jax.Array, r: jax.Array) -> jax.Array:
     """
     n = mask.shape[0]
     if n <= 2 * _KTH_ROW:
-        return jnp.argmax(prefix_count(mask) > r).astype(_I32)
+        return _kth_true_scan(mask, r)
     rows = -(-n // _KTH_ROW)
     padded = jnp.zeros((rows * _KTH_ROW,), bool).at[:n].set(mask)
     row, col = _kth_true_rows(padded.reshape(rows, _KTH_ROW), r)
@@ -112,8 +112,12 @@ def _kth_true_rows(mask: jax.Array, r: jax.Array) -> tuple[jax.Array, jax.Array]
     counts = jnp.sum(mask, axis=1, dtype=_I32)
     before = prefix_count(counts) - counts  # Trues in the rows above
     row = jnp.clip(jnp.sum(before <= r, dtype=_I32) - 1, 0, mask.shape[0] - 1)
-    col = jnp.argmax(prefix_count(mask[row]) > r - before[row]).astype(_I32)
-    return row, col
+    return row, _kth_true_scan(mask[row], r - before[row])
+
+
+def _kth_true_scan(mask: jax.Array, r: jax.Array) -> jax.Array:
+    """:func:`_kth_true` by one prefix sum over the whole mask."""
+    return jnp.argmax(prefix_count(mask) > r).astype(_I32)
 
 
 def _uniform_index(bits: jax.Array, n: jax.Array) -> jax.Array:

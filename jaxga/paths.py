@@ -265,19 +265,14 @@ def last_occurrence(
     i = jnp.arange(n, dtype=jnp.int32)
     valid = i < length
     if n_cells is not None and n_cells <= TABLE_MAX_CELLS:
-        keys = jnp.where(valid, cells, n_cells)
-        at = jnp.clip(cells, 0, n_cells - 1)
-        if n_cells > CHUNKED_LOOKUP_CELLS:
-            return jnp.where(valid, table_lookup(keys, at, n_cells), i)
-        return jnp.where(valid, position_table(keys, n_cells)[at], i)
+        look = position_lookup(cells, length, n_cells)
+        return jnp.where(valid, look(jnp.clip(cells, 0, n_cells - 1)), i)
     key = jnp.where(valid, cells, -1 - i)
     order = jnp.argsort(key, stable=True).astype(jnp.int32)
     sk = key[order]
     is_end = jnp.concatenate([sk[1:] != sk[:-1], jnp.array([True])])
     end = jax.lax.cummin(jnp.where(is_end, i, n), reverse=True)
     return jnp.zeros(n, jnp.int32).at[order].set(order[end])
-
-
 
 
 def position_lookup(

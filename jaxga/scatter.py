@@ -28,6 +28,8 @@ import jax.numpy as jnp
 import numpy as np
 from jax.custom_batching import custom_vmap
 
+from jaxga.folding import fold_call
+
 __all__ = ["position_table", "table_lookup"]
 
 MAX_FLAT_ENTRIES = int(np.iinfo(np.int32).max)
@@ -116,7 +118,8 @@ def table_lookup(keys: jax.Array, queries: jax.Array, n_cells: int) -> jax.Array
     ``[0, n_cells)``; ``queries`` of any shape.
 
     The same values as building the table and gathering from it (one flat scatter and
-    one flat gather for all rows of every ``vmap`` level). When all rows' tables would
+    one flat gather for all rows of every ``vmap`` level, folded by
+    :func:`jaxga.folding.fold_call`). When all rows' tables would
     exceed :data:`LOOKUP_DIRECT_MAX` entries they are built and read in chunks of
     :data:`LOOKUP_CHUNK_ENTRIES` (a ``lax.map`` over chunks of rows), so that each
     chunk's tables stay in the cache between the scatter and the gather: for 4,000
@@ -126,7 +129,13 @@ def table_lookup(keys: jax.Array, queries: jax.Array, n_cells: int) -> jax.Array
     :data:`jaxga.paths.CHUNKED_LOOKUP_CELLS` cells.
     """
     queries = jnp.asarray(queries, jnp.int32)
-    flat = _table_lookup_fn(int(n_cells))(jnp.asarray(keys, jnp.int32), queries.reshape(-1))
+
+    def client(lead, lanes, operands, axes):
+        k, q = lanes if lead else (x[None] for x in lanes)
+        out = _lookup_chunked(k, q, int(n_cells))
+        return [out if lead else out[0]]
+
+    (flat,) = fold_call(client, [jnp.asarray(keys, jnp.int32), queries.reshape(-1)], [], 1)
     return flat.reshape(queries.shape)
 
 
@@ -143,40 +152,17 @@ def _lookup_rows(keys: jax.Array, queries: jax.Array, n_cells: int) -> jax.Array
     return jnp.where(inside, val, -1)
 
 
-@functools.cache
-def _table_lookup_fn(n_cells: int) -> Callable:
-    """The ``custom_vmap`` function of :func:`table_lookup` for one table size."""
-
-    def rows(keys: jax.Array, queries: jax.Array) -> jax.Array:
-        lead = keys.shape[:-1]
-        r = int(np.prod(lead, dtype=np.int64))
-        k = keys.reshape(r, keys.shape[-1])
-        q = queries.reshape(r, queries.shape[-1])
-        per_chunk = max(1, LOOKUP_CHUNK_ENTRIES // n_cells)
-        if r * n_cells <= LOOKUP_DIRECT_MAX or r <= per_chunk:
-            out = _lookup_rows(k, q, n_cells)
-        else:
-            n_chunks = -(-r // per_chunk)
-            pad = n_chunks * per_chunk - r
-            k = jnp.concatenate([k, jnp.full((pad, k.shape[1]), n_cells, jnp.int32)])
-            q = jnp.concatenate([q, jnp.full((pad, q.shape[1]), -1, jnp.int32)])
-            out = jax.lax.map(
-                lambda kq: _lookup_rows(kq[0], kq[1], n_cells),
-                (k.reshape(n_chunks, per_chunk, -1), q.reshape(n_chunks, per_chunk, -1)),
-            ).reshape(n_chunks * per_chunk, -1)[:r]
-        return out.reshape(lead + (queries.shape[-1],))
-
-    @custom_vmap
-    def look(keys: jax.Array, queries: jax.Array) -> jax.Array:
-        return rows(keys, queries)
-
-    @look.def_vmap
-    def _batched(axis_size, in_batched, keys, queries):
-        keys_b, queries_b = in_batched
-        if not keys_b:
-            keys = jnp.broadcast_to(keys, (axis_size,) + keys.shape)
-        if not queries_b:
-            queries = jnp.broadcast_to(queries, (axis_size,) + queries.shape)
-        return look(keys, queries), True
-
-    return look
+def _lookup_chunked(keys: jax.Array, queries: jax.Array, n_cells: int) -> jax.Array:
+    """:func:`_lookup_rows`, in chunks of rows above :data:`LOOKUP_DIRECT_MAX` entries."""
+    r = keys.shape[0]
+    per_chunk = max(1, LOOKUP_CHUNK_ENTRIES // n_cells)
+    if r * n_cells <= LOOKUP_DIRECT_MAX or r <= per_chunk:
+        return _lookup_rows(keys, queries, n_cells)
+    n_chunks = -(-r // per_chunk)
+    pad = n_chunks * per_chunk - r
+    k = jnp.concatenate([keys, jnp.full((pad, keys.shape[1]), n_cells, jnp.int32)])
+    q = jnp.concatenate([queries, jnp.full((pad, queries.shape[1]), -1, jnp.int32)])
+    return jax.lax.map(
+        lambda kq: _lookup_rows(kq[0], kq[1], n_cells),
+        (k.reshape(n_chunks, per_chunk, -1), q.reshape(n_chunks, per_chunk, -1)),
+    ).reshape(n_chunks * per_chunk, -1)[:r]
