@@ -17,8 +17,11 @@ from jaxga.batching import (
     over_pairs,
     over_pairs_gated,
     true_first_order,
+    window_width,
+    windowed_map,
 )
 from jaxga.maps import load_map
+from jaxga.numerics import ordered_sum
 from jaxga.paths import Population, from_coords
 from jaxga.reference import shortest_path
 
@@ -192,3 +195,88 @@ def test_true_first_order_is_the_stable_argsort(n):
     got = np.asarray(jax.jit(jax.vmap(true_first_order))(jnp.asarray(flags)))
     want = np.argsort(~flags, axis=1, kind="stable")
     assert got.dtype == np.int32 and np.array_equal(got, want)
+
+
+# ------------------------------------------------------------------- windowed_map
+def _segment_sum(scale):
+    """A width-agnostic row function (reads ``length`` cells, ordered float sum)."""
+
+    def fn(c, n):
+        x, y = (c % 7).astype(jnp.float32), (c // 7).astype(jnp.float32)
+        seg = jnp.sqrt(jnp.diff(x) ** 2 + jnp.diff(y) ** 2 + 0.1) * scale
+        seg = jnp.where(jnp.arange(c.shape[0] - 1) < n - 1, seg, 0.0)
+        return ordered_sum(seg), jnp.max(jnp.where(jnp.arange(c.shape[0]) < n, c, -1))
+
+    return fn
+
+
+def _rows(key, shape, longest):
+    k1, k2 = jax.random.split(key)
+    cells = jax.random.randint(k1, shape + (160,), 0, 49, jnp.int32)
+    length = jax.random.randint(k2, shape, 1, longest + 1, jnp.int32)
+    return cells, length
+
+
+@pytest.mark.parametrize("longest", [64, 65, 160])
+@pytest.mark.parametrize("depth", [0, 1, 2])
+def test_windowed_map_is_vmap_bit_for_bit(depth, longest):
+    """Narrow (every path fits 64 cells) and full-width batches, under 0-2 vmap levels,
+    with a closed-over per-run scale: exactly ``vmap(fn)``'s bits."""
+    shape = ((3, 2) if depth == 2 else (4,) if depth == 1 else ())
+    cells, length = _rows(jax.random.PRNGKey(longest), shape + (9,), longest)
+    scale = jnp.linspace(0.5, 2.0, int(np.prod(shape, dtype=int))).reshape(shape)
+
+    def windowed(c, n, s):
+        return windowed_map(_segment_sum(s), c, n)
+
+    def plain(c, n, s):
+        return jax.vmap(_segment_sum(s))(c, n)
+
+    for _ in range(depth):
+        windowed, plain = jax.vmap(windowed), jax.vmap(plain)
+    got = jax.jit(windowed)(cells, length, scale)
+    want = jax.jit(plain)(cells, length, scale)
+    for g, w in zip(got, want):
+        assert g.shape == w.shape and g.dtype == w.dtype
+        np.testing.assert_array_equal(np.asarray(g), np.asarray(w))
+
+
+def test_windowed_map_picks_one_width_for_the_whole_folded_batch():
+    """The width is chosen once for all runs: narrow only when the batch's longest path
+    fits the window (a row function that reports its width shows which ran)."""
+    assert window_width(160) == 64 and window_width(400) == 256 and window_width(2) == 1
+
+    def width(c, n):
+        return (jnp.int32(c.shape[0]),)
+
+    run = jax.jit(jax.vmap(lambda c, n: windowed_map(width, c, n)[0]))
+    cells, length = _rows(jax.random.PRNGKey(0), (3, 5), 64)
+    assert np.all(np.asarray(run(cells, length)) == 64)
+    assert np.all(np.asarray(run(cells, length.at[2, 4].set(65))) == 160)
+
+
+@pytest.mark.parametrize("preset", ["sga", "imga", "agacd", "mpmga", "iga_zhu", "iga_zhang"])
+def test_engine_evaluation_in_the_window_equals_full_width(setting, preset, monkeypatch):
+    """Every fitness function gives the same bits on the 64-cell window as on the full
+    160 cells (a population of short paths, some made discontinuous)."""
+    from jaxga import batching
+    from jaxga.engine import build, evaluate
+    from jaxga.presets import load_preset
+
+    grid, pop = setting
+    over = ({"crossover.method": "common_point", "mutation.method": "neighbour_point"}
+            if preset == "agacd" else {})  # agacd proper works on waypoints (no window)
+    algo, params = build(load_preset(preset, overrides=over), grid)
+    assert not algo.waypoints and int(jnp.max(pop.length)) <= 64
+    cells = pop.cells.at[1, 5].set(pop.cells[1, 20])  # a jump: infeasible
+    active = jnp.arange(cells.shape[0]) < 9
+
+    def ev(c, n):
+        return evaluate(algo, grid, params, c, n, active)
+
+    narrow = jax.jit(ev)(cells, pop.length)
+    monkeypatch.setattr(batching, "WINDOW_FRACTION", 1.0)
+    wide = jax.jit(ev)(cells, pop.length)
+    assert not bool(narrow[1][1]) and bool(narrow[1][0])
+    for a, b in zip(narrow, wide):
+        np.testing.assert_array_equal(np.asarray(a), np.asarray(b))
