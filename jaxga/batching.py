@@ -139,6 +139,7 @@ def gated_map(
     *,
     block: int | None = None,
     dense: bool = False,
+    shrinking: bool = False,
 ) -> tuple:
     """``vmap(fn)`` over the entries where ``apply`` holds; ``defaults`` elsewhere.
 
@@ -161,6 +162,13 @@ def gated_map(
     ``dense=True`` (static) computes ``fn`` for every entry and selects: the same result,
     cheaper when most entries apply (a crossover with ``pc = 0.8``: the sort and the
     per-block scatters cost more than the skipped work).
+
+    ``shrinking=True`` (static) declares ``fn(key, cells, length, ...) -> (cells, length,
+    ...)`` a path operator that reads only the first ``length`` cells, returns a path no
+    longer than its input, padded as SPEC 2 says, and has no width-dependent float sum.
+    A block whose paths all fit :func:`window_width` cells is then computed on that many
+    (the operator traced at both widths) and re-padded: the same bits, less work (a
+    sequential pass such as :func:`jaxga.mutation.corner_cut` scans the window only).
     """
     apply = jnp.asarray(apply, bool)
     if dense:
@@ -172,25 +180,36 @@ def gated_map(
     n = apply.shape[0]
     b = block or max(4, -(-n // 4))
     args, defaults = tuple(jnp.asarray(a) for a in args), tuple(defaults)
-    fn_op, consts = hoist(lambda *a: tuple(fn(*a)), *(a[0] for a in args))
+    example = [a[0] for a in args]
+    fn_op, consts = hoist(lambda *a: tuple(fn(*a)), *example)
     n_args = len(args)
+    narrow = None
+    if shrinking:
+        cap = args[1].shape[1]
+        w = window_width(cap)
+        if w < cap:
+            narrow_op, narrow_consts = hoist(lambda *a: tuple(fn(*a)), example[0],
+                                             example[1][:w], *example[2:])
+            narrow = (narrow_op, len(consts), w)
+            consts = consts + narrow_consts
 
     def client(lead, lanes, operands, axes):
         r = int(np.prod(lead, dtype=np.int64)) if lead else 1
         flat = [x.reshape((r * n,) + x.shape[1 + bool(lead):]) for x in lanes]
         width = b if not lead else max(b, -(-b * r // POOL_SHRINK))
         out = _blocks(fn_op, flat[0], flat[1:1 + n_args], flat[1 + n_args:], operands,
-                      axes, n, width)
+                      axes, n, width, narrow)
         return [x.reshape(((r, n) if lead else (n,)) + x.shape[1:]) for x in out]
 
     out = fold_call(client, [apply, *args, *defaults], consts, len(defaults))
     return tuple(out)
 
 
-def _blocks(fn_op, apply, args, defaults, consts, axes, n, b):
+def _blocks(fn_op, apply, args, defaults, consts, axes, n, b, narrow=None):
     """The applied entries of ``apply`` (``R * n`` entries of ``R`` calls: call ``i // n``
     owns entry ``i`` and the rows ``consts[j][i // n]`` where ``axes[j] == 0``), in blocks
-    of ``b`` inside a ``while_loop``."""
+    of ``b`` inside a ``while_loop``. ``narrow = (op, first const, width)``: a shrinking
+    path operator's narrow program (:func:`gated_map`)."""
     total = apply.shape[0]
     n_blocks = -(-total // b)
     order = true_first_order(apply)
@@ -207,8 +226,29 @@ def _blocks(fn_op, apply, args, defaults, consts, axes, n, b):
         valid = k * b + lane < n_apply
         src = jnp.minimum(idx, total - 1)
         lane_consts = [x if ax is None else x[src // n] for x, ax in zip(consts, axes)]
-        res = jax.vmap(fn_op, in_axes=([None if ax is None else 0 for ax in axes],)
-                       + (0,) * len(args))(lane_consts, *(a[src] for a in args))
+        const_axes = [None if ax is None else 0 for ax in axes]
+        lane_args = [a[src] for a in args]
+        if narrow is None:
+            res = jax.vmap(fn_op, in_axes=(const_axes,) + (0,) * len(args))(
+                lane_consts, *lane_args)
+        else:
+            op, j, w = narrow
+
+            def run_wide():
+                return tuple(jax.vmap(fn_op, in_axes=(const_axes[:j],) + (0,) * len(args))(
+                    lane_consts[:j], *lane_args))
+
+            def run_narrow():
+                k, c, ln, *rest = lane_args
+                out = jax.vmap(op, in_axes=(const_axes[j:],) + (0,) * len(args))(
+                    lane_consts[j:], k, c[:, :w], ln, *rest)
+                cap = c.shape[1]
+                cells = jnp.concatenate(
+                    [out[0], jnp.broadcast_to(out[0][:, w - 1:], (b, cap - w))], axis=1)
+                return (cells, *out[1:])
+
+            longest = jnp.max(jnp.where(valid, lane_args[2], 0))
+            res = jax.lax.cond(longest <= w, run_narrow, run_wide)
         dst = jnp.where(valid, idx, total)
         out = tuple(o.at[dst].set(r.astype(o.dtype), mode="drop") for o, r in zip(out, res))
         return k + 1, out
@@ -218,7 +258,8 @@ def _blocks(fn_op, apply, args, defaults, consts, axes, n, b):
 
 
 def over_individuals_gated(
-    op: Callable, *, alternative: Callable | None = None, in_axes_extra: tuple = ()
+    op: Callable, *, alternative: Callable | None = None, in_axes_extra: tuple = (),
+    shrinking: bool = False,
 ) -> Callable:
     """Lift ``op(key, grid, cells, length, *extra)`` with a per-individual probability.
 
@@ -235,6 +276,9 @@ def over_individuals_gated(
     through ``alternative`` elsewhere, with the same key, as
     ``mutation.either(op, alternative)`` does, but each operator is computed only for
     its own individuals (Zhu & Pan's half one-point, half range mutation).
+
+    ``shrinking=True`` (static): ``op`` (and ``alternative``) never lengthen a path and
+    are computed on a narrow window when the paths fit (:func:`gated_map`).
     """
 
     def lifted(key: jax.Array, grid: Grid, pop: Population, prob, *extra):
@@ -259,10 +303,10 @@ def over_individuals_gated(
         args = (k_op, pop.cells, pop.length, *mapped)
         out = (pop.cells, pop.length, jnp.zeros((n,), bool))
         if use_op is None:
-            out = gated_map(one(op), apply, args, out)
+            out = gated_map(one(op), apply, args, out, shrinking=shrinking)
         else:
-            out = gated_map(one(op), apply & use_op, args, out)
-            out = gated_map(one(alternative), apply & ~use_op, args, out)
+            out = gated_map(one(op), apply & use_op, args, out, shrinking=shrinking)
+            out = gated_map(one(alternative), apply & ~use_op, args, out, shrinking=shrinking)
         cells, length, failed = out
         return Population(cells, length), jnp.sum(failed, dtype=jnp.int32)
 

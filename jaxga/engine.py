@@ -319,7 +319,8 @@ def _simplify(algo: Algorithm, key, grid, pop, params):
             c2, n2, _ = post.simplify_adjacent(k, g, c, n)
             return c2, n2, jnp.bool_(False)
     ps = jnp.broadcast_to(params["simplify.probability"], (pop.size,))
-    return over_individuals_gated(op)(key, grid, pop, ps)
+    # Both operators only shorten paths: computed on the narrow window when they fit.
+    return over_individuals_gated(op, shrinking=True)(key, grid, pop, ps)
 
 
 # ------------------------------------------------------------------------------ state

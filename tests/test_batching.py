@@ -280,3 +280,37 @@ def test_engine_evaluation_in_the_window_equals_full_width(setting, preset, monk
     assert not bool(narrow[1][1]) and bool(narrow[1][0])
     for a, b in zip(narrow, wide):
         np.testing.assert_array_equal(np.asarray(a), np.asarray(b))
+
+
+@pytest.mark.parametrize("op", [mu.corner_cut, "simplify_adjacent"])
+@pytest.mark.parametrize("longest", [40, 80, 160])
+def test_shrinking_gated_operator_on_the_window_equals_full_width(setting, op, longest):
+    """``shrinking=True`` (blocks whose paths fit 64 cells run on them, the others at full
+    width) gives exactly the cells, lengths and failure counts of the full-width gated
+    operator, alone and under vmap over 3 runs, with probability 0.35 and 1."""
+    from jaxga.paths import pad
+    from jaxga.postprocess import simplify_adjacent
+
+    op = simplify_adjacent if op == "simplify_adjacent" else op
+    grid, _ = setting
+    free = np.flatnonzero(~np.asarray(grid.blocked).reshape(-1))
+    rng = np.random.default_rng(longest)
+    cells = jnp.asarray(free[rng.integers(0, free.size, (3, 20, 160))], jnp.int32)
+    length = jnp.asarray(rng.integers(1, longest + 1, (3, 20)), jnp.int32)
+    length = length.at[1].set(jnp.minimum(length[1], 64))  # one run always narrow
+    cells = jax.vmap(jax.vmap(pad))(cells, length)
+    keys = jax.random.split(jax.random.PRNGKey(longest), 3)
+
+    def lift(shrinking, prob):
+        f = over_individuals_gated(op, shrinking=shrinking)
+        return jax.jit(jax.vmap(lambda k, c, n: f(k, grid, Population(c, n), prob)))
+
+    for prob in (0.35, 1.0):
+        got = lift(True, prob)(keys, cells, length)
+        want = lift(False, prob)(keys, cells, length)
+        alone = lift(True, prob)(keys[:1], cells[:1], length[:1])
+        for g, w, a in zip(jax.tree_util.tree_leaves(got), jax.tree_util.tree_leaves(want),
+                           jax.tree_util.tree_leaves(alone)):
+            np.testing.assert_array_equal(np.asarray(g), np.asarray(w))
+            np.testing.assert_array_equal(np.asarray(a)[0], np.asarray(w)[0])
+        assert int(jnp.sum(got[0].length != length)) > 0  # the operator did something
