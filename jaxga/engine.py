@@ -214,10 +214,13 @@ def waypoints_feasible(grid: Grid, cells: jax.Array, length: jax.Array) -> jax.A
 def evaluate(algo: Algorithm, grid: Grid, params: dict, cells, length, active) -> tuple:
     """``(fitness f32[P], feasible bool[P])``; infeasible or inactive -> fitness 0.
 
-    Grid paths are evaluated by :func:`jaxga.batching.windowed_map`: on the first
-    ``window_width(L)`` cells (64 of 160 on a 20 x 20 map) whenever every path of the
-    batch fits, with the same bits as on all ``L`` (imga's evolution at 100 seeds on
-    20 x 20: 0.84-1.0 -> 0.53-0.54 s per 50 generations; sga and iga_zhang 3-8 %).
+    With ``fitness.window`` (default) grid paths are evaluated by
+    :func:`jaxga.batching.windowed_map`: on the first ``window_width(L)`` cells (64 of
+    160 on a 20 x 20 map) whenever every path of the batch fits, with the same bits as
+    on all ``L`` (imga's evolution at 100 seeds on 20 x 20: 0.84-1.0 -> 0.53-0.54 s per
+    50 generations; sga and iga_zhang 3-8 %). The narrow program costs 1-2 s of compile
+    time; iga_zhu and mpmga switch it off (their populations keep a few long paths, and
+    they gained nothing).
     """
     fit = fitness_function(algo, params)
     if algo.waypoints:
@@ -229,7 +232,10 @@ def evaluate(algo: Algorithm, grid: Grid, params: dict, cells, length, active) -
             ok = has_endpoints(grid, c, n) & is_continuous(grid, c, n)
             return fit(grid, c, n, ok), ok
 
-        f, feas = windowed_map(one, cells, length)
+        if algo.get("fitness.window"):
+            f, feas = windowed_map(one, cells, length)
+        else:
+            f, feas = jax.vmap(one)(cells, length)
     return jnp.where(active, f, 0.0).astype(F32), feas & active
 
 

@@ -3,6 +3,8 @@ result of the plain (compute everything, then select) formulation."""
 
 from __future__ import annotations
 
+import functools
+
 import jax
 import jax.numpy as jnp
 import numpy as np
@@ -256,27 +258,26 @@ def test_windowed_map_picks_one_width_for_the_whole_folded_batch():
 
 
 @pytest.mark.parametrize("preset", ["sga", "imga", "agacd", "mpmga", "iga_zhu", "iga_zhang"])
-def test_engine_evaluation_in_the_window_equals_full_width(setting, preset, monkeypatch):
+def test_engine_evaluation_in_the_window_equals_full_width(setting, preset):
     """Every fitness function gives the same bits on the 64-cell window as on the full
-    160 cells (a population of short paths, some made discontinuous)."""
-    from jaxga import batching
+    160 cells (``fitness.window`` on and off; a population of short paths, some made
+    discontinuous)."""
     from jaxga.engine import build, evaluate
     from jaxga.presets import load_preset
 
     grid, pop = setting
     over = ({"crossover.method": "common_point", "mutation.method": "neighbour_point"}
             if preset == "agacd" else {})  # agacd proper works on waypoints (no window)
-    algo, params = build(load_preset(preset, overrides=over), grid)
-    assert not algo.waypoints and int(jnp.max(pop.length)) <= 64
     cells = pop.cells.at[1, 5].set(pop.cells[1, 20])  # a jump: infeasible
     active = jnp.arange(cells.shape[0]) < 9
-
-    def ev(c, n):
-        return evaluate(algo, grid, params, c, n, active)
-
-    narrow = jax.jit(ev)(cells, pop.length)
-    monkeypatch.setattr(batching, "WINDOW_FRACTION", 1.0)
-    wide = jax.jit(ev)(cells, pop.length)
+    out = []
+    for window in (True, False):
+        algo, params = build(load_preset(preset, overrides={**over, "fitness.window": window}),
+                             grid)
+        assert not algo.waypoints and int(jnp.max(pop.length)) <= 64
+        ev = functools.partial(evaluate, algo, grid, params)
+        out.append(jax.jit(ev)(cells, pop.length, active))
+    narrow, wide = out
     assert not bool(narrow[1][1]) and bool(narrow[1][0])
     for a, b in zip(narrow, wide):
         np.testing.assert_array_equal(np.asarray(a), np.asarray(b))
