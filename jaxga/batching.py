@@ -181,17 +181,14 @@ def gated_map(
     b = block or max(4, -(-n // 4))
     args, defaults = tuple(jnp.asarray(a) for a in args), tuple(defaults)
     example = [a[0] for a in args]
-    fn_op, consts = hoist(lambda *a: tuple(fn(*a)), *example)
     n_args = len(args)
     narrow = None
-    if shrinking:
-        cap = args[1].shape[1]
-        w = window_width(cap)
-        if w < cap:
-            narrow_op, narrow_consts = hoist(lambda *a: tuple(fn(*a)), example[0],
-                                             example[1][:w], *example[2:])
-            narrow = (narrow_op, len(consts), w)
-            consts = consts + narrow_consts
+    w = window_width(args[1].shape[1]) if shrinking else None
+    if shrinking and w < args[1].shape[1]:
+        fn_op, narrow_op, consts, j = _hoist_two_widths(fn, example, 1, w)
+        narrow = (narrow_op, j, w)
+    else:
+        fn_op, consts = hoist(lambda *a: tuple(fn(*a)), *example)
 
     def client(lead, lanes, operands, axes):
         r = int(np.prod(lead, dtype=np.int64)) if lead else 1
@@ -226,29 +223,22 @@ def _blocks(fn_op, apply, args, defaults, consts, axes, n, b, narrow=None):
         valid = k * b + lane < n_apply
         src = jnp.minimum(idx, total - 1)
         lane_consts = [x if ax is None else x[src // n] for x, ax in zip(consts, axes)]
-        const_axes = [None if ax is None else 0 for ax in axes]
         lane_args = [a[src] for a in args]
         if narrow is None:
-            res = jax.vmap(fn_op, in_axes=(const_axes,) + (0,) * len(args))(
-                lane_consts, *lane_args)
+            res = _vmap_hoisted(fn_op, lane_consts, axes, lane_args)
         else:
             op, j, w = narrow
 
-            def run_wide():
-                return tuple(jax.vmap(fn_op, in_axes=(const_axes[:j],) + (0,) * len(args))(
-                    lane_consts[:j], *lane_args))
-
             def run_narrow():
                 k, c, ln, *rest = lane_args
-                out = jax.vmap(op, in_axes=(const_axes[j:],) + (0,) * len(args))(
-                    lane_consts[j:], k, c[:, :w], ln, *rest)
-                cap = c.shape[1]
-                cells = jnp.concatenate(
-                    [out[0], jnp.broadcast_to(out[0][:, w - 1:], (b, cap - w))], axis=1)
-                return (cells, *out[1:])
+                out = _vmap_hoisted(op, lane_consts[j:], axes[j:], [k, c[:, :w], ln, *rest])
+                pad = jnp.broadcast_to(out[0][:, w - 1:], (b, c.shape[1] - w))  # SPEC 2
+                return (jnp.concatenate([out[0], pad], axis=1), *out[1:])
 
             longest = jnp.max(jnp.where(valid, lane_args[2], 0))
-            res = jax.lax.cond(longest <= w, run_narrow, run_wide)
+            res = jax.lax.cond(
+                longest <= w, run_narrow,
+                lambda: _vmap_hoisted(fn_op, lane_consts[:j], axes[:j], lane_args))
         dst = jnp.where(valid, idx, total)
         out = tuple(o.at[dst].set(r.astype(o.dtype), mode="drop") for o, r in zip(out, res))
         return k + 1, out
@@ -405,31 +395,38 @@ def windowed_map(fn: Callable, cells: jax.Array, length: jax.Array, *args,
     args = tuple(jnp.asarray(a) for a in args)
     if w >= cap:
         return tuple(jax.vmap(fn)(cells, length, *args))
-    example = tuple(a[0] for a in args)
-    # The operator traced at both widths (a jaxpr has fixed shapes); their closed-over
-    # values are operands of the folded call.
-    narrow_op, narrow_consts = hoist(lambda *a: tuple(fn(*a)), cells[0, :w], length[0], *example)
-    wide_op, wide_consts = hoist(lambda *a: tuple(fn(*a)), cells[0], length[0], *example)
-    n_narrow = len(narrow_consts)
+    example = [cells[0], length[0], *(a[0] for a in args)]
+    wide_op, narrow_op, consts, j = _hoist_two_widths(fn, example, 0, w)
 
     def client(lead, lanes, operands, axes):
-        c, ln, *rest = lanes
-        lead_n = int(np.prod(lead, dtype=np.int64)) if lead else 1
-        c = c.reshape((lead_n * n, cap))
-        ln = ln.reshape((lead_n * n,))
-        rest = [x.reshape((lead_n * n,) + x.shape[1 + bool(lead):]) for x in rest]
-        entry = jnp.arange(lead_n * n, dtype=jnp.int32) // n
+        total = (int(np.prod(lead, dtype=np.int64)) if lead else 1) * n
+        c, ln, *rest = [x.reshape((total,) + x.shape[1 + bool(lead):]) for x in lanes]
+        entry = jnp.arange(total, dtype=jnp.int32) // n
         lane_consts = [x if ax is None else x[entry] for x, ax in zip(operands, axes)]
-        const_axes = [None if ax is None else 0 for ax in axes]
+        out = jax.lax.cond(
+            jnp.max(ln) <= w,
+            lambda: _vmap_hoisted(narrow_op, lane_consts[j:], axes[j:], [c[:, :w], ln, *rest]),
+            lambda: _vmap_hoisted(wide_op, lane_consts[:j], axes[:j], [c, ln, *rest]))
+        return [x.reshape(((total // n, n) if lead else (n,)) + x.shape[1:]) for x in out]
 
-        def run(op, lo, hi, width):
-            in_axes = (const_axes[lo:hi],) + (0,) * (2 + len(rest))
-            return lambda: tuple(jax.vmap(op, in_axes=in_axes)(
-                lane_consts[lo:hi], c[:, :width], ln, *rest))
+    n_out = len(jax.eval_shape(wide_op, consts[:j], *example))
+    return tuple(fold_call(client, [cells, length, *args], consts, n_out))
 
-        out = jax.lax.cond(jnp.max(ln) <= w, run(narrow_op, 0, n_narrow, w),
-                           run(wide_op, n_narrow, len(operands), cap))
-        return [x.reshape(((lead_n, n) if lead else (n,)) + x.shape[1:]) for x in out]
 
-    n_out = len(jax.eval_shape(wide_op, wide_consts, cells[0], length[0], *example))
-    return tuple(fold_call(client, [cells, length, *args], narrow_consts + wide_consts, n_out))
+def _hoist_two_widths(fn: Callable, example: list, at: int, w: int) -> tuple:
+    """``(wide_op, narrow_op, consts, j)``: ``fn`` hoisted (:func:`jaxga.folding.hoist`)
+    for the ``example`` arguments and for them with ``example[at]`` (a path) cut to its
+    first ``w`` cells (a jaxpr has fixed shapes); ``consts[:j]`` are the wide program's
+    closed-over values, ``consts[j:]`` the narrow one's."""
+    wide_op, wide_consts = hoist(lambda *a: tuple(fn(*a)), *example)
+    cut = list(example)
+    cut[at] = example[at][:w]
+    narrow_op, narrow_consts = hoist(lambda *a: tuple(fn(*a)), *cut)
+    return wide_op, narrow_op, wide_consts + narrow_consts, len(wide_consts)
+
+
+def _vmap_hoisted(op: Callable, consts: list, axes: list, args: list) -> tuple:
+    """A hoisted ``op`` over lanes: ``args`` and the ``consts`` whose ``axes`` entry is
+    not None are per lane (leading axis), the others shared."""
+    in_axes = ([None if ax is None else 0 for ax in axes],) + (0,) * len(args)
+    return tuple(jax.vmap(op, in_axes=in_axes)(consts, *args))
