@@ -764,7 +764,7 @@ def with_probability(op: Callable) -> Callable:
 
 
 def crossover_population(
-    op: Callable, *, in_axes_extra: tuple = (), dense: bool = False
+    op: Callable, *, in_axes_extra: tuple = (), dense: bool = False, splicing: bool = False
 ) -> Callable:
     """Lift a pair operator with a crossover probability to a population.
 
@@ -777,9 +777,12 @@ def crossover_population(
     passes through. Only the pairs that are crossed are computed
     (:func:`jaxga.batching.over_pairs_gated`); the result is that of
     ``over_pairs(with_probability(op))``. ``dense=True`` computes every pair and selects
-    (same result; cheaper at the papers' high crossover rates).
+    (same result; cheaper at the papers' high crossover rates). ``splicing=True`` (with
+    ``dense``; :func:`common_point` only, whose children are a head of one parent and a
+    tail of the other) computes the pairs on twice the window
+    (:func:`jaxga.batching.spliced_pairs_map`) when every parent fits it.
     """
-    return over_pairs_gated(op, in_axes_extra=in_axes_extra, dense=dense)
+    return over_pairs_gated(op, in_axes_extra=in_axes_extra, dense=dense, splicing=splicing)
 
 
 CROSSOVERS: dict[str, Callable] = {

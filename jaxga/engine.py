@@ -274,7 +274,10 @@ def _crossover(algo: Algorithm, key, grid, pop, fitness, active, t, params, fit_
         op = functools.partial(op, fitness_fn=fit_fn)
     # Dense: at the papers' crossover rates (0.6-0.9) computing every pair and selecting
     # is cheaper than gathering the crossed pairs (same result; RESULTS.md, 2026-11-23).
-    return cx.crossover_population(op, dense=True)(key, grid, pop, pc)
+    # The common-point crossover's children are a head and a tail of their parents: on
+    # twice the window when the parents fit it (same result; RESULTS.md, 2026-11-24).
+    splicing = method == "common_point"
+    return cx.crossover_population(op, dense=True, splicing=splicing)(key, grid, pop, pc)
 
 
 MUTATIONS: dict[str, Callable] = {

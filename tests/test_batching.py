@@ -18,6 +18,7 @@ from jaxga.batching import (
     over_individuals_gated,
     over_pairs,
     over_pairs_gated,
+    spliced_pairs_map,
     true_first_order,
     window_width,
     windowed_map,
@@ -255,6 +256,81 @@ def test_windowed_map_picks_one_width_for_the_whole_folded_batch():
     cells, length = _rows(jax.random.PRNGKey(0), (3, 5), 64)
     assert np.all(np.asarray(run(cells, length)) == 64)
     assert np.all(np.asarray(run(cells, length.at[2, 4].set(65))) == 160)
+
+
+def _head_tail(k, c1, l1, c2, l2):
+    """A splicing pair operator: children ``c1[:l1 - 1] + c2[:l2]`` and ``c2[:1] +
+    c1[r:l1]`` (``r`` random), up to ``l1 + l2 - 1`` cells, and which width it ran at."""
+    from jaxga.repair import concat
+
+    cap = c1.shape[0]
+    r = jax.random.randint(k, (), 1, jnp.maximum(l1, 2))
+    a, la, ok_a = concat([(c1, 0, l1 - 1), (c2, 0, l2)], cap)
+    b, lb, ok_b = concat([(c2, 0, 1), (c1, r, l1)], cap)
+    return a, la, b, lb, (~ok_a).astype(jnp.int32) + (~ok_b), jnp.int32(cap)
+
+
+@pytest.mark.parametrize("longest", [64, 65])
+@pytest.mark.parametrize("depth", [0, 1, 2])
+def test_spliced_pairs_map_is_vmap_bit_for_bit(depth, longest):
+    """Parents that fit 64 cells are spliced on 128 (children up to 127 cells, re-padded
+    with their last cell), a batch with one longer parent at full width: under 0-2 vmap
+    levels exactly ``vmap(fn)``'s children, lengths and failure counts."""
+    from jaxga.paths import pad
+
+    shape = (3, 2) if depth == 2 else (4,) if depth == 1 else ()
+    c1, l1 = _rows(jax.random.PRNGKey(longest), shape + (9,), longest)
+    c2, l2 = _rows(jax.random.PRNGKey(longest + 1), shape + (9,), 64)
+    l1 = l1.reshape(-1).at[-1].set(longest).reshape(l1.shape)  # one parent of `longest`
+    lead = c1.shape[:-1]
+    c1 = jax.vmap(pad)(c1.reshape(-1, 160), l1.reshape(-1)).reshape(c1.shape)
+    c2 = jax.vmap(pad)(c2.reshape(-1, 160), l2.reshape(-1)).reshape(c2.shape)
+    keys = jax.random.split(jax.random.PRNGKey(7), int(np.prod(lead))).reshape(lead + (2,))
+
+    def spliced(*a):
+        return spliced_pairs_map(_head_tail, a)
+
+    def plain(*a):
+        return jax.vmap(_head_tail)(*a)
+
+    for _ in range(depth):
+        spliced, plain = jax.vmap(spliced), jax.vmap(plain)
+    got = jax.jit(spliced)(keys, c1, l1, c2, l2)
+    want = jax.jit(plain)(keys, c1, l1, c2, l2)
+    for g, w in zip(got[:5], want[:5]):
+        assert g.shape == w.shape and g.dtype == w.dtype
+        np.testing.assert_array_equal(np.asarray(g), np.asarray(w))
+    width = np.asarray(got[5])
+    assert np.all(width == (128 if longest <= 64 else 160))
+    assert int(jnp.max(got[1])) > 64 and int(jnp.sum(got[4])) == 0  # long children fit
+
+
+def test_spliced_common_point_crossover_equals_full_width(setting):
+    """The engine's common-point crossover with ``splicing=True`` (parents of at most 64
+    cells: computed on 128) gives the children, lengths and failure counts of the plain
+    dense crossover, for 3 runs under vmap and for one alone, at pc 0.8 and 1."""
+    grid, pop = setting
+    assert int(jnp.max(pop.length)) <= 64
+    rng = np.random.default_rng(3)
+    order = jnp.asarray(np.stack([rng.permutation(pop.size) for _ in range(3)]))
+    cells, length = pop.cells[order], pop.length[order]
+    keys = jax.random.split(jax.random.PRNGKey(5), 3)
+
+    def lift(splicing, pc):
+        f = cx.crossover_population(cx.common_point, dense=True, splicing=splicing)
+        return jax.jit(jax.vmap(lambda k, c, n: f(k, grid, Population(c, n), pc)))
+
+    for pc in (0.8, 1.0):
+        got = lift(True, pc)(keys, cells, length)
+        want = lift(False, pc)(keys, cells, length)
+        alone = lift(True, pc)(keys[:1], cells[:1], length[:1])
+        for g, w, a in zip(jax.tree_util.tree_leaves(got), jax.tree_util.tree_leaves(want),
+                           jax.tree_util.tree_leaves(alone)):
+            np.testing.assert_array_equal(np.asarray(g), np.asarray(w))
+            np.testing.assert_array_equal(np.asarray(a)[0], np.asarray(w)[0])
+        assert int(jnp.sum(got[0].length != length)) > 0  # some pairs were crossed
+    with pytest.raises(ValueError, match="splicing"):
+        over_pairs_gated(cx.common_point, splicing=True)
 
 
 @pytest.mark.parametrize("preset", ["sga", "imga", "agacd", "mpmga", "iga_zhu", "iga_zhang"])
