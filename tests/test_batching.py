@@ -258,6 +258,21 @@ def test_windowed_map_picks_one_width_for_the_whole_folded_batch():
     assert np.all(np.asarray(run(cells, length.at[2, 4].set(65))) == 160)
 
 
+def _assert_narrow_equals_wide(lift, probs, keys, cells, length):
+    """``lift(narrow, prob)``: a jitted population operator vmapped over runs, with the
+    window on or off. Both give the same leaves for every run, and run 0 alone gives
+    the same as in the batch; the operator changed some lengths."""
+    for prob in probs:
+        got = lift(True, prob)(keys, cells, length)
+        want = lift(False, prob)(keys, cells, length)
+        alone = lift(True, prob)(keys[:1], cells[:1], length[:1])
+        for g, w, a in zip(jax.tree_util.tree_leaves(got), jax.tree_util.tree_leaves(want),
+                           jax.tree_util.tree_leaves(alone)):
+            np.testing.assert_array_equal(np.asarray(g), np.asarray(w))
+            np.testing.assert_array_equal(np.asarray(a)[0], np.asarray(w)[0])
+        assert int(jnp.sum(got[0].length != length)) > 0  # the operator did something
+
+
 def _head_tail(k, c1, l1, c2, l2):
     """A splicing pair operator: children ``c1[:l1 - 1] + c2[:l2]`` and ``c2[:1] +
     c1[r:l1]`` (``r`` random), up to ``l1 + l2 - 1`` cells, and which width it ran at."""
@@ -320,15 +335,7 @@ def test_spliced_common_point_crossover_equals_full_width(setting):
         f = cx.crossover_population(cx.common_point, dense=True, splicing=splicing)
         return jax.jit(jax.vmap(lambda k, c, n: f(k, grid, Population(c, n), pc)))
 
-    for pc in (0.8, 1.0):
-        got = lift(True, pc)(keys, cells, length)
-        want = lift(False, pc)(keys, cells, length)
-        alone = lift(True, pc)(keys[:1], cells[:1], length[:1])
-        for g, w, a in zip(jax.tree_util.tree_leaves(got), jax.tree_util.tree_leaves(want),
-                           jax.tree_util.tree_leaves(alone)):
-            np.testing.assert_array_equal(np.asarray(g), np.asarray(w))
-            np.testing.assert_array_equal(np.asarray(a)[0], np.asarray(w)[0])
-        assert int(jnp.sum(got[0].length != length)) > 0  # some pairs were crossed
+    _assert_narrow_equals_wide(lift, (0.8, 1.0), keys, cells, length)
     with pytest.raises(ValueError, match="splicing"):
         over_pairs_gated(cx.common_point, splicing=True)
 
@@ -382,12 +389,4 @@ def test_shrinking_gated_operator_on_the_window_equals_full_width(setting, op, l
         f = over_individuals_gated(op, shrinking=shrinking)
         return jax.jit(jax.vmap(lambda k, c, n: f(k, grid, Population(c, n), prob)))
 
-    for prob in (0.35, 1.0):
-        got = lift(True, prob)(keys, cells, length)
-        want = lift(False, prob)(keys, cells, length)
-        alone = lift(True, prob)(keys[:1], cells[:1], length[:1])
-        for g, w, a in zip(jax.tree_util.tree_leaves(got), jax.tree_util.tree_leaves(want),
-                           jax.tree_util.tree_leaves(alone)):
-            np.testing.assert_array_equal(np.asarray(g), np.asarray(w))
-            np.testing.assert_array_equal(np.asarray(a)[0], np.asarray(w)[0])
-        assert int(jnp.sum(got[0].length != length)) > 0  # the operator did something
+    _assert_narrow_equals_wide(lift, (0.35, 1.0), keys, cells, length)
