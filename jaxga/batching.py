@@ -176,6 +176,8 @@ def gated_map(
     ``splicing=True`` (static, with ``dense``) declares ``fn`` a splicing pair operator
     (:func:`spliced_pairs_map`): computed on twice the window when every parent fits it.
     """
+    if splicing and not dense:
+        raise ValueError("splicing=True needs dense=True")
     apply = jnp.asarray(apply, bool)
     if dense:
         res = spliced_pairs_map(fn, args) if splicing else jax.vmap(fn)(*args)
@@ -406,10 +408,12 @@ def spliced_pairs_map(fn: Callable, args: tuple, window: int | None = None) -> t
     """``vmap(fn)(*args)`` for a splicing pair operator, on ``2 * window`` cells when
     every parent of the whole batch fits ``window`` cells.
 
-    ``args = (keys, c1, l1, c2, l2, *rest)``; ``fn`` returns ``(c1', l1', c2', l2', ...)``.
-    ``fn`` must read only the first ``l1`` / ``l2`` cells of its parents, draw the same
-    random numbers at every width and build children no longer than ``l1 + l2 - 1``
-    cells (a head of one parent and a tail of the other: the common-point crossover).
+    ``args = (keys, c1, l1, c2, l2, *rest)``, the parents padded with their last cell
+    (SPEC 2); ``fn`` returns ``(c1', l1', c2', l2', ...)``. ``fn``'s result must depend
+    only on the first ``l1`` / ``l2`` cells of its parents (it may look past them and mask
+    what it finds), it must draw the same random numbers at every width and build
+    children no longer than ``l1 + l2 - 1`` cells (a head of one parent and a tail of the
+    other: the common-point crossover's are at most ``l1 + l2 - 3``).
     Such children always fit ``2 * window`` cells, as they fit the full width, so the
     narrow program gives the same children, re-padded with their last cell (SPEC 2),
     and the same failure counts. As :func:`windowed_map`, one unbatched test on the

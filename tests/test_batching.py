@@ -23,6 +23,7 @@ from jaxga.batching import (
     window_width,
     windowed_map,
 )
+from jaxga.grid import Grid
 from jaxga.maps import load_map
 from jaxga.numerics import ordered_sum
 from jaxga.paths import Population, from_coords
@@ -338,6 +339,39 @@ def test_spliced_common_point_crossover_equals_full_width(setting):
     _assert_narrow_equals_wide(lift, (0.8, 1.0), keys, cells, length)
     with pytest.raises(ValueError, match="splicing"):
         over_pairs_gated(cx.common_point, splicing=True)
+
+
+def _serpentine(n, by_column=False, rows_from=0):
+    """The first ``n`` cells of a boustrophedon over an open 20 x 20 map (rows from row
+    ``rows_from`` up, or columns from the left): continuous and loop-free."""
+    xy = [(x if y % 2 == 0 else 19 - x, y) for y in range(rows_from, 20) for x in range(20)]
+    return [(y, x) for x, y in xy[:n]] if by_column else xy[:n]
+
+
+@pytest.mark.parametrize("longest", [64, 80])
+def test_spliced_common_point_long_children_and_wide_batches(longest):
+    """Parents of at most 64 cells whose one common cell is near the end of the first
+    and at the start of the second give a child of 125 cells (spliced on 128); with one
+    parent of 80 cells the whole folded batch runs at 160. Either way the children,
+    lengths and failure counts equal the plain dense crossover's."""
+    grid = Grid.create(np.zeros((20, 20), bool), (0, 0), (19, 19), corner_rule="free")
+    rows_0_3 = _serpentine(64)  # ends (17, 3), (16, 3)
+    after = [(16, 4), (17, 3), (18, 4), (19, 4)] + _serpentine(60, rows_from=5)
+    pairs = [(rows_0_3, after), (_serpentine(50), _serpentine(64, by_column=True)),
+             (_serpentine(64, by_column=True), _serpentine(37)),
+             (_serpentine(longest), _serpentine(61, by_column=True))]
+    runs = [pairs[:3], pairs[1:], pairs[2:] + pairs[:1]]
+    paths = [[from_coords(p, 20, 160) for pair in run for p in pair] for run in runs]
+    cells = jnp.asarray(np.array([[c for c, _ in r] for r in paths]), jnp.int32)
+    length = jnp.asarray([[n for _, n in r] for r in paths], jnp.int32)
+    keys = jax.random.split(jax.random.PRNGKey(longest), 3)
+
+    def lift(splicing, pc):
+        f = cx.crossover_population(cx.common_point, dense=True, splicing=splicing)
+        return jax.jit(jax.vmap(lambda k, c, n: f(k, grid, Population(c, n), pc)))
+
+    _assert_narrow_equals_wide(lift, (1.0,), keys, cells, length)
+    assert int(lift(True, 1.0)(keys, cells, length)[0].length[0, 0]) == 125
 
 
 @pytest.mark.parametrize("preset", ["sga", "imga", "agacd", "mpmga", "iga_zhu", "iga_zhang"])
