@@ -236,15 +236,10 @@ def _blocks(fn_op, apply, args, defaults, consts, axes, n, b, narrow=None):
             res = _vmap_hoisted(fn_op, lane_consts, axes, lane_args)
         else:
             op, j, w = narrow
-
-            def run_narrow():
-                k, c, ln, *rest = lane_args
-                out = _vmap_hoisted(op, lane_consts[j:], axes[j:], [k, c[:, :w], ln, *rest])
-                return (_repad(out[0], c.shape[1]), *out[1:])
-
             longest = jnp.max(jnp.where(valid, lane_args[2], 0))
             res = jax.lax.cond(
-                longest <= w, run_narrow,
+                longest <= w,
+                lambda: _narrow_call(op, lane_consts[j:], axes[j:], lane_args, (1,), w, (0,)),
                 lambda: _vmap_hoisted(fn_op, lane_consts[:j], axes[:j], lane_args))
         dst = jnp.where(valid, idx, total)
         out = tuple(o.at[dst].set(r.astype(o.dtype), mode="drop") for o, r in zip(out, res))
@@ -438,11 +433,6 @@ def _windowed(fn: Callable, args: tuple, *, paths: tuple, lengths: tuple, fits: 
     example = [a[0] for a in args]
     wide_op, narrow_op, consts, j = _hoist_two_widths(fn, example, paths, cut)
 
-    def narrow(lane_consts, axes, lanes):
-        lanes = [x[:, :cut] if i in paths else x for i, x in enumerate(lanes)]
-        out = _vmap_hoisted(narrow_op, lane_consts[j:], axes[j:], lanes)
-        return tuple(_repad(x, cap) if i in out_paths else x for i, x in enumerate(out))
-
     def client(lead, lanes, operands, axes):
         total = (int(np.prod(lead, dtype=np.int64)) if lead else 1) * n
         flat = [x.reshape((total,) + x.shape[1 + bool(lead):]) for x in lanes]
@@ -451,12 +441,24 @@ def _windowed(fn: Callable, args: tuple, *, paths: tuple, lengths: tuple, fits: 
         longest = jnp.max(jnp.stack([jnp.max(flat[i]) for i in lengths]))
         out = jax.lax.cond(
             longest <= fits,
-            lambda: narrow(lane_consts, axes, flat),
+            lambda: _narrow_call(narrow_op, lane_consts[j:], axes[j:], flat, paths, cut,
+                                 out_paths),
             lambda: _vmap_hoisted(wide_op, lane_consts[:j], axes[:j], flat))
         return [x.reshape(((total // n, n) if lead else (n,)) + x.shape[1:]) for x in out]
 
     n_out = len(jax.eval_shape(wide_op, consts[:j], *example))
     return tuple(fold_call(client, list(args), consts, n_out))
+
+
+def _narrow_call(op: Callable, consts: list, axes: list, lanes: list, paths: tuple,
+                 cut: int, out_paths: tuple) -> tuple:
+    """A narrow program (:func:`_hoist_two_widths`) over lanes: the paths ``lanes[i]``
+    (``i`` in ``paths``) cut to ``cut`` cells, the output paths ``out_paths`` re-padded
+    to the lanes' full width."""
+    width = lanes[paths[0]].shape[1]
+    lanes = [x[:, :cut] if i in paths else x for i, x in enumerate(lanes)]
+    out = _vmap_hoisted(op, consts, axes, lanes)
+    return tuple(_repad(x, width) if i in out_paths else x for i, x in enumerate(out))
 
 
 def _repad(cells: jax.Array, width: int) -> jax.Array:

@@ -274,9 +274,9 @@ def _crossover(algo: Algorithm, key, grid, pop, fitness, active, t, params, fit_
         op = functools.partial(op, fitness_fn=fit_fn)
     # Dense: at the papers' crossover rates (0.6-0.9) computing every pair and selecting
     # is cheaper than gathering the crossed pairs (same result; RESULTS.md, 2026-11-23).
-    # The common-point crossover's children are a head and a tail of their parents: on
-    # twice the window when the parents fit it (same result; RESULTS.md, 2026-11-24).
-    splicing = method == "common_point"
+    # Splicing crossovers run on twice the window when the parents fit it (same result;
+    # RESULTS.md, 2026-11-24).
+    splicing = method in cx.SPLICING_CROSSOVERS
     return cx.crossover_population(op, dense=True, splicing=splicing)(key, grid, pop, pc)
 
 

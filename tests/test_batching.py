@@ -28,6 +28,7 @@ from jaxga.maps import load_map
 from jaxga.numerics import ordered_sum
 from jaxga.paths import Population, from_coords
 from jaxga.reference import shortest_path
+from jaxga.repair import concat
 
 
 @pytest.fixture(scope="module")
@@ -277,8 +278,6 @@ def _assert_narrow_equals_wide(lift, probs, keys, cells, length):
 def _head_tail(k, c1, l1, c2, l2):
     """A splicing pair operator: children ``c1[:l1 - 1] + c2[:l2]`` and ``c2[:1] +
     c1[r:l1]`` (``r`` random), up to ``l1 + l2 - 1`` cells, and which width it ran at."""
-    from jaxga.repair import concat
-
     cap = c1.shape[0]
     r = jax.random.randint(k, (), 1, jnp.maximum(l1, 2))
     a, la, ok_a = concat([(c1, 0, l1 - 1), (c2, 0, l2)], cap)
@@ -321,6 +320,16 @@ def test_spliced_pairs_map_is_vmap_bit_for_bit(depth, longest):
     assert int(jnp.max(got[1])) > 64 and int(jnp.sum(got[4])) == 0  # long children fit
 
 
+def _common_point_lift(grid):
+    """``lift(splicing, pc)``: the dense common-point crossover of runs under vmap."""
+
+    def lift(splicing, pc):
+        f = cx.crossover_population(cx.common_point, dense=True, splicing=splicing)
+        return jax.jit(jax.vmap(lambda k, c, n: f(k, grid, Population(c, n), pc)))
+
+    return lift
+
+
 def test_spliced_common_point_crossover_equals_full_width(setting):
     """The engine's common-point crossover with ``splicing=True`` (parents of at most 64
     cells: computed on 128) gives the children, lengths and failure counts of the plain
@@ -332,11 +341,7 @@ def test_spliced_common_point_crossover_equals_full_width(setting):
     cells, length = pop.cells[order], pop.length[order]
     keys = jax.random.split(jax.random.PRNGKey(5), 3)
 
-    def lift(splicing, pc):
-        f = cx.crossover_population(cx.common_point, dense=True, splicing=splicing)
-        return jax.jit(jax.vmap(lambda k, c, n: f(k, grid, Population(c, n), pc)))
-
-    _assert_narrow_equals_wide(lift, (0.8, 1.0), keys, cells, length)
+    _assert_narrow_equals_wide(_common_point_lift(grid), (0.8, 1.0), keys, cells, length)
     with pytest.raises(ValueError, match="splicing"):
         over_pairs_gated(cx.common_point, splicing=True)
 
@@ -366,10 +371,7 @@ def test_spliced_common_point_long_children_and_wide_batches(longest):
     length = jnp.asarray([[n for _, n in r] for r in paths], jnp.int32)
     keys = jax.random.split(jax.random.PRNGKey(longest), 3)
 
-    def lift(splicing, pc):
-        f = cx.crossover_population(cx.common_point, dense=True, splicing=splicing)
-        return jax.jit(jax.vmap(lambda k, c, n: f(k, grid, Population(c, n), pc)))
-
+    lift = _common_point_lift(grid)
     _assert_narrow_equals_wide(lift, (1.0,), keys, cells, length)
     assert int(lift(True, 1.0)(keys, cells, length)[0].length[0, 0]) == 125
 
