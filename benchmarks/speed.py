@@ -14,7 +14,10 @@ evolve seconds), and the child's peak resident memory. Presets keep their operat
 parameters; only population size and generations are set to the setting's (and with
 ``--max-generations-many G`` the runs of 100 seeds or more evolve only ``G``
 generations: ind-gen/s is per generation, runs/s is then extrapolated to the full
-generation count).
+generation count). The extrapolation is a quick approximation and understates the full
+run: the first generations cost more than the later ones (sga at 20 x 20, 100 runs:
+8.6 ms per generation over the first 50, 7.9 ms over the next 250; RESULTS.md,
+2026-11-24), so the targets are judged on full runs (the default).
 
 The same SGA written as a straightforward per-individual NumPy/Python loop
 (``benchmarks/numpy_sga.py``) runs in this (parent) process on the same maps; the
