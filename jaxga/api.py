@@ -207,6 +207,17 @@ runs, -13 % in another). 64 keeps shares up to 64 runs in one ``vmap`` and split
 larger ones into blocks of 32-64."""
 
 
+INIT_RUN_BLOCK = 10
+"""Largest number of runs one device initialises together (the init program's blocks).
+
+The random-walk initialisation is a loop of walk rounds whose length is set by the
+slowest run of its batch, and batching walks saves little per run (1 run: about 17 ms
+per run per device; 50 runs in one ``vmap``: about the same), so it takes smaller blocks
+than the evolution. Measured (sga 20 x 20, 1000 seeds, 2 devices, RESULTS.md
+2026-11-24): blocks of 50 / 20 / 10 / 5 runs initialised in 8.55 / 8.17 / 7.28 / 7.23 s.
+The results are the same: every run is independent of the runs that share its block."""
+
+
 def run_blocks(n_runs: int, n_devices: int = 1, block: int | None = None) -> int:
     """How many blocks :func:`map_runs` splits ``n_runs`` runs into (1 = one ``vmap``).
 
@@ -300,11 +311,11 @@ def _programs(algo: Algorithm, grid_spec: Any, params_spec: Any, n_runs: int,
     # every iteration (RESULTS.md, 2026-11-23).
     n_dev = 1 if sh is None else sh.mesh.size
 
-    def jit(fn, in_axes):
+    def jit(fn, in_axes, block=None):
         if sh is None:
-            return jax.jit(map_runs(fn, in_axes, n_runs))
+            return jax.jit(map_runs(fn, in_axes, n_runs, block))
         P = jax.sharding.PartitionSpec
-        local = map_runs(fn, in_axes, n_runs // n_dev)
+        local = map_runs(fn, in_axes, n_runs // n_dev, block)
         # check_vma=False: the loops' carries start as constants that the runs then vary.
         per_device = jax.shard_map(
             local, mesh=sh.mesh, out_specs=P("runs"), check_vma=False,
@@ -314,7 +325,7 @@ def _programs(algo: Algorithm, grid_spec: Any, params_spec: Any, n_runs: int,
 
     t0 = time.perf_counter()
     keys = jax.ShapeDtypeStruct((n_runs, 2), jnp.uint32)
-    init_t = jit(do_init, (0, None, 0)).trace(keys, grid_spec, params_spec)
+    init_t = jit(do_init, (0, None, 0), INIT_RUN_BLOCK).trace(keys, grid_spec, params_spec)
     state_spec = init_t.out_info[0]
     evolve_t = {n: jit(functools.partial(do_evolve, n=n), (0, None, 0, 0)).trace(
         keys, grid_spec, params_spec, state_spec) for n in sorted(set(sizes))}
