@@ -128,9 +128,18 @@ def true_first_order(flags: jax.Array) -> jax.Array:
     return jnp.zeros((n,), jnp.int32).at[pos].set(i, unique_indices=True)
 
 
-POOL_SHRINK = 8
+POOL_SHRINK = 4
 """Under ``vmap``, :func:`gated_map` computes ``1 / POOL_SHRINK`` of its per-run block
-width times the number of runs per iteration (see there)."""
+width times the number of runs per iteration, at most :data:`POOL_MAX` entries (see
+there)."""
+
+POOL_MAX = 192
+"""Largest pooled block of :func:`gated_map` under ``vmap`` (unless one run's block is
+wider). The best width was about 190 entries both for 100 runs in one ``vmap`` (where
+``POOL_SHRINK`` 8 gave it, and 4, i.e. 375, was slower) and for the blocks of 50 runs
+that ``jaxga.api`` runs per device (where 4 gives it: sga at 1000 seeds 1.5-4 % faster
+than 8, the other presets 0-4 %; RESULTS.md, 2026-11-24). The results do not depend on
+the width."""
 
 
 def gated_map(
@@ -157,6 +166,7 @@ def gated_map(
 
     Under ``vmap`` (runs, islands) the applied entries of ALL the batch's calls are
     pooled (:func:`jaxga.folding.fold_call`): blocks of ``block * R / POOL_SHRINK``
+    (at most :data:`POOL_MAX`, at least ``block``)
     entries for ``R`` calls, as many as the batch's applied entries need. Without
     pooling every run paid the block count of its busiest run (for SGA's mutation of
     100 runs: 1,500 to 2,250 operator evaluations for about 1,800 mutants; pooled,
@@ -201,7 +211,7 @@ def gated_map(
     def client(lead, lanes, operands, axes):
         r = int(np.prod(lead, dtype=np.int64)) if lead else 1
         flat = [x.reshape((r * n,) + x.shape[1 + bool(lead):]) for x in lanes]
-        width = b if not lead else max(b, -(-b * r // POOL_SHRINK))
+        width = b if not lead else max(b, min(-(-b * r // POOL_SHRINK), POOL_MAX))
         out = _blocks(fn_op, flat[0], flat[1:1 + n_args], flat[1 + n_args:], operands,
                       axes, n, width, narrow)
         return [x.reshape(((r, n) if lead else (n,)) + x.shape[1:]) for x in out]
