@@ -780,8 +780,7 @@ def crossover_population(
     ``over_pairs(with_probability(op))``. ``dense=True`` computes every pair and selects
     (same result; cheaper at the papers' high crossover rates). ``splicing=True`` (with
     ``dense``; the operators of :data:`SPLICING_CROSSOVERS` only) computes the pairs on
-    twice the window
-    (:func:`jaxga.batching.spliced_pairs_map`) when every parent fits it.
+    twice the window (:func:`jaxga.batching.spliced_pairs_map`) when every parent fits it.
     """
     return over_pairs_gated(op, in_axes_extra=in_axes_extra, dense=dense, splicing=splicing)
 

@@ -26,7 +26,7 @@ from jaxga.batching import (
 from jaxga.grid import Grid
 from jaxga.maps import load_map
 from jaxga.numerics import ordered_sum
-from jaxga.paths import Population, from_coords
+from jaxga.paths import Population, from_coords, pad
 from jaxga.reference import shortest_path
 from jaxga.repair import concat
 
@@ -291,8 +291,6 @@ def test_spliced_pairs_map_is_vmap_bit_for_bit(depth, longest):
     """Parents that fit 64 cells are spliced on 128 (children up to 127 cells, re-padded
     with their last cell), a batch with one longer parent at full width: under 0-2 vmap
     levels exactly ``vmap(fn)``'s children, lengths and failure counts."""
-    from jaxga.paths import pad
-
     shape = (3, 2) if depth == 2 else (4,) if depth == 1 else ()
     c1, l1 = _rows(jax.random.PRNGKey(longest), shape + (9,), longest)
     c2, l2 = _rows(jax.random.PRNGKey(longest + 1), shape + (9,), 64)
@@ -408,7 +406,6 @@ def test_shrinking_gated_operator_on_the_window_equals_full_width(setting, op, l
     """``shrinking=True`` (blocks whose paths fit 64 cells run on them, the others at full
     width) gives exactly the cells, lengths and failure counts of the full-width gated
     operator, alone and under vmap over 3 runs, with probability 0.35 and 1."""
-    from jaxga.paths import pad
     from jaxga.postprocess import simplify_adjacent
 
     op = simplify_adjacent if op == "simplify_adjacent" else op
