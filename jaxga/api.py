@@ -13,6 +13,7 @@ import dataclasses
 import functools
 import math
 import time
+import warnings
 from collections.abc import Callable, Mapping, Sequence
 from typing import Any
 
@@ -23,7 +24,7 @@ import numpy as np
 from jaxga import parallel
 from jaxga.config import Config
 from jaxga.engine import Algorithm, build, default_params, evolve, finish, init_state, static_config
-from jaxga.errors import JaxgaError, ParameterError
+from jaxga.errors import InitialisationWarning, JaxgaError, ParameterError
 from jaxga.grid import Grid
 
 SUMMARY_METRICS = ("length", "raw_length", "angle_sum", "turns", "fitness",
@@ -535,6 +536,7 @@ def sweep(
     timing["total_s"] = time.perf_counter() - t_start
     rate = init_rate.reshape(n_total, -1).mean(axis=1)
     unf = unfilled.reshape(n_total, -1).sum(axis=1)
+    _warn_unfilled(unf, rate, algo.population * algo.islands, config)
     results = []
     for q, cfg in enumerate(configs):
         sl = slice(q * n_seeds, (q + 1) * n_seeds)
@@ -603,6 +605,26 @@ def run(
     return sweep(preset, grid, [{}], seeds, generations=generations,
                  corner_rule=corner_rule, variant=variant, sets=sets, progress=progress,
                  chunks=chunks, **overrides)[0]
+
+
+def _warn_unfilled(unfilled: np.ndarray, init_rate: np.ndarray, capacity: int,
+                   config) -> None:
+    """Warn (:class:`~jaxga.errors.InitialisationWarning`) when runs whose initialiser made
+    some paths still started with copies in empty slots (SPEC 4; ``jaxga.init.initialise``
+    fills slots left empty after ``init.max_tries`` attempts per individual with copies).
+    Runs whose initialiser made no path are failures with a reason instead."""
+    short = (np.asarray(unfilled) > 0) & (np.asarray(init_rate) > 0)
+    if not short.any():
+        return
+    n = np.asarray(unfilled)[short]
+    copied = f"{n.min()}" if n.min() == n.max() else f"{n.min()}-{n.max()}"
+    warnings.warn(
+        f"{int(short.sum())} of {short.size} runs started with {copied} of their {capacity} "
+        f"initial individuals copied: the initialiser {config.get('init.method')!r} "
+        f"succeeded in {100 * float(np.asarray(init_rate)[short].mean()):.2g} % of its "
+        f"attempts, and init.max_tries = {config.get('init.max_tries')} did not fill the "
+        "population (raise init.max_tries)",
+        InitialisationWarning, stacklevel=3)
 
 
 def _failure_reason(success: np.ndarray, init_rate: np.ndarray, config) -> str:

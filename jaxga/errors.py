@@ -27,3 +27,11 @@ class NoPathError(JaxgaError):
 
 class ParameterError(JaxgaError):
     """A parameter is unknown, of the wrong type or out of range."""
+
+
+class InitialisationWarning(UserWarning):
+    """The initialiser filled only part of a population within its budget of attempts.
+
+    :func:`jaxga.init.initialise` then fills the empty slots with copies of the individuals
+    it made, so the run still works, on fewer distinct individuals than asked for.
+    """

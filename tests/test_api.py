@@ -4,12 +4,13 @@ and the optax schedules of the adaptive operators."""
 from __future__ import annotations
 
 import math
+import warnings
 
 import numpy as np
 import pytest
 
 from jaxga import api, schedules
-from jaxga.errors import ParameterError
+from jaxga.errors import InitialisationWarning, ParameterError
 from jaxga.maps import load_map, random_map
 from jaxga.presets import preset_names
 from jaxga.reference import any_angle_shortest_path, clear_np, shortest_path
@@ -140,6 +141,43 @@ def test_failure_reason_counts_the_seeds_and_names_an_initialiser_that_never_suc
     none = api._failure_reason(np.array([False, False, True]), np.array([0.0, 0.1, 0.3]), cfg)
     assert none.startswith("no feasible path found by 2 of 3 seeds; 1 of them got no initial")
     assert "'intermittent_connect'" in none and "init.max_tries" in none
+
+
+def test_unfilled_initial_populations_are_warned_about_naming_the_budget(grid):
+    # one attempt per individual on average: the random walk fills 2 of 8 slots here
+    with warnings.catch_warnings(record=True) as caught:
+        warnings.simplefilter("always")
+        r = api.run("sga", grid, seeds=3, population__size=8, generations=3,
+                    init__max_tries=1)
+    short = (r.init_unfilled > 0) & (r.init_success_rate > 0)
+    assert short.any() and r.success.all()
+    warned = [w for w in caught if issubclass(w.category, InitialisationWarning)]
+    assert len(warned) == 1
+    text = str(warned[0].message)
+    assert text.startswith(f"{int(short.sum())} of 3 runs started with ")
+    assert "of their 8 initial individuals copied" in text
+    assert "'random_walk'" in text and "init.max_tries = 1 " in text
+    # the copies are valid individuals: every returned path is still feasible
+    blocked = grid.blocked_np()
+    for i in range(3):
+        path = r.path(i)
+        assert path[0] == grid.start_xy and path[-1] == grid.goal_xy
+        assert all(clear_np(blocked, grid.corner_rule, p, q) for p, q in zip(path, path[1:]))
+
+
+def test_unfilled_warning_only_for_runs_that_made_some_paths():
+    from jaxga.presets import load_preset
+
+    cfg = load_preset("mpmga")
+    with warnings.catch_warnings():
+        warnings.simplefilter("error")
+        api._warn_unfilled(np.array([0, 0]), np.array([0.3, 0.2]), 60, cfg)
+        # no path at all is a failed run with a reason (_failure_reason), not a warning
+        api._warn_unfilled(np.array([60, 0]), np.array([0.0, 0.2]), 60, cfg)
+    with pytest.warns(InitialisationWarning, match=r"^2 of 3 runs started with 12-50 of their "
+                      r"60 initial individuals copied: the initialiser 'intermittent_connect' "
+                      r"succeeded in 1 % of its attempts, and init.max_tries = 20 "):
+        api._warn_unfilled(np.array([12, 60, 50]), np.array([0.015, 0.0, 0.005]), 60, cfg)
 
 
 @pytest.mark.parametrize("t", [0, 1, 7, 50, 100])
