@@ -12,6 +12,7 @@ from __future__ import annotations
 import dataclasses
 import functools
 import math
+import sys
 import time
 import warnings
 from collections.abc import Callable, Mapping, Sequence
@@ -624,7 +625,21 @@ def _warn_unfilled(unfilled: np.ndarray, init_rate: np.ndarray, capacity: int,
         f"succeeded in {100 * float(np.asarray(init_rate)[short].mean()):.2g} % of its "
         f"attempts, and init.max_tries = {config.get('init.max_tries')} did not fill the "
         "population (raise init.max_tries)",
-        InitialisationWarning, stacklevel=3)
+        InitialisationWarning, stacklevel=_caller_stacklevel())
+
+
+def _caller_stacklevel() -> int:
+    """The ``stacklevel`` that makes a warning raised by this function's caller point at
+    the first frame outside the jaxga package (the user's line, whichever of ``run``,
+    ``sweep``, ``replan`` or the CLI they called)."""
+    frame, level = sys._getframe(1), 1
+    while frame.f_back is not None and _in_jaxga(frame.f_globals.get("__name__", "")):
+        frame, level = frame.f_back, level + 1
+    return level
+
+
+def _in_jaxga(module: str) -> bool:
+    return module == "jaxga" or module.startswith("jaxga.")
 
 
 def _failure_reason(success: np.ndarray, init_rate: np.ndarray, config) -> str:

@@ -153,6 +153,7 @@ def test_unfilled_initial_populations_are_warned_about_naming_the_budget(grid):
     assert short.any() and r.success.all()
     warned = [w for w in caught if issubclass(w.category, InitialisationWarning)]
     assert len(warned) == 1
+    assert warned[0].filename == __file__  # points at the caller's line, not into jaxga
     text = str(warned[0].message)
     assert text.startswith(f"{int(short.sum())} of 3 runs started with ")
     assert "of their 8 initial individuals copied" in text
