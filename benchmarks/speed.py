@@ -2,6 +2,7 @@
 
     python benchmarks/speed.py [--presets sga,imga,...] [--settings 20x20,50x50]
         [--seeds 1,100,1000] [--max-generations-many 50] [--devices N] [--warm]
+        [--timeout-minutes M]
 
 For each preset and setting (20 x 20: population 60, 300 generations on
 ``classic_ga_gapp3_20x20``; 50 x 50: population 80, 500 generations on
@@ -29,6 +30,11 @@ still run; XLA's compilation is read from disk).
 The same SGA written as a straightforward per-individual NumPy/Python loop
 (``benchmarks/numpy_sga.py``) runs in this (parent) process on the same maps; the
 ratio is its seconds per run over jaxga's sga seconds per run.
+
+A configuration whose child runs longer than ``--timeout-minutes`` is stopped and
+recorded as a row that says so; the script goes on with the next. Interrupted by hand
+(Ctrl-C, or SIGTERM), it stops the running child and still appends the rows measured so
+far, with a line naming the configuration it was measuring.
 """
 
 from __future__ import annotations
@@ -36,6 +42,7 @@ from __future__ import annotations
 import argparse
 import json
 import os
+import signal
 import subprocess
 import sys
 import tempfile
@@ -83,16 +90,18 @@ def child(preset: str, setting: str, seeds: int, generations: int) -> dict:
     }
 
 
-def measure(preset, setting, seeds, generations, devices, warm=False) -> dict:
+def measure(preset, setting, seeds, generations, devices, warm=False,
+            timeout: float | None = None) -> dict:
     """One configuration in a child process; with ``warm``, a second child reads the
-    persistent compilation cache the first one wrote (its compile is ``compile_warm_s``)."""
+    persistent compilation cache the first one wrote (its compile is ``compile_warm_s``).
+    ``timeout``: seconds per child (``subprocess.TimeoutExpired`` after stopping it)."""
     env = dict(os.environ, PYTHONPATH=f"{HERE.parent}{os.pathsep}{HERE}",
                XLA_FLAGS=f"--xla_force_host_platform_device_count={devices}")
     env.pop("JAXGA_CACHE_DIR", None)
     cmd = [sys.executable, __file__, "--child", f"{preset}:{setting}:{seeds}:{generations}"]
 
     def one() -> dict:
-        proc = subprocess.run(cmd, env=env, capture_output=True, text=True)
+        proc = subprocess.run(cmd, env=env, capture_output=True, text=True, timeout=timeout)
         if proc.returncode != 0:
             raise RuntimeError(proc.stderr[-3000:])
         return json.loads(proc.stdout.strip().splitlines()[-1])
@@ -118,6 +127,42 @@ def numpy_baseline(setting: str, n: int) -> tuple[float, float]:
     return per_run, population * generations / float(np.mean([r["evolve_s"] for r in runs]))
 
 
+def measure_all(args, base: dict, timeout: float | None, rows: list, notes: list,
+                current: list) -> None:
+    """Measure every configuration of ``args`` into ``rows`` (table rows) and ``notes``
+    (one per stopped configuration); ``current`` gets each configuration's name before
+    it is measured (named in the note of an interrupted run)."""
+    for preset in args.presets.split(","):
+        for setting in args.settings.split(","):
+            population, generations = SETTINGS[setting]
+            for seeds in (int(s) for s in args.seeds.split(",")):
+                gens = generations
+                if seeds >= 100 and args.max_generations_many:
+                    gens = min(generations, args.max_generations_many)
+                current.append(f"{preset} {setting} with {seeds} seed(s)")
+                try:
+                    m = measure(preset, setting, seeds, gens, args.devices, args.warm,
+                                timeout)
+                except subprocess.TimeoutExpired:
+                    rows.append([preset, setting, seeds, "", gens, "", "", "",
+                                 f"stopped after {args.timeout_minutes:g} min", "", "", "",
+                                 "", ""])
+                    notes.append(f"Stopped: {current[-1]} ran longer than "
+                                 f"--timeout-minutes {args.timeout_minutes:g}.")
+                    print(rows[-1], flush=True)
+                    continue
+                ind_gen = seeds * m["population"] * m["generations"] / m["evolve_s"]
+                per_run = (m["init_s"] + m["post_s"]
+                           + m["evolve_s"] * generations / m["generations"]) / seeds
+                ratio = (f"{base[setting][0] / per_run:,.1f}" if preset == "sga" else "")
+                rows.append([preset, setting, seeds, m["population"], m["generations"],
+                             m["compile_s"], m.get("compile_warm_s", ""),
+                             m["init_s"], m["evolve_s"],
+                             f"{1 / per_run:,.2f}", f"{ind_gen:,.0f}", ratio,
+                             f"{m['peak_mib']:,.0f}", f"{m['success']:.2f}"])
+                print(rows[-1], flush=True)
+
+
 def main() -> None:
     ap = argparse.ArgumentParser(description=__doc__)
     ap.add_argument("--presets", default="sga,imga,agacd,iga_zhang,mpmga,iga_zhu")
@@ -131,6 +176,8 @@ def main() -> None:
     ap.add_argument("--no-write", action="store_true")
     ap.add_argument("--warm", action="store_true",
                     help="also measure the compile of a second run from the persistent cache")
+    ap.add_argument("--timeout-minutes", type=float, default=0,
+                    help="stop a configuration after this many minutes (0: no limit)")
     args = ap.parse_args()
     if args.child:
         preset, setting, seeds, generations = args.child.split(":")
@@ -138,29 +185,20 @@ def main() -> None:
         return
 
     t_all = time.perf_counter()
+    # SIGTERM (e.g. `kill`) ends the run like Ctrl-C: the rows so far are still written.
+    signal.signal(signal.SIGTERM, signal.default_int_handler)
     base = {}
     for setting in args.settings.split(","):
         base[setting] = numpy_baseline(setting, args.baseline_seeds)
         print("numpy loop", setting, base[setting], flush=True)
-    rows = []
-    for preset in args.presets.split(","):
-        for setting in args.settings.split(","):
-            population, generations = SETTINGS[setting]
-            for seeds in (int(s) for s in args.seeds.split(",")):
-                gens = generations
-                if seeds >= 100 and args.max_generations_many:
-                    gens = min(generations, args.max_generations_many)
-                m = measure(preset, setting, seeds, gens, args.devices, args.warm)
-                ind_gen = seeds * m["population"] * m["generations"] / m["evolve_s"]
-                per_run = (m["init_s"] + m["post_s"]
-                           + m["evolve_s"] * generations / m["generations"]) / seeds
-                ratio = (f"{base[setting][0] / per_run:,.1f}" if preset == "sga" else "")
-                rows.append([preset, setting, seeds, m["population"], m["generations"],
-                             m["compile_s"], m.get("compile_warm_s", ""),
-                             m["init_s"], m["evolve_s"],
-                             f"{1 / per_run:,.2f}", f"{ind_gen:,.0f}", ratio,
-                             f"{m['peak_mib']:,.0f}", f"{m['success']:.2f}"])
-                print(rows[-1], flush=True)
+    timeout = args.timeout_minutes * 60 or None
+    rows, notes, current = [], [], []
+    try:
+        measure_all(args, base, timeout, rows, notes, current)
+    except KeyboardInterrupt:
+        notes.append(f"Interrupted by hand after {time.perf_counter() - t_all:.0f} s, while "
+                     f"measuring {current[-1] if current else 'the first configuration'}: the rows "
+                     "above are complete; that configuration and the later ones did not run.")
     base_rows = [[s, SETTINGS[s][0], SETTINGS[s][1], f"{b[0]:.3f}", f"{b[1]:,.0f}"]
                  for s, b in base.items()]
     body = (
@@ -181,6 +219,7 @@ def main() -> None:
         + markdown_table(["setting", "population", "generations", "s per run",
                           "ind-gen/s"], base_rows)
         + f"\n\nWall time: {time.perf_counter() - t_all:.0f} s."
+        + "".join(f"\n\n{n}" for n in notes)
     )
     append("speed of every preset vs a NumPy loop SGA", body, write=not args.no_write)
 
