@@ -148,32 +148,44 @@ def _atan2_nonneg(y: jax.Array, x: jax.Array) -> jax.Array:
 def _fill_forward(key: jax.Array, vx: jax.Array, vy: jax.Array) -> tuple[jax.Array, jax.Array]:
     """Carry ``(vx, vy)`` forward from the last position whose ``key`` is not -1.
 
-    ``key[j]`` is ``j`` at positions that hold a value and -1 at holes. Each pass copies
-    a left neighbour with a larger key; the loop stops as soon as ``key`` is
-    non-decreasing, which is exactly when it equals its running maximum. Paths without
-    repeated interior nodes have no holes and run zero passes; otherwise the number of
-    passes is the longest run of holes.
+    ``key[j]`` is ``j`` at positions that hold a value and -1 at holes. The result is
+    ``v[m[j]]`` with ``m`` the running maximum of ``key`` (positions before the first
+    value keep their own). Computed by pointer doubling: pass ``p`` lets each position
+    take the pair ``(key, v)`` from ``2**p`` positions to its left when that key is
+    larger, so after ``p`` passes ``key[j]`` is the maximum over the ``2**p`` positions
+    ending at ``j``; the loop stops as soon as ``key`` is non-decreasing, which is
+    exactly when it equals its running maximum. Paths without repeated interior nodes
+    have no holes and run zero passes; otherwise ``ceil(log2(r + 1))`` passes for the
+    longest run of ``r`` holes. (Under ``vmap`` every path of the batch runs the
+    batch's largest pass count. One pass per hole, as this loop did before, made
+    blocks of mpmga runs at 50 x 50 whose evaluated paths held long runs of repeated
+    nodes 6x slower: RESULTS.md, 2026-11-24.)
     """
 
+    n = key.shape[0]
+    j = jnp.arange(n, dtype=jnp.int32)
+
     def holes(state):
-        k = state[0]
-        return jnp.any(k[1:] < k[:-1])
+        s, k = state[0], state[1]
+        # s >= n: every window covers the whole prefix, k is the running maximum (the
+        # bound only guarantees termination; it never stops the loop early)
+        return jnp.any(k[1:] < k[:-1]) & (s < n)
 
     def shift(state):
-        k, ax, ay = state
-        take = jnp.concatenate([jnp.zeros((1,), bool), k[:-1] > k[1:]])
-        k_prev = jnp.concatenate([k[:1], k[:-1]])
-        ax_prev = jnp.concatenate([ax[:1], ax[:-1]])
-        ay_prev = jnp.concatenate([ay[:1], ay[:-1]])
+        s, k, ax, ay = state
+        src = jnp.maximum(j - s, 0)
+        k_prev = k[src]
+        take = (j >= s) & (k_prev > k)
         return (
+            2 * s,
             jnp.where(take, k_prev, k),
-            jnp.where(take, ax_prev, ax),
-            jnp.where(take, ay_prev, ay),
+            jnp.where(take, ax[src], ax),
+            jnp.where(take, ay[src], ay),
         )
 
-    if key.shape[0] < 2:
+    if n < 2:
         return vx, vy
-    _, vx, vy = jax.lax.while_loop(holes, shift, (key, vx, vy))
+    _, _, vx, vy = jax.lax.while_loop(holes, shift, (jnp.int32(1), key, vx, vy))
     return vx, vy
 
 

@@ -167,6 +167,41 @@ def test_repeated_nodes_are_skipped():
     assert np.count_nonzero(a) == 3
 
 
+def _fill_forward_reference(key: np.ndarray, v: np.ndarray) -> np.ndarray:
+    """``v`` carried forward from the last position whose key is not -1 (numpy)."""
+    m = np.maximum.accumulate(key, axis=-1)
+    return np.where(m >= 0, np.take_along_axis(v, np.maximum(m, 0), axis=-1), v)
+
+
+@given(st.lists(st.tuples(st.booleans(), st.integers(0, 40)), min_size=1, max_size=12),
+       st.integers(0, 2**31 - 1))
+def test_direction_fill_forward_matches_running_maximum(runs, seed):
+    """The last segment direction carried over repeated nodes (holes) equals a numpy
+    running maximum, for holes at the start, in long runs and under vmap with paths
+    without holes in the same batch."""
+    mask = np.concatenate([np.full(n + 1, filled) for filled, n in runs])
+    n = mask.size
+    rng = np.random.default_rng(seed)
+    keys = np.stack([np.where(mask, np.arange(n), -1), np.arange(n)]).astype(np.int32)
+    vx, vy = (rng.integers(-3, 4, (2, n)).astype(np.int32) for _ in range(2))
+    px, py = jax.vmap(ob._fill_forward)(jnp.asarray(keys), jnp.asarray(vx), jnp.asarray(vy))
+    np.testing.assert_array_equal(px, _fill_forward_reference(keys, vx))
+    np.testing.assert_array_equal(py, _fill_forward_reference(keys, vy))
+
+
+def test_long_hole_runs_fill_exactly():
+    """One path with 700 holes after its first segment and one with none: both exact."""
+    n = 799
+    keys = np.stack([np.where(np.arange(n) < 1, 0, -1), np.arange(n)]).astype(np.int32)
+    keys[0, 701:] = np.arange(701, n)
+    vx = np.tile(np.arange(n, dtype=np.int32) % 5 - 2, (2, 1))
+    vy = -vx
+    px, py = jax.jit(jax.vmap(ob._fill_forward))(keys, vx, vy)
+    np.testing.assert_array_equal(px, _fill_forward_reference(keys, vx))
+    np.testing.assert_array_equal(py, _fill_forward_reference(keys, vy))
+    assert (np.asarray(px)[0, :701] == vx[0, 0]).all()
+
+
 # ---------------------------------------------------------------- smoothness
 def test_angle_sum_agacd():
     """AGACD eq. 10-17: smoothness = sum of rotation angles (radians)."""
