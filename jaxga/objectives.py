@@ -163,7 +163,6 @@ def _fill_forward(key: jax.Array, vx: jax.Array, vy: jax.Array) -> tuple[jax.Arr
     """
 
     n = key.shape[0]
-    j = jnp.arange(n, dtype=jnp.int32)
 
     def holes(state):
         s, k = state[0], state[1]
@@ -171,16 +170,21 @@ def _fill_forward(key: jax.Array, vx: jax.Array, vy: jax.Array) -> tuple[jax.Arr
         # bound only guarantees termination; it never stops the loop early)
         return jnp.any(k[1:] < k[:-1]) & (s < n)
 
+    def shifted(v, s, fill):
+        # v moved s positions to the right, the first s filled: a dynamic slice (s is the
+        # same for every path of a batch, so it stays a slice under vmap, not a gather)
+        return jax.lax.dynamic_slice(jnp.concatenate([jnp.full((n,), fill, v.dtype), v]),
+                                     (n - s,), (n,))
+
     def shift(state):
         s, k, ax, ay = state
-        src = jnp.maximum(j - s, 0)
-        k_prev = k[src]
-        take = (j >= s) & (k_prev > k)
+        k_prev = shifted(k, s, -1)
+        take = k_prev > k  # a filled -1 never beats a key (keys are >= -1)
         return (
             2 * s,
             jnp.where(take, k_prev, k),
-            jnp.where(take, ax[src], ax),
-            jnp.where(take, ay[src], ay),
+            jnp.where(take, shifted(ax, s, 0), ax),
+            jnp.where(take, shifted(ay, s, 0), ay),
         )
 
     if n < 2:
