@@ -127,40 +127,32 @@ def numpy_baseline(setting: str, n: int) -> tuple[float, float]:
     return per_run, population * generations / float(np.mean([r["evolve_s"] for r in runs]))
 
 
-def measure_all(args, base: dict, timeout: float | None, rows: list, notes: list,
-                current: list) -> None:
-    """Measure every configuration of ``args`` into ``rows`` (table rows) and ``notes``
-    (one per stopped configuration); ``current`` gets each configuration's name before
-    it is measured (named in the note of an interrupted run)."""
-    for preset in args.presets.split(","):
-        for setting in args.settings.split(","):
-            population, generations = SETTINGS[setting]
-            for seeds in (int(s) for s in args.seeds.split(",")):
-                gens = generations
-                if seeds >= 100 and args.max_generations_many:
-                    gens = min(generations, args.max_generations_many)
-                current.append(f"{preset} {setting} with {seeds} seed(s)")
-                try:
-                    m = measure(preset, setting, seeds, gens, args.devices, args.warm,
-                                timeout)
-                except subprocess.TimeoutExpired:
-                    rows.append([preset, setting, seeds, "", gens, "", "", "",
-                                 f"stopped after {args.timeout_minutes:g} min", "", "", "",
-                                 "", ""])
-                    notes.append(f"Stopped: {current[-1]} ran longer than "
-                                 f"--timeout-minutes {args.timeout_minutes:g}.")
-                    print(rows[-1], flush=True)
-                    continue
-                ind_gen = seeds * m["population"] * m["generations"] / m["evolve_s"]
-                per_run = (m["init_s"] + m["post_s"]
-                           + m["evolve_s"] * generations / m["generations"]) / seeds
-                ratio = (f"{base[setting][0] / per_run:,.1f}" if preset == "sga" else "")
-                rows.append([preset, setting, seeds, m["population"], m["generations"],
-                             m["compile_s"], m.get("compile_warm_s", ""),
-                             m["init_s"], m["evolve_s"],
-                             f"{1 / per_run:,.2f}", f"{ind_gen:,.0f}", ratio,
-                             f"{m['peak_mib']:,.0f}", f"{m['success']:.2f}"])
-                print(rows[-1], flush=True)
+def configurations(args) -> list[tuple[str, str, int]]:
+    """``(preset, setting, seeds)`` of every configuration, in the order they run."""
+    return [(preset, setting, int(seeds)) for preset in args.presets.split(",")
+            for setting in args.settings.split(",") for seeds in args.seeds.split(",")]
+
+
+def measure_row(args, base: dict, timeout: float | None, preset: str, setting: str,
+                seeds: int) -> list:
+    """One configuration's table row (a row saying so when it ran past ``timeout``)."""
+    generations = SETTINGS[setting][1]
+    gens = generations
+    if seeds >= 100 and args.max_generations_many:
+        gens = min(generations, args.max_generations_many)
+    try:
+        m = measure(preset, setting, seeds, gens, args.devices, args.warm, timeout)
+    except subprocess.TimeoutExpired:
+        return [preset, setting, seeds, "", gens, "", "", "",
+                f"stopped after {args.timeout_minutes:g} min", "", "", "", "", ""]
+    ind_gen = seeds * m["population"] * m["generations"] / m["evolve_s"]
+    per_run = (m["init_s"] + m["post_s"]
+               + m["evolve_s"] * generations / m["generations"]) / seeds
+    ratio = (f"{base[setting][0] / per_run:,.1f}" if preset == "sga" else "")
+    return [preset, setting, seeds, m["population"], m["generations"],
+            m["compile_s"], m.get("compile_warm_s", ""), m["init_s"], m["evolve_s"],
+            f"{1 / per_run:,.2f}", f"{ind_gen:,.0f}", ratio,
+            f"{m['peak_mib']:,.0f}", f"{m['success']:.2f}"]
 
 
 def main() -> None:
@@ -192,13 +184,22 @@ def main() -> None:
         base[setting] = numpy_baseline(setting, args.baseline_seeds)
         print("numpy loop", setting, base[setting], flush=True)
     timeout = args.timeout_minutes * 60 or None
-    rows, notes, current = [], [], []
+    configs, rows, notes = configurations(args), [], []
+
+    def name(config: tuple[str, str, int]) -> str:
+        return "{} {} with {} seed(s)".format(*config)
+
     try:
-        measure_all(args, base, timeout, rows, notes, current)
+        for config in configs:
+            rows.append(measure_row(args, base, timeout, *config))
+            print(rows[-1], flush=True)
+            if str(rows[-1][8]).startswith("stopped after"):
+                notes.append(f"Stopped: {name(config)} ran longer than --timeout-minutes "
+                             f"{args.timeout_minutes:g}.")
     except KeyboardInterrupt:
         notes.append(f"Interrupted by hand after {time.perf_counter() - t_all:.0f} s, while "
-                     f"measuring {current[-1] if current else 'the first configuration'}: the rows "
-                     "above are complete; that configuration and the later ones did not run.")
+                     f"measuring {name(configs[len(rows)])}: the rows above are complete; "
+                     "that configuration and the later ones did not run.")
     base_rows = [[s, SETTINGS[s][0], SETTINGS[s][1], f"{b[0]:.3f}", f"{b[1]:,.0f}"]
                  for s, b in base.items()]
     body = (

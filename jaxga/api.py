@@ -614,15 +614,15 @@ def _warn_unfilled(unfilled: np.ndarray, init_rate: np.ndarray, capacity: int,
     some paths still started with copies in empty slots (SPEC 4; ``jaxga.init.initialise``
     fills slots left empty after ``init.max_tries`` attempts per individual with copies).
     Runs whose initialiser made no path are failures with a reason instead."""
-    short = (np.asarray(unfilled) > 0) & (np.asarray(init_rate) > 0)
+    short = (unfilled > 0) & (init_rate > 0)
     if not short.any():
         return
-    n = np.asarray(unfilled)[short]
+    n = unfilled[short]
     copied = f"{n.min()}" if n.min() == n.max() else f"{n.min()}-{n.max()}"
     warnings.warn(
         f"{int(short.sum())} of {short.size} runs started with {copied} of their {capacity} "
         f"initial individuals copied: the initialiser {config.get('init.method')!r} "
-        f"succeeded in {100 * float(np.asarray(init_rate)[short].mean()):.2g} % of its "
+        f"succeeded in {100 * float(init_rate[short].mean()):.2g} % of its "
         f"attempts, and init.max_tries = {config.get('init.max_tries')} did not fill the "
         "population (raise init.max_tries)",
         InitialisationWarning, stacklevel=_caller_stacklevel())
