@@ -27,6 +27,7 @@ from jaxga.config import Config
 from jaxga.engine import Algorithm, build, default_params, evolve, finish, init_state, static_config
 from jaxga.errors import InitialisationWarning, JaxgaError, ParameterError
 from jaxga.grid import Grid
+from jaxga.objectives import Metrics
 
 SUMMARY_METRICS = ("length", "raw_length", "angle_sum", "turns", "fitness",
                    "convergence_generation")
@@ -38,7 +39,11 @@ float32 on the device, so an optimal path can come out a few 1e-8 below the opti
 
 
 def _relative_gap(length: np.ndarray, optimum: float, success: np.ndarray) -> np.ndarray:
-    gap = np.asarray(length, float) / optimum - 1.0
+    length = np.asarray(length, float)
+    if optimum == 0.0:  # start == goal: the optimal path has length 0
+        gap = np.where(length == 0.0, 0.0, np.inf)
+    else:
+        gap = length / optimum - 1.0
     gap = np.where(np.abs(gap) < GAP_TOLERANCE, 0.0, gap)
     return np.where(success, gap, np.nan)
 
@@ -670,7 +675,8 @@ def _no_path_result(config, map_name, grid, seeds, algo, reason, elapsed) -> Res
         raw_cells=empty, raw_n_cells=np.zeros(s, np.int32), length=nan, raw_length=nan,
         fitness=np.zeros(s), convergence_generation=np.full(s, -1),
         history={k: np.zeros((s, 0)) for k in ("best", "mean", "std")},
-        metrics={}, raw_metrics={}, failures=np.zeros((s, 3), np.int32),
+        metrics={k: nan.copy() for k in Metrics._fields},
+        raw_metrics={k: nan.copy() for k in Metrics._fields}, failures=np.zeros((s, 3), np.int32),
         init_success_rate=np.zeros(s), init_unfilled=np.zeros(s, np.int32),
         optimum=math.inf, any_angle_optimum=math.inf,
         timing={"compile_s": 0.0, "init_s": 0.0, "evolve_s": 0.0, "post_s": 0.0,

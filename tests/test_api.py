@@ -128,6 +128,24 @@ def test_unreachable_goal_is_a_no_path_result():
     r = api.run("sga", walled, seeds=2, **SMALL)
     assert not r.success.any() and "unreachable" in r.reason
     assert r.to_json()["runs"][0]["path"] == []
+    # the summary of a no-path result is a table of NaNs with the reason, not an error
+    text = r.summary()
+    assert "success 0/2" in text and "unreachable" in text
+    assert {row[0] for row in r.summary_rows()} >= {"angle_sum", "turns", "gap"}
+    assert all(math.isnan(v) for row in r.summary_rows() for v in row[1:])
+
+
+def test_start_equal_to_goal_has_gap_zero_without_warnings():
+    """The optimum is 0 when start == goal: the gap is 0, not 0 / 0."""
+    g = load_map("classic_ga_gapp3_20x20", corner_rule="free")
+    same = g.replace(goal=g.start_xy)
+    with warnings.catch_warnings():
+        warnings.simplefilter("error")
+        r = api.run("sga", same, seeds=2, **SMALL)
+        rows = {row[0]: row for row in r.summary_rows()}
+    assert r.success.all() and r.optimum == 0.0
+    assert (r.length == 0).all() and (r.gap == 0).all() and (r.raw_gap == 0).all()
+    assert rows["gap"][1:] == (0.0, 0.0, 0.0, 0.0)
 
 
 def test_failure_reason_counts_the_seeds_and_names_an_initialiser_that_never_succeeded():

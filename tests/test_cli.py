@@ -63,6 +63,26 @@ def test_unreachable_goal_and_malformed_file(tmp_path, capsys):
     assert "ragged.txt" in err and "\n" not in err
 
 
+def test_run_with_an_unreachable_goal_reports_no_path(tmp_path, capsys):
+    """`jaxga run` on a map whose goal cannot be reached: the summary, the JSON and the
+    plot are still written, then "no path" with the cause and exit code 3."""
+    walled = tmp_path / "walled.txt"
+    walled.write_text("G#\n#S\n")  # the only move is a diagonal between two obstacles
+    out, png = tmp_path / "out.json", tmp_path / "out.png"
+    rc = main(["run", "--preset", "sga", "--map", str(walled), "--corner-rule", "strict",
+               "--seeds", "2", "--generations", "3", "--quiet", "--json", str(out),
+               "--plot", str(png)])
+    captured = capsys.readouterr()
+    assert rc == EXIT_NO_PATH
+    assert "success 0/2" in captured.out and "Traceback" not in captured.err
+    assert captured.err.strip().startswith("jaxga: no path:")
+    assert "unreachable" in captured.err and "strict" in captured.err
+    runs = json.loads(out.read_text())["runs"]
+    assert [r["success"] for r in runs] == [False, False]
+    assert all(r["path"] == [] and r["length"] is None for r in runs)
+    assert png.stat().st_size > 0
+
+
 def test_console_script_never_prints_a_traceback(tmp_path):
     """The real entry point, in a subprocess: bad input gives exit 2 and one stderr line."""
     bad = tmp_path / "bad.map"
