@@ -12,6 +12,7 @@ from __future__ import annotations
 import dataclasses
 import functools
 import math
+import os
 import sys
 import time
 import warnings
@@ -162,14 +163,25 @@ class Result:
         }
 
 
+SEED_LIMIT = 2**32
+"""Seeds are 32-bit (``jax.random.PRNGKey`` of a uint32): seeds must lie in
+``[0, SEED_LIMIT)``, where no two give the same run."""
+
+
 def _seed_list(seeds: int | Sequence[int]) -> np.ndarray:
+    """The seeds of a call, checked: a count ``N`` (seeds ``0..N-1``) or explicit seeds."""
     if isinstance(seeds, (int, np.integer)):
         if seeds < 1:
             raise JaxgaError(f"seeds must be >= 1, got {seeds}")
+        if seeds > SEED_LIMIT:
+            raise JaxgaError(f"seeds must be at most 2**32 (seeds are 32-bit), got {seeds}")
         return np.arange(int(seeds))
     arr = np.asarray(list(seeds), dtype=np.int64)
     if arr.size == 0:
         raise JaxgaError("seeds must not be empty")
+    if arr.min() < 0 or arr.max() >= SEED_LIMIT:
+        raise JaxgaError(f"seeds must be integers in [0, 2**32) (seeds are 32-bit), got "
+                         f"{int(arr.min())} .. {int(arr.max())}")
     return arr
 
 
@@ -464,9 +476,9 @@ def sweep(
     config, grid, map_name = _load(preset, grid, corner_rule, variant, sets, overrides,
                                    generations)
     configs = _point_configs(config, points)
-    seed_arr = _seed_list(seeds)
     octile = shortest_path(grid)
     if not octile.found:
+        seed_arr = _seed_list(seeds)
         return [_no_path_result(c, map_name, grid, seed_arr, build(c, grid)[0],
                                 octile.reason, time.perf_counter() - t_start)
                 for c in configs]
@@ -481,8 +493,13 @@ def sweep(
     # the capacity is the largest size swept, also when it is below the preset's size
     algo, _ = build(config.override({"population.size": capacity}), grid)
     per_point = [default_params(c, algo.islands) for c in configs]
-    n_seeds, n_points = len(seed_arr), len(configs)
+    n_points = len(configs)
+    if isinstance(seeds, (int, np.integer)) and 0 < seeds <= SEED_LIMIT:  # before arange
+        _check_result_memory(int(seeds) * n_points, algo)
+    seed_arr = _seed_list(seeds)
+    n_seeds = len(seed_arr)
     n_runs = n_seeds * n_points
+    _check_result_memory(n_runs, algo)
     # Runs padded (copies of the last run) to a multiple of processes x local devices;
     # this process computes its contiguous share and allgather_runs joins the shares.
     n_total, share = parallel.run_share(n_runs)
@@ -589,9 +606,10 @@ def run(
         grid: a :class:`Grid`, a map file or a built-in map name. A map given by name is
             loaded with ``corner_rule`` or else the preset's ``map.corner_rule``; a Grid
             keeps its own unless ``corner_rule`` is given.
-        seeds: a count ``N`` (seeds ``0..N-1``) or explicit integer seeds. Seed ``s``
-            always gives the same run, whatever other seeds run with it and on however
-            many devices.
+        seeds: a count ``N`` (seeds ``0..N-1``) or explicit integer seeds in
+            ``[0, 2**32)``. Seed ``s`` always gives the same run, whatever other seeds run
+            with it and on however many devices. A call whose results would need more
+            than half the machine's memory is refused (:class:`ParameterError`).
         generations: overrides the preset's generation count.
         overrides: configuration keys with ``.`` written as ``__`` (e.g.
             ``crossover__probability=0.7``), or ``sets=("crossover.probability=0.7",)``.
@@ -611,6 +629,32 @@ def run(
     return sweep(preset, grid, [{}], seeds, generations=generations,
                  corner_rule=corner_rule, variant=variant, sets=sets, progress=progress,
                  chunks=chunks, **overrides)[0]
+
+
+RESULT_MEMORY_FRACTION = 0.5
+"""A call is refused when its results alone would need more than this fraction of the
+machine's physical memory (they are all held on the host at the end)."""
+
+
+def _physical_memory() -> int | None:
+    try:
+        return os.sysconf("SC_PAGE_SIZE") * os.sysconf("SC_PHYS_PAGES")
+    except (AttributeError, ValueError, OSError):  # not POSIX
+        return None
+
+
+def _check_result_memory(n_runs: int, algo: Algorithm) -> None:
+    """A clear error instead of the operating system killing the process: every run keeps
+    three float32 histories of ``generations`` values, two int32 paths of ``capacity``
+    cells and a few hundred bytes of metrics, counters and keys on the host."""
+    per_run = 12 * algo.generations + 8 * algo.capacity + 256
+    need, total = n_runs * per_run, _physical_memory()
+    if total is not None and need > RESULT_MEMORY_FRACTION * total:
+        raise ParameterError(
+            f"{n_runs} runs would need about {need / 2**30:.1f} GiB for their results alone "
+            f"({algo.generations} generations of history and paths of {algo.capacity} cells "
+            f"per run), more than half of this machine's {total / 2**30:.1f} GiB: run fewer "
+            f"seeds per call")
 
 
 def _warn_unfilled(unfilled: np.ndarray, init_rate: np.ndarray, capacity: int,

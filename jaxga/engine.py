@@ -120,8 +120,54 @@ def static_config(config: Config) -> Config:
                         if not SCHEMA[k].dynamic and k not in NON_STRUCTURAL))
 
 
+NEEDS: tuple[tuple[str, Any, tuple[str, ...]], ...] = (
+    ("mutation.method", "segment_sa", ("mutation.temperature_c1", "mutation.temperature_w")),
+    ("crossover.adaptive", True, ("crossover.pc_low", "crossover.pc_high")),
+    ("mutation.adaptive", True, ("mutation.pm_low", "mutation.pm_high")),
+)
+"""``(key, value, keys needed)``: configuration keys an operator reads when ``key`` has
+``value`` (MPMGA eq. 17's temperature schedule; AGACD eq. 26-29's adaptive rates)."""
+
+AGACD_OBJECTIVES = 3
+"""AGACD's fitness combines length, smoothness and safety (eq. 18-25): 2 Delphi ratios."""
+
+
+def check_combination(config: Config) -> None:
+    """Checks that involve several configuration keys, before anything is traced.
+
+    Raises :class:`ParameterError` naming the keys: an operator whose parameters are
+    missing (:data:`NEEDS`), MPMGA's decay rate ``w = 0`` (eq. 17 needs ``0 < w <= 1``),
+    a Delphi ratio list whose length does not match AGACD's three objectives (eq. 21-25),
+    more migrants than an island has individuals (SPEC 8).
+    """
+    for key, value, needed in NEEDS:
+        if config.get(key) == value:
+            missing = [k for k in needed if config.get(k) is None]
+            if missing:
+                raise ParameterError(
+                    f"{key} = {value!r} needs {' and '.join(missing)}, which this "
+                    f"configuration does not set (--set KEY=VALUE)")
+    if config.get("mutation.method") == "segment_sa" and not config["mutation.temperature_w"] > 0:
+        raise ParameterError("mutation.temperature_w must be in (0, 1] (MPMGA eq. 17: "
+                             f"T = c1 * w**t), got {config['mutation.temperature_w']}")
+    ratios = config.get("fitness.importance_ratios")
+    if config["fitness.method"] == "agacd" and ratios is not None \
+            and len(ratios) != AGACD_OBJECTIVES - 1:
+        raise ParameterError(
+            f"fitness.importance_ratios needs {AGACD_OBJECTIVES - 1} entries for AGACD's "
+            f"{AGACD_OBJECTIVES} objectives (length, smoothness, safety), got {list(ratios)}")
+    migrating = (int(config["islands.count"]) > 1 and config["islands.topology"] != "none")
+    if migrating and int(config["islands.migrants"]) > int(config["population.size"]):
+        raise ParameterError(
+            f"islands.migrants = {config['islands.migrants']} exceeds the population of an "
+            f"island (population.size = {config['population.size']})")
+
+
 def default_params(config: Config, islands: int = 1) -> dict[str, jax.Array]:
-    """Dynamic parameters (float32 scalars, or ``[islands]`` arrays for per-island rates)."""
+    """Dynamic parameters (float32 scalars, or ``[islands]`` arrays for per-island rates).
+
+    Checks the configuration's combinations first (:func:`check_combination`)."""
+    check_combination(config)
     params: dict[str, jax.Array] = {
         k: jnp.asarray(v, F32) for k, v in config.dynamic().items()
     }
@@ -311,7 +357,11 @@ def _mutation(algo: Algorithm, key, grid, pop, fitness, active, t, params, fit_f
             params["mutation.temperature_c1"], algo.get("mutation.temperature_w"))(t)
         op = functools.partial(mu.segment_sa, temperature=temperature, fitness_fn=fit_fn)
     elif method == "point_checked":
-        op = functools.partial(mu.point_checked, radius=int(algo.get("mutation.radius", 2)))
+        # a radius of the map's larger side minus one already reaches every cell: larger
+        # radii give the same candidate cells (but would build a (2r+1)^2 table per node)
+        reach = max(grid.blocked.shape) - 1
+        radius = max(1, min(int(algo.get("mutation.radius", 2)), reach))
+        op = functools.partial(mu.point_checked, radius=radius)
     else:
         op = MUTATIONS[method]
     return over_individuals_gated(op)(key, grid, pop, pm)

@@ -4,13 +4,14 @@ and the optax schedules of the adaptive operators."""
 from __future__ import annotations
 
 import math
+import re
 import warnings
 
 import numpy as np
 import pytest
 
 from jaxga import api, schedules
-from jaxga.errors import InitialisationWarning, ParameterError
+from jaxga.errors import InitialisationWarning, JaxgaError, ParameterError
 from jaxga.maps import load_map, random_map
 from jaxga.presets import preset_names
 from jaxga.reference import any_angle_shortest_path, clear_np, shortest_path
@@ -281,3 +282,50 @@ def test_map_runs_in_blocks_equals_one_vmap():
         np.testing.assert_array_equal(np.asarray(r), np.asarray(g))
     text = jax.jit(blocked, static_argnums=(3,)).lower(keys, shared, state, 3).as_text()
     assert "stablehlo.while" in text  # really computed block by block
+
+
+@pytest.mark.parametrize("preset, overrides, words", [
+    ("sga", {"mutation__method": "segment_sa"},
+     ["mutation.temperature_c1 and mutation.temperature_w"]),
+    ("mpmga", {"mutation__temperature_w": 0.0}, ["mutation.temperature_w", "(0, 1]"]),
+    ("sga", {"crossover__adaptive": True}, ["crossover.pc_low and crossover.pc_high"]),
+    ("agacd", {"fitness__importance_ratios": [1.0]}, ["2 entries", "[1.0]"]),
+    ("agacd", {"fitness__importance_ratios": [1.2, 1.4, 2.0]}, ["2 entries"]),
+    ("mpmga", {"islands__migrants": 9}, ["islands.migrants = 9", "population.size = 8"]),
+])
+def test_inconsistent_parameters_are_refused_before_tracing(grid, preset, overrides, words):
+    """Combinations of keys that an operator cannot use (each key valid on its own) give
+    a ParameterError naming them, not an error from inside the traced program."""
+    with pytest.raises(ParameterError) as err:
+        api.run(preset, grid, seeds=1, **{**SMALL, **overrides})
+    assert all(w in str(err.value) for w in words), str(err.value)
+
+
+@pytest.mark.parametrize("seeds, words", [
+    ([2**32], "[0, 2**32)"), ([-1, 3], "[0, 2**32)"), (2**32 + 1, "at most 2**32"),
+])
+def test_seeds_outside_32_bits_are_refused(grid, seeds, words):
+    """Seeds are 32-bit: 2**32 would silently repeat seed 0, -1 seed 2**32 - 1."""
+    with pytest.raises(JaxgaError, match=re.escape(words)):
+        api.run("sga", grid, seeds=seeds, **SMALL)
+
+
+def test_a_call_whose_results_cannot_fit_in_memory_is_refused(grid, monkeypatch):
+    """A clear error before anything is allocated, instead of the process being killed."""
+    monkeypatch.setattr(api, "_physical_memory", lambda: 2**30)  # a 1 GiB machine
+    # per run: 3 x 3 float32 history values, 2 int32 paths of 4 * (10 + 10) = 80 cells
+    # and 256 bytes: 932 bytes, so 10**6 runs need 0.87 GiB, more than half of 1 GiB
+    with pytest.raises(ParameterError, match="GiB for their results alone"):
+        api.run("sga", grid, seeds=10**6, **SMALL)
+    assert api.run("sga", grid, seeds=2, **SMALL).success.all()  # small calls still run
+
+
+def test_a_mutation_radius_beyond_the_map_is_the_radius_that_reaches_every_cell(grid):
+    """AGACD's point mutation picks among the free cells within ``radius`` (Chebyshev):
+    on a 10 x 10 map radius 9 already reaches every cell, so radius 10,000 gives the same
+    runs (instead of a (2r + 1)^2 table of 400 million offsets per node)."""
+    far = api.run("agacd", grid, seeds=2, mutation__radius=10_000, **SMALL)
+    nine = api.run("agacd", grid, seeds=2, mutation__radius=9, **SMALL)
+    np.testing.assert_array_equal(far.cells, nine.cells)
+    np.testing.assert_array_equal(far.history["best"], nine.history["best"])
+    np.testing.assert_array_equal(far.failures, nine.failures)
