@@ -176,13 +176,20 @@ def _seed_list(seeds: int | Sequence[int]) -> np.ndarray:
         if seeds > SEED_LIMIT:
             raise JaxgaError(f"seeds must be at most 2**32 (seeds are 32-bit), got {seeds}")
         return np.arange(int(seeds))
-    arr = np.asarray(list(seeds), dtype=np.int64)
+    try:
+        arr = np.asarray(list(seeds))
+    except TypeError:
+        arr = None
+    if arr is None or isinstance(seeds, (str, bytes)) or arr.ndim != 1:
+        raise JaxgaError(f"seeds must be a count or a list of integer seeds, got {seeds!r}")
     if arr.size == 0:
         raise JaxgaError("seeds must not be empty")
-    if arr.min() < 0 or arr.max() >= SEED_LIMIT:
+    if arr.dtype.kind not in "iu":
+        raise JaxgaError(f"seeds must be integers, got {list(seeds)!r}")
+    if arr.min() < 0 or arr.max() >= SEED_LIMIT:  # (uint64 compares exactly)
         raise JaxgaError(f"seeds must be integers in [0, 2**32) (seeds are 32-bit), got "
                          f"{int(arr.min())} .. {int(arr.max())}")
-    return arr
+    return arr.astype(np.int64)
 
 
 def _seed_sharding() -> tuple[jax.sharding.NamedSharding | None, Any]:
@@ -398,8 +405,9 @@ def _load(preset, grid, corner_rule, variant, sets, overrides, generations):
     from jaxga.presets import load_preset
 
     ov: dict[str, Any] = {k.replace("__", "."): v for k, v in overrides.items()}
-    if generations is not None:
-        ov["generations"] = int(generations)
+    if generations is not None:  # validated with the configuration (an integer >= 1)
+        integral = isinstance(generations, (int, np.integer)) and not isinstance(generations, bool)
+        ov["generations"] = int(generations) if integral else generations
     config = (preset.override(ov) if isinstance(preset, Config)
               else load_preset(preset, variant=variant, overrides=ov, sets=sets))
     if isinstance(grid, Grid):
@@ -407,7 +415,8 @@ def _load(preset, grid, corner_rule, variant, sets, overrides, generations):
         if corner_rule is not None:
             grid = grid.replace(corner_rule=corner_rule)
     else:
-        info = load_map_info(grid, corner_rule=corner_rule or config["map.corner_rule"])
+        rule = config["map.corner_rule"] if corner_rule is None else corner_rule
+        info = load_map_info(grid, corner_rule=rule)
         grid, map_name = info.grid, info.name
     grid.check_endpoints()
     return config, grid, map_name

@@ -137,6 +137,8 @@ def check_combination(config: Config) -> None:
 
     Raises :class:`ParameterError` naming the keys: an operator whose parameters are
     missing (:data:`NEEDS`), MPMGA's decay rate ``w = 0`` (eq. 17 needs ``0 < w <= 1``),
+    Zhang's speeds ``v``, ``v_t`` not positive (eq. 2), IMGA's or MPMGA's fitness weights
+    all 0 (every path equal),
     a Delphi ratio list whose length does not match AGACD's three objectives (eq. 21-25),
     more migrants than an island has individuals (SPEC 8).
     """
@@ -156,6 +158,17 @@ def check_combination(config: Config) -> None:
         raise ParameterError(
             f"fitness.importance_ratios needs {AGACD_OBJECTIVES - 1} entries for AGACD's "
             f"{AGACD_OBJECTIVES} objectives (length, smoothness, safety), got {list(ratios)}")
+    method = config["fitness.method"]
+    if method == "iga_zhang":
+        for key in ("fitness.v", "fitness.v_t"):
+            if config.get(key) is not None and not config[key] > 0:
+                raise ParameterError(f"{key} is a speed and must be > 0 (Zhang eq. 2 divides "
+                                     f"by it), got {config[key]}")
+    weights = {"imga": ("fitness.a", "fitness.b", "fitness.c"),
+               "mpmga": ("fitness.alpha", "fitness.beta")}.get(method, ())
+    if weights and all(config.get(k) == 0 for k in weights):
+        raise ParameterError(f"{' and '.join(weights)} are all 0: every path would have "
+                             "the same fitness (IMGA eq. 4, MPMGA eq. 3)")
     migrating = (int(config["islands.count"]) > 1 and config["islands.topology"] != "none")
     if migrating and int(config["islands.migrants"]) > int(config["population.size"]):
         raise ParameterError(

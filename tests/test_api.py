@@ -292,6 +292,10 @@ def test_map_runs_in_blocks_equals_one_vmap():
     ("agacd", {"fitness__importance_ratios": [1.0]}, ["2 entries", "[1.0]"]),
     ("agacd", {"fitness__importance_ratios": [1.2, 1.4, 2.0]}, ["2 entries"]),
     ("mpmga", {"islands__migrants": 9}, ["islands.migrants = 9", "population.size = 8"]),
+    ("iga_zhang", {"fitness__v_t": 0.0}, ["fitness.v_t", "> 0"]),
+    ("mpmga", {"fitness__alpha": 0.0, "fitness__beta": 0.0}, ["same fitness"]),
+    ("imga", {"fitness__a": 0, "fitness__b": 0, "fitness__c": 0}, ["same fitness"]),
+    ("sga", {"generations": 2.7}, ["generations must be an integer"]),
 ])
 def test_inconsistent_parameters_are_refused_before_tracing(grid, preset, overrides, words):
     """Combinations of keys that an operator cannot use (each key valid on its own) give
@@ -303,9 +307,12 @@ def test_inconsistent_parameters_are_refused_before_tracing(grid, preset, overri
 
 @pytest.mark.parametrize("seeds, words", [
     ([2**32], "[0, 2**32)"), ([-1, 3], "[0, 2**32)"), (2**32 + 1, "at most 2**32"),
+    ([2**63], "[0, 2**32)"), ([1.5, 2], "must be integers"), ("ab", "a count or a list"),
+    (2.0, "a count or a list"), ([[1, 2]], "a count or a list"),
 ])
 def test_seeds_outside_32_bits_are_refused(grid, seeds, words):
-    """Seeds are 32-bit: 2**32 would silently repeat seed 0, -1 seed 2**32 - 1."""
+    """Seeds are 32-bit: 2**32 would silently repeat seed 0, -1 seed 2**32 - 1; seeds that
+    are not integers are refused, not truncated (1.5 would have run seed 1)."""
     with pytest.raises(JaxgaError, match=re.escape(words)):
         api.run("sga", grid, seeds=seeds, **SMALL)
 
@@ -329,3 +336,8 @@ def test_a_mutation_radius_beyond_the_map_is_the_radius_that_reaches_every_cell(
     np.testing.assert_array_equal(far.cells, nine.cells)
     np.testing.assert_array_equal(far.history["best"], nine.history["best"])
     np.testing.assert_array_equal(far.failures, nine.failures)
+
+
+def test_an_empty_corner_rule_is_refused_not_replaced_by_the_presets(grid):
+    with pytest.raises(JaxgaError, match="corner"):
+        api.run("sga", "classic_ga_gapp3_20x20", seeds=1, corner_rule="", **SMALL)
