@@ -18,6 +18,7 @@ import os
 import sys
 import time
 from collections.abc import Sequence
+from pathlib import Path
 
 from jaxga.errors import EndpointError, JaxgaError, NoPathError
 from jaxga.grid import CORNER_RULES
@@ -505,11 +506,37 @@ def use_compilation_cache() -> str | None:
     return path
 
 
+def check_outputs(args: argparse.Namespace) -> None:
+    """Check ``--json`` and ``--plot`` before the work, not after it: the directory must
+    exist and be writable, and the plot's extension must be an image format matplotlib
+    writes (no extension: ``.png`` is added, as matplotlib would, and reported)."""
+    for option in ("json", "plot"):
+        path = getattr(args, option, None)
+        if not path:
+            continue
+        folder = Path(path).parent
+        if not folder.is_dir() or not os.access(folder, os.W_OK):
+            raise JaxgaError(f"cannot write --{option} {path}: directory {str(folder)!r} "
+                             "does not exist or is not writable")
+    plot = getattr(args, "plot", None)
+    if plot:
+        from matplotlib.figure import Figure
+
+        formats = Figure().canvas.get_supported_filetypes()
+        suffix = Path(plot).suffix.lower().lstrip(".")
+        if not suffix:
+            args.plot = plot + ".png"
+        elif suffix not in formats:
+            raise JaxgaError(f"cannot write --plot {plot}: {suffix!r} is not an image format "
+                             f"matplotlib writes ({', '.join(sorted(formats))})")
+
+
 def main(argv: Sequence[str] | None = None) -> int:
     """Entry point of the ``jaxga`` console script; returns the exit status."""
     parser = build_parser()
     args = parser.parse_args(argv)
     try:
+        check_outputs(args)
         if hasattr(args, "devices"):  # subcommands with add_parallel_arguments
             configure_from_args(args)  # before JAX's backend starts
         if args.func in (cmd_run, cmd_doe, cmd_compare):

@@ -22,6 +22,7 @@ static (it changes the compiled code).
 from __future__ import annotations
 
 import dataclasses
+import operator
 from collections.abc import Sequence
 
 import jax
@@ -86,7 +87,11 @@ class Grid:
         :class:`~jaxga.errors.EndpointError` for an endpoint off the map and
         :class:`~jaxga.errors.JaxgaError` for a bad array or corner rule.
         """
-        arr = np.asarray(blocked)
+        try:
+            arr = np.asarray(blocked)
+        except ValueError:  # ragged rows
+            raise JaxgaError("a grid must be a non-empty 2-D array with rows of equal "
+                             "length") from None
         if arr.ndim != 2 or arr.shape[0] < 1 or arr.shape[1] < 1:
             raise JaxgaError(f"a grid must be a non-empty 2-D array, got shape {arr.shape}")
         if arr.dtype != np.bool_:
@@ -172,8 +177,10 @@ class Grid:
 
 
 def _check_xy(name: str, xy, w: int, h: int) -> tuple[int, int]:
-    try:
-        x, y = (int(v) for v in xy)
+    try:  # operator.index: integers only (1.5 or "3" are refused, not truncated or split)
+        if isinstance(xy, (str, bytes)) or any(isinstance(v, (bool, np.bool_)) for v in xy):
+            raise TypeError
+        x, y = (operator.index(v) for v in xy)
     except (TypeError, ValueError):
         raise EndpointError(f"{name} must be a pair of integers (x, y), got {xy!r}") from None
     if not (0 <= x < w and 0 <= y < h):

@@ -2,13 +2,14 @@
 
 from __future__ import annotations
 
+import argparse
 import json
 import subprocess
 import sys
 
 import pytest
 
-from jaxga.cli import EXIT_BAD_INPUT, EXIT_NO_PATH, main
+from jaxga.cli import EXIT_BAD_INPUT, EXIT_NO_PATH, check_outputs, main
 
 
 def test_optimum_json_on_builtin_map(tmp_path, capsys):
@@ -81,6 +82,30 @@ def test_run_with_an_unreachable_goal_reports_no_path(tmp_path, capsys):
     assert [r["success"] for r in runs] == [False, False]
     assert all(r["path"] == [] and r["length"] is None for r in runs)
     assert png.stat().st_size > 0
+
+
+@pytest.mark.parametrize("option, name, words", [
+    ("--plot", "out.xyz", "'xyz' is not an image format"),
+    ("--plot", "missing/out.png", "does not exist"),
+    ("--json", "missing/out.json", "does not exist"),
+])
+def test_output_paths_are_checked_before_the_run(tmp_path, capsys, monkeypatch, option, name,
+                                                 words):
+    """A bad --plot or --json fails at once (exit 2, one line), not after the whole run."""
+    import jaxga.api
+
+    monkeypatch.setattr(jaxga.api, "run", lambda *a, **k: pytest.fail("the run started"))
+    rc = main(["run", "--preset", "sga", "--map", "classic_ga_gapp3_20x20", "--seeds", "2",
+               "--generations", "3", "--quiet", option, str(tmp_path / name)])
+    err = capsys.readouterr().err.strip()
+    assert rc == EXIT_BAD_INPUT and words in err and "\n" not in err
+    assert not (tmp_path / name).exists()
+
+
+def test_a_plot_without_extension_is_written_as_png_and_reported_so(tmp_path):
+    args = argparse.Namespace(plot=str(tmp_path / "figure"), json=None)
+    check_outputs(args)
+    assert args.plot == str(tmp_path / "figure.png")
 
 
 def test_console_script_never_prints_a_traceback(tmp_path):

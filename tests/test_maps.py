@@ -7,6 +7,7 @@ import math
 import tempfile
 from pathlib import Path
 
+import jax.numpy as jnp
 import numpy as np
 import pytest
 from hypothesis import HealthCheck, given, settings
@@ -14,6 +15,7 @@ from hypothesis import strategies as st
 from hypothesis.extra import numpy as hnp
 
 from jaxga import EndpointError, Grid, MapFormatError, ParameterError
+from jaxga.errors import JaxgaError
 from jaxga.grid import CORNER_RULES, move_legal
 from jaxga.maps import (
     FORMATS,
@@ -581,3 +583,20 @@ def test_preprocess_combines_inflate_and_fill():
     assert preprocess(g, radius=1).blocked_np().all()  # ... and then enclosed
     np.testing.assert_array_equal(preprocess(g, 1, fill=False).blocked_np(), inflated)
     np.testing.assert_array_equal(preprocess(g).blocked_np(), b)
+
+
+@pytest.mark.parametrize("start", [(1.5, 0), "30", (True, False), (1, 2, 3), (1,)])
+def test_endpoints_must_be_integer_pairs(start):
+    """Not truncated (1.5 -> 1), split ("30" -> (3, 0)) or read as 0/1 (True)."""
+    with pytest.raises(EndpointError, match="must be a pair of integers"):
+        Grid.create(np.zeros((4, 4), bool), start=start)
+
+
+def test_endpoints_accept_numpy_and_jax_integers():
+    g = Grid.create(np.zeros((4, 4), bool), start=(np.int64(1), jnp.int32(2)), goal=[3, 3])
+    assert g.start_xy == (1, 2) and g.goal_xy == (3, 3)
+
+
+def test_a_ragged_list_is_not_a_grid():
+    with pytest.raises(JaxgaError, match="rows of equal length"):
+        Grid.create([[0, 0], [0]])
