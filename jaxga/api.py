@@ -577,7 +577,8 @@ def sweep(
         results.append(Result(
             preset=config["name"], map_name=map_name, corner_rule=grid.corner_rule,
             seeds=seed_arr, success=success,
-            reason=_failure_reason(success, rate[sl], config),
+            reason=_failure_reason(success, rate[sl], config, algo.capacity,
+                                   len(octile.path)),
             cells=h["cells"], n_cells=h["length"],
             raw_cells=h["raw_cells"], raw_n_cells=h["raw_length"],
             length=h["path_length"].astype(float),
@@ -700,10 +701,12 @@ def _in_jaxga(module: str) -> bool:
     return module == "jaxga" or module.startswith("jaxga.")
 
 
-def _failure_reason(success: np.ndarray, init_rate: np.ndarray, config) -> str:
+def _failure_reason(success: np.ndarray, init_rate: np.ndarray, config, capacity: int,
+                    shortest_cells: int) -> str:
     """Why some runs returned no path: how many, and whether the initialiser ever made a
     path (a paper's initialiser can fail on every attempt on some maps, e.g. median
-    insertion through a wall three cells thick)."""
+    insertion through a wall three cells thick), naming a path capacity below the cell
+    count of the shortest 8-connected path as the likely cause."""
     failed = ~np.asarray(success)
     if not failed.any():
         return ""
@@ -713,8 +716,13 @@ def _failure_reason(success: np.ndarray, init_rate: np.ndarray, config) -> str:
     if no_init.any():
         method = config.get("init.method")
         text += (f"; {int(no_init.sum())} of them got no initial path: the initialiser "
-                 f"{method!r} succeeded in none of its attempts on this map (raise "
-                 f"init.max_tries or choose another init.method)")
+                 f"{method!r} succeeded in none of its attempts on this map")
+        if capacity < shortest_cells:
+            text += (f"; population.capacity = {capacity} is probably too small: the "
+                     f"shortest 8-connected path has {shortest_cells} cells (raise "
+                     f"population.capacity)")
+        else:
+            text += " (raise init.max_tries or choose another init.method)"
     return text
 
 

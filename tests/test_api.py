@@ -154,12 +154,28 @@ def test_failure_reason_counts_the_seeds_and_names_an_initialiser_that_never_suc
 
     cfg = load_preset("mpmga")
     ok = np.array([True, True, True])
-    assert api._failure_reason(ok, np.array([0.2, 0.1, 0.3]), cfg) == ""
-    some = api._failure_reason(np.array([True, False, True]), np.array([0.2, 0.1, 0.3]), cfg)
+    fits = dict(capacity=80, shortest_cells=12)
+    assert api._failure_reason(ok, np.array([0.2, 0.1, 0.3]), cfg, **fits) == ""
+    some = api._failure_reason(np.array([True, False, True]), np.array([0.2, 0.1, 0.3]), cfg,
+                               **fits)
     assert some == "no feasible path found by 1 of 3 seeds"
-    none = api._failure_reason(np.array([False, False, True]), np.array([0.0, 0.1, 0.3]), cfg)
+    none = api._failure_reason(np.array([False, False, True]), np.array([0.0, 0.1, 0.3]), cfg,
+                               **fits)
     assert none.startswith("no feasible path found by 2 of 3 seeds; 1 of them got no initial")
     assert "'intermittent_connect'" in none and "init.max_tries" in none
+    assert "capacity" not in none
+
+
+def test_a_capacity_below_the_shortest_path_is_named_as_the_cause(grid):
+    """Paths cannot hold the shortest path's cells: the reason says so, instead of
+    sending the user to raise init.max_tries."""
+    from jaxga.reference import shortest_path
+
+    cells = len(shortest_path(grid).path)
+    r = api.run("sga", grid, seeds=2, population__capacity=cells - 1, **SMALL)
+    assert not r.success.any()
+    assert f"population.capacity = {cells - 1} is probably too small" in r.reason
+    assert f"has {cells} cells" in r.reason and "init.max_tries" not in r.reason
 
 
 def test_unfilled_initial_populations_are_warned_about_naming_the_budget(grid):
