@@ -12,6 +12,7 @@ from __future__ import annotations
 import dataclasses
 import functools
 import math
+import operator
 import os
 import sys
 import time
@@ -168,6 +169,17 @@ SEED_LIMIT = 2**32
 ``[0, SEED_LIMIT)``, where no two give the same run."""
 
 
+def _integer_or_as_is(value: Any) -> Any:
+    """``value`` as a Python int when it is an integer of any kind (numpy, JAX 0-d), else
+    unchanged, so that the configuration's check refuses it by name (bools included)."""
+    if isinstance(value, (bool, np.bool_)):
+        return value
+    try:
+        return operator.index(value)
+    except TypeError:
+        return value
+
+
 def _seed_list(seeds: int | Sequence[int]) -> np.ndarray:
     """The seeds of a call, checked: a count ``N`` (seeds ``0..N-1``) or explicit seeds."""
     if isinstance(seeds, (int, np.integer)):
@@ -177,7 +189,7 @@ def _seed_list(seeds: int | Sequence[int]) -> np.ndarray:
             raise JaxgaError(f"seeds must be at most 2**32 (seeds are 32-bit), got {seeds}")
         return np.arange(int(seeds))
     try:
-        arr = np.asarray(list(seeds))
+        arr = seeds if isinstance(seeds, np.ndarray) else np.asarray(list(seeds))
     except TypeError:
         arr = None
     if arr is None or isinstance(seeds, (str, bytes)) or arr.ndim != 1:
@@ -406,8 +418,7 @@ def _load(preset, grid, corner_rule, variant, sets, overrides, generations):
 
     ov: dict[str, Any] = {k.replace("__", "."): v for k, v in overrides.items()}
     if generations is not None:  # validated with the configuration (an integer >= 1)
-        integral = isinstance(generations, (int, np.integer)) and not isinstance(generations, bool)
-        ov["generations"] = int(generations) if integral else generations
+        ov["generations"] = _integer_or_as_is(generations)
     config = (preset.override(ov) if isinstance(preset, Config)
               else load_preset(preset, variant=variant, overrides=ov, sets=sets))
     if isinstance(grid, Grid):
@@ -656,13 +667,17 @@ def _physical_memory() -> int | None:
 def _check_result_memory(n_runs: int, algo: Algorithm) -> None:
     """A clear error instead of the operating system killing the process: every run keeps
     three float32 histories of ``generations`` values, two int32 paths of ``capacity``
-    cells and a few hundred bytes of metrics, counters and keys on the host."""
-    per_run = 12 * algo.generations + 8 * algo.capacity + 256
+    cells and a few hundred bytes of metrics, counters and keys, and while it evolves its
+    population (``population x islands x capacity`` int32 cells, counted twice: the state
+    and its next generation). An estimate, not a bound: blocks of runs need more."""
+    per_run = (12 * algo.generations + 8 * algo.capacity + 256
+               + 2 * 4 * algo.population * algo.islands * algo.capacity)
     need, total = n_runs * per_run, _physical_memory()
     if total is not None and need > RESULT_MEMORY_FRACTION * total:
         raise ParameterError(
-            f"{n_runs} runs would need about {need / 2**30:.1f} GiB for their results alone "
-            f"({algo.generations} generations of history and paths of {algo.capacity} cells "
+            f"{n_runs} runs would need about {need / 2**30:.1f} GiB for their results and "
+            f"populations ({algo.generations} generations of history, paths of "
+            f"{algo.capacity} cells and a population of {algo.population * algo.islands} "
             f"per run), more than half of this machine's {total / 2**30:.1f} GiB: run fewer "
             f"seeds per call")
 

@@ -23,6 +23,7 @@ from pathlib import Path
 from jaxga.errors import EndpointError, JaxgaError, NoPathError
 from jaxga.grid import CORNER_RULES
 from jaxga.parallel import (
+    ENV_PROCESS_ID,
     EXIT_PROCESS_LOST,
     ProcessLostError,
     add_parallel_arguments,
@@ -510,11 +511,16 @@ def check_outputs(args: argparse.Namespace) -> None:
     """Check ``--json`` and ``--plot`` before the work, not after it: the directory must
     exist and be writable, and the plot's extension must be an image format matplotlib
     writes (no extension: ``.png`` is added, as matplotlib would, and reported)."""
+    pid = getattr(args, "process_id", None)
+    if pid is None and os.environ.get(ENV_PROCESS_ID, "").strip().isdigit():
+        pid = int(os.environ[ENV_PROCESS_ID])
     for option in ("json", "plot"):
         path = getattr(args, option, None)
-        if not path:
+        if not path or pid not in (None, 0):  # only process 0 writes the outputs
             continue
         folder = Path(path).parent
+        if Path(path).is_dir():
+            raise JaxgaError(f"cannot write --{option} {path}: it is a directory")
         if not folder.is_dir() or not os.access(folder, os.W_OK):
             raise JaxgaError(f"cannot write --{option} {path}: directory {str(folder)!r} "
                              "does not exist or is not writable")

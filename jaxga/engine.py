@@ -94,6 +94,7 @@ def build(config: Config, grid: Grid) -> tuple[Algorithm, dict]:
     cap_p = int(config["population.size"])
     capacity = int(config["population.capacity"]) or default_capacity(grid)
     islands = int(config["islands.count"])
+    check_migration(config, cap_p)
     algo = Algorithm(
         config=static_config(config),
         population=cap_p,
@@ -139,8 +140,8 @@ def check_combination(config: Config) -> None:
     missing (:data:`NEEDS`), MPMGA's decay rate ``w = 0`` (eq. 17 needs ``0 < w <= 1``),
     Zhang's speeds ``v``, ``v_t`` not positive (eq. 2), IMGA's or MPMGA's fitness weights
     all 0 (every path equal),
-    a Delphi ratio list whose length does not match AGACD's three objectives (eq. 21-25),
-    more migrants than an island has individuals (SPEC 8).
+    a Delphi ratio list whose length does not match AGACD's three objectives (eq. 21-25).
+    Migrants are checked against the island size by :func:`check_migration`.
     """
     for key, value, needed in NEEDS:
         if config.get(key) == value:
@@ -169,11 +170,25 @@ def check_combination(config: Config) -> None:
     if weights and all(config.get(k) == 0 for k in weights):
         raise ParameterError(f"{' and '.join(weights)} are all 0: every path would have "
                              "the same fitness (IMGA eq. 4, MPMGA eq. 3)")
-    migrating = (int(config["islands.count"]) > 1 and config["islands.topology"] != "none")
-    if migrating and int(config["islands.migrants"]) > int(config["population.size"]):
+
+
+def check_migration(config: Config, population: int) -> None:
+    """Migrants must fit the islands of ``population`` individuals (the capacity: a sweep
+    over sizes is checked at its largest). Each island receives ``k`` migrants per source
+    (ring, full: ``k``; star: the centre ``(I - 1) k``; MPMGA's A-B-C scheme: ``2 k`` into
+    A, and B and C swap ``k`` others than the ``k`` that moved), SPEC 8 / MPMGA 4.4."""
+    count, topology = int(config["islands.count"]), config["islands.topology"]
+    k = int(config["islands.migrants"])
+    if count == 1 or topology == "none" or k == 0:
+        return
+    if topology == "mpmga" and count != 3:
+        raise ParameterError(f"islands.topology = 'mpmga' needs islands.count = 3 (A, B, C), "
+                             f"got {count}")
+    need = {"star": (count - 1) * k, "mpmga": 2 * k}.get(topology, k)
+    if need > population:
         raise ParameterError(
-            f"islands.migrants = {config['islands.migrants']} exceeds the population of an "
-            f"island (population.size = {config['population.size']})")
+            f"islands.migrants = {k} needs {need} individuals per island under the "
+            f"{topology!r} topology; an island has {population} (population.size)")
 
 
 def default_params(config: Config, islands: int = 1) -> dict[str, jax.Array]:

@@ -178,7 +178,10 @@ class Grid:
 
 def _check_xy(name: str, xy, w: int, h: int) -> tuple[int, int]:
     try:  # operator.index: integers only (1.5 or "3" are refused, not truncated or split)
-        if isinstance(xy, (str, bytes)) or any(isinstance(v, (bool, np.bool_)) for v in xy):
+        if isinstance(xy, (str, bytes)):
+            raise TypeError
+        xy = tuple(xy)
+        if any(isinstance(v, (bool, np.bool_)) for v in xy):
             raise TypeError
         x, y = (operator.index(v) for v in xy)
     except (TypeError, ValueError):

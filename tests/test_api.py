@@ -307,15 +307,20 @@ def test_map_runs_in_blocks_equals_one_vmap():
     ("sga", {"crossover__adaptive": True}, ["crossover.pc_low and crossover.pc_high"]),
     ("agacd", {"fitness__importance_ratios": [1.0]}, ["2 entries", "[1.0]"]),
     ("agacd", {"fitness__importance_ratios": [1.2, 1.4, 2.0]}, ["2 entries"]),
-    ("mpmga", {"islands__migrants": 9}, ["islands.migrants = 9", "population.size = 8"]),
+    ("mpmga", {"islands__migrants": 9}, ["islands.migrants = 9", "needs 18", "has 8"]),
+    ("mpmga", {"islands__migrants": 5}, ["needs 10 individuals", "'mpmga' topology"]),
+    ("mpmga", {"islands__count": 2}, ["needs islands.count = 3"]),
     ("iga_zhang", {"fitness__v_t": 0.0}, ["fitness.v_t", "> 0"]),
     ("mpmga", {"fitness__alpha": 0.0, "fitness__beta": 0.0}, ["same fitness"]),
     ("imga", {"fitness__a": 0, "fitness__b": 0, "fitness__c": 0}, ["same fitness"]),
     ("sga", {"generations": 2.7}, ["generations must be an integer"]),
+    ("sga", {"generations": True}, ["generations must be an integer"]),
 ])
-def test_inconsistent_parameters_are_refused_before_tracing(grid, preset, overrides, words):
+def test_inconsistent_parameters_are_refused_before_tracing(grid, monkeypatch, preset,
+                                                            overrides, words):
     """Combinations of keys that an operator cannot use (each key valid on its own) give
     a ParameterError naming them, not an error from inside the traced program."""
+    monkeypatch.setattr(api, "_programs", lambda *a, **k: pytest.fail("compiled"))
     with pytest.raises(ParameterError) as err:
         api.run(preset, grid, seeds=1, **{**SMALL, **overrides})
     assert all(w in str(err.value) for w in words), str(err.value)
@@ -336,10 +341,11 @@ def test_seeds_outside_32_bits_are_refused(grid, seeds, words):
 def test_a_call_whose_results_cannot_fit_in_memory_is_refused(grid, monkeypatch):
     """A clear error before anything is allocated, instead of the process being killed."""
     monkeypatch.setattr(api, "_physical_memory", lambda: 2**30)  # a 1 GiB machine
-    # per run: 3 x 3 float32 history values, 2 int32 paths of 4 * (10 + 10) = 80 cells
-    # and 256 bytes: 932 bytes, so 10**6 runs need 0.87 GiB, more than half of 1 GiB
-    with pytest.raises(ParameterError, match="GiB for their results alone"):
-        api.run("sga", grid, seeds=10**6, **SMALL)
+    # per run: 3 x 3 float32 history values, 2 int32 paths of 4 * (10 + 10) = 80 cells,
+    # 256 bytes and twice 8 x 80 int32 population cells: 6,052 bytes, so 10**5 runs need
+    # 0.56 GiB, more than half of 1 GiB
+    with pytest.raises(ParameterError, match="GiB for their results and populations"):
+        api.run("sga", grid, seeds=10**5, **SMALL)
     assert api.run("sga", grid, seeds=2, **SMALL).success.all()  # small calls still run
 
 
@@ -357,3 +363,12 @@ def test_a_mutation_radius_beyond_the_map_is_the_radius_that_reaches_every_cell(
 def test_an_empty_corner_rule_is_refused_not_replaced_by_the_presets(grid):
     with pytest.raises(JaxgaError, match="corner"):
         api.run("sga", "classic_ga_gapp3_20x20", seeds=1, corner_rule="", **SMALL)
+
+
+def test_integer_types_are_accepted_for_seeds_generations_and_endpoints(grid):
+    """numpy and JAX integers, arrays of seeds and one-pass iterables keep working."""
+    import jax.numpy as jnp
+
+    r = api.run("sga", grid.replace(start=iter(grid.start_xy)), seeds=np.arange(2),
+                generations=jnp.int32(3), population__size=8, init__max_tries=40)
+    assert r.generations == 3 and list(r.seeds) == [0, 1] and r.success.all()

@@ -600,3 +600,8 @@ def test_endpoints_accept_numpy_and_jax_integers():
 def test_a_ragged_list_is_not_a_grid():
     with pytest.raises(JaxgaError, match="rows of equal length"):
         Grid.create([[0, 0], [0]])
+
+
+def test_generated_maps_check_endpoints_like_grids():
+    with pytest.raises(EndpointError, match="must be a pair of integers"):
+        random_map(10, 10, 0.0, 3, start=(1.5, 0.9))

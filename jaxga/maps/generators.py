@@ -22,8 +22,8 @@ from collections import deque
 
 import numpy as np
 
-from jaxga.errors import EndpointError, ParameterError
-from jaxga.grid import DEFAULT_CORNER_RULE, Grid, check_corner_rule
+from jaxga.errors import ParameterError
+from jaxga.grid import DEFAULT_CORNER_RULE, Grid, _check_xy, check_corner_rule
 from jaxga.maps.preprocess import _reachable_np
 
 __all__ = ["maze_map", "random_map", "rectangles_map", "rooms_map"]
@@ -51,16 +51,9 @@ def _setup(
     w = _int("width", width, 1)
     s = _int("seed", seed, 0)
     rule = check_corner_rule(corner_rule)
-    xy = []
-    for name, val, default in (("start", start, (0, 0)), ("goal", goal, (w - 1, h - 1))):
-        try:
-            x, y = (int(v) for v in (default if val is None else val))
-        except (TypeError, ValueError):
-            raise EndpointError(f"{name} must be a pair of integers (x, y), got {val!r}") from None
-        if not (0 <= x < w and 0 <= y < h):
-            raise EndpointError(f"{name} ({x}, {y}) is off the {w} x {h} map")
-        xy.append((x, y))
-    return h, w, np.random.default_rng(s), xy[0], xy[1], rule
+    sxy = _check_xy("start", (0, 0) if start is None else start, w, h)
+    gxy = _check_xy("goal", (w - 1, h - 1) if goal is None else goal, w, h)
+    return h, w, np.random.default_rng(s), sxy, gxy, rule
 
 
 def _connected(blocked: np.ndarray, start: XY, goal: XY, rule: str) -> bool:
