@@ -9,10 +9,10 @@ on its own.
 
 from __future__ import annotations
 
+import contextlib
 import dataclasses
 import functools
 import math
-import operator
 import os
 import sys
 import time
@@ -28,7 +28,7 @@ from jaxga import parallel
 from jaxga.config import Config
 from jaxga.engine import Algorithm, build, default_params, evolve, finish, init_state, static_config
 from jaxga.errors import InitialisationWarning, JaxgaError, ParameterError
-from jaxga.grid import Grid
+from jaxga.grid import Grid, as_integer
 from jaxga.objectives import Metrics
 
 SUMMARY_METRICS = ("length", "raw_length", "angle_sum", "turns", "fitness",
@@ -169,24 +169,18 @@ SEED_LIMIT = 2**32
 ``[0, SEED_LIMIT)``, where no two give the same run."""
 
 
-def _integer_or_as_is(value: Any) -> Any:
-    """``value`` as a Python int when it is an integer of any kind (numpy, JAX 0-d), else
-    unchanged, so that the configuration's check refuses it by name (bools included)."""
-    if isinstance(value, (bool, np.bool_)):
-        return value
-    try:
-        return operator.index(value)
-    except TypeError:
-        return value
-
-
-def _seed_list(seeds: int | Sequence[int]) -> np.ndarray:
-    """The seeds of a call, checked: a count ``N`` (seeds ``0..N-1``) or explicit seeds."""
+def _seed_list(seeds: int | Sequence[int],
+               check_count: Callable[[int], None] | None = None) -> np.ndarray:
+    """The seeds of a call, checked: a count ``N`` (seeds ``0..N-1``) or explicit seeds.
+    ``check_count(n)`` runs once the number of seeds is known, before a count is turned
+    into an array (so a count too large for memory is refused before it is allocated)."""
+    check_count = check_count or (lambda n: None)
     if isinstance(seeds, (int, np.integer)):
         if seeds < 1:
             raise JaxgaError(f"seeds must be >= 1, got {seeds}")
         if seeds > SEED_LIMIT:
             raise JaxgaError(f"seeds must be at most 2**32 (seeds are 32-bit), got {seeds}")
+        check_count(int(seeds))
         return np.arange(int(seeds))
     try:
         arr = seeds if isinstance(seeds, np.ndarray) else np.asarray(list(seeds))
@@ -201,6 +195,7 @@ def _seed_list(seeds: int | Sequence[int]) -> np.ndarray:
     if arr.min() < 0 or arr.max() >= SEED_LIMIT:  # (uint64 compares exactly)
         raise JaxgaError(f"seeds must be integers in [0, 2**32) (seeds are 32-bit), got "
                          f"{int(arr.min())} .. {int(arr.max())}")
+    check_count(arr.size)
     return arr.astype(np.int64)
 
 
@@ -417,8 +412,10 @@ def _load(preset, grid, corner_rule, variant, sets, overrides, generations):
     from jaxga.presets import load_preset
 
     ov: dict[str, Any] = {k.replace("__", "."): v for k, v in overrides.items()}
-    if generations is not None:  # validated with the configuration (an integer >= 1)
-        ov["generations"] = _integer_or_as_is(generations)
+    if generations is not None:  # a non-integer is left for the configuration to refuse
+        with contextlib.suppress(TypeError):
+            generations = as_integer(generations)
+        ov["generations"] = generations
     config = (preset.override(ov) if isinstance(preset, Config)
               else load_preset(preset, variant=variant, overrides=ov, sets=sets))
     if isinstance(grid, Grid):
@@ -514,12 +511,9 @@ def sweep(
     algo, _ = build(config.override({"population.size": capacity}), grid)
     per_point = [default_params(c, algo.islands) for c in configs]
     n_points = len(configs)
-    if isinstance(seeds, (int, np.integer)) and 0 < seeds <= SEED_LIMIT:  # before arange
-        _check_result_memory(int(seeds) * n_points, algo)
-    seed_arr = _seed_list(seeds)
+    seed_arr = _seed_list(seeds, lambda n: _check_result_memory(n * n_points, algo))
     n_seeds = len(seed_arr)
     n_runs = n_seeds * n_points
-    _check_result_memory(n_runs, algo)
     # Runs padded (copies of the last run) to a multiple of processes x local devices;
     # this process computes its contiguous share and allgather_runs joins the shares.
     n_total, share = parallel.run_share(n_runs)

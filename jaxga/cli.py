@@ -26,6 +26,7 @@ from jaxga.parallel import (
     ENV_PROCESS_ID,
     EXIT_PROCESS_LOST,
     ProcessLostError,
+    _env_int,
     add_parallel_arguments,
     configure_from_args,
 )
@@ -512,8 +513,8 @@ def check_outputs(args: argparse.Namespace) -> None:
     exist and be writable, and the plot's extension must be an image format matplotlib
     writes (no extension: ``.png`` is added, as matplotlib would, and reported)."""
     pid = getattr(args, "process_id", None)
-    if pid is None and os.environ.get(ENV_PROCESS_ID, "").strip().isdigit():
-        pid = int(os.environ[ENV_PROCESS_ID])
+    if pid is None:
+        pid = _env_int(ENV_PROCESS_ID)
     for option in ("json", "plot"):
         path = getattr(args, option, None)
         if not path or pid not in (None, 0):  # only process 0 writes the outputs

@@ -385,11 +385,7 @@ def _mutation(algo: Algorithm, key, grid, pop, fitness, active, t, params, fit_f
             params["mutation.temperature_c1"], algo.get("mutation.temperature_w"))(t)
         op = functools.partial(mu.segment_sa, temperature=temperature, fitness_fn=fit_fn)
     elif method == "point_checked":
-        # a radius of the map's larger side minus one already reaches every cell: larger
-        # radii give the same candidate cells (but would build a (2r+1)^2 table per node)
-        reach = max(grid.blocked.shape) - 1
-        radius = max(1, min(int(algo.get("mutation.radius", 2)), reach))
-        op = functools.partial(mu.point_checked, radius=radius)
+        op = functools.partial(mu.point_checked, radius=int(algo.get("mutation.radius", 2)))
     else:
         op = MUTATIONS[method]
     return over_individuals_gated(op)(key, grid, pop, pm)

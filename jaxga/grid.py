@@ -176,14 +176,20 @@ class Grid:
             return f"Grid(shape={self.blocked.shape}, corner_rule={self.corner_rule!r})"
 
 
+def as_integer(value) -> int:
+    """``value`` as a Python int when it is an integer of any kind (Python, numpy, a 0-d
+    JAX or numpy integer array); ``TypeError`` for anything else, bools included (1.5 is
+    not truncated, ``True`` is not 1)."""
+    if isinstance(value, (bool, np.bool_)):
+        raise TypeError(f"{value!r} is a bool, not an integer")
+    return int(operator.index(value))
+
+
 def _check_xy(name: str, xy, w: int, h: int) -> tuple[int, int]:
-    try:  # operator.index: integers only (1.5 or "3" are refused, not truncated or split)
+    try:  # integers only: 1.5 or "30" are refused, not truncated or split
         if isinstance(xy, (str, bytes)):
             raise TypeError
-        xy = tuple(xy)
-        if any(isinstance(v, (bool, np.bool_)) for v in xy):
-            raise TypeError
-        x, y = (operator.index(v) for v in xy)
+        x, y = (as_integer(v) for v in tuple(xy))
     except (TypeError, ValueError):
         raise EndpointError(f"{name} must be a pair of integers (x, y), got {xy!r}") from None
     if not (0 <= x < w and 0 <= y < h):

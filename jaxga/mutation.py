@@ -341,7 +341,8 @@ def point_checked(
     of section 3). For feasible *waypoint* paths.
 
     Decisions where AGACD is silent (it only says "single-gene point mutation"):
-    ``radius`` (static, default 2) bounds the move; the new cell is uniform over the free
+    ``radius`` (static, default 2; beyond the map's larger side minus one it changes
+    nothing and is clamped) bounds the move; the new cell is uniform over the free
     cells of the ``(2r+1)^2`` square other than the node itself and any cell already on
     the path (so the path stays loop-free and keeps its length); ``los`` (static) is
     ``"clear"`` (exact, honours the corner rule, default) or ``"linear_trial"``
@@ -350,6 +351,9 @@ def point_checked(
     """
     if radius < 1:
         raise ParameterError(f"radius must be >= 1, got {radius}")
+    # the map's larger side minus one already reaches every cell: a larger radius gives
+    # the same candidate cells (but would build a (2r+1)^2 offset table per node)
+    radius = max(1, min(radius, max(grid.blocked.shape) - 1))
     sees = line_of_sight(los)
     cells = jnp.asarray(cells, _I32)
     length = jnp.asarray(length, _I32)

@@ -17,13 +17,12 @@ different generators or sizes are not related. ``start`` defaults to ``(0, 0)`` 
 
 from __future__ import annotations
 
-import operator
 from collections import deque
 
 import numpy as np
 
 from jaxga.errors import ParameterError
-from jaxga.grid import DEFAULT_CORNER_RULE, Grid, _check_xy, check_corner_rule
+from jaxga.grid import DEFAULT_CORNER_RULE, Grid, _check_xy, as_integer, check_corner_rule
 from jaxga.maps.preprocess import _reachable_np
 
 __all__ = ["maze_map", "random_map", "rectangles_map", "rooms_map"]
@@ -33,10 +32,8 @@ XY = tuple[int, int]
 
 # -------------------------------------------------------------------------- helpers
 def _int(name: str, value, minimum: int) -> int:
-    if isinstance(value, bool):
-        raise ParameterError(f"{name} must be an integer, got {value!r}")
     try:
-        v = operator.index(value)
+        v = as_integer(value)
     except TypeError:
         raise ParameterError(f"{name} must be an integer, got {value!r}") from None
     if v < minimum:
