@@ -383,6 +383,34 @@ def test_point_checked_uniform_and_rejects_blocked_segments():
     assert stats.binomtest(n_failed, 120 * P, 16 / 18).pvalue > 1e-3
 
 
+def test_point_checked_radius_beyond_the_map_is_the_radius_that_reaches_every_cell():
+    """On a 10 x 10 map radius 9 already reaches every cell: radius 10,000 is clamped to
+    it (instead of building a (2r + 1)^2 table of 400 million offsets per node).
+    The engine calls this operator with ``mutation.radius`` as given, so a preset run
+    with radius 10,000 gets the clamp too."""
+    grid = random_map(10, 10, 0.2, 3, corner_rule="free")
+    parents = random_parents(grid, P, seed=5)
+    key = jax.random.PRNGKey(11)
+    # the same program: no larger table is built (a larger one would give the same
+    # mutants, since cells off the map are never candidates)
+    programs = {r: str(jax.make_jaxpr(functools.partial(M.point_checked, radius=r))(
+        key, grid, parents.cells[0], parents.length[0])) for r in (9, 10_000)}
+    assert programs[9] == programs[10_000]
+    outs = {r: _runner(functools.partial(M.point_checked, radius=r))(
+        key, grid, parents) for r in (9, 10_000)}
+    for a, b in zip(outs[9], outs[10_000]):
+        np.testing.assert_array_equal(np.asarray(a), np.asarray(b))
+    check_outputs(grid, parents, *outs[10_000], "waypoint")
+    # the clamp does not hide the radius: radius 1 moves a node by at most one cell
+    near = _runner(functools.partial(M.point_checked, radius=1))(key, grid, parents)
+    c, n, failed = (np.asarray(v) for v in near[:3])
+    pc = np.asarray(parents.cells)
+    moved = c != pc
+    assert moved.any()
+    w = grid.width
+    assert (np.maximum(abs(c % w - pc % w), abs(c // w - pc // w))[moved] == 1).all()
+
+
 def test_range_mutation_regrows_between_kept_parts():
     """Zhu 4.5: only the stretch between the two nodes changes, by a directional walk."""
     grid = _grid(np.zeros((6, SIZE)), start=(0, 0), goal=(9, 0), rule="strict")
