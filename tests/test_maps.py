@@ -128,6 +128,21 @@ def test_orientation_01_without_separators_and_commas(tmp_path):
     assert a[0, 1] and a[1, 2]
 
 
+@pytest.mark.parametrize("fmt", ["01", "ascii", "movingai"])
+def test_a_byte_order_mark_is_ignored_in_every_text_format(tmp_path, fmt):
+    """Editors on Windows save UTF-8 with a BOM: the format is still detected from the
+    first line (no extension decides here) and the map is the same."""
+    text = {"01": "0 0 1\n0 1 0\n",
+            "ascii": "..#\n.#.\n",
+            "movingai": "type octile\nheight 2\nwidth 3\nmap\n..@\n.@.\n"}[fmt]
+    plain = tmp_path / "plain.txt"
+    plain.write_bytes(text.encode())
+    bom = tmp_path / "bom.txt"
+    bom.write_bytes(b"\xef\xbb\xbf" + text.encode())
+    assert detect_format(bom) == detect_format(plain) == fmt
+    np.testing.assert_array_equal(load_map(bom).blocked_np(), load_map(plain).blocked_np())
+
+
 def test_orientation_movingai_first_row_is_top(tmp_path):
     text = "type octile\nheight 4\nwidth 3\nmap\n@..\n...\n...\n...\n"
     b = load_map(write(tmp_path, "m.map", text)).blocked_np()

@@ -203,7 +203,7 @@ def detect_format(path: Source, raw: bytes | None = None) -> str:
     if suffix == ".map":
         return "movingai"
     first = ""
-    for line in raw.decode("utf-8", errors="replace").splitlines():
+    for line in raw.decode("utf-8-sig", errors="replace").splitlines():  # BOM too
         if line.strip():
             first = line.strip()
             break
