@@ -175,7 +175,14 @@ def _seed_list(seeds: int | Sequence[int],
     ``check_count(n)`` runs once the number of seeds is known, before a count is turned
     into an array (so a count too large for memory is refused before it is allocated)."""
     check_count = check_count or (lambda n: None)
-    if isinstance(seeds, (int, np.integer)):
+    if isinstance(seeds, (bool, np.bool_)):  # True is not a count of 1
+        raise JaxgaError(f"seeds must be a count or a list of integer seeds, got {seeds!r}")
+    if isinstance(seeds, (int, np.integer)) or getattr(seeds, "ndim", None) == 0:
+        try:  # a 0-d numpy or JAX integer array is a count too
+            seeds = as_integer(seeds)
+        except TypeError:
+            raise JaxgaError(
+                f"seeds must be a count or a list of integer seeds, got {seeds!r}") from None
         if seeds < 1:
             raise JaxgaError(f"seeds must be >= 1, got {seeds}")
         if seeds > SEED_LIMIT:

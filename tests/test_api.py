@@ -329,6 +329,8 @@ def test_inconsistent_parameters_are_refused_before_tracing(grid, monkeypatch, p
     ([2**32], "[0, 2**32)"), ([-1, 3], "[0, 2**32)"), (2**32 + 1, "at most 2**32"),
     ([2**63], "[0, 2**32)"), ([1.5, 2], "must be integers"), ("ab", "a count or a list"),
     (2.0, "a count or a list"), ([[1, 2]], "a count or a list"),
+    (True, "a count or a list"), (np.bool_(True), "a count or a list"),
+    ([True, False], "must be integers"), (np.float32(2.0), "a count or a list"),
 ])
 def test_seeds_outside_32_bits_are_refused(grid, seeds, words):
     """Seeds are 32-bit: 2**32 would silently repeat seed 0, -1 seed 2**32 - 1; seeds that
@@ -360,3 +362,6 @@ def test_integer_types_are_accepted_for_seeds_generations_and_endpoints(grid):
     r = api.run("sga", grid.replace(start=iter(grid.start_xy)), seeds=np.arange(2),
                 generations=jnp.int32(3), population__size=8, init__max_tries=40)
     assert r.generations == 3 and list(r.seeds) == [0, 1] and r.success.all()
+    # a 0-d integer array is a count: the same two runs
+    again = api.run("sga", grid, seeds=jnp.int32(2), **SMALL)
+    assert list(again.seeds) == [0, 1] and np.array_equal(again.cells, r.cells)
