@@ -197,6 +197,11 @@ def _seed_list(seeds: int | Sequence[int],
         raise JaxgaError(f"seeds must be a count or a list of integer seeds, got {seeds!r}")
     if arr.size == 0:
         raise JaxgaError("seeds must not be empty")
+    values = arr.tolist() if arr.dtype.kind == "O" else None
+    if values is not None and all(type(v) is int for v in values):
+        # Python integers beyond 64 bits (numpy keeps them as objects): out of range
+        raise JaxgaError(f"seeds must be integers in [0, 2**32) (seeds are 32-bit), got "
+                         f"{min(values)} .. {max(values)}")
     if arr.dtype.kind not in "iu":
         raise JaxgaError(f"seeds must be integers, got {list(seeds)!r}")
     if arr.min() < 0 or arr.max() >= SEED_LIMIT:  # (uint64 compares exactly)

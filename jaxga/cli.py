@@ -15,6 +15,7 @@ from __future__ import annotations
 import argparse
 import json
 import os
+import re
 import sys
 import time
 from collections.abc import Sequence
@@ -538,10 +539,25 @@ def check_outputs(args: argparse.Namespace) -> None:
                              f"matplotlib writes ({', '.join(sorted(formats))})")
 
 
+_NEGATIVE_XY = re.compile(r"-\d+,")
+
+
+def _join_negative_xy(argv: Sequence[str]) -> list[str]:
+    """``--start -1,0`` as ``--start=-1,0``: argparse would take ``-1,0`` for an option
+    and say "expected one argument" instead of naming the cell as off the map."""
+    out: list[str] = []
+    for arg in argv:
+        if out and out[-1] in ("--start", "--goal") and _NEGATIVE_XY.match(arg):
+            out[-1] = f"{out[-1]}={arg}"
+        else:
+            out.append(arg)
+    return out
+
+
 def main(argv: Sequence[str] | None = None) -> int:
     """Entry point of the ``jaxga`` console script; returns the exit status."""
     parser = build_parser()
-    args = parser.parse_args(argv)
+    args = parser.parse_args(_join_negative_xy(sys.argv[1:] if argv is None else argv))
     try:
         check_outputs(args)
         if hasattr(args, "devices"):  # subcommands with add_parallel_arguments

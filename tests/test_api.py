@@ -327,7 +327,8 @@ def test_inconsistent_parameters_are_refused_before_tracing(grid, monkeypatch, p
 
 @pytest.mark.parametrize("seeds, words", [
     ([2**32], "[0, 2**32)"), ([-1, 3], "[0, 2**32)"), (2**32 + 1, "at most 2**32"),
-    ([2**63], "[0, 2**32)"), ([1.5, 2], "must be integers"), ("ab", "a count or a list"),
+    ([2**63], "[0, 2**32)"), ([2**70, 1], "[0, 2**32)"), ([1.5, 2], "must be integers"),
+    ("ab", "a count or a list"),
     (2.0, "a count or a list"), ([[1, 2]], "a count or a list"),
     (True, "a count or a list"), (np.bool_(True), "a count or a list"),
     ([True, False], "must be integers"), (np.float32(2.0), "a count or a list"),

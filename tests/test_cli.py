@@ -41,6 +41,8 @@ def test_optimum_uses_file_endpoints_and_overrides(tmp_path):
     [
         (["--map", "does-not-exist.txt"], EXIT_BAD_INPUT, "not found"),
         (["--map", "classic_ga_gapp3_20x20", "--start", "20,0"], EXIT_BAD_INPUT, "off the"),
+        (["--map", "classic_ga_gapp3_20x20", "--start", "-1,0"], EXIT_BAD_INPUT, "(-1, 0)"),
+        (["--map", "classic_ga_gapp3_20x20", "--goal", "-3,-4"], EXIT_BAD_INPUT, "(-3, -4)"),
         (["--map", "random-32-32-20"], EXIT_BAD_INPUT, "blocked"),
         (["--map", "classic_ga_gapp3_20x20", "--corner-rule", "loose"], EXIT_BAD_INPUT,
          "corner rule"),
