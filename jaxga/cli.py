@@ -46,7 +46,7 @@ def _parse_xy(text: str) -> tuple[int, int]:
     return x, y
 
 
-def _add_map_arguments(p: argparse.ArgumentParser) -> None:
+def _add_map_arguments(p: argparse.ArgumentParser, rule_default: str = "strict") -> None:
     p.add_argument("--map", required=True, help="a map file (0/1 text, .map, ASCII, PNG) or a "
                    "built-in map name (see `jaxga maps`)")
     p.add_argument("--start", type=_parse_xy, metavar="X,Y",
@@ -55,13 +55,13 @@ def _add_map_arguments(p: argparse.ArgumentParser) -> None:
     p.add_argument("--goal", type=_parse_xy, metavar="X,Y",
                    help="goal cell (default: the file's G or (W-1, H-1))")
     p.add_argument("--corner-rule", default=None, metavar="RULE",
-                   help=f"one of {', '.join(CORNER_RULES)} (default: strict)")
+                   help=f"one of {', '.join(CORNER_RULES)} (default: {rule_default})")
 
 
 def _add_preset_arguments(p: argparse.ArgumentParser) -> None:
     """The options of a GA experiment: preset, map, variant, generations, overrides."""
     p.add_argument("--preset", required=True, help="a preset name (jaxga presets) or a TOML file")
-    _add_map_arguments(p)
+    _add_map_arguments(p, rule_default="the preset's map.corner_rule")
     p.add_argument("--variant", help="a preset variant, e.g. 50x50 for agacd")
     p.add_argument("--generations", type=int, help="override the preset's generations")
     p.add_argument("--set", action="append", metavar="KEY=VALUE",
@@ -461,7 +461,7 @@ def build_parser() -> argparse.ArgumentParser:
     p = sub.add_parser("compare", help="compare presets on a map with statistical tests")
     p.add_argument("--presets", required=True, metavar="A,B,...",
                    help="comma-separated preset names (jaxga presets) or TOML files")
-    _add_map_arguments(p)
+    _add_map_arguments(p, rule_default="the first preset's map.corner_rule")
     p.add_argument("--seeds", type=int, default=30,
                    help="seeded runs per preset, the same seeds for all (default 30)")
     p.add_argument("--metric", default="length",
