@@ -120,3 +120,26 @@ def test_console_script_never_prints_a_traceback(tmp_path):
     )
     assert proc.returncode == EXIT_BAD_INPUT
     assert "Traceback" not in proc.stderr and len(proc.stderr.strip().splitlines()) == 1
+
+
+def test_the_command_line_compilation_cache_directory(tmp_path, monkeypatch):
+    """`jaxga run` keeps compiled programs in $JAXGA_CACHE_DIR, by default
+    ~/.cache/jaxga/jax; an empty value turns the cache off (README, Quick start)."""
+    import jax
+
+    from jaxga.cli import use_compilation_cache
+
+    updates = []
+    monkeypatch.setattr(jax.config, "update", lambda k, v: updates.append((k, v)))
+    monkeypatch.setenv("HOME", str(tmp_path))
+    monkeypatch.delenv("JAXGA_CACHE_DIR", raising=False)
+    default = str(tmp_path / ".cache" / "jaxga" / "jax")
+    assert use_compilation_cache() == default
+    assert ("jax_compilation_cache_dir", default) in updates
+    updates.clear()
+    monkeypatch.setenv("JAXGA_CACHE_DIR", str(tmp_path / "mine"))
+    assert use_compilation_cache() == str(tmp_path / "mine")
+    assert ("jax_compilation_cache_dir", str(tmp_path / "mine")) in updates
+    updates.clear()
+    monkeypatch.setenv("JAXGA_CACHE_DIR", "")
+    assert use_compilation_cache() is None and updates == []
