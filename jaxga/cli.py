@@ -14,6 +14,7 @@ from __future__ import annotations
 
 import argparse
 import json
+import math
 import os
 import re
 import sys
@@ -22,7 +23,7 @@ from collections.abc import Sequence
 from pathlib import Path
 
 from jaxga.errors import EndpointError, JaxgaError, NoPathError
-from jaxga.grid import CORNER_RULES
+from jaxga.grid import CORNER_RULES, as_integer
 from jaxga.parallel import (
     ENV_PROCESS_ID,
     EXIT_PROCESS_LOST,
@@ -250,6 +251,8 @@ def cmd_compare(args: argparse.Namespace) -> int:
     from jaxga.errors import ParameterError
 
     presets = [p.strip() for p in args.presets.split(",") if p.strip()]
+    if len(presets) < 2:
+        raise ParameterError(f"--presets needs at least two preset names, got {args.presets!r}")
     check_metric(args.metric)
     if args.test not in TESTS:
         raise ParameterError(f"unknown test {args.test!r}; choose from {', '.join(TESTS)}")
@@ -281,7 +284,9 @@ def cmd_compare(args: argparse.Namespace) -> int:
         plot_comparison(comp, args.plot)
         print(f"wrote {args.plot}")
     if not any(r.success.any() for r in comp.results.values()):
-        print("jaxga: no path: no preset found a path", file=sys.stderr)
+        reasons = sorted({r.reason for r in comp.results.values() if r.reason})
+        print("jaxga: no path: no preset found a path"
+              + "".join(f"; {reason}" for reason in reasons), file=sys.stderr)
         return EXIT_NO_PATH
     return 0
 
@@ -305,11 +310,23 @@ def _preset_rule(args: argparse.Namespace) -> str:
 
 def _parse_obstacles(text: str) -> list[tuple[int, int]]:
     """``X,Y;X,Y;...`` (empty: none) as a list of ``(x, y)`` cells."""
+    from jaxga.errors import ParameterError
+
     cells = []
     for part in text.replace(" ", "").split(";"):
         if part:
-            cells.append(_parse_xy(part))
+            try:
+                cells.append(_parse_xy(part))
+            except argparse.ArgumentTypeError as e:
+                raise ParameterError(f"--obstacles: {e}") from None
     return cells
+
+
+def _number_or_inf(value) -> float:
+    """A run's ``raw_length`` for ordering: anything that is not a finite number sorts last."""
+    if isinstance(value, bool) or not isinstance(value, (int, float)):
+        return float("inf")
+    return float(value) if math.isfinite(value) else float("inf")
 
 
 def _read_path_json(path: str, run_index: int | None) -> list[tuple[int, int]]:
@@ -324,8 +341,12 @@ def _read_path_json(path: str, run_index: int | None) -> list[tuple[int, int]]:
             data = json.load(f)
         except ValueError as e:
             raise ParameterError(f"{path}: not valid JSON ({e})") from None
+    expected = (f"{path}: expected a list of [x, y] cells, an object with a \"path\" list, "
+                "or the JSON of `jaxga run`")
     if isinstance(data, dict) and "runs" in data:
         runs = data["runs"]
+        if not (isinstance(runs, list) and all(isinstance(r, dict) for r in runs)):
+            raise ParameterError(f"{expected} (its \"runs\" must be a list of objects)")
         if run_index is not None:
             if not 0 <= run_index < len(runs):
                 raise ParameterError(f"{path}: --run {run_index} is outside 0..{len(runs) - 1}")
@@ -334,15 +355,14 @@ def _read_path_json(path: str, run_index: int | None) -> list[tuple[int, int]]:
             ok = [r for r in runs if r.get("success") and r.get("raw_path")]
             if not ok:
                 raise ParameterError(f"{path}: no successful run with a path")
-            run = min(ok, key=lambda r: r.get("raw_length") or float("inf"))
+            run = min(ok, key=lambda r: _number_or_inf(r.get("raw_length")))
         data = run.get("raw_path") or run.get("path")
     elif isinstance(data, dict):
         data = data.get("path")
-    try:
-        cells = [(int(x), int(y)) for x, y in data]
+    try:  # integers only: 0.9 is not cell 0
+        cells = [(as_integer(x), as_integer(y)) for x, y in data]
     except (TypeError, ValueError):
-        raise ParameterError(f"{path}: expected a list of [x, y] cells, an object with a "
-                             "\"path\" list, or the JSON of `jaxga run`") from None
+        raise ParameterError(f"{expected} (cells are pairs of integers)") from None
     if not cells:
         raise ParameterError(f"{path}: the path is empty")
     return cells

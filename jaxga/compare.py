@@ -58,6 +58,15 @@ DEFAULT_METRICS = ("length", "raw_length", "turns", "convergence_generation")
 PresetSpec = str | Config | tuple[str | Config, Mapping[str, Any]]
 
 
+def check_alpha(alpha: Any) -> None:
+    """The significance level must be a number in (0, 1): ``alpha = 5`` would mark every
+    test significant, NaN none."""
+    ok = (isinstance(alpha, (int, float, np.floating)) and not isinstance(alpha, bool)
+          and 0 < alpha < 1)
+    if not ok:
+        raise ParameterError(f"alpha must be a number in (0, 1), got {alpha!r}")
+
+
 def check_metric(metric: str) -> str:
     """``metric`` if it is one of :data:`METRICS`, else a :class:`ParameterError`."""
     if metric not in METRICS:
@@ -358,6 +367,7 @@ def compare_results(
     """
     if len(results) < 2:
         raise ParameterError(f"a comparison needs at least two presets, got {len(results)}")
+    check_alpha(alpha)
     check_metric(metric)
     if test not in TESTS:
         raise ParameterError(f"unknown test {test!r}; choose from {', '.join(TESTS)}")
@@ -449,6 +459,7 @@ def compare(
         failed seeds and corrections). Each preset's :class:`Result` is exactly what
         ``run(preset, grid, seeds, **common_options)`` returns.
     """
+    check_alpha(alpha)
     check_metric(metric)
     for m in metrics or ():
         check_metric(m)

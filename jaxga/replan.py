@@ -191,9 +191,12 @@ def mpmga_cell(p: int, width: int) -> XY:
 
 def _as_xy_list(path: Any, name: str) -> list[XY]:
     try:
-        arr = np.asarray(path, dtype=np.int64)
+        arr = np.asarray(path)
     except (TypeError, ValueError):
         raise ParameterError(f"{name} must be a list of (x, y) integer pairs") from None
+    if arr.size and arr.dtype.kind not in "iu":  # 0.9 is not cell 0, True is not 1
+        raise ParameterError(f"{name} must be a list of (x, y) integer pairs, got values of "
+                             f"type {arr.dtype}")
     if arr.ndim != 2 or arr.shape[1] != 2:
         if arr.size == 0:
             return []
@@ -484,7 +487,7 @@ def _plan_segment(work: Grid, blocked: np.ndarray, start: XY, rejoin: XY, preset
                     goal=(rejoin[0] - ox, rejoin[1] - oy), corner_rule=rule)
     kw = dict(overrides)
     if population is not None and "population__size" not in kw:
-        kw["population__size"] = int(population)
+        kw["population__size"] = population  # checked as the configuration key
     r = run(preset, g, seeds=seeds, generations=generations, **kw)
     info["result"] = r
     n_ok = int(np.sum(r.success))

@@ -12,7 +12,7 @@ import pytest
 import scipy.stats
 
 from jaxga import api
-from jaxga.cli import EXIT_BAD_INPUT, main
+from jaxga.cli import EXIT_BAD_INPUT, EXIT_NO_PATH, main
 from jaxga.compare import METRICS, compare, compare_results
 from jaxga.errors import ParameterError
 from jaxga.maps import random_map, save_map
@@ -278,3 +278,31 @@ def test_cli_compare_unknown_preset(tmp_path, grid, capsys):
     assert main(args) == EXIT_BAD_INPUT
     err = capsys.readouterr().err.strip()
     assert "no_such_preset" in err and "\n" not in err
+
+
+@pytest.mark.parametrize("presets", [",", "", "sga"])
+def test_cli_compare_needs_two_presets_even_with_endpoints(tmp_path, grid, capsys, presets):
+    map_file = save_map(grid, tmp_path / "m.ascii")
+    args = _cli_args(map_file, "--start", "0,0")
+    args[2] = presets
+    assert main(args) == EXIT_BAD_INPUT
+    err = capsys.readouterr().err.strip()
+    assert "at least two" in err and "\n" not in err
+
+
+@pytest.mark.parametrize("alpha", [5, 0, 1, float("nan"), "x", True, None])
+def test_a_significance_level_outside_0_1_is_refused(comparison, alpha):
+    """alpha = 5 marked every test significant; NaN none; "x" failed in summary()."""
+    with pytest.raises(ParameterError, match="alpha must be a number in"):
+        compare_results(comparison.results, alpha=alpha)
+    with pytest.raises(ParameterError, match="alpha must be a number in"):
+        compare(["sga", "imga"], "classic_ga_gapp3_20x20", seeds=1, alpha=alpha)
+
+
+def test_cli_compare_with_no_path_names_the_cause(tmp_path, capsys):
+    walled = tmp_path / "walled.txt"
+    walled.write_text("S.#.\n..#G\n")
+    args = _cli_args(walled)
+    assert main(args) == EXIT_NO_PATH
+    err = capsys.readouterr().err.strip()
+    assert "no preset found a path" in err and "unreachable" in err

@@ -184,6 +184,15 @@ def test_invalid_robot_cell_and_arguments(sc25):
         replan(g, p, [], sc25.position, plan_from="nowhere")
     with pytest.raises(ParameterError, match="empty"):
         replan(g, [], [], sc25.position)
+    # coordinates are integers: 0.9 is not cell 0 (they were truncated)
+    with pytest.raises(ParameterError, match="integer pairs"):
+        replan(g, [(x + 0.5, y) for x, y in p], [], sc25.position)
+    with pytest.raises(ParameterError, match="integer pairs"):
+        replan(g, p, [(20.7, 12.2)], sc25.position)
+    with pytest.raises(ParameterError, match="integer pairs"):
+        replan(g, p, [], (20.5, 11))
+    with pytest.raises(ParameterError, match="population.size"):
+        replan(g, p, [(20, 12)], sc25.position, population=2.5)
 
 
 def test_ga_failure_is_honest_and_fallback_is_flagged(sc25, monkeypatch):
@@ -240,6 +249,8 @@ def test_cli_replan_end_to_end(tmp_path, sc25, capsys):
     (["--position", "20,11", "--obstacles", "23,24;23,23;24,23;20,12"], EXIT_NO_PATH,
      "unreachable"),
     (["--position", "20,11", "--corner-rule", "loose"], EXIT_BAD_INPUT, "corner rule"),
+    (["--position", "20,11", "--obstacles", "x"], EXIT_BAD_INPUT, "--obstacles"),
+    (["--position", "20,11", "--obstacles", "4,4;5"], EXIT_BAD_INPUT, "'5'"),
 ])
 def test_cli_replan_errors(tmp_path, sc25, capsys, extra, code, words):
     m, plain, _ = _cli_files(tmp_path, sc25)
@@ -257,4 +268,18 @@ def test_cli_replan_bad_path_file(tmp_path, sc25, capsys):
     assert "not valid JSON" in capsys.readouterr().err
     bad.write_text(json.dumps({"runs": [{"success": False}]}))
     assert main([*args, str(bad)]) == EXIT_BAD_INPUT
+    capsys.readouterr()
+    # malformed JSON of `jaxga run`, and cells that are not integers: one line each
+    for content in ('{"runs": 5}', '{"runs": [1, 2]}', '{"runs": {"a": 1}}',
+                    "[[0.9, 0.9], [1.9, 1.9]]", "[[0, 0], [1e400, 1]]"):
+        bad.write_text(content)
+        assert main([*args, str(bad)]) == EXIT_BAD_INPUT, content
+        err = capsys.readouterr().err.strip()
+        assert "bad.json" in err and "\n" not in err and "Traceback" not in err, err
+    # a raw_length that is not a number sorts last: the other run's path is taken
+    bad.write_text(json.dumps({"runs": [
+        {"success": True, "raw_path": [list(c) for c in sc25.path], "raw_length": "x"},
+        {"success": True, "raw_path": [[0, 0], [1, 1]], "raw_length": 1.0}]}))
+    assert main([*args, str(bad)]) == EXIT_BAD_INPUT
+    assert "(20, 11) is not on the path" in capsys.readouterr().err
     assert main([*args, str(tmp_path / "missing.json")]) == EXIT_BAD_INPUT
