@@ -505,20 +505,26 @@ def sweep(
     config, grid, map_name = _load(preset, grid, corner_rule, variant, sets, overrides,
                                    generations)
     configs = _point_configs(config, points)
-    octile = shortest_path(grid)
-    if not octile.found:
-        seed_arr = _seed_list(seeds)
-        return [_no_path_result(c, map_name, grid, seed_arr, build(c, grid)[0],
-                                octile.reason, time.perf_counter() - t_start)
-                for c in configs]
-    any_angle = any_angle_shortest_path(grid)
     capacity = max(int(c["population.size"]) for c in configs)
     if population_capacity is not None:
-        if int(population_capacity) < capacity:
+        try:  # 9.7 is not truncated
+            population_capacity = as_integer(population_capacity)
+        except TypeError:
+            raise ParameterError(f"population_capacity must be an integer, got "
+                                 f"{population_capacity!r}") from None
+        if population_capacity < capacity:
             raise ParameterError(
                 f"population_capacity {population_capacity} is below the largest "
                 f"population.size swept ({capacity})")
-        capacity = int(population_capacity)
+        capacity = population_capacity
+    octile = shortest_path(grid)
+    if not octile.found:
+        algos = [build(c, grid)[0] for c in configs]
+        seed_arr = _seed_list(seeds, lambda n: _check_result_memory(
+            n * len(configs), max(algos, key=lambda a: a.capacity)))
+        return [_no_path_result(c, map_name, grid, seed_arr, a, octile.reason,
+                                time.perf_counter() - t_start) for c, a in zip(configs, algos)]
+    any_angle = any_angle_shortest_path(grid)
     # the capacity is the largest size swept, also when it is below the preset's size
     algo, _ = build(config.override({"population.size": capacity}), grid)
     per_point = [default_params(c, algo.islands) for c in configs]

@@ -54,6 +54,7 @@ class Field:
 
     def check(self, key: str, value: Any) -> Any:
         kinds = self.kind if isinstance(self.kind, tuple) else (self.kind,)
+        value = python_scalar(value)
         if float in kinds and isinstance(value, int) and not isinstance(value, bool):
             value = float(value)
         if isinstance(value, bool) and bool not in kinds:
@@ -72,6 +73,17 @@ class Field:
             if self.high is not None and value > self.high:
                 raise ParameterError(f"{key} = {value!r} is above its maximum {self.high}")
         return value
+
+
+def python_scalar(value: Any) -> Any:
+    """A numpy scalar (``np.int64(8)``, ``np.float32(0.5)``, ``np.bool_(True)``) as the
+    Python value it holds; anything else unchanged. Sweeps and designs built with numpy
+    give numpy scalars, which are the same values as far as a configuration goes."""
+    import numpy as np
+
+    if isinstance(value, np.generic) and value.dtype.kind in "biuf":
+        return value.item()
+    return value
 
 
 def _kind_name(kinds: tuple[type, ...]) -> str:

@@ -71,8 +71,8 @@ from typing import Any
 
 import numpy as np
 
-from jaxga.config import SCHEMA, Config, parse_value
-from jaxga.errors import ParameterError
+from jaxga.config import SCHEMA, Config, parse_value, python_scalar
+from jaxga.errors import NoPathError, ParameterError
 from jaxga.grid import Grid
 
 # ----------------------------------------------------------------------------- factors
@@ -86,6 +86,15 @@ class Factor:
     levels: tuple[Any, Any, Any]
 
     def __post_init__(self) -> None:
+        if isinstance(self.levels, (str, bytes)):
+            raise ParameterError(f"factor {self.name}: levels must be three numbers, got "
+                                 f"{self.levels!r}")
+        try:  # numpy levels are the numbers they hold
+            levels = tuple(python_scalar(v) for v in self.levels)
+        except TypeError:
+            raise ParameterError(f"factor {self.name}: levels must be three numbers, got "
+                                 f"{self.levels!r}") from None
+        object.__setattr__(self, "levels", levels)
         if len(self.levels) != 3:
             raise ParameterError(
                 f"factor {self.name} needs three levels low,mid,high, got {list(self.levels)}")
@@ -576,16 +585,46 @@ class _Checkpoint:
     def _point(self, q: int) -> Path:
         return self.dir / f"point-{q:04d}.json"
 
-    def load_points(self, n: int) -> list[dict[str, list] | None]:
-        """The saved responses of points ``0..n-1`` (None where not finished yet), as
-        process 0 read them."""
+    def _read(self, path: Path, n_seeds: int) -> dict[str, list]:
+        """The responses saved in ``path``, checked: every response, one value (a number
+        or null) per seed; ``ParameterError`` naming the file otherwise."""
+        try:
+            data = json.loads(path.read_text(encoding="utf-8"))
+        except (OSError, ValueError) as e:
+            raise ParameterError(f"checkpoint file {path} is unreadable ({e}): delete it "
+                                 f"and run again to recompute it") from None
+        responses = data.get("responses") if isinstance(data, dict) else None
+        ok = (isinstance(responses, dict) and set(responses) == set(RESPONSES)
+              and all(isinstance(v, list) and len(v) == n_seeds
+                      and all(x is None or (isinstance(x, (int, float))
+                                            and not isinstance(x, bool)) for x in v)
+                      for v in responses.values()))
+        if not ok:
+            raise ParameterError(
+                f"checkpoint file {path} does not hold the responses ({', '.join(RESPONSES)}) "
+                f"of {n_seeds} seeds: delete it and run again to recompute it")
+        return responses
+
+    def _broadcast_read(self, paths: list[Path], n_seeds: int) -> list[dict[str, list] | None]:
+        """Process 0 reads (None for files not written yet); every process gets its result
+        or its refusal."""
         from jaxga import parallel
 
-        saved = None
+        saved, error = None, None
         if self.lead:
-            saved = [json.loads(p.read_text(encoding="utf-8"))["responses"]
-                     if (p := self._point(q)).exists() else None for q in range(n)]
-        return parallel.broadcast(saved)
+            try:
+                saved = [self._read(p, n_seeds) if p.exists() else None for p in paths]
+            except ParameterError as e:
+                error = str(e)
+        saved, error = parallel.broadcast((saved, error))
+        if error:
+            raise ParameterError(error)
+        return saved
+
+    def load_points(self, n: int, n_seeds: int) -> list[dict[str, list] | None]:
+        """The saved responses of points ``0..n-1`` (None where not finished yet), as
+        process 0 read them."""
+        return self._broadcast_read([self._point(q) for q in range(n)], n_seeds)
 
     def save_point(self, q: int, responses: dict[str, np.ndarray]) -> None:
         if self.lead:
@@ -594,13 +633,8 @@ class _Checkpoint:
     def _confirm(self, coded: np.ndarray) -> Path:
         return self.dir / ("confirm_" + "_".join(f"{int(c):+d}" for c in coded) + ".json")
 
-    def load_confirmation(self, coded: np.ndarray) -> dict[str, list] | None:
-        from jaxga import parallel
-
-        saved = None
-        if self.lead and (p := self._confirm(coded)).exists():
-            saved = json.loads(p.read_text(encoding="utf-8"))["responses"]
-        return parallel.broadcast(saved)
+    def load_confirmation(self, coded: np.ndarray, n_seeds: int) -> dict[str, list] | None:
+        return self._broadcast_read([self._confirm(coded)], n_seeds)[0]
 
     def save_confirmation(self, coded: np.ndarray, responses: dict[str, np.ndarray]) -> None:
         if self.lead:
@@ -660,7 +694,9 @@ def run_doe(
     import jax
 
     import jaxga
-    from jaxga.api import _load, _seed_list, sweep
+    from jaxga.api import _check_result_memory, _load, _seed_list, sweep
+    from jaxga.engine import build
+    from jaxga.reference import shortest_path
 
     t_start = time.perf_counter()
     if response not in RESPONSES:
@@ -674,9 +710,13 @@ def run_doe(
     check_factors(config, factors)
     coded = design_array(design, len(factors))
     points = design_points(factors, coded)
-    seed_arr = _seed_list(seeds)
     n_points = len(points)
     capacity = max(int(config.override(p)["population.size"]) for p in points)
+    largest, _ = build(config.override({"population.size": capacity}), loaded)
+    seed_arr = _seed_list(seeds, lambda n: _check_result_memory(n * n_points, largest))
+    octile = shortest_path(loaded)
+    if not octile.found:  # nothing to fit: say why instead of fitting failed runs
+        raise NoPathError(f"{map_name}: {octile.reason}")
     if block is None:
         block = 1 if checkpoint is not None else n_points
     if block < 1:
@@ -705,7 +745,7 @@ def run_doe(
 
     results: list[dict[str, np.ndarray] | None] = [None] * n_points
     if ckpt is not None:
-        for q, saved in enumerate(ckpt.load_points(n_points)):
+        for q, saved in enumerate(ckpt.load_points(n_points, len(seed_arr))):
             if saved is not None:
                 results[q] = _decode(saved)
     done = sum(r is not None for r in results)
@@ -735,7 +775,7 @@ def run_doe(
     coef = fit_linear(coded, y)
     best, predicted = predicted_best(coef, direction)
 
-    saved = ckpt.load_confirmation(best) if ckpt is not None else None
+    saved = ckpt.load_confirmation(best, len(seed_arr)) if ckpt is not None else None
     t0 = time.perf_counter()
     if saved is not None:
         confirm = _decode(saved)

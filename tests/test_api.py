@@ -366,3 +366,24 @@ def test_integer_types_are_accepted_for_seeds_generations_and_endpoints(grid):
     # a 0-d integer array is a count: the same two runs
     again = api.run("sga", grid, seeds=jnp.int32(2), **SMALL)
     assert list(again.seeds) == [0, 1] and np.array_equal(again.cells, r.cells)
+    # numpy scalars as configuration values (a sweep built with numpy gives them)
+    same = api.run("sga", grid, seeds=2, population__size=np.int64(8), generations=3,
+                   init__max_tries=np.int32(40), crossover__probability=np.float64(0.5))
+    assert same.config["population.size"] == 8 and same.success.all()
+    assert type(same.config["population.size"]) is int
+
+
+def test_sweep_capacity_must_be_an_integer_and_no_path_sweeps_check_memory(grid, monkeypatch):
+    with pytest.raises(ParameterError, match="population_capacity must be an integer"):
+        api.sweep("sga", grid, [{"population.size": 4}], seeds=1, population_capacity=9.7,
+                  **SMALL)
+    # an unreachable goal: no runs, but the per-run results are still allocated
+    blocked = np.asarray(grid.blocked).copy()
+    gx, gy = grid.goal_xy
+    blocked[max(gy - 1, 0):gy + 2, max(gx - 1, 0):gx + 2] = True
+    blocked[gy, gx] = False
+    walled = grid.replace(blocked=blocked)
+    monkeypatch.setattr(api, "_physical_memory", lambda: 2**30)
+    with pytest.raises(ParameterError, match="GiB for their results"):
+        api.run("sga", walled, seeds=10**6, **SMALL)
+    assert "unreachable" in api.run("sga", walled, seeds=2, **SMALL).reason

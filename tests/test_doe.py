@@ -17,7 +17,7 @@ import numpy as np
 import pytest
 
 import jaxga
-from jaxga.cli import EXIT_BAD_INPUT, main
+from jaxga.cli import EXIT_BAD_INPUT, EXIT_NO_PATH, main
 from jaxga.doe import (
     AGACD_TABLE3,
     AGACD_TABLE4,
@@ -34,7 +34,7 @@ from jaxga.doe import (
     predicted_best,
     run_doe,
 )
-from jaxga.errors import ParameterError
+from jaxga.errors import NoPathError, ParameterError
 from jaxga.presets import load_preset
 
 ROOT = Path(__file__).resolve().parents[1]
@@ -400,6 +400,42 @@ def test_checkpointed_blocks_equal_one_call_and_resume(one_call, blocked, tmp_pa
     with pytest.raises(ParameterError, match="different configuration.*block"):
         run_doe("agacd", MAP, SMALL, "agacd-table4", seeds=3, checkpoint=ckpt, block=2,
                 **KW)
+
+
+@pytest.mark.parametrize("damage, where", [
+    ("{bad", "point"), ("", "point"), ('{"point": 3}', "point"),
+    ('{"responses": {"fitness": [1, 2, 3]}}', "point"),
+    ("two_seeds", "point"), ("text_value", "point"), ("{bad", "confirm"),
+    ("two_seeds", "confirm"),
+])
+def test_a_damaged_checkpoint_file_is_named_not_a_traceback(blocked, tmp_path, damage, where):
+    """A point or confirmation file that is not valid JSON, lacks responses or holds
+    another number of seeds is refused naming the file (before anything runs)."""
+    ckpt0, _ = blocked
+    ckpt = tmp_path / "ckpt"
+    shutil.copytree(ckpt0, ckpt)
+    target = (ckpt / "point-0004.json" if where == "point"
+              else next(ckpt.glob("confirm_*.json")))
+    saved = json.loads(target.read_text())
+    if damage == "two_seeds":
+        saved["responses"] = {k: v[:2] for k, v in saved["responses"].items()}
+        damage = json.dumps(saved)
+    elif damage == "text_value":
+        saved["responses"]["length"][0] = "x"
+        damage = json.dumps(saved)
+    target.write_text(damage)
+    with pytest.raises(ParameterError, match=re.escape(target.name)):
+        run_doe("agacd", MAP, SMALL, "agacd-table4", seeds=3, checkpoint=ckpt, **KW)
+
+
+def test_a_doe_on_an_unreachable_goal_is_no_path_naming_the_cause(tmp_path, capsys):
+    walled = tmp_path / "walled.txt"
+    walled.write_text("S.#.\n..#G\n")
+    with pytest.raises(NoPathError, match="unreachable"):
+        run_doe("agacd", str(walled), SMALL, "agacd-table4", seeds=3, **KW)
+    args = [a if a != MAP else str(walled) for a in CLI_ARGS]
+    assert main(args) == EXIT_NO_PATH
+    assert "unreachable" in capsys.readouterr().err
 
 
 def test_cli_errors_are_one_line(tmp_path, capsys):
