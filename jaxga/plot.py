@@ -14,6 +14,7 @@ from pathlib import Path
 
 import numpy as np
 
+from jaxga.errors import ParameterError
 from jaxga.grid import Grid
 
 __all__ = ["plot_box", "plot_comparison", "plot_convergence", "plot_diversity",
@@ -79,18 +80,39 @@ def plot_paths(result, grid: Grid | str, seed: int | None = None, ax=None):
     the preset's post-optimiser (SPEC 9); the legend gives both lengths.
     """
     grid = _as_grid(grid, result.corner_rule)
+    if grid.width != result.width:
+        raise ParameterError(f"the result is on a map {result.width} cells wide "
+                             f"({result.map_name}), this map is {grid.width} wide")
     paths = []
     if seed is None and result.success.any():
         seed = int(np.nanargmin(np.where(result.success, result.length, np.nan)))
+    if seed is not None and not 0 <= seed < len(result.seeds):
+        raise ParameterError(f"seed is an index into result.seeds, 0..{len(result.seeds) - 1}; "
+                             f"got {seed}")
     if seed is not None and result.success[seed]:
         paths = [(result.path(seed, raw=True), f"raw ({result.raw_length[seed]:.2f})"),
                  (result.path(seed), f"post-optimised ({result.length[seed]:.2f})")]
+        _check_paths_fit(grid, result, [p for p, _ in paths])
     ax = plot_map(grid, paths, ax=ax)
     title = f"{result.preset} on {result.map_name}"
     if seed is not None:
         title += f", seed {int(result.seeds[seed])}"
     ax.set_title(title)
     return ax
+
+
+def _check_paths_fit(grid: Grid, result, paths) -> None:
+    """Refuse to draw a result on a map it was not computed on (same width, but another
+    map or other endpoints): its paths would cross walls in the picture."""
+    blocked = grid.blocked_np()
+    h = blocked.shape[0]
+    for path in paths:
+        ends = (path[0], path[-1]) == (grid.start_xy, grid.goal_xy)
+        if not ends or any(not 0 <= y < h or blocked[y, x] for x, y in path):
+            raise ParameterError(
+                f"the result's paths ({result.map_name}, {path[0]} -> {path[-1]}) do not fit "
+                f"this map (start {grid.start_xy}, goal {grid.goal_xy}): pass the map and "
+                f"endpoints the result was computed on")
 
 
 def _as_grid(grid: Grid | str, corner_rule: str) -> Grid:

@@ -143,6 +143,16 @@ def test_a_byte_order_mark_is_ignored_in_every_text_format(tmp_path, fmt):
     np.testing.assert_array_equal(load_map(bom).blocked_np(), load_map(plain).blocked_np())
 
 
+@pytest.mark.parametrize("make", ["random_map", "maze_map", "rooms_map", "rectangles_map"])
+def test_generators_refuse_huge_maps_at_once(make):
+    """100,000 x 100,000 would take hours of Python flood fills or exhaust memory."""
+    import jaxga.maps as maps
+
+    with pytest.raises(ParameterError, match="larger than the generators' limit"):
+        extra = {"random_map": {"density": 0.2}, "rectangles_map": {"n_rects": 3}}.get(make, {})
+        getattr(maps, make)(100_000, 100_000, seed=1, **extra)
+
+
 def test_orientation_movingai_first_row_is_top(tmp_path):
     text = "type octile\nheight 4\nwidth 3\nmap\n@..\n...\n...\n...\n"
     b = load_map(write(tmp_path, "m.map", text)).blocked_np()

@@ -74,6 +74,26 @@ def test_plot_paths_draws_raw_and_post_optimised_paths_with_endpoints(comparison
     plt.close(fig)
 
 
+def test_plot_paths_refuses_a_map_the_result_was_not_computed_on(comparison, grid):
+    """Drawing a result on another map would show its paths crossing walls."""
+    from jaxga.errors import ParameterError
+
+    r = comparison.results["imga"]
+    with pytest.raises(ParameterError, match="10 cells wide"):
+        plot_paths(r, random_map(10, 12, 0.2, 3, corner_rule="free"))
+    walls = np.asarray(grid.blocked).copy()
+    i = int(np.flatnonzero(r.success)[0])
+    x, y = r.path(i, raw=True)[1]
+    walls[y, x] = True  # a wall on the drawn path: same size, another map
+    with pytest.raises(ParameterError, match="do not fit this map"):
+        plot_paths(r, grid.replace(blocked=walls), seed=i)
+    with pytest.raises(ParameterError, match="do not fit this map"):
+        plot_paths(r, grid.replace(goal=grid.start_xy), seed=i)  # other endpoints
+    with pytest.raises(ParameterError, match="index into result.seeds"):
+        plot_paths(r, grid, seed=SEEDS)
+    plt.close("all")
+
+
 def test_plot_diversity_one_curve_per_algorithm(comparison, tmp_path):
     ax = plot_diversity(comparison)
     assert [ln.get_label() for ln in ax.get_lines()] == ["sga", "imga"]

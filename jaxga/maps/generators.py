@@ -31,6 +31,12 @@ XY = tuple[int, int]
 
 
 # -------------------------------------------------------------------------- helpers
+MAX_GENERATED_CELLS = 4096 * 4096
+"""The generators' size limit: their flood fills and corridor searches run in Python over
+every cell, so a 100,000 x 100,000 request would take hours or exhaust memory instead of
+failing; such maps are refused at once."""
+
+
 def _int(name: str, value, minimum: int) -> int:
     try:
         v = as_integer(value)
@@ -46,6 +52,11 @@ def _setup(
 ) -> tuple[int, int, np.random.Generator, XY, XY, str]:
     h = _int("height", height, 1)
     w = _int("width", width, 1)
+    if h * w > MAX_GENERATED_CELLS:
+        raise ParameterError(
+            f"a generated map of {w} x {h} = {h * w:,} cells is larger than the generators' "
+            f"limit of {MAX_GENERATED_CELLS:,} cells (4096 x 4096); load a larger map from a "
+            f"file instead")
     s = _int("seed", seed, 0)
     rule = check_corner_rule(corner_rule)
     sxy = _check_xy("start", (0, 0) if start is None else start, w, h)
