@@ -197,11 +197,15 @@ def _seed_list(seeds: int | Sequence[int],
         raise JaxgaError(f"seeds must be a count or a list of integer seeds, got {seeds!r}")
     if arr.size == 0:
         raise JaxgaError("seeds must not be empty")
-    values = arr.tolist() if arr.dtype.kind == "O" else None
-    if values is not None and all(type(v) is int for v in values):
-        # Python integers beyond 64 bits (numpy keeps them as objects): out of range
-        raise JaxgaError(f"seeds must be integers in [0, 2**32) (seeds are 32-bit), got "
-                         f"{min(values)} .. {max(values)}")
+    if arr.dtype.kind == "O":  # Python integers beyond 64 bits, or mixed integer types
+        try:
+            values = [as_integer(v) for v in arr.tolist()]
+        except TypeError:
+            raise JaxgaError(f"seeds must be integers, got {list(seeds)!r}") from None
+        if min(values) < 0 or max(values) >= SEED_LIMIT:
+            raise JaxgaError(f"seeds must be integers in [0, 2**32) (seeds are 32-bit), got "
+                             f"{min(values)} .. {max(values)}")
+        arr = np.array(values, np.int64)
     if arr.dtype.kind not in "iu":
         raise JaxgaError(f"seeds must be integers, got {list(seeds)!r}")
     if arr.min() < 0 or arr.max() >= SEED_LIMIT:  # (uint64 compares exactly)
@@ -519,11 +523,10 @@ def sweep(
         capacity = population_capacity
     octile = shortest_path(grid)
     if not octile.found:
-        algos = [build(c, grid)[0] for c in configs]
-        seed_arr = _seed_list(seeds, lambda n: _check_result_memory(
-            n * len(configs), max(algos, key=lambda a: a.capacity)))
-        return [_no_path_result(c, map_name, grid, seed_arr, a, octile.reason,
-                                time.perf_counter() - t_start) for c, a in zip(configs, algos)]
+        seed_arr = _seed_list(seeds, lambda n: _check_memory(
+            n * len(configs), NO_PATH_BYTES_PER_RUN, "for their results"))
+        return [_no_path_result(c, map_name, grid, seed_arr, build(c, grid)[0], octile.reason,
+                                time.perf_counter() - t_start) for c in configs]
     any_angle = any_angle_shortest_path(grid)
     # the capacity is the largest size swept, also when it is below the preset's size
     algo, _ = build(config.override({"population.size": capacity}), grid)
@@ -684,14 +687,24 @@ def _check_result_memory(n_runs: int, algo: Algorithm) -> None:
     and its next generation). An estimate, not a bound: blocks of runs need more."""
     per_run = (12 * algo.generations + 8 * algo.capacity + 256
                + 2 * 4 * algo.population * algo.islands * algo.capacity)
+    _check_memory(n_runs, per_run, (
+        f"for their results and populations ({algo.generations} generations of history, "
+        f"paths of {algo.capacity} cells and a population of "
+        f"{algo.population * algo.islands} per run)"))
+
+
+NO_PATH_BYTES_PER_RUN = 256
+"""What a run of a no-path result keeps (its seed, NaN metrics and empty paths)."""
+
+
+def _check_memory(n_runs: int, per_run: int, what: str) -> None:
+    """``ParameterError`` when ``n_runs`` runs of ``per_run`` bytes need more than
+    :data:`RESULT_MEMORY_FRACTION` of the machine's physical memory."""
     need, total = n_runs * per_run, _physical_memory()
     if total is not None and need > RESULT_MEMORY_FRACTION * total:
         raise ParameterError(
-            f"{n_runs} runs would need about {need / 2**30:.1f} GiB for their results and "
-            f"populations ({algo.generations} generations of history, paths of "
-            f"{algo.capacity} cells and a population of {algo.population * algo.islands} "
-            f"per run), more than half of this machine's {total / 2**30:.1f} GiB: run fewer "
-            f"seeds per call")
+            f"{n_runs} runs would need about {need / 2**30:.1f} GiB {what}, more than half "
+            f"of this machine's {total / 2**30:.1f} GiB: run fewer seeds per call")
 
 
 def _warn_unfilled(unfilled: np.ndarray, init_rate: np.ndarray, capacity: int,

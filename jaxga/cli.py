@@ -322,11 +322,14 @@ def _parse_obstacles(text: str) -> list[tuple[int, int]]:
     return cells
 
 
-def _number_or_inf(value) -> float:
+def _number_or_inf(value: object) -> float:
     """A run's ``raw_length`` for ordering: anything that is not a finite number sorts last."""
     if isinstance(value, bool) or not isinstance(value, (int, float)):
         return float("inf")
-    return float(value) if math.isfinite(value) else float("inf")
+    try:
+        return float(value) if math.isfinite(value) else float("inf")
+    except OverflowError:  # an integer too large for a float
+        return float("inf")
 
 
 def _read_path_json(path: str, run_index: int | None) -> list[tuple[int, int]]:
@@ -560,14 +563,18 @@ def check_outputs(args: argparse.Namespace) -> None:
 
 
 _NEGATIVE_XY = re.compile(r"-\d+,")
+_XY_OPTIONS = ("--start", "--goal", "--position", "--obstacles")
 
 
 def _join_negative_xy(argv: Sequence[str]) -> list[str]:
-    """``--start -1,0`` as ``--start=-1,0``: argparse would take ``-1,0`` for an option
+    """``--start -1,0`` as ``--start=-1,0`` (also ``--goal``, ``--position``,
+    ``--obstacles`` and their abbreviations): argparse would take ``-1,0`` for an option
     and say "expected one argument" instead of naming the cell as off the map."""
     out: list[str] = []
     for arg in argv:
-        if out and out[-1] in ("--start", "--goal") and _NEGATIVE_XY.match(arg):
+        option = out[-1] if out else ""
+        takes_xy = len(option) > 3 and any(o.startswith(option) for o in _XY_OPTIONS)
+        if takes_xy and _NEGATIVE_XY.match(arg):
             out[-1] = f"{out[-1]}={arg}"
         else:
             out.append(arg)

@@ -72,7 +72,7 @@ from typing import Any
 import numpy as np
 
 from jaxga.config import SCHEMA, Config, parse_value, python_scalar
-from jaxga.errors import NoPathError, ParameterError
+from jaxga.errors import ParameterError
 from jaxga.grid import Grid
 
 # ----------------------------------------------------------------------------- factors
@@ -712,16 +712,15 @@ def run_doe(
     points = design_points(factors, coded)
     n_points = len(points)
     capacity = max(int(config.override(p)["population.size"]) for p in points)
-    largest, _ = build(config.override({"population.size": capacity}), loaded)
-    seed_arr = _seed_list(seeds, lambda n: _check_result_memory(n * n_points, largest))
-    octile = shortest_path(loaded)
-    if not octile.found:  # nothing to fit: say why instead of fitting failed runs
-        raise NoPathError(f"{map_name}: {octile.reason}")
     if block is None:
         block = 1 if checkpoint is not None else n_points
     if block < 1:
         raise ParameterError(f"block must be >= 1 design point, got {block}")
     block = min(int(block), n_points)
+    # only a block of points is in memory at a time (between blocks, a few floats per seed)
+    largest, _ = build(config.override({"population.size": capacity}), loaded)
+    seed_arr = _seed_list(seeds, lambda n: _check_result_memory(n * block, largest))
+    shortest_path(loaded).raise_if_missing()  # nothing to fit: say why (NoPathError)
 
     common = dict(generations=generations, corner_rule=corner_rule, variant=variant,
                   sets=tuple(sets), population_capacity=capacity, **overrides)

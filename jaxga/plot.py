@@ -11,11 +11,12 @@ from __future__ import annotations
 
 from collections.abc import Sequence
 from pathlib import Path
+from typing import Any
 
 import numpy as np
 
 from jaxga.errors import ParameterError
-from jaxga.grid import Grid
+from jaxga.grid import Grid, as_integer
 
 __all__ = ["plot_box", "plot_comparison", "plot_convergence", "plot_diversity",
            "plot_main_effects", "plot_map", "plot_paths", "plot_result", "plot_seed_scatter"]
@@ -86,9 +87,15 @@ def plot_paths(result, grid: Grid | str, seed: int | None = None, ax=None):
     paths = []
     if seed is None and result.success.any():
         seed = int(np.nanargmin(np.where(result.success, result.length, np.nan)))
-    if seed is not None and not 0 <= seed < len(result.seeds):
-        raise ParameterError(f"seed is an index into result.seeds, 0..{len(result.seeds) - 1}; "
-                             f"got {seed}")
+    if seed is not None:
+        try:
+            index = as_integer(seed)
+        except TypeError:  # 1.0 or True: refused just below
+            index = -1
+        if not 0 <= index < len(result.seeds):
+            raise ParameterError(f"seed is an integer index into result.seeds, "
+                                 f"0..{len(result.seeds) - 1}; got {seed!r}")
+        seed = index
     if seed is not None and result.success[seed]:
         paths = [(result.path(seed, raw=True), f"raw ({result.raw_length[seed]:.2f})"),
                  (result.path(seed), f"post-optimised ({result.length[seed]:.2f})")]
@@ -101,7 +108,7 @@ def plot_paths(result, grid: Grid | str, seed: int | None = None, ax=None):
     return ax
 
 
-def _check_paths_fit(grid: Grid, result, paths) -> None:
+def _check_paths_fit(grid: Grid, result: Any, paths: list[list[tuple[int, int]]]) -> None:
     """Refuse to draw a result on a map it was not computed on (same width, but another
     map or other endpoints): its paths would cross walls in the picture."""
     blocked = grid.blocked_np()

@@ -65,6 +65,7 @@ from typing import Any
 
 import numpy as np
 
+from jaxga.config import SCHEMA
 from jaxga.errors import EndpointError, JaxgaError, ParameterError
 from jaxga.grid import Grid
 from jaxga.maps.preprocess import reachable
@@ -355,6 +356,8 @@ def replan(
     if window is not None and (isinstance(window, bool) or not isinstance(window, int)
                                or window < 2):
         raise ParameterError(f"window must be an integer >= 2 or None, got {window!r}")
+    if population is not None:  # checked now, also when no GA run is needed
+        SCHEMA["population.size"].check("population", population)
     h, w = grid.height, grid.width
     rule = grid.corner_rule
     cells = _dedupe(_as_xy_list(path, "path"))

@@ -332,6 +332,7 @@ def test_inconsistent_parameters_are_refused_before_tracing(grid, monkeypatch, p
     (2.0, "a count or a list"), ([[1, 2]], "a count or a list"),
     (True, "a count or a list"), (np.bool_(True), "a count or a list"),
     ([True, False], "must be integers"), (np.float32(2.0), "a count or a list"),
+    ([np.int64(1), 2**70], "[0, 2**32)"), ([1, 2**70, 1.5], "must be integers"),
 ])
 def test_seeds_outside_32_bits_are_refused(grid, seeds, words):
     """Seeds are 32-bit: 2**32 would silently repeat seed 0, -1 seed 2**32 - 1; seeds that
@@ -366,6 +367,8 @@ def test_integer_types_are_accepted_for_seeds_generations_and_endpoints(grid):
     # a 0-d integer array is a count: the same two runs
     again = api.run("sga", grid, seeds=jnp.int32(2), **SMALL)
     assert list(again.seeds) == [0, 1] and np.array_equal(again.cells, r.cells)
+    mixed = api.run("sga", grid, seeds=np.array([0, np.int64(1)], dtype=object), **SMALL)
+    assert list(mixed.seeds) == [0, 1] and np.array_equal(mixed.cells, r.cells)
     # numpy scalars as configuration values (a sweep built with numpy gives them)
     same = api.run("sga", grid, seeds=2, population__size=np.int64(8), generations=3,
                    init__max_tries=np.int32(40), crossover__probability=np.float64(0.5))
@@ -384,6 +387,7 @@ def test_sweep_capacity_must_be_an_integer_and_no_path_sweeps_check_memory(grid,
     blocked[gy, gx] = False
     walled = grid.replace(blocked=blocked)
     monkeypatch.setattr(api, "_physical_memory", lambda: 2**30)
-    with pytest.raises(ParameterError, match="GiB for their results"):
-        api.run("sga", walled, seeds=10**6, **SMALL)
+    with pytest.raises(ParameterError, match="GiB for their results"):  # 256 bytes a run
+        api.run("sga", walled, seeds=10**7, **SMALL)
+    assert api.run("sga", walled, seeds=10**6, **SMALL).seeds.size == 10**6  # 0.24 GiB
     assert "unreachable" in api.run("sga", walled, seeds=2, **SMALL).reason

@@ -295,8 +295,15 @@ def test_a_significance_level_outside_0_1_is_refused(comparison, alpha):
     """alpha = 5 marked every test significant; NaN none; "x" failed in summary()."""
     with pytest.raises(ParameterError, match="alpha must be a number in"):
         compare_results(comparison.results, alpha=alpha)
+
+
+def test_a_bad_significance_level_is_refused_before_running(monkeypatch):
+    import importlib
+
+    module = importlib.import_module("jaxga.compare")  # jaxga.compare is also the function
+    monkeypatch.setattr(module, "run", lambda *a, **k: pytest.fail("a preset ran"))
     with pytest.raises(ParameterError, match="alpha must be a number in"):
-        compare(["sga", "imga"], "classic_ga_gapp3_20x20", seeds=1, alpha=alpha)
+        compare(["sga", "imga"], "classic_ga_gapp3_20x20", seeds=1, alpha=5)
 
 
 def test_cli_compare_with_no_path_names_the_cause(tmp_path, capsys):

@@ -408,7 +408,8 @@ def test_checkpointed_blocks_equal_one_call_and_resume(one_call, blocked, tmp_pa
     ("two_seeds", "point"), ("text_value", "point"), ("{bad", "confirm"),
     ("two_seeds", "confirm"),
 ])
-def test_a_damaged_checkpoint_file_is_named_not_a_traceback(blocked, tmp_path, damage, where):
+def test_a_damaged_checkpoint_file_is_named_not_a_traceback(blocked, tmp_path, monkeypatch,
+                                                            damage, where):
     """A point or confirmation file that is not valid JSON, lacks responses or holds
     another number of seeds is refused naming the file (before anything runs)."""
     ckpt0, _ = blocked
@@ -424,8 +425,23 @@ def test_a_damaged_checkpoint_file_is_named_not_a_traceback(blocked, tmp_path, d
         saved["responses"]["length"][0] = "x"
         damage = json.dumps(saved)
     target.write_text(damage)
+    monkeypatch.setattr(jaxga.api, "sweep", lambda *a, **k: pytest.fail("a sweep ran"))
     with pytest.raises(ParameterError, match=re.escape(target.name)):
         run_doe("agacd", MAP, SMALL, "agacd-table4", seeds=3, checkpoint=ckpt, **KW)
+
+
+def test_a_checkpointed_doe_checks_the_memory_of_one_block(blocked, tmp_path, monkeypatch):
+    """Only a block of points is in memory at a time: 3 seeds x 1 point, not x 9."""
+    ckpt0, _ = blocked
+    ckpt = tmp_path / "ckpt"
+    shutil.copytree(ckpt0, ckpt)
+    checked = []
+    real = jaxga.api._check_result_memory
+    monkeypatch.setattr(jaxga.api, "_check_result_memory",
+                        lambda n, algo: checked.append(n) or real(n, algo))
+    monkeypatch.setattr(jaxga.api, "sweep", lambda *a, **k: pytest.fail("a sweep ran"))
+    run_doe("agacd", MAP, SMALL, "agacd-table4", seeds=3, checkpoint=ckpt, **KW)
+    assert checked == [3]
 
 
 def test_a_doe_on_an_unreachable_goal_is_no_path_naming_the_cause(tmp_path, capsys):

@@ -89,8 +89,9 @@ def test_plot_paths_refuses_a_map_the_result_was_not_computed_on(comparison, gri
         plot_paths(r, grid.replace(blocked=walls), seed=i)
     with pytest.raises(ParameterError, match="do not fit this map"):
         plot_paths(r, grid.replace(goal=grid.start_xy), seed=i)  # other endpoints
-    with pytest.raises(ParameterError, match="index into result.seeds"):
-        plot_paths(r, grid, seed=SEEDS)
+    for seed in (SEEDS, -1, 1.0, True):
+        with pytest.raises(ParameterError, match="index into result.seeds"):
+            plot_paths(r, grid, seed=seed)
     plt.close("all")
 
 

@@ -191,8 +191,9 @@ def test_invalid_robot_cell_and_arguments(sc25):
         replan(g, p, [(20.7, 12.2)], sc25.position)
     with pytest.raises(ParameterError, match="integer pairs"):
         replan(g, p, [], (20.5, 11))
-    with pytest.raises(ParameterError, match="population.size"):
-        replan(g, p, [(20, 12)], sc25.position, population=2.5)
+    for obstacles in ([(20, 12)], []):  # also when nothing is blocked and no GA runs
+        with pytest.raises(ParameterError, match="population"):
+            replan(g, p, obstacles, sc25.position, population=2.5)
 
 
 def test_ga_failure_is_honest_and_fallback_is_flagged(sc25, monkeypatch):
@@ -251,6 +252,8 @@ def test_cli_replan_end_to_end(tmp_path, sc25, capsys):
     (["--position", "20,11", "--corner-rule", "loose"], EXIT_BAD_INPUT, "corner rule"),
     (["--position", "20,11", "--obstacles", "x"], EXIT_BAD_INPUT, "--obstacles"),
     (["--position", "20,11", "--obstacles", "4,4;5"], EXIT_BAD_INPUT, "'5'"),
+    (["--position", "-1,0"], EXIT_BAD_INPUT, "(-1, 0)"),
+    (["--posit", "20,11", "--obst", "-1,0"], EXIT_BAD_INPUT, "(-1, 0) is off the"),
 ])
 def test_cli_replan_errors(tmp_path, sc25, capsys, extra, code, words):
     m, plain, _ = _cli_files(tmp_path, sc25)
@@ -280,6 +283,9 @@ def test_cli_replan_bad_path_file(tmp_path, sc25, capsys):
     bad.write_text(json.dumps({"runs": [
         {"success": True, "raw_path": [list(c) for c in sc25.path], "raw_length": "x"},
         {"success": True, "raw_path": [[0, 0], [1, 1]], "raw_length": 1.0}]}))
+    assert main([*args, str(bad)]) == EXIT_BAD_INPUT
+    assert "(20, 11) is not on the path" in capsys.readouterr().err
+    bad.write_text(bad.read_text().replace('"x"', "1" + "0" * 400))  # too large for a float
     assert main([*args, str(bad)]) == EXIT_BAD_INPUT
     assert "(20, 11) is not on the path" in capsys.readouterr().err
     assert main([*args, str(tmp_path / "missing.json")]) == EXIT_BAD_INPUT

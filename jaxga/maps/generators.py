@@ -186,7 +186,8 @@ def random_map(
     ``max_attempts`` times; then :class:`~jaxga.errors.ParameterError` (density too high).
 
     Args:
-        height, width: map size in cells (>= 1).
+        height, width: map size in cells (>= 1; at most :data:`MAX_GENERATED_CELLS`
+            cells in all, like every generator here).
         density: obstacle fraction in ``[0, 1)``.
         seed: non-negative integer seed.
         start, goal: ``(x, y)`` endpoints, default ``(0, 0)`` and ``(W - 1, H - 1)``.
@@ -231,7 +232,8 @@ def maze_map(
     remainder; the map edge is the outer wall). The backtracker knocks down the wall
     between a cell and a random unvisited neighbour, so every open cell is connected
     and there is exactly one corridor route between two lattice cells. Endpoints that
-    fall in a wall are cleared and joined to the maze by a short corridor.
+    fall in a wall are cleared and joined to the maze by a short corridor. At most
+    :data:`MAX_GENERATED_CELLS` cells.
     """
     h, w, rng, s, g, rule = _setup(height, width, seed, start, goal, corner_rule)
     c = _int("corridor_width", corridor_width, 1)
@@ -260,7 +262,8 @@ def rooms_map(
     rooms absorbs any remainder; the map edge is the outer wall). Doors ``door_width``
     wide, at a random place along the shared wall, join the rooms along a random spanning
     tree (so every room is reachable), and each remaining shared wall gets a door with
-    probability ``extra_doors`` (loops, as in the Moving AI ``room`` maps).
+    probability ``extra_doors`` (loops, as in the Moving AI ``room`` maps). At most
+    :data:`MAX_GENERATED_CELLS` cells.
     """
     h, w, rng, s, g, rule = _setup(height, width, seed, start, goal, corner_rule)
     size = _int("room_size", room_size, 1)
@@ -293,7 +296,8 @@ def rectangles_map(
     uniform over the placements that fit on the map. A rectangle that would cover an
     endpoint or disconnect the start from the goal is rejected and redrawn; after
     ``max_attempts`` draws in total (default ``20 * n_rects + 20``) without placing all
-    rectangles, :class:`~jaxga.errors.ParameterError` is raised.
+    rectangles, :class:`~jaxga.errors.ParameterError` is raised. At most
+    :data:`MAX_GENERATED_CELLS` cells.
     """
     h, w, rng, s, g, rule = _setup(height, width, seed, start, goal, corner_rule)
     n = _int("n_rects", n_rects, 0)
