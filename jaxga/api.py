@@ -33,9 +33,13 @@ from jaxga.objectives import Metrics
 
 SUMMARY_METRICS = ("length", "raw_length", "angle_sum", "turns", "fitness",
                    "convergence_generation")
+GAPS = ("gap", "raw_gap", "fitness_gap")
 
 
 GAP_TOLERANCE = 1e-6
+FITNESS_GAP_TOLERANCE = 1e-5
+"""Fitness is float32 on the device and the reference float64: relative differences
+below this are reported as 0."""
 """Relative gaps smaller than this are reported as exactly 0: path lengths are summed in
 float32 on the device, so an optimal path can come out a few 1e-8 below the optimum."""
 
@@ -82,6 +86,13 @@ class Result:
     width: int
     config: Config | None = None
     point: dict[str, Any] = dataclasses.field(default_factory=dict)
+    fitness_optimum: float = math.nan
+    """The exact optimum of the preset's fitness over 8-connected paths
+    (:func:`jaxga.fitness_reference.fitness_optimum`); NaN where it is not computed
+    (AGACD's waypoint fitness, maps over its size limit)."""
+    fitness_optimum_length: float = math.nan
+    """The length of the path that reaches :attr:`fitness_optimum`: where the fitness
+    charges turns it can be longer than :attr:`optimum`."""
 
     def path(self, i: int, raw: bool = False) -> list[tuple[int, int]]:
         """Seed ``i``'s best path as ``(x, y)`` cells (post-optimised unless ``raw``)."""
@@ -101,6 +112,17 @@ class Result:
         (negative only for waypoint algorithms, whose raw paths are not 8-connected)."""
         return _relative_gap(self.raw_length, self.optimum, self.success)
 
+    @property
+    def fitness_gap(self) -> np.ndarray:
+        """``fitness_optimum / fitness - 1`` per seed: 0 for a run that found the optimum
+        of its own fitness (for the ``1 / cost`` fitnesses, the relative excess of its
+        cost); NaN for failed seeds and where the optimum is not computed."""
+        f = np.asarray(self.fitness, float)
+        with np.errstate(divide="ignore", invalid="ignore"):
+            gap = np.where(f > 0, self.fitness_optimum / f - 1.0, np.inf)
+        gap = np.where(np.abs(gap) < FITNESS_GAP_TOLERANCE, 0.0, gap)
+        return np.where(self.success & np.isfinite(self.fitness_optimum), gap, np.nan)
+
     def _column(self, name: str) -> np.ndarray:
         if name in self.metrics:
             return np.asarray(self.metrics[name], float)
@@ -110,9 +132,9 @@ class Result:
         """``(metric, mean, sd, min, max)`` over successful seeds (AGACD Tables 8-9)."""
         ok = self.success
         rows = []
-        names = list(SUMMARY_METRICS) + ["gap", "raw_gap"]
+        names = list(SUMMARY_METRICS) + list(GAPS)
         for name in names:
-            v = (getattr(self, name) if name in ("gap", "raw_gap") else self._column(name))[ok]
+            v = (getattr(self, name) if name in GAPS else self._column(name))[ok]
             if v.size == 0:
                 rows.append((name, math.nan, math.nan, math.nan, math.nan))
             else:
@@ -128,7 +150,10 @@ class Result:
             f"{self.generations} generations",
             f"success {int(self.success.sum())}/{len(self.seeds)}"
             + (f" ({self.reason})" if self.reason else ""),
-            f"optimum: 8-connected {self.optimum:.4f}, any-angle {self.any_angle_optimum:.4f}",
+            f"optimum: 8-connected {self.optimum:.4f}, any-angle {self.any_angle_optimum:.4f}"
+            + (f", fitness {self.fitness_optimum:.6g} (a path of length "
+               f"{self.fitness_optimum_length:.4f})"
+               if np.isfinite(self.fitness_optimum) else ""),
             f"{'metric':24s} {'mean':>10s} {'sd':>10s} {'min':>10s} {'max':>10s}",
         ]
         for name, mean, sd, lo, hi in self.summary_rows():
@@ -159,9 +184,15 @@ class Result:
         return {
             "preset": self.preset, "map": self.map_name, "corner_rule": self.corner_rule,
             "optimum": self.optimum, "any_angle_optimum": self.any_angle_optimum,
+            "fitness_optimum": _finite_or_none(self.fitness_optimum),
+            "fitness_optimum_length": _finite_or_none(self.fitness_optimum_length),
             "timing": dict(self.timing), "population": self.population,
             "generations": self.generations, "runs": runs,
         }
+
+
+def _finite_or_none(x: float) -> float | None:
+    return float(x) if np.isfinite(x) else None
 
 
 SEED_LIMIT = 2**32
@@ -501,6 +532,7 @@ def sweep(
     every process returns the whole, identical result (:mod:`jaxga.parallel`; a lost
     process raises :class:`jaxga.parallel.ProcessLostError`).
     """
+    from jaxga.fitness_reference import fitness_optimum, fitness_weights
     from jaxga.reference import any_angle_shortest_path, shortest_path
 
     t_start = time.perf_counter()
@@ -531,6 +563,15 @@ def sweep(
     # the capacity is the largest size swept, also when it is below the preset's size
     algo, _ = build(config.override({"population.size": capacity}), grid)
     per_point = [default_params(c, algo.islands) for c in configs]
+    # The exact optimum of each point's own fitness (points may sweep its weights).
+    fitness_opts: dict[Any, Any] = {}
+    for c in configs:
+        method, wts = fitness_weights(c)
+        key = (method, tuple(sorted(wts.items())))
+        if key not in fitness_opts:
+            fitness_opts[key] = fitness_optimum(grid, method, **wts)
+    point_opt = [fitness_opts[(m, tuple(sorted(w.items())))]
+                 for m, w in map(fitness_weights, configs)]
     n_points = len(configs)
     seed_arr = _seed_list(seeds, lambda n: _check_result_memory(n * n_points, algo))
     n_seeds = len(seed_arr)
@@ -618,6 +659,8 @@ def sweep(
             timing=dict(timing), population=int(cfg["population.size"]) * algo.islands,
             generations=algo.generations, width=grid.width, config=cfg,
             point={k.replace("__", "."): v for k, v in points[q].items()},
+            fitness_optimum=point_opt[q].fitness,
+            fitness_optimum_length=point_opt[q].length,
         ))
     return results
 

@@ -489,7 +489,7 @@ def build_parser() -> argparse.ArgumentParser:
                    help="seeded runs per preset, the same seeds for all (default 30)")
     p.add_argument("--metric", default="length",
                    help="main metric: length (post-optimised, default), raw_length, gap, "
-                   "raw_gap, turns, angle_sum, convergence_generation")
+                   "raw_gap, fitness_gap, turns, angle_sum, convergence_generation")
     p.add_argument("--test", default="mannwhitneyu",
                    help="mannwhitneyu (default; independent samples) or wilcoxon (paired "
                    "by seed; only when the presets share random numbers)")

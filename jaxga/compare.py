@@ -24,10 +24,12 @@ Decisions recorded here (the issue leaves them open):
   and summaries of every metric (for Wilcoxon the pair is dropped), and counted in the
   success rate, which is compared separately by Fisher's exact test.
 * **Metrics.** ``length`` (post-optimised, the default), ``raw_length`` (the GA's own
-  8-connected path, before post-optimisation), ``gap``, ``raw_gap``, ``turns`` and
-  ``angle_sum`` (of the post-optimised path) and ``convergence_generation``. The
-  fitness is not offered: its definition differs between presets, so fitness values of
-  two presets are not comparable.
+  8-connected path, before post-optimisation), ``gap``, ``raw_gap``, ``fitness_gap``
+  (how far each preset's best fitness is from the exact optimum of its OWN fitness,
+  :mod:`jaxga.fitness_reference`; NaN for AGACD), ``turns`` and ``angle_sum`` (of the
+  post-optimised path) and ``convergence_generation``. The fitness itself is not
+  offered: its definition differs between presets, so fitness values of two presets are
+  not comparable (their relative gaps to their own optima are).
 * **Multiple comparisons.** Holm's step-down correction over the k(k-1)/2 pairs of each
   metric separately (each metric answers its own question); Fisher tests likewise.
 """
@@ -41,7 +43,7 @@ from typing import Any
 
 import numpy as np
 
-from jaxga.api import Result, run
+from jaxga.api import GAPS, Result, run
 from jaxga.config import Config
 from jaxga.errors import ParameterError
 from jaxga.grid import Grid
@@ -50,7 +52,7 @@ from jaxga.stats import TwoSampleTest, fisher_success, holm, mann_whitney, wilco
 __all__ = ["METRICS", "TESTS", "Comparison", "PairTest", "compare", "compare_results",
            "metric_values"]
 
-METRICS = ("length", "raw_length", "gap", "raw_gap", "turns", "angle_sum",
+METRICS = ("length", "raw_length", "gap", "raw_gap", "fitness_gap", "turns", "angle_sum",
            "convergence_generation")
 TESTS = ("mannwhitneyu", "wilcoxon")
 DEFAULT_METRICS = ("length", "raw_length", "turns", "convergence_generation")
@@ -85,7 +87,7 @@ def metric_values(result: Result, metric: str) -> np.ndarray:
     """
     if metric != "fitness":
         check_metric(metric)
-    if metric in ("gap", "raw_gap"):
+    if metric in GAPS:
         v = getattr(result, metric)
     elif metric in ("turns", "angle_sum"):
         v = result.metrics.get(metric, np.full(len(result.seeds), np.nan))
@@ -181,6 +183,7 @@ class Comparison:
                 "mean": mean, "sd": sd, "min": lo, "max": hi,
                 "raw_gap": _stats(metric_values(r, "raw_gap"))[0],
                 "gap": _stats(metric_values(r, "gap"))[0],
+                "fitness_gap": _stats(metric_values(r, "fitness_gap"))[0],
                 "time_per_run_s": _time_per_run(r),
                 "population": r.population, "generations": r.generations,
             })
@@ -188,11 +191,12 @@ class Comparison:
 
     def _preset_table(self) -> tuple[list[str], list[list[str]]]:
         head = ["preset", "pop x gen", "success", f"{self.metric} mean", "sd", "min", "max",
-                "gap 8-conn", "gap any-angle", "s/run"]
+                "gap 8-conn", "gap any-angle", "gap own fitness", "s/run"]
         rows = [[r["label"], f"{r['population']} x {r['generations']}",
                  f"{r['n_success']}/{r['n']}", f"{r['mean']:.4f}", f"{r['sd']:.4f}",
                  f"{r['min']:.4f}", f"{r['max']:.4f}", f"{100 * r['raw_gap']:.2f}%",
-                 f"{100 * r['gap']:.2f}%", f"{r['time_per_run_s']:.3f}"]
+                 f"{100 * r['gap']:.2f}%", _percent(r["fitness_gap"]),
+                 f"{r['time_per_run_s']:.3f}"]
                 for r in self.preset_rows()]
         return head, rows
 
@@ -299,6 +303,7 @@ class Comparison:
             presets[row["label"]] = {
                 "preset": r.preset, "population": r.population,
                 "generations": r.generations, "n_seeds": row["n"],
+                "fitness_optimum": _num(r.fitness_optimum),
                 "n_success": row["n_success"], "success_rate": row["success_rate"],
                 "summary": {name: {"mean": _num(m), "sd": _num(s), "min": _num(lo),
                                    "max": _num(hi)}
@@ -315,6 +320,10 @@ class Comparison:
             "pairwise": [t.to_json() for t in self.pairwise],
             "success_tests": [t.to_json() for t in self.success_tests],
         }
+
+
+def _percent(v: float) -> str:
+    return "-" if math.isnan(v) else f"{100 * v:.2f}%"
 
 
 def _p(p: float) -> str:

@@ -197,7 +197,7 @@ def plot_box(data, metric: str | None = None, ax=None, reference: dict | None = 
                 reference["any-angle optimum"] = data.any_angle_optimum
             if metric in ("length", "raw_length"):
                 reference["8-connected optimum"] = data.optimum
-            if metric in ("gap", "raw_gap"):
+            if metric in ("gap", "raw_gap", "fitness_gap"):
                 reference["optimum"] = 0.0
     else:
         values = {k: np.asarray(v, float) for k, v in data.items()}

@@ -12,6 +12,7 @@ import pytest
 
 from jaxga import api, schedules
 from jaxga.errors import InitialisationWarning, JaxgaError, ParameterError
+from jaxga.fitness_reference import fitness_optimum
 from jaxga.maps import load_map, random_map
 from jaxga.presets import preset_names
 from jaxga.reference import any_angle_shortest_path, clear_np, shortest_path
@@ -53,10 +54,20 @@ def test_every_preset_returns_only_feasible_paths(preset_run, grid):
             assert r.raw_length[i] >= octile - 1e-4
     assert r.history["best"].shape == (3, 3)
     assert np.all(np.diff(r.history["best"], axis=1) >= 0)
+    # no run beats the exact optimum of its own fitness (AGACD's waypoint fitness has none)
+    if name == "agacd":
+        assert math.isnan(r.fitness_optimum) and np.isnan(r.fitness_gap).all()
+    else:
+        opt = fitness_optimum(grid, r.config)
+        assert opt.found and r.fitness_optimum == opt.fitness
+        assert r.fitness_optimum_length >= octile - 1e-9
+        assert np.all(r.fitness_gap[r.success] >= 0), (name, r.fitness, opt.fitness)
+        assert np.isnan(r.fitness_gap[~r.success]).all()
     # the JSON layout of `jaxga run --json`
     js = r.to_json()
     assert js["preset"] == name and len(js["runs"]) == 3
     assert {"compile_s", "init_s", "evolve_s", "post_s", "total_s"} <= set(js["timing"])
+    assert js["fitness_optimum"] == (None if name == "agacd" else r.fitness_optimum)
 
 
 def test_every_preset_is_deterministic(preset_run, grid):
