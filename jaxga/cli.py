@@ -92,9 +92,17 @@ def _xy_list(path) -> list[list[int]]:
 
 
 def cmd_optimum(args: argparse.Namespace) -> int:
-    """``jaxga optimum``: exact 8-connected and any-angle optima of one map."""
+    """``jaxga optimum``: exact 8-connected and any-angle optima of one map, and with
+    ``--preset`` the exact optimum of that preset's fitness."""
+    from jaxga.fitness_reference import fitness_optimum
+    from jaxga.presets import load_preset
     from jaxga.reference import any_angle_shortest_path, shortest_path
 
+    config = None
+    if args.preset is not None:
+        config = load_preset(args.preset, variant=args.variant, sets=args.set or ())
+        if args.corner_rule is None:  # as `jaxga run`: the preset's corner rule
+            args.corner_rule = config["map.corner_rule"]
     info, grid = _load_grid(args)
     t0 = time.perf_counter()
     octile = shortest_path(grid).raise_if_missing()
@@ -107,6 +115,16 @@ def cmd_optimum(args: argparse.Namespace) -> int:
     print(f"8-connected  {octile.length:.4f}  ({octile.n_cells} cells, {t1 - t0:.3f} s)")
     print(f"any-angle    {any_angle.length:.4f}  ({any_angle.n_cells} waypoints, "
           f"{t2 - t1:.3f} s)")
+    fit = None
+    if config is not None:
+        fit = fitness_optimum(grid, config)
+        label = f"fitness of {config['name']} ({config['fitness.method']})"
+        if fit.found:
+            print(f"{label}  {fit.fitness:.6g}  (a path of length {fit.length:.4f}, "
+                  f"{len(fit.path)} cells{'' if fit.loop_free else ', not loop-free: a bound'}"
+                  f", {time.perf_counter() - t2:.3f} s)")
+        else:
+            print(f"{label}  not computed: {fit.reason}")
     if args.json:
         out = {
             "map": info.name,
@@ -118,6 +136,14 @@ def cmd_optimum(args: argparse.Namespace) -> int:
             "any_angle_length": float(any_angle.length),
             "any_angle_path": _xy_list(any_angle.path),
         }
+        if fit is not None:
+            out["fitness"] = {
+                "preset": config["name"], "method": config["fitness.method"],
+                "found": fit.found, "reason": fit.reason,
+                "value": fit.fitness if fit.found else None,
+                "length": fit.length if fit.found else None,
+                "path": _xy_list(fit.path), "loop_free": fit.loop_free,
+            }
         _write_json(args.json, out)
     return 0
 
@@ -409,7 +435,12 @@ def build_parser() -> argparse.ArgumentParser:
     sub.required = True
 
     p = sub.add_parser("optimum", help="exact 8-connected and any-angle optima of a map")
-    _add_map_arguments(p)
+    _add_map_arguments(p, rule_default="strict, or the preset's map.corner_rule")
+    p.add_argument("--preset", help="also the exact optimum of this preset's fitness over "
+                   "8-connected paths (not for agacd, whose fitness scores waypoint paths)")
+    p.add_argument("--variant", help="a preset variant, e.g. 50x50 for agacd")
+    p.add_argument("--set", action="append", metavar="KEY=VALUE",
+                   help="override a preset key, e.g. fitness.omega=0.5")
     p.add_argument("--json", metavar="OUT", help="write the optima and paths as JSON")
     p.set_defaults(func=cmd_optimum)
 

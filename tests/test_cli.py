@@ -25,6 +25,30 @@ def test_optimum_json_on_builtin_map(tmp_path, capsys):
     assert "30.9706" in capsys.readouterr().out
 
 
+def test_optimum_of_a_presets_fitness(tmp_path, capsys):
+    out = tmp_path / "opt.json"
+    assert main(["optimum", "--map", "routeplanning_yangbo_20x20", "--preset", "iga_zhu",
+                 "--json", str(out)]) == 0
+    data = json.loads(out.read_text())
+    assert data["corner_rule"] == "free"  # the preset's, as `jaxga run` takes it
+    fit = data["fitness"]
+    assert fit["found"] and fit["method"] == "iga_zhu" and fit["loop_free"]
+    assert fit["length"] == pytest.approx(31.5563, abs=1e-4)
+    assert fit["length"] > data["length"]  # longer than the shortest path
+    assert fit["path"][0] == [0, 0] and fit["path"][-1] == [19, 19]
+    assert "a path of length 31.5563" in capsys.readouterr().out
+    # --set changes the weights: omega = 1 is the length alone
+    assert main(["optimum", "--map", "routeplanning_yangbo_20x20", "--preset", "iga_zhu",
+                 "--set", "fitness.omega=1", "--json", str(out)]) == 0
+    data = json.loads(out.read_text())
+    assert data["fitness"]["length"] == pytest.approx(data["length"])
+    assert main(["optimum", "--map", "classic_ga_gapp3_20x20", "--preset", "agacd",
+                 "--json", str(out)]) == 0
+    fit = json.loads(out.read_text())["fitness"]
+    assert not fit["found"] and fit["value"] is None and "waypoint" in fit["reason"]
+    assert "not computed" in capsys.readouterr().out
+
+
 def test_optimum_uses_file_endpoints_and_overrides(tmp_path):
     art = tmp_path / "m.txt"
     art.write_text("S..#\n.#..\n...G\n")  # top row first
