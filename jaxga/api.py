@@ -37,11 +37,11 @@ GAPS = ("gap", "raw_gap", "fitness_gap")
 
 
 GAP_TOLERANCE = 1e-6
-FITNESS_GAP_TOLERANCE = 1e-5
-"""Fitness is float32 on the device and the reference float64: relative differences
-below this are reported as 0."""
 """Relative gaps smaller than this are reported as exactly 0: path lengths are summed in
 float32 on the device, so an optimal path can come out a few 1e-8 below the optimum."""
+FITNESS_GAP_TOLERANCE = 1e-5
+"""The same for :attr:`Result.fitness_gap`: the fitness is a float32 sum of lengths and
+turn costs and its reciprocal (errors of about 1e-6 relative), the reference float64."""
 
 
 def _relative_gap(length: np.ndarray, optimum: float, success: np.ndarray) -> np.ndarray:
@@ -93,6 +93,9 @@ class Result:
     fitness_optimum_length: float = math.nan
     """The length of the path that reaches :attr:`fitness_optimum`: where the fitness
     charges turns it can be longer than :attr:`optimum`."""
+    fitness_optimum_loop_free: bool = True
+    """False when the optimal walk visits a cell twice: :attr:`fitness_optimum` is then an
+    upper bound of what a loop-free path (all that the GAs keep) can reach."""
 
     def path(self, i: int, raw: bool = False) -> list[tuple[int, int]]:
         """Seed ``i``'s best path as ``(x, y)`` cells (post-optimised unless ``raw``)."""
@@ -117,11 +120,10 @@ class Result:
         """``fitness_optimum / fitness - 1`` per seed: 0 for a run that found the optimum
         of its own fitness (for the ``1 / cost`` fitnesses, the relative excess of its
         cost); NaN for failed seeds and where the optimum is not computed."""
-        f = np.asarray(self.fitness, float)
-        with np.errstate(divide="ignore", invalid="ignore"):
-            gap = np.where(f > 0, self.fitness_optimum / f - 1.0, np.inf)
+        ok = self.success & np.isfinite(self.fitness_optimum)  # success: fitness > 0
+        gap = self.fitness_optimum / np.where(ok, np.asarray(self.fitness, float), 1.0) - 1.0
         gap = np.where(np.abs(gap) < FITNESS_GAP_TOLERANCE, 0.0, gap)
-        return np.where(self.success & np.isfinite(self.fitness_optimum), gap, np.nan)
+        return np.where(ok, gap, np.nan)
 
     def _column(self, name: str) -> np.ndarray:
         if name in self.metrics:
@@ -152,7 +154,9 @@ class Result:
             + (f" ({self.reason})" if self.reason else ""),
             f"optimum: 8-connected {self.optimum:.4f}, any-angle {self.any_angle_optimum:.4f}"
             + (f", fitness {self.fitness_optimum:.6g} (a path of length "
-               f"{self.fitness_optimum_length:.4f})"
+               f"{self.fitness_optimum_length:.4f}"
+               + ("" if self.fitness_optimum_loop_free else
+                  "; an upper bound: the optimal walk revisits a cell") + ")"
                if np.isfinite(self.fitness_optimum) else ""),
             f"{'metric':24s} {'mean':>10s} {'sd':>10s} {'min':>10s} {'max':>10s}",
         ]
@@ -186,6 +190,8 @@ class Result:
             "optimum": self.optimum, "any_angle_optimum": self.any_angle_optimum,
             "fitness_optimum": _finite_or_none(self.fitness_optimum),
             "fitness_optimum_length": _finite_or_none(self.fitness_optimum_length),
+            "fitness_optimum_loop_free": (self.fitness_optimum_loop_free
+                                          if np.isfinite(self.fitness_optimum) else None),
             "timing": dict(self.timing), "population": self.population,
             "generations": self.generations, "runs": runs,
         }
@@ -661,6 +667,7 @@ def sweep(
             point={k.replace("__", "."): v for k, v in points[q].items()},
             fitness_optimum=point_opt[q].fitness,
             fitness_optimum_length=point_opt[q].length,
+            fitness_optimum_loop_free=point_opt[q].loop_free,
         ))
     return results
 

@@ -99,6 +99,8 @@ def cmd_optimum(args: argparse.Namespace) -> int:
     from jaxga.reference import any_angle_shortest_path, shortest_path
 
     config = None
+    if args.preset is None and (args.set or args.variant):
+        raise JaxgaError("--set and --variant need --preset")
     if args.preset is not None:
         config = load_preset(args.preset, variant=args.variant, sets=args.set or ())
         if args.corner_rule is None:  # as `jaxga run`: the preset's corner rule
@@ -142,7 +144,8 @@ def cmd_optimum(args: argparse.Namespace) -> int:
                 "found": fit.found, "reason": fit.reason,
                 "value": fit.fitness if fit.found else None,
                 "length": fit.length if fit.found else None,
-                "path": _xy_list(fit.path), "loop_free": fit.loop_free,
+                "path": _xy_list(fit.path),
+                "loop_free": fit.loop_free if fit.found else None,
             }
         _write_json(args.json, out)
     return 0

@@ -29,7 +29,9 @@ Decisions recorded here (the issue leaves them open):
   :mod:`jaxga.fitness_reference`; NaN for AGACD), ``turns`` and ``angle_sum`` (of the
   post-optimised path) and ``convergence_generation``. The fitness itself is not
   offered: its definition differs between presets, so fitness values of two presets are
-  not comparable (their relative gaps to their own optima are).
+  not comparable. Their gaps to their own optima are on one scale, with a caveat: for
+  the ``1 / cost`` fitnesses the gap is the relative excess cost, for MPMGA's
+  ``alpha / length + beta c / smoothness`` a ratio of fitness values.
 * **Multiple comparisons.** Holm's step-down correction over the k(k-1)/2 pairs of each
   metric separately (each metric answers its own question); Fisher tests likewise.
 """

@@ -12,12 +12,12 @@ start to goal, every move legal under the grid's corner rule (SPEC 1). For the f
 fitnesses whose denominator is a sum over moves and nodes (``sga``, ``iga_zhu``,
 ``iga_zhang``, ``imga``), the optimum is a shortest path in the graph of states
 ``(cell, heading of the move that entered it)``: a move costs its weighted length, the
-node it enters, and the turn it makes at the cell it leaves. MPMGA's fitness
-``alpha / length + beta * c / smoothness`` is not a sum; its penalties are multiples of
-5, so the graph gets one layer per smoothness value ``5 s`` and the optimum is the best
-of ``alpha / L*(s) + beta * c / max(5 s, floor)`` over the layers, ``L*(s)`` the shortest
-path with smoothness exactly ``5 s``; layers are added until no larger smoothness can
-win. Dijkstra is :func:`scipy.sparse.csgraph.dijkstra`.
+node it enters, and the turn it makes at the cell it leaves; Dijkstra is
+:func:`scipy.sparse.csgraph.dijkstra`. MPMGA's fitness ``alpha / length + beta * c /
+smoothness`` is not a sum; its penalties are multiples of 5, so the states get one layer
+per smoothness value ``5 s``, computed one after the other, and the optimum is the best
+of ``alpha / L*(s) + beta * c / max(5 s, floor)``, ``L*(s)`` the shortest walk with
+smoothness exactly ``5 s``; layers are added until no larger smoothness can win.
 
 The optimum is taken over *walks*; if the optimal walk visits a cell twice (a loop that
 pays for itself in saved turn costs), it is only a bound for the loop-free paths the GAs
@@ -32,14 +32,23 @@ The costs are written here from SPEC 3 and the papers' equations, independently 
 from __future__ import annotations
 
 import dataclasses
+import inspect
 import math
 from collections.abc import Mapping
 
 import numpy as np
 
+from jaxga import objectives
+from jaxga.engine import FITNESS_PARAMS
 from jaxga.errors import ParameterError
 from jaxga.grid import DIRECTIONS, Grid
 from jaxga.maps.preprocess import legal_moves
+from jaxga.reference import (
+    _endpoint_problem,
+    _unreachable,
+    obstacle_adjacent_cells,
+    path_length,
+)
 
 __all__ = [
     "FitnessOptimum",
@@ -59,17 +68,16 @@ MAX_CELLS = 128 * 128
 per cell (about 100 MB at this size, more for MPMGA's layers)."""
 
 DEFAULT_WEIGHTS: dict[str, dict[str, float]] = {
-    "sga": {},
-    "iga_zhu": {"omega": 0.7, "c1": 1.0, "c2": 2.0, "c3": 3.0},
-    "iga_zhang": {"a": 2.0, "v": 1.0, "v_t": 0.5, "r": 0.5},
-    "imga": {"a": 6.0, "b": 1.0, "c": 3.0},
-    "mpmga": {"alpha": 0.8, "beta": 0.2, "c": 1.0, "smoothness_floor": 0.1},
+    m: {k: float(inspect.signature(getattr(objectives, m)).parameters[k].default)
+        for k in FITNESS_PARAMS[m]}
+    for m in SUPPORTED_METHODS
 }
-"""The papers' weights (SPEC 3), the defaults of :mod:`jaxga.objectives` too."""
+"""The weights of each fitness and their defaults, read from :mod:`jaxga.objectives` (the
+papers' values, SPEC 3), so that the two cannot drift apart."""
 
-_STEP = np.array([math.hypot(dx, dy) for dx, dy in DIRECTIONS.tolist()])
-MAX_EDGES = 24_000_000
-"""MPMGA's layered graph is not built beyond this many edges (about 300 MB)."""
+MAX_LAYER_STATES = 48_000_000
+"""MPMGA's search keeps every layer's states (8 headings x cells, 16 bytes each): it gives
+up beyond this many (about 770 MB; 5,800 layers on a 32 x 32 map, 366 on 128 x 128)."""
 
 
 @dataclasses.dataclass(frozen=True, eq=False)
@@ -96,8 +104,22 @@ class FitnessOptimum:
     reason: str = ""
 
 
+_STEP = np.array([math.hypot(dx, dy) for dx, dy in DIRECTIONS.tolist()])
+
+
 def _missing(method: str, reason: str) -> FitnessOptimum:
     return FitnessOptimum(False, method, math.nan, reason=reason)
+
+
+def _weights(method: str, weights: Mapping[str, float] | None) -> dict[str, float]:
+    """The method's weights: ``weights`` over the defaults; unknown names are refused."""
+    out = dict(DEFAULT_WEIGHTS[method])
+    unknown = sorted(set(weights or {}) - set(out))
+    if unknown:
+        raise ParameterError(f"fitness {method!r} has no weight {', '.join(unknown)} "
+                             f"(its weights: {', '.join(out) or 'none'})")
+    out.update({k: float(v) for k, v in (weights or {}).items()})
+    return out
 
 
 def fitness_weights(config: Mapping) -> tuple[str, dict[str, float]]:
@@ -105,11 +127,8 @@ def fitness_weights(config: Mapping) -> tuple[str, dict[str, float]]:
 
     Missing keys take the papers' values (:data:`DEFAULT_WEIGHTS`)."""
     method = str(config["fitness.method"])
-    weights = dict(DEFAULT_WEIGHTS.get(method, {}))
-    for name in weights:
-        key = f"fitness.{name}"
-        if config.get(key) is not None:
-            weights[name] = float(config[key])
+    weights = {name: float(config[f"fitness.{name}"]) for name in DEFAULT_WEIGHTS.get(method, {})
+               if config.get(f"fitness.{name}") is not None}
     return method, weights
 
 
@@ -118,18 +137,6 @@ def _turn_steps(d_in: int, d_out: int) -> int:
     """The turn between two headings in 45-degree steps, 0 (straight) to 4 (reversal)."""
     k = (d_out - d_in) % 8
     return min(k, 8 - k)
-
-
-def _near_obstacle(blocked: np.ndarray) -> np.ndarray:
-    """``bool[H, W]``: some 8-neighbour is blocked (off the map counts as free; IMGA eq. 6)."""
-    h, w = blocked.shape
-    pad = np.pad(blocked, 1, constant_values=False)
-    near = np.zeros((h, w), bool)
-    for oy in (-1, 0, 1):
-        for ox in (-1, 0, 1):
-            if ox or oy:
-                near |= pad[1 + oy : 1 + oy + h, 1 + ox : 1 + ox + w]
-    return near
 
 
 def _additive_costs(method: str, weights: Mapping[str, float], blocked: np.ndarray,
@@ -152,7 +159,8 @@ def _additive_costs(method: str, weights: Mapping[str, float], blocked: np.ndarr
         return _STEP, zero_nodes, lambda di, do: per_turn if di != do else 0.0
     if method == "imga":  # IMGA eq. 4-7: a L + b S + c E
         a, b, c = weights["a"], weights["b"], weights["c"]
-        node = b * 5.0 * _near_obstacle(blocked).reshape(-1)
+        # IMGA eq. 6: 5 per node with a blocked 8-neighbour (off the map counts as free)
+        node = b * 5.0 * obstacle_adjacent_cells(blocked).reshape(-1)
         ys, xs = np.divmod(np.arange(h * w), w)
         sx, sy = np.sign(goal_xy[0] - xs), np.sign(goal_xy[1] - ys)
 
@@ -184,20 +192,18 @@ def _moves(legal: np.ndarray, w: int) -> list[tuple[int, np.ndarray, np.ndarray]
     return out
 
 
-def _search(n_cells: int, legal: np.ndarray, w: int, start: int, weight_of, layer_of,
-            layers: int):
-    """Dijkstra over states ``(layer, heading, cell)`` plus one start state.
+def _search(n_cells: int, legal: np.ndarray, w: int, start: int, weight_of):
+    """Dijkstra over states ``(heading, cell)`` plus one start state.
 
     ``weight_of(d_in, d_out, src, dst)`` gives the edge weights of the moves in
-    direction ``d_out`` out of a cell entered with heading ``d_in``; ``layer_of(d_in,
-    d_out)`` how many layers the move climbs (0 for additive fitnesses). Returns the
-    distance and predecessor arrays; state ``i`` is ``((layer * 8 + d) * n_cells + c)``,
-    the start state is the last one.
+    direction ``d_out`` out of a cell entered with heading ``d_in`` (``None`` for the
+    start). Returns the distance and predecessor arrays; state ``i`` is
+    ``d * n_cells + c``, the start state is the last one.
     """
     from scipy.sparse import csr_matrix
     from scipy.sparse.csgraph import dijkstra
 
-    n_states = layers * 8 * n_cells + 1
+    n_states = 8 * n_cells + 1
     src_state = n_states - 1
     rows, cols, vals = [], [], []
     moves = _moves(legal, w)
@@ -206,15 +212,11 @@ def _search(n_cells: int, legal: np.ndarray, w: int, start: int, weight_of, laye
         rows.append(np.full(int(m.sum()), src_state))
         cols.append(d_out * n_cells + dst[m])
         vals.append(weight_of(None, d_out, src[m], dst[m]))
-    for layer in range(layers):
-        for d_in in range(8):
-            for d_out, src, dst in moves:
-                up = layer_of(d_in, d_out)
-                if layer + up >= layers:
-                    continue
-                rows.append((layer * 8 + d_in) * n_cells + src)
-                cols.append(((layer + up) * 8 + d_out) * n_cells + dst)
-                vals.append(weight_of(d_in, d_out, src, dst))
+    for d_in in range(8):
+        for d_out, src, dst in moves:
+            rows.append(d_in * n_cells + src)
+            cols.append(d_out * n_cells + dst)
+            vals.append(weight_of(d_in, d_out, src, dst))
     r = np.concatenate(rows)
     c = np.concatenate(cols)
     v = np.concatenate([np.broadcast_to(np.asarray(x, float), (len(rr),))
@@ -241,9 +243,10 @@ def _as_path(cells: list[int], w: int) -> np.ndarray:
     return np.stack([idx % w, idx // w], axis=1).astype(np.int32)
 
 
-def _length(cells: list[int], w: int) -> float:
-    p = _as_path(cells, w).astype(float)
-    return float(np.sum(np.hypot(*np.diff(p, axis=0).T))) if len(cells) > 1 else 0.0
+def _found(method: str, fitness: float, cells: list[int], w: int) -> FitnessOptimum:
+    path = _as_path(cells, w)
+    return FitnessOptimum(True, method, fitness, path_length(path), path,
+                          loop_free=len(set(cells)) == len(cells))
 
 
 def fitness_optimum_np(
@@ -266,8 +269,7 @@ def fitness_optimum_np(
     if method not in SUPPORTED_METHODS:
         return _missing(method, f"no exact optimum for fitness {method!r} (only "
                                 f"{', '.join(SUPPORTED_METHODS)}: AGACD evolves waypoint paths)")
-    wts = dict(DEFAULT_WEIGHTS[method])
-    wts.update({k: float(v) for k, v in (weights or {}).items() if k in wts})
+    wts = _weights(method, weights)
     b = np.asarray(blocked, dtype=bool)
     h, w = b.shape
     n = h * w
@@ -275,9 +277,9 @@ def fitness_optimum_np(
         return _missing(method, f"the map has {n:,} cells, more than the exact fitness "
                                 f"reference searches by default ({max_cells:,})")
     (sx, sy), (gx, gy) = (int(v) for v in start_xy), (int(v) for v in goal_xy)
-    for name, (x, y) in (("start", (sx, sy)), ("goal", (gx, gy))):
-        if not (0 <= x < w and 0 <= y < h) or b[y, x]:
-            return _missing(method, f"{name} ({x}, {y}) is blocked or off the map")
+    problem = _endpoint_problem(b, (sx, sy), (gx, gy))
+    if problem:
+        return _missing(method, problem)
     start, goal = sy * w + sx, gy * w + gx
     if start == goal:
         return _missing(method, "start equals goal: there is no path to optimise")
@@ -291,62 +293,90 @@ def fitness_optimum_np(
             t = t[src]
         return step[d_out] + node[dst] + t
 
-    dist, pred, src_state = _search(n, legal, w, start, weight_of, lambda di, do: 0, 1)
+    dist, pred, src_state = _search(n, legal, w, start, weight_of)
     ends = np.arange(8) * n + goal
     best = int(ends[np.argmin(dist[ends])])
     if not np.isfinite(dist[best]):
-        return _missing(method, f"goal ({gx}, {gy}) unreachable from start ({sx}, {sy}) "
-                                f"under corner rule {corner_rule!r}")
+        return _missing(method, _unreachable((sx, sy), (gx, gy), corner_rule))
     if method == "mpmga":  # the shortest length bounds what higher smoothness can give
         return _mpmga_optimum(b, legal, start, goal, wts, shortest=float(dist[best]))
     cells = _walk(pred, best, src_state, n, start)
-    cost = float(dist[best]) + float(node[start])
-    return FitnessOptimum(True, method, 1.0 / cost, _length(cells, w), _as_path(cells, w),
-                          loop_free=len(set(cells)) == len(cells))
+    cost = max(float(dist[best]) + float(node[start]), objectives.EPS)  # as the GA's fitness
+    return _found(method, 1.0 / cost, cells, w)
 
 
 def _mpmga_optimum(b: np.ndarray, legal: np.ndarray, start: int, goal: int,
                    wts: Mapping[str, float], shortest: float) -> FitnessOptimum:
     """MPMGA eq. 3: ``alpha / L + beta c / max(S, floor)``, best over smoothness layers.
 
-    ``shortest`` is the 8-connected optimum: no path of any smoothness is shorter."""
+    Layer ``s`` holds, for every state (heading, cell), the shortest walk from the start
+    whose smoothness is exactly ``5 s``; it is computed from layers ``s - 1``, ``s - 5``
+    and ``s - 25`` (a turn of 45, 90 or more degrees) and then by straight moves within
+    the layer, one layer after the other. ``shortest`` is the 8-connected optimum: no
+    walk of any smoothness is shorter, so once ``alpha / shortest + beta c / (5 (s + 1))``
+    is no better than the best value found, no later layer can win.
+    """
     h, w = b.shape
     n = h * w
     alpha, beta_c, floor = wts["alpha"], wts["beta"] * wts["c"], wts["smoothness_floor"]
-    edges_per_layer = 64 * int(legal.sum())
-
-    def weight_of(d_in, d_out, src, dst):
-        return _STEP[d_out]
-
-    def layer_of(d_in, d_out):
-        return _mpmga_turn(d_in, d_out)
-
-    layers = 8
-    while True:
-        if layers * edges_per_layer > MAX_EDGES:
-            if layers == 8:
-                return _missing("mpmga", f"the map is too large for MPMGA's layered search "
-                                         f"({layers * edges_per_layer:,} edges for 8 "
-                                         f"smoothness layers; the limit is {MAX_EDGES:,})")
-            return _missing("mpmga", f"MPMGA's optimum needs more than {layers // 2} "
-                                     f"smoothness layers (smoothness {5 * layers // 2}) on "
-                                     f"this map; the search stops at {MAX_EDGES:,} edges")
-        dist, pred, src_state = _search(n, legal, w, start, weight_of, layer_of, layers)
-        ends = dist[: layers * 8 * n].reshape(layers, 8, n)[:, :, goal]  # [layer, heading]
-        per_layer = ends.min(axis=1)  # L*(s): the shortest path of smoothness 5 s
-        s = np.arange(layers) * 5.0
-        with np.errstate(divide="ignore"):
-            value = np.where(np.isfinite(per_layer),
-                             alpha / per_layer + beta_c / np.maximum(s, floor), -np.inf)
-        k = int(np.argmax(value))
-        # A smoothness of 5 * layers or more gives at most alpha / shortest + beta c / (5 layers).
-        if value[k] >= alpha / shortest + beta_c / (5.0 * layers):
+    moves = _moves(legal, w)
+    turns = {inc: [(di, do) for di in range(8) for do in range(8) if _mpmga_turn(di, do) == inc]
+             for inc in (1, 5, 25)}
+    max_layers = max(1, MAX_LAYER_STATES // (8 * n))
+    # A loop-free path turns at most n - 2 times, by at most 25 units each: the layers up
+    # to 25 (n - 2) hold every loop-free path, so their best bounds the loop-free optimum.
+    all_paths = 25 * max(n - 2, 0) + 1
+    dist: list[np.ndarray] = []  # [layer] float64[8, n]
+    pred: list[np.ndarray] = []  # [layer] int64[8, n]: (layer * 8 + heading) * n + cell
+    best_value, best_state = -np.inf, -1
+    for layer in range(min(max_layers, all_paths)):
+        cur = np.full((8, n), np.inf)
+        came = np.full((8, n), -1, np.int64)
+        if layer == 0:  # the first move, out of the start: no turn
+            for d, src, dst in moves:
+                m = src == start
+                cur[d, dst[m]] = _STEP[d]
+        for inc, pairs in turns.items():  # a turn climbs inc layers
+            if layer < inc:
+                continue
+            prev = dist[layer - inc]
+            for d_in, d_out in pairs:
+                _, src, dst = moves[d_out]
+                cand = prev[d_in, src] + _STEP[d_out]
+                better = cand < cur[d_out, dst]
+                cur[d_out, dst[better]] = cand[better]
+                came[d_out, dst[better]] = ((layer - inc) * 8 + d_in) * n + src[better]
+        for d, src, dst in moves:  # straight on, within the layer, until nothing improves
+            while True:
+                cand = cur[d, src] + _STEP[d]
+                better = cand < cur[d, dst]
+                if not better.any():
+                    break
+                cur[d, dst[better]] = cand[better]
+                came[d, dst[better]] = (layer * 8 + d) * n + src[better]
+        dist.append(cur)
+        pred.append(came)
+        d_best = int(np.argmin(cur[:, goal]))
+        if np.isfinite(cur[d_best, goal]):
+            value = alpha / cur[d_best, goal] + beta_c / max(5.0 * layer, floor)
+            if value > best_value:
+                best_value, best_state = value, (layer * 8 + d_best) * n + goal
+        if best_value >= alpha / shortest + beta_c / (5.0 * (layer + 1)):
             break
-        layers *= 2
-    d = int(np.argmin(ends[k]))
-    cells = _walk(pred, (k * 8 + d) * n + goal, src_state, n, start)
-    return FitnessOptimum(True, "mpmga", float(value[k]), float(per_layer[k]),
-                          _as_path(cells, w), loop_free=len(set(cells)) == len(cells))
+    else:
+        if max_layers < all_paths:
+            return _missing("mpmga", f"MPMGA's optimum needs more than {max_layers} smoothness "
+                                     f"layers (smoothness {5 * max_layers}) on this map: "
+                                     "not computed")
+    cells, state = [], best_state
+    while state >= 0:
+        layer, rest = divmod(state, 8 * n)
+        d, cell = divmod(rest, n)
+        cells.append(cell)
+        state = int(pred[layer][d, cell])
+    cells.append(start)
+    cells.reverse()
+    return _found("mpmga", float(best_value), cells, w)
 
 
 def path_fitness_np(
@@ -363,8 +393,7 @@ def path_fitness_np(
     """
     if method not in SUPPORTED_METHODS:
         raise ParameterError(f"no exact optimum for fitness {method!r}")
-    wts = dict(DEFAULT_WEIGHTS[method])
-    wts.update({k: float(v) for k, v in (weights or {}).items() if k in wts})
+    wts = _weights(method, weights)
     b = np.asarray(blocked, dtype=bool)
     w = b.shape[1]
     p = np.asarray(path_xy, dtype=np.int64).reshape(-1, 2)
@@ -380,7 +409,7 @@ def path_fitness_np(
     for k, d in enumerate(heads):
         t = 0.0 if k == 0 else turn(heads[k - 1], d)
         cost += step[d] + node[cells[k + 1]] + (t if np.isscalar(t) else t[cells[k]])
-    return 1.0 / cost
+    return 1.0 / max(cost, objectives.EPS)
 
 
 def fitness_optimum(grid: Grid, config: Mapping | str, *,
@@ -394,6 +423,9 @@ def fitness_optimum(grid: Grid, config: Mapping | str, *,
     """
     if isinstance(config, str):
         method, wts = config, dict(weights)
+    elif weights:
+        raise ParameterError("give the weights in the configuration (fitness.* keys), not "
+                             "as keywords beside it")
     else:
         method, wts = fitness_weights(config)
     return fitness_optimum_np(grid.blocked_np(), grid.start_xy, grid.goal_xy,

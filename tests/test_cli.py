@@ -70,6 +70,10 @@ def test_optimum_uses_file_endpoints_and_overrides(tmp_path):
         (["--map", "random-32-32-20"], EXIT_BAD_INPUT, "blocked"),
         (["--map", "classic_ga_gapp3_20x20", "--corner-rule", "loose"], EXIT_BAD_INPUT,
          "corner rule"),
+        (["--map", "classic_ga_gapp3_20x20", "--set", "fitness.omega=1"], EXIT_BAD_INPUT,
+         "need --preset"),
+        (["--map", "classic_ga_gapp3_20x20", "--preset", "iga_zhu", "--set",
+          "fitness.omega=-1"], EXIT_BAD_INPUT, "fitness.omega"),
     ],
 )
 def test_bad_input_is_one_line(args, code, words, capsys):

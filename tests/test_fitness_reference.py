@@ -14,6 +14,7 @@ from hypothesis import given, settings
 from hypothesis import strategies as st
 
 from jaxga import objectives
+from jaxga.errors import ParameterError
 from jaxga.fitness_reference import (
     MAX_CELLS,
     SUPPORTED_METHODS,
@@ -97,12 +98,13 @@ def _jaxga_fitness(grid: Grid, method: str, weights: dict, path_xy: np.ndarray) 
     return float(_scores(grid, method, weights, [cells])[0])
 
 
-WEIGHTS = {  # the papers' weights and one other setting per method
+WEIGHTS = {  # the papers' weights and other settings per method
     "sga": [{}],
     "iga_zhu": [{}, {"omega": 0.3, "c1": 2.0, "c2": 2.5, "c3": 7.0}],
     "iga_zhang": [{}, {"a": 5.0, "v": 1.0, "v_t": 0.25, "r": 1.0}],
     "imga": [{}, {"a": 1.0, "b": 2.0, "c": 4.0}],
-    "mpmga": [{}, {"alpha": 0.2, "beta": 0.8, "c": 2.0, "smoothness_floor": 0.1}],
+    "mpmga": [{}, {"alpha": 0.2, "beta": 0.8, "c": 2.0, "smoothness_floor": 0.1},
+              {"alpha": 1.0, "beta": 0.05, "c": 1.0, "smoothness_floor": 0.1}],
 }
 
 
@@ -119,7 +121,7 @@ def _full(method: str, weights: dict) -> dict:
     ends=st.tuples(st.integers(0, L - 1), st.integers(0, L - 1)),
     rule=st.sampled_from(["free", "no_squeeze", "strict"]),
     method=st.sampled_from(SUPPORTED_METHODS),
-    which=st.integers(0, 1),
+    which=st.integers(0, 2),
 )
 def test_the_optimum_is_the_best_simple_path_by_brute_force(bits, density, ends, rule,
                                                             method, which):
@@ -215,6 +217,69 @@ def test_preset_weights_are_read_from_the_configuration():
     assert method == "mpmga" and w["alpha"] == pytest.approx(0.8)
 
 
+def test_mpmga_optimum_in_a_later_layer_than_the_smoothest_path():
+    # the smoothest path (smoothness 30) is longer than one with smoothness 35; with
+    # alpha = 1, beta = 0.05 the shorter one wins (found by brute force over 50 paths)
+    blocked = np.array([[0, 0, 0, 0, 0], [0, 0, 1, 0, 1], [1, 0, 0, 0, 0], [0, 1, 1, 0, 0]],
+                       bool)  # row 0 at the bottom
+    w = {"alpha": 1.0, "beta": 0.05, "c": 1.0, "smoothness_floor": 0.1}
+    r = fitness_optimum_np(blocked, (0, 0), (4, 3), "strict", "mpmga", w)
+    # diagonal, up (45), right (90), right, diagonal (45): 5 + 25 + 5
+    assert r.path.tolist() == [[0, 0], [1, 1], [1, 2], [2, 2], [3, 2], [4, 3]]
+    assert r.fitness == pytest.approx(1 / (3 + 2 * math.sqrt(2)) + 0.05 / 35)
+    paths = _simple_paths(blocked, 0, 19, "strict")
+    values = [path_fitness_np(blocked, (4, 3), "mpmga", w,
+                              np.stack([np.array(p) % 5, np.array(p) // 5], axis=1))
+              for p in paths]
+    assert max(values) == pytest.approx(r.fitness)
+
+
+def test_mpmga_search_gives_up_beyond_its_layer_budget(monkeypatch):
+    import jaxga.fitness_reference as fr
+
+    # a zigzag corridor: every path turns at least 4 times by 90 degrees (smoothness 100)
+    blocked = np.array([[0, 0, 0, 0, 0], [1, 1, 1, 1, 0], [0, 0, 0, 0, 0],
+                        [0, 1, 1, 1, 1], [0, 0, 0, 0, 0]], bool)
+    r = fitness_optimum_np(blocked, (0, 0), (4, 4), "strict", "mpmga")
+    assert r.found and r.length == 16 and r.fitness == pytest.approx(0.8 / 16 + 0.2 / 100)
+    monkeypatch.setattr(fr, "MAX_LAYER_STATES", 8 * 25 * 10)  # 10 layers: smoothness < 50
+    r = fitness_optimum_np(blocked, (0, 0), (4, 4), "strict", "mpmga")
+    assert not r.found and "more than 10 smoothness layers" in r.reason
+
+
+def test_a_walk_that_revisits_a_cell_is_flagged_as_a_bound():
+    # reversals cost c4 = c3 = 1 and 45 / 90-degree turns 100: the optimal walk goes up
+    # the left column, reverses and turns once (found by a review of this module)
+    blocked = np.zeros((4, 4), bool)
+    blocked[0, 1] = blocked[2, 2] = True
+    w = {"omega": 0.05, "c1": 100.0, "c2": 100.0, "c3": 1.0}
+    r = fitness_optimum_np(blocked, (0, 0), (1, 3), "free", "iga_zhu", w)
+    assert r.found and not r.loop_free
+    assert len({tuple(p) for p in r.path.tolist()}) < len(r.path)
+    paths = _simple_paths(blocked, 0, 13, "free")
+    best = max(path_fitness_np(blocked, (1, 3), "iga_zhu", w,
+                               np.stack([np.array(p) % 4, np.array(p) // 4], axis=1))
+               for p in paths)
+    assert best <= r.fitness * (1 + 1e-12)  # an upper bound of every simple path
+
+
+def test_weights_are_checked_and_a_zero_cost_is_floored_as_the_ga_does():
+    blocked = np.zeros((3, 5), bool)
+    with pytest.raises(ParameterError, match="no weight omgea"):
+        fitness_optimum_np(blocked, (0, 0), (4, 2), "free", "iga_zhu", {"omgea": 1.0})
+    grid = Grid(blocked=jnp.asarray(blocked), start=jnp.int32(0), goal=jnp.int32(14),
+                corner_rule="free")
+    with pytest.raises(ParameterError, match="in the configuration"):
+        fitness_optimum(grid, load_preset("iga_zhu"), omega=0.5)
+    # omega = 0 and a straight path: cost 0, fitness 1 / EPS like jaxga.objectives
+    r = fitness_optimum_np(blocked, (0, 1), (4, 1), "free", "iga_zhu", {"omega": 0.0})
+    assert r.fitness == pytest.approx(1 / objectives.EPS)
+    g = Grid(blocked=jnp.asarray(blocked), start=jnp.int32(5), goal=jnp.int32(9),
+             corner_rule="free")
+    assert r.fitness == pytest.approx(_jaxga_fitness(g, "iga_zhu", _full("iga_zhu", {
+        "omega": 0.0}), r.path))
+
+
 def test_what_is_not_computed_says_why():
     blocked = np.zeros((5, 5), bool)
     assert "waypoint" in fitness_optimum_np(blocked, (0, 0), (4, 4), "free", "agacd").reason
@@ -223,7 +288,7 @@ def test_what_is_not_computed_says_why():
     assert not r.found and "cells" in r.reason and math.isnan(r.fitness)
     assert fitness_optimum_np(big, (0, 0), (5, 0), "free", "sga", max_cells=None).found
     r = fitness_optimum_np(np.zeros((128, 128), bool), (0, 0), (127, 127), "free", "mpmga")
-    assert not r.found and "too large for MPMGA's layered search" in r.reason
+    assert r.found and r.fitness == pytest.approx(0.8 / (127 * math.sqrt(2)) + 0.2 / 0.1)
     walled = blocked.copy()
     walled[:, 2] = True
     for method in SUPPORTED_METHODS:
