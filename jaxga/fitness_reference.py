@@ -65,7 +65,7 @@ SUPPORTED_METHODS = ("sga", "iga_zhu", "iga_zhang", "imga", "mpmga")
 
 MAX_CELLS = 128 * 128
 """Maps with more cells are not searched by default: the state graph has up to 64 edges
-per cell (about 100 MB at this size, more for MPMGA's layers)."""
+per cell (about 100 MB at this size; MPMGA's layers have :data:`MAX_LAYER_STATES`)."""
 
 DEFAULT_WEIGHTS: dict[str, dict[str, float]] = {
     m: {k: float(inspect.signature(getattr(objectives, m)).parameters[k].default)
