@@ -64,12 +64,14 @@ def _simple_paths(blocked: np.ndarray, start: int, goal: int, rule: str) -> list
 
 
 @functools.cache
-def _scorer(method: str, rule: str):
+def _scorer(method: str):
+    """jaxga's fitness over a batch of paths (the objectives do not read the corner rule,
+    which only decides which paths exist: one compiled program per method)."""
     fn = getattr(objectives, method)
 
     @jax.jit
     def score(blocked, start, goal, cells, length, weights):
-        grid = Grid(blocked=blocked, start=start, goal=goal, corner_rule=rule)
+        grid = Grid(blocked=blocked, start=start, goal=goal, corner_rule="free")
         return jax.vmap(lambda c, n: fn(grid, c, n, **weights))(cells, length)
 
     return score
@@ -82,7 +84,7 @@ def _padded(paths: list[list[int]]) -> tuple[np.ndarray, np.ndarray]:
 
 def _scores(grid: Grid, method: str, weights: dict, paths: list[list[int]]) -> np.ndarray:
     """jaxga's fitness of every path, in fixed-size chunks (one compiled program)."""
-    score = _scorer(method, grid.corner_rule)
+    score = _scorer(method)
     w = {k: jnp.float32(v) for k, v in weights.items()}
     out = []
     for i in range(0, len(paths), CHUNK):
