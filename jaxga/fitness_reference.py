@@ -91,7 +91,8 @@ class FitnessOptimum:
         length: the Euclidean length of the optimal path.
         path: ``int32[k, 2]`` ``(x, y)`` cells from start to goal; ``(0, 2)`` if not found.
         loop_free: the optimal walk visits no cell twice, so ``fitness`` is the exact
-            optimum over loop-free paths; otherwise it is an upper bound of it.
+            optimum over loop-free paths; otherwise it is an upper bound of it (which a
+            loop-free path may still reach, on a tie).
         reason: why nothing was computed (unsupported method, map too large, no path).
     """
 
@@ -125,7 +126,8 @@ def _weights(method: str, weights: Mapping[str, float] | None) -> dict[str, floa
 def fitness_weights(config: Mapping) -> tuple[str, dict[str, float]]:
     """``(method, weights)`` of a configuration's fitness (keys ``fitness.*``).
 
-    Missing keys take the papers' values (:data:`DEFAULT_WEIGHTS`)."""
+    Keys the configuration does not set are left out; :func:`fitness_optimum_np` then
+    takes the papers' values (:data:`DEFAULT_WEIGHTS`)."""
     method = str(config["fitness.method"])
     weights = {name: float(config[f"fitness.{name}"]) for name in DEFAULT_WEIGHTS.get(method, {})
                if config.get(f"fitness.{name}") is not None}
