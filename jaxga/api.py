@@ -144,6 +144,14 @@ class Result:
                              else 0.0, float(v.min()), float(v.max())))
         return rows
 
+    def _fitness_optimum_text(self) -> str:
+        if not np.isfinite(self.fitness_optimum):
+            return ""
+        bound = ("" if self.fitness_optimum_loop_free
+                 else "; an upper bound: the optimal walk revisits a cell")
+        return (f", fitness {self.fitness_optimum:.6g} (a path of length "
+                f"{self.fitness_optimum_length:.4f}{bound})")
+
     def summary(self) -> str:
         """A text table: mean, sd, min and max per metric, success rate, optima, timing."""
         lines = [
@@ -153,11 +161,7 @@ class Result:
             f"success {int(self.success.sum())}/{len(self.seeds)}"
             + (f" ({self.reason})" if self.reason else ""),
             f"optimum: 8-connected {self.optimum:.4f}, any-angle {self.any_angle_optimum:.4f}"
-            + (f", fitness {self.fitness_optimum:.6g} (a path of length "
-               f"{self.fitness_optimum_length:.4f}"
-               + ("" if self.fitness_optimum_loop_free else
-                  "; an upper bound: the optimal walk revisits a cell") + ")"
-               if np.isfinite(self.fitness_optimum) else ""),
+            + self._fitness_optimum_text(),
             f"{'metric':24s} {'mean':>10s} {'sd':>10s} {'min':>10s} {'max':>10s}",
         ]
         for name, mean, sd, lo, hi in self.summary_rows():
@@ -188,8 +192,8 @@ class Result:
         return {
             "preset": self.preset, "map": self.map_name, "corner_rule": self.corner_rule,
             "optimum": self.optimum, "any_angle_optimum": self.any_angle_optimum,
-            "fitness_optimum": _finite_or_none(self.fitness_optimum),
-            "fitness_optimum_length": _finite_or_none(self.fitness_optimum_length),
+            "fitness_optimum": json_number(self.fitness_optimum),
+            "fitness_optimum_length": json_number(self.fitness_optimum_length),
             "fitness_optimum_loop_free": (self.fitness_optimum_loop_free
                                           if np.isfinite(self.fitness_optimum) else None),
             "timing": dict(self.timing), "population": self.population,
@@ -197,8 +201,9 @@ class Result:
         }
 
 
-def _finite_or_none(x: float) -> float | None:
-    return float(x) if np.isfinite(x) else None
+def json_number(x: float | None) -> float | None:
+    """``x`` as a JSON number, or ``None`` (null) for None, NaN and infinities."""
+    return None if x is None or not math.isfinite(x) else float(x)
 
 
 SEED_LIMIT = 2**32
@@ -569,15 +574,11 @@ def sweep(
     # the capacity is the largest size swept, also when it is below the preset's size
     algo, _ = build(config.override({"population.size": capacity}), grid)
     per_point = [default_params(c, algo.islands) for c in configs]
-    # The exact optimum of each point's own fitness (points may sweep its weights).
-    fitness_opts: dict[Any, Any] = {}
-    for c in configs:
-        method, wts = fitness_weights(c)
-        key = (method, tuple(sorted(wts.items())))
-        if key not in fitness_opts:
-            fitness_opts[key] = fitness_optimum(grid, method, **wts)
-    point_opt = [fitness_opts[(m, tuple(sorted(w.items())))]
-                 for m, w in map(fitness_weights, configs)]
+    # The exact optimum of each point's own fitness, once per distinct weight set (points
+    # may sweep the weights).
+    fit_keys = [(m, tuple(sorted(w.items()))) for m, w in map(fitness_weights, configs)]
+    fit_opts = {k: fitness_optimum(grid, k[0], **dict(k[1])) for k in dict.fromkeys(fit_keys)}
+    point_opt = [fit_opts[k] for k in fit_keys]
     n_points = len(configs)
     seed_arr = _seed_list(seeds, lambda n: _check_result_memory(n * n_points, algo))
     n_seeds = len(seed_arr)

@@ -46,6 +46,7 @@ from typing import Any
 import numpy as np
 
 from jaxga.api import GAPS, Result, run
+from jaxga.api import json_number as _num
 from jaxga.config import Config
 from jaxga.errors import ParameterError
 from jaxga.grid import Grid
@@ -118,10 +119,6 @@ class PairTest:
                 "p_holm": _num(self.p_holm), "a12": _num(r.a12),
                 "rank_biserial": _num(r.rank_biserial), "n_a": r.n_a, "n_b": r.n_b,
                 "median_a": _num(self.median_a), "median_b": _num(self.median_b)}
-
-
-def _num(x: float) -> float | None:
-    return None if x is None or not math.isfinite(x) else float(x)
 
 
 def _time_per_run(r: Result) -> float:
