@@ -1,0 +1,102 @@
+"""XLA:CPU's default fusion emitters against its older ones: compile time, speed, results.
+
+    python benchmarks/fast_compile.py [--presets sga,imga,...] [--seeds 1,10,64]
+        [--devices N] [--no-write]
+
+For each preset and seed count (20 x 20: ``classic_ga_gapp3_20x20``, population 60 in
+all (mpmga: 3 islands of 20), 300 generations), two child processes (cold compile, no
+persistent cache) run the same seeds: one with XLA's default (the MLIR fusion
+emitters), one with ``XLA_FLAGS=--xla_cpu_use_fusion_emitters=false`` (the older
+emitters). The table gives both processes' compile, init, evolve and total seconds, the
+work per device (runs per device x population x generations) and whether the two
+results are identical (``_results.result_hash``: every path, fitness, length and
+history). jaxga compiles with XLA's default; the flag is a user's choice (README).
+"""
+
+from __future__ import annotations
+
+import argparse
+import json
+import os
+import subprocess
+import sys
+import time
+from pathlib import Path
+
+from _results import append, markdown_table, result_hash
+
+from jaxga.parallel import cores
+
+HERE = Path(__file__).resolve().parent
+POPULATION, GENERATIONS = 60, 300
+
+
+def child(preset: str, seeds: int) -> dict:
+    """One run in this (fresh) process (its ``XLA_FLAGS`` choose the emitters)."""
+    from jaxga import api
+    from jaxga.maps import load_map
+
+    grid = load_map("classic_ga_gapp3_20x20", corner_rule="free")
+    size = POPULATION // 3 if preset == "mpmga" else POPULATION
+    r = api.run(preset, grid, seeds=seeds, population__size=size, generations=GENERATIONS)
+    t = r.timing
+    return {k: t[k] for k in ("compile_s", "init_s", "evolve_s", "post_s", "total_s")} | {
+        "hash": result_hash(r)}
+
+
+def measure(preset: str, seeds: int, older: bool, devices: int) -> dict:
+    flags = f"--xla_force_host_platform_device_count={devices}"
+    if older:
+        flags += " --xla_cpu_use_fusion_emitters=false"
+    env = dict(os.environ, PYTHONPATH=f"{HERE.parent}{os.pathsep}{HERE}", XLA_FLAGS=flags)
+    env.pop("JAXGA_CACHE_DIR", None)
+    cmd = [sys.executable, __file__, "--child", f"{preset}:{seeds}"]
+    proc = subprocess.run(cmd, env=env, capture_output=True, text=True)
+    if proc.returncode != 0:
+        raise RuntimeError(proc.stderr[-3000:])
+    return json.loads(proc.stdout.strip().splitlines()[-1])
+
+
+def main() -> None:
+    ap = argparse.ArgumentParser(description=__doc__)
+    ap.add_argument("--presets", default="sga,imga,agacd,iga_zhang,mpmga,iga_zhu")
+    ap.add_argument("--seeds", default="1,10,64")
+    ap.add_argument("--devices", type=int, default=cores())
+    ap.add_argument("--child")
+    ap.add_argument("--no-write", action="store_true")
+    args = ap.parse_args()
+    if args.child:
+        preset, seeds = args.child.split(":")
+        print(json.dumps(child(preset, int(seeds))))
+        return
+
+    t_all = time.perf_counter()
+    rows = []
+    for preset in args.presets.split(","):
+        for seeds in (int(s) for s in args.seeds.split(",")):
+            default = measure(preset, seeds, False, args.devices)
+            older = measure(preset, seeds, True, args.devices)
+            work = -(-seeds // args.devices) * POPULATION * GENERATIONS  # runs padded
+            rows.append([preset, seeds, f"{work:,}", *(f"{m[k]:.2f}" for m in (default, older)
+                           for k in ("compile_s", "init_s", "evolve_s", "total_s")),
+                         "yes" if default["hash"] == older["hash"] else "NO"])
+            print(rows[-1], flush=True)
+    body = (
+        f"{args.devices} XLA host device(s); classic_ga_gapp3_20x20, corner rule free, "
+        f"population {POPULATION} (mpmga 3 x {POPULATION // 3}), {GENERATIONS} generations. "
+        "Seconds; compile cold (no persistent cache), one child process per cell group; "
+        "total = compile + init + evolve + post. Work per device = runs per device x "
+        "population x generations. Same result = equal hashes of every path, fitness, "
+        "length and history of the two processes.\n\n"
+        + markdown_table(
+            ["preset", "seeds", "work per device",
+             "compile (default)", "init", "evolve", "total",
+             "compile (older)", "init", "evolve", "total", "same result"], rows)
+        + f"\n\nWall time: {time.perf_counter() - t_all:.0f} s."
+    )
+    append("XLA:CPU fusion emitters, default vs older: compile time, speed, results",
+           body, write=not args.no_write)
+
+
+if __name__ == "__main__":
+    main()
