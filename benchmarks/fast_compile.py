@@ -10,7 +10,9 @@ emitters), one with ``XLA_FLAGS=--xla_cpu_use_fusion_emitters=false`` (the older
 emitters). The table gives both processes' compile, init, evolve and total seconds, the
 work per device (runs per device x population x generations) and whether the two
 results are identical (``_results.result_hash``: every path, fitness, length and
-history). jaxga compiles with XLA's default; the flag is a user's choice (README).
+history). Equal hashes here do not make the two compilations bit-identical in general:
+a small mpmga run differs by 1 ulp in one history value (RESULTS.md, 2026-11-25). jaxga
+compiles with XLA's default; the flag is a user's choice (README, performance).
 """
 
 from __future__ import annotations
@@ -45,6 +47,7 @@ def child(preset: str, seeds: int) -> dict:
 
 
 def measure(preset: str, seeds: int, older: bool, devices: int) -> dict:
+    """:func:`child`'s numbers from a fresh process (cold compile), older emitters or not."""
     flags = f"--xla_force_host_platform_device_count={devices}"
     if older:
         flags += " --xla_cpu_use_fusion_emitters=false"
