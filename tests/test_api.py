@@ -149,10 +149,10 @@ def test_unreachable_goal_is_a_no_path_result():
 
 def test_start_equal_to_goal_has_gap_zero_without_warnings(grid):
     """The optimum is 0 when start == goal: the gap is 0, not 0 / 0."""
-    same = grid.replace(goal=grid.start_xy)  # the 2-run program of the memory test
+    same = grid.replace(goal=grid.start_xy)  # the 3-run program of ``preset_run``
     with warnings.catch_warnings():
         warnings.simplefilter("error")
-        r = api.run("sga", same, seeds=2, **SMALL)
+        r = api.run("sga", same, seeds=3, **SMALL)
         rows = {row[0]: row for row in r.summary_rows()}
     assert r.success.all() and r.optimum == 0.0
     assert (r.length == 0).all() and (r.gap == 0).all() and (r.raw_gap == 0).all()
@@ -360,7 +360,7 @@ def test_a_call_whose_results_cannot_fit_in_memory_is_refused(grid, monkeypatch)
     # 0.56 GiB, more than half of 1 GiB
     with pytest.raises(ParameterError, match="GiB for their results and populations"):
         api.run("sga", grid, seeds=10**5, **SMALL)
-    assert api.run("sga", grid, seeds=2, **SMALL).success.all()  # small calls still run
+    assert api.run("sga", grid, seeds=3, **SMALL).success.all()  # small calls still run
 
 
 def test_an_empty_corner_rule_is_refused_not_replaced_by_the_presets(grid):
@@ -372,16 +372,18 @@ def test_integer_types_are_accepted_for_seeds_generations_and_endpoints(grid):
     """numpy and JAX integers, arrays of seeds and one-pass iterables keep working."""
     import jax.numpy as jnp
 
-    r = api.run("sga", grid.replace(start=iter(grid.start_xy)), seeds=np.arange(2),
+    # three runs each: the module's 3-run program (``preset_run``), compiled once
+    r = api.run("sga", grid.replace(start=iter(grid.start_xy)), seeds=np.arange(3),
                 generations=jnp.int32(3), population__size=8, init__max_tries=40)
-    assert r.generations == 3 and list(r.seeds) == [0, 1] and r.success.all()
-    # a 0-d integer array is a count: the same two runs
-    again = api.run("sga", grid, seeds=jnp.int32(2), **SMALL)
-    assert list(again.seeds) == [0, 1] and np.array_equal(again.cells, r.cells)
-    mixed = api.run("sga", grid, seeds=np.array([0, np.int64(1)], dtype=object), **SMALL)
-    assert list(mixed.seeds) == [0, 1] and np.array_equal(mixed.cells, r.cells)
+    assert r.generations == 3 and list(r.seeds) == [0, 1, 2] and r.success.all()
+    # a 0-d integer array is a count: the same three runs
+    again = api.run("sga", grid, seeds=jnp.int32(3), **SMALL)
+    assert list(again.seeds) == [0, 1, 2] and np.array_equal(again.cells, r.cells)
+    mixed = api.run("sga", grid, seeds=np.array([0, np.int64(1), np.int32(2)], dtype=object),
+                    **SMALL)
+    assert list(mixed.seeds) == [0, 1, 2] and np.array_equal(mixed.cells, r.cells)
     # numpy scalars as configuration values (a sweep built with numpy gives them)
-    same = api.run("sga", grid, seeds=2, population__size=np.int64(8), generations=3,
+    same = api.run("sga", grid, seeds=3, population__size=np.int64(8), generations=3,
                    init__max_tries=np.int32(40), crossover__probability=np.float64(0.5))
     assert same.config["population.size"] == 8 and same.success.all()
     assert type(same.config["population.size"]) is int
