@@ -55,3 +55,24 @@ def _bounded_compiled_programs():
         from jaxga.api import clear_compiled
 
         clear_compiled()
+
+
+SLOWEST_FILES = ("test_distributed.py", "test_api.py", "test_crossover.py",
+                 "test_notebooks.py", "test_batching.py", "test_init.py", "test_mutation.py",
+                 "test_doe.py", "test_engine.py")
+"""Test files that take a minute or more on CI's 2-core machine, slowest first (cold
+compilation cache; ``benchmarks/suite_time.py``, RESULTS.md 2026-11-25): they run first.
+
+``--dist loadfile`` (pyproject.toml) hands whole files to the two workers in queue
+order, and by default xdist queues files by their number of tests, which put the
+notebooks and the ``jax.distributed`` tests (few tests, 2-3 minutes each) last: one
+worker then ran alone for up to two minutes at the end. Longest first (with
+``--no-loadscope-reorder``, the queue follows this collection order) leaves only short
+files for the end."""
+
+
+@pytest.hookimpl(trylast=True)
+def pytest_collection_modifyitems(config, items):
+    """Queue :data:`SLOWEST_FILES` first, in that order; every file's own order is kept."""
+    rank = {name: i for i, name in enumerate(SLOWEST_FILES)}
+    items.sort(key=lambda item: rank.get(item.path.name, len(rank)))

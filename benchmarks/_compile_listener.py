@@ -1,0 +1,58 @@
+"""pytest plugin for ``benchmarks/suite_time.py``: JAX's compile durations per test.
+
+Loaded with ``pytest -p _compile_listener`` (``benchmarks/`` on ``PYTHONPATH``). It
+listens to ``jax.monitoring``'s duration events (tracing, lowering to MLIR, XLA's
+backend compile, persistent-cache hits) and records, for every test of this process, the
+seconds and the number of each event between the test's start and its end (setup, call
+and teardown; counts under ``"n:<event>"``), with the test's own wall time. Each pytest
+process that runs tests (every xdist worker; not the xdist controller) writes
+``<$JAXGA_SUITE_PROFILE>/<worker>.json``. Work done in child processes that a test
+starts (notebook kernels, ``jax.distributed`` processes) is not seen: only its wall time.
+"""
+
+from __future__ import annotations
+
+import collections
+import json
+import os
+import time
+from pathlib import Path
+
+import jax.monitoring
+
+_totals: collections.defaultdict[str, float] = collections.defaultdict(float)
+_counts: collections.defaultdict[str, int] = collections.defaultdict(int)
+_rows: list[tuple[str, dict[str, float]]] = []
+_start: dict[str, float] = {}
+
+
+def _listen(event: str, duration: float, **_kwargs) -> None:
+    _totals[event] += duration
+    _counts[event] += 1
+
+
+jax.monitoring.register_event_duration_secs_listener(_listen)
+
+
+def pytest_runtest_logstart(nodeid: str, location) -> None:
+    _start.clear()
+    _start.update(_totals)
+    _start.update({"n:" + k: v for k, v in _counts.items()})
+    _start["wall"] = time.perf_counter()
+
+
+def pytest_runtest_logfinish(nodeid: str, location) -> None:
+    now = {**_totals, **{"n:" + k: v for k, v in _counts.items()}}
+    row = {k: v - _start.get(k, 0) for k, v in now.items() if v > _start.get(k, 0)}
+    row["wall"] = time.perf_counter() - _start.get("wall", time.perf_counter())
+    _rows.append((nodeid, row))
+
+
+def pytest_sessionfinish(session) -> None:
+    if session.config.pluginmanager.has_plugin("dsession"):
+        return  # the xdist controller: it sees its workers' tests, not their compilations
+    out = Path(os.environ.get("JAXGA_SUITE_PROFILE", "."))
+    out.mkdir(parents=True, exist_ok=True)
+    worker = os.environ.get("PYTEST_XDIST_WORKER", "main")
+    (out / f"{worker}.json").write_text(json.dumps(
+        {"rows": _rows, "counts": dict(_counts), "totals": dict(_totals)}))

@@ -1,0 +1,183 @@
+"""Where a preset's cold compilation goes: tracing, lowering, XLA, and XLA's kernels by module.
+
+    python benchmarks/compile_anatomy.py [--presets sga,imga,...] [--seeds 1] [--no-write]
+
+For each preset, one fresh process (cold compile, no persistent cache, one XLA device)
+runs ``jaxga.run`` on ``classic_ga_gapp3_20x20`` (population 60, mpmga 3 islands of 20,
+300 generations) and reports:
+
+* ``compile_s`` as ``jaxga.run`` reports it, split into tracing (JAX's
+  ``jaxpr_trace_duration`` events), lowering (``Traced.lower``) and XLA
+  (``Lowered.compile``), and the process's CPU seconds over the same run (user + system,
+  imports included): with 2 cores, a CPU time near twice the wall time means the
+  compilation is already limited by the CPU, not by waiting;
+* per program (init, evolve, finish): XLA seconds and the number of kernels XLA emitted
+  (``fusion`` instructions of the optimised HLO, each compiled on its own), and the jaxga
+  modules whose code the most kernels come from (the innermost jaxga stack frame of each
+  fusion's metadata).
+
+The compile target of the engine issue is < 10 s per preset; this says what a shorter
+compile would have to cut.
+"""
+
+from __future__ import annotations
+
+import argparse
+import collections
+import json
+import os
+import re
+import subprocess
+import sys
+from pathlib import Path
+
+from _results import append, markdown_table
+
+HERE = Path(__file__).resolve().parent
+PRESETS = ("sga", "imga", "agacd", "iga_zhang", "mpmga", "iga_zhu")
+PROGRAMS = ("init", "finish", "evolve")  # the order jaxga.api._programs compiles them in
+
+
+def kernels_by_module(hlo: str) -> tuple[int, collections.Counter]:
+    """Fusion count of an optimised HLO module and the jaxga module of each fusion's
+    innermost stack frame (``"other"``: no jaxga frame, e.g. JAX's own code)."""
+    lines = hlo.splitlines()
+
+    def table(name: str) -> dict[int, str]:
+        if name not in lines:
+            return {}
+        out = {}
+        for line in lines[lines.index(name) + 1:]:
+            if not line.strip():
+                break
+            key, value = line.split(" ", 1)
+            out[int(key)] = value
+        return out
+
+    files = {k: v.strip('"').rsplit("/", 1)[-1] for k, v in table("FileNames").items()}
+    locations = {k: int(re.search(r"file_name_id=(\d+)", v).group(1))
+                 for k, v in table("FileLocations").items()}
+    frames = {k: tuple(int(x) for x in re.search(
+        r"file_location_id=(\d+) parent_frame_id=(\d+)", v).groups())
+        for k, v in table("StackFrames").items()}
+
+    def module(frame: int) -> str:
+        seen = set()
+        while frame in frames and frame not in seen:
+            seen.add(frame)
+            loc, parent = frames[frame]
+            name = files.get(locations.get(loc, -1), "")
+            if name and name != "api.py":  # api.py: the program wrappers around the engine
+                return name.removesuffix(".py")
+            frame = parent
+        return "other"
+
+    count, by = 0, collections.Counter()
+    for line in lines:
+        if re.search(r"= \S+ fusion\(", line):
+            count += 1
+            m = re.search(r"stack_frame_id=(\d+)", line)
+            by[module(int(m.group(1))) if m else "other"] += 1
+    return count, by
+
+
+def child(preset: str, seeds: int) -> dict:
+    """One cold ``jaxga.run`` in this process, instrumented."""
+    import resource
+    import time
+
+    import jax
+    import jax.monitoring
+
+    from jaxga import api
+    from jaxga.maps import load_map
+
+    tracing = [0.0]
+
+    def listen(event: str, duration: float, **_kw) -> None:
+        if event == "/jax/core/compile/jaxpr_trace_duration":
+            tracing[0] += duration
+
+    jax.monitoring.register_event_duration_secs_listener(listen)
+    lower_s, xla = [], []
+    lower, compile_ = jax.stages.Traced.lower, jax.stages.Lowered.compile
+
+    def timed_lower(self, *a, **k):
+        t = time.perf_counter()
+        out = lower(self, *a, **k)
+        lower_s.append(time.perf_counter() - t)
+        return out
+
+    def timed_compile(self, *a, **k):
+        t = time.perf_counter()
+        out = compile_(self, *a, **k)
+        xla.append((time.perf_counter() - t, out.as_text()))
+        return out
+
+    jax.stages.Traced.lower, jax.stages.Lowered.compile = timed_lower, timed_compile
+    grid = load_map("classic_ga_gapp3_20x20", corner_rule="free")
+    size = 20 if preset == "mpmga" else 60
+    cpu0 = resource.getrusage(resource.RUSAGE_SELF)
+    r = api.run(preset, grid, seeds=seeds, population__size=size, generations=300)
+    cpu1 = resource.getrusage(resource.RUSAGE_SELF)
+    programs = {}
+    for name, (seconds, hlo) in zip(PROGRAMS, xla):
+        n, by = kernels_by_module(hlo)
+        programs[name] = {"xla_s": seconds, "kernels": n, "by_module": by.most_common(4)}
+    cpu = (cpu1.ru_utime - cpu0.ru_utime) + (cpu1.ru_stime - cpu0.ru_stime)
+    return {"compile_s": r.timing["compile_s"], "trace_s": tracing[0],
+            "lower_s": sum(lower_s), "xla_s": sum(s for s, _ in xla),
+            "run_wall_s": r.timing["total_s"], "run_cpu_s": cpu, "programs": programs}
+
+
+def measure(preset: str, seeds: int) -> dict:
+    env = dict(os.environ, PYTHONPATH=f"{HERE.parent}{os.pathsep}{HERE}", JAXGA_DEVICES="1")
+    env.pop("JAXGA_CACHE_DIR", None)
+    proc = subprocess.run([sys.executable, __file__, "--child", f"{preset}:{seeds}"],
+                          env=env, capture_output=True, text=True)
+    if proc.returncode != 0:
+        raise RuntimeError(proc.stderr[-3000:])
+    return json.loads(proc.stdout.strip().splitlines()[-1])
+
+
+def main() -> None:
+    ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    ap.add_argument("--presets", default=",".join(PRESETS))
+    ap.add_argument("--seeds", type=int, default=1)
+    ap.add_argument("--no-write", action="store_true")
+    ap.add_argument("--child", help=argparse.SUPPRESS)
+    a = ap.parse_args()
+    if a.child:
+        preset, seeds = a.child.split(":")
+        print(json.dumps(child(preset, int(seeds))))
+        return
+    whole, programs = [], []
+    for preset in a.presets.split(","):
+        m = measure(preset, a.seeds)
+        print(preset, json.dumps(m), flush=True)
+        whole.append([preset, m["compile_s"], m["trace_s"], m["lower_s"], m["xla_s"],
+                      m["run_wall_s"], m["run_cpu_s"]])
+        for name in ("init", "evolve", "finish"):
+            p = m["programs"][name]
+            programs.append([preset, name, p["xla_s"], p["kernels"],
+                             ", ".join(f"{mod} {n}" for mod, n in p["by_module"])])
+    body = (
+        f"`classic_ga_gapp3_20x20`, corner rule free, population 60 (mpmga 3 x 20), 300 "
+        f"generations, {a.seeds} seed(s), one XLA device, one fresh process per preset "
+        f"(cold compile, no persistent cache). Seconds. compile = `jaxga.run`'s "
+        f"`compile_s`; trace, lower, XLA = its parts (JAX's tracing events, "
+        f"`Traced.lower`, `Lowered.compile`); run wall / run CPU = the whole `jaxga.run` "
+        f"call's wall time and the process's CPU time over it (user + system).\n\n"
+        + markdown_table(["preset", "compile", "trace", "lower", "XLA", "run wall",
+                          "run CPU"], whole)
+        + "\n\nXLA per program: kernels = `fusion` instructions of the optimised HLO; "
+        "modules = the jaxga module of each kernel's innermost jaxga stack frame "
+        "(the four largest).\n\n"
+        + markdown_table(["preset", "program", "XLA s", "kernels", "kernels by module"],
+                         programs)
+    )
+    append("cold compile anatomy of every preset", body, write=not a.no_write)
+
+
+if __name__ == "__main__":
+    main()

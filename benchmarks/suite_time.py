@@ -1,0 +1,118 @@
+"""Where the test suite's time goes: JAX compilation per test file, cold cache, as in CI.
+
+    python benchmarks/suite_time.py [--top 15] [--no-write] [-- PYTEST_ARGS...]
+
+Runs the README's test command (``pytest -q``, from the repository root) with an empty
+persistent compilation cache (``JAXGA_TEST_JAX_CACHE`` set to a new temporary
+directory: CI starts from a clean clone) and the ``_compile_listener`` plugin, then
+prints, per test file: its tests, the sum of their wall times, and how much of that was
+XLA's backend compilation (seconds and programs), tracing to jaxprs and lowering to MLIR
+(JAX's ``jax.monitoring`` events, in the pytest workers only; a test's child processes,
+such as notebook kernels or ``jax.distributed`` processes, count as wall time only), and
+the compile seconds that persistent-cache hits saved. Then the slowest tests. The suite
+must stay under 15 minutes on CI's 2-core machine (README, tests); this says which
+files to look at when it creeps up.
+"""
+
+from __future__ import annotations
+
+import argparse
+import collections
+import json
+import os
+import subprocess
+import sys
+import tempfile
+import time
+from pathlib import Path
+
+from _results import append, markdown_table
+
+HERE = Path(__file__).resolve().parent
+ROOT = HERE.parent
+BACKEND = "/jax/core/compile/backend_compile_duration"
+TRACE = "/jax/core/compile/jaxpr_trace_duration"
+LOWER = "/jax/core/compile/jaxpr_to_mlir_module_duration"
+SAVED = "/jax/compilation_cache/compile_time_saved_sec"
+
+
+def run_suite(pytest_args: list[str], profile: Path, cache: Path) -> tuple[float, str]:
+    """Run pytest once (cold compilation cache); its wall seconds and its last line."""
+    env = dict(os.environ, JAXGA_SUITE_PROFILE=str(profile), JAXGA_TEST_JAX_CACHE=str(cache),
+               PYTHONPATH=os.pathsep.join(filter(None, [str(HERE), os.environ.get("PYTHONPATH")])))
+    cmd = [sys.executable, "-m", "pytest", "-q", "-p", "_compile_listener", *pytest_args]
+    t0 = time.perf_counter()
+    proc = subprocess.run(cmd, cwd=ROOT, env=env, capture_output=True, text=True)
+    wall = time.perf_counter() - t0
+    lines = [ln for ln in proc.stdout.strip().splitlines() if ln.strip()]
+    if proc.returncode != 0:
+        print(proc.stdout[-5000:], proc.stderr[-3000:], file=sys.stderr)
+        raise SystemExit(f"pytest exited with {proc.returncode}")
+    return wall, lines[-1] if lines else ""
+
+
+def per_file(profile: Path) -> tuple[dict[str, collections.Counter], list, dict]:
+    """Sums per test file, every test's (wall, backend, nodeid), the worker of each file."""
+    files: dict[str, collections.Counter] = collections.defaultdict(collections.Counter)
+    tests, worker_of = [], {}  # files in the order each worker ran them: dict order
+    for path in sorted(profile.glob("*.json")):
+        for nodeid, row in json.loads(path.read_text())["rows"]:
+            name = nodeid.split("::")[0]
+            files[name]["tests"] += 1
+            files[name].update({k: v for k, v in row.items()})
+            worker_of[name] = path.stem
+            tests.append((row["wall"], row.get(BACKEND, 0.0), nodeid))
+    return files, sorted(tests, reverse=True), worker_of
+
+
+def main() -> None:
+    ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    ap.add_argument("--top", type=int, default=15, help="how many of the slowest tests")
+    ap.add_argument("--no-write", action="store_true", help="do not append to RESULTS.md")
+    ap.add_argument("pytest_args", nargs="*", help="extra pytest arguments (after --)")
+    a = ap.parse_args()
+    with tempfile.TemporaryDirectory(prefix="jaxga-suite-") as tmp:
+        profile, cache = Path(tmp) / "profile", Path(tmp) / "cache"
+        wall, last = run_suite(a.pytest_args, profile, cache)
+        files, tests, worker_of = per_file(profile)
+    order = sorted(files, key=lambda f: -files[f]["wall"])
+    rows = [[f.removeprefix("tests/"), worker_of[f], files[f]["tests"], files[f]["wall"],
+             files[f][BACKEND], int(files[f]["n:" + BACKEND]), files[f][TRACE],
+             files[f][LOWER], files[f][SAVED]] for f in order]
+    total = collections.Counter()
+    for f in order:
+        total.update(files[f])
+    rows.append(["all", "", total["tests"], total["wall"], total[BACKEND],
+                 int(total["n:" + BACKEND]), total[TRACE], total[LOWER], total[SAVED]])
+    workers = collections.Counter()
+    for f in order:
+        workers[worker_of[f]] += files[f]["wall"]
+    ran = collections.defaultdict(list)
+    for f, w in worker_of.items():
+        ran[w].append(f"{f.removeprefix('tests/test_').removesuffix('.py')} "
+                      f"{files[f]['wall']:.0f}")
+    body = (
+        f"`pytest -q` from the repository root, cold persistent compilation cache (a new "
+        f"temporary `JAXGA_TEST_JAX_CACHE`), JAX's `jax.monitoring` duration events per "
+        f"test (plugin `benchmarks/_compile_listener.py`). Seconds. Wall = sum of the "
+        f"tests' own times (setup + call + teardown); XLA = backend compilation (seconds, "
+        f"programs); trace = Python to jaxpr; lower = jaxpr to MLIR; cache saved = XLA "
+        f"seconds that persistent-cache hits saved. Only the pytest workers are seen: "
+        f"tests that start processes (notebook kernels, `jax.distributed`, device "
+        f"counts) count as wall time.\n\n"
+        f"pytest: {last}; wall of the whole command {wall:.0f} s; tests' time per "
+        f"worker: " + ", ".join(f"{w} {s:.0f} s" for w, s in sorted(workers.items()))
+        + "\n\nFiles in the order each worker ran them (seconds):\n\n"
+        + "\n".join(f"- {w}: " + ", ".join(ran[w]) for w in sorted(ran))
+        + "\n\n"
+        + markdown_table(["file", "worker", "tests", "wall", "XLA s", "XLA programs",
+                          "trace", "lower", "cache saved"], rows)
+        + f"\n\nSlowest {a.top} tests:\n\n"
+        + markdown_table(["test", "wall", "XLA s"],
+                         [[n, w, c] for w, c, n in tests[: a.top]])
+    )
+    append("test suite time per file, cold compilation cache", body, write=not a.no_write)
+
+
+if __name__ == "__main__":
+    main()
