@@ -14,7 +14,9 @@ runs ``jaxga.run`` on ``classic_ga_gapp3_20x20`` (population 60, mpmga 3 islands
 * per program (init, evolve, finish): XLA seconds and the number of kernels XLA emitted
   (``fusion`` instructions of the optimised HLO, each compiled on its own), and the jaxga
   modules whose code the most kernels come from (the innermost jaxga stack frame of each
-  fusion's metadata).
+  fusion's metadata; code traced inside :mod:`jaxga.folding`'s batching rule, such as
+  the bodies of the pooled gated operators, has stack frames that end there and counts
+  as ``folding``).
 
 The compile target of the engine issue is < 10 s per preset; this says what a shorter
 compile would have to cut.
