@@ -8,8 +8,8 @@ runs ``jaxga.run`` on ``classic_ga_gapp3_20x20`` (population 60, mpmga 3 islands
 
 * ``compile_s`` as ``jaxga.run`` reports it, split into tracing (JAX's
   ``jaxpr_trace_duration`` events), lowering (``Traced.lower``) and XLA
-  (``Lowered.compile``), and the process's CPU seconds over the same run (user + system,
-  imports included): with 2 cores, a CPU time near twice the wall time means the
+  (``Lowered.compile``), and the process's CPU seconds over the same call (user +
+  system, every thread): with 2 cores, a CPU time near twice the wall time means the
   compilation is already limited by the CPU, not by waiting;
 * per program (init, evolve, finish): XLA seconds and the number of kernels XLA emitted
   (``fusion`` instructions of the optimised HLO, each compiled on its own), and the jaxga
@@ -38,6 +38,8 @@ from _results import append, markdown_table
 HERE = Path(__file__).resolve().parent
 PRESETS = ("sga", "imga", "agacd", "iga_zhang", "mpmga", "iga_zhu")
 PROGRAMS = ("init", "finish", "evolve")  # the order jaxga.api._programs compiles them in
+FUSION = re.compile(r"\s*(ROOT )?%\S+ = .*? fusion\(")
+"""An HLO ``fusion`` instruction (its result may be a tuple)."""
 
 
 def kernels_by_module(hlo: str) -> tuple[int, collections.Counter]:
@@ -56,7 +58,7 @@ def kernels_by_module(hlo: str) -> tuple[int, collections.Counter]:
             out[int(key)] = value
         return out
 
-    files = {k: v.strip('"').rsplit("/", 1)[-1] for k, v in table("FileNames").items()}
+    files = {k: v.strip('"') for k, v in table("FileNames").items()}
     locations = {k: int(re.search(r"file_name_id=(\d+)", v).group(1))
                  for k, v in table("FileLocations").items()}
     frames = {k: tuple(int(x) for x in re.search(
@@ -68,15 +70,17 @@ def kernels_by_module(hlo: str) -> tuple[int, collections.Counter]:
         while frame in frames and frame not in seen:
             seen.add(frame)
             loc, parent = frames[frame]
-            name = files.get(locations.get(loc, -1), "")
-            if name and name != "api.py":  # api.py: the program wrappers around the engine
+            path = files.get(locations.get(loc, -1), "")
+            name = path.rsplit("/", 1)[-1]
+            # api.py: the program wrappers around the engine; look at the caller's frame
+            if "/jaxga/" in path and name != "api.py":
                 return name.removesuffix(".py")
-            frame = parent
+            frame = parent - 1  # the text prints a frame's parent id plus one (0: none)
         return "other"
 
     count, by = 0, collections.Counter()
     for line in lines:
-        if re.search(r"= \S+ fusion\(", line):
+        if FUSION.match(line):
             count += 1
             m = re.search(r"stack_frame_id=(\d+)", line)
             by[module(int(m.group(1))) if m else "other"] += 1
@@ -122,6 +126,8 @@ def child(preset: str, seeds: int) -> dict:
     cpu0 = resource.getrusage(resource.RUSAGE_SELF)
     r = api.run(preset, grid, seeds=seeds, population__size=size, generations=300)
     cpu1 = resource.getrusage(resource.RUSAGE_SELF)
+    if len(xla) != len(PROGRAMS):
+        raise RuntimeError(f"expected {len(PROGRAMS)} compiled programs, got {len(xla)}")
     programs = {}
     for name, (seconds, hlo) in zip(PROGRAMS, xla):
         n, by = kernels_by_module(hlo)
@@ -134,7 +140,8 @@ def child(preset: str, seeds: int) -> dict:
 
 def measure(preset: str, seeds: int) -> dict:
     env = dict(os.environ, PYTHONPATH=f"{HERE.parent}{os.pathsep}{HERE}", JAXGA_DEVICES="1")
-    env.pop("JAXGA_CACHE_DIR", None)
+    for key in ("JAXGA_CACHE_DIR", "JAX_COMPILATION_CACHE_DIR"):
+        env.pop(key, None)  # cold: no persistent compilation cache
     proc = subprocess.run([sys.executable, __file__, "--child", f"{preset}:{seeds}"],
                           env=env, capture_output=True, text=True)
     if proc.returncode != 0:
