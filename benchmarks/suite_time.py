@@ -12,7 +12,8 @@ only; a test's child processes, such as notebook kernels or ``jax.distributed``
 processes, count as wall time only), and
 the compile seconds that persistent-cache hits saved. Then the slowest tests. The suite
 must stay under 15 minutes on CI's 2-core machine (README, tests); this says which
-files to look at when it creeps up.
+files to look at when it creeps up. The worker column assumes the suite's own
+``--dist loadfile`` (a whole file on one worker).
 """
 
 from __future__ import annotations
