@@ -47,6 +47,29 @@ def result_hash(result) -> str:
     return h.hexdigest()[:16]
 
 
+def cold_child(script: str, spec: str, **env: str) -> tuple[dict, str]:
+    """Run ``python <script> --child <spec>`` in a fresh process and return its last
+    stdout line parsed as JSON, and its stderr.
+
+    The child imports ``jaxga`` from this checkout and the benchmark helpers from
+    ``benchmarks/``; it has no persistent compilation cache (``JAXGA_CACHE_DIR`` and
+    ``JAX_COMPILATION_CACHE_DIR`` removed), so it compiles cold. ``env`` adds or replaces
+    environment variables (``XLA_FLAGS``, ``JAXGA_DEVICES``, ...). A failing child raises
+    ``RuntimeError`` with the end of its stderr."""
+    import json
+    import subprocess
+
+    here = Path(__file__).resolve().parent
+    child_env = dict(os.environ, PYTHONPATH=f"{here.parent}{os.pathsep}{here}", **env)
+    for key in ("JAXGA_CACHE_DIR", "JAX_COMPILATION_CACHE_DIR"):
+        child_env.pop(key, None)
+    proc = subprocess.run([sys.executable, script, "--child", spec], env=child_env,
+                          capture_output=True, text=True)
+    if proc.returncode != 0:
+        raise RuntimeError(proc.stderr[-3000:])
+    return json.loads(proc.stdout.strip().splitlines()[-1]), proc.stderr
+
+
 def markdown_table(headers: list[str], rows: list[list]) -> str:
     """A GitHub markdown table (numbers right-aligned)."""
     def fmt(v):

@@ -27,15 +27,10 @@ from __future__ import annotations
 import argparse
 import collections
 import json
-import os
 import re
-import subprocess
-import sys
-from pathlib import Path
 
-from _results import append, markdown_table
+from _results import append, cold_child, markdown_table
 
-HERE = Path(__file__).resolve().parent
 PRESETS = ("sga", "imga", "agacd", "iga_zhang", "mpmga", "iga_zhu")
 PROGRAMS = ("init", "finish", "evolve")  # the order jaxga.api._programs compiles them in
 FUSION = re.compile(r"\s*(ROOT )?%\S+ = .*? fusion\(")
@@ -139,14 +134,8 @@ def child(preset: str, seeds: int) -> dict:
 
 
 def measure(preset: str, seeds: int) -> dict:
-    env = dict(os.environ, PYTHONPATH=f"{HERE.parent}{os.pathsep}{HERE}", JAXGA_DEVICES="1")
-    for key in ("JAXGA_CACHE_DIR", "JAX_COMPILATION_CACHE_DIR"):
-        env.pop(key, None)  # cold: no persistent compilation cache
-    proc = subprocess.run([sys.executable, __file__, "--child", f"{preset}:{seeds}"],
-                          env=env, capture_output=True, text=True)
-    if proc.returncode != 0:
-        raise RuntimeError(proc.stderr[-3000:])
-    return json.loads(proc.stdout.strip().splitlines()[-1])
+    """:func:`child`'s numbers from a fresh process (cold compile, one device)."""
+    return cold_child(__file__, f"{preset}:{seeds}", JAXGA_DEVICES="1")[0]
 
 
 def main() -> None:

@@ -19,17 +19,12 @@ from __future__ import annotations
 
 import argparse
 import json
-import os
-import subprocess
-import sys
 import time
-from pathlib import Path
 
-from _results import append, markdown_table, result_hash
+from _results import append, cold_child, markdown_table, result_hash
 
 from jaxga.parallel import cores
 
-HERE = Path(__file__).resolve().parent
 POPULATION, GENERATIONS = 60, 300
 
 
@@ -51,13 +46,7 @@ def measure(preset: str, seeds: int, older: bool, devices: int) -> dict:
     flags = f"--xla_force_host_platform_device_count={devices}"
     if older:
         flags += " --xla_cpu_use_fusion_emitters=false"
-    env = dict(os.environ, PYTHONPATH=f"{HERE.parent}{os.pathsep}{HERE}", XLA_FLAGS=flags)
-    env.pop("JAXGA_CACHE_DIR", None)
-    cmd = [sys.executable, __file__, "--child", f"{preset}:{seeds}"]
-    proc = subprocess.run(cmd, env=env, capture_output=True, text=True)
-    if proc.returncode != 0:
-        raise RuntimeError(proc.stderr[-3000:])
-    return json.loads(proc.stdout.strip().splitlines()[-1])
+    return cold_child(__file__, f"{preset}:{seeds}", XLA_FLAGS=flags)[0]
 
 
 def main() -> None:

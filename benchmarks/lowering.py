@@ -16,15 +16,11 @@ from __future__ import annotations
 
 import argparse
 import json
-import os
 import re
-import subprocess
 import sys
-from pathlib import Path
 
-from _results import append, markdown_table, result_hash
+from _results import append, cold_child, markdown_table, result_hash
 
-HERE = Path(__file__).resolve().parent
 PROGRAM = re.compile(r"Finished XLA compilation of jit\((do_\w+)\) in ([0-9.]+) sec")
 
 
@@ -43,18 +39,12 @@ def child(preset: str, seeds: int, generations: int) -> dict:
 
 
 def measure(preset: str, seeds: int, generations: int, lowering: str) -> dict:
-    env = dict(os.environ, PYTHONPATH=f"{HERE.parent}{os.pathsep}{HERE}",
-               XLA_FLAGS="--xla_force_host_platform_device_count=1",
-               JAXGA_THREEFRY=lowering, JAX_LOG_COMPILES="1")
-    env.pop("JAXGA_CACHE_DIR", None)
-    cmd = [sys.executable, __file__, "--child", f"{preset}:{seeds}:{generations}"]
-    proc = subprocess.run(cmd, env=env, capture_output=True, text=True)
-    if proc.returncode != 0:
-        raise RuntimeError(proc.stderr[-3000:])
-    out = json.loads(proc.stdout.strip().splitlines()[-1])
+    out, stderr = cold_child(__file__, f"{preset}:{seeds}:{generations}",
+                             XLA_FLAGS="--xla_force_host_platform_device_count=1",
+                             JAXGA_THREEFRY=lowering, JAX_LOG_COMPILES="1")
     if out["unrolled"] != (lowering == "unrolled"):
         raise RuntimeError(f"JAXGA_THREEFRY={lowering} was not applied")
-    out["xla"] = {name: float(s) for name, s in PROGRAM.findall(proc.stderr)}
+    out["xla"] = {name: float(s) for name, s in PROGRAM.findall(stderr)}
     return out
 
 

@@ -16,13 +16,9 @@ from __future__ import annotations
 import argparse
 import json
 import os
-import subprocess
 import sys
-from pathlib import Path
 
-from _results import append, markdown_table, result_hash
-
-HERE = Path(__file__).resolve().parent
+from _results import append, cold_child, markdown_table, result_hash
 
 
 def child(preset: str, seeds: int, generations: int, block: int) -> dict:
@@ -62,17 +58,11 @@ def main() -> None:
         print(json.dumps(child(preset, int(seeds), int(generations), int(block))))
         return
 
-    env = dict(os.environ, PYTHONPATH=f"{HERE.parent}{os.pathsep}{HERE}",
-               XLA_FLAGS=f"--xla_force_host_platform_device_count={args.devices}")
-    env.pop("JAXGA_CACHE_DIR", None)
+    flags = f"--xla_force_host_platform_device_count={args.devices}"
     rows, hashes = [], set()
     for block in (int(b) for b in args.blocks.split(",")):
         spec = f"{args.preset}:{args.seeds}:{args.generations}:{block}"
-        proc = subprocess.run([sys.executable, __file__, "--child", spec], env=env,
-                              capture_output=True, text=True)
-        if proc.returncode != 0:
-            raise RuntimeError(proc.stderr[-3000:])
-        m = json.loads(proc.stdout.strip().splitlines()[-1])
+        m = cold_child(__file__, spec, XLA_FLAGS=flags)[0]
         hashes.add(m["hash"])
         rate = args.seeds * m["population"] * args.generations / m["evolve_s"]
         rows.append([block, m["blocks"], m["block_runs"], m["compile_s"], m["init_s"],
