@@ -216,7 +216,7 @@ def gated_map(
                       axes, n, width, narrow)
         return [x.reshape(((r, n) if lead else (n,)) + x.shape[1:]) for x in out]
 
-    out = fold_call(client, [apply, *args, *defaults], consts, len(defaults))
+    out = fold_call(client, [apply, *args, *defaults], consts, defaults)
     return tuple(out)
 
 
@@ -456,8 +456,9 @@ def _windowed(fn: Callable, args: tuple, *, paths: tuple, lengths: tuple, fits: 
             lambda: _vmap_hoisted(wide_op, lane_consts[:j], axes[:j], flat))
         return [x.reshape(((total // n, n) if lead else (n,)) + x.shape[1:]) for x in out]
 
-    n_out = len(jax.eval_shape(wide_op, consts[:j], *example))
-    return tuple(fold_call(client, list(args), consts, n_out))
+    out_like = [jax.ShapeDtypeStruct((n,) + o.shape, o.dtype)
+                for o in jax.eval_shape(wide_op, consts[:j], *example)]
+    return tuple(fold_call(client, list(args), consts, out_like))
 
 
 def _narrow_call(op: Callable, consts: list, axes: list, lanes: list, paths: tuple,

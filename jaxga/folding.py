@@ -7,13 +7,13 @@ whose lanes finish at different times (:func:`jaxga.lanes.lane_while_loop`), a g
 map that should compute only the applied entries of ALL runs rather than a per-run
 block count that every run then pays (:func:`jaxga.batching.gated_map`).
 
-:func:`fold_call` gives such a computation that view. It carries a
-:func:`jax.custom_batching.custom_vmap` rule that, at every ``vmap`` level, adds one
-leading dimension to the per-call ("lane") arrays and calls itself again, so that the
-innermost call receives the lane arrays with all levels as leading dimensions, flattens
-them into one, and hands them to the computation. Values the computation closes over
-are hoisted into explicit operands first (:func:`hoist`); an operand batched at no
-level (the map) stays one copy, one batched at some levels only is broadcast.
+:func:`fold_call` gives such a computation that view. It binds a primitive of its own,
+:data:`fold_p`, whose batching rule, at every ``vmap`` level, adds one leading dimension
+to the per-call ("lane") arrays and binds it again; when the program is lowered, the
+computation receives the lane arrays with all levels flattened into one leading
+dimension, and is traced only then, once. Values the computation closes over are
+hoisted into explicit operands first (:func:`hoist`); an operand batched at no level
+(the map) stays one copy, one batched at some levels only is broadcast.
 """
 
 from __future__ import annotations
@@ -25,7 +25,7 @@ import jax
 import jax.extend.core
 import jax.numpy as jnp
 import numpy as np
-from jax.custom_batching import custom_vmap
+from jax.interpreters import batching, mlir
 
 __all__ = ["FlatCall", "fold_call", "hoist"]
 
@@ -40,8 +40,9 @@ flattened leading dimension (``axes[j] == 0``). The outputs have the lanes' layo
 def hoist(fn: Callable, *example: Any) -> tuple[Callable, list]:
     """``(fn_op, consts)`` with ``fn_op(consts, *args) == fn(*args)`` and no closure.
 
-    ``jax.custom_batching.custom_vmap`` cannot batch values a function closes over (a
-    map, a run's parameters); tracing ``fn`` once on ``example`` arguments turns them
+    A folded call cannot batch values its computation closes over (a map, a run's
+    parameters), and it is traced when the program is lowered, where no tracer of the
+    caller may be closed over; tracing ``fn`` once on ``example`` arguments turns them
     into the explicit operands ``consts``.
     """
     closed, shapes = jax.make_jaxpr(fn, return_shape=True)(*example)
@@ -55,31 +56,48 @@ def hoist(fn: Callable, *example: Any) -> tuple[Callable, list]:
 
 
 def fold_call(client: FlatCall, lanes: Sequence[jax.Array], operands: Sequence[jax.Array],
-              n_out: int) -> list:
-    """``client``'s outputs (``n_out`` arrays) for the lane arrays ``lanes`` and the
-    ``operands``, with every ``vmap`` level above this call folded into the lanes'
-    leading dimension (module docstring; :data:`FlatCall` gives ``client``'s contract).
+              out_like: Sequence[Any]) -> list:
+    """``client``'s outputs for the lane arrays ``lanes`` and the ``operands``, with every
+    ``vmap`` level above this call folded into the lanes' leading dimension (module
+    docstring; :data:`FlatCall` gives ``client``'s contract).
+
+    ``out_like``: one output per ``client`` output, an array or ``jax.ShapeDtypeStruct``
+    with the shape and dtype of that output for this call alone (no ``vmap``). They are
+    checked when ``client`` runs; a mismatch raises ``TypeError``.
     """
     lanes = [jnp.asarray(x) for x in lanes]
     operands = [jnp.asarray(x) for x in operands]
+    if not lanes:
+        raise ValueError("fold_call needs at least one lane array")
     base = tuple(np.ndim(x) for x in lanes)
-    fn = _folded(client, base, tuple(() for _ in operands), int(n_out))
-    return list(fn(lanes, operands))
+    outs = tuple((tuple(np.shape(o)), np.dtype(o.dtype)) for o in out_like)
+    return list(fold_p.bind(*lanes, *operands, client=client, base=base,
+                            op_levels=tuple(() for _ in operands), out_avals=outs))
 
 
-def _folded(client: FlatCall, base: tuple, op_levels: tuple, n_out: int) -> Callable:
-    """The ``custom_vmap`` function for one stack of ``vmap`` levels.
+fold_p = jax.extend.core.Primitive("jaxga_fold")
+"""The folded call as a primitive. Its batching rule only adds a level (no tracing);
+``client`` is traced once, when the program is lowered (or run eagerly), with every
+level folded. A :func:`jax.custom_batching.custom_vmap` function instead traces its body
+again at every ``vmap`` level and every time a loop's body is re-batched, and throws
+all but the last trace away: that was about a third of the presets' tracing time."""
+fold_p.multiple_results = True
+
+
+def _folded_call(*args: jax.Array, client: FlatCall, base: tuple, op_levels: tuple,
+                 out_avals: tuple) -> list:
+    """Run ``client`` on the lanes with all their ``vmap`` levels flattened into one.
 
     ``op_levels[j]`` records, outermost level first, whether operand ``j`` is batched at
-    each level already folded in; every lane array is batched at all of them (the rule
+    each level folded in; every lane array is batched at all of them (the batching rule
     broadcasts an unbatched one).
     """
-
-    def call(lanes, operands):
-        k = np.ndim(lanes[0]) - base[0]
-        if k == 0:
-            return client((), lanes, operands, [None] * len(operands))
-        lead = tuple(np.shape(lanes[0])[:k])
+    lanes, operands = list(args[:len(base)]), list(args[len(base):])
+    k = np.ndim(lanes[0]) - base[0]
+    lead = tuple(np.shape(lanes[0])[:k])
+    if k == 0:
+        out = client((), lanes, operands, [None] * len(operands))
+    else:
         n = int(np.prod(lead, dtype=np.int64))
         flat_lanes = [x.reshape((n,) + x.shape[k:]) for x in lanes]
         flat_ops, axes = [], []
@@ -94,17 +112,37 @@ def _folded(client: FlatCall, base: tuple, op_levels: tuple, n_out: int) -> Call
                 x = jnp.broadcast_to(x.reshape(shape + rest), lead + rest)
             flat_ops.append(x.reshape((n,) + x.shape[k:]))
             axes.append(0)
-        out = client(lead, flat_lanes, flat_ops, axes)
-        return [x.reshape(lead + x.shape[1:]) for x in out]
+        out = [x.reshape(lead + x.shape[1:]) for x in client(lead, flat_lanes, flat_ops, axes)]
+    got = tuple((tuple(np.shape(x)), np.dtype(x.dtype)) for x in out)
+    want = tuple((lead + s, d) for s, d in out_avals)
+    if got != want:
+        raise TypeError(f"fold_call: the client returned {got}, declared {want}")
+    return list(out)
 
-    fn = custom_vmap(call)
 
-    @fn.def_vmap
-    def _rule(axis_size, in_batched, lanes, operands):
-        lane_b, op_b = in_batched
-        lanes = [x if b else jnp.broadcast_to(x, (axis_size,) + x.shape)
-                 for x, b in zip(lanes, lane_b)]
-        levels = tuple((bool(b),) + lv for b, lv in zip(op_b, op_levels))
-        return _folded(client, base, levels, n_out)(lanes, operands), [True] * n_out
+def _abstract_eval(*avals: Any, base: tuple, out_avals: tuple, **_: Any) -> list:
+    lead = tuple(avals[0].shape[:avals[0].ndim - base[0]])
+    return [jax.core.ShapedArray(lead + s, d) for s, d in out_avals]
 
-    return fn
+
+def _batch_rule(args: Sequence[jax.Array], dims: Sequence[Any], *, client: FlatCall,
+                base: tuple, op_levels: tuple, out_avals: tuple) -> tuple[list, list]:
+    """One more ``vmap`` level: move its axis to the front of every lane array
+    (broadcasting the unbatched ones), record which operands it batches, bind again."""
+    size = next(x.shape[d] for x, d in zip(args, dims) if d is not None)
+    front = [x if d is None else jnp.moveaxis(x, d, 0)
+             for x, d in zip(args, dims)]
+    n_lanes = len(base)
+    lanes = [x if d is not None else jnp.broadcast_to(x, (size,) + x.shape)
+             for x, d in zip(front[:n_lanes], dims[:n_lanes])]
+    levels = tuple((d is not None,) + lv
+                   for d, lv in zip(dims[n_lanes:], op_levels))
+    out = fold_p.bind(*lanes, *front[n_lanes:], client=client, base=base, op_levels=levels,
+                      out_avals=out_avals)
+    return out, [0] * len(out)
+
+
+fold_p.def_impl(_folded_call)
+fold_p.def_abstract_eval(_abstract_eval)
+batching.primitive_batchers[fold_p] = _batch_rule
+mlir.register_lowering(fold_p, mlir.lower_fun(_folded_call, multiple_results=True))

@@ -9,7 +9,7 @@ a block of 1,500 connections (100 seeds x 15 mutants) runs about 14 rounds at fu
 (RESULTS.md, 2026-11-24).
 
 :func:`lane_while_loop` has the semantics of ``lax.while_loop`` for one lane. It carries
-a :func:`jax.custom_batching.custom_vmap` rule that folds every ``vmap`` level into one
+a batching rule that folds every ``vmap`` level into one
 flat batch of lanes (:func:`jaxga.folding.fold_call`), so that the loop
 sees all its lanes at once, however many ``vmap`` levels (mutants, runs, islands) are
 stacked. It then runs the rounds at full width only while more than ``1 / shrink`` of
@@ -80,7 +80,7 @@ def lane_while_loop(
     carry_leaves, carry_tree = jax.tree_util.tree_flatten(init_val)
     carry_leaves = [jnp.asarray(x) for x in carry_leaves]
     init_val = jax.tree_util.tree_unflatten(carry_tree, carry_leaves)
-    # Closed-over values become operands (custom_vmap cannot batch closed-over values).
+    # Closed-over values become operands (a folded call cannot batch closed-over values).
     cond_op, cond_consts = hoist(cond_fun, init_val)
     body_op, body_consts = hoist(body_fun, init_val)
     n_cond = len(cond_consts)
@@ -90,7 +90,7 @@ def lane_while_loop(
                     carry_tree, lead, lanes, operands, axes, int(shrink),
                     bool(masked), bool(narrow))
 
-    out = fold_call(client, carry_leaves, cond_consts + body_consts, len(carry_leaves))
+    out = fold_call(client, carry_leaves, cond_consts + body_consts, carry_leaves)
     return jax.tree_util.tree_unflatten(carry_tree, out)
 
 

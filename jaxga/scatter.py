@@ -135,7 +135,8 @@ def table_lookup(keys: jax.Array, queries: jax.Array, n_cells: int) -> jax.Array
         out = _lookup_chunked(k, q, int(n_cells))
         return [out if lead else out[0]]
 
-    (flat,) = fold_call(client, [jnp.asarray(keys, jnp.int32), queries.reshape(-1)], [], 1)
+    flat_queries = queries.reshape(-1)
+    (flat,) = fold_call(client, [jnp.asarray(keys, jnp.int32), flat_queries], [], [flat_queries])
     return flat.reshape(queries.shape)
 
 

@@ -5,6 +5,7 @@ from __future__ import annotations
 import jax
 import jax.numpy as jnp
 import numpy as np
+import pytest
 
 from jaxga.folding import fold_call, hoist
 
@@ -27,7 +28,7 @@ def _probe(seen):
 
 def test_without_vmap_the_client_sees_the_call_itself():
     seen = []
-    out = fold_call(_probe(seen), [jnp.arange(3)], [jnp.int32(5)], 1)
+    out = fold_call(_probe(seen), [jnp.arange(3)], [jnp.int32(5)], [jnp.arange(3)])
     assert seen == [((), [(3,)], [None])]
     np.testing.assert_array_equal(out[0], [5, 6, 7])
 
@@ -39,7 +40,7 @@ def test_two_levels_fold_into_one_leading_dimension_and_operands_broadcast():
     shared = jnp.int32(7)  # batched at no level: stays one copy
 
     def call(xi, o):
-        return fold_call(_probe(seen), [xi], [o, shared], 1)[0]
+        return fold_call(_probe(seen), [xi], [o, shared], [xi])[0]
 
     out = jax.vmap(jax.vmap(call, in_axes=(0, None)))(x, outer)
     lead, lane_shapes, op_shapes = seen[-1]
@@ -60,3 +61,28 @@ def test_hoist_turns_closed_over_values_into_operands():
              for c in consts]
     assert int(fn_op(consts, jnp.int32(2), jnp.int32(3))["a"]) == 12
     assert int(fn_op(other, jnp.int32(2), jnp.int32(3))["a"]) == 90
+
+
+def test_the_client_is_traced_once_with_every_level_folded():
+    """Nested vmap inside a scan inside jit: the batching rule adds levels without
+    tracing the client; it is traced once, at lowering, with all three levels folded."""
+    seen = []
+    x = jnp.arange(2 * 3 * 4 * 5).reshape(2, 3, 4, 5)
+
+    def call(xi):
+        return fold_call(_probe(seen), [xi], [jnp.int32(1)], [xi])[0]
+
+    def scanned(xs):  # the scan body is traced unbatched, then batched by the outer vmap
+        return jax.lax.scan(lambda c, row: (c, jax.vmap(jax.vmap(call))(row)), 0, xs)[1]
+
+    out = jax.jit(jax.vmap(scanned))(x)
+    assert [s[0] for s in seen] == [(2, 4, 5)]
+    np.testing.assert_array_equal(out, np.asarray(x) + 1)
+
+
+def test_a_client_returning_other_shapes_than_declared_is_an_error():
+    def client(lead, lanes, operands, axes):
+        return [lanes[0][..., :1]]
+
+    with pytest.raises(TypeError, match="declared"):
+        fold_call(client, [jnp.arange(3)], [], [jnp.arange(3)])
