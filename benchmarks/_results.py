@@ -54,15 +54,17 @@ def cold_child(script: str, spec: str, **env: str) -> tuple[dict, str]:
     The child imports ``jaxga`` from this checkout and the benchmark helpers from
     ``benchmarks/``; it has no persistent compilation cache (``JAXGA_CACHE_DIR`` and
     ``JAX_COMPILATION_CACHE_DIR`` removed), so it compiles cold. ``env`` adds or replaces
-    environment variables (``XLA_FLAGS``, ``JAXGA_DEVICES``, ...). A failing child raises
+    environment variables (``XLA_FLAGS``, ``JAXGA_DEVICES``, ``PYTHONPATH`` to import
+    another checkout's ``jaxga``, ...). A failing child raises
     ``RuntimeError`` with the end of its stderr."""
     import json
     import subprocess
 
     here = Path(__file__).resolve().parent
-    child_env = dict(os.environ, PYTHONPATH=f"{here.parent}{os.pathsep}{here}", **env)
+    child_env = dict(os.environ, PYTHONPATH=f"{here.parent}{os.pathsep}{here}")
     for key in ("JAXGA_CACHE_DIR", "JAX_COMPILATION_CACHE_DIR"):
         child_env.pop(key, None)
+    child_env.update(env)
     proc = subprocess.run([sys.executable, script, "--child", spec], env=child_env,
                           capture_output=True, text=True)
     if proc.returncode != 0:

@@ -1,0 +1,141 @@
+"""Cold compile of two checkouts, interleaved: a git revision against this working tree.
+
+    python benchmarks/compile_ab.py --base HEAD~1 [--presets sga,iga_zhu] [--reps 2]
+        [--seeds 1] [--devices 1] [--no-write]
+
+The machine's speed drifts by 10-20 % within an hour (RESULTS.md, sessions 20-22), so
+two compile tables taken at different times cannot show a change of a few per cent. This
+script checks the base revision out into a temporary ``git worktree`` and, for every
+preset and repetition, runs one fresh process on the base and one on this working tree,
+one after the other (cold compile: no persistent compilation cache). Each child runs
+``jaxga.run(preset, classic_ga_gapp3_20x20, seeds)`` (corner rule free, population 60,
+mpmga 3 x 20, 300 generations) and reports ``compile_s`` and its parts: tracing (JAX's
+trace events), lowering (``Traced.lower``) and XLA (``Lowered.compile``), plus a hash of
+every per-seed output (``_results.result_hash``): equal hashes mean the change left the
+results bit for bit the same.
+"""
+
+from __future__ import annotations
+
+import argparse
+import json
+import os
+import subprocess
+import sys
+import tempfile
+from pathlib import Path
+
+from _results import append, cold_child, markdown_table
+
+PRESETS = ("sga", "imga", "agacd", "iga_zhang", "mpmga", "iga_zhu")
+ROOT = Path(__file__).resolve().parents[1]
+
+
+def child(preset: str, seeds: int) -> dict:
+    """One cold ``jaxga.run`` in this process: compile split and result hash."""
+    import time
+
+    import jax
+    import jax.monitoring
+    from _results import result_hash
+
+    import jaxga
+    from jaxga import api
+    from jaxga.maps import load_map
+
+    trace = [0.0]
+
+    def listen(event: str, duration: float, **_kw) -> None:
+        if event == "/jax/core/compile/jaxpr_trace_duration":
+            trace[0] += duration
+
+    jax.monitoring.register_event_duration_secs_listener(listen)
+    spent = {"lower": 0.0, "xla": 0.0}
+
+    def timing(fn, part):
+        def wrapped(self, *a, **k):
+            t = time.perf_counter()
+            out = fn(self, *a, **k)
+            spent[part] += time.perf_counter() - t
+            return out
+        return wrapped
+
+    jax.stages.Traced.lower = timing(jax.stages.Traced.lower, "lower")
+    jax.stages.Lowered.compile = timing(jax.stages.Lowered.compile, "xla")
+    grid = load_map("classic_ga_gapp3_20x20", corner_rule="free")
+    r = api.run(preset, grid, seeds=seeds, population__size=20 if preset == "mpmga" else 60,
+                generations=300)
+    return {"jaxga": jaxga.__file__, "compile_s": r.timing["compile_s"], "trace_s": trace[0],
+            "lower_s": spent["lower"], "xla_s": spent["xla"], "hash": result_hash(r)}
+
+
+def measure(root: Path, preset: str, seeds: int, devices: int) -> dict:
+    """:func:`child` in a fresh process importing ``jaxga`` from ``root``."""
+    here = Path(__file__).resolve().parent
+    m = cold_child(__file__, f"{preset}:{seeds}", PYTHONPATH=f"{root}{os.pathsep}{here}",
+                   JAXGA_DEVICES=str(devices),
+                   XLA_FLAGS=f"--xla_force_host_platform_device_count={devices}")[0]
+    if not m["jaxga"].startswith(str(root)):
+        raise RuntimeError(f"the child imported {m['jaxga']}, not the checkout {root}")
+    return m
+
+
+def main() -> None:
+    ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    ap.add_argument("--base", default="HEAD", help="git revision to compare against")
+    ap.add_argument("--presets", default=",".join(PRESETS))
+    ap.add_argument("--reps", type=int, default=2)
+    ap.add_argument("--seeds", type=int, default=1)
+    ap.add_argument("--devices", type=int, default=1)
+    ap.add_argument("--no-write", action="store_true")
+    ap.add_argument("--child", help=argparse.SUPPRESS)
+    a = ap.parse_args()
+    if a.child:
+        preset, seeds = a.child.split(":")
+        print(json.dumps(child(preset, int(seeds))))
+        return
+    base = subprocess.run(["git", "rev-parse", "--short", a.base], cwd=ROOT, check=True,
+                          capture_output=True, text=True).stdout.strip()
+    head = subprocess.run(["git", "rev-parse", "--short", "HEAD"], cwd=ROOT, check=True,
+                          capture_output=True, text=True).stdout.strip()
+    dirty = subprocess.run(["git", "status", "--porcelain", "--", "jaxga"], cwd=ROOT,
+                           check=True, capture_output=True, text=True).stdout.strip()
+    new_name = f"{head}{' + uncommitted jaxga changes' if dirty else ''}"
+    rows, same = [], True
+    with tempfile.TemporaryDirectory() as tmp:
+        tree = Path(tmp) / "base"
+        subprocess.run(["git", "worktree", "add", "--detach", str(tree), base], cwd=ROOT,
+                       check=True, capture_output=True)
+        try:
+            for preset in a.presets.split(","):
+                for rep in range(a.reps):
+                    got = {}
+                    for name, root in (("base", tree), ("new", ROOT)):
+                        got[name] = m = measure(root, preset, a.seeds, a.devices)
+                        print(preset, rep, name, json.dumps(m), flush=True)
+                    b, n = got["base"], got["new"]
+                    same &= b["hash"] == n["hash"]
+                    rows.append([preset, rep + 1]
+                                + [f"{b[k]:.2f} -> {n[k]:.2f}"
+                                   for k in ("compile_s", "trace_s", "lower_s", "xla_s")]
+                                + [f"{n['compile_s'] - b['compile_s']:+.2f}",
+                                   "equal" if b["hash"] == n["hash"] else "DIFFERENT"])
+        finally:
+            subprocess.run(["git", "worktree", "remove", "--force", str(tree)], cwd=ROOT,
+                           capture_output=True)
+    body = (
+        f"base {base} -> new {new_name}. `classic_ga_gapp3_20x20`, corner rule free, "
+        f"population 60 (mpmga 3 x 20), 300 generations, {a.seeds} seed(s), {a.devices} XLA "
+        "device(s); each pair of cold compiles (fresh processes, no persistent cache) ran "
+        "one after the other. Seconds, base -> new. results: hash of every per-seed "
+        "output, base against new.\n\n"
+        + markdown_table(["preset", "repeat", "compile", "trace", "lower", "XLA",
+                          "change", "results"], rows)
+        + f"\n\nAll results identical: {'yes' if same else 'NO'}."
+    )
+    append("cold compile, base against new (benchmarks/compile_ab.py)", body,
+           write=not a.no_write)
+
+
+if __name__ == "__main__":
+    sys.exit(main())
