@@ -7,12 +7,14 @@ The machine's speed drifts by 10-20 % within an hour (RESULTS.md, sessions 20-22
 two compile tables taken at different times cannot show a change of a few per cent. This
 script checks the base revision out into a temporary ``git worktree`` and, for every
 preset and repetition, runs one fresh process on the base and one on this working tree,
-one after the other (cold compile: no persistent compilation cache). Each child runs
+one after the other, base first in odd repetitions and new first in even ones (cold
+compile: no persistent compilation cache). Each child runs
 ``jaxga.run(preset, classic_ga_gapp3_20x20, seeds)`` (corner rule free, population 60,
 mpmga 3 x 20, 300 generations) and reports ``compile_s`` and its parts: tracing (JAX's
 trace events), lowering (``Traced.lower``) and XLA (``Lowered.compile``), plus a hash of
 every per-seed output (``_results.result_hash``): equal hashes mean the change left the
-results bit for bit the same.
+results bit for bit the same. The worktree is removed at the end; if the script is
+killed, ``git worktree prune`` forgets it.
 """
 
 from __future__ import annotations
@@ -75,7 +77,7 @@ def measure(root: Path, preset: str, seeds: int, devices: int) -> dict:
     m = cold_child(__file__, f"{preset}:{seeds}", PYTHONPATH=f"{root}{os.pathsep}{here}",
                    JAXGA_DEVICES=str(devices),
                    XLA_FLAGS=f"--xla_force_host_platform_device_count={devices}")[0]
-    if not m["jaxga"].startswith(str(root)):
+    if not Path(m["jaxga"]).resolve().is_relative_to(Path(root).resolve() / "jaxga"):
         raise RuntimeError(f"the child imported {m['jaxga']}, not the checkout {root}")
     return m
 
@@ -110,7 +112,8 @@ def main() -> None:
             for preset in a.presets.split(","):
                 for rep in range(a.reps):
                     got = {}
-                    for name, root in (("base", tree), ("new", ROOT)):
+                    order = (("base", tree), ("new", ROOT))
+                    for name, root in order if rep % 2 == 0 else order[::-1]:  # ABBA
                         got[name] = m = measure(root, preset, a.seeds, a.devices)
                         print(preset, rep, name, json.dumps(m), flush=True)
                     b, n = got["base"], got["new"]
@@ -127,8 +130,8 @@ def main() -> None:
         f"base {base} -> new {new_name}. `classic_ga_gapp3_20x20`, corner rule free, "
         f"population 60 (mpmga 3 x 20), 300 generations, {a.seeds} seed(s), {a.devices} XLA "
         "device(s); each pair of cold compiles (fresh processes, no persistent cache) ran "
-        "one after the other. Seconds, base -> new. results: hash of every per-seed "
-        "output, base against new.\n\n"
+        "one after the other, base first in odd repeats, new first in even ones. Seconds, "
+        "base -> new. results: hash of every per-seed output, base against new.\n\n"
         + markdown_table(["preset", "repeat", "compile", "trace", "lower", "XLA",
                           "change", "results"], rows)
         + f"\n\nAll results identical: {'yes' if same else 'NO'}."

@@ -197,7 +197,7 @@ def gated_map(
         )
     n = apply.shape[0]
     b = block or max(4, -(-n // 4))
-    args, defaults = tuple(jnp.asarray(a) for a in args), tuple(defaults)
+    args, defaults = tuple(jnp.asarray(a) for a in args), tuple(jnp.asarray(d) for d in defaults)
     example = [a[0] for a in args]
     n_args = len(args)
     narrow = None

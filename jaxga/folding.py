@@ -61,16 +61,25 @@ def fold_call(client: FlatCall, lanes: Sequence[jax.Array], operands: Sequence[j
     ``vmap`` level above this call folded into the lanes' leading dimension (module
     docstring; :data:`FlatCall` gives ``client``'s contract).
 
-    ``out_like``: one output per ``client`` output, an array or ``jax.ShapeDtypeStruct``
-    with the shape and dtype of that output for this call alone (no ``vmap``). They are
-    checked when ``client`` runs; a mismatch raises ``TypeError``.
+    ``out_like``: one output per ``client`` output, an array (or anything
+    ``jnp.asarray`` takes) or a ``jax.ShapeDtypeStruct`` with the shape, dtype and weak
+    type of that output for this call alone (no ``vmap``). Shapes and dtypes are checked
+    when ``client`` runs; a mismatch raises ``TypeError``.
+
+    ``client`` runs when the program is lowered (``jax.jit(f).lower()``, or the first
+    call), not when ``f`` is traced: configuration contexts active only around tracing
+    (dtype promotion, matmul precision) and module constants are read then, and
+    ``client`` must not close over the caller's tracers (:func:`hoist`). The call has no
+    differentiation rule, declares no effects, and is not supported under ``shard_map``
+    with ``check_vma=True`` or with explicitly sharded lanes (an error says so); jaxga
+    needs none of these.
     """
     lanes = [jnp.asarray(x) for x in lanes]
     operands = [jnp.asarray(x) for x in operands]
     if not lanes:
         raise ValueError("fold_call needs at least one lane array")
     base = tuple(np.ndim(x) for x in lanes)
-    outs = tuple((tuple(np.shape(o)), np.dtype(o.dtype)) for o in out_like)
+    outs = tuple(_out_aval(o) for o in out_like)
     return list(fold_p.bind(*lanes, *operands, client=client, base=base,
                             op_levels=tuple(() for _ in operands), out_avals=outs))
 
@@ -114,15 +123,31 @@ def _folded_call(*args: jax.Array, client: FlatCall, base: tuple, op_levels: tup
             axes.append(0)
         out = [x.reshape(lead + x.shape[1:]) for x in client(lead, flat_lanes, flat_ops, axes)]
     got = tuple((tuple(np.shape(x)), np.dtype(x.dtype)) for x in out)
-    want = tuple((lead + s, d) for s, d in out_avals)
+    want = tuple((lead + s, np.dtype(d)) for s, d, _ in out_avals)
     if got != want:
         raise TypeError(f"fold_call: the client returned {got}, declared {want}")
     return list(out)
 
 
+def _out_aval(o: Any) -> tuple:
+    """``(shape, canonical dtype, weak type)`` of one declared output."""
+    if not isinstance(o, jax.ShapeDtypeStruct):
+        o = jnp.asarray(o)
+    return (tuple(o.shape), jax.dtypes.canonicalize_dtype(o.dtype),
+            bool(getattr(o, "weak_type", False)))
+
+
 def _abstract_eval(*avals: Any, base: tuple, out_avals: tuple, **_: Any) -> list:
+    for a in avals:
+        mat = getattr(a, "manual_axis_type", None)
+        spec = getattr(getattr(a, "sharding", None), "spec", ())
+        if (mat is not None and mat.varying) or any(p is not None for p in spec):
+            raise NotImplementedError(
+                "jaxga.folding.fold_call does not track sharding types: it is not supported "
+                "under shard_map with check_vma=True nor on explicitly sharded arrays "
+                f"(an input has type {a.str_short()})")
     lead = tuple(avals[0].shape[:avals[0].ndim - base[0]])
-    return [jax.core.ShapedArray(lead + s, d) for s, d in out_avals]
+    return [jax.core.ShapedArray(lead + s, d, w) for s, d, w in out_avals]
 
 
 def _batch_rule(args: Sequence[jax.Array], dims: Sequence[Any], *, client: FlatCall,

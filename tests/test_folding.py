@@ -42,11 +42,16 @@ def test_two_levels_fold_into_one_leading_dimension_and_operands_broadcast():
     def call(xi, o):
         return fold_call(_probe(seen), [xi], [o, shared], [xi])[0]
 
+    want = np.asarray(x) + np.asarray(outer)[:, None, None] + 7
     out = jax.vmap(jax.vmap(call, in_axes=(0, None)))(x, outer)
     lead, lane_shapes, op_shapes = seen[-1]
     assert lead == (2, 3) and lane_shapes == [(6, 4)]
     assert op_shapes == [(6,), None]  # the outer-only operand broadcast to all 6 lanes
-    np.testing.assert_array_equal(out, np.asarray(x) + np.asarray(outer)[:, None, None] + 7)
+    np.testing.assert_array_equal(out, want)
+    # the same under jit, where the client runs when the program is lowered
+    jitted = jax.jit(jax.vmap(jax.vmap(call, in_axes=(0, None)), in_axes=(1, 0)))
+    np.testing.assert_array_equal(jitted(jnp.swapaxes(x, 0, 1), outer), want)
+    assert seen[-1] == ((2, 3), [(6, 4)], [(6,), None])
 
 
 def test_hoist_turns_closed_over_values_into_operands():
@@ -86,3 +91,22 @@ def test_a_client_returning_other_shapes_than_declared_is_an_error():
 
     with pytest.raises(TypeError, match="declared"):
         fold_call(client, [jnp.arange(3)], [], [jnp.arange(3)])
+    with pytest.raises(TypeError, match="declared"):  # a dtype, under jit
+        jax.jit(lambda x: fold_call(_probe([]), [x], [], [x.astype(jnp.float32)]))(
+            jnp.arange(3))
+
+
+def test_declared_outputs_keep_weak_types_and_take_numpy_values():
+    """A weakly typed declared output stays weak under jit (as ``lax.while_loop``'s
+    carry does), and NumPy values declare the dtype JAX gives them."""
+    def ident(lead, lanes, operands, axes):
+        return list(lanes)
+
+    def f(x):
+        return fold_call(ident, [x], [], [x])[0] * jnp.bfloat16(2)
+
+    weak = jnp.asarray(1.5)  # a Python float: weakly typed float32
+    assert jax.jit(f)(weak).dtype == f(weak).dtype == jnp.bfloat16
+    assert jax.jit(f)(jnp.float32(1.5)).dtype == jnp.float32
+    (out,) = fold_call(ident, [np.zeros(3)], [], [np.zeros(3)])  # float64 -> float32
+    assert out.dtype == jnp.float32
