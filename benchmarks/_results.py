@@ -72,6 +72,56 @@ def cold_child(script: str, spec: str, **env: str) -> tuple[dict, str]:
     return json.loads(proc.stdout.strip().splitlines()[-1]), proc.stderr
 
 
+def instrumented_run(preset: str, seeds: int):
+    """``jaxga.run(preset, classic_ga_gapp3_20x20, seeds)`` (corner rule free, population
+    60, mpmga 3 islands of 20, 300 generations) with its compilation timed.
+
+    Returns ``(result, parts)``: ``parts["trace_s"]`` (JAX's ``jaxpr_trace_duration``
+    events), ``parts["lower_s"]`` (``Traced.lower``), ``parts["xla"]`` (one
+    ``(seconds, compiled program)`` per ``Lowered.compile``, in compile order) and
+    ``parts["cpu_s"]`` (the process's user + system CPU seconds over the call). Used by
+    ``compile_anatomy.py`` and ``compile_ab.py``, in a fresh process (:func:`cold_child`).
+    """
+    import resource
+    import time
+
+    import jax
+    import jax.monitoring
+
+    from jaxga import api
+    from jaxga.maps import load_map
+
+    parts = {"trace_s": 0.0, "lower_s": 0.0, "xla": []}
+
+    def listen(event: str, duration: float, **_kw) -> None:
+        if event == "/jax/core/compile/jaxpr_trace_duration":
+            parts["trace_s"] += duration
+
+    jax.monitoring.register_event_duration_secs_listener(listen)
+    lower, compile_ = jax.stages.Traced.lower, jax.stages.Lowered.compile
+
+    def timed_lower(self, *a, **k):
+        t = time.perf_counter()
+        out = lower(self, *a, **k)
+        parts["lower_s"] += time.perf_counter() - t
+        return out
+
+    def timed_compile(self, *a, **k):
+        t = time.perf_counter()
+        out = compile_(self, *a, **k)
+        parts["xla"].append((time.perf_counter() - t, out))
+        return out
+
+    jax.stages.Traced.lower, jax.stages.Lowered.compile = timed_lower, timed_compile
+    grid = load_map("classic_ga_gapp3_20x20", corner_rule="free")
+    cpu0 = resource.getrusage(resource.RUSAGE_SELF)
+    result = api.run(preset, grid, seeds=seeds,
+                     population__size=20 if preset == "mpmga" else 60, generations=300)
+    cpu1 = resource.getrusage(resource.RUSAGE_SELF)
+    parts["cpu_s"] = (cpu1.ru_utime - cpu0.ru_utime) + (cpu1.ru_stime - cpu0.ru_stime)
+    return result, parts
+
+
 def markdown_table(headers: list[str], rows: list[list]) -> str:
     """A GitHub markdown table (numbers right-aligned)."""
     def fmt(v):

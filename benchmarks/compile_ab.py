@@ -27,7 +27,7 @@ import sys
 import tempfile
 from pathlib import Path
 
-from _results import append, cold_child, markdown_table
+from _results import append, cold_child, instrumented_run, markdown_table, result_hash
 
 PRESETS = ("sga", "imga", "agacd", "iga_zhang", "mpmga", "iga_zhu")
 ROOT = Path(__file__).resolve().parents[1]
@@ -35,40 +35,12 @@ ROOT = Path(__file__).resolve().parents[1]
 
 def child(preset: str, seeds: int) -> dict:
     """One cold ``jaxga.run`` in this process: compile split and result hash."""
-    import time
-
-    import jax
-    import jax.monitoring
-    from _results import result_hash
-
     import jaxga
-    from jaxga import api
-    from jaxga.maps import load_map
 
-    trace = [0.0]
-
-    def listen(event: str, duration: float, **_kw) -> None:
-        if event == "/jax/core/compile/jaxpr_trace_duration":
-            trace[0] += duration
-
-    jax.monitoring.register_event_duration_secs_listener(listen)
-    spent = {"lower": 0.0, "xla": 0.0}
-
-    def timing(fn, part):
-        def wrapped(self, *a, **k):
-            t = time.perf_counter()
-            out = fn(self, *a, **k)
-            spent[part] += time.perf_counter() - t
-            return out
-        return wrapped
-
-    jax.stages.Traced.lower = timing(jax.stages.Traced.lower, "lower")
-    jax.stages.Lowered.compile = timing(jax.stages.Lowered.compile, "xla")
-    grid = load_map("classic_ga_gapp3_20x20", corner_rule="free")
-    r = api.run(preset, grid, seeds=seeds, population__size=20 if preset == "mpmga" else 60,
-                generations=300)
-    return {"jaxga": jaxga.__file__, "compile_s": r.timing["compile_s"], "trace_s": trace[0],
-            "lower_s": spent["lower"], "xla_s": spent["xla"], "hash": result_hash(r)}
+    r, parts = instrumented_run(preset, seeds)
+    return {"jaxga": jaxga.__file__, "compile_s": r.timing["compile_s"],
+            "trace_s": parts["trace_s"], "lower_s": parts["lower_s"],
+            "xla_s": sum(s for s, _ in parts["xla"]), "hash": result_hash(r)}
 
 
 def measure(root: Path, preset: str, seeds: int, devices: int) -> dict:

@@ -30,7 +30,7 @@ import collections
 import json
 import re
 
-from _results import append, cold_child, markdown_table
+from _results import append, cold_child, instrumented_run, markdown_table
 
 PRESETS = ("sga", "imga", "agacd", "iga_zhang", "mpmga", "iga_zhu")
 PROGRAMS = ("init", "finish", "evolve")  # the order jaxga.api._programs compiles them in
@@ -85,53 +85,18 @@ def kernels_by_module(hlo: str) -> tuple[int, collections.Counter]:
 
 def child(preset: str, seeds: int) -> dict:
     """One cold ``jaxga.run`` in this process, instrumented."""
-    import resource
-    import time
-
-    import jax
-    import jax.monitoring
-
-    from jaxga import api
-    from jaxga.maps import load_map
-
-    tracing = [0.0]
-
-    def listen(event: str, duration: float, **_kw) -> None:
-        if event == "/jax/core/compile/jaxpr_trace_duration":
-            tracing[0] += duration
-
-    jax.monitoring.register_event_duration_secs_listener(listen)
-    lower_s, xla = [], []
-    lower, compile_ = jax.stages.Traced.lower, jax.stages.Lowered.compile
-
-    def timed_lower(self, *a, **k):
-        t = time.perf_counter()
-        out = lower(self, *a, **k)
-        lower_s.append(time.perf_counter() - t)
-        return out
-
-    def timed_compile(self, *a, **k):
-        t = time.perf_counter()
-        out = compile_(self, *a, **k)
-        xla.append((time.perf_counter() - t, out.as_text()))
-        return out
-
-    jax.stages.Traced.lower, jax.stages.Lowered.compile = timed_lower, timed_compile
-    grid = load_map("classic_ga_gapp3_20x20", corner_rule="free")
-    size = 20 if preset == "mpmga" else 60
-    cpu0 = resource.getrusage(resource.RUSAGE_SELF)
-    r = api.run(preset, grid, seeds=seeds, population__size=size, generations=300)
-    cpu1 = resource.getrusage(resource.RUSAGE_SELF)
+    r, parts = instrumented_run(preset, seeds)
+    xla = parts["xla"]
     if len(xla) != len(PROGRAMS):
         raise RuntimeError(f"expected {len(PROGRAMS)} compiled programs, got {len(xla)}")
     programs = {}
-    for name, (seconds, hlo) in zip(PROGRAMS, xla):
-        n, by = kernels_by_module(hlo)
+    for name, (seconds, compiled) in zip(PROGRAMS, xla):
+        n, by = kernels_by_module(compiled.as_text())
         programs[name] = {"xla_s": seconds, "kernels": n, "by_module": by.most_common(4)}
-    cpu = (cpu1.ru_utime - cpu0.ru_utime) + (cpu1.ru_stime - cpu0.ru_stime)
-    return {"compile_s": r.timing["compile_s"], "trace_s": tracing[0],
-            "lower_s": sum(lower_s), "xla_s": sum(s for s, _ in xla),
-            "run_wall_s": r.timing["total_s"], "run_cpu_s": cpu, "programs": programs}
+    return {"compile_s": r.timing["compile_s"], "trace_s": parts["trace_s"],
+            "lower_s": parts["lower_s"], "xla_s": sum(s for s, _ in xla),
+            "run_wall_s": r.timing["total_s"], "run_cpu_s": parts["cpu_s"],
+            "programs": programs}
 
 
 def measure(preset: str, seeds: int) -> dict:
