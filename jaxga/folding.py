@@ -89,7 +89,7 @@ fold_p = jax.extend.core.Primitive("jaxga_fold")
 ``client`` is traced once, when the program is lowered (or run eagerly), with every
 level folded. A :func:`jax.custom_batching.custom_vmap` function instead traces its body
 again at every ``vmap`` level and every time a loop's body is re-batched, and throws
-all but the last trace away: that was about a third of the presets' tracing time."""
+all but the last trace away: that was a quarter to a half of the presets' tracing time."""
 fold_p.multiple_results = True
 
 
