@@ -14,7 +14,7 @@ from hypothesis import strategies as st
 from jaxga import Grid
 from jaxga.grid import CORNER_RULES
 from jaxga.paths import has_endpoints, is_continuous, is_loop_free, remove_loops
-from jaxga.repair import SPLICE_LOCAL_MAX, concat, connect, splice_loop_free
+from jaxga.repair import SPLICE_LOCAL_MAX, concat, connect, prefix_count, splice_loop_free
 
 N = 10
 CAP = 64
@@ -229,3 +229,14 @@ def test_compact_keeps_the_flagged_values_in_order(n, size):
         kept = v[f][:size]
         want[: len(kept)] = kept
         assert c == f.sum() and np.array_equal(o, want)
+
+
+@pytest.mark.parametrize("n", [1, 5, 33])
+def test_prefix_count_is_the_cumulative_sum_along_any_axis(n):
+    x = np.random.default_rng(n).integers(0, 3, size=(3, n, 4))
+    for axis in (0, 1, 2):
+        got = prefix_count(jnp.asarray(x), axis=axis)
+        assert got.dtype == jnp.int32
+        np.testing.assert_array_equal(got, np.cumsum(x, axis=axis))
+    np.testing.assert_array_equal(prefix_count(jnp.asarray(x[0, :, 0] > 0)),
+                                  np.cumsum(x[0, :, 0] > 0))
