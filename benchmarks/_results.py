@@ -122,6 +122,25 @@ def instrumented_run(preset: str, seeds: int):
     return result, parts
 
 
+def parse_args(ap, child):
+    """``ap.parse_args()`` for a benchmark script, which is also its own child process.
+
+    :func:`cold_child` starts ``python <script> --child a:b:...``; then this calls
+    ``child(a, b, ...)`` (parts made of digits as ``int``), prints its result as JSON for
+    the parent and exits, instead of returning the arguments.
+    """
+    import argparse
+    import json
+
+    ap.add_argument("--child", help=argparse.SUPPRESS)
+    args = ap.parse_args()
+    if args.child:
+        parts = [int(p) if p.lstrip("-").isdigit() else p for p in args.child.split(":")]
+        print(json.dumps(child(*parts)))
+        raise SystemExit(0)
+    return args
+
+
 def markdown_table(headers: list[str], rows: list[list]) -> str:
     """A GitHub markdown table (numbers right-aligned)."""
     def fmt(v):

@@ -27,7 +27,7 @@ import sys
 import tempfile
 from pathlib import Path
 
-from _results import append, cold_child, instrumented_run, markdown_table, result_hash
+from _results import append, cold_child, instrumented_run, markdown_table, parse_args, result_hash
 
 PRESETS = ("sga", "imga", "agacd", "iga_zhang", "mpmga", "iga_zhu")
 ROOT = Path(__file__).resolve().parents[1]
@@ -62,12 +62,7 @@ def main() -> None:
     ap.add_argument("--seeds", type=int, default=1)
     ap.add_argument("--devices", type=int, default=1)
     ap.add_argument("--no-write", action="store_true")
-    ap.add_argument("--child", help=argparse.SUPPRESS)
-    a = ap.parse_args()
-    if a.child:
-        preset, seeds = a.child.split(":")
-        print(json.dumps(child(preset, int(seeds))))
-        return
+    a = parse_args(ap, child)
     base = subprocess.run(["git", "rev-parse", "--short", a.base], cwd=ROOT, check=True,
                           capture_output=True, text=True).stdout.strip()
     head = subprocess.run(["git", "rev-parse", "--short", "HEAD"], cwd=ROOT, check=True,

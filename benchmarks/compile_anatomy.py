@@ -30,7 +30,7 @@ import collections
 import json
 import re
 
-from _results import append, cold_child, instrumented_run, markdown_table
+from _results import append, cold_child, instrumented_run, markdown_table, parse_args
 
 PRESETS = ("sga", "imga", "agacd", "iga_zhang", "mpmga", "iga_zhu")
 PROGRAMS = ("init", "finish", "evolve")  # the order jaxga.api._programs compiles them in
@@ -109,12 +109,7 @@ def main() -> None:
     ap.add_argument("--presets", default=",".join(PRESETS))
     ap.add_argument("--seeds", type=int, default=1)
     ap.add_argument("--no-write", action="store_true")
-    ap.add_argument("--child", help=argparse.SUPPRESS)
-    a = ap.parse_args()
-    if a.child:
-        preset, seeds = a.child.split(":")
-        print(json.dumps(child(preset, int(seeds))))
-        return
+    a = parse_args(ap, child)
     whole, programs = [], []
     for preset in a.presets.split(","):
         m = measure(preset, a.seeds)

@@ -18,10 +18,9 @@ compiles with XLA's default; the flag is a user's choice (README, performance).
 from __future__ import annotations
 
 import argparse
-import json
 import time
 
-from _results import append, cold_child, markdown_table, result_hash
+from _results import append, cold_child, markdown_table, parse_args, result_hash
 
 from jaxga.parallel import cores
 
@@ -54,13 +53,8 @@ def main() -> None:
     ap.add_argument("--presets", default="sga,imga,agacd,iga_zhang,mpmga,iga_zhu")
     ap.add_argument("--seeds", default="1,10,64")
     ap.add_argument("--devices", type=int, default=cores())
-    ap.add_argument("--child")
     ap.add_argument("--no-write", action="store_true")
-    args = ap.parse_args()
-    if args.child:
-        preset, seeds = args.child.split(":")
-        print(json.dumps(child(preset, int(seeds))))
-        return
+    args = parse_args(ap, child)
 
     t_all = time.perf_counter()
     rows = []

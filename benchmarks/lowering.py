@@ -15,11 +15,10 @@ lowerings must be equal: the hash function is the same, only the program differs
 from __future__ import annotations
 
 import argparse
-import json
 import re
 import sys
 
-from _results import append, cold_child, markdown_table, result_hash
+from _results import append, cold_child, markdown_table, parse_args, result_hash
 
 PROGRAM = re.compile(r"Finished XLA compilation of jit\((do_\w+)\) in ([0-9.]+) sec")
 
@@ -54,13 +53,8 @@ def main() -> None:
     ap.add_argument("--seeds", type=int, default=100)
     ap.add_argument("--generations", type=int, default=50)
     ap.add_argument("--repeats", type=int, default=1)
-    ap.add_argument("--child")
     ap.add_argument("--no-write", action="store_true")
-    args = ap.parse_args()
-    if args.child:
-        preset, seeds, generations = args.child.split(":")
-        print(json.dumps(child(preset, int(seeds), int(generations))))
-        return
+    args = parse_args(ap, child)
 
     rows, same = [], True
     for preset in args.presets.split(","):

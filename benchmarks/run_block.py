@@ -14,11 +14,10 @@ result (``jaxga.numerics`` keeps float sums independent of the batch).
 from __future__ import annotations
 
 import argparse
-import json
 import os
 import sys
 
-from _results import append, cold_child, markdown_table, result_hash
+from _results import append, cold_child, markdown_table, parse_args, result_hash
 
 
 def child(preset: str, seeds: int, generations: int, block: int) -> dict:
@@ -50,13 +49,8 @@ def main() -> None:
     ap.add_argument("--generations", type=int, default=50)
     ap.add_argument("--blocks", default="128,64,32,24")
     ap.add_argument("--devices", type=int, default=os.cpu_count() or 1)
-    ap.add_argument("--child")
     ap.add_argument("--no-write", action="store_true")
-    args = ap.parse_args()
-    if args.child:
-        preset, seeds, generations, block = args.child.split(":")
-        print(json.dumps(child(preset, int(seeds), int(generations), int(block))))
-        return
+    args = parse_args(ap, child)
 
     flags = f"--xla_force_host_platform_device_count={args.devices}"
     rows, hashes = [], set()

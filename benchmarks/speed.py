@@ -50,7 +50,7 @@ import time
 from pathlib import Path
 
 import numpy as np
-from _results import append, markdown_table
+from _results import append, markdown_table, parse_args
 
 from jaxga.parallel import cores
 
@@ -164,17 +164,12 @@ def main() -> None:
     # Default: one XLA host device per core, as jaxga itself runs (jaxga.parallel).
     ap.add_argument("--devices", type=int, default=cores())
     ap.add_argument("--baseline-seeds", type=int, default=3)
-    ap.add_argument("--child")
     ap.add_argument("--no-write", action="store_true")
     ap.add_argument("--warm", action="store_true",
                     help="also measure the compile of a second run from the persistent cache")
     ap.add_argument("--timeout-minutes", type=float, default=0,
                     help="stop a configuration after this many minutes (0: no limit)")
-    args = ap.parse_args()
-    if args.child:
-        preset, setting, seeds, generations = args.child.split(":")
-        print(json.dumps(child(preset, setting, int(seeds), int(generations))))
-        return
+    args = parse_args(ap, child)
 
     t_all = time.perf_counter()
     # SIGTERM (e.g. `kill`) ends the run like Ctrl-C: the rows so far are still written.

@@ -61,7 +61,7 @@ def per_file(profile: Path) -> tuple[dict[str, collections.Counter], list, dict]
         for nodeid, row in json.loads(path.read_text())["rows"]:
             name = nodeid.split("::")[0]
             files[name]["tests"] += 1
-            files[name].update({k: v for k, v in row.items()})
+            files[name].update(row)
             worker_of[name] = path.stem
             tests.append((row["wall"], row.get(BACKEND, 0.0), nodeid))
     return files, sorted(tests, reverse=True), worker_of
