@@ -17,6 +17,14 @@ the lanes are unfinished, moves the unfinished ones to the front of a buffer of
 ``1 / shrink`` of the lanes (:func:`jaxga.batching.true_first_order`) and finishes them
 there. Each lane computes exactly what it computes alone (same body, same carry, same
 operands; bit for bit), only the discarded work is skipped.
+
+Below :data:`MIN_COMPACT_LANES` lanes (64: the loops of a run or two, such as one
+run's 60 initial walks or its 5-15 connections of a generation) the loop is one plain
+``while_loop`` over all lanes. At that width an iteration costs its fixed overhead
+whatever the number of lanes, so compaction saves nothing, and the two-phase form
+compiles the body twice (RESULTS.md, 2026-11-25 session 24: sga's initialisation
+program 189 -> 140 kernels, evolution at 1 and 8 seeds as fast or faster, the programs
+of 100 seeds and more unchanged).
 """
 
 from __future__ import annotations
@@ -36,6 +44,13 @@ __all__ = ["lane_while_loop"]
 SHRINK = 8
 """Default ratio of all lanes to the lanes of the compacted buffer."""
 
+MIN_COMPACT_LANES = 64
+"""Default lane count below which the loop is one plain loop over all lanes (module
+docstring; ``min_lanes`` of :func:`lane_while_loop`). Measured: with 15 lanes (4 runs'
+connections) a plain loop was faster than the narrow one (mpmga's evolution at 8 seeds
+2.34 -> 1.44 s), with 188 and 240 lanes it was slower (sga's evolution at 100 seeds
+1.8 -> 2.1 s, its initialisation at 8 seeds 0.055 -> 0.080 s)."""
+
 
 def lane_while_loop(
     cond_fun: Callable[[Any], jax.Array],
@@ -45,6 +60,7 @@ def lane_while_loop(
     shrink: int = SHRINK,
     masked: bool = True,
     narrow: bool = False,
+    min_lanes: int = MIN_COMPACT_LANES,
 ) -> Any:
     """``lax.while_loop(cond_fun, body_fun, init_val)``, with the unfinished lanes
     compacted when it runs under ``vmap`` (module docstring).
@@ -71,6 +87,11 @@ def lane_while_loop(
             finish within a few iterations (median-insertion rounds: same run time,
             mpmga's 6 % faster); long loops such as walks then need many iterations at
             the narrow width (iga_zhu's evolution 24 % slower).
+        min_lanes: static; with fewer lanes than this (all ``vmap`` levels together) the
+            loop runs every lane to the end, as ``vmap`` of a ``while_loop`` does, and
+            the body is compiled once. A narrow batch (one run's population) gains
+            nothing from compaction: its iterations cost their fixed overhead whatever
+            the width.
 
     Returns:
         The final carry, equal bit for bit to the plain ``while_loop``'s.
@@ -88,13 +109,14 @@ def lane_while_loop(
     def client(lead, lanes, operands, axes):
         return _run(lambda c, o: cond_op(o[:n_cond], c), lambda c, o: body_op(o[n_cond:], c),
                     carry_tree, lead, lanes, operands, axes, int(shrink),
-                    bool(masked), bool(narrow))
+                    bool(masked), bool(narrow), int(min_lanes))
 
     out = fold_call(client, carry_leaves, cond_consts + body_consts, carry_leaves)
     return jax.tree_util.tree_unflatten(carry_tree, out)
 
 
-def _run(cond_fun, body_fun, carry_tree, lead, flat_c, flat_o, axes, shrink, masked, narrow):
+def _run(cond_fun, body_fun, carry_tree, lead, flat_c, flat_o, axes, shrink, masked, narrow,
+         min_lanes):
     """The loop over the lanes ``flat_c`` (the folded ``vmap`` levels ``lead``; a plain
     ``while_loop`` without ``vmap``). ``cond_fun(carry, operands)`` and
     ``body_fun(carry, operands)`` are one lane's."""
@@ -134,7 +156,7 @@ def _run(cond_fun, body_fun, carry_tree, lead, flat_c, flat_o, axes, shrink, mas
         return c
 
     m = n // shrink
-    if m < 1:
+    if m < 1 or n < min_lanes:
         flat_c = loop(jnp.any, flat_c, flat_o)
     elif narrow:
         # One loop at width m: each iteration advances the first m unfinished lanes and

@@ -1,5 +1,6 @@
 """lane_while_loop (jaxga.lanes): the plain while_loop's results under any vmap nesting,
-in its two-phase and its narrow form."""
+in its two-phase and its narrow form (``min_lanes=1``: compacted at any width) and as
+one plain loop below ``min_lanes``."""
 
 from __future__ import annotations
 
@@ -48,7 +49,7 @@ def test_equals_the_while_loop_at_any_vmap_depth(shape, narrow):
         return jax.jit(fn)(xs, bounds)
 
     want = run(jax.lax.while_loop)
-    got = run(functools.partial(lane_while_loop, narrow=narrow))
+    got = run(functools.partial(lane_while_loop, narrow=narrow, min_lanes=1))
     for g, w in zip(got, want):
         assert g.dtype == w.dtype and g.shape == shape
         assert np.array_equal(np.asarray(g), np.asarray(w))
@@ -67,7 +68,8 @@ def test_operand_batched_at_one_level_only():
 
         return jax.jit(jax.vmap(lambda x: jax.vmap(inner)(x, tables)))(xs)
 
-    for g, w in zip(run(lane_while_loop), run(jax.lax.while_loop)):
+    for g, w in zip(run(functools.partial(lane_while_loop, min_lanes=1)),
+                    run(jax.lax.while_loop)):
         assert np.array_equal(np.asarray(g), np.asarray(w))
 
 
@@ -86,7 +88,7 @@ def test_every_split_between_the_full_and_the_compact_phase(finish, narrow):
                     (jnp.int32(0), jnp.int32(1)))
 
     want = jax.vmap(lambda t: one(jax.lax.while_loop, t))(target)
-    loop = functools.partial(lane_while_loop, narrow=narrow)
+    loop = functools.partial(lane_while_loop, narrow=narrow, min_lanes=1)
     got = jax.jit(jax.vmap(lambda t: one(loop, t)))(target)
     assert np.array_equal(np.asarray(got[0]), rounds)
     for g, w in zip(got, want):
@@ -116,6 +118,35 @@ def test_unmasked_loop_with_a_body_that_keeps_finished_lanes():
         return loop(lambda c: c[0] < t, body, (jnp.int32(0), jnp.int32(3)), **kw)
 
     want = jax.vmap(lambda t: one(jax.lax.while_loop, t))(target)
-    got = jax.jit(jax.vmap(lambda t: one(lane_while_loop, t, masked=False)))(target)
+    got = jax.jit(jax.vmap(lambda t: one(lane_while_loop, t, masked=False, min_lanes=1)))(target)
     for g, w in zip(got, want):
         assert np.array_equal(np.asarray(g), np.asarray(w))
+
+
+@pytest.mark.parametrize("narrow", [False, True])
+def test_fewer_lanes_than_min_lanes_run_as_one_plain_loop(narrow):
+    """Below ``min_lanes`` the lanes run in one while loop (the two-phase form has two, so
+    its body is compiled twice); at or above it they are compacted. Same carries either
+    way."""
+    target = jnp.asarray(np.random.default_rng(3).integers(0, 50, 40), jnp.int32)
+
+    def program(min_lanes):
+        loop = functools.partial(lane_while_loop, narrow=narrow, min_lanes=min_lanes)
+        return jax.jit(jax.vmap(lambda t: loop(lambda c: c[0] < t,
+                                               lambda c: (c[0] + 1, c[1] * 7 + c[0]),
+                                               (jnp.int32(0), jnp.int32(1)))))
+
+    want = jax.vmap(lambda t: jax.lax.while_loop(
+        lambda c: c[0] < t, lambda c: (c[0] + 1, c[1] * 7 + c[0]),
+        (jnp.int32(0), jnp.int32(1))))(target)
+    text = {}
+    for min_lanes in (41, 40):
+        fn = program(min_lanes)
+        text[min_lanes] = fn.lower(target).as_text()
+        for g, w in zip(fn(target), want):
+            assert np.array_equal(np.asarray(g), np.asarray(w))
+    assert text[41].count("stablehlo.while") == 1
+    if narrow:  # one loop either way, but only the compacted one picks lanes
+        assert text[40] != text[41]
+    else:
+        assert text[40].count("stablehlo.while") == 2
