@@ -20,11 +20,12 @@ operands; bit for bit), only the discarded work is skipped.
 
 Below :data:`MIN_COMPACT_LANES` lanes (64: the loops of a run or two, such as one
 run's 60 initial walks or its 5-15 connections of a generation) the loop is one plain
-``while_loop`` over all lanes. At that width an iteration costs its fixed overhead
-whatever the number of lanes, so compaction saves nothing, and the two-phase form
-compiles the body twice (RESULTS.md, 2026-11-25 session 24: sga's initialisation
-program 189 -> 140 kernels, evolution at 1 and 8 seeds as fast or faster, the programs
-of 100 seeds and more unchanged).
+``while_loop`` over all lanes. At that width an iteration costs mostly its fixed
+overhead whatever the number of lanes, so compaction saves little, and the two-phase
+form compiles the body twice (RESULTS.md, 2026-11-25 session 24: sga's initialisation
+program 189 -> 140 kernels; the evolution of 1 and 8 seeds as fast or up to 38 %
+faster, mpmga's 1-seed initialisation 26 ms slower; the programs of 100 seeds and more
+unchanged).
 """
 
 from __future__ import annotations
@@ -90,8 +91,8 @@ def lane_while_loop(
         min_lanes: static; with fewer lanes than this (all ``vmap`` levels together) the
             loop runs every lane to the end, as ``vmap`` of a ``while_loop`` does, and
             the body is compiled once. A narrow batch (one run's population) gains
-            nothing from compaction: its iterations cost their fixed overhead whatever
-            the width.
+            little from compaction: its iterations cost mostly their fixed overhead
+            whatever the width.
 
     Returns:
         The final carry, equal bit for bit to the plain ``while_loop``'s.

@@ -130,18 +130,15 @@ def test_fewer_lanes_than_min_lanes_run_as_one_plain_loop(narrow):
     way."""
     target = jnp.asarray(np.random.default_rng(3).integers(0, 50, 40), jnp.int32)
 
-    def program(min_lanes):
-        loop = functools.partial(lane_while_loop, narrow=narrow, min_lanes=min_lanes)
-        return jax.jit(jax.vmap(lambda t: loop(lambda c: c[0] < t,
-                                               lambda c: (c[0] + 1, c[1] * 7 + c[0]),
-                                               (jnp.int32(0), jnp.int32(1)))))
+    def one(loop, t):
+        return loop(lambda c: c[0] < t, lambda c: (c[0] + 1, c[1] * 7 + c[0]),
+                    (jnp.int32(0), jnp.int32(1)))
 
-    want = jax.vmap(lambda t: jax.lax.while_loop(
-        lambda c: c[0] < t, lambda c: (c[0] + 1, c[1] * 7 + c[0]),
-        (jnp.int32(0), jnp.int32(1))))(target)
+    want = jax.vmap(lambda t: one(jax.lax.while_loop, t))(target)
     text = {}
     for min_lanes in (41, 40):
-        fn = program(min_lanes)
+        loop = functools.partial(lane_while_loop, narrow=narrow, min_lanes=min_lanes)
+        fn = jax.jit(jax.vmap(functools.partial(one, loop)))
         text[min_lanes] = fn.lower(target).as_text()
         for g, w in zip(fn(target), want):
             assert np.array_equal(np.asarray(g), np.asarray(w))
