@@ -72,9 +72,19 @@ def cold_child(script: str, spec: str, **env: str) -> tuple[dict, str]:
     return json.loads(proc.stdout.strip().splitlines()[-1]), proc.stderr
 
 
+def standard_run(preset: str, seeds: int):
+    """``jaxga.run(preset, classic_ga_gapp3_20x20, seeds)`` as the compile benchmarks run
+    it: corner rule free, population 60 (mpmga 3 islands of 20), 300 generations."""
+    from jaxga import api
+    from jaxga.maps import load_map
+
+    grid = load_map("classic_ga_gapp3_20x20", corner_rule="free")
+    return api.run(preset, grid, seeds=seeds,
+                   population__size=20 if preset == "mpmga" else 60, generations=300)
+
+
 def instrumented_run(preset: str, seeds: int):
-    """``jaxga.run(preset, classic_ga_gapp3_20x20, seeds)`` (corner rule free, population
-    60, mpmga 3 islands of 20, 300 generations) with its compilation timed.
+    """:func:`standard_run` with its compilation timed.
 
     Returns ``(result, parts)``: ``parts["trace_s"]`` (JAX's ``jaxpr_trace_duration``
     events), ``parts["lower_s"]`` (``Traced.lower``), ``parts["xla"]`` (one
@@ -87,9 +97,6 @@ def instrumented_run(preset: str, seeds: int):
 
     import jax
     import jax.monitoring
-
-    from jaxga import api
-    from jaxga.maps import load_map
 
     parts = {"trace_s": 0.0, "lower_s": 0.0, "xla": []}
 
@@ -113,10 +120,8 @@ def instrumented_run(preset: str, seeds: int):
         return out
 
     jax.stages.Traced.lower, jax.stages.Lowered.compile = timed_lower, timed_compile
-    grid = load_map("classic_ga_gapp3_20x20", corner_rule="free")
     cpu0 = resource.getrusage(resource.RUSAGE_SELF)
-    result = api.run(preset, grid, seeds=seeds,
-                     population__size=20 if preset == "mpmga" else 60, generations=300)
+    result = standard_run(preset, seeds)
     cpu1 = resource.getrusage(resource.RUSAGE_SELF)
     parts["cpu_s"] = (cpu1.ru_utime - cpu0.ru_utime) + (cpu1.ru_stime - cpu0.ru_stime)
     return result, parts

@@ -1,7 +1,7 @@
 """Cold compile of two checkouts, interleaved: a git revision against this working tree.
 
     python benchmarks/compile_ab.py --base HEAD~1 [--presets sga,iga_zhu] [--reps 2]
-        [--seeds 1] [--devices 1] [--no-write]
+        [--seeds 1] [--devices 1] [--warm N] [--no-write]
 
 The machine's speed drifts by 10-20 % within an hour (RESULTS.md, sessions 20-22), so
 two compile tables taken at different times cannot show a change of a few per cent. This
@@ -13,8 +13,11 @@ compile: no persistent compilation cache). Each child runs
 mpmga 3 x 20, 300 generations) and reports ``compile_s`` and its parts: tracing (JAX's
 trace events), lowering (``Traced.lower``) and XLA (``Lowered.compile``), plus a hash of
 every per-seed output (``_results.result_hash``): equal hashes mean the change left the
-results bit for bit the same. The worktree is removed at the end; if the script is
-killed, ``git worktree prune`` forgets it.
+results bit for bit the same. With ``--warm N`` each child then runs the same call
+``N`` more times (its programs compiled) and reports the fastest initialisation +
+evolution, so that a change's effect on run time is measured the same interleaved way.
+The worktree is removed at the end; if the script is killed, ``git worktree prune``
+forgets it.
 """
 
 from __future__ import annotations
@@ -27,26 +30,39 @@ import sys
 import tempfile
 from pathlib import Path
 
-from _results import append, cold_child, instrumented_run, markdown_table, parse_args, result_hash
+from _results import (
+    append,
+    cold_child,
+    instrumented_run,
+    markdown_table,
+    parse_args,
+    result_hash,
+    standard_run,
+)
 
 PRESETS = ("sga", "imga", "agacd", "iga_zhang", "mpmga", "iga_zhu")
 ROOT = Path(__file__).resolve().parents[1]
 
 
-def child(preset: str, seeds: int) -> dict:
-    """One cold ``jaxga.run`` in this process: compile split and result hash."""
+def child(preset: str, seeds: int, warm: int) -> dict:
+    """One cold ``jaxga.run`` in this process: compile split and result hash; then the
+    fastest init + evolve of ``warm`` more calls (0: none)."""
     import jaxga
 
     r, parts = instrumented_run(preset, seeds)
+    runs = [standard_run(preset, seeds).timing for _ in range(warm)]
+    best = min(runs, key=lambda t: t["init_s"] + t["evolve_s"], default=None)
     return {"jaxga": jaxga.__file__, "compile_s": r.timing["compile_s"],
             "trace_s": parts["trace_s"], "lower_s": parts["lower_s"],
-            "xla_s": sum(s for s, _ in parts["xla"]), "hash": result_hash(r)}
+            "xla_s": sum(s for s, _ in parts["xla"]), "hash": result_hash(r),
+            "init_s": best and best["init_s"], "evolve_s": best and best["evolve_s"]}
 
 
-def measure(root: Path, preset: str, seeds: int, devices: int) -> dict:
+def measure(root: Path, preset: str, seeds: int, devices: int, warm: int) -> dict:
     """:func:`child` in a fresh process importing ``jaxga`` from ``root``."""
     here = Path(__file__).resolve().parent
-    m = cold_child(__file__, f"{preset}:{seeds}", PYTHONPATH=f"{root}{os.pathsep}{here}",
+    m = cold_child(__file__, f"{preset}:{seeds}:{warm}",
+                   PYTHONPATH=f"{root}{os.pathsep}{here}",
                    JAXGA_DEVICES=str(devices),
                    XLA_FLAGS=f"--xla_force_host_platform_device_count={devices}")[0]
     if not Path(m["jaxga"]).resolve().is_relative_to(Path(root).resolve() / "jaxga"):
@@ -61,6 +77,8 @@ def main() -> None:
     ap.add_argument("--reps", type=int, default=2)
     ap.add_argument("--seeds", type=int, default=1)
     ap.add_argument("--devices", type=int, default=1)
+    ap.add_argument("--warm", type=int, default=0,
+                    help="also time this many warm calls per child (init, evolve)")
     ap.add_argument("--no-write", action="store_true")
     a = parse_args(ap, child)
     base = subprocess.run(["git", "rev-parse", "--short", a.base], cwd=ROOT, check=True,
@@ -81,15 +99,17 @@ def main() -> None:
                     got = {}
                     order = (("base", tree), ("new", ROOT))
                     for name, root in order if rep % 2 == 0 else order[::-1]:  # ABBA
-                        got[name] = m = measure(root, preset, a.seeds, a.devices)
+                        got[name] = m = measure(root, preset, a.seeds, a.devices, a.warm)
                         print(preset, rep, name, json.dumps(m), flush=True)
                     b, n = got["base"], got["new"]
                     same &= b["hash"] == n["hash"]
                     rows.append([preset, rep + 1]
                                 + [f"{b[k]:.2f} -> {n[k]:.2f}"
                                    for k in ("compile_s", "trace_s", "lower_s", "xla_s")]
-                                + [f"{n['compile_s'] - b['compile_s']:+.2f}",
-                                   "equal" if b["hash"] == n["hash"] else "DIFFERENT"])
+                                + [f"{n['compile_s'] - b['compile_s']:+.2f}"]
+                                + [f"{b[k]:.3f} -> {n[k]:.3f}"
+                                   for k in ("init_s", "evolve_s") if a.warm]
+                                + ["equal" if b["hash"] == n["hash"] else "DIFFERENT"])
         finally:
             subprocess.run(["git", "worktree", "remove", "--force", str(tree)], cwd=ROOT,
                            capture_output=True)
@@ -98,9 +118,13 @@ def main() -> None:
         f"population 60 (mpmga 3 x 20), 300 generations, {a.seeds} seed(s), {a.devices} XLA "
         "device(s); each pair of cold compiles (fresh processes, no persistent cache) ran "
         "one after the other, base first in odd repeats, new first in even ones. Seconds, "
-        "base -> new. results: hash of every per-seed output, base against new.\n\n"
-        + markdown_table(["preset", "repeat", "compile", "trace", "lower", "XLA",
-                          "change", "results"], rows)
+        "base -> new. results: hash of every per-seed output, base against new."
+        + (f" warm init / evolve: the fastest of {a.warm} more calls in the same process "
+           "(programs compiled)." if a.warm else "")
+        + "\n\n"
+        + markdown_table(["preset", "repeat", "compile", "trace", "lower", "XLA", "change"]
+                         + (["warm init", "warm evolve"] if a.warm else []) + ["results"],
+                         rows)
         + f"\n\nAll results identical: {'yes' if same else 'NO'}."
     )
     append("cold compile, base against new (benchmarks/compile_ab.py)", body,

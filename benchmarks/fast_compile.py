@@ -20,7 +20,7 @@ from __future__ import annotations
 import argparse
 import time
 
-from _results import append, cold_child, markdown_table, parse_args, result_hash
+from _results import append, cold_child, markdown_table, parse_args, result_hash, standard_run
 
 from jaxga.parallel import cores
 
@@ -29,12 +29,7 @@ POPULATION, GENERATIONS = 60, 300
 
 def child(preset: str, seeds: int) -> dict:
     """One run in this (fresh) process (its ``XLA_FLAGS`` choose the emitters)."""
-    from jaxga import api
-    from jaxga.maps import load_map
-
-    grid = load_map("classic_ga_gapp3_20x20", corner_rule="free")
-    size = POPULATION // 3 if preset == "mpmga" else POPULATION
-    r = api.run(preset, grid, seeds=seeds, population__size=size, generations=GENERATIONS)
+    r = standard_run(preset, seeds)  # population POPULATION, GENERATIONS generations
     t = r.timing
     return {k: t[k] for k in ("compile_s", "init_s", "evolve_s", "post_s", "total_s")} | {
         "hash": result_hash(r)}
