@@ -26,7 +26,16 @@ import numpy as np
 
 from jaxga import parallel
 from jaxga.config import Config
-from jaxga.engine import Algorithm, build, default_params, evolve, finish, init_state, static_config
+from jaxga.engine import (
+    Algorithm,
+    build,
+    check_migration,
+    default_params,
+    evolve,
+    finish,
+    init_state,
+    static_config,
+)
 from jaxga.errors import InitialisationWarning, JaxgaError, ParameterError
 from jaxga.grid import Grid, as_integer
 from jaxga.objectives import Metrics
@@ -503,6 +512,9 @@ def _point_configs(config: Config, points: Sequence[Mapping[str, Any]]) -> list[
                 f"sweep point {dict(point)} changes {', '.join(changed)}: only dynamic keys "
                 "(probabilities, weights, temperatures) and population.size can be swept "
                 "in one compiled call; run the other values separately")
+        # every point's islands must hold its migrants: an inactive individual never
+        # migrates (the check at build time only sees the largest size)
+        check_migration(cfg, int(cfg["population.size"]))
         out.append(cfg)
     return out
 

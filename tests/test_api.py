@@ -120,6 +120,14 @@ def test_sweeping_a_structural_key_is_refused(grid):
         api.sweep("sga", grid, [{"crossover.probability": 1.5}], seeds=1, **SMALL)
 
 
+def test_a_sweep_point_too_small_for_its_migrants_is_refused(grid):
+    """MPMGA's A island takes in 2 k migrants: a swept population.size below that is
+    refused before anything compiles (the capacity of the largest point would fit)."""
+    with pytest.raises(ParameterError, match="islands.migrants = 2 needs 4 .* has 3"):
+        api.sweep("mpmga", grid, [{"population.size": 8}, {"population.size": 3}],
+                  seeds=1, islands__migrants=2, **SMALL)
+
+
 def test_compiled_programs_are_reused_across_maps_seeds_and_values(grid):
     api.run("sga", grid, seeds=[5, 6, 7], **SMALL)
     before = api._programs.cache_info()
