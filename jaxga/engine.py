@@ -285,7 +285,8 @@ def waypoints_feasible(grid: Grid, cells: jax.Array, length: jax.Array) -> jax.A
     return sized & on_map & free[:, 0] & jnp.all(seg_ok, axis=1)
 
 
-def evaluate(algo: Algorithm, grid: Grid, params: dict, cells, length, active) -> tuple:
+def evaluate(algo: Algorithm, grid: Grid, params: dict, cells, length, active, *,
+             window: bool | None = None) -> tuple:
     """``(fitness f32[P], feasible bool[P])``; infeasible or inactive -> fitness 0.
 
     With ``fitness.window`` (default) grid paths are evaluated by
@@ -294,7 +295,10 @@ def evaluate(algo: Algorithm, grid: Grid, params: dict, cells, length, active) -
     on all ``L`` (imga's evolution at 100 seeds on 20 x 20: 0.84-1.0 -> 0.53-0.54 s per
     50 generations; sga and iga_zhang 3-8 %). The narrow program costs 1-2 s of compile
     time; iga_zhu and mpmga switch it off (their populations keep a few long paths, and
-    they gained nothing).
+    they gained nothing). ``window`` (static): ``False`` evaluates at full width only
+    whatever the configuration says (the initial population, evaluated once per run:
+    one program instead of two, the same bits; sga's initialisation program 140 -> 128
+    kernels, imga's 303 -> 259; RESULTS.md, 2026-11-25 session 25).
     """
     fit = fitness_function(algo, params)
     if algo.waypoints:
@@ -306,7 +310,7 @@ def evaluate(algo: Algorithm, grid: Grid, params: dict, cells, length, active) -
             ok = has_endpoints(grid, c, n) & is_continuous(grid, c, n)
             return fit(grid, c, n, ok), ok
 
-        if algo.get("fitness.window"):
+        if algo.get("fitness.window") if window is None else window:
             f, feas = windowed_map(one, cells, length)
         else:
             f, feas = jax.vmap(one)(cells, length)
@@ -458,7 +462,9 @@ def init_state(algo: Algorithm, key: jax.Array, grid: Grid, params: dict) -> tup
             k, grid, init_fn, algo.population, algo.capacity,
             max_tries=int(algo.get("init.max_tries")),
         )
-        fitness, feas = evaluate(algo, grid, params, pop.cells, pop.length, active)
+        # Once per run: at full width (the window pays off in the generations' loop).
+        fitness, feas = evaluate(algo, grid, params, pop.cells, pop.length, active,
+                                 window=False)
         return IslandState(pop.cells, pop.length, fitness, feas), stats
 
     islands, stats = jax.vmap(one)(keys)
@@ -480,12 +486,33 @@ def island_generation(algo: Algorithm, key, grid: Grid, isl: IslandState, t, par
     pop = Population(isl.cells[idx], isl.length[idx])
     fitness = isl.fitness[idx]
     pop, f_cx = _crossover(algo, k_cx, grid, pop, fitness, active, t, params, fit_fn)
-    if algo.get("mutation.adaptive") or algo.get("mutation.method") == "segment_sa":
-        fitness, _ = evaluate(algo, grid, params, pop.cells, pop.length, active)
-    pop, f_mu = _mutation(algo, k_mu, grid, pop, fitness, active, t, params, fit_fn)
-    pop, f_si = _simplify(algo, k_si, grid, pop, params)
-    new_fitness, feas = evaluate(algo, grid, params, pop.cells, pop.length, active)
-    return IslandState(pop.cells, pop.length, new_fitness, feas), jnp.stack([f_cx, f_mu, f_si])
+
+    def vary(pop, fitness):
+        pop, f_mu = _mutation(algo, k_mu, grid, pop, fitness, active, t, params, fit_fn)
+        pop, f_si = _simplify(algo, k_si, grid, pop, params)
+        return pop, jnp.stack([f_mu, f_si]).astype(I32)
+
+    if not algo.get("mutation.adaptive"):  # the mutation does not read the fitness
+        pop, fails = vary(pop, fitness)
+        new_fitness, feas = evaluate(algo, grid, params, pop.cells, pop.length, active)
+    else:
+        # AGACD eq. 28-29: an individual's mutation probability depends on its fitness
+        # after crossover, so the generation evaluates twice. The two evaluations are the
+        # two steps of one loop, mutation and simplification a branch of step 0: the
+        # evaluation is compiled once (agacd's evolution program: 617 -> 453 kernels,
+        # RESULTS.md, 2026-11-25 session 25), with the same results.
+        def step(i, carry):
+            pop, _, _, fails = carry
+            fitness, feas = evaluate(algo, grid, params, pop.cells, pop.length, active)
+            pop, fails = jax.lax.cond(i == 0, lambda: vary(pop, fitness),
+                                      lambda: (pop, fails))
+            return pop, fitness, feas, fails
+
+        zero = (jnp.zeros((algo.population,), F32), jnp.zeros((algo.population,), bool),
+                jnp.zeros((2,), I32))
+        pop, new_fitness, feas, fails = jax.lax.fori_loop(0, 2, step, (pop, *zero))
+    return IslandState(pop.cells, pop.length, new_fitness, feas), jnp.concatenate(
+        [jnp.reshape(f_cx, (1,)).astype(I32), fails])
 
 
 def _island_params(params: dict, islands: int) -> tuple[dict, dict]:
