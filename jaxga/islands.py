@@ -35,12 +35,11 @@ def _ranked(fitness: jax.Array, active: jax.Array) -> tuple[jax.Array, jax.Array
     return best_first.astype(jnp.int32), worst_first.astype(jnp.int32)
 
 
-def _replace(source: jax.Array, p: int, dst, dst_idx: jax.Array, src, src_idx: jax.Array):
-    """Record that slots ``[dst, dst_idx]`` receive copies of ``[src, src_idx]`` of the
-    state before the migration: ``source`` (``int32[I * P]``) maps every flat slot
-    ``island * p + index`` to the flat slot it is copied from. ``dst`` and ``src`` are
-    island numbers (ints or arrays)."""
-    return source.at[dst * p + dst_idx].set((src * p + src_idx).astype(jnp.int32))
+def _replace(islands, dst: int, dst_idx: jax.Array, src: int, src_idx: jax.Array, old):
+    """Copy individuals ``old[src, src_idx]`` into ``islands[dst, dst_idx]``."""
+    return jax.tree_util.tree_map(
+        lambda new, o: new.at[dst, dst_idx].set(o[src, src_idx]), islands, old
+    )
 
 
 def migrate(algo, key: jax.Array, islands, t: jax.Array, active: jax.Array):
@@ -63,34 +62,32 @@ def migrate(algo, key: jax.Array, islands, t: jax.Array, active: jax.Array):
     if k > p_active_min:
         raise ValueError(f"{k} migrants exceed the population of {p_active_min}")
     best, worst = _ranked(islands.fitness, active[None, :])
-    p = algo.population
-    # Every move is recorded in one map from each slot to the slot it copies (all
-    # sources are the state before the migration), then every leaf of the state is
-    # gathered once: a copy per move and leaf was 60 of MPMGA's evolution kernels.
-    identity = jnp.arange(n_isl * p, dtype=jnp.int32)
-    source = identity
+    old = islands
+    new = islands
     if topology == "ring":
         for i in range(n_isl):
-            source = _replace(source, p, (i + 1) % n_isl, worst[(i + 1) % n_isl, :k], i,
-                              best[i, :k])
+            new = _replace(new, (i + 1) % n_isl, worst[(i + 1) % n_isl, :k], i, best[i, :k], old)
     elif topology == "star":
         for i in range(1, n_isl):
-            source = _replace(source, p, 0, worst[0, (i - 1) * k: i * k], i, best[i, :k])
-            source = _replace(source, p, i, worst[i, :k], 0, best[0, :k])
+            new = _replace(new, 0, worst[0, (i - 1) * k: i * k], i, best[i, :k], old)
+            new = _replace(new, i, worst[i, :k], 0, best[0, :k], old)
     elif topology == "full":
-        flat_f = jnp.where(active[None, :], islands.fitness, -jnp.inf)
+        flat_f = jnp.where(active[None, :], old.fitness, -jnp.inf)
         for i in range(n_isl):
             others = jnp.where(jnp.arange(n_isl)[:, None] == i, -jnp.inf, flat_f).reshape(-1)
             top = jnp.argsort(-others, stable=True)[:k]
-            source = _replace(source, p, i, worst[i, :k], top // p, top % p)
+            src_isl, src_idx = top // algo.population, top % algo.population
+            new = jax.tree_util.tree_map(
+                lambda nw, o, i=i, si=src_isl, sx=src_idx, w=worst[i, :k]: nw.at[i, w].set(
+                    o[si, sx]), new, old)
     elif topology == "mpmga":
         if n_isl != 3:
             raise ValueError("the mpmga topology needs exactly 3 islands (A, B, C)")
         a_worst_b, a_worst_c = worst[0, :k], worst[0, k: 2 * k]
-        source = _replace(source, p, 0, a_worst_b, 1, best[1, :k])  # B's best rise into A
-        source = _replace(source, p, 0, a_worst_c, 2, best[2, :k])  # C's best rise into A
-        source = _replace(source, p, 1, best[1, :k], 0, a_worst_b)  # A's worst sink into B
-        source = _replace(source, p, 2, best[2, :k], 0, a_worst_c)  # ... and into C
+        new = _replace(new, 0, a_worst_b, 1, best[1, :k], old)   # B's best rise into A
+        new = _replace(new, 0, a_worst_c, 2, best[2, :k], old)   # C's best rise into A
+        new = _replace(new, 1, best[1, :k], 0, a_worst_b, old)   # A's worst sink into B
+        new = _replace(new, 2, best[2, :k], 0, a_worst_c, old)   # ... and into C
         # B and C swap k random active individuals (other than the ones that just moved).
         u = jax.random.uniform(key, (2, algo.population))
         moved = jnp.zeros((2, algo.population), bool).at[0, best[1, :k]].set(True)
@@ -98,11 +95,9 @@ def migrate(algo, key: jax.Array, islands, t: jax.Array, active: jax.Array):
         u = jnp.where(active[None, :] & ~moved, u, jnp.inf)
         pick = jnp.argsort(u, axis=-1)[:, :k]
         rb, rc = pick[0], pick[1]
-        source = _replace(source, p, 1, rb, 2, rc)
-        source = _replace(source, p, 2, rc, 1, rb)
+        new = _replace(new, 1, rb, 2, rc, old)
+        new = _replace(new, 2, rc, 1, rb, old)
     else:
         raise ValueError(f"unknown migration topology {topology!r}")
     do = (t + 1) % int(algo.get("islands.interval")) == 0
-    source = jnp.where(do, source, identity)
-    return jax.tree_util.tree_map(
-        lambda x: x.reshape((n_isl * p,) + x.shape[2:])[source].reshape(x.shape), islands)
+    return jax.tree_util.tree_map(lambda o, nw: jnp.where(do, nw, o), old, new)
