@@ -298,7 +298,7 @@ def evaluate(algo: Algorithm, grid: Grid, params: dict, cells, length, active, *
     they gained nothing). ``window`` (static): ``False`` evaluates at full width only
     whatever the configuration says (the initial population, evaluated once per run:
     one program instead of two, the same bits; sga's initialisation program 140 -> 128
-    kernels, imga's 303 -> 259; RESULTS.md, 2026-11-25 session 25).
+    kernels, imga's 303 -> 257; RESULTS.md, 2026-11-25 session 25).
     """
     fit = fitness_function(algo, params)
     if algo.waypoints:
