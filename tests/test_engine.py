@@ -126,3 +126,55 @@ def test_population_waypoint_feasibility_equals_the_per_path_check(rule):
     for lo, hi in [(0, 0), (1, 1), (2, SHORT_SPAN), (SHORT_SPAN + 1, w)]:
         assert np.sum(valid & (span >= lo) & (span <= hi)) > 20, (lo, hi)
     assert 50 < int(np.sum(want)) < p - 50
+
+
+def test_adaptive_generation_equals_its_straight_line_composition():
+    """With adaptive mutation (AGACD) a generation evaluates the crossed population, mutates
+    with probabilities from that fitness, and evaluates again; the engine runs the two
+    evaluations as the two steps of one loop. Its islands and failure counts equal the
+    stages called one after the other, for two generations of two runs."""
+    import functools
+
+    import jax
+    import jax.numpy as jnp
+
+    from jaxga import engine as E
+    from jaxga.paths import Population
+    from jaxga.presets import load_preset
+
+    grid = random_map(10, 10, 0.2, 3, corner_rule="free")
+    algo, params = E.build(load_preset("agacd", overrides={
+        "population.size": 16, "generations": 3, "init.max_tries": 40,
+        # wide adaptive ranges: the gates then depend on which fitness the mutation reads
+        "crossover.pc_low": 0.9, "crossover.pc_high": 1.0,
+        "mutation.pm_low": 0.0, "mutation.pm_high": 1.0}), grid)
+    assert algo.get("mutation.adaptive")
+
+    def straight(key, isl, t):
+        active = E._active(algo, params)
+        fit_fn = E.fitness_function(algo, params)
+        k_sel, k_cx, k_mu, k_si = jax.random.split(key, 4)
+        idx = E._select(algo, k_sel, isl.fitness, active)
+        pop = Population(isl.cells[idx], isl.length[idx])
+        pop, f_cx = E._crossover(algo, k_cx, grid, pop, isl.fitness[idx], active, t, params,
+                                 fit_fn)
+        fitness, _ = E.evaluate(algo, grid, params, pop.cells, pop.length, active)
+        pop, f_mu = E._mutation(algo, k_mu, grid, pop, fitness, active, t, params, fit_fn)
+        pop, f_si = E._simplify(algo, k_si, grid, pop, params)
+        f, feas = E.evaluate(algo, grid, params, pop.cells, pop.length, active)
+        return E.IslandState(pop.cells, pop.length, f, feas), jnp.stack([f_cx, f_mu, f_si])
+
+    one = functools.partial(E.island_generation, algo, grid=grid, params=params)
+    looped = jax.jit(lambda k, s, t: one(key=k, isl=s, t=t))
+    straight = jax.jit(straight)
+    for r in range(2):
+        state, _ = E.init_state(algo, jax.random.PRNGKey(r), grid, params)
+        isl = jax.tree_util.tree_map(lambda x: x[0], state.islands)
+        for t in range(2):
+            key = jax.random.fold_in(jax.random.PRNGKey(10 + r), t)
+            got = looped(key, isl, jnp.int32(t))
+            want = straight(key, isl, jnp.int32(t))
+            for g, w in zip(jax.tree_util.tree_leaves(got), jax.tree_util.tree_leaves(want)):
+                np.testing.assert_array_equal(np.asarray(g), np.asarray(w))
+            isl = got[0]
+        assert not np.array_equal(np.asarray(isl.cells), np.asarray(state.islands.cells[0]))
