@@ -72,15 +72,26 @@ def cold_child(script: str, spec: str, **env: str) -> tuple[dict, str]:
     return json.loads(proc.stdout.strip().splitlines()[-1]), proc.stderr
 
 
+STANDARD_POPULATION, STANDARD_GENERATIONS = 60, 300
+"""The compile benchmarks' setting (:func:`standard_run`): AGACD Table 6's 20 x 20 run."""
+
+STANDARD_SETTING = (f"`classic_ga_gapp3_20x20`, corner rule free, population "
+                    f"{STANDARD_POPULATION} (mpmga 3 x {STANDARD_POPULATION // 3}), "
+                    f"{STANDARD_GENERATIONS} generations")
+""":func:`standard_run`'s setting in words, for the tables' captions."""
+
+
 def standard_run(preset: str, seeds: int):
     """``jaxga.run(preset, classic_ga_gapp3_20x20, seeds)`` as the compile benchmarks run
-    it: corner rule free, population 60 (mpmga 3 islands of 20), 300 generations."""
+    it: corner rule free, :data:`STANDARD_POPULATION` individuals (mpmga: 3 islands of a
+    third of them), :data:`STANDARD_GENERATIONS` generations."""
     from jaxga import api
     from jaxga.maps import load_map
 
     grid = load_map("classic_ga_gapp3_20x20", corner_rule="free")
-    return api.run(preset, grid, seeds=seeds,
-                   population__size=20 if preset == "mpmga" else 60, generations=300)
+    size = STANDARD_POPULATION // 3 if preset == "mpmga" else STANDARD_POPULATION
+    return api.run(preset, grid, seeds=seeds, population__size=size,
+                   generations=STANDARD_GENERATIONS)
 
 
 def instrumented_run(preset: str, seeds: int):

@@ -31,6 +31,7 @@ import tempfile
 from pathlib import Path
 
 from _results import (
+    STANDARD_SETTING,
     append,
     cold_child,
     instrumented_run,
@@ -114,8 +115,7 @@ def main() -> None:
             subprocess.run(["git", "worktree", "remove", "--force", str(tree)], cwd=ROOT,
                            capture_output=True)
     body = (
-        f"base {base} -> new {new_name}. `classic_ga_gapp3_20x20`, corner rule free, "
-        f"population 60 (mpmga 3 x 20), 300 generations, {a.seeds} seed(s), {a.devices} XLA "
+        f"base {base} -> new {new_name}. {STANDARD_SETTING}, {a.seeds} seed(s), {a.devices} XLA "
         "device(s); each pair of cold compiles (fresh processes, no persistent cache) ran "
         "one after the other, base first in odd repeats, new first in even ones. Seconds, "
         "base -> new. results: hash of every per-seed output, base against new."

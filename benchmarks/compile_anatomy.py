@@ -30,7 +30,14 @@ import collections
 import json
 import re
 
-from _results import append, cold_child, instrumented_run, markdown_table, parse_args
+from _results import (
+    STANDARD_SETTING,
+    append,
+    cold_child,
+    instrumented_run,
+    markdown_table,
+    parse_args,
+)
 
 PRESETS = ("sga", "imga", "agacd", "iga_zhang", "mpmga", "iga_zhu")
 PROGRAMS = ("init", "finish", "evolve")  # the order jaxga.api._programs compiles them in
@@ -121,8 +128,7 @@ def main() -> None:
             programs.append([preset, name, p["xla_s"], p["kernels"],
                              ", ".join(f"{mod} {n}" for mod, n in p["by_module"])])
     body = (
-        f"`classic_ga_gapp3_20x20`, corner rule free, population 60 (mpmga 3 x 20), 300 "
-        f"generations, {a.seeds} seed(s), one XLA device, one fresh process per preset "
+        f"{STANDARD_SETTING}, {a.seeds} seed(s), one XLA device, one fresh process per preset "
         f"(cold compile, no persistent cache). Seconds. compile = `jaxga.run`'s "
         f"`compile_s`; trace, lower, XLA = its parts (JAX's tracing events, "
         f"`Traced.lower`, `Lowered.compile`); run wall / run CPU = the whole `jaxga.run` "

@@ -20,16 +20,24 @@ from __future__ import annotations
 import argparse
 import time
 
-from _results import append, cold_child, markdown_table, parse_args, result_hash, standard_run
+from _results import (
+    STANDARD_GENERATIONS,
+    STANDARD_POPULATION,
+    STANDARD_SETTING,
+    append,
+    cold_child,
+    markdown_table,
+    parse_args,
+    result_hash,
+    standard_run,
+)
 
 from jaxga.parallel import cores
-
-POPULATION, GENERATIONS = 60, 300
 
 
 def child(preset: str, seeds: int) -> dict:
     """One run in this (fresh) process (its ``XLA_FLAGS`` choose the emitters)."""
-    r = standard_run(preset, seeds)  # population POPULATION, GENERATIONS generations
+    r = standard_run(preset, seeds)
     t = r.timing
     return {k: t[k] for k in ("compile_s", "init_s", "evolve_s", "post_s", "total_s")} | {
         "hash": result_hash(r)}
@@ -57,14 +65,14 @@ def main() -> None:
         for seeds in (int(s) for s in args.seeds.split(",")):
             default = measure(preset, seeds, False, args.devices)
             older = measure(preset, seeds, True, args.devices)
-            work = -(-seeds // args.devices) * POPULATION * GENERATIONS  # runs padded
+            # runs padded to a multiple of the device count
+            work = -(-seeds // args.devices) * STANDARD_POPULATION * STANDARD_GENERATIONS
             rows.append([preset, seeds, f"{work:,}", *(f"{m[k]:.2f}" for m in (default, older)
                            for k in ("compile_s", "init_s", "evolve_s", "total_s")),
                          "yes" if default["hash"] == older["hash"] else "NO"])
             print(rows[-1], flush=True)
     body = (
-        f"{args.devices} XLA host device(s); classic_ga_gapp3_20x20, corner rule free, "
-        f"population {POPULATION} (mpmga 3 x {POPULATION // 3}), {GENERATIONS} generations. "
+        f"{args.devices} XLA host device(s); {STANDARD_SETTING}. "
         "Seconds; compile cold (no persistent cache), one child process per cell group; "
         "total = compile + init + evolve + post. Work per device = runs per device x "
         "population x generations. Same result = equal hashes of every path, fitness, "
