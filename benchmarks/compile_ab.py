@@ -11,11 +11,12 @@ one after the other, base first in odd repetitions and new first in even ones (c
 compile: no persistent compilation cache). Each child runs
 ``jaxga.run(preset, classic_ga_gapp3_20x20, seeds)`` (corner rule free, population 60,
 mpmga 3 x 20, 300 generations) and reports ``compile_s`` and its parts: tracing (JAX's
-trace events), lowering (``Traced.lower``) and XLA (``Lowered.compile``), plus a hash of
-every per-seed output (``_results.result_hash``): equal hashes mean the change left the
-results bit for bit the same. With ``--warm N`` each child then runs the same call
+trace events), lowering (``Traced.lower``) and XLA (``Lowered.compile``; also per program:
+init, finish, evolve), plus a hash of every per-seed output (``_results.result_hash``):
+equal hashes mean the change left the results bit for bit the same. With ``--warm N`` each child then runs the same call
 ``N`` more times (its programs compiled) and reports the fastest initialisation +
-evolution, so that a change's effect on run time is measured the same interleaved way.
+evolution and the fastest post-optimisation, so that a change's effect on run time is
+measured the same interleaved way.
 The worktree is removed at the end; if the script is killed, ``git worktree prune``
 forgets it.
 """
@@ -53,10 +54,15 @@ def child(preset: str, seeds: int, warm: int) -> dict:
     r, parts = instrumented_run(preset, seeds)
     runs = [standard_run(preset, seeds).timing for _ in range(warm)]
     best = min(runs, key=lambda t: t["init_s"] + t["evolve_s"], default=None)
+    post = min((t["post_s"] for t in runs), default=None)
     return {"jaxga": jaxga.__file__, "compile_s": r.timing["compile_s"],
             "trace_s": parts["trace_s"], "lower_s": parts["lower_s"],
             "xla_s": sum(s for s, _ in parts["xla"]), "hash": result_hash(r),
-            "init_s": best and best["init_s"], "evolve_s": best and best["evolve_s"]}
+            # compile order of jaxga.api._programs: init, finish, then the evolve program(s)
+            "xla_init_s": parts["xla"][0][0], "xla_finish_s": parts["xla"][1][0],
+            "xla_evolve_s": sum(s for s, _ in parts["xla"][2:]),
+            "init_s": best and best["init_s"], "evolve_s": best and best["evolve_s"],
+            "post_s": post}
 
 
 def measure(root: Path, preset: str, seeds: int, devices: int, warm: int) -> dict:
@@ -106,10 +112,11 @@ def main() -> None:
                     same &= b["hash"] == n["hash"]
                     rows.append([preset, rep + 1]
                                 + [f"{b[k]:.2f} -> {n[k]:.2f}"
-                                   for k in ("compile_s", "trace_s", "lower_s", "xla_s")]
+                                   for k in ("compile_s", "trace_s", "lower_s", "xla_s",
+                                             "xla_init_s", "xla_finish_s", "xla_evolve_s")]
                                 + [f"{n['compile_s'] - b['compile_s']:+.2f}"]
                                 + [f"{b[k]:.3f} -> {n[k]:.3f}"
-                                   for k in ("init_s", "evolve_s") if a.warm]
+                                   for k in ("init_s", "evolve_s", "post_s") if a.warm]
                                 + ["equal" if b["hash"] == n["hash"] else "DIFFERENT"])
         finally:
             subprocess.run(["git", "worktree", "remove", "--force", str(tree)], cwd=ROOT,
@@ -120,10 +127,13 @@ def main() -> None:
         "one after the other, base first in odd repeats, new first in even ones. Seconds, "
         "base -> new. results: hash of every per-seed output, base against new."
         + (f" warm init / evolve: the fastest of {a.warm} more calls in the same process "
-           "(programs compiled)." if a.warm else "")
+           "(programs compiled), by init + evolve; warm post: the fastest post-optimisation "
+           "of those calls." if a.warm else "")
         + "\n\n"
-        + markdown_table(["preset", "repeat", "compile", "trace", "lower", "XLA", "change"]
-                         + (["warm init", "warm evolve"] if a.warm else []) + ["results"],
+        + markdown_table(["preset", "repeat", "compile", "trace", "lower", "XLA", "XLA init",
+                          "XLA finish", "XLA evolve", "change"]
+                         + (["warm init", "warm evolve", "warm post"] if a.warm else [])
+                         + ["results"],
                          rows)
         + f"\n\nAll results identical: {'yes' if same else 'NO'}."
     )

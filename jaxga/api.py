@@ -377,6 +377,15 @@ PROGRAM_CACHE_SIZE = 8
 """How many compiled program sets :func:`sweep` keeps (see :func:`clear_compiled`)."""
 
 
+FINISH_COMPILER_OPTIONS = {"xla_cpu_use_fusion_emitters": False}
+"""XLA options of the finish program (post-optimisation, metrics; it runs once per run):
+XLA:CPU's older (LLVM IR) fusion emitters compile it 0.4-0.5 s faster than the default
+MLIR emitters and its run is no slower (RESULTS.md, 2026-11-25 sessions 20-21 and 26).
+Always these options, whatever the number of runs, so a run's results never depend on
+how many runs share its call. The init and evolve programs keep XLA's defaults: with the
+older emitters they compile faster but run up to 1.9x slower on wide batches."""
+
+
 @functools.lru_cache(maxsize=PROGRAM_CACHE_SIZE)
 def _programs(algo: Algorithm, grid_spec: Any, params_spec: Any, n_runs: int,
               sizes: tuple[int, ...], n_devices: int) -> _Programs:
@@ -439,7 +448,8 @@ def _programs(algo: Algorithm, grid_spec: Any, params_spec: Any, n_runs: int,
                                                       for n, t in evolve_t.items()}}
     # One after the other. Compiling them in threads (one per core) was measured again on
     # 2026-11-23 on a quiet machine: no faster (sga, 100 and 1000 seeds, within 3 %).
-    compiled = {name: t.lower().compile() for name, t in traced.items()}
+    compiled = {name: t.lower().compile(FINISH_COMPILER_OPTIONS if name == "finish" else None)
+                for name, t in traced.items()}
     return _Programs(
         init=compiled["init"],
         evolve={n: compiled[f"evolve{n}"] for n in evolve_t},
