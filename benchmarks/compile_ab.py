@@ -13,10 +13,10 @@ compile: no persistent compilation cache). Each child runs
 mpmga 3 x 20, 300 generations) and reports ``compile_s`` and its parts: tracing (JAX's
 trace events), lowering (``Traced.lower``) and XLA (``Lowered.compile``; also per program:
 init, finish, evolve), plus a hash of every per-seed output (``_results.result_hash``):
-equal hashes mean the change left the results bit for bit the same. With ``--warm N`` each child then runs the same call
-``N`` more times (its programs compiled) and reports the fastest initialisation +
-evolution and the fastest post-optimisation, so that a change's effect on run time is
-measured the same interleaved way.
+equal hashes mean the change left the results bit for bit the same. With ``--warm N``
+each child then runs the same call ``N`` more times (its programs compiled) and reports
+the fastest initialisation + evolution and the fastest post-optimisation, so that a
+change's effect on run time is measured the same interleaved way.
 The worktree is removed at the end; if the script is killed, ``git worktree prune``
 forgets it.
 """

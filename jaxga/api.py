@@ -379,8 +379,10 @@ PROGRAM_CACHE_SIZE = 8
 
 FINISH_COMPILER_OPTIONS = {"xla_cpu_use_fusion_emitters": False}
 """XLA options of the finish program (post-optimisation, metrics; it runs once per run):
-XLA:CPU's older (LLVM IR) fusion emitters compile it 0.4-0.5 s faster than the default
-MLIR emitters and its run is no slower (RESULTS.md, 2026-11-25 sessions 20-21 and 26).
+XLA:CPU's older (LLVM IR) fusion emitters compile it 0.3-0.6 s faster than the default
+MLIR emitters, with the same results (checked in the A/B tables and by
+``tests/test_engine.py``), and its run is no slower (RESULTS.md, 2026-11-25/26, sessions
+20-21 and 26).
 Always these options, whatever the number of runs, so a run's results never depend on
 how many runs share its call. The init and evolve programs keep XLA's defaults: with the
 older emitters they compile faster but run up to 1.9x slower on wide batches."""

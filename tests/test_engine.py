@@ -5,6 +5,7 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
+from jaxga import api
 from jaxga.api import run
 from jaxga.maps import random_map
 from jaxga.reference import any_angle_shortest_path, clear_np
@@ -44,6 +45,40 @@ def test_a_seed_gives_the_same_run_whichever_runs_share_its_batch(tiny_runs):
     assert np.array_equal(a.cells[2], b.cells[1])
     for h in ("best", "mean", "std"):
         assert np.array_equal(a.history[h][2], b.history[h][1])
+
+
+def test_finish_program_equals_its_functions_compiled_with_xla_defaults():
+    """The finish program is compiled with other XLA options
+    (``api.FINISH_COMPILER_OPTIONS``, the older fusion emitters): its post-optimised
+    paths and every reported length and metric are bit for bit those of the same
+    functions compiled with XLA's defaults, on agacd's greedy shortcut post-optimisation."""
+    import jax
+    import jax.numpy as jnp
+
+    from jaxga import objectives
+    from jaxga import postprocess as post
+
+    assert api.FINISH_COMPILER_OPTIONS == {"xla_cpu_use_fusion_emitters": False}
+    grid = random_map(10, 10, 0.2, 3, corner_rule="free")
+    r = run("agacd", grid, seeds=3, population__size=8, generations=3, init__max_tries=40)
+    assert r.success.any()
+
+    @jax.jit
+    def reference(c, n):
+        opt_c, opt_n = post.shortcut_greedy(grid, c, n)
+        both = jax.vmap(lambda c, n: (objectives.path_length(grid, c, n),
+                                      objectives.metrics(grid, c, n)))(
+            jnp.stack([c, opt_c]), jnp.stack([n, opt_n]))
+        return opt_c, opt_n, both
+
+    for i in np.flatnonzero(r.success):
+        opt_c, opt_n, (lengths, metrics) = reference(jnp.asarray(r.raw_cells[i]),
+                                                     jnp.asarray(r.raw_n_cells[i]))
+        assert int(opt_n) == r.n_cells[i]
+        assert np.array_equal(np.asarray(opt_c), r.cells[i])
+        assert np.asarray(lengths).tolist() == [r.raw_length[i], r.length[i]]
+        for k, v in metrics._asdict().items():
+            assert np.asarray(v).tolist() == [r.raw_metrics[k][i], r.metrics[k][i]], k
 
 
 _DEVICE_SCRIPT = """
