@@ -72,6 +72,21 @@ def cold_child(script: str, spec: str, **env: str) -> tuple[dict, str]:
     return json.loads(proc.stdout.strip().splitlines()[-1]), proc.stderr
 
 
+PRESETS = ("sga", "imga", "agacd", "iga_zhang", "mpmga", "iga_zhu")
+"""The six presets in the papers' order, the benchmarks' default and table order
+(``jaxga.presets.preset_names()`` lists them alphabetically)."""
+
+PROGRAMS = ("init", "finish", "evolve")
+"""The programs ``jaxga.api._programs`` compiles, in compile order (one evolve program
+per chunk size: several when a run is split into chunks)."""
+
+
+def xla_seconds_by_program(xla: list) -> dict[str, float]:
+    """:func:`instrumented_run`'s ``parts["xla"]`` as XLA seconds per program of
+    :data:`PROGRAMS` (the evolve programs summed)."""
+    return {"init": xla[0][0], "finish": xla[1][0], "evolve": sum(s for s, _ in xla[2:])}
+
+
 STANDARD_POPULATION, STANDARD_GENERATIONS = 60, 300
 """The compile benchmarks' setting (:func:`standard_run`): AGACD Table 6's 20 x 20 run."""
 

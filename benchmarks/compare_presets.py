@@ -29,14 +29,13 @@ import sys
 import time
 from pathlib import Path
 
-from _results import append
+from _results import PRESETS, append
 
 MAPS = {
     "classic_ga_gapp3_20x20": "free",
     "routeplanning_yangbo_20x20": "free",
     "random-32-32-20": "strict",
 }
-PRESETS = ("sga", "imga", "agacd", "iga_zhang", "mpmga", "iga_zhu")
 METRICS = ("length", "raw_length", "turns", "convergence_generation")
 
 

@@ -9,8 +9,8 @@ script checks the base revision out into a temporary ``git worktree`` and, for e
 preset and repetition, runs one fresh process on the base and one on this working tree,
 one after the other, base first in odd repetitions and new first in even ones (cold
 compile: no persistent compilation cache). Each child runs
-``jaxga.run(preset, classic_ga_gapp3_20x20, seeds)`` (corner rule free, population 60,
-mpmga 3 x 20, 300 generations) and reports ``compile_s`` and its parts: tracing (JAX's
+``jaxga.run(preset, classic_ga_gapp3_20x20, seeds)`` as ``_results.standard_run`` does
+(:data:`_results.STANDARD_SETTING`) and reports ``compile_s`` and its parts: tracing (JAX's
 trace events), lowering (``Traced.lower``) and XLA (``Lowered.compile``; also per program:
 init, finish, evolve), plus a hash of every per-seed output (``_results.result_hash``):
 equal hashes mean the change left the results bit for bit the same. With ``--warm N``
@@ -32,6 +32,7 @@ import tempfile
 from pathlib import Path
 
 from _results import (
+    PRESETS,
     STANDARD_SETTING,
     append,
     cold_child,
@@ -40,9 +41,9 @@ from _results import (
     parse_args,
     result_hash,
     standard_run,
+    xla_seconds_by_program,
 )
 
-PRESETS = ("sga", "imga", "agacd", "iga_zhang", "mpmga", "iga_zhu")
 ROOT = Path(__file__).resolve().parents[1]
 
 
@@ -55,12 +56,11 @@ def child(preset: str, seeds: int, warm: int) -> dict:
     runs = [standard_run(preset, seeds).timing for _ in range(warm)]
     best = min(runs, key=lambda t: t["init_s"] + t["evolve_s"], default=None)
     post = min((t["post_s"] for t in runs), default=None)
+    by_program = xla_seconds_by_program(parts["xla"])
     return {"jaxga": jaxga.__file__, "compile_s": r.timing["compile_s"],
             "trace_s": parts["trace_s"], "lower_s": parts["lower_s"],
             "xla_s": sum(s for s, _ in parts["xla"]), "hash": result_hash(r),
-            # compile order of jaxga.api._programs: init, finish, then the evolve program(s)
-            "xla_init_s": parts["xla"][0][0], "xla_finish_s": parts["xla"][1][0],
-            "xla_evolve_s": sum(s for s, _ in parts["xla"][2:]),
+            **{f"xla_{name}_s": s for name, s in by_program.items()},
             "init_s": best and best["init_s"], "evolve_s": best and best["evolve_s"],
             "post_s": post}
 

@@ -31,6 +31,8 @@ import json
 import re
 
 from _results import (
+    PRESETS,
+    PROGRAMS,
     STANDARD_SETTING,
     append,
     cold_child,
@@ -39,8 +41,6 @@ from _results import (
     parse_args,
 )
 
-PRESETS = ("sga", "imga", "agacd", "iga_zhang", "mpmga", "iga_zhu")
-PROGRAMS = ("init", "finish", "evolve")  # the order jaxga.api._programs compiles them in
 FUSION = re.compile(r"\s*(ROOT )?%\S+ = .*? fusion\(")
 """An HLO ``fusion`` instruction (its result may be a tuple)."""
 

@@ -382,10 +382,10 @@ FINISH_COMPILER_OPTIONS = {"xla_cpu_use_fusion_emitters": False}
 XLA:CPU's older (LLVM IR) fusion emitters compile it 0.3-0.6 s faster than the default
 MLIR emitters, with the same results (checked in the A/B tables and by
 ``tests/test_engine.py``), and its run is no slower (RESULTS.md, 2026-11-25/26, sessions
-20-21 and 26).
-Always these options, whatever the number of runs, so a run's results never depend on
-how many runs share its call. The init and evolve programs keep XLA's defaults: with the
-older emitters they compile faster but run up to 1.9x slower on wide batches."""
+20-21 and 26). Always these options, whatever the number of runs, so a run's results
+never depend on how many runs share its call. The init and evolve programs keep XLA's
+defaults: with the older emitters they compile faster but run up to 1.9x slower on wide
+batches."""
 
 
 @functools.lru_cache(maxsize=PROGRAM_CACHE_SIZE)

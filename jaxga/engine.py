@@ -310,7 +310,8 @@ def evaluate(algo: Algorithm, grid: Grid, params: dict, cells, length, active, *
             ok = has_endpoints(grid, c, n) & is_continuous(grid, c, n)
             return fit(grid, c, n, ok), ok
 
-        if algo.get("fitness.window") if window is None else window:
+        use_window = algo.get("fitness.window") if window is None else window
+        if use_window:
             f, feas = windowed_map(one, cells, length)
         else:
             f, feas = jax.vmap(one)(cells, length)
