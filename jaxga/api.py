@@ -460,6 +460,23 @@ def _programs(algo: Algorithm, grid_spec: Any, params_spec: Any, n_runs: int,
     )
 
 
+def equal_chunks(generations: int, chunks: int) -> tuple[int, ...]:
+    """Split ``generations`` into at most ``chunks`` compiled chunks of one size.
+
+    The number of chunks is the largest divisor of ``generations`` not above ``chunks``
+    (45 generations in at most 10 chunks: 9 chunks of 5; a prime count above ``chunks``:
+    one chunk). Every chunk size is a compiled evolve program of its own, so unequal
+    chunks (45 as 5 x 5 + 5 x 4) would compile the evolution twice for a progress bar;
+    equal chunks compile it once. Chunking never changes a result (generation ``t`` uses
+    the key ``fold_in(key, t)``, :func:`jaxga.engine.evolve`).
+    """
+    if generations < 1:
+        raise ParameterError(f"generations must be at least 1, got {generations}")
+    limit = max(1, min(int(chunks), generations))
+    n = max(d for d in range(1, limit + 1) if generations % d == 0)
+    return (generations // n,) * n
+
+
 def clear_compiled() -> None:
     """Free every compiled program this process holds (jaxga's and JAX's caches).
 
@@ -628,9 +645,7 @@ def sweep(
         if progress is not None:
             progress(stage, frac)
 
-    n_chunks = max(1, min(int(chunks), algo.generations))
-    sizes = tuple(algo.generations // n_chunks + (1 if i < algo.generations % n_chunks
-                                                   else 0) for i in range(n_chunks))
+    sizes = equal_chunks(algo.generations, chunks)
     report("compile", 0.0)
     t0 = time.perf_counter()
     progs = _programs(algo, _spec(grid), tuple(sorted(_spec(params).items())), len(run_seeds),
@@ -725,7 +740,8 @@ def run(
         overrides: configuration keys with ``.`` written as ``__`` (e.g.
             ``crossover__probability=0.7``), or ``sets=("crossover.probability=0.7",)``.
         progress: optional callback ``(stage, fraction)``; with ``chunks > 1`` the
-            generations run in that many compiled chunks (same result) for a progress bar.
+            generations run in up to that many compiled chunks of one size
+            (:func:`equal_chunks`; same result) for a progress bar.
 
     Returns:
         A :class:`Result`. Seeds that found no feasible path have ``success`` False and

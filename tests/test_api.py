@@ -138,6 +138,39 @@ def test_compiled_programs_are_reused_across_maps_seeds_and_values(grid):
     assert r.timing["compile_s"] < 1.0
 
 
+@pytest.mark.parametrize("generations, chunks, sizes", [
+    (45, 10, (5,) * 9), (40, 10, (4,) * 10), (35, 10, (5,) * 7), (300, 10, (30,) * 10),
+    (47, 10, (47,)), (3, 10, (1, 1, 1)), (6, 4, (2, 2, 2)), (7, 1, (7,)), (5, 0, (5,)),
+])
+def test_progress_chunks_have_one_size(generations, chunks, sizes):
+    """Each chunk size is an evolve program of its own: unequal chunks (iga_zhang's 45
+    generations as 5 x 5 + 5 x 4) compiled the evolution twice for the CLI's progress bar."""
+    assert api.equal_chunks(generations, chunks) == sizes
+
+
+def test_a_chunked_run_equals_one_call_and_compiles_one_evolve_program(grid, monkeypatch):
+    kw = {**SMALL, "generations": 4}
+    one = api.run("iga_zhang", grid, seeds=3, **kw)
+    compiled = []
+    programs = api._programs
+
+    def recording(*args):
+        out = programs(*args)
+        compiled.append(tuple(out.evolve))
+        return out
+
+    monkeypatch.setattr(api, "_programs", recording)
+    seen = []
+    chunked = api.run("iga_zhang", grid, seeds=3, chunks=3,
+                      progress=lambda stage, frac: seen.append((stage, frac)), **kw)
+    assert compiled == [(2,)]  # 4 generations in at most 3 chunks: 2 x 2, not 2 + 1 + 1
+    assert seen == [("compile", 0.0), ("compile", 1.0), ("evolve", 0.5), ("evolve", 1.0)]
+    for field in ("cells", "length", "fitness", "convergence_generation"):
+        np.testing.assert_array_equal(getattr(chunked, field), getattr(one, field))
+    for h in ("best", "mean", "std"):
+        np.testing.assert_array_equal(chunked.history[h], one.history[h])
+
+
 def test_unreachable_goal_is_a_no_path_result():
     g = load_map("classic_ga_gapp3_20x20", corner_rule="free")
     blocked = np.asarray(g.blocked).copy()
