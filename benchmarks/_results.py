@@ -109,8 +109,43 @@ def standard_run(preset: str, seeds: int):
                    generations=STANDARD_GENERATIONS)
 
 
-def instrumented_run(preset: str, seeds: int):
-    """:func:`standard_run` with its compilation timed.
+CLI_MAP = "classic_ga_gapp3_20x20"
+"""The built-in map of :func:`cli_run` (the README's main command runs on it)."""
+
+
+def cli_run(preset: str, seeds: int):
+    """What ``jaxga run --preset <preset> --map classic_ga_gapp3_20x20 --seeds <seeds>``
+    runs, through ``jaxga.cli.main``: the preset's own population and generations, and
+    the progress bar's chunked evolution. Without a persistent compilation cache (the
+    command line's own, ``$JAXGA_CACHE_DIR``, is turned off). Returns the ``Result``
+    (the summary table the command prints is discarded)."""
+    import contextlib
+    import io
+
+    from jaxga import api, cli
+
+    os.environ["JAXGA_CACHE_DIR"] = ""
+    got = []
+    run = api.run
+
+    def recording(*args, **kwargs):
+        got.append(run(*args, **kwargs))
+        return got[-1]
+
+    api.run = recording
+    try:
+        with contextlib.redirect_stdout(io.StringIO()):
+            status = cli.main(["run", "--preset", preset, "--map", CLI_MAP,
+                               "--seeds", str(seeds)])
+    finally:
+        api.run = run
+    if status != 0 or len(got) != 1:
+        raise RuntimeError(f"jaxga run --preset {preset} exited with {status}")
+    return got[0]
+
+
+def instrumented_run(preset: str, seeds: int, run=standard_run):
+    """:func:`standard_run` (or ``run``, e.g. :func:`cli_run`) with its compilation timed.
 
     Returns ``(result, parts)``: ``parts["trace_s"]`` (JAX's ``jaxpr_trace_duration``
     events), ``parts["lower_s"]`` (``Traced.lower``), ``parts["xla"]`` (one
@@ -147,7 +182,7 @@ def instrumented_run(preset: str, seeds: int):
 
     jax.stages.Traced.lower, jax.stages.Lowered.compile = timed_lower, timed_compile
     cpu0 = resource.getrusage(resource.RUSAGE_SELF)
-    result = standard_run(preset, seeds)
+    result = run(preset, seeds)
     cpu1 = resource.getrusage(resource.RUSAGE_SELF)
     parts["cpu_s"] = (cpu1.ru_utime - cpu0.ru_utime) + (cpu1.ru_stime - cpu0.ru_stime)
     return result, parts

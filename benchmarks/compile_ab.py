@@ -1,7 +1,7 @@
 """Cold compile of two checkouts, interleaved: a git revision against this working tree.
 
     python benchmarks/compile_ab.py --base HEAD~1 [--presets sga,iga_zhu] [--reps 2]
-        [--seeds 1] [--devices 1] [--warm N] [--no-write]
+        [--seeds 1] [--devices 1] [--warm N] [--cli] [--no-write]
 
 The machine's speed drifts by 10-20 % within an hour (RESULTS.md, sessions 20-22), so
 two compile tables taken at different times cannot show a change of a few per cent. This
@@ -16,7 +16,10 @@ init, finish, evolve), plus a hash of every per-seed output (``_results.result_h
 equal hashes mean the change left the results bit for bit the same. With ``--warm N``
 each child then runs the same call ``N`` more times (its programs compiled) and reports
 the fastest initialisation + evolution and the fastest post-optimisation, so that a
-change's effect on run time is measured the same interleaved way.
+change's effect on run time is measured the same interleaved way. With ``--cli`` each
+child runs the command line instead, ``jaxga run --preset P --map classic_ga_gapp3_20x20
+--seeds N`` (``_results.cli_run``: the preset's own population and generations, the
+progress bar's chunked evolution).
 The worktree is removed at the end; if the script is killed, ``git worktree prune``
 forgets it.
 """
@@ -32,9 +35,11 @@ import tempfile
 from pathlib import Path
 
 from _results import (
+    CLI_MAP,
     PRESETS,
     STANDARD_SETTING,
     append,
+    cli_run,
     cold_child,
     instrumented_run,
     markdown_table,
@@ -47,13 +52,15 @@ from _results import (
 ROOT = Path(__file__).resolve().parents[1]
 
 
-def child(preset: str, seeds: int, warm: int) -> dict:
-    """One cold ``jaxga.run`` in this process: compile split and result hash; then the
-    fastest init + evolve of ``warm`` more calls (0: none)."""
+def child(preset: str, seeds: int, warm: int, cli: int = 0) -> dict:
+    """One cold ``jaxga.run`` in this process (``cli``: ``jaxga run`` on the command
+    line): compile split and result hash; then the fastest init + evolve of ``warm`` more
+    calls (0: none)."""
     import jaxga
 
-    r, parts = instrumented_run(preset, seeds)
-    runs = [standard_run(preset, seeds).timing for _ in range(warm)]
+    run = cli_run if cli else standard_run
+    r, parts = instrumented_run(preset, seeds, run)
+    runs = [run(preset, seeds).timing for _ in range(warm)]
     best = min(runs, key=lambda t: t["init_s"] + t["evolve_s"], default=None)
     post = min((t["post_s"] for t in runs), default=None)
     by_program = xla_seconds_by_program(parts["xla"])
@@ -65,10 +72,10 @@ def child(preset: str, seeds: int, warm: int) -> dict:
             "post_s": post}
 
 
-def measure(root: Path, preset: str, seeds: int, devices: int, warm: int) -> dict:
+def measure(root: Path, preset: str, seeds: int, devices: int, warm: int, cli: bool) -> dict:
     """:func:`child` in a fresh process importing ``jaxga`` from ``root``."""
     here = Path(__file__).resolve().parent
-    m = cold_child(__file__, f"{preset}:{seeds}:{warm}",
+    m = cold_child(__file__, f"{preset}:{seeds}:{warm}:{int(cli)}",
                    PYTHONPATH=f"{root}{os.pathsep}{here}",
                    JAXGA_DEVICES=str(devices),
                    XLA_FLAGS=f"--xla_force_host_platform_device_count={devices}")[0]
@@ -86,6 +93,9 @@ def main() -> None:
     ap.add_argument("--devices", type=int, default=1)
     ap.add_argument("--warm", type=int, default=0,
                     help="also time this many warm calls per child (init, evolve)")
+    ap.add_argument("--cli", action="store_true",
+                    help="run `jaxga run --preset P --map classic_ga_gapp3_20x20 --seeds N` "
+                         "(the preset's own settings) instead of the standard setting")
     ap.add_argument("--no-write", action="store_true")
     a = parse_args(ap, child)
     base = subprocess.run(["git", "rev-parse", "--short", a.base], cwd=ROOT, check=True,
@@ -106,7 +116,7 @@ def main() -> None:
                     got = {}
                     order = (("base", tree), ("new", ROOT))
                     for name, root in order if rep % 2 == 0 else order[::-1]:  # ABBA
-                        got[name] = m = measure(root, preset, a.seeds, a.devices, a.warm)
+                        got[name] = m = measure(root, preset, a.seeds, a.devices, a.warm, a.cli)
                         print(preset, rep, name, json.dumps(m), flush=True)
                     b, n = got["base"], got["new"]
                     same &= b["hash"] == n["hash"]
@@ -121,8 +131,11 @@ def main() -> None:
         finally:
             subprocess.run(["git", "worktree", "remove", "--force", str(tree)], cwd=ROOT,
                            capture_output=True)
+    setting = (f"`jaxga run --preset P --map {CLI_MAP} --seeds {a.seeds}` (each preset's "
+               "own population and generations; the evolution in the progress bar's chunks)"
+               if a.cli else STANDARD_SETTING)
     body = (
-        f"base {base} -> new {new_name}. {STANDARD_SETTING}, {a.seeds} seed(s), {a.devices} XLA "
+        f"base {base} -> new {new_name}. {setting}, {a.seeds} seed(s), {a.devices} XLA "
         "device(s); each pair of cold compiles (fresh processes, no persistent cache) ran "
         "one after the other, base first in odd repeats, new first in even ones. Seconds, "
         "base -> new. results: hash of every per-seed output, base against new."
