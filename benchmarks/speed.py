@@ -21,7 +21,7 @@ run: the first generations cost more than the later ones (sga at 20 x 20, 100 ru
 2026-11-24), so the targets are judged on full runs (the default).
 
 With ``--warm`` each configuration runs twice, in two child processes sharing a fresh
-persistent compilation cache (``jaxga.cli.use_compilation_cache``, which ``jaxga run``
+persistent compilation cache (``jaxga.use_compilation_cache``, which ``jaxga run``
 turns on by default): the first child's compile is then cold but includes writing the
 cache (what a user's first ``jaxga run`` pays), the second child's is the "warm" compile
 of every later run of the same preset, map size and seed count (tracing and lowering
@@ -77,7 +77,7 @@ def child(preset: str, setting: str, seeds: int, generations: int) -> dict:
     if preset == "mpmga":  # 3 islands: the setting's population is the total
         overrides["population__size"] = population // 3
     if os.environ.get("JAXGA_CACHE_DIR"):  # --warm: the CLI's persistent cache
-        from jaxga.cli import use_compilation_cache
+        from jaxga import use_compilation_cache
 
         use_compilation_cache()
     r = run(preset, grid_for(setting), seeds=seeds, **overrides)

@@ -3,6 +3,7 @@
 from jaxga import lowering
 from jaxga.api import Result, run, sweep
 from jaxga.compare import Comparison, compare
+from jaxga.compilation_cache import use_compilation_cache
 from jaxga.errors import EndpointError, JaxgaError, MapFormatError, NoPathError, ParameterError
 from jaxga.grid import CORNER_RULES, Grid
 from jaxga.replan import replan
@@ -26,5 +27,6 @@ __all__ = [
     "replan",
     "run",
     "sweep",
+    "use_compilation_cache",
 ]
 __version__ = "0.1.0"

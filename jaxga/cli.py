@@ -22,6 +22,7 @@ import time
 from collections.abc import Sequence
 from pathlib import Path
 
+from jaxga.compilation_cache import use_compilation_cache
 from jaxga.errors import EndpointError, JaxgaError, NoPathError
 from jaxga.grid import CORNER_RULES, as_integer
 from jaxga.parallel import (
@@ -543,27 +544,6 @@ def build_parser() -> argparse.ArgumentParser:
     p = sub.add_parser("maps", help="list the built-in maps")
     p.set_defaults(func=cmd_maps)
     return parser
-
-
-def use_compilation_cache() -> str | None:
-    """Turn on JAX's persistent compilation cache for the command line.
-
-    ``$JAXGA_CACHE_DIR`` (default ``~/.cache/jaxga/jax``; empty to disable): a second
-    ``jaxga run`` of the same preset on a map of the same size loads its compiled
-    programs from disk instead of compiling them again (seconds instead of tens of
-    seconds). Returns the directory used, or None.
-    """
-    import os
-    from pathlib import Path
-
-    path = os.environ.get("JAXGA_CACHE_DIR", str(Path.home() / ".cache" / "jaxga" / "jax"))
-    if not path:
-        return None
-    import jax
-
-    jax.config.update("jax_compilation_cache_dir", path)
-    jax.config.update("jax_persistent_cache_min_compile_time_secs", 1.0)
-    return path
 
 
 def check_outputs(args: argparse.Namespace) -> None:

@@ -152,11 +152,16 @@ def test_console_script_never_prints_a_traceback(tmp_path):
 
 def test_the_command_line_compilation_cache_directory(tmp_path, monkeypatch):
     """`jaxga run` keeps compiled programs in $JAXGA_CACHE_DIR, by default
-    ~/.cache/jaxga/jax; an empty value turns the cache off (README, Quick start)."""
+    ~/.cache/jaxga/jax; an empty value turns the cache off (README, Quick start). A
+    script or notebook calls the same function, optionally with its own directory."""
     import jax
 
-    from jaxga.cli import use_compilation_cache
+    import jaxga
+    from jaxga import cli
+    from jaxga.errors import ParameterError
 
+    assert cli.use_compilation_cache is jaxga.use_compilation_cache
+    use_compilation_cache = jaxga.use_compilation_cache
     updates = []
     monkeypatch.setattr(jax.config, "update", lambda k, v: updates.append((k, v)))
     monkeypatch.setenv("HOME", str(tmp_path))
@@ -171,3 +176,8 @@ def test_the_command_line_compilation_cache_directory(tmp_path, monkeypatch):
     updates.clear()
     monkeypatch.setenv("JAXGA_CACHE_DIR", "")
     assert use_compilation_cache() is None and updates == []
+    # an explicit directory wins over the environment, even over an empty one
+    assert use_compilation_cache(tmp_path / "nb") == str(tmp_path / "nb")
+    assert ("jax_compilation_cache_dir", str(tmp_path / "nb")) in updates
+    with pytest.raises(ParameterError, match="must not be empty"):
+        use_compilation_cache("")
