@@ -1,6 +1,6 @@
 """JAX's persistent compilation cache for jaxga's programs (on disk, across processes).
 
-A cold ``jaxga.run`` spends 8-20 s compiling its programs on this 2-core machine
+A cold ``jaxga.run`` spends about 8-20 s compiling its programs on a 2-core CPU
 (README, performance). JAX can keep compiled programs on disk, keyed by the program and
 the JAX and XLA versions; a later process that compiles the same program (same preset,
 map size and run count) reads it instead. Tracing and lowering still run, so such a
