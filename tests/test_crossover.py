@@ -681,3 +681,44 @@ def test_kth_true_is_the_rth_true_index_or_zero(n):
         got = np.asarray(_KTH(jnp.asarray(mask), jnp.asarray(r, jnp.int32)))
         want = [np.flatnonzero(m)[k] if k < m.sum() else 0 for m, k in zip(mask, r)]
         np.testing.assert_array_equal(got, want)
+
+
+_JOINS = jax.jit(jax.vmap(lambda c1, l1, c2, l2, cut, start: (
+    X._join(c2, cut, X._position_lookup(c1, l1, None)(c2), c1, l1, start),
+    X._join_reverse(c2, cut, c1, l1, start, X._position_lookup(c2, l2, None)(c1)))))
+
+
+@settings(max_examples=30)
+@given(grids_and_parents(n=8), st.integers(0, 2**30))
+def test_second_child_from_one_lookup_equals_the_two_lookup_join(gp, seed):
+    """common_point's second child comes from the lookup of parent 1's cells in parent 2
+    (``_join_reverse``): for loop-free parents it equals ``_join`` with the lookup of
+    parent 2's cells in parent 1 that it replaces (cells, length, fit and junction), at
+    a common cell of the two parents (as common_point calls it) and at any head cut below
+    parent 2's length and any tail start."""
+    _, pop = gp
+    rng = np.random.default_rng(seed)
+    c1, l1 = np.asarray(pop.cells[0::2]), np.asarray(pop.length[0::2])
+    c2, l2 = np.asarray(pop.cells[1::2]), np.asarray(pop.length[1::2])
+    at_common = []
+    for a, n1, b, n2 in zip(c1, l1, c2, l2):
+        pairs = [(j, i) for i in range(n1) for j in range(n2) if a[i] == b[j]]
+        at_common.append(pairs[rng.integers(len(pairs))] if pairs else (0, 0))
+    for cut, start in (np.array(at_common).T, (rng.integers(0, l2), rng.integers(0, l1))):
+        two, one = _JOINS(c1, l1, c2, l2, jnp.asarray(cut, jnp.int32),
+                          jnp.asarray(start, jnp.int32))
+        for a, b in zip(two, one):
+            np.testing.assert_array_equal(np.asarray(a), np.asarray(b))
+
+
+def test_second_child_loop_cut_example():
+    """Head 0-7-3-8-9 of parent 2 (cut before its cell 2) + tail 2-3-4-5 of parent 1: the
+    head's cell 3 is in the tail, so the child is 0-7 + 3-4-5 (the loop 3-8-9-2-3 cut),
+    by both joins."""
+    c1 = jnp.asarray([0, 1, 2, 3, 4, 5, 5, 5], jnp.int32)
+    c2 = jnp.asarray([0, 7, 3, 8, 9, 2, 5, 5], jnp.int32)
+    args = (c1[None], jnp.asarray([6]), c2[None], jnp.asarray([7]), jnp.asarray([5]),
+            jnp.asarray([2]))
+    for joined in _JOINS(*args):
+        assert list(np.asarray(joined.cells[0, :int(joined.length[0])])) == [0, 7, 3, 4, 5]
+        assert bool(joined.ok[0]) and (int(joined.left[0]), int(joined.right[0])) == (7, 3)
