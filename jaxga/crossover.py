@@ -178,9 +178,10 @@ def _join_reverse(
     position in it, so that ``k`` is the smallest ``pos_a_in_b[i]`` below ``cut_b`` over
     the tail positions ``i``, and the child continues at the last such ``i``: the
     same child as ``_join(cb, cut_b, pos_b_in_a, ca, la, start_a)`` whenever ``cb`` is
-    loop-free (SPEC 1: evolving populations are). With a ``cb`` that has loops the child
-    is still as continuous as the raw splice (a cut junction joins ``cb[k - 1]`` to the
-    cell that follows it in ``cb``), but a loop through the junction may remain.
+    loop-free (SPEC 1: evolving populations are) and ``cut_b`` is at most its length.
+    With a ``cb`` that has loops the child is still as continuous as the raw splice (a
+    cut junction joins ``cb[k - 1]`` to the cell that follows it in ``cb``), but a loop
+    through the junction may remain.
     """
     n = cb.shape[0]
     i = jnp.arange(n, dtype=_I32)
