@@ -424,6 +424,9 @@ def heterologous(
 
     ``fitness_fn(grid, cells, length) -> f32`` is static (bind it with
     ``functools.partial``); it is evaluated on the two parents and the two children.
+    The second child's loop cut comes from the lookup of parent 1's cells in parent 2
+    (:func:`_join_reverse`, exact for a loop-free parent 2, SPEC 1), as in
+    :func:`common_point`.
     """
     c1, c2 = jnp.asarray(c1, _I32), jnp.asarray(c2, _I32)
     l1, l2 = jnp.asarray(l1, _I32), jnp.asarray(l2, _I32)
@@ -433,9 +436,8 @@ def heterologous(
     i, o = _kth_true_rows(valid, r)
     j = jnp.maximum(jtab[i, o], 0)
     pos2 = _position_lookup(c2, l2, grid.n_cells)(c1)
-    pos1 = _position_lookup(c1, l1, grid.n_cells)(c2)
     k1 = _join(c1, i + 1, pos2, c2, l2, j + 1)
-    k2 = _join(c2, j + 1, pos1, c1, l1, i + 1)
+    k2 = _join_reverse(c2, j + 1, c1, l1, i + 1, pos2)  # one lookup, as common_point
     paths = jnp.stack([c1, c2, k1.cells, k2.cells])
     lens = jnp.stack([l1, l2, k1.length, k2.length])
     f = jax.vmap(lambda c, ln: jnp.asarray(fitness_fn(grid, c, ln), _F32))(paths, lens)
