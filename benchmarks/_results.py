@@ -123,8 +123,9 @@ def cli_run(preset: str, seeds: int):
     import io
 
     from jaxga import api, cli
+    from jaxga.compilation_cache import ENV_VAR
 
-    os.environ["JAXGA_CACHE_DIR"] = ""
+    os.environ[ENV_VAR] = ""
     got = []
     run = api.run
 

@@ -155,9 +155,17 @@ def _join(
     has = jnp.any(hit)
     a = jnp.where(has, jnp.argmax(hit).astype(_I32), cut)
     b = jnp.where(has, pos_in_b[jnp.clip(a, 0, n - 1)], start_b)
-    cells, length, ok = concat([(ca, 0, a), (cb, b, lb)], n)
-    right = cb[jnp.clip(b, 0, n - 1)]
-    left = jnp.where(a > 0, ca[jnp.clip(a - 1, 0, n - 1)], right)
+    return _splice(ca, a, cb, b, lb)
+
+
+def _splice(head: jax.Array, cut: jax.Array, tail: jax.Array, start: jax.Array,
+            tail_len: jax.Array) -> _Joined:
+    """``head[:cut] + tail[start:tail_len]`` (the loop cut already chosen) with its
+    junction ``(head[cut - 1], tail[start])`` and whether it fits the capacity."""
+    n = head.shape[0]
+    cells, length, ok = concat([(head, 0, cut), (tail, start, tail_len)], n)
+    right = tail[jnp.clip(start, 0, n - 1)]
+    left = jnp.where(cut > 0, head[jnp.clip(cut - 1, 0, n - 1)], right)
     return _Joined(cells, length, ok, left, right)
 
 
@@ -190,10 +198,7 @@ def _join_reverse(
     has = first < n
     b = jnp.where(has, first, cut_b)
     a = jnp.where(has, jnp.max(jnp.where(tail & (pos_a_in_b == first), i, -1)), start_a)
-    cells, length, ok = concat([(cb, 0, b), (ca, a, la)], n)
-    right = ca[jnp.clip(a, 0, n - 1)]
-    left = jnp.where(b > 0, cb[jnp.clip(b - 1, 0, n - 1)], right)
-    return _Joined(cells, length, ok, left, right)
+    return _splice(cb, b, ca, a, la)
 
 
 def _choose(take: jax.Array, new: jax.Array, old: jax.Array) -> jax.Array:
