@@ -3,6 +3,7 @@ and the optax schedules of the adaptive operators."""
 
 from __future__ import annotations
 
+import dataclasses
 import math
 import re
 import warnings
@@ -12,7 +13,7 @@ import pytest
 
 from jaxga import api, schedules
 from jaxga.errors import InitialisationWarning, JaxgaError, ParameterError
-from jaxga.fitness_reference import fitness_optimum
+from jaxga.fitness_reference import fitness_optimum, fitness_weights, path_fitness_np
 from jaxga.maps import load_map, random_map
 from jaxga.presets import preset_names
 from jaxga.reference import any_angle_shortest_path, clear_np, shortest_path
@@ -82,6 +83,101 @@ def test_every_preset_is_deterministic(preset_run, grid):
         for h in ("best", "mean", "std"):
             assert np.array_equal(again.history[h][i], r.history[h][j])
         assert again.length[i] == r.length[j] and again.fitness[i] == r.fitness[j]
+
+
+def _polyline_length(path) -> float:
+    p = np.asarray(path, float)
+    return float(np.hypot(*np.diff(p, axis=0).T).sum()) if len(p) > 1 else 0.0
+
+
+def test_reported_values_agree_with_the_returned_paths(preset_run, grid):
+    """Every per-seed number recomputed here from the returned paths and histories:
+    lengths as polylines, the grid presets' fitness by the independent NumPy scorer of
+    ``jaxga.fitness_reference``, the convergence generation from the best-so-far
+    history, and the JSON runs from the padded cell arrays."""
+    name, r, _ = preset_run
+    blocked = grid.blocked_np()
+    js = r.to_json()
+    for i in range(len(r.seeds)):
+        best = r.history["best"][i]
+        run = js["runs"][i]
+        assert run["seed"] == r.seeds[i] and run["success"] == bool(r.success[i])
+        assert best[-1] == r.fitness[i] == np.float32(run["fitness"])
+        for h in ("best", "mean", "std"):
+            assert np.array_equal(np.float32(run["history"][h]), r.history[h][i])
+        if not r.success[i]:
+            assert r.convergence_generation[i] == -1 and run["path"] == []
+            continue
+        post, raw = r.path(i), r.path(i, raw=True)
+        assert math.isclose(r.length[i], _polyline_length(post), rel_tol=1e-5)
+        assert math.isclose(r.raw_length[i], _polyline_length(raw), rel_tol=1e-5)
+        if name != "agacd":  # the five grid-step fitnesses have an independent scorer
+            method, weights = fitness_weights(r.config)
+            ref = path_fitness_np(blocked, grid.goal_xy, method, weights, np.array(raw))
+            assert math.isclose(ref, float(r.fitness[i]), rel_tol=1e-5), (name, i)
+        # the first generation whose best-so-far is the final best (0: the initial
+        # population held it, so every generation's best-so-far equals it)
+        c = int(r.convergence_generation[i])
+        assert 0 <= c <= len(best)
+        if c == 0:
+            assert np.all(best == r.fitness[i])
+        else:
+            assert best[c - 1] == r.fitness[i]
+            assert c == 1 or best[c - 2] < r.fitness[i]
+        assert run["convergence_generation"] == c
+        # JSON paths: the padded cell rows decoded as (x, y), y counted from the bottom
+        w = grid.width
+        for key, cells, n, length in (("path", r.cells, r.n_cells, r.length),
+                                      ("raw_path", r.raw_cells, r.raw_n_cells, r.raw_length)):
+            row = cells[i][: int(n[i])]
+            assert run[key] == [[int(c) % w, int(c) // w] for c in row]
+            assert run[key.replace("path", "length")] == float(length[i])
+        assert run["path"][0] == list(grid.start_xy) and run["path"][-1] == list(grid.goal_xy)
+
+
+def test_summary_rows_are_the_statistics_of_the_successful_seeds(preset_run):
+    name, r, _ = preset_run
+    assert r.success.all(), name  # then one seed is marked failed below
+    failed = dataclasses.replace(r, success=np.array([True, False, True]))
+    rows = {row[0]: row[1:] for row in failed.summary_rows()}
+    columns = {"length": r.length, "raw_length": r.raw_length, "fitness": r.fitness,
+               "convergence_generation": r.convergence_generation,
+               "angle_sum": r.metrics["angle_sum"], "turns": r.metrics["turns"],
+               "gap": failed.gap, "raw_gap": failed.raw_gap,
+               "fitness_gap": failed.fitness_gap}
+    assert set(rows) == set(columns)
+    for key, values in columns.items():
+        a, b = float(values[0]), float(values[2])  # the two successful seeds
+        expected = ((a + b) / 2, abs(a - b) / math.sqrt(2), min(a, b), max(a, b))
+        np.testing.assert_allclose(rows[key], expected, rtol=1e-6, atol=1e-12,
+                                   equal_nan=True, err_msg=f"{name} {key}")
+    assert "success 2/3" in failed.summary()
+
+
+def test_stagnation_freezes_a_run_after_k_generations_without_improvement(grid):
+    """IMGA 4.4's stopping rule (``termination.stagnation``): with K = 1 a run freezes
+    after its first generation without improvement; until then it is the run without
+    the rule (same keys), afterwards its state, so its history, stays as it was."""
+    free = api.run("sga", grid, seeds=3, **SMALL)  # the program of ``preset_run``
+    stop = api.run("sga", grid, seeds=3, **SMALL, termination__stagnation=1)
+    n_gen = SMALL["generations"]
+    froze = 0
+    for i in range(3):
+        best = stop.history["best"][i]
+        # with K = 1 generations 1..f improved (f = the convergence generation) and
+        # generation f + 1 did not: the run froze there (history index f)
+        f = int(stop.convergence_generation[i])
+        assert np.all(np.diff(best[:f]) > 0)
+        for h in ("best", "mean", "std"):
+            upto = min(f, n_gen - 1) + 1
+            assert np.array_equal(stop.history[h][i, :upto], free.history[h][i, :upto])
+            if f < n_gen:
+                assert np.all(stop.history[h][i, f:] == stop.history[h][i, f]), (i, h)
+        if f == n_gen:  # improved every generation: never frozen
+            assert np.array_equal(stop.cells[i], free.cells[i])
+        elif not np.array_equal(stop.history["mean"][i], free.history["mean"][i]):
+            froze += 1
+    assert froze >= 1  # the rule changed at least one of these runs
 
 
 def test_a_sweep_point_equals_a_run_with_those_values(grid):

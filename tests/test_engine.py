@@ -213,3 +213,63 @@ def test_adaptive_generation_equals_its_straight_line_composition():
                 np.testing.assert_array_equal(np.asarray(g), np.asarray(w))
             isl = got[0]
         assert not np.array_equal(np.asarray(isl.cells), np.asarray(state.islands.cells[0]))
+
+
+def test_history_row_counts_only_active_individuals_of_every_island():
+    """Best-so-far, mean and sd (ddof 0) of the fitness over the active slots of all
+    islands (``population.active`` below the capacity), against NumPy."""
+    import jax.numpy as jnp
+
+    from jaxga import engine as E
+    from jaxga.presets import load_preset
+
+    grid = random_map(8, 8, 0.1, 1, corner_rule="free")
+    algo, params = E.build(load_preset("sga", overrides={
+        "population.size": 8, "islands.count": 3, "islands.topology": "ring",
+        "islands.migrants": 1}), grid)
+    params = {**params, "population.active": jnp.int32(5)}
+    rng = np.random.default_rng(7)
+    fitness = rng.random((3, 8)).astype(np.float32)
+    state = E.GAState(
+        islands=E.IslandState(jnp.zeros((3, 8, algo.capacity), jnp.int32),
+                              jnp.ones((3, 8), jnp.int32), jnp.asarray(fitness),
+                              jnp.ones((3, 8), bool)),
+        best_cells=jnp.zeros((algo.capacity,), jnp.int32), best_length=jnp.int32(1),
+        best_fitness=jnp.float32(0.75), generation=jnp.int32(4), stall=jnp.int32(0),
+        frozen=jnp.bool_(False), failures=jnp.zeros(3, jnp.int32))
+    row = E.history_row(algo, state, params)
+    active = fitness[:, :5].astype(np.float64)
+    assert float(row["best"]) == 0.75
+    np.testing.assert_allclose(float(row["mean"]), active.mean(), rtol=1e-6)
+    np.testing.assert_allclose(float(row["std"]), active.std(), rtol=1e-5)
+    assert not np.isclose(float(row["mean"]), fitness.mean(), rtol=1e-4)
+
+
+def test_per_island_rates_apply_to_their_own_island():
+    """MPMGA's islands differ by their crossover and mutation rates (SPEC 8): with
+    selection and migration off, an island whose rates are 0 keeps its population
+    through a generation and an island with rate 1 does not (the rates are dynamic
+    parameters: one compiled generation for every setting)."""
+    import jax
+    import jax.numpy as jnp
+
+    from jaxga import engine as E
+    from jaxga.presets import load_preset
+
+    grid = random_map(10, 10, 0.2, 3, corner_rule="free")
+    algo, params = E.build(load_preset("sga", overrides={
+        "population.size": 8, "init.max_tries": 40, "islands.count": 3,
+        "islands.topology": "none", "islands.migrants": 0, "selection.method": "none",
+        "islands.crossover_probabilities": [0.0, 0.0, 0.0],
+        "islands.mutation_probabilities": [0.0, 0.0, 0.0]}), grid)
+    state, _ = jax.jit(lambda k: E.init_state(algo, k, grid, params))(jax.random.PRNGKey(0))
+    step = jax.jit(lambda k, s, p: E.generation(algo, k, grid, s, p))
+    for pc, pm in [((0.0, 1.0, 1.0), (0.0, 0.0, 0.0)), ((0.0, 0.0, 0.0), (1.0, 0.0, 0.0)),
+                   ((0.0, 0.0, 0.0), (0.0, 0.0, 0.0))]:
+        rates = {**params, "crossover.probability": jnp.asarray(pc, jnp.float32),
+                 "mutation.probability": jnp.asarray(pm, jnp.float32)}
+        new = step(jax.random.PRNGKey(1), state, rates)
+        for i in range(3):
+            same = np.array_equal(np.asarray(new.islands.cells[i]),
+                                  np.asarray(state.islands.cells[i]))
+            assert same == (pc[i] == 0 and pm[i] == 0), (i, pc, pm)
