@@ -264,6 +264,9 @@ def test_heterologous_properties(gp, seed):
     assert n_failed == 0
 
 
+_COLUMN_CHILD = jax.jit(jax.vmap(X.column_child, in_axes=(0, None, 0, 0, 0, 0)))
+
+
 @settings(max_examples=25)
 @given(grids_and_parents(n=8), st.integers(0, 2**30))
 def test_column_properties(gp, seed):
@@ -273,17 +276,22 @@ def test_column_properties(gp, seed):
     out, n_failed = _run("column", grid, pop, seed)
     _assert_valid(grid, out)
     parents, kids = pop.to_lists(), out.to_lists()
-    unchanged = 0
+    # each pair's child recomputed with the documented keys (over_pairs: one key per
+    # pair; column: its first half for the child)
+    k_child = jax.vmap(lambda k: jax.random.split(k)[0])(
+        jax.random.split(jax.random.PRNGKey(seed), 4))
+    kc, kl, ok = (np.asarray(v) for v in _COLUMN_CHILD(
+        k_child, grid, pop.cells[0::2], pop.length[0::2], pop.cells[1::2],
+        pop.length[1::2]))
+    assert n_failed == 2 * int((~ok).sum())
     for k in range(0, 8, 2):
         p1, p2 = parents[k], parents[k + 1]
         o1, o2 = kids[k], kids[k + 1]
-        new = {tuple(o) for o in (o1, o2) if o not in (p1, p2)}
-        assert len(new) <= 1  # at most one distinct child per pair
-        unchanged += (o1, o2) == (p1, p2)
-    assert n_failed % 2 == 0 and n_failed // 2 <= unchanged
-
-
-_COLUMN_CHILD = jax.jit(jax.vmap(X.column_child, in_axes=(0, None, 0, 0, 0, 0)))
+        if ok[k // 2]:
+            child = kc[k // 2, : kl[k // 2]].tolist()
+            assert o1 in (p1, p2, child) and o2 in (p1, p2, child)
+        else:
+            assert (o1, o2) == (p1, p2)
 
 
 @settings(max_examples=20)
@@ -460,19 +468,34 @@ def test_column_roulette_over_parents_and_child(distinct):
 
 
 def test_column_failure_returns_both_parents():
-    """A connection that cannot close within max_rounds is Zhu's "crossover failure"."""
+    """A connection that cannot close within max_rounds (3 here: some pairs close, some
+    do not) is Zhu's "crossover failure"."""
     blocked = np.zeros((10, 10), bool)
     blocked[2:9, 4] = True  # a wall the medians fall into
     grid = Grid.create(blocked, corner_rule="free")
     par = [[0, 1, 2, 3, 13, 23, 33, 43, 53, 63, 73, 83, 93, 94, 95, 96, 97, 98, 99],
            [0, 10, 20, 30, 40, 50, 60, 70, 80, 90, 91, 92, 93, 94, 95, 96, 97, 98, 99]]
     pop = Population.from_paths(par * 32, CAP)
-    op = functools.partial(X.column, fitness_fn=_len_fitness, max_rounds=1)
+    op = functools.partial(X.column, fitness_fn=_len_fitness, max_rounds=3)
     out, n_failed = jax.jit(over_pairs(op))(jax.random.PRNGKey(0), grid, pop)
     kids = out.to_lists()
-    n_fail_pairs = sum(kids[k: k + 2] == par for k in range(0, 64, 2))
-    assert int(n_failed) > 0 and int(n_failed) % 2 == 0
-    assert int(n_failed) // 2 <= n_fail_pairs
+    # each pair's child recomputed with the documented keys (over_pairs: one key per
+    # pair; column: its first half for the child): a failed pair returns exactly
+    # (P1, P2) and counts 2, a successful one only members of {P1, P2, child}
+    k_pairs = jax.random.split(jax.random.PRNGKey(0), 32)
+    k_child = jax.vmap(lambda k: jax.random.split(k)[0])(k_pairs)
+    child = jax.jit(jax.vmap(functools.partial(X.column_child, max_rounds=3),
+                             in_axes=(0,) + (None,) * 5))
+    kc, kl, ok = (np.asarray(v) for v in child(k_child, grid, pop.cells[0], pop.length[0],
+                                              pop.cells[1], pop.length[1]))
+    assert 0 < (~ok).sum() < 32  # both outcomes occur at this key
+    assert int(n_failed) == 2 * int((~ok).sum())
+    for k in range(32):
+        if ok[k]:
+            members = (par[0], par[1], kc[k, : kl[k]].tolist())
+            assert all(o in members for o in kids[2 * k: 2 * k + 2])
+        else:
+            assert kids[2 * k: 2 * k + 2] == par, k
 
 
 def test_heterologous_hand_made_pair():
@@ -595,14 +618,20 @@ def test_gate_reports_failures_only_when_crossing():
     assert scipy.stats.binomtest(int(n_failed) // 2, 500, 0.5).pvalue > 1e-4
 
 
-def test_same_key_same_result_and_column_child_is_connect():
+def test_same_key_same_result_in_any_batch_and_column_child_is_connect():
     grid = Grid.create(np.zeros((5, 5), bool), corner_rule="strict")
     pop = Population.from_paths([[0, 5, 10, 16, 17, 23, 24], [0, 1, 2, 8, 14, 19, 24]], 16)
     args = (grid, pop.cells[0], pop.length[0], pop.cells[1], pop.length[1])
+    # a key gives the same children alone and in a batch of other keys, and other keys
+    # other children (for some operator: a different common point, cut or column draw)
+    keys = jax.random.split(jax.random.PRNGKey(7), 8)
+    differs = False
     for name, op in _OPS.items():
-        f = jax.jit(op)
-        a, b = f(jax.random.PRNGKey(7), *args), f(jax.random.PRNGKey(7), *args)
-        assert all(np.array_equal(x, y) for x, y in zip(a, b)), name
+        alone = jax.jit(op)(keys[5], *args)
+        batch = jax.jit(jax.vmap(op, in_axes=(0,) + (None,) * 5))(keys, *args)
+        assert all(np.array_equal(x, y[5]) for x, y in zip(alone, batch)), name
+        differs |= any(not np.array_equal(y[5], y[j]) for y in batch[:4] for j in range(8))
+    assert differs
     # column child = remove_loops(connect(anchors)) with the documented key split and
     # the default bounds for a 5 x 5 map (max_rounds 2 * 3 + 6, queue 2 * 5)
     def ref(key):
