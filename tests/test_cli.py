@@ -181,3 +181,51 @@ def test_the_command_line_compilation_cache_directory(tmp_path, monkeypatch):
     assert ("jax_compilation_cache_dir", str(tmp_path / "nb")) in updates
     with pytest.raises(ParameterError, match="must not be empty"):
         use_compilation_cache("")
+
+
+def test_presets_and_maps_list_what_the_package_ships(capsys):
+    from jaxga.maps.builtin import builtin_names
+    from jaxga.presets import preset_names
+
+    assert main(["presets"]) == 0
+    out = capsys.readouterr().out
+    names = sorted(preset_names())
+    assert names == ["agacd", "iga_zhang", "iga_zhu", "imga", "mpmga", "sga"]
+    for name, paper in zip(names, ("Hao et al. 2021", "Zhang Ke-qi", "Zhu & Pan 2024",
+                                   "Li, Hu, Liu 2021", "Hao et al. 2020", "AGACD")):
+        line = next(x for x in out.splitlines() if x.startswith(name + " "))
+        assert paper in line, (name, line)
+    assert main(["maps"]) == 0
+    listed = [x.split()[0] for x in capsys.readouterr().out.splitlines() if x.strip()]
+    assert listed == sorted(builtin_names()) and "classic_ga_gapp3_20x20" in listed
+
+
+def test_run_json_holds_the_paths_from_the_given_endpoints(tmp_path, capsys):
+    """A successful `jaxga run` with --start and --goal: every path in the JSON runs from
+    the given start to the given goal over free cells, the raw path cell to adjacent
+    cell, and the summary counts the successes."""
+    from jaxga.maps import load_map
+
+    art = tmp_path / "m.txt"
+    art.write_text("00000000\n00110000\n00010000\n00000110\n01000000\n01000100\n"
+                   "00000100\n00000000\n")
+    out, png = tmp_path / "out.json", tmp_path / "out.png"
+    rc = main(["run", "--preset", "sga", "--map", str(art), "--start", "1,0",
+               "--goal", "6,7", "--corner-rule", "free", "--seeds", "3",
+               "--generations", "3", "--set", "population.size=8", "--quiet",
+               "--json", str(out), "--plot", str(png)])
+    captured = capsys.readouterr()
+    assert rc == 0, captured.err
+    blocked = load_map(str(art)).blocked_np()
+    doc = json.loads(out.read_text())
+    assert doc["corner_rule"] == "free" and len(doc["runs"]) == 3
+    assert f"success {sum(r['success'] for r in doc['runs'])}/3" in captured.out
+    assert any(r["success"] for r in doc["runs"])
+    for r in (r for r in doc["runs"] if r["success"]):
+        for key in ("path", "raw_path"):
+            path = r[key]
+            assert path[0] == [1, 0] and path[-1] == [6, 7], key
+            assert not any(blocked[y, x] for x, y in path)
+        assert all(max(abs(a - c), abs(b - d)) == 1
+                   for (a, b), (c, d) in zip(r["raw_path"], r["raw_path"][1:]))
+    assert png.stat().st_size > 0
