@@ -189,9 +189,11 @@ def test_uniform_walk_step_is_uniform():
     assert _chi2(first, FIG3["3b"][2]) < 1e-9
 
 
-def _greedy_step_probs(grid: Grid, cur: int, target: int, p_goal: float = 0.5):
+def _greedy_step_probs(grid: Grid, cur: int, target: int, p_goal: float = 0.5,
+                       split_ties: bool = True):
     """AGACD 4.3 by enumeration: target w.p. 1/2, else each free cell w.p. 1/(2 n_free);
-    nearest legal neighbour, ties split evenly."""
+    nearest legal neighbour, ties split evenly (``split_ties=False``: a wrong rule that
+    always takes the first tied neighbour in direction order)."""
     b = grid.blocked_np()
     h, w = b.shape
     legal = legal_moves(b, grid.corner_rule)
@@ -204,8 +206,9 @@ def _greedy_step_probs(grid: Grid, cur: int, target: int, p_goal: float = 0.5):
     for t, wt in [(target, p_goal)] + [(int(f), (1 - p_goal) / len(free)) for f in free]:
         d2 = [(x - t % w) ** 2 + (y - t // w) ** 2 for x, y in nbrs]
         best = [n for n, d in zip(nbrs, d2) if d == min(d2)]
-        for x, y in best:
-            out[y * w + x] = out.get(y * w + x, 0.0) + wt / len(best)
+        for k, (x, y) in enumerate(best):
+            share = wt / len(best) if split_ties else wt * (k == 0)
+            out[y * w + x] = out.get(y * w + x, 0.0) + share
     return out
 
 
@@ -221,8 +224,13 @@ def test_greedy_step_distribution(rule):
     first, _ = _first_steps(keys, grid, cur, 35, jnp.zeros(1, jnp.int32), "greedy")
     exact = _greedy_step_probs(grid, cur, 35)
     assert _chi2(first, exact) > 1e-3
-    # A deterministic tie-break (first direction) would be rejected.
-    assert len(exact) > 2
+    # Wrong rules are rejected by the same test: a deterministic tie-break (the first
+    # tied neighbour) and a walk that always heads for the target.
+    def floored(probs):  # every candidate kept, impossible ones at a tiny probability
+        return {c: max(probs.get(c, 0.0), 1e-12) for c in exact}
+
+    assert _chi2(first, floored(_greedy_step_probs(grid, cur, 35, split_ties=False))) < 1e-9
+    assert _chi2(first, floored(_greedy_step_probs(grid, cur, 35, p_goal=1.0))) < 1e-9
 
 
 # ---------------------------------------------------------- MPMGA anchors
@@ -328,6 +336,25 @@ def test_walks_between_cells_avoid_exclusion(grid, seed):
         check_paths(grid, cells, length, ok, source=src, target=dst, exclude=ex)
         if src == dst:
             assert np.asarray(ok).all() and (np.asarray(length) == 1).all()
+
+
+def test_every_initialiser_and_walk_succeeds_on_an_open_map():
+    """The two property tests above check the paths reported ok; on an obstacle-free map
+    every initialiser and walk primitive also reports some (one that always failed
+    would pass them). The same compiled functions, 5 x 8 keys."""
+    grid = Grid.create(np.zeros((SIZE, SIZE), bool), (0, 0), (SIZE - 1, SIZE - 1),
+                       corner_rule="free")
+    goal = SIZE * SIZE - 1
+    checked = dict.fromkeys([*NAMES, "directional", "uniform", "uniform_adj", "greedy"], 0)
+    no_exclusion = jnp.full((CAP,), -1, jnp.int32)
+    for seed in range(5):
+        keys = jax.random.split(jax.random.PRNGKey(seed), N_KEYS)
+        for name, (cells, length, ok) in _all_initialisers(keys, grid).items():
+            checked[name] += check_paths(grid, cells, length, ok)
+        for name, (cells, length, ok) in _walks_between(keys, grid, 0, goal,
+                                                         no_exclusion).items():
+            checked[name] += check_paths(grid, cells, length, ok, source=0, target=goal)
+    assert min(checked.values()) > 0, checked
 
 
 @pytest.mark.parametrize("walk", ["uniform_walk", "directional_walk"])
