@@ -186,7 +186,7 @@ CLASSIC = {  # benchmarks/classic/README.md: free, no_squeeze, strict
     "routeplanning_yangbo_20x20.txt": (30.3848, 30.3848, 32.7279),
     "routeplanning_zhangzheng_paper_20x20.txt": (28.6274, 28.6274, 31.5563),
 }
-# any-angle optima (cell-centre vertices), checked against brute force when computed
+# any-angle optima (cell-centre vertices); test_classic_table re-derives each by brute force
 CLASSIC_ANY_ANGLE = {
     "aco_classic_20x20_v1_lihongxin.txt": (34.0285, 34.0285, 36.8518),
     "acoga_skolayat_G_20x20.txt": (28.1905, 29.8482, 30.5424),
@@ -211,6 +211,9 @@ def test_classic_table(name: str, k: int, rule: str) -> None:
     aa = any_angle_shortest_path(grid)
     assert aa.found and aa.kind == "any_angle"
     assert aa.length == pytest.approx(CLASSIC_ANY_ANGLE[name][k], abs=5e-5)
+    # the tabled values re-derived: the brute force over every pair of cell centres
+    assert aa.length == pytest.approx(brute_any_angle_vectorised(b, rule, (0, 0), (19, 19)),
+                                      abs=1e-5)
     assert math.dist((0, 0), (19, 19)) - 1e-9 <= aa.length <= res.length + 1e-9
     assert all(clear_np(b, rule, p, q) for p, q in zip(aa.path[:-1], aa.path[1:], strict=True))
 
