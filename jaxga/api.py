@@ -516,6 +516,7 @@ def _load(preset, grid, corner_rule, variant, sets, overrides, generations):
               else load_preset(preset, variant=variant, overrides=ov, sets=sets))
     if isinstance(grid, Grid):
         map_name = "grid"
+        grid = grid.validated()  # a grid made with the plain constructor is checked too
         if corner_rule is not None:
             grid = grid.replace(corner_rule=corner_rule)
     else:

@@ -430,9 +430,17 @@ def cmd_replan(args: argparse.Namespace) -> int:
     return 0
 
 
+class _Parser(argparse.ArgumentParser):
+    """argparse, reporting a bad command line in the one-line form of every other jaxga
+    error (``jaxga: error: ...``, exit 2) instead of a usage block."""
+
+    def error(self, message: str):  # type: ignore[override]
+        self.exit(EXIT_BAD_INPUT, f"jaxga: error: {message} (see: {self.prog} --help)\n")
+
+
 def build_parser() -> argparse.ArgumentParser:
     """The argument parser of the ``jaxga`` command."""
-    parser = argparse.ArgumentParser(
+    parser = _Parser(
         prog="jaxga", description="Genetic-algorithm path planning on grid maps, in JAX."
     )
     sub = parser.add_subparsers(dest="command", metavar="COMMAND")
@@ -574,6 +582,14 @@ def check_outputs(args: argparse.Namespace) -> None:
         elif suffix not in formats:
             raise JaxgaError(f"cannot write --plot {plot}: {suffix!r} is not an image format "
                              f"matplotlib writes ({', '.join(sorted(formats))})")
+        else:  # some formats need outside tools (pgf: LaTeX): write an empty figure first
+            import io
+
+            try:
+                Figure().savefig(io.BytesIO(), format=suffix)
+            except Exception as err:  # noqa: BLE001 - any backend failure, named
+                raise JaxgaError(f"cannot write --plot {plot}: matplotlib cannot write "
+                                 f"{suffix!r} here ({err})") from None
 
 
 _NEGATIVE_XY = re.compile(r"-\d+,")

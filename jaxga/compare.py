@@ -240,6 +240,9 @@ class Comparison:
         ``verbose`` adds each preset's full :meth:`Result.summary`.
         """
         parts = [self._header(), _text_table(*self._preset_table())]
+        failed = [f"{label}: {r.reason}" for label, r in self.results.items() if r.reason]
+        if failed:  # why a preset's seeds found no path (e.g. a capacity too small)
+            parts.append("\n".join(failed))
         for m in self.metrics:
             parts.append(f"pairwise tests on {m}:\n" + _text_table(*self._test_table(m)))
         if self.all_succeeded():
@@ -304,6 +307,7 @@ class Comparison:
                 "generations": r.generations, "n_seeds": row["n"],
                 "fitness_optimum": _num(r.fitness_optimum),
                 "n_success": row["n_success"], "success_rate": row["success_rate"],
+                "reason": r.reason,
                 "summary": {name: {"mean": _num(m), "sd": _num(s), "min": _num(lo),
                                    "max": _num(hi)}
                             for name, m, s, lo, hi in r.summary_rows()},

@@ -72,7 +72,7 @@ from typing import Any
 import numpy as np
 
 from jaxga.config import SCHEMA, Config, parse_value, python_scalar
-from jaxga.errors import ParameterError
+from jaxga.errors import NoPathError, ParameterError
 from jaxga.grid import Grid
 
 # ----------------------------------------------------------------------------- factors
@@ -751,6 +751,7 @@ def run_doe(
     if progress is not None:
         progress(done, n_points)
     sweep_s = compile_s = 0.0
+    reasons: list[str] = []  # why the seeds of the points run here found no path
     for b0 in range(0, n_points, block):
         idx = list(range(b0, min(b0 + block, n_points)))
         if all(results[q] is not None for q in idx):
@@ -763,6 +764,8 @@ def run_doe(
         for q, res in zip(idx, out):
             if results[q] is None:
                 results[q] = seed_responses(res)
+                if res.reason and res.reason not in reasons:
+                    reasons.append(res.reason)
                 if ckpt is not None:
                     ckpt.save_point(q, results[q])
                 done += 1
@@ -770,6 +773,9 @@ def run_doe(
             progress(done, n_points)
 
     all_responses = {k: np.stack([r[k] for r in results]) for k in results[0]}
+    if not np.any(all_responses["success"]):  # nothing to fit: say why
+        raise NoPathError("no seed of any design point found a path"
+                          + "".join(f"; {r}" for r in reasons[:2]))
     y = point_means(all_responses[response])
     coef = fit_linear(coded, y)
     best, predicted = predicted_best(coef, direction)

@@ -138,8 +138,9 @@ def check_combination(config: Config) -> None:
 
     Raises :class:`ParameterError` naming the keys: an operator whose parameters are
     missing (:data:`NEEDS`), MPMGA's decay rate ``w = 0`` (eq. 17 needs ``0 < w <= 1``),
-    Zhang's speeds ``v``, ``v_t`` not positive (eq. 2), IMGA's or MPMGA's fitness weights
-    all 0 (every path equal),
+    Zhang's speeds ``v``, ``v_t`` not positive or a turning speed above the straight one
+    (eq. 2: negative time per turn), IMGA's, MPMGA's or Zhu's fitness weights all 0
+    (every path equal), a smoothness floor not positive (a divisor),
     a Delphi ratio list whose length does not match AGACD's three objectives (eq. 21-25).
     Migrants are checked against the island size by :func:`check_migration`.
     """
@@ -165,11 +166,29 @@ def check_combination(config: Config) -> None:
             if config.get(key) is not None and not config[key] > 0:
                 raise ParameterError(f"{key} is a speed and must be > 0 (Zhang eq. 2 divides "
                                      f"by it), got {config[key]}")
+        v, v_t = config.get("fitness.v"), config.get("fitness.v_t")
+        if v is not None and v_t is not None and v_t > v:
+            raise ParameterError(
+                f"fitness.v_t = {v_t} is above fitness.v = {v}: a turn would take less time "
+                "than going straight, so the time lost per turn (Zhang eq. 2, k = (v - v_t) "
+                "pi r / (2 v v_t)) would be negative; the turning speed must not exceed v")
     weights = {"imga": ("fitness.a", "fitness.b", "fitness.c"),
-               "mpmga": ("fitness.alpha", "fitness.beta")}.get(method, ())
-    if weights and all(config.get(k) == 0 for k in weights):
-        raise ParameterError(f"{' and '.join(weights)} are all 0: every path would have "
-                             "the same fitness (IMGA eq. 4, MPMGA eq. 3)")
+               "mpmga": ("fitness.alpha", "fitness.beta"),
+               "iga_zhu": ("fitness.omega", "fitness.c1", "fitness.c2", "fitness.c3",
+                           "fitness.c4")}.get(method, ())
+    if method == "iga_zhu":  # omega weighs the length; 1 - omega the turn penalties
+        zero = config.get("fitness.omega") == 0 and all(
+            config.get(k) in (0, None) for k in weights[1:])
+    else:
+        zero = bool(weights) and all(config.get(k) == 0 for k in weights)
+    if zero:
+        raise ParameterError(f"{' and '.join(k for k in weights if config.get(k) is not None)}"
+                             " are all 0: every path would have the same fitness (IMGA eq. "
+                             "4, MPMGA eq. 3, Zhu & Pan eq. 6)")
+    floor = config.get("fitness.smoothness_floor")
+    if floor is not None and not floor > 0:
+        raise ParameterError(f"fitness.smoothness_floor must be > 0 (it replaces the zero "
+                             f"smoothness of a straight path as a divisor), got {floor}")
 
 
 def check_migration(config: Config, population: int) -> None:

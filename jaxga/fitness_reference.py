@@ -423,12 +423,17 @@ def fitness_optimum(grid: Grid, config: Mapping | str, *,
     omega=0.5)``). The search covers 8-connected paths under ``grid.corner_rule``, the
     space of the grid-step GAs. See :func:`fitness_optimum_np`.
     """
+    from jaxga.engine import check_combination  # engine imports this module's users
+
     if isinstance(config, str):
         method, wts = config, dict(weights)
+        check_combination({"fitness.method": method,
+                           **{f"fitness.{k}": v for k, v in wts.items()}})
     elif weights:
         raise ParameterError("give the weights in the configuration (fitness.* keys), not "
                              "as keywords beside it")
     else:
+        check_combination(config)  # the weights a run would refuse are refused here too
         method, wts = fitness_weights(config)
     return fitness_optimum_np(grid.blocked_np(), grid.start_xy, grid.goal_xy,
                               grid.corner_rule, method, wts, max_cells=max_cells)

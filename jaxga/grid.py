@@ -155,6 +155,27 @@ class Grid:
         """``blocked`` as a host NumPy array."""
         return np.asarray(self.blocked, dtype=bool)
 
+    def validated(self) -> Grid:
+        """This grid rebuilt by :meth:`create`, so that one made with the plain constructor
+        (``Grid(blocked=..., start=..., goal=...)``) is checked as ``create`` checks its
+        arguments: a 2-D array of booleans or 0/1, integer cell indices on the map, a
+        known corner rule. Raises :class:`~jaxga.errors.JaxgaError` (or
+        :class:`~jaxga.errors.EndpointError`) naming the problem."""
+        for name in ("start", "goal"):
+            value = np.asarray(getattr(self, name))
+            if value.ndim != 0 or not np.issubdtype(value.dtype, np.integer):
+                raise JaxgaError(f"the grid's {name} must be one integer cell index "
+                                 f"(y * W + x), got {value!r}")
+        arr = np.asarray(self.blocked)
+        if arr.ndim != 2 or arr.shape[0] < 1 or arr.shape[1] < 1:
+            raise JaxgaError(f"a grid must be a non-empty 2-D array, got shape {arr.shape}")
+        w, h = arr.shape[1], arr.shape[0]
+        for name in ("start", "goal"):
+            index = int(getattr(self, name))
+            if not 0 <= index < w * h:
+                raise EndpointError(f"{name} cell index {index} is off the {w} x {h} map")
+        return Grid.create(arr, self.start_xy, self.goal_xy, self.corner_rule)
+
     def check_endpoints(self) -> Grid:
         """Raise :class:`~jaxga.errors.EndpointError` if the start or goal is blocked.
 

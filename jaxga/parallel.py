@@ -83,6 +83,9 @@ ENV_NUM_PROCESSES = "JAXGA_NUM_PROCESSES"
 ENV_PROCESS_ID = "JAXGA_PROCESS_ID"
 ENV_PROCESS_TIMEOUT = "JAXGA_PROCESS_TIMEOUT"
 DEFAULT_PROCESS_TIMEOUT = 60.0
+MAX_PROCESS_TIMEOUT = 1_000_000
+"""Longest ``--process-timeout`` in seconds (about 11.6 days): JAX's coordination
+service takes its timeouts as 32-bit integers (twice this plus slack still fits)."""
 EXIT_PROCESS_LOST = 4  # exit status of the CLI when a process is lost or never joins
 
 _CHUNK_BYTES = 2 << 20  # key-value values above ~100 MB stall the runtime's heartbeats
@@ -278,8 +281,9 @@ def initialize(coordinator: str, num_processes: int, process_id: int, *,
                          f"{process_id} of {num_processes}")
     if not re.fullmatch(r".+:\d+", coordinator or ""):
         raise JaxgaError(f"the coordinator must be HOST:PORT, got {coordinator!r}")
-    if timeout <= 0:
-        raise JaxgaError(f"the process timeout must be > 0 s, got {timeout}")
+    if not 0 < timeout <= MAX_PROCESS_TIMEOUT:  # also refuses nan
+        raise JaxgaError(f"the process timeout must be > 0 s and at most "
+                         f"{MAX_PROCESS_TIMEOUT:,} s, got {timeout}")
     if _session is not None:
         raise JaxgaError("jaxga.parallel.initialize was already called in this process")
     if num_processes == 1:

@@ -460,6 +460,10 @@ def test_map_runs_in_blocks_equals_one_vmap():
     ("iga_zhang", {"fitness__v_t": 0.0}, ["fitness.v_t", "> 0"]),
     ("mpmga", {"fitness__alpha": 0.0, "fitness__beta": 0.0}, ["same fitness"]),
     ("imga", {"fitness__a": 0, "fitness__b": 0, "fitness__c": 0}, ["same fitness"]),
+    ("iga_zhu", {"fitness__omega": 0, "fitness__c1": 0, "fitness__c2": 0, "fitness__c3": 0},
+     ["fitness.omega and fitness.c1", "same fitness"]),
+    ("iga_zhang", {"fitness__v_t": 2.0}, ["fitness.v_t = 2.0 is above fitness.v = 1.0"]),
+    ("mpmga", {"fitness__smoothness_floor": 0.0}, ["fitness.smoothness_floor must be > 0"]),
     ("sga", {"generations": 2.7}, ["generations must be an integer"]),
     ("sga", {"generations": True}, ["generations must be an integer"]),
 ])
@@ -541,3 +545,42 @@ def test_sweep_capacity_must_be_an_integer_and_no_path_sweeps_check_memory(grid,
         api.run("sga", walled, seeds=10**7, **SMALL)
     assert api.run("sga", walled, seeds=10**6, **SMALL).seeds.size == 10**6  # 0.24 GiB
     assert "unreachable" in api.run("sga", walled, seeds=2, **SMALL).reason
+
+
+def test_the_exact_fitness_optimum_refuses_what_a_run_refuses(grid):
+    """``jaxga.fitness_reference.fitness_optimum`` (``jaxga optimum --preset``) checks
+    the weights as a run does: a zero smoothness floor divided by zero there."""
+    from jaxga.presets import load_preset
+
+    config = load_preset("mpmga", overrides={"fitness.smoothness_floor": 0.0})
+    with pytest.raises(ParameterError, match="smoothness_floor must be > 0"):
+        fitness_optimum(grid, config)
+    with pytest.raises(ParameterError, match="above fitness.v"):
+        fitness_optimum(grid, "iga_zhang", a=2.0, v=1.0, v_t=3.0, r=0.5)
+    assert fitness_optimum(grid, "iga_zhang", a=2.0, v=1.0, v_t=1.0, r=0.5).found
+
+
+def test_a_grid_made_with_the_plain_constructor_is_checked(monkeypatch):
+    """``Grid(blocked=..., start=..., goal=...)`` skips ``Grid.create``'s checks; ``run``
+    applies them (0/1 floats are a valid map, as for ``create``)."""
+    import jax.numpy as jnp
+
+    from jaxga import Grid
+    from jaxga.errors import EndpointError
+
+    monkeypatch.setattr(api, "_programs", lambda *a, **k: pytest.fail("compiled"))
+    cases = [
+        (Grid(blocked=jnp.zeros((5, 5), bool), start=jnp.int32(0), goal=jnp.int32(25)),
+         EndpointError, "goal cell index 25 is off the 5 x 5 map"),
+        (Grid(blocked=jnp.zeros((5, 5), bool), start=jnp.float32(1.5), goal=jnp.int32(24)),
+         JaxgaError, "start must be one integer cell index"),
+        (Grid(blocked=jnp.full((5, 5), 0.5), start=jnp.int32(0), goal=jnp.int32(24)),
+         JaxgaError, "booleans or 0/1"),
+        (Grid(blocked=jnp.zeros(5, bool), start=jnp.int32(0), goal=jnp.int32(4)),
+         JaxgaError, "2-D array"),
+    ]
+    for g, error, words in cases:
+        with pytest.raises(error, match=words):
+            api.run("sga", g, seeds=1, **SMALL)
+    g = Grid(blocked=jnp.zeros((5, 5)), start=jnp.int32(0), goal=jnp.int32(24))
+    assert g.validated().blocked.dtype == bool and g.validated().goal_xy == (4, 4)

@@ -229,3 +229,51 @@ def test_run_json_holds_the_paths_from_the_given_endpoints(tmp_path, capsys):
         assert all(max(abs(a - c), abs(b - d)) == 1
                    for (a, b), (c, d) in zip(r["raw_path"], r["raw_path"][1:]))
     assert png.stat().st_size > 0
+
+
+@pytest.mark.parametrize("argv, words", [
+    (["run", "--preset", "sga", "--map", "m", "--seeds", "1.5"], "invalid int value: '1.5'"),
+    (["run", "--preset", "sga", "--map", "m", "--start", "3,4,5"], "expected X,Y"),
+    (["run", "--preset"], "expected one argument"),
+    (["bogus"], "invalid choice: 'bogus'"),
+])
+def test_a_malformed_command_line_is_one_line_too(argv, words, capsys):
+    """argparse's own errors in jaxga's one-line form (exit 2), not a usage block."""
+    with pytest.raises(SystemExit) as e:
+        main(argv)
+    err = capsys.readouterr().err
+    assert e.value.code == EXIT_BAD_INPUT
+    assert err.startswith("jaxga: error: ") and words in err and err.count("\n") == 1
+
+
+def test_a_plot_format_matplotlib_cannot_write_here_fails_before_the_run(tmp_path,
+                                                                        monkeypatch):
+    """pgf needs LaTeX: without it, the check of --plot fails at once, naming it."""
+    from matplotlib.figure import Figure
+
+    from jaxga.errors import JaxgaError
+
+    def no_latex(self, *a, **k):
+        raise RuntimeError("'xelatex' not found")
+
+    args = argparse.Namespace(plot=str(tmp_path / "p.pgf"), json=None)
+    monkeypatch.setattr(Figure, "savefig", no_latex)
+    with pytest.raises(JaxgaError, match="cannot write --plot .*p.pgf.*xelatex"):
+        check_outputs(args)
+    monkeypatch.undo()
+    args = argparse.Namespace(plot=str(tmp_path / "p.svg"), json=None)
+    check_outputs(args)  # a format that needs nothing else passes
+    assert not (tmp_path / "p.svg").exists()
+
+
+def test_a_doe_where_no_seed_finds_a_path_names_the_cause(tmp_path, capsys):
+    """Nothing to fit: exit 3 with the reason the runs give (here the capacity)."""
+    art = tmp_path / "m.txt"
+    art.write_text("\n".join(["0000000"] * 7) + "\n")
+    rc = main(["doe", "--preset", "sga", "--map", str(art), "--seeds", "1",
+               "--generations", "2", "--quiet", "--design", "L9",
+               "--factor", "population.size=4,6,8", "--set", "population.capacity=3"])
+    err = capsys.readouterr().err
+    assert rc == EXIT_NO_PATH
+    assert err.startswith("jaxga: no path: no seed of any design point found a path")
+    assert "population.capacity = 3 is probably too small" in err

@@ -189,6 +189,12 @@ def test_failed_seeds_are_excluded_from_tests_and_counted_in_success(comparison)
     assert "Fisher" in c.summary()
     row = {r["label"]: r for r in c.preset_rows()}["sga"]
     assert row["n_success"] == 1 and row["mean"] == pytest.approx(sga.length[0])
+    # a preset's failure reason (as jaxga.run words it) is printed and in the JSON
+    why = "no feasible path found by 4 of 5 seeds; population.capacity = 3 is too small"
+    c = compare_results({"sga": dataclasses.replace(failing, reason=why), "imga": imga})
+    assert f"sga: {why}" in c.summary().splitlines()
+    assert c.to_json()["presets"]["sga"]["reason"] == why
+    assert c.to_json()["presets"]["imga"]["reason"] == ""
 
 
 def test_paired_wilcoxon_option(comparison):

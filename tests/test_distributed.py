@@ -327,3 +327,13 @@ def test_incomplete_or_malformed_process_options_are_one_line_errors(capsys, mon
     assert main([*RUN, "--coordinator", "nohost", "--num-processes", "2",
                  "--process-id", "2"]) == 2
     assert "need 0 <= process id < number of processes" in capsys.readouterr().err
+
+
+@pytest.mark.parametrize("timeout", [0.0, -1.0, float("nan"), float("inf"), 1e10])
+def test_a_process_timeout_that_jax_cannot_take_is_refused(timeout):
+    """Before anything starts: JAX's coordination service takes 32-bit seconds."""
+    from jaxga import parallel
+    from jaxga.errors import JaxgaError
+
+    with pytest.raises(JaxgaError, match="process timeout must be > 0 s and at most"):
+        parallel.initialize("localhost:1", 2, 1, timeout=timeout)
