@@ -39,7 +39,7 @@ from collections.abc import Mapping
 import numpy as np
 
 from jaxga import objectives
-from jaxga.engine import FITNESS_PARAMS
+from jaxga.engine import FITNESS_PARAMS, check_combination
 from jaxga.errors import ParameterError
 from jaxga.grid import DIRECTIONS, Grid
 from jaxga.maps.preprocess import legal_moves
@@ -423,8 +423,6 @@ def fitness_optimum(grid: Grid, config: Mapping | str, *,
     omega=0.5)``). The search covers 8-connected paths under ``grid.corner_rule``, the
     space of the grid-step GAs. See :func:`fitness_optimum_np`.
     """
-    from jaxga.engine import check_combination  # engine imports this module's users
-
     if isinstance(config, str):
         method, wts = config, dict(weights)
         check_combination({"fitness.method": method,
