@@ -200,7 +200,8 @@ class Result:
             })
         return {
             "preset": self.preset, "map": self.map_name, "corner_rule": self.corner_rule,
-            "optimum": self.optimum, "any_angle_optimum": self.any_angle_optimum,
+            "optimum": json_number(self.optimum),  # null when the goal is unreachable
+            "any_angle_optimum": json_number(self.any_angle_optimum),
             "fitness_optimum": json_number(self.fitness_optimum),
             "fitness_optimum_length": json_number(self.fitness_optimum_length),
             "fitness_optimum_loop_free": (self.fitness_optimum_loop_free

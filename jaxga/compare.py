@@ -456,8 +456,9 @@ def compare(
     """Run every preset on ``grid`` with the same ``seeds`` and compare them.
 
     Args:
-        presets: preset names / TOML files / :class:`Config`s, or a mapping label ->
-            preset or ``(preset, overrides)`` to compare variants of one preset.
+        presets: preset names / TOML files / :class:`Config`s (or one comma-separated
+            string of names), or a mapping label -> preset or ``(preset, overrides)``
+            to compare variants of one preset.
         grid: a :class:`Grid`, map file or built-in map name (as :func:`jaxga.api.run`).
         seeds: a count or explicit seeds, the same for every preset.
         metric, metrics, test, alpha: see :func:`compare_results`.
@@ -477,6 +478,8 @@ def compare(
         check_metric(m)
     if test not in TESTS:
         raise ParameterError(f"unknown test {test!r}; choose from {', '.join(TESTS)}")
+    if isinstance(presets, str):  # "sga,imga", as on the command line
+        presets = [p.strip() for p in presets.split(",") if p.strip()]
     specs = _normalise_presets(presets)
     if len(specs) < 2:
         raise ParameterError(f"a comparison needs at least two presets, got {len(specs)}")

@@ -4,6 +4,7 @@ and the optax schedules of the adaptive operators."""
 from __future__ import annotations
 
 import dataclasses
+import json
 import math
 import re
 import warnings
@@ -277,6 +278,10 @@ def test_unreachable_goal_is_a_no_path_result():
     r = api.run("sga", walled, seeds=2, **SMALL)
     assert not r.success.any() and "unreachable" in r.reason
     assert r.to_json()["runs"][0]["path"] == []
+    # strict JSON: no optimum is null, not Infinity
+    doc = r.to_json()
+    assert doc["optimum"] is None and doc["any_angle_optimum"] is None
+    json.loads(json.dumps(doc, allow_nan=False))
     # the summary of a no-path result is a table of NaNs with the reason, not an error
     text = r.summary()
     assert "success 0/2" in text and "unreachable" in text

@@ -113,6 +113,14 @@ def comparison(grid):
     return compare(["sga", "imga"], grid, seeds=SEEDS, **SMALL)
 
 
+def test_presets_as_one_comma_separated_string(comparison, grid):
+    """``compare("sga,imga", ...)`` as the command line's --presets, not the letters."""
+    again = compare("sga, imga", grid, seeds=SEEDS, **SMALL)
+    assert list(again.results) == ["sga", "imga"]
+    np.testing.assert_array_equal(again.results["imga"].cells,
+                                  comparison.results["imga"].cells)
+
+
 def test_compare_gives_the_results_of_separate_runs(comparison, grid):
     for name in ("sga", "imga"):
         alone = api.run(name, grid, seeds=SEEDS, **SMALL)
