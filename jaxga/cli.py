@@ -582,11 +582,13 @@ def check_outputs(args: argparse.Namespace) -> None:
         elif suffix not in formats:
             raise JaxgaError(f"cannot write --plot {plot}: {suffix!r} is not an image format "
                              f"matplotlib writes ({', '.join(sorted(formats))})")
-        else:  # some formats need outside tools (pgf: LaTeX): write an empty figure first
+        else:  # some formats need outside tools (pgf: LaTeX for any text): try one first
             import io
 
+            probe = Figure()
+            probe.text(0.5, 0.5, "jaxga")
             try:
-                Figure().savefig(io.BytesIO(), format=suffix)
+                probe.savefig(io.BytesIO(), format=suffix)
             except Exception as err:  # noqa: BLE001 - any backend failure, named
                 raise JaxgaError(f"cannot write --plot {plot}: matplotlib cannot write "
                                  f"{suffix!r} here ({err})") from None

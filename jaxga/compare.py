@@ -442,7 +442,7 @@ def _normalise_presets(presets: Sequence[PresetSpec] | Mapping[str, PresetSpec]
 
 
 def compare(
-    presets: Sequence[PresetSpec] | Mapping[str, PresetSpec],
+    presets: Sequence[PresetSpec] | Mapping[str, PresetSpec] | str,
     grid: Grid | str,
     seeds: int | Sequence[int] = 30,
     *,

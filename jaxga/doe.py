@@ -690,12 +690,18 @@ def run_doe(
 
     Returns:
         A :class:`DoeResult` (``to_json()`` is the ``jaxga doe --json`` layout).
+
+    Raises:
+        ParameterError: a factor, level or key combination of some design point is
+            invalid (checked for every point before the first one runs).
+        NoPathError: the goal is unreachable, or no seed of any design point found a
+            path (nothing to fit; the message carries the runs' reason).
     """
     import jax
 
     import jaxga
     from jaxga.api import _check_result_memory, _load, _seed_list, sweep
-    from jaxga.engine import build
+    from jaxga.engine import build, check_combination
     from jaxga.reference import shortest_path
 
     t_start = time.perf_counter()
@@ -711,6 +717,8 @@ def run_doe(
     coded = design_array(design, len(factors))
     points = design_points(factors, coded)
     n_points = len(points)
+    for p in points:  # key combinations of every point, before any point runs
+        check_combination(config.override(p))
     capacity = max(int(config.override(p)["population.size"]) for p in points)
     if block is None:
         block = 1 if checkpoint is not None else n_points

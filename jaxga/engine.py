@@ -24,6 +24,7 @@ from __future__ import annotations
 
 import dataclasses
 import functools
+import inspect
 from collections.abc import Callable
 from typing import Any
 
@@ -161,34 +162,35 @@ def check_combination(config: Config) -> None:
             f"fitness.importance_ratios needs {AGACD_OBJECTIVES - 1} entries for AGACD's "
             f"{AGACD_OBJECTIVES} objectives (length, smoothness, safety), got {list(ratios)}")
     method = config["fitness.method"]
+
+    def weight(name: str):  # as the objective sees it: the configuration's, else its default
+        value = config.get(f"fitness.{name}")
+        if value is None:
+            value = inspect.signature(getattr(objectives, method)).parameters[name].default
+        return value
+
     if method == "iga_zhang":
         for key in ("fitness.v", "fitness.v_t"):
             if config.get(key) is not None and not config[key] > 0:
                 raise ParameterError(f"{key} is a speed and must be > 0 (Zhang eq. 2 divides "
                                      f"by it), got {config[key]}")
-        v, v_t = config.get("fitness.v"), config.get("fitness.v_t")
-        if v is not None and v_t is not None and v_t > v:
+        v, v_t = weight("v"), weight("v_t")
+        if v_t > v:
             raise ParameterError(
                 f"fitness.v_t = {v_t} is above fitness.v = {v}: a turn would take less time "
                 "than going straight, so the time lost per turn (Zhang eq. 2, k = (v - v_t) "
                 "pi r / (2 v v_t)) would be negative; the turning speed must not exceed v")
-    weights = {"imga": ("fitness.a", "fitness.b", "fitness.c"),
-               "mpmga": ("fitness.alpha", "fitness.beta"),
-               "iga_zhu": ("fitness.omega", "fitness.c1", "fitness.c2", "fitness.c3",
-                           "fitness.c4")}.get(method, ())
-    if method == "iga_zhu":  # omega weighs the length; 1 - omega the turn penalties
-        zero = config.get("fitness.omega") == 0 and all(
-            config.get(k) in (0, None) for k in weights[1:])
-    else:
-        zero = bool(weights) and all(config.get(k) == 0 for k in weights)
-    if zero:
-        raise ParameterError(f"{' and '.join(k for k in weights if config.get(k) is not None)}"
-                             " are all 0: every path would have the same fitness (IMGA eq. "
-                             "4, MPMGA eq. 3, Zhu & Pan eq. 6)")
-    floor = config.get("fitness.smoothness_floor")
-    if floor is not None and not floor > 0:
-        raise ParameterError(f"fitness.smoothness_floor must be > 0 (it replaces the zero "
-                             f"smoothness of a straight path as a divisor), got {floor}")
+    weights = {"imga": ("a", "b", "c"), "mpmga": ("alpha", "beta"),
+               "iga_zhu": ("omega", "c1", "c2", "c3")}.get(method, ())
+    if weights and all(weight(k) == 0 for k in weights):
+        raise ParameterError(f"{' and '.join('fitness.' + k for k in weights)} are all 0: "
+                             "every path would have the same fitness (IMGA eq. 4, MPMGA "
+                             "eq. 3, Zhu & Pan eq. 6)")
+    if "smoothness_floor" in FITNESS_PARAMS.get(method, ()):
+        floor = weight("smoothness_floor")
+        if not floor > 0:
+            raise ParameterError(f"fitness.smoothness_floor must be > 0 (it replaces the zero "
+                                 f"smoothness of a straight path as a divisor), got {floor}")
 
 
 def check_migration(config: Config, population: int) -> None:

@@ -264,6 +264,14 @@ def test_a_plot_format_matplotlib_cannot_write_here_fails_before_the_run(tmp_pat
     args = argparse.Namespace(plot=str(tmp_path / "p.svg"), json=None)
     check_outputs(args)  # a format that needs nothing else passes
     assert not (tmp_path / "p.svg").exists()
+    # the real probe, where this machine has no LaTeX (the CI machine has none)
+    import shutil
+
+    from matplotlib import rcParams
+
+    if shutil.which(rcParams["pgf.texsystem"]) is None:
+        with pytest.raises(JaxgaError, match="cannot write --plot .*p.pgf"):
+            check_outputs(argparse.Namespace(plot=str(tmp_path / "p.pgf"), json=None))
 
 
 def test_a_doe_where_no_seed_finds_a_path_names_the_cause(tmp_path, capsys):

@@ -531,3 +531,13 @@ def test_plot_main_effects_draws_level_means():
     import matplotlib.pyplot as plt
 
     plt.close(ax.figure)
+
+
+def test_every_design_point_is_checked_before_the_first_runs(monkeypatch):
+    """A level that is valid alone but not with the preset's other keys (Zhang's
+    straight speed below its turning speed 0.5) is refused before any point runs, not
+    after the points before it (a checkpoint could not be resumed past it)."""
+    monkeypatch.setattr(jaxga.api, "sweep", lambda *a, **k: pytest.fail("a sweep ran"))
+    with pytest.raises(ParameterError, match="fitness.v_t = 0.5 is above fitness.v = 0.25"):
+        run_doe("iga_zhang", MAP, [Factor("fitness.v", (0.25, 0.5, 1.0))], "L9", seeds=1,
+                generations=2, population__size=8)
