@@ -277,10 +277,10 @@ def _not_lead(what: str, seconds: float) -> bool:
 def cmd_compare(args: argparse.Namespace) -> int:
     """``jaxga compare``: several presets on one map with the same seeds; per-preset
     summary, pairwise tests with effect sizes (Holm-corrected), JSON, box plots."""
-    from jaxga.compare import TESTS, check_metric, compare
+    from jaxga.compare import TESTS, check_metric, compare, split_presets
     from jaxga.errors import ParameterError
 
-    presets = [p.strip() for p in args.presets.split(",") if p.strip()]
+    presets = split_presets(args.presets)
     if len(presets) < 2:
         raise ParameterError(f"--presets needs at least two preset names, got {args.presets!r}")
     check_metric(args.metric)

@@ -441,6 +441,12 @@ def _normalise_presets(presets: Sequence[PresetSpec] | Mapping[str, PresetSpec]
     return out
 
 
+def split_presets(text: str) -> list[str]:
+    """``"sga, imga"`` -> ``["sga", "imga"]``: a comma-separated preset list (``jaxga
+    compare --presets``, or :func:`compare` given one string)."""
+    return [p.strip() for p in text.split(",") if p.strip()]
+
+
 def compare(
     presets: Sequence[PresetSpec] | Mapping[str, PresetSpec] | str,
     grid: Grid | str,
@@ -479,7 +485,7 @@ def compare(
     if test not in TESTS:
         raise ParameterError(f"unknown test {test!r}; choose from {', '.join(TESTS)}")
     if isinstance(presets, str):  # "sga,imga", as on the command line
-        presets = [p.strip() for p in presets.split(",") if p.strip()]
+        presets = split_presets(presets)
     specs = _normalise_presets(presets)
     if len(specs) < 2:
         raise ParameterError(f"a comparison needs at least two presets, got {len(specs)}")

@@ -717,9 +717,10 @@ def run_doe(
     coded = design_array(design, len(factors))
     points = design_points(factors, coded)
     n_points = len(points)
-    for p in points:  # key combinations of every point, before any point runs
-        check_combination(config.override(p))
-    capacity = max(int(config.override(p)["population.size"]) for p in points)
+    point_configs = [config.override(p) for p in points]
+    for c in point_configs:  # key combinations of every point, before any point runs
+        check_combination(c)
+    capacity = max(int(c["population.size"]) for c in point_configs)
     if block is None:
         block = 1 if checkpoint is not None else n_points
     if block < 1:

@@ -63,6 +63,14 @@ FITNESS_PARAMS: dict[str, tuple[str, ...]] = {
     "iga_zhu": ("omega", "c1", "c2", "c3"),
     "iga_zhang": ("a", "v", "v_t", "r"),
 }
+FITNESS_DEFAULTS: dict[str, dict[str, float]] = {
+    m: {k: float(inspect.signature(getattr(objectives, m)).parameters[k].default)
+        for k in names}
+    for m, names in FITNESS_PARAMS.items()
+}
+"""Each combiner's parameters and their defaults, read from :mod:`jaxga.objectives` (the
+papers' values, SPEC 3), so that the two cannot drift apart: what a parameter the
+configuration leaves out is."""
 WAYPOINT_ALGORITHMS = ("cut_and_check",)  # crossovers that work on waypoint paths (AGACD)
 
 
@@ -165,9 +173,7 @@ def check_combination(config: Config) -> None:
 
     def weight(name: str):  # as the objective sees it: the configuration's, else its default
         value = config.get(f"fitness.{name}")
-        if value is None:
-            value = inspect.signature(getattr(objectives, method)).parameters[name].default
-        return value
+        return FITNESS_DEFAULTS[method][name] if value is None else value
 
     if method == "iga_zhang":
         for key in ("fitness.v", "fitness.v_t"):

@@ -32,14 +32,13 @@ The costs are written here from SPEC 3 and the papers' equations, independently 
 from __future__ import annotations
 
 import dataclasses
-import inspect
 import math
 from collections.abc import Mapping
 
 import numpy as np
 
 from jaxga import objectives
-from jaxga.engine import FITNESS_PARAMS, check_combination
+from jaxga.engine import FITNESS_DEFAULTS, check_combination
 from jaxga.errors import ParameterError
 from jaxga.grid import DIRECTIONS, Grid
 from jaxga.maps.preprocess import legal_moves
@@ -68,12 +67,9 @@ MAX_CELLS = 128 * 128
 per cell (about 100 MB at this size; MPMGA's layers have :data:`MAX_LAYER_STATES`)."""
 
 DEFAULT_WEIGHTS: dict[str, dict[str, float]] = {
-    m: {k: float(inspect.signature(getattr(objectives, m)).parameters[k].default)
-        for k in FITNESS_PARAMS[m]}
-    for m in SUPPORTED_METHODS
-}
-"""The weights of each fitness and their defaults, read from :mod:`jaxga.objectives` (the
-papers' values, SPEC 3), so that the two cannot drift apart."""
+    m: dict(FITNESS_DEFAULTS[m]) for m in SUPPORTED_METHODS}
+"""The weights of each fitness and their defaults (:data:`jaxga.engine.FITNESS_DEFAULTS`,
+read from :mod:`jaxga.objectives`)."""
 
 MAX_LAYER_STATES = 48_000_000
 """MPMGA's search keeps every layer's states (8 headings x cells, 16 bytes each): it gives

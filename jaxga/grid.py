@@ -161,20 +161,19 @@ class Grid:
         arguments: a 2-D array of booleans or 0/1, integer cell indices on the map, a
         known corner rule. Raises :class:`~jaxga.errors.JaxgaError` (or
         :class:`~jaxga.errors.EndpointError`) naming the problem."""
+        # the array and the corner rule exactly as create checks them
+        base = Grid.create(np.asarray(self.blocked), corner_rule=self.corner_rule)
+        cells = {}
         for name in ("start", "goal"):
             value = np.asarray(getattr(self, name))
             if value.ndim != 0 or not np.issubdtype(value.dtype, np.integer):
                 raise JaxgaError(f"the grid's {name} must be one integer cell index "
                                  f"(y * W + x), got {value!r}")
-        arr = np.asarray(self.blocked)
-        if arr.ndim != 2 or arr.shape[0] < 1 or arr.shape[1] < 1:
-            raise JaxgaError(f"a grid must be a non-empty 2-D array, got shape {arr.shape}")
-        w, h = arr.shape[1], arr.shape[0]
-        for name in ("start", "goal"):
-            index = int(getattr(self, name))
-            if not 0 <= index < w * h:
-                raise EndpointError(f"{name} cell index {index} is off the {w} x {h} map")
-        return Grid.create(arr, self.start_xy, self.goal_xy, self.corner_rule)
+            if not 0 <= int(value) < base.n_cells:
+                raise EndpointError(f"{name} cell index {int(value)} is off the "
+                                    f"{base.width} x {base.height} map")
+            cells[name] = jnp.int32(value)
+        return Grid(blocked=base.blocked, corner_rule=base.corner_rule, **cells)
 
     def check_endpoints(self) -> Grid:
         """Raise :class:`~jaxga.errors.EndpointError` if the start or goal is blocked.

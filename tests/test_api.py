@@ -17,7 +17,7 @@ from jaxga.errors import InitialisationWarning, JaxgaError, ParameterError
 from jaxga.fitness_reference import fitness_optimum, fitness_weights, path_fitness_np
 from jaxga.maps import load_map, random_map
 from jaxga.presets import preset_names
-from jaxga.reference import any_angle_shortest_path, clear_np, shortest_path
+from jaxga.reference import any_angle_shortest_path, clear_np, path_length, shortest_path
 
 SMALL = dict(population__size=8, generations=3, init__max_tries=40)
 
@@ -86,11 +86,6 @@ def test_every_preset_is_deterministic(preset_run, grid):
         assert again.length[i] == r.length[j] and again.fitness[i] == r.fitness[j]
 
 
-def _polyline_length(path) -> float:
-    p = np.asarray(path, float)
-    return float(np.hypot(*np.diff(p, axis=0).T).sum()) if len(p) > 1 else 0.0
-
-
 def test_reported_values_agree_with_the_returned_paths(preset_run, grid):
     """Every per-seed number recomputed here from the returned paths and histories:
     lengths as polylines, the grid presets' fitness by the independent NumPy scorer of
@@ -110,8 +105,8 @@ def test_reported_values_agree_with_the_returned_paths(preset_run, grid):
             assert r.convergence_generation[i] == -1 and run["path"] == []
             continue
         post, raw = r.path(i), r.path(i, raw=True)
-        assert math.isclose(r.length[i], _polyline_length(post), rel_tol=1e-5)
-        assert math.isclose(r.raw_length[i], _polyline_length(raw), rel_tol=1e-5)
+        assert math.isclose(r.length[i], path_length(np.array(post)), rel_tol=1e-5)
+        assert math.isclose(r.raw_length[i], path_length(np.array(raw)), rel_tol=1e-5)
         if name != "agacd":  # the five grid-step fitnesses have an independent scorer
             method, weights = fitness_weights(r.config)
             ref = path_fitness_np(blocked, grid.goal_xy, method, weights, np.array(raw))
