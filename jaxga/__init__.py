@@ -1,5 +1,7 @@
 """jaxga: genetic-algorithm path planning for mobile robots on grid maps, in JAX."""
 
+import contextlib
+
 from jaxga import lowering
 from jaxga.api import Result, run, sweep
 from jaxga.compare import Comparison, compare
@@ -10,8 +12,11 @@ from jaxga.replan import replan
 
 # Threefry lowered without a loop on the CPU: the same random bits, faster compiles
 # (jaxga/lowering.py; JAXGA_THREEFRY=rolled keeps JAX's own lowering). Nothing is
-# lowered at import, so this holds for every program jaxga compiles.
-lowering.configure_from_environment()
+# lowered at import, so this holds for every program jaxga compiles. A bad value is
+# refused by run, sweep, doe and the command line (lowering.check_environment), before
+# they compile anything: raised here, the command line could only show a traceback.
+with contextlib.suppress(ParameterError):
+    lowering.configure_from_environment()
 
 __all__ = [
     "CORNER_RULES",

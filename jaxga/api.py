@@ -25,11 +25,12 @@ import jax.numpy as jnp
 import numpy as np
 
 from jaxga import parallel
-from jaxga.config import Config
+from jaxga.config import Config, flatten
 from jaxga.engine import (
     Algorithm,
     build,
     check_migration,
+    check_overrides_read,
     default_params,
     evolve,
     finish,
@@ -38,6 +39,7 @@ from jaxga.engine import (
 )
 from jaxga.errors import InitialisationWarning, JaxgaError, ParameterError
 from jaxga.grid import Grid, as_integer
+from jaxga.lowering import check_environment
 from jaxga.objectives import Metrics
 
 SUMMARY_METRICS = ("length", "raw_length", "angle_sum", "turns", "fitness",
@@ -504,10 +506,26 @@ def _stack_params(per_point: Sequence[dict], seeds: int) -> dict:
             for k in per_point[0]}
 
 
+def _check_call_options(progress, chunks) -> None:
+    """The options of :func:`run` and :func:`sweep` that do not reach the configuration."""
+    if progress is not None and not callable(progress):
+        raise ParameterError(f"progress must be a callable (stage, fraction), got "
+                             f"{progress!r}")
+    try:
+        chunks = as_integer(chunks)
+    except TypeError:
+        raise ParameterError(f"chunks must be an integer >= 1, got {chunks!r}") from None
+    if chunks < 1:
+        raise ParameterError(f"chunks must be an integer >= 1, got {chunks!r}")
+
+
 def _load(preset, grid, corner_rule, variant, sets, overrides, generations):
     from jaxga.maps import load_map_info
-    from jaxga.presets import load_preset
+    from jaxga.presets import load_preset, parse_set
 
+    check_environment()  # a bad $JAXGA_THREEFRY, which `import jaxga` does not refuse
+    if not isinstance(sets, (str, Sequence)):
+        raise ParameterError(f"sets must be 'key=value' strings, got {sets!r}")
     ov: dict[str, Any] = {k.replace("__", "."): v for k, v in overrides.items()}
     if generations is not None:  # a non-integer is left for the configuration to refuse
         with contextlib.suppress(TypeError):
@@ -515,6 +533,8 @@ def _load(preset, grid, corner_rule, variant, sets, overrides, generations):
         ov["generations"] = generations
     config = (preset.override(ov) if isinstance(preset, Config)
               else load_preset(preset, variant=variant, overrides=ov, sets=sets))
+    set_keys = [parse_set(s)[0] for s in ((sets,) if isinstance(sets, str) else sets)]
+    check_overrides_read(config, [*flatten(ov), *set_keys])  # never silently ignored
     if isinstance(grid, Grid):
         map_name = "grid"
         grid = grid.validated()  # a grid made with the plain constructor is checked too
@@ -534,7 +554,9 @@ def _point_configs(config: Config, points: Sequence[Mapping[str, Any]]) -> list[
     out = []
     base = static_config(config)
     for point in points:
-        cfg = config.override({k.replace("__", "."): v for k, v in point.items()})
+        changes = {k.replace("__", "."): v for k, v in point.items()}
+        cfg = config.override(changes)
+        check_overrides_read(cfg, flatten(changes))
         if static_config(cfg) != base:
             new = dict(static_config(cfg).items)
             old = dict(base.items)
@@ -590,8 +612,13 @@ def sweep(
     from jaxga.reference import any_angle_shortest_path, shortest_path
 
     t_start = time.perf_counter()
+    if not isinstance(points, Sequence) or isinstance(points, str) \
+            or not all(isinstance(p, Mapping) for p in points):
+        raise ParameterError(f"points must be a list of mappings key -> value, got "
+                             f"{points!r}")
     if not points:
         raise ParameterError("a sweep needs at least one point")
+    _check_call_options(progress, chunks)
     config, grid, map_name = _load(preset, grid, corner_rule, variant, sets, overrides,
                                    generations)
     configs = _point_configs(config, points)
@@ -758,6 +785,30 @@ def run(
     return sweep(preset, grid, [{}], seeds, generations=generations,
                  corner_rule=corner_rule, variant=variant, sets=sets, progress=progress,
                  chunks=chunks, **overrides)[0]
+
+
+def check_run(
+    preset: str | Config,
+    grid: Grid | str,
+    *,
+    generations: int | None = None,
+    corner_rule: str | None = None,
+    variant: str | None = None,
+    sets: Sequence[str] = (),
+    progress: Callable[[str, float], None] | None = None,
+    chunks: int = 1,
+    **overrides: Any,
+) -> Config:
+    """The configuration :func:`run` would use, checked as :func:`run` checks it before
+    compiling (preset, map, endpoints, overrides that nothing reads, key combinations,
+    migrants); raises what :func:`run` would raise. Compiles and runs nothing:
+    :func:`jaxga.compare` checks every preset with it before the first one runs."""
+    del progress, chunks  # accepted as run accepts them
+    config, grid, _ = _load(preset, grid, corner_rule, variant, sets, overrides,
+                            generations)
+    (config,) = _point_configs(config, [{}])
+    build(config, grid)  # check_migration and check_combination
+    return config
 
 
 RESULT_MEMORY_FRACTION = 0.5

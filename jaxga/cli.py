@@ -25,6 +25,7 @@ from pathlib import Path
 from jaxga.compilation_cache import use_compilation_cache
 from jaxga.errors import EndpointError, JaxgaError, NoPathError
 from jaxga.grid import CORNER_RULES, as_integer
+from jaxga.lowering import check_environment
 from jaxga.parallel import (
     ENV_PROCESS_ID,
     EXIT_PROCESS_LOST,
@@ -95,8 +96,9 @@ def _xy_list(path) -> list[list[int]]:
 def cmd_optimum(args: argparse.Namespace) -> int:
     """``jaxga optimum``: exact 8-connected and any-angle optima of one map, and with
     ``--preset`` the exact optimum of that preset's fitness."""
+    from jaxga.engine import check_overrides_read
     from jaxga.fitness_reference import fitness_optimum
-    from jaxga.presets import load_preset
+    from jaxga.presets import load_preset, parse_set
     from jaxga.reference import any_angle_shortest_path, shortest_path
 
     config = None
@@ -104,6 +106,7 @@ def cmd_optimum(args: argparse.Namespace) -> int:
         raise JaxgaError("--set and --variant need --preset")
     if args.preset is not None:
         config = load_preset(args.preset, variant=args.variant, sets=args.set or ())
+        check_overrides_read(config, [parse_set(text)[0] for text in args.set or ()])
         if args.corner_rule is None:  # as `jaxga run`: the preset's corner rule
             args.corner_rule = config["map.corner_rule"]
     info, grid = _load_grid(args)
@@ -618,6 +621,7 @@ def main(argv: Sequence[str] | None = None) -> int:
     parser = build_parser()
     args = parser.parse_args(_join_negative_xy(sys.argv[1:] if argv is None else argv))
     try:
+        check_environment()  # $JAXGA_THREEFRY, which `import jaxga` does not refuse
         check_outputs(args)
         if hasattr(args, "devices"):  # subcommands with add_parallel_arguments
             configure_from_args(args)  # before JAX's backend starts

@@ -40,12 +40,13 @@ from __future__ import annotations
 
 import dataclasses
 import math
+import os
 from collections.abc import Callable, Mapping, Sequence
 from typing import Any
 
 import numpy as np
 
-from jaxga.api import GAPS, Result, run
+from jaxga.api import GAPS, Result, check_run, run
 from jaxga.api import json_number as _num
 from jaxga.config import Config
 from jaxga.errors import ParameterError
@@ -424,20 +425,31 @@ def _median(v: np.ndarray) -> float:
 
 def _normalise_presets(presets: Sequence[PresetSpec] | Mapping[str, PresetSpec]
                        ) -> dict[str, tuple[str | Config, dict[str, Any]]]:
+    def spec_of(spec: Any) -> tuple[str | Config, dict[str, Any]]:
+        preset, ov = spec if isinstance(spec, tuple) and len(spec) == 2 else (spec, {})
+        if not isinstance(preset, (str, os.PathLike, Config)) or not isinstance(ov, Mapping):
+            raise ParameterError(
+                f"a preset to compare is a name, a TOML file, a Config or (preset, "
+                f"overrides), got {spec!r}")
+        return preset, dict(ov)
+
     if isinstance(presets, Mapping):
-        items = list(presets.items())
-    else:
+        items = [(str(label), spec_of(spec)) for label, spec in presets.items()]
+    elif isinstance(presets, Sequence):
         items = []
         for p in presets:
-            base = p[0] if isinstance(p, tuple) else p
-            items.append((base if isinstance(base, str) else str(base["name"]), p))
+            base, ov = spec_of(p)
+            items.append((str(base["name"]) if isinstance(base, Config) else str(base),
+                          (base, ov)))
+    else:
+        raise ParameterError(f"presets must be a list of presets, a mapping label -> "
+                             f"preset or a comma-separated string, got {presets!r}")
     out: dict[str, tuple[str | Config, dict[str, Any]]] = {}
     for label, spec in items:
         if label in out:
             raise ParameterError(f"preset {label!r} given twice; use a mapping "
                                  "{label: (preset, overrides)} to compare variants")
-        preset, ov = spec if isinstance(spec, tuple) else (spec, {})
-        out[str(label)] = (preset, dict(ov))
+        out[label] = spec
     return out
 
 
@@ -489,11 +501,8 @@ def compare(
     specs = _normalise_presets(presets)
     if len(specs) < 2:
         raise ParameterError(f"a comparison needs at least two presets, got {len(specs)}")
-    from jaxga.presets import load_preset
-
-    for preset, _ in specs.values():  # unknown names fail before anything runs
-        if isinstance(preset, str):
-            load_preset(preset)
+    for preset, ov in specs.values():  # a preset's bad input fails before anything runs
+        check_run(preset, grid, **{**common_options, **ov})
     results = {}
     for label, (preset, ov) in specs.items():
         if progress is not None:

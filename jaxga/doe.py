@@ -72,6 +72,7 @@ from typing import Any
 import numpy as np
 
 from jaxga.config import SCHEMA, Config, parse_value, python_scalar
+from jaxga.engine import unread_keys
 from jaxga.errors import NoPathError, ParameterError
 from jaxga.grid import Grid
 
@@ -133,10 +134,6 @@ AGACD_TABLE3: tuple[Factor, ...] = (
 )
 """AGACD Table 3: the five factors of its DOE and their levels (20 x 20 map)."""
 
-_PER_ISLAND = {"crossover.probability": "islands.crossover_probabilities",
-               "mutation.probability": "islands.mutation_probabilities"}
-
-
 def check_factors(config: Config, factors: Sequence[Factor]) -> None:
     """Refuse factors a sweep cannot vary in one compiled call, or that do nothing.
 
@@ -166,11 +163,10 @@ def check_factors(config: Config, factors: Sequence[Factor]) -> None:
                 f"factor {f.name!r} changes the compiled program: only dynamic keys "
                 "(probabilities, weights, temperatures) and population.size can be "
                 "factors; run the other values as separate experiments")
-        island_key = _PER_ISLAND.get(f.name)
-        if island_key and config.get(island_key) is not None:
-            raise ParameterError(
-                f"factor {f.name!r} has no effect: preset {config['name']!r} sets "
-                f"{island_key}")
+        unread = unread_keys(config)
+        if f.name in unread:
+            raise ParameterError(f"factor {f.name!r} has no effect in preset "
+                                 f"{config['name']!r}: {unread[f.name]}")
         for v in f.levels:
             config.override({f.name: v})  # type and range of every level
 
@@ -603,7 +599,15 @@ class _Checkpoint:
             raise ParameterError(
                 f"checkpoint file {path} does not hold the responses ({', '.join(RESPONSES)}) "
                 f"of {n_seeds} seeds: delete it and run again to recompute it")
-        return responses
+        wrong = _impossible_response(responses)
+        if wrong:
+            raise ParameterError(f"checkpoint file {path} holds an impossible value: {wrong}; "
+                                 "delete it and run again to recompute it")
+        reason = data.get("reason", "")
+        if not isinstance(reason, str):
+            raise ParameterError(f"checkpoint file {path}: reason must be a string, got "
+                                 f"{reason!r}; delete it and run again to recompute it")
+        return {**responses, "reason": reason}
 
     def _broadcast_read(self, paths: list[Path], n_seeds: int) -> list[dict[str, list] | None]:
         """Process 0 reads (None for files not written yet); every process gets its result
@@ -626,9 +630,11 @@ class _Checkpoint:
         process 0 read them."""
         return self._broadcast_read([self._point(q) for q in range(n)], n_seeds)
 
-    def save_point(self, q: int, responses: dict[str, np.ndarray]) -> None:
+    def save_point(self, q: int, responses: dict[str, np.ndarray], reason: str = "") -> None:
+        """Write point ``q``'s responses and, if some seeds found no path, why."""
         if self.lead:
-            _atomic_write_json(self._point(q), {"point": q, "responses": _encode(responses)})
+            _atomic_write_json(self._point(q), {"point": q, "responses": _encode(responses),
+                                                "reason": reason})
 
     def _confirm(self, coded: np.ndarray) -> Path:
         return self.dir / ("confirm_" + "_".join(f"{int(c):+d}" for c in coded) + ".json")
@@ -642,6 +648,35 @@ class _Checkpoint:
                                                       "responses": _encode(responses)})
 
 
+_INTEGER_RESPONSES = ("convergence_generation", "turns")
+_LENGTH_LIKE = ("length", "raw_length", "convergence_generation", "turns", "smoothness")
+
+
+def _impossible_response(responses: Mapping[str, list]) -> str:
+    """What no run can have returned (what :func:`seed_responses` makes of a Result), as
+    text naming the response and seed; "" if every value is possible. A success is 0 or
+    1; a failed seed has fitness 0 and no length-like value (null); a successful one has
+    a finite fitness >= 0 and finite length-like values >= 0, whole numbers for the
+    generation and the turns."""
+    for s, ok in enumerate(responses["success"]):
+        if ok not in (0, 1):
+            return f"success of seed {s} is {ok!r}, not 0 or 1"
+        fit = responses["fitness"][s]
+        if fit is None or not math.isfinite(fit) or fit < 0 or (fit != 0 and not ok):
+            return (f"fitness of seed {s} is {fit!r} for a "
+                    f"{'successful' if ok else 'failed'} seed")
+        for key in _LENGTH_LIKE:
+            v = responses[key][s]
+            if not ok:
+                if v is not None:
+                    return f"{key} of the failed seed {s} is {v!r}, not null"
+                continue
+            if v is None or not math.isfinite(v) or v < 0 \
+                    or (key in _INTEGER_RESPONSES and v != int(v)):
+                return f"{key} of seed {s} is {v!r}"
+    return ""
+
+
 def _encode(responses: Mapping[str, np.ndarray]) -> dict[str, list]:
     """NaN -> null; Python floats round-trip exactly through JSON."""
     return {k: [_json_float(float(x)) for x in v] for k, v in responses.items()}
@@ -649,7 +684,7 @@ def _encode(responses: Mapping[str, np.ndarray]) -> dict[str, list]:
 
 def _decode(responses: Mapping[str, list]) -> dict[str, np.ndarray]:
     return {k: np.array([np.nan if x is None else x for x in v], float)
-            for k, v in responses.items()}
+            for k, v in responses.items() if k in RESPONSES}
 
 
 # ----------------------------------------------------------------------------- running
@@ -752,15 +787,17 @@ def run_doe(
         ckpt = _Checkpoint(checkpoint, manifest)
 
     results: list[dict[str, np.ndarray] | None] = [None] * n_points
+    reasons: list[str] = []  # why the seeds of the points found no path
     if ckpt is not None:
         for q, saved in enumerate(ckpt.load_points(n_points, len(seed_arr))):
             if saved is not None:
                 results[q] = _decode(saved)
+                if saved["reason"] and saved["reason"] not in reasons:
+                    reasons.append(saved["reason"])
     done = sum(r is not None for r in results)
     if progress is not None:
         progress(done, n_points)
     sweep_s = compile_s = 0.0
-    reasons: list[str] = []  # why the seeds of the points run here found no path
     for b0 in range(0, n_points, block):
         idx = list(range(b0, min(b0 + block, n_points)))
         if all(results[q] is not None for q in idx):
@@ -776,7 +813,7 @@ def run_doe(
                 if res.reason and res.reason not in reasons:
                     reasons.append(res.reason)
                 if ckpt is not None:
-                    ckpt.save_point(q, results[q])
+                    ckpt.save_point(q, results[q], res.reason)
                 done += 1
         if progress is not None:
             progress(done, n_points)

@@ -25,7 +25,7 @@ from __future__ import annotations
 import dataclasses
 import functools
 import inspect
-from collections.abc import Callable
+from collections.abc import Callable, Iterable
 from typing import Any
 
 import jax
@@ -37,7 +37,7 @@ from jaxga import objectives, schedules
 from jaxga import postprocess as post
 from jaxga import selection as sel
 from jaxga.batching import over_individuals_gated, over_pairs_gated, windowed_map
-from jaxga.config import SCHEMA, Config
+from jaxga.config import DEFAULTS, SCHEMA, Config
 from jaxga.errors import ParameterError
 from jaxga.grid import Grid
 from jaxga.init import get_initialiser, initialise
@@ -63,6 +63,8 @@ FITNESS_PARAMS: dict[str, tuple[str, ...]] = {
     "iga_zhu": ("omega", "c1", "c2", "c3"),
     "iga_zhang": ("a", "v", "v_t", "r"),
 }
+FITNESS_PARAM_NAMES = frozenset(n for names in FITNESS_PARAMS.values() for n in names)
+"""Every objective's parameter names (``fitness.NAME`` keys)."""
 FITNESS_DEFAULTS: dict[str, dict[str, float]] = {
     m: {k: float(inspect.signature(getattr(objectives, m)).parameters[k].default)
         for k in names}
@@ -140,6 +142,81 @@ NEEDS: tuple[tuple[str, Any, tuple[str, ...]], ...] = (
 
 AGACD_OBJECTIVES = 3
 """AGACD's fitness combines length, smoothness and safety (eq. 18-25): 2 Delphi ratios."""
+
+
+def unread_keys(config: Config) -> dict[str, str]:
+    """The configuration keys that no stage of this configuration reads, with the reason.
+
+    Setting one of them changes nothing (a fitness weight of another objective, a fixed
+    rate under AGACD's adaptive rates eq. 26-29, MPMGA's temperature without its
+    simulated-annealing mutation, migration settings of a single island, ...), so
+    :func:`jaxga.run` refuses them as overrides instead of ignoring them silently.
+    Mirrors what :func:`build`, the stages and :func:`jaxga.islands.migrate` read.
+    """
+    out: dict[str, str] = {}
+    method = config["fitness.method"]
+    params = FITNESS_PARAMS.get(method, ())
+    for key in SCHEMA:
+        name = key.split(".", 1)[1] if key.startswith("fitness.") else None
+        if name in FITNESS_PARAM_NAMES and name not in params:
+            out[key] = (f"fitness.method = {method!r} has no parameter {name!r}"
+                        f" (it reads {', '.join(params) or 'none'})")
+    if method != "agacd":
+        out["fitness.importance_ratios"] = (f"only AGACD's fitness has Delphi ratios, "
+                                            f"fitness.method = {method!r}")
+    if config["crossover.method"] in WAYPOINT_ALGORITHMS \
+            or config["mutation.method"] == "point_checked":
+        out["fitness.window"] = "waypoint paths are evaluated without the narrow window"
+    if config["selection.method"] != "tournament":
+        out["selection.tournament_size"] = (f"selection.method = "
+                                            f"{config['selection.method']!r}, not 'tournament'")
+    for stage, low, high in (("crossover", "pc_low", "pc_high"),
+                             ("mutation", "pm_low", "pm_high")):
+        island_key = f"islands.{stage}_probabilities"
+        if config[f"{stage}.method"] == "none":
+            for k in (f"{stage}.probability", f"{stage}.adaptive", f"{stage}.{low}",
+                      f"{stage}.{high}", island_key):
+                out[k] = f"{stage}.method = 'none'"
+        elif config[f"{stage}.adaptive"]:
+            for k in (f"{stage}.probability", island_key):
+                out[k] = (f"{stage}.adaptive = true: the rate is {stage}.{low} .. "
+                          f"{stage}.{high} (AGACD eq. 26-29)")
+        else:
+            for k in (low, high):
+                out[f"{stage}.{k}"] = f"{stage}.adaptive = false"
+            if config.get(island_key) is not None:
+                out[f"{stage}.probability"] = f"{island_key} sets each island's rate"
+    if config["mutation.method"] != "segment_sa":
+        for k in ("mutation.temperature_c1", "mutation.temperature_w"):
+            out[k] = (f"mutation.method = {config['mutation.method']!r}: only 'segment_sa' "
+                      "has a temperature (MPMGA eq. 17)")
+    if config["mutation.method"] != "point_checked":
+        out["mutation.radius"] = (f"mutation.method = {config['mutation.method']!r}: only "
+                                  "'point_checked' has a radius (AGACD 4.7)")
+    if config["simplify.method"] == "none":
+        out["simplify.probability"] = "simplify.method = 'none'"
+    if int(config["islands.count"]) == 1:
+        for k in ("islands.topology", "islands.interval", "islands.migrants"):
+            out[k] = "islands.count = 1: there is no migration"
+    elif config["islands.topology"] == "none" or int(config["islands.migrants"]) == 0:
+        out["islands.interval"] = ("no migration (islands.topology = 'none' or "
+                                   "islands.migrants = 0)")
+    return out
+
+
+def check_overrides_read(config: Config, keys: Iterable[str]) -> None:
+    """Refuse overridden ``keys`` that ``config`` never reads (:func:`unread_keys`).
+
+    An unread key set to its default (:data:`jaxga.config.DEFAULTS`: no migration, no
+    simplification, ...) is accepted: it states that the feature is off, as
+    ``islands.count = 1, islands.topology = "none"`` does."""
+    unread = unread_keys(config)
+    bad = [k for k in keys
+           if k in unread and (k not in DEFAULTS or config.get(k) != DEFAULTS[k])]
+    if bad:
+        name = config.get("name", "the configuration")
+        raise ParameterError("; ".join(
+            f"{k} has no effect in {name!r}: {unread[k]}" for k in bad))
 
 
 def check_combination(config: Config) -> None:

@@ -73,9 +73,19 @@ def threefry_unrolled() -> bool:
     return _state["unrolled"]
 
 
-def configure_from_environment() -> bool:
-    """Apply ``$JAXGA_THREEFRY`` (``unrolled``, the default, or ``rolled``) at import."""
+def check_environment() -> str:
+    """``$JAXGA_THREEFRY`` (``unrolled``, the default, or ``rolled``), lower case;
+    :class:`ParameterError` for any other value.
+
+    ``import jaxga`` leaves JAX's lowering alone on such a value and does not raise (the
+    command line could only show it as a traceback); :func:`jaxga.run` and the other
+    entry points call this first and refuse it before anything compiles."""
     value = os.environ.get(ENV_VAR, "unrolled").strip().lower()
     if value not in ("unrolled", "rolled"):
         raise ParameterError(f"{ENV_VAR} must be 'unrolled' or 'rolled', got {value!r}")
-    return unroll_threefry_on_cpu(value == "unrolled")
+    return value
+
+
+def configure_from_environment() -> bool:
+    """Apply ``$JAXGA_THREEFRY`` (:func:`check_environment`) at import."""
+    return unroll_threefry_on_cpu(check_environment() == "unrolled")

@@ -180,7 +180,8 @@ def _chain(
     return [*inner, (label, body, variants)]
 
 
-def _parse_set(text: str) -> tuple[str, Any]:
+def parse_set(text: str) -> tuple[str, Any]:
+    """``(key, value)`` of a ``--set key=value`` string; the value is parsed as TOML."""
     if not isinstance(text, str) or "=" not in text:
         raise ParameterError(f"malformed --set {text!r}: expected key=value")
     key, _, value = text.partition("=")
@@ -250,6 +251,6 @@ def load_preset(
             raise ParameterError(f"overrides must be a mapping of dotted keys, got {overrides!r}")
         config = _validated({**config.as_dict(), **flatten(overrides)}, "overrides")
     for text in sets:
-        key, value = _parse_set(text)
+        key, value = parse_set(text)
         config = _validated({**config.as_dict(), key: value}, f"--set {text!r}")
     return config

@@ -12,7 +12,7 @@ import warnings
 import numpy as np
 import pytest
 
-from jaxga import api, schedules
+from jaxga import api, engine, schedules
 from jaxga.errors import InitialisationWarning, JaxgaError, ParameterError
 from jaxga.fitness_reference import fitness_optimum, fitness_weights, path_fitness_np
 from jaxga.maps import load_map, random_map
@@ -204,6 +204,90 @@ def test_population_size_sweep_uses_the_active_mask(grid):
         assert r.history["best"].shape == (1, 3)
     # an inactive slot never counts: 4 active individuals cannot have the history of 8
     assert not np.array_equal(results[0].history["mean"], results[2].history["mean"])
+
+
+def test_keys_reported_unread_do_not_change_a_run(grid, monkeypatch):
+    """What ``unread_keys`` calls unread is unread: with the refusal switched off, a sweep
+    whose points give every unread dynamic key of sga two sets of values returns the
+    same runs bit for bit (the other fitness weights, AGACD's adaptive bounds, MPMGA's
+    temperature, the simplification rate); a read key (the mutation rate) changes them."""
+    from jaxga.config import SCHEMA
+    from jaxga.presets import load_preset
+
+    config = load_preset("sga").override({k.replace("__", "."): v for k, v in SMALL.items()})
+    unread = [k for k in engine.unread_keys(config) if SCHEMA[k].dynamic]
+    assert {"fitness.omega", "fitness.v_t", "crossover.pc_low", "mutation.pm_high",
+            "mutation.temperature_c1", "simplify.probability"} <= set(unread)
+    assert "mutation.probability" not in unread and "crossover.probability" not in unread
+    # values valid for every key: v_t <= v, bounds low <= high, temperatures > 0
+    a = {k: 0.25 for k in unread}
+    b = {k: 0.75 for k in unread}
+    monkeypatch.setattr(api, "check_overrides_read", lambda *_: None)
+    runs = api.sweep("sga", grid, [a, b, {**b, "mutation.probability": 0.9}], seeds=1,
+                     **SMALL)
+    for key in ("cells", "n_cells", "fitness"):
+        assert np.array_equal(getattr(runs[0], key), getattr(runs[1], key))
+    assert np.array_equal(runs[0].history["mean"], runs[1].history["mean"])
+    assert not np.array_equal(runs[1].history["mean"], runs[2].history["mean"])
+
+
+@pytest.mark.parametrize("preset, overrides, message", [
+    ("sga", {"fitness__omega": 0.5}, "fitness.omega has no effect in 'sga': fitness.method"),
+    ("agacd", {"crossover__probability": 0.5}, "crossover.adaptive = true"),
+    ("agacd", {"mutation__probability": 0.5}, "mutation.adaptive = true"),
+    ("mpmga", {"mutation__probability": 0.5}, "islands.mutation_probabilities sets"),
+    ("sga", {"islands__migrants": 2}, "islands.count = 1: there is no migration"),
+    ("sga", {"selection__tournament_size": 3}, "not 'tournament'"),
+    ("imga", {"mutation__temperature_w": 0.5}, "only 'segment_sa' has a temperature"),
+    ("iga_zhu", {"mutation__radius": 3}, "only 'point_checked' has a radius"),
+    ("iga_zhang", {"fitness__importance_ratios": [1.2, 1.4]}, "only AGACD's fitness"),
+    ("agacd", {"fitness__window": False}, "waypoint paths"),
+])
+def test_an_override_that_nothing_reads_is_refused(grid, preset, overrides, message):
+    with pytest.raises(ParameterError, match=re.escape(message)):
+        api.run(preset, grid, seeds=1, **SMALL, **overrides)
+    key = next(iter(overrides)).replace("__", ".")
+    with pytest.raises(ParameterError, match=re.escape(key)):
+        api.run(preset, grid, seeds=1, sets=[f"{key}=0.5"], **SMALL)
+    with pytest.raises(ParameterError, match=re.escape(message)):
+        api.sweep(preset, grid, [{key: next(iter(overrides.values()))}], seeds=1, **SMALL)
+
+
+def test_an_unread_key_set_to_its_default_is_accepted():
+    """Switching a feature off explicitly is not refused (notebook 04 runs MPMGA as one
+    island with ``islands.topology = "none"``); a value that would matter is."""
+    from jaxga.presets import load_preset
+
+    ov = {"islands.count": 1, "islands.topology": "none", "islands.migrants": 0,
+          "islands.crossover_probabilities": [0.5], "islands.mutation_probabilities": [0.5]}
+    config = load_preset("mpmga", overrides=ov)
+    engine.check_overrides_read(config, ov)
+    config = load_preset("mpmga", overrides={**ov, "islands.migrants": 2})
+    with pytest.raises(ParameterError, match="islands.migrants has no effect in 'mpmga'"):
+        engine.check_overrides_read(config, ov)
+
+
+def test_overrides_that_are_read_are_accepted_by_every_preset():
+    """The refusal never hits a key the preset's stages read: every dynamic key each
+    built-in preset (and variant) sets is read, and so is each fitness weight of its
+    own objective, a rate of a non-adaptive operator, and migration settings of islands."""
+    from jaxga.config import DEFAULTS
+    from jaxga.presets import _chain, load_preset
+
+    for name in preset_names():
+        variants = {v for _, _, vs in _chain(name) for v in vs}
+        for variant in (None, *sorted(variants)):
+            config = load_preset(name, variant=variant)
+            unread = engine.unread_keys(config)
+            method = config["fitness.method"]
+            for k in engine.FITNESS_PARAMS[method]:
+                assert f"fitness.{k}" not in unread
+            set_dynamic = [k for k, v in config.items  # set to a value of its own
+                           if engine.SCHEMA[k].dynamic and v is not None
+                           and (k not in DEFAULTS or v != DEFAULTS[k])]
+            assert not [k for k in set_dynamic if k in unread], (name, variant)
+            if config["islands.count"] > 1:
+                assert "islands.migrants" not in unread and "islands.topology" not in unread
 
 
 def test_sweeping_a_structural_key_is_refused(grid):
@@ -476,6 +560,24 @@ def test_inconsistent_parameters_are_refused_before_tracing(grid, monkeypatch, p
     with pytest.raises(ParameterError) as err:
         api.run(preset, grid, seeds=1, **{**SMALL, **overrides})
     assert all(w in str(err.value) for w in words), str(err.value)
+
+
+@pytest.mark.parametrize("call, words", [
+    (lambda g: api.run("sga", g, seeds=1, sets=3), "sets must be 'key=value' strings"),
+    (lambda g: api.run("sga", g, seeds=1, chunks="a"), "chunks must be an integer >= 1"),
+    (lambda g: api.run("sga", g, seeds=1, chunks=0), "chunks must be an integer >= 1"),
+    (lambda g: api.run("sga", g, seeds=1, chunks=2.5), "chunks must be an integer >= 1"),
+    (lambda g: api.run("sga", g, seeds=1, progress=3), "progress must be a callable"),
+    (lambda g: api.sweep("sga", g, 3), "points must be a list of mappings"),
+    (lambda g: api.sweep("sga", g, [3]), "points must be a list of mappings"),
+    (lambda g: api.sweep("sga", g, "crossover.probability=0.5"), "points must be a list"),
+])
+def test_wrong_python_types_are_refused_with_a_jaxga_error(grid, monkeypatch, call, words):
+    """Options of the wrong type are named (ParameterError), not a TypeError from deep
+    inside, and before anything compiles."""
+    monkeypatch.setattr(api, "_programs", lambda *a, **k: pytest.fail("compiled"))
+    with pytest.raises(ParameterError, match=re.escape(words)):
+        call(grid)
 
 
 @pytest.mark.parametrize("seeds, words", [

@@ -74,6 +74,8 @@ def test_optimum_uses_file_endpoints_and_overrides(tmp_path):
          "need --preset"),
         (["--map", "classic_ga_gapp3_20x20", "--preset", "iga_zhu", "--set",
           "fitness.omega=-1"], EXIT_BAD_INPUT, "fitness.omega"),
+        (["--map", "classic_ga_gapp3_20x20", "--preset", "sga", "--set",
+          "fitness.omega=0.5"], EXIT_BAD_INPUT, "fitness.omega has no effect in 'sga'"),
     ],
 )
 def test_bad_input_is_one_line(args, code, words, capsys):
@@ -112,6 +114,16 @@ def test_run_with_an_unreachable_goal_reports_no_path(tmp_path, capsys):
     assert [r["success"] for r in runs] == [False, False]
     assert all(r["path"] == [] and r["length"] is None for r in runs)
     assert png.stat().st_size > 0
+
+
+def test_run_refuses_a_set_that_nothing_reads(capsys):
+    """`--set` of a key the preset never reads is refused before anything compiles, with
+    the reason (AGACD's rates are adaptive), not silently ignored."""
+    rc = main(["run", "--preset", "agacd", "--map", "classic_ga_gapp3_20x20", "--seeds",
+               "2", "--generations", "3", "--quiet", "--set", "crossover.probability=0.9"])
+    err = capsys.readouterr().err.strip()
+    assert rc == EXIT_BAD_INPUT and "\n" not in err
+    assert "crossover.probability has no effect in 'agacd': crossover.adaptive = true" in err
 
 
 @pytest.mark.parametrize("option, name, words", [
@@ -229,6 +241,22 @@ def test_run_json_holds_the_paths_from_the_given_endpoints(tmp_path, capsys):
         assert all(max(abs(a - c), abs(b - d)) == 1
                    for (a, b), (c, d) in zip(r["raw_path"], r["raw_path"][1:]))
     assert png.stat().st_size > 0
+    # The JSON goes as it is into `jaxga replan` (its default run: the successful run
+    # with the shortest raw path): the robot on that path's second cell, its third
+    # cell blocked.
+    best = min((r for r in doc["runs"] if r["success"]), key=lambda r: r["raw_length"])
+    position, wall = best["raw_path"][1], best["raw_path"][2]
+    replanned = tmp_path / "replan.json"
+    rc = main(["replan", "--path-json", str(out), "--map", str(art), "--corner-rule", "free",
+               "--position", "{},{}".format(*position), "--obstacles", "{},{}".format(*wall),
+               "--preset", "sga", "--seeds", "2", "--generations", "3", "--population", "8",
+               "--fallback", "--json", str(replanned)])
+    assert rc == 0, capsys.readouterr().err
+    data = json.loads(replanned.read_text())
+    path = data["path"]
+    assert data["success"] and path[0] == position and path[-1] == [6, 7]
+    assert wall not in path and not any(blocked[y, x] for x, y in path)
+    assert all(max(abs(a - c), abs(b - d)) == 1 for (a, b), (c, d) in zip(path, path[1:]))
 
 
 @pytest.mark.parametrize("argv, words", [
@@ -274,14 +302,22 @@ def test_a_plot_format_matplotlib_cannot_write_here_fails_before_the_run(tmp_pat
             check_outputs(argparse.Namespace(plot=str(tmp_path / "p.pgf"), json=None))
 
 
-def test_a_doe_where_no_seed_finds_a_path_names_the_cause(tmp_path, capsys):
-    """Nothing to fit: exit 3 with the reason the runs give (here the capacity)."""
+def test_a_doe_where_no_seed_finds_a_path_names_the_cause(tmp_path, capsys, monkeypatch):
+    """Nothing to fit: exit 3 with the reason the runs give (here the capacity), also
+    when every point is read back from the checkpoint (the point files keep it)."""
+    import jaxga.api
+
     art = tmp_path / "m.txt"
     art.write_text("\n".join(["0000000"] * 7) + "\n")
-    rc = main(["doe", "--preset", "sga", "--map", str(art), "--seeds", "1",
-               "--generations", "2", "--quiet", "--design", "L9",
-               "--factor", "population.size=4,6,8", "--set", "population.capacity=3"])
-    err = capsys.readouterr().err
-    assert rc == EXIT_NO_PATH
-    assert err.startswith("jaxga: no path: no seed of any design point found a path")
-    assert "population.capacity = 3 is probably too small" in err
+    args = ["doe", "--preset", "sga", "--map", str(art), "--seeds", "1",
+            "--generations", "2", "--quiet", "--design", "L9",
+            "--factor", "population.size=4,6,8", "--set", "population.capacity=3",
+            "--checkpoint", str(tmp_path / "ckpt")]
+    for again in (False, True):
+        if again:  # every point is in the checkpoint: nothing runs
+            monkeypatch.setattr(jaxga.api, "sweep", lambda *a, **k: pytest.fail("ran"))
+        rc = main(args)
+        err = capsys.readouterr().err
+        assert rc == EXIT_NO_PATH
+        assert err.startswith("jaxga: no path: no seed of any design point found a path")
+        assert "population.capacity = 3 is probably too small" in err

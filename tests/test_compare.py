@@ -6,6 +6,7 @@ from __future__ import annotations
 import dataclasses
 import json
 import math
+import re
 
 import numpy as np
 import pytest
@@ -244,6 +245,12 @@ def test_compare_rejects_bad_requests(comparison, grid):
         compare(["sga", "sga"], grid, seeds=2)
     with pytest.raises(ParameterError):  # unknown preset, before anything runs
         compare(["sga", "no_such_preset"], grid, seeds=2)
+    with pytest.raises(ParameterError, match="presets must be a list of presets"):
+        compare(3, grid, seeds=2)
+    with pytest.raises(ParameterError, match="a preset to compare is a name"):
+        compare([1, 2], grid, seeds=2)
+    with pytest.raises(ParameterError, match="a preset to compare is a name"):
+        compare({"a": ("sga", 3), "b": "imga"}, grid, seeds=2)
     assert "fitness" not in METRICS
 
 
@@ -318,6 +325,27 @@ def test_a_bad_significance_level_is_refused_before_running(monkeypatch):
     monkeypatch.setattr(module, "run", lambda *a, **k: pytest.fail("a preset ran"))
     with pytest.raises(ParameterError, match="alpha must be a number in"):
         compare(["sga", "imga"], "classic_ga_gapp3_20x20", seeds=1, alpha=5)
+
+
+@pytest.mark.parametrize("presets, message", [
+    # the second preset does not read the override (AGACD's rates are adaptive)
+    ({"sga": {"crossover__probability": 0.5}, "agacd": {"crossover__probability": 0.5}},
+     "crossover.probability has no effect in 'agacd'"),
+    # MPMGA's A island takes in 2 k migrants, more than an island of 3
+    ({"sga": {}, "mpmga": {"population__size": 3, "islands__migrants": 2}},
+     "islands.migrants = 2 needs 4"),
+    ({"sga": {}, "mpmga": {"fitness__smoothness_floor": 0.0}}, "smoothness_floor"),
+])
+def test_any_presets_bad_input_is_refused_before_the_first_runs(monkeypatch, presets,
+                                                                 message):
+    """Every preset's configuration is checked before the first preset runs, so that a
+    refusal never comes after minutes of runs of the presets listed before it."""
+    import importlib
+
+    module = importlib.import_module("jaxga.compare")
+    monkeypatch.setattr(module, "run", lambda *a, **k: pytest.fail("a preset ran"))
+    with pytest.raises(ParameterError, match=re.escape(message)):
+        compare({k: (k, v) for k, v in presets.items()}, "classic_ga_gapp3_20x20", seeds=1)
 
 
 def test_cli_compare_with_no_path_names_the_cause(tmp_path, capsys):

@@ -406,12 +406,15 @@ def test_checkpointed_blocks_equal_one_call_and_resume(one_call, blocked, tmp_pa
     ("{bad", "point"), ("", "point"), ('{"point": 3}', "point"),
     ('{"responses": {"fitness": [1, 2, 3]}}', "point"),
     ("two_seeds", "point"), ("text_value", "point"), ("{bad", "confirm"),
-    ("two_seeds", "confirm"),
+    ("two_seeds", "confirm"), ("success_2", "point"), ("failed_with_length", "point"),
+    ("negative_length", "confirm"), ("half_turn", "point"), ("reason_number", "point"),
 ])
 def test_a_damaged_checkpoint_file_is_named_not_a_traceback(blocked, tmp_path, monkeypatch,
                                                             damage, where):
-    """A point or confirmation file that is not valid JSON, lacks responses or holds
-    another number of seeds is refused naming the file (before anything runs)."""
+    """A point or confirmation file that is not valid JSON, lacks responses, holds
+    another number of seeds or a value no run can return (a success of 2, a failed seed
+    with a length, a negative length, half a turn) is refused naming the file, before
+    anything runs."""
     ckpt0, _ = blocked
     ckpt = tmp_path / "ckpt"
     shutil.copytree(ckpt0, ckpt)
@@ -423,6 +426,18 @@ def test_a_damaged_checkpoint_file_is_named_not_a_traceback(blocked, tmp_path, m
         damage = json.dumps(saved)
     elif damage == "text_value":
         saved["responses"]["length"][0] = "x"
+        damage = json.dumps(saved)
+    elif damage != "" and not damage.startswith("{"):  # values no run can return
+        r = saved["responses"]
+        assert r["success"][0] == 1  # the damage below is impossible for a success
+        change = {"success_2": ("success", 2), "negative_length": ("length", -1.0),
+                  "half_turn": ("turns", 1.5)}.get(damage)
+        if change:
+            r[change[0]][0] = change[1]
+        elif damage == "failed_with_length":  # a failed seed with a length
+            r["success"][0], r["fitness"][0] = 0, 0.0
+        else:
+            saved["reason"] = 3
         damage = json.dumps(saved)
     target.write_text(damage)
     monkeypatch.setattr(jaxga.api, "sweep", lambda *a, **k: pytest.fail("a sweep ran"))

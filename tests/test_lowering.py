@@ -74,3 +74,27 @@ def test_importing_jaxga_unrolls_threefry_unless_told_not_to(monkeypatch, restor
     monkeypatch.setenv(lowering.ENV_VAR, "sideways")
     with pytest.raises(ParameterError, match="JAXGA_THREEFRY must be 'unrolled' or 'rolled'"):
         lowering.configure_from_environment()
+
+
+def test_a_bad_threefry_setting_is_one_line_on_the_command_line_and_refused_by_run(
+        monkeypatch):
+    """``import jaxga`` does not raise on a bad ``$JAXGA_THREEFRY`` (the console script
+    could only show a traceback); the command line says it in one line (exit 2) and
+    ``jaxga.run`` refuses it before anything compiles."""
+    import os
+    import subprocess
+    import sys
+
+    import jaxga
+
+    env = {**os.environ, lowering.ENV_VAR: "sideways"}
+    proc = subprocess.run([sys.executable, "-m", "jaxga.cli", "presets"], env=env,
+                          capture_output=True, text=True, timeout=120)
+    assert proc.returncode == 2
+    assert proc.stderr.strip() == ("jaxga: error: JAXGA_THREEFRY must be 'unrolled' or "
+                                   "'rolled', got 'sideways'")
+    assert proc.stdout == ""
+    monkeypatch.setenv(lowering.ENV_VAR, "sideways")
+    monkeypatch.setattr(jaxga.api, "build", lambda *a, **k: pytest.fail("it went on"))
+    with pytest.raises(ParameterError, match="JAXGA_THREEFRY must be"):
+        jaxga.run("sga", "classic_ga_gapp3_20x20", seeds=1)
