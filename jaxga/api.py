@@ -519,22 +519,32 @@ def _check_call_options(progress, chunks) -> None:
         raise ParameterError(f"chunks must be an integer >= 1, got {chunks!r}")
 
 
-def _load(preset, grid, corner_rule, variant, sets, overrides, generations):
+def _load(preset, grid, corner_rule, variant, sets, overrides, generations, *,
+          check_read: bool = True):
+    """``(config, grid, map name)`` of a call, checked; ``check_read=False`` leaves
+    overrides that nothing reads to the caller (:func:`jaxga.compare.compare`)."""
     from jaxga.maps import load_map_info
     from jaxga.presets import load_preset, parse_set
 
     check_environment()  # a bad $JAXGA_THREEFRY, which `import jaxga` does not refuse
     if not isinstance(sets, (str, Sequence)):
         raise ParameterError(f"sets must be 'key=value' strings, got {sets!r}")
+    sets = (sets,) if isinstance(sets, str) else tuple(sets)
     ov: dict[str, Any] = {k.replace("__", "."): v for k, v in overrides.items()}
     if generations is not None:  # a non-integer is left for the configuration to refuse
         with contextlib.suppress(TypeError):
             generations = as_integer(generations)
         ov["generations"] = generations
-    config = (preset.override(ov) if isinstance(preset, Config)
-              else load_preset(preset, variant=variant, overrides=ov, sets=sets))
-    set_keys = [parse_set(s)[0] for s in ((sets,) if isinstance(sets, str) else sets)]
-    check_overrides_read(config, [*flatten(ov), *set_keys])  # never silently ignored
+    if isinstance(preset, Config):  # as load_preset: the overrides, then the sets
+        if variant is not None:
+            raise ParameterError(f"variant {variant!r} given with a Config: load the preset "
+                                 "with its variant (jaxga.presets.load_preset) instead")
+        set_values = dict(parse_set(text) for text in sets)
+        config = preset.override(ov).override(set_values)
+    else:
+        config = load_preset(preset, variant=variant, overrides=ov, sets=sets)
+    if check_read:  # never silently ignored
+        check_overrides_read(config, [*flatten(ov), *(parse_set(t)[0] for t in sets)])
     if isinstance(grid, Grid):
         map_name = "grid"
         grid = grid.validated()  # a grid made with the plain constructor is checked too
@@ -803,7 +813,7 @@ def check_run(
     compiling (preset, map, endpoints, overrides that nothing reads, key combinations,
     migrants); raises what :func:`run` would raise. Compiles and runs nothing:
     :func:`jaxga.compare` checks every preset with it before the first one runs."""
-    del progress, chunks  # accepted as run accepts them
+    _check_call_options(progress, chunks)
     config, grid, _ = _load(preset, grid, corner_rule, variant, sets, overrides,
                             generations)
     (config,) = _point_configs(config, [{}])

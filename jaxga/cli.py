@@ -497,7 +497,7 @@ def build_parser() -> argparse.ArgumentParser:
     p.add_argument("--fallback", action="store_true",
                    help="splice the exact A* segment if the GA finds none (flagged)")
     p.add_argument("--set", action="append", metavar="KEY=VALUE",
-                   help="override a configuration key, e.g. crossover.probability=0.7")
+                   help="override a configuration key, e.g. mutation.temperature_c1=50")
     p.add_argument("--json", metavar="OUT", help="write the result as JSON")
     p.set_defaults(func=cmd_replan)
 

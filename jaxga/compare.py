@@ -423,6 +423,50 @@ def _median(v: np.ndarray) -> float:
     return float(np.median(v)) if v.size else math.nan
 
 
+RUN_OPTIONS = ("generations", "corner_rule", "variant", "sets", "progress", "chunks")
+"""Keyword arguments of :func:`jaxga.api.run` that are not configuration keys."""
+
+
+def _options_per_preset(specs, grid, common: Mapping[str, Any]) -> dict[str, dict[str, Any]]:
+    """Each preset's keyword arguments for :func:`jaxga.api.run`: the common options,
+    less the common configuration keys (overrides and ``sets``) that this preset never
+    reads (:func:`jaxga.engine.unread_keys`; they would change nothing), then its own
+    overrides, which are checked strictly by ``run``. A common key that no preset
+    reads is refused."""
+    from jaxga.api import _load
+    from jaxga.engine import OFF_VALUES, unread_keys
+    from jaxga.presets import parse_set
+
+    sets = common.get("sets", ())
+    sets = (sets,) if isinstance(sets, str) else sets
+    out: dict[str, dict[str, Any]] = {}
+    unread_by_all: dict[str, str] | None = None
+    for label, (preset, ov) in specs.items():
+        opts = {**common, **ov}
+        config, _, _ = _load(preset, grid, opts.get("corner_rule"), opts.get("variant"),
+                             opts.get("sets", ()), {k: v for k, v in opts.items()
+                                                    if k not in RUN_OPTIONS},
+                             opts.get("generations"), check_read=False)
+        own = {k.replace("__", ".") for k in ov}
+        unread = {k: why for k, why in unread_keys(config).items()
+                  if k not in own and config.get(k) != OFF_VALUES.get(k, object())}
+        kept = {k: v for k, v in common.items()
+                if k in RUN_OPTIONS or k.replace("__", ".") not in unread}
+        read_sets = tuple(t for t in sets if parse_set(t)[0] not in unread)
+        if "sets" not in ov and len(read_sets) < len(sets):
+            kept["sets"] = read_sets
+        out[label] = {**kept, **ov}
+        unread_by_all = (dict(unread) if unread_by_all is None
+                         else {k: v for k, v in unread_by_all.items() if k in unread})
+    given = [k.replace("__", ".") for k in common if k not in RUN_OPTIONS]
+    given += [parse_set(t)[0] for t in sets]
+    nowhere = [k for k in given if k in (unread_by_all or {})]
+    if nowhere:
+        raise ParameterError("; ".join(f"{k} has no effect in any of the presets compared "
+                                       f"(e.g. {unread_by_all[k]})" for k in nowhere))
+    return out
+
+
 def _normalise_presets(presets: Sequence[PresetSpec] | Mapping[str, PresetSpec]
                        ) -> dict[str, tuple[str | Config, dict[str, Any]]]:
     def spec_of(spec: Any) -> tuple[str | Config, dict[str, Any]]:
@@ -483,7 +527,10 @@ def compare(
         progress: optional callback, called with the label before each preset runs.
         common_options: passed to every :func:`jaxga.api.run` call (``generations``,
             ``corner_rule``, ``variant``, ``sets``, overrides such as
-            ``population__size=10``); per-preset overrides win over them.
+            ``population__size=10``); per-preset overrides win over them. A common
+            configuration key that a preset never reads (``crossover.probability`` for
+            AGACD, whose rates are adaptive) is left out of that preset's run, where it
+            would change nothing; one that no preset reads is refused.
 
     Returns:
         A :class:`Comparison` (see the module docstring for the decisions on tests,
@@ -501,11 +548,12 @@ def compare(
     specs = _normalise_presets(presets)
     if len(specs) < 2:
         raise ParameterError(f"a comparison needs at least two presets, got {len(specs)}")
-    for preset, ov in specs.values():  # a preset's bad input fails before anything runs
-        check_run(preset, grid, **{**common_options, **ov})
+    options = _options_per_preset(specs, grid, common_options)
+    for label, (preset, _) in specs.items():  # bad input fails before anything runs
+        check_run(preset, grid, **options[label])
     results = {}
-    for label, (preset, ov) in specs.items():
+    for label, (preset, _) in specs.items():
         if progress is not None:
             progress(label)
-        results[label] = run(preset, grid, seeds, **{**common_options, **ov})
+        results[label] = run(preset, grid, seeds, **options[label])
     return compare_results(results, metric=metric, metrics=metrics, test=test, alpha=alpha)

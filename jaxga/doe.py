@@ -137,10 +137,11 @@ AGACD_TABLE3: tuple[Factor, ...] = (
 def check_factors(config: Config, factors: Sequence[Factor]) -> None:
     """Refuse factors a sweep cannot vary in one compiled call, or that do nothing.
 
-    A factor must be a key of ``config`` (the preset after overrides), either dynamic
-    (probabilities, weights, temperatures: :data:`jaxga.config.SCHEMA`) or
-    ``population.size`` (the engine's active mask); names must be distinct; every level
-    must be a valid value of the key.
+    A factor must be a configuration key that ``config`` (the preset after overrides)
+    reads (:func:`jaxga.engine.unread_keys`: a fitness weight the preset leaves at the
+    objective's default is read), either dynamic (probabilities, weights, temperatures:
+    :data:`jaxga.config.SCHEMA`) or ``population.size`` (the engine's active mask); names
+    must be distinct; every level must be a valid value of the key.
     """
     if not factors:
         raise ParameterError("a designed experiment needs at least one factor")
@@ -148,22 +149,17 @@ def check_factors(config: Config, factors: Sequence[Factor]) -> None:
     dup = sorted({n for n in names if names.count(n) > 1})
     if dup:
         raise ParameterError(f"factor {', '.join(dup)} given more than once")
-    present = dict(config.items)
+    unread = unread_keys(config)
     for f in factors:
         if f.name not in SCHEMA:
             near = [k for k in SCHEMA if k.split(".")[-1] == f.name.split(".")[-1]]
             hint = f" (did you mean {', '.join(near)}?)" if near else ""
             raise ParameterError(f"unknown factor {f.name!r}: not a configuration key{hint}")
-        if f.name not in present:
-            raise ParameterError(
-                f"factor {f.name!r} is not set by preset {config['name']!r}: it would have "
-                "no effect")
         if not (SCHEMA[f.name].dynamic or f.name == "population.size"):
             raise ParameterError(
                 f"factor {f.name!r} changes the compiled program: only dynamic keys "
                 "(probabilities, weights, temperatures) and population.size can be "
                 "factors; run the other values as separate experiments")
-        unread = unread_keys(config)
         if f.name in unread:
             raise ParameterError(f"factor {f.name!r} has no effect in preset "
                                  f"{config['name']!r}: {unread[f.name]}")
@@ -592,8 +588,9 @@ class _Checkpoint:
         responses = data.get("responses") if isinstance(data, dict) else None
         ok = (isinstance(responses, dict) and set(responses) == set(RESPONSES)
               and all(isinstance(v, list) and len(v) == n_seeds
-                      and all(x is None or (isinstance(x, (int, float))
-                                            and not isinstance(x, bool)) for x in v)
+                      and all(x is None or x in _INFINITIES
+                              or (isinstance(x, (int, float)) and not isinstance(x, bool))
+                              for x in v)
                       for v in responses.values()))
         if not ok:
             raise ParameterError(
@@ -656,17 +653,19 @@ def _impossible_response(responses: Mapping[str, list]) -> str:
     """What no run can have returned (what :func:`seed_responses` makes of a Result), as
     text naming the response and seed; "" if every value is possible. A success is 0 or
     1; a failed seed has fitness 0 and no length-like value (null); a successful one has
-    a finite fitness >= 0 and finite length-like values >= 0, whole numbers for the
-    generation and the turns."""
+    a fitness >= 0 (+inf when extreme weights overflow float32) and finite length-like
+    values >= 0, whole numbers for the generation and the turns."""
     for s, ok in enumerate(responses["success"]):
         if ok not in (0, 1):
             return f"success of seed {s} is {ok!r}, not 0 or 1"
-        fit = responses["fitness"][s]
-        if fit is None or not math.isfinite(fit) or fit < 0 or (fit != 0 and not ok):
+        fit = _INFINITIES.get(responses["fitness"][s], responses["fitness"][s])
+        if fit is None or math.isnan(fit) or fit < 0 or (fit != 0 and not ok):
             return (f"fitness of seed {s} is {fit!r} for a "
                     f"{'successful' if ok else 'failed'} seed")
         for key in _LENGTH_LIKE:
             v = responses[key][s]
+            if isinstance(v, str):  # "inf": only a fitness can overflow
+                return f"{key} of seed {s} is {v!r}"
             if not ok:
                 if v is not None:
                     return f"{key} of the failed seed {s} is {v!r}, not null"
@@ -677,13 +676,20 @@ def _impossible_response(responses: Mapping[str, list]) -> str:
     return ""
 
 
+_INFINITIES = {"inf": math.inf, "-inf": -math.inf}
+
+
 def _encode(responses: Mapping[str, np.ndarray]) -> dict[str, list]:
-    """NaN -> null; Python floats round-trip exactly through JSON."""
-    return {k: [_json_float(float(x)) for x in v] for k, v in responses.items()}
+    """NaN -> null, +-inf -> "inf" / "-inf" (a fitness can overflow float32 with extreme
+    weights); Python floats round-trip exactly through JSON."""
+    def one(x: float):
+        return ("inf" if x > 0 else "-inf") if math.isinf(x) else _json_float(x)
+
+    return {k: [one(float(x)) for x in v] for k, v in responses.items()}
 
 
 def _decode(responses: Mapping[str, list]) -> dict[str, np.ndarray]:
-    return {k: np.array([np.nan if x is None else x for x in v], float)
+    return {k: np.array([np.nan if x is None else _INFINITIES.get(x, x) for x in v], float)
             for k, v in responses.items() if k in RESPONSES}
 
 

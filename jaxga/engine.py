@@ -37,10 +37,11 @@ from jaxga import objectives, schedules
 from jaxga import postprocess as post
 from jaxga import selection as sel
 from jaxga.batching import over_individuals_gated, over_pairs_gated, windowed_map
-from jaxga.config import DEFAULTS, SCHEMA, Config
+from jaxga.config import SCHEMA, Config
 from jaxga.errors import ParameterError
 from jaxga.grid import Grid
 from jaxga.init import get_initialiser, initialise
+from jaxga.islands import migrates
 from jaxga.numerics import ordered_mean
 from jaxga.paths import (
     Population,
@@ -74,6 +75,20 @@ FITNESS_DEFAULTS: dict[str, dict[str, float]] = {
 papers' values, SPEC 3), so that the two cannot drift apart: what a parameter the
 configuration leaves out is."""
 WAYPOINT_ALGORITHMS = ("cut_and_check",)  # crossovers that work on waypoint paths (AGACD)
+
+
+def uses_waypoints(config: Config) -> bool:
+    """Whether the population holds waypoint paths (AGACD's crossover or point mutation:
+    segments checked by line of sight) rather than 8-connected cell paths."""
+    return (config["crossover.method"] in WAYPOINT_ALGORITHMS
+            or config["mutation.method"] == "point_checked")
+
+
+PER_ISLAND: dict[str, str] = {
+    "crossover.probability": "islands.crossover_probabilities",
+    "mutation.probability": "islands.mutation_probabilities",
+}
+"""A rate and the key that, when set, gives each island its own (MPMGA A, B, C)."""
 
 
 @dataclasses.dataclass(frozen=True)
@@ -112,8 +127,7 @@ def build(config: Config, grid: Grid) -> tuple[Algorithm, dict]:
         capacity=capacity,
         generations=int(config["generations"]),
         islands=islands,
-        waypoints=config["crossover.method"] in WAYPOINT_ALGORITHMS
-        or config["mutation.method"] == "point_checked",
+        waypoints=uses_waypoints(config),
     )
     return algo, default_params(config, islands)
 
@@ -156,23 +170,23 @@ def unread_keys(config: Config) -> dict[str, str]:
     out: dict[str, str] = {}
     method = config["fitness.method"]
     params = FITNESS_PARAMS.get(method, ())
+    own = [*params, *(("importance_ratios",) if method == "agacd" else ())]
     for key in SCHEMA:
         name = key.split(".", 1)[1] if key.startswith("fitness.") else None
         if name in FITNESS_PARAM_NAMES and name not in params:
             out[key] = (f"fitness.method = {method!r} has no parameter {name!r}"
-                        f" (it reads {', '.join(params) or 'none'})")
+                        f" (its parameters: {', '.join(own) or 'none'})")
     if method != "agacd":
         out["fitness.importance_ratios"] = (f"only AGACD's fitness has Delphi ratios, "
                                             f"fitness.method = {method!r}")
-    if config["crossover.method"] in WAYPOINT_ALGORITHMS \
-            or config["mutation.method"] == "point_checked":
+    if uses_waypoints(config):
         out["fitness.window"] = "waypoint paths are evaluated without the narrow window"
     if config["selection.method"] != "tournament":
         out["selection.tournament_size"] = (f"selection.method = "
                                             f"{config['selection.method']!r}, not 'tournament'")
     for stage, low, high in (("crossover", "pc_low", "pc_high"),
                              ("mutation", "pm_low", "pm_high")):
-        island_key = f"islands.{stage}_probabilities"
+        island_key = PER_ISLAND[f"{stage}.probability"]
         if config[f"{stage}.method"] == "none":
             for k in (f"{stage}.probability", f"{stage}.adaptive", f"{stage}.{low}",
                       f"{stage}.{high}", island_key):
@@ -198,21 +212,31 @@ def unread_keys(config: Config) -> dict[str, str]:
     if int(config["islands.count"]) == 1:
         for k in ("islands.topology", "islands.interval", "islands.migrants"):
             out[k] = "islands.count = 1: there is no migration"
-    elif config["islands.topology"] == "none" or int(config["islands.migrants"]) == 0:
-        out["islands.interval"] = ("no migration (islands.topology = 'none' or "
-                                   "islands.migrants = 0)")
+    elif not migrates(config):
+        why = ("islands.topology = 'none'" if config["islands.topology"] == "none"
+               else "islands.migrants = 0")
+        for k in ("islands.topology", "islands.interval", "islands.migrants"):
+            if k not in why:
+                out[k] = f"{why}: there is no migration"
     return out
 
 
-def check_overrides_read(config: Config, keys: Iterable[str]) -> None:
-    """Refuse overridden ``keys`` that ``config`` never reads (:func:`unread_keys`).
+OFF_VALUES: dict[str, Any] = {
+    "islands.topology": "none", "islands.migrants": 0, "islands.interval": 1,
+    "simplify.probability": 0.0, "crossover.adaptive": False, "mutation.adaptive": False,
+    "fitness.window": False,
+}
+"""Values of unread keys that say what happens anyway (no migration, no simplification,
+fixed rates, no narrow window): accepted as overrides, as in notebook 04's one-island
+MPMGA with ``islands.topology = "none"``."""
 
-    An unread key set to its default (:data:`jaxga.config.DEFAULTS`: no migration, no
-    simplification, ...) is accepted: it states that the feature is off, as
-    ``islands.count = 1, islands.topology = "none"`` does."""
+
+def check_overrides_read(config: Config, keys: Iterable[str]) -> None:
+    """Refuse overridden ``keys`` that ``config`` never reads (:func:`unread_keys`),
+    unless set to the value that says what happens anyway (:data:`OFF_VALUES`)."""
     unread = unread_keys(config)
     bad = [k for k in keys
-           if k in unread and (k not in DEFAULTS or config.get(k) != DEFAULTS[k])]
+           if k in unread and (k not in OFF_VALUES or config.get(k) != OFF_VALUES[k])]
     if bad:
         name = config.get("name", "the configuration")
         raise ParameterError("; ".join(
@@ -223,9 +247,10 @@ def check_combination(config: Config) -> None:
     """Checks that involve several configuration keys, before anything is traced.
 
     Raises :class:`ParameterError` naming the keys: an operator whose parameters are
-    missing (:data:`NEEDS`), MPMGA's decay rate ``w = 0`` (eq. 17 needs ``0 < w <= 1``),
-    Zhang's speeds ``v``, ``v_t`` not positive or a turning speed above the straight one
-    (eq. 2: negative time per turn), IMGA's, MPMGA's or Zhu's fitness weights all 0
+    missing (:data:`NEEDS`; a fixed crossover or mutation rate, or one per island),
+    MPMGA's decay rate ``w = 0`` (eq. 17 needs ``0 < w <= 1``), Zhang's speeds ``v``,
+    ``v_t`` not positive or a turning speed above the straight one (eq. 2: negative time
+    per turn), IMGA's, MPMGA's or Zhu's fitness weights all 0
     (every path equal), a smoothness floor not positive (a divisor),
     a Delphi ratio list whose length does not match AGACD's three objectives (eq. 21-25).
     Migrants are checked against the island size by :func:`check_migration`.
@@ -237,6 +262,15 @@ def check_combination(config: Config) -> None:
                 raise ParameterError(
                     f"{key} = {value!r} needs {' and '.join(missing)}, which this "
                     f"configuration does not set (--set KEY=VALUE)")
+    for stage in ("crossover", "mutation"):  # a fixed rate, or one per island
+        rate, island_key = f"{stage}.probability", PER_ISLAND[f"{stage}.probability"]
+        method = config.get(f"{stage}.method", "none")  # fitness_optimum: fitness only
+        if method != "none" and not config.get(f"{stage}.adaptive") \
+                and config.get(rate) is None and config.get(island_key) is None:
+            raise ParameterError(
+                f"{stage}.method = {method!r} with {stage}.adaptive = "
+                f"false needs {rate} (or {island_key}), which this configuration does not "
+                "set (--set KEY=VALUE)")
     if config.get("mutation.method") == "segment_sa" and not config["mutation.temperature_w"] > 0:
         raise ParameterError("mutation.temperature_w must be in (0, 1] (MPMGA eq. 17: "
                              f"T = c1 * w**t), got {config['mutation.temperature_w']}")
@@ -283,7 +317,7 @@ def check_migration(config: Config, population: int) -> None:
     A, and B and C swap ``k`` others than the ``k`` that moved), SPEC 8 / MPMGA 4.4."""
     count, topology = int(config["islands.count"]), config["islands.topology"]
     k = int(config["islands.migrants"])
-    if count == 1 or topology == "none" or k == 0:
+    if not migrates(config):
         return
     if topology == "mpmga" and count != 3:
         raise ParameterError(f"islands.topology = 'mpmga' needs islands.count = 3 (A, B, C), "
@@ -308,11 +342,7 @@ def default_params(config: Config, islands: int = 1) -> dict[str, jax.Array]:
     if method == "agacd":
         ratios = config.get("fitness.importance_ratios", (1.2, 1.4))
         params["fitness.weights"] = objectives.delphi_weights(jnp.asarray(ratios, F32))
-    per_island_keys = {
-        "crossover.probability": "islands.crossover_probabilities",
-        "mutation.probability": "islands.mutation_probabilities",
-    }
-    for key, island_key in per_island_keys.items():
+    for key, island_key in PER_ISLAND.items():
         per_island = config.get(island_key)
         if per_island is not None:
             if len(per_island) != islands:

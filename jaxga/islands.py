@@ -42,6 +42,15 @@ def _replace(islands, dst: int, dst_idx: jax.Array, src: int, src_idx: jax.Array
     )
 
 
+def migrates(config) -> bool:
+    """Whether a configuration (a :class:`jaxga.config.Config` or an
+    :class:`jaxga.engine.Algorithm`) moves individuals between islands at all: more than
+    one island, a topology other than ``"none"`` and at least one migrant."""
+    return (int(config.get("islands.count", 1)) > 1
+            and config.get("islands.topology") != "none"
+            and int(config.get("islands.migrants", 0)) > 0)
+
+
 def migrate(algo, key: jax.Array, islands, t: jax.Array, active: jax.Array):
     """Apply the configured migration to the island stack (SPEC 8).
 
@@ -56,7 +65,7 @@ def migrate(algo, key: jax.Array, islands, t: jax.Array, active: jax.Array):
     n_isl = algo.islands
     topology = algo.get("islands.topology")
     k = int(algo.get("islands.migrants"))
-    if n_isl == 1 or topology == "none" or k == 0:
+    if not migrates(algo):
         return islands
     p_active_min = algo.population  # k is checked against the capacity at build time
     if k > p_active_min:

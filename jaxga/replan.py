@@ -60,7 +60,7 @@ from __future__ import annotations
 import dataclasses
 import math
 import time
-from collections.abc import Iterable, Sequence
+from collections.abc import Iterable, Mapping, Sequence
 from typing import Any
 
 import numpy as np
@@ -292,6 +292,13 @@ def _window_box(a: XY, b: XY, size: int, h: int, w: int) -> tuple[int, int, int,
 
 
 # ================================================================================ replan
+def _run_overrides(overrides: Mapping[str, Any], population: int | None) -> dict[str, Any]:
+    kw = dict(overrides)
+    if population is not None and "population__size" not in kw:
+        kw["population__size"] = population  # checked as the configuration key
+    return kw
+
+
 def replan(
     grid: Grid,
     path: Sequence[XY] | np.ndarray,
@@ -338,7 +345,8 @@ def replan(
         fallback: if no seed finds a segment, splice the exact A* segment and flag it
             (``used_fallback``) instead of returning ``success=False``.
         overrides: further configuration overrides for :func:`jaxga.run`
-            (``crossover__probability=...``).
+            (``mutation__temperature_c1=...``; checked at once, as :func:`jaxga.run`
+            checks them, also when the path needs no GA run).
 
     Returns:
         A :class:`ReplanResult`. An unreachable or blocked goal and a GA failure are
@@ -358,6 +366,11 @@ def replan(
         raise ParameterError(f"window must be an integer >= 2 or None, got {window!r}")
     if population is not None:  # checked now, also when no GA run is needed
         SCHEMA["population.size"].check("population", population)
+    # The GA's configuration is checked now too (overrides that nothing reads, key
+    # combinations), not only when a blocked path needs a GA run.
+    from jaxga.api import check_run
+
+    check_run(preset, grid, generations=generations, **_run_overrides(overrides, population))
     h, w = grid.height, grid.width
     rule = grid.corner_rule
     cells = _dedupe(_as_xy_list(path, "path"))
@@ -488,10 +501,8 @@ def _plan_segment(work: Grid, blocked: np.ndarray, start: XY, rejoin: XY, preset
                 info["window"] = box
     g = Grid.create(sub, start=(start[0] - ox, start[1] - oy),
                     goal=(rejoin[0] - ox, rejoin[1] - oy), corner_rule=rule)
-    kw = dict(overrides)
-    if population is not None and "population__size" not in kw:
-        kw["population__size"] = population  # checked as the configuration key
-    r = run(preset, g, seeds=seeds, generations=generations, **kw)
+    r = run(preset, g, seeds=seeds, generations=generations,
+            **_run_overrides(overrides, population))
     info["result"] = r
     n_ok = int(np.sum(r.success))
     info.update(ga_success=n_ok, seeds=len(r.seeds))

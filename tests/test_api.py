@@ -206,29 +206,65 @@ def test_population_size_sweep_uses_the_active_mask(grid):
     assert not np.array_equal(results[0].history["mean"], results[2].history["mean"])
 
 
-def test_keys_reported_unread_do_not_change_a_run(grid, monkeypatch):
-    """What ``unread_keys`` calls unread is unread: with the refusal switched off, a sweep
-    whose points give every unread dynamic key of sga two sets of values returns the
-    same runs bit for bit (the other fitness weights, AGACD's adaptive bounds, MPMGA's
-    temperature, the simplification rate); a read key (the mutation rate) changes them."""
+UNREAD_CASES = [(name, {}) for name in sorted(preset_names())] + [
+    ("agacd", {"crossover.adaptive": False, "crossover.probability": 0.7}),
+    ("sga", {"simplify.method": "simplify_adjacent", "simplify.probability": 0.2,
+             "selection.method": "tournament"}),
+    ("mpmga", {"crossover.adaptive": True, "crossover.pc_low": 0.5,
+               "crossover.pc_high": 0.9}),
+    ("imga", {"crossover.method": "none", "mutation.method": "segment_sa",
+              "mutation.temperature_c1": 50.0, "mutation.temperature_w": 0.9}),
+]
+
+
+@pytest.mark.parametrize("preset, changes", UNREAD_CASES,
+                         ids=[f"{p}{'+' if c else ''}{'-'.join(c)[:40]}"
+                              for p, c in UNREAD_CASES])
+def test_unread_dynamic_keys_are_exactly_those_the_program_does_not_use(preset, changes):
+    """``unread_keys`` against the traced program (nothing compiles): every dynamic key
+    is given a value, a whole run (initialisation, a generation, post-optimisation) is
+    traced, and JAX's dead-code elimination says which parameters reach the outputs.
+    A key is reported unread exactly when its parameter does not (a per-island rate
+    travels under the rate's name, so it stands for ``islands.*_probabilities``)."""
+    import jax
+
+    pe = pytest.importorskip("jax._src.interpreters.partial_eval")
+    if not hasattr(pe, "dce_jaxpr"):
+        pytest.skip("this JAX has no dce_jaxpr")
     from jaxga.config import SCHEMA
     from jaxga.presets import load_preset
 
-    config = load_preset("sga").override({k.replace("__", "."): v for k, v in SMALL.items()})
-    unread = [k for k in engine.unread_keys(config) if SCHEMA[k].dynamic]
-    assert {"fitness.omega", "fitness.v_t", "crossover.pc_low", "mutation.pm_high",
-            "mutation.temperature_c1", "simplify.probability"} <= set(unread)
-    assert "mutation.probability" not in unread and "crossover.probability" not in unread
-    # values valid for every key: v_t <= v, bounds low <= high, temperatures > 0
-    a = {k: 0.25 for k in unread}
-    b = {k: 0.75 for k in unread}
-    monkeypatch.setattr(api, "check_overrides_read", lambda *_: None)
-    runs = api.sweep("sga", grid, [a, b, {**b, "mutation.probability": 0.9}], seeds=1,
-                     **SMALL)
-    for key in ("cells", "n_cells", "fitness"):
-        assert np.array_equal(getattr(runs[0], key), getattr(runs[1], key))
-    assert np.array_equal(runs[0].history["mean"], runs[1].history["mean"])
-    assert not np.array_equal(runs[1].history["mean"], runs[2].history["mean"])
+    grid = random_map(8, 8, 0.15, 1, corner_rule="free")
+    config = load_preset(preset).override({"population.size": 6, "generations": 1,
+                                           "islands.migrants": 1, **changes})
+    missing = {k: 0.3 for k, f in SCHEMA.items() if f.dynamic and config.get(k) is None}
+    missing.pop("fitness.v_t", None)  # Zhang: must not exceed v
+    config = config.override(missing)
+    algo, params = engine.build(config, grid)
+    key = jax.random.PRNGKey(0)
+
+    def whole_run(params):
+        state, _ = engine.init_state(algo, key, grid, params)
+        state, history = engine.evolve(algo, key, grid, state, params, 1)
+        return engine.finish(algo, grid, state, history, params, state.best_fitness), history
+
+    closed = jax.make_jaxpr(whole_run)(params)
+    _, used = pe.dce_jaxpr(closed.jaxpr, [True] * len(closed.jaxpr.outvars))
+    paths = [jax.tree_util.keystr(p) for p, _ in jax.tree_util.tree_flatten_with_path(params)[0]]
+    used_keys = {p[2:-2] for p, u in zip(paths, used, strict=True) if u}
+    unread = engine.unread_keys(config)
+
+    def claimed_unread(k: str) -> bool:
+        island_key = engine.PER_ISLAND.get(k)
+        if island_key and config.get(island_key) is not None:  # the leaf holds those
+            return island_key in unread
+        return k in unread
+
+    dynamic = [k for k in config.dynamic() if k != "population.size"]
+    assert dynamic and used_keys
+    wrong = {k: "claimed unread" if claimed_unread(k) else "claimed read"
+             for k in dynamic if claimed_unread(k) == (k in used_keys)}
+    assert not wrong
 
 
 @pytest.mark.parametrize("preset, overrides, message", [
@@ -241,16 +277,25 @@ def test_keys_reported_unread_do_not_change_a_run(grid, monkeypatch):
     ("imga", {"mutation__temperature_w": 0.5}, "only 'segment_sa' has a temperature"),
     ("iga_zhu", {"mutation__radius": 3}, "only 'point_checked' has a radius"),
     ("iga_zhang", {"fitness__importance_ratios": [1.2, 1.4]}, "only AGACD's fitness"),
-    ("agacd", {"fitness__window": False}, "waypoint paths"),
+    ("agacd", {"fitness__window": True}, "waypoint paths"),
+    ("sga", {"islands__count": 2, "islands__topology": "ring"},
+     "islands.topology has no effect in 'sga': islands.migrants = 0"),
+    ("sga", {"islands__count": 2, "islands__migrants": 1},
+     "islands.migrants has no effect in 'sga': islands.topology = 'none'"),
 ])
-def test_an_override_that_nothing_reads_is_refused(grid, preset, overrides, message):
+def test_an_override_that_nothing_reads_is_refused(grid, monkeypatch, preset, overrides,
+                                                   message):
+    """As keyword overrides, as ``sets`` (the same values as TOML) and as sweep points,
+    before anything compiles."""
+    monkeypatch.setattr(api, "_programs", lambda *a, **k: pytest.fail("compiled"))
     with pytest.raises(ParameterError, match=re.escape(message)):
         api.run(preset, grid, seeds=1, **SMALL, **overrides)
-    key = next(iter(overrides)).replace("__", ".")
-    with pytest.raises(ParameterError, match=re.escape(key)):
-        api.run(preset, grid, seeds=1, sets=[f"{key}=0.5"], **SMALL)
+    sets = [f"{k.replace('__', '.')}={json.dumps(v)}" for k, v in overrides.items()]
     with pytest.raises(ParameterError, match=re.escape(message)):
-        api.sweep(preset, grid, [{key: next(iter(overrides.values()))}], seeds=1, **SMALL)
+        api.run(preset, grid, seeds=1, sets=sets, **SMALL)
+    with pytest.raises(ParameterError, match=re.escape(message)):
+        api.sweep(preset, grid, [{k.replace("__", "."): v for k, v in overrides.items()}],
+                  seeds=1, **SMALL)
 
 
 def test_an_unread_key_set_to_its_default_is_accepted():
@@ -265,6 +310,9 @@ def test_an_unread_key_set_to_its_default_is_accepted():
     config = load_preset("mpmga", overrides={**ov, "islands.migrants": 2})
     with pytest.raises(ParameterError, match="islands.migrants has no effect in 'mpmga'"):
         engine.check_overrides_read(config, ov)
+    # AGACD's waypoint paths are never evaluated on the narrow window: False says so
+    engine.check_overrides_read(load_preset("agacd", overrides={"fitness.window": False}),
+                                ["fitness.window"])
 
 
 def test_overrides_that_are_read_are_accepted_by_every_preset():
@@ -288,6 +336,33 @@ def test_overrides_that_are_read_are_accepted_by_every_preset():
             assert not [k for k in set_dynamic if k in unread], (name, variant)
             if config["islands.count"] > 1:
                 assert "islands.migrants" not in unread and "islands.topology" not in unread
+
+
+def test_a_config_preset_takes_sets_and_refuses_a_variant(grid, monkeypatch):
+    """``sets`` apply to a :class:`Config` as to a preset name (they were silently
+    dropped); a variant cannot apply to a Config that is already loaded."""
+    from jaxga.presets import load_preset
+
+    config = api.check_run(load_preset("agacd"), grid,
+                           sets=["crossover.adaptive=false", "crossover.probability=0.8",
+                                 "population.size=7"])
+    assert not config["crossover.adaptive"] and config["crossover.probability"] == 0.8
+    assert config["population.size"] == 7
+    assert config == api.check_run("agacd", grid, sets=["crossover.adaptive=false",
+                                                        "crossover.probability=0.8",
+                                                        "population.size=7"])
+    with pytest.raises(ParameterError, match="variant '50x50' given with a Config"):
+        api.check_run(load_preset("agacd"), grid, variant="50x50")
+
+
+def test_a_fixed_rate_that_is_missing_is_named():
+    """AGACD with its adaptive crossover switched off has no fixed rate to use: named
+    before tracing (it was a KeyError from inside the traced program)."""
+    with pytest.raises(ParameterError, match="needs crossover.probability .or "
+                                             "islands.crossover_probabilities."):
+        api.check_run("agacd", "classic_ga_gapp3_20x20", crossover__adaptive=False)
+    with pytest.raises(ParameterError, match="chunks must be an integer"):
+        api.check_run("sga", "classic_ga_gapp3_20x20", chunks=0)
 
 
 def test_sweeping_a_structural_key_is_refused(grid):

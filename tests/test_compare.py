@@ -327,6 +327,39 @@ def test_a_bad_significance_level_is_refused_before_running(monkeypatch):
         compare(["sga", "imga"], "classic_ga_gapp3_20x20", seeds=1, alpha=5)
 
 
+def test_a_common_key_is_left_out_of_the_presets_that_do_not_read_it(monkeypatch):
+    """``jaxga compare --presets sga,agacd --set crossover.probability=0.7``: sga runs
+    with it, AGACD (adaptive rates) without, where it would change nothing; a common
+    key that no preset reads is refused, and a preset's own override is strict."""
+    import importlib
+
+    module = importlib.import_module("jaxga.compare")
+    calls = {}
+
+    class Recorded(Exception):
+        pass
+
+    def fake_run(preset, grid, seeds, **options):
+        calls[preset] = options
+        if len(calls) == 2:
+            raise Recorded
+
+    monkeypatch.setattr(module, "run", fake_run)
+    for kw, agacd in (({"crossover__probability": 0.7}, {}),
+                      ({"sets": ["crossover.probability=0.7", "generations=4"]},
+                       {"sets": ("generations=4",)})):
+        calls.clear()
+        with pytest.raises(Recorded):
+            compare(["sga", "agacd"], "classic_ga_gapp3_20x20", seeds=1, **kw)
+        assert calls == {"sga": kw, "agacd": agacd}
+    with pytest.raises(ParameterError, match="fitness.omega has no effect in any of the "
+                                             "presets compared"):
+        compare(["sga", "agacd"], "classic_ga_gapp3_20x20", seeds=1, fitness__omega=0.5)
+    with pytest.raises(ParameterError, match="crossover.probability has no effect in 'agacd'"):
+        compare({"sga": "sga", "agacd": ("agacd", {"crossover__probability": 0.7})},
+                "classic_ga_gapp3_20x20", seeds=1)
+
+
 @pytest.mark.parametrize("presets, message", [
     # the second preset does not read the override (AGACD's rates are adaptive)
     ({"sga": {"crossover__probability": 0.5}, "agacd": {"crossover__probability": 0.5}},

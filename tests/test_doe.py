@@ -230,17 +230,32 @@ def test_bad_factor_text(text, words):
         Factor.parse(text)
 
 
+def test_a_factor_on_a_weight_left_at_its_default_is_accepted():
+    """A fitness weight that the preset does not write down but its objective reads
+    (Zhang's turning radius r at its default) is a valid factor, as in a sweep."""
+    from jaxga.config import Config
+
+    mapping = load_preset("iga_zhang").as_dict()
+    del mapping["fitness.r"]  # a user file that leaves r at the objective's default
+    config = Config.from_mapping(mapping)
+    assert config.get("fitness.r") is None
+    check_factors(config, [Factor("fitness.r", (0.25, 0.5, 0.75))])
+
+
 @pytest.mark.parametrize("preset, factor, words", [
     ("agacd", Factor("crossover.pc_lo", (0.1, 0.2, 0.3)), "unknown factor"),
-    ("sga", Factor("crossover.pc_low", (0.1, 0.2, 0.3)), "not set by preset"),
+    ("sga", Factor("crossover.pc_low", (0.1, 0.2, 0.3)), "crossover.adaptive = false"),
+    ("sga", Factor("fitness.omega", (0.1, 0.2, 0.3)), "has no parameter 'omega'"),
     ("agacd", Factor("generations", (10, 20, 30)), "changes the compiled program"),
     ("agacd", Factor("mutation.radius", (1, 2, 3)), "changes the compiled program"),
     ("agacd", Factor("crossover.pc_low", (0.5, 0.9, 1.2)), "above its maximum"),
     ("agacd", Factor("population.size", (10, 15.5, 20)), "integer"),
-    ("mpmga", Factor("crossover.probability", (0.5, 0.6, 0.7)), "not set by preset"),
+    ("mpmga", Factor("crossover.probability", (0.5, 0.6, 0.7)), "islands.crossover"),
     ("mpmga+pc", Factor("crossover.probability", (0.5, 0.6, 0.7)), "islands.crossover"),
 ])
 def test_factor_validation_against_the_preset(preset, factor, words):
+    """A factor must be a dynamic key (or the population size) that the preset reads;
+    the reason names why it would have no effect."""
     name, _, extra = preset.partition("+")
     config = load_preset(name)
     if extra:  # a user --set that the per-island rates override
@@ -443,6 +458,33 @@ def test_a_damaged_checkpoint_file_is_named_not_a_traceback(blocked, tmp_path, m
     monkeypatch.setattr(jaxga.api, "sweep", lambda *a, **k: pytest.fail("a sweep ran"))
     with pytest.raises(ParameterError, match=re.escape(target.name)):
         run_doe("agacd", MAP, SMALL, "agacd-table4", seeds=3, checkpoint=ckpt, **KW)
+
+
+def test_a_point_file_round_trips_an_overflowing_fitness_and_the_reason(tmp_path):
+    """What a run can return is read back exactly: a fitness that overflowed float32
+    (+inf, written "inf"), a failed seed's NaN lengths (null) and the no-path reason; an
+    infinite length is not something a run returns."""
+    from jaxga.doe import RESPONSES, _Checkpoint, _decode
+
+    responses = {k: np.array([2.5, np.nan]) for k in RESPONSES}
+    responses.update(fitness=np.array([np.inf, 0.0]), success=np.array([1.0, 0.0]),
+                     convergence_generation=np.array([3.0, np.nan]),
+                     turns=np.array([2.0, np.nan]))
+    ckpt = _Checkpoint(tmp_path, {"format": 1})
+    ckpt.save_point(0, responses, "no feasible path found by 1 of 2 seeds")
+    (saved,) = ckpt.load_points(1, 2)
+    assert saved["reason"] == "no feasible path found by 1 of 2 seeds"
+    assert saved["fitness"] == ["inf", 0.0]
+    back = _decode(saved)
+    assert set(back) == set(RESPONSES)
+    for k in RESPONSES:
+        np.testing.assert_array_equal(back[k], responses[k])
+    point = tmp_path / "point-0000.json"
+    data = json.loads(point.read_text())
+    data["responses"]["length"][0] = "inf"
+    point.write_text(json.dumps(data))
+    with pytest.raises(ParameterError, match="length of seed 0 is 'inf'"):
+        ckpt.load_points(1, 2)
 
 
 def test_a_checkpointed_doe_checks_the_memory_of_one_block(blocked, tmp_path, monkeypatch):

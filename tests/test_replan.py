@@ -198,6 +198,11 @@ def test_invalid_robot_cell_and_arguments(sc25):
     for obstacles in ([(20, 12)], []):  # also when nothing is blocked and no GA runs
         with pytest.raises(ParameterError, match="population"):
             replan(g, p, obstacles, sc25.position, population=2.5)
+        # MPMGA's rates are per island: a single rate would change nothing
+        with pytest.raises(ParameterError, match="crossover.probability has no effect"):
+            replan(g, p, obstacles, sc25.position, crossover__probability=0.7)
+        with pytest.raises(ParameterError, match="fitness.omega has no effect"):
+            replan(g, p, obstacles, sc25.position, sets=("fitness.omega=0.5",))
 
 
 def test_ga_failure_is_honest_and_fallback_is_flagged(sc25, monkeypatch):
