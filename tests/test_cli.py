@@ -243,13 +243,14 @@ def test_run_json_holds_the_paths_from_the_given_endpoints(tmp_path, capsys):
     assert png.stat().st_size > 0
     # The JSON goes as it is into `jaxga replan` (its default run: the successful run
     # with the shortest raw path): the robot on that path's second cell, its third
-    # cell blocked.
+    # cell blocked. The GA settings are the run's (3 seeds, 8 individuals, 3
+    # generations, the whole 8 x 8 map): replan reuses its compiled programs.
     best = min((r for r in doc["runs"] if r["success"]), key=lambda r: r["raw_length"])
     position, wall = best["raw_path"][1], best["raw_path"][2]
     replanned = tmp_path / "replan.json"
     rc = main(["replan", "--path-json", str(out), "--map", str(art), "--corner-rule", "free",
                "--position", "{},{}".format(*position), "--obstacles", "{},{}".format(*wall),
-               "--preset", "sga", "--seeds", "2", "--generations", "3", "--population", "8",
+               "--preset", "sga", "--seeds", "3", "--generations", "3", "--population", "8",
                "--fallback", "--json", str(replanned)])
     assert rc == 0, capsys.readouterr().err
     data = json.loads(replanned.read_text())
