@@ -544,7 +544,12 @@ def _load(preset, grid, corner_rule, variant, sets, overrides, generations, *,
     else:
         config = load_preset(preset, variant=variant, overrides=ov, sets=sets)
     if check_read:  # never silently ignored
-        check_overrides_read(config, [*flatten(ov), *(parse_set(t)[0] for t in sets)])
+        overridden = [*flatten(ov), *(parse_set(t)[0] for t in sets)]
+        check_overrides_read(config, overridden)
+        if isinstance(grid, Grid) and "map.corner_rule" in overridden:
+            raise ParameterError(
+                "map.corner_rule has no effect with a Grid: a Grid keeps its own corner rule "
+                f"({grid.corner_rule!r}); pass corner_rule=... to change it")
     if isinstance(grid, Grid):
         map_name = "grid"
         grid = grid.validated()  # a grid made with the plain constructor is checked too

@@ -355,6 +355,17 @@ def test_a_config_preset_takes_sets_and_refuses_a_variant(grid, monkeypatch):
         api.check_run(load_preset("agacd"), grid, variant="50x50")
 
 
+def test_a_corner_rule_key_with_a_grid_is_refused(grid):
+    """A Grid keeps its own corner rule (``corner_rule=`` changes it): the preset key
+    ``map.corner_rule`` would be ignored, so it is refused as an override."""
+    with pytest.raises(ParameterError, match="map.corner_rule has no effect with a Grid"):
+        api.check_run("sga", grid, map__corner_rule="strict")
+    with pytest.raises(ParameterError, match="map.corner_rule has no effect with a Grid"):
+        api.check_run("sga", grid, sets=["map.corner_rule=strict"])
+    config = api.check_run("sga", "classic_ga_gapp3_20x20", map__corner_rule="strict")
+    assert config["map.corner_rule"] == "strict"  # a map given by name reads it
+
+
 def test_a_fixed_rate_that_is_missing_is_named():
     """AGACD with its adaptive crossover switched off has no fixed rate to use: named
     before tracing (it was a KeyError from inside the traced program)."""
