@@ -802,25 +802,21 @@ def run(
                  chunks=chunks, **overrides)[0]
 
 
-def check_run(
-    preset: str | Config,
-    grid: Grid | str,
-    *,
-    generations: int | None = None,
-    corner_rule: str | None = None,
-    variant: str | None = None,
-    sets: Sequence[str] = (),
-    progress: Callable[[str, float], None] | None = None,
-    chunks: int = 1,
-    **overrides: Any,
-) -> Config:
-    """The configuration :func:`run` would use, checked as :func:`run` checks it before
-    compiling (preset, map, endpoints, overrides that nothing reads, key combinations,
-    migrants); raises what :func:`run` would raise. Compiles and runs nothing:
-    :func:`jaxga.compare` checks every preset with it before the first one runs."""
-    _check_call_options(progress, chunks)
-    config, grid, _ = _load(preset, grid, corner_rule, variant, sets, overrides,
-                            generations)
+RUN_OPTIONS = ("generations", "corner_rule", "variant", "sets", "progress", "chunks")
+"""Keyword arguments of :func:`run` (besides ``seeds``) that are not configuration keys."""
+
+
+def check_run(preset: str | Config, grid: Grid | str, **options: Any) -> Config:
+    """The configuration :func:`run` would use with these keyword ``options`` (all of
+    :func:`run`'s but ``seeds``), checked as :func:`run` checks it before compiling
+    (preset, map, endpoints, overrides that nothing reads, key combinations, migrants);
+    raises what :func:`run` would raise. Compiles and runs nothing: :func:`jaxga.compare`
+    checks every preset with it before the first one runs."""
+    overrides = dict(options)
+    named = {k: overrides.pop(k) for k in RUN_OPTIONS if k in overrides}
+    _check_call_options(named.get("progress"), named.get("chunks", 1))
+    config, grid, _ = _load(preset, grid, named.get("corner_rule"), named.get("variant"),
+                            named.get("sets", ()), overrides, named.get("generations"))
     (config,) = _point_configs(config, [{}])
     build(config, grid)  # check_migration and check_combination
     return config

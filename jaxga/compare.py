@@ -46,7 +46,7 @@ from typing import Any
 
 import numpy as np
 
-from jaxga.api import GAPS, Result, check_run, run
+from jaxga.api import GAPS, RUN_OPTIONS, Result, check_run, run
 from jaxga.api import json_number as _num
 from jaxga.config import Config
 from jaxga.errors import ParameterError
@@ -421,10 +421,6 @@ def compare_results(
 def _median(v: np.ndarray) -> float:
     v = v[np.isfinite(v)]
     return float(np.median(v)) if v.size else math.nan
-
-
-RUN_OPTIONS = ("generations", "corner_rule", "variant", "sets", "progress", "chunks")
-"""Keyword arguments of :func:`jaxga.api.run` that are not configuration keys."""
 
 
 def _options_per_preset(specs, grid, common: Mapping[str, Any]) -> dict[str, dict[str, Any]]:
