@@ -524,10 +524,10 @@ def _load(preset, grid, corner_rule, variant, sets, overrides, generations, *,
     """``(config, grid, map name)`` of a call, checked; ``check_read=False`` leaves
     overrides that nothing reads to the caller (:func:`jaxga.compare.compare`)."""
     from jaxga.maps import load_map_info
-    from jaxga.presets import load_preset, parse_set
+    from jaxga.presets import file_keys, load_preset, parse_set
 
     check_environment()  # a bad $JAXGA_THREEFRY, which `import jaxga` does not refuse
-    if not isinstance(sets, (str, Sequence)):
+    if isinstance(sets, bytes) or not isinstance(sets, (str, Sequence)):
         raise ParameterError(f"sets must be 'key=value' strings, got {sets!r}")
     sets = (sets,) if isinstance(sets, str) else tuple(sets)
     ov: dict[str, Any] = {k.replace("__", "."): v for k, v in overrides.items()}
@@ -535,6 +535,11 @@ def _load(preset, grid, corner_rule, variant, sets, overrides, generations, *,
         with contextlib.suppress(TypeError):
             generations = as_integer(generations)
         ov["generations"] = generations
+    given = flatten(ov)
+    for key, value in (parse_set(text) for text in sets):  # one value per key
+        if key in given and given[key] != value:
+            raise ParameterError(f"{key} is given twice, as {given[key]!r} and {value!r}")
+        given[key] = value
     if isinstance(preset, Config):  # as load_preset: the overrides, then the sets
         if variant is not None:
             raise ParameterError(f"variant {variant!r} given with a Config: load the preset "
@@ -545,11 +550,20 @@ def _load(preset, grid, corner_rule, variant, sets, overrides, generations, *,
         config = load_preset(preset, variant=variant, overrides=ov, sets=sets)
     if check_read:  # never silently ignored
         overridden = [*flatten(ov), *(parse_set(t)[0] for t in sets)]
+        if not isinstance(preset, Config):  # keys a user TOML file sets, too
+            overridden += file_keys(preset, variant)
         check_overrides_read(config, overridden)
-        if isinstance(grid, Grid) and "map.corner_rule" in overridden:
+        rule = config["map.corner_rule"]
+        if "map.corner_rule" in overridden and corner_rule is not None \
+                and corner_rule != rule:
+            raise ParameterError(f"two corner rules given: {corner_rule!r} (corner_rule, "
+                                 f"--corner-rule) and {rule!r} (map.corner_rule)")
+        if "map.corner_rule" in overridden and isinstance(grid, Grid) \
+                and corner_rule is None and grid.corner_rule != rule:
             raise ParameterError(
-                "map.corner_rule has no effect with a Grid: a Grid keeps its own corner rule "
-                f"({grid.corner_rule!r}); pass corner_rule=... to change it")
+                f"map.corner_rule = {rule!r} has no effect with a Grid, which keeps its own "
+                f"corner rule ({grid.corner_rule!r}): give the Grid that rule "
+                "(corner_rule=... or Grid.replace)")
     if isinstance(grid, Grid):
         map_name = "grid"
         grid = grid.validated()  # a grid made with the plain constructor is checked too
@@ -628,7 +642,8 @@ def sweep(
 
     t_start = time.perf_counter()
     if not isinstance(points, Sequence) or isinstance(points, str) \
-            or not all(isinstance(p, Mapping) for p in points):
+            or not all(isinstance(p, Mapping) and all(isinstance(k, str) for k in p)
+                       for p in points):
         raise ParameterError(f"points must be a list of mappings key -> value, got "
                              f"{points!r}")
     if not points:

@@ -106,7 +106,12 @@ def cmd_optimum(args: argparse.Namespace) -> int:
         raise JaxgaError("--set and --variant need --preset")
     if args.preset is not None:
         config = load_preset(args.preset, variant=args.variant, sets=args.set or ())
-        check_overrides_read(config, [parse_set(text)[0] for text in args.set or ()])
+        set_keys = [parse_set(text)[0] for text in args.set or ()]
+        check_overrides_read(config, set_keys)
+        other = [k for k in set_keys if not k.startswith("fitness.") and k != "map.corner_rule"]
+        if other:
+            raise JaxgaError(f"jaxga optimum reads only the fitness keys and map.corner_rule "
+                             f"of a preset, not {', '.join(other)}")
         if args.corner_rule is None:  # as `jaxga run`: the preset's corner rule
             args.corner_rule = config["map.corner_rule"]
     info, grid = _load_grid(args)
@@ -298,8 +303,17 @@ def cmd_compare(args: argparse.Namespace) -> int:
         from jaxga.maps import load_map
         from jaxga.presets import load_preset
 
-        grid = load_map(args.map, start=args.start, goal=args.goal, corner_rule=(
-            args.corner_rule or load_preset(presets[0])["map.corner_rule"]))
+        rule = args.corner_rule
+        if rule is None:  # the presets' own rule (with --set), which must be one
+            rules = {p: load_preset(p, sets=args.set or ())["map.corner_rule"]
+                     for p in presets}
+            if len(set(rules.values())) > 1:
+                raise ParameterError(
+                    "the presets would run under different corner rules ("
+                    + ", ".join(f"{p}: {r}" for p, r in rules.items())
+                    + "): give one with --corner-rule")
+            rule = rules[presets[0]]
+        grid = load_map(args.map, start=args.start, goal=args.goal, corner_rule=rule)
     progress = None if args.quiet else (lambda label: print(f"running {label} ...",
                                                               file=sys.stderr, flush=True))
     comp = compare(presets, grid, seeds=args.seeds, metric=args.metric, test=args.test,

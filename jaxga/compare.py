@@ -146,6 +146,9 @@ class Comparison:
     alpha: float
     pairwise: list[PairTest]
     success_tests: list[PairTest]
+    left_out: dict[str, tuple[str, ...]] = dataclasses.field(default_factory=dict)
+    """Per preset label, the common override keys that :func:`compare` left out of its
+    run because the preset never reads them (they would change nothing)."""
 
     @property
     def labels(self) -> list[str]:
@@ -244,6 +247,10 @@ class Comparison:
         failed = [f"{label}: {r.reason}" for label, r in self.results.items() if r.reason]
         if failed:  # why a preset's seeds found no path (e.g. a capacity too small)
             parts.append("\n".join(failed))
+        if any(self.left_out.values()):
+            parts.append("\n".join(f"{label} does not read {', '.join(keys)}: left out of "
+                                   "its runs" for label, keys in self.left_out.items()
+                                   if keys))
         for m in self.metrics:
             parts.append(f"pairwise tests on {m}:\n" + _text_table(*self._test_table(m)))
         if self.all_succeeded():
@@ -308,7 +315,7 @@ class Comparison:
                 "generations": r.generations, "n_seeds": row["n"],
                 "fitness_optimum": _num(r.fitness_optimum),
                 "n_success": row["n_success"], "success_rate": row["success_rate"],
-                "reason": r.reason,
+                "reason": r.reason, "left_out": list(self.left_out.get(row["label"], ())),
                 "summary": {name: {"mean": _num(m), "sd": _num(s), "min": _num(lo),
                                    "max": _num(hi)}
                             for name, m, s, lo, hi in r.summary_rows()},
@@ -423,12 +430,14 @@ def _median(v: np.ndarray) -> float:
     return float(np.median(v)) if v.size else math.nan
 
 
-def _options_per_preset(specs, grid, common: Mapping[str, Any]) -> dict[str, dict[str, Any]]:
-    """Each preset's keyword arguments for :func:`jaxga.api.run`: the common options,
-    less the common configuration keys (overrides and ``sets``) that this preset never
-    reads (:func:`jaxga.engine.unread_keys`; they would change nothing), then its own
+def _options_per_preset(specs, grid, common: Mapping[str, Any]
+                        ) -> tuple[dict[str, dict[str, Any]], dict[str, tuple[str, ...]]]:
+    """Each preset's keyword arguments for :func:`jaxga.api.run`, and the common keys
+    left out of them: the common options, less the common configuration keys
+    (overrides and ``sets``) that this preset never reads
+    (:func:`jaxga.engine.unread_keys`; they would change nothing), then its own
     overrides, which are checked strictly by ``run``. A common key that no preset
-    reads is refused."""
+    reads is refused, and so are presets that would run under different corner rules."""
     from jaxga.api import _load
     from jaxga.engine import OFF_VALUES, unread_keys
     from jaxga.presets import parse_set
@@ -436,31 +445,51 @@ def _options_per_preset(specs, grid, common: Mapping[str, Any]) -> dict[str, dic
     sets = common.get("sets", ())
     sets = (sets,) if isinstance(sets, str) else sets
     out: dict[str, dict[str, Any]] = {}
+    left_out: dict[str, tuple[str, ...]] = {}
     unread_by_all: dict[str, str] | None = None
+    rules: dict[str, str] = {}
     for label, (preset, ov) in specs.items():
-        opts = {**common, **ov}
-        config, _, _ = _load(preset, grid, opts.get("corner_rule"), opts.get("variant"),
-                             opts.get("sets", ()), {k: v for k, v in opts.items()
-                                                    if k not in RUN_OPTIONS},
-                             opts.get("generations"), check_read=False)
-        own = {k.replace("__", ".") for k in ov}
+        own_sets = ov.get("sets", ())
+        own_sets = (own_sets,) if isinstance(own_sets, str) else tuple(own_sets)
+        own = {k.replace("__", ".") for k in ov if k not in RUN_OPTIONS}
+        own |= {parse_set(t)[0] for t in own_sets}
+        # the common keys this preset does not set itself, then its own
+        merged = {k: v for k, v in common.items()
+                  if k in RUN_OPTIONS or k.replace("__", ".") not in own}
+        merged.update({k: v for k, v in ov.items() if k != "sets"})
+        merged_sets = tuple(t for t in sets if parse_set(t)[0] not in own) + own_sets
+        config, loaded, _ = _load(preset, grid, merged.get("corner_rule"),
+                                  merged.get("variant"), merged_sets,
+                                  {k: v for k, v in merged.items() if k not in RUN_OPTIONS},
+                                  merged.get("generations"), check_read=False)
+        rules[label] = loaded.corner_rule
         unread = {k: why for k, why in unread_keys(config).items()
                   if k not in own and config.get(k) != OFF_VALUES.get(k, object())}
-        kept = {k: v for k, v in common.items()
-                if k in RUN_OPTIONS or k.replace("__", ".") not in unread}
-        read_sets = tuple(t for t in sets if parse_set(t)[0] not in unread)
-        if "sets" not in ov and len(read_sets) < len(sets):
-            kept["sets"] = read_sets
-        out[label] = {**kept, **ov}
+        options = {k: v for k, v in merged.items()
+                   if k in RUN_OPTIONS or k.replace("__", ".") not in unread}
+        options.pop("sets", None)
+        read_sets = tuple(t for t in merged_sets if parse_set(t)[0] not in unread)
+        if read_sets:
+            options["sets"] = read_sets
+        out[label] = options
+        common_keys = [k.replace("__", ".") for k in common if k not in RUN_OPTIONS]
+        common_keys += [parse_set(t)[0] for t in sets]
+        left_out[label] = tuple(k for k in dict.fromkeys(common_keys)
+                                if k in unread and k not in own)
         unread_by_all = (dict(unread) if unread_by_all is None
                          else {k: v for k, v in unread_by_all.items() if k in unread})
+    if len(set(rules.values())) > 1:  # compare_results would refuse them after the runs
+        raise ParameterError(
+            "the presets would run under different corner rules ("
+            + ", ".join(f"{label}: {rule}" for label, rule in rules.items())
+            + "): give one with corner_rule=... (--corner-rule)")
     given = [k.replace("__", ".") for k in common if k not in RUN_OPTIONS]
     given += [parse_set(t)[0] for t in sets]
     nowhere = [k for k in given if k in (unread_by_all or {})]
     if nowhere:
         raise ParameterError("; ".join(f"{k} has no effect in any of the presets compared "
                                        f"(e.g. {unread_by_all[k]})" for k in nowhere))
-    return out
+    return out, left_out
 
 
 def _normalise_presets(presets: Sequence[PresetSpec] | Mapping[str, PresetSpec]
@@ -539,12 +568,14 @@ def compare(
         check_metric(m)
     if test not in TESTS:
         raise ParameterError(f"unknown test {test!r}; choose from {', '.join(TESTS)}")
+    if progress is not None and not callable(progress):
+        raise ParameterError(f"progress must be a callable (label), got {progress!r}")
     if isinstance(presets, str):  # "sga,imga", as on the command line
         presets = split_presets(presets)
     specs = _normalise_presets(presets)
     if len(specs) < 2:
         raise ParameterError(f"a comparison needs at least two presets, got {len(specs)}")
-    options = _options_per_preset(specs, grid, common_options)
+    options, left_out = _options_per_preset(specs, grid, common_options)
     for label, (preset, _) in specs.items():  # bad input fails before anything runs
         check_run(preset, grid, **options[label])
     results = {}
@@ -552,4 +583,6 @@ def compare(
         if progress is not None:
             progress(label)
         results[label] = run(preset, grid, seeds, **options[label])
-    return compare_results(results, metric=metric, metrics=metrics, test=test, alpha=alpha)
+    comparison = compare_results(results, metric=metric, metrics=metrics, test=test,
+                                 alpha=alpha)
+    return dataclasses.replace(comparison, left_out=left_out)

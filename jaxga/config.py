@@ -57,6 +57,8 @@ class Field:
         value = python_scalar(value)
         if float in kinds and isinstance(value, int) and not isinstance(value, bool):
             value = float(value)
+        if list in kinds and isinstance(value, tuple):  # (1.2, 1.4) from Python
+            value = list(value)
         if isinstance(value, bool) and bool not in kinds:
             raise ParameterError(f"{key} must be {_kind_name(kinds)}, got {value!r}")
         if not isinstance(value, kinds):

@@ -65,7 +65,7 @@ import math
 import os
 import tempfile
 import time
-from collections.abc import Callable, Mapping, Sequence
+from collections.abc import Callable, Iterable, Mapping, Sequence
 from pathlib import Path
 from typing import Any
 
@@ -74,7 +74,7 @@ import numpy as np
 from jaxga.config import SCHEMA, Config, parse_value, python_scalar
 from jaxga.engine import unread_keys
 from jaxga.errors import NoPathError, ParameterError
-from jaxga.grid import Grid
+from jaxga.grid import Grid, as_integer
 
 # ----------------------------------------------------------------------------- factors
 
@@ -87,6 +87,9 @@ class Factor:
     levels: tuple[Any, Any, Any]
 
     def __post_init__(self) -> None:
+        if not isinstance(self.name, str):
+            raise ParameterError(f"a factor's name is a configuration key (a string), got "
+                                 f"{self.name!r}")
         if isinstance(self.levels, (str, bytes)):
             raise ParameterError(f"factor {self.name}: levels must be three numbers, got "
                                  f"{self.levels!r}")
@@ -751,10 +754,32 @@ def run_doe(
     direction = direction or RESPONSES[response]
     if direction not in ("max", "min"):
         raise ParameterError(f"direction must be 'max' or 'min', got {direction!r}")
-    factors = tuple(factors)
+    if not isinstance(factors, (str, bytes, Mapping)) and isinstance(factors, Iterable):
+        factors = tuple(factors)
+    if not isinstance(factors, tuple) or not all(isinstance(f, Factor) for f in factors):
+        raise ParameterError(f"factors must be a list of jaxga.doe.Factor (Factor(name, "
+                             f"(low, mid, high)) or Factor.parse('NAME=LOW,MID,HIGH')), got "
+                             f"{factors!r}")
+    if progress is not None and not callable(progress):
+        raise ParameterError(f"progress must be a callable (done, total), got {progress!r}")
+    if checkpoint is not None and not isinstance(checkpoint, (str, os.PathLike)):
+        raise ParameterError(f"checkpoint must be a directory path, got {checkpoint!r}")
+    if block is not None:
+        try:
+            block = as_integer(block)
+        except TypeError:
+            raise ParameterError(f"block must be an integer >= 1, got {block!r}") from None
     config, loaded, map_name = _load(preset, grid, corner_rule, variant, sets, overrides,
                                      generations)
     check_factors(config, factors)
+    from jaxga.presets import parse_set
+
+    overridden = {k.replace("__", ".") for k in overrides}
+    overridden |= {parse_set(t)[0] for t in ((sets,) if isinstance(sets, str) else sets)}
+    both = [f.name for f in factors if f.name in overridden]
+    if both:
+        raise ParameterError(f"{', '.join(both)} is both a factor and an override: the "
+                             "factor's levels would replace the override")
     coded = design_array(design, len(factors))
     points = design_points(factors, coded)
     n_points = len(points)

@@ -271,6 +271,12 @@ def check_combination(config: Config) -> None:
                 f"{stage}.method = {method!r} with {stage}.adaptive = "
                 f"false needs {rate} (or {island_key}), which this configuration does not "
                 "set (--set KEY=VALUE)")
+    for stage, low, high in (("crossover", "pc_low", "pc_high"),
+                             ("mutation", "pm_low", "pm_high")):
+        lo, hi = config.get(f"{stage}.{low}"), config.get(f"{stage}.{high}")
+        if config.get(f"{stage}.adaptive") and lo is not None and hi is not None and lo > hi:
+            raise ParameterError(f"{stage}.{low} = {lo} is above {stage}.{high} = {hi} "
+                                 "(AGACD eq. 26-29 move the rate between the two)")
     if config.get("mutation.method") == "segment_sa" and not config["mutation.temperature_w"] > 0:
         raise ParameterError("mutation.temperature_w must be in (0, 1] (MPMGA eq. 17: "
                              f"T = c1 * w**t), got {config['mutation.temperature_w']}")
@@ -303,6 +309,11 @@ def check_combination(config: Config) -> None:
         raise ParameterError(f"{' and '.join('fitness.' + k for k in weights)} are all 0: "
                              "every path would have the same fitness (IMGA eq. 4, MPMGA "
                              "eq. 3, Zhu & Pan eq. 6)")
+    if method == "mpmga" and weight("alpha") == 0 and weight("beta") * weight("c") == 0:
+        raise ParameterError(
+            "fitness.alpha = 0 with fitness.beta * fitness.c = 0: every path would have "
+            "fitness 0 (MPMGA eq. 3: alpha / length + beta * c / smoothness), which the "
+            "engine reads as infeasible")
     if "smoothness_floor" in FITNESS_PARAMS.get(method, ()):
         floor = weight("smoothness_floor")
         if not floor > 0:

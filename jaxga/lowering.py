@@ -80,9 +80,10 @@ def check_environment() -> str:
     ``import jaxga`` leaves JAX's lowering alone on such a value and does not raise (the
     command line could only show it as a traceback); :func:`jaxga.run` and the other
     entry points call this first and refuse it before anything compiles."""
-    value = os.environ.get(ENV_VAR, "unrolled").strip().lower()
+    given = os.environ.get(ENV_VAR, "")
+    value = given.strip().lower() or "unrolled"  # set but empty: as if unset
     if value not in ("unrolled", "rolled"):
-        raise ParameterError(f"{ENV_VAR} must be 'unrolled' or 'rolled', got {value!r}")
+        raise ParameterError(f"{ENV_VAR} must be 'unrolled' or 'rolled', got {given!r}")
     return value
 
 

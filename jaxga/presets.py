@@ -180,6 +180,21 @@ def _chain(
     return [*inner, (label, body, variants)]
 
 
+def file_keys(name_or_path: str | os.PathLike, variant: str | None = None) -> list[str]:
+    """The configuration keys that user TOML files set in the ``base`` chain of
+    ``name_or_path`` (their tables and the chosen variant; not the built-in presets, not
+    the metadata ``name``, ``paper``, ``description``): overrides like ``--set``, so that
+    :func:`jaxga.run` can refuse the ones the configuration never reads."""
+    keys: list[str] = []
+    for label, body, variants in _chain(name_or_path):
+        if label.startswith("preset "):  # a built-in preset
+            continue
+        for key in (*body, *variants.get(variant, {})):
+            if key not in ("name", "paper", "description") and key not in keys:
+                keys.append(key)
+    return keys
+
+
 def parse_set(text: str) -> tuple[str, Any]:
     """``(key, value)`` of a ``--set key=value`` string; the value is parsed as TOML."""
     if not isinstance(text, str) or "=" not in text:

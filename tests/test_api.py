@@ -13,6 +13,7 @@ import numpy as np
 import pytest
 
 from jaxga import api, engine, schedules
+from jaxga.compare import compare as jaxga_compare
 from jaxga.errors import InitialisationWarning, JaxgaError, ParameterError
 from jaxga.fitness_reference import fitness_optimum, fitness_weights, path_fitness_np
 from jaxga.maps import load_map, random_map
@@ -355,15 +356,60 @@ def test_a_config_preset_takes_sets_and_refuses_a_variant(grid, monkeypatch):
         api.check_run(load_preset("agacd"), grid, variant="50x50")
 
 
-def test_a_corner_rule_key_with_a_grid_is_refused(grid):
-    """A Grid keeps its own corner rule (``corner_rule=`` changes it): the preset key
-    ``map.corner_rule`` would be ignored, so it is refused as an override."""
-    with pytest.raises(ParameterError, match="map.corner_rule has no effect with a Grid"):
-        api.check_run("sga", grid, map__corner_rule="strict")
-    with pytest.raises(ParameterError, match="map.corner_rule has no effect with a Grid"):
-        api.check_run("sga", grid, sets=["map.corner_rule=strict"])
+def test_a_corner_rule_key_that_would_be_ignored_is_refused(grid):
+    """A Grid keeps its own corner rule (``corner_rule=`` changes it): a preset key
+    ``map.corner_rule`` that disagrees with it would be ignored, and so would one that
+    disagrees with ``corner_rule=``; both are refused. One that agrees is accepted (the
+    command line builds the Grid with it when given --start or --goal)."""
+    assert grid.corner_rule == "free"
+    for bad in ({"map__corner_rule": "strict"}, {"sets": ["map.corner_rule=strict"]}):
+        with pytest.raises(ParameterError, match="map.corner_rule = 'strict' has no effect "
+                                                 "with a Grid"):
+            api.check_run("sga", grid, **bad)
+    api.check_run("sga", grid, map__corner_rule="free")
+    api.check_run("sga", grid, map__corner_rule="strict", corner_rule="strict")
+    with pytest.raises(ParameterError, match="two corner rules given: 'free'"):
+        api.check_run("sga", "classic_ga_gapp3_20x20", corner_rule="free",
+                      map__corner_rule="strict")
     config = api.check_run("sga", "classic_ga_gapp3_20x20", map__corner_rule="strict")
     assert config["map.corner_rule"] == "strict"  # a map given by name reads it
+
+
+def test_a_key_given_twice_with_two_values_is_refused(grid):
+    """One value per key: ``generations=1`` with ``sets=["generations=3"]`` ran 3
+    generations (the set won silently); the same value twice is harmless."""
+    with pytest.raises(ParameterError, match="generations is given twice, as 1 and 3"):
+        api.check_run("sga", grid, generations=1, sets=["generations=3"])
+    with pytest.raises(ParameterError, match="crossover.probability is given twice"):
+        api.check_run("sga", grid, crossover__probability=0.5,
+                      sets=["crossover.probability=0.7"])
+    with pytest.raises(ParameterError, match="mutation.probability is given twice"):
+        api.check_run("sga", grid, sets=["mutation.probability=0.1",
+                                         "mutation.probability=0.2"])
+    api.check_run("sga", grid, generations=3, sets=["generations=3"])
+
+
+def test_keys_a_user_file_sets_are_checked_like_overrides(grid, tmp_path):
+    """A user TOML file that sets a key its configuration never reads is refused as
+    ``--set`` is; a copy of every built-in preset file is accepted with every variant."""
+    from jaxga.presets import _chain, _preset_file
+
+    user = tmp_path / "mine.toml"
+    user.write_text('base = "agacd"\n[crossover]\nprobability = 0.8\n')
+    with pytest.raises(ParameterError, match="crossover.probability has no effect in 'mine'"):
+        api.check_run(str(user), grid)
+    for name in preset_names():
+        copy = tmp_path / f"copy_{name}.toml"
+        copy.write_text(_preset_file(name).read_text(encoding="utf-8"))
+        for variant in (None, *sorted({v for _, _, vs in _chain(name) for v in vs})):
+            api.check_run(str(copy), grid, variant=variant)
+
+
+def test_list_keys_take_tuples(grid):
+    config = api.check_run("agacd", grid, fitness__importance_ratios=(1.2, 1.5))
+    assert list(config["fitness.importance_ratios"]) == [1.2, 1.5]
+    config = api.check_run("mpmga", grid, islands__crossover_probabilities=(0.5, 0.6, 0.7))
+    assert list(config["islands.crossover_probabilities"]) == [0.5, 0.6, 0.7]
 
 
 def test_a_fixed_rate_that_is_missing_is_named():
@@ -630,6 +676,9 @@ def test_map_runs_in_blocks_equals_one_vmap():
     ("mpmga", {"islands__count": 2}, ["needs islands.count = 3"]),
     ("iga_zhang", {"fitness__v_t": 0.0}, ["fitness.v_t", "> 0"]),
     ("mpmga", {"fitness__alpha": 0.0, "fitness__beta": 0.0}, ["same fitness"]),
+    ("mpmga", {"fitness__alpha": 0.0, "fitness__c": 0.0}, ["every path would have fitness 0"]),
+    ("agacd", {"crossover__pc_low": 0.9, "crossover__pc_high": 0.5},
+     ["crossover.pc_low = 0.9 is above crossover.pc_high = 0.5"]),
     ("imga", {"fitness__a": 0, "fitness__b": 0, "fitness__c": 0}, ["same fitness"]),
     ("iga_zhu", {"fitness__omega": 0, "fitness__c1": 0, "fitness__c2": 0, "fitness__c3": 0},
      ["fitness.omega and fitness.c1", "same fitness"]),
@@ -657,6 +706,10 @@ def test_inconsistent_parameters_are_refused_before_tracing(grid, monkeypatch, p
     (lambda g: api.sweep("sga", g, 3), "points must be a list of mappings"),
     (lambda g: api.sweep("sga", g, [3]), "points must be a list of mappings"),
     (lambda g: api.sweep("sga", g, "crossover.probability=0.5"), "points must be a list"),
+    (lambda g: api.sweep("sga", g, [{3: 3}]), "points must be a list of mappings"),
+    (lambda g: api.run("sga", g, seeds=1, sets=b"x=1"), "sets must be 'key=value' strings"),
+    (lambda g: jaxga_compare(["sga", "imga"], g, seeds=1, progress=3),
+     "progress must be a callable"),
 ])
 def test_wrong_python_types_are_refused_with_a_jaxga_error(grid, monkeypatch, call, words):
     """Options of the wrong type are named (ParameterError), not a TypeError from deep

@@ -122,6 +122,21 @@ def test_presets_as_one_comma_separated_string(comparison, grid):
                                   comparison.results["imga"].cells)
 
 
+def test_a_common_key_left_out_is_reported(comparison, grid):
+    """IMGA's weight ``a`` (at its preset value, so the compiled programs are reused)
+    given to sga and imga: sga does not read it, runs without it, and the summary and
+    the JSON say so; the results are those of the plain comparison."""
+    again = compare(["sga", "imga"], grid, seeds=SEEDS, fitness__a=6.0, **SMALL)
+    assert again.left_out == {"sga": ("fitness.a",), "imga": ()}
+    assert "sga does not read fitness.a: left out of its runs" in again.summary()
+    js = again.to_json()["presets"]
+    assert js["sga"]["left_out"] == ["fitness.a"] and js["imga"]["left_out"] == []
+    for name in ("sga", "imga"):
+        np.testing.assert_array_equal(again.results[name].cells,
+                                      comparison.results[name].cells)
+    assert comparison.left_out == {"sga": (), "imga": ()}
+
+
 def test_compare_gives_the_results_of_separate_runs(comparison, grid):
     for name in ("sga", "imga"):
         alone = api.run(name, grid, seeds=SEEDS, **SMALL)
@@ -327,6 +342,27 @@ def test_a_bad_significance_level_is_refused_before_running(monkeypatch):
         compare(["sga", "imga"], "classic_ga_gapp3_20x20", seeds=1, alpha=5)
 
 
+def test_presets_under_different_corner_rules_are_refused_before_running(
+        monkeypatch, tmp_path, capsys):
+    """Their results could not be compared (other maps, in effect): refused before the
+    first preset runs, from the API and from the command line, with --start too (which
+    used to give every preset the first preset's rule)."""
+    import importlib
+
+    module = importlib.import_module("jaxga.compare")
+    monkeypatch.setattr(module, "run", lambda *a, **k: pytest.fail("a preset ran"))
+    with pytest.raises(ParameterError, match="different corner rules .a: free, b: strict"):
+        compare({"a": "sga", "b": ("sga", {"map__corner_rule": "strict"})},
+                "classic_ga_gapp3_20x20", seeds=1)
+    strict = tmp_path / "strict.toml"
+    strict.write_text('base = "sga"\n[map]\ncorner_rule = "strict"\n')
+    for extra in ([], ["--start", "0,0"]):
+        rc = main(["compare", "--presets", f"sga,{strict}", "--map",
+                   "classic_ga_gapp3_20x20", "--seeds", "1", "--quiet", *extra])
+        err = capsys.readouterr().err.strip()
+        assert rc == EXIT_BAD_INPUT and "different corner rules" in err and "\n" not in err
+
+
 def test_a_common_key_is_left_out_of_the_presets_that_do_not_read_it(monkeypatch):
     """``jaxga compare --presets sga,agacd --set crossover.probability=0.7``: sga runs
     with it, AGACD (adaptive rates) without, where it would change nothing; a common
@@ -345,13 +381,24 @@ def test_a_common_key_is_left_out_of_the_presets_that_do_not_read_it(monkeypatch
             raise Recorded
 
     monkeypatch.setattr(module, "run", fake_run)
-    for kw, agacd in (({"crossover__probability": 0.7}, {}),
-                      ({"sets": ["crossover.probability=0.7", "generations=4"]},
-                       {"sets": ("generations=4",)})):
+    both = ("crossover.probability=0.7", "generations=4")
+    for kw, sga, agacd in (
+            ({"crossover__probability": 0.7}, {"crossover__probability": 0.7}, {}),
+            ({"sets": list(both)}, {"sets": both}, {"sets": ("generations=4",)})):
         calls.clear()
         with pytest.raises(Recorded):
             compare(["sga", "agacd"], "classic_ga_gapp3_20x20", seeds=1, **kw)
-        assert calls == {"sga": kw, "agacd": agacd}
+        assert calls == {"sga": sga, "agacd": agacd}
+    # a preset's own sets join the common ones and win over them for their keys
+    calls.clear()
+    with pytest.raises(Recorded):
+        compare({"a": ("sga", {"sets": ["crossover.probability=0.5"]}), "b": "imga"},
+                "classic_ga_gapp3_20x20", seeds=1, sets=["crossover.probability=0.6",
+                                                         "mutation.probability=0.1"])
+    assert calls == {"sga": {"sets": ("mutation.probability=0.1",
+                                      "crossover.probability=0.5")},
+                     "imga": {"sets": ("crossover.probability=0.6",
+                                       "mutation.probability=0.1")}}
     with pytest.raises(ParameterError, match="fitness.omega has no effect in any of the "
                                              "presets compared"):
         compare(["sga", "agacd"], "classic_ga_gapp3_20x20", seeds=1, fitness__omega=0.5)

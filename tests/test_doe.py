@@ -590,6 +590,34 @@ def test_plot_main_effects_draws_level_means():
     plt.close(ax.figure)
 
 
+@pytest.mark.parametrize("kw, words", [
+    ({"factors": {"mutation.probability": (0.1, 0.2, 0.3)}}, "factors must be a list"),
+    ({"factors": "x"}, "factors must be a list"),
+    ({"factors": [("x", (1, 2, 3))]}, "factors must be a list"),
+    ({"block": "1"}, "block must be an integer"),
+    ({"block": 1.5}, "block must be an integer"),
+    ({"progress": 3}, "progress must be a callable"),
+    ({"checkpoint": 3}, "checkpoint must be a directory path"),
+])
+def test_wrong_python_types_for_a_doe_are_named(monkeypatch, kw, words):
+    monkeypatch.setattr(jaxga.api, "sweep", lambda *a, **k: pytest.fail("a sweep ran"))
+    args = {"factors": [Factor("mutation.probability", (0.1, 0.2, 0.3))], **kw}
+    with pytest.raises(ParameterError, match=words):
+        run_doe("sga", MAP, design="L9", seeds=1, generations=2, **args)
+    with pytest.raises(ParameterError, match="a factor's name is a configuration key"):
+        Factor(3, (1, 2, 3))
+
+
+def test_a_factor_that_is_also_an_override_is_refused(monkeypatch):
+    """The factor's levels would silently replace the override."""
+    monkeypatch.setattr(jaxga.api, "sweep", lambda *a, **k: pytest.fail("a sweep ran"))
+    factor = [Factor("mutation.probability", (0.1, 0.2, 0.3))]
+    for kw in ({"mutation__probability": 0.9}, {"sets": ["mutation.probability=0.9"]}):
+        with pytest.raises(ParameterError, match="mutation.probability is both a factor "
+                                                 "and an override"):
+            run_doe("sga", MAP, factor, "L9", seeds=1, generations=2, **kw)
+
+
 def test_every_design_point_is_checked_before_the_first_runs(monkeypatch):
     """A level that is valid alone but not with the preset's other keys (Zhang's
     straight speed below its turning speed 0.5) is refused before any point runs, not

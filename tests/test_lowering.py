@@ -71,6 +71,8 @@ def test_importing_jaxga_unrolls_threefry_unless_told_not_to(monkeypatch, restor
     assert not lowering.threefry_unrolled()
     keys = jax.vmap(jax.random.PRNGKey)(jnp.arange(2, dtype=jnp.uint32))
     assert _has_loop(_random_program(), keys)
+    monkeypatch.setenv(lowering.ENV_VAR, " ")  # set but empty: the default
+    assert lowering.check_environment() == "unrolled"
     monkeypatch.setenv(lowering.ENV_VAR, "sideways")
     with pytest.raises(ParameterError, match="JAXGA_THREEFRY must be 'unrolled' or 'rolled'"):
         lowering.configure_from_environment()
