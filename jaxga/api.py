@@ -591,9 +591,11 @@ def _point_configs(config: Config, points: Sequence[Mapping[str, Any]]) -> list[
             old = dict(base.items)
             changed = sorted(k for k in new.keys() | old.keys() if new.get(k) != old.get(k))
             raise ParameterError(
-                f"sweep point {dict(point)} changes {', '.join(changed)}: only dynamic keys "
-                "(probabilities, weights, temperatures) and population.size can be swept "
-                "in one compiled call; run the other values separately")
+                f"sweep point {dict(point)} changes {', '.join(changed)}, which the "
+                "compiled program depends on: only scalar dynamic keys (a crossover or "
+                "mutation rate, a fitness weight, MPMGA's c1 temperature; "
+                "jaxga.config.SCHEMA) and population.size can be swept in one compiled "
+                "call; run the other values separately")
         # every point's islands must hold its migrants: an inactive individual never
         # migrates (the check at build time only sees the largest size)
         check_migration(cfg, int(cfg["population.size"]))

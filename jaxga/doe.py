@@ -548,6 +548,8 @@ class _Checkpoint:
         from jaxga import parallel
 
         self.dir = Path(directory)
+        config = manifest.get("config")
+        self.generations = config.get("generations") if isinstance(config, dict) else None
         # Several processes (jaxga.parallel): process 0 alone reads and writes the
         # checkpoint; the others receive what it read (and its refusal) by broadcast, so
         # every process agrees on which points remain even without a shared filesystem.
@@ -559,6 +561,8 @@ class _Checkpoint:
 
     def _check(self, manifest: dict[str, Any]) -> str | None:
         """Validate (or create) the manifest; the refusal message, or None."""
+        if self.dir.exists() and not self.dir.is_dir():
+            return f"checkpoint {self.dir} is a file, not a directory"
         self.dir.mkdir(parents=True, exist_ok=True)
         path = self.dir / "manifest.json"
         if path.exists():
@@ -599,7 +603,7 @@ class _Checkpoint:
             raise ParameterError(
                 f"checkpoint file {path} does not hold the responses ({', '.join(RESPONSES)}) "
                 f"of {n_seeds} seeds: delete it and run again to recompute it")
-        wrong = _impossible_response(responses)
+        wrong = _impossible_response(responses, self.generations)
         if wrong:
             raise ParameterError(f"checkpoint file {path} holds an impossible value: {wrong}; "
                                  "delete it and run again to recompute it")
@@ -652,12 +656,14 @@ _INTEGER_RESPONSES = ("convergence_generation", "turns")
 _LENGTH_LIKE = ("length", "raw_length", "convergence_generation", "turns", "smoothness")
 
 
-def _impossible_response(responses: Mapping[str, list]) -> str:
+def _impossible_response(responses: Mapping[str, list], generations: int | None = None
+                         ) -> str:
     """What no run can have returned (what :func:`seed_responses` makes of a Result), as
     text naming the response and seed; "" if every value is possible. A success is 0 or
     1; a failed seed has fitness 0 and no length-like value (null); a successful one has
     a fitness >= 0 (+inf when extreme weights overflow float32) and finite length-like
-    values >= 0, whole numbers for the generation and the turns."""
+    values >= 0, whole numbers for the generation (at most ``generations``) and the
+    turns."""
     for s, ok in enumerate(responses["success"]):
         if ok not in (0, 1):
             return f"success of seed {s} is {ok!r}, not 0 or 1"
@@ -676,6 +682,9 @@ def _impossible_response(responses: Mapping[str, list]) -> str:
             if v is None or not math.isfinite(v) or v < 0 \
                     or (key in _INTEGER_RESPONSES and v != int(v)):
                 return f"{key} of seed {s} is {v!r}"
+            if key == "convergence_generation" and generations is not None \
+                    and v > generations:
+                return f"{key} of seed {s} is {v!r}, after the last of {generations}"
     return ""
 
 

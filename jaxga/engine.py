@@ -358,8 +358,8 @@ def default_params(config: Config, islands: int = 1) -> dict[str, jax.Array]:
         if per_island is not None:
             if len(per_island) != islands:
                 raise ParameterError(
-                    f"{island_key} has {len(per_island)} entries for {islands} islands"
-                )
+                    f"{island_key} has {len(per_island)} entries for {islands} islands "
+                    f"(islands.count): give one rate per island")
             params[key] = jnp.asarray(per_island, F32)
     return params
 

@@ -423,6 +423,7 @@ def test_checkpointed_blocks_equal_one_call_and_resume(one_call, blocked, tmp_pa
     ("two_seeds", "point"), ("text_value", "point"), ("{bad", "confirm"),
     ("two_seeds", "confirm"), ("success_2", "point"), ("failed_with_length", "point"),
     ("negative_length", "confirm"), ("half_turn", "point"), ("reason_number", "point"),
+    ("late_convergence", "point"),
 ])
 def test_a_damaged_checkpoint_file_is_named_not_a_traceback(blocked, tmp_path, monkeypatch,
                                                             damage, where):
@@ -446,7 +447,8 @@ def test_a_damaged_checkpoint_file_is_named_not_a_traceback(blocked, tmp_path, m
         r = saved["responses"]
         assert r["success"][0] == 1  # the damage below is impossible for a success
         change = {"success_2": ("success", 2), "negative_length": ("length", -1.0),
-                  "half_turn": ("turns", 1.5)}.get(damage)
+                  "half_turn": ("turns", 1.5),
+                  "late_convergence": ("convergence_generation", 99)}.get(damage)
         if change:
             r[change[0]][0] = change[1]
         elif damage == "failed_with_length":  # a failed seed with a length
@@ -606,6 +608,15 @@ def test_wrong_python_types_for_a_doe_are_named(monkeypatch, kw, words):
         run_doe("sga", MAP, design="L9", seeds=1, generations=2, **args)
     with pytest.raises(ParameterError, match="a factor's name is a configuration key"):
         Factor(3, (1, 2, 3))
+
+
+def test_a_checkpoint_that_is_a_file_is_named(monkeypatch, tmp_path):
+    monkeypatch.setattr(jaxga.api, "sweep", lambda *a, **k: pytest.fail("a sweep ran"))
+    existing = tmp_path / "m.txt"
+    existing.write_text("x")
+    with pytest.raises(ParameterError, match="m.txt is a file, not a directory"):
+        run_doe("sga", MAP, [Factor("mutation.probability", (0.1, 0.2, 0.3))], "L9",
+                seeds=1, generations=2, checkpoint=existing)
 
 
 def test_a_factor_that_is_also_an_override_is_refused(monkeypatch):
