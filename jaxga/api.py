@@ -519,12 +519,24 @@ def _check_call_options(progress, chunks) -> None:
         raise ParameterError(f"chunks must be an integer >= 1, got {chunks!r}")
 
 
+def _normalised(key: str, value: Any) -> Any:
+    """``value`` as the configuration stores it (a tuple and a list alike, numpy scalars
+    as Python ones), to compare two values given for ``key``; an invalid value is
+    refused with the key's own message."""
+    from jaxga.config import SCHEMA
+
+    if key not in SCHEMA:  # refused by name when the preset loads
+        return repr(value)
+    value = SCHEMA[key].check(key, value)
+    return tuple(value) if isinstance(value, list) else value
+
+
 def _load(preset, grid, corner_rule, variant, sets, overrides, generations, *,
           check_read: bool = True):
     """``(config, grid, map name)`` of a call, checked; ``check_read=False`` leaves
     overrides that nothing reads to the caller (:func:`jaxga.compare.compare`)."""
     from jaxga.maps import load_map_info
-    from jaxga.presets import file_keys, load_preset, parse_set
+    from jaxga.presets import check_file_keys_read, load_preset, parse_set
 
     check_environment()  # a bad $JAXGA_THREEFRY, which `import jaxga` does not refuse
     if isinstance(sets, bytes) or not isinstance(sets, (str, Sequence)):
@@ -537,7 +549,7 @@ def _load(preset, grid, corner_rule, variant, sets, overrides, generations, *,
         ov["generations"] = generations
     given = flatten(ov)
     for key, value in (parse_set(text) for text in sets):  # one value per key
-        if key in given and given[key] != value:
+        if key in given and _normalised(key, given[key]) != _normalised(key, value):
             raise ParameterError(f"{key} is given twice, as {given[key]!r} and {value!r}")
         given[key] = value
     if isinstance(preset, Config):  # as load_preset: the overrides, then the sets
@@ -550,9 +562,9 @@ def _load(preset, grid, corner_rule, variant, sets, overrides, generations, *,
         config = load_preset(preset, variant=variant, overrides=ov, sets=sets)
     if check_read:  # never silently ignored
         overridden = [*flatten(ov), *(parse_set(t)[0] for t in sets)]
-        if not isinstance(preset, Config):  # keys a user TOML file sets, too
-            overridden += file_keys(preset, variant)
         check_overrides_read(config, overridden)
+        if not isinstance(preset, Config):  # keys a user TOML file sets, in that file
+            check_file_keys_read(preset, variant)
         rule = config["map.corner_rule"]
         if "map.corner_rule" in overridden and corner_rule is not None \
                 and corner_rule != rule:
@@ -563,7 +575,7 @@ def _load(preset, grid, corner_rule, variant, sets, overrides, generations, *,
             raise ParameterError(
                 f"map.corner_rule = {rule!r} has no effect with a Grid, which keeps its own "
                 f"corner rule ({grid.corner_rule!r}): give the Grid that rule "
-                "(corner_rule=... or Grid.replace)")
+                "(corner_rule=... or Grid.replace; --corner-rule on the command line)")
     if isinstance(grid, Grid):
         map_name = "grid"
         grid = grid.validated()  # a grid made with the plain constructor is checked too

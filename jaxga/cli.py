@@ -108,6 +108,10 @@ def cmd_optimum(args: argparse.Namespace) -> int:
         config = load_preset(args.preset, variant=args.variant, sets=args.set or ())
         set_keys = [parse_set(text)[0] for text in args.set or ()]
         check_overrides_read(config, set_keys)
+        if "map.corner_rule" in set_keys and args.corner_rule is not None \
+                and args.corner_rule != config["map.corner_rule"]:
+            raise JaxgaError(f"two corner rules given: {args.corner_rule!r} (--corner-rule) "
+                             f"and {config['map.corner_rule']!r} (map.corner_rule)")
         other = [k for k in set_keys if not k.startswith("fitness.") and k != "map.corner_rule"]
         if other:
             raise JaxgaError(f"jaxga optimum reads only the fitness keys and map.corner_rule "
@@ -544,7 +548,7 @@ def build_parser() -> argparse.ArgumentParser:
     p = sub.add_parser("compare", help="compare presets on a map with statistical tests")
     p.add_argument("--presets", required=True, metavar="A,B,...",
                    help="comma-separated preset names (jaxga presets) or TOML files")
-    _add_map_arguments(p, rule_default="the first preset's map.corner_rule")
+    _add_map_arguments(p, rule_default="the presets' map.corner_rule, which must agree")
     p.add_argument("--seeds", type=int, default=30,
                    help="seeded runs per preset, the same seeds for all (default 30)")
     p.add_argument("--metric", default="length",

@@ -442,20 +442,25 @@ def _options_per_preset(specs, grid, common: Mapping[str, Any]
     from jaxga.engine import OFF_VALUES, unread_keys
     from jaxga.presets import parse_set
 
-    sets = common.get("sets", ())
-    sets = (sets,) if isinstance(sets, str) else sets
+    def as_sets(value: Any) -> tuple:
+        if isinstance(value, bytes) or not isinstance(value, (str, Sequence)):
+            raise ParameterError(f"sets must be 'key=value' strings, got {value!r}")
+        return (value,) if isinstance(value, str) else tuple(value)
+
+    sets = as_sets(common.get("sets", ()))
+    # generations= is a configuration key given as an option: a preset's own wins
+    is_key = [k for k in RUN_OPTIONS if k != "generations"]
     out: dict[str, dict[str, Any]] = {}
     left_out: dict[str, tuple[str, ...]] = {}
     unread_by_all: dict[str, str] | None = None
     rules: dict[str, str] = {}
     for label, (preset, ov) in specs.items():
-        own_sets = ov.get("sets", ())
-        own_sets = (own_sets,) if isinstance(own_sets, str) else tuple(own_sets)
-        own = {k.replace("__", ".") for k in ov if k not in RUN_OPTIONS}
+        own_sets = as_sets(ov.get("sets", ()))
+        own = {k.replace("__", ".") for k in ov if k not in is_key}
         own |= {parse_set(t)[0] for t in own_sets}
         # the common keys this preset does not set itself, then its own
         merged = {k: v for k, v in common.items()
-                  if k in RUN_OPTIONS or k.replace("__", ".") not in own}
+                  if k in is_key or k.replace("__", ".") not in own}
         merged.update({k: v for k, v in ov.items() if k != "sets"})
         merged_sets = tuple(t for t in sets if parse_set(t)[0] not in own) + own_sets
         config, loaded, _ = _load(preset, grid, merged.get("corner_rule"),
@@ -560,7 +565,8 @@ def compare(
     Returns:
         A :class:`Comparison` (see the module docstring for the decisions on tests,
         failed seeds and corrections). Each preset's :class:`Result` is exactly what
-        ``run(preset, grid, seeds, **common_options)`` returns.
+        :func:`jaxga.api.run` returns for it with the common options (less the keys it
+        does not read, :attr:`Comparison.left_out`) and its own overrides.
     """
     check_alpha(alpha)
     check_metric(metric)

@@ -71,7 +71,7 @@ from typing import Any
 
 import numpy as np
 
-from jaxga.config import SCHEMA, Config, parse_value, python_scalar
+from jaxga.config import SCHEMA, Config, flatten, parse_value, python_scalar
 from jaxga.engine import unread_keys
 from jaxga.errors import NoPathError, ParameterError
 from jaxga.grid import Grid, as_integer
@@ -542,7 +542,7 @@ def _map_fingerprint(grid: Grid, name: str) -> dict[str, Any]:
 
 class _Checkpoint:
     """A directory of finished points: ``manifest.json``, ``point-NNNN.json``,
-    ``confirm-<coded>.json``."""
+    ``confirm_<coded>.json``."""
 
     def __init__(self, directory: str | Path, manifest: dict[str, Any]) -> None:
         from jaxga import parallel
@@ -763,6 +763,9 @@ def run_doe(
     direction = direction or RESPONSES[response]
     if direction not in ("max", "min"):
         raise ParameterError(f"direction must be 'max' or 'min', got {direction!r}")
+    if isinstance(sets, bytes) or not isinstance(sets, (str, Sequence)):
+        raise ParameterError(f"sets must be 'key=value' strings, got {sets!r}")
+    sets = (sets,) if isinstance(sets, str) else tuple(sets)  # one string is one set
     if not isinstance(factors, (str, bytes, Mapping)) and isinstance(factors, Iterable):
         factors = tuple(factors)
     if not isinstance(factors, tuple) or not all(isinstance(f, Factor) for f in factors):
@@ -783,8 +786,8 @@ def run_doe(
     check_factors(config, factors)
     from jaxga.presets import parse_set
 
-    overridden = {k.replace("__", ".") for k in overrides}
-    overridden |= {parse_set(t)[0] for t in ((sets,) if isinstance(sets, str) else sets)}
+    overridden = set(flatten({k.replace("__", "."): v for k, v in overrides.items()}))
+    overridden |= {parse_set(t)[0] for t in sets}
     both = [f.name for f in factors if f.name in overridden]
     if both:
         raise ParameterError(f"{', '.join(both)} is both a factor and an override: the "

@@ -271,12 +271,6 @@ def check_combination(config: Config) -> None:
                 f"{stage}.method = {method!r} with {stage}.adaptive = "
                 f"false needs {rate} (or {island_key}), which this configuration does not "
                 "set (--set KEY=VALUE)")
-    for stage, low, high in (("crossover", "pc_low", "pc_high"),
-                             ("mutation", "pm_low", "pm_high")):
-        lo, hi = config.get(f"{stage}.{low}"), config.get(f"{stage}.{high}")
-        if config.get(f"{stage}.adaptive") and lo is not None and hi is not None and lo > hi:
-            raise ParameterError(f"{stage}.{low} = {lo} is above {stage}.{high} = {hi} "
-                                 "(AGACD eq. 26-29 move the rate between the two)")
     if config.get("mutation.method") == "segment_sa" and not config["mutation.temperature_w"] > 0:
         raise ParameterError("mutation.temperature_w must be in (0, 1] (MPMGA eq. 17: "
                              f"T = c1 * w**t), got {config['mutation.temperature_w']}")

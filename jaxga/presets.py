@@ -39,7 +39,7 @@ from importlib import resources
 from pathlib import Path
 from typing import Any
 
-from jaxga.config import SCHEMA, Config, flatten, parse_value
+from jaxga.config import DEFAULTS, SCHEMA, Config, flatten, parse_value
 from jaxga.errors import ParameterError
 
 if sys.version_info >= (3, 11):
@@ -180,19 +180,31 @@ def _chain(
     return [*inner, (label, body, variants)]
 
 
-def file_keys(name_or_path: str | os.PathLike, variant: str | None = None) -> list[str]:
-    """The configuration keys that user TOML files set in the ``base`` chain of
-    ``name_or_path`` (their tables and the chosen variant; not the built-in presets, not
-    the metadata ``name``, ``paper``, ``description``): overrides like ``--set``, so that
-    :func:`jaxga.run` can refuse the ones the configuration never reads."""
-    keys: list[str] = []
-    for label, body, variants in _chain(name_or_path):
+def check_file_keys_read(name_or_path: str | os.PathLike, variant: str | None = None) -> None:
+    """Refuse keys that a user TOML file in the ``base`` chain of ``name_or_path`` sets
+    but that the configuration of THAT file (with ``variant`` where the file's chain
+    has it) never reads (:func:`jaxga.engine.unread_keys`), naming the file: such a key
+    is an override like ``--set``. Built-in presets, the metadata and values equal to
+    the key's default (:data:`jaxga.config.DEFAULTS`: a file that spells out
+    ``tournament_size = 2``) are not checked, nor is ``map.corner_rule``, which is a
+    default that ``corner_rule=`` or a Grid replaces as a built-in preset's is."""
+    from jaxga.engine import check_overrides_read
+
+    chain = _chain(name_or_path)
+    for depth, (label, body, variants) in enumerate(chain):
         if label.startswith("preset "):  # a built-in preset
             continue
-        for key in (*body, *variants.get(variant, {})):
-            if key not in ("name", "paper", "description") and key not in keys:
-                keys.append(key)
-    return keys
+        has_variant = variant is not None and any(
+            variant in vs for _, _, vs in chain[:depth + 1])
+        config = load_preset(label, variant=variant if has_variant else None)
+        own = {**body, **(variants.get(variant, {}) if has_variant else {})}
+        keys = [k for k in own
+                if k not in ("name", "paper", "description", "map.corner_rule")
+                and (k not in DEFAULTS or config.get(k) != DEFAULTS[k])]
+        try:
+            check_overrides_read(config, keys)
+        except ParameterError as e:
+            raise ParameterError(f"{label}: {e}") from None
 
 
 def parse_set(text: str) -> tuple[str, Any]:

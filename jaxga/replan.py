@@ -292,10 +292,27 @@ def _window_box(a: XY, b: XY, size: int, h: int, w: int) -> tuple[int, int, int,
 
 
 # ================================================================================ replan
-def _run_overrides(overrides: Mapping[str, Any], population: int | None) -> dict[str, Any]:
+def _run_options(overrides: Mapping[str, Any], generations: int | None,
+                 population: int | None) -> dict[str, Any]:
+    """:func:`jaxga.run`'s keyword options for the re-planning GA. ``generations`` and
+    ``population`` at replan's defaults give way to the same keys in ``overrides`` or
+    their ``sets`` (``--set generations=30``); other values are given as such, so that
+    :func:`jaxga.run` refuses two different values for one key."""
+    from jaxga.presets import parse_set
+
     kw = dict(overrides)
-    if population is not None and "population__size" not in kw:
-        kw["population__size"] = population  # checked as the configuration key
+    sets = kw.get("sets", ())
+    keys = {k.replace("__", ".") for k in kw}
+    if isinstance(sets, (list, tuple)):  # other types are refused by jaxga.run
+        keys |= {parse_set(t)[0] for t in sets if isinstance(t, str) and "=" in t}
+    if not (generations == DEFAULT_GENERATIONS and "generations" in keys):
+        kw["generations"] = generations
+    if population is None or (population == DEFAULT_POPULATION and "population.size" in keys):
+        return kw
+    if "population__size" in kw and kw["population__size"] != population:
+        raise ParameterError(f"population.size is given twice, as {population!r} "
+                             f"(population) and {kw['population__size']!r}")
+    kw["population__size"] = population  # checked as the configuration key
     return kw
 
 
@@ -370,7 +387,7 @@ def replan(
     # combinations), not only when a blocked path needs a GA run.
     from jaxga.api import check_run
 
-    check_run(preset, grid, generations=generations, **_run_overrides(overrides, population))
+    check_run(preset, grid, **_run_options(overrides, generations, population))
     h, w = grid.height, grid.width
     rule = grid.corner_rule
     cells = _dedupe(_as_xy_list(path, "path"))
@@ -501,8 +518,7 @@ def _plan_segment(work: Grid, blocked: np.ndarray, start: XY, rejoin: XY, preset
                 info["window"] = box
     g = Grid.create(sub, start=(start[0] - ox, start[1] - oy),
                     goal=(rejoin[0] - ox, rejoin[1] - oy), corner_rule=rule)
-    r = run(preset, g, seeds=seeds, generations=generations,
-            **_run_overrides(overrides, population))
+    r = run(preset, g, seeds=seeds, **_run_options(overrides, generations, population))
     info["result"] = r
     n_ok = int(np.sum(r.success))
     info.update(ga_success=n_ok, seeds=len(r.seeds))

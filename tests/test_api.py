@@ -387,6 +387,11 @@ def test_a_key_given_twice_with_two_values_is_refused(grid):
         api.check_run("sga", grid, sets=["mutation.probability=0.1",
                                          "mutation.probability=0.2"])
     api.check_run("sga", grid, generations=3, sets=["generations=3"])
+    # the same value in another type is one value
+    api.check_run("agacd", grid, fitness__importance_ratios=(1.2, 1.5),
+                  sets=["fitness.importance_ratios=[1.2, 1.5]"])
+    api.check_run("sga", grid, crossover__probability=np.float32(0.5),
+                  sets=["crossover.probability=0.5"])
 
 
 def test_keys_a_user_file_sets_are_checked_like_overrides(grid, tmp_path):
@@ -396,13 +401,29 @@ def test_keys_a_user_file_sets_are_checked_like_overrides(grid, tmp_path):
 
     user = tmp_path / "mine.toml"
     user.write_text('base = "agacd"\n[crossover]\nprobability = 0.8\n')
-    with pytest.raises(ParameterError, match="crossover.probability has no effect in 'mine'"):
+    with pytest.raises(ParameterError, match="mine.toml: crossover.probability has no "
+                                             "effect in 'mine'"):
         api.check_run(str(user), grid)
     for name in preset_names():
         copy = tmp_path / f"copy_{name}.toml"
         copy.write_text(_preset_file(name).read_text(encoding="utf-8"))
         for variant in (None, *sorted({v for _, _, vs in _chain(name) for v in vs})):
             api.check_run(str(copy), grid, variant=variant)
+    # a file's corner rule is a default, as a built-in preset's: another one replaces it
+    copy = str(tmp_path / "copy_sga.toml")
+    assert api.check_run(copy, "classic_ga_gapp3_20x20", corner_rule="strict")
+    strict = load_map("classic_ga_gapp3_20x20", corner_rule="strict")
+    assert api.check_run(copy, strict)
+    # a file that builds on another is checked against its own configuration, not
+    # against what the file below it set (the fixed rate of the sga copy, now adaptive)
+    layered = tmp_path / "adaptive.toml"
+    layered.write_text('base = "copy_sga.toml"\n[crossover]\nadaptive = true\n'
+                       'pc_low = 0.6\npc_high = 0.8\n')
+    assert api.check_run(str(layered), grid)["crossover.adaptive"]
+    # a file may spell out a default it does not use (tournament_size = 2 under roulette)
+    spelled = tmp_path / "spelled.toml"
+    spelled.write_text('base = "sga"\n[selection]\ntournament_size = 2\n')
+    api.check_run(str(spelled), grid)
 
 
 def test_list_keys_take_tuples(grid):
@@ -677,8 +698,6 @@ def test_map_runs_in_blocks_equals_one_vmap():
     ("iga_zhang", {"fitness__v_t": 0.0}, ["fitness.v_t", "> 0"]),
     ("mpmga", {"fitness__alpha": 0.0, "fitness__beta": 0.0}, ["same fitness"]),
     ("mpmga", {"fitness__alpha": 0.0, "fitness__c": 0.0}, ["every path would have fitness 0"]),
-    ("agacd", {"crossover__pc_low": 0.9, "crossover__pc_high": 0.5},
-     ["crossover.pc_low = 0.9 is above crossover.pc_high = 0.5"]),
     ("imga", {"fitness__a": 0, "fitness__b": 0, "fitness__c": 0}, ["same fitness"]),
     ("iga_zhu", {"fitness__omega": 0, "fitness__c1": 0, "fitness__c2": 0, "fitness__c3": 0},
      ["fitness.omega and fitness.c1", "same fitness"]),

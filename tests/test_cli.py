@@ -78,6 +78,8 @@ def test_optimum_uses_file_endpoints_and_overrides(tmp_path):
           "fitness.omega=0.5"], EXIT_BAD_INPUT, "fitness.omega has no effect in 'sga'"),
         (["--map", "classic_ga_gapp3_20x20", "--preset", "sga", "--set",
           "generations=3"], EXIT_BAD_INPUT, "reads only the fitness keys and map.corner_rule"),
+        (["--map", "classic_ga_gapp3_20x20", "--preset", "sga", "--corner-rule", "free",
+          "--set", "map.corner_rule=strict"], EXIT_BAD_INPUT, "two corner rules given"),
     ],
 )
 def test_bad_input_is_one_line(args, code, words, capsys):

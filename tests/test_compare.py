@@ -399,6 +399,17 @@ def test_a_common_key_is_left_out_of_the_presets_that_do_not_read_it(monkeypatch
                                       "crossover.probability=0.5")},
                      "imga": {"sets": ("crossover.probability=0.6",
                                        "mutation.probability=0.1")}}
+    # so do its generations, however either is given
+    for own, common in (({"sets": ["generations=20"]}, {"generations": 10}),
+                        ({"generations": 20}, {"sets": ["generations=10"]})):
+        calls.clear()
+        with pytest.raises(Recorded):
+            compare({"a": ("sga", own), "b": "imga"}, "classic_ga_gapp3_20x20", seeds=1,
+                    **common)
+        assert calls["sga"] == {k: tuple(v) if k == "sets" else v for k, v in own.items()}
+        assert calls["imga"] == {k: tuple(v) if k == "sets" else v for k, v in common.items()}
+    with pytest.raises(ParameterError, match="sets must be 'key=value' strings"):
+        compare(["sga", "imga"], "classic_ga_gapp3_20x20", seeds=1, sets=3)
     with pytest.raises(ParameterError, match="fitness.omega has no effect in any of the "
                                              "presets compared"):
         compare(["sga", "agacd"], "classic_ga_gapp3_20x20", seeds=1, fitness__omega=0.5)

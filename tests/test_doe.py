@@ -610,6 +610,21 @@ def test_wrong_python_types_for_a_doe_are_named(monkeypatch, kw, words):
         Factor(3, (1, 2, 3))
 
 
+def test_one_set_string_is_one_set(monkeypatch):
+    """``sets="mutation.probability=0.5"`` is one override (it was split into letters)."""
+    seen = {}
+
+    def fake_sweep(preset, grid, points, seeds, **options):
+        seen.update(options)
+        raise KeyboardInterrupt
+
+    monkeypatch.setattr(jaxga.api, "sweep", fake_sweep)
+    with pytest.raises(KeyboardInterrupt):
+        run_doe("sga", MAP, [Factor("crossover.probability", (0.5, 0.6, 0.7))], "L9",
+                seeds=1, generations=2, sets="mutation.probability=0.5")
+    assert seen["sets"] == ("mutation.probability=0.5",)
+
+
 def test_a_checkpoint_that_is_a_file_is_named(monkeypatch, tmp_path):
     monkeypatch.setattr(jaxga.api, "sweep", lambda *a, **k: pytest.fail("a sweep ran"))
     existing = tmp_path / "m.txt"

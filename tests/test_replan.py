@@ -203,6 +203,27 @@ def test_invalid_robot_cell_and_arguments(sc25):
             replan(g, p, obstacles, sc25.position, crossover__probability=0.7)
         with pytest.raises(ParameterError, match="fitness.omega has no effect"):
             replan(g, p, obstacles, sc25.position, sets=("fitness.omega=0.5",))
+        with pytest.raises(ParameterError, match="population.size is given twice"):
+            replan(g, p, obstacles, sc25.position, population=12,
+                   sets=("population.size=30",))
+
+
+def test_sets_of_the_ga_size_replace_replans_defaults(sc25, monkeypatch):
+    """``jaxga replan --set population.size=30`` (or generations) is the GA's size, not a
+    second value against replan's defaults of 10 and 20."""
+    import jaxga.api
+
+    seen = {}
+
+    def fake_run(preset, grid, seeds, **options):
+        seen.update(options)
+        raise KeyboardInterrupt
+
+    monkeypatch.setattr(jaxga.api, "run", fake_run)
+    with pytest.raises(KeyboardInterrupt):
+        replan(sc25.grid, sc25.path, [(20, 12)], sc25.position,
+               sets=("population.size=30", "generations=30"))
+    assert seen == {"sets": ("population.size=30", "generations=30")}
 
 
 def test_ga_failure_is_honest_and_fallback_is_flagged(sc25, monkeypatch):
