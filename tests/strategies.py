@@ -61,9 +61,9 @@ def random_parents(grid: Grid, n: int, seed: int) -> Population:
 
 
 @st.composite
-def grids_and_parents(draw, n: int = 8, **grid_kwargs):
-    """A random grid and ``n`` valid parents on it."""
-    grid = draw(grids(**grid_kwargs))
+def grids_and_parents(draw, n: int = 8, corner_rules=("free", "no_squeeze", "strict")):
+    """A random grid (one of ``corner_rules``) and ``n`` valid parents on it."""
+    grid = draw(grids(corner_rules=corner_rules))
     seed = draw(st.integers(0, 2**20))
     try:
         return grid, random_parents(grid, n, seed)
