@@ -15,6 +15,7 @@ from __future__ import annotations
 
 import dataclasses
 import math
+import re
 import sys
 from collections.abc import Iterable, Mapping
 from pathlib import Path
@@ -192,13 +193,17 @@ def flatten(table: Mapping[str, Any], prefix: str = "") -> dict[str, Any]:
     return out
 
 
+_LOOSE_NUMBER = re.compile(r"[+-]?(\d+\.\d*|\.\d+)([eE][+-]?\d+)?")
+"""Decimal numbers that TOML refuses but nobody reads as words: ``.5``, ``5.``."""
+
+
 def parse_value(text: str) -> Any:
-    """A ``--set`` value: TOML syntax (``0.7``, ``true``, ``"ring"``, ``[0.9, 0.6]``), or a
-    bare word taken as a string."""
+    """A ``--set`` value: TOML syntax (``0.7``, ``true``, ``"ring"``, ``[0.9, 0.6]``), a
+    decimal number TOML refuses (``.5``, ``5.``), or a bare word taken as a string."""
     try:
         return tomllib.loads(f"v = {text}")["v"]
     except tomllib.TOMLDecodeError:
-        return text
+        return float(text) if _LOOSE_NUMBER.fullmatch(text.strip()) else text
 
 
 @dataclasses.dataclass(frozen=True)

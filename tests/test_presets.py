@@ -257,6 +257,10 @@ def test_overrides_and_sets():
     assert load_preset("agacd", "50x50", overrides={"generations": 10})["generations"] == 10
     assert load_preset("imga", sets="generations=3")["generations"] == 3  # a single string
     assert load_preset("imga", sets=["population.size=30"])["population.size"] == 30  # int
+    # decimals that TOML refuses but that are plainly numbers (they were words)
+    config = load_preset("imga", sets=["crossover.probability=.5", "mutation.probability=1."])
+    assert config["crossover.probability"] == 0.5 and config["mutation.probability"] == 1.0
+    assert load_preset("imga", sets=["description=1.2.3"])["description"] == "1.2.3"
 
 
 @pytest.mark.parametrize("bad", ["crossover.probability", "=0.5", "generations=", "  = 1"])
