@@ -458,7 +458,7 @@ class DoeResult:
         """The design with its results in the layout of AGACD Table 5: run number, coded
         levels, real values, one column per seed ("trial") and the mean."""
         names = [f.name for f in self.factors]
-        short = [n.split(".")[-1][:10] for n in names]
+        short = column_names(names)
         trials = [f"trial {i + 1}" for i in range(len(self.seeds))]
         head = (["no."] + [f"X{i + 1}" for i in range(len(names))] + short + trials
                 + [f"mean {self.response}", "ok"])
@@ -505,6 +505,14 @@ class DoeResult:
                                      for k, v in self.timing.items()),
         ]
         return "\n".join(lines)
+
+
+def column_names(keys: Sequence[str]) -> list[str]:
+    """Table headers for configuration keys: the last part of each key
+    (``crossover.pc_low`` -> ``pc_low``), or the whole key where two would read alike
+    (``crossover.probability`` and ``mutation.probability``)."""
+    last = [k.split(".")[-1] for k in keys]
+    return [k if last.count(s) > 1 else s for k, s in zip(keys, last)]
 
 
 def _fmt(v: float) -> str:

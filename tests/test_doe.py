@@ -610,6 +610,14 @@ def test_wrong_python_types_for_a_doe_are_named(monkeypatch, kw, words):
         Factor(3, (1, 2, 3))
 
 
+def test_table_headers_tell_the_factors_apart():
+    from jaxga.doe import column_names
+
+    assert column_names(["population.size", "crossover.pc_low"]) == ["size", "pc_low"]
+    assert column_names(["crossover.probability", "mutation.probability", "fitness.a"]) == [
+        "crossover.probability", "mutation.probability", "a"]
+
+
 def test_one_set_string_is_one_set(monkeypatch):
     """``sets="mutation.probability=0.5"`` is one override (it was split into letters)."""
     seen = {}
