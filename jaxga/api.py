@@ -523,12 +523,11 @@ def _normalised(key: str, value: Any) -> Any:
     """``value`` as the configuration stores it (a tuple and a list alike, numpy scalars
     as Python ones), to compare two values given for ``key``; an invalid value is
     refused with the key's own message."""
-    from jaxga.config import SCHEMA
+    from jaxga.config import SCHEMA, _freeze
 
     if key not in SCHEMA:  # refused by name when the preset loads
         return repr(value)
-    value = SCHEMA[key].check(key, value)
-    return tuple(value) if isinstance(value, list) else value
+    return _freeze(SCHEMA[key].check(key, value))
 
 
 def _load(preset, grid, corner_rule, variant, sets, overrides, generations, *,
@@ -536,19 +535,18 @@ def _load(preset, grid, corner_rule, variant, sets, overrides, generations, *,
     """``(config, grid, map name)`` of a call, checked; ``check_read=False`` leaves
     overrides that nothing reads to the caller (:func:`jaxga.compare.compare`)."""
     from jaxga.maps import load_map_info
-    from jaxga.presets import check_file_keys_read, load_preset, parse_set
+    from jaxga.presets import as_sets, check_file_keys_read, load_preset, parse_set
 
     check_environment()  # a bad $JAXGA_THREEFRY, which `import jaxga` does not refuse
-    if isinstance(sets, bytes) or not isinstance(sets, (str, Sequence)):
-        raise ParameterError(f"sets must be 'key=value' strings, got {sets!r}")
-    sets = (sets,) if isinstance(sets, str) else tuple(sets)
+    sets = as_sets(sets)
     ov: dict[str, Any] = {k.replace("__", "."): v for k, v in overrides.items()}
     if generations is not None:  # a non-integer is left for the configuration to refuse
         with contextlib.suppress(TypeError):
             generations = as_integer(generations)
         ov["generations"] = generations
     given = flatten(ov)
-    for key, value in (parse_set(text) for text in sets):  # one value per key
+    set_values = [parse_set(text) for text in sets]
+    for key, value in set_values:  # one value per key
         if key in given and _normalised(key, given[key]) != _normalised(key, value):
             raise ParameterError(f"{key} is given twice, as {given[key]!r} and {value!r}")
         given[key] = value
@@ -556,12 +554,11 @@ def _load(preset, grid, corner_rule, variant, sets, overrides, generations, *,
         if variant is not None:
             raise ParameterError(f"variant {variant!r} given with a Config: load the preset "
                                  "with its variant (jaxga.presets.load_preset) instead")
-        set_values = dict(parse_set(text) for text in sets)
-        config = preset.override(ov).override(set_values)
+        config = preset.override(ov).override(dict(set_values))
     else:
         config = load_preset(preset, variant=variant, overrides=ov, sets=sets)
     if check_read:  # never silently ignored
-        overridden = [*flatten(ov), *(parse_set(t)[0] for t in sets)]
+        overridden = [*flatten(ov), *(key for key, _ in set_values)]
         check_overrides_read(config, overridden)
         if not isinstance(preset, Config):  # keys a user TOML file sets, in that file
             check_file_keys_read(preset, variant)

@@ -440,27 +440,24 @@ def _options_per_preset(specs, grid, common: Mapping[str, Any]
     reads is refused, and so are presets that would run under different corner rules."""
     from jaxga.api import _load
     from jaxga.engine import OFF_VALUES, unread_keys
-    from jaxga.presets import parse_set
-
-    def as_sets(value: Any) -> tuple:
-        if isinstance(value, bytes) or not isinstance(value, (str, Sequence)):
-            raise ParameterError(f"sets must be 'key=value' strings, got {value!r}")
-        return (value,) if isinstance(value, str) else tuple(value)
+    from jaxga.presets import as_sets, overridden_keys, parse_set
 
     sets = as_sets(common.get("sets", ()))
+    common_keys = overridden_keys({k: v for k, v in common.items() if k not in RUN_OPTIONS},
+                                  sets)
     # generations= is a configuration key given as an option: a preset's own wins
-    is_key = [k for k in RUN_OPTIONS if k != "generations"]
+    option_names = [k for k in RUN_OPTIONS if k != "generations"]
     out: dict[str, dict[str, Any]] = {}
     left_out: dict[str, tuple[str, ...]] = {}
     unread_by_all: dict[str, str] | None = None
     rules: dict[str, str] = {}
     for label, (preset, ov) in specs.items():
         own_sets = as_sets(ov.get("sets", ()))
-        own = {k.replace("__", ".") for k in ov if k not in is_key}
-        own |= {parse_set(t)[0] for t in own_sets}
+        own = set(overridden_keys({k: v for k, v in ov.items() if k not in option_names},
+                                  own_sets))
         # the common keys this preset does not set itself, then its own
         merged = {k: v for k, v in common.items()
-                  if k in is_key or k.replace("__", ".") not in own}
+                  if k in option_names or k.replace("__", ".") not in own}
         merged.update({k: v for k, v in ov.items() if k != "sets"})
         merged_sets = tuple(t for t in sets if parse_set(t)[0] not in own) + own_sets
         config, loaded, _ = _load(preset, grid, merged.get("corner_rule"),
@@ -477,8 +474,6 @@ def _options_per_preset(specs, grid, common: Mapping[str, Any]
         if read_sets:
             options["sets"] = read_sets
         out[label] = options
-        common_keys = [k.replace("__", ".") for k in common if k not in RUN_OPTIONS]
-        common_keys += [parse_set(t)[0] for t in sets]
         left_out[label] = tuple(k for k in dict.fromkeys(common_keys)
                                 if k in unread and k not in own)
         unread_by_all = (dict(unread) if unread_by_all is None
@@ -488,9 +483,7 @@ def _options_per_preset(specs, grid, common: Mapping[str, Any]
             "the presets would run under different corner rules ("
             + ", ".join(f"{label}: {rule}" for label, rule in rules.items())
             + "): give one with corner_rule=... (--corner-rule)")
-    given = [k.replace("__", ".") for k in common if k not in RUN_OPTIONS]
-    given += [parse_set(t)[0] for t in sets]
-    nowhere = [k for k in given if k in (unread_by_all or {})]
+    nowhere = [k for k in dict.fromkeys(common_keys) if k in (unread_by_all or {})]
     if nowhere:
         raise ParameterError("; ".join(f"{k} has no effect in any of the presets compared "
                                        f"(e.g. {unread_by_all[k]})" for k in nowhere))

@@ -71,7 +71,7 @@ from typing import Any
 
 import numpy as np
 
-from jaxga.config import SCHEMA, Config, flatten, parse_value, python_scalar
+from jaxga.config import SCHEMA, Config, parse_value, python_scalar
 from jaxga.engine import unread_keys
 from jaxga.errors import NoPathError, ParameterError
 from jaxga.grid import Grid, as_integer
@@ -771,9 +771,9 @@ def run_doe(
     direction = direction or RESPONSES[response]
     if direction not in ("max", "min"):
         raise ParameterError(f"direction must be 'max' or 'min', got {direction!r}")
-    if isinstance(sets, bytes) or not isinstance(sets, (str, Sequence)):
-        raise ParameterError(f"sets must be 'key=value' strings, got {sets!r}")
-    sets = (sets,) if isinstance(sets, str) else tuple(sets)  # one string is one set
+    from jaxga.presets import as_sets, overridden_keys
+
+    sets = as_sets(sets)  # one string is one set
     if not isinstance(factors, (str, bytes, Mapping)) and isinstance(factors, Iterable):
         factors = tuple(factors)
     if not isinstance(factors, tuple) or not all(isinstance(f, Factor) for f in factors):
@@ -792,10 +792,7 @@ def run_doe(
     config, loaded, map_name = _load(preset, grid, corner_rule, variant, sets, overrides,
                                      generations)
     check_factors(config, factors)
-    from jaxga.presets import parse_set
-
-    overridden = set(flatten({k.replace("__", "."): v for k, v in overrides.items()}))
-    overridden |= {parse_set(t)[0] for t in sets}
+    overridden = overridden_keys(overrides, sets)
     both = [f.name for f in factors if f.name in overridden]
     if both:
         raise ParameterError(f"{', '.join(both)} is both a factor and an override: the "

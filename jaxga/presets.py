@@ -207,6 +207,21 @@ def check_file_keys_read(name_or_path: str | os.PathLike, variant: str | None = 
             raise ParameterError(f"{label}: {e}") from None
 
 
+def as_sets(sets: Any) -> tuple[str, ...]:
+    """``sets`` as a tuple of ``"key=value"`` strings: one string is one set (not its
+    characters); anything but a string or a sequence is refused."""
+    if isinstance(sets, bytes) or not isinstance(sets, (str, Sequence)):
+        raise ParameterError(f"sets must be 'key=value' strings, got {sets!r}")
+    return (sets,) if isinstance(sets, str) else tuple(sets)
+
+
+def overridden_keys(overrides: Mapping[str, Any], sets: Sequence[str]) -> list[str]:
+    """The dotted configuration keys that keyword ``overrides`` (``a__b=...`` or
+    ``"a.b"``, nested mappings flattened) and ``sets`` give, in that order."""
+    keys = list(flatten({k.replace("__", "."): v for k, v in overrides.items()}))
+    return keys + [parse_set(text)[0] for text in sets]
+
+
 def parse_set(text: str) -> tuple[str, Any]:
     """``(key, value)`` of a ``--set key=value`` string; the value is parsed as TOML."""
     if not isinstance(text, str) or "=" not in text:
@@ -253,8 +268,7 @@ def load_preset(
         ParameterError: unknown preset, file, variant or key; malformed TOML or ``--set``;
             a value of the wrong type or out of range. The message names the file or key.
     """
-    if isinstance(sets, str):  # a single "key=value" would otherwise be split into chars
-        sets = (sets,)
+    sets = as_sets(sets)
     chain = _chain(name_or_path)
     label = chain[-1][0]
     merged: dict[str, Any] = {}

@@ -298,13 +298,11 @@ def _run_options(overrides: Mapping[str, Any], generations: int | None,
     ``population`` at replan's defaults give way to the same keys in ``overrides`` or
     their ``sets`` (``--set generations=30``); other values are given as such, so that
     :func:`jaxga.run` refuses two different values for one key."""
-    from jaxga.presets import parse_set
+    from jaxga.presets import as_sets, overridden_keys
 
     kw = dict(overrides)
-    sets = kw.get("sets", ())
-    keys = {k.replace("__", ".") for k in kw}
-    if isinstance(sets, (list, tuple)):  # other types are refused by jaxga.run
-        keys |= {parse_set(t)[0] for t in sets if isinstance(t, str) and "=" in t}
+    keys = set(overridden_keys({k: v for k, v in kw.items() if k != "sets"},
+                               as_sets(kw.get("sets", ()))))
     if not (generations == DEFAULT_GENERATIONS and "generations" in keys):
         kw["generations"] = generations
     if population is None or (population == DEFAULT_POPULATION and "population.size" in keys):
