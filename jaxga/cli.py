@@ -216,6 +216,7 @@ def cmd_run(args: argparse.Namespace) -> int:
         corner_rule=args.corner_rule, variant=args.variant, sets=args.set or (),
         progress=progress, chunks=10 if progress else 1,
     )
+    _name_map(args, [result])
     if _not_lead(f"{len(result.seeds)} seeds", result.timing["total_s"]):
         return 0
     print(result.summary())
@@ -254,6 +255,7 @@ def cmd_doe(args: argparse.Namespace) -> int:
         corner_rule=args.corner_rule, variant=args.variant, sets=args.set or (),
         checkpoint=args.checkpoint, block=args.block, progress=progress,
     )
+    _name_map(args, [result])
     if _not_lead(f"{len(result.coded)} design points x {len(result.seeds)} seeds",
                  result.timing["total_s"]):
         return 0
@@ -323,6 +325,7 @@ def cmd_compare(args: argparse.Namespace) -> int:
     comp = compare(presets, grid, seeds=args.seeds, metric=args.metric, test=args.test,
                    progress=progress, generations=args.generations,
                    corner_rule=args.corner_rule, sets=args.set or ())
+    _name_map(args, comp.results.values())
     if _not_lead(f"{len(presets)} presets x {args.seeds} seeds",
                  sum(r.timing["total_s"] for r in comp.results.values())):
         return 0
@@ -351,6 +354,15 @@ def _grid_for_run(args: argparse.Namespace, rule: str | None = None):
         return args.map
     return load_map(args.map, start=args.start, goal=args.goal,
                     corner_rule=rule or args.corner_rule or _preset_rule(args))
+
+
+def _name_map(args: argparse.Namespace, results) -> None:
+    """Name the map of ``results`` as the command line did (``--map``): with ``--start`` or
+    ``--goal`` the command passes a ``Grid``, which the library can only call "grid"."""
+    from jaxga.maps.loaders import map_name
+
+    for result in results:
+        result.map_name = map_name(args.map)
 
 
 def _preset_rule(args: argparse.Namespace) -> str:

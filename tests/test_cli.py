@@ -235,6 +235,8 @@ def test_run_json_holds_the_paths_from_the_given_endpoints(tmp_path, capsys):
     blocked = load_map(str(art)).blocked_np()
     doc = json.loads(out.read_text())
     assert doc["corner_rule"] == "free" and len(doc["runs"]) == 3
+    # the map keeps the name it has on the command line (a Grid is only "grid")
+    assert doc["map"] == "m" and "on m (corner rule 'free')" in captured.out
     assert f"success {sum(r['success'] for r in doc['runs'])}/3" in captured.out
     assert any(r["success"] for r in doc["runs"])
     for r in (r for r in doc["runs"] if r["success"]):

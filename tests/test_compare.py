@@ -281,11 +281,15 @@ def _cli_args(map_file, *extra):
 def test_cli_compare_end_to_end(tmp_path, grid, comparison, capsys):
     map_file = save_map(grid, tmp_path / "m.ascii")
     out, png = tmp_path / "c.json", tmp_path / "c.png"
-    assert main(_cli_args(map_file, "--json", str(out), "--plot", str(png))) == 0
+    # --start (the map's own) makes the command pass a Grid: the map keeps its name
+    start = "{},{}".format(*grid.start_xy)
+    assert main(_cli_args(map_file, "--json", str(out), "--plot", str(png),
+                          "--start", start)) == 0
     text = capsys.readouterr().out
     assert "pairwise tests on length" in text and f"wrote {out}" in text
     js = json.loads(out.read_text())
     assert set(js["presets"]) == {"sga", "imga"} and js["metric"] == "length"
+    assert js["map"] == "m" and "map m (corner rule 'free')" in text
     # the CLI ran the same seeds as compare(): the same lengths
     for name in ("sga", "imga"):
         want = [None if not ok else x for ok, x in
