@@ -359,7 +359,14 @@ def test_json_layout(one_call):
     assert set(d["predicted_best"]["coded"].values()) <= {-1, 0, 1}
     assert len(d["confirmation"]["responses"]) == 3
     assert isinstance(d["confirmation"]["mean"], float)
-    assert d["timing"]["total_s"] > 0
+    t = d["timing"]
+    assert t["total_s"] >= t["sweep_s"] + t["confirmation_s"] > 0
+    assert t["compile_s"] <= t["sweep_s"] + t["confirmation_s"]
+    # the report's time line says how its parts add up (compile is inside the others)
+    line = one_call.report().splitlines()[-1]
+    assert line.startswith(f"time (s): total {t['total_s']:.2f} = design points "
+                           f"{t['sweep_s']:.2f} + confirmation {t['confirmation_s']:.2f}")
+    assert f"compiling took {t['compile_s']:.2f} of the first two" in line
 
 
 def test_failed_seeds_fitness_zero_lengths_excluded():
