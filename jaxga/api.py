@@ -10,6 +10,7 @@ on its own.
 from __future__ import annotations
 
 import contextlib
+import contextvars
 import dataclasses
 import functools
 import math
@@ -391,6 +392,14 @@ defaults: with the older emitters they compile faster but run up to 1.9x slower 
 batches."""
 
 
+_COMPILE_PROGRESS: contextvars.ContextVar[Callable[[float], None] | None] = \
+    contextvars.ContextVar("jaxga_compile_progress", default=None)
+"""Where :func:`_programs` reports how far a compilation has got (a fraction below 1,
+after the tracing and after each program but the last): set by :func:`sweep` around the
+call, so that the cached function keeps its arguments (a programs' cache hit reports
+nothing)."""
+
+
 @functools.lru_cache(maxsize=PROGRAM_CACHE_SIZE)
 def _programs(algo: Algorithm, grid_spec: Any, params_spec: Any, n_runs: int,
               sizes: tuple[int, ...], n_devices: int) -> _Programs:
@@ -453,8 +462,15 @@ def _programs(algo: Algorithm, grid_spec: Any, params_spec: Any, n_runs: int,
                                                       for n, t in evolve_t.items()}}
     # One after the other. Compiling them in threads (one per core) was measured again on
     # 2026-11-23 on a quiet machine: no faster (sga, 100 and 1000 seeds, within 3 %).
-    compiled = {name: t.lower().compile(FINISH_COMPILER_OPTIONS if name == "finish" else None)
-                for name, t in traced.items()}
+    report = _COMPILE_PROGRESS.get() or (lambda frac: None)
+    steps = 1 + len(traced)  # the tracing, then each program
+    report(1 / steps)
+    compiled = {}
+    for i, (name, t) in enumerate(traced.items()):
+        compiled[name] = t.lower().compile(FINISH_COMPILER_OPTIONS if name == "finish"
+                                           else None)
+        if i + 2 < steps:
+            report((i + 2) / steps)
     return _Programs(
         init=compiled["init"],
         evolve={n: compiled[f"evolve{n}"] for n in evolve_t},
@@ -718,8 +734,12 @@ def sweep(
     sizes = equal_chunks(algo.generations, chunks)
     report("compile", 0.0)
     t0 = time.perf_counter()
-    progs = _programs(algo, _spec(grid), tuple(sorted(_spec(params).items())), len(run_seeds),
-                      sizes, jax.local_device_count())
+    token = _COMPILE_PROGRESS.set(lambda frac: report("compile", frac))
+    try:
+        progs = _programs(algo, _spec(grid), tuple(sorted(_spec(params).items())),
+                          len(run_seeds), sizes, jax.local_device_count())
+    finally:
+        _COMPILE_PROGRESS.reset(token)
     compile_s = time.perf_counter() - t0
     report("compile", 1.0)
 
@@ -809,7 +829,10 @@ def run(
         generations: overrides the preset's generation count.
         overrides: configuration keys with ``.`` written as ``__`` (e.g.
             ``crossover__probability=0.7``), or ``sets=("crossover.probability=0.7",)``.
-        progress: optional callback ``(stage, fraction)``; with ``chunks > 1`` the
+        progress: optional callback ``(stage, fraction)``: ``("compile", 0.0)``, the
+            compilation's progress (after the tracing and after each compiled program,
+            when the programs are not compiled yet), ``("compile", 1.0)``, then
+            ``("evolve", f)`` after each chunk of generations. With ``chunks > 1`` the
             generations run in up to that many compiled chunks of one size
             (:func:`equal_chunks`; same result) for a progress bar.
 

@@ -19,8 +19,9 @@ import os
 import re
 import sys
 import time
-from collections.abc import Sequence
+from collections.abc import Callable, Sequence
 from pathlib import Path
+from typing import Any
 
 from jaxga.compilation_cache import use_compilation_cache
 from jaxga.errors import EndpointError, JaxgaError, NoPathError
@@ -187,21 +188,32 @@ def cmd_presets(args: argparse.Namespace) -> int:
 
 
 class _Progress:
-    """A one-line progress bar on stderr, shown only for runs longer than ~2 s."""
+    """Progress of a run on stderr, shown from the first update after the run has taken
+    ``delay`` seconds (a quick run shows none): on a terminal a one-line bar redrawn in
+    place; on a pipe or a file (a log) one plain line per update, no carriage returns."""
 
-    def __init__(self) -> None:
-        self.t0 = time.perf_counter()
+    def __init__(self, stream: Any = None, clock: Callable[[], float] = time.perf_counter,
+                 delay: float = 2.0) -> None:
+        self.stream = sys.stderr if stream is None else stream
+        isatty = getattr(self.stream, "isatty", None)
+        self.tty = bool(isatty()) if callable(isatty) else False
+        self.clock = clock
+        self.t0 = clock()
+        self.delay = delay
         self.shown = False
 
     def __call__(self, stage: str, frac: float) -> None:
-        if time.perf_counter() - self.t0 < 2.0 and frac < 1.0 and not self.shown:
+        if not self.shown and self.clock() - self.t0 < self.delay:
             return
         self.shown = True
+        if not self.tty:
+            print(f"progress: {stage} {100 * frac:.0f}%", file=self.stream, flush=True)
+            return
         bar = "#" * int(30 * frac)
-        print(f"\r{stage:8s} [{bar:30s}] {100 * frac:5.1f}%", end="", file=sys.stderr,
+        print(f"\r{stage:8s} [{bar:30s}] {100 * frac:5.1f}%", end="", file=self.stream,
               flush=True)
         if stage == "evolve" and frac >= 1.0:
-            print(file=sys.stderr)
+            print(file=self.stream)
 
 
 def cmd_run(args: argparse.Namespace) -> int:

@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import argparse
+import io
 import json
 import subprocess
 import sys
@@ -328,3 +329,51 @@ def test_a_doe_where_no_seed_finds_a_path_names_the_cause(tmp_path, capsys, monk
         assert rc == EXIT_NO_PATH
         assert err.startswith("jaxga: no path: no seed of any design point found a path")
         assert "population.capacity = 3 is probably too small" in err
+
+
+class _Clock:
+    """A settable clock for the progress display."""
+
+    def __init__(self) -> None:
+        self.now = 0.0
+
+    def __call__(self) -> float:
+        return self.now
+
+
+class _Stream(io.StringIO):
+    def __init__(self, tty: bool) -> None:
+        super().__init__()
+        self.tty = tty
+
+    def isatty(self) -> bool:
+        return self.tty
+
+
+@pytest.mark.parametrize("tty", [False, True])
+def test_progress_is_shown_after_two_seconds_as_a_bar_or_as_log_lines(tty):
+    """A quick run shows nothing; a long one shows every update from the first one
+    after 2 s: redrawn in place on a terminal, one plain line each on a pipe (a log
+    file gets no carriage returns)."""
+    from jaxga.cli import _Progress
+
+    clock, stream = _Clock(), _Stream(tty)
+    quick = _Progress(stream, clock)
+    for stage, frac in [("compile", 0.0), ("compile", 1.0), ("evolve", 0.5), ("evolve", 1.0)]:
+        quick(stage, frac)
+    assert stream.getvalue() == ""
+    show = _Progress(stream, clock)
+    updates = [(0.0, "compile", 0.0), (1.0, "compile", 0.25), (2.5, "compile", 0.5),
+               (3.0, "compile", 1.0), (3.5, "evolve", 0.5), (4.0, "evolve", 1.0)]
+    for now, stage, frac in updates:
+        clock.now = now
+        show(stage, frac)
+    text = stream.getvalue()
+    if tty:
+        assert text == ("\rcompile  [###############               ]  50.0%"
+                        "\rcompile  [##############################] 100.0%"
+                        "\revolve   [###############               ]  50.0%"
+                        "\revolve   [##############################] 100.0%\n")
+    else:
+        assert text.splitlines() == ["progress: compile 50%", "progress: compile 100%",
+                                     "progress: evolve 50%", "progress: evolve 100%"]
