@@ -37,6 +37,7 @@ from jaxga.engine import (
     finish,
     init_state,
     static_config,
+    uses_waypoints,
 )
 from jaxga.errors import InitialisationWarning, JaxgaError, ParameterError
 from jaxga.grid import Grid, as_integer
@@ -108,6 +109,17 @@ class Result:
     fitness_optimum_loop_free: bool = True
     """False when the optimal walk visits a cell twice: :attr:`fitness_optimum` is then an
     upper bound of what a loop-free path (all that the GAs keep) can reach."""
+    fitness_optimum_reason: str = ""
+    """Why :attr:`fitness_optimum` is NaN (not computed), "" when it is computed."""
+    start: tuple[int, int] | None = None
+    """The start cell ``(x, y)``, y from the bottom."""
+    goal: tuple[int, int] | None = None
+    """The goal cell ``(x, y)``, y from the bottom."""
+    population_capacity: int = 0
+    """Individuals per island that the compiled program holds (the largest
+    ``population.size`` of a sweep, or ``population_capacity=``): the random numbers of a
+    run depend on it, so ``run(..., population_capacity=K)`` repeats a sweep point's runs
+    bit for bit."""
 
     def path(self, i: int, raw: bool = False) -> list[tuple[int, int]]:
         """Seed ``i``'s best path as ``(x, y)`` cells (post-optimised unless ``raw``)."""
@@ -123,9 +135,19 @@ class Result:
 
     @property
     def raw_gap(self) -> np.ndarray:
-        """Relative gap of each raw (8-connected) length to the 8-connected optimum
-        (negative only for waypoint algorithms, whose raw paths are not 8-connected)."""
-        return _relative_gap(self.raw_length, self.optimum, self.success)
+        """Relative gap of each raw length to the exact optimum of its kind: the
+        8-connected optimum for 8-connected raw paths, the any-angle optimum for the
+        waypoint paths of AGACD (whose straight segments may beat the 8-connected
+        optimum); NaN for failed seeds."""
+        return _relative_gap(self.raw_length, self.raw_optimum, self.success)
+
+    @property
+    def raw_optimum(self) -> float:
+        """The exact optimum that :attr:`raw_gap` measures against (see there)."""
+        return self.any_angle_optimum if self._raw_waypoints() else self.optimum
+
+    def _raw_waypoints(self) -> bool:
+        return self.config is not None and uses_waypoints(self.config)
 
     @property
     def fitness_gap(self) -> np.ndarray:
@@ -158,7 +180,8 @@ class Result:
 
     def _fitness_optimum_text(self) -> str:
         if not np.isfinite(self.fitness_optimum):
-            return ""
+            return (f"; no fitness optimum: {self.fitness_optimum_reason}"
+                    if self.fitness_optimum_reason else "")
         bound = ("" if self.fitness_optimum_loop_free
                  else "; an upper bound: the optimal walk revisits a cell")
         return (f", fitness {self.fitness_optimum:.6g} (a path of length "
@@ -178,6 +201,9 @@ class Result:
         ]
         for name, mean, sd, lo, hi in self.summary_rows():
             lines.append(f"{name:24s} {mean:10.4f} {sd:10.4f} {lo:10.4f} {hi:10.4f}")
+        raw_basis = "any-angle" if self._raw_waypoints() else "8-connected"
+        lines.append(f"gaps: gap = length / any-angle optimum - 1, raw_gap = raw_length / "
+                     f"{raw_basis} optimum - 1, fitness_gap = fitness optimum / fitness - 1")
         t = self.timing
         lines.append(
             "time (s): compile {compile_s:.2f}, init {init_s:.3f}, evolve {evolve_s:.3f}, "
@@ -187,6 +213,7 @@ class Result:
 
     def to_json(self) -> dict[str, Any]:
         """The ``--json`` layout of ``jaxga run``."""
+        gaps = {k: getattr(self, k) for k in GAPS}
         runs = []
         for i, seed in enumerate(self.seeds):
             ok = bool(self.success[i])
@@ -199,18 +226,30 @@ class Result:
                 "raw_length": float(self.raw_length[i]) if ok else None,
                 "fitness": float(self.fitness[i]),
                 "convergence_generation": int(self.convergence_generation[i]),
+                # the other metrics of the summary table, null for a failed seed
+                **{k: json_number(float(self._column(k)[i])) if ok else None
+                   for k in ("angle_sum", "turns")},
+                **{k: json_number(float(gaps[k][i])) for k in GAPS},
                 "history": {k: [float(x) for x in v[i]] for k, v in self.history.items()},
             })
         return {
             "preset": self.preset, "map": self.map_name, "corner_rule": self.corner_rule,
+            "start": None if self.start is None else list(self.start),
+            "goal": None if self.goal is None else list(self.goal),
             "optimum": json_number(self.optimum),  # null when the goal is unreachable
             "any_angle_optimum": json_number(self.any_angle_optimum),
+            "raw_optimum": json_number(self.raw_optimum),
             "fitness_optimum": json_number(self.fitness_optimum),
             "fitness_optimum_length": json_number(self.fitness_optimum_length),
             "fitness_optimum_loop_free": (self.fitness_optimum_loop_free
                                           if np.isfinite(self.fitness_optimum) else None),
+            "fitness_optimum_reason": self.fitness_optimum_reason,
             "timing": dict(self.timing), "population": self.population,
-            "generations": self.generations, "runs": runs,
+            "population_capacity": self.population_capacity,
+            "generations": self.generations,
+            # every setting of the run (preset, file, --set and sweep point resolved)
+            "config": None if self.config is None else self.config.as_dict(),
+            "runs": runs,
         }
 
 
@@ -679,18 +718,7 @@ def sweep(
     config, grid, map_name = _load(preset, grid, corner_rule, variant, sets, overrides,
                                    generations)
     configs = _point_configs(config, points)
-    capacity = max(int(c["population.size"]) for c in configs)
-    if population_capacity is not None:
-        try:  # 9.7 is not truncated
-            population_capacity = as_integer(population_capacity)
-        except TypeError:
-            raise ParameterError(f"population_capacity must be an integer, got "
-                                 f"{population_capacity!r}") from None
-        if population_capacity < capacity:
-            raise ParameterError(
-                f"population_capacity {population_capacity} is below the largest "
-                f"population.size swept ({capacity})")
-        capacity = population_capacity
+    capacity = _population_capacity(configs, population_capacity)
     octile = shortest_path(grid)
     if not octile.found:
         seed_arr = _seed_list(seeds, lambda n: _check_memory(
@@ -798,8 +826,27 @@ def sweep(
             fitness_optimum=point_opt[q].fitness,
             fitness_optimum_length=point_opt[q].length,
             fitness_optimum_loop_free=point_opt[q].loop_free,
+            fitness_optimum_reason="" if point_opt[q].found else point_opt[q].reason,
+            start=grid.start_xy, goal=grid.goal_xy, population_capacity=algo.population,
         ))
     return results
+
+
+def _population_capacity(configs: Sequence[Config], requested: Any) -> int:
+    """Individuals per island of the compiled program: ``requested``, checked, or the
+    largest ``population.size`` of the points."""
+    capacity = max(int(c["population.size"]) for c in configs)
+    if requested is None:
+        return capacity
+    try:  # 9.7 is not truncated
+        requested = as_integer(requested)
+    except TypeError:
+        raise ParameterError(f"population_capacity must be an integer, got "
+                             f"{requested!r}") from None
+    if requested < capacity:
+        raise ParameterError(f"population_capacity {requested} is below the largest "
+                             f"population.size ({capacity})")
+    return requested
 
 
 def run(
@@ -813,6 +860,7 @@ def run(
     sets: Sequence[str] = (),
     progress: Callable[[str, float], None] | None = None,
     chunks: int = 1,
+    population_capacity: int | None = None,
     **overrides: Any,
 ) -> Result:
     """Run ``preset`` on ``grid`` once per seed, all seeds in one compiled call.
@@ -835,6 +883,11 @@ def run(
             ``("evolve", f)`` after each chunk of generations. With ``chunks > 1`` the
             generations run in up to that many compiled chunks of one size
             (:func:`equal_chunks`; same result) for a progress bar.
+        population_capacity: individuals per island that the compiled program holds
+            (default ``population.size``); the random numbers of a run depend on it. A
+            point of a :func:`sweep` or a DOE over population sizes ran with the largest
+            size swept as its capacity (``Result.population_capacity``): pass that to
+            repeat its runs bit for bit.
 
     Returns:
         A :class:`Result`. Seeds that found no feasible path have ``success`` False and
@@ -848,10 +901,11 @@ def run(
     """
     return sweep(preset, grid, [{}], seeds, generations=generations,
                  corner_rule=corner_rule, variant=variant, sets=sets, progress=progress,
-                 chunks=chunks, **overrides)[0]
+                 chunks=chunks, population_capacity=population_capacity, **overrides)[0]
 
 
-RUN_OPTIONS = ("generations", "corner_rule", "variant", "sets", "progress", "chunks")
+RUN_OPTIONS = ("generations", "corner_rule", "variant", "sets", "progress", "chunks",
+               "population_capacity")
 """Keyword arguments of :func:`run` (besides ``seeds``) that are not configuration keys."""
 
 
@@ -867,6 +921,7 @@ def check_run(preset: str | Config, grid: Grid | str, **options: Any) -> Config:
     config, grid, _ = _load(preset, grid, named.get("corner_rule"), named.get("variant"),
                             named.get("sets", ()), overrides, named.get("generations"))
     (config,) = _point_configs(config, [{}])
+    _population_capacity([config], named.get("population_capacity"))
     build(config, grid)  # check_migration and check_combination
     return config
 
@@ -988,6 +1043,8 @@ def _no_path_result(config, map_name, grid, seeds, algo, reason, elapsed) -> Res
                 "total_s": elapsed},
         population=int(config["population.size"]) * algo.islands,
         generations=algo.generations, width=grid.width, config=config,
+        fitness_optimum_reason=reason, start=grid.start_xy, goal=grid.goal_xy,
+        population_capacity=algo.population,
     )
 
 

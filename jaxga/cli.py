@@ -227,6 +227,7 @@ def cmd_run(args: argparse.Namespace) -> int:
         args.preset, _grid_for_run(args), seeds=args.seeds, generations=args.generations,
         corner_rule=args.corner_rule, variant=args.variant, sets=args.set or (),
         progress=progress, chunks=10 if progress else 1,
+        population_capacity=args.population_capacity,
     )
     _name_map(args, [result])
     if _not_lead(f"{len(result.seeds)} seeds", result.timing["total_s"]):
@@ -504,6 +505,10 @@ def build_parser() -> argparse.ArgumentParser:
     p = sub.add_parser("run", help="run a preset on a map for many seeds")
     _add_preset_arguments(p)
     p.add_argument("--seeds", type=int, default=10, help="number of seeded runs (default 10)")
+    p.add_argument("--population-capacity", type=int, metavar="K",
+                   help="individuals per island of the compiled program (default: "
+                   "population.size); a run's random numbers depend on it: give a DOE's "
+                   "or sweep's population_capacity to repeat one of its points bit for bit")
     p.add_argument("--json", metavar="OUT", help="write every run as JSON")
     p.add_argument("--plot", metavar="OUT.png", help="plot the map, best paths and convergence")
     p.add_argument("--quiet", action="store_true", help="no progress bar")

@@ -56,6 +56,12 @@ from jaxga.stats import TwoSampleTest, fisher_success, holm, mann_whitney, wilco
 __all__ = ["METRICS", "TESTS", "Comparison", "PairTest", "compare", "compare_results",
            "metric_values"]
 
+GAP_NOTE = ("mean gaps over the successful seeds: raw gap = raw length (before "
+            "post-optimisation) / exact 8-connected optimum - 1 (any-angle optimum for "
+            "AGACD's waypoint paths); gap = post-optimised length / exact any-angle "
+            "optimum - 1; gap own fitness = optimum of the preset's fitness / fitness - 1")
+"""What the gap columns of the per-preset table measure (printed under it)."""
+
 METRICS = ("length", "raw_length", "gap", "raw_gap", "fitness_gap", "turns", "angle_sum",
            "convergence_generation")
 TESTS = ("mannwhitneyu", "wilcoxon")
@@ -194,7 +200,7 @@ class Comparison:
 
     def _preset_table(self) -> tuple[list[str], list[list[str]]]:
         head = ["preset", "pop x gen", "success", f"{self.metric} mean", "sd", "min", "max",
-                "gap 8-conn", "gap any-angle", "gap own fitness", "s/run"]
+                "raw gap", "gap", "gap own fitness", "s/run"]
         rows = [[r["label"], f"{r['population']} x {r['generations']}",
                  f"{r['n_success']}/{r['n']}", f"{r['mean']:.4f}", f"{r['sd']:.4f}",
                  f"{r['min']:.4f}", f"{r['max']:.4f}", f"{100 * r['raw_gap']:.2f}%",
@@ -243,7 +249,7 @@ class Comparison:
 
         ``verbose`` adds each preset's full :meth:`Result.summary`.
         """
-        parts = [self._header(), _text_table(*self._preset_table())]
+        parts = [self._header(), _text_table(*self._preset_table()), GAP_NOTE]
         failed = [f"{label}: {r.reason}" for label, r in self.results.items() if r.reason]
         if failed:  # why a preset's seeds found no path (e.g. a capacity too small)
             parts.append("\n".join(failed))
@@ -283,7 +289,8 @@ class Comparison:
         With ``compact`` the main metric has the full table and the other metrics one
         table of Holm-corrected p-values and effect sizes (one row per pair).
         """
-        parts = [self._header().replace("\n", "; "), _md_table(*self._preset_table())]
+        parts = [self._header().replace("\n", "; "), _md_table(*self._preset_table()),
+                 GAP_NOTE]
         parts.append(f"Pairwise tests on `{self.metric}`:\n\n"
                      + _md_table(*self._test_table(self.metric)))
         others = [m for m in self.metrics if m != self.metric]
@@ -321,9 +328,13 @@ class Comparison:
                             for name, m, s, lo, hi in r.summary_rows()},
                 "time_per_run_s": row["time_per_run_s"], "timing": dict(r.timing),
                 "values": {m: [_num(x) for x in metric_values(r, m)] for m in self.metrics},
+                "population_capacity": r.population_capacity,
+                "config": None if r.config is None else r.config.as_dict(),
             }
         return {
             "map": r0.map_name, "corner_rule": r0.corner_rule,
+            "start": None if r0.start is None else list(r0.start),
+            "goal": None if r0.goal is None else list(r0.goal),
             "seeds": [int(s) for s in r0.seeds], "optimum": _num(self.optimum),
             "any_angle_optimum": _num(self.any_angle_optimum), "metric": self.metric,
             "metrics": list(self.metrics), "test": self.test, "alpha": self.alpha,

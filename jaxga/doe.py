@@ -394,6 +394,12 @@ class DoeResult:
     confirmation: np.ndarray  # float[S]
     confirmation_all: dict[str, np.ndarray]
     timing: dict[str, float]
+    config: Config | None = None
+    """The resolved configuration that every point overrides with its factor levels."""
+    population_capacity: int = 0
+    """Individuals per island of every point's and the confirmation's compiled program
+    (the largest ``population.size`` of the design): ``jaxga.run(...,
+    population_capacity=...)`` with a point's values repeats its runs bit for bit."""
 
     @property
     def values(self) -> list[dict[str, Any]]:
@@ -452,6 +458,9 @@ class DoeResult:
                              "mean": _json_float(self.confirmation_mean),
                              "n_success": int(self.confirmation_all["success"].sum())},
             "timing": {k: float(v) for k, v in self.timing.items()},
+            "generations": None if self.config is None else int(self.config["generations"]),
+            "population_capacity": self.population_capacity,
+            "config": None if self.config is None else self.config.as_dict(),
         }
 
     def table(self) -> str:
@@ -904,4 +913,5 @@ def run_doe(
         confirmation=confirm[response], confirmation_all=confirm,
         timing={"compile_s": compile_s, "sweep_s": sweep_s, "confirmation_s": confirm_s,
                 "total_s": time.perf_counter() - t_start},
+        config=config, population_capacity=capacity,
     )

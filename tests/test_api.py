@@ -66,11 +66,24 @@ def test_every_preset_returns_only_feasible_paths(preset_run, grid):
         assert r.fitness_optimum_length >= octile - 1e-9
         assert np.all(r.fitness_gap[r.success] >= 0), (name, r.fitness, opt.fitness)
         assert np.isnan(r.fitness_gap[~r.success]).all()
-    # the JSON layout of `jaxga run --json`
+        assert r.fitness_optimum_reason == ""
+    # every raw gap against the optimum of the raw paths' kind: never below it
+    assert np.all(r.raw_gap[r.success] >= 0) and np.all(r.gap[r.success] >= 0), name
+    assert r.raw_optimum == (bound if name == "agacd" else octile)
+    # the JSON layout of `jaxga run --json`: enough to identify and repeat the runs
     js = r.to_json()
     assert js["preset"] == name and len(js["runs"]) == 3
     assert {"compile_s", "init_s", "evolve_s", "post_s", "total_s"} <= set(js["timing"])
     assert js["fitness_optimum"] == (None if name == "agacd" else r.fitness_optimum)
+    assert ("waypoint" in js["fitness_optimum_reason"]) == (name == "agacd")
+    assert js["start"] == list(grid.start_xy) and js["goal"] == list(grid.goal_xy)
+    assert js["config"] == r.config.as_dict() and js["config"]["generations"] == 3
+    assert js["population_capacity"] == 8 and js["raw_optimum"] == r.raw_optimum
+    for i, run in enumerate(js["runs"]):
+        for key in ("angle_sum", "turns", "gap", "raw_gap", "fitness_gap"):
+            want = r._column(key)[i] if key in ("angle_sum", "turns") else getattr(r, key)[i]
+            assert run[key] == (float(want) if r.success[i] and np.isfinite(want) else None)
+    json.dumps(js, allow_nan=False)
 
 
 def test_every_preset_is_deterministic(preset_run, grid):
@@ -205,6 +218,17 @@ def test_population_size_sweep_uses_the_active_mask(grid):
         assert r.history["best"].shape == (1, 3)
     # an inactive slot never counts: 4 active individuals cannot have the history of 8
     assert not np.array_equal(results[0].history["mean"], results[2].history["mean"])
+    # a point's runs are repeated bit for bit by run() with the sweep's capacity (the
+    # same 3-run program), which every result and its JSON record
+    assert {r.population_capacity for r in results} == {8}
+    again = api.run("sga", grid, seeds=[0, 1, 2], population_capacity=8,
+                    **{**SMALL, "population__size": 4})
+    assert again.population_capacity == 8 and again.to_json()["population_capacity"] == 8
+    assert np.array_equal(again.cells[:1], results[0].cells)
+    assert np.array_equal(again.history["mean"][:1], results[0].history["mean"])
+    with pytest.raises(ParameterError, match="population_capacity 3 is below the largest "
+                                             "population.size .4."):
+        api.check_run("sga", grid, population_capacity=3, **{**SMALL, "population__size": 4})
 
 
 UNREAD_CASES = [(name, {}) for name in sorted(preset_names())] + [

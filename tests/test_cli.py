@@ -131,6 +131,33 @@ def test_run_refuses_a_set_that_nothing_reads(capsys):
     assert "crossover.probability has no effect in 'agacd': crossover.adaptive = true" in err
 
 
+def test_population_capacity_reaches_the_run(capsys, monkeypatch):
+    """--population-capacity is passed to jaxga.run (to repeat a DOE point's runs), and a
+    capacity below the population is refused before anything compiles."""
+    import jaxga.api
+
+    seen = {}
+
+    class Stop(Exception):
+        pass
+
+    def fake_run(*args, **kwargs):
+        seen.update(kwargs)
+        raise Stop
+
+    argv = ["run", "--preset", "sga", "--map", "classic_ga_gapp3_20x20", "--seeds", "2",
+            "--generations", "3", "--quiet", "--set", "population.size=8"]
+    monkeypatch.setattr(jaxga.api, "run", fake_run)
+    with pytest.raises(Stop):
+        main([*argv, "--population-capacity", "12"])
+    assert seen["population_capacity"] == 12
+    monkeypatch.undo()
+    assert main([*argv, "--population-capacity", "4"]) == EXIT_BAD_INPUT
+    err = capsys.readouterr().err.strip()
+    assert "population_capacity 4 is below the largest population.size (8)" in err
+    assert "\n" not in err
+
+
 @pytest.mark.parametrize("option, name, words", [
     ("--plot", "out.xyz", "'xyz' is not an image format"),
     ("--plot", "missing/out.png", "does not exist"),

@@ -290,6 +290,13 @@ def test_cli_compare_end_to_end(tmp_path, grid, comparison, capsys):
     js = json.loads(out.read_text())
     assert set(js["presets"]) == {"sga", "imga"} and js["metric"] == "length"
     assert js["map"] == "m" and "map m (corner rule 'free')" in text
+    assert js["start"] == list(grid.start_xy) and js["goal"] == list(grid.goal_xy)
+    for name in ("sga", "imga"):  # every setting of each preset's runs
+        conf = js["presets"][name]["config"]
+        assert conf == comparison.results[name].config.as_dict()
+        assert conf["name"] == name and conf["generations"] == 3
+        assert conf["population.size"] == js["presets"][name]["population_capacity"] == 8
+    assert "raw gap = raw length" in text  # what the gap columns measure
     # the CLI ran the same seeds as compare(): the same lengths
     for name in ("sga", "imga"):
         want = [None if not ok else x for ok, x in
