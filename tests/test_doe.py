@@ -322,17 +322,15 @@ def test_doe_points_equal_separate_runs(one_call):
 
     r = one_call
     assert r.responses.shape == (9, 3)
-    sizes = [v["population.size"] for v in r.values]
-    checked = 0
+    # every point, with the design's capacity (its largest population.size), which
+    # the result records: one compiled program for all nine runs
+    assert r.population_capacity == max(v["population.size"] for v in r.values)
     for q, point in enumerate(r.values):
-        if sizes[q] != max(sizes):  # jaxga.run's capacity is the point's own size
-            continue
         single = jaxga.run("agacd", MAP, seeds=3, **KW,
+                           population_capacity=r.population_capacity,
                            **{k.replace(".", "__"): v for k, v in point.items()})
         _assert_same_runs({k: v[q] for k, v in r.all_responses.items()},
                           seed_responses(single))
-        checked += 1
-    assert checked == 3
     # the response of each point is the mean over its seeds; fitness-like: all seeds
     np.testing.assert_allclose(r.means, r.responses.mean(axis=1))
     assert r.direction == "max" and r.response == "fitness"
@@ -359,6 +357,10 @@ def test_json_layout(one_call):
     assert set(d["predicted_best"]["coded"].values()) <= {-1, 0, 1}
     assert len(d["confirmation"]["responses"]) == 3
     assert isinstance(d["confirmation"]["mean"], float)
+    # what identifies the experiment: every setting, the generations, the capacity
+    assert d["config"] == one_call.config.as_dict() and d["config"]["name"] == "agacd"
+    assert d["generations"] == one_call.config["generations"]
+    assert d["population_capacity"] == 20  # the largest population.size of the design
     t = d["timing"]
     assert t["total_s"] >= t["sweep_s"] + t["confirmation_s"] > 0
     assert t["compile_s"] <= t["sweep_s"] + t["confirmation_s"]
