@@ -305,6 +305,11 @@ def _seed_list(seeds: int | Sequence[int],
     if arr.min() < 0 or arr.max() >= SEED_LIMIT:  # (uint64 compares exactly)
         raise JaxgaError(f"seeds must be integers in [0, 2**32) (seeds are 32-bit), got "
                          f"{int(arr.min())} .. {int(arr.max())}")
+    values, counts = np.unique(arr, return_counts=True)
+    if (counts > 1).any():  # the same run twice: a pseudo-replicate in any statistic
+        raise JaxgaError(f"seeds must be distinct: seed {int(values[counts > 1][0])} is "
+                         f"given {int(counts[counts > 1][0])} times (a seed always gives "
+                         "the same run)")
     check_count(arr.size)
     return arr.astype(np.int64)
 

@@ -19,6 +19,7 @@ import os
 import re
 import sys
 import time
+import warnings
 from collections.abc import Callable, Sequence
 from pathlib import Path
 from typing import Any
@@ -663,6 +664,20 @@ def _join_negative_xy(argv: Sequence[str]) -> list[str]:
     return out
 
 
+def _one_line_warnings(show: Callable[..., None]) -> Callable[..., None]:
+    """A ``warnings.showwarning`` that prints jaxga's own warnings as one ``jaxga:
+    warning: ...`` line, like its errors (Python's format adds the console script's file
+    and source line), and hands other libraries' warnings to ``show``."""
+
+    def show_warning(message, category, filename, lineno, file=None, line=None) -> None:
+        if category.__module__.split(".")[0] == "jaxga":
+            print(f"jaxga: warning: {message}", file=sys.stderr if file is None else file)
+        else:
+            show(message, category, filename, lineno, file, line)
+
+    return show_warning
+
+
 def main(argv: Sequence[str] | None = None) -> int:
     """Entry point of the ``jaxga`` console script; returns the exit status."""
     parser = build_parser()
@@ -674,7 +689,9 @@ def main(argv: Sequence[str] | None = None) -> int:
             configure_from_args(args)  # before JAX's backend starts
         if args.func in (cmd_run, cmd_doe, cmd_compare):
             use_compilation_cache()
-        return args.func(args)
+        with warnings.catch_warnings():
+            warnings.showwarning = _one_line_warnings(warnings.showwarning)
+            return args.func(args)
     except ProcessLostError as e:
         # Exit at once: a normal exit would wait in jax.distributed's shutdown barrier
         # for the lost process (up to --process-timeout).

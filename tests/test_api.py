@@ -775,10 +775,13 @@ def test_wrong_python_types_are_refused_with_a_jaxga_error(grid, monkeypatch, ca
     (True, "a count or a list"), (np.bool_(True), "a count or a list"),
     ([True, False], "must be integers"), (np.float32(2.0), "a count or a list"),
     ([np.int64(1), 2**70], "[0, 2**32)"), ([1, 2**70, 1.5], "must be integers"),
+    ([3, 1, 3, 3], "seeds must be distinct: seed 3 is given 3 times"),
+    (np.array([7, 7]), "seed 7 is given 2 times"),
 ])
 def test_seeds_outside_32_bits_are_refused(grid, seeds, words):
     """Seeds are 32-bit: 2**32 would silently repeat seed 0, -1 seed 2**32 - 1; seeds that
-    are not integers are refused, not truncated (1.5 would have run seed 1)."""
+    are not integers are refused, not truncated (1.5 would have run seed 1). A repeated
+    seed repeats its run exactly (a pseudo-replicate in every statistic): refused."""
     with pytest.raises(JaxgaError, match=re.escape(words)):
         api.run("sga", grid, seeds=seeds, **SMALL)
 

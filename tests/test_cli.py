@@ -404,3 +404,30 @@ def test_progress_is_shown_after_two_seconds_as_a_bar_or_as_log_lines(tty):
     else:
         assert text.splitlines() == ["progress: compile 50%", "progress: compile 100%",
                                      "progress: evolve 50%", "progress: evolve 100%"]
+
+
+def test_jaxga_warnings_are_one_line_like_its_errors(capsys, monkeypatch):
+    """An InitialisationWarning during `jaxga run` is one `jaxga: warning: ...` line
+    (not Python's format with the console script's file and source line); other
+    libraries' warnings keep Python's format."""
+    import warnings
+
+    import jaxga.api
+    from jaxga.errors import InitialisationWarning
+
+    class Stop(Exception):
+        pass
+
+    def fake_run(*args, **kwargs):
+        warnings.warn("2 of 2 runs started with fewer individuals", InitialisationWarning,
+                      stacklevel=2)
+        warnings.warn("not ours", DeprecationWarning, stacklevel=2)
+        raise Stop
+
+    monkeypatch.setattr(jaxga.api, "run", fake_run)
+    with pytest.warns(DeprecationWarning, match="not ours") as seen:  # handed on
+        with pytest.raises(Stop):
+            main(["run", "--preset", "sga", "--map", "classic_ga_gapp3_20x20", "--quiet"])
+    assert [w.category for w in seen] == [DeprecationWarning]
+    err = capsys.readouterr().err
+    assert err == "jaxga: warning: 2 of 2 runs started with fewer individuals\n"
