@@ -59,6 +59,12 @@ def _add_map_arguments(p: argparse.ArgumentParser, rule_default: str = "strict")
                    "file's S or (0, 0))")
     p.add_argument("--goal", type=_parse_xy, metavar="X,Y",
                    help="goal cell (default: the file's G or (W-1, H-1))")
+    p.add_argument("--scenario", type=int, metavar="N",
+                   help="start and goal of problem N (0 = the first) of a Moving AI "
+                   "scenario file: --scen, or else the built-in map's own, or X.map.scen "
+                   "or X-random-*.scen beside a map file X.map (y is converted: the "
+                   "file counts it from the top)")
+    p.add_argument("--scen", metavar="FILE", help="the .scen file of --scenario")
     p.add_argument("--corner-rule", default=None, metavar="RULE",
                    help=f"one of {', '.join(CORNER_RULES)} (default: {rule_default})")
 
@@ -71,6 +77,45 @@ def _add_preset_arguments(p: argparse.ArgumentParser) -> None:
     p.add_argument("--generations", type=int, help="override the preset's generations")
     p.add_argument("--set", action="append", metavar="KEY=VALUE",
                    help="override a configuration key, e.g. crossover.probability=0.7")
+
+
+def _apply_scenario(args: argparse.Namespace) -> None:
+    """``--scenario N``: ``args.start`` / ``args.goal`` from problem ``N`` of a Moving AI
+    scenario file (converted to y from the bottom by :func:`jaxga.maps.read_scen`),
+    checked against the map's size. Refused with --start/--goal, and --scen without
+    --scenario."""
+    if getattr(args, "scenario", None) is None:
+        if getattr(args, "scen", None) is not None:
+            raise JaxgaError("--scen names the scenario file of --scenario N: give N too")
+        return
+    from jaxga.maps import builtin_names, load_map_info, read_scen
+    from jaxga.maps.builtin import builtin_scenario_path
+
+    if args.start is not None or args.goal is not None:
+        raise JaxgaError("--scenario gives the start and goal: leave out --start and --goal")
+    if args.scen is not None:
+        path = Path(args.scen)
+    elif args.map in builtin_names():
+        path = builtin_scenario_path(args.map)
+        if path is None:
+            raise JaxgaError(f"built-in map {args.map!r} has no scenario file: give --scen")
+    else:  # Moving AI's names: X.map.scen, or X-random-1.scen of the scenario sets
+        m = Path(args.map)
+        found = [m.with_name(m.name + ".scen"), *sorted(m.parent.glob(f"{m.stem}-random-*.scen"))]
+        path = next((f for f in found if f.is_file()), None)
+        if path is None:
+            raise JaxgaError(f"no scenario file {m.name}.scen or {m.stem}-random-*.scen "
+                             "beside the map: give --scen")
+    problems = read_scen(path)
+    if not 0 <= args.scenario < len(problems):
+        raise JaxgaError(f"--scenario {args.scenario}: {path.name} has problems 0 .. "
+                         f"{len(problems) - 1}")
+    problem = problems[args.scenario]
+    grid = load_map_info(args.map).grid
+    if (problem.width, problem.height) != (grid.width, grid.height):
+        raise JaxgaError(f"{path.name} is for a {problem.width} x {problem.height} map "
+                         f"({problem.map_name}), {args.map} is {grid.width} x {grid.height}")
+    args.start, args.goal = problem.start, problem.goal
 
 
 def _load_grid(args: argparse.Namespace):
@@ -685,6 +730,7 @@ def main(argv: Sequence[str] | None = None) -> int:
     try:
         check_environment()  # $JAXGA_THREEFRY, which `import jaxga` does not refuse
         check_outputs(args)
+        _apply_scenario(args)
         if hasattr(args, "devices"):  # subcommands with add_parallel_arguments
             configure_from_args(args)  # before JAX's backend starts
         if args.func in (cmd_run, cmd_doe, cmd_compare):

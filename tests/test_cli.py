@@ -61,6 +61,63 @@ def test_optimum_uses_file_endpoints_and_overrides(tmp_path):
     assert json.loads(out.read_text())["path"][0] == [0, 0]
 
 
+def test_scenario_gives_the_endpoints_of_a_moving_ai_problem(tmp_path, capsys):
+    """--scenario N takes problem N's start and goal (y converted from the file's top-down
+    count): on a built-in map from its own .scen, whose optimal length the exact
+    optimum then equals (strict rule); beside a map file (X.map.scen) or with --scen."""
+    import shutil
+
+    from jaxga.maps import builtin_scenarios
+    from jaxga.maps.builtin import builtin_path
+
+    out = tmp_path / "o.json"
+    problem = builtin_scenarios("maze-32-32-2")[3]
+    assert main(["optimum", "--map", "maze-32-32-2", "--corner-rule", "strict",
+                 "--scenario", "3", "--json", str(out)]) == 0
+    data = json.loads(out.read_text())
+    assert data["start"] == list(problem.start) and data["goal"] == list(problem.goal)
+    assert data["length"] == pytest.approx(problem.optimal_length, abs=1e-6)
+    # a map file with its scenario file beside it, then the same problem by --scen
+    m = tmp_path / "maze.map"
+    shutil.copy(builtin_path("maze-32-32-2"), m)
+    (tmp_path / "maze.map.scen").write_text(
+        "version 1\n3\tmaze.map\t32\t32\t11\t17\t3\t10\t15.24264069\n")
+    for extra in ([], ["--scen", str(tmp_path / "maze.map.scen")]):
+        assert main(["optimum", "--map", str(m), "--corner-rule", "strict",
+                     "--scenario", "0", "--json", str(out), *extra]) == 0
+        data = json.loads(out.read_text())
+        assert data["start"] == [11, 31 - 17] and data["goal"] == [3, 31 - 10]
+    capsys.readouterr()
+
+
+@pytest.mark.parametrize("extra, words", [
+    (["--scenario", "333"], "has problems 0 .. 332"),
+    (["--scenario", "-1"], "has problems 0 .. 332"),
+    (["--scen", "x.scen"], "give N too"),
+    (["--scenario", "1", "--goal", "1,1"], "leave out --start and --goal"),
+    (["--scenario", "1", "--scen", "missing.scen"], "scenario file not found"),
+])
+def test_bad_scenario_options_are_one_line(extra, words, capsys):
+    rc = main(["optimum", "--map", "maze-32-32-2", *extra])
+    err = capsys.readouterr().err.strip()
+    assert rc == EXIT_BAD_INPUT and words in err and "\n" not in err
+
+
+def test_a_scenario_of_another_map_size_or_a_map_without_one_is_refused(tmp_path, capsys):
+    scen = tmp_path / "big.scen"
+    scen.write_text("version 1\n0\tbig.map\t64\t64\t1\t1\t2\t2\t1.41421356\n")
+    assert main(["optimum", "--map", "maze-32-32-2", "--scenario", "0", "--scen",
+                 str(scen)]) == EXIT_BAD_INPUT
+    assert "is for a 64 x 64 map (big.map), maze-32-32-2 is 32 x 32" in capsys.readouterr().err
+    assert main(["optimum", "--map", "classic_ga_gapp3_20x20", "--scenario", "0"]) \
+        == EXIT_BAD_INPUT
+    assert "has no scenario file: give --scen" in capsys.readouterr().err
+    art = tmp_path / "m.txt"
+    art.write_text("000\n000\n")
+    assert main(["optimum", "--map", str(art), "--scenario", "0"]) == EXIT_BAD_INPUT
+    assert "beside the map: give --scen" in capsys.readouterr().err
+
+
 @pytest.mark.parametrize(
     "args, code, words",
     [
