@@ -889,7 +889,9 @@ def run(
             generations run in up to that many compiled chunks of one size
             (:func:`equal_chunks`; same result) for a progress bar.
         population_capacity: individuals per island that the compiled program holds
-            (default ``population.size``); the random numbers of a run depend on it. A
+            (default ``population.size``; not the configuration key
+            ``population.capacity``, the cells a path can hold); the random numbers of a
+            run depend on it. A
             point of a :func:`sweep` or a DOE over population sizes ran with the largest
             size swept as its capacity (``Result.population_capacity``): pass that to
             repeat its runs bit for bit.

@@ -553,8 +553,9 @@ def build_parser() -> argparse.ArgumentParser:
     p.add_argument("--seeds", type=int, default=10, help="number of seeded runs (default 10)")
     p.add_argument("--population-capacity", type=int, metavar="K",
                    help="individuals per island of the compiled program (default: "
-                   "population.size); a run's random numbers depend on it: give a DOE's "
-                   "or sweep's population_capacity to repeat one of its points bit for bit")
+                   "population.size; not the key population.capacity, the cells of a "
+                   "path); a run's random numbers depend on it: give a DOE's or sweep's "
+                   "population_capacity to repeat one of its points bit for bit")
     p.add_argument("--json", metavar="OUT", help="write every run as JSON")
     p.add_argument("--plot", metavar="OUT.png", help="plot the map, best paths and convergence")
     p.add_argument("--quiet", action="store_true", help="no progress bar")
@@ -594,7 +595,7 @@ def build_parser() -> argparse.ArgumentParser:
     p.add_argument("--json", metavar="OUT", help="write the result as JSON")
     p.set_defaults(func=cmd_replan)
 
-    from jaxga.doe import DESIGNS, RESPONSES
+    from jaxga.doe import DESIGNS, RESPONSE_ALIASES, RESPONSES
 
     p = sub.add_parser("doe", help="a designed experiment over hyper-parameters (AGACD 5.2.1)")
     _add_preset_arguments(p)
@@ -605,8 +606,9 @@ def build_parser() -> argparse.ArgumentParser:
                    help="a factor and its levels coded -1,0,1, e.g. population.size=40,50,60 "
                    "(repeat; default for agacd-table4: AGACD Table 3)")
     p.add_argument("--seeds", type=int, default=5, help="seeded runs per point (default 5)")
-    p.add_argument("--response", default="fitness", choices=tuple(RESPONSES),
-                   help="the response fitted (default fitness)")
+    p.add_argument("--response", default="fitness",
+                   choices=(*RESPONSES, *RESPONSE_ALIASES),
+                   help="the response fitted (default fitness; angle_sum = smoothness)")
     p.add_argument("--direction", choices=("max", "min"),
                    help="maximise or minimise the response (default: max for fitness and "
                    "success, min for the others)")

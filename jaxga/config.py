@@ -104,7 +104,8 @@ SCHEMA: dict[str, Field] = {
     "map.corner_rule": Field(str, "corner rule of SPEC 1 used unless the run names one",
                              choices=CORNER_RULES),
     "population.size": Field(int, "individuals per population (per island)", low=2, high=100_000),
-    "population.capacity": Field(int, "path capacity L; 0 = automatic from the map size",
+    "population.capacity": Field(int, "path capacity L: cells a path can hold (not a "
+                                 "number of individuals); 0 = automatic from the map size",
                                  low=0, high=1_000_000),
     "generations": Field(int, "generations per run", low=1, high=1_000_000),
     "init.method": Field(str, "initialiser (SPEC 4)", choices=INITIALISERS),

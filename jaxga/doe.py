@@ -264,6 +264,10 @@ def design_points(factors: Sequence[Factor], coded: np.ndarray) -> list[dict[str
 
 # ----------------------------------------------------------------------------- analysis
 
+RESPONSE_ALIASES: dict[str, str] = {"angle_sum": "smoothness"}
+"""Other names of a response: ``angle_sum`` is what :func:`jaxga.run`'s summary and
+``jaxga compare`` call the smoothness (AGACD eq. 10-17)."""
+
 RESPONSES: dict[str, str] = {
     "fitness": "max",
     "success": "max",
@@ -760,8 +764,8 @@ def run_doe(
         factors: the :class:`Factor` s, assigned to the first columns of ``design``.
         design: one of :data:`DESIGNS`.
         seeds: a count or explicit seeds; every point and the confirmation run use them.
-        response: one of :data:`RESPONSES`; ``direction`` (``"max"`` / ``"min"``)
-            overrides its default.
+        response: one of :data:`RESPONSES` (``"angle_sum"`` is ``"smoothness"``);
+            ``direction`` (``"max"`` / ``"min"``) overrides its default.
         checkpoint: a directory for a resumable run (see the module docstring).
         block: design points per compiled call; default all of them (one call) without
             a checkpoint, 1 with one.
@@ -784,6 +788,8 @@ def run_doe(
     from jaxga.reference import shortest_path
 
     t_start = time.perf_counter()
+    response = RESPONSE_ALIASES.get(response, response) if isinstance(response, str) \
+        else response
     if response not in RESPONSES:
         raise ParameterError(f"unknown response {response!r}: one of {', '.join(RESPONSES)}")
     direction = direction or RESPONSES[response]

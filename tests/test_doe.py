@@ -669,3 +669,11 @@ def test_every_design_point_is_checked_before_the_first_runs(monkeypatch):
     with pytest.raises(ParameterError, match="fitness.v_t = 0.5 is above fitness.v = 0.25"):
         run_doe("iga_zhang", MAP, [Factor("fitness.v", (0.25, 0.5, 1.0))], "L9", seeds=1,
                 generations=2, population__size=8)
+
+
+def test_angle_sum_is_the_smoothness_response(one_call):
+    """``response="angle_sum"`` (the name of run's summary and compare) is the smoothness
+    response: the same design, the same compiled programs, the smoothness values."""
+    r = run_doe("agacd", MAP, SMALL, "agacd-table4", seeds=3, response="angle_sum", **KW)
+    assert r.response == "smoothness" and r.direction == "min"
+    np.testing.assert_array_equal(r.responses, one_call.all_responses["smoothness"])
