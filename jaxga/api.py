@@ -19,7 +19,7 @@ import sys
 import time
 import warnings
 from collections.abc import Callable, Mapping, Sequence
-from typing import Any
+from typing import TYPE_CHECKING, Any
 
 import jax
 import jax.numpy as jnp
@@ -43,6 +43,9 @@ from jaxga.errors import InitialisationWarning, JaxgaError, ParameterError
 from jaxga.grid import Grid, as_integer
 from jaxga.lowering import check_environment
 from jaxga.objectives import Metrics
+
+if TYPE_CHECKING:
+    from jaxga.maps import MapInfo
 
 SUMMARY_METRICS = ("length", "raw_length", "angle_sum", "turns", "fitness",
                    "convergence_generation")
@@ -594,10 +597,13 @@ def _load(preset, grid, corner_rule, variant, sets, overrides, generations, *,
           check_read: bool = True):
     """``(config, grid, map name)`` of a call, checked; ``check_read=False`` leaves
     overrides that nothing reads to the caller (:func:`jaxga.compare.compare`)."""
-    from jaxga.maps import load_map_info
+    from jaxga.maps import MapInfo, load_map_info
     from jaxga.presets import as_sets, check_file_keys_read, load_preset, parse_set
 
     check_environment()  # a bad $JAXGA_THREEFRY, which `import jaxga` does not refuse
+    map_name = "grid"
+    if isinstance(grid, MapInfo):  # a loaded map that keeps its name (and its endpoints)
+        grid, map_name = grid.grid, grid.name
     sets = as_sets(sets)
     ov: dict[str, Any] = {k.replace("__", "."): v for k, v in overrides.items()}
     if generations is not None:  # a non-integer is left for the configuration to refuse
@@ -634,7 +640,6 @@ def _load(preset, grid, corner_rule, variant, sets, overrides, generations, *,
                 f"corner rule ({grid.corner_rule!r}): give the Grid that rule "
                 "(corner_rule=... or Grid.replace; --corner-rule on the command line)")
     if isinstance(grid, Grid):
-        map_name = "grid"
         grid = grid.validated()  # a grid made with the plain constructor is checked too
         if corner_rule is not None:
             grid = grid.replace(corner_rule=corner_rule)
@@ -674,7 +679,7 @@ def _point_configs(config: Config, points: Sequence[Mapping[str, Any]]) -> list[
 
 def sweep(
     preset: str | Config,
-    grid: Grid | str,
+    grid: Grid | MapInfo | str,
     points: Sequence[Mapping[str, Any]],
     seeds: int | Sequence[int] = 1,
     *,
@@ -856,7 +861,7 @@ def _population_capacity(configs: Sequence[Config], requested: Any) -> int:
 
 def run(
     preset: str | Config,
-    grid: Grid | str,
+    grid: Grid | MapInfo | str,
     seeds: int | Sequence[int] = 1,
     *,
     generations: int | None = None,
@@ -872,9 +877,12 @@ def run(
 
     Args:
         preset: a preset name (``jaxga presets``), a TOML file, or a :class:`Config`.
-        grid: a :class:`Grid`, a map file or a built-in map name. A map given by name is
-            loaded with ``corner_rule`` or else the preset's ``map.corner_rule``; a Grid
-            keeps its own unless ``corner_rule`` is given.
+        grid: a :class:`Grid`, a map file or a built-in map name, or a
+            :class:`jaxga.maps.MapInfo` (``load_map_info(name, start=..., goal=...)``:
+            other endpoints, and the results keep the map's name where a Grid is "grid").
+            A map given by name is loaded with ``corner_rule`` or else the preset's
+            ``map.corner_rule``; a Grid or MapInfo keeps its own unless ``corner_rule`` is
+            given.
         seeds: a count ``N`` (seeds ``0..N-1``) or explicit integer seeds in
             ``[0, 2**32)``. Seed ``s`` always gives the same run, whatever other seeds run
             with it and on however many devices. A call whose results would need more

@@ -886,3 +886,18 @@ def test_a_grid_made_with_the_plain_constructor_is_checked(monkeypatch):
             api.run("sga", g, seeds=1, **SMALL)
     g = Grid(blocked=jnp.zeros((5, 5)), start=jnp.int32(0), goal=jnp.int32(24))
     assert g.validated().blocked.dtype == bool and g.validated().goal_xy == (4, 4)
+
+
+def test_a_map_info_keeps_the_map_name_with_its_endpoints(grid):
+    """``run(preset, load_map_info(name, start=..., goal=...))``: the runs of the Grid it
+    holds, under the map's name (a Grid alone is "grid")."""
+    from pathlib import Path
+
+    from jaxga.maps import MapInfo
+
+    info = MapInfo(name="ten", path=Path("ten.txt"), format="01", builtin=False, grid=grid)
+    named = api.run("sga", info, seeds=3, **SMALL)
+    plain = api.run("sga", grid, seeds=3, **SMALL)
+    assert named.map_name == "ten" and named.to_json()["map"] == "ten"
+    assert plain.map_name == "grid" and "on ten (corner rule 'free')" in named.summary()
+    assert np.array_equal(named.cells, plain.cells)
