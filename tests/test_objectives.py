@@ -173,18 +173,24 @@ def _fill_forward_reference(key: np.ndarray, v: np.ndarray) -> np.ndarray:
     return np.where(m >= 0, np.take_along_axis(v, np.maximum(m, 0), axis=-1), v)
 
 
+FILL_WIDTH = 12 * 41  # the longest example below: 12 runs of 41 entries
+_fill_forward_pairs = jax.jit(jax.vmap(ob._fill_forward))
+
+
 @given(st.lists(st.tuples(st.booleans(), st.integers(0, 40)), min_size=1, max_size=12),
        st.integers(0, 2**31 - 1))
 def test_direction_fill_forward_matches_running_maximum(runs, seed):
     """The last segment direction carried over repeated nodes (holes) equals a numpy
     running maximum, for holes at the start, in long runs and under vmap with paths
-    without holes in the same batch."""
+    without holes in the same batch. Every example is padded to one length with filled
+    entries after its runs (a fill only looks back), so one program serves them all."""
     mask = np.concatenate([np.full(n + 1, filled) for filled, n in runs])
+    mask = np.concatenate([mask, np.ones(FILL_WIDTH - mask.size, bool)])
     n = mask.size
     rng = np.random.default_rng(seed)
     keys = np.stack([np.where(mask, np.arange(n), -1), np.arange(n)]).astype(np.int32)
     vx, vy = (rng.integers(-3, 4, (2, n)).astype(np.int32) for _ in range(2))
-    px, py = jax.vmap(ob._fill_forward)(jnp.asarray(keys), jnp.asarray(vx), jnp.asarray(vy))
+    px, py = _fill_forward_pairs(jnp.asarray(keys), jnp.asarray(vx), jnp.asarray(vy))
     np.testing.assert_array_equal(px, _fill_forward_reference(keys, vx))
     np.testing.assert_array_equal(py, _fill_forward_reference(keys, vy))
 
