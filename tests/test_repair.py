@@ -19,11 +19,17 @@ from jaxga.repair import SPLICE_LOCAL_MAX, concat, connect, prefix_count, splice
 N = 10
 CAP = 64
 
+# One compiled program per (map shape, corner rule, anchors, capacity): the tests below
+# call it on hand-made cases (eagerly, every JAX operation compiled on its own, the file
+# compiled about 700 small programs).
+_connect_one = jax.jit(connect, static_argnums=(3, 4))
+_prefix_count = jax.jit(prefix_count, static_argnames="axis")
+
 
 def test_mpmga_connection_example():
     """MPMGA section 4.2: the intermittent path 0, 60 becomes 0, 20, 40, 60 (20 x 20)."""
     grid = Grid.create(np.zeros((20, 20), bool), corner_rule="free")
-    cells, n, ok = connect(jax.random.PRNGKey(0), grid, jnp.array([0, 60], jnp.int32), 2, 8)
+    cells, n, ok = _connect_one(jax.random.PRNGKey(0), grid, jnp.array([0, 60], jnp.int32), 2, 8)
     assert bool(ok) and np.asarray(cells[: int(n)]).tolist() == [0, 20, 40, 60]
 
 
@@ -32,7 +38,8 @@ def test_medians_on_an_open_map_are_deterministic():
     grid = Grid.create(np.zeros((20, 20), bool), corner_rule="free")
     out = []
     for seed in range(3):
-        cells, n, ok = connect(jax.random.PRNGKey(seed), grid, jnp.array([0, 5 + 20 * 2]), 2, 16)
+        cells, n, ok = _connect_one(jax.random.PRNGKey(seed), grid,
+                                    jnp.array([0, 5 + 20 * 2]), 2, 16)
         assert bool(ok)
         out.append(np.asarray(cells[: int(n)]).tolist())
     # (0,0)->(5,2): median (2,1); (0,0)-(2,1): (1,0); (2,1)-(5,2): (3,1); (3,1)-(5,2): (4,1).
@@ -133,9 +140,9 @@ def test_stricter_rules_judge_the_loop_free_connection():
 
 def test_capacity_overflow_fails_instead_of_wrapping():
     grid = Grid.create(np.zeros((20, 20), bool), corner_rule="free")
-    _, _, ok = connect(jax.random.PRNGKey(0), grid, jnp.array([0, 399], jnp.int32), 2, 10)
+    _, _, ok = _connect_one(jax.random.PRNGKey(0), grid, jnp.array([0, 399], jnp.int32), 2, 10)
     assert not bool(ok)
-    _, n, ok = connect(jax.random.PRNGKey(0), grid, jnp.array([0, 399], jnp.int32), 2, 20)
+    _, n, ok = _connect_one(jax.random.PRNGKey(0), grid, jnp.array([0, 399], jnp.int32), 2, 20)
     assert bool(ok) and int(n) == 20
 
 
@@ -144,10 +151,10 @@ def test_strict_rule_goes_round_corners():
     blocked = np.zeros((3, 3), bool)
     blocked[0, 1] = True  # (1, 0)
     grid = Grid.create(blocked, corner_rule="strict")
-    cells, n, ok = connect(jax.random.PRNGKey(0), grid, jnp.array([0, 4], jnp.int32), 2, 8)
+    cells, n, ok = _connect_one(jax.random.PRNGKey(0), grid, jnp.array([0, 4], jnp.int32), 2, 8)
     assert bool(ok) and np.asarray(cells[: int(n)]).tolist() == [0, 3, 4]
     free = grid.replace(corner_rule="free")
-    cells, n, ok = connect(jax.random.PRNGKey(0), free, jnp.array([0, 4], jnp.int32), 2, 8)
+    cells, n, ok = _connect_one(jax.random.PRNGKey(0), free, jnp.array([0, 4], jnp.int32), 2, 8)
     assert bool(ok) and np.asarray(cells[: int(n)]).tolist() == [0, 4]
 
 
@@ -235,8 +242,8 @@ def test_compact_keeps_the_flagged_values_in_order(n, size):
 def test_prefix_count_is_the_cumulative_sum_along_any_axis(n):
     x = np.random.default_rng(n).integers(0, 3, size=(3, n, 4))
     for axis in (0, 1, 2):
-        got = prefix_count(jnp.asarray(x), axis=axis)
+        got = _prefix_count(jnp.asarray(x), axis=axis)
         assert got.dtype == jnp.int32
         np.testing.assert_array_equal(got, np.cumsum(x, axis=axis))
-    np.testing.assert_array_equal(prefix_count(jnp.asarray(x[0, :, 0] > 0)),
+    np.testing.assert_array_equal(_prefix_count(jnp.asarray(x[0, :, 0] > 0)),
                                   np.cumsum(x[0, :, 0] > 0))
