@@ -117,6 +117,7 @@ class ReplanResult:
         wall_s: wall time of the whole call.
         prefix: the travelled part of the old path, up to and including the robot's cell.
         ga: the :class:`jaxga.Result` of every GA call (for inspection).
+        corner_rule: the corner rule under which the path was judged and re-planned.
     """
 
     success: bool
@@ -134,10 +135,12 @@ class ReplanResult:
     wall_s: float
     prefix: list[XY]
     ga: list[Any] = dataclasses.field(default_factory=list, repr=False)
+    corner_rule: str = ""
 
     def summary(self) -> str:
         """A few lines: status, blockage, rejoin, segment, length and times."""
-        lines = [f"status      {self.status}" + (f" ({self.reason})" if self.reason else "")]
+        lines = [f"status      {self.status}" + (f" ({self.reason})" if self.reason else ""),
+                 f"corner rule {self.corner_rule!r}"]
         if self.blockage is not None:
             lines.append(f"blocked     step {self.blockage[0]} -> {self.blockage[1]}")
         for s in self.segments:
@@ -161,7 +164,7 @@ class ReplanResult:
 
         return {
             "success": self.success, "status": self.status, "reason": self.reason,
-            "path": [xy(p) for p in self.path],
+            "corner_rule": self.corner_rule, "path": [xy(p) for p in self.path],
             "length": None if not math.isfinite(self.length) else float(self.length),
             "segment": [xy(p) for p in self.segment], "rejoin": xy(self.rejoin),
             "blockage": None if self.blockage is None else [xy(p) for p in self.blockage],
@@ -432,7 +435,7 @@ def replan(
             blockage=blockage0, segments=segments,
             used_fallback=any(s["used_fallback"] for s in segments),
             latency_s=wall - compile_s, compile_s=compile_s, wall_s=wall,
-            prefix=prefix, ga=ga)
+            prefix=prefix, ga=ga, corner_rule=rule)
 
     k = first_blocked_step(blocked, rule, rest)
     blockage0 = None if k is None else (rest[k], rest[k + 1])

@@ -143,6 +143,12 @@ def test_nothing_blocked_returns_remaining_path_without_ga(sc25, monkeypatch):
         assert r.success and r.status == "clear"
         assert r.path == sc25.path[i:] and r.segments == [] and r.ga == []
         assert r.rejoin is None and r.blockage is None and r.compile_s == 0.0
+        # the rule the path was judged under, in the summary and the JSON
+        assert r.corner_rule == sc25.grid.corner_rule == r.to_json()["corner_rule"]
+        assert f"corner rule {sc25.grid.corner_rule!r}" in r.summary()
+    at_goal = len(sc25.path) - 1
+    strict = replan(sc25.grid.replace(corner_rule="strict"), sc25.path, [], at_goal)
+    assert strict.corner_rule == "strict" and strict.status == "clear"
     r = replan(sc25.grid, sc25.path, [], len(sc25.path) - 1)  # at the goal
     assert r.success and r.path == [sc25.path[-1]] and r.length == 0.0
 
