@@ -145,7 +145,7 @@ def cmd_optimum(args: argparse.Namespace) -> int:
     ``--preset`` the exact optimum of that preset's fitness."""
     from jaxga.engine import check_overrides_read
     from jaxga.fitness_reference import fitness_optimum
-    from jaxga.presets import load_preset, parse_set
+    from jaxga.presets import check_file_keys_read, load_preset, parse_set
     from jaxga.reference import any_angle_shortest_path, shortest_path
 
     config = None
@@ -155,6 +155,7 @@ def cmd_optimum(args: argparse.Namespace) -> int:
         config = load_preset(args.preset, variant=args.variant, sets=args.set or ())
         set_keys = [parse_set(text)[0] for text in args.set or ()]
         check_overrides_read(config, set_keys)
+        check_file_keys_read(args.preset, args.variant)  # as `jaxga run` checks a file
         if "map.corner_rule" in set_keys and args.corner_rule is not None \
                 and args.corner_rule != config["map.corner_rule"]:
             raise JaxgaError(f"two corner rules given: {args.corner_rule!r} (--corner-rule) "

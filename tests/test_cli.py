@@ -48,6 +48,13 @@ def test_optimum_of_a_presets_fitness(tmp_path, capsys):
     fit = json.loads(out.read_text())["fitness"]
     assert not fit["found"] and fit["value"] is None and "waypoint" in fit["reason"]
     assert "not computed" in capsys.readouterr().out
+    # a user file is checked as `jaxga run` checks it: a key sga never reads is refused
+    mine = tmp_path / "mine.toml"
+    mine.write_text('base = "sga"\n[mutation]\npm_high = 0.3\n')
+    assert main(["optimum", "--map", "classic_ga_gapp3_20x20", "--preset",
+                 str(mine)]) == EXIT_BAD_INPUT
+    err = capsys.readouterr().err.strip()
+    assert "mutation.pm_high" in err and "\n" not in err
 
 
 def test_optimum_uses_file_endpoints_and_overrides(tmp_path):
