@@ -636,8 +636,9 @@ def _load(preset, grid, corner_rule, variant, sets, overrides, generations, *,
         if "map.corner_rule" in overridden and isinstance(grid, Grid) \
                 and corner_rule is None and grid.corner_rule != rule:
             raise ParameterError(
-                f"map.corner_rule = {rule!r} has no effect with a Grid, which keeps its own "
-                f"corner rule ({grid.corner_rule!r}): give the Grid that rule "
+                f"map.corner_rule = {rule!r} has no effect with a Grid (or a loaded "
+                f"MapInfo), which keeps its own corner rule ({grid.corner_rule!r}): give "
+                "the Grid that rule "
                 "(corner_rule=... or Grid.replace; --corner-rule on the command line)")
     if isinstance(grid, Grid):
         grid = grid.validated()  # a grid made with the plain constructor is checked too
@@ -734,7 +735,7 @@ def sweep(
         seed_arr = _seed_list(seeds, lambda n: _check_memory(
             n * len(configs), NO_PATH_BYTES_PER_RUN, "for their results"))
         return [_no_path_result(c, map_name, grid, seed_arr, build(c, grid)[0], octile.reason,
-                                time.perf_counter() - t_start) for c in configs]
+                                time.perf_counter() - t_start, capacity) for c in configs]
     any_angle = any_angle_shortest_path(grid)
     # the capacity is the largest size swept, also when it is below the preset's size
     algo, _ = build(config.override({"population.size": capacity}), grid)
@@ -884,9 +885,11 @@ def run(
             ``map.corner_rule``; a Grid or MapInfo keeps its own unless ``corner_rule`` is
             given.
         seeds: a count ``N`` (seeds ``0..N-1``) or explicit integer seeds in
-            ``[0, 2**32)``. Seed ``s`` always gives the same run, whatever other seeds run
-            with it and on however many devices. A call whose results would need more
-            than half the machine's memory is refused (:class:`ParameterError`).
+            ``[0, 2**32)``, each once (a repeated seed would repeat its run exactly: a
+            pseudo-replicate; refused). Seed ``s`` always gives the same run, whatever
+            other seeds run with it and on however many devices. A call whose results
+            would need more than half the machine's memory is refused
+            (:class:`ParameterError`).
         generations: overrides the preset's generation count.
         overrides: configuration keys with ``.`` written as ``__`` (e.g.
             ``crossover__probability=0.7``), or ``sets=("crossover.probability=0.7",)``.
@@ -1040,7 +1043,8 @@ def _failure_reason(success: np.ndarray, init_rate: np.ndarray, config, capacity
     return text
 
 
-def _no_path_result(config, map_name, grid, seeds, algo, reason, elapsed) -> Result:
+def _no_path_result(config, map_name, grid, seeds, algo, reason, elapsed,
+                    population_capacity) -> Result:
     s = len(seeds)
     empty = np.zeros((s, 1), np.int32)
     nan = np.full(s, np.nan)
@@ -1059,7 +1063,7 @@ def _no_path_result(config, map_name, grid, seeds, algo, reason, elapsed) -> Res
         population=int(config["population.size"]) * algo.islands,
         generations=algo.generations, width=grid.width, config=config,
         fitness_optimum_reason=reason, start=grid.start_xy, goal=grid.goal_xy,
-        population_capacity=algo.population,
+        population_capacity=population_capacity,
     )
 
 

@@ -61,9 +61,10 @@ def _add_map_arguments(p: argparse.ArgumentParser, rule_default: str = "strict")
                    help="goal cell (default: the file's G or (W-1, H-1))")
     p.add_argument("--scenario", type=int, metavar="N",
                    help="start and goal of problem N (0 = the first) of a Moving AI "
-                   "scenario file: --scen, or else the built-in map's own, or X.map.scen "
-                   "or X-random-*.scen beside a map file X.map (y is converted: the "
-                   "file counts it from the top)")
+                   "scenario file: --scen, or else the built-in map's own, or "
+                   "X-random-N.scen, X.map.scen or X.scen beside a map file X.map (y is "
+                   "converted: the file counts it from the top). Its optimal lengths "
+                   "assume no corner cutting: --corner-rule strict to compare")
     p.add_argument("--scen", metavar="FILE", help="the .scen file of --scenario")
     p.add_argument("--corner-rule", default=None, metavar="RULE",
                    help=f"one of {', '.join(CORNER_RULES)} (default: {rule_default})")
@@ -81,41 +82,37 @@ def _add_preset_arguments(p: argparse.ArgumentParser) -> None:
 
 def _apply_scenario(args: argparse.Namespace) -> None:
     """``--scenario N``: ``args.start`` / ``args.goal`` from problem ``N`` of a Moving AI
-    scenario file (converted to y from the bottom by :func:`jaxga.maps.read_scen`),
-    checked against the map's size. Refused with --start/--goal, and --scen without
-    --scenario."""
+    scenario file (``--scen``, else :func:`jaxga.maps.scenario_path` of the map; y
+    converted to count from the bottom by :func:`jaxga.maps.read_scen`), checked against
+    the map's size; a note on stderr names the file and the problem. Refused with
+    --start/--goal, and --scen without --scenario. Loads the map (starts JAX)."""
     if getattr(args, "scenario", None) is None:
         if getattr(args, "scen", None) is not None:
             raise JaxgaError("--scen names the scenario file of --scenario N: give N too")
         return
-    from jaxga.maps import builtin_names, load_map_info, read_scen
-    from jaxga.maps.builtin import builtin_scenario_path
+    from jaxga.maps import load_map_info, read_scen, scenario_path
 
     if args.start is not None or args.goal is not None:
         raise JaxgaError("--scenario gives the start and goal: leave out --start and --goal")
-    if args.scen is not None:
-        path = Path(args.scen)
-    elif args.map in builtin_names():
-        path = builtin_scenario_path(args.map)
-        if path is None:
-            raise JaxgaError(f"built-in map {args.map!r} has no scenario file: give --scen")
-    else:  # Moving AI's names: X.map.scen, or X-random-1.scen of the scenario sets
-        m = Path(args.map)
-        found = [m.with_name(m.name + ".scen"), *sorted(m.parent.glob(f"{m.stem}-random-*.scen"))]
-        path = next((f for f in found if f.is_file()), None)
-        if path is None:
-            raise JaxgaError(f"no scenario file {m.name}.scen or {m.stem}-random-*.scen "
-                             "beside the map: give --scen")
+    grid = load_map_info(args.map).grid  # a missing or malformed map is named first
+    path = Path(args.scen) if args.scen is not None else scenario_path(args.map)
+    if path is None:
+        raise JaxgaError(f"no scenario file for {args.map} (a built-in map's own, or "
+                         "X-random-N.scen, X.map.scen or X.scen beside X.map): give --scen")
     problems = read_scen(path)
+    if not problems:
+        raise JaxgaError(f"{path.name} has no problems")
     if not 0 <= args.scenario < len(problems):
         raise JaxgaError(f"--scenario {args.scenario}: {path.name} has problems 0 .. "
                          f"{len(problems) - 1}")
     problem = problems[args.scenario]
-    grid = load_map_info(args.map).grid
     if (problem.width, problem.height) != (grid.width, grid.height):
         raise JaxgaError(f"{path.name} is for a {problem.width} x {problem.height} map "
                          f"({problem.map_name}), {args.map} is {grid.width} x {grid.height}")
     args.start, args.goal = problem.start, problem.goal
+    print(f"scenario {args.scenario} of {path.name}: {problem.start} -> {problem.goal}, "
+          f"optimal length {problem.optimal_length:.4f} without corner cutting",
+          file=sys.stderr)
 
 
 def _load_grid(args: argparse.Namespace):
@@ -271,12 +268,11 @@ def cmd_run(args: argparse.Namespace) -> int:
     lead = parallel.process_index() == 0
     progress = None if args.quiet or not lead else _Progress()
     result = run(
-        args.preset, _grid_for_run(args), seeds=args.seeds, generations=args.generations,
+        args.preset, _map_for_run(args), seeds=args.seeds, generations=args.generations,
         corner_rule=args.corner_rule, variant=args.variant, sets=args.set or (),
         progress=progress, chunks=10 if progress else 1,
         population_capacity=args.population_capacity,
     )
-    _name_map(args, [result])
     if _not_lead(f"{len(result.seeds)} seeds", result.timing["total_s"]):
         return 0
     print(result.summary())
@@ -310,12 +306,11 @@ def cmd_doe(args: argparse.Namespace) -> int:
             print(f"design points done: {done}/{total}", file=sys.stderr, flush=True)
 
     result = run_doe(
-        args.preset, _grid_for_run(args), factors, design=args.design, seeds=args.seeds,
+        args.preset, _map_for_run(args), factors, design=args.design, seeds=args.seeds,
         response=args.response, direction=args.direction, generations=args.generations,
         corner_rule=args.corner_rule, variant=args.variant, sets=args.set or (),
         checkpoint=args.checkpoint, block=args.block, progress=progress,
     )
-    _name_map(args, [result])
     if _not_lead(f"{len(result.coded)} design points x {len(result.seeds)} seeds",
                  result.timing["total_s"]):
         return 0
@@ -366,7 +361,7 @@ def cmd_compare(args: argparse.Namespace) -> int:
         check_corner_rule(args.corner_rule)
     grid = args.map
     if args.start is not None or args.goal is not None:
-        from jaxga.maps import load_map
+        from jaxga.maps import load_map_info
         from jaxga.presets import load_preset
 
         rule = args.corner_rule
@@ -379,13 +374,12 @@ def cmd_compare(args: argparse.Namespace) -> int:
                     + ", ".join(f"{p}: {r}" for p, r in rules.items())
                     + "): give one with --corner-rule")
             rule = rules[presets[0]]
-        grid = load_map(args.map, start=args.start, goal=args.goal, corner_rule=rule)
+        grid = load_map_info(args.map, start=args.start, goal=args.goal, corner_rule=rule)
     progress = None if args.quiet else (lambda label: print(f"running {label} ...",
                                                               file=sys.stderr, flush=True))
     comp = compare(presets, grid, seeds=args.seeds, metric=args.metric, test=args.test,
                    progress=progress, generations=args.generations,
                    corner_rule=args.corner_rule, sets=args.set or ())
-    _name_map(args, comp.results.values())
     if _not_lead(f"{len(presets)} presets x {args.seeds} seeds",
                  sum(r.timing["total_s"] for r in comp.results.values())):
         return 0
@@ -405,24 +399,23 @@ def cmd_compare(args: argparse.Namespace) -> int:
     return 0
 
 
-def _grid_for_run(args: argparse.Namespace, rule: str | None = None):
-    """The map as named on the command line (endpoints applied); the corner rule is the
-    run's (the preset's unless --corner-rule)."""
+def _map_for_run(args: argparse.Namespace):
+    """The map as named on the command line: the name itself, or with --start/--goal the
+    loaded map with those endpoints, under the run's corner rule (the preset's unless
+    --corner-rule), as a MapInfo so that the results keep the map's name."""
+    from jaxga.maps import load_map_info
+
+    if args.start is None and args.goal is None:
+        return args.map
+    return load_map_info(args.map, start=args.start, goal=args.goal,
+                         corner_rule=args.corner_rule or _preset_rule(args))
+
+
+def _grid_for_run(args: argparse.Namespace, rule: str):
+    """The Grid of the run (endpoints applied) under its corner rule ``rule``."""
     from jaxga.maps import load_map
 
-    if args.start is None and args.goal is None and rule is None:
-        return args.map
-    return load_map(args.map, start=args.start, goal=args.goal,
-                    corner_rule=rule or args.corner_rule or _preset_rule(args))
-
-
-def _name_map(args: argparse.Namespace, results) -> None:
-    """Name the map of ``results`` as the command line did (``--map``): with ``--start`` or
-    ``--goal`` the command passes a ``Grid``, which the library can only call "grid"."""
-    from jaxga.maps.loaders import map_name
-
-    for result in results:
-        result.map_name = map_name(args.map)
+    return load_map(args.map, start=args.start, goal=args.goal, corner_rule=rule)
 
 
 def _preset_rule(args: argparse.Namespace) -> str:
@@ -713,9 +706,9 @@ def _join_negative_xy(argv: Sequence[str]) -> list[str]:
 
 
 def _one_line_warnings(show: Callable[..., None]) -> Callable[..., None]:
-    """A ``warnings.showwarning`` that prints jaxga's own warnings as one ``jaxga:
-    warning: ...`` line, like its errors (Python's format adds the console script's file
-    and source line), and hands other libraries' warnings to ``show``."""
+    """A ``warnings.showwarning`` that prints jaxga's own warnings (the categories of
+    :mod:`jaxga.errors`) as one ``jaxga: warning: ...`` line, like its errors (Python's
+    format adds the file and source line), and hands other warnings to ``show``."""
 
     def show_warning(message, category, filename, lineno, file=None, line=None) -> None:
         if category.__module__.split(".")[0] == "jaxga":
@@ -731,15 +724,15 @@ def main(argv: Sequence[str] | None = None) -> int:
     parser = build_parser()
     args = parser.parse_args(_join_negative_xy(sys.argv[1:] if argv is None else argv))
     try:
-        check_environment()  # $JAXGA_THREEFRY, which `import jaxga` does not refuse
-        check_outputs(args)
-        _apply_scenario(args)
-        if hasattr(args, "devices"):  # subcommands with add_parallel_arguments
-            configure_from_args(args)  # before JAX's backend starts
-        if args.func in (cmd_run, cmd_doe, cmd_compare):
-            use_compilation_cache()
         with warnings.catch_warnings():
             warnings.showwarning = _one_line_warnings(warnings.showwarning)
+            check_environment()  # $JAXGA_THREEFRY, which `import jaxga` does not refuse
+            check_outputs(args)
+            if hasattr(args, "devices"):  # subcommands with add_parallel_arguments
+                configure_from_args(args)  # before JAX's backend starts
+            _apply_scenario(args)  # after it: loading the map starts JAX
+            if args.func in (cmd_run, cmd_doe, cmd_compare):
+                use_compilation_cache()
             return args.func(args)
     except ProcessLostError as e:
         # Exit at once: a normal exit would wait in jax.distributed's shutdown barrier

@@ -3,8 +3,9 @@
 Issue 5 (comparisons). ``compare(presets, grid, seeds, **options) -> Comparison`` runs
 every preset with :func:`jaxga.api.run` and gives, per preset, the summary table of
 :meth:`Result.summary_rows` (AGACD Tables 8-9, Zhu & Pan Table 4), the success rate,
-the gap of the raw (8-connected) path to the exact 8-connected optimum and of the
-post-optimised path to the any-angle optimum, and the time per run; and, between every
+the gap of the raw path to the exact 8-connected optimum (to the any-angle optimum for
+AGACD's waypoint paths, :attr:`Result.raw_gap`) and of the post-optimised path to the
+any-angle optimum, and the time per run; and, between every
 pair of presets, two-sided tests with effect sizes (:mod:`jaxga.stats`) on one or more
 metrics, Holm-corrected over the pairs of each metric, plus Fisher's exact test on the
 success rates.

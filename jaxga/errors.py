@@ -35,3 +35,8 @@ class InitialisationWarning(UserWarning):
     :func:`jaxga.init.initialise` then fills the empty slots with copies of the individuals
     it made, so the run still works, on fewer distinct individuals than asked for.
     """
+
+
+class DeviceWarning(RuntimeWarning):
+    """A device count asked for cannot take effect (JAX already runs with another):
+    the results are the same, only the speed differs (:mod:`jaxga.parallel`)."""

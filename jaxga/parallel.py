@@ -75,7 +75,7 @@ from typing import Any
 
 import numpy as np
 
-from jaxga.errors import JaxgaError
+from jaxga.errors import DeviceWarning, JaxgaError
 
 ENV_DEVICES = "JAXGA_DEVICES"
 ENV_COORDINATOR = "JAXGA_COORDINATOR"
@@ -152,7 +152,7 @@ def set_local_devices(n: int | None = None, *, warn: bool = True) -> int | None:
                 f"jaxga.parallel: JAX is already running with {have} CPU device(s); asking "
                 f"for {n} has no effect. Call jaxga.parallel.use_all_cores() (or "
                 "set_local_devices) right after `import jax`, before any JAX computation. "
-                "Results are the same, only slower.", RuntimeWarning, stacklevel=2)
+                "Results are the same, only slower.", DeviceWarning, stacklevel=2)
     return n
 
 

@@ -84,6 +84,7 @@ def test_scenario_gives_the_endpoints_of_a_moving_ai_problem(tmp_path, capsys):
     data = json.loads(out.read_text())
     assert data["start"] == list(problem.start) and data["goal"] == list(problem.goal)
     assert data["length"] == pytest.approx(problem.optimal_length, abs=1e-6)
+    capsys.readouterr()
     # a map file with its scenario file beside it, then the same problem by --scen
     m = tmp_path / "maze.map"
     shutil.copy(builtin_path("maze-32-32-2"), m)
@@ -94,7 +95,10 @@ def test_scenario_gives_the_endpoints_of_a_moving_ai_problem(tmp_path, capsys):
                      "--scenario", "0", "--json", str(out), *extra]) == 0
         data = json.loads(out.read_text())
         assert data["start"] == [11, 31 - 17] and data["goal"] == [3, 31 - 10]
-    capsys.readouterr()
+        # a note names the file and the problem
+        assert capsys.readouterr().err == (
+            "scenario 0 of maze.map.scen: (11, 14) -> (3, 21), optimal length 15.2426 "
+            "without corner cutting\n")
 
 
 @pytest.mark.parametrize("extra, words", [
@@ -118,11 +122,35 @@ def test_a_scenario_of_another_map_size_or_a_map_without_one_is_refused(tmp_path
     assert "is for a 64 x 64 map (big.map), maze-32-32-2 is 32 x 32" in capsys.readouterr().err
     assert main(["optimum", "--map", "classic_ga_gapp3_20x20", "--scenario", "0"]) \
         == EXIT_BAD_INPUT
-    assert "has no scenario file: give --scen" in capsys.readouterr().err
+    assert "no scenario file for classic_ga_gapp3_20x20" in capsys.readouterr().err
     art = tmp_path / "m.txt"
     art.write_text("000\n000\n")
     assert main(["optimum", "--map", str(art), "--scenario", "0"]) == EXIT_BAD_INPUT
-    assert "beside the map: give --scen" in capsys.readouterr().err
+    assert "X.map.scen or X.scen beside X.map): give --scen" in capsys.readouterr().err
+    # a missing map is named as such, not as a missing scenario file
+    assert main(["optimum", "--map", str(tmp_path / "gone.map"), "--scenario", "0"]) \
+        == EXIT_BAD_INPUT
+    err = capsys.readouterr().err
+    assert "gone.map: map file not found" in err and "scenario file" not in err
+    (tmp_path / "m.scen").write_text("version 1\n")
+    assert main(["optimum", "--map", str(art), "--scenario", "0"]) == EXIT_BAD_INPUT
+    assert "m.scen has no problems" in capsys.readouterr().err
+
+
+def test_scenario_files_beside_a_map_are_found_in_moving_ai_order(tmp_path):
+    """X-random-N.scen with the smallest N (2 before 10), then X.map.scen, then X.scen."""
+    from jaxga.maps import scenario_path
+
+    m = tmp_path / "x.map"
+    assert scenario_path(m) is None
+    for name in ("x.scen", "x.map.scen", "x-random-10.scen", "x-random-2.scen"):
+        (tmp_path / name).write_text("version 1\n")
+    order = []
+    while (found := scenario_path(m)) is not None:
+        order.append(found.name)
+        found.unlink()
+    assert order == ["x-random-2.scen", "x-random-10.scen", "x.map.scen", "x.scen"]
+    assert scenario_path("maze-32-32-2").name == "maze-32-32-2-random-1.scen"
 
 
 @pytest.mark.parametrize(
@@ -495,3 +523,37 @@ def test_jaxga_warnings_are_one_line_like_its_errors(capsys, monkeypatch):
     assert [w.category for w in seen] == [DeprecationWarning]
     err = capsys.readouterr().err
     assert err == "jaxga: warning: 2 of 2 runs started with fewer individuals\n"
+
+
+def test_scenario_reaches_run_after_the_devices_are_configured(monkeypatch, capsys):
+    """`jaxga run --scenario N`: the map reaches jaxga.run as the named map with the
+    problem's endpoints, loaded only after the devices and processes are configured
+    (loading a map starts JAX, after which neither can change)."""
+    import jaxga.api
+    import jaxga.cli as cli
+    from jaxga.maps import MapInfo, builtin_scenarios
+
+    calls, seen = [], {}
+
+    class Stop(Exception):
+        pass
+
+    def fake_run(preset, grid, **kwargs):
+        seen["grid"] = grid
+        raise Stop
+
+    real_apply = cli._apply_scenario
+    monkeypatch.setattr(cli, "configure_from_args", lambda args: calls.append("devices"))
+    monkeypatch.setattr(cli, "_apply_scenario",
+                        lambda args: (calls.append("scenario"), real_apply(args)))
+    monkeypatch.setattr(jaxga.api, "run", fake_run)
+    with pytest.raises(Stop):
+        main(["run", "--preset", "sga", "--map", "maze-32-32-2", "--scenario", "4",
+              "--quiet"])
+    assert calls == ["devices", "scenario"]
+    problem = builtin_scenarios("maze-32-32-2")[4]
+    info = seen["grid"]
+    assert isinstance(info, MapInfo) and info.name == "maze-32-32-2"
+    assert (info.grid.start_xy, info.grid.goal_xy) == (problem.start, problem.goal)
+    assert info.grid.corner_rule == "free"  # the preset's rule, as without --scenario
+    capsys.readouterr()

@@ -17,6 +17,7 @@ from jaxga.maps.builtin import (
     builtin_path,
     builtin_scenario_path,
     builtin_scenarios,
+    scenario_path,
 )
 from jaxga.maps.generators import maze_map, random_map, rectangles_map, rooms_map
 from jaxga.maps.loaders import (
@@ -50,6 +51,7 @@ __all__ = [
     "builtin_path",
     "builtin_scenario_path",
     "builtin_scenarios",
+    "scenario_path",
     "detect_format",
     "endpoints_connected",
     "fill_enclosed",

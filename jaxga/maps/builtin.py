@@ -12,6 +12,7 @@ A built-in map's name is its file name without the extension. Load one with
 from __future__ import annotations
 
 import functools
+import os
 from pathlib import Path
 
 from jaxga.errors import MapFormatError
@@ -23,6 +24,7 @@ __all__ = [
     "builtin_path",
     "builtin_scenario_path",
     "builtin_scenarios",
+    "scenario_path",
 ]
 
 DATA_DIR = Path(__file__).resolve().parent / "data"
@@ -52,14 +54,34 @@ def builtin_path(name: str) -> Path:
         ) from None
 
 
-def builtin_scenario_path(name: str) -> Path | None:
-    """Path of the ``.scen`` file shipped with built-in map ``name``, or None if none is."""
-    builtin_path(name)  # validates the name
-    for pattern in (f"{name}-random-*.scen", f"{name}.map.scen", f"{name}.scen"):
-        found = sorted(DATA_DIR.glob(pattern))
+def _scenario_beside(folder: Path, stem: str) -> Path | None:
+    """The scenario file of map ``stem`` in ``folder``, by Moving AI's names: the first
+    of ``stem-random-N.scen`` (smallest N), ``stem.map.scen``, ``stem.scen``."""
+    def number(p: Path) -> tuple[int, str]:
+        tail = p.name[len(stem) + len("-random-"):-len(".scen")]
+        return (int(tail), "") if tail.isdigit() else (1 << 62, tail)
+
+    for pattern in (f"{stem}-random-*.scen", f"{stem}.map.scen", f"{stem}.scen"):
+        found = sorted((p for p in folder.glob(pattern) if p.is_file()), key=number)
         if found:
             return found[0]
     return None
+
+
+def builtin_scenario_path(name: str) -> Path | None:
+    """Path of the ``.scen`` file shipped with built-in map ``name``, or None if none is."""
+    builtin_path(name)  # validates the name
+    return _scenario_beside(DATA_DIR, name)
+
+
+def scenario_path(source: str | os.PathLike) -> Path | None:
+    """The Moving AI scenario file of a map: a built-in map's own, or for a map file
+    ``X.map`` the first of ``X-random-N.scen`` (smallest N), ``X.map.scen`` and
+    ``X.scen`` beside it; None if there is none."""
+    if isinstance(source, str) and source in builtin_names():
+        return builtin_scenario_path(source)
+    path = Path(os.fspath(source))
+    return _scenario_beside(path.parent, path.stem)
 
 
 def builtin_scenarios(name: str) -> list[Scenario]:
