@@ -593,6 +593,16 @@ def _normalised(key: str, value: Any) -> Any:
     return _freeze(SCHEMA[key].check(key, value))
 
 
+def check_one_corner_rule(corner_rule: str | None, config: Config,
+                          overridden: Sequence[str]) -> None:
+    """Refuse a ``corner_rule=`` (``--corner-rule``) that disagrees with an overridden
+    ``map.corner_rule`` (``--set``): two rules for one run."""
+    rule = config["map.corner_rule"]
+    if "map.corner_rule" in overridden and corner_rule is not None and corner_rule != rule:
+        raise ParameterError(f"two corner rules given: {corner_rule!r} (corner_rule, "
+                             f"--corner-rule) and {rule!r} (map.corner_rule)")
+
+
 def _load(preset, grid, corner_rule, variant, sets, overrides, generations, *,
           check_read: bool = True):
     """``(config, grid, map name)`` of a call, checked; ``check_read=False`` leaves
@@ -628,11 +638,8 @@ def _load(preset, grid, corner_rule, variant, sets, overrides, generations, *,
         check_overrides_read(config, overridden)
         if not isinstance(preset, Config):  # keys a user TOML file sets, in that file
             check_file_keys_read(preset, variant)
+        check_one_corner_rule(corner_rule, config, overridden)
         rule = config["map.corner_rule"]
-        if "map.corner_rule" in overridden and corner_rule is not None \
-                and corner_rule != rule:
-            raise ParameterError(f"two corner rules given: {corner_rule!r} (corner_rule, "
-                                 f"--corner-rule) and {rule!r} (map.corner_rule)")
         if "map.corner_rule" in overridden and isinstance(grid, Grid) \
                 and corner_rule is None and grid.corner_rule != rule:
             raise ParameterError(

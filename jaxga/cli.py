@@ -140,6 +140,7 @@ def _xy_list(path) -> list[list[int]]:
 def cmd_optimum(args: argparse.Namespace) -> int:
     """``jaxga optimum``: exact 8-connected and any-angle optima of one map, and with
     ``--preset`` the exact optimum of that preset's fitness."""
+    from jaxga.api import check_one_corner_rule
     from jaxga.engine import check_overrides_read
     from jaxga.fitness_reference import fitness_optimum
     from jaxga.presets import check_file_keys_read, load_preset, parse_set
@@ -153,10 +154,7 @@ def cmd_optimum(args: argparse.Namespace) -> int:
         set_keys = [parse_set(text)[0] for text in args.set or ()]
         check_overrides_read(config, set_keys)
         check_file_keys_read(args.preset, args.variant)  # as `jaxga run` checks a file
-        if "map.corner_rule" in set_keys and args.corner_rule is not None \
-                and args.corner_rule != config["map.corner_rule"]:
-            raise JaxgaError(f"two corner rules given: {args.corner_rule!r} (--corner-rule) "
-                             f"and {config['map.corner_rule']!r} (map.corner_rule)")
+        check_one_corner_rule(args.corner_rule, config, set_keys)
         other = [k for k in set_keys if not k.startswith("fitness.") and k != "map.corner_rule"]
         if other:
             raise JaxgaError(f"jaxga optimum reads only the fitness keys and map.corner_rule "
@@ -346,7 +344,7 @@ def _not_lead(what: str, seconds: float) -> bool:
 def cmd_compare(args: argparse.Namespace) -> int:
     """``jaxga compare``: several presets on one map with the same seeds; per-preset
     summary, pairwise tests with effect sizes (Holm-corrected), JSON, box plots."""
-    from jaxga.compare import TESTS, check_metric, compare, split_presets
+    from jaxga.compare import TESTS, check_metric, compare, one_corner_rule, split_presets
     from jaxga.errors import ParameterError
 
     presets = split_presets(args.presets)
@@ -366,14 +364,8 @@ def cmd_compare(args: argparse.Namespace) -> int:
 
         rule = args.corner_rule
         if rule is None:  # the presets' own rule (with --set), which must be one
-            rules = {p: load_preset(p, sets=args.set or ())["map.corner_rule"]
-                     for p in presets}
-            if len(set(rules.values())) > 1:
-                raise ParameterError(
-                    "the presets would run under different corner rules ("
-                    + ", ".join(f"{p}: {r}" for p, r in rules.items())
-                    + "): give one with --corner-rule")
-            rule = rules[presets[0]]
+            rule = one_corner_rule({p: load_preset(p, sets=args.set or ())["map.corner_rule"]
+                                    for p in presets})
         grid = load_map_info(args.map, start=args.start, goal=args.goal, corner_rule=rule)
     progress = None if args.quiet else (lambda label: print(f"running {label} ...",
                                                               file=sys.stderr, flush=True))

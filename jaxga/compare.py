@@ -442,6 +442,17 @@ def _median(v: np.ndarray) -> float:
     return float(np.median(v)) if v.size else math.nan
 
 
+def one_corner_rule(rules: Mapping[str, str]) -> str:
+    """The corner rule that every preset (label -> rule) runs under; presets under
+    different rules are refused (their results could not be compared)."""
+    if len(set(rules.values())) > 1:
+        raise ParameterError(
+            "the presets would run under different corner rules ("
+            + ", ".join(f"{label}: {rule}" for label, rule in rules.items())
+            + "): give one with corner_rule=... (--corner-rule)")
+    return next(iter(rules.values()))
+
+
 def _options_per_preset(specs, grid, common: Mapping[str, Any]
                         ) -> tuple[dict[str, dict[str, Any]], dict[str, tuple[str, ...]]]:
     """Each preset's keyword arguments for :func:`jaxga.api.run`, and the common keys
@@ -490,11 +501,7 @@ def _options_per_preset(specs, grid, common: Mapping[str, Any]
                                 if k in unread and k not in own)
         unread_by_all = (dict(unread) if unread_by_all is None
                          else {k: v for k, v in unread_by_all.items() if k in unread})
-    if len(set(rules.values())) > 1:  # compare_results would refuse them after the runs
-        raise ParameterError(
-            "the presets would run under different corner rules ("
-            + ", ".join(f"{label}: {rule}" for label, rule in rules.items())
-            + "): give one with corner_rule=... (--corner-rule)")
+    one_corner_rule(rules)  # compare_results would refuse them after the runs
     nowhere = [k for k in dict.fromkeys(common_keys) if k in (unread_by_all or {})]
     if nowhere:
         raise ParameterError("; ".join(f"{k} has no effect in any of the presets compared "

@@ -783,7 +783,7 @@ def run_doe(
     import jax
 
     import jaxga
-    from jaxga.api import _check_result_memory, _load, _seed_list, sweep
+    from jaxga.api import _check_result_memory, _load, _population_capacity, _seed_list, sweep
     from jaxga.engine import build, check_combination
     from jaxga.reference import shortest_path
 
@@ -827,7 +827,7 @@ def run_doe(
     point_configs = [config.override(p) for p in points]
     for c in point_configs:  # key combinations of every point, before any point runs
         check_combination(c)
-    capacity = max(int(c["population.size"]) for c in point_configs)
+    capacity = _population_capacity(point_configs, None)  # the largest size
     if block is None:
         block = 1 if checkpoint is not None else n_points
     if block < 1:
