@@ -37,10 +37,12 @@ from jaxga.engine import (
     finish,
     init_state,
     static_config,
+    uses_guide,
     uses_waypoints,
 )
 from jaxga.errors import InitialisationWarning, JaxgaError, ParameterError
 from jaxga.grid import Grid, as_integer
+from jaxga.guide import with_guide
 from jaxga.lowering import check_environment
 from jaxga.objectives import Metrics
 
@@ -123,6 +125,16 @@ class Result:
     ``population.size`` of a sweep, or ``population_capacity=``): the random numbers of a
     run depend on it, so ``run(..., population_capacity=K)`` repeats a sweep point's runs
     bit for bit."""
+    init_fallback: np.ndarray | None = None
+    """Per seed, how many initial individuals (all islands together) the fallback
+    initialiser made (``init.fallback``): the slots the preset's own initialiser left
+    empty after ``init.max_tries`` attempts per individual."""
+    causes: np.ndarray | None = None
+    """Per seed, why it returned no path ("" for a successful seed); :attr:`reason`
+    sums them up."""
+    path_capacity: int = 0
+    """The cells a path can hold (``population.capacity``, or the automatic capacity of
+    :func:`jaxga.engine.default_capacity`)."""
 
     def path(self, i: int, raw: bool = False) -> list[tuple[int, int]]:
         """Seed ``i``'s best path as ``(x, y)`` cells (post-optimised unless ``raw``)."""
@@ -190,6 +202,21 @@ class Result:
         return (f", fitness {self.fitness_optimum:.6g} (a path of length "
                 f"{self.fitness_optimum_length:.4f}{bound})")
 
+    def _initial_population_text(self) -> str:
+        method = self.config.get("init.method") if self.config is not None else "?"
+        text = (f"initial population: {method}, {100 * float(np.mean(self.init_success_rate)):.3g}"
+                f" % of its attempts succeeded; paths of up to {self.path_capacity} cells")
+        made = np.zeros(len(self.seeds), int) if self.init_fallback is None \
+            else np.asarray(self.init_fallback)
+        if made.any():
+            fallback = self.config.get("init.fallback") if self.config is not None else "?"
+            lo, hi = int(made[made > 0].min()), int(made.max())
+            count = f"{lo}" if lo == hi else f"{lo}-{hi}"
+            text += (f"; the fallback {fallback} made {count} of {self.population} initial "
+                     f"individuals in {int((made > 0).sum())} of {len(self.seeds)} seeds "
+                     f"({int(made.sum())} in all)")
+        return text
+
     def summary(self) -> str:
         """A text table: mean, sd, min and max per metric, success rate, optima, timing."""
         lines = [
@@ -202,11 +229,15 @@ class Result:
             + self._fitness_optimum_text(),
             f"{'metric':24s} {'mean':>10s} {'sd':>10s} {'min':>10s} {'max':>10s}",
         ]
-        for name, mean, sd, lo, hi in self.summary_rows():
-            lines.append(f"{name:24s} {mean:10.4f} {sd:10.4f} {lo:10.4f} {hi:10.4f}")
+        if not self.success.any():  # nothing to summarise: the reason says why
+            lines[-1] = "no metrics: no seed found a path"
+        else:
+            for name, mean, sd, lo, hi in self.summary_rows():
+                lines.append(f"{name:24s} {mean:10.4f} {sd:10.4f} {lo:10.4f} {hi:10.4f}")
         raw_basis = "any-angle" if self._raw_waypoints() else "8-connected"
         lines.append(f"gaps: gap = length / any-angle optimum - 1, raw_gap = raw_length / "
                      f"{raw_basis} optimum - 1, fitness_gap = fitness optimum / fitness - 1")
+        lines.append(self._initial_population_text())
         t = self.timing
         lines.append(
             "time (s): compile {compile_s:.2f}, init {init_s:.3f}, evolve {evolve_s:.3f}, "
@@ -234,6 +265,9 @@ class Result:
                    for k in ("angle_sum", "turns")},
                 **{k: json_number(float(gaps[k][i])) for k in GAPS},
                 "history": {k: [float(x) for x in v[i]] for k, v in self.history.items()},
+                "init_fallback": (None if self.init_fallback is None
+                                  else int(self.init_fallback[i])),
+                "cause": "" if self.causes is None else str(self.causes[i]),
             })
         return {
             "preset": self.preset, "map": self.map_name, "corner_rule": self.corner_rule,
@@ -249,6 +283,7 @@ class Result:
             "fitness_optimum_reason": self.fitness_optimum_reason,
             "timing": dict(self.timing), "population": self.population,
             "population_capacity": self.population_capacity,
+            "path_capacity": self.path_capacity,
             "generations": self.generations,
             # every setting of the run (preset, file, --set and sweep point resolved)
             "config": None if self.config is None else self.config.as_dict(),
@@ -336,14 +371,49 @@ def _spec(tree: Any) -> Any:
     return jax.tree_util.tree_map(lambda x: jax.ShapeDtypeStruct(jnp.shape(x), x.dtype), tree)
 
 
-@dataclasses.dataclass(frozen=True)
 class _Programs:
-    """The three compiled programs of a batch of runs (and how long compiling took)."""
+    """The programs of a batch of runs: init compiled at once, the evolve programs (one per
+    chunk size) and finish compiled when first needed, so that a batch whose
+    initialisation found no path at all compiles nothing more (:func:`sweep`)."""
 
-    init: Any
-    evolve: dict[int, Any]
-    finish: Any
-    compile_s: float
+    def __init__(self, traced: dict[str, Any], sizes: tuple[int, ...]) -> None:
+        self._traced = traced
+        self._compiled: dict[str, Any] = {}
+        self.sizes = tuple(sorted(set(sizes)))
+
+    def _compile(self, names: Sequence[str], report: Callable[[float], None]) -> None:
+        """Compile the ``names`` not compiled yet, one after the other, reporting the
+        fraction of all programs (and the tracing) done after each but the last."""
+        steps = 1 + len(self._traced)  # the tracing, then each program
+        for name in names:
+            if name in self._compiled:
+                continue
+            self._compiled[name] = self._traced[name].lower().compile(
+                FINISH_COMPILER_OPTIONS if name == "finish" else None)
+            done = 1 + len(self._compiled)
+            if done < steps:
+                report(done / steps)
+
+    def compile_init(self, report: Callable[[float], None]) -> None:
+        self._compile(["init"], report)
+
+    def compile_rest(self, report: Callable[[float], None]) -> None:
+        self._compile([*(f"evolve{n}" for n in self.sizes), "finish"], report)
+
+    @property
+    def init(self) -> Any:
+        return self._compiled["init"]
+
+    @property
+    def evolve(self) -> dict[int, Any]:
+        """The compiled evolve program of each chunk size (compiled now if need be)."""
+        self.compile_rest(lambda frac: None)
+        return {n: self._compiled[f"evolve{n}"] for n in self.sizes}
+
+    @property
+    def finish(self) -> Any:
+        self.compile_rest(lambda frac: None)
+        return self._compiled["finish"]
 
 
 RUN_BLOCK = 64
@@ -450,7 +520,8 @@ nothing)."""
 @functools.lru_cache(maxsize=PROGRAM_CACHE_SIZE)
 def _programs(algo: Algorithm, grid_spec: Any, params_spec: Any, n_runs: int,
               sizes: tuple[int, ...], n_devices: int) -> _Programs:
-    """Compile init / evolve (one per chunk size) / finish for ``n_runs`` runs.
+    """Trace init / evolve (one per chunk size) / finish for ``n_runs`` runs and compile
+    init (the others when first needed: :class:`_Programs`).
 
     Cached per (algorithm, map shape and corner rule, parameter shapes, run count, chunks,
     devices): a second call with another map of the same shape, other seeds or other
@@ -464,7 +535,7 @@ def _programs(algo: Algorithm, grid_spec: Any, params_spec: Any, n_runs: int,
 
     def do_init(k, grid, params):
         state, stats = init_state(algo, jax.random.fold_in(k, 0), grid, params)
-        return state, stats.success_rate, stats.n_failed
+        return state, stats.success_rate, stats.n_failed, stats.from_fallback
 
     def do_evolve(k, grid, params, state, n):
         return evolve(algo, jax.random.fold_in(k, 1), grid, state, params, n)
@@ -493,7 +564,6 @@ def _programs(algo: Algorithm, grid_spec: Any, params_spec: Any, n_runs: int,
         return jax.jit(per_device, out_shardings=sh,
                        in_shardings=tuple(rep if a is None else sh for a in in_axes))
 
-    t0 = time.perf_counter()
     keys = jax.ShapeDtypeStruct((n_runs, 2), jnp.uint32)
     init_t = jit(do_init, (0, None, 0), INIT_RUN_BLOCK).trace(keys, grid_spec, params_spec)
     state_spec = init_t.out_info[0]
@@ -505,25 +575,15 @@ def _programs(algo: Algorithm, grid_spec: Any, params_spec: Any, n_runs: int,
     finish_t = jit(do_finish, (None, 0, 0, 0, 0)).trace(
         grid_spec, params_spec, state_spec, full_hist,
         jax.ShapeDtypeStruct((n_runs,), jnp.float32))
-    traced = {"init": init_t, "finish": finish_t, **{f"evolve{n}": t
-                                                      for n, t in evolve_t.items()}}
+    traced = {"init": init_t, **{f"evolve{n}": t for n, t in evolve_t.items()},
+              "finish": finish_t}
     # One after the other. Compiling them in threads (one per core) was measured again on
     # 2026-11-23 on a quiet machine: no faster (sga, 100 and 1000 seeds, within 3 %).
     report = _COMPILE_PROGRESS.get() or (lambda frac: None)
-    steps = 1 + len(traced)  # the tracing, then each program
-    report(1 / steps)
-    compiled = {}
-    for i, (name, t) in enumerate(traced.items()):
-        compiled[name] = t.lower().compile(FINISH_COMPILER_OPTIONS if name == "finish"
-                                           else None)
-        if i + 2 < steps:
-            report((i + 2) / steps)
-    return _Programs(
-        init=compiled["init"],
-        evolve={n: compiled[f"evolve{n}"] for n in evolve_t},
-        finish=compiled["finish"],
-        compile_s=time.perf_counter() - t0,
-    )
+    programs = _Programs(traced, sizes)
+    report(1 / (1 + len(traced)))
+    programs.compile_init(report)
+    return programs
 
 
 def equal_chunks(generations: int, chunks: int) -> tuple[int, ...]:
@@ -744,6 +804,8 @@ def sweep(
         return [_no_path_result(c, map_name, grid, seed_arr, build(c, grid)[0], octile.reason,
                                 time.perf_counter() - t_start, capacity) for c in configs]
     any_angle = any_angle_shortest_path(grid)
+    if uses_guide(config):  # the exact distance fields the field initialiser steers by
+        grid = with_guide(grid)
     # the capacity is the largest size swept, also when it is below the preset's size
     algo, _ = build(config.override({"population.size": capacity}), grid)
     per_point = [default_params(c, algo.islands) for c in configs]
@@ -787,12 +849,33 @@ def sweep(
     finally:
         _COMPILE_PROGRESS.reset(token)
     compile_s = time.perf_counter() - t0
-    report("compile", 1.0)
 
     t0 = time.perf_counter()
-    state, init_rate, unfilled = jax.block_until_ready(progs.init(keys, grid, params))
+    state, init_rate, unfilled, fallback = jax.block_until_ready(
+        progs.init(keys, grid, params))
     init_s = time.perf_counter() - t0
     init_best = state.best_fitness
+    # Every process's initial best, so that all of them decide alike whether to evolve.
+    started, init_rate, unfilled, fallback = parallel.allgather_runs(
+        (init_best > 0, init_rate, unfilled, fallback))
+    rate = init_rate.reshape(n_total, -1).mean(axis=1)
+    unf = unfilled.reshape(n_total, -1).sum(axis=1)
+    from_fallback = fallback.reshape(n_total, -1).sum(axis=1)
+    _warn_unfilled(unf, rate, algo.population * algo.islands, config)
+    common = dict(config=config, configs=configs, points=points, map_name=map_name,
+                  grid=grid, seed_arr=seed_arr, algo=algo, octile=octile,
+                  any_angle=any_angle, point_opt=point_opt, rate=rate, unfilled=unf,
+                  from_fallback=from_fallback)
+    if not started.any():  # nothing can succeed: no evolution, no post-optimisation
+        report("compile", 1.0)
+        timing = {"compile_s": compile_s, "init_s": init_s, "evolve_s": 0.0,
+                  "post_s": 0.0, "total_s": time.perf_counter() - t_start}
+        return _unstarted_results(timing=timing, **common)
+
+    t0 = time.perf_counter()
+    progs.compile_rest(lambda frac: report("compile", frac))
+    compile_s += time.perf_counter() - t0
+    report("compile", 1.0)
 
     t0 = time.perf_counter()
     hists = []
@@ -812,22 +895,19 @@ def sweep(
     timing = {"compile_s": compile_s, "init_s": init_s, "evolve_s": evolve_s,
               "post_s": post_s, "total_s": time.perf_counter() - t_start}
 
-    host, hist, init_rate, unfilled = parallel.allgather_runs(
-        (out, history, init_rate, unfilled))
+    host, hist = parallel.allgather_runs((out, history))
     timing["total_s"] = time.perf_counter() - t_start
-    rate = init_rate.reshape(n_total, -1).mean(axis=1)
-    unf = unfilled.reshape(n_total, -1).sum(axis=1)
-    _warn_unfilled(unf, rate, algo.population * algo.islands, config)
+    n_seeds = len(seed_arr)
     results = []
     for q, cfg in enumerate(configs):
         sl = slice(q * n_seeds, (q + 1) * n_seeds)
         h = jax.tree_util.tree_map(lambda a, sl=sl: a[sl], host)
         success = h["success"] & h["feasible_post"]
+        causes = _causes(success, started[sl], rate[sl], from_fallback[sl], config,
+                         algo.capacity, len(octile.path))
         results.append(Result(
             preset=config["name"], map_name=map_name, corner_rule=grid.corner_rule,
-            seeds=seed_arr, success=success,
-            reason=_failure_reason(success, rate[sl], config, algo.capacity,
-                                   len(octile.path)),
+            seeds=seed_arr, success=success, reason=_failure_reason(causes),
             cells=h["cells"], n_cells=h["length"],
             raw_cells=h["raw_cells"], raw_n_cells=h["raw_length"],
             length=h["path_length"].astype(float),
@@ -846,7 +926,33 @@ def sweep(
             fitness_optimum_loop_free=point_opt[q].loop_free,
             fitness_optimum_reason="" if point_opt[q].found else point_opt[q].reason,
             start=grid.start_xy, goal=grid.goal_xy, population_capacity=algo.population,
+            init_fallback=from_fallback[sl], causes=causes, path_capacity=algo.capacity,
         ))
+    return results
+
+
+def _unstarted_results(*, config, configs, points, map_name, grid, seed_arr, algo, octile,
+                       any_angle, point_opt, rate, unfilled, from_fallback,
+                       timing) -> list[Result]:
+    """The results of a sweep whose initialisation gave no run a path: every seed failed,
+    each with its cause; nothing evolved (SPEC 10)."""
+    n_seeds = len(seed_arr)
+    results = []
+    for q, cfg in enumerate(configs):
+        sl = slice(q * n_seeds, (q + 1) * n_seeds)
+        success = np.zeros(n_seeds, bool)
+        causes = _causes(success, success, rate[sl], from_fallback[sl], config,
+                         algo.capacity, len(octile.path))
+        r = _no_path_result(cfg, map_name, grid, seed_arr, algo, _failure_reason(causes),
+                            timing["total_s"], algo.population)
+        results.append(dataclasses.replace(
+            r, preset=config["name"], init_success_rate=rate[sl], init_unfilled=unfilled[sl],
+            optimum=float(octile.length), any_angle_optimum=float(any_angle.length),
+            timing=dict(timing), point={k.replace("__", "."): v for k, v in points[q].items()},
+            fitness_optimum=point_opt[q].fitness, fitness_optimum_length=point_opt[q].length,
+            fitness_optimum_loop_free=point_opt[q].loop_free,
+            fitness_optimum_reason="" if point_opt[q].found else point_opt[q].reason,
+            init_fallback=from_fallback[sl], causes=causes, path_capacity=algo.capacity))
     return results
 
 
@@ -1025,28 +1131,42 @@ def _in_jaxga(module: str) -> bool:
     return module == "jaxga" or module.startswith("jaxga.")
 
 
-def _failure_reason(success: np.ndarray, init_rate: np.ndarray, config, capacity: int,
-                    shortest_cells: int) -> str:
-    """Why some runs returned no path: how many, and whether the initialiser ever made a
-    path (a paper's initialiser can fail on every attempt on some maps, e.g. median
-    insertion through a wall three cells thick), naming a path capacity below the cell
-    count of the shortest 8-connected path as the likely cause."""
-    failed = ~np.asarray(success)
+def _causes(success: np.ndarray, started: np.ndarray, init_rate: np.ndarray,
+            from_fallback: np.ndarray, config, capacity: int,
+            shortest_cells: int) -> np.ndarray:
+    """Per seed, why it returned no path ("" for a successful seed): its initialisation
+    gave it no path (the initialiser never succeeded on this map, with or without the
+    fallback; or the path capacity is below the shortest path's cell count), or its best
+    path did not survive the final feasibility check."""
+    out = np.full(len(success), "", dtype=object)
+    method, fallback = config.get("init.method"), config.get("init.fallback", "none")
+    for i in np.flatnonzero(~np.asarray(success)):
+        if started[i]:
+            out[i] = "lost its best path in the final feasibility check"
+        elif capacity < shortest_cells:
+            out[i] = (f"got no initial path: population.capacity = {capacity} is probably "
+                      f"too small: the shortest 8-connected path has {shortest_cells} cells "
+                      "(raise population.capacity)")
+        elif fallback == "none" or method == "field_walk":
+            out[i] = (f"got no initial path: the initialiser {method!r} succeeded in none of "
+                      "its attempts on this map (raise init.max_tries, choose another "
+                      "init.method, or set init.fallback = 'field_walk')")
+        else:
+            out[i] = (f"got no initial path: the initialiser {method!r} succeeded in none of "
+                      f"its attempts and the fallback {fallback!r} made none either")
+    return out
+
+
+def _failure_reason(causes: np.ndarray) -> str:
+    """Why some runs returned no path: how many, and each cause with its seed count."""
+    causes = np.asarray(causes, dtype=object)
+    failed = causes != ""
     if not failed.any():
         return ""
-    n, total = int(failed.sum()), failed.size
-    text = f"no feasible path found by {n} of {total} seeds"
-    no_init = failed & (np.asarray(init_rate) == 0)
-    if no_init.any():
-        method = config.get("init.method")
-        text += (f"; {int(no_init.sum())} of them got no initial path: the initialiser "
-                 f"{method!r} succeeded in none of its attempts on this map")
-        if capacity < shortest_cells:
-            text += (f"; population.capacity = {capacity} is probably too small: the "
-                     f"shortest 8-connected path has {shortest_cells} cells (raise "
-                     f"population.capacity)")
-        else:
-            text += " (raise init.max_tries or choose another init.method)"
+    text = f"no feasible path found by {int(failed.sum())} of {failed.size} seeds"
+    kinds, counts = np.unique(causes[failed].astype(str), return_counts=True)
+    for cause, k in zip(kinds, counts):
+        text += f"; {int(k)} of them {cause}"
     return text
 
 
@@ -1070,7 +1190,8 @@ def _no_path_result(config, map_name, grid, seeds, algo, reason, elapsed,
         population=int(config["population.size"]) * algo.islands,
         generations=algo.generations, width=grid.width, config=config,
         fitness_optimum_reason=reason, start=grid.start_xy, goal=grid.goal_xy,
-        population_capacity=population_capacity,
+        population_capacity=population_capacity, init_fallback=np.zeros(s, np.int32),
+        causes=np.full(s, reason, dtype=object), path_capacity=algo.capacity,
     )
 
 

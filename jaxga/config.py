@@ -30,7 +30,8 @@ else:  # pragma: no cover
     import tomli as tomllib
 
 INITIALISERS = ("random_walk", "median_insertion", "intermittent_connect",
-                "greedy_random_target", "directional")
+                "greedy_random_target", "directional", "field_walk")
+FALLBACKS = ("field_walk", "none")
 FITNESSES = ("sga", "imga", "agacd", "mpmga", "iga_zhu", "iga_zhang")
 SELECTIONS = ("roulette", "roulette_elite", "layered_thirds", "stratified", "tournament",
               "none")
@@ -38,7 +39,7 @@ CROSSOVERS = ("common_point", "cut_and_check", "heterologous", "column", "zhu_mi
 MUTATIONS = ("neighbour_point", "one_point", "range", "segment_sa", "point_checked",
              "zhu_mixed", "none")
 SIMPLIFIERS = ("none", "simplify_adjacent", "corner_cut")
-POSTPROCESSORS = ("none", "shortcut_greedy")
+POSTPROCESSORS = ("none", "shortcut_greedy", "shortcut_optimal")
 TOPOLOGIES = ("none", "ring", "star", "full", "mpmga")
 
 
@@ -110,6 +111,14 @@ SCHEMA: dict[str, Field] = {
     "generations": Field(int, "generations per run", low=1, high=1_000_000),
     "init.method": Field(str, "initialiser (SPEC 4)", choices=INITIALISERS),
     "init.max_tries": Field(int, "redraws of a failed individual", low=1, high=10_000),
+    "init.fallback": Field(str, "initialiser that fills the slots init.method left empty "
+                           "after init.max_tries attempts ('none': the paper's initialiser "
+                           "alone)", choices=FALLBACKS),
+    "init.slack": Field(float, low=0.0, high=100.0, dynamic=True,
+                        doc="field_walk: paths up to (1 + slack) x the optimal length"),
+    "init.temperature": Field(float, low=0.0, high=1000.0, dynamic=True,
+                              doc="field_walk: preference for short detours, "
+                                  "exp(-excess / temperature); 0 = optimal moves only"),
     "fitness.method": Field(str, "fitness combiner (SPEC 3)", choices=FITNESSES),
     "fitness.window": Field(bool, "evaluate grid paths on a narrow window when all fit "
                             "(same results; faster where paths stay short, 1-2 s more "
@@ -164,6 +173,9 @@ DEFAULTS: dict[str, Any] = {
     "map.corner_rule": "strict",
     "population.capacity": 0,
     "init.max_tries": 20,
+    "init.fallback": "field_walk",
+    "init.slack": 0.5,
+    "init.temperature": 1.0,
     "fitness.window": True,
     "selection.tournament_size": 2,
     "crossover.adaptive": False,

@@ -618,7 +618,8 @@ def column_child(
     processing" = median insertion (:func:`jaxga.repair.connect`, Zhu eq. 11-12, with the
     second half of ``key``), then loop removal. Returns ``(cells int32[L], length, ok)``;
     ``ok`` False = Zhu's "crossover failure" (a column without candidates, a failed
-    connection, or a capacity overflow). Requires ``L >= max(H, W)``.
+    connection, or a capacity overflow; a child spanning more columns than ``L`` cells
+    is one).
 
     ``max_rounds`` and ``queue`` (static) bound the median insertion
     (:func:`jaxga.repair.connect`). Under ``vmap`` every pair runs as many rounds as the
@@ -633,12 +634,11 @@ def column_child(
     n = jnp.asarray(c1).shape[0]
     h, w = grid.shape
     a = max(h, w)
-    if a > n:
-        raise ParameterError(
-            f"column crossover on a {w} x {h} map needs capacity >= {a}, got {n}"
-        )
     k_anchor, k_conn = jax.random.split(key)
     anchors, n_anchors, cols_ok = column_anchors(k_anchor, grid, c1, l1, c2, l2)
+    if a > n:  # a big map and a small capacity: a child spanning more columns cannot fit
+        cols_ok &= n_anchors <= n
+        anchors, n_anchors = anchors[:n], jnp.minimum(n_anchors, n)
     if max_rounds is None:
         max_rounds = 2 * int(np.ceil(np.log2(max(a, 2)))) + 6
     if queue is None:
@@ -674,7 +674,7 @@ def column(
     On "crossover failure" both slots keep their parents and ``failed`` is 2.
 
     ``fitness_fn(grid, cells, length) -> f32`` is static (bind it with
-    ``functools.partial``). Requires capacity ``L >= max(H, W)``. ``max_rounds``,
+    ``functools.partial``). ``max_rounds``,
     ``queue``: see :func:`column_child` (they dominate the cost).
     """
     c1, c2 = jnp.asarray(c1, _I32), jnp.asarray(c2, _I32)

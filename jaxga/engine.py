@@ -40,7 +40,7 @@ from jaxga.batching import over_individuals_gated, over_pairs_gated, windowed_ma
 from jaxga.config import SCHEMA, Config
 from jaxga.errors import ParameterError
 from jaxga.grid import Grid
-from jaxga.init import get_initialiser, initialise
+from jaxga.init import field_walk, get_initialiser, initialise_population
 from jaxga.islands import migrates
 from jaxga.numerics import ordered_mean
 from jaxga.paths import (
@@ -106,9 +106,44 @@ class Algorithm:
         return self.config.get(key, default)
 
 
+CAPACITY_FACTOR = 3
+"""The automatic path capacity holds this many times the optimal path's cells."""
+
+SMALL_MAP_CAPACITY = 160
+"""The automatic capacity is at least ``min(4 * (H + W), 160)`` cells: the ``4 * (H + W)``
+the papers' 20 x 20 maps have always had (so that their reproductions are unchanged;
+their random walks and connections need the room), for maps up to that size."""
+
+
+def capacity_class(cells: int) -> int:
+    """The smallest size class ``2**k * (1, 1.25, 1.5 or 1.75)`` (at least 8) holding
+    ``cells``: problems of similar size share compiled programs."""
+    cells = max(int(cells), 8)
+    k = max(cells.bit_length() - 3, 0)
+    step = 1 << k  # a quarter of the power of two below cells
+    return -(-cells // step) * step
+
+
 def default_capacity(grid: Grid) -> int:
-    """Path capacity used when the configuration says 0: ``4 * (H + W)`` nodes."""
-    return 4 * (grid.height + grid.width)
+    """Path capacity used when the configuration says 0 (``population.capacity``).
+
+    ``CAPACITY_FACTOR`` (3) times the cells of an optimal path, bounded by the free cells
+    the start can reach (no loop-free path holds more), rounded up to a size class
+    (:func:`capacity_class`), and at least ``min(4 * (H + W), 160)``
+    (:data:`SMALL_MAP_CAPACITY`). The 400-cell optimum of a 65 x 65 maze gets 1280 cells,
+    a 30-cell optimum on a 256 x 256 map 160. A path that would not fit is a counted
+    failure of the operator that made it (never truncated). Computed on the host from
+    the exact distance fields (:func:`jaxga.guide.problem_facts`); an unreachable goal
+    gets the minimum.
+    """
+    from jaxga.guide import problem_facts
+
+    floor = min(4 * (grid.height + grid.width), SMALL_MAP_CAPACITY)
+    facts = problem_facts(grid)
+    if not facts.reachable:
+        return floor
+    need = min(CAPACITY_FACTOR * facts.optimal_cells, facts.reachable_cells)
+    return max(floor, capacity_class(need))
 
 
 def build(config: Config, grid: Grid) -> tuple[Algorithm, dict]:
@@ -181,6 +216,12 @@ def unread_keys(config: Config) -> dict[str, str]:
                                             f"fitness.method = {method!r}")
     if uses_waypoints(config):
         out["fitness.window"] = "waypoint paths are evaluated without the narrow window"
+    if not uses_guide(config):
+        for k in ("init.slack", "init.temperature"):
+            out[k] = ("only the field initialiser reads it (init.method = 'field_walk', or "
+                      "init.fallback = 'field_walk')")
+    if config["init.method"] == "field_walk":
+        out["init.fallback"] = "init.method = 'field_walk' cannot fail where a path exists"
     if config["selection.method"] != "tournament":
         out["selection.tournament_size"] = (f"selection.method = "
                                             f"{config['selection.method']!r}, not 'tournament'")
@@ -222,6 +263,7 @@ def unread_keys(config: Config) -> dict[str, str]:
 
 
 OFF_VALUES: dict[str, Any] = {
+    "init.fallback": "none",
     "islands.topology": "none", "islands.migrants": 0, "islands.interval": 1,
     "simplify.probability": 0.0, "crossover.adaptive": False, "mutation.adaptive": False,
     "fitness.window": False,
@@ -274,6 +316,11 @@ def check_combination(config: Config) -> None:
     if config.get("mutation.method") == "segment_sa" and not config["mutation.temperature_w"] > 0:
         raise ParameterError("mutation.temperature_w must be in (0, 1] (MPMGA eq. 17: "
                              f"T = c1 * w**t), got {config['mutation.temperature_w']}")
+    if config.get("post.method") == "shortcut_optimal" and uses_waypoints(config):
+        raise ParameterError(
+            "post.method = 'shortcut_optimal' needs continuous paths (8-connected cells); "
+            "this configuration evolves waypoint paths (AGACD's cut_and_check crossover or "
+            "point_checked mutation): use post.method = 'shortcut_greedy'")
     ratios = config.get("fitness.importance_ratios")
     if config["fitness.method"] == "agacd" and ratios is not None \
             and len(ratios) != AGACD_OBJECTIVES - 1:
@@ -588,19 +635,39 @@ def _best_of(state_islands: IslandState) -> tuple:
     return cells, state_islands.length.reshape(-1)[k], f[k]
 
 
+def uses_guide(config: Config) -> bool:
+    """Whether a run of ``config`` steers by the problem's exact distance fields (its grid
+    needs :func:`jaxga.guide.with_guide`): the field initialiser, as ``init.method`` or as
+    the fallback of another initialiser."""
+    return config["init.method"] == "field_walk" or config["init.fallback"] != "none"
+
+
+def _field_walk(params: dict) -> Callable:
+    return functools.partial(field_walk, slack=params["init.slack"],
+                             temperature=params["init.temperature"])
+
+
 def init_state(algo: Algorithm, key: jax.Array, grid: Grid, params: dict) -> tuple:
     """Initial population of every island (SPEC 4) and its evaluation.
 
-    Returns ``(GAState, init_success_rate, n_unfilled)``.
+    ``init.method`` draws the population within ``init.max_tries`` attempts per
+    individual; ``init.fallback = "field_walk"`` then fills exactly the slots it left
+    empty with :func:`jaxga.init.field_walk` (``init.slack``, ``init.temperature``), so a
+    run starts with a whole population wherever a path exists. Returns
+    ``(GAState, InitStats)`` (one entry per island).
     """
-    init_fn = get_initialiser(algo.get("init.method"))
+    method = algo.get("init.method")
+    init_fn = _field_walk(params) if method == "field_walk" else get_initialiser(method)
+    fallback = None
+    if algo.get("init.fallback") == "field_walk" and method != "field_walk":
+        fallback = _field_walk(params)
     keys = jax.random.split(key, algo.islands)
     active = _active(algo, params)
 
     def one(k):
-        pop, stats = initialise(
+        pop, stats = initialise_population(
             k, grid, init_fn, algo.population, algo.capacity,
-            max_tries=int(algo.get("init.max_tries")),
+            max_tries=int(algo.get("init.max_tries")), fallback=fallback,
         )
         # Once per run: at full width (the window pays off in the generations' loop).
         fitness, feas = evaluate(algo, grid, params, pop.cells, pop.length, active,
@@ -736,6 +803,8 @@ def finish(algo: Algorithm, grid: Grid, state: GAState, history: dict, params: d
     success = state.best_fitness > 0
     if algo.get("post.method") == "shortcut_greedy":
         opt_c, opt_n = post.shortcut_greedy(grid, raw_c, raw_n)
+    elif algo.get("post.method") == "shortcut_optimal":
+        opt_c, opt_n = post.shortcut_optimal(grid, raw_c, raw_n)
     else:
         opt_c, opt_n = remove_loops(raw_c, raw_n, grid.n_cells)
     best = history["best"]

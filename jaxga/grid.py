@@ -24,6 +24,7 @@ from __future__ import annotations
 import dataclasses
 import operator
 from collections.abc import Sequence
+from typing import Any
 
 import jax
 import jax.numpy as jnp
@@ -35,6 +36,25 @@ CORNER_RULES: tuple[str, ...] = ("free", "no_squeeze", "strict")
 """The corner rules of SPEC 1, in order of strictness."""
 
 DEFAULT_CORNER_RULE = "strict"
+
+MAX_MAP_CELLS = 512 * 512
+"""The largest map jaxga plans on (262,144 cells, e.g. 512 x 512). A run's host-side work
+(the exact optima it reports gaps against, the distance fields) and its paths grow with
+the map; beyond this a run would take many minutes or more memory than a workstation
+has. Larger maps are refused at once, naming the way around: a coarser map
+(:func:`jaxga.maps.coarsen`, ``load_map(..., coarsen=k)``, ``--coarsen K``)."""
+
+
+def too_large(width: int, height: int) -> str:
+    """The one-line refusal of a map over :data:`MAX_MAP_CELLS`, or "" if it fits."""
+    if width * height <= MAX_MAP_CELLS:
+        return ""
+    k = 2
+    while -(-width // k) * -(-height // k) > MAX_MAP_CELLS:
+        k += 1
+    return (f"map {width} x {height} has {width * height:,} cells, more than jaxga plans on "
+            f"({MAX_MAP_CELLS:,}, e.g. 512 x 512): make it coarser, e.g. {k} x {k} cells "
+            f"into one (--coarsen {k}, load_map(..., coarsen={k}), jaxga.maps.coarsen)")
 
 # The 8 move directions, counter-clockwise from east. Index d gives (dx, dy).
 DIRECTIONS = np.array(
@@ -61,6 +81,7 @@ class Grid:
         start: int32 scalar, the start cell index ``y * W + x``.
         goal: int32 scalar, the goal cell index.
         corner_rule: ``"free"``, ``"no_squeeze"`` or ``"strict"`` (static).
+        guide: the exact distance fields of :mod:`jaxga.guide`, or None.
 
     Build grids with :meth:`Grid.create` (or a loader in :mod:`jaxga.maps`), which checks
     shapes, dtypes and that the endpoints lie on the map. Whether the endpoints are free
@@ -71,6 +92,11 @@ class Grid:
     start: jax.Array
     goal: jax.Array
     corner_rule: str = dataclasses.field(default=DEFAULT_CORNER_RULE, metadata={"static": True})
+    guide: Any = None
+    """The problem's exact distance fields (:class:`jaxga.guide.Guide`), or None. Attached
+    by :func:`jaxga.guide.with_guide`; read by the field initialiser and the repairs that
+    connect through the fields. It belongs to this map, these endpoints and this corner
+    rule: :meth:`replace` and :meth:`validated` drop it."""
 
     # ----------------------------------------------------------------- construction
     @classmethod
@@ -85,7 +111,8 @@ class Grid:
 
         ``start`` defaults to ``(0, 0)`` and ``goal`` to ``(W - 1, H - 1)``. Raises
         :class:`~jaxga.errors.EndpointError` for an endpoint off the map and
-        :class:`~jaxga.errors.JaxgaError` for a bad array or corner rule.
+        :class:`~jaxga.errors.JaxgaError` for a bad array or corner rule, or a map of more
+        than :data:`MAX_MAP_CELLS` cells (:func:`too_large`).
         """
         try:
             arr = np.asarray(blocked)
@@ -99,8 +126,8 @@ class Grid:
                 raise JaxgaError("a grid array must hold booleans or 0/1 values")
             arr = arr.astype(bool)
         h, w = arr.shape
-        if h * w >= 2**31:
-            raise JaxgaError(f"grid {w} x {h} has too many cells for int32 cell indices")
+        if too_large(w, h):
+            raise JaxgaError(too_large(w, h))
         check_corner_rule(corner_rule)
         sx, sy = _check_xy("start", (0, 0) if start is None else start, w, h)
         gx, gy = _check_xy("goal", (w - 1, h - 1) if goal is None else goal, w, h)

@@ -16,6 +16,7 @@ from jaxga import api, engine, schedules
 from jaxga.compare import compare as jaxga_compare
 from jaxga.errors import InitialisationWarning, JaxgaError, ParameterError
 from jaxga.fitness_reference import fitness_optimum, fitness_weights, path_fitness_np
+from jaxga.guide import with_guide
 from jaxga.maps import load_map, random_map
 from jaxga.presets import preset_names
 from jaxga.reference import any_angle_shortest_path, clear_np, path_length, shortest_path
@@ -269,7 +270,7 @@ def test_unread_dynamic_keys_are_exactly_those_the_program_does_not_use(preset, 
     key = jax.random.PRNGKey(0)
 
     def whole_run(params):
-        state, _ = engine.init_state(algo, key, grid, params)
+        state, _ = engine.init_state(algo, key, with_guide(grid), params)
         state, history = engine.evolve(algo, key, grid, state, params, 1)
         return engine.finish(algo, grid, state, history, params, state.best_fitness), history
 
@@ -510,7 +511,7 @@ def test_a_chunked_run_equals_one_call_and_compiles_one_evolve_program(grid, mon
 
     def recording(*args):
         out = programs(*args)
-        compiled.append(tuple(out.evolve))
+        compiled.append(out.sizes)  # the evolve programs it holds (compiled when needed)
         return out
 
     monkeypatch.setattr(api, "_programs", recording)
@@ -544,9 +545,10 @@ def test_unreachable_goal_is_a_no_path_result():
     doc = r.to_json()
     assert doc["optimum"] is None and doc["any_angle_optimum"] is None
     json.loads(json.dumps(doc, allow_nan=False))
-    # the summary of a no-path result is a table of NaNs with the reason, not an error
+    # the summary of a no-path result gives the reason and no table of NaNs
     text = r.summary()
     assert "success 0/2" in text and "unreachable" in text
+    assert "no metrics: no seed found a path" in text and "nan" not in text
     assert {row[0] for row in r.summary_rows()} >= {"angle_sum", "turns", "gap"}
     assert all(math.isnan(v) for row in r.summary_rows() for v in row[1:])
 
@@ -566,18 +568,32 @@ def test_start_equal_to_goal_has_gap_zero_without_warnings(grid):
 def test_failure_reason_counts_the_seeds_and_names_an_initialiser_that_never_succeeded():
     from jaxga.presets import load_preset
 
-    cfg = load_preset("mpmga")
-    ok = np.array([True, True, True])
+    cfg = load_preset("mpmga", sets=["init.fallback=none"])
     fits = dict(capacity=80, shortest_cells=12)
-    assert api._failure_reason(ok, np.array([0.2, 0.1, 0.3]), cfg, **fits) == ""
-    some = api._failure_reason(np.array([True, False, True]), np.array([0.2, 0.1, 0.3]), cfg,
-                               **fits)
-    assert some == "no feasible path found by 1 of 3 seeds"
-    none = api._failure_reason(np.array([False, False, True]), np.array([0.0, 0.1, 0.3]), cfg,
-                               **fits)
+    rate, made = np.array([0.2, 0.1, 0.3]), np.zeros(3, int)
+
+    def reason(success, started, rate=rate, config=cfg, **kw):
+        causes = api._causes(np.array(success), np.array(started), rate, made, config,
+                             **{**fits, **kw})
+        assert (causes == "").tolist() == list(success)
+        return api._failure_reason(causes)
+
+    assert reason([True, True, True], [True, True, True]) == ""
+    some = reason([True, False, True], [True, True, True])
+    assert some == ("no feasible path found by 1 of 3 seeds; 1 of them lost its best path "
+                    "in the final feasibility check")
+    none = reason([False, False, True], [False, True, True], rate=np.array([0.0, 0.1, 0.3]))
     assert none.startswith("no feasible path found by 2 of 3 seeds; 1 of them got no initial")
     assert "'intermittent_connect'" in none and "init.max_tries" in none
-    assert "capacity" not in none
+    assert "init.fallback = 'field_walk'" in none and "capacity" not in none
+    # the capacity below the shortest path's cells is named instead
+    small = reason([False, False, True], [False, False, True], capacity=10)
+    assert small.startswith("no feasible path found by 2 of 3 seeds; 2 of them got no initial "
+                            "path: population.capacity = 10 is probably too small")
+    # with the fallback on, a seed without any path says that the fallback made none
+    both = reason([False, True, True], [False, True, True],
+                  config=load_preset("mpmga"))
+    assert "and the fallback 'field_walk' made none either" in both
 
 
 def test_a_capacity_below_the_shortest_path_is_named_as_the_cause(grid):
@@ -597,9 +613,9 @@ def test_unfilled_initial_populations_are_warned_about_naming_the_budget(grid):
     with warnings.catch_warnings(record=True) as caught:
         warnings.simplefilter("always")
         r = api.run("sga", grid, seeds=3, population__size=8, generations=3,
-                    init__max_tries=1)
+                    init__max_tries=1, init__fallback="none")
     short = (r.init_unfilled > 0) & (r.init_success_rate > 0)
-    assert short.any() and r.success.all()
+    assert short.any() and r.success.all() and (r.init_fallback == 0).all()
     warned = [w for w in caught if issubclass(w.category, InitialisationWarning)]
     assert len(warned) == 1
     assert warned[0].filename == __file__  # points at the caller's line, not into jaxga
@@ -613,6 +629,28 @@ def test_unfilled_initial_populations_are_warned_about_naming_the_budget(grid):
         path = r.path(i)
         assert path[0] == grid.start_xy and path[-1] == grid.goal_xy
         assert all(clear_np(blocked, grid.corner_rule, p, q) for p, q in zip(path, path[1:]))
+
+
+def test_the_fallback_fills_exactly_the_slots_the_initialiser_left_empty(grid):
+    """The same runs with the fallback on (the default): no copies, no warning; the
+    fallback made as many individuals as the initialiser left empty, and the result, its
+    summary and its JSON say so."""
+    off = api.run("sga", grid, seeds=3, population__size=8, generations=3,
+                  init__max_tries=1, init__fallback="none")
+    with warnings.catch_warnings():
+        warnings.simplefilter("error", InitialisationWarning)
+        on = api.run("sga", grid, seeds=3, population__size=8, generations=3,
+                     init__max_tries=1)
+    np.testing.assert_array_equal(on.init_fallback, off.init_unfilled)
+    assert (on.init_unfilled == 0).all() and on.init_fallback.sum() > 0
+    np.testing.assert_array_equal(on.init_success_rate, off.init_success_rate)
+    made = on.init_fallback[on.init_fallback > 0]
+    count = str(made.min()) if made.min() == made.max() else f"{made.min()}-{made.max()}"
+    assert (f"the fallback field_walk made {count} of 8 initial individuals in "
+            f"{int((on.init_fallback > 0).sum())} of 3 seeds") in on.summary()
+    runs = on.to_json()["runs"]
+    assert [run["init_fallback"] for run in runs] == on.init_fallback.tolist()
+    assert all(run["cause"] == "" for run in runs)
 
 
 def test_unfilled_warning_only_for_runs_that_made_some_paths():

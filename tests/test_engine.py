@@ -7,6 +7,7 @@ import pytest
 
 from jaxga import api
 from jaxga.api import run
+from jaxga.guide import with_guide
 from jaxga.maps import random_map
 from jaxga.reference import any_angle_shortest_path, clear_np
 
@@ -203,7 +204,7 @@ def test_adaptive_generation_equals_its_straight_line_composition():
     looped = jax.jit(lambda k, s, t: one(key=k, isl=s, t=t))
     straight = jax.jit(straight)
     for r in range(2):
-        state, _ = E.init_state(algo, jax.random.PRNGKey(r), grid, params)
+        state, _ = E.init_state(algo, jax.random.PRNGKey(r), with_guide(grid), params)
         isl = jax.tree_util.tree_map(lambda x: x[0], state.islands)
         for t in range(2):
             key = jax.random.fold_in(jax.random.PRNGKey(10 + r), t)
@@ -262,7 +263,8 @@ def test_per_island_rates_apply_to_their_own_island():
         "islands.topology": "none", "islands.migrants": 0, "selection.method": "none",
         "islands.crossover_probabilities": [0.0, 0.0, 0.0],
         "islands.mutation_probabilities": [0.0, 0.0, 0.0]}), grid)
-    state, _ = jax.jit(lambda k: E.init_state(algo, k, grid, params))(jax.random.PRNGKey(0))
+    state, _ = jax.jit(lambda k: E.init_state(algo, k, with_guide(grid), params))(
+        jax.random.PRNGKey(0))
     step = jax.jit(lambda k, s, p: E.generation(algo, k, grid, s, p))
     for pc, pm in [((0.0, 1.0, 1.0), (0.0, 0.0, 0.0)), ((0.0, 0.0, 0.0), (1.0, 0.0, 0.0)),
                    ((0.0, 0.0, 0.0), (0.0, 0.0, 0.0))]:

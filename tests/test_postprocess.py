@@ -2,6 +2,8 @@
 
 from __future__ import annotations
 
+import math
+
 import jax
 import jax.numpy as jnp
 import numpy as np
@@ -106,6 +108,52 @@ def test_shortcut_greedy_linear_trial(gp):
         for k in range(len(src) - 1):
             s[k, k + 1] = True
         assert got == [src[k] for k in _greedy_reference(list(range(len(src))), s)]
+
+
+_optimal = jax.jit(jax.vmap(PP.shortcut_optimal, in_axes=(None, 0, 0)))
+_optimal_narrow = jax.jit(jax.vmap(lambda g, c, n: PP.shortcut_optimal(g, c, n, window=3),
+                                   in_axes=(None, 0, 0)))
+
+
+def _shortest_subsequence(xy, sees) -> float:
+    """Brute force: the shortest sub-sequence from the first to the last node whose
+    consecutive nodes see each other (every pair, no window)."""
+    n = len(xy)
+    best = [0.0] + [math.inf] * (n - 1)
+    for j in range(1, n):
+        for i in range(j):
+            if sees[i, j]:
+                best[j] = min(best[j], best[i] + math.dist(xy[i], xy[j]))
+    return best[-1]
+
+
+@settings(max_examples=25)
+@given(grids_and_parents(n=P))
+def test_shortcut_optimal_is_the_shortest_clear_subsequence(gp):
+    """Feasible, same endpoints, a sub-sequence of the input, as short as the brute-force
+    optimum over all sub-sequences (the paths here are shorter than the window), and
+    never longer than the greedy pass; with a window of 3 positions still feasible and
+    never longer than greedy (the greedy result is the fallback)."""
+    grid, parents = gp
+    w = grid.width
+    sees = np.asarray(_pairs["clear"](grid, parents.cells))
+    in_len = np.asarray(_checks(grid, parents.cells, parents.length)[4])
+    greedy_len = np.asarray(_checks(grid, *_shortcut["clear"](grid, parents.cells,
+                                                               parents.length))[4])
+    for fn, exact in ((_optimal, True), (_optimal_narrow, False)):
+        c, n = fn(grid, parents.cells, parents.length)
+        ends, _, feas, loop_free, out_len = (np.asarray(v) for v in _checks(grid, c, n))
+        assert ends.all() and feas.all() and loop_free.all()
+        assert (out_len <= greedy_len + 1e-4).all() and (out_len <= in_len + 1e-4).all()
+        np.testing.assert_array_equal(np.asarray(jax.vmap(pad)(c, n)), np.asarray(c))
+        for i, (got, src) in enumerate(zip(_as_lists(c, n),
+                                           _as_lists(parents.cells, parents.length))):
+            positions = [src.index(cell) for cell in got]
+            assert positions == sorted(positions)  # a sub-sequence
+            if exact:
+                xy = [(cell % w, cell // w) for cell in src]
+                assert math.isclose(out_len[i], _shortest_subsequence(xy, sees[i]),
+                                    rel_tol=1e-5)
 
 
 def _one(fn, grid, xy, cap=CAP):
@@ -251,3 +299,17 @@ def test_simplify_adjacent_farthest_neighbour():
 
 def test_remove_loops_is_reexported():
     assert PP.remove_loops is paths.remove_loops
+
+
+def test_shortcut_optimal_is_refused_for_waypoint_paths():
+    """AGACD's population holds waypoint paths (segments longer than one step), which the
+    windowed programme of shortcut_optimal does not cover: a configuration error."""
+    import pytest
+
+    from jaxga.engine import check_combination
+    from jaxga.errors import ParameterError
+    from jaxga.presets import load_preset
+
+    with pytest.raises(ParameterError, match="shortcut_optimal' needs continuous paths"):
+        check_combination(load_preset("agacd", overrides={"post.method": "shortcut_optimal"}))
+    check_combination(load_preset("imga", overrides={"post.method": "shortcut_optimal"}))

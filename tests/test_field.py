@@ -1,0 +1,261 @@
+"""The exact distance fields (jaxga.guide) and the initialiser steered by them.
+
+Property tests on generated random maps, mazes and rooms of several sizes under all three
+corner rules: the fields equal the reference Dijkstra (jaxga.reference, heapq, written
+independently of SciPy); field_walk returns valid (independent NumPy check), bounded and
+distinct paths on every reachable problem and an explicit failure on unreachable ones;
+the population fallback fills exactly the slots its initialiser left empty.
+"""
+
+from __future__ import annotations
+
+import functools
+import math
+
+import jax
+import jax.numpy as jnp
+import numpy as np
+import pytest
+from hypothesis import given, settings
+from hypothesis import strategies as st
+
+from jaxga import Grid
+from jaxga import init as I
+from jaxga.engine import SMALL_MAP_CAPACITY, capacity_class, default_capacity
+from jaxga.guide import distance_fields, problem_facts, with_guide
+from jaxga.maps import builtin_names, load_map, maze_map, random_map, reachable, rooms_map
+from jaxga.objectives import path_length
+from jaxga.reference import distances_from, shortest_path
+from tests.strategies import check_paths
+
+FIELD_CAP = 256  # one compiled program per map size
+KEYS = 16
+SIZES = (12, 24)
+RULES = ("free", "no_squeeze", "strict")
+
+
+def _map(kind: str, size: int, seed: int, rule: str) -> Grid:
+    end = (size - 1, size - 1)
+    if kind == "maze":
+        return maze_map(size, size, seed, corridor_width=2, start=(0, 0), goal=end,
+                        corner_rule=rule)
+    if kind == "rooms":
+        return rooms_map(size, size, seed, room_size=4, door_width=2, start=(0, 0), goal=end,
+                         corner_rule=rule)
+    return random_map(size, size, 0.25, seed, start=(0, 0), goal=end, corner_rule=rule)
+
+
+@st.composite
+def problems(draw, kinds=("random", "maze", "rooms")):
+    """A generated map (kind, size, corner rule) with random free endpoints."""
+    kind = draw(st.sampled_from(kinds))
+    size = draw(st.sampled_from(SIZES))
+    rule = draw(st.sampled_from(RULES))
+    grid = _map(kind, size, draw(st.integers(0, 10_000)), rule)
+    free = np.flatnonzero(~grid.blocked_np().reshape(-1))
+    a, b = draw(st.lists(st.sampled_from(free.tolist()), min_size=2, max_size=2))
+    return kind, grid.replace(start=(a % size, a // size), goal=(b % size, b // size))
+
+
+@functools.partial(jax.jit, static_argnames=("capacity",))
+def _walks(keys, grid, slack, temperature, capacity=FIELD_CAP):
+    return jax.vmap(lambda k: I.field_walk(k, grid, capacity, slack, temperature))(keys)
+
+
+_lengths = jax.jit(jax.vmap(path_length, in_axes=(None, 0, 0)))
+
+
+# ----------------------------------------------------------------------------- fields
+@settings(max_examples=30, deadline=None)
+@given(problems())
+def test_fields_and_facts_equal_the_reference(problem):
+    """The SciPy fields equal the heapq Dijkstra of jaxga.reference from both endpoints;
+    the optimum, its cell count and the start's region agree with the reference A* and
+    flood fill."""
+    _, grid = problem
+    to_goal, from_start, _ = distance_fields(grid)
+    want_goal = distances_from(grid, grid.goal_xy).reshape(-1)
+    want_start = distances_from(grid, grid.start_xy).reshape(-1)
+    np.testing.assert_allclose(to_goal, want_goal, rtol=0, atol=1e-9)
+    np.testing.assert_allclose(from_start, want_start, rtol=0, atol=1e-9)
+    facts = problem_facts(grid)
+    ref = shortest_path(grid)
+    assert facts.reachable == ref.found
+    assert facts.reachable_cells == int(reachable(grid).sum())
+    if ref.found:
+        assert math.isclose(facts.optimal_length, ref.length, abs_tol=1e-9)
+        assert facts.optimal_cells == ref.n_cells
+    else:
+        assert facts.optimal_cells == 0 and math.isinf(facts.optimal_length)
+
+
+def test_a_blocked_endpoint_has_no_field():
+    b = np.zeros((6, 6), bool)
+    b[5, 5] = True
+    grid = Grid.create(b, start=(0, 0), goal=(5, 5))
+    to_goal, from_start, _ = distance_fields(grid)
+    assert np.isinf(to_goal).all() and not problem_facts(grid).reachable
+    assert from_start[0] == 0 and np.isinf(from_start[35])
+
+
+def test_the_guide_belongs_to_its_endpoints():
+    """Grid.replace (other endpoints) drops the guide; with_guide keeps an attached one."""
+    grid = with_guide(random_map(12, 12, 0.2, 3))
+    assert grid.guide is not None and with_guide(grid) is grid
+    moved = grid.replace(goal=(5, 5))
+    assert moved.guide is None
+    assert float(with_guide(moved).guide.to_goal[int(moved.goal)]) == 0.0
+    with pytest.raises(Exception, match="with_guide"):
+        I.field_walk(jax.random.PRNGKey(0), moved, 64)
+
+
+# ------------------------------------------------------------------- field_walk
+@settings(max_examples=30, deadline=None)
+@given(problems(), st.integers(0, 2**31 - 1), st.sampled_from([0.0, 0.3, 1.0]),
+       st.sampled_from([0.0, 0.5, 2.0]))
+def test_field_walk_paths_are_valid_bounded_and_spread(problem, seed, slack, temperature):
+    """Every reachable problem: all KEYS walks succeed and are valid paths (independent
+    check: start to goal, legal moves under the corner rule, loop-free, padded), no
+    longer than (1 + slack) times the optimum; with slack > 0 on random and room maps
+    the walks spread over several paths. An unreachable goal: every walk fails."""
+    kind, grid = problem
+    guided = with_guide(grid)
+    keys = jax.random.split(jax.random.PRNGKey(seed), KEYS)
+    cells, length, ok = _walks(keys, guided, slack, temperature)
+    facts = problem_facts(grid)
+    if not facts.reachable:
+        assert not np.asarray(ok).any()
+        return
+    assert np.asarray(ok).all()
+    assert check_paths(grid, cells, length, ok, cap=FIELD_CAP) == KEYS
+    lengths = np.asarray(_lengths(grid, cells, length), float)
+    assert (lengths >= facts.optimal_length - 1e-4).all()
+    assert (lengths <= (1 + slack) * facts.optimal_length + 1e-3 * FIELD_CAP).all()
+    distinct = {tuple(c[:n]) for c, n in zip(np.asarray(cells).tolist(), np.asarray(length))}
+    if slack > 0 and kind != "maze" and facts.optimal_cells > 8:
+        assert len(distinct) >= 2
+
+
+def test_field_walk_without_slack_or_temperature_is_optimal():
+    """slack 0, temperature 0: only optimal moves through a cell of a shortest path, so
+    every walk is an 8-connected optimum (the reference A*'s length)."""
+    for rule in RULES:
+        for seed in range(3):
+            grid = random_map(24, 24, 0.3, seed, corner_rule=rule)
+            keys = jax.random.split(jax.random.PRNGKey(seed), KEYS)
+            cells, length, ok = _walks(keys, with_guide(grid), 0.0, 0.0)
+            assert np.asarray(ok).all()
+            np.testing.assert_allclose(np.asarray(_lengths(grid, cells, length)),
+                                       shortest_path(grid).length, rtol=1e-5)
+
+
+def test_field_descent_spends_at_most_its_budget():
+    """One walk down the goal's field from the start with budget B: it reaches the goal
+    by moves that lower the field, no longer than the optimum plus B."""
+    grid = with_guide(rooms_map(24, 24, 2, room_size=5, corner_rule="strict"))
+    opt = problem_facts(grid).optimal_length
+    walk = jax.jit(jax.vmap(lambda k, b: I.field_descent(
+        k, grid, grid.guide.to_goal, grid.start, FIELD_CAP, b, 1.0), in_axes=(0, None)))
+    for budget in (0.0, 2.0, 10.0):
+        cells, length, ok = walk(jax.random.split(jax.random.PRNGKey(1), KEYS), budget)
+        assert np.asarray(ok).all()
+        check_paths(grid, cells, length, ok, cap=FIELD_CAP)
+        field = np.asarray(grid.guide.to_goal)
+        for c, n in zip(np.asarray(cells), np.asarray(length)):
+            assert (np.diff(field[c[:n]]) < 0).all()  # strictly down the field
+        lengths = np.asarray(_lengths(grid, cells, length))
+        assert (lengths <= opt + budget + 1e-3).all()
+
+
+def test_field_walk_fails_only_when_the_capacity_is_below_the_path():
+    """A corridor of 30 cells: capacity 29 fails every walk, 30 succeeds with slack 0."""
+    b = np.ones((3, 30), bool)
+    b[1, :] = False
+    grid = with_guide(Grid.create(b, start=(0, 1), goal=(29, 1)))
+    keys = jax.random.split(jax.random.PRNGKey(0), 4)
+    for cap, expect in ((29, False), (30, True)):
+        _, length, ok = _walks(keys, grid, 0.5, 1.0, capacity=cap)
+        assert (np.asarray(ok) == expect).all()
+        if expect:
+            assert (np.asarray(length) == 30).all()
+
+
+# ----------------------------------------------------------------------- fallback
+def _sometimes(key, grid, capacity):
+    """An initialiser that succeeds for about a third of its keys (a field walk kept or
+    marked failed by a coin): its successes are valid paths."""
+    cells, length, ok = I.field_walk(jax.random.fold_in(key, 1), grid, capacity, 0.2, 0.0)
+    return cells, length, ok & (jax.random.uniform(key) < 0.33)
+
+
+def _never(key, grid, capacity):
+    cells, length, _ = I.random_walk(key, grid, capacity)
+    return cells, length, jnp.bool_(False)
+
+
+@pytest.mark.parametrize("init_fn", [_sometimes, _never, I.median_insertion])
+def test_the_fallback_fills_exactly_the_slots_the_initialiser_left_empty(init_fn):
+    grid = with_guide(rooms_map(24, 24, 5, room_size=5, corner_rule="strict"))
+    key = jax.random.PRNGKey(3)
+    pop0, st0 = I.initialise(key, grid, init_fn, 24, FIELD_CAP, max_tries=1)
+    pop1, st1 = I.initialise(key, grid, init_fn, 24, FIELD_CAP, max_tries=1,
+                             fallback=I.field_walk)
+    valid0, valid1 = np.asarray(st0.valid), np.asarray(st1.valid)
+    assert valid1.all() and int(st1.n_failed) == 0
+    assert int(st1.from_fallback) == int((~valid0).sum())
+    # the initialiser's own individuals are untouched, its statistics too
+    np.testing.assert_array_equal(np.asarray(pop1.cells)[valid0], np.asarray(pop0.cells)[valid0])
+    np.testing.assert_array_equal(np.asarray(pop1.length)[valid0],
+                                  np.asarray(pop0.length)[valid0])
+    for name in ("attempts", "successes", "rounds"):
+        assert int(getattr(st1, name)) == int(getattr(st0, name))
+    assert check_paths(grid, pop1.cells, pop1.length, valid1, cap=FIELD_CAP) == 24
+
+
+def test_a_full_population_is_the_same_with_or_without_the_fallback():
+    grid = with_guide(random_map(24, 24, 0.1, 4, corner_rule="free"))
+    key = jax.random.PRNGKey(5)
+    pop0, st0 = I.initialise(key, grid, I.directional, 16, FIELD_CAP, max_tries=50)
+    pop1, st1 = I.initialise(key, grid, I.directional, 16, FIELD_CAP, max_tries=50,
+                             fallback=I.field_walk)
+    assert np.asarray(st0.valid).all() and int(st1.from_fallback) == 0
+    np.testing.assert_array_equal(np.asarray(pop0.cells), np.asarray(pop1.cells))
+    np.testing.assert_array_equal(np.asarray(pop0.length), np.asarray(pop1.length))
+
+
+def test_the_fallback_cannot_fill_an_unreachable_goal():
+    b = np.zeros((12, 12), bool)
+    b[6, :] = True
+    grid = with_guide(Grid.create(b))
+    _, stats = I.initialise(jax.random.PRNGKey(0), grid, I.random_walk, 8, FIELD_CAP,
+                            max_tries=2, fallback=I.field_walk)
+    assert int(stats.n_failed) == 8 and int(stats.from_fallback) == 0
+
+
+# ----------------------------------------------------------------------- capacity
+def test_capacity_classes_round_up_to_a_few_sizes():
+    assert [capacity_class(c) for c in (1, 8, 9, 100, 128, 129, 161, 400, 1100)] == \
+        [8, 8, 10, 112, 128, 160, 192, 448, 1280]
+    for c in range(1, 3000, 7):
+        k = capacity_class(c)
+        assert c <= k <= max(8, 1.25 * c + 1)
+
+
+def test_the_automatic_capacity_fits_the_problem():
+    """3 x the optimal path's cells (a size class), at least min(4 (H + W), 160): the
+    papers' 20 x 20 maps keep the 160 cells their reproductions ran with; the long
+    optimum of a 65 x 65 maze fits; an unreachable goal gets the minimum."""
+    for name in builtin_names():
+        if "20x20" in name:
+            assert default_capacity(load_map(name, corner_rule="free")) == SMALL_MAP_CAPACITY
+    maze = maze_map(65, 65, 7, corner_rule="strict")
+    facts = problem_facts(maze)
+    assert facts.optimal_cells > 300
+    cap = default_capacity(maze)
+    assert cap == max(160, capacity_class(min(3 * facts.optimal_cells, facts.reachable_cells)))
+    assert cap >= 3 * facts.optimal_cells or cap >= facts.reachable_cells
+    small = random_map(8, 8, 0.0, 1)
+    assert default_capacity(small) == 4 * (8 + 8)
+    b = np.zeros((30, 30), bool)
+    b[15, :] = True
+    assert default_capacity(Grid.create(b)) == SMALL_MAP_CAPACITY
