@@ -68,6 +68,14 @@ def _add_map_arguments(p: argparse.ArgumentParser, rule_default: str = "strict")
     p.add_argument("--scen", metavar="FILE", help="the .scen file of --scenario")
     p.add_argument("--corner-rule", default=None, metavar="RULE",
                    help=f"one of {', '.join(CORNER_RULES)} (default: {rule_default})")
+    _add_coarsen_argument(p)
+
+
+def _add_coarsen_argument(p: argparse.ArgumentParser) -> None:
+    p.add_argument("--coarsen", type=int, metavar="K",
+                   help="merge K x K cells into one, blocked if any of them is (for maps "
+                   "over 512 x 512 cells); --start, --goal and --scenario stay in the "
+                   "original map's cells")
 
 
 def _add_preset_arguments(p: argparse.ArgumentParser) -> None:
@@ -94,7 +102,8 @@ def _apply_scenario(args: argparse.Namespace) -> None:
 
     if args.start is not None or args.goal is not None:
         raise JaxgaError("--scenario gives the start and goal: leave out --start and --goal")
-    grid = load_map_info(args.map).grid  # a missing or malformed map is named first
+    # a missing or malformed map is named first
+    grid = load_map_info(args.map, coarsen=args.coarsen).grid
     path = Path(args.scen) if args.scen is not None else scenario_path(args.map)
     if path is None:
         raise JaxgaError(f"no scenario file for {args.map} (a built-in map's own, or "
@@ -106,7 +115,8 @@ def _apply_scenario(args: argparse.Namespace) -> None:
         raise JaxgaError(f"--scenario {args.scenario}: {path.name} has problems 0 .. "
                          f"{len(problems) - 1}")
     problem = problems[args.scenario]
-    if (problem.width, problem.height) != (grid.width, grid.height):
+    k = args.coarsen or 1
+    if (-(-problem.width // k), -(-problem.height // k)) != (grid.width, grid.height):
         raise JaxgaError(f"{path.name} is for a {problem.width} x {problem.height} map "
                          f"({problem.map_name}), {args.map} is {grid.width} x {grid.height}")
     args.start, args.goal = problem.start, problem.goal
@@ -121,7 +131,8 @@ def _load_grid(args: argparse.Namespace):
 
     if args.corner_rule is not None:
         check_corner_rule(args.corner_rule)
-    info = load_map_info(args.map, start=args.start, goal=args.goal, corner_rule=args.corner_rule)
+    info = load_map_info(args.map, start=args.start, goal=args.goal, corner_rule=args.corner_rule,
+                         coarsen=args.coarsen)
     return info, info.grid.check_endpoints()
 
 
@@ -358,7 +369,7 @@ def cmd_compare(args: argparse.Namespace) -> int:
 
         check_corner_rule(args.corner_rule)
     grid = args.map
-    if args.start is not None or args.goal is not None:
+    if args.start is not None or args.goal is not None or args.coarsen is not None:
         from jaxga.maps import load_map_info
         from jaxga.presets import load_preset
 
@@ -366,7 +377,8 @@ def cmd_compare(args: argparse.Namespace) -> int:
         if rule is None:  # the presets' own rule (with --set), which must be one
             rule = one_corner_rule({p: load_preset(p, sets=args.set or ())["map.corner_rule"]
                                     for p in presets})
-        grid = load_map_info(args.map, start=args.start, goal=args.goal, corner_rule=rule)
+        grid = load_map_info(args.map, start=args.start, goal=args.goal, corner_rule=rule,
+                             coarsen=args.coarsen)
     progress = None if args.quiet else (lambda label: print(f"running {label} ...",
                                                               file=sys.stderr, flush=True))
     comp = compare(presets, grid, seeds=args.seeds, metric=args.metric, test=args.test,
@@ -397,17 +409,19 @@ def _map_for_run(args: argparse.Namespace):
     --corner-rule), as a MapInfo so that the results keep the map's name."""
     from jaxga.maps import load_map_info
 
-    if args.start is None and args.goal is None:
+    if args.start is None and args.goal is None and args.coarsen is None:
         return args.map
     return load_map_info(args.map, start=args.start, goal=args.goal,
-                         corner_rule=args.corner_rule or _preset_rule(args))
+                         corner_rule=args.corner_rule or _preset_rule(args),
+                         coarsen=args.coarsen)
 
 
 def _grid_for_run(args: argparse.Namespace, rule: str):
     """The Grid of the run (endpoints applied) under its corner rule ``rule``."""
     from jaxga.maps import load_map
 
-    return load_map(args.map, start=args.start, goal=args.goal, corner_rule=rule)
+    return load_map(args.map, start=args.start, goal=args.goal, corner_rule=rule,
+                    coarsen=args.coarsen)
 
 
 def _preset_rule(args: argparse.Namespace) -> str:

@@ -557,3 +557,24 @@ def test_scenario_reaches_run_after_the_devices_are_configured(monkeypatch, caps
     assert (info.grid.start_xy, info.grid.goal_xy) == (problem.start, problem.goal)
     assert info.grid.corner_rule == "free"  # the preset's rule, as without --scenario
     capsys.readouterr()
+
+
+def test_a_map_over_the_size_limit_is_one_line_and_coarsen_plans_on_it(tmp_path, capsys):
+    """``--map`` of 600 x 600 cells: refused with one line naming --coarsen; with
+    ``--coarsen 2`` the optimum of the 300 x 300 map (endpoints in the original's cells)."""
+    import numpy as np
+
+    from jaxga.maps import save_map
+
+    b = np.zeros((600, 600), bool)
+    b[100:500, 300] = True
+    path = save_map(b, tmp_path / "big.map")
+    assert main(["optimum", "--map", str(path)]) == EXIT_BAD_INPUT
+    err = capsys.readouterr().err.strip()
+    assert "\n" not in err and "600 x 600 has 360,000 cells" in err and "--coarsen 2" in err
+    out = tmp_path / "opt.json"
+    assert main(["optimum", "--map", str(path), "--coarsen", "2", "--start", "10,300",
+                 "--goal", "590,300", "--json", str(out)]) == 0
+    data = json.loads(out.read_text())
+    assert data["path"][0] == [5, 150] and data["path"][-1] == [295, 150]
+    assert data["length"] > 290  # around the wall, on the coarse map

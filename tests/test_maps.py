@@ -630,3 +630,64 @@ def test_a_ragged_list_is_not_a_grid():
 def test_generated_maps_check_endpoints_like_grids():
     with pytest.raises(EndpointError, match="must be a pair of integers"):
         random_map(10, 10, 0.0, 3, start=(1.5, 0.9))
+
+
+# ------------------------------------------------------------ size limit, coarsening
+def test_a_map_over_the_size_limit_is_refused_from_its_header(tmp_path):
+    """Refused before the body is parsed: a Moving AI header of 2000 x 2000 over one
+    malformed row, a PNG's IHDR, and a 0/1 file's first line and line count, each with
+    one line naming the limit and the way around it (a coarser map)."""
+    from jaxga.grid import MAX_MAP_CELLS
+
+    header = tmp_path / "huge.map"
+    header.write_text("type octile\nheight 2000\nwidth 2000\nmap\n@@@\n")
+    with pytest.raises(MapFormatError) as e:
+        load_map(header)
+    text = str(e.value)
+    assert "\n" not in text and "2000 x 2000 has 4,000,000 cells" in text
+    assert f"{MAX_MAP_CELLS:,}" in text and "--coarsen 4" in text and "coarsen=4" in text
+    side = 600
+    b = np.random.default_rng(0).random((side, side)) < 0.1
+    for ext in ("png", "txt"):
+        path = save_map(b, tmp_path / f"big.{ext}")
+        with pytest.raises(MapFormatError, match=f"map {side} x {side} has 360,000 cells"):
+            load_map(path)
+        coarse = load_map(path, coarsen=2, start=(3, 5), goal=(599, 598))
+        assert coarse.shape == (300, 300)
+        assert coarse.start_xy == (1, 2) and coarse.goal_xy == (299, 299)
+        np.testing.assert_array_equal(coarse.blocked_np(),
+                                      b.reshape(300, 2, 300, 2).any(axis=(1, 3)))
+    with pytest.raises(EndpointError, match=r"goal \(600, 0\) is off the 600 x 600 map"):
+        load_map(tmp_path / "big.txt", coarsen=2, goal=(600, 0))
+    with pytest.raises(JaxgaError, match="more than jaxga plans on"):
+        Grid.create(np.zeros((513, 512), bool))
+    Grid.create(np.zeros((512, 512), bool))  # the limit itself is accepted
+
+
+@settings(max_examples=40, deadline=None)
+@given(hnp.arrays(bool, st.tuples(st.integers(1, 13), st.integers(1, 13))),
+       st.integers(1, 5))
+def test_coarsen_blocks_a_cell_when_any_of_its_cells_is(blocked, k):
+    from jaxga.maps import coarsen_blocked
+
+    got = coarsen_blocked(blocked, k)
+    h, w = blocked.shape
+    assert got.shape == (-(-h // k), -(-w // k))
+    for y in range(got.shape[0]):
+        for x in range(got.shape[1]):
+            assert got[y, x] == blocked[y * k:(y + 1) * k, x * k:(x + 1) * k].any()
+
+
+def test_coarsen_a_grid_and_bad_factors():
+    from jaxga.maps import coarsen
+
+    b = np.zeros((9, 10), bool)
+    b[4, 7] = True
+    g = coarsen(Grid.create(b, start=(1, 1), goal=(9, 8), corner_rule="free"), 3)
+    assert g.shape == (3, 4) and g.start_xy == (0, 0) and g.goal_xy == (3, 2)
+    assert g.corner_rule == "free" and g.blocked_np()[1, 2] and g.blocked_np().sum() == 1
+    for bad in (0, -2, 1.5, True):
+        with pytest.raises((ParameterError, MapFormatError), match="positive integer"):
+            coarsen(g, bad)
+        with pytest.raises((ParameterError, MapFormatError), match="positive integer"):
+            load_map("classic_ga_gapp3_20x20", coarsen=bad)

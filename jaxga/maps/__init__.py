@@ -33,6 +33,8 @@ from jaxga.maps.loaders import (
     save_map,
 )
 from jaxga.maps.preprocess import (
+    coarsen,
+    coarsen_blocked,
     endpoints_connected,
     fill_enclosed,
     inflate,
@@ -52,6 +54,8 @@ __all__ = [
     "builtin_scenario_path",
     "builtin_scenarios",
     "scenario_path",
+    "coarsen",
+    "coarsen_blocked",
     "detect_format",
     "endpoints_connected",
     "fill_enclosed",

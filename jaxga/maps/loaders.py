@@ -38,7 +38,7 @@ from pathlib import Path
 import numpy as np
 
 from jaxga.errors import EndpointError, MapFormatError
-from jaxga.grid import DEFAULT_CORNER_RULE, Grid, check_corner_rule
+from jaxga.grid import DEFAULT_CORNER_RULE, Grid, check_corner_rule, too_large
 
 __all__ = [
     "FORMATS",
@@ -110,6 +110,7 @@ def load_map(
     goal: XY | None = None,
     corner_rule: str | None = None,
     fmt: str | None = None,
+    coarsen: int | None = None,
 ) -> Grid:
     """Load a map file or a built-in map as a :class:`~jaxga.Grid`.
 
@@ -124,13 +125,21 @@ def load_map(
         corner_rule: ``"free"``, ``"no_squeeze"`` or ``"strict"``; default
             :data:`jaxga.grid.DEFAULT_CORNER_RULE` (``"strict"``).
         fmt: force a format from :data:`FORMATS` instead of detecting it.
+        coarsen: merge ``k x k`` cells into one, blocked when any of them is
+            (:func:`jaxga.maps.coarsen_blocked`); ``start`` and ``goal`` (and a file's
+            ``S``/``G``) are given on the original map and move to the coarse cells
+            holding them, ``(x // k, y // k)``. The way to plan on a map of more than
+            :data:`jaxga.grid.MAX_MAP_CELLS` cells.
 
     Raises:
-        MapFormatError: missing, unreadable or malformed file; unknown built-in name.
+        MapFormatError: missing, unreadable or malformed file; unknown built-in name; a
+            map over :data:`jaxga.grid.MAX_MAP_CELLS` cells (after ``coarsen``), refused
+            from the file's header or line count before it is parsed.
         EndpointError: an endpoint off the map. (Blocked endpoints are *not* checked
             here; see :meth:`jaxga.Grid.check_endpoints`.)
     """
-    return load_map_info(source, start=start, goal=goal, corner_rule=corner_rule, fmt=fmt).grid
+    return load_map_info(source, start=start, goal=goal, corner_rule=corner_rule, fmt=fmt,
+                         coarsen=coarsen).grid
 
 
 def load_map_info(
@@ -140,9 +149,11 @@ def load_map_info(
     goal: XY | None = None,
     corner_rule: str | None = None,
     fmt: str | None = None,
+    coarsen: int | None = None,
 ) -> MapInfo:
     """Like :func:`load_map` but return a :class:`MapInfo` (name, path, format, grid)."""
     from jaxga.maps import builtin  # local import: builtin imports this module
+    from jaxga.maps.preprocess import coarsen_blocked
 
     rule = check_corner_rule(DEFAULT_CORNER_RULE if corner_rule is None else corner_rule)
     if fmt is not None and fmt not in FORMATS:
@@ -161,6 +172,13 @@ def load_map_info(
     bare_name = isinstance(source, str) and not is_builtin and Path(source).name == source
     raw = _read_bytes(path, label, builtin_hint=bare_name and not Path(source).suffix)
     kind = fmt or detect_format(path, raw)
+    factor = 1 if coarsen is None else _coarsen_factor(coarsen)
+    size = _declared_size(raw, kind)
+    if size is not None:  # refuse a map too large before parsing it (a second or more)
+        w0, h0 = size
+        message = too_large(-(-w0 // factor), -(-h0 // factor))
+        if message:
+            raise MapFormatError(f"{label}: {message}")
     if kind == "png":
         blocked = _parse_png(path, label)
         file_start = file_goal = None
@@ -177,6 +195,17 @@ def load_map_info(
 
     s = start if start is not None else file_start
     g = goal if goal is not None else file_goal
+    if factor > 1:
+        h0, w0 = blocked.shape
+        for name, xy in (("start", s), ("goal", g)):
+            if xy is not None and not (0 <= xy[0] < w0 and 0 <= xy[1] < h0):
+                raise EndpointError(f"{label}: {name} {tuple(xy)} is off the {w0} x {h0} map")
+        blocked = coarsen_blocked(blocked, factor)
+        s = None if s is None else (s[0] // factor, s[1] // factor)
+        g = None if g is None else (g[0] // factor, g[1] // factor)
+    message = too_large(blocked.shape[1], blocked.shape[0])
+    if message:
+        raise MapFormatError(f"{label}: {message}")
     try:
         grid = Grid.create(blocked, start=s, goal=g, corner_rule=rule)
     except EndpointError as e:
@@ -455,6 +484,37 @@ def _body_lines(text: str, label: str) -> list[tuple[int, str]]:
         gap = next(n for n in range(first, last + 1) if not lines[n - 1])
         raise MapFormatError(f"{label}: line {gap}: blank line inside the map")
     return numbered
+
+
+def _coarsen_factor(value) -> int:
+    if isinstance(value, bool) or not isinstance(value, (int, np.integer)) or value < 1:
+        raise MapFormatError(f"coarsen must be a positive integer, got {value!r}")
+    return int(value)
+
+
+def _declared_size(raw: bytes, kind: str) -> tuple[int, int] | None:
+    """``(width, height)`` of a map file from its header (PNG, Moving AI) or its first
+    line and line count (0/1 text, ASCII art), without parsing it; None if it cannot be
+    told (the parser then reports what is wrong)."""
+    if kind == "png":
+        if raw.startswith(_PNG_MAGIC) and raw[12:16] == b"IHDR" and len(raw) >= 24:
+            return int.from_bytes(raw[16:20], "big"), int.from_bytes(raw[20:24], "big")
+        return None
+    head = raw[:4096].decode("utf-8", errors="replace")
+    if kind == "movingai":
+        dims = {}
+        for line in head.splitlines()[:8]:
+            words = line.split()
+            if len(words) == 2 and words[0].lower() in ("height", "width") \
+                    and words[1].isdigit():
+                dims[words[0].lower()] = int(words[1])
+        return (dims["width"], dims["height"]) if len(dims) == 2 else None
+    first = next((ln.strip() for ln in head.splitlines() if ln.strip()), "")
+    if not first:
+        return None
+    width = len(first.replace(",", " ").split()) if any(c in _SEPARATORS for c in first) \
+        else len(first)
+    return width, sum(1 for line in raw.splitlines() if line.strip())
 
 
 def _check_ragged(rows: list[list[bool]], lineno: int, label: str) -> None:

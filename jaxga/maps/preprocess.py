@@ -23,6 +23,8 @@ from jaxga.errors import ParameterError
 from jaxga.grid import DIRECTIONS, Grid, check_corner_rule
 
 __all__ = [
+    "coarsen",
+    "coarsen_blocked",
     "endpoints_connected",
     "fill_enclosed",
     "inflate",
@@ -163,3 +165,37 @@ def preprocess(grid: Grid, radius: float = 0.0, fill: bool = True) -> Grid:
     ``fill``) :func:`fill_enclosed` (AGACD §2, MPMGA §3)."""
     out = inflate(grid, radius)
     return fill_enclosed(out) if fill else out
+
+
+# ------------------------------------------------------------------------ coarsening
+def coarsen_blocked(blocked: np.ndarray, factor: int) -> np.ndarray:
+    """``bool[ceil(H / k), ceil(W / k)]``: ``k x k`` blocks of cells merged into one cell,
+    blocked when any of its cells is (row 0 = bottom, as the input). A path on the coarse
+    map is a corridor of free cells at least ``k`` wide on the original (with the corner
+    rule ``"strict"``), so a plan on it is safe on the original. A last row or column of
+    blocks that reaches past the map counts only the cells on the map."""
+    if isinstance(factor, bool) or not isinstance(factor, numbers.Integral) or factor < 1:
+        raise ParameterError(f"coarsen factor must be a positive integer, got {factor!r}")
+    b = np.asarray(blocked, dtype=bool)
+    if b.ndim != 2:
+        raise ParameterError(f"a map must be a 2-D array, got shape {b.shape}")
+    k = int(factor)
+    h, w = b.shape
+    hc, wc = -(-h // k), -(-w // k)
+    pad = np.zeros((hc * k, wc * k), dtype=bool)  # cells past the map are not obstacles
+    pad[:h, :w] = b
+    return pad.reshape(hc, k, wc, k).any(axis=(1, 3))
+
+
+def coarsen(grid: Grid, factor: int) -> Grid:
+    """``grid`` with ``factor x factor`` cells merged into one (:func:`coarsen_blocked`);
+    the start and goal move to the coarse cells holding them, ``(x // k, y // k)``. The way
+    to plan on a map over :data:`jaxga.grid.MAX_MAP_CELLS`: load it with
+    ``load_map(..., coarsen=k)`` (``--coarsen K``), which coarsens before building the
+    grid. A coarse endpoint whose block holds an obstacle is blocked:
+    :meth:`jaxga.Grid.check_endpoints` says so."""
+    (sx, sy), (gx, gy) = grid.start_xy, grid.goal_xy
+    coarse = coarsen_blocked(grid.blocked_np(), factor)  # checks the factor
+    k = int(factor)
+    return Grid.create(coarse, start=(sx // k, sy // k), goal=(gx // k, gy // k),
+                       corner_rule=grid.corner_rule)
