@@ -782,7 +782,6 @@ def sweep(
     process raises :class:`jaxga.parallel.ProcessLostError`).
     """
     from jaxga.fitness_reference import fitness_optimum, fitness_weights
-    from jaxga.reference import any_angle_shortest_path, shortest_path
 
     t_start = time.perf_counter()
     if not isinstance(points, Sequence) or isinstance(points, str) \
@@ -797,13 +796,12 @@ def sweep(
                                    generations)
     configs = _point_configs(config, points)
     capacity = _population_capacity(configs, population_capacity)
-    octile = shortest_path(grid)
+    octile, any_angle = _optima(grid)
     if not octile.found:
         seed_arr = _seed_list(seeds, lambda n: _check_memory(
             n * len(configs), NO_PATH_BYTES_PER_RUN, "for their results"))
         return [_no_path_result(c, map_name, grid, seed_arr, build(c, grid)[0], octile.reason,
                                 time.perf_counter() - t_start, capacity) for c in configs]
-    any_angle = any_angle_shortest_path(grid)
     if uses_guide(config):  # the exact distance fields the field initialiser steers by
         grid = with_guide(grid)
     # the capacity is the largest size swept, also when it is below the preset's size
@@ -954,6 +952,33 @@ def _unstarted_results(*, config, configs, points, map_name, grid, seed_arr, alg
             fitness_optimum_reason="" if point_opt[q].found else point_opt[q].reason,
             init_fallback=from_fallback[sl], causes=causes, path_capacity=algo.capacity))
     return results
+
+
+@functools.lru_cache(maxsize=32)
+def _optima_cached(digest: bytes, shape: tuple[int, int], blocked: bytes, start: tuple,
+                   goal: tuple, corner_rule: str):
+    from jaxga.reference import any_angle_shortest_path_np, shortest_path_np
+
+    del digest  # the cache key; the arguments are the data
+    b = np.frombuffer(blocked, dtype=bool).reshape(shape)
+    octile = shortest_path_np(b, start, goal, corner_rule)
+    if not octile.found:
+        return octile, None
+    return octile, any_angle_shortest_path_np(b, start, goal, corner_rule)
+
+
+def _optima(grid: Grid):
+    """``(8-connected optimum, any-angle optimum)`` of the grid's problem (jaxga.reference;
+    the any-angle one None when the goal is unreachable), cached for the last 32
+    problems: comparing presets or repeating runs on one problem computes them once
+    (the any-angle optimum of a long problem on a 256 x 256 map takes seconds)."""
+    import hashlib
+
+    b = np.ascontiguousarray(grid.blocked_np())
+    raw = b.tobytes()
+    key = (b.shape, grid.start_xy, grid.goal_xy, grid.corner_rule)
+    digest = hashlib.blake2b(raw + repr(key).encode(), digest_size=16).digest()
+    return _optima_cached(digest, b.shape, raw, *key[1:])
 
 
 def _population_capacity(configs: Sequence[Config], requested: Any) -> int:

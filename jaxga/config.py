@@ -32,6 +32,7 @@ else:  # pragma: no cover
 INITIALISERS = ("random_walk", "median_insertion", "intermittent_connect",
                 "greedy_random_target", "directional", "field_walk")
 FALLBACKS = ("field_walk", "none")
+REPAIR_FALLBACKS = ("none", "field")
 FITNESSES = ("sga", "imga", "agacd", "mpmga", "iga_zhu", "iga_zhang")
 SELECTIONS = ("roulette", "roulette_elite", "layered_thirds", "stratified", "tournament",
               "none")
@@ -119,6 +120,11 @@ SCHEMA: dict[str, Field] = {
     "init.temperature": Field(float, low=0.0, high=1000.0, dynamic=True,
                               doc="field_walk: preference for short detours, "
                                   "exp(-excess / temperature); 0 = optimal moves only"),
+    "repair.fallback": Field(str, "'field': a repair that does not close (median insertion "
+                             "of the initialisers, the column crossover and the segment "
+                             "mutation; the range mutation's walk) connects down the exact "
+                             "distance field instead of failing ('none': the papers' "
+                             "failure)", choices=REPAIR_FALLBACKS),
     "fitness.method": Field(str, "fitness combiner (SPEC 3)", choices=FITNESSES),
     "fitness.window": Field(bool, "evaluate grid paths on a narrow window when all fit "
                             "(same results; faster where paths stay short, 1-2 s more "
@@ -176,6 +182,7 @@ DEFAULTS: dict[str, Any] = {
     "init.fallback": "field_walk",
     "init.slack": 0.5,
     "init.temperature": 1.0,
+    "repair.fallback": "none",
     "fitness.window": True,
     "selection.tournament_size": 2,
     "crossover.adaptive": False,

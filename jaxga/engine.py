@@ -222,6 +222,9 @@ def unread_keys(config: Config) -> dict[str, str]:
                       "init.fallback = 'field_walk')")
     if config["init.method"] == "field_walk":
         out["init.fallback"] = "init.method = 'field_walk' cannot fail where a path exists"
+    if not field_repairs(config):
+        out["repair.fallback"] = ("no operator of this configuration repairs by median "
+                                  "insertion or a regrowth walk")
     if config["selection.method"] != "tournament":
         out["selection.tournament_size"] = (f"selection.method = "
                                             f"{config['selection.method']!r}, not 'tournament'")
@@ -264,6 +267,7 @@ def unread_keys(config: Config) -> dict[str, str]:
 
 OFF_VALUES: dict[str, Any] = {
     "init.fallback": "none",
+    "repair.fallback": "none",
     "islands.topology": "none", "islands.migrants": 0, "islands.interval": 1,
     "simplify.probability": 0.0, "crossover.adaptive": False, "mutation.adaptive": False,
     "fitness.window": False,
@@ -531,12 +535,14 @@ def _crossover(algo: Algorithm, key, grid, pop, fitness, active, t, params, fit_
     if method == "zhu_mixed":  # Zhu & Pan 4.4: half the pairs one-point, half column
         k_half, key = jax.random.split(key)
         use_a = mu.split_half(k_half, pop.size // 2)
-        lifted = over_pairs_gated(cx.common_point,
-                                  alternative=functools.partial(cx.column, fitness_fn=fit_fn))
+        lifted = over_pairs_gated(cx.common_point, alternative=functools.partial(
+            cx.column, fitness_fn=fit_fn, field_repair=_field_repair(algo)))
         return lifted(key, grid, pop, pc, use_a)
     op = cx.CROSSOVERS[method]
     if method in ("heterologous", "column"):
         op = functools.partial(op, fitness_fn=fit_fn)
+    if method == "column" and _field_repair(algo):
+        op = functools.partial(op, field_repair=True)
     # Dense: at the papers' crossover rates (0.6-0.9) computing every pair and selecting
     # is cheaper than gathering the crossed pairs (same result; RESULTS.md, 2026-11-23).
     # Splicing crossovers run on twice the window when the parents fit it (same result;
@@ -569,16 +575,21 @@ def _mutation(algo: Algorithm, key, grid, pop, fitness, active, t, params, fit_f
         pm = jnp.broadcast_to(params["mutation.probability"], (pop.size,))
     if method == "zhu_mixed":  # Zhu & Pan 4.5: half one-point, half range mutation
         k_half, key = jax.random.split(key)
-        lifted = over_individuals_gated(mu.one_point, alternative=mu.range_mutation)
+        rng = (functools.partial(mu.range_mutation, field_repair=True) if _field_repair(algo)
+               else mu.range_mutation)
+        lifted = over_individuals_gated(mu.one_point, alternative=rng)
         return lifted(key, grid, pop, pm, mu.split_half(k_half, pop.size))
     if method == "segment_sa":
         temperature = schedules.mpmga_temperature(
             params["mutation.temperature_c1"], algo.get("mutation.temperature_w"))(t)
-        op = functools.partial(mu.segment_sa, temperature=temperature, fitness_fn=fit_fn)
+        op = functools.partial(mu.segment_sa, temperature=temperature, fitness_fn=fit_fn,
+                               field_repair=_field_repair(algo))
     elif method == "point_checked":
         op = functools.partial(mu.point_checked, radius=int(algo.get("mutation.radius", 2)))
     else:
         op = MUTATIONS[method]
+        if method == "range" and _field_repair(algo):
+            op = functools.partial(op, field_repair=True)
     return over_individuals_gated(op)(key, grid, pop, pm)
 
 
@@ -638,8 +649,27 @@ def _best_of(state_islands: IslandState) -> tuple:
 def uses_guide(config: Config) -> bool:
     """Whether a run of ``config`` steers by the problem's exact distance fields (its grid
     needs :func:`jaxga.guide.with_guide`): the field initialiser, as ``init.method`` or as
-    the fallback of another initialiser."""
-    return config["init.method"] == "field_walk" or config["init.fallback"] != "none"
+    the fallback of another initialiser, and the field repairs (``repair.fallback``)."""
+    return (config["init.method"] == "field_walk" or config["init.fallback"] != "none"
+            or (config["repair.fallback"] != "none" and field_repairs(config)))
+
+
+FIELD_REPAIRED = {
+    "init.method": ("median_insertion", "intermittent_connect"),
+    "crossover.method": ("column", "zhu_mixed"),
+    "mutation.method": ("range", "segment_sa", "zhu_mixed"),
+}
+"""The operators whose repair ``repair.fallback = "field"`` changes (their
+``field_repair`` option)."""
+
+
+def field_repairs(config: Config) -> bool:
+    """Whether ``repair.fallback = "field"`` changes an operator of ``config``."""
+    return any(config[k] in names for k, names in FIELD_REPAIRED.items())
+
+
+def _field_repair(algo: Algorithm) -> bool:
+    return algo.get("repair.fallback") == "field"
 
 
 def _field_walk(params: dict) -> Callable:
@@ -658,6 +688,8 @@ def init_state(algo: Algorithm, key: jax.Array, grid: Grid, params: dict) -> tup
     """
     method = algo.get("init.method")
     init_fn = _field_walk(params) if method == "field_walk" else get_initialiser(method)
+    if _field_repair(algo) and method in FIELD_REPAIRED["init.method"]:
+        init_fn = functools.partial(init_fn, field_repair=True)
     fallback = None
     if algo.get("init.fallback") == "field_walk" and method != "field_walk":
         fallback = _field_walk(params)

@@ -94,6 +94,7 @@ __all__ = [
     "initialise_population",
     "field_descent",
     "field_path",
+    "field_reconnect",
     "field_walk",
     "intermittent_anchors",
     "intermittent_connect",
@@ -471,7 +472,8 @@ def median_insertion(
     capacity: int,
     work_capacity: int | None = None,
     max_rounds: int = 64,
-    queue: int = 16,
+    queue: int | None = None,
+    field_repair: bool = False,
 ) -> tuple[jax.Array, jax.Array, jax.Array]:
     """IMGA's heuristic median insertion (Li, Hu, Liu 2021, section 4.1, eq. 2-3).
 
@@ -490,9 +492,16 @@ def median_insertion(
     connection fails after ``max_rounds`` rounds of parallel insertion (64; on
     ``classic_ga_gapp3_20x20`` the success rate is 32 % with 64 rounds and with 1000,
     and 34 % for a sequential NumPy transcription of the paper with a 2000-node cap),
-    with more than ``queue`` gaps open at once (16 never binds for ``S - N - G`` there),
-    or when the connected path, loops included, outgrows ``work_capacity`` (default
+    with more than ``queue`` gaps open at once (default 16 on maps up to 20 cells a side,
+    where it never binds for ``S - N - G``, the value the paper reproductions ran with;
+    ``max(H, W)`` on larger maps, the most gaps two gaps of that span can open), or when
+    the connected path, loops included, outgrows ``work_capacity`` (default
     ``capacity``). After loop removal the path must fit ``capacity``.
+
+    ``field_repair`` (static; jaxga's extension, ``repair.fallback = "field"``): a
+    connection that does not close is replaced by the path ``S -> N -> G`` down the
+    exact distance fields (:func:`field_path`, optimal moves through the same ``N``), so
+    the only failure left is a path that does not fit the capacity. Needs ``grid.guide``.
     """
     capacity = _check_capacity(capacity)
     if capacity < 2:
@@ -507,11 +516,24 @@ def median_insertion(
     if capacity < 3:
         anchors = jnp.stack([grid.start, grid.goal]).astype(_I32)
     work = capacity if work_capacity is None else max(int(work_capacity), capacity)
+    if queue is None:
+        queue = 16 if max(grid.shape) <= 20 else max(grid.shape)
     cells, length, ok = connect(
         k_conn, grid, anchors, anchors.shape[0], work, max_rounds=max_rounds, queue=queue
     )
     cells, length = remove_loops(cells, length, n)
-    return _fit(cells, length, ok, capacity)
+    cells, length, ok = _fit(cells, length, ok, capacity)
+    if field_repair:
+        return _repaired(k_conn, grid, mid, capacity, (cells, length, ok))
+    return cells, length, ok
+
+
+def _repaired(key, grid, via, capacity, result):
+    """``result`` if ok, else the optimal path through ``via`` down the fields."""
+    cells, length, ok = result
+    f_cells, f_len, f_ok = field_path(jax.random.fold_in(key, 7), grid, via, capacity,
+                                      0.0, 0.0)
+    return (jnp.where(ok, cells, f_cells), jnp.where(ok, length, f_len), ok | f_ok)
 
 
 def intermittent_anchors(
@@ -579,6 +601,7 @@ def intermittent_connect(
     work_capacity: int | None = None,
     max_rounds: int = 64,
     queue: int | None = None,
+    field_repair: bool = False,
 ) -> tuple[jax.Array, jax.Array, jax.Array]:
     """MPMGA's barrier-free intermittent path, connected and loop-deleted (Hao et al. 2020 4.2).
 
@@ -607,6 +630,10 @@ def intermittent_connect(
     ``work_capacity`` cells fails. Measured on ``classic_ga_gapp3_20x20``
     (capacity 160): 16-17 % success, against 19 % for a sequential NumPy transcription of
     the paper with a 2000-node cap and 8.5 % with ``work_capacity = capacity``.
+
+    ``field_repair`` (static; ``repair.fallback = "field"``): a connection that does not
+    close is replaced by the optimal path through the middle anchor down the exact
+    distance fields (:func:`field_path`); needs ``grid.guide``.
     """
     capacity = _check_capacity(capacity)
     h, w = grid.shape
@@ -624,7 +651,10 @@ def intermittent_connect(
     )
     ok &= fits
     cells, length = remove_loops(cells, length, grid.n_cells)
-    return _fit(cells, length, ok, capacity)
+    result = _fit(cells, length, ok, capacity)
+    if field_repair:
+        return _repaired(key, grid, anchors[n_anchors // 2], capacity, result)
+    return result
 
 
 def greedy_walk(
@@ -879,8 +909,9 @@ def field_path(
     ``budget`` the detour through ``via`` leaves (``budget`` minus
     ``from_start[via] + to_goal[via] - optimum``) is split evenly between the two walks.
 
-    It fails only when ``via`` is not connected to both endpoints or the path does not
-    fit ``capacity``. With ``via`` on a shortest path and ``budget`` 0 it is an optimal
+    A ``via`` that the start cannot reach (a cell of another region) is replaced by the
+    start itself. So it fails only when the goal is unreachable or the path does not fit
+    ``capacity``. With ``via`` on a shortest path and ``budget`` 0 it is an optimal
     8-connected path. Used by :func:`field_walk` and to connect a failed median
     insertion through its own middle cell (:func:`median_insertion`).
 
@@ -892,6 +923,7 @@ def field_path(
     guide = _require_guide(grid, "field_path")
     n = grid.n_cells
     via = jnp.clip(jnp.asarray(via, _I32), 0, n - 1)
+    via = jnp.where(jnp.isfinite(guide.from_start[via]), via, grid.start)
     optimum = guide.to_goal[grid.start]
     detour = guide.from_start[via] + guide.to_goal[via] - optimum
     half = jnp.maximum(jnp.asarray(budget, _F32) - detour, 0.0) / 2
@@ -908,6 +940,49 @@ def field_path(
     joined = jnp.where(j < length[0], first, second)
     joined, total = remove_loops(pad(joined, total), total, n)
     return _fit(joined, total, ok[0] & ok[1], capacity)
+
+
+def field_reconnect(
+    key: jax.Array,
+    grid: Grid,
+    cells: jax.Array,
+    length: jax.Array,
+    i: jax.Array,
+    j: jax.Array,
+    temperature: float | jax.Array = 0.0,
+) -> tuple[jax.Array, jax.Array, jax.Array]:
+    """Reconnect a path through the goal's distance field where a repair failed.
+
+    The repair of an operator (median insertion between positions ``i`` and ``j``, a
+    regrowth walk) did not close the gap ``cells[i] -> cells[j]``. Instead of failing:
+    walk down the goal's field from ``cells[i]`` (:func:`field_descent`, optimal moves
+    only, ties broken at random; ``temperature`` > 0 has no effect with no budget) until
+    the walk meets the path again at a position ``>= j`` (at the latest at the goal, the
+    path's last cell), and splice ``cells[:i + 1] + walk + cells[k:]`` with its loops
+    removed (:func:`jaxga.repair.splice_loop_free`). The walk cannot dead-end, so the
+    result is a valid path whenever it fits the capacity: the only failure.
+
+    Returns ``(cells int32[L], length, ok)``; ``ok`` False = the result exceeds ``L``
+    (the cells are then meaningless). Needs ``grid.guide``.
+    """
+    from jaxga.paths import position_lookup
+    from jaxga.repair import splice_loop_free
+
+    guide = _require_guide(grid, "field_reconnect")
+    cells = jnp.asarray(cells, _I32)
+    length = jnp.asarray(length, _I32)
+    cap = cells.shape[0]
+    i, j = jnp.asarray(i, _I32), jnp.asarray(j, _I32)
+    walk, walk_len, reached = _descent(key, grid, guide.to_goal, jnp.int32(0), cells[i], cap,
+                                       0.0, temperature)
+    pos = position_lookup(cells, length, grid.n_cells)(walk)
+    t = jnp.arange(cap, dtype=_I32)
+    meets = (t >= 1) & (t < walk_len) & (pos >= j)
+    k = jnp.argmax(meets).astype(_I32)  # the goal (the path's last cell) always meets
+    seg = jnp.roll(walk, -1)  # walk[1 : k] as a segment
+    new, new_len, fits = splice_loop_free(cells, length, i + 1, seg, k - 1, pos[k],
+                                          grid.n_cells)
+    return new, new_len, fits & reached & jnp.any(meets)
 
 
 def _via_candidates(grid: Grid, budget: jax.Array) -> tuple[jax.Array, jax.Array]:

@@ -47,7 +47,7 @@ import numpy as np
 from jaxga.batching import keep_parent_on_failure, over_individuals_gated
 from jaxga.errors import ParameterError
 from jaxga.grid import DIRECTIONS, Grid, blocked_at, move_legal
-from jaxga.init import directional_walk
+from jaxga.init import directional_walk, field_reconnect
 from jaxga.postprocess import compact, line_of_sight
 from jaxga.repair import concat, connect, splice_loop_free
 
@@ -213,6 +213,7 @@ def range_mutation(
     length: jax.Array,
     *,
     factors: tuple[float, float] = (3.0, 2.0),
+    field_repair: bool = False,
 ) -> tuple[jax.Array, jax.Array, jax.Array]:
     """Zhu & Pan's range mutation (section 4.5, Fig. 7); SPEC 7 ``range``.
 
@@ -229,6 +230,11 @@ def range_mutation(
     loop removal (Zhu's chromosomes "do not allow duplicate grid numbers"); the walk's
     step cap is the capacity. ``failed`` when the path has fewer than 3 nodes, the walk
     hits a dead end or its step cap, or the spliced path exceeds the capacity.
+
+    ``field_repair`` (static; jaxga's extension, ``repair.fallback = "field"``): a walk
+    that dead-ends is replaced by the walk down the goal's exact distance field from
+    ``p_i`` (:func:`jaxga.init.field_reconnect`), which cannot dead-end; needs
+    ``grid.guide``.
     """
     cells = jnp.asarray(cells, _I32)
     length = jnp.asarray(length, _I32)
@@ -242,7 +248,19 @@ def range_mutation(
         k_walk, grid, cells[i], cells[j], cap, exclude=exclude, factors=factors
     )
     new, new_len, fits = concat([(cells, 0, i), (seg, 0, seg_len), (cells, j + 1, length)], cap)
-    return _finish(has_seg & reached & fits, new, new_len, cells, length)
+    ok = has_seg & reached & fits
+    if field_repair:
+        new, new_len, ok = _field_repaired(k_walk, grid, cells, length, i, j, has_seg,
+                                           (new, new_len, ok))
+    return _finish(ok, new, new_len, cells, length)
+
+
+def _field_repaired(key, grid, cells, length, i, j, has_seg, result):
+    """``result`` where ok, else the path reconnected down the goal's field from
+    position ``i`` (:func:`jaxga.init.field_reconnect`)."""
+    new, new_len, ok = result
+    f_c, f_n, f_ok = field_reconnect(jax.random.fold_in(key, 7), grid, cells, length, i, j)
+    return (jnp.where(ok, new, f_c), jnp.where(ok, new_len, f_n), ok | (has_seg & f_ok))
 
 
 # ------------------------------------------------------------------ MPMGA segment
@@ -257,6 +275,7 @@ def segment_sa(
     seg_capacity: int | None = None,
     max_rounds: int = 32,
     queue: int | None = None,
+    field_repair: bool = False,
 ) -> tuple[jax.Array, jax.Array, jax.Array]:
     """MPMGA's single-gene-segment mutation with simulated-annealing acceptance (4.6).
 
@@ -300,6 +319,11 @@ def segment_sa(
     3 nodes, the connection does not close (or needs more than ``seg_capacity`` nodes),
     or the result exceeds the capacity ``L`` (checked after loop removal, in a work
     buffer of ``L + seg_capacity`` cells). A rejected mutant is NOT a failure.
+
+    ``field_repair`` (static; jaxga's extension, ``repair.fallback = "field"``): a
+    connection that does not close is replaced by the walk down the goal's exact
+    distance field from ``p_i`` (:func:`jaxga.init.field_reconnect`); the mutant is then
+    accepted or rejected as any other. Needs ``grid.guide``.
     """
     cells = jnp.asarray(cells, _I32)
     length = jnp.asarray(length, _I32)
@@ -313,6 +337,9 @@ def segment_sa(
     )
     new, new_len, fits = splice_loop_free(cells, length, i, seg, seg_len, j + 1, grid.n_cells)
     ok = has_seg & closed & fits
+    if field_repair:
+        new, new_len, ok = _field_repaired(k_conn, grid, cells, length, i, j, has_seg,
+                                           (new, new_len, ok))
     f_old = jnp.asarray(fitness_fn(grid, cells, length), jnp.float32)
     f_new = jnp.asarray(fitness_fn(grid, new, new_len), jnp.float32)
     t = jnp.maximum(jnp.asarray(temperature, jnp.float32), jnp.finfo(jnp.float32).tiny)

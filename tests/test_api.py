@@ -944,3 +944,21 @@ def test_a_map_info_keeps_the_map_name_with_its_endpoints(grid):
     assert named.map_name == "ten" and named.to_json()["map"] == "ten"
     assert plain.map_name == "grid" and "on ten (corner rule 'free')" in named.summary()
     assert np.array_equal(named.cells, plain.cells)
+
+
+def test_the_field_repair_reaches_the_operators_that_repair(grid):
+    """``repair.fallback = "field"`` in iga_zhu (column crossover, range mutation): the
+    same runs fail fewer crossovers and mutations, every path stays feasible; in sga
+    (no such operator) the key is refused as having no effect."""
+    from jaxga.maps import rooms_map
+
+    rooms = rooms_map(12, 12, 1, room_size=3, corner_rule="free")
+    kw = dict(population__size=8, generations=6)
+    plain = api.run("iga_zhu", rooms, seeds=3, **kw)
+    repaired = api.run("iga_zhu", rooms, seeds=3, repair__fallback="field", **kw)
+    assert repaired.success.all()
+    # crossovers: none fails; mutations: only Zhu's one-point ones (no candidate cell)
+    assert plain.failures[:, 0].sum() > 0 and repaired.failures[:, 0].sum() == 0
+    assert repaired.failures[:, 1].sum() < plain.failures[:, 1].sum()
+    with pytest.raises(ParameterError, match="repair.fallback has no effect in 'sga'"):
+        api.run("sga", grid, seeds=1, repair__fallback="field", **SMALL)
