@@ -2,6 +2,7 @@
 
     python benchmarks/hybrid_tuning.py --stage operators [--seeds 8]
     python benchmarks/hybrid_tuning.py --stage doe [--seeds 8]
+    python benchmarks/hybrid_tuning.py --stage refine [--seeds 8]
 
 Tuned on the shared Moving AI maps (``../shared/benchmarks/movingai``, corner rule
 "strict"), never on the test maps. Problems: for each of the nine maps, its scenario of
@@ -20,6 +21,9 @@ promises, and the seconds per run (initialisation + evolution + post-optimisatio
   length; the table gives each design point's mean gap over all problems and the main
   effect of each factor level (mean gap over the points at that level), from which the
   preset's levels are read.
+* ``--stage refine``: the L18's best levels of init.slack and init.temperature were its
+  lowest; a full 3 x 3 factorial below them (the other factors at their best levels)
+  says whether lower still is better.
 
 Prints the tables and appends them to RESULTS.md.
 """
@@ -67,6 +71,10 @@ VARIANTS = {  # one static choice changed at a time
     "generations 20": {"generations": 20},
     "generations 80": {"generations": 80},
 }
+DOE_BASE = {**BASE, "generations": 20}
+"""The design's fixed part: the base with 20 generations (the operator screen: 20, 40 and
+80 generations gave the same gaps; every other operator of the base was at least as good
+as its alternatives)."""
 FACTORS = (
     Factor("init.slack", (0.1, 0.3, 0.6)),
     Factor("init.temperature", (0.25, 1.0, 4.0)),
@@ -123,12 +131,20 @@ def stage_operators(seeds: int) -> str:
                               "s/run"], rows))
 
 
-def stage_doe(seeds: int) -> str:
-    config = load_preset("sga").override(BASE)
+REFINE_BASE = {**DOE_BASE, "crossover.probability": 0.9, "mutation.probability": 0.3,
+               "simplify.probability": 0.2, "population.size": 80}
+"""The L18's best levels of the other factors."""
+REFINE_FACTORS = (Factor("init.slack", (0.0, 0.05, 0.1)),
+                  Factor("init.temperature", (0.0, 0.1, 0.25)))
+
+
+def stage_doe(seeds: int, refine: bool = False) -> str:
+    config = load_preset("sga").override(REFINE_BASE if refine else DOE_BASE)
+    factors, design = (REFINE_FACTORS, "full") if refine else (FACTORS, "L18")
     gaps = []
     for label, info in problems("both"):
         t0 = time.perf_counter()
-        d = run_doe(config, info, FACTORS, "L18", seeds=seeds, response="length",
+        d = run_doe(config, info, factors, design, seeds=seeds, response="length",
                     direction="min")
         opt = any_angle_shortest_path(info.grid).length
         gaps.append(np.nanmean(d.all_responses["length"], axis=1) / opt - 1)
@@ -139,23 +155,35 @@ def stage_doe(seeds: int) -> str:
     rows = [[q + 1, *[int(c) for c in coded[q]], f"{100 * gap[q]:.3f}"]
             for q in range(len(gap))]
     effects = []
-    for k, f in enumerate(FACTORS):
+    for k, f in enumerate(factors):
         means = [100 * gap[coded[:, k] == level].mean() for level in (-1, 0, 1)]
         best = int(np.argmin(means))
         effects.append([f.name, *[f"{m:.3f}" for m in means], f"{f.levels[best]}"])
+    if refine:
+        shown = ("crossover.probability", "mutation.probability", "simplify.probability",
+                 "population.size", "generations")
+        fixed = ", ".join(f"{k} = {REFINE_BASE[k]}" for k in shown)
+        return (f"Full 3 x 3 factorial of init.slack and init.temperature below the L18's "
+                f"lowest levels, the other factors at the L18's best levels "
+                f"({fixed}), "
+                f"on the same {len(gaps)} problems, {seeds} seeds per point.\n\n"
+                + markdown_table(["point", *[f.name for f in factors], "mean gap %"], rows)
+                + "\n\nMain effects:\n\n"
+                + markdown_table(["factor", "low", "mid", "high", "best level"], effects))
     return (f"L18 design of the dynamic parameters, on the median-length and the longest "
             f"scenario of each of the 9 Moving AI maps ({len(gaps)} problems), {seeds} "
-            "seeds per point, the operators of the base (see the operator screen). "
+            "seeds per point, the operators of the base with 20 generations (the operator "
+            "screen). "
             "Response: post-optimised length; gap % = mean over seeds and problems of "
             "length / any-angle optimum - 1.\n\n"
-            + markdown_table(["point", *[f.name for f in FACTORS], "mean gap %"], rows)
+            + markdown_table(["point", *[f.name for f in factors], "mean gap %"], rows)
             + "\n\nMain effects (mean gap % of the points at each level):\n\n"
             + markdown_table(["factor", "low", "mid", "high", "best level"], effects))
 
 
 def main() -> None:
     ap = argparse.ArgumentParser(description=__doc__)
-    ap.add_argument("--stage", choices=("operators", "doe"), required=True)
+    ap.add_argument("--stage", choices=("operators", "doe", "refine"), required=True)
     ap.add_argument("--seeds", type=int, default=8)
     ap.add_argument("--no-write", action="store_true")
     args = ap.parse_args()
@@ -163,9 +191,12 @@ def main() -> None:
     if args.stage == "operators":
         body = stage_operators(args.seeds)
         title = "hybrid tuning: operator screen on the Moving AI maps"
-    else:
+    elif args.stage == "doe":
         body = stage_doe(args.seeds)
         title = "hybrid tuning: L18 design of the dynamic parameters on the Moving AI maps"
+    else:
+        body = stage_doe(args.seeds, refine=True)
+        title = "hybrid tuning: init.slack and init.temperature below the L18's levels"
     body += f"\n\nWall time: {time.perf_counter() - t0:.0f} s."
     print(body)
     append(title, body, write=not args.no_write)

@@ -235,9 +235,16 @@ def _self_avoiding_walk(
     target = jnp.asarray(target, _I32)
     n = grid.n_cells
     nbr_t, legal_t = _move_tables(grid)
-    visited = exclusion_mask(grid, exclude)
-    visited = visited.at[jnp.clip(target, 0, n - 1)].set(False)
-    visited = visited.at[jnp.clip(source, 0, n - 1)].set(True)
+    use_table = n <= VISITED_TABLE_CELLS_PER_NODE * capacity
+    if use_table:  # the walk's visited set: one bool per cell of the map
+        visited = exclusion_mask(grid, exclude)
+        visited = visited.at[jnp.clip(target, 0, n - 1)].set(False)
+        visited = visited.at[jnp.clip(source, 0, n - 1)].set(True)
+        seen = None
+    else:  # a large map: a set of at most `capacity` cells, and the excluded cells
+        seen = _excluded_cells(grid, exclude, target)
+        visited = (_hash_add(_hash_empty(capacity), jnp.clip(source, 0, n - 1))[0],
+                   jnp.bool_(False))
     source_free = ~grid.blocked.reshape(-1)[jnp.clip(source, 0, n - 1)]
     on_map = (source >= 0) & (source < n) & (target >= 0) & (target < n)
     done0 = (source == target) | ~on_map | ~source_free
@@ -255,7 +262,10 @@ def _self_avoiding_walk(
         k = cur * 8 + lanes
         nbr = nbr_t[k]
         legal = legal_t[k]
-        cand = legal & ~visited[nbr]
+        if use_table:
+            cand = legal & ~visited[nbr]
+        else:
+            cand = legal & ~_hash_seen(visited[0], nbr) & ~seen(nbr)
         if directional:
             score = jnp.where(cand, _directional_scores(grid, cur, nbr, target, factors), 0.0)
         else:
@@ -288,7 +298,11 @@ def _self_avoiding_walk(
         # loop runs unmasked (below), so this step is applied to finished walks too.
         move = ~done & (t < steps) & ~dead
         new = jnp.where(move, nxt, cur)
-        visited = visited.at[new].set(True)
+        if use_table:
+            visited = visited.at[new].set(True)
+        else:
+            table, kept = _hash_add(visited[0], new)
+            visited = (table, visited[1] | ~kept)
         reached = move & (new == target)
         buf = buf.at[n_moves + 1].set(new, mode="drop")  # past n_moves: scratch
         return (t + 1, new, visited, done | dead | reached, ok | reached,
@@ -302,11 +316,79 @@ def _self_avoiding_walk(
     # Unmasked: a finished walk's step changes only t, done and the scratch entry past
     # n_moves, none of which is read below (with the masked loop, the per-step select of
     # the visited table and the buffer made a 50 x 50 initialisation 2x slower).
-    _, cur, _, _, ok, n_moves, buf = lane_while_loop(cond, step, carry0, masked=False)
+    _, cur, visited, _, ok, n_moves, buf = lane_while_loop(cond, step, carry0, masked=False)
+    if not use_table:
+        ok &= ~visited[1]  # a full probe window: the walk may have crossed itself
     # Past its last move a walk stays on its final cell.
     cells = jnp.where(jnp.arange(capacity, dtype=_I32) <= n_moves, buf, cur)
     length = 1 + n_moves
     return cells, length, ok
+
+
+VISITED_TABLE_CELLS_PER_NODE = 16
+"""A self-avoiding walk keeps its visited set as one bool per map cell while the map has
+at most this many cells per node of the walk's capacity (every classic and 32 x 32 map);
+on larger maps as a hash set of the walk's own cells (:func:`_hash_add`) and a sorted
+list of the excluded ones, so that its memory and time grow with the capacity, not with
+the map (a range mutation on a 256 x 256 map held 64 kB per walk)."""
+
+_HASH_PROBES = 16
+_HASH_MULT = np.uint32(0x9E3779B1)
+
+
+def _hash_empty(capacity: int) -> jax.Array:
+    """An empty set of at most ``capacity`` cells: ``int32[M]`` slots holding ``cell + 1``
+    (0 = empty), ``M`` the power of two >= 8 capacity (a load of at most 1/8)."""
+    return jnp.zeros((1 << max(4, (8 * capacity - 1).bit_length()),), _I32)
+
+
+def _hash_probe(table: jax.Array, cells: jax.Array) -> jax.Array:
+    """The ``_HASH_PROBES`` slots a cell may occupy (Fibonacci hashing, linear probing)."""
+    bits = int(table.shape[0]).bit_length() - 1
+    home = (cells.astype(jnp.uint32) * _HASH_MULT) >> jnp.uint32(32 - bits)
+    return ((home.astype(_I32)[..., None] + jnp.arange(_HASH_PROBES, dtype=_I32))
+            & (table.shape[0] - 1))
+
+
+def _hash_seen(table: jax.Array, cells: jax.Array) -> jax.Array:
+    """Whether each of ``cells`` is in the set (exact: a cell is always stored within its
+    probe window, or its insertion was reported lost)."""
+    return jnp.any(table[_hash_probe(table, cells)] == cells[..., None] + 1, axis=-1)
+
+
+def _hash_add(table: jax.Array, cell: jax.Array) -> tuple[jax.Array, jax.Array]:
+    """``(table with cell, kept)``: ``kept`` False when its probe window of 16 slots is
+    full (at a load of at most 1/8 a negligible event; the walk then reports failure)."""
+    slots = _hash_probe(table, cell)
+    held = table[slots]
+    present = jnp.any(held == cell + 1)
+    empty = held == 0
+    write = ~present & jnp.any(empty)
+    table = table.at[jnp.where(write, slots[jnp.argmax(empty)], table.shape[0])].set(
+        cell + 1, mode="drop")
+    return table, present | write
+
+
+def _excluded_cells(grid: Grid, exclude, target) -> Callable[[jax.Array], jax.Array]:
+    """``excluded(cells) -> bool``: membership in ``exclude`` (see :func:`exclusion_mask`)
+    without a map-sized table for a list of cells (a sorted copy and binary search); the
+    target is never excluded."""
+    n = grid.n_cells
+    target = jnp.asarray(target, _I32)
+    if exclude is None:
+        return lambda cells: jnp.zeros(cells.shape, bool)
+    exclude = jnp.asarray(exclude)
+    if exclude.dtype == jnp.bool_:
+        mask = exclusion_mask(grid, exclude)
+        return lambda cells: mask[jnp.clip(cells, 0, n - 1)] & (cells != target)
+    listed = jnp.sort(jnp.where((exclude >= 0) & (exclude < n), exclude, n).reshape(-1)
+                      .astype(_I32))
+
+    def excluded(cells):
+        k = jnp.clip(jnp.searchsorted(listed, cells), 0, listed.shape[0] - 1)
+        return (listed[k] == cells) & (cells != target)
+
+    return excluded
 
 
 def uniform_walk(

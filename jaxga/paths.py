@@ -227,7 +227,7 @@ def is_loop_free(cells: jax.Array, length: jax.Array, n_cells: int | None = None
     cells = jnp.asarray(cells, jnp.int32)
     n = cells.shape[0]
     i = jnp.arange(n, dtype=jnp.int32)
-    if n_cells is not None and n_cells <= TABLE_MAX_CELLS:
+    if _use_table(n_cells, n):
         on_map = (cells >= 0) & (cells < n_cells)
         last = last_occurrence(cells, length, n_cells)
         return jnp.all((i >= length) | (on_map & (last == i)))
@@ -239,7 +239,20 @@ def is_loop_free(cells: jax.Array, length: jax.Array, n_cells: int | None = None
 
 # ------------------------------------------------------------------ loop removal
 TABLE_MAX_CELLS = 16384
-"""Maps with at most this many cells use a scatter table for :func:`last_occurrence`."""
+"""Maps with at most this many cells use a scatter table for :func:`last_occurrence`
+(and :func:`position_lookup`, :func:`is_loop_free`), if they also have at most
+:data:`TABLE_CELLS_PER_NODE` cells per node of the path."""
+
+TABLE_CELLS_PER_NODE = 16
+"""A table of the map's cells per path is used only while it is at most this many times
+the path's capacity: on larger maps (64 x 64 with paths of 160 cells) a sort of the path,
+so that the memory and time per path grow with the path, not with the map. Both give the
+same answers."""
+
+
+def _use_table(n_cells: int | None, capacity: int) -> bool:
+    return n_cells is not None and n_cells <= min(TABLE_MAX_CELLS,
+                                                  TABLE_CELLS_PER_NODE * capacity)
 
 CHUNKED_LOOKUP_CELLS = 1024
 """Maps with more cells read their position tables (:func:`position_lookup`,
@@ -264,7 +277,7 @@ def last_occurrence(
     n = cells.shape[0]
     i = jnp.arange(n, dtype=jnp.int32)
     valid = i < length
-    if n_cells is not None and n_cells <= TABLE_MAX_CELLS:
+    if _use_table(n_cells, n):
         look = position_lookup(cells, length, n_cells)
         return jnp.where(valid, look(jnp.clip(cells, 0, n_cells - 1)), i)
     key = jnp.where(valid, cells, -1 - i)
@@ -280,14 +293,15 @@ def position_lookup(
 ) -> Callable:
     """``look(q)``: the last valid position of cell ``q`` in the path, or -1 (any shape).
 
-    A scatter table of ``n_cells`` entries on maps up to :data:`TABLE_MAX_CELLS` cells,
-    a sort and binary search otherwise (also without ``n_cells``). Used by the crossovers
+    A scatter table of ``n_cells`` entries on maps up to :data:`TABLE_MAX_CELLS` cells
+    and :data:`TABLE_CELLS_PER_NODE` cells per node of the path, a sort and binary search
+    otherwise (also without ``n_cells``). Used by the crossovers
     (where one parent's cells are in the other) and :func:`jaxga.repair.splice_loop_free`.
     """
     n = cells.shape[0]
     i = jnp.arange(n, dtype=jnp.int32)
     valid = i < length
-    if n_cells is not None and n_cells <= TABLE_MAX_CELLS:
+    if _use_table(n_cells, n):
         keys = jnp.where(valid, cells, n_cells)
         if n_cells > CHUNKED_LOOKUP_CELLS:
             return lambda q: table_lookup(keys, q, n_cells)

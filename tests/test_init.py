@@ -535,3 +535,34 @@ def test_x64_mode_keeps_int32():
                          text=True, timeout=300,
                          cwd=os.path.dirname(os.path.dirname(os.path.abspath(__file__))))
     assert res.returncode == 0 and "ok" in res.stdout, res.stderr[-2000:]
+
+
+@pytest.mark.parametrize("walk", ["uniform_walk", "directional_walk"])
+def test_large_map_walks_keep_a_capacity_sized_visited_set_with_the_same_paths(
+        walk, monkeypatch):
+    """On a map of more than 16 cells per node of capacity the walks keep their visited
+    set as a hash set of their own cells and a sorted list of the excluded ones: the same
+    key gives the same walk as with the map-sized table (forced here), exclusions
+    included."""
+    grid = random_map(48, 48, 0.25, seed=2)
+    free = np.flatnonzero(~grid.blocked_np().reshape(-1))
+    src = int(free[len(free) // 2])
+    near = [c for c in free if max(abs(c % 48 - src % 48), abs(c // 48 - src // 48)) == 6]
+    dst = int(near[0])
+    cap = 128  # 48 * 48 > 16 * 128: the hash set
+    rng = np.random.default_rng(0)
+    excl = np.full(cap, -1, np.int32)
+    excl[:40] = rng.choice(free, 40)
+    keys = jax.random.split(jax.random.PRNGKey(11), 64)
+
+    def walks():
+        return jax.jit(jax.vmap(lambda k: getattr(I, walk)(k, grid, src, dst, cap,
+                                                           jnp.asarray(excl))))(keys)
+
+    hashed = walks()
+    monkeypatch.setattr(I, "VISITED_TABLE_CELLS_PER_NODE", 10**9)
+    table = walks()
+    for a, b in zip(hashed, table):
+        np.testing.assert_array_equal(np.asarray(a), np.asarray(b))
+    assert np.asarray(hashed[2]).any()
+    check_paths(grid, *hashed, source=src, target=dst, exclude=excl[excl >= 0], cap=cap)

@@ -23,8 +23,10 @@ else:  # pragma: no cover
     import tomli as tomllib
 
 ROOT = Path(__file__).resolve().parent.parent
-PRESETS = ("agacd", "iga_zhang", "iga_zhu", "imga", "mpmga", "sga")
+PAPER_PRESETS = ("agacd", "iga_zhang", "iga_zhu", "imga", "mpmga", "sga")
+PRESETS = (*PAPER_PRESETS, "hybrid")
 VARIANTS = {
+    "hybrid": [],
     "agacd": ["50x50"],
     "iga_zhang": ["env2", "env3"],
     "iga_zhu": [],
@@ -48,7 +50,7 @@ def check(config: Config, expected: dict) -> None:
 # ----------------------------------------------------------------------------- loading
 
 
-def test_the_six_presets_exist():
+def test_the_six_paper_presets_and_jaxgas_own_exist():
     assert preset_names() == sorted(PRESETS)
     info = preset_info()
     assert [name for name, _, _ in info] == sorted(PRESETS)
@@ -63,7 +65,9 @@ def test_every_preset_and_variant_loads_and_validates(name):
         config = load_preset(name, variant)
         assert isinstance(config, Config)
         assert config["name"] == name
-        assert config["map.corner_rule"] == "free"  # SPEC 1: presets reproducing a paper
+        # SPEC 1: presets reproducing a paper squeeze between diagonal obstacles; jaxga's
+        # own preset is for users' maps, whose default is no corner cutting
+        assert config["map.corner_rule"] == ("free" if name in PAPER_PRESETS else "strict")
         assert all(key in SCHEMA for key, _ in config.items)
         if variant is not None:
             assert variant in config["description"]
