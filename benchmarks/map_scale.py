@@ -50,7 +50,7 @@ def child(spec: str) -> None:
 
 def main() -> None:
     ap = argparse.ArgumentParser(description=__doc__)
-    ap.add_argument("--presets", default=",".join(PRESETS))
+    ap.add_argument("--presets", default=",".join((*PRESETS, "hybrid")))
     ap.add_argument("--sizes", default="32,64,128,256")
     ap.add_argument("--seeds", type=int, default=8)
     ap.add_argument("--generations", type=int, default=20)

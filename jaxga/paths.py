@@ -270,8 +270,10 @@ def last_occurrence(
     Padding positions map to themselves. With ``n_cells`` (the map size, static) at most
     :data:`TABLE_MAX_CELLS`, one scatter-max into a table of ``n_cells`` entries and one
     gather (about 40x faster than a sort on CPU for a 20 x 20 map); otherwise, or without
-    ``n_cells``, a stable sort, O(L log L), with no map-sized table (PERFORMANCE_NOTES:
-    map-sized tables become memory-bound on large maps).
+    ``n_cells``, a sort, O(L log L), with no map-sized table (PERFORMANCE_NOTES:
+    map-sized tables become memory-bound on large maps): one sort of packed
+    ``(cell, position)`` words where they fit 32 bits (:func:`_sorted_by_cell`), else a
+    stable argsort.
     """
     cells = jnp.asarray(cells, jnp.int32)
     n = cells.shape[0]
@@ -280,12 +282,35 @@ def last_occurrence(
     if _use_table(n_cells, n):
         look = position_lookup(cells, length, n_cells)
         return jnp.where(valid, look(jnp.clip(cells, 0, n_cells - 1)), i)
-    key = jnp.where(valid, cells, -1 - i)
-    order = jnp.argsort(key, stable=True).astype(jnp.int32)
-    sk = key[order]
+    if _packable(n_cells, n):  # one sort of one array: cell and position in a word
+        sk, order = _sorted_by_cell(cells, valid, n_cells)
+        sk = jnp.where(sk == n_cells, -1 - i, sk)  # padding: each its own group
+    else:
+        key = jnp.where(valid, cells, -1 - i)
+        order = jnp.argsort(key, stable=True).astype(jnp.int32)
+        sk = key[order]
     is_end = jnp.concatenate([sk[1:] != sk[:-1], jnp.array([True])])
     end = jax.lax.cummin(jnp.where(is_end, i, n), reverse=True)
     return jnp.zeros(n, jnp.int32).at[order].set(order[end])
+
+
+def _packable(n_cells: int | None, n: int) -> bool:
+    """Whether ``(cell, position)`` pairs of a path of ``n`` nodes on a map of ``n_cells``
+    cells fit one uint32 (cells up to ``n_cells`` inclusive, the padding's key)."""
+    return n_cells is not None and (n_cells + 1) << max(n - 1, 1).bit_length() <= 2**32
+
+
+def _sorted_by_cell(cells: jax.Array, valid: jax.Array,
+                    n_cells: int) -> tuple[jax.Array, jax.Array]:
+    """``(cell int32[L], position int32[L])`` sorted by cell, then position (padding as
+    cell ``n_cells``, after every real cell): ONE sort of ``cell << b | position`` words.
+    On XLA's CPU backend that is about 5x faster than the stable ``argsort`` (a sort of
+    two arrays) of the same pairs."""
+    n = cells.shape[0]
+    b = max(n - 1, 1).bit_length()
+    key = jnp.where(valid, cells, n_cells).astype(jnp.uint32)
+    packed = jnp.sort((key << b) | jnp.arange(n, dtype=jnp.uint32))
+    return (packed >> b).astype(jnp.int32), (packed & jnp.uint32((1 << b) - 1)).astype(jnp.int32)
 
 
 def position_lookup(
@@ -312,9 +337,12 @@ def position_lookup(
             return jnp.where(inside, table[jnp.clip(q, 0, n_cells - 1)], -1)
 
         return look
-    key = jnp.where(valid, cells, np.iinfo(np.int32).max)
-    order = jnp.argsort(key, stable=True).astype(jnp.int32)
-    sk = key[order]
+    if _packable(n_cells, n):
+        sk, order = _sorted_by_cell(cells, valid, n_cells)
+    else:
+        key = jnp.where(valid, cells, np.iinfo(np.int32).max)
+        order = jnp.argsort(key, stable=True).astype(jnp.int32)
+        sk = key[order]
 
     def look(q):
         k = jnp.searchsorted(sk, q, side="right").astype(jnp.int32) - 1

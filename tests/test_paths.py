@@ -171,10 +171,13 @@ def test_is_continuous_agrees_with_the_exact_segment_reference(rule):
     assert 50 < want.sum() < batch - 50  # both outcomes are exercised
 
 
-def test_last_occurrence_is_the_same_for_every_table_variant():
-    """The last valid position of each node's cell (padding: itself), computed by a sort
-    (no map size), a small-map table, and on a map above CHUNKED_LOOKUP_CELLS by
-    ``scatter.table_lookup`` (batched rows, so its folded rule runs too)."""
+def test_last_occurrence_is_the_same_for_every_table_variant(monkeypatch):
+    """The last valid position of each node's cell (padding: itself), computed by a
+    stable argsort (no map size, or a map too large to pack a cell and a position into
+    32 bits), one sort of packed words (a large map), a small-map table, and on a map
+    above CHUNKED_LOOKUP_CELLS by ``scatter.table_lookup`` (batched rows, so its folded
+    rule runs too; tables forced on that map)."""
+    from jaxga import paths
     from jaxga.paths import CHUNKED_LOOKUP_CELLS, last_occurrence
 
     rng = np.random.default_rng(3)
@@ -184,6 +187,14 @@ def test_last_occurrence_is_the_same_for_every_table_variant():
     for c, n in zip(np.asarray(cells), np.asarray(length)):
         row = [max(j for j in range(n) if c[j] == c[i]) if i < n else i for i in range(30)]
         want.append(row)
-    for n_cells in (None, 64, CHUNKED_LOOKUP_CELLS + 1):
+    for n_cells, tables in ((None, 16), (64, 16), (2**20, 16), (2**28, 16),
+                            (CHUNKED_LOOKUP_CELLS + 1, 10**6)):
+        monkeypatch.setattr(paths, "TABLE_CELLS_PER_NODE", tables)
+        assert paths._packable(n_cells, 30) == (n_cells not in (None, 2**28))
         got = jax.jit(jax.vmap(lambda c, n, m=n_cells: last_occurrence(c, n, m)))(cells, length)
         np.testing.assert_array_equal(got, want)
+        look = jax.jit(jax.vmap(lambda c, n, m=n_cells: paths.position_lookup(c, n, m)(
+            jnp.arange(-2, 45, dtype=jnp.int32))))(cells, length)
+        for row, c, n in zip(np.asarray(look), np.asarray(cells), np.asarray(length)):
+            where = {int(v): j for j, v in enumerate(c[:n])}  # the last position of each
+            assert row.tolist() == [where.get(q, -1) for q in range(-2, 45)]
