@@ -50,21 +50,59 @@ METHODS = {
     "median_insertion (IMGA)": I.median_insertion,
     "intermittent_connect (MPMGA)": I.intermittent_connect,
     "greedy_random_target (AGACD)": I.greedy_random_target,
+    "field_walk (jaxga, preset defaults)": I.field_walk,
+    "field_walk (jaxga, hybrid: slack 0.1, T 0)": functools.partial(I.field_walk, slack=0.1,
+                                                                     temperature=0.0),
 }
+
+
+def problems(which: str) -> list[tuple[str, object, int]]:
+    """``(label, grid with its guide, capacity)``: the classic 20 x 20 maps (corner rule
+    free, capacity 160), or the longest scenario of each shared Moving AI map (corner rule
+    strict, the automatic capacity)."""
+    from _results import SHARED
+
+    from jaxga.engine import default_capacity
+    from jaxga.guide import with_guide
+    from jaxga.maps import load_map_info, read_scen
+
+    out = []
+    if which == "classic":
+        for name in builtin_names():
+            if name.endswith("_20x20"):
+                out.append((name, with_guide(load_map(name, corner_rule="free")), CAPACITY))
+        return out
+    folder = SHARED / "movingai"
+    for path in sorted(folder.glob("*.map")):
+        scen = sorted(folder.glob(f"{path.stem}*.scen"))[0]
+        p = max(read_scen(scen), key=lambda q: q.optimal_length)
+        grid = load_map_info(path, start=p.start, goal=p.goal, corner_rule="strict").grid
+        out.append((f"{path.stem} longest ({p.optimal_length:.1f})", with_guide(grid),
+                    default_capacity(grid)))
+    return out
+
+
+def diversity(cells: np.ndarray, length: np.ndarray, valid: np.ndarray) -> tuple[int, float]:
+    """``(distinct paths, mean pairwise Jaccard distance of their cell sets)`` over the
+    valid individuals (up to 200 of them for the pairs)."""
+    paths = [tuple(c[:n]) for c, n, v in zip(cells.tolist(), length.tolist(), valid) if v]
+    sets = [set(p) for p in paths[:200]]
+    dist = [1 - len(a & b) / len(a | b) for i, a in enumerate(sets) for b in sets[i + 1:]]
+    return len(set(paths)), float(np.mean(dist)) if dist else float("nan")
 
 
 def _block(x):
     return jax.tree_util.tree_map(lambda a: a.block_until_ready(), x)
 
 
-def study(size: int, repeats: int, attempts: int, maps: list[str]) -> list[dict]:
+def study(size: int, repeats: int, attempts: int, which: str) -> list[dict]:
     rows = []
     lengths_of = jax.jit(population_map(path_length))
-    for map_name in maps:
-        grid = load_map(map_name, corner_rule="free")
+    for map_name, grid, capacity in problems(which):
         for label, fn in METHODS.items():
             # Per-attempt success rate and cost per attempt (batches of 100 keys).
-            batch = jax.jit(jax.vmap(lambda k, fn=fn, grid=grid: fn(k, grid, CAPACITY)))
+            batch = jax.jit(jax.vmap(lambda k, fn=fn, grid=grid, cap=capacity: fn(k, grid,
+                                                                                 cap)))
             keys = jax.random.split(jax.random.PRNGKey(12345), attempts)
             _block(batch(keys[:100]))
             ok_total, times = 0, []
@@ -75,20 +113,29 @@ def study(size: int, repeats: int, attempts: int, maps: list[str]) -> list[dict]
                 ok_total += int(np.sum(np.asarray(out[2])))
             rate = ok_total / attempts
             us_attempt = float(np.median(times)) / 100 * 1e6
+            if rate == 0:  # the initialiser alone builds nothing here
+                rows.append(dict(map=map_name, method=label, rate=0.0, us_attempt=us_attempt,
+                                 chunk=0, compile_s=float("nan"), build_s=float("nan"),
+                                 failed=size, mean=float("nan"), sd=float("nan"),
+                                 init_rate=0.0, repeats=0, distinct=0,
+                                 jaccard=float("nan")))
+                print(f"{map_name:40s} {label:30s} no path in {attempts} attempts", flush=True)
+                continue
             # Population of `size` valid individuals. Rounds of `chunk` candidates, chunk
             # sized from the measured rate so that about one or two rounds suffice.
             chunk = int(min(8000, max(size, math.ceil(1.3 * size / max(rate, 1e-3) / 100) * 100)))
             max_tries = max(1, math.ceil(20 * chunk / size))
 
-            def build(key, fn=fn, grid=grid, chunk=chunk, max_tries=max_tries):
-                return I.initialise(key, grid, fn, size, CAPACITY, max_tries=max_tries,
+            def build(key, fn=fn, grid=grid, chunk=chunk, max_tries=max_tries,
+                      cap=capacity):
+                return I.initialise(key, grid, fn, size, cap, max_tries=max_tries,
                                     chunk=chunk)
 
             # Compile time: ahead-of-time lowering + compilation with empty caches (the
             # jitted initialise would otherwise reuse the executable of the previous map).
             jax.clear_caches()
             t0 = time.perf_counter()
-            I.initialise.lower(jax.random.PRNGKey(0), grid, fn, size, CAPACITY,
+            I.initialise.lower(jax.random.PRNGKey(0), grid, fn, size, capacity,
                                max_tries=max_tries, chunk=chunk).compile()
             compile_s = time.perf_counter() - t0
             _block(build(jax.random.PRNGKey(0)))  # warm the jit cache
@@ -101,6 +148,9 @@ def study(size: int, repeats: int, attempts: int, maps: list[str]) -> list[dict]
                 failed += int(st.n_failed)
                 init_rates.append(float(st.success_rate))
                 lens.append(np.asarray(lengths_of(grid, pop.cells, pop.length))[valid])
+                if r == 1:
+                    distinct, jaccard = diversity(np.asarray(pop.cells),
+                                                  np.asarray(pop.length), valid)
                 if sum(build_times) > 30.0:  # very slow builds: fewer repeats
                     break
             lens = np.concatenate(lens) if lens else np.zeros(0)
@@ -112,6 +162,7 @@ def study(size: int, repeats: int, attempts: int, maps: list[str]) -> list[dict]
                     mean=float(lens.mean()) if lens.size else float("nan"),
                     sd=float(lens.std(ddof=1)) if lens.size > 1 else float("nan"),
                     init_rate=float(np.mean(init_rates)), repeats=len(build_times),
+                    distinct=distinct, jaccard=jaccard,
                 )
             )
             r_ = rows[-1]
@@ -125,13 +176,13 @@ def table(rows: list[dict], size: int, repeats: int) -> str:
     head = (
         "| map | method | success per 100 attempts | us per attempt | "
         f"time to build {size} (s) | builds timed | compile (s) | mean length | sd length | "
-        "unfilled |\n"
-        "|---|---|---:|---:|---:|---:|---:|---:|---:|---:|\n"
+        f"unfilled | distinct of {size} | mean Jaccard distance |\n"
+        "|---|---|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|\n"
     )
     body = "".join(
         f"| {r['map']} | {r['method']} | {100 * r['rate']:.2f} | {r['us_attempt']:.1f} | "
         f"{r['build_s']:.4f} | {r['repeats']} | {r['compile_s']:.1f} | {r['mean']:.2f} | "
-        f"{r['sd']:.2f} | {r['failed']} |\n"
+        f"{r['sd']:.2f} | {r['failed']} | {r['distinct']} | {r['jaccard']:.3f} |\n"
         for r in rows
     )
     return head + body
@@ -142,12 +193,13 @@ def main(argv=None) -> None:
     ap.add_argument("--size", type=int, default=200)
     ap.add_argument("--repeats", type=int, default=5)
     ap.add_argument("--attempts", type=int, default=2000)
-    ap.add_argument("--maps", nargs="*", default=None)
+    ap.add_argument("--maps", choices=("classic", "movingai"), default="classic",
+                    help="the classic 20 x 20 maps (free) or the longest scenario of each "
+                         "shared Moving AI map (strict, automatic capacity)")
     ap.add_argument("--no-append", action="store_true")
     args = ap.parse_args(argv)
-    maps = args.maps or [n for n in builtin_names() if n.endswith("_20x20")]
     start = datetime.datetime.now(datetime.timezone.utc)
-    rows = study(args.size, args.repeats, args.attempts, maps)
+    rows = study(args.size, args.repeats, args.attempts, args.maps)
     load = os.getloadavg()
     md = table(rows, args.size, args.repeats)
     print()
@@ -160,8 +212,13 @@ def main(argv=None) -> None:
     )
     section = (
         f"\n## init_study ({start:%Y-%m-%d %H:%M} UTC)\n\n"
-        f"Zhu & Pan 2024 Table 2 layout for every initialiser of `jaxga.init` on the classic "
-        f"20 x 20 maps (corner rule \"free\", start 0, goal 399, capacity {CAPACITY}). "
+        + (f"Zhu & Pan 2024 Table 2 layout for every initialiser of `jaxga.init` on the "
+           f"classic 20 x 20 maps (corner rule \"free\", start 0, goal 399, capacity "
+           f"{CAPACITY}). " if args.maps == "classic" else
+           "Every initialiser of `jaxga.init` on the longest scenario of each shared Moving "
+           "AI map (corner rule \"strict\", the automatic capacity). ")
+        + f"distinct = different paths among the {args.size} of the first build; Jaccard = "
+        f"mean over pairs of 1 - |A and B| / |A or B| of their cell sets (up to 200 paths). "
         f"Success rate from {args.attempts} independent attempts; us per attempt = jit + "
         f"vmap over 100 keys, warm, median; time to build {args.size} valid individuals "
         f"with `jaxga.init.initialise` (redraws included, rounds of `chunk` candidates "

@@ -44,6 +44,7 @@ from jaxga.errors import InitialisationWarning, JaxgaError, ParameterError
 from jaxga.grid import Grid, as_integer
 from jaxga.guide import with_guide
 from jaxga.lowering import check_environment
+from jaxga.maptables import with_tables
 from jaxga.objectives import Metrics
 
 if TYPE_CHECKING:
@@ -804,6 +805,7 @@ def sweep(
                                 time.perf_counter() - t_start, capacity) for c in configs]
     if uses_guide(config):  # the exact distance fields the field initialiser steers by
         grid = with_guide(grid)
+    grid = with_tables(grid)  # per-map tables, once per run rather than per generation
     # the capacity is the largest size swept, also when it is below the preset's size
     algo, _ = build(config.override({"population.size": capacity}), grid)
     per_point = [default_params(c, algo.islands) for c in configs]

@@ -330,7 +330,8 @@ def _step_masks(grid: Grid, cells: jax.Array) -> jax.Array:
     """``int32[...]``: bit ``(dy + 1) * 3 + (dx + 1)`` set when the step from the cell by
     ``(dx, dy)`` is legal (:func:`jaxga.grid.move_legal`); bit 4 (no step) always set.
 
-    On maps of up to :data:`~jaxga.paths.TABLE_MAX_CELLS` cells the masks of all cells are
+    With ``grid.tables`` attached the masks of all cells are read from them; otherwise, on
+    maps of up to :data:`~jaxga.paths.TABLE_MAX_CELLS` cells the masks of all cells are
     built once per call (under a ``vmap`` over pairs the table is not batched) and
     gathered; on larger maps they are computed for the given cells only.
     """
@@ -345,6 +346,8 @@ def _step_masks(grid: Grid, cells: jax.Array) -> jax.Array:
         legal = inside & move_legal(grid, c, jnp.where(inside, qy * w + qx, 0))
         return legal | (bit == 16)
 
+    if grid.tables is not None:
+        return grid.tables.step_masks[jnp.clip(cells, 0, n_cells - 1)]
     if n_cells > TABLE_MAX_CELLS:
         return jnp.sum(jnp.where(legal9(cells), bit, 0), axis=-1, dtype=_I32)
     # The bits are packed with a matrix product: XLA fuses an elementwise/reduce table
@@ -478,8 +481,15 @@ def _free_prefix(grid: Grid) -> jax.Array:
 
     ``[W, H + 1]`` entries ``colcum[x, v] = #free (x, y < v)`` then ``[H, W + 1]`` entries
     ``rowcum[y, v] = #free (x < v, y)``. Depends on the grid only (computed once per call,
-    not per pair, under ``vmap`` over pairs).
+    not per pair, under ``vmap`` over pairs; read from ``grid.tables`` when attached).
     """
+    if grid.tables is not None:
+        return grid.tables.free_prefix
+    return compute_free_prefix(grid)
+
+
+def compute_free_prefix(grid: Grid) -> jax.Array:
+    """:func:`_free_prefix` computed from the map (what :mod:`jaxga.maptables` stores)."""
     free = (~grid.blocked).astype(_I32)
     h, w = free.shape
     col = jnp.concatenate([jnp.zeros((w, 1), _I32), prefix_count(free.T, axis=1)], axis=1)

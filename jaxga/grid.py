@@ -82,6 +82,7 @@ class Grid:
         goal: int32 scalar, the goal cell index.
         corner_rule: ``"free"``, ``"no_squeeze"`` or ``"strict"`` (static).
         guide: the exact distance fields of :mod:`jaxga.guide`, or None.
+        tables: the per-map lookup tables of :mod:`jaxga.maptables`, or None.
 
     Build grids with :meth:`Grid.create` (or a loader in :mod:`jaxga.maps`), which checks
     shapes, dtypes and that the endpoints lie on the map. Whether the endpoints are free
@@ -97,6 +98,12 @@ class Grid:
     by :func:`jaxga.guide.with_guide`; read by the field initialiser and the repairs that
     connect through the fields. It belongs to this map, these endpoints and this corner
     rule: :meth:`replace` and :meth:`validated` drop it."""
+    tables: Any = None
+    """Per-map lookup tables (:class:`jaxga.maptables.MapTables`), or None: the legal moves
+    and free neighbours of every cell, computed once per run instead of once per
+    generation by every operator that reads them (:func:`jaxga.maptables.with_tables`).
+    They belong to this map and corner rule: :meth:`replace` and :meth:`validated` drop
+    them."""
 
     # ----------------------------------------------------------------- construction
     @classmethod

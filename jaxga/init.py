@@ -124,8 +124,16 @@ def _move_tables(grid: Grid) -> tuple[jax.Array, jax.Array]:
 
     Directions are :data:`jaxga.grid.DIRECTIONS`; an off-map neighbour is stored as ``p``
     itself with ``legal`` False. ``legal`` is :func:`jaxga.grid.move_legal` (both cells
-    free, corner rule for diagonals).
+    free, corner rule for diagonals). Read from ``grid.tables`` when attached
+    (:func:`jaxga.maptables.with_tables`).
     """
+    if grid.tables is not None:
+        return grid.tables.nbr, grid.tables.legal
+    return compute_move_tables(grid)
+
+
+def compute_move_tables(grid: Grid) -> tuple[jax.Array, jax.Array]:
+    """:func:`_move_tables` computed from the map (what :mod:`jaxga.maptables` stores)."""
     h, w = grid.shape
     p = jnp.arange(grid.n_cells, dtype=_I32)[:, None]
     nx, ny = p % w + _DX, p // w + _DY

@@ -51,8 +51,16 @@ def neighbour_masks(grid: Grid) -> jax.Array:
     free.
 
     One table per map, computed once outside the insertion rounds: a round then needs
-    one gather per open gap instead of nine (gathers dominate a round on the CPU).
+    one gather per open gap instead of nine (gathers dominate a round on the CPU). Read
+    from ``grid.tables`` when attached (:func:`jaxga.maptables.with_tables`).
     """
+    if grid.tables is not None:
+        return grid.tables.masks
+    return compute_neighbour_masks(grid)
+
+
+def compute_neighbour_masks(grid: Grid) -> jax.Array:
+    """:func:`neighbour_masks` computed from the map (what :mod:`jaxga.maptables` stores)."""
     h, w = grid.blocked.shape
     ys, xs = jnp.divmod(jnp.arange(h * w, dtype=jnp.int32), w)
     free = ~blocked_at(grid.blocked, xs[:, None] + _OFFSETS[:, 0], ys[:, None] + _OFFSETS[:, 1])
