@@ -216,7 +216,7 @@ def unread_keys(config: Config) -> dict[str, str]:
                                             f"fitness.method = {method!r}")
     if uses_waypoints(config):
         out["fitness.window"] = "waypoint paths are evaluated without the narrow window"
-    if not uses_guide(config):
+    if not uses_field_walk(config):
         for k in ("init.slack", "init.temperature"):
             out[k] = ("only the field initialiser reads it (init.method = 'field_walk', or "
                       "init.fallback = 'field_walk')")
@@ -646,12 +646,18 @@ def _best_of(state_islands: IslandState) -> tuple:
     return cells, state_islands.length.reshape(-1)[k], f[k]
 
 
+def uses_field_walk(config: Config) -> bool:
+    """Whether ``config`` draws individuals with :func:`jaxga.init.field_walk` (its
+    ``init.slack`` and ``init.temperature``): as ``init.method`` or as the fallback."""
+    return config["init.method"] == "field_walk" or config["init.fallback"] != "none"
+
+
 def uses_guide(config: Config) -> bool:
     """Whether a run of ``config`` steers by the problem's exact distance fields (its grid
     needs :func:`jaxga.guide.with_guide`): the field initialiser, as ``init.method`` or as
     the fallback of another initialiser, and the field repairs (``repair.fallback``)."""
-    return (config["init.method"] == "field_walk" or config["init.fallback"] != "none"
-            or (config["repair.fallback"] != "none" and field_repairs(config)))
+    return uses_field_walk(config) or (config["repair.fallback"] != "none"
+                                       and field_repairs(config))
 
 
 FIELD_REPAIRED = {

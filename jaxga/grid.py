@@ -54,7 +54,8 @@ def too_large(width: int, height: int) -> str:
         k += 1
     return (f"map {width} x {height} has {width * height:,} cells, more than jaxga plans on "
             f"({MAX_MAP_CELLS:,}, e.g. 512 x 512): make it coarser, e.g. {k} x {k} cells "
-            f"into one (--coarsen {k}, load_map(..., coarsen={k}), jaxga.maps.coarsen)")
+            f"into one (--coarsen {k} of jaxga run, optimum, compare and doe; "
+            f"load_map(..., coarsen={k}); jaxga.maps.coarsen)")
 
 # The 8 move directions, counter-clockwise from east. Index d gives (dx, dy).
 DIRECTIONS = np.array(

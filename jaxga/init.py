@@ -333,9 +333,10 @@ def _self_avoiding_walk(
     return cells, length, ok
 
 
-VISITED_TABLE_CELLS_PER_NODE = 16
+VISITED_TABLE_CELLS_PER_NODE = 64
 """A self-avoiding walk keeps its visited set as one bool per map cell while the map has
-at most this many cells per node of the walk's capacity (every classic and 32 x 32 map);
+at most this many cells per node of the walk's capacity (up to 101 x 101 cells for a
+capacity of 160; below that the hash set of 32-64 bytes per node would be larger);
 on larger maps as a hash set of the walk's own cells (:func:`_hash_add`) and a sorted
 list of the excluded ones, so that its memory and time grow with the capacity, not with
 the map (a range mutation on a 256 x 256 map held 64 kB per walk)."""
@@ -1072,7 +1073,8 @@ def field_reconnect(
     seg = jnp.roll(walk, -1)  # walk[1 : k] as a segment
     new, new_len, fits = splice_loop_free(cells, length, i + 1, seg, k - 1, pos[k],
                                           grid.n_cells)
-    return new, new_len, fits & reached & jnp.any(meets)
+    del reached  # the walk may meet the path before its end: the splice is what counts
+    return new, new_len, fits & jnp.any(meets)
 
 
 def _via_candidates(grid: Grid, budget: jax.Array) -> tuple[jax.Array, jax.Array]:

@@ -296,16 +296,21 @@ def _window_box(a: XY, b: XY, size: int, h: int, w: int) -> tuple[int, int, int,
 
 # ================================================================================ replan
 def _run_options(overrides: Mapping[str, Any], generations: int | None,
-                 population: int | None) -> dict[str, Any]:
+                 population: int | None, grid: Grid | None = None) -> dict[str, Any]:
     """:func:`jaxga.run`'s keyword options for the re-planning GA. ``generations`` and
     ``population`` at replan's defaults give way to the same keys in ``overrides`` or
     their ``sets`` (``--set generations=30``); other values are given as such, so that
-    :func:`jaxga.run` refuses two different values for one key."""
+    :func:`jaxga.run` refuses two different values for one key. With ``grid`` the path
+    capacity is ``4 (H + W)`` unless ``population.capacity`` is given: one compiled
+    program per map (or window) size, whatever the segment (the automatic capacity
+    follows the problem's optimum, which would compile again for longer segments)."""
     from jaxga.presets import as_sets, overridden_keys
 
     kw = dict(overrides)
     keys = set(overridden_keys({k: v for k, v in kw.items() if k != "sets"},
                                as_sets(kw.get("sets", ()))))
+    if grid is not None and "population.capacity" not in keys:
+        kw["population__capacity"] = 4 * (grid.height + grid.width)
     if not (generations == DEFAULT_GENERATIONS and "generations" in keys):
         kw["generations"] = generations
     if population is None or (population == DEFAULT_POPULATION and "population.size" in keys):
@@ -519,7 +524,7 @@ def _plan_segment(work: Grid, blocked: np.ndarray, start: XY, rejoin: XY, preset
                 info["window"] = box
     g = Grid.create(sub, start=(start[0] - ox, start[1] - oy),
                     goal=(rejoin[0] - ox, rejoin[1] - oy), corner_rule=rule)
-    r = run(preset, g, seeds=seeds, **_run_options(overrides, generations, population))
+    r = run(preset, g, seeds=seeds, **_run_options(overrides, generations, population, g))
     info["result"] = r
     n_ok = int(np.sum(r.success))
     info.update(ga_success=n_ok, seeds=len(r.seeds))

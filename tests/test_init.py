@@ -540,7 +540,7 @@ def test_x64_mode_keeps_int32():
 @pytest.mark.parametrize("walk", ["uniform_walk", "directional_walk"])
 def test_large_map_walks_keep_a_capacity_sized_visited_set_with_the_same_paths(
         walk, monkeypatch):
-    """On a map of more than 16 cells per node of capacity the walks keep their visited
+    """On a map of more than 64 cells per node of capacity the walks keep their visited
     set as a hash set of their own cells and a sorted list of the excluded ones: the same
     key gives the same walk as with the map-sized table (forced here), exclusions
     included."""
@@ -549,10 +549,10 @@ def test_large_map_walks_keep_a_capacity_sized_visited_set_with_the_same_paths(
     src = int(free[len(free) // 2])
     near = [c for c in free if max(abs(c % 48 - src % 48), abs(c // 48 - src // 48)) == 6]
     dst = int(near[0])
-    cap = 128  # 48 * 48 > 16 * 128: the hash set
+    cap = 32  # 48 * 48 > 64 * 32: the hash set
     rng = np.random.default_rng(0)
     excl = np.full(cap, -1, np.int32)
-    excl[:40] = rng.choice(free, 40)
+    excl[:20] = rng.choice(free, 20)
     keys = jax.random.split(jax.random.PRNGKey(11), 64)
 
     def walks():

@@ -633,7 +633,7 @@ def test_generated_maps_check_endpoints_like_grids():
 
 
 # ------------------------------------------------------------ size limit, coarsening
-def test_a_map_over_the_size_limit_is_refused_from_its_header(tmp_path):
+def test_a_map_over_the_size_limit_is_refused_from_its_header(tmp_path, monkeypatch):
     """Refused before the body is parsed: a Moving AI header of 2000 x 2000 over one
     malformed row, a PNG's IHDR, and a 0/1 file's first line and line count, each with
     one line naming the limit and the way around it (a coarser map)."""
@@ -648,10 +648,18 @@ def test_a_map_over_the_size_limit_is_refused_from_its_header(tmp_path):
     assert f"{MAX_MAP_CELLS:,}" in text and "--coarsen 4" in text and "coarsen=4" in text
     side = 600
     b = np.random.default_rng(0).random((side, side)) < 0.1
+    from jaxga.maps import loaders
+
+    def never(*args, **kwargs):
+        raise AssertionError("the file was parsed")
+
     for ext in ("png", "txt"):
         path = save_map(b, tmp_path / f"big.{ext}")
-        with pytest.raises(MapFormatError, match=f"map {side} x {side} has 360,000 cells"):
-            load_map(path)
+        with monkeypatch.context() as m:  # refused before any parser runs
+            m.setattr(loaders, "_parse_png", never)
+            m.setattr(loaders, "parse_01", never)
+            with pytest.raises(MapFormatError, match=f"map {side} x {side} has 360,000 cells"):
+                load_map(path)
         coarse = load_map(path, coarsen=2, start=(3, 5), goal=(599, 598))
         assert coarse.shape == (300, 300)
         assert coarse.start_xy == (1, 2) and coarse.goal_xy == (299, 299)

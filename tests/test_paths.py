@@ -198,3 +198,14 @@ def test_last_occurrence_is_the_same_for_every_table_variant(monkeypatch):
         for row, c, n in zip(np.asarray(look), np.asarray(cells), np.asarray(length)):
             where = {int(v): j for j, v in enumerate(c[:n])}  # the last position of each
             assert row.tolist() == [where.get(q, -1) for q in range(-2, 45)]
+
+
+def test_is_loop_free_refuses_a_node_off_the_map_whatever_the_width():
+    """With the map size given, a valid node off the map makes a path not loop-free in
+    the table and in the sort variant alike (a short buffer takes the sort)."""
+    from jaxga.paths import is_loop_free
+
+    for width in (3, 30):
+        cells = jnp.asarray([0, 500, 2] + [2] * (width - 3), jnp.int32)
+        assert not bool(is_loop_free(cells, jnp.int32(3), 400))
+        assert bool(is_loop_free(cells.at[1].set(1), jnp.int32(3), 400))

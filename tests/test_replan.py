@@ -229,7 +229,14 @@ def test_sets_of_the_ga_size_replace_replans_defaults(sc25, monkeypatch):
     with pytest.raises(KeyboardInterrupt):
         replan(sc25.grid, sc25.path, [(20, 12)], sc25.position,
                sets=("population.size=30", "generations=30"))
-    assert seen == {"sets": ("population.size=30", "generations=30")}
+    # the capacity is pinned at 4 (H + W) of the map: one program per map size
+    assert seen == {"sets": ("population.size=30", "generations=30"),
+                    "population__capacity": 4 * (25 + 25)}
+    seen.clear()
+    with pytest.raises(KeyboardInterrupt):
+        replan(sc25.grid, sc25.path, [(20, 12)], sc25.position,
+               sets=("population.capacity=120",))
+    assert "population__capacity" not in seen  # a capacity given is the user's
 
 
 def test_ga_failure_is_honest_and_fallback_is_flagged(sc25, monkeypatch):

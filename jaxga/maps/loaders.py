@@ -509,12 +509,13 @@ def _declared_size(raw: bytes, kind: str) -> tuple[int, int] | None:
                     and words[1].isdigit():
                 dims[words[0].lower()] = int(words[1])
         return (dims["width"], dims["height"]) if len(dims) == 2 else None
-    first = next((ln.strip() for ln in head.splitlines() if ln.strip()), "")
-    if not first:
+    lines = [line for line in raw.splitlines() if line.strip()]
+    if not lines:
         return None
+    first = lines[0].decode("utf-8-sig", errors="replace").strip()
     width = len(first.replace(",", " ").split()) if any(c in _SEPARATORS for c in first) \
         else len(first)
-    return width, sum(1 for line in raw.splitlines() if line.strip())
+    return width, len(lines)
 
 
 def _check_ragged(rows: list[list[bool]], lineno: int, label: str) -> None:
