@@ -38,12 +38,12 @@ from _results import (
     CLI_MAP,
     PRESETS,
     STANDARD_SETTING,
-    append,
     cli_run,
     cold_child,
     instrumented_run,
     markdown_table,
     parse_args,
+    record,
     result_hash,
     standard_run,
     xla_seconds_by_program,
@@ -150,7 +150,7 @@ def main() -> None:
                          rows)
         + f"\n\nAll results identical: {'yes' if same else 'NO'}."
     )
-    append("cold compile, base against new (benchmarks/compile_ab.py)", body,
+    record("cold compile, base against new (benchmarks/compile_ab.py)", body,
            write=not a.no_write)
 
 

@@ -24,10 +24,10 @@ from _results import (
     STANDARD_GENERATIONS,
     STANDARD_POPULATION,
     STANDARD_SETTING,
-    append,
     cold_child,
     markdown_table,
     parse_args,
+    record,
     result_hash,
     standard_run,
 )
@@ -83,7 +83,7 @@ def main() -> None:
              "compile (older)", "init", "evolve", "total", "same result"], rows)
         + f"\n\nWall time: {time.perf_counter() - t_all:.0f} s."
     )
-    append("XLA:CPU fusion emitters, default vs older: compile time, speed, results",
+    record("XLA:CPU fusion emitters, default vs older: compile time, speed, results",
            body, write=not args.no_write)
 
 

@@ -15,7 +15,7 @@ import time
 
 import jax
 import numpy as np
-from _results import append, markdown_table
+from _results import markdown_table, record
 
 from jaxga import crossover as cx
 from jaxga import init
@@ -111,7 +111,7 @@ def main() -> None:
         body.append(f"\n### {label}, capacity {cap}\n")
         body.append(markdown_table(["family", "operator", "compile (s)", "us / individual"],
                                    rows))
-    append("operators: microseconds per individual", "\n".join(body), write=not args.no_write)
+    record("operators: microseconds per individual", "\n".join(body), write=not args.no_write)
 
 
 if __name__ == "__main__":

@@ -19,7 +19,7 @@ Where the tree knows ``init.fallback``, the runs are made twice: with the fallba
 bit for bit, and with the default (on), reported beside it (equal wherever the papers'
 initialisers fill every slot). A run in which no seed found a path is compared as
 "no path" (the tree stops it after the initialisation: nothing to evolve). Prints the
-table and appends it to RESULTS.md.
+table and records it in RESULTS.md.
 """
 
 from __future__ import annotations
@@ -32,7 +32,7 @@ import sys
 import tempfile
 from pathlib import Path
 
-from _results import PRESETS, append, markdown_table
+from _results import PRESETS, markdown_table, record
 
 HERE = Path(__file__).resolve().parent
 ROOT = HERE.parent
@@ -137,7 +137,7 @@ def main() -> None:
             "with the fallback off.\n\n"
             + markdown_table(["reproduction", "base hash", "fallback off", "equal",
                               "fallback on (default)", "equal"], rows))
-    append("paper reproductions, result hashes against a base revision", body,
+    record("paper reproductions, result hashes against a base revision", body,
            write=not args.no_write)
     if same != len(rows):
         raise SystemExit(1)

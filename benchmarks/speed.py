@@ -50,7 +50,7 @@ import time
 from pathlib import Path
 
 import numpy as np
-from _results import append, markdown_table, parse_args
+from _results import markdown_table, parse_args, record
 
 from jaxga.parallel import cores
 
@@ -217,7 +217,7 @@ def main() -> None:
         + f"\n\nWall time: {time.perf_counter() - t_all:.0f} s."
         + "".join(f"\n\n{n}" for n in notes)
     )
-    append("speed of every preset vs a NumPy loop SGA", body, write=not args.no_write)
+    record("speed of every preset vs a NumPy loop SGA", body, write=not args.no_write)
 
 
 if __name__ == "__main__":
