@@ -59,8 +59,6 @@ from jaxga.paths import position_lookup as _position_lookup
 from jaxga.repair import concat, connect, prefix_count
 
 __all__ = [
-    "CROSSOVERS",
-    "SPLICING_CROSSOVERS",
     "ColumnRanges",
     "adaptive_crossover_probability",
     "adaptive_pair_probability",
@@ -851,21 +849,7 @@ def crossover_population(
     (:func:`jaxga.batching.over_pairs_gated`); the result is that of
     ``over_pairs(with_probability(op))``. ``dense=True`` computes every pair and selects
     (same result; cheaper at the papers' high crossover rates). ``splicing=True`` (with
-    ``dense``; the operators of :data:`SPLICING_CROSSOVERS` only) computes the pairs on
+    ``dense``; operators with the registry trait ``splicing`` only) computes the pairs on
     twice the window (:func:`jaxga.batching.spliced_pairs_map`) when every parent fits it.
     """
     return over_pairs_gated(op, in_axes_extra=in_axes_extra, dense=dense, splicing=splicing)
-
-
-CROSSOVERS: dict[str, Callable] = {
-    "common_point": common_point,
-    "cut_and_check": cut_and_check,
-    "heterologous": heterologous,
-    "column": column,
-}
-"""Crossovers by name (SPEC 6). ``heterologous`` and ``column`` need ``fitness_fn``."""
-
-SPLICING_CROSSOVERS: frozenset[str] = frozenset({"common_point"})
-"""Crossovers that may run with ``crossover_population(..., splicing=True)``: children a
-head of one parent and a tail of the other (at most ``l1 + l2 - 3`` cells), nothing else
-depending on the width (:func:`jaxga.batching.spliced_pairs_map`)."""

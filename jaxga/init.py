@@ -22,7 +22,7 @@ bounded) and reporting the success rate.
 
 The walk primitives go from any ``source`` cell to any ``target`` cell and accept an
 ``exclude`` set (cells that count as visited). Initialisers are looked up by name in
-:data:`INITIALISERS` (:func:`get_initialiser`).
+the registry (:mod:`jaxga.registry`, :func:`get_initialiser`).
 
 Implementation notes shared by the walks
 ----------------------------------------
@@ -80,7 +80,6 @@ from jaxga.paths import (
 from jaxga.repair import connect
 
 __all__ = [
-    "INITIALISERS",
     "InitFn",
     "InitStats",
     "directional",
@@ -1131,28 +1130,19 @@ def field_walk(
     return cells, length, ok & (total > 0)
 
 
-INITIALISERS: dict[str, InitFn] = {
-    "random_walk": random_walk,
-    "median_insertion": median_insertion,
-    "intermittent_connect": intermittent_connect,
-    "greedy_random_target": greedy_random_target,
-    "directional": directional,
-    "field_walk": field_walk,
-}
-"""The initialisers of SPEC 4 by name (the names presets use)."""
-
-
 def get_initialiser(name_or_fn: str | InitFn) -> InitFn:
-    """An initialiser by name (:data:`INITIALISERS`) or the callable itself."""
+    """An initialiser by its registered name (:mod:`jaxga.registry`, family ``init``; an
+    old name is accepted) or the callable itself."""
     if callable(name_or_fn):
         return name_or_fn
-    try:
-        return INITIALISERS[name_or_fn]
-    except (KeyError, TypeError):
-        raise ParameterError(
-            f"unknown initialiser {name_or_fn!r}: expected a callable or one of "
-            f"{', '.join(INITIALISERS)}"
-        ) from None
+    from jaxga import registry  # it imports this module
+
+    if isinstance(name_or_fn, str) and registry.canonical("init", name_or_fn) is not None:
+        return registry.operator("init", name_or_fn).fn
+    raise ParameterError(
+        f"unknown initialiser {name_or_fn!r}: expected a callable or one of "
+        f"{', '.join(registry.names('init'))}"
+    )
 
 
 # ---------------------------------------------------------------------- population
@@ -1268,7 +1258,7 @@ def initialise_population(
         key: PRNG key; the same key gives the same population.
         grid: the map.
         init_fn: static; an initialiser ``(key, grid, capacity) -> (cells, length, ok)`` or
-            its name in :data:`INITIALISERS`. Bind options with ``functools.partial`` and
+            its registered name (:mod:`jaxga.registry`). Bind options with ``functools.partial`` and
             reuse the same object (a new partial each call recompiles).
         size: static population size ``P``.
         capacity: static path capacity ``L``.
