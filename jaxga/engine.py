@@ -144,7 +144,7 @@ def default_capacity(grid: Grid) -> int:
     a 30-cell optimum on a 256 x 256 map 160. A path that would not fit is a counted
     failure of the operator that made it (never truncated). Computed on the host from
     the exact distance fields (:func:`jaxga.guide.problem_facts`); an unreachable goal
-    gets the minimum.
+    gets the minimum (decision 020).
     """
     from jaxga.guide import problem_facts
 
@@ -436,13 +436,12 @@ def evaluate(algo: Algorithm, grid: Grid, params: dict, cells, length, active, *
     With ``fitness.window`` (default) grid paths are evaluated by
     :func:`jaxga.batching.windowed_map`: on the first ``window_width(L)`` cells (64 of
     160 on a 20 x 20 map) whenever every path of the batch fits, with the same bits as
-    on all ``L`` (imga's evolution at 100 seeds on 20 x 20: 0.84-1.0 -> 0.53-0.54 s per
-    50 generations; sga and iga_zhang 3-8 %). The narrow program costs 1-2 s of compile
-    time; iga_zhu and mpmga switch it off (their populations keep a few long paths, and
-    they gained nothing). ``window`` (static): ``False`` evaluates at full width only
-    whatever the configuration says (the initial population, evaluated once per run:
-    one program instead of two, the same bits; sga's initialisation program 140 -> 128
-    kernels, imga's 303 -> 257; RESULTS.md, 2026-11-25 session 25).
+    on all ``L``: faster where paths stay short, at the price of a second (narrow)
+    program to compile; iga_zhu and mpmga switch it off (their populations keep a few
+    long paths, and they gained nothing; decision 005). ``window`` (static): ``False``
+    evaluates at full width only whatever the configuration says (the initial
+    population, evaluated once per run: one program instead of two, the same bits;
+    decision 006).
     """
     fit = fitness_function(algo, params)
     if algo.waypoints:
@@ -574,7 +573,8 @@ def uses_guide(config: Config) -> bool:
 
 def field_repairs(config: Config) -> bool:
     """Whether ``repair.fallback = "field"`` changes an operator of ``config`` (one with
-    the trait :data:`~jaxga.registry.FIELD_REPAIR`: its ``field_repair`` option)."""
+    the trait :data:`~jaxga.registry.FIELD_REPAIR`: its ``field_repair`` option;
+    decision 019)."""
     return _has_trait(config, FIELD_REPAIR, roles=("init.method", "crossover.method",
                                                    "mutation.method"))
 
@@ -589,7 +589,7 @@ def init_state(algo: Algorithm, key: jax.Array, grid: Grid, params: dict) -> tup
     ``init.method`` draws the population within ``init.max_tries`` attempts per
     individual; ``init.fallback = "field_walk"`` then fills exactly the slots it left
     empty with :func:`jaxga.init.field_walk` (``init.slack``, ``init.temperature``), so a
-    run starts with a whole population wherever a path exists. Returns
+    run starts with a whole population wherever a path exists (decision 018). Returns
     ``(GAState, InitStats)`` (one entry per island).
     """
     ctx = binding(algo, params)
@@ -643,8 +643,8 @@ def island_generation(algo: Algorithm, key, grid: Grid, isl: IslandState, t, par
         # AGACD eq. 28-29: an individual's mutation probability depends on its fitness
         # after crossover, so the generation evaluates twice. The two evaluations are the
         # two steps of one loop, mutation and simplification a branch of step 0: the
-        # evaluation is compiled once (agacd's evolution program: 617 -> 453 kernels,
-        # RESULTS.md, 2026-11-25 session 25), with the same results.
+        # evaluation is compiled once (fewer kernels to compile; decision 006), with the
+        # same results.
         def step(i, carry):
             pop, _, _, fails = carry
             fitness, feas = evaluate(algo, grid, params, pop.cells, pop.length, active)

@@ -179,7 +179,10 @@ class Operator:
         (Population, n_failed)`` (crossover: a probability per pair; mutation and
         simplification: per individual): :attr:`population` if given, else the
         family's lift of :meth:`bind` (:func:`jaxga.crossover.crossover_population`,
-        dense; :func:`jaxga.batching.over_individuals_gated`)."""
+        dense: at the papers' crossover rates computing every pair and selecting is
+        cheaper than gathering the crossed pairs, decision 004; splicing crossovers on
+        twice the window when the parents fit it, decision 005;
+        :func:`jaxga.batching.over_individuals_gated`). The same results either way."""
         if self.population is not None:
             return self.population(ctx)
         op = self.bind(ctx)
