@@ -73,6 +73,43 @@ def cold_child(script: str, spec: str, **env: str) -> tuple[dict, str]:
     return json.loads(proc.stdout.strip().splitlines()[-1]), proc.stderr
 
 
+def child_at(checkout: Path, script: str, spec: str) -> dict:
+    """``python <script> --child <spec>`` in a fresh process importing ``jaxga`` from
+    ``checkout`` (and the benchmark helpers from this ``benchmarks/``), cold compilation
+    cache; its last stdout line parsed as JSON. A failing child raises ``RuntimeError``
+    with the end of its stderr."""
+    import json
+    import subprocess
+
+    here = Path(__file__).resolve().parent
+    env = dict(os.environ, PYTHONPATH=f"{checkout}{os.pathsep}{here}")
+    for key in ("JAXGA_CACHE_DIR", "JAX_COMPILATION_CACHE_DIR"):
+        env.pop(key, None)
+    proc = subprocess.run([sys.executable, str(here / script), "--child", spec], env=env,
+                          capture_output=True, text=True, cwd=checkout)
+    if proc.returncode != 0:
+        raise RuntimeError(proc.stderr[-3000:])
+    return json.loads(proc.stdout.strip().splitlines()[-1])
+
+
+def child_at_revision(revision: str, script: str, spec: str) -> dict:
+    """:func:`child_at` on a checkout of ``revision`` (a temporary ``git worktree``,
+    removed afterwards)."""
+    import subprocess
+    import tempfile
+
+    root = Path(__file__).resolve().parents[1]
+    with tempfile.TemporaryDirectory() as tmp:
+        base = Path(tmp) / "base"
+        subprocess.run(["git", "worktree", "add", "--detach", str(base), revision],
+                       cwd=root, check=True, capture_output=True)
+        try:
+            return child_at(base, script, spec)
+        finally:
+            subprocess.run(["git", "worktree", "remove", "--force", str(base)], cwd=root,
+                           check=True, capture_output=True)
+
+
 PRESETS = ("sga", "imga", "agacd", "iga_zhang", "mpmga", "iga_zhu")
 """The six presets in the papers' order, the benchmarks' default and table order
 (``jaxga.presets.preset_names()`` lists them alphabetically)."""
