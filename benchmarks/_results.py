@@ -1,4 +1,5 @@
-"""Shared by the benchmark scripts: machine description and appending to RESULTS.md."""
+"""Shared by the benchmark scripts: machine description, child processes, and the
+current results in RESULTS.md (with their history in ``history/results.jsonl``)."""
 
 from __future__ import annotations
 
@@ -70,6 +71,43 @@ def cold_child(script: str, spec: str, **env: str) -> tuple[dict, str]:
     if proc.returncode != 0:
         raise RuntimeError(proc.stderr[-3000:])
     return json.loads(proc.stdout.strip().splitlines()[-1]), proc.stderr
+
+
+def child_at(checkout: Path, script: str, spec: str) -> dict:
+    """``python <script> --child <spec>`` in a fresh process importing ``jaxga`` from
+    ``checkout`` (and the benchmark helpers from this ``benchmarks/``), cold compilation
+    cache; its last stdout line parsed as JSON. A failing child raises ``RuntimeError``
+    with the end of its stderr."""
+    import json
+    import subprocess
+
+    here = Path(__file__).resolve().parent
+    env = dict(os.environ, PYTHONPATH=f"{checkout}{os.pathsep}{here}")
+    for key in ("JAXGA_CACHE_DIR", "JAX_COMPILATION_CACHE_DIR"):
+        env.pop(key, None)
+    proc = subprocess.run([sys.executable, str(here / script), "--child", spec], env=env,
+                          capture_output=True, text=True, cwd=checkout)
+    if proc.returncode != 0:
+        raise RuntimeError(proc.stderr[-3000:])
+    return json.loads(proc.stdout.strip().splitlines()[-1])
+
+
+def child_at_revision(revision: str, script: str, spec: str) -> dict:
+    """:func:`child_at` on a checkout of ``revision`` (a temporary ``git worktree``,
+    removed afterwards)."""
+    import subprocess
+    import tempfile
+
+    root = Path(__file__).resolve().parents[1]
+    with tempfile.TemporaryDirectory() as tmp:
+        base = Path(tmp) / "base"
+        subprocess.run(["git", "worktree", "add", "--detach", str(base), revision],
+                       cwd=root, check=True, capture_output=True)
+        try:
+            return child_at(base, script, spec)
+        finally:
+            subprocess.run(["git", "worktree", "remove", "--force", str(base)], cwd=root,
+                           check=True, capture_output=True)
 
 
 PRESETS = ("sga", "imga", "agacd", "iga_zhang", "mpmga", "iga_zhu")
@@ -219,21 +257,129 @@ def markdown_table(headers: list[str], rows: list[list]) -> str:
     return "\n".join(out)
 
 
-def append(title: str, body: str, *, write: bool = True) -> None:
-    """Append a section (title, date, command, machine, body) to ``RESULTS.md``."""
-    stamp = _dt.datetime.now(_dt.timezone.utc).strftime("%Y-%m-%d %H:%M UTC")
-    section = (
-        f"\n## {title} ({stamp})\n\n- command: `{command()}`\n- machine: {machine()}\n\n"
-        f"{body.strip()}\n"
-    )
-    print(section)
+RESULTS_HEADER = """# Benchmark results
+
+The current result of every benchmark in `benchmarks/`: one section per script and
+command line, replaced in place when the script runs again (`_results.record`). Each
+section names the command, the commit it measured, the date and the machine. Every
+run is also appended to `benchmarks/history/results.jsonl` (one JSON object per run:
+title, command, commit, date, machine, body), where older readings stay; conclusions
+and rejected experiments are the decision notes in `docs/decisions/`. Sections are
+ordered by script. A section whose commit is older than the code you read measured that
+commit ("recorded in X": measured on the code just before commit X); run its command
+again to refresh it.
+"""
+"""The text above the sections of ``RESULTS.md``."""
+
+HISTORY = Path(__file__).with_name("history") / "results.jsonl"
+
+
+def script_command(command_line: str) -> str:
+    """``command_line`` from its script on (``PYTHONPATH=. /x/python benchmarks/speed.py
+    --seeds 1`` -> ``speed.py --seeds 1``): what identifies a benchmark's section."""
+    words = command_line.strip().strip("`").split()
+    for i, word in enumerate(words):
+        if word.endswith(".py"):
+            return " ".join([Path(word).name, *words[i + 1:]])
+    return " ".join(words)
+
+
+def commit() -> str:
+    """The checkout's short commit, ``+changes`` appended when its tracked files differ
+    from that commit (the measured code is then not exactly the commit)."""
+    import subprocess
+
+    root = Path(__file__).resolve().parents[1]
+
+    def git(*args: str) -> str:
+        out = subprocess.run(["git", *args], cwd=root, capture_output=True, text=True)
+        return out.stdout.strip() if out.returncode == 0 else ""
+
+    head = git("rev-parse", "--short", "HEAD") or "unknown"
+    dirty = git("status", "--porcelain", "--untracked-files=no", "--", "jaxga", "presets")
+    return head + ("+changes" if dirty else "")
+
+
+META = ("command", "commit", "date", "machine")
+"""The bullets under a section's title, in order."""
+
+
+def _meta(line: str) -> tuple[str, str] | None:
+    """``("commit", "abc1234")`` for the line ``- commit: abc1234``, else None."""
+    key, sep, value = line[2:].partition(":")
+    return (key, value.strip()) if line.startswith("- ") and sep and key in META else None
+
+
+def parse_sections(text: str) -> tuple[str, list[dict]]:
+    """``RESULTS.md`` as its header and its sections: ``{"title", "command", "commit",
+    "date", "machine", "body"}`` each (the inverse of :func:`render`)."""
+    lines = text.splitlines()
+    starts = [i for i, line in enumerate(lines) if line.startswith("## ")]
+    header = "\n".join(lines[:starts[0]] if starts else lines).strip() + "\n"
+    sections = []
+    for a, b in zip(starts, [*starts[1:], len(lines)]):
+        sec = {"title": lines[a][3:].strip(), **dict.fromkeys(META, "")}
+        i = a + 1
+        while i < b and (not lines[i].strip() or _meta(lines[i])):
+            if lines[i].strip():
+                key, value = _meta(lines[i])
+                sec[key] = value.strip("`") if key == "command" else value
+            i += 1
+        sec["body"] = "\n".join(lines[i:b]).strip()
+        sections.append(sec)
+    return header, sections
+
+
+def render(header: str, sections: list[dict]) -> str:
+    """The text of ``RESULTS.md``: the header, then each section (title, command,
+    commit, date, machine, body)."""
+    out = [header.strip(), ""]
+    for sec in sections:
+        out += [f"## {sec['title']}", "", f"- command: `{sec['command']}`",
+                f"- commit: {sec['commit']}", f"- date: {sec['date']}",
+                f"- machine: {sec['machine']}", "", sec["body"].strip(), ""]
+    return "\n".join(out)
+
+
+def _section_key(sec: dict) -> tuple[str, str]:
+    return sec["title"], script_command(sec["command"])
+
+
+def replace_section(text: str, new: dict) -> str:
+    """``RESULTS.md``'s text with ``new`` in place of the section of the same title and
+    script command (added if there is none), sections ordered by script."""
+    header, sections = parse_sections(text) if text.strip() else (RESULTS_HEADER, [])
+    kept = [s for s in sections if _section_key(s) != _section_key(new)]
+    order = {k: i for i, k in enumerate(_section_key(s) for s in sections)}
+    kept.append(new)
+    kept.sort(key=lambda s: (script_command(s["command"]).split(" ")[0],
+                             order.get(_section_key(s), len(order))))
+    return render(header, kept)
+
+
+def record(title: str, body: str, *, write: bool = True, results: Path | None = None,
+           history: Path | None = None) -> dict:
+    """Make ``body`` the current result of this benchmark: the section of ``RESULTS.md``
+    with this ``title`` and this script command is replaced (or added), and the run is
+    appended to ``history/results.jsonl``. ``write=False`` only prints it."""
+    import json
+
+    if any(line.startswith("## ") for line in body.splitlines()):
+        raise ValueError("a result's body cannot hold a level-2 heading ('## ')")
+    sec = {"title": title, "command": command(), "commit": commit(),
+           "date": _dt.datetime.now(_dt.timezone.utc).strftime("%Y-%m-%d %H:%M UTC"),
+           "machine": machine(), "body": body.strip()}
+    print(render("", [sec]))
     if write:
-        new = not RESULTS.exists()
-        with RESULTS.open("a", encoding="utf-8") as fh:
-            if new:
-                fh.write("# Benchmark results\n")
-            fh.write(section)
-        print(f"appended to {RESULTS}")
+        results = results or RESULTS
+        history = history or HISTORY
+        text = results.read_text(encoding="utf-8") if results.exists() else ""
+        results.write_text(replace_section(text, sec), encoding="utf-8")
+        history.parent.mkdir(parents=True, exist_ok=True)
+        with history.open("a", encoding="utf-8") as fh:
+            fh.write(json.dumps(sec) + "\n")
+        print(f"recorded in {results} and {history}")
+    return sec
 
 
 def timed(fn, *args, repeats: int = 5) -> float:

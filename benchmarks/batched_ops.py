@@ -20,7 +20,7 @@ import argparse
 import jax
 import jax.numpy as jnp
 import numpy as np
-from _results import append, markdown_table, timed
+from _results import markdown_table, record, timed
 
 from jaxga.batching import true_first_order
 from jaxga.scatter import position_table
@@ -66,7 +66,7 @@ def main() -> None:
     body = ("Median of the jitted call's wall time, in ms, one XLA device.\n\n"
             + markdown_table(["batched op", "plain vmap ms", "jaxga ms", "speed-up",
                               "same result"], rows))
-    append("batched primitives: plain vmap vs position_table / true_first_order", body,
+    record("batched primitives: plain vmap vs position_table / true_first_order", body,
            write=not args.no_write)
 
 

@@ -29,7 +29,7 @@ import sys
 import time
 from pathlib import Path
 
-from _results import PRESETS, append
+from _results import PRESETS, record
 
 MAPS = {
     "classic_ga_gapp3_20x20": "free",
@@ -135,7 +135,7 @@ def report(maps, presets, seeds: int, cache: Path, write: bool,
         if missing:
             note += f"\n\nNOT RUN (did not finish in time): {', '.join(missing)}."
         body = note + "\n\n" + comp.to_markdown()
-        append(f"compare presets on {map_name}", body, write=write)
+        record(f"compare presets on {map_name}", body, write=write)
     if missing_all:
         print("missing batches: " + "; ".join(missing_all), file=sys.stderr)
 

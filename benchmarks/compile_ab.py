@@ -3,13 +3,13 @@
     python benchmarks/compile_ab.py --base HEAD~1 [--presets sga,iga_zhu] [--reps 2]
         [--seeds 1] [--devices 1] [--warm N] [--cli] [--no-write]
 
-The machine's speed drifts by 10-20 % within an hour (RESULTS.md, sessions 20-22), so
-two compile tables taken at different times cannot show a change of a few per cent. This
-script checks the base revision out into a temporary ``git worktree`` and, for every
-preset and repetition, runs one fresh process on the base and one on this working tree,
-one after the other, base first in odd repetitions and new first in even ones (cold
-compile: no persistent compilation cache). Each child runs
-``jaxga.run(preset, classic_ga_gapp3_20x20, seeds)`` as ``_results.standard_run`` does
+The machine's speed drifts within an hour by more than the few per cent a change may
+move a compile (decision 023), so two compile tables taken at different times cannot
+show such a change. This script checks the base revision out into a temporary
+``git worktree`` and, for every preset and repetition, runs one fresh process on the
+base and one on this working tree, one after the other, base first in odd repetitions
+and new first in even ones (cold compile: no persistent compilation cache). Each child
+runs ``jaxga.run(preset, classic_ga_gapp3_20x20, seeds)`` as ``_results.standard_run`` does
 (:data:`_results.STANDARD_SETTING`) and reports ``compile_s`` and its parts: tracing (JAX's
 trace events), lowering (``Traced.lower``) and XLA (``Lowered.compile``; also per program:
 init, finish, evolve), plus a hash of every per-seed output (``_results.result_hash``):
@@ -38,12 +38,12 @@ from _results import (
     CLI_MAP,
     PRESETS,
     STANDARD_SETTING,
-    append,
     cli_run,
     cold_child,
     instrumented_run,
     markdown_table,
     parse_args,
+    record,
     result_hash,
     standard_run,
     xla_seconds_by_program,
@@ -150,7 +150,7 @@ def main() -> None:
                          rows)
         + f"\n\nAll results identical: {'yes' if same else 'NO'}."
     )
-    append("cold compile, base against new (benchmarks/compile_ab.py)", body,
+    record("cold compile, base against new (benchmarks/compile_ab.py)", body,
            write=not a.no_write)
 
 

@@ -34,11 +34,11 @@ from _results import (
     PRESETS,
     PROGRAMS,
     STANDARD_SETTING,
-    append,
     cold_child,
     instrumented_run,
     markdown_table,
     parse_args,
+    record,
 )
 
 FUSION = re.compile(r"\s*(ROOT )?%\S+ = .*? fusion\(")
@@ -141,7 +141,7 @@ def main() -> None:
         + markdown_table(["preset", "program", "XLA s", "kernels", "kernels by module"],
                          programs)
     )
-    append("cold compile anatomy of every preset", body, write=not a.no_write)
+    record("cold compile anatomy of every preset", body, write=not a.no_write)
 
 
 if __name__ == "__main__":

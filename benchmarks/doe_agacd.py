@@ -21,7 +21,7 @@ import argparse
 import os
 import time
 
-from _results import append, markdown_table
+from _results import markdown_table, record
 
 from jaxga.doe import AGACD_TABLE3, contrast_coefficients, predicted_best, run_doe
 
@@ -110,7 +110,7 @@ in all); load average before
 {', '.join(f'{v:.1f}' for v in load0)}, after {', '.join(f'{v:.1f}' for v in
 os.getloadavg())} on a shared 2-core machine: times are noisy.
 """
-    append("AGACD DOE (5.2.1, Tables 3-5)", body, write=not args.no_write)
+    record("AGACD DOE (5.2.1, Tables 3-5)", body, write=not args.no_write)
 
 
 def _generations(args: argparse.Namespace) -> int:

@@ -11,8 +11,10 @@ emitters). The table gives both processes' compile, init, evolve and total secon
 work per device (runs per device x population x generations) and whether the two
 results are identical (``_results.result_hash``: every path, fitness, length and
 history). Equal hashes here do not make the two compilations bit-identical in general:
-a small mpmga run differs by 1 ulp in one history value (RESULTS.md, 2026-11-25). jaxga
-compiles with XLA's default; the flag is a user's choice (README, performance).
+a small mpmga run differed by 1 ulp in one history value. jaxga compiles the init and
+evolve programs with XLA's default and only the finish program with the older emitters
+(``jaxga.api.FINISH_COMPILER_OPTIONS``, decision 012); the flag is a user's choice
+(README, performance).
 """
 
 from __future__ import annotations
@@ -24,10 +26,10 @@ from _results import (
     STANDARD_GENERATIONS,
     STANDARD_POPULATION,
     STANDARD_SETTING,
-    append,
     cold_child,
     markdown_table,
     parse_args,
+    record,
     result_hash,
     standard_run,
 )
@@ -83,7 +85,7 @@ def main() -> None:
              "compile (older)", "init", "evolve", "total", "same result"], rows)
         + f"\n\nWall time: {time.perf_counter() - t_all:.0f} s."
     )
-    append("XLA:CPU fusion emitters, default vs older: compile time, speed, results",
+    record("XLA:CPU fusion emitters, default vs older: compile time, speed, results",
            body, write=not args.no_write)
 
 

@@ -21,7 +21,7 @@ import time
 
 import numpy as np
 from _results import PRESETS as PAPER_PRESETS
-from _results import append, markdown_table
+from _results import markdown_table, record
 
 from jaxga.api import run
 from jaxga.maps import builtin_names, load_map_info
@@ -100,7 +100,7 @@ def main() -> None:
                           "total s"], rows)
         + f"\n\nWall time of the whole table: {time.perf_counter() - t_all:.0f} s."
     )
-    append("feasibility, success and optimality gap of every preset", body,
+    record("feasibility, success and optimality gap of every preset", body,
            write=not args.no_write)
 
 

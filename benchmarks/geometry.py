@@ -14,7 +14,7 @@ import argparse
 import jax
 import jax.numpy as jnp
 import numpy as np
-from _results import SHARED, append, markdown_table, timed
+from _results import SHARED, markdown_table, record, timed
 
 from jaxga.geometry import clear, linear_trial
 from jaxga.maps import load_map, random_map
@@ -72,7 +72,7 @@ def main() -> None:
                      "per path"])
     body = f"Map: {name}.\n\n" + markdown_table(
         ["what", "n", "total (ms)", "per item (ns)", "note"], rows)
-    append("geometry: clear per segment, path checks", body, write=not args.no_write)
+    record("geometry: clear per segment, path checks", body, write=not args.no_write)
 
 
 if __name__ == "__main__":

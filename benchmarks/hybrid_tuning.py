@@ -34,7 +34,7 @@ import argparse
 import time
 
 import numpy as np
-from _results import SHARED, append, markdown_table
+from _results import SHARED, markdown_table, record
 
 from jaxga.api import run
 from jaxga.doe import Factor, run_doe
@@ -199,7 +199,7 @@ def main() -> None:
         title = "hybrid tuning: init.slack and init.temperature below the L18's levels"
     body += f"\n\nWall time: {time.perf_counter() - t0:.0f} s."
     print(body)
-    append(title, body, write=not args.no_write)
+    record(title, body, write=not args.no_write)
 
 
 if __name__ == "__main__":

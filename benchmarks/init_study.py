@@ -24,14 +24,9 @@ date, machine and load average.
 from __future__ import annotations
 
 import argparse
-import datetime
 import functools
 import math
-import os
-import platform
-import sys
 import time
-from pathlib import Path
 
 import jax
 import numpy as np
@@ -198,25 +193,20 @@ def main(argv=None) -> None:
                          "shared Moving AI map (strict, automatic capacity)")
     ap.add_argument("--no-append", action="store_true")
     args = ap.parse_args(argv)
-    start = datetime.datetime.now(datetime.timezone.utc)
     rows = study(args.size, args.repeats, args.attempts, args.maps)
-    load = os.getloadavg()
     md = table(rows, args.size, args.repeats)
     print()
     print(md)
-    machine = (
-        f"{platform.platform()}, {platform.machine()}, os.cpu_count() = {os.cpu_count()}, "
-        f"python {platform.python_version()}, jax {jax.__version__} "
-        f"({jax.default_backend()}), load average {load[0]:.1f}, {load[1]:.1f}, {load[2]:.1f} "
-        "at the end (other engineers' jobs share the 2 cores: times are upper bounds)"
-    )
-    section = (
-        f"\n## init_study ({start:%Y-%m-%d %H:%M} UTC)\n\n"
-        + (f"Zhu & Pan 2024 Table 2 layout for every initialiser of `jaxga.init` on the "
-           f"classic 20 x 20 maps (corner rule \"free\", start 0, goal 399, capacity "
-           f"{CAPACITY}). " if args.maps == "classic" else
-           "Every initialiser of `jaxga.init` on the longest scenario of each shared Moving "
-           "AI map (corner rule \"strict\", the automatic capacity). ")
+    from _results import record
+
+    title = ("init_study: every initialiser on the classic 20 x 20 maps"
+             if args.maps == "classic" else "init_study: every initialiser on the Moving AI maps")
+    body = (
+        (f"Zhu & Pan 2024 Table 2 layout for every initialiser of `jaxga.init` on the "
+         f"classic 20 x 20 maps (corner rule \"free\", start 0, goal 399, capacity "
+         f"{CAPACITY}). " if args.maps == "classic" else
+         "Every initialiser of `jaxga.init` on the longest scenario of each shared Moving "
+         "AI map (corner rule \"strict\", the automatic capacity). ")
         + f"distinct = different paths among the {args.size} of the first build; Jaccard = "
         f"mean over pairs of 1 - |A and B| / |A or B| of their cell sets (up to 200 paths). "
         f"Success rate from {args.attempts} independent attempts; us per attempt = jit + "
@@ -225,21 +215,13 @@ def main(argv=None) -> None:
         f"sized from the measured rate), median over {args.repeats} keys after compilation "
         f"(fewer when the builds took over 30 s; compile time = ahead-of-time compilation of "
         f"`initialise` with empty caches); length = Euclidean path length of all individuals "
-        f"built, "
-        f"sd over individuals; unfilled = individuals still missing after the redraw budget "
-        f"(summed over the repeats).\n\n"
-        f"- command: `PYTHONPATH=. {Path(sys.executable).as_posix()} "
-        f"benchmarks/init_study.py {' '.join(argv if argv is not None else sys.argv[1:])}`\n"
-        f"- machine: {machine}\n"
-        "- paper (Zhu & Pan Table 2, MATLAB, 30 runs, their Map 3 = classic_ga_gapp3, "
-        "Map 4 = routeplanning_yangbo): GA 3.57 / 3.03 successes per 100, CGA 5.42 / 4.12, "
-        "IGA 34.1 / 24.15; IGA time for 200: 0.445 / 0.731 s; IGA mean length 71.4 / 81.3 "
-        "(sd 16.4 / 19.0)\n\n" + md
+        f"built, sd over individuals; unfilled = individuals still missing after the redraw "
+        f"budget (summed over the repeats). Paper (Zhu & Pan Table 2, MATLAB, 30 runs, their "
+        "Map 3 = classic_ga_gapp3, Map 4 = routeplanning_yangbo): GA 3.57 / 3.03 successes "
+        "per 100, CGA 5.42 / 4.12, IGA 34.1 / 24.15; IGA time for 200: 0.445 / 0.731 s; IGA "
+        "mean length 71.4 / 81.3 (sd 16.4 / 19.0).\n\n" + md
     )
-    if not args.no_append:
-        with open(Path(__file__).parent / "RESULTS.md", "a") as f:
-            f.write(section)
-        print("appended to benchmarks/RESULTS.md")
+    record(title, body, write=not args.no_append)
 
 
 if __name__ == "__main__":

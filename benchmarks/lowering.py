@@ -18,7 +18,7 @@ import argparse
 import re
 import sys
 
-from _results import append, cold_child, markdown_table, parse_args, result_hash
+from _results import cold_child, markdown_table, parse_args, record, result_hash
 
 PROGRAM = re.compile(r"Finished XLA compilation of jit\((do_\w+)\) in ([0-9.]+) sec")
 
@@ -86,7 +86,7 @@ def main() -> None:
                           "XLA total", "compile_s", "evolve ind-gen/s", "results"], rows)
         + f"\n\nAll results identical under both lowerings: {'yes' if same else 'NO'}."
     )
-    append("Threefry lowering: rolled vs unrolled", body, write=not args.no_write)
+    record("Threefry lowering: rolled vs unrolled", body, write=not args.no_write)
     if not same:
         sys.exit(1)
 

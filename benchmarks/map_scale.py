@@ -12,7 +12,7 @@ area (a table of H x W entries per individual) shows up as growing time or memor
 Each (preset, size) runs in a fresh process (no compilation cache): evolution
 milliseconds per generation per run, initialisation milliseconds per run, the XLA
 temporary memory of the init and evolve programs (``memory_analysis()``), and the
-process's peak resident memory. Prints the table and appends it to RESULTS.md.
+process's peak resident memory. Prints the table and records it in RESULTS.md.
 """
 
 from __future__ import annotations
@@ -21,7 +21,7 @@ import argparse
 import json
 import resource
 
-from _results import PRESETS, append, cold_child, markdown_table
+from _results import PRESETS, cold_child, markdown_table, record
 
 
 def child(spec: str) -> None:
@@ -77,7 +77,7 @@ def main() -> None:
             "evolve program) and the process's peak resident memory.\n\n"
             + markdown_table(["preset", "map", "success", "evolve ms/gen/run",
                               "init ms/run", "evolve MB", "init MB", "peak RSS MB"], rows))
-    append("time and memory per generation against map size (one problem)", body,
+    record("time and memory per generation against map size (one problem)", body,
            write=not args.no_write)
 
 

@@ -22,7 +22,7 @@ median and the longest problem. Each (preset, fallback, map) runs in a fresh pro
 
 Every row is appended as one JSON line to ``--resume FILE`` (default
 ``benchmarks/.movingai_ga.jsonl``, not committed) and skipped when the script is run
-again, so a long run can be resumed. Prints the table and appends it to RESULTS.md.
+again, so a long run can be resumed. Prints the table and records it in RESULTS.md.
 """
 
 from __future__ import annotations
@@ -33,7 +33,7 @@ import time
 from pathlib import Path
 
 import numpy as np
-from _results import PRESETS, SHARED, append, cold_child, markdown_table
+from _results import PRESETS, SHARED, cold_child, markdown_table, record
 
 MOVINGAI = SHARED / "movingai"
 MAPS = ("maze-32-32-2", "random-32-32-20", "room-32-32-4", "den312d", "warehouse-10-20-10-2-1",
@@ -149,7 +149,7 @@ def main() -> None:
                               "fallback %"], rows)
             + f"\n\nWall time (this invocation): {time.perf_counter() - t0:.0f} s.")
     print(body)
-    append("every preset on the Moving AI maps (success, gaps, time, memory)", body,
+    record("every preset on the Moving AI maps (success, gaps, time, memory)", body,
            write=not args.no_write)
 
 

@@ -31,7 +31,7 @@ import numpy as np
 from jaxga.reference import OctileGraph, any_angle_shortest_path_np, legal_moves_np
 
 sys.path.insert(0, str(Path(__file__).resolve().parent))
-import _results  # noqa: E402  (benchmarks/_results.py: machine line, RESULTS.md writer)
+import _results  # noqa: E402  (benchmarks/_results.py: machine line, RESULTS.md)
 
 DEFAULT_ROOT = Path("/work/shared/benchmarks/movingai")
 PASSABLE = frozenset(".GS")  # '@', 'O', 'T', 'W' and anything else are blocked
@@ -246,7 +246,7 @@ def main(argv: list[str] | None = None) -> int:
             f"{args.any_angle_count} scenarios of {args.any_angle_map} spread over the range "
             "of optimal lengths; 'upper bound' is `exact=False`.\n\n" + any_angle_table
         )
-    _results.append(
+    _results.record(
         f"Moving AI optimal lengths (jaxga.reference, '{args.rule}')",
         body,
         write=not args.no_append,

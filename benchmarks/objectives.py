@@ -29,7 +29,7 @@ from collections.abc import Callable
 import jax
 import jax.numpy as jnp
 import numpy as np
-from _results import append
+from _results import record
 
 from jaxga import objectives as ob
 from jaxga.grid import DIRECTIONS, Grid
@@ -187,7 +187,7 @@ def main(argv: list[str] | None = None) -> None:
     print(table)
 
     mean_len = np.mean([np.mean(np.asarray(p[2])) for p in pops])
-    append(
+    record(
         "objectives",
         f"{args.paths} random continuous loop-free paths (self-avoiding random walks, "
         f"mean length {mean_len:.0f} nodes), capacity {args.capacity}, "

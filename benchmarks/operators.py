@@ -15,14 +15,13 @@ import time
 
 import jax
 import numpy as np
-from _results import append, markdown_table
+from _results import markdown_table, record
 
 from jaxga import crossover as cx
-from jaxga import init
+from jaxga import init, registry
 from jaxga import mutation as mu
 from jaxga import objectives as ob
 from jaxga import postprocess as post
-from jaxga import selection as sel
 from jaxga.maps import load_map, random_map
 from jaxga.paths import remove_loops
 
@@ -58,15 +57,20 @@ def bench_map(grid, capacity: int, repeats: int) -> list[list]:
     def k_pop(k):
         return (k, pop)
 
-    for name in init.INITIALISERS:
+    for init_op in registry.operators("init"):
         fn = functools.partial(lambda k, fn: jax.vmap(
-            lambda kk: fn(kk, grid, capacity))(jax.random.split(k, P)), fn=init.INITIALISERS[name])
-        rows.append(["init", name, *median_us(fn, k_only, repeats)])
-    for name, fn in sel.SELECTIONS.items():
-        rows.append(["selection", name,
-                     *median_us(lambda k, fn=fn: fn(k, fitness), k_only, repeats)])
-    for name, op in cx.CROSSOVERS.items():
-        if name in ("heterologous", "column"):
+            lambda kk: fn(kk, grid, capacity))(jax.random.split(k, P)), fn=init_op.fn)
+        rows.append(["init", init_op.name, *median_us(fn, k_only, repeats)])
+    for sel_op in registry.operators("selection"):
+        if sel_op.fn is None:
+            continue
+        rows.append(["selection", sel_op.name, *median_us(
+            lambda k, fn=sel_op.fn: fn(k, fitness), k_only, repeats)])
+    for cx_op in registry.operators("crossover"):
+        if cx_op.fn is None:
+            continue
+        name, op = cx_op.name, cx_op.fn
+        if registry.NEEDS_FITNESS in cx_op.traits:
             op = functools.partial(op, fitness_fn=fit_fn)
         lifted = cx.crossover_population(op)
         rows.append(["crossover", name, *median_us(
@@ -111,7 +115,7 @@ def main() -> None:
         body.append(f"\n### {label}, capacity {cap}\n")
         body.append(markdown_table(["family", "operator", "compile (s)", "us / individual"],
                                    rows))
-    append("operators: microseconds per individual", "\n".join(body), write=not args.no_write)
+    record("operators: microseconds per individual", "\n".join(body), write=not args.no_write)
 
 
 if __name__ == "__main__":

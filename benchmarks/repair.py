@@ -15,7 +15,7 @@ import argparse
 import jax
 import jax.numpy as jnp
 import numpy as np
-from _results import append, markdown_table, timed
+from _results import markdown_table, record, timed
 
 from jaxga.maps import load_map
 from jaxga.repair import connect
@@ -49,7 +49,7 @@ def main() -> None:
     body = (f"{P} connections, jit + vmap, median of 7 calls.\n\n"
             + markdown_table(["connection", "capacity", "max rounds", "us / connection",
                               "success rate"], rows))
-    append("repair: connect cost vs capacity and round cap", body, write=not args.no_write)
+    record("repair: connect cost vs capacity and round cap", body, write=not args.no_write)
 
 
 if __name__ == "__main__":

@@ -19,7 +19,7 @@ from __future__ import annotations
 import argparse
 
 import numpy as np
-from _results import append, markdown_table
+from _results import markdown_table, record
 
 from jaxga.reference import shortest_path_np
 from jaxga.replan import mpmga_scenario, replan
@@ -79,7 +79,7 @@ def main() -> None:
              "segment found", "mean spliced length", "exact optimum robot -> goal",
              "paper (MPMGA)"], rows)
     )
-    append("replan: local re-planning latency, MPMGA 5.2.1 / 5.3.1 (SPEC 10)", body,
+    record("replan: local re-planning latency, MPMGA 5.2.1 / 5.3.1 (SPEC 10)", body,
            write=not args.no_write)
 
 

@@ -19,20 +19,17 @@ Where the tree knows ``init.fallback``, the runs are made twice: with the fallba
 bit for bit, and with the default (on), reported beside it (equal wherever the papers'
 initialisers fill every slot). A run in which no seed found a path is compared as
 "no path" (the tree stops it after the initialisation: nothing to evolve). Prints the
-table and appends it to RESULTS.md.
+table and records it in RESULTS.md.
 """
 
 from __future__ import annotations
 
 import argparse
 import json
-import os
 import subprocess
-import sys
-import tempfile
 from pathlib import Path
 
-from _results import PRESETS, append, markdown_table
+from _results import PRESETS, child_at, child_at_revision, markdown_table, record
 
 HERE = Path(__file__).resolve().parent
 ROOT = HERE.parent
@@ -83,18 +80,6 @@ def child(spec: str) -> None:
     print(json.dumps(out))
 
 
-def hashes(checkout: Path, opts: dict) -> dict:
-    env = dict(os.environ, PYTHONPATH=f"{checkout}{os.pathsep}{HERE}")
-    for key in ("JAXGA_CACHE_DIR", "JAX_COMPILATION_CACHE_DIR"):
-        env.pop(key, None)
-    proc = subprocess.run([sys.executable, str(HERE / "reproduction_hashes.py"), "--child",
-                           json.dumps(opts)], env=env, capture_output=True, text=True,
-                          cwd=checkout)
-    if proc.returncode != 0:
-        raise RuntimeError(proc.stderr[-3000:])
-    return json.loads(proc.stdout.strip().splitlines()[-1])
-
-
 def main() -> None:
     ap = argparse.ArgumentParser(description=__doc__)
     ap.add_argument("--base", help="git revision of the reference results (required)")
@@ -109,17 +94,10 @@ def main() -> None:
     if not args.base:
         ap.error("--base is required")
     opts = {"seeds": args.seeds, "doe_seeds": args.doe_seeds}
-    with tempfile.TemporaryDirectory() as tmp:
-        base = Path(tmp) / "base"
-        subprocess.run(["git", "worktree", "add", "--detach", str(base), args.base],
-                       cwd=ROOT, check=True, capture_output=True)
-        try:
-            base_h = hashes(base, {**opts, "fallback": None})
-        finally:
-            subprocess.run(["git", "worktree", "remove", "--force", str(base)], cwd=ROOT,
-                           check=True, capture_output=True)
-    off = hashes(ROOT, {**opts, "fallback": "none"})
-    on = hashes(ROOT, {**opts, "fallback": "field_walk"})
+    script = Path(__file__).name
+    base_h = child_at_revision(args.base, script, json.dumps({**opts, "fallback": None}))
+    off = child_at(ROOT, script, json.dumps({**opts, "fallback": "none"}))
+    on = child_at(ROOT, script, json.dumps({**opts, "fallback": "field_walk"}))
     rows, same = [], 0
     for name in base_h:
         if name == "version":
@@ -137,7 +115,7 @@ def main() -> None:
             "with the fallback off.\n\n"
             + markdown_table(["reproduction", "base hash", "fallback off", "equal",
                               "fallback on (default)", "equal"], rows))
-    append("paper reproductions, result hashes against a base revision", body,
+    record("paper reproductions, result hashes against a base revision", body,
            write=not args.no_write)
     if same != len(rows):
         raise SystemExit(1)

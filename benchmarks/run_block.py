@@ -17,7 +17,7 @@ import argparse
 import os
 import sys
 
-from _results import append, cold_child, markdown_table, parse_args, result_hash
+from _results import cold_child, markdown_table, parse_args, record, result_hash
 
 
 def child(preset: str, seeds: int, generations: int, block: int) -> dict:
@@ -71,7 +71,7 @@ def main() -> None:
                           "evolve", "ind-gen/s", "peak MiB", "results hash"], rows)
         + f"\n\nAll results identical: {'yes' if len(hashes) == 1 else 'NO'}."
     )
-    append("Runs per block (benchmarks/run_block.py)", body, write=not args.no_write)
+    record("Runs per block (benchmarks/run_block.py)", body, write=not args.no_write)
     if len(hashes) != 1:
         sys.exit(1)
 

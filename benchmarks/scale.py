@@ -32,7 +32,7 @@ import sys
 import time
 from pathlib import Path
 
-from _results import append, markdown_table
+from _results import markdown_table, record
 
 HERE = Path(__file__).resolve().parent
 MAP = "classic_ga_gapp3_20x20"
@@ -146,7 +146,7 @@ def main() -> None:
         f"{', '.join(f'{v:.1f}' for v in load_before)} before and "
         f"{', '.join(f'{v:.1f}' for v in load_after)} after: the machine was shared, "
         "the numbers are noisy.\n\n" + table)
-    append("Scaling: devices and processes (benchmarks/scale.py)", body,
+    record("Scaling: devices and processes (benchmarks/scale.py)", body,
            write=not args.no_write)
 
 

@@ -5,7 +5,7 @@
 Writes maps of 600 x 600 to 5000 x 5000 cells in each file format to a temporary folder
 and times ``jaxga.maps.load_map`` until it raises its one-line refusal, then the same
 ``jaxga optimum --map FILE`` as a user types it (a fresh process: its time includes
-starting Python and importing jaxga). Prints the table and appends it to RESULTS.md.
+starting Python and importing jaxga). Prints the table and records it in RESULTS.md.
 """
 
 from __future__ import annotations
@@ -17,7 +17,7 @@ import time
 from pathlib import Path
 
 import numpy as np
-from _results import append, markdown_table
+from _results import markdown_table, record
 
 from jaxga.errors import MapFormatError
 from jaxga.maps import load_map, save_map
@@ -53,7 +53,7 @@ def main() -> None:
             "on stderr.\n\n"
             + markdown_table(["map", "format", "load ms", "CLI s", "exit", "lines",
                               "message"], rows))
-    append("a map over the size limit is refused at once", body)
+    record("a map over the size limit is refused at once", body)
 
 
 if __name__ == "__main__":

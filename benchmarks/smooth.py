@@ -23,7 +23,7 @@ import time
 import jax
 import jax.numpy as jnp
 import numpy as np
-from _results import append, markdown_table
+from _results import markdown_table, record
 
 from jaxga.grid import Grid
 from jaxga.maps import load_map
@@ -117,7 +117,7 @@ def main(argv: list[str] | None = None) -> None:
                "max kappa <= bound"]
     table = markdown_table(headers, rows)
     print(table)
-    append(
+    record(
         "smooth: B-spline smoothing of 1 and 100 paths (SPEC 12)",
         f"{P} optimal paths (any-angle and 8-connected, alternating) between random "
         "start/goal pairs, corner rule strict; default SmoothConfig (200 Adam steps, "

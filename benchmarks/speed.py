@@ -16,9 +16,8 @@ parameters; only population size and generations are set to the setting's (and w
 ``--max-generations-many G`` the runs of 100 seeds or more evolve only ``G``
 generations: ind-gen/s is per generation, runs/s is then extrapolated to the full
 generation count). The extrapolation is a quick approximation and understates the full
-run: the first generations cost more than the later ones (sga at 20 x 20, 100 runs:
-8.6 ms per generation over the first 50, 7.9 ms over the next 250; RESULTS.md,
-2026-11-24), so the targets are judged on full runs (the default).
+run: the first generations cost more than the later ones, so the targets are judged on
+full runs (the default; decision 023).
 
 With ``--warm`` each configuration runs twice, in two child processes sharing a fresh
 persistent compilation cache (``jaxga.use_compilation_cache``, which ``jaxga run``
@@ -50,7 +49,7 @@ import time
 from pathlib import Path
 
 import numpy as np
-from _results import append, markdown_table, parse_args
+from _results import markdown_table, parse_args, record
 
 from jaxga.parallel import cores
 
@@ -217,7 +216,7 @@ def main() -> None:
         + f"\n\nWall time: {time.perf_counter() - t_all:.0f} s."
         + "".join(f"\n\n{n}" for n in notes)
     )
-    append("speed of every preset vs a NumPy loop SGA", body, write=not args.no_write)
+    record("speed of every preset vs a NumPy loop SGA", body, write=not args.no_write)
 
 
 if __name__ == "__main__":

@@ -28,7 +28,7 @@ import tempfile
 import time
 from pathlib import Path
 
-from _results import append, markdown_table
+from _results import markdown_table, record
 
 HERE = Path(__file__).resolve().parent
 ROOT = HERE.parent
@@ -119,7 +119,7 @@ def main() -> None:
         + markdown_table(["test", "wall", "XLA s"],
                          [[n, w, c] for w, c, n in tests[: a.top]])
     )
-    append("test suite time per file, cold compilation cache", body, write=not a.no_write)
+    record("test suite time per file, cold compilation cache", body, write=not a.no_write)
 
 
 if __name__ == "__main__":

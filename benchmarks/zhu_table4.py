@@ -29,7 +29,7 @@ import argparse
 import jax
 import jax.numpy as jnp
 import numpy as np
-from _results import append, markdown_table
+from _results import markdown_table, record
 
 from jaxga.api import run
 from jaxga.fitness_reference import fitness_optimum
@@ -115,7 +115,7 @@ def main() -> None:
                           "% seeds at the fitness optimum", "mean fitness gap %"],
                          opt_rows)
     )
-    append("Zhu & Pan Table 4 side by side", body, write=not args.no_write)
+    record("Zhu & Pan Table 4 side by side", body, write=not args.no_write)
 
 
 if __name__ == "__main__":

@@ -420,24 +420,19 @@ class _Programs:
 RUN_BLOCK = 64
 """Largest number of runs one device computes together (see :func:`map_runs`).
 
-Measured (sga 20 x 20, 2 devices, a noisy machine; the second sweep is
-``benchmarks/run_block.py`` in RESULTS.md 2026-11-23, the first a scratch script doing
-the same): 1000 seeds in blocks of 125, 50, 25 and 20 runs: 154k / 134k, 195k / 180k,
-205k / 144k and 209k / 180k individual-generations per second. At 100 seeds, one
-``vmap`` of 50 per device against 2 blocks of 25 was within noise (+8 % in one pair of
-runs, -13 % in another). 64 keeps shares up to 64 runs in one ``vmap`` and splits
-larger ones into blocks of 32-64."""
+Blocks of 20-50 runs compute faster than blocks of 125, and one ``vmap`` of 50 runs is
+within noise of two blocks of 25 (``benchmarks/run_block.py``; decision 011). 64 keeps
+shares up to 64 runs in one ``vmap`` and splits larger ones into blocks of 32-64."""
 
 
 INIT_RUN_BLOCK = 10
 """Largest number of runs one device initialises together (the init program's blocks).
 
 The random-walk initialisation is a loop of walk rounds whose length is set by the
-slowest run of its batch, and batching walks saves little per run (1 run: about 17 ms
-per run per device; 50 runs in one ``vmap``: about the same), so it takes smaller blocks
-than the evolution. Measured (sga 20 x 20, 1000 seeds, 2 devices, RESULTS.md
-2026-11-24): blocks of 50 / 20 / 10 / 5 runs initialised in 8.55 / 8.17 / 7.28 / 7.23 s.
-The results are the same: every run is independent of the runs that share its block."""
+slowest run of its batch, and batching walks saves little per run, so it takes smaller
+blocks than the evolution: blocks of 10 initialise 1000 seeds faster than blocks of 20
+or 50 (decision 011). The results are the same: every run is independent of the runs
+that share its block."""
 
 
 def run_blocks(n_runs: int, n_devices: int = 1, block: int | None = None) -> int:
@@ -473,8 +468,7 @@ def map_runs(fn: Callable, in_axes: tuple, n_runs: int,
     larger than the caches (1000 x 60 x 160 cells are 38 MB), and every ``while_loop``
     under the ``vmap`` (the gated operators' blocks, repair rounds, initialisation
     rounds) runs as many iterations as the slowest run of its batch: smaller batches
-    wait less. Blocks of 20-50 runs were 1.3x faster than blocks of 125
-    (:data:`RUN_BLOCK`).
+    wait less (:data:`RUN_BLOCK`, decision 011).
     """
     n_blocks = run_blocks(n_runs, 1, block)
     if n_blocks == 1:
@@ -501,13 +495,12 @@ PROGRAM_CACHE_SIZE = 8
 
 FINISH_COMPILER_OPTIONS = {"xla_cpu_use_fusion_emitters": False}
 """XLA options of the finish program (post-optimisation, metrics; it runs once per run):
-XLA:CPU's older (LLVM IR) fusion emitters compile it 0.3-0.6 s faster than the default
-MLIR emitters, with the same results (checked in the A/B tables and by
-``tests/test_engine.py``), and its run is no slower (RESULTS.md, 2026-11-25/26, sessions
-20-21 and 26). Always these options, whatever the number of runs, so a run's results
-never depend on how many runs share its call. The init and evolve programs keep XLA's
-defaults: with the older emitters they compile faster but run up to 1.9x slower on wide
-batches."""
+XLA:CPU's older (LLVM IR) fusion emitters compile it faster than the default MLIR
+emitters, with the same results (checked in the A/B tables and by
+``tests/test_engine.py``), and its run is no slower (decision 012). Always these
+options, whatever the number of runs, so a run's results never depend on how many runs
+share its call. The init and evolve programs keep XLA's defaults: with the older
+emitters they compile faster but run slower on wide batches (decision 012)."""
 
 
 _COMPILE_PROGRESS: contextvars.ContextVar[Callable[[float], None] | None] = \
@@ -550,7 +543,7 @@ def _programs(algo: Algorithm, grid_spec: Any, params_spec: Any, n_runs: int,
     # device runs its own share as a program of its own. Under a jit sharded by XLA
     # instead, every while_loop whose trip count depends on the runs (the operators'
     # gated blocks, connection rounds) had to agree on its condition across devices at
-    # every iteration (RESULTS.md, 2026-11-23).
+    # every iteration (decision 011).
     n_dev = 1 if sh is None else sh.mesh.size
 
     def jit(fn, in_axes, block=None):
@@ -578,8 +571,8 @@ def _programs(algo: Algorithm, grid_spec: Any, params_spec: Any, n_runs: int,
         jax.ShapeDtypeStruct((n_runs,), jnp.float32))
     traced = {"init": init_t, **{f"evolve{n}": t for n, t in evolve_t.items()},
               "finish": finish_t}
-    # One after the other. Compiling them in threads (one per core) was measured again on
-    # 2026-11-23 on a quiet machine: no faster (sga, 100 and 1000 seeds, within 3 %).
+    # One after the other: compiling them in threads (one per core) was no faster
+    # (decision 011).
     report = _COMPILE_PROGRESS.get() or (lambda frac: None)
     programs = _Programs(traced, sizes)
     report(1 / (1 + len(traced)))
@@ -973,7 +966,8 @@ def _optima(grid: Grid):
     """``(8-connected optimum, any-angle optimum)`` of the grid's problem (jaxga.reference;
     the any-angle one None when the goal is unreachable), cached for the last 32
     problems: comparing presets or repeating runs on one problem computes them once
-    (the any-angle optimum of a long problem on a 256 x 256 map takes seconds)."""
+    (the any-angle optimum of a long problem on a 256 x 256 map takes seconds:
+    decision 015)."""
     import hashlib
 
     b = np.ascontiguousarray(grid.blocked_np())

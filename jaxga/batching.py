@@ -115,10 +115,9 @@ def true_first_order(flags: jax.Array) -> jax.Array:
     """``int32[n]``: the indices of the True entries of ``flags`` in order, then those of
     the False entries in order; equal to ``jnp.argsort(~flags, stable=True)``.
 
-    A prefix count and one scatter of a permutation instead of a comparison sort: for
-    the 9,540 segments of an AGACD population (60 x 159) XLA's CPU sort took 1.2 ms per
-    population, 14x longer (``benchmarks/batched_ops.py``, RESULTS.md), and in a profile
-    of AGACD's evolution it was half of a generation.
+    A prefix count and one scatter of a permutation instead of a comparison sort, which
+    on XLA's CPU backend is many times slower and was half of a generation of AGACD's
+    evolution (decision 004).
     """
     flags = jnp.asarray(flags, bool)
     n = flags.shape[0]
@@ -135,11 +134,9 @@ there)."""
 
 POOL_MAX = 192
 """Largest pooled block of :func:`gated_map` under ``vmap`` (unless one run's block is
-wider). The best width was about 190 entries both for 100 runs in one ``vmap`` (where
-``POOL_SHRINK`` 8 gave it, and 4, i.e. 375, was slower) and for the blocks of 50 runs
-that ``jaxga.api`` runs per device (where 4 gives it: sga at 1000 seeds 1.5-4 % faster
-than 8, the other presets 0-4 %; RESULTS.md, 2026-11-24). The results do not depend on
-the width."""
+wider): about the best width both for 100 runs in one ``vmap`` and for the blocks of
+runs that ``jaxga.api`` runs per device, where :data:`POOL_SHRINK` 4 gives it
+(decision 004). The results do not depend on the width."""
 
 
 def gated_map(
@@ -380,10 +377,10 @@ def over_pairs_gated(
 
 WINDOW_FRACTION = 0.4
 """:func:`windowed_map`'s narrow width is the smallest power of two at least this share
-of the capacity. Measured longest path of a whole batch of evolving SGA runs (speed.py's
-maps): 20 x 20, capacity 160, 50 runs: 88 at generation 10, 46-57 from generation 20
-on (window 64); 50 x 50, capacity 400, 20 runs: 260 at generation 50, 164-220 from
-generation 100 on (window 256)."""
+of the capacity (decision 005). Measured longest path of a whole batch of evolving SGA
+runs (speed.py's maps): 20 x 20, capacity 160, 50 runs: 88 at generation 10, 46-57 from
+generation 20 on (window 64); 50 x 50, capacity 400, 20 runs: 260 at generation 50,
+164-220 from generation 100 on (window 256)."""
 
 
 def window_width(capacity: int) -> int:
@@ -422,8 +419,7 @@ def spliced_pairs_map(fn: Callable, args: tuple, window: int | None = None) -> t
     Such children always fit ``2 * window`` cells, as they fit the full width, so the
     narrow program gives the same children, re-padded with their last cell (SPEC 2),
     and the same failure counts. As :func:`windowed_map`, one unbatched test on the
-    longest parent of all folded runs picks the program. SGA's crossover of 100 runs on
-    20 x 20 (160 -> 128 cells): 4.2 -> 3.1 ms (RESULTS.md, 2026-11-24).
+    longest parent of all folded runs picks the program (decision 005).
     """
     w = window_width(args[1].shape[1]) if window is None else int(window)
     return _windowed(fn, tuple(args), paths=(1, 3), lengths=(2, 4), fits=w, cut=2 * w,

@@ -240,6 +240,46 @@ def cmd_presets(args: argparse.Namespace) -> int:
     return 0
 
 
+def describe_field(field: Any) -> str:
+    """One line on a configuration field: type, range or choices, default, whether it
+    can be swept without recompiling, and its meaning."""
+    kinds = field.kind if isinstance(field.kind, tuple) else (field.kind,)
+    parts = ["/".join(k.__name__ for k in kinds)]
+    if field.choices is not None:
+        parts.append("one of " + ", ".join(map(str, field.choices)))
+    if field.low is not None and field.high is not None:
+        parts.append(f"in [{field.low}, {field.high}]")
+    elif field.low is not None:
+        parts.append(f">= {field.low}")
+    elif field.high is not None:
+        parts.append(f"<= {field.high}")
+    if field.default is not None:
+        parts.append(f"default {field.default}")
+    parts.append("dynamic" if field.dynamic else "static")
+    return f"{field.doc} ({'; '.join(parts)})"
+
+
+def cmd_operators(args: argparse.Namespace) -> int:
+    """``jaxga operators [FAMILY]``: the registered operators of each family (or one),
+    with their former names, traits, parameters and papers (:mod:`jaxga.registry`)."""
+    from jaxga import registry
+
+    families = registry.FAMILIES if args.family is None else (args.family,)
+    for family in families:
+        if family not in registry.FAMILIES:
+            raise JaxgaError(f"unknown operator family {family!r} "
+                             f"({', '.join(registry.FAMILIES)})")
+        print(f"{family}.method")
+        for op in registry.operators(family):
+            former = f" (formerly {', '.join(op.aliases)})" if op.aliases else ""
+            traits = f" [{', '.join(sorted(op.traits))}]" if op.traits else ""
+            print(f"  {op.name}{former}{traits}")
+            print(f"      {op.summary}")
+            for key, field in op.params.items():
+                print(f"      {key}: {describe_field(field)}")
+    return 0
+
+
 class _Progress:
     """Progress of a run on stderr, shown from the first update after the run has taken
     ``delay`` seconds (a quick run shows none): on a terminal a one-line bar redrawn in
@@ -646,6 +686,12 @@ def build_parser() -> argparse.ArgumentParser:
 
     p = sub.add_parser("presets", help="list the presets and their papers")
     p.set_defaults(func=cmd_presets)
+
+    p = sub.add_parser("operators", help="list the operators of each family, with their "
+                       "parameters (the values of --set FAMILY.method=NAME)")
+    p.add_argument("family", nargs="?", help="one family: init, fitness, selection, "
+                   "crossover, mutation, simplify or post")
+    p.set_defaults(func=cmd_operators)
 
     p = sub.add_parser("maps", help="list the built-in maps")
     p.set_defaults(func=cmd_maps)

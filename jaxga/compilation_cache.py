@@ -1,10 +1,11 @@
 """JAX's persistent compilation cache for jaxga's programs (on disk, across processes).
 
-A cold ``jaxga.run`` spends about 8-20 s compiling its programs on a 2-core CPU
+A cold ``jaxga.run`` spends seconds compiling its programs, most of a short run's time
 (README, performance). JAX can keep compiled programs on disk, keyed by the program and
 the JAX and XLA versions; a later process that compiles the same program (same preset,
 map size and run count) reads it instead. Tracing and lowering still run, so such a
-"warm" compile takes about 3-5 s (``benchmarks/speed.py --warm``).
+"warm" compile is shorter than a cold one but not free (``benchmarks/speed.py --warm``;
+decision 014).
 
 ``jaxga run`` and the other commands turn the cache on by default. A script or a
 notebook turns it on with :func:`use_compilation_cache` before its first run.
@@ -48,8 +49,8 @@ def use_compilation_cache(directory: str | os.PathLike | None = None) -> str | N
     ``jax_persistent_cache_min_compile_time_secs`` (:data:`MIN_COMPILE_SECONDS`) for the
     whole process; it works after other programs have been compiled. A restarted
     notebook kernel that calls it before ``jaxga.run`` compiles a preset it compiled
-    before in about 3-5 s instead of 10-20 s. Not part of any paper: an engineering
-    aid (jaxga's results never depend on it).
+    before in a fraction of the cold compile time (decision 014). Not part of any
+    paper: an engineering aid (jaxga's results never depend on it).
     """
     if directory is None:
         path = os.environ.get(ENV_VAR, default_directory())

@@ -17,89 +17,29 @@ import dataclasses
 import math
 import re
 import sys
-from collections.abc import Iterable, Mapping
+from collections.abc import Iterable, Iterator, Mapping
 from pathlib import Path
 from typing import Any
 
+from jaxga import registry
 from jaxga.errors import ParameterError
+from jaxga.fields import Field, P, python_scalar
 from jaxga.grid import CORNER_RULES
+from jaxga.registry import MethodField
 
 if sys.version_info >= (3, 11):
     import tomllib
 else:  # pragma: no cover
     import tomli as tomllib
 
-INITIALISERS = ("random_walk", "median_insertion", "intermittent_connect",
-                "greedy_random_target", "directional", "field_walk")
+__all__ = ["DEFAULTS", "REQUIRED", "SCHEMA", "Config", "Field", "flatten", "load_toml",
+           "parse_value", "python_scalar"]
+
 FALLBACKS = ("field_walk", "none")
 REPAIR_FALLBACKS = ("none", "field")
-FITNESSES = ("sga", "imga", "agacd", "mpmga", "iga_zhu", "iga_zhang")
-SELECTIONS = ("roulette", "roulette_elite", "layered_thirds", "stratified", "tournament",
-              "none")
-CROSSOVERS = ("common_point", "cut_and_check", "heterologous", "column", "zhu_mixed", "none")
-MUTATIONS = ("neighbour_point", "one_point", "range", "segment_sa", "point_checked",
-             "zhu_mixed", "none")
-SIMPLIFIERS = ("none", "simplify_adjacent", "corner_cut")
-POSTPROCESSORS = ("none", "shortcut_greedy", "shortcut_optimal")
 TOPOLOGIES = ("none", "ring", "star", "full", "mpmga")
 
-
-@dataclasses.dataclass(frozen=True)
-class Field:
-    """One configuration key: its type, constraint, whether it is dynamic, and meaning."""
-
-    kind: type | tuple[type, ...]
-    doc: str
-    choices: tuple | None = None
-    low: float | None = None
-    high: float | None = None
-    dynamic: bool = False
-
-    def check(self, key: str, value: Any) -> Any:
-        kinds = self.kind if isinstance(self.kind, tuple) else (self.kind,)
-        value = python_scalar(value)
-        if float in kinds and isinstance(value, int) and not isinstance(value, bool):
-            value = float(value)
-        if list in kinds and isinstance(value, tuple):  # (1.2, 1.4) from Python
-            value = list(value)
-        if isinstance(value, bool) and bool not in kinds:
-            raise ParameterError(f"{key} must be {_kind_name(kinds)}, got {value!r}")
-        if not isinstance(value, kinds):
-            raise ParameterError(f"{key} must be {_kind_name(kinds)}, got {value!r}")
-        if self.choices is not None and value not in self.choices:
-            raise ParameterError(
-                f"{key} = {value!r} is not one of {', '.join(map(str, self.choices))}"
-            )
-        if isinstance(value, (int, float)) and not isinstance(value, bool):
-            if isinstance(value, float) and not math.isfinite(value):
-                raise ParameterError(f"{key} must be finite, got {value!r}")
-            if self.low is not None and value < self.low:
-                raise ParameterError(f"{key} = {value!r} is below its minimum {self.low}")
-            if self.high is not None and value > self.high:
-                raise ParameterError(f"{key} = {value!r} is above its maximum {self.high}")
-        return value
-
-
-def python_scalar(value: Any) -> Any:
-    """A numpy scalar (``np.int64(8)``, ``np.float32(0.5)``, ``np.bool_(True)``) as the
-    Python value it holds; anything else unchanged. Sweeps and designs built with numpy
-    give numpy scalars, which are the same values as far as a configuration goes."""
-    import numpy as np
-
-    if isinstance(value, np.generic) and value.dtype.kind in "biuf":
-        return value.item()
-    return value
-
-
-def _kind_name(kinds: tuple[type, ...]) -> str:
-    return " or ".join({bool: "true/false", int: "an integer", float: "a number",
-                        str: "a string", list: "a list"}.get(k, k.__name__) for k in kinds)
-
-
-P = dict(kind=float, low=0.0, high=1.0, dynamic=True)
-POS = dict(kind=float, low=0.0, dynamic=True)
-
-SCHEMA: dict[str, Field] = {
+COMMON_FIELDS: dict[str, Field] = {
     "name": Field(str, "preset name"),
     "paper": Field(str, "the paper the preset reproduces"),
     "description": Field(str, "one line on the algorithm"),
@@ -110,60 +50,34 @@ SCHEMA: dict[str, Field] = {
                                  "number of individuals); 0 = automatic from the map size",
                                  low=0, high=1_000_000),
     "generations": Field(int, "generations per run", low=1, high=1_000_000),
-    "init.method": Field(str, "initialiser (SPEC 4)", choices=INITIALISERS),
+    "init.method": MethodField("init", "initialiser (SPEC 4)"),
     "init.max_tries": Field(int, "redraws of a failed individual", low=1, high=10_000),
     "init.fallback": Field(str, "initialiser that fills the slots init.method left empty "
                            "after init.max_tries attempts ('none': the paper's initialiser "
                            "alone)", choices=FALLBACKS),
-    "init.slack": Field(float, low=0.0, high=100.0, dynamic=True,
-                        doc="field_walk: paths up to (1 + slack) x the optimal length"),
-    "init.temperature": Field(float, low=0.0, high=1000.0, dynamic=True,
-                              doc="field_walk: preference for short detours, "
-                                  "exp(-excess / temperature); 0 = optimal moves only"),
     "repair.fallback": Field(str, "'field': a repair that does not close (median insertion "
                              "of the initialisers, the column crossover and the segment "
                              "mutation; the range mutation's walk) connects down the exact "
                              "distance field instead of failing ('none': the papers' "
                              "failure)", choices=REPAIR_FALLBACKS),
-    "fitness.method": Field(str, "fitness combiner (SPEC 3)", choices=FITNESSES),
+    "fitness.method": MethodField("fitness", "fitness combiner (SPEC 3)"),
     "fitness.window": Field(bool, "evaluate grid paths on a narrow window when all fit "
                             "(same results; faster where paths stay short, 1-2 s more "
                             "compile)"),
-    "fitness.a": Field(**POS, doc="IMGA length weight a / Zhang turn weight a"),
-    "fitness.b": Field(**POS, doc="IMGA safety weight b"),
-    "fitness.c": Field(**POS, doc="IMGA energy weight c / MPMGA smoothness constant c"),
-    "fitness.importance_ratios": Field(list, "AGACD Delphi importance ratios (eq. 21-25)"),
-    "fitness.smoothness_floor": Field(**POS, doc="floor of a zero smoothness (straight path)"),
-    "fitness.alpha": Field(**POS, doc="MPMGA length weight alpha"),
-    "fitness.beta": Field(**POS, doc="MPMGA smoothness weight beta"),
-    "fitness.omega": Field(**P, doc="Zhu length weight omega"),
-    "fitness.c1": Field(**POS, doc="Zhu penalty of a 45 degree turn"),
-    "fitness.c2": Field(**POS, doc="Zhu penalty of a 90 degree turn"),
-    "fitness.c3": Field(**POS, doc="Zhu penalty of a 135 degree turn"),
-    "fitness.v": Field(**POS, doc="Zhang straight speed v"),
-    "fitness.v_t": Field(**POS, doc="Zhang turning speed v_t"),
-    "fitness.r": Field(**POS, doc="Zhang turning radius r"),
-    "selection.method": Field(str, "selection (SPEC 5)", choices=SELECTIONS),
-    "selection.tournament_size": Field(int, "tournament size k", low=1, high=1000),
-    "crossover.method": Field(str, "crossover (SPEC 6)", choices=CROSSOVERS),
+    "selection.method": MethodField("selection", "selection (SPEC 5)"),
+    "crossover.method": MethodField("crossover", "crossover (SPEC 6)"),
     "crossover.probability": Field(**P, doc="crossover probability pc per pair"),
     "crossover.adaptive": Field(bool, "AGACD adaptive pc (eq. 26-27)"),
     "crossover.pc_low": Field(**P, doc="AGACD pc_low"),
     "crossover.pc_high": Field(**P, doc="AGACD pc_high"),
-    "mutation.method": Field(str, "mutation (SPEC 7)", choices=MUTATIONS),
+    "mutation.method": MethodField("mutation", "mutation (SPEC 7)"),
     "mutation.probability": Field(**P, doc="mutation probability pm per individual"),
     "mutation.adaptive": Field(bool, "AGACD adaptive pm (eq. 28-29)"),
     "mutation.pm_low": Field(**P, doc="AGACD pm_low"),
     "mutation.pm_high": Field(**P, doc="AGACD pm_high"),
-    "mutation.radius": Field(int, "AGACD point mutation radius in cells", low=1, high=10_000),
-    "mutation.temperature_c1": Field(**POS, doc="MPMGA annealing T = c1 * w**t: c1"),
-    "mutation.temperature_w": Field(float, low=0.0, high=1.0,
-                                    doc="MPMGA annealing T = c1 * w**t: w (static: optax "
-                                        "builds the schedule from it)"),
-    "simplify.method": Field(str, "per-generation simplification (SPEC 9)", choices=SIMPLIFIERS),
+    "simplify.method": MethodField("simplify", "per-generation simplification (SPEC 9)"),
     "simplify.probability": Field(**P, doc="simplification probability ps per individual"),
-    "post.method": Field(str, "post-optimisation of the final best (SPEC 9)",
-                         choices=POSTPROCESSORS),
+    "post.method": MethodField("post", "post-optimisation of the final best (SPEC 9)"),
     "termination.stagnation": Field(int, "IMGA: stop after K generations without improvement; "
                                     "0 = never", low=0, high=1_000_000),
     "islands.count": Field(int, "number of islands (1 = single population)", low=1, high=1024),
@@ -174,17 +88,14 @@ SCHEMA: dict[str, Field] = {
     "islands.mutation_probabilities": Field(list, "per-island pm (MPMGA A, B, C)"),
 }
 
-DEFAULTS: dict[str, Any] = {
+COMMON_DEFAULTS: dict[str, Any] = {
     "description": "",
     "map.corner_rule": "strict",
     "population.capacity": 0,
     "init.max_tries": 20,
     "init.fallback": "field_walk",
-    "init.slack": 0.5,
-    "init.temperature": 1.0,
     "repair.fallback": "none",
     "fitness.window": True,
-    "selection.tournament_size": 2,
     "crossover.adaptive": False,
     "mutation.adaptive": False,
     "simplify.method": "none",
@@ -196,6 +107,48 @@ DEFAULTS: dict[str, Any] = {
     "islands.interval": 1,
     "islands.migrants": 0,
 }
+
+
+
+class _WithOperators(Mapping):
+    """A read-only mapping: ``common`` and what the registered operators add
+    (``part(field)`` of each of their keys, None left out), rebuilt when the registry
+    changes, so operators registered after import are part of it."""
+
+    def __init__(self, common: dict[str, Any], part) -> None:
+        self._common, self._part, self._version, self._merged = common, part, -1, {}
+
+    def _get(self) -> dict[str, Any]:
+        if self._version != registry.version():
+            merged = dict(self._common)
+            for key, field in registry.schema_fields().items():
+                value = self._part(field)
+                if value is not None:
+                    merged[key] = value
+            self._merged, self._version = merged, registry.version()
+        return self._merged
+
+    def __getitem__(self, key: str) -> Any:
+        return self._get()[key]
+
+    def __iter__(self) -> Iterator[str]:
+        return iter(self._get())
+
+    def __len__(self) -> int:
+        return len(self._get())
+
+    def __repr__(self) -> str:
+        return repr(self._get())
+
+
+SCHEMA: Mapping[str, Field] = _WithOperators(COMMON_FIELDS, lambda field: field)
+"""Every configuration key with its :class:`~jaxga.fields.Field`: the keys of the run,
+the families' and the islands' (:data:`COMMON_FIELDS`) and the keys the registered
+operators declare (:func:`jaxga.registry.schema_fields`)."""
+
+DEFAULTS: Mapping[str, Any] = _WithOperators(COMMON_DEFAULTS, lambda field: field.default)
+"""The value of every key a configuration may leave out: :data:`COMMON_DEFAULTS` and
+the defaults of the operators' keys."""
 
 REQUIRED = ("name", "population.size", "generations", "init.method", "fitness.method",
             "selection.method", "crossover.method", "mutation.method")

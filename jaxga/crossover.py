@@ -59,8 +59,6 @@ from jaxga.paths import position_lookup as _position_lookup
 from jaxga.repair import concat, connect, prefix_count
 
 __all__ = [
-    "CROSSOVERS",
-    "SPLICING_CROSSOVERS",
     "ColumnRanges",
     "adaptive_crossover_probability",
     "adaptive_pair_probability",
@@ -89,8 +87,8 @@ def _kth_true(mask: jax.Array, r: jax.Array) -> jax.Array:
 
     Masks longer than ``2 * _KTH_ROW`` are searched in rows of ``_KTH_ROW``
     (:func:`_kth_true_rows`): a prefix sum over the rows' counts and one within a row
-    instead of one over the whole mask (3,000 masks of 160 slots, the common-point
-    crossovers of 100 SGA runs: 0.72 -> 0.36 ms; the crossover 3.8 -> 3.0 ms).
+    instead of one over the whole mask: faster on masks of a path's capacity
+    (decision 010).
     """
     n = mask.shape[0]
     if n <= 2 * _KTH_ROW:
@@ -231,10 +229,9 @@ def common_point(
     Continuous, loop-free parents give continuous, loop-free children. Cost: one cell
     lookup (where parent 1's cells are in parent 2; the second child's loop cut is read
     off it too, :func:`_join_reverse`, exact for a loop-free parent 2) and a few gathers
-    of length ``L``; no scan, no O(L^2) matrix. The lookups (a scatter per parent) were
-    most of the operator's time: one instead of two made it about 3x faster (15,000
-    pairs of 128 cells: 35-38 -> 11 ms) and sga's evolution of 1000 seeds about 13 %
-    faster, with the same children (RESULTS.md, 2026-11-26 session 27).
+    of length ``L``; no scan, no O(L^2) matrix. The lookups (a scatter per parent) are
+    most of the operator's time, so one lookup instead of two makes it several times
+    faster, with the same children (decision 010).
     """
     c1, c2 = jnp.asarray(c1, _I32), jnp.asarray(c2, _I32)
     l1, l2 = jnp.asarray(l1, _I32), jnp.asarray(l2, _I32)
@@ -351,8 +348,8 @@ def _step_masks(grid: Grid, cells: jax.Array) -> jax.Array:
     if n_cells > TABLE_MAX_CELLS:
         return jnp.sum(jnp.where(legal9(cells), bit, 0), axis=-1, dtype=_I32)
     # The bits are packed with a matrix product: XLA fuses an elementwise/reduce table
-    # into the gather that reads it (recomputing 9 move_legal per gathered element, about
-    # 20x slower here) but never a dot. Exact: integers below 2**9 in float32.
+    # into the gather that reads it (recomputing 9 move_legal per gathered element, much
+    # slower here: decision 010) but never a dot. Exact: integers below 2**9 in float32.
     legal = legal9(jnp.arange(n_cells, dtype=_I32)).astype(_F32)
     table = jnp.dot(legal, bit.astype(_F32), precision=jax.lax.Precision.HIGHEST)
     return table.astype(_I32)[jnp.clip(cells, 0, n_cells - 1)]
@@ -851,21 +848,7 @@ def crossover_population(
     (:func:`jaxga.batching.over_pairs_gated`); the result is that of
     ``over_pairs(with_probability(op))``. ``dense=True`` computes every pair and selects
     (same result; cheaper at the papers' high crossover rates). ``splicing=True`` (with
-    ``dense``; the operators of :data:`SPLICING_CROSSOVERS` only) computes the pairs on
+    ``dense``; operators with the registry trait ``splicing`` only) computes the pairs on
     twice the window (:func:`jaxga.batching.spliced_pairs_map`) when every parent fits it.
     """
     return over_pairs_gated(op, in_axes_extra=in_axes_extra, dense=dense, splicing=splicing)
-
-
-CROSSOVERS: dict[str, Callable] = {
-    "common_point": common_point,
-    "cut_and_check": cut_and_check,
-    "heterologous": heterologous,
-    "column": column,
-}
-"""Crossovers by name (SPEC 6). ``heterologous`` and ``column`` need ``fitness_fn``."""
-
-SPLICING_CROSSOVERS: frozenset[str] = frozenset({"common_point"})
-"""Crossovers that may run with ``crossover_population(..., splicing=True)``: children a
-head of one parent and a tail of the other (at most ``l1 + l2 - 3`` cells), nothing else
-depending on the width (:func:`jaxga.batching.spliced_pairs_map`)."""

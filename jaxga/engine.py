@@ -24,7 +24,6 @@ from __future__ import annotations
 
 import dataclasses
 import functools
-import inspect
 from collections.abc import Callable, Iterable
 from typing import Any
 
@@ -33,14 +32,12 @@ import jax.numpy as jnp
 
 from jaxga import crossover as cx
 from jaxga import mutation as mu
-from jaxga import objectives, schedules
-from jaxga import postprocess as post
-from jaxga import selection as sel
-from jaxga.batching import over_individuals_gated, over_pairs_gated, windowed_map
+from jaxga import objectives, registry, schedules
+from jaxga.batching import windowed_map
 from jaxga.config import SCHEMA, Config
 from jaxga.errors import ParameterError
 from jaxga.grid import Grid
-from jaxga.init import field_walk, get_initialiser, initialise_population
+from jaxga.init import initialise_population
 from jaxga.islands import migrates
 from jaxga.numerics import ordered_mean
 from jaxga.paths import (
@@ -51,37 +48,50 @@ from jaxga.paths import (
     is_feasible,
     remove_loops,
 )
+from jaxga.registry import FIELD_REPAIR, NEVER_FAILS, WAYPOINTS, Binding
 
 F32 = jnp.float32
 I32 = jnp.int32
 
-# Fitness parameters of each combiner: config key suffix -> keyword of the objective.
 FITNESS_PARAMS: dict[str, tuple[str, ...]] = {
-    "sga": (),
-    "imga": ("a", "b", "c"),
-    "agacd": ("smoothness_floor",),
-    "mpmga": ("alpha", "beta", "c", "smoothness_floor"),
-    "iga_zhu": ("omega", "c1", "c2", "c3"),
-    "iga_zhang": ("a", "v", "v_t", "r"),
+    op.name: tuple(key.split(".", 1)[1] for key, field in op.params.items() if field.dynamic)
+    for op in registry.operators("fitness")
 }
-FITNESS_PARAM_NAMES = frozenset(n for names in FITNESS_PARAMS.values() for n in names)
-"""Every objective's parameter names (``fitness.NAME`` keys)."""
+"""Each fitness combiner's weights: ``fitness.NAME`` keys that are keywords of its
+objective in :mod:`jaxga.objectives` (from the registry; AGACD's Delphi ratios become its
+``weights``)."""
 FITNESS_DEFAULTS: dict[str, dict[str, float]] = {
-    m: {k: float(inspect.signature(getattr(objectives, m)).parameters[k].default)
-        for k in names}
+    m: {k: registry.objective_default(m, k) for k in names}
     for m, names in FITNESS_PARAMS.items()
 }
 """Each combiner's parameters and their defaults, read from :mod:`jaxga.objectives` (the
 papers' values, SPEC 3), so that the two cannot drift apart: what a parameter the
 configuration leaves out is."""
-WAYPOINT_ALGORITHMS = ("cut_and_check",)  # crossovers that work on waypoint paths (AGACD)
+
+
+def chosen_operators(config: Config) -> dict[str, registry.Operator]:
+    """The registered operators a configuration uses, by role: ``<family>.method`` for
+    every family, and ``init.fallback`` when it names an initialiser. A configuration
+    without a family's key (a fitness alone, :mod:`jaxga.fitness_reference`) uses
+    none there."""
+    out = {f"{family}.method": registry.operator(family, config.get(f"{family}.method"))
+           for family in registry.FAMILIES if config.get(f"{family}.method") is not None}
+    if config.get("init.fallback", "none") != "none":
+        out["init.fallback"] = registry.operator("init", config["init.fallback"])
+    return out
+
+
+def _has_trait(config: Config, trait: str, roles: Iterable[str] | None = None) -> bool:
+    chosen = chosen_operators(config)
+    return any(trait in op.traits for role, op in chosen.items()
+               if roles is None or role in roles)
 
 
 def uses_waypoints(config: Config) -> bool:
-    """Whether the population holds waypoint paths (AGACD's crossover or point mutation:
-    segments checked by line of sight) rather than 8-connected cell paths."""
-    return (config["crossover.method"] in WAYPOINT_ALGORITHMS
-            or config["mutation.method"] == "point_checked")
+    """Whether the population holds waypoint paths (an operator with the trait
+    :data:`~jaxga.registry.WAYPOINTS`, AGACD's crossover or point mutation: segments
+    checked by line of sight) rather than 8-connected cell paths."""
+    return _has_trait(config, WAYPOINTS)
 
 
 PER_ISLAND: dict[str, str] = {
@@ -134,7 +144,7 @@ def default_capacity(grid: Grid) -> int:
     a 30-cell optimum on a 256 x 256 map 160. A path that would not fit is a counted
     failure of the operator that made it (never truncated). Computed on the host from
     the exact distance fields (:func:`jaxga.guide.problem_facts`); an unreachable goal
-    gets the minimum.
+    gets the minimum (decision 020).
     """
     from jaxga.guide import problem_facts
 
@@ -182,15 +192,13 @@ def static_config(config: Config) -> Config:
 
 
 NEEDS: tuple[tuple[str, Any, tuple[str, ...]], ...] = (
-    ("mutation.method", "segment_sa", ("mutation.temperature_c1", "mutation.temperature_w")),
     ("crossover.adaptive", True, ("crossover.pc_low", "crossover.pc_high")),
     ("mutation.adaptive", True, ("mutation.pm_low", "mutation.pm_high")),
 )
-"""``(key, value, keys needed)``: configuration keys an operator reads when ``key`` has
-``value`` (MPMGA eq. 17's temperature schedule; AGACD eq. 26-29's adaptive rates)."""
+"""``(key, value, keys needed)``: configuration keys read when ``key`` has ``value``
+(AGACD eq. 26-29's adaptive rates). An operator's own needed keys are its
+``required`` keys in the registry (MPMGA eq. 17's temperature schedule)."""
 
-AGACD_OBJECTIVES = 3
-"""AGACD's fitness combines length, smoothness and safety (eq. 18-25): 2 Delphi ratios."""
 
 
 def unread_keys(config: Config) -> dict[str, str]:
@@ -199,35 +207,31 @@ def unread_keys(config: Config) -> dict[str, str]:
     Setting one of them changes nothing (a fitness weight of another objective, a fixed
     rate under AGACD's adaptive rates eq. 26-29, MPMGA's temperature without its
     simulated-annealing mutation, migration settings of a single island, ...), so
-    :func:`jaxga.run` refuses them as overrides instead of ignoring them silently.
-    Mirrors what :func:`build`, the stages and :func:`jaxga.islands.migrate` read.
+    :func:`jaxga.run` refuses them as overrides instead of ignoring them silently. An
+    operator's own keys (:func:`jaxga.registry.schema_fields`) are read exactly when an
+    operator the configuration uses declares them (:func:`chosen_operators`); the
+    families' shared keys follow what :func:`build`, the stages and
+    :func:`jaxga.islands.migrate` read.
     """
     out: dict[str, str] = {}
-    method = config["fitness.method"]
-    params = FITNESS_PARAMS.get(method, ())
-    own = [*params, *(("importance_ratios",) if method == "agacd" else ())]
-    for key in SCHEMA:
-        name = key.split(".", 1)[1] if key.startswith("fitness.") else None
-        if name in FITNESS_PARAM_NAMES and name not in params:
-            out[key] = (f"fitness.method = {method!r} has no parameter {name!r}"
-                        f" (its parameters: {', '.join(own) or 'none'})")
-    if method != "agacd":
-        out["fitness.importance_ratios"] = (f"only AGACD's fitness has Delphi ratios, "
-                                            f"fitness.method = {method!r}")
+    chosen = chosen_operators(config)
+    read = {key for op in chosen.values() for key in op.params}
+    for key in registry.schema_fields():
+        if key in read:
+            continue
+        family, name = key.split(".", 1)
+        who = registry.readers(key)
+        where = " as init.method or init.fallback" if family == "init" else ""
+        out[key] = (f"{family}.method = {config[f'{family}.method']!r} has no parameter "
+                    f"{name!r} (read by {', '.join(map(repr, who))} only{where})")
     if uses_waypoints(config):
         out["fitness.window"] = "waypoint paths are evaluated without the narrow window"
-    if not uses_field_walk(config):
-        for k in ("init.slack", "init.temperature"):
-            out[k] = ("only the field initialiser reads it (init.method = 'field_walk', or "
-                      "init.fallback = 'field_walk')")
-    if config["init.method"] == "field_walk":
-        out["init.fallback"] = "init.method = 'field_walk' cannot fail where a path exists"
+    if NEVER_FAILS in chosen["init.method"].traits:
+        out["init.fallback"] = (f"init.method = {config['init.method']!r} cannot fail where "
+                                "a path exists")
     if not field_repairs(config):
         out["repair.fallback"] = ("no operator of this configuration repairs by median "
                                   "insertion or a regrowth walk")
-    if config["selection.method"] != "tournament":
-        out["selection.tournament_size"] = (f"selection.method = "
-                                            f"{config['selection.method']!r}, not 'tournament'")
     for stage, low, high in (("crossover", "pc_low", "pc_high"),
                              ("mutation", "pm_low", "pm_high")):
         island_key = PER_ISLAND[f"{stage}.probability"]
@@ -244,13 +248,6 @@ def unread_keys(config: Config) -> dict[str, str]:
                 out[f"{stage}.{k}"] = f"{stage}.adaptive = false"
             if config.get(island_key) is not None:
                 out[f"{stage}.probability"] = f"{island_key} sets each island's rate"
-    if config["mutation.method"] != "segment_sa":
-        for k in ("mutation.temperature_c1", "mutation.temperature_w"):
-            out[k] = (f"mutation.method = {config['mutation.method']!r}: only 'segment_sa' "
-                      "has a temperature (MPMGA eq. 17)")
-    if config["mutation.method"] != "point_checked":
-        out["mutation.radius"] = (f"mutation.method = {config['mutation.method']!r}: only "
-                                  "'point_checked' has a radius (AGACD 4.7)")
     if config["simplify.method"] == "none":
         out["simplify.probability"] = "simplify.method = 'none'"
     if int(config["islands.count"]) == 1:
@@ -292,16 +289,19 @@ def check_overrides_read(config: Config, keys: Iterable[str]) -> None:
 def check_combination(config: Config) -> None:
     """Checks that involve several configuration keys, before anything is traced.
 
-    Raises :class:`ParameterError` naming the keys: an operator whose parameters are
-    missing (:data:`NEEDS`; a fixed crossover or mutation rate, or one per island),
-    MPMGA's decay rate ``w = 0`` (eq. 17 needs ``0 < w <= 1``), Zhang's speeds ``v``,
-    ``v_t`` not positive or a turning speed above the straight one (eq. 2: negative time
-    per turn), IMGA's, MPMGA's or Zhu's fitness weights all 0
-    (every path equal), a smoothness floor not positive (a divisor),
-    a Delphi ratio list whose length does not match AGACD's three objectives (eq. 21-25).
-    Migrants are checked against the island size by :func:`check_migration`.
+    Raises :class:`ParameterError` naming the keys: keys an operator needs and the
+    configuration does not set (:data:`NEEDS`, the operators' ``required`` keys; a fixed
+    crossover or mutation rate, or one per island), a post-optimisation of cell paths on
+    waypoint paths, and what each chosen operator's own ``check`` refuses
+    (:mod:`jaxga.registry`: MPMGA's decay rate ``w = 0``, eq. 17; Zhang's speeds not
+    positive or a turning speed above the straight one, eq. 2; IMGA's, MPMGA's or Zhu's
+    fitness weights all 0; a smoothness floor not positive; a Delphi ratio list whose
+    length does not match AGACD's three objectives, eq. 21-25). Migrants are checked
+    against the island size by :func:`check_migration`.
     """
-    for key, value, needed in NEEDS:
+    needs = [*NEEDS, *((role, op.name, op.required)
+                       for role, op in chosen_operators(config).items() if op.required)]
+    for key, value, needed in needs:
         if config.get(key) == value:
             missing = [k for k in needed if config.get(k) is None]
             if missing:
@@ -317,53 +317,16 @@ def check_combination(config: Config) -> None:
                 f"{stage}.method = {method!r} with {stage}.adaptive = "
                 f"false needs {rate} (or {island_key}), which this configuration does not "
                 "set (--set KEY=VALUE)")
-    if config.get("mutation.method") == "segment_sa" and not config["mutation.temperature_w"] > 0:
-        raise ParameterError("mutation.temperature_w must be in (0, 1] (MPMGA eq. 17: "
-                             f"T = c1 * w**t), got {config['mutation.temperature_w']}")
-    if config.get("post.method") == "shortcut_optimal" and uses_waypoints(config):
+    post_op = chosen_operators(config).get("post.method")
+    if post_op is not None and registry.CONTINUOUS_ONLY in post_op.traits \
+            and uses_waypoints(config):
         raise ParameterError(
-            "post.method = 'shortcut_optimal' needs continuous paths (8-connected cells); "
+            f"post.method = {post_op.name!r} needs continuous paths (8-connected cells); "
             "this configuration evolves waypoint paths (AGACD's cut_and_check crossover or "
             "point_checked mutation): use post.method = 'shortcut_greedy'")
-    ratios = config.get("fitness.importance_ratios")
-    if config["fitness.method"] == "agacd" and ratios is not None \
-            and len(ratios) != AGACD_OBJECTIVES - 1:
-        raise ParameterError(
-            f"fitness.importance_ratios needs {AGACD_OBJECTIVES - 1} entries for AGACD's "
-            f"{AGACD_OBJECTIVES} objectives (length, smoothness, safety), got {list(ratios)}")
-    method = config["fitness.method"]
-
-    def weight(name: str):  # as the objective sees it: the configuration's, else its default
-        value = config.get(f"fitness.{name}")
-        return FITNESS_DEFAULTS[method][name] if value is None else value
-
-    if method == "iga_zhang":
-        for key in ("fitness.v", "fitness.v_t"):
-            if config.get(key) is not None and not config[key] > 0:
-                raise ParameterError(f"{key} is a speed and must be > 0 (Zhang eq. 2 divides "
-                                     f"by it), got {config[key]}")
-        v, v_t = weight("v"), weight("v_t")
-        if v_t > v:
-            raise ParameterError(
-                f"fitness.v_t = {v_t} is above fitness.v = {v}: a turn would take less time "
-                "than going straight, so the time lost per turn (Zhang eq. 2, k = (v - v_t) "
-                "pi r / (2 v v_t)) would be negative; the turning speed must not exceed v")
-    weights = {"imga": ("a", "b", "c"), "mpmga": ("alpha", "beta"),
-               "iga_zhu": ("omega", "c1", "c2", "c3")}.get(method, ())
-    if weights and all(weight(k) == 0 for k in weights):
-        raise ParameterError(f"{' and '.join('fitness.' + k for k in weights)} are all 0: "
-                             "every path would have the same fitness (IMGA eq. 4, MPMGA "
-                             "eq. 3, Zhu & Pan eq. 6)")
-    if method == "mpmga" and weight("alpha") == 0 and weight("beta") * weight("c") == 0:
-        raise ParameterError(
-            "fitness.alpha = 0 with fitness.beta * fitness.c = 0: every path would have "
-            "fitness 0 (MPMGA eq. 3: alpha / length + beta * c / smoothness), which the "
-            "engine reads as infeasible")
-    if "smoothness_floor" in FITNESS_PARAMS.get(method, ()):
-        floor = weight("smoothness_floor")
-        if not floor > 0:
-            raise ParameterError(f"fitness.smoothness_floor must be > 0 (it replaces the zero "
-                                 f"smoothness of a straight path as a divisor), got {floor}")
+    for op in chosen_operators(config).values():
+        if op.check is not None:
+            op.check(config)
 
 
 def check_migration(config: Config, population: int) -> None:
@@ -394,10 +357,9 @@ def default_params(config: Config, islands: int = 1) -> dict[str, jax.Array]:
         k: jnp.asarray(v, F32) for k, v in config.dynamic().items()
     }
     params["population.active"] = jnp.asarray(config["population.size"], I32)
-    method = config["fitness.method"]
-    if method == "agacd":
-        ratios = config.get("fitness.importance_ratios", (1.2, 1.4))
-        params["fitness.weights"] = objectives.delphi_weights(jnp.asarray(ratios, F32))
+    for op in chosen_operators(config).values():
+        if op.prepare is not None:
+            params.update(op.prepare(config))
     for key, island_key in PER_ISLAND.items():
         per_island = config.get(island_key)
         if per_island is not None:
@@ -412,16 +374,8 @@ def default_params(config: Config, islands: int = 1) -> dict[str, jax.Array]:
 # ----------------------------------------------------------------------------- stages
 def fitness_function(algo: Algorithm, params: dict) -> Callable:
     """``f(grid, cells, length, feasible) -> f32`` with the configured combiner and weights."""
-    method = algo.get("fitness.method")
-    fn = getattr(objectives, method)
-    kwargs = {}
-    for name in FITNESS_PARAMS[method]:
-        key = f"fitness.{name}"
-        if key in params:
-            kwargs[name] = params[key]
-    if method == "agacd":
-        kwargs["weights"] = params["fitness.weights"]
-    return functools.partial(fn, **kwargs)
+    op = registry.operator("fitness", algo.get("fitness.method"))
+    return functools.partial(op.bind(Binding(algo, params)))
 
 
 def feasibility(algo: Algorithm, grid: Grid, cells: jax.Array, length: jax.Array) -> jax.Array:
@@ -482,13 +436,12 @@ def evaluate(algo: Algorithm, grid: Grid, params: dict, cells, length, active, *
     With ``fitness.window`` (default) grid paths are evaluated by
     :func:`jaxga.batching.windowed_map`: on the first ``window_width(L)`` cells (64 of
     160 on a 20 x 20 map) whenever every path of the batch fits, with the same bits as
-    on all ``L`` (imga's evolution at 100 seeds on 20 x 20: 0.84-1.0 -> 0.53-0.54 s per
-    50 generations; sga and iga_zhang 3-8 %). The narrow program costs 1-2 s of compile
-    time; iga_zhu and mpmga switch it off (their populations keep a few long paths, and
-    they gained nothing). ``window`` (static): ``False`` evaluates at full width only
-    whatever the configuration says (the initial population, evaluated once per run:
-    one program instead of two, the same bits; sga's initialisation program 140 -> 128
-    kernels, imga's 303 -> 257; RESULTS.md, 2026-11-25 session 25).
+    on all ``L``: faster where paths stay short, at the price of a second (narrow)
+    program to compile; iga_zhu and mpmga switch it off (their populations keep a few
+    long paths, and they gained nothing; decision 005). ``window`` (static): ``False``
+    evaluates at full width only whatever the configuration says (the initial
+    population, evaluated once per run: one program instead of two, the same bits;
+    decision 006).
     """
     fit = fitness_function(algo, params)
     if algo.waypoints:
@@ -508,19 +461,25 @@ def evaluate(algo: Algorithm, grid: Grid, params: dict, cells, length, active, *
     return jnp.where(active, f, 0.0).astype(F32), feas & active
 
 
+def binding(algo: Algorithm, params: dict, t: jax.Array | None = None,
+            fit_fn: Callable | None = None) -> Binding:
+    """What the stages bind operators with (:class:`jaxga.registry.Binding`): the static
+    algorithm, the dynamic parameters, generation ``t``, the fitness function and
+    whether ``repair.fallback = "field"``."""
+    return Binding(algo, params, generation=t, generations=algo.generations,
+                   fitness_fn=fit_fn, field_repair=_field_repair(algo))
+
+
 def _select(algo: Algorithm, key, fitness, active) -> jax.Array:
-    method = algo.get("selection.method")
-    if method == "none":
+    op = registry.operator("selection", algo.get("selection.method"))
+    if op.fn is None:
         return jnp.arange(fitness.shape[0], dtype=I32)
-    fn = sel.SELECTIONS[method]
-    if method == "tournament":
-        fn = functools.partial(fn, k=int(algo.get("selection.tournament_size")))
-    return fn(key, fitness, active)
+    return op.bind(Binding(algo, {}))(key, fitness, active)
 
 
 def _crossover(algo: Algorithm, key, grid, pop, fitness, active, t, params, fit_fn):
-    method = algo.get("crossover.method")
-    if method == "none":
+    op = registry.operator("crossover", algo.get("crossover.method"))
+    if op.fn is None and op.population is None:
         return pop, jnp.int32(0)
     if algo.get("crossover.adaptive"):
         # AGACD eq. 26-27: f = the fitter of the pair; f_max, f_avg of the population
@@ -532,36 +491,12 @@ def _crossover(algo: Algorithm, key, grid, pop, fitness, active, t, params, fit_
         )
     else:
         pc = params["crossover.probability"]
-    if method == "zhu_mixed":  # Zhu & Pan 4.4: half the pairs one-point, half column
-        k_half, key = jax.random.split(key)
-        use_a = mu.split_half(k_half, pop.size // 2)
-        lifted = over_pairs_gated(cx.common_point, alternative=functools.partial(
-            cx.column, fitness_fn=fit_fn, field_repair=_field_repair(algo)))
-        return lifted(key, grid, pop, pc, use_a)
-    op = cx.CROSSOVERS[method]
-    if method in ("heterologous", "column"):
-        op = functools.partial(op, fitness_fn=fit_fn)
-    if method == "column" and _field_repair(algo):
-        op = functools.partial(op, field_repair=True)
-    # Dense: at the papers' crossover rates (0.6-0.9) computing every pair and selecting
-    # is cheaper than gathering the crossed pairs (same result; RESULTS.md, 2026-11-23).
-    # Splicing crossovers run on twice the window when the parents fit it (same result;
-    # RESULTS.md, 2026-11-24).
-    splicing = method in cx.SPLICING_CROSSOVERS
-    return cx.crossover_population(op, dense=True, splicing=splicing)(key, grid, pop, pc)
-
-
-MUTATIONS: dict[str, Callable] = {
-    "neighbour_point": mu.neighbour_point,
-    "one_point": mu.one_point,
-    "range": mu.range_mutation,
-    "corner_cut": mu.corner_cut,
-}
+    return op.lift(binding(algo, params, t, fit_fn))(key, grid, pop, pc)
 
 
 def _mutation(algo: Algorithm, key, grid, pop, fitness, active, t, params, fit_fn):
-    method = algo.get("mutation.method")
-    if method == "none":
+    op = registry.operator("mutation", algo.get("mutation.method"))
+    if op.fn is None and op.population is None:
         return pop, jnp.int32(0)
     if algo.get("mutation.adaptive"):
         f_max = jnp.max(jnp.where(active, fitness, -jnp.inf))
@@ -573,39 +508,15 @@ def _mutation(algo: Algorithm, key, grid, pop, fitness, active, t, params, fit_f
         )
     else:
         pm = jnp.broadcast_to(params["mutation.probability"], (pop.size,))
-    if method == "zhu_mixed":  # Zhu & Pan 4.5: half one-point, half range mutation
-        k_half, key = jax.random.split(key)
-        rng = (functools.partial(mu.range_mutation, field_repair=True) if _field_repair(algo)
-               else mu.range_mutation)
-        lifted = over_individuals_gated(mu.one_point, alternative=rng)
-        return lifted(key, grid, pop, pm, mu.split_half(k_half, pop.size))
-    if method == "segment_sa":
-        temperature = schedules.mpmga_temperature(
-            params["mutation.temperature_c1"], algo.get("mutation.temperature_w"))(t)
-        op = functools.partial(mu.segment_sa, temperature=temperature, fitness_fn=fit_fn,
-                               field_repair=_field_repair(algo))
-    elif method == "point_checked":
-        op = functools.partial(mu.point_checked, radius=int(algo.get("mutation.radius", 2)))
-    else:
-        op = MUTATIONS[method]
-        if method == "range" and _field_repair(algo):
-            op = functools.partial(op, field_repair=True)
-    return over_individuals_gated(op)(key, grid, pop, pm)
+    return op.lift(binding(algo, params, t, fit_fn))(key, grid, pop, pm)
 
 
 def _simplify(algo: Algorithm, key, grid, pop, params):
-    method = algo.get("simplify.method")
-    if method == "none":
+    op = registry.operator("simplify", algo.get("simplify.method"))
+    if op.fn is None:
         return pop, jnp.int32(0)
-    if method == "corner_cut":
-        op = mu.corner_cut
-    else:
-        def op(k, g, c, n):  # "nothing to simplify" is not a failure
-            c2, n2, _ = post.simplify_adjacent(k, g, c, n)
-            return c2, n2, jnp.bool_(False)
     ps = jnp.broadcast_to(params["simplify.probability"], (pop.size,))
-    # Both operators only shorten paths: computed on the narrow window when they fit.
-    return over_individuals_gated(op, shrinking=True)(key, grid, pop, ps)
+    return op.lift(binding(algo, params))(key, grid, pop, ps)
 
 
 # ------------------------------------------------------------------------------ state
@@ -660,27 +571,16 @@ def uses_guide(config: Config) -> bool:
                                        and field_repairs(config))
 
 
-FIELD_REPAIRED = {
-    "init.method": ("median_insertion", "intermittent_connect"),
-    "crossover.method": ("column", "zhu_mixed"),
-    "mutation.method": ("range", "segment_sa", "zhu_mixed"),
-}
-"""The operators whose repair ``repair.fallback = "field"`` changes (their
-``field_repair`` option)."""
-
-
 def field_repairs(config: Config) -> bool:
-    """Whether ``repair.fallback = "field"`` changes an operator of ``config``."""
-    return any(config[k] in names for k, names in FIELD_REPAIRED.items())
+    """Whether ``repair.fallback = "field"`` changes an operator of ``config`` (one with
+    the trait :data:`~jaxga.registry.FIELD_REPAIR`: its ``field_repair`` option;
+    decision 019)."""
+    return _has_trait(config, FIELD_REPAIR, roles=("init.method", "crossover.method",
+                                                   "mutation.method"))
 
 
 def _field_repair(algo: Algorithm) -> bool:
     return algo.get("repair.fallback") == "field"
-
-
-def _field_walk(params: dict) -> Callable:
-    return functools.partial(field_walk, slack=params["init.slack"],
-                             temperature=params["init.temperature"])
 
 
 def init_state(algo: Algorithm, key: jax.Array, grid: Grid, params: dict) -> tuple:
@@ -689,16 +589,15 @@ def init_state(algo: Algorithm, key: jax.Array, grid: Grid, params: dict) -> tup
     ``init.method`` draws the population within ``init.max_tries`` attempts per
     individual; ``init.fallback = "field_walk"`` then fills exactly the slots it left
     empty with :func:`jaxga.init.field_walk` (``init.slack``, ``init.temperature``), so a
-    run starts with a whole population wherever a path exists. Returns
+    run starts with a whole population wherever a path exists (decision 018). Returns
     ``(GAState, InitStats)`` (one entry per island).
     """
-    method = algo.get("init.method")
-    init_fn = _field_walk(params) if method == "field_walk" else get_initialiser(method)
-    if _field_repair(algo) and method in FIELD_REPAIRED["init.method"]:
-        init_fn = functools.partial(init_fn, field_repair=True)
+    ctx = binding(algo, params)
+    method = registry.operator("init", algo.get("init.method"))
+    init_fn = method.bind(ctx)
     fallback = None
-    if algo.get("init.fallback") == "field_walk" and method != "field_walk":
-        fallback = _field_walk(params)
+    if algo.get("init.fallback") != "none" and NEVER_FAILS not in method.traits:
+        fallback = registry.operator("init", algo.get("init.fallback")).bind(ctx)
     keys = jax.random.split(key, algo.islands)
     active = _active(algo, params)
 
@@ -744,8 +643,8 @@ def island_generation(algo: Algorithm, key, grid: Grid, isl: IslandState, t, par
         # AGACD eq. 28-29: an individual's mutation probability depends on its fitness
         # after crossover, so the generation evaluates twice. The two evaluations are the
         # two steps of one loop, mutation and simplification a branch of step 0: the
-        # evaluation is compiled once (agacd's evolution program: 617 -> 453 kernels,
-        # RESULTS.md, 2026-11-25 session 25), with the same results.
+        # evaluation is compiled once (fewer kernels to compile; decision 006), with the
+        # same results.
         def step(i, carry):
             pop, _, _, fails = carry
             fitness, feas = evaluate(algo, grid, params, pop.cells, pop.length, active)
@@ -839,12 +738,11 @@ def finish(algo: Algorithm, grid: Grid, state: GAState, history: dict, params: d
     """
     raw_c, raw_n = state.best_cells, state.best_length
     success = state.best_fitness > 0
-    if algo.get("post.method") == "shortcut_greedy":
-        opt_c, opt_n = post.shortcut_greedy(grid, raw_c, raw_n)
-    elif algo.get("post.method") == "shortcut_optimal":
-        opt_c, opt_n = post.shortcut_optimal(grid, raw_c, raw_n)
-    else:
+    post_op = registry.operator("post", algo.get("post.method"))
+    if post_op.fn is None:
         opt_c, opt_n = remove_loops(raw_c, raw_n, grid.n_cells)
+    else:
+        opt_c, opt_n = post_op.bind(binding(algo, params))(grid, raw_c, raw_n)
     best = history["best"]
     if initial_best is not None:
         best = jnp.concatenate([jnp.reshape(initial_best, (1,)), best])

@@ -42,7 +42,7 @@ MAX_MAP_CELLS = 512 * 512
 (the exact optima it reports gaps against, the distance fields) and its paths grow with
 the map; beyond this a run would take many minutes or more memory than a workstation
 has. Larger maps are refused at once, naming the way around: a coarser map
-(:func:`jaxga.maps.coarsen`, ``load_map(..., coarsen=k)``, ``--coarsen K``)."""
+(:func:`jaxga.maps.coarsen`, ``load_map(..., coarsen=k)``, ``--coarsen K``; decision 021)."""
 
 
 def too_large(width: int, height: int) -> str:

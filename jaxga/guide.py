@@ -7,7 +7,7 @@ starts with no path has nothing to evolve. The exact 8-connected distance from e
 cell to the goal (and from the start), under the grid's corner rule, removes the
 guesswork: from any reachable cell some legal move lowers the distance to the goal by
 exactly its own length, so a walk that only takes moves towards the goal cannot get
-stuck (:func:`jaxga.init.field_walk`).
+stuck (:func:`jaxga.init.field_walk`; decision 018).
 
 The fields are computed once per problem on the host with SciPy's Dijkstra
 (:func:`scipy.sparse.csgraph.dijkstra`) over the legal-move graph of

@@ -22,36 +22,35 @@ bounded) and reporting the success rate.
 
 The walk primitives go from any ``source`` cell to any ``target`` cell and accept an
 ``exclude`` set (cells that count as visited). Initialisers are looked up by name in
-:data:`INITIALISERS` (:func:`get_initialiser`).
+the registry (:mod:`jaxga.registry`, :func:`get_initialiser`).
 
 Implementation notes shared by the walks
 ----------------------------------------
 * A walk is a ``while_loop`` over steps that stops when the walk is done (target
   reached or dead end); under ``vmap`` it is a :func:`jaxga.lanes.lane_while_loop`, which
   finishes the last walking lanes in a compacted batch instead of running every lane to
-  the longest one (initialisation of 100 SGA runs on a 20 x 20 map: 3.5 s with a
-  fixed-length ``lax.scan`` to the step cap, 3.2 s with this loop; iga_zhu's evolution,
-  whose range mutation regrows short stretches, 1.28x faster). The step cap is the
-  capacity: a walk that has not reached its target after ``capacity - 1`` moves fails
-  (for the AGACD walk, which may revisit cells, see ``max_steps``).
+  the longest one: faster than a fixed-length ``lax.scan`` to the step cap, most of all
+  for short walks such as the regrowth of Zhu's range mutation (decision 002). The step
+  cap is the capacity: a walk that has not reached its target after ``capacity - 1``
+  moves fails (for the AGACD walk, which may revisit cells, see ``max_steps``).
 * The 8 neighbours of every cell and whether each move is legal under the corner rule
   are tabulated once per grid (``int32[H*W*8]`` and ``bool[H*W*8]``; under ``vmap`` over
   individuals the grid is shared, so the tables are built once per call). A step then
   costs two flat gathers of 8 entries.
 * The visited set of a self-avoiding walk is a ``bool[H*W]`` table per individual,
-  updated by one scalar scatter per step. Measured on this 2-core CPU (directional walk,
-  20 x 20 map, P = 100, capacity 160, best of 30): table + scatter 13 us per
-  individual, table updated by an ``O(H*W)`` select 23 us, membership against the path
-  so far (8 x L compares per step, no table) 47 us; so the table is used. It costs
-  ``H*W`` bytes per individual in the scan carry (P = 1000 on a 256 x 256 map: 65 MB);
-  for much larger maps the walk primitives are not the right tool.
-* Cost per attempt (same setting, warm, median; ``benchmarks/init_study.py``):
-  random_walk / directional about 13-20 us, greedy_random_target 75-130 us (640 moves),
-  median_insertion 160-400 us and intermittent_connect 580-1150 us, both dominated by
+  updated by one scalar scatter per step: cheaper than updating the table by an
+  ``O(H*W)`` select or testing membership against the path so far (8 x L compares per
+  step, no table) (decision 002). It costs ``H*W`` bytes per individual in the loop
+  carry (P = 1000 on a 256 x 256 map: 65 MB), so on maps of more than
+  :data:`VISITED_TABLE_CELLS_PER_NODE` cells per node of capacity the walks keep a hash
+  set of their own cells instead (decision 008).
+* Cost per attempt (``benchmarks/init_study.py``, decision 002): the random and
+  directional walks are the cheapest, greedy_random_target (640 moves) costs more, and
+  median_insertion and intermittent_connect cost the most, both dominated by
   :func:`jaxga.repair.connect` (its ``while_loop`` over insertion rounds runs, under
   ``vmap``, until the slowest lane stops, and a connection that cycles stops only at
   ``max_rounds``).
-* Random numbers are drawn in bulk before the scan (one float32 or three uint32 words per
+* Random numbers are drawn in bulk before the loop (one float32 or three uint32 words per
   step), not per step.
 """
 
@@ -80,7 +79,6 @@ from jaxga.paths import (
 from jaxga.repair import connect
 
 __all__ = [
-    "INITIALISERS",
     "InitFn",
     "InitStats",
     "directional",
@@ -282,9 +280,9 @@ def _self_avoiding_walk(
             cs = jnp.cumsum(score)
         else:
             # 0/1 scores: seven unrolled adds give jnp.cumsum's (exact) values without
-            # its reduce_window, which was the costliest op of an SGA initialisation
-            # (2.95 -> 2.62 s for 100 runs). Not for the directional scores: there the
-            # unrolled adds made iga_zhu's evolution 15 % slower.
+            # its reduce_window, which was the costliest op of an SGA initialisation.
+            # Not for the directional scores: there the unrolled adds made iga_zhu's
+            # evolution slower (decision 002).
             parts = [score[0]]
             for j in range(1, 8):
                 parts.append(parts[-1] + score[j])
@@ -323,7 +321,7 @@ def _self_avoiding_walk(
     carry0 = (jnp.int32(0), jnp.clip(source, 0, n - 1), visited, done0, ok0, jnp.int32(0), buf0)
     # Unmasked: a finished walk's step changes only t, done and the scratch entry past
     # n_moves, none of which is read below (with the masked loop, the per-step select of
-    # the visited table and the buffer made a 50 x 50 initialisation 2x slower).
+    # the visited table and the buffer slowed a 50 x 50 initialisation: decision 002).
     _, cur, visited, _, ok, n_moves, buf = lane_while_loop(cond, step, carry0, masked=False)
     if not use_table:
         ok &= ~visited[1]  # a full probe window: the walk may have crossed itself
@@ -339,7 +337,7 @@ at most this many cells per node of the walk's capacity (up to 101 x 101 cells f
 capacity of 160; below that the hash set of 32-64 bytes per node would be larger);
 on larger maps as a hash set of the walk's own cells (:func:`_hash_add`) and a sorted
 list of the excluded ones, so that its memory and time grow with the capacity, not with
-the map (a range mutation on a 256 x 256 map held 64 kB per walk)."""
+the map (a range mutation on a 256 x 256 map held 64 kB per walk; decision 008)."""
 
 _HASH_PROBES = 16
 _HASH_MULT = np.uint32(0x9E3779B1)
@@ -1051,7 +1049,7 @@ def field_reconnect(
     the walk meets the path again at a position ``>= j`` (at the latest at the goal, the
     path's last cell), and splice ``cells[:i + 1] + walk + cells[k:]`` with its loops
     removed (:func:`jaxga.repair.splice_loop_free`). The walk cannot dead-end, so the
-    result is a valid path whenever it fits the capacity: the only failure.
+    result is a valid path whenever it fits the capacity: the only failure (decision 019).
 
     Returns ``(cells int32[L], length, ok)``; ``ok`` False = the result exceeds ``L``
     (the cells are then meaningless). Needs ``grid.guide``.
@@ -1098,10 +1096,10 @@ def field_walk(
 ) -> tuple[jax.Array, jax.Array, jax.Array]:
     """jaxga's initialiser that cannot fail: random detours down the exact distance fields.
 
-    Not from the papers (SPEC 12, "a path on every map"). Draw a cell ``N`` uniformly
-    among the cells through which a path is at most ``(1 + slack)`` times the optimum
-    (``from_start[N] + to_goal[N] <= (1 + slack) * optimum``: an ellipse in the map's own
-    distances, so it follows corridors and doors, never walls), then build
+    Not from the papers (SPEC 12, "a path on every map"; decision 018). Draw a cell ``N``
+    uniformly among the cells through which a path is at most ``(1 + slack)`` times the
+    optimum (``from_start[N] + to_goal[N] <= (1 + slack) * optimum``: an ellipse in the
+    map's own distances, so it follows corridors and doors, never walls), then build
     ``start -> N -> goal`` with :func:`field_path`, whose two walks spend what is left of
     the budget ``slack * optimum`` on random detours (``temperature``: the walks prefer
     moves that add little length, ``exp(-excess / temperature)``).
@@ -1131,28 +1129,19 @@ def field_walk(
     return cells, length, ok & (total > 0)
 
 
-INITIALISERS: dict[str, InitFn] = {
-    "random_walk": random_walk,
-    "median_insertion": median_insertion,
-    "intermittent_connect": intermittent_connect,
-    "greedy_random_target": greedy_random_target,
-    "directional": directional,
-    "field_walk": field_walk,
-}
-"""The initialisers of SPEC 4 by name (the names presets use)."""
-
-
 def get_initialiser(name_or_fn: str | InitFn) -> InitFn:
-    """An initialiser by name (:data:`INITIALISERS`) or the callable itself."""
+    """An initialiser by its registered name (:mod:`jaxga.registry`, family ``init``; an
+    old name is accepted) or the callable itself."""
     if callable(name_or_fn):
         return name_or_fn
-    try:
-        return INITIALISERS[name_or_fn]
-    except (KeyError, TypeError):
-        raise ParameterError(
-            f"unknown initialiser {name_or_fn!r}: expected a callable or one of "
-            f"{', '.join(INITIALISERS)}"
-        ) from None
+    from jaxga import registry  # it imports this module
+
+    if isinstance(name_or_fn, str) and registry.canonical("init", name_or_fn) is not None:
+        return registry.operator("init", name_or_fn).fn
+    raise ParameterError(
+        f"unknown initialiser {name_or_fn!r}: expected a callable or one of "
+        f"{', '.join(registry.names('init'))}"
+    )
 
 
 # ---------------------------------------------------------------------- population
@@ -1268,7 +1257,7 @@ def initialise_population(
         key: PRNG key; the same key gives the same population.
         grid: the map.
         init_fn: static; an initialiser ``(key, grid, capacity) -> (cells, length, ok)`` or
-            its name in :data:`INITIALISERS`. Bind options with ``functools.partial`` and
+            its registered name (:mod:`jaxga.registry`). Bind options with ``functools.partial`` and
             reuse the same object (a new partial each call recompiles).
         size: static population size ``P``.
         capacity: static path capacity ``L``.
@@ -1289,19 +1278,18 @@ def initialise_population(
             drawn from the key ``fold_in(key, FALLBACK_STREAM)`` (e.g.
             :func:`field_walk`, which cannot fail where a path exists). Slots the rounds
             filled are never touched, so when the rounds fill the population the result
-            is the same bit for bit as without a fallback. ``stats.from_fallback``
-            counts the slots it filled; candidates are verified as the rounds' are (and
-            are not checked for ``unique``).
+            is the same bit for bit as without a fallback (decision 018).
+            ``stats.from_fallback`` counts the slots it filled; candidates are verified
+            as the rounds' are (and are not checked for ``unique``).
 
     Returns:
         ``(Population(cells int32[size, capacity], length int32[size]), InitStats)``.
 
     ``initialise`` is itself jittable and ``vmap``-able over keys (many seeded runs): the
     rounds then continue until every run's population is full (or the budget is spent).
-    (A :func:`jaxga.lanes.lane_while_loop` over the rounds, finishing the last runs in a
-    compacted batch, saved 10-20 % of the initialisation time of 100 runs but nested the
-    initialiser's own compacted loops twice more into the program: mpmga's initialisation
-    compiled in 12 s instead of 6.6 s. Not kept.)
+    The rounds are one plain ``while_loop``: a :func:`jaxga.lanes.lane_while_loop` over
+    them saves some run time but nests the initialiser's own compacted loops twice more
+    into the program and lengthens its compile (decision 003).
     """
     fn = get_initialiser(init_fn)
     capacity = _check_capacity(capacity)
@@ -1380,8 +1368,8 @@ def initialise_population(
                     filled | take)
 
         # Computed whether or not a slot is empty: under vmap (many runs) a lax.cond would
-        # be a select computing both branches anyway, and on a 256 x 256 map its
-        # batching multiplied the program's memory by 60 (4.9 GB for 4 runs of 200).
+        # be a select computing both branches anyway, and on a large map its batching
+        # multiplied the program's memory many times over (decision 018).
         before = jnp.sum(filled, dtype=_I32)
         cells, length, filled = fill((cells, length, filled))
         from_fallback = jnp.sum(filled, dtype=_I32) - before

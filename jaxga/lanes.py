@@ -3,10 +3,9 @@
 Under ``vmap`` a ``lax.while_loop`` with a per-lane condition runs every lane until the
 slowest one stops: the body is computed for the whole batch at every iteration and the
 finished lanes' results are discarded by a select. For the median-insertion rounds of
-:func:`jaxga.repair.connect` that is most of the work: in an SGA mutation of a 20 x 20
-population, 93 % of the connections close in one round and 1-2 % need 6-14 rounds, so
-a block of 1,500 connections (100 seeds x 15 mutants) runs about 14 rounds at full width
-(RESULTS.md, 2026-11-24).
+:func:`jaxga.repair.connect` that is most of the work: most connections close in one
+round and a few need many, so a block of connections runs as many rounds at full width
+as its slowest connection needs (decision 001).
 
 :func:`lane_while_loop` has the semantics of ``lax.while_loop`` for one lane. It carries
 a batching rule that folds every ``vmap`` level into one
@@ -22,10 +21,7 @@ Below :data:`MIN_COMPACT_LANES` lanes (64: the loops of a run or two, such as on
 run's 60 initial walks or its 5-15 connections of a generation) the loop is one plain
 ``while_loop`` over all lanes. At that width an iteration costs mostly its fixed
 overhead whatever the number of lanes, so compaction saves little, and the two-phase
-form compiles the body twice (RESULTS.md, 2026-11-25 session 24: sga's initialisation
-program 189 -> 140 kernels; the evolution of 1 and 8 seeds as fast or up to 38 %
-faster, mpmga's 1-seed initialisation 26 ms slower; the programs of 100 seeds and more
-unchanged).
+form compiles the body twice (decision 001).
 """
 
 from __future__ import annotations
@@ -47,10 +43,8 @@ SHRINK = 8
 
 MIN_COMPACT_LANES = 64
 """Default lane count below which the loop is one plain loop over all lanes (module
-docstring; ``min_lanes`` of :func:`lane_while_loop`). Measured: with 15 lanes (4 runs'
-connections) a plain loop was faster than the narrow one (mpmga's evolution at 8 seeds
-2.34 -> 1.44 s), with 188 and 240 lanes it was slower (sga's evolution at 100 seeds
-1.8 -> 2.1 s, its initialisation at 8 seeds 0.055 -> 0.080 s)."""
+docstring; ``min_lanes`` of :func:`lane_while_loop`): a plain loop is faster over the
+lanes of a few runs and slower over a few hundred lanes (decision 001)."""
 
 
 def lane_while_loop(
@@ -84,10 +78,9 @@ def lane_while_loop(
         narrow: static. False: the two phases above (full width, then compacted), which
             compile the body twice. True: one loop at the compacted width that advances
             the first unfinished lanes at every iteration, so the body is compiled once
-            (sga's cold compile 17.6 -> 16.4 s). Narrow suits loops whose lanes mostly
-            finish within a few iterations (median-insertion rounds: same run time,
-            mpmga's 6 % faster); long loops such as walks then need many iterations at
-            the narrow width (iga_zhu's evolution 24 % slower).
+            (a shorter compile). Narrow suits loops whose lanes mostly finish within a
+            few iterations (median-insertion rounds); long loops such as walks then
+            need many iterations at the narrow width and run slower (decision 001).
         min_lanes: static; with fewer lanes than this (all ``vmap`` levels together) the
             loop runs every lane to the end, as ``vmap`` of a ``while_loop`` does, and
             the body is compiled once. A narrow batch (one run's population) gains

@@ -33,8 +33,8 @@ Conventions shared by all functions
   the smallest non-zero turn possible on the map. Only :func:`angle_sum` and
   :func:`turn_angles` need the angle as a number; they use a branch-free float32
   ``atan2`` for ``y >= 0`` (argument reduction to ``[0, tan(pi/8)]`` and a degree-17 odd
-  series, absolute error below 1e-6; about 4x faster than ``jnp.arctan2`` on CPU) that
-  is exact for continuous paths and waypoint paths alike.
+  series, absolute error below 1e-6; faster than ``jnp.arctan2`` on CPU: decision 009)
+  that is exact for continuous paths and waypoint paths alike.
 * **Dtypes.** Indices and counts are int32, real results float32, also under
   ``JAX_ENABLE_X64=1`` (parameters are cast to float32).
 * **Map size.** The exact integer arithmetic requires ``max(H, W) <= 32767``; larger maps
@@ -48,10 +48,9 @@ denominator (only possible for a one-node path, start == goal) is floored at
 :data:`EPS` so that no fitness is ever ``inf`` or ``nan``. Each combiner builds the
 path geometry once and shares it between its terms.
 
-Cost (``benchmarks/objectives.py``, 1000 paths of capacity 256 on a 64 x 64 map, 2 CPU
-cores): about 0.4 us per path for the length, 1-1.5 us for every turn-based objective,
-1 us for IMGA safety and 2-3 us for AGACD safety; ``min_clearance`` and
-``tangencies`` are ``O(L H W)`` (about 1-2 ms per path there) and meant for reports.
+Cost: the length, the turn-based objectives and the safety terms cost microseconds per
+path; ``min_clearance`` and ``tangencies`` are ``O(L H W)`` and meant for reports
+(``benchmarks/objectives.py``; decision 009).
 """
 
 from __future__ import annotations
@@ -157,9 +156,8 @@ def _fill_forward(key: jax.Array, vx: jax.Array, vy: jax.Array) -> tuple[jax.Arr
     exactly when it equals its running maximum. Paths without repeated interior nodes
     have no holes and run zero passes; otherwise ``ceil(log2(r + 1))`` passes for the
     longest run of ``r`` holes. (Under ``vmap`` every path of the batch runs the
-    batch's largest pass count. One pass per hole, as this loop did before, made
-    blocks of mpmga runs at 50 x 50 whose evaluated paths held long runs of repeated
-    nodes 6x slower: RESULTS.md, 2026-11-24.)
+    batch's largest pass count, so one pass per hole was much slower on batches whose
+    paths held long runs of repeated nodes: decision 009.)
     """
 
     n = key.shape[0]

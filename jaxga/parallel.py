@@ -4,8 +4,8 @@ Issue 7. Runs (seeds x sweep points) are one leading axis (``jaxga.api.sweep``).
 module decides how that axis is split:
 
 * **Devices of one process.** On a CPU, XLA gives a process one device by default and
-  leaves the other cores mostly idle (``PERFORMANCE_NOTES.md``: two host devices ran
-  1.4-1.55x faster). :func:`set_local_devices` / :func:`use_all_cores` ask JAX for one CPU
+  leaves the other cores mostly idle (two host devices run faster than one:
+  decision 017). :func:`set_local_devices` / :func:`use_all_cores` ask JAX for one CPU
   device per core through its ``jax_num_cpu_devices`` option, which must be set before
   JAX's backend starts (the first array or ``jax.devices()`` call). Decision: the JAX
   option rather than editing ``XLA_FLAGS``: it is JAX's documented way, it is checked

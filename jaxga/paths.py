@@ -221,7 +221,7 @@ def is_loop_free(cells: jax.Array, length: jax.Array, n_cells: int | None = None
 
     Without ``n_cells``: a sort, O(L log L). With ``n_cells`` (the map size, static) at
     most :data:`TABLE_MAX_CELLS`: the last-occurrence table of :func:`last_occurrence`
-    (the sort was 14 % of an SGA initialisation's time); then a valid node outside
+    (cheaper than the sort on small maps; decision 008); then a valid node outside
     ``[0, n_cells)`` (off the map) also makes the result False.
     """
     cells = jnp.asarray(cells, jnp.int32)
@@ -249,8 +249,8 @@ TABLE_MAX_CELLS = 16384
 TABLE_CELLS_PER_NODE = 16
 """A table of the map's cells per path is used only while it is at most this many times
 the path's capacity: on larger maps (64 x 64 with paths of 160 cells) a sort of the path,
-so that the memory and time per path grow with the path, not with the map. Both give the
-same answers for paths on the map."""
+so that the memory and time per path grow with the path, not with the map (decision 008).
+Both give the same answers for paths on the map."""
 
 
 def _use_table(n_cells: int | None, capacity: int) -> bool:
@@ -260,9 +260,8 @@ def _use_table(n_cells: int | None, capacity: int) -> bool:
 CHUNKED_LOOKUP_CELLS = 1024
 """Maps with more cells read their position tables (:func:`position_lookup`,
 :func:`last_occurrence`) through :func:`jaxga.scatter.table_lookup`, in cache-sized chunks
-(50 x 50: the common-point crossover 2x faster, initialisation 9 % faster); smaller ones
-build the table and gather from it (20 x 20: SGA's evolution 1-3 % faster than through
-``table_lookup``, which does not chunk there)."""
+(faster at 50 x 50); smaller ones build the table and gather from it (faster at 20 x 20
+than through ``table_lookup``, which does not chunk there; decision 007)."""
 
 
 def last_occurrence(
@@ -272,7 +271,7 @@ def last_occurrence(
 
     Padding positions map to themselves. With ``n_cells`` (the map size, static) at most
     :data:`TABLE_MAX_CELLS`, one scatter-max into a table of ``n_cells`` entries and one
-    gather (about 40x faster than a sort on CPU for a 20 x 20 map); otherwise, or without
+    gather (many times faster than a sort on small maps: decision 008); otherwise, or without
     ``n_cells``, a sort, O(L log L), with no map-sized table (PERFORMANCE_NOTES:
     map-sized tables become memory-bound on large maps): one sort of packed
     ``(cell, position)`` words where they fit 32 bits (:func:`_sorted_by_cell`), else a
@@ -309,8 +308,8 @@ def _sorted_by_cell(cells: jax.Array, valid: jax.Array,
     """``(cell int32[L], position int32[L])`` sorted by cell, then position (padding, and
     a valid node off the map, as cell ``n_cells``, after every real cell): ONE sort of
     ``cell << b | position`` words.
-    On XLA's CPU backend that is about 5x faster than the stable ``argsort`` (a sort of
-    two arrays) of the same pairs."""
+    On XLA's CPU backend that is several times faster than the stable ``argsort`` (a
+    sort of two arrays) of the same pairs (decision 008)."""
     n = cells.shape[0]
     b = max(n - 1, 1).bit_length()
     key = jnp.where(valid & (cells >= 0) & (cells < n_cells), cells, n_cells)

@@ -189,10 +189,11 @@ def legal_moves_np(blocked: np.ndarray, corner_rule: str) -> np.ndarray:
 class OctileGraph:
     """The 8-connected move graph of one map under one corner rule (SPEC 1).
 
-    Building it costs one vectorised pass plus one Python list per cell (about 0.2 s on
-    a 256 x 256 map); afterwards :meth:`search` answers start/goal queries with A* and
-    the octile heuristic, and :meth:`distances` gives a full Dijkstra field. Reuse one
-    graph for many queries on the same map (the Moving AI benchmark does).
+    Building it costs one vectorised pass plus one Python list per cell (a fraction of a
+    second on a 256 x 256 map: decision 015); afterwards :meth:`search` answers
+    start/goal queries with A* and the octile heuristic, and :meth:`distances` gives a
+    full Dijkstra field. Reuse one graph for many queries on the same map (the Moving AI
+    benchmark does).
     """
 
     def __init__(self, blocked: np.ndarray, corner_rule: str = "strict") -> None:
@@ -900,11 +901,9 @@ def any_angle_shortest_path(grid: Grid, *, exact: bool = True) -> ReferencePath:
     up to 32 x 32 (random cells and random rectangles, all three rules); the tests repeat
     this on a few hundred small grids.
 
-    Time on Berlin_1_256 (256 x 256, strict, 2-core CPU; ``benchmarks/movingai_optima.py``,
-    recorded in ``benchmarks/RESULTS.md``): 0.3 s for a scenario of 8-connected length
-    88, 0.5 s at 130, 1-1.2 s at 173, 1.4-1.8 s at 216 and 5-10 s for the longest (367);
-    ``exact=False`` takes 0.2-0.9 s. A 20 x 20 map takes 10-80 ms. (These are at load
-    average ~2.5; at load 5.6 the same runs took about twice as long, up to 12.7 s.)
+    Time: milliseconds on a 20 x 20 map; on a 256 x 256 map it grows with the path's
+    length, from under a second to seconds for the longest Moving AI scenarios;
+    ``exact=False`` is faster there (``benchmarks/movingai_optima.py``; decision 015).
     """
     return any_angle_shortest_path_np(
         grid.blocked_np(), grid.start_xy, grid.goal_xy, grid.corner_rule, exact=exact

@@ -104,8 +104,8 @@ def prefix_count(x: jax.Array, axis: int = 0) -> jax.Array:
     """``int32``: inclusive prefix sum of a bool or integer array along ``axis``.
 
     ``jax.lax.associative_scan`` (O(n log n) work): ``jnp.cumsum`` lowers to a
-    ``reduce_window`` that is O(n^2) on XLA's CPU backend (8x slower at n = 1440) and
-    dominated the connection rounds.
+    ``reduce_window`` that is O(n^2) on XLA's CPU backend and dominated the connection
+    rounds (decision 004).
     """
     return jax.lax.associative_scan(jnp.add, jnp.asarray(x, jnp.int32), axis=axis)
 

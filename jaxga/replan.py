@@ -303,7 +303,8 @@ def _run_options(overrides: Mapping[str, Any], generations: int | None,
     :func:`jaxga.run` refuses two different values for one key. With ``grid`` the path
     capacity is ``4 (H + W)`` unless ``population.capacity`` is given: one compiled
     program per map (or window) size, whatever the segment (the automatic capacity
-    follows the problem's optimum, which would compile again for longer segments)."""
+    follows the problem's optimum, which would compile again for longer segments;
+    decision 020)."""
     from jaxga.presets import as_sets, overridden_keys
 
     kw = dict(overrides)

@@ -13,9 +13,8 @@ table of ``rows * n`` entries, offsetting each row's indices by ``row * n``.
 Results are bit-for-bit those of the plain ``.at[]`` scatter (integer maxima are
 order-independent). Indices follow ``.at[]``: negative ones count from the end, others
 outside the table are dropped. Not every scatter gains: a flat version of the
-connection's small node-table set (18 updates into 160 entries, 10 x 3 x 15 rows) was
-slower than the batched scatter (0.28 against 0.16 ms, measured once and not kept), so
-only the map-sized position tables use this.
+connection's small node-table set (18 updates into 160 entries) was slower than the
+batched scatter, so only the map-sized position tables use this (decision 007).
 """
 
 from __future__ import annotations
@@ -55,9 +54,8 @@ def position_table(keys: jax.Array, n_cells: int) -> jax.Array:
     ``keys`` is ``int32[L]``. Equal to ``full(n_cells, -1).at[keys].max(arange(L),
     mode="drop")``. Used by :func:`jaxga.paths.position_lookup` and
     :func:`jaxga.paths.last_occurrence` (the crossovers' "where is this cell in the other
-    parent" and loop removal): 2.4x faster than the batched scatter for 100 seeds x 30
-    pairs x 160 cells on a 20 x 20 map and 1.7x for 32 seeds x 40 pairs x 400 cells on a
-    50 x 50 map (``benchmarks/batched_ops.py``, RESULTS.md).
+    parent" and loop removal): faster than the batched scatter on 20 x 20 and 50 x 50
+    maps (``benchmarks/batched_ops.py``; decision 007).
     """
     return _position_table_fn(int(n_cells))(jnp.asarray(keys, jnp.int32))
 
@@ -122,11 +120,10 @@ def table_lookup(keys: jax.Array, queries: jax.Array, n_cells: int) -> jax.Array
     :func:`jaxga.folding.fold_call`). When all rows' tables would
     exceed :data:`LOOKUP_DIRECT_MAX` entries they are built and read in chunks of
     :data:`LOOKUP_CHUNK_ENTRIES` (a ``lax.map`` over chunks of rows), so that each
-    chunk's tables stay in the cache between the scatter and the gather: for 4,000
-    common-point crossovers on a 50 x 50 map (tables of 2,500 cells, 40 MB per parent)
-    the two lookups took 48 ms at once, nearly all of a generation, and about 19 ms in
-    chunks. :func:`jaxga.paths.position_lookup` uses it on maps of more than
-    :data:`jaxga.paths.CHUNKED_LOOKUP_CELLS` cells.
+    chunk's tables stay in the cache between the scatter and the gather (at once, the
+    lookups of a generation's common-point crossovers on a 50 x 50 map took nearly all
+    of the generation: decision 007). :func:`jaxga.paths.position_lookup` uses it on
+    maps of more than :data:`jaxga.paths.CHUNKED_LOOKUP_CELLS` cells.
     """
     queries = jnp.asarray(queries, jnp.int32)
 

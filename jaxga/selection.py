@@ -36,15 +36,12 @@ Conventions shared by every selection (decisions where the papers are silent):
 
 from __future__ import annotations
 
-from collections.abc import Callable
-
 import jax
 import jax.numpy as jnp
 
 from jaxga.errors import ParameterError
 
 __all__ = [
-    "SELECTIONS",
     "layered_thirds",
     "rank_order",
     "roulette",
@@ -255,13 +252,3 @@ def tournament(
     f = jnp.where(jnp.isnan(fitness), -jnp.inf, fitness)
     win = jnp.argmax(f[cand], axis=1)
     return jnp.take_along_axis(cand, win[:, None], axis=1)[:, 0].astype(_I32)
-
-
-SELECTIONS: dict[str, Callable] = {
-    "roulette": roulette,
-    "roulette_elite": roulette_elite,
-    "layered_thirds": layered_thirds,
-    "stratified": stratified,
-    "tournament": tournament,
-}
-"""Selections by name (SPEC 5), for presets. All share ``fn(key, fitness, active=None)``."""

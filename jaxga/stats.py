@@ -14,8 +14,8 @@ means every a is larger), so for a metric to minimise (path length) A12 < 0.5 fa
 statistics and p-value, never an exception.
 
 :mod:`scipy.stats` is imported by the functions that use it, not with the module:
-importing it took 0.6 of the 1.2-1.4 s of ``import jaxga`` (which imports this module
-through :mod:`jaxga.compare`), paid by every ``jaxga run`` from the command line.
+importing it was a large share of ``import jaxga`` (which imports this module through
+:mod:`jaxga.compare`), paid by every ``jaxga run`` from the command line (decision 016).
 """
 
 from __future__ import annotations

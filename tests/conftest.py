@@ -58,11 +58,10 @@ def _bounded_compiled_programs():
 
 
 SLOWEST_FILES = ("test_distributed.py", "test_api.py", "test_crossover.py",
-                 "test_notebooks.py", "test_batching.py", "test_init.py", "test_mutation.py",
-                 "test_doe.py", "test_engine.py")
-"""The test files that took the longest on this 2-core machine (35-225 s each, cold
-compilation cache; the per-file profiles of RESULTS.md, 2026-11-25 14:05 and 15:07,
-``benchmarks/suite_time.py``), roughly slowest first: they run first.
+                 "test_registry.py", "test_notebooks.py", "test_batching.py", "test_init.py",
+                 "test_mutation.py", "test_doe.py", "test_engine.py")
+"""The test files that take the longest on the 2-core CI machine with a cold compilation
+cache (``benchmarks/suite_time.py``; decision 024), roughly slowest first: they run first.
 
 ``--dist loadfile`` (pyproject.toml) hands whole files to the two workers in queue
 order, and by default xdist queues files by their number of tests, which put the

@@ -299,10 +299,16 @@ def test_unread_dynamic_keys_are_exactly_those_the_program_does_not_use(preset, 
     ("agacd", {"mutation__probability": 0.5}, "mutation.adaptive = true"),
     ("mpmga", {"mutation__probability": 0.5}, "islands.mutation_probabilities sets"),
     ("sga", {"islands__migrants": 2}, "islands.count = 1: there is no migration"),
-    ("sga", {"selection__tournament_size": 3}, "not 'tournament'"),
-    ("imga", {"mutation__temperature_w": 0.5}, "only 'segment_sa' has a temperature"),
-    ("iga_zhu", {"mutation__radius": 3}, "only 'point_checked' has a radius"),
-    ("iga_zhang", {"fitness__importance_ratios": [1.2, 1.4]}, "only AGACD's fitness"),
+    ("sga", {"selection__tournament_size": 3},
+     "selection.method = 'roulette' has no parameter 'tournament_size' (read by "
+     "'tournament' only)"),
+    ("imga", {"mutation__temperature_w": 0.5}, "no parameter 'temperature_w' (read by "
+     "'segment_sa' only)"),
+    ("iga_zhu", {"mutation__radius": 3}, "no parameter 'radius' (read by 'point_checked' "
+     "only)"),
+    ("iga_zhang", {"fitness__importance_ratios": [1.2, 1.4]},
+     "fitness.method = 'iga_zhang' has no parameter 'importance_ratios' (read by 'agacd' "
+     "only)"),
     ("agacd", {"fitness__window": True}, "waypoint paths"),
     ("sga", {"islands__count": 2, "islands__topology": "ring"},
      "islands.topology has no effect in 'sga': islands.migrants = 0"),

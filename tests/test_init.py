@@ -21,13 +21,13 @@ from hypothesis import given, settings
 from hypothesis import strategies as st
 from scipy import stats
 
-from jaxga import Grid, NoPathError, ParameterError
+from jaxga import Grid, NoPathError, ParameterError, registry
 from jaxga import init as I
 from jaxga.guide import with_guide
 from jaxga.maps import legal_moves, random_map
 from tests.strategies import CAP, SIZE, check_paths, grids
 
-NAMES = tuple(I.INITIALISERS)
+NAMES = registry.names("init")
 WALKS = ("random_walk", "greedy_random_target", "directional")  # fail = goal not reached
 
 
@@ -258,7 +258,7 @@ N_KEYS = 8
 @jax.jit
 def _all_initialisers_guided(keys, grid):
     return {name: jax.vmap(lambda k, f=f: f(k, grid, CAP))(keys)
-            for name, f in I.INITIALISERS.items()}
+            for name, f in ((op.name, op.fn) for op in registry.operators("init"))}
 
 
 def _all_initialisers(keys, grid):

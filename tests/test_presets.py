@@ -181,7 +181,8 @@ def test_iga_zhu_table_3():
         "fitness.method": "iga_zhu", "fitness.omega": 0.7,
         "fitness.c1": 1.0, "fitness.c2": 2.0, "fitness.c3": 3.0,
         "init.method": "directional", "selection.method": "roulette_elite",
-        "crossover.method": "zhu_mixed", "mutation.method": "zhu_mixed",
+        "crossover.method": "common_point_or_column",
+        "mutation.method": "replace_point_or_regrow",
         "post.method": "none",
     })
 
@@ -192,7 +193,7 @@ def test_iga_zhang():
     config = load_preset("iga_zhang")
     check(config, {
         "crossover.probability": 0.8,
-        "simplify.method": "corner_cut", "simplify.probability": 1.0,
+        "simplify.method": "cut_corners", "simplify.probability": 1.0,
         "selection.method": "stratified", "fitness.method": "iga_zhang",
         "init.method": "random_walk", "crossover.method": "common_point",
         "generations": 45,
@@ -394,7 +395,8 @@ def test_standalone_user_file(tmp_path):
     ]) + "\n")
     config = load_preset(user)
     check(config, {"name": "mine", "generations": 5, "population.size": 8,
-                   "selection.tournament_size": 3, "map.corner_rule": "strict"})
+                   "selection.tournament_size": 3, "map.corner_rule": "strict",
+                   "mutation.method": "replace_point"})  # the former name, accepted
 
 
 # ----------------------------------------------------------------------- packaging

@@ -1,0 +1,241 @@
+"""The contract of each operator family (:mod:`jaxga.registry`), as checks that raise
+``AssertionError`` naming the operator and what it broke.
+
+``tests/test_registry.py`` runs them on every registered operator, so a new operator is
+tested by being registered; it also shows that a broken operator fails them.
+
+Shared by every family: outputs have the documented dtypes and shapes; paths are padded
+with their last cell (SPEC 2) and their lengths lie in ``[1, L]``; the same key gives
+the same result, under ``jax.vmap`` and ``jit`` as alone (two separate traces).
+Path operators (crossover, mutation, simplify): a reported failure returns the parent
+bit for bit, and feasible, loop-free parents from start to goal give feasible, loop-free
+children from start to goal (continuous ones unless the operator makes waypoint paths);
+a ``shrinking`` operator never lengthens a path.
+"""
+
+from __future__ import annotations
+
+import jax
+import jax.numpy as jnp
+import numpy as np
+
+from jaxga import registry
+from jaxga.engine import binding, build, fitness_function
+from jaxga.grid import Grid
+from jaxga.objectives import path_length
+from jaxga.paths import Population, has_endpoints, is_continuous, is_feasible, is_loop_free
+from jaxga.presets import load_preset
+
+P = 6
+"""Individuals (or pairs) per check."""
+
+
+def some_value(field):
+    """A valid value of a field the configuration must set (its default, else the middle
+    of its range, else one above its minimum)."""
+    if field.default is not None:
+        return field.default
+    kind = field.kind[0] if isinstance(field.kind, tuple) else field.kind
+    if field.low is not None and field.high is not None:
+        return kind((field.low + field.high) / 2)
+    return kind((field.low or 0) + 1)
+
+
+def bound(op: registry.Operator, grid: Grid, capacity: int, field_repair: bool = False):
+    """``op`` bound as the engine binds it, in a small SGA configuration that selects it
+    (its required keys set): ``(bound function, Binding, fitness function)``."""
+    changes = {f"{op.family}.method": op.name, "population.size": P, "generations": 2,
+               "population.capacity": capacity,
+               "repair.fallback": "field" if field_repair else "none"}
+    changes.update({k: some_value(op.params[k]) for k in op.required})
+    config = load_preset("sga").override(changes)
+    algo, params = build(config, grid)
+    fit_fn = fitness_function(algo, params)
+    ctx = binding(algo, params, jnp.int32(1), fit_fn)
+    return (None if op.fn is None else op.bind(ctx)), ctx, fit_fn
+
+
+def _tree_equal(a, b) -> bool:
+    return all(np.array_equal(np.asarray(x), np.asarray(y))
+               for x, y in zip(jax.tree_util.tree_leaves(a), jax.tree_util.tree_leaves(b),
+                               strict=True))
+
+
+def _check(ok, op: registry.Operator, what: str) -> None:
+    if not bool(np.all(np.asarray(ok))):
+        raise AssertionError(f"{op.family} operator {op.name!r}: {what}")
+
+
+def check_paths(op, grid: Grid, cells, length, *, valid=None, waypoints=False) -> None:
+    """Shapes, dtypes and padding of paths ``cells[N, L]``, ``length[N]``; where
+    ``valid``: start to goal, feasible (continuous unless ``waypoints``), loop-free."""
+    cells, length = np.asarray(cells), np.asarray(length)
+    _check(cells.dtype == np.int32 and length.dtype == np.int32, op, "paths must be int32")
+    n, cap = cells.shape
+    _check((length >= 1) & (length <= cap), op, "a length outside [1, L]")
+    last = cells[np.arange(n), np.clip(length - 1, 0, cap - 1)]
+    pad_ok = np.where(np.arange(cap)[None, :] >= length[:, None], cells == last[:, None], True)
+    _check(pad_ok, op, "paths must be padded with their last cell (SPEC 2)")
+    if valid is None:
+        return
+    feasible = is_feasible if waypoints else is_continuous
+    c, L = jnp.asarray(cells), jnp.asarray(length)
+    ends = jax.vmap(lambda a, b: has_endpoints(grid, a, b))(c, L)
+    feas = jax.vmap(lambda a, b: feasible(grid, a, b))(c, L)
+    loops = jax.vmap(lambda a, b: is_loop_free(a, b, grid.n_cells))(c, L)
+    valid = np.asarray(valid)
+    _check(~valid | np.asarray(ends), op, "a path that does not go from start to goal")
+    _check(~valid | np.asarray(feas), op, "an infeasible path from feasible input"
+           if waypoints else "a path that is not continuous (8-connected)")
+    _check(~valid | np.asarray(loops), op, "a path with a loop from loop-free input")
+
+
+def _vmap_equals_alone(op, batched, alone, args_of) -> None:
+    """Same key, same result: the first and last rows of the batched (``vmap``) result
+    equal the operator called alone (a separate trace under ``jit``)."""
+    one = jax.jit(alone)
+    for i in (0, P - 1):
+        row = jax.tree_util.tree_map(lambda x, i=i: x[i], batched)
+        _check(_tree_equal(one(*args_of(i)), row),
+               op, "the same key gave another result alone than under vmap")
+
+
+def check_init(op: registry.Operator, grid: Grid, capacity: int, key) -> None:
+    """``init_fn(key, grid, capacity) -> (cells, length, ok)``: a successful draw is a
+    feasible, loop-free path from start to goal."""
+    fn, _, _ = bound(op, grid, capacity)
+    keys = jax.random.split(key, P)
+    run = jax.jit(jax.vmap(lambda k: fn(k, grid, capacity)))
+    cells, length, ok = out = run(keys)
+    _check(np.asarray(ok).dtype == bool, op, "ok must be bool")
+    check_paths(op, grid, cells, length, valid=ok)
+    if registry.NEVER_FAILS in op.traits:
+        _check(ok, op, "it declares never_fails, but failed on a reachable goal")
+    _vmap_equals_alone(op, out, lambda k: fn(k, grid, capacity), lambda i: (keys[i],))
+
+
+def check_fitness(op: registry.Operator, grid: Grid, pop: Population) -> None:
+    """``f(grid, cells, length, feasible) -> f32``: finite and positive on feasible
+    paths, 0 on infeasible ones."""
+    fn, _, _ = bound(op, grid, pop.cells.shape[1])
+    feasible = jnp.arange(P) % 2 == 0
+    run = jax.jit(jax.vmap(lambda c, n, f: fn(grid, c, n, f)))
+    f = run(pop.cells, pop.length, feasible)
+    _check(np.asarray(f).dtype == np.float32 and np.asarray(f).shape == (P,), op,
+           "fitness must be float32, one per path")
+    _check(np.isfinite(f), op, "a fitness that is not finite")
+    _check(np.where(np.asarray(feasible), np.asarray(f) > 0, np.asarray(f) == 0), op,
+           "fitness must be > 0 for feasible paths and 0 for infeasible ones")
+    _vmap_equals_alone(op, f, lambda c, n, ok: fn(grid, c, n, ok),
+                       lambda i: (pop.cells[i], pop.length[i], feasible[i]))
+
+
+def check_selection(op: registry.Operator, grid: Grid, key) -> None:
+    """``select(key, fitness, active) -> int32[P]``: indices of active individuals."""
+    if op.fn is None:
+        return
+    fn, _, _ = bound(op, grid, 32)
+    fitness = jnp.asarray([0.5, 0.0, 0.9, 0.2, 0.7, 0.3], jnp.float32)
+    active = jnp.arange(P) < P - 2
+    keys = jax.random.split(key, P)
+    run = jax.jit(jax.vmap(lambda k: fn(k, fitness, active)))
+    idx = run(keys)
+    idx = np.asarray(idx)
+    _check(idx.dtype == np.int32 and idx.shape == (P, P), op, "indices must be int32[P]")
+    _check((idx >= 0) & (idx < P - 2), op, "it selected an inactive or off-range individual")
+    _vmap_equals_alone(op, jnp.asarray(idx), lambda k: fn(k, fitness, active),
+                       lambda i: (keys[i],))
+
+
+def check_variation(op: registry.Operator, grid: Grid, pop: Population, key,
+                    field_repair: bool = False) -> None:
+    """A crossover (pairs of rows ``2k, 2k+1``), mutation or simplification on feasible,
+    loop-free parents from start to goal."""
+    fn, ctx, _ = bound(op, grid, pop.cells.shape[1], field_repair)
+    waypoints = registry.WAYPOINTS in op.traits
+    if fn is None:  # a composition of registered operators: the population lift only
+        return check_lift(op, grid, pop, key, ctx, waypoints)
+    keys = jax.random.split(key, P)
+    if op.family == "crossover":
+        c1, l1 = pop.cells[0::2], pop.length[0::2]
+        c2, l2 = pop.cells[1::2], pop.length[1::2]
+        half = P // 2
+        keys = keys[:half]
+        run = jax.jit(jax.vmap(lambda k, a, b, c, d: fn(k, grid, a, b, c, d)))
+        out = run(keys, c1, l1, c2, l2)
+        o1, n1, o2, n2, failed = (np.asarray(x) for x in out)
+        _check(failed.dtype == np.int32 and ((failed >= 0) & (failed <= 2)).all(), op,
+               "n_failed must be an int32 count of 0, 1 or 2 slots")
+        same1 = (o1 == np.asarray(c1)).all(1) & (n1 == np.asarray(l1))
+        same2 = (o2 == np.asarray(c2)).all(1) & (n2 == np.asarray(l2))
+        _check(same1.astype(int) + same2.astype(int) >= failed, op,
+               "a failed child must be its parent, unchanged")
+        cells = np.concatenate([o1, o2])
+        length = np.concatenate([n1, n2])
+        check_paths(op, grid, cells, length, valid=np.ones(len(length), bool),
+                    waypoints=waypoints)
+        grew = length > np.concatenate([np.asarray(l1), np.asarray(l2)])
+        _vmap_equals_alone(op, out, lambda k, a, b, c, d: fn(k, grid, a, b, c, d),
+                           lambda i: (keys[min(i, half - 1)], c1[min(i, half - 1)],
+                                      l1[min(i, half - 1)], c2[min(i, half - 1)],
+                                      l2[min(i, half - 1)]))
+    else:
+        run = jax.jit(jax.vmap(lambda k, c, n: fn(k, grid, c, n)))
+        out = run(keys, pop.cells, pop.length)
+        cells, length, failed = (np.asarray(x) for x in out)
+        _check(failed.dtype == bool and failed.shape == (P,), op, "failed must be bool[P]")
+        same = (cells == np.asarray(pop.cells)).all(1) & (length == np.asarray(pop.length))
+        _check(~failed | same, op, "a failed individual must be its parent, unchanged")
+        check_paths(op, grid, cells, length, valid=np.ones(P, bool), waypoints=waypoints)
+        grew = length > np.asarray(pop.length)
+        _vmap_equals_alone(op, out, lambda k, c, n: fn(k, grid, c, n),
+                           lambda i: (keys[i], pop.cells[i], pop.length[i]))
+    if registry.SHRINKING in op.traits:
+        _check(~grew, op, "it declares shrinking, but lengthened a path")
+
+
+def check_lift(op: registry.Operator, grid: Grid, pop: Population, key, ctx,
+               waypoints: bool) -> None:
+    """The population lift (probability 1): shapes, determinism, valid children."""
+    lifted = jax.jit(lambda k, c, n: op.lift(ctx)(k, grid, Population(c, n), 1.0))
+    out = lifted(key, pop.cells, pop.length)
+    new, failed = out
+    _check(np.asarray(failed).dtype == np.int32 and 0 <= int(failed) <= P, op,
+           "n_failed must be an int32 count of at most P")
+    check_paths(op, grid, new.cells, new.length, valid=np.ones(P, bool), waypoints=waypoints)
+
+
+def check_post(op: registry.Operator, grid: Grid, pop: Population) -> None:
+    """``post(grid, cells, length) -> (cells, length)``: a feasible path from start to
+    goal, no longer than its input."""
+    if op.fn is None:
+        return
+    fn, _, _ = bound(op, grid, pop.cells.shape[1])
+    run = jax.jit(jax.vmap(lambda c, n: fn(grid, c, n)))
+    out = run(pop.cells, pop.length)
+    cells, length = out
+    check_paths(op, grid, cells, length, valid=np.ones(P, bool), waypoints=True)
+    before = jax.vmap(lambda c, n: path_length(grid, c, n))(pop.cells, pop.length)
+    after = jax.vmap(lambda c, n: path_length(grid, c, n))(cells, length)
+    _check(np.asarray(after) <= np.asarray(before) + 1e-4, op, "it lengthened a path")
+    _vmap_equals_alone(op, out, lambda c, n: fn(grid, c, n),
+                       lambda i: (pop.cells[i], pop.length[i]))
+
+
+def check_operator(op: registry.Operator, grid: Grid, pop: Population, key,
+                   field_repair: bool = False) -> None:
+    """The contract of ``op``'s family (module docstring) on ``grid`` with feasible,
+    loop-free parents ``pop`` (``P`` paths of the grid's capacity)."""
+    if op.family == "init":
+        check_init(op, grid, pop.cells.shape[1], key)
+    elif op.family == "fitness":
+        check_fitness(op, grid, pop)
+    elif op.family == "selection":
+        check_selection(op, grid, key)
+    elif op.family in ("crossover", "mutation", "simplify"):
+        if op.fn is not None or op.population is not None:
+            check_variation(op, grid, pop, key, field_repair)
+    elif op.family == "post":
+        check_post(op, grid, pop)
+    else:
+        raise AssertionError(f"no contract for the family {op.family!r}")

@@ -1,0 +1,203 @@
+"""The operator registry: every registered operator keeps its family's contract
+(``tests/contracts.py``), a broken one is caught, and the configuration accepts exactly
+the registered names (former names included)."""
+
+from __future__ import annotations
+
+import re
+import subprocess
+import sys
+from pathlib import Path
+
+import jax
+import jax.numpy as jnp
+import pytest
+
+from jaxga import registry
+from jaxga.config import COMMON_FIELDS, SCHEMA
+from jaxga.errors import ParameterError
+from jaxga.guide import with_guide
+from jaxga.maps import random_map
+from jaxga.maptables import with_tables
+from jaxga.postprocess import compact
+from jaxga.presets import load_preset
+from tests import contracts
+from tests.strategies import random_parents
+
+OPERATORS = registry.operators()
+
+
+@pytest.fixture(scope="module")
+def setting():
+    """A 10 x 10 map with 20 % obstacles under the strictest corner rule, as a run sees
+    it (distance fields and per-map tables attached), and six feasible, loop-free
+    parents of capacity 64 built without the operators under test."""
+    grid = with_tables(with_guide(random_map(10, 10, 0.2, 3, corner_rule="strict")))
+    return grid, random_parents(grid, contracts.P, seed=5)
+
+
+@pytest.mark.parametrize("op", OPERATORS, ids=[f"{op.family}-{op.name}" for op in OPERATORS])
+def test_every_registered_operator_keeps_its_family_contract(setting, op):
+    """With ``repair.fallback = "none"``; the field repairs have their own property tests
+    (``tests/test_field.py``)."""
+    grid, pop = setting
+    contracts.check_operator(op, grid, pop, jax.random.PRNGKey(7))
+
+
+# ------------------------------------------------------- a broken operator is caught
+def _teleport(key, grid, cells, length):
+    """Moves node 1 to the last cell of the map (the goal's cell on these maps is never
+    next to the start's neighbour): a jump, not a legal move."""
+    return cells.at[1].set(grid.n_cells - 1), length, jnp.bool_(False)
+
+
+def _lies_about_failure(key, grid, cells, length):
+    """Deletes node 1 and reports a failure (a failure must return the parent)."""
+    keep = (jnp.arange(cells.shape[0]) < length) & (jnp.arange(cells.shape[0]) != 1)
+    out, n = compact(cells, keep)
+    return out, n, jnp.bool_(True)
+
+
+def _not_pure(key, grid, cells, length):
+    """Reads a Python counter: two traces with the same key give different results."""
+    _not_pure.calls += 1
+    return cells, length, jnp.bool_(_not_pure.calls % 2 == 0)
+
+
+_not_pure.calls = 0
+
+
+@pytest.mark.parametrize("fn, message", [
+    (_teleport, "not continuous"),
+    (_lies_about_failure, "a failed individual must be its parent"),
+    (_not_pure, "the same key gave another result"),
+])
+def test_a_registered_operator_that_breaks_the_contract_fails_it(setting, fn, message):
+    grid, pop = setting
+    op = registry.register(registry.Operator("mutation", "broken_toy", fn, "broken (test)"))
+    try:
+        with pytest.raises(AssertionError, match=message):
+            contracts.check_operator(op, grid, pop, jax.random.PRNGKey(0))
+    finally:
+        registry.unregister("mutation", "broken_toy")
+
+
+def test_a_shrinking_operator_that_lengthens_fails_the_contract(setting):
+    grid, pop = setting
+    real = registry.operator("mutation", "neighbour_point")  # it may lengthen a path
+    op = registry.register(registry.Operator("simplify", "toy_grow", real.fn, "test",
+                                             traits=frozenset({registry.SHRINKING})))
+    try:
+        with pytest.raises(AssertionError, match="shrinking"):
+            contracts.check_operator(op, grid, pop, jax.random.PRNGKey(1))
+    finally:
+        registry.unregister("simplify", "toy_grow")
+
+
+# ------------------------------------------------ configuration and registry agree
+def test_the_configuration_accepts_exactly_the_registered_names():
+    base = load_preset("sga")
+    for family in registry.FAMILIES:
+        key = f"{family}.method"
+        for op in registry.operators(family):
+            for name in (op.name, *op.aliases):
+                changes = {key: name, **{k: contracts.some_value(op.params[k])
+                                          for k in op.required}}
+                assert base.override(changes)[key] == op.name  # aliases -> current name
+        with pytest.raises(ParameterError, match=re.escape(f"{key} = 'no_such_op' is not one of")):
+            base.override({key: "no_such_op"})
+    assert set(SCHEMA) == set(COMMON_FIELDS) | set(registry.schema_fields())
+
+
+def test_registering_adds_the_name_and_keys_and_unregistering_removes_them():
+    from jaxga.fields import Field
+
+    field = Field(float, "toy strength", low=0.0, high=2.0, dynamic=True, default=1.0)
+    op = registry.Operator("mutation", "toy_op", registry.operator("mutation",
+                                                                     "replace_point").fn,
+                           "toy", params={"mutation.toy_strength": field}, aliases=("toy",))
+    registry.register(op)
+    try:
+        config = load_preset("sga").override({"mutation.method": "toy"})
+        assert config["mutation.method"] == "toy_op"
+        assert config["mutation.toy_strength"] == 1.0  # the field's default
+        assert SCHEMA["mutation.toy_strength"] is field
+        with pytest.raises(ValueError, match="already registered"):
+            registry.register(op)
+    finally:
+        registry.unregister("mutation", "toy_op")
+    assert "mutation.toy_strength" not in SCHEMA
+    with pytest.raises(ParameterError, match="is not one of"):
+        load_preset("sga").override({"mutation.method": "toy"})
+
+
+@pytest.mark.parametrize("bad, message", [
+    (dict(family="mutations"), "unknown operator family"),
+    (dict(name="neighbour_point"), "already registered"),
+    (dict(aliases=("range",)), "already registered"),
+    (dict(traits=frozenset({"fast"})), "unknown trait"),
+    (dict(params={"fitness.toy": SCHEMA["fitness.window"]}), "not in the 'mutation' section"),
+    (dict(params={"mutation.radius": SCHEMA["mutation.probability"]}),
+     "declared with another field"),
+    (dict(required=("mutation.nothing",)), "are not parameters"),
+])
+def test_register_refuses_inconsistent_declarations(bad, message):
+    op = registry.Operator(**{"family": "mutation", "name": "toy_bad", "fn": None,
+                              "summary": "test", **bad})
+    with pytest.raises(ValueError, match=message):
+        registry.register(op)
+    assert registry.canonical("mutation", "toy_bad") is None
+
+
+def test_the_old_names_in_a_users_preset_file_still_work(tmp_path):
+    user = tmp_path / "old.toml"
+    user.write_text("\n".join([
+        "generations = 5", "[population]", "size = 8", "[init]", 'method = "directional"',
+        "[fitness]", 'method = "sga"', "[selection]", 'method = "roulette"',
+        "[crossover]", 'method = "zhu_mixed"', "probability = 0.8",
+        "[mutation]", 'method = "range"', "probability = 0.4",
+        "[simplify]", 'method = "corner_cut"', "probability = 0.5"]) + "\n")
+    config = load_preset(user)
+    assert (config["crossover.method"], config["mutation.method"],
+            config["simplify.method"]) == ("common_point_or_column", "regrow_segment",
+                                           "cut_corners")
+
+
+def test_operators_command_lists_the_registry():
+    out = subprocess.run([sys.executable, "-m", "jaxga.cli", "operators", "mutation"],
+                         capture_output=True, text=True, check=True,
+                         cwd=Path(__file__).resolve().parents[1]).stdout
+    for op in registry.operators("mutation"):
+        assert re.search(rf"^  {op.name}\b", out, re.M), op.name
+        for key in op.params:
+            assert key in out
+    assert "replace_point (formerly one_point)" in out
+
+
+def test_the_readme_walk_through_adds_a_working_operator(setting):
+    """The README's "Operators, and how to add one": its function and its registration
+    run as written; the operator keeps the mutation contract, the configuration accepts
+    it, and a run uses it."""
+    import types
+
+    from jaxga import api
+    from jaxga.grid import move_legal
+
+    readme = (Path(__file__).resolve().parents[1] / "README.md").read_text()
+    section = readme.split("## Operators, and how to add one", 1)[1].split("\n## ", 1)[0]
+    function, registration = re.findall(r"```python\n(.*?)```", section, re.S)
+    ns = {"jax": jax, "jnp": jnp, "move_legal": move_legal, "compact": compact}
+    exec(function, ns)  # noqa: S102 - the README's own code
+    ns.update(mu=types.SimpleNamespace(drop_point=ns["drop_point"]),
+              register=registry.register, Operator=registry.Operator,
+              SHRINKING=registry.SHRINKING)
+    exec(registration, ns)  # noqa: S102
+    try:
+        grid, pop = setting
+        op = registry.operator("mutation", "drop_point")
+        contracts.check_operator(op, grid, pop, jax.random.PRNGKey(3))
+        r = api.run("sga", grid, seeds=2, population__size=8, generations=3,
+                    sets=["mutation.method=drop_point", "mutation.probability=1.0"])
+        assert r.config["mutation.method"] == "drop_point" and r.success.all()
+    finally:
+        registry.unregister("mutation", "drop_point")
