@@ -14,10 +14,9 @@ Prints the table and records it in RESULTS.md; exits 1 if any hash differs.
 from __future__ import annotations
 
 import argparse
-import subprocess
 from pathlib import Path
 
-from _results import child_at, child_at_revision, markdown_table, parse_args, record
+from _results import child_at, child_at_revision, commit, markdown_table, parse_args, record
 
 ROOT = Path(__file__).resolve().parents[1]
 
@@ -53,9 +52,7 @@ def main() -> None:
              else "**NO**"] for name in base]
     rows += [[name, "-", tree[name], "new"] for name in tree if name not in base]
     same = sum(r[3] == "yes" for r in rows)
-    revision = subprocess.run(["git", "rev-parse", "--short", "HEAD"], cwd=ROOT,
-                              capture_output=True, text=True).stdout.strip()
-    body = (f"Base {args.base}, tree {revision} (plus uncommitted changes, if any); every "
+    body = (f"Base {args.base}, tree {commit()}; every "
             f"built-in preset with its default settings on every classic 20 x 20 map, "
             f"{args.seeds} seeds. {same} of {len(base)} runs of the base are bit for bit "
             "the same in the tree.\n\n"

@@ -26,10 +26,9 @@ from __future__ import annotations
 
 import argparse
 import json
-import subprocess
 from pathlib import Path
 
-from _results import PRESETS, child_at, child_at_revision, markdown_table, record
+from _results import PRESETS, child_at, child_at_revision, commit, markdown_table, record
 
 HERE = Path(__file__).resolve().parent
 ROOT = HERE.parent
@@ -107,9 +106,7 @@ def main() -> None:
         rows.append([name, base_h[name], off[name], "yes" if equal else "**NO**", on[name],
                      "yes" if on[name] == base_h[name] else "no"])
         print(rows[-1], flush=True)
-    revision = subprocess.run(["git", "rev-parse", "--short", "HEAD"], cwd=ROOT,
-                              capture_output=True, text=True).stdout.strip()
-    body = (f"Base {args.base}, tree {revision} (plus uncommitted changes, if any); "
+    body = (f"Base {args.base}, tree {commit()}; "
             f"{args.seeds} seeds per feasibility cell, {args.doe_seeds} per DOE point, 30 per "
             f"Zhu & Pan run. {same} of {len(rows)} reproductions are bit for bit the base's "
             "with the fallback off.\n\n"
