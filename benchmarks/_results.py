@@ -74,22 +74,11 @@ def cold_child(script: str, spec: str, **env: str) -> tuple[dict, str]:
 
 
 def child_at(checkout: Path, script: str, spec: str) -> dict:
-    """``python <script> --child <spec>`` in a fresh process importing ``jaxga`` from
-    ``checkout`` (and the benchmark helpers from this ``benchmarks/``), cold compilation
-    cache; its last stdout line parsed as JSON. A failing child raises ``RuntimeError``
-    with the end of its stderr."""
-    import json
-    import subprocess
-
+    """:func:`cold_child` of the benchmark ``script`` (a file name in this
+    ``benchmarks/``) importing ``jaxga`` from ``checkout`` instead of this tree."""
     here = Path(__file__).resolve().parent
-    env = dict(os.environ, PYTHONPATH=f"{checkout}{os.pathsep}{here}")
-    for key in ("JAXGA_CACHE_DIR", "JAX_COMPILATION_CACHE_DIR"):
-        env.pop(key, None)
-    proc = subprocess.run([sys.executable, str(here / script), "--child", spec], env=env,
-                          capture_output=True, text=True, cwd=checkout)
-    if proc.returncode != 0:
-        raise RuntimeError(proc.stderr[-3000:])
-    return json.loads(proc.stdout.strip().splitlines()[-1])
+    return cold_child(str(here / script), spec,
+                      PYTHONPATH=f"{checkout}{os.pathsep}{here}")[0]
 
 
 def child_at_revision(revision: str, script: str, spec: str) -> dict:

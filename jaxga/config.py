@@ -35,7 +35,9 @@ else:  # pragma: no cover
 __all__ = ["DEFAULTS", "REQUIRED", "SCHEMA", "Config", "Field", "flatten", "load_toml",
            "parse_value", "python_scalar"]
 
-FALLBACKS = ("field_walk", "none")
+FALLBACKS = (*(op.name for op in registry.operators("init")
+               if registry.NEVER_FAILS in op.traits), "none")
+"""``init.fallback``: an initialiser that cannot fail where a path exists, or none."""
 REPAIR_FALLBACKS = ("none", "field")
 TOPOLOGIES = ("none", "ring", "star", "full", "mpmga")
 

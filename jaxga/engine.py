@@ -23,7 +23,6 @@ reported, so a sweep over population sizes is one compiled call.
 from __future__ import annotations
 
 import dataclasses
-import functools
 from collections.abc import Callable, Iterable
 from typing import Any
 
@@ -81,8 +80,14 @@ def chosen_operators(config: Config) -> dict[str, registry.Operator]:
     return out
 
 
-def _has_trait(config: Config, trait: str, roles: Iterable[str] | None = None) -> bool:
-    chosen = chosen_operators(config)
+FIELD_REPAIR_ROLES = ("init.method", "crossover.method", "mutation.method")
+"""The roles whose operator ``repair.fallback`` can change (not the fallback initialiser)."""
+
+
+def _has_trait(chosen: dict[str, registry.Operator], trait: str,
+               roles: Iterable[str] | None = None) -> bool:
+    """Whether an operator of ``chosen`` (:func:`chosen_operators`), in one of ``roles``
+    (all: None), declares ``trait``."""
     return any(trait in op.traits for role, op in chosen.items()
                if roles is None or role in roles)
 
@@ -91,7 +96,7 @@ def uses_waypoints(config: Config) -> bool:
     """Whether the population holds waypoint paths (an operator with the trait
     :data:`~jaxga.registry.WAYPOINTS`, AGACD's crossover or point mutation: segments
     checked by line of sight) rather than 8-connected cell paths."""
-    return _has_trait(config, WAYPOINTS)
+    return _has_trait(chosen_operators(config), WAYPOINTS)
 
 
 PER_ISLAND: dict[str, str] = {
@@ -224,12 +229,12 @@ def unread_keys(config: Config) -> dict[str, str]:
         where = " as init.method or init.fallback" if family == "init" else ""
         out[key] = (f"{family}.method = {config[f'{family}.method']!r} has no parameter "
                     f"{name!r} (read by {', '.join(map(repr, who))} only{where})")
-    if uses_waypoints(config):
+    if _has_trait(chosen, WAYPOINTS):
         out["fitness.window"] = "waypoint paths are evaluated without the narrow window"
     if NEVER_FAILS in chosen["init.method"].traits:
         out["init.fallback"] = (f"init.method = {config['init.method']!r} cannot fail where "
                                 "a path exists")
-    if not field_repairs(config):
+    if not _has_trait(chosen, FIELD_REPAIR, FIELD_REPAIR_ROLES):
         out["repair.fallback"] = ("no operator of this configuration repairs by median "
                                   "insertion or a regrowth walk")
     for stage, low, high in (("crossover", "pc_low", "pc_high"),
@@ -299,8 +304,9 @@ def check_combination(config: Config) -> None:
     length does not match AGACD's three objectives, eq. 21-25). Migrants are checked
     against the island size by :func:`check_migration`.
     """
+    chosen = chosen_operators(config)
     needs = [*NEEDS, *((role, op.name, op.required)
-                       for role, op in chosen_operators(config).items() if op.required)]
+                       for role, op in chosen.items() if op.required)]
     for key, value, needed in needs:
         if config.get(key) == value:
             missing = [k for k in needed if config.get(k) is None]
@@ -317,14 +323,14 @@ def check_combination(config: Config) -> None:
                 f"{stage}.method = {method!r} with {stage}.adaptive = "
                 f"false needs {rate} (or {island_key}), which this configuration does not "
                 "set (--set KEY=VALUE)")
-    post_op = chosen_operators(config).get("post.method")
+    post_op = chosen.get("post.method")
     if post_op is not None and registry.CONTINUOUS_ONLY in post_op.traits \
-            and uses_waypoints(config):
+            and _has_trait(chosen, WAYPOINTS):
         raise ParameterError(
             f"post.method = {post_op.name!r} needs continuous paths (8-connected cells); "
             "this configuration evolves waypoint paths (AGACD's cut_and_check crossover or "
             "point_checked mutation): use post.method = 'shortcut_greedy'")
-    for op in chosen_operators(config).values():
+    for op in chosen.values():
         if op.check is not None:
             op.check(config)
 
@@ -375,7 +381,7 @@ def default_params(config: Config, islands: int = 1) -> dict[str, jax.Array]:
 def fitness_function(algo: Algorithm, params: dict) -> Callable:
     """``f(grid, cells, length, feasible) -> f32`` with the configured combiner and weights."""
     op = registry.operator("fitness", algo.get("fitness.method"))
-    return functools.partial(op.bind(Binding(algo, params)))
+    return op.bind(Binding(algo, params))
 
 
 def feasibility(algo: Algorithm, grid: Grid, cells: jax.Array, length: jax.Array) -> jax.Array:
@@ -557,26 +563,21 @@ def _best_of(state_islands: IslandState) -> tuple:
     return cells, state_islands.length.reshape(-1)[k], f[k]
 
 
-def uses_field_walk(config: Config) -> bool:
-    """Whether ``config`` draws individuals with :func:`jaxga.init.field_walk` (its
-    ``init.slack`` and ``init.temperature``): as ``init.method`` or as the fallback."""
-    return config["init.method"] == "field_walk" or config["init.fallback"] != "none"
-
-
 def uses_guide(config: Config) -> bool:
     """Whether a run of ``config`` steers by the problem's exact distance fields (its grid
-    needs :func:`jaxga.guide.with_guide`): the field initialiser, as ``init.method`` or as
-    the fallback of another initialiser, and the field repairs (``repair.fallback``)."""
-    return uses_field_walk(config) or (config["repair.fallback"] != "none"
-                                       and field_repairs(config))
+    needs :func:`jaxga.guide.with_guide`): an operator with the trait
+    :data:`~jaxga.registry.NEEDS_GUIDE` (the field initialiser, as ``init.method`` or as
+    the fallback of another initialiser), and the field repairs (``repair.fallback``)."""
+    return _has_trait(chosen_operators(config), registry.NEEDS_GUIDE) or (
+        config["repair.fallback"] != "none" and field_repairs(config))
+
 
 
 def field_repairs(config: Config) -> bool:
     """Whether ``repair.fallback = "field"`` changes an operator of ``config`` (one with
     the trait :data:`~jaxga.registry.FIELD_REPAIR`: its ``field_repair`` option;
     decision 019)."""
-    return _has_trait(config, FIELD_REPAIR, roles=("init.method", "crossover.method",
-                                                   "mutation.method"))
+    return _has_trait(chosen_operators(config), FIELD_REPAIR, FIELD_REPAIR_ROLES)
 
 
 def _field_repair(algo: Algorithm) -> bool:

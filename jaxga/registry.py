@@ -58,6 +58,7 @@ __all__ = [
     "FAMILIES",
     "FIELD_REPAIR",
     "NEEDS_FITNESS",
+    "NEEDS_GUIDE",
     "NEVER_FAILS",
     "SHRINKING",
     "SPLICING",
@@ -96,9 +97,12 @@ SHRINKING = "shrinking"
 """It never lengthens a path (computed on the narrow window when the paths fit)."""
 CONTINUOUS_ONLY = "continuous_only"
 """It needs 8-connected cell paths (not for configurations that evolve waypoint paths)."""
+NEEDS_GUIDE = "needs_guide"
+"""It steers by the problem's exact distance fields: the grid of a run that uses it
+carries them (:func:`jaxga.guide.with_guide`)."""
 
 TRAITS = (NEEDS_FITNESS, FIELD_REPAIR, WAYPOINTS, SPLICING, NEVER_FAILS, SHRINKING,
-          CONTINUOUS_ONLY)
+          CONTINUOUS_ONLY, NEEDS_GUIDE)
 """Every trait an operator may declare."""
 
 
@@ -358,7 +362,7 @@ register(Operator(
                                   doc="field_walk: preference for short detours, "
                                       "exp(-excess / temperature); 0 = optimal moves only"),
     },
-    traits=frozenset({NEVER_FAILS}),
+    traits=frozenset({NEVER_FAILS, NEEDS_GUIDE}),
     options=lambda ctx: {"slack": ctx.params["init.slack"],
                          "temperature": ctx.params["init.temperature"]},
 ))

@@ -226,16 +226,16 @@ def check_operator(op: registry.Operator, grid: Grid, pop: Population, key,
                    field_repair: bool = False) -> None:
     """The contract of ``op``'s family (module docstring) on ``grid`` with feasible,
     loop-free parents ``pop`` (``P`` paths of the grid's capacity)."""
-    if op.family == "init":
-        check_init(op, grid, pop.cells.shape[1], key)
-    elif op.family == "fitness":
-        check_fitness(op, grid, pop)
-    elif op.family == "selection":
-        check_selection(op, grid, key)
-    elif op.family in ("crossover", "mutation", "simplify"):
-        if op.fn is not None or op.population is not None:
-            check_variation(op, grid, pop, key, field_repair)
-    elif op.family == "post":
-        check_post(op, grid, pop)
-    else:
+    checks = {
+        "init": lambda: check_init(op, grid, pop.cells.shape[1], key),
+        "fitness": lambda: check_fitness(op, grid, pop),
+        "selection": lambda: check_selection(op, grid, key),
+        "crossover": lambda: check_variation(op, grid, pop, key, field_repair),
+        "mutation": lambda: check_variation(op, grid, pop, key, field_repair),
+        "simplify": lambda: check_variation(op, grid, pop, key, field_repair),
+        "post": lambda: check_post(op, grid, pop),
+    }
+    if op.family not in checks:
         raise AssertionError(f"no contract for the family {op.family!r}")
+    if op.fn is not None or op.population is not None:  # "none": the stage does nothing
+        checks[op.family]()
