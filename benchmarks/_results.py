@@ -101,10 +101,10 @@ def child_at_revision(revision: str, script: str, spec: str) -> dict:
 
 PRESETS = ("sga", "imga", "agacd", "iga_zhang", "mpmga", "iga_zhu")
 """The six presets in the papers' order, the benchmarks' default and table order
-(``jaxga.presets.preset_names()`` lists them alphabetically)."""
+(``jaxga.config.presets.preset_names()`` lists them alphabetically)."""
 
 PROGRAMS = ("init", "finish", "evolve")
-"""The programs ``jaxga.api._programs`` compiles, in compile order (one evolve program
+"""The programs ``jaxga.api.compiled_programs`` compiles, in compile order (one evolve program
 per chunk size: several when a run is split into chunks)."""
 
 
@@ -150,7 +150,7 @@ def cli_run(preset: str, seeds: int):
     import io
 
     from jaxga import api, cli
-    from jaxga.compilation_cache import ENV_VAR
+    from jaxga.api.compilation_cache import ENV_VAR
 
     os.environ[ENV_VAR] = ""
     got = []

@@ -7,10 +7,10 @@ pairs or seeds x segments) and checks that both give the same array:
 
 * position table (crossover lookups, loop removal): ``full(n, -1).at[keys].max(arange(L))``
   vmapped over 100 seeds x 30 pairs (20 x 20 map, L = 160) and 32 seeds x 40 pairs
-  (50 x 50, L = 400), against :func:`jaxga.scatter.position_table`;
-* gate order of :func:`jaxga.batching.gated_map` over AGACD's 60 x 159 segments for 20
+  (50 x 50, L = 400), against :func:`jaxga._batching.scatter.position_table`;
+* gate order of :func:`jaxga.operators.lift.gated_map` over AGACD's 60 x 159 segments for 20
   seeds: ``argsort(~flags, stable=True)`` against
-  :func:`jaxga.batching.true_first_order`.
+  :func:`jaxga.operators.lift.true_first_order`.
 """
 
 from __future__ import annotations
@@ -22,8 +22,8 @@ import jax.numpy as jnp
 import numpy as np
 from _results import markdown_table, record, timed
 
-from jaxga.batching import true_first_order
-from jaxga.scatter import position_table
+from jaxga._batching.scatter import position_table
+from jaxga.operators.lift import true_first_order
 
 
 def _nest(fn, depth, in_axes=0):

@@ -14,7 +14,7 @@ runs ``jaxga.run`` on ``classic_ga_gapp3_20x20`` (population 60, mpmga 3 islands
 * per program (init, evolve, finish): XLA seconds and the number of kernels XLA emitted
   (``fusion`` instructions of the optimised HLO, each compiled on its own), and the jaxga
   modules whose code the most kernels come from (the innermost jaxga stack frame of each
-  fusion's metadata; the code a folded call (:mod:`jaxga.folding`) emits around the
+  fusion's metadata; the code a folded call (:mod:`jaxga._batching.folding`) emits around the
   operator it folds, such as the pooled gated operators' block loop or a compacted
   loop's bookkeeping, is traced when the program is lowered under the stack of the
   call's ``fold_call``, so it counts as ``folding``).

@@ -114,7 +114,7 @@ os.getloadavg())} on a shared 2-core machine: times are noisy.
 
 
 def _generations(args: argparse.Namespace) -> int:
-    from jaxga.presets import load_preset
+    from jaxga.config.presets import load_preset
 
     return args.generations or int(load_preset("agacd")["generations"])
 

@@ -34,7 +34,7 @@ from _results import (
     standard_run,
 )
 
-from jaxga.parallel import cores
+from jaxga.api.parallel import cores
 
 
 def child(preset: str, seeds: int) -> dict:

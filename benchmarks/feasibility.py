@@ -11,7 +11,7 @@ Classic 20 x 20 maps run under the papers' corner rule ``free`` with their usual
 corners (0, 0) -> (19, 19). The Moving AI maps run under their own rule (``strict``, no
 corner cutting) between the endpoints of the longest scenario of their ``.scen`` file.
 Every returned path (raw and post-optimised) is checked independently of the engine with
-``jaxga.reference.clear_np`` (exact segment test under the corner rule).
+``jaxga.reference.optima.clear_np`` (exact segment test under the corner rule).
 """
 
 from __future__ import annotations
@@ -26,7 +26,7 @@ from _results import markdown_table, record
 from jaxga.api import run
 from jaxga.maps import builtin_names, load_map_info
 from jaxga.maps.builtin import builtin_scenarios
-from jaxga.reference import clear_np
+from jaxga.reference.optima import clear_np
 
 MOVINGAI = ("random-32-32-20", "maze-32-32-2")
 
@@ -90,7 +90,7 @@ def main() -> None:
         "post = after the preset's post-optimisation (none for sga), gap to the exact "
         "any-angle optimum (the lower bound of any path); fitness optimal = share of "
         "successful seeds whose best fitness equals the exact optimum of the preset's own "
-        "fitness over 8-connected paths (`jaxga.fitness_reference`; none for AGACD's "
+        "fitness over 8-connected paths (`jaxga.reference.fitness`; none for AGACD's "
         "waypoint fitness), fitness gap = mean of optimum / fitness - 1; init = share of "
         "initialisation attempts that produced a path.\n\n"
         + markdown_table(["preset", "map (corner rule)", "success", "infeasible",

@@ -16,9 +16,9 @@ import jax.numpy as jnp
 import numpy as np
 from _results import SHARED, markdown_table, record, timed
 
-from jaxga.geometry import clear, linear_trial
+from jaxga.core.geometry import clear, linear_trial
+from jaxga.core.paths import is_continuous, is_feasible, remove_loops
 from jaxga.maps import load_map, random_map
-from jaxga.paths import is_continuous, is_feasible, remove_loops
 
 
 def main() -> None:

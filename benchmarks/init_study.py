@@ -1,6 +1,6 @@
 """Initialisation study: the layout of Zhu & Pan 2024 Table 2 for every jaxga initialiser.
 
-For each initialiser of :mod:`jaxga.init` (plus Zhu & Pan's "CGA", the unadjusted 1/d
+For each initialiser of :mod:`jaxga.operators.init` (plus Zhu & Pan's "CGA", the unadjusted 1/d
 roulette = ``directional`` with ``factors=(1, 1)``) on each classic 20 x 20 built-in map
 (corner rule "free", as the papers; start cell 0, goal cell 399):
 
@@ -8,9 +8,9 @@ roulette = ``directional`` with ``factors=(1, 1)``) on each classic 20 x 20 buil
   at population-sized batches of keys; Zhu Table 2 reports successes per 100 attempts);
 * microseconds per attempt (jit + vmap over 100 keys, capacity 160, warm);
 * time to build a population of ``--size`` valid individuals with
-  :func:`jaxga.init.initialise` (redraws included), after compilation: median over
+  :func:`jaxga.operators.init.initialise` (redraws included), after compilation: median over
   ``--repeats`` different keys; the compile time is reported separately;
-* mean and sd of the Euclidean lengths (:func:`jaxga.objectives.path_length`) of all
+* mean and sd of the Euclidean lengths (:func:`jaxga.core.objectives.path_length`) of all
   individuals built (sd over individuals, which is the scale of Zhu's Table 2 sd column).
 
 Usage::
@@ -31,10 +31,10 @@ import time
 import jax
 import numpy as np
 
-from jaxga import init as I
+from jaxga.core.objectives import path_length
+from jaxga.core.paths import population_map
 from jaxga.maps import builtin_names, load_map
-from jaxga.objectives import path_length
-from jaxga.paths import population_map
+from jaxga.operators import init as I
 
 CAPACITY = 160
 
@@ -58,8 +58,8 @@ def problems(which: str) -> list[tuple[str, object, int]]:
     from _results import SHARED
 
     from jaxga.engine import default_capacity
-    from jaxga.guide import with_guide
     from jaxga.maps import load_map_info, read_scen
+    from jaxga.operators.guide import with_guide
 
     out = []
     if which == "classic":
@@ -202,16 +202,16 @@ def main(argv=None) -> None:
     title = ("init_study: every initialiser on the classic 20 x 20 maps"
              if args.maps == "classic" else "init_study: every initialiser on the Moving AI maps")
     body = (
-        (f"Zhu & Pan 2024 Table 2 layout for every initialiser of `jaxga.init` on the "
+        (f"Zhu & Pan 2024 Table 2 layout for every initialiser of `jaxga.operators.init` on the "
          f"classic 20 x 20 maps (corner rule \"free\", start 0, goal 399, capacity "
          f"{CAPACITY}). " if args.maps == "classic" else
-         "Every initialiser of `jaxga.init` on the longest scenario of each shared Moving "
-         "AI map (corner rule \"strict\", the automatic capacity). ")
+         "Every initialiser of `jaxga.operators.init` on the longest scenario of each shared "
+         "Moving AI map (corner rule \"strict\", the automatic capacity). ")
         + f"distinct = different paths among the {args.size} of the first build; Jaccard = "
         f"mean over pairs of 1 - |A and B| / |A or B| of their cell sets (up to 200 paths). "
         f"Success rate from {args.attempts} independent attempts; us per attempt = jit + "
         f"vmap over 100 keys, warm, median; time to build {args.size} valid individuals "
-        f"with `jaxga.init.initialise` (redraws included, rounds of `chunk` candidates "
+        f"with `jaxga.operators.init.initialise` (redraws included, rounds of `chunk` candidates "
         f"sized from the measured rate), median over {args.repeats} keys after compilation "
         f"(fewer when the builds took over 30 s; compile time = ahead-of-time compilation of "
         f"`initialise` with empty caches); length = Euclidean path length of all individuals "

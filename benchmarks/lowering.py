@@ -26,7 +26,7 @@ PROGRAM = re.compile(r"Finished XLA compilation of jit\((do_\w+)\) in ([0-9.]+) 
 def child(preset: str, seeds: int, generations: int) -> dict:
     """One cold run (in a fresh process)."""
     from jaxga.api import run
-    from jaxga.lowering import threefry_unrolled
+    from jaxga.api.lowering import threefry_unrolled
     from jaxga.maps import load_map
 
     grid = load_map("classic_ga_gapp3_20x20", corner_rule="free")

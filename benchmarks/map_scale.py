@@ -35,7 +35,7 @@ def child(spec: str) -> None:
     grid = random_map(size, size, 0.15, seed=1, start=(2, 2), goal=(29, 29))
     r = jaxga.run(preset, grid, seeds=seeds, generations=generations,
                   population__capacity=160)
-    progs = [o for o in gc.get_objects() if isinstance(o, api._Programs)][-1]
+    progs = [o for o in gc.get_objects() if isinstance(o, api.Programs)][-1]
     memory = {name: c.memory_analysis().temp_size_in_bytes / 2**20
               for name, c in progs._compiled.items()}
     print(json.dumps({

@@ -55,9 +55,9 @@ def scenarios(name: str):
 def child(spec: str) -> None:
     import resource
 
-    import jaxga.parallel
+    import jaxga.api.parallel
 
-    jaxga.parallel.use_all_cores()
+    jaxga.api.parallel.use_all_cores()
     from jaxga.api import run
     from jaxga.maps import load_map_info
 

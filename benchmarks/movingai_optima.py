@@ -1,9 +1,9 @@
-"""Reproduce the optimal lengths of every Moving AI scenario with jaxga.reference.
+"""Reproduce the optimal lengths of every Moving AI scenario with jaxga.reference.optima.
 
 For every ``.scen`` file in a folder of Moving AI benchmarks (default
 ``/work/shared/benchmarks/movingai``), load its map, run
-:func:`jaxga.reference.OctileGraph.search` (the engine of
-:func:`jaxga.reference.shortest_path`; SPEC 1 and 11) under the ``"strict"`` corner rule
+:func:`jaxga.reference.optima.OctileGraph.search` (the engine of
+:func:`jaxga.reference.optima.shortest_path`; SPEC 1 and 11) under the ``"strict"`` corner rule
 (the Moving AI convention: no corner cutting) on every scenario, and count how many
 optimal lengths are reproduced within ``--tol`` (default 1e-3). A sample of scenarios
 per map is also cross-checked against ``scipy.sparse.csgraph.dijkstra`` on the legal-move
@@ -28,7 +28,7 @@ from pathlib import Path
 
 import numpy as np
 
-from jaxga.reference import OctileGraph, any_angle_shortest_path_np, legal_moves_np
+from jaxga.reference.optima import OctileGraph, any_angle_shortest_path_np, legal_moves_np
 
 sys.path.insert(0, str(Path(__file__).resolve().parent))
 import _results  # noqa: E402  (benchmarks/_results.py: machine line, RESULTS.md)
@@ -80,7 +80,7 @@ def scipy_check(blocked: np.ndarray, rule: str, pairs: list, lengths: list[float
     from scipy.sparse import coo_matrix
     from scipy.sparse.csgraph import dijkstra
 
-    from jaxga.grid import DIRECTIONS
+    from jaxga.core.grid import DIRECTIONS
 
     h, w = blocked.shape
     legal = legal_moves_np(blocked, rule).reshape(8, -1)
@@ -234,8 +234,8 @@ def main(argv: list[str] | None = None) -> int:
     if any_angle_table:
         print(any_angle_table)
     body = (
-        f"`jaxga.reference` 8-connected optimum (A*, octile heuristic, one `OctileGraph` per "
-        f"map) on every scenario of every `.scen` file in `{args.root}`, corner rule "
+        f"`jaxga.reference.optima` 8-connected optimum (A*, octile heuristic, one `OctileGraph` "
+        f"per map) on every scenario of every `.scen` file in `{args.root}`, corner rule "
         f"'{args.rule}', tolerance {args.tol:g}; 'scipy cross-check' compares a random sample "
         f"with `scipy.sparse.csgraph.dijkstra`. `platform.processor()` = "
         f"{platform.processor()!r}, `os.cpu_count()` = {os.cpu_count()}.\n\n" + table
@@ -247,7 +247,7 @@ def main(argv: list[str] | None = None) -> int:
             "of optimal lengths; 'upper bound' is `exact=False`.\n\n" + any_angle_table
         )
     _results.record(
-        f"Moving AI optimal lengths (jaxga.reference, '{args.rule}')",
+        f"Moving AI optimal lengths (jaxga.reference.optima, '{args.rule}')",
         body,
         write=not args.no_append,
     )

@@ -6,7 +6,7 @@ way paper code is written: for-loops over generations and individuals, every pat
 Python list of cell indices, no vectorisation across individuals. It is meant as an
 HONEST baseline: no artificial slowness, no needless copies, the obvious
 precomputations a careful programmer would make (a table of the free 8-neighbours of
-every cell, as ``jaxga.init._move_tables`` builds too), scalar random numbers from one
+every cell, as ``jaxga.operators.init._move_tables`` builds too), scalar random numbers from one
 ``numpy.random.default_rng(seed)`` generator.
 
 The map is a boolean ``blocked[H, W]`` array (row 0 at the bottom), start and goal are
@@ -17,31 +17,31 @@ capacity ``L`` (default ``4 * (H + W)``, ``jaxga.engine.default_capacity``).
 Operators, each mirroring the jaxga function named (same semantics, not the same random
 stream):
 
-* initialisation ``random_walk`` (:func:`jaxga.init.random_walk` /
-  :func:`jaxga.init.uniform_walk`; Zhu & Pan 2024 section 4.1): a self-avoiding walk from
+* initialisation ``random_walk`` (:func:`jaxga.operators.init.random_walk` /
+  :func:`jaxga.operators.init.uniform_walk`; Zhu & Pan 2024 section 4.1): a self-avoiding walk from
   the start, stepping to a uniformly random free, not yet visited 8-neighbour, until it
   reaches the goal (success), a dead end or ``L - 1`` moves (failure). Failures are
-  redrawn as in :func:`jaxga.init.initialise`: a budget of ``max_tries`` (100) attempts
+  redrawn as in :func:`jaxga.operators.init.initialise`: a budget of ``max_tries`` (100) attempts
   per individual on average; slots still empty after it get copies of the paths found
   (cyclically), or the one-cell path ``[start]`` if none was found.
   The walk is self-avoiding, so its paths are loop-free.
-* fitness ``sga`` (:func:`jaxga.objectives.sga`): ``1 / length``, the Euclidean length of
+* fitness ``sga`` (:func:`jaxga.core.objectives.sga`): ``1 / length``, the Euclidean length of
   the cell polyline; 0 for a path that does not run from start to goal through
   consecutive free cells (:func:`jaxga.engine.evaluate`).
-* selection ``roulette`` (:func:`jaxga.selection.roulette`; AGACD 4.5, Zhu & Pan eq.
+* selection ``roulette`` (:func:`jaxga.operators.selection.roulette`; AGACD 4.5, Zhu & Pan eq.
   10): ``P`` i.i.d. fitness-proportional draws (uniform if every fitness is 0).
 * crossover ``common_point`` with probability ``pc`` per pair
-  (:func:`jaxga.crossover.common_point`; IMGA, Li, Hu & Liu 2021, 4.3.2; Zhu & Pan 4.4):
+  (:func:`jaxga.operators.crossover.common_point`; IMGA, Li, Hu & Liu 2021, 4.3.2; Zhu & Pan 4.4):
   consecutive pairs of the mating pool; a cell common to both parents, interior to both,
   chosen uniformly; tails swapped; loops removed; a child longer than ``L`` keeps its
   parent; no common cell, no crossover.
 * mutation ``neighbour_point`` with probability ``pm`` per individual
-  (:func:`jaxga.mutation.neighbour_point`; IMGA 4.3.3): a random interior node is
+  (:func:`jaxga.operators.mutation.neighbour_point`; IMGA 4.3.3): a random interior node is
   replaced by a random free 8-neighbour other than its two path neighbours, the gaps
-  ``prev -> new -> next`` are closed by median insertion (:func:`jaxga.repair.connect`;
+  ``prev -> new -> next`` are closed by median insertion (:func:`jaxga.operators.repair.connect`;
   IMGA 4.1 eq. 2-3: insert the median ``((xa + xb) // 2, (ya + yb) // 2)`` of every
   open gap, or a random free 8-neighbour of it if it is blocked; at most 16 rounds, 16
-  nodes and 8 open gaps), loops are removed (:func:`jaxga.paths.remove_loops`, MPMGA
+  nodes and 8 open gaps), loops are removed (:func:`jaxga.core.paths.remove_loops`, MPMGA
   4.3), and the parent is kept on any failure or if the mutant exceeds ``L``.
 * best-so-far tracking over the initial population and every generation.
 
@@ -72,7 +72,7 @@ from itertools import accumulate
 import numpy as np
 
 MAX_TRIES = 100  # presets/sga.toml init.max_tries: average walk attempts per individual
-SEG_CAPACITY = 16  # jaxga.mutation.neighbour_point: nodes of the connection
+SEG_CAPACITY = 16  # jaxga.operators.mutation.neighbour_point: nodes of the connection
 MAX_ROUNDS = 16  # ... insertion rounds
 QUEUE = 8  # ... gaps open at the same time
 SQRT2 = math.sqrt(2.0)
@@ -167,9 +167,9 @@ def initialise(rng, nbrs, start, goal, population, capacity):
         if path is not None:
             pop.append(path)
     found = len(pop)
-    if found == 0:  # as jaxga.init.initialise: the one-cell path [start] (fitness 0)
+    if found == 0:  # as jaxga.operators.init.initialise: the one-cell path [start] (fitness 0)
         return [[start] for _ in range(population)]
-    for k in range(population - found):  # as jaxga.init.initialise: copies, cyclically
+    for k in range(population - found):  # as jaxga.operators.init.initialise: copies, cyclically
         pop.append(pop[k % found])
     return pop
 

@@ -1,9 +1,9 @@
-"""Time the jitted objectives and fitness combiners of :mod:`jaxga.objectives`.
+"""Time the jitted objectives and fitness combiners of :mod:`jaxga.core.objectives`.
 
 1000 random continuous paths (8-adjacent random walks, lengths between L/2 and L,
 padded by repeating the last cell) of capacity L = 256 on a 64 x 64 map with 20 % random
 obstacles. Every function is lifted to the population with
-:func:`jaxga.paths.population_map` and jitted; after a warm-up call, each repeat evaluates
+:func:`jaxga.core.paths.population_map` and jitted; after a warm-up call, each repeat evaluates
 a *different* pre-built population (the repeats cycle through several random populations
 kept on the device), waits with ``block_until_ready`` and is timed on its own; the median
 is reported. Because every timed call consumes fresh input, XLA cannot hoist or reuse
@@ -31,9 +31,9 @@ import jax.numpy as jnp
 import numpy as np
 from _results import record
 
-from jaxga import objectives as ob
-from jaxga.grid import DIRECTIONS, Grid
-from jaxga.paths import population_map
+from jaxga.core import objectives as ob
+from jaxga.core.grid import DIRECTIONS, Grid
+from jaxga.core.paths import population_map
 
 
 def random_population(

@@ -17,13 +17,14 @@ import jax
 import numpy as np
 from _results import markdown_table, record
 
-from jaxga import crossover as cx
-from jaxga import init, registry
-from jaxga import mutation as mu
-from jaxga import objectives as ob
-from jaxga import postprocess as post
+from jaxga.config import registry
+from jaxga.core import objectives as ob
+from jaxga.core.paths import remove_loops
 from jaxga.maps import load_map, random_map
-from jaxga.paths import remove_loops
+from jaxga.operators import crossover as cx
+from jaxga.operators import init
+from jaxga.operators import mutation as mu
+from jaxga.operators import postprocess as post
 
 P = 100
 

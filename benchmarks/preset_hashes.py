@@ -27,7 +27,10 @@ def child(seeds: int) -> dict:
 
     from jaxga.api import run
     from jaxga.maps import builtin_names
-    from jaxga.presets import preset_names
+    try:
+        from jaxga.config.presets import preset_names
+    except ImportError:  # a revision before the layer folders (issue 38)
+        from jaxga.presets import preset_names
 
     out = {}
     for preset in preset_names():

@@ -1,4 +1,4 @@
-"""Cost of median-insertion repair (jaxga.repair.connect) against capacity and round cap.
+"""Cost of median-insertion repair (jaxga.operators.repair.connect) against capacity and round cap.
 
 The issue asks that the repair cost not grow with (insertion rounds x capacity). This
 times ``connect`` for 100 S-N-G connections on classic_ga_gapp3_20x20 (random free N) at
@@ -18,7 +18,7 @@ import numpy as np
 from _results import markdown_table, record, timed
 
 from jaxga.maps import load_map
-from jaxga.repair import connect
+from jaxga.operators.repair import connect
 
 P = 100
 

@@ -21,7 +21,7 @@ import argparse
 import numpy as np
 from _results import markdown_table, record
 
-from jaxga.reference import shortest_path_np
+from jaxga.reference.optima import shortest_path_np
 from jaxga.replan import mpmga_scenario, replan
 
 PAPER = {"25x25": "about 0.3-0.4 s (5.2.1)", "50x50": "under 1 s (5.3.1)"}

@@ -42,7 +42,7 @@ def child(spec: str) -> None:
 
     import jaxga
     from jaxga.api import run
-    from jaxga.config import SCHEMA
+    from jaxga.config.schema import SCHEMA
     from jaxga.doe import AGACD_TABLE3, run_doe
     from jaxga.maps import builtin_names, load_map
 

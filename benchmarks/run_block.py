@@ -8,7 +8,7 @@ one per core as jaxga uses) on ``classic_ga_gapp3_20x20`` (population 60; mpmga 
 islands of 20): compile, initialisation and evolution seconds, evolution
 individual-generations per second, peak resident memory, and a SHA-256 of every per-seed
 output. The hashes must all be equal: the block size changes the schedule, never a
-result (``jaxga.numerics`` keeps float sums independent of the batch).
+result (``jaxga._batching.numerics`` keeps float sums independent of the batch).
 """
 
 from __future__ import annotations

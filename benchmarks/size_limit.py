@@ -1,4 +1,4 @@
-"""How fast is a map over the size limit refused? (jaxga.grid.MAX_MAP_CELLS)
+"""How fast is a map over the size limit refused? (jaxga.core.grid.MAX_MAP_CELLS)
 
     python benchmarks/size_limit.py
 
@@ -19,7 +19,7 @@ from pathlib import Path
 import numpy as np
 from _results import markdown_table, record
 
-from jaxga.errors import MapFormatError
+from jaxga.core.errors import MapFormatError
 from jaxga.maps import load_map, save_map
 
 

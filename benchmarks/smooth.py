@@ -25,11 +25,11 @@ import jax.numpy as jnp
 import numpy as np
 from _results import markdown_table, record
 
-from jaxga.grid import Grid
+from jaxga.core.grid import Grid
+from jaxga.core.paths import from_coords
 from jaxga.maps import load_map
 from jaxga.maps.generators import random_map
-from jaxga.paths import from_coords
-from jaxga.reference import any_angle_shortest_path, shortest_path
+from jaxga.reference.optima import any_angle_shortest_path, shortest_path
 from jaxga.smooth import SmoothConfig, distance_field, smooth, smooth_population
 
 P = 100

@@ -16,7 +16,7 @@ pc 0.8, pm 0.4).
 Two tables. The first is the paper's layout (length, and smoothness = eq. 8's
 ``fit_2``, the sum of the turn costs c1 / c2 / c3 = 1 / 2 / 3 that the paper's Table 4
 reports for every algorithm). The second sets the IGA against the exact optimum of its
-own fitness (eq. 6, ``jaxga.fitness_reference``): the value a perfect optimiser of the
+own fitness (eq. 6, ``jaxga.reference.fitness``): the value a perfect optimiser of the
 paper's objective reaches, the length and smoothness of that path, how many seeds reach
 it, and the cost ``omega * length + (1 - omega) * smoothness`` (1 / fitness) of jaxga's
 runs and, computed from the paper's means, of the paper's.
@@ -32,9 +32,9 @@ import numpy as np
 from _results import markdown_table, record
 
 from jaxga.api import run
-from jaxga.fitness_reference import fitness_optimum
+from jaxga.core.objectives import zhu_penalty
 from jaxga.maps import load_map
-from jaxga.objectives import zhu_penalty
+from jaxga.reference.fitness import fitness_optimum
 
 PAPER = {  # Zhu & Pan 2024, Table 4: length mean, sd, min; smoothness mean, sd
     ("iga_zhu", "classic_ga_gapp3_20x20"): (31.0096, 0.1486, 30.9706, 8.9333, 2.2118),
@@ -107,7 +107,7 @@ def main() -> None:
                           "% length-optimal", "success", "mean conv. gen",
                           "s per run (after compile)"], rows)
         + "\n\nThe IGA against the exact optimum of its own fitness (eq. 6, omega 0.7: cost "
-        "= 1 / fitness = 0.7 length + 0.3 smoothness; `jaxga.fitness_reference`). The "
+        "= 1 / fitness = 0.7 length + 0.3 smoothness; `jaxga.reference.fitness`). The "
         "paper's cost is computed from its mean length and mean smoothness (a cost of "
         "means, close to the mean cost).\n\n"
         + markdown_table(["map", "optimal cost", "its length", "its smoothness",

@@ -2,16 +2,15 @@
 
 import contextlib
 
-from jaxga import lowering
-from jaxga.api import Result, run, sweep
+from jaxga.api import Result, lowering, run, sweep
+from jaxga.api.compilation_cache import use_compilation_cache
 from jaxga.compare import Comparison, compare
-from jaxga.compilation_cache import use_compilation_cache
-from jaxga.errors import EndpointError, JaxgaError, MapFormatError, NoPathError, ParameterError
-from jaxga.grid import CORNER_RULES, Grid
+from jaxga.core.errors import EndpointError, JaxgaError, MapFormatError, NoPathError, ParameterError
+from jaxga.core.grid import CORNER_RULES, Grid
 from jaxga.replan import replan
 
 # Threefry lowered without a loop on the CPU: the same random bits, faster compiles
-# (jaxga/lowering.py; JAXGA_THREEFRY=rolled keeps JAX's own lowering). Nothing is
+# (jaxga/api/lowering.py; JAXGA_THREEFRY=rolled keeps JAX's own lowering). Nothing is
 # lowered at import, so this holds for every program jaxga compiles. A bad value is
 # refused by run, sweep, doe and the command line (lowering.check_environment), before
 # they compile anything: raised here, the command line could only show a traceback.

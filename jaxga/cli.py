@@ -24,18 +24,18 @@ from collections.abc import Callable, Sequence
 from pathlib import Path
 from typing import Any
 
-from jaxga.compilation_cache import use_compilation_cache
-from jaxga.errors import EndpointError, JaxgaError, NoPathError
-from jaxga.grid import CORNER_RULES, as_integer
-from jaxga.lowering import check_environment
-from jaxga.parallel import (
+from jaxga.api.compilation_cache import use_compilation_cache
+from jaxga.api.lowering import check_environment
+from jaxga.api.parallel import (
     ENV_PROCESS_ID,
     EXIT_PROCESS_LOST,
     ProcessLostError,
-    _env_int,
     add_parallel_arguments,
     configure_from_args,
+    env_int,
 )
+from jaxga.core.errors import EndpointError, JaxgaError, NoPathError
+from jaxga.core.grid import CORNER_RULES, as_integer
 
 EXIT_BAD_INPUT = 2
 EXIT_NO_PATH = 3
@@ -126,7 +126,7 @@ def _apply_scenario(args: argparse.Namespace) -> None:
 
 
 def _load_grid(args: argparse.Namespace):
-    from jaxga.grid import check_corner_rule
+    from jaxga.core.grid import check_corner_rule
     from jaxga.maps import load_map_info
 
     if args.corner_rule is not None:
@@ -152,10 +152,10 @@ def cmd_optimum(args: argparse.Namespace) -> int:
     """``jaxga optimum``: exact 8-connected and any-angle optima of one map, and with
     ``--preset`` the exact optimum of that preset's fitness."""
     from jaxga.api import check_one_corner_rule
+    from jaxga.config.presets import check_file_keys_read, load_preset, parse_set
     from jaxga.engine import check_overrides_read
-    from jaxga.fitness_reference import fitness_optimum
-    from jaxga.presets import check_file_keys_read, load_preset, parse_set
-    from jaxga.reference import any_angle_shortest_path, shortest_path
+    from jaxga.reference.fitness import fitness_optimum
+    from jaxga.reference.optima import any_angle_shortest_path, shortest_path
 
     config = None
     if args.preset is None and (args.set or args.variant):
@@ -231,7 +231,7 @@ def cmd_maps(args: argparse.Namespace) -> int:
 
 def cmd_presets(args: argparse.Namespace) -> int:
     """``jaxga presets``: list the presets with their papers."""
-    from jaxga.presets import preset_info
+    from jaxga.config.presets import preset_info
 
     for name, paper, description in preset_info():
         print(f"{name:10s} {paper}")
@@ -261,8 +261,8 @@ def describe_field(field: Any) -> str:
 
 def cmd_operators(args: argparse.Namespace) -> int:
     """``jaxga operators [FAMILY]``: the registered operators of each family (or one),
-    with their former names, traits, parameters and papers (:mod:`jaxga.registry`)."""
-    from jaxga import registry
+    with their former names, traits, parameters and papers (:mod:`jaxga.config.registry`)."""
+    from jaxga.config import registry
 
     families = registry.FAMILIES if args.family is None else (args.family,)
     for family in families:
@@ -311,8 +311,7 @@ class _Progress:
 
 def cmd_run(args: argparse.Namespace) -> int:
     """``jaxga run``: many seeds of a preset on a map; summary table, JSON, plot."""
-    from jaxga import parallel
-    from jaxga.api import run
+    from jaxga.api import parallel, run
 
     lead = parallel.process_index() == 0
     progress = None if args.quiet or not lead else _Progress()
@@ -382,7 +381,7 @@ def cmd_doe(args: argparse.Namespace) -> int:
 def _not_lead(what: str, seconds: float) -> bool:
     """True (after a one-line note) on every process but process 0 of a multi-process
     run: process 0 prints and writes the results of all processes (issue 7)."""
-    from jaxga import parallel
+    from jaxga.api import parallel
 
     if parallel.process_index() == 0:
         return False
@@ -396,7 +395,7 @@ def cmd_compare(args: argparse.Namespace) -> int:
     """``jaxga compare``: several presets on one map with the same seeds; per-preset
     summary, pairwise tests with effect sizes (Holm-corrected), JSON, box plots."""
     from jaxga.compare import TESTS, check_metric, compare, one_corner_rule, split_presets
-    from jaxga.errors import ParameterError
+    from jaxga.core.errors import ParameterError
 
     presets = split_presets(args.presets)
     if len(presets) < 2:
@@ -405,13 +404,13 @@ def cmd_compare(args: argparse.Namespace) -> int:
     if args.test not in TESTS:
         raise ParameterError(f"unknown test {args.test!r}; choose from {', '.join(TESTS)}")
     if args.corner_rule is not None:
-        from jaxga.grid import check_corner_rule
+        from jaxga.core.grid import check_corner_rule
 
         check_corner_rule(args.corner_rule)
     grid = args.map
     if args.start is not None or args.goal is not None or args.coarsen is not None:
+        from jaxga.config.presets import load_preset
         from jaxga.maps import load_map_info
-        from jaxga.presets import load_preset
 
         rule = args.corner_rule
         if rule is None:  # the presets' own rule (with --set), which must be one
@@ -465,14 +464,14 @@ def _grid_for_run(args: argparse.Namespace, rule: str):
 
 
 def _preset_rule(args: argparse.Namespace) -> str:
-    from jaxga.presets import load_preset
+    from jaxga.config.presets import load_preset
 
     return load_preset(args.preset, variant=args.variant, sets=args.set or ())["map.corner_rule"]
 
 
 def _parse_obstacles(text: str) -> list[tuple[int, int]]:
     """``X,Y;X,Y;...`` (empty: none) as a list of ``(x, y)`` cells."""
-    from jaxga.errors import ParameterError
+    from jaxga.core.errors import ParameterError
 
     cells = []
     for part in text.replace(" ", "").split(";"):
@@ -499,7 +498,7 @@ def _read_path_json(path: str, run_index: int | None) -> list[tuple[int, int]]:
     ``"path"`` list (``jaxga optimum --json``), or the JSON of ``jaxga run`` (the raw
     8-connected path of run ``run_index``, default the successful run with the shortest
     raw path)."""
-    from jaxga.errors import ParameterError
+    from jaxga.core.errors import ParameterError
 
     with open(path, encoding="utf-8") as f:
         try:
@@ -536,7 +535,7 @@ def _read_path_json(path: str, run_index: int | None) -> list[tuple[int, int]]:
 def cmd_replan(args: argparse.Namespace) -> int:
     """``jaxga replan``: re-plan a path around new obstacles from the robot's cell
     (MPMGA 5.2.1 / 5.3.1, SPEC 10)."""
-    from jaxga.grid import check_corner_rule
+    from jaxga.core.grid import check_corner_rule
     from jaxga.maps import load_map
     from jaxga.replan import replan
 
@@ -704,7 +703,7 @@ def check_outputs(args: argparse.Namespace) -> None:
     writes (no extension: ``.png`` is added, as matplotlib would, and reported)."""
     pid = getattr(args, "process_id", None)
     if pid is None:
-        pid = _env_int(ENV_PROCESS_ID)
+        pid = env_int(ENV_PROCESS_ID)
     for option in ("json", "plot"):
         path = getattr(args, option, None)
         if not path or pid not in (None, 0):  # only process 0 writes the outputs
@@ -759,7 +758,7 @@ def _join_negative_xy(argv: Sequence[str]) -> list[str]:
 
 def _one_line_warnings(show: Callable[..., None]) -> Callable[..., None]:
     """A ``warnings.showwarning`` that prints jaxga's own warnings (the categories of
-    :mod:`jaxga.errors`) as one ``jaxga: warning: ...`` line, like its errors (Python's
+    :mod:`jaxga.core.errors`) as one ``jaxga: warning: ...`` line, like its errors (Python's
     format adds the file and source line), and hands other warnings to ``show``."""
 
     def show_warning(message, category, filename, lineno, file=None, line=None) -> None:

@@ -27,7 +27,7 @@ Decisions recorded here (the issue leaves them open):
 * **Metrics.** ``length`` (post-optimised, the default), ``raw_length`` (the GA's own
   8-connected path, before post-optimisation), ``gap``, ``raw_gap``, ``fitness_gap``
   (how far each preset's best fitness is from the exact optimum of its OWN fitness,
-  :mod:`jaxga.fitness_reference`; NaN for AGACD), ``turns`` and ``angle_sum`` (of the
+  :mod:`jaxga.reference.fitness`; NaN for AGACD), ``turns`` and ``angle_sum`` (of the
   post-optimised path) and ``convergence_generation``. The fitness itself is not
   offered: its definition differs between presets, so fitness values of two presets are
   not comparable. Their gaps to their own optima are on one scale, with a caveat: for
@@ -49,9 +49,9 @@ import numpy as np
 
 from jaxga.api import GAPS, RUN_OPTIONS, Result, check_run, run
 from jaxga.api import json_number as _num
-from jaxga.config import Config
-from jaxga.errors import ParameterError
-from jaxga.grid import Grid
+from jaxga.config.schema import Config
+from jaxga.core.errors import ParameterError
+from jaxga.core.grid import Grid
 from jaxga.stats import TwoSampleTest, fisher_success, holm, mann_whitney, wilcoxon_paired
 
 __all__ = ["METRICS", "TESTS", "Comparison", "PairTest", "compare", "compare_results",
@@ -461,9 +461,9 @@ def _options_per_preset(specs, grid, common: Mapping[str, Any]
     (:func:`jaxga.engine.unread_keys`; they would change nothing), then its own
     overrides, which are checked strictly by ``run``. A common key that no preset
     reads is refused, and so are presets that would run under different corner rules."""
-    from jaxga.api import _load
+    from jaxga.api import load_problem
+    from jaxga.config.presets import as_sets, overridden_keys, parse_set
     from jaxga.engine import OFF_VALUES, unread_keys
-    from jaxga.presets import as_sets, overridden_keys, parse_set
 
     sets = as_sets(common.get("sets", ()))
     common_keys = overridden_keys({k: v for k, v in common.items() if k not in RUN_OPTIONS},
@@ -483,7 +483,7 @@ def _options_per_preset(specs, grid, common: Mapping[str, Any]
                   if k in option_names or k.replace("__", ".") not in own}
         merged.update({k: v for k, v in ov.items() if k != "sets"})
         merged_sets = tuple(t for t in sets if parse_set(t)[0] not in own) + own_sets
-        config, loaded, _ = _load(preset, grid, merged.get("corner_rule"),
+        config, loaded, _ = load_problem(preset, grid, merged.get("corner_rule"),
                                   merged.get("variant"), merged_sets,
                                   {k: v for k, v in merged.items() if k not in RUN_OPTIONS},
                                   merged.get("generations"), check_read=False)

@@ -27,7 +27,7 @@ the float32 lengths and angle sums of the post-optimised paths may differ in the
 ``block`` is therefore part of the checkpoint's fingerprint.
 ``DIR/manifest.json`` records what was run (preset configuration, map, factors, design,
 seeds, block, versions); a checkpoint written by another configuration is refused.
-With several processes (``jaxga doe --coordinator ...``, :mod:`jaxga.parallel`) every
+With several processes (``jaxga doe --coordinator ...``, :mod:`jaxga.api.parallel`) every
 block is split over the processes; process 0 alone reads and writes ``DIR`` and tells
 the others which points are finished, so ``DIR`` need only be on process 0's disk. A lost
 process loses the block being computed, never a finished point: the restarted command
@@ -71,10 +71,10 @@ from typing import Any
 
 import numpy as np
 
-from jaxga.config import SCHEMA, Config, parse_value, python_scalar
+from jaxga.config.schema import SCHEMA, Config, parse_value, python_scalar
+from jaxga.core.errors import NoPathError, ParameterError
+from jaxga.core.grid import Grid, as_integer
 from jaxga.engine import unread_keys
-from jaxga.errors import NoPathError, ParameterError
-from jaxga.grid import Grid, as_integer
 
 # ----------------------------------------------------------------------------- factors
 
@@ -143,7 +143,7 @@ def check_factors(config: Config, factors: Sequence[Factor]) -> None:
     A factor must be a configuration key that ``config`` (the preset after overrides)
     reads (:func:`jaxga.engine.unread_keys`: a fitness weight the preset leaves at the
     objective's default is read), either dynamic (probabilities, weights, temperatures:
-    :data:`jaxga.config.SCHEMA`) or ``population.size`` (the engine's active mask); names
+    :data:`jaxga.config.schema.SCHEMA`) or ``population.size`` (the engine's active mask); names
     must be distinct; every level must be a valid value of the key.
     """
     if not factors:
@@ -575,12 +575,12 @@ class _Checkpoint:
     ``confirm_<coded>.json``."""
 
     def __init__(self, directory: str | Path, manifest: dict[str, Any]) -> None:
-        from jaxga import parallel
+        from jaxga.api import parallel
 
         self.dir = Path(directory)
         config = manifest.get("config")
         self.generations = config.get("generations") if isinstance(config, dict) else None
-        # Several processes (jaxga.parallel): process 0 alone reads and writes the
+        # Several processes (jaxga.api.parallel): process 0 alone reads and writes the
         # checkpoint; the others receive what it read (and its refusal) by broadcast, so
         # every process agrees on which points remain even without a shared filesystem.
         self.lead = parallel.process_index() == 0
@@ -646,7 +646,7 @@ class _Checkpoint:
     def _broadcast_read(self, paths: list[Path], n_seeds: int) -> list[dict[str, list] | None]:
         """Process 0 reads (None for files not written yet); every process gets its result
         or its refusal."""
-        from jaxga import parallel
+        from jaxga.api import parallel
 
         saved, error = None, None
         if self.lead:
@@ -783,9 +783,9 @@ def run_doe(
     import jax
 
     import jaxga
-    from jaxga.api import _check_result_memory, _load, _population_capacity, _seed_list, sweep
+    from jaxga.api import check_result_memory, checked_capacity, load_problem, seed_list, sweep
     from jaxga.engine import build, check_combination
-    from jaxga.reference import shortest_path
+    from jaxga.reference.optima import shortest_path
 
     t_start = time.perf_counter()
     response = RESPONSE_ALIASES.get(response, response) if isinstance(response, str) \
@@ -795,7 +795,7 @@ def run_doe(
     direction = direction or RESPONSES[response]
     if direction not in ("max", "min"):
         raise ParameterError(f"direction must be 'max' or 'min', got {direction!r}")
-    from jaxga.presets import as_sets, overridden_keys
+    from jaxga.config.presets import as_sets, overridden_keys
 
     sets = as_sets(sets)  # one string is one set
     if not isinstance(factors, (str, bytes, Mapping)) and isinstance(factors, Iterable):
@@ -813,7 +813,7 @@ def run_doe(
             block = as_integer(block)
         except TypeError:
             raise ParameterError(f"block must be an integer >= 1, got {block!r}") from None
-    config, loaded, map_name = _load(preset, grid, corner_rule, variant, sets, overrides,
+    config, loaded, map_name = load_problem(preset, grid, corner_rule, variant, sets, overrides,
                                      generations)
     check_factors(config, factors)
     overridden = overridden_keys(overrides, sets)
@@ -827,7 +827,7 @@ def run_doe(
     point_configs = [config.override(p) for p in points]
     for c in point_configs:  # key combinations of every point, before any point runs
         check_combination(c)
-    capacity = _population_capacity(point_configs, None)  # the largest size
+    capacity = checked_capacity(point_configs, None)  # the largest size
     if block is None:
         block = 1 if checkpoint is not None else n_points
     if block < 1:
@@ -835,7 +835,7 @@ def run_doe(
     block = min(int(block), n_points)
     # only a block of points is in memory at a time (between blocks, a few floats per seed)
     largest, _ = build(config.override({"population.size": capacity}), loaded)
-    seed_arr = _seed_list(seeds, lambda n: _check_result_memory(n * block, largest))
+    seed_arr = seed_list(seeds, lambda n: check_result_memory(n * block, largest))
     shortest_path(loaded).raise_if_missing()  # nothing to fit: say why (NoPathError)
 
     common = dict(generations=generations, corner_rule=corner_rule, variant=variant,

@@ -15,8 +15,8 @@ from typing import Any
 
 import numpy as np
 
-from jaxga.errors import ParameterError
-from jaxga.grid import Grid, as_integer
+from jaxga.core.errors import ParameterError
+from jaxga.core.grid import Grid, as_integer
 
 __all__ = ["plot_box", "plot_comparison", "plot_convergence", "plot_diversity",
            "plot_main_effects", "plot_map", "plot_paths", "plot_result", "plot_seed_scatter"]

@@ -9,11 +9,11 @@ needed 0.3-0.4 s (25 x 25) and under 1 s (50 x 50) per re-plan in Matlab.
 
 :func:`replan` does this with a small GA budget:
 
-1. the robot's cell must be free and on the path (else :class:`~jaxga.errors.EndpointError`
-   / :class:`~jaxga.errors.ParameterError`);
+1. the robot's cell must be free and on the path (else :class:`~jaxga.core.errors.EndpointError`
+   / :class:`~jaxga.core.errors.ParameterError`);
 2. walking the remaining path from the robot's cell, the first *blocked step* is the first
    pair of consecutive path cells whose segment is no longer clear (a cell now blocked, or
-   a diagonal step made illegal by the corner rule; :func:`jaxga.reference.clear_np`, so
+   a diagonal step made illegal by the corner rule; :func:`jaxga.reference.optima.clear_np`, so
    waypoint paths work as well as 8-connected ones). Nothing blocked: the remaining path
    is returned unchanged and no GA runs;
 3. the *rejoin cell* is the first path cell beyond the blocked step that is free and
@@ -41,7 +41,7 @@ Decisions (not in the paper):
   waypoint segment (feasible by line of sight) instead.
 * GA failure (no seed found a feasible segment) is reported honestly by default:
   ``success=False``, ``status="ga_failed"``, a ``reason``. With ``fallback=True`` the
-  exact 8-connected A* segment (:func:`jaxga.reference.shortest_path`) is spliced
+  exact 8-connected A* segment (:func:`jaxga.reference.optima.shortest_path`) is spliced
   instead and the result says so (``used_fallback=True``, ``status="fallback"``).
 * ``latency_s`` is the wall time of the call minus the time spent compiling
   (``compile_s``, non-zero only on the first call for a map/window size and seed count;
@@ -65,11 +65,11 @@ from typing import Any
 
 import numpy as np
 
-from jaxga.config import SCHEMA
-from jaxga.errors import EndpointError, JaxgaError, ParameterError
-from jaxga.grid import Grid
+from jaxga.config.schema import SCHEMA
+from jaxga.core.errors import EndpointError, JaxgaError, ParameterError
+from jaxga.core.grid import Grid
 from jaxga.maps.preprocess import reachable
-from jaxga.reference import clear_np, path_length, shortest_path_np
+from jaxga.reference.optima import clear_np, path_length, shortest_path_np
 
 __all__ = [
     "MPMGA_SCENARIOS",
@@ -235,7 +235,7 @@ def first_blocked_step(blocked: np.ndarray, corner_rule: str, path: Sequence[XY]
                        start: int = 0) -> int | None:
     """Index ``k >= start`` of the first step ``path[k] -> path[k+1]`` that is not clear.
 
-    A step is clear when its segment is (SPEC 1, :func:`jaxga.reference.clear_np`): for
+    A step is clear when its segment is (SPEC 1, :func:`jaxga.reference.optima.clear_np`): for
     8-adjacent cells, exactly when the move is legal under the corner rule. Returns None
     when every step from ``start`` on is clear (MPMGA 5.2.1: "obstacles suddenly appear
     ... blocking the path"; SPEC 10).
@@ -305,7 +305,7 @@ def _run_options(overrides: Mapping[str, Any], generations: int | None,
     program per map (or window) size, whatever the segment (the automatic capacity
     follows the problem's optimum, which would compile again for longer segments;
     decision 020)."""
-    from jaxga.presets import as_sets, overridden_keys
+    from jaxga.config.presets import as_sets, overridden_keys
 
     kw = dict(overrides)
     keys = set(overridden_keys({k: v for k, v in kw.items() if k != "sets"},
@@ -353,7 +353,7 @@ def replan(
         new_obstacles: cells ``(x, y)`` that became blocked, or a ``bool[H, W]`` mask.
         position: the robot's current cell ``(x, y)`` (its first occurrence on ``path``)
             or an index into ``path``.
-        preset: the GA (a preset name, TOML file or :class:`jaxga.config.Config`).
+        preset: the GA (a preset name, TOML file or :class:`jaxga.config.schema.Config`).
         seeds: seeded GA runs in one compiled call; the best successful one is used.
         generations: GA generations (small: this is a real-time re-plan).
         population: ``population.size`` override (per island for island presets); None
@@ -590,7 +590,7 @@ def mpmga_scenario(name: str) -> Scenario:
     on the 50 x 50 map. Cell numbers are converted by :func:`mpmga_cell`.
     """
     from jaxga.maps import rectangles_map
-    from jaxga.reference import shortest_path
+    from jaxga.reference.optima import shortest_path
 
     if name not in MPMGA_SCENARIOS:
         raise ParameterError(f"unknown scenario {name!r}: expected one of "

@@ -51,7 +51,7 @@ padded population:
 5. **Fallback.** If the curve cannot be certified clear (also when the path has fewer
    than two nodes or the optimisation produced non-finite values), the result is the
    polyline itself with ``used_fallback = True``; its ``clear`` flag is then the exact
-   feasibility of the polyline (:func:`jaxga.geometry.segments_clear`, corner rule
+   feasibility of the polyline (:func:`jaxga.core.geometry.segments_clear`, corner rule
    included). A path squeezing between two diagonally touching obstacles (legal under
    ``corner_rule="free"``) always falls back: a curve can only pass such a point with
    clearance 0.
@@ -97,9 +97,9 @@ import jax.numpy as jnp
 import numpy as np
 import optax
 
-from jaxga.errors import ParameterError
-from jaxga.geometry import segments_clear
-from jaxga.grid import Grid, blocked_at
+from jaxga.core.errors import ParameterError
+from jaxga.core.geometry import segments_clear
+from jaxga.core.grid import Grid, blocked_at
 
 __all__ = [
     "DistanceField",

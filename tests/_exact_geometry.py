@@ -3,7 +3,7 @@
 It enumerates every parameter ``t`` at which the segment between two cell centres meets
 a grid line, checks the cell containing the midpoint of every piece between consecutive
 crossings, and applies the corner rule at every grid vertex the segment passes through.
-It shares no code with :mod:`jaxga.geometry`.
+It shares no code with :mod:`jaxga.core.geometry`.
 """
 
 from __future__ import annotations

@@ -1,4 +1,4 @@
-"""The contract of each operator family (:mod:`jaxga.registry`), as checks that raise
+"""The contract of each operator family (:mod:`jaxga.config.registry`), as checks that raise
 ``AssertionError`` naming the operator and what it broke.
 
 ``tests/test_registry.py`` runs them on every registered operator, so a new operator is
@@ -19,12 +19,12 @@ import jax
 import jax.numpy as jnp
 import numpy as np
 
-from jaxga import registry
+from jaxga.config import registry
+from jaxga.config.presets import load_preset
+from jaxga.core.grid import Grid
+from jaxga.core.objectives import path_length
+from jaxga.core.paths import Population, has_endpoints, is_continuous, is_feasible, is_loop_free
 from jaxga.engine import binding, build, fitness_function
-from jaxga.grid import Grid
-from jaxga.objectives import path_length
-from jaxga.paths import Population, has_endpoints, is_continuous, is_feasible, is_loop_free
-from jaxga.presets import load_preset
 
 P = 6
 """Individuals (or pairs) per check."""

@@ -13,9 +13,9 @@ from hypothesis import reject
 from hypothesis import strategies as st
 
 from jaxga import Grid
+from jaxga.core.paths import Population, remove_loops
 from jaxga.maps import legal_moves, random_map
-from jaxga.paths import Population, remove_loops
-from jaxga.repair import connect
+from jaxga.operators.repair import connect
 
 SIZE = 10
 CAP = 64

@@ -12,14 +12,15 @@ import warnings
 import numpy as np
 import pytest
 
-from jaxga import api, engine, schedules
+from jaxga import api, engine
 from jaxga.compare import compare as jaxga_compare
-from jaxga.errors import InitialisationWarning, JaxgaError, ParameterError
-from jaxga.fitness_reference import fitness_optimum, fitness_weights, path_fitness_np
-from jaxga.guide import with_guide
+from jaxga.config.presets import preset_names
+from jaxga.core.errors import InitialisationWarning, JaxgaError, ParameterError
 from jaxga.maps import load_map, random_map
-from jaxga.presets import preset_names
-from jaxga.reference import any_angle_shortest_path, clear_np, path_length, shortest_path
+from jaxga.operators import schedules
+from jaxga.operators.guide import with_guide
+from jaxga.reference.fitness import fitness_optimum, fitness_weights, path_fitness_np
+from jaxga.reference.optima import any_angle_shortest_path, clear_np, path_length, shortest_path
 
 SMALL = dict(population__size=8, generations=3, init__max_tries=40)
 
@@ -89,13 +90,13 @@ def test_every_preset_returns_only_feasible_paths(preset_run, grid):
 
 def test_every_preset_is_deterministic(preset_run, grid):
     name, r, overrides = preset_run
-    before = api._programs.cache_info().misses
+    before = api.compiled_programs.cache_info().misses
     again = api.run(name, grid, seeds=[2, 0, 1], **overrides)  # other order, same program
-    assert api._programs.cache_info().misses == before
+    assert api.compiled_programs.cache_info().misses == before
     for i, j in ((0, 2), (1, 0), (2, 1)):
         assert again.success[i] == r.success[j]
         assert np.array_equal(again.cells[i], r.cells[j])
-        # bit for bit: float sums run in a fixed order whatever the batch (jaxga.numerics)
+        # bit for bit: float sums run in a fixed order whatever the batch (jaxga._batching.numerics)
         for h in ("best", "mean", "std"):
             assert np.array_equal(again.history[h][i], r.history[h][j])
         assert again.length[i] == r.length[j] and again.fitness[i] == r.fitness[j]
@@ -104,7 +105,7 @@ def test_every_preset_is_deterministic(preset_run, grid):
 def test_reported_values_agree_with_the_returned_paths(preset_run, grid):
     """Every per-seed number recomputed here from the returned paths and histories:
     lengths as polylines, the grid presets' fitness by the independent NumPy scorer of
-    ``jaxga.fitness_reference``, the convergence generation from the best-so-far
+    ``jaxga.reference.fitness``, the convergence generation from the best-so-far
     history, and the JSON runs from the padded cell arrays."""
     name, r, _ = preset_run
     blocked = grid.blocked_np()
@@ -257,8 +258,8 @@ def test_unread_dynamic_keys_are_exactly_those_the_program_does_not_use(preset, 
     pe = pytest.importorskip("jax._src.interpreters.partial_eval")
     if not hasattr(pe, "dce_jaxpr"):
         pytest.skip("this JAX has no dce_jaxpr")
-    from jaxga.config import SCHEMA
-    from jaxga.presets import load_preset
+    from jaxga.config.presets import load_preset
+    from jaxga.config.schema import SCHEMA
 
     grid = random_map(8, 8, 0.15, 1, corner_rule="free")
     config = load_preset(preset).override({"population.size": 6, "generations": 1,
@@ -319,7 +320,7 @@ def test_an_override_that_nothing_reads_is_refused(grid, monkeypatch, preset, ov
                                                    message):
     """As keyword overrides, as ``sets`` (the same values as TOML) and as sweep points,
     before anything compiles."""
-    monkeypatch.setattr(api, "_programs", lambda *a, **k: pytest.fail("compiled"))
+    monkeypatch.setattr(api, "compiled_programs", lambda *a, **k: pytest.fail("compiled"))
     with pytest.raises(ParameterError, match=re.escape(message)):
         api.run(preset, grid, seeds=1, **SMALL, **overrides)
     sets = [f"{k.replace('__', '.')}={json.dumps(v)}" for k, v in overrides.items()]
@@ -333,7 +334,7 @@ def test_an_override_that_nothing_reads_is_refused(grid, monkeypatch, preset, ov
 def test_an_unread_key_set_to_its_default_is_accepted():
     """Switching a feature off explicitly is not refused (notebook 04 runs MPMGA as one
     island with ``islands.topology = "none"``); a value that would matter is."""
-    from jaxga.presets import load_preset
+    from jaxga.config.presets import load_preset
 
     ov = {"islands.count": 1, "islands.topology": "none", "islands.migrants": 0,
           "islands.crossover_probabilities": [0.5], "islands.mutation_probabilities": [0.5]}
@@ -351,8 +352,8 @@ def test_overrides_that_are_read_are_accepted_by_every_preset():
     """The refusal never hits a key the preset's stages read: every dynamic key each
     built-in preset (and variant) sets is read, and so is each fitness weight of its
     own objective, a rate of a non-adaptive operator, and migration settings of islands."""
-    from jaxga.config import DEFAULTS
-    from jaxga.presets import _chain, load_preset
+    from jaxga.config.presets import _chain, load_preset
+    from jaxga.config.schema import DEFAULTS
 
     for name in preset_names():
         variants = {v for _, _, vs in _chain(name) for v in vs}
@@ -373,7 +374,7 @@ def test_overrides_that_are_read_are_accepted_by_every_preset():
 def test_a_config_preset_takes_sets_and_refuses_a_variant(grid, monkeypatch):
     """``sets`` apply to a :class:`Config` as to a preset name (they were silently
     dropped); a variant cannot apply to a Config that is already loaded."""
-    from jaxga.presets import load_preset
+    from jaxga.config.presets import load_preset
 
     config = api.check_run(load_preset("agacd"), grid,
                            sets=["crossover.adaptive=false", "crossover.probability=0.8",
@@ -428,7 +429,7 @@ def test_a_key_given_twice_with_two_values_is_refused(grid):
 def test_keys_a_user_file_sets_are_checked_like_overrides(grid, tmp_path):
     """A user TOML file that sets a key its configuration never reads is refused as
     ``--set`` is; a copy of every built-in preset file is accepted with every variant."""
-    from jaxga.presets import _chain, _preset_file
+    from jaxga.config.presets import _chain, _preset_file
 
     user = tmp_path / "mine.toml"
     user.write_text('base = "agacd"\n[crossover]\nprobability = 0.8\n')
@@ -491,10 +492,10 @@ def test_a_sweep_point_too_small_for_its_migrants_is_refused(grid):
 
 def test_compiled_programs_are_reused_across_maps_seeds_and_values(grid):
     api.run("sga", grid, seeds=[5, 6, 7], **SMALL)
-    before = api._programs.cache_info()
+    before = api.compiled_programs.cache_info()
     other = random_map(10, 10, 0.25, 11, corner_rule="free")
     r = api.run("sga", other, seeds=[7, 8, 9], crossover__probability=0.5, **SMALL)
-    after = api._programs.cache_info()
+    after = api.compiled_programs.cache_info()
     assert after.misses == before.misses and after.hits == before.hits + 1
     assert r.timing["compile_s"] < 1.0
 
@@ -513,14 +514,14 @@ def test_a_chunked_run_equals_one_call_and_compiles_one_evolve_program(grid, mon
     kw = {**SMALL, "generations": 4}
     one = api.run("iga_zhang", grid, seeds=3, **kw)
     compiled = []
-    programs = api._programs
+    programs = api.compiled_programs
 
     def recording(*args):
         out = programs(*args)
         compiled.append(out.sizes)  # the evolve programs it holds (compiled when needed)
         return out
 
-    monkeypatch.setattr(api, "_programs", recording)
+    monkeypatch.setattr(api, "compiled_programs", recording)
     seen = []
     misses = programs.cache_info().misses
     chunked = api.run("iga_zhang", grid, seeds=3, chunks=3,
@@ -572,17 +573,17 @@ def test_start_equal_to_goal_has_gap_zero_without_warnings(grid):
 
 
 def test_failure_reason_counts_the_seeds_and_names_an_initialiser_that_never_succeeded():
-    from jaxga.presets import load_preset
+    from jaxga.config.presets import load_preset
 
     cfg = load_preset("mpmga", sets=["init.fallback=none"])
     fits = dict(capacity=80, shortest_cells=12)
     rate, made = np.array([0.2, 0.1, 0.3]), np.zeros(3, int)
 
     def reason(success, started, rate=rate, config=cfg, **kw):
-        causes = api._causes(np.array(success), np.array(started), rate, made, config,
+        causes = api.failure_causes(np.array(success), np.array(started), rate, made, config,
                              **{**fits, **kw})
         assert (causes == "").tolist() == list(success)
-        return api._failure_reason(causes)
+        return api.failure_reason(causes)
 
     assert reason([True, True, True], [True, True, True]) == ""
     some = reason([True, False, True], [True, True, True])
@@ -605,7 +606,7 @@ def test_failure_reason_counts_the_seeds_and_names_an_initialiser_that_never_suc
 def test_a_capacity_below_the_shortest_path_is_named_as_the_cause(grid):
     """Paths cannot hold the shortest path's cells: the reason says so, instead of
     sending the user to raise init.max_tries."""
-    from jaxga.reference import shortest_path
+    from jaxga.reference.optima import shortest_path
 
     cells = len(shortest_path(grid).path)
     r = api.run("sga", grid, seeds=2, population__capacity=cells - 1, **SMALL)
@@ -660,18 +661,18 @@ def test_the_fallback_fills_exactly_the_slots_the_initialiser_left_empty(grid):
 
 
 def test_unfilled_warning_only_for_runs_that_made_some_paths():
-    from jaxga.presets import load_preset
+    from jaxga.config.presets import load_preset
 
     cfg = load_preset("mpmga")
     with warnings.catch_warnings():
         warnings.simplefilter("error")
-        api._warn_unfilled(np.array([0, 0]), np.array([0.3, 0.2]), 60, cfg)
-        # no path at all is a failed run with a reason (_failure_reason), not a warning
-        api._warn_unfilled(np.array([60, 0]), np.array([0.0, 0.2]), 60, cfg)
+        api.warn_unfilled(np.array([0, 0]), np.array([0.3, 0.2]), 60, cfg)
+        # no path at all is a failed run with a reason (failure_reason), not a warning
+        api.warn_unfilled(np.array([60, 0]), np.array([0.0, 0.2]), 60, cfg)
     with pytest.warns(InitialisationWarning, match=r"^2 of 3 runs started with 12-50 of their "
                       r"60 initial individuals copied: the initialiser 'intermittent_connect' "
                       r"succeeded in 1 % of its attempts, and init.max_tries = 20 "):
-        api._warn_unfilled(np.array([12, 60, 50]), np.array([0.015, 0.0, 0.005]), 60, cfg)
+        api.warn_unfilled(np.array([12, 60, 50]), np.array([0.015, 0.0, 0.005]), 60, cfg)
 
 
 @pytest.mark.parametrize("t", [0, 1, 7, 50, 100])
@@ -689,9 +690,9 @@ def test_schedules_match_the_papers_formulas(t):
 def test_relative_gap_rounds_float32_noise_to_zero_but_keeps_real_gaps():
     """An optimal path summed in float32 can be 1e-8 below the optimum: its gap is 0, not
     -0.0000; real gaps (positive, or negative for waypoint paths) and failures are kept."""
-    from jaxga.api import _relative_gap
+    from jaxga.api import relative_gap
 
-    gap = _relative_gap(np.array([30.970598, 31.5, 29.0, 30.0]), 30.9706,
+    gap = relative_gap(np.array([30.970598, 31.5, 29.0, 30.0]), 30.9706,
                         np.array([True, True, True, False]))
     assert gap[0] == 0.0 and not np.signbit(gap[0])
     assert gap[1] == pytest.approx(31.5 / 30.9706 - 1)
@@ -783,7 +784,7 @@ def test_inconsistent_parameters_are_refused_before_tracing(grid, monkeypatch, p
                                                             overrides, words):
     """Combinations of keys that an operator cannot use (each key valid on its own) give
     a ParameterError naming them, not an error from inside the traced program."""
-    monkeypatch.setattr(api, "_programs", lambda *a, **k: pytest.fail("compiled"))
+    monkeypatch.setattr(api, "compiled_programs", lambda *a, **k: pytest.fail("compiled"))
     with pytest.raises(ParameterError) as err:
         api.run(preset, grid, seeds=1, **{**SMALL, **overrides})
     assert all(w in str(err.value) for w in words), str(err.value)
@@ -806,7 +807,7 @@ def test_inconsistent_parameters_are_refused_before_tracing(grid, monkeypatch, p
 def test_wrong_python_types_are_refused_with_a_jaxga_error(grid, monkeypatch, call, words):
     """Options of the wrong type are named (ParameterError), not a TypeError from deep
     inside, and before anything compiles."""
-    monkeypatch.setattr(api, "_programs", lambda *a, **k: pytest.fail("compiled"))
+    monkeypatch.setattr(api, "compiled_programs", lambda *a, **k: pytest.fail("compiled"))
     with pytest.raises(ParameterError, match=re.escape(words)):
         call(grid)
 
@@ -832,7 +833,7 @@ def test_seeds_outside_32_bits_are_refused(grid, seeds, words):
 
 def test_a_call_whose_results_cannot_fit_in_memory_is_refused(grid, monkeypatch):
     """A clear error before anything is allocated, instead of the process being killed."""
-    monkeypatch.setattr(api, "_physical_memory", lambda: 2**30)  # a 1 GiB machine
+    monkeypatch.setattr(api, "physical_memory", lambda: 2**30)  # a 1 GiB machine
     # per run: 3 x 3 float32 history values, 2 int32 paths of 4 * (10 + 10) = 80 cells,
     # 256 bytes and twice 8 x 80 int32 population cells: 6,052 bytes, so 10**5 runs need
     # 0.56 GiB, more than half of 1 GiB
@@ -877,7 +878,7 @@ def test_sweep_capacity_must_be_an_integer_and_no_path_sweeps_check_memory(grid,
     blocked[max(gy - 1, 0):gy + 2, max(gx - 1, 0):gx + 2] = True
     blocked[gy, gx] = False
     walled = grid.replace(blocked=blocked)
-    monkeypatch.setattr(api, "_physical_memory", lambda: 2**30)
+    monkeypatch.setattr(api, "physical_memory", lambda: 2**30)
     with pytest.raises(ParameterError, match="GiB for their results"):  # 256 bytes a run
         api.run("sga", walled, seeds=10**7, **SMALL)
     assert api.run("sga", walled, seeds=10**6, **SMALL).seeds.size == 10**6  # 0.24 GiB
@@ -890,9 +891,9 @@ def test_sweep_capacity_must_be_an_integer_and_no_path_sweeps_check_memory(grid,
 
 
 def test_the_exact_fitness_optimum_refuses_what_a_run_refuses(grid):
-    """``jaxga.fitness_reference.fitness_optimum`` (``jaxga optimum --preset``) checks
+    """``jaxga.reference.fitness.fitness_optimum`` (``jaxga optimum --preset``) checks
     the weights as a run does: a zero smoothness floor divided by zero there."""
-    from jaxga.presets import load_preset
+    from jaxga.config.presets import load_preset
 
     config = load_preset("mpmga", overrides={"fitness.smoothness_floor": 0.0})
     with pytest.raises(ParameterError, match="smoothness_floor must be > 0"):
@@ -917,9 +918,9 @@ def test_a_grid_made_with_the_plain_constructor_is_checked(monkeypatch):
     import jax.numpy as jnp
 
     from jaxga import Grid
-    from jaxga.errors import EndpointError
+    from jaxga.core.errors import EndpointError
 
-    monkeypatch.setattr(api, "_programs", lambda *a, **k: pytest.fail("compiled"))
+    monkeypatch.setattr(api, "compiled_programs", lambda *a, **k: pytest.fail("compiled"))
     cases = [
         (Grid(blocked=jnp.zeros((5, 5), bool), start=jnp.int32(0), goal=jnp.int32(25)),
          EndpointError, "goal cell index 25 is off the 5 x 5 map"),

@@ -10,9 +10,13 @@ import jax.numpy as jnp
 import numpy as np
 import pytest
 
-from jaxga import crossover as cx
-from jaxga import mutation as mu
-from jaxga.batching import (
+from jaxga._batching.numerics import ordered_sum
+from jaxga.core.grid import Grid
+from jaxga.core.paths import Population, from_coords, pad
+from jaxga.maps import load_map
+from jaxga.operators import crossover as cx
+from jaxga.operators import mutation as mu
+from jaxga.operators.lift import (
     gated_map,
     over_individuals,
     over_individuals_gated,
@@ -23,12 +27,8 @@ from jaxga.batching import (
     window_width,
     windowed_map,
 )
-from jaxga.grid import Grid
-from jaxga.maps import load_map
-from jaxga.numerics import ordered_sum
-from jaxga.paths import Population, from_coords, pad
-from jaxga.reference import shortest_path
-from jaxga.repair import concat
+from jaxga.operators.repair import concat
+from jaxga.reference.optima import shortest_path
 
 
 @pytest.fixture(scope="module")
@@ -379,8 +379,8 @@ def test_engine_evaluation_in_the_window_equals_full_width(setting, preset):
     """Every fitness function gives the same bits on the 64-cell window as on the full
     160 cells (``fitness.window`` on and off; a population of short paths, some made
     discontinuous)."""
+    from jaxga.config.presets import load_preset
     from jaxga.engine import build, evaluate
-    from jaxga.presets import load_preset
 
     grid, pop = setting
     over = ({"crossover.method": "common_point", "mutation.method": "neighbour_point"}
@@ -406,7 +406,7 @@ def test_shrinking_gated_operator_on_the_window_equals_full_width(setting, op, l
     """``shrinking=True`` (blocks whose paths fit 64 cells run on them, the others at full
     width) gives exactly the cells, lengths and failure counts of the full-width gated
     operator, alone and under vmap over 3 runs, with probability 0.35 and 1."""
-    from jaxga.postprocess import simplify_adjacent
+    from jaxga.operators.postprocess import simplify_adjacent
 
     op = simplify_adjacent if op == "simplify_adjacent" else op
     grid, _ = setting

@@ -294,7 +294,7 @@ def test_the_command_line_compilation_cache_directory(tmp_path, monkeypatch):
 
     import jaxga
     from jaxga import cli
-    from jaxga.errors import ParameterError
+    from jaxga.core.errors import ParameterError
 
     assert cli.use_compilation_cache is jaxga.use_compilation_cache
     use_compilation_cache = jaxga.use_compilation_cache
@@ -320,8 +320,8 @@ def test_the_command_line_compilation_cache_directory(tmp_path, monkeypatch):
 
 
 def test_presets_and_maps_list_what_the_package_ships(capsys):
+    from jaxga.config.presets import preset_names
     from jaxga.maps.builtin import builtin_names
-    from jaxga.presets import preset_names
 
     assert main(["presets"]) == 0
     out = capsys.readouterr().out
@@ -407,7 +407,7 @@ def test_a_plot_format_matplotlib_cannot_write_here_fails_before_the_run(tmp_pat
     """pgf needs LaTeX: without it, the check of --plot fails at once, naming it."""
     from matplotlib.figure import Figure
 
-    from jaxga.errors import JaxgaError
+    from jaxga.core.errors import JaxgaError
 
     def no_latex(self, *a, **k):
         raise RuntimeError("'xelatex' not found")
@@ -506,7 +506,7 @@ def test_jaxga_warnings_are_one_line_like_its_errors(capsys, monkeypatch):
     import warnings
 
     import jaxga.api
-    from jaxga.errors import InitialisationWarning
+    from jaxga.core.errors import InitialisationWarning
 
     class Stop(Exception):
         pass

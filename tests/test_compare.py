@@ -15,7 +15,7 @@ import scipy.stats
 from jaxga import api
 from jaxga.cli import EXIT_BAD_INPUT, EXIT_NO_PATH, main
 from jaxga.compare import METRICS, compare, compare_results
-from jaxga.errors import ParameterError
+from jaxga.core.errors import ParameterError
 from jaxga.maps import random_map, save_map
 from jaxga.stats import fisher_success, holm, mann_whitney, wilcoxon_paired
 

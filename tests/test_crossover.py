@@ -1,6 +1,6 @@
 """Crossover operators (SPEC 6): properties, the papers' worked examples, statistics.
 
-Every operator is run under ``jax.jit`` through :func:`jaxga.batching.over_pairs` (the
+Every operator is run under ``jax.jit`` through :func:`jaxga.operators.lift.over_pairs` (the
 vmap over pairs) and compared with an independent pure-Python reference that enumerates
 every possible crossing choice: the operator's output must be the outcome of one of them
 (children with loops cut, capacity failures keeping the parent, rejections keeping the
@@ -20,12 +20,9 @@ from hypothesis import given, settings
 from hypothesis import strategies as st
 
 from jaxga import Grid
-from jaxga import crossover as X
-from jaxga.batching import over_pairs
-from jaxga.geometry import clear
-from jaxga.grid import DIRECTIONS
-from jaxga.maps.preprocess import legal_moves
-from jaxga.paths import (
+from jaxga.core.geometry import clear
+from jaxga.core.grid import DIRECTIONS
+from jaxga.core.paths import (
     Population,
     has_endpoints,
     is_continuous,
@@ -33,7 +30,10 @@ from jaxga.paths import (
     is_loop_free,
     remove_loops,
 )
-from jaxga.repair import connect
+from jaxga.maps.preprocess import legal_moves
+from jaxga.operators import crossover as X
+from jaxga.operators.lift import over_pairs
+from jaxga.operators.repair import connect
 from tests.strategies import CAP, SIZE, grids_and_parents
 
 N_CELLS = SIZE * SIZE
@@ -655,7 +655,7 @@ def test_dtypes(x64):
 def test_large_map_code_paths():
     """Maps above TABLE_MAX_CELLS use a sort for cell lookups and move_legal for the step
     masks: same results as the table variants (the hand-made pair, moved onto 130 x 130)."""
-    from jaxga.paths import CHUNKED_LOOKUP_CELLS, TABLE_MAX_CELLS
+    from jaxga.core.paths import CHUNKED_LOOKUP_CELLS, TABLE_MAX_CELLS
 
     cells = jnp.array([5, 9, 2, 7, 7, 7], jnp.int32)
     q = jnp.array([[2, 7, 3], [9, 5, -1]], jnp.int32)

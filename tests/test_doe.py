@@ -18,6 +18,8 @@ import pytest
 
 import jaxga
 from jaxga.cli import EXIT_BAD_INPUT, EXIT_NO_PATH, main
+from jaxga.config.presets import load_preset
+from jaxga.core.errors import NoPathError, ParameterError
 from jaxga.doe import (
     AGACD_TABLE3,
     AGACD_TABLE4,
@@ -34,8 +36,6 @@ from jaxga.doe import (
     predicted_best,
     run_doe,
 )
-from jaxga.errors import NoPathError, ParameterError
-from jaxga.presets import load_preset
 
 ROOT = Path(__file__).resolve().parents[1]
 PAPER = ROOT.parent / "shared" / "papers" / "001_66b815cfd6d0fbaa.txt"
@@ -233,7 +233,7 @@ def test_bad_factor_text(text, words):
 def test_a_factor_on_a_weight_left_at_its_default_is_accepted():
     """A fitness weight that the preset does not write down but its objective reads
     (Zhang's turning radius r at its default) is a valid factor, as in a sweep."""
-    from jaxga.config import Config
+    from jaxga.config.schema import Config
 
     mapping = load_preset("iga_zhang").as_dict()
     del mapping["fitness.r"]  # a user file that leaves r at the objective's default
@@ -311,7 +311,7 @@ def _without_timing(d: dict) -> dict:
 def _assert_same_runs(a: dict[str, np.ndarray], b: dict[str, np.ndarray]) -> None:
     """Same runs, bit for bit: fitness, success, turns, convergence generation and the
     float32 lengths and smoothness (float sums run in a fixed order whatever the number of
-    runs per call: jaxga.numerics)."""
+    runs per call: jaxga._batching.numerics)."""
     for key in ("fitness", "success", "turns", "convergence_generation",
                 "length", "raw_length", "smoothness"):
         np.testing.assert_array_equal(a[key], b[key], err_msg=key)
@@ -504,8 +504,8 @@ def test_a_checkpointed_doe_checks_the_memory_of_one_block(blocked, tmp_path, mo
     ckpt = tmp_path / "ckpt"
     shutil.copytree(ckpt0, ckpt)
     checked = []
-    real = jaxga.api._check_result_memory
-    monkeypatch.setattr(jaxga.api, "_check_result_memory",
+    real = jaxga.api.check_result_memory
+    monkeypatch.setattr(jaxga.api, "check_result_memory",
                         lambda n, algo: checked.append(n) or real(n, algo))
     monkeypatch.setattr(jaxga.api, "sweep", lambda *a, **k: pytest.fail("a sweep ran"))
     run_doe("agacd", MAP, SMALL, "agacd-table4", seeds=3, checkpoint=ckpt, **KW)

@@ -7,9 +7,9 @@ import pytest
 
 from jaxga import api
 from jaxga.api import run
-from jaxga.guide import with_guide
 from jaxga.maps import random_map
-from jaxga.reference import any_angle_shortest_path, clear_np
+from jaxga.operators.guide import with_guide
+from jaxga.reference.optima import any_angle_shortest_path, clear_np
 
 
 @pytest.fixture(scope="module")
@@ -56,8 +56,8 @@ def test_finish_program_equals_its_functions_compiled_with_xla_defaults():
     import jax
     import jax.numpy as jnp
 
-    from jaxga import objectives
-    from jaxga import postprocess as post
+    from jaxga.core import objectives
+    from jaxga.operators import postprocess as post
 
     assert api.FINISH_COMPILER_OPTIONS == {"xla_cpu_use_fusion_emitters": False}
     grid = random_map(10, 10, 0.2, 3, corner_rule="free")
@@ -104,7 +104,7 @@ def test_results_do_not_depend_on_the_device_count():
     computing its runs one at a time (``api.map_runs``), == one device, one ``vmap`` of
     21 (initialised in 3 blocks of 7, ``api.INIT_RUN_BLOCK``): the same paths and the
     same float bits for every reported value (sums in a fixed order,
-    ``jaxga.numerics``)."""
+    ``jaxga._batching.numerics``)."""
     import json
     import os
     import subprocess
@@ -137,8 +137,8 @@ def test_population_waypoint_feasibility_equals_the_per_path_check(rule):
     import jax
     import jax.numpy as jnp
 
+    from jaxga.core.paths import is_feasible
     from jaxga.engine import SHORT_SPAN, waypoints_feasible
-    from jaxga.paths import is_feasible
 
     grid = random_map(12, 12, 0.25, 5, corner_rule=rule)
     rng = np.random.default_rng(len(rule))
@@ -174,9 +174,9 @@ def test_adaptive_generation_equals_its_straight_line_composition():
     import jax
     import jax.numpy as jnp
 
-    from jaxga import engine as E
-    from jaxga.paths import Population
-    from jaxga.presets import load_preset
+    from jaxga.config.presets import load_preset
+    from jaxga.core.paths import Population
+    from jaxga.engine import evolution as E
 
     grid = random_map(10, 10, 0.2, 3, corner_rule="free")
     algo, params = E.build(load_preset("agacd", overrides={
@@ -221,8 +221,8 @@ def test_history_row_counts_only_active_individuals_of_every_island():
     islands (``population.active`` below the capacity), against NumPy."""
     import jax.numpy as jnp
 
-    from jaxga import engine as E
-    from jaxga.presets import load_preset
+    from jaxga.config.presets import load_preset
+    from jaxga.engine import evolution as E
 
     grid = random_map(8, 8, 0.1, 1, corner_rule="free")
     algo, params = E.build(load_preset("sga", overrides={
@@ -254,8 +254,8 @@ def test_per_island_rates_apply_to_their_own_island():
     import jax
     import jax.numpy as jnp
 
-    from jaxga import engine as E
-    from jaxga.presets import load_preset
+    from jaxga.config.presets import load_preset
+    from jaxga.engine import evolution as E
 
     grid = random_map(10, 10, 0.2, 3, corner_rule="free")
     algo, params = E.build(load_preset("sga", overrides={

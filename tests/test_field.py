@@ -1,7 +1,7 @@
-"""The exact distance fields (jaxga.guide) and the initialiser steered by them.
+"""The exact distance fields (jaxga.operators.guide) and the initialiser steered by them.
 
 Property tests on generated random maps, mazes and rooms of several sizes under all three
-corner rules: the fields equal the reference Dijkstra (jaxga.reference, heapq, written
+corner rules: the fields equal the reference Dijkstra (jaxga.reference.optima, heapq, written
 independently of SciPy); field_walk returns valid (independent NumPy check), bounded and
 distinct paths on every reachable problem and an explicit failure on unreachable ones;
 the population fallback fills exactly the slots its initialiser left empty.
@@ -20,12 +20,12 @@ from hypothesis import given, settings
 from hypothesis import strategies as st
 
 from jaxga import Grid
-from jaxga import init as I
+from jaxga.core.objectives import path_length
 from jaxga.engine import SMALL_MAP_CAPACITY, capacity_class, default_capacity
-from jaxga.guide import distance_fields, problem_facts, with_guide
 from jaxga.maps import builtin_names, load_map, maze_map, random_map, reachable, rooms_map
-from jaxga.objectives import path_length
-from jaxga.reference import distances_from, shortest_path
+from jaxga.operators import init as I
+from jaxga.operators.guide import distance_fields, problem_facts, with_guide
+from jaxga.reference.optima import distances_from, shortest_path
 from tests.strategies import check_paths
 
 FIELD_CAP = 256  # one compiled program per map size
@@ -69,7 +69,7 @@ _lengths = jax.jit(jax.vmap(path_length, in_axes=(None, 0, 0)))
 @settings(max_examples=30, deadline=None)
 @given(problems())
 def test_fields_and_facts_equal_the_reference(problem):
-    """The SciPy fields equal the heapq Dijkstra of jaxga.reference from both endpoints;
+    """The SciPy fields equal the heapq Dijkstra of jaxga.reference.optima from both endpoints;
     the optimum, its cell count and the start's region agree with the reference A* and
     flood fill."""
     _, grid = problem
@@ -262,9 +262,9 @@ def test_the_automatic_capacity_fits_the_problem():
 
 
 # ------------------------------------------------------------------ field repairs
-from jaxga import crossover as CX  # noqa: E402
-from jaxga import mutation as MU  # noqa: E402
-from jaxga.objectives import sga as sga_fitness  # noqa: E402
+from jaxga.core.objectives import sga as sga_fitness  # noqa: E402
+from jaxga.operators import crossover as CX  # noqa: E402
+from jaxga.operators import mutation as MU  # noqa: E402
 from tests.strategies import CAP, grids_and_parents  # noqa: E402
 
 
@@ -323,12 +323,12 @@ def test_field_repairs_replace_real_failures():
 # ------------------------------------------------------------------ map tables
 @pytest.mark.parametrize("preset", ["iga_zhu", "mpmga", "imga"])
 def test_map_tables_give_the_same_generations(preset):
-    """The per-map tables attached once (jaxga.maptables) instead of computed by every
+    """The per-map tables attached once (jaxga.engine.maptables) instead of computed by every
     operator: the same initial population and generations, bit for bit (walks, median
     insertion, heterologous and column crossovers)."""
     from jaxga import engine
-    from jaxga.maptables import with_tables
-    from jaxga.presets import load_preset
+    from jaxga.config.presets import load_preset
+    from jaxga.engine.maptables import with_tables
 
     grid = with_guide(rooms_map(16, 16, 3, room_size=4, corner_rule="no_squeeze"))
     config = load_preset(preset).override({"population.size": 12, "generations": 3,

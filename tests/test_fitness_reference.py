@@ -1,5 +1,5 @@
-"""The exact fitness optimum (jaxga.fitness_reference) against brute force over every
-simple path of small maps, scored by the GA's own fitness functions (jaxga.objectives)."""
+"""The exact fitness optimum (jaxga.reference.fitness) against brute force over every
+simple path of small maps, scored by the GA's own fitness functions (jaxga.core.objectives)."""
 
 from __future__ import annotations
 
@@ -13,9 +13,13 @@ import pytest
 from hypothesis import given, settings
 from hypothesis import strategies as st
 
-from jaxga import objectives
-from jaxga.errors import ParameterError
-from jaxga.fitness_reference import (
+from jaxga.config.presets import load_preset
+from jaxga.core import objectives
+from jaxga.core.errors import ParameterError
+from jaxga.core.grid import DIRECTIONS, Grid
+from jaxga.maps import load_map
+from jaxga.maps.preprocess import legal_moves
+from jaxga.reference.fitness import (
     MAX_CELLS,
     SUPPORTED_METHODS,
     fitness_optimum,
@@ -23,11 +27,7 @@ from jaxga.fitness_reference import (
     fitness_weights,
     path_fitness_np,
 )
-from jaxga.grid import DIRECTIONS, Grid
-from jaxga.maps import load_map
-from jaxga.maps.preprocess import legal_moves
-from jaxga.presets import load_preset
-from jaxga.reference import shortest_path
+from jaxga.reference.optima import shortest_path
 
 H, W = 3, 4
 L = H * W  # a simple path has at most every cell
@@ -111,7 +111,7 @@ WEIGHTS = {  # the papers' weights and other settings per method
 
 
 def _full(method: str, weights: dict) -> dict:
-    from jaxga.fitness_reference import DEFAULT_WEIGHTS
+    from jaxga.reference.fitness import DEFAULT_WEIGHTS
 
     return {**DEFAULT_WEIGHTS[method], **weights}
 
@@ -237,7 +237,7 @@ def test_mpmga_optimum_in_a_later_layer_than_the_smoothest_path():
 
 
 def test_mpmga_search_gives_up_beyond_its_layer_budget(monkeypatch):
-    import jaxga.fitness_reference as fr
+    import jaxga.reference.fitness as fr
 
     # a zigzag corridor: every path turns at least 4 times by 90 degrees (smoothness 100)
     blocked = np.array([[0, 0, 0, 0, 0], [1, 1, 1, 1, 0], [0, 0, 0, 0, 0],
@@ -273,7 +273,7 @@ def test_weights_are_checked_and_a_zero_cost_is_floored_as_the_ga_does():
                 corner_rule="free")
     with pytest.raises(ParameterError, match="in the configuration"):
         fitness_optimum(grid, load_preset("iga_zhu"), omega=0.5)
-    # omega = 0 and a straight path: cost 0, fitness 1 / EPS like jaxga.objectives
+    # omega = 0 and a straight path: cost 0, fitness 1 / EPS like jaxga.core.objectives
     r = fitness_optimum_np(blocked, (0, 1), (4, 1), "free", "iga_zhu", {"omega": 0.0})
     assert r.fitness == pytest.approx(1 / objectives.EPS)
     g = Grid(blocked=jnp.asarray(blocked), start=jnp.int32(5), goal=jnp.int32(9),

@@ -1,4 +1,4 @@
-"""jaxga.folding: every vmap level above a call folded into one flat batch of lanes."""
+"""jaxga._batching.folding: every vmap level above a call folded into one flat batch of lanes."""
 
 from __future__ import annotations
 
@@ -7,7 +7,7 @@ import jax.numpy as jnp
 import numpy as np
 import pytest
 
-from jaxga.folding import fold_call, hoist
+from jaxga._batching.folding import fold_call, hoist
 
 
 def _probe(seen):

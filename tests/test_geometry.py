@@ -12,8 +12,8 @@ from hypothesis import given
 from hypothesis import strategies as st
 
 from jaxga import Grid
-from jaxga.geometry import clear, clear_xy, linear_trial, segments_clear
-from jaxga.grid import CORNER_RULES, move_legal
+from jaxga.core.geometry import clear, clear_xy, linear_trial, segments_clear
+from jaxga.core.grid import CORNER_RULES, move_legal
 from tests._exact_geometry import exact_clear, passes_vertex
 
 H, W = 6, 7  # one fixed shape, so each jitted function compiles once per corner rule

@@ -21,10 +21,11 @@ from hypothesis import given, settings
 from hypothesis import strategies as st
 from scipy import stats
 
-from jaxga import Grid, NoPathError, ParameterError, registry
-from jaxga import init as I
-from jaxga.guide import with_guide
+from jaxga import Grid, NoPathError, ParameterError
+from jaxga.config import registry
 from jaxga.maps import legal_moves, random_map
+from jaxga.operators import init as I
+from jaxga.operators.guide import with_guide
 from tests.strategies import CAP, SIZE, check_paths, grids
 
 NAMES = registry.names("init")
@@ -171,7 +172,7 @@ def _greedy_step_probs(grid: Grid, cur: int, target: int, p_goal: float = 0.5,
     b = grid.blocked_np()
     h, w = b.shape
     legal = legal_moves(b, grid.corner_rule)
-    from jaxga.grid import DIRECTIONS
+    from jaxga.core.grid import DIRECTIONS
 
     nbrs = [(cur % w + dx, cur // w + dy) for d, (dx, dy) in enumerate(DIRECTIONS.tolist())
             if legal[d, cur // w, cur % w]]
@@ -338,7 +339,7 @@ def test_every_initialiser_and_walk_succeeds_on_an_open_map():
 
 @pytest.mark.parametrize("walk", ["uniform_walk", "directional_walk"])
 def test_batched_walks_equal_walks_one_at_a_time(walk):
-    """Under vmap the walk's step loop compacts its unfinished lanes (jaxga.lanes): every
+    """Under vmap the walk's step loop compacts its unfinished lanes (jaxga._batching.lanes): every
     walk of a batch equals the same walk run alone, cells past its length (copies of
     its last cell) included."""
     grid = random_map(12, 12, 0.2, seed=4)
@@ -515,8 +516,8 @@ def test_x64_mode_keeps_int32():
     code = textwrap.dedent("""
         import sys, jax, numpy as np
         jax.config.update("jax_compilation_cache_dir", sys.argv[1])
-        from jaxga import init as I
-        from jaxga.guide import with_guide
+        from jaxga.operators import init as I
+        from jaxga.operators.guide import with_guide
         from jaxga.maps import random_map
         g = with_guide(random_map(10, 10, 0.2, 3, corner_rule="free"))
         names = ("directional", "greedy_random_target", "intermittent_connect", "field_walk")

@@ -1,5 +1,5 @@
 """Migration between islands (SPEC 8, MPMGA 4.4): every topology against a plain NumPy
-reference written from the module docstring of :mod:`jaxga.islands`."""
+reference written from the module docstring of :mod:`jaxga.operators.islands`."""
 
 from __future__ import annotations
 
@@ -8,10 +8,10 @@ import jax.numpy as jnp
 import numpy as np
 import pytest
 
+from jaxga.config.presets import load_preset
+from jaxga.core.grid import Grid
 from jaxga.engine import IslandState, build
-from jaxga.grid import Grid
-from jaxga.islands import migrate
-from jaxga.presets import load_preset
+from jaxga.operators.islands import migrate
 
 P, L = 8, 5
 

@@ -1,4 +1,4 @@
-"""lane_while_loop (jaxga.lanes): the plain while_loop's results under any vmap nesting,
+"""lane_while_loop (jaxga._batching.lanes): the plain while_loop's results under any vmap nesting,
 in its two-phase and its narrow form (``min_lanes=1``: compacted at any width) and as
 one plain loop below ``min_lanes``."""
 
@@ -11,7 +11,7 @@ import jax.numpy as jnp
 import numpy as np
 import pytest
 
-from jaxga.lanes import lane_while_loop
+from jaxga._batching.lanes import lane_while_loop
 
 
 def _collatz(loop, x, table, bound):

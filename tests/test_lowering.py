@@ -1,4 +1,4 @@
-"""The unrolled CPU lowering of Threefry (jaxga/lowering.py): same bits, no loop."""
+"""The unrolled CPU lowering of Threefry (jaxga/api/lowering.py): same bits, no loop."""
 
 from __future__ import annotations
 
@@ -7,8 +7,8 @@ import jax.numpy as jnp
 import numpy as np
 import pytest
 
-from jaxga import lowering
-from jaxga.errors import ParameterError
+from jaxga.api import lowering
+from jaxga.core.errors import ParameterError
 
 pytestmark = pytest.mark.skipif(lowering._rules() is None,
                                 reason="this JAX does not expose the Threefry lowering rules")

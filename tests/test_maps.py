@@ -15,8 +15,8 @@ from hypothesis import strategies as st
 from hypothesis.extra import numpy as hnp
 
 from jaxga import EndpointError, Grid, MapFormatError, ParameterError
-from jaxga.errors import JaxgaError
-from jaxga.grid import CORNER_RULES, move_legal
+from jaxga.core.errors import JaxgaError
+from jaxga.core.grid import CORNER_RULES, move_legal
 from jaxga.maps import (
     FORMATS,
     builtin_names,
@@ -637,7 +637,7 @@ def test_a_map_over_the_size_limit_is_refused_from_its_header(tmp_path, monkeypa
     """Refused before the body is parsed: a Moving AI header of 2000 x 2000 over one
     malformed row, a PNG's IHDR, and a 0/1 file's first line and line count, each with
     one line naming the limit and the way around it (a coarser map)."""
-    from jaxga.grid import MAX_MAP_CELLS
+    from jaxga.core.grid import MAX_MAP_CELLS
 
     header = tmp_path / "huge.map"
     header.write_text("type octile\nheight 2000\nwidth 2000\nmap\n@@@\n")

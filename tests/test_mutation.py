@@ -11,12 +11,10 @@ import numpy as np
 from hypothesis import given, settings
 from scipy import stats
 
-from jaxga import Grid, objectives
-from jaxga import mutation as M
-from jaxga.batching import over_individuals
-from jaxga.geometry import clear, linear_trial
-from jaxga.maps import random_map
-from jaxga.paths import (
+from jaxga import Grid
+from jaxga.core import objectives
+from jaxga.core.geometry import clear, linear_trial
+from jaxga.core.paths import (
     Population,
     has_endpoints,
     is_continuous,
@@ -25,6 +23,9 @@ from jaxga.paths import (
     pad,
     population_map,
 )
+from jaxga.maps import random_map
+from jaxga.operators import mutation as M
+from jaxga.operators.lift import over_individuals
 from tests.strategies import CAP, SIZE, grids_and_parents, random_parents
 
 P = 8

@@ -1,4 +1,4 @@
-"""Batch-invariant float sums (jaxga.numerics) and the objectives built on them."""
+"""Batch-invariant float sums (jaxga._batching.numerics) and the objectives built on them."""
 
 import math
 
@@ -7,9 +7,9 @@ import jax.numpy as jnp
 import numpy as np
 import pytest
 
+from jaxga._batching.numerics import ordered_mean, ordered_sum
+from jaxga.core.objectives import angle_sum, path_length
 from jaxga.maps import random_map
-from jaxga.numerics import ordered_mean, ordered_sum
-from jaxga.objectives import angle_sum, path_length
 
 
 def _in_blocks(fn, x, block):

@@ -22,8 +22,8 @@ from hypothesis import given
 from hypothesis import strategies as st
 
 from jaxga import Grid, ParameterError
-from jaxga import objectives as ob
-from jaxga.paths import population_map
+from jaxga.core import objectives as ob
+from jaxga.core.paths import population_map
 
 S2 = math.sqrt(2.0)
 PI = math.pi
@@ -559,7 +559,7 @@ def test_x64_mode_dtypes_and_values():
         """
         import jax, jax.numpy as jnp, numpy as np
         from jaxga import Grid
-        from jaxga import objectives as ob
+        from jaxga.core import objectives as ob
         assert jax.config.jax_enable_x64
         b = np.zeros((5, 5), bool); b[0, 3] = b[3, 0] = True
         g = Grid.create(b, start=(0, 0), goal=(4, 4), corner_rule="free")

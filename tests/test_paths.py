@@ -10,9 +10,8 @@ from hypothesis import given
 from hypothesis import strategies as st
 
 from jaxga import Grid, ParameterError
-from jaxga.grid import DIRECTIONS
-from jaxga.maps import random_map
-from jaxga.paths import (
+from jaxga.core.grid import DIRECTIONS
+from jaxga.core.paths import (
     Population,
     cells_to_xy,
     from_coords,
@@ -25,7 +24,8 @@ from jaxga.paths import (
     remove_loops,
     to_coords,
 )
-from jaxga.reference import clear_np
+from jaxga.maps import random_map
+from jaxga.reference.optima import clear_np
 
 N = 8  # 8 x 8 open map
 CAP = 40
@@ -143,7 +143,7 @@ def test_remove_loops_under_x64():
 def test_is_continuous_agrees_with_the_exact_segment_reference(rule):
     """Random walks with jumps and off-map cells on a map with obstacles: continuous iff
     the length is in [1, L], every cell (padding too) is on the map, the first cell is
-    free and every valid step is 8-adjacent and clear (jaxga.reference.clear_np)."""
+    free and every valid step is 8-adjacent and clear (jaxga.reference.optima.clear_np)."""
     grid = random_map(7, 6, 0.3, seed=2, corner_rule=rule)
     blocked, w, n = grid.blocked_np(), grid.width, grid.n_cells
     rng = np.random.default_rng(rule.encode()[0])
@@ -177,8 +177,8 @@ def test_last_occurrence_is_the_same_for_every_table_variant(monkeypatch):
     32 bits), one sort of packed words (a large map), a small-map table, and on a map
     above CHUNKED_LOOKUP_CELLS by ``scatter.table_lookup`` (batched rows, so its folded
     rule runs too; tables forced on that map)."""
-    from jaxga import paths
-    from jaxga.paths import CHUNKED_LOOKUP_CELLS, last_occurrence
+    from jaxga.core import paths
+    from jaxga.core.paths import CHUNKED_LOOKUP_CELLS, last_occurrence
 
     rng = np.random.default_rng(3)
     cells = jnp.asarray(rng.integers(0, 40, (5, 30)), jnp.int32)  # many repeats
@@ -203,7 +203,7 @@ def test_last_occurrence_is_the_same_for_every_table_variant(monkeypatch):
 def test_is_loop_free_refuses_a_node_off_the_map_whatever_the_width():
     """With the map size given, a valid node off the map makes a path not loop-free in
     the table and in the sort variant alike (a short buffer takes the sort)."""
-    from jaxga.paths import is_loop_free
+    from jaxga.core.paths import is_loop_free
 
     for width in (3, 30):
         cells = jnp.asarray([0, 500, 2] + [2] * (width - 3), jnp.int32)

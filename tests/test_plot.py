@@ -76,7 +76,7 @@ def test_plot_paths_draws_raw_and_post_optimised_paths_with_endpoints(comparison
 
 def test_plot_paths_refuses_a_map_the_result_was_not_computed_on(comparison, grid):
     """Drawing a result on another map would show its paths crossing walls."""
-    from jaxga.errors import ParameterError
+    from jaxga.core.errors import ParameterError
 
     r = comparison.results["imga"]
     with pytest.raises(ParameterError, match="10 cells wide"):

@@ -10,12 +10,11 @@ import numpy as np
 from hypothesis import given, settings
 from scipy import stats
 
-from jaxga import Grid, paths
-from jaxga import postprocess as PP
-from jaxga.batching import over_individuals
-from jaxga.geometry import clear, linear_trial
-from jaxga.objectives import path_length
-from jaxga.paths import (
+from jaxga import Grid
+from jaxga.core import paths
+from jaxga.core.geometry import clear, linear_trial
+from jaxga.core.objectives import path_length
+from jaxga.core.paths import (
     Population,
     has_endpoints,
     is_continuous,
@@ -24,6 +23,8 @@ from jaxga.paths import (
     pad,
     population_map,
 )
+from jaxga.operators import postprocess as PP
+from jaxga.operators.lift import over_individuals
 from tests.strategies import CAP, SIZE, grids_and_parents
 
 P = 8
@@ -306,9 +307,9 @@ def test_shortcut_optimal_is_refused_for_waypoint_paths():
     windowed programme of shortcut_optimal does not cover: a configuration error."""
     import pytest
 
+    from jaxga.config.presets import load_preset
+    from jaxga.core.errors import ParameterError
     from jaxga.engine import check_combination
-    from jaxga.errors import ParameterError
-    from jaxga.presets import load_preset
 
     with pytest.raises(ParameterError, match="shortcut_optimal' needs continuous paths"):
         check_combination(load_preset("agacd", overrides={"post.method": "shortcut_optimal"}))

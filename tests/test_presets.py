@@ -1,4 +1,4 @@
-"""The six presets and their loader (jaxga.presets).
+"""The six presets and their loader (jaxga.config.presets).
 
 The expected numbers below were written from the papers (papers/000-004), not copied from
 the TOML files: every value a paper gives is asserted against that paper.
@@ -13,9 +13,9 @@ from pathlib import Path
 
 import pytest
 
-from jaxga.config import SCHEMA, Config
-from jaxga.errors import ParameterError
-from jaxga.presets import load_preset, preset_info, preset_names, preset_variants
+from jaxga.config.presets import load_preset, preset_info, preset_names, preset_variants
+from jaxga.config.schema import SCHEMA, Config
+from jaxga.core.errors import ParameterError
 
 if sys.version_info >= (3, 11):
     import tomllib

@@ -1,4 +1,4 @@
-"""Tests of jaxga.reference: exact 8-connected and any-angle optima, exact line of sight.
+"""Tests of jaxga.reference.optima: exact 8-connected and any-angle optima, exact line of sight.
 
 Independent checks used here: a brute-force any-angle optimum (scipy Dijkstra over the
 complete visibility graph of all free cells, edges from the scalar walk ``clear_np``),
@@ -20,9 +20,9 @@ from hypothesis import strategies as st
 from scipy.sparse import coo_matrix
 from scipy.sparse.csgraph import dijkstra
 
-from jaxga.errors import EndpointError, NoPathError
-from jaxga.grid import CORNER_RULES, DIRECTIONS, Grid
-from jaxga.reference import (
+from jaxga.core.errors import EndpointError, NoPathError
+from jaxga.core.grid import CORNER_RULES, DIRECTIONS, Grid
+from jaxga.reference.optima import (
     OctileGraph,
     ReferencePath,
     any_angle_shortest_path,

@@ -13,14 +13,14 @@ import jax
 import jax.numpy as jnp
 import pytest
 
-from jaxga import registry
-from jaxga.config import COMMON_FIELDS, SCHEMA
-from jaxga.errors import ParameterError
-from jaxga.guide import with_guide
+from jaxga.config import registry
+from jaxga.config.presets import load_preset
+from jaxga.config.schema import COMMON_FIELDS, SCHEMA
+from jaxga.core.errors import ParameterError
+from jaxga.engine.maptables import with_tables
 from jaxga.maps import random_map
-from jaxga.maptables import with_tables
-from jaxga.postprocess import compact
-from jaxga.presets import load_preset
+from jaxga.operators.guide import with_guide
+from jaxga.operators.postprocess import compact
 from tests import contracts
 from tests.strategies import random_parents
 
@@ -110,7 +110,7 @@ def test_the_configuration_accepts_exactly_the_registered_names():
 
 
 def test_registering_adds_the_name_and_keys_and_unregistering_removes_them():
-    from jaxga.fields import Field
+    from jaxga.config.fields import Field
 
     field = Field(float, "toy strength", low=0.0, high=2.0, dynamic=True, default=1.0)
     op = registry.Operator("mutation", "toy_op", registry.operator("mutation",
@@ -181,7 +181,7 @@ def test_the_readme_walk_through_adds_a_working_operator(setting):
     import types
 
     from jaxga import api
-    from jaxga.grid import move_legal
+    from jaxga.core.grid import move_legal
 
     readme = (Path(__file__).resolve().parents[1] / "README.md").read_text()
     section = readme.split("## Operators, and how to add one", 1)[1].split("\n## ", 1)[0]

@@ -12,9 +12,9 @@ from hypothesis import given
 from hypothesis import strategies as st
 
 from jaxga import Grid
-from jaxga.grid import CORNER_RULES
-from jaxga.paths import has_endpoints, is_continuous, is_loop_free, remove_loops
-from jaxga.repair import SPLICE_LOCAL_MAX, concat, connect, prefix_count, splice_loop_free
+from jaxga.core.grid import CORNER_RULES
+from jaxga.core.paths import has_endpoints, is_continuous, is_loop_free, remove_loops
+from jaxga.operators.repair import SPLICE_LOCAL_MAX, concat, connect, prefix_count, splice_loop_free
 
 N = 10
 CAP = 64
@@ -223,7 +223,7 @@ def test_splice_loop_free_matches_the_loop_removal_of_the_splice(seed, variant):
 def test_compact_keeps_the_flagged_values_in_order(n, size):
     """The connection's work-queue compaction (one word, two words, prefix count):
     ``vals[flags]`` in order, padded with -1, the first ``size`` kept, and the count."""
-    from jaxga.repair import _compact
+    from jaxga.operators.repair import _compact
 
     rng = np.random.default_rng(n)
     density = np.array([0.0, 0.1, 0.5, 0.9, 1.0])[:, None]

@@ -15,9 +15,9 @@ import pytest
 
 import jaxga.api
 from jaxga.cli import EXIT_BAD_INPUT, EXIT_NO_PATH, main
-from jaxga.errors import EndpointError, ParameterError
+from jaxga.core.errors import EndpointError, ParameterError
 from jaxga.maps import save_map
-from jaxga.reference import clear_np
+from jaxga.reference.optima import clear_np
 from jaxga.replan import (
     first_blocked_step,
     mpmga_cell,
@@ -109,7 +109,7 @@ def test_mpmga_50x50_scenario_in_a_window(sc50):
 # The file's small budget (10 individuals, init.max_tries 20) leaves a few initial slots of
 # MPMGA's intermittent initialisation filled with copies in the second re-planning, and
 # jaxga.api.run warns so (test_api.py tests that warning); this test is about the splices.
-@pytest.mark.filterwarnings("ignore::jaxga.errors.InitialisationWarning")
+@pytest.mark.filterwarnings("ignore::jaxga.core.errors.InitialisationWarning")
 def test_every_blocked_part_is_replanned_and_loops_removed(sc25):
     """Two separate blockages: two splices (the second from the last clear cell before
     it); the result is one feasible loop-free path."""

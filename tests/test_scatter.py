@@ -1,4 +1,4 @@
-"""Flat scatters under vmap (jaxga.scatter): the same tables as the plain .at[] scatter."""
+"""Flat scatters under vmap (jaxga._batching.scatter): the same tables as a plain .at[] scatter."""
 
 from __future__ import annotations
 
@@ -7,8 +7,8 @@ import jax.numpy as jnp
 import numpy as np
 import pytest
 
-from jaxga import scatter
-from jaxga.scatter import position_table, table_lookup
+from jaxga._batching import scatter
+from jaxga._batching.scatter import position_table, table_lookup
 
 
 def _nest(fn, depth):
@@ -40,7 +40,7 @@ def test_the_flat_and_the_batched_rows_give_the_same_tables():
     """position_table computes a batch of rows with one flat scatter, or (beyond
     MAX_FLAT_ENTRIES = 2**31 - 1 entries, where int32 flat indices would overflow) with
     one batched scatter: both equal the per-row scatter."""
-    from jaxga.scatter import MAX_FLAT_ENTRIES, _rows_batched, _rows_flat
+    from jaxga._batching.scatter import MAX_FLAT_ENTRIES, _rows_batched, _rows_flat
 
     assert MAX_FLAT_ENTRIES == 2**31 - 1
     keys = jnp.asarray(np.random.default_rng(5).integers(-13, 12, (4, 6, 9)), jnp.int32)

@@ -12,7 +12,7 @@ import scipy.stats
 from hypothesis import given, settings
 from hypothesis import strategies as st
 
-from jaxga import selection as S
+from jaxga.operators import selection as S
 
 P = 13  # odd on purpose
 R = 3  # runs per hypothesis example (vmap over runs)

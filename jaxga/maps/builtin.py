@@ -15,7 +15,7 @@ import functools
 import os
 from pathlib import Path
 
-from jaxga.errors import MapFormatError
+from jaxga.core.errors import MapFormatError
 from jaxga.maps.scenarios import Scenario, read_scen
 
 __all__ = [

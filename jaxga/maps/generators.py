@@ -21,9 +21,9 @@ from collections import deque
 
 import numpy as np
 
-from jaxga.errors import ParameterError
-from jaxga.grid import DEFAULT_CORNER_RULE, Grid, _check_xy, as_integer, check_corner_rule
-from jaxga.maps.preprocess import _reachable_np
+from jaxga.core.errors import ParameterError
+from jaxga.core.grid import DEFAULT_CORNER_RULE, Grid, as_integer, check_corner_rule, check_xy
+from jaxga.maps.preprocess import reachable_np
 
 __all__ = ["maze_map", "random_map", "rectangles_map", "rooms_map"]
 
@@ -59,13 +59,13 @@ def _setup(
             f"file instead")
     s = _int("seed", seed, 0)
     rule = check_corner_rule(corner_rule)
-    sxy = _check_xy("start", (0, 0) if start is None else start, w, h)
-    gxy = _check_xy("goal", (w - 1, h - 1) if goal is None else goal, w, h)
+    sxy = check_xy("start", (0, 0) if start is None else start, w, h)
+    gxy = check_xy("goal", (w - 1, h - 1) if goal is None else goal, w, h)
     return h, w, np.random.default_rng(s), sxy, gxy, rule
 
 
 def _connected(blocked: np.ndarray, start: XY, goal: XY, rule: str) -> bool:
-    return bool(_reachable_np(blocked, start, rule)[goal[1], goal[0]])
+    return bool(reachable_np(blocked, start, rule)[goal[1], goal[0]])
 
 
 def _join(blocked: np.ndarray, anchor: XY, point: XY, rule: str) -> np.ndarray:
@@ -76,7 +76,7 @@ def _join(blocked: np.ndarray, anchor: XY, point: XY, rule: str) -> np.ndarray:
     h, w = b.shape
     for x, y in (anchor, point):
         b[y, x] = False
-    reach = _reachable_np(b, anchor, rule)
+    reach = reachable_np(b, anchor, rule)
     parent = {point: point}
     queue = deque([point])
     while queue:  # BFS over all cells, ignoring obstacles, to the nearest reachable cell
@@ -183,7 +183,7 @@ def random_map(
     cells) are drawn uniformly without replacement among the cells other than the start
     and goal - so the density is exact, as in the Moving AI ``random-*-*-20`` maps. If the
     goal is not reachable from the start under ``corner_rule`` the map is redrawn, up to
-    ``max_attempts`` times; then :class:`~jaxga.errors.ParameterError` (density too high).
+    ``max_attempts`` times; then :class:`~jaxga.core.errors.ParameterError` (density too high).
 
     Args:
         height, width: map size in cells (>= 1; at most :data:`MAX_GENERATED_CELLS`
@@ -296,7 +296,7 @@ def rectangles_map(
     uniform over the placements that fit on the map. A rectangle that would cover an
     endpoint or disconnect the start from the goal is rejected and redrawn; after
     ``max_attempts`` draws in total (default ``20 * n_rects + 20``) without placing all
-    rectangles, :class:`~jaxga.errors.ParameterError` is raised. At most
+    rectangles, :class:`~jaxga.core.errors.ParameterError` is raised. At most
     :data:`MAX_GENERATED_CELLS` cells.
     """
     h, w, rng, s, g, rule = _setup(height, width, seed, start, goal, corner_rule)

@@ -20,7 +20,7 @@ row comes first:
 The format is chosen from the file's content and extension (see :func:`detect_format`)
 unless ``fmt=`` names it. Anything malformed - a missing or empty file, ragged rows, an
 unknown character, a wrong Moving AI header, two ``S`` markers, an unreadable image -
-raises :class:`~jaxga.errors.MapFormatError` with a one-line message that names the file,
+raises :class:`~jaxga.core.errors.MapFormatError` with a one-line message that names the file,
 the problem and, where it helps, the line.
 
 Endpoints: ``start`` defaults to ``(0, 0)`` and ``goal`` to ``(W - 1, H - 1)`` unless the
@@ -37,8 +37,8 @@ from pathlib import Path
 
 import numpy as np
 
-from jaxga.errors import EndpointError, MapFormatError
-from jaxga.grid import DEFAULT_CORNER_RULE, Grid, check_corner_rule, too_large
+from jaxga.core.errors import EndpointError, MapFormatError
+from jaxga.core.grid import DEFAULT_CORNER_RULE, Grid, check_corner_rule, too_large
 
 __all__ = [
     "FORMATS",
@@ -123,17 +123,17 @@ def load_map(
             marker (ASCII), else ``(0, 0)``.
         goal: ``(x, y)`` goal; default: the file's ``G`` marker, else ``(W - 1, H - 1)``.
         corner_rule: ``"free"``, ``"no_squeeze"`` or ``"strict"``; default
-            :data:`jaxga.grid.DEFAULT_CORNER_RULE` (``"strict"``).
+            :data:`jaxga.core.grid.DEFAULT_CORNER_RULE` (``"strict"``).
         fmt: force a format from :data:`FORMATS` instead of detecting it.
         coarsen: merge ``k x k`` cells into one, blocked when any of them is
             (:func:`jaxga.maps.coarsen_blocked`); ``start`` and ``goal`` (and a file's
             ``S``/``G``) are given on the original map and move to the coarse cells
             holding them, ``(x // k, y // k)``. The way to plan on a map of more than
-            :data:`jaxga.grid.MAX_MAP_CELLS` cells.
+            :data:`jaxga.core.grid.MAX_MAP_CELLS` cells.
 
     Raises:
         MapFormatError: missing, unreadable or malformed file; unknown built-in name; a
-            map over :data:`jaxga.grid.MAX_MAP_CELLS` cells (after ``coarsen``), refused
+            map over :data:`jaxga.core.grid.MAX_MAP_CELLS` cells (after ``coarsen``), refused
             from the file's header or line count before it is parsed.
         EndpointError: an endpoint off the map. (Blocked endpoints are *not* checked
             here; see :meth:`jaxga.Grid.check_endpoints`.)

@@ -19,8 +19,8 @@ from collections import deque
 
 import numpy as np
 
-from jaxga.errors import ParameterError
-from jaxga.grid import DIRECTIONS, Grid, check_corner_rule
+from jaxga.core.errors import ParameterError
+from jaxga.core.grid import DIRECTIONS, Grid, check_corner_rule
 
 __all__ = [
     "coarsen",
@@ -38,9 +38,9 @@ __all__ = [
 def legal_moves(blocked: np.ndarray, corner_rule: str) -> np.ndarray:
     """``bool[8, H, W]``: whether the move from ``(x, y)`` in direction ``d`` is legal.
 
-    Directions are :data:`jaxga.grid.DIRECTIONS`. A move is legal when both cells are on
+    Directions are :data:`jaxga.core.grid.DIRECTIONS`. A move is legal when both cells are on
     the map and free and, for a diagonal move, the two side cells satisfy ``corner_rule``
-    (SPEC 1) - the same rule as :func:`jaxga.grid.move_legal`, for every cell at once.
+    (SPEC 1) - the same rule as :func:`jaxga.core.grid.move_legal`, for every cell at once.
     """
     check_corner_rule(corner_rule)
     b = np.asarray(blocked, dtype=bool)
@@ -63,7 +63,9 @@ def legal_moves(blocked: np.ndarray, corner_rule: str) -> np.ndarray:
     return out
 
 
-def _reachable_np(blocked: np.ndarray, source: tuple[int, int], corner_rule: str) -> np.ndarray:
+def reachable_np(blocked: np.ndarray, source: tuple[int, int], corner_rule: str) -> np.ndarray:
+    """``bool[H, W]``: the free cells reachable from ``source`` by legal 8-connected moves
+    under ``corner_rule`` (breadth-first search in NumPy)."""
     b = np.asarray(blocked, dtype=bool)
     h, w = b.shape
     seen = np.zeros(h * w, dtype=bool)
@@ -98,7 +100,7 @@ def reachable(grid: Grid, source: tuple[int, int] | None = None) -> np.ndarray:
     x, y = grid.start_xy if source is None else (int(source[0]), int(source[1]))
     if not (0 <= x < grid.width and 0 <= y < grid.height):
         raise ParameterError(f"source ({x}, {y}) is off the {grid.width} x {grid.height} map")
-    return _reachable_np(grid.blocked_np(), (x, y), grid.corner_rule)
+    return reachable_np(grid.blocked_np(), (x, y), grid.corner_rule)
 
 
 def endpoints_connected(grid: Grid) -> bool:
@@ -118,7 +120,7 @@ def inflate(grid: Grid, radius: float) -> Grid:
     The map border is not an obstacle (only blocked cells are inflated). The endpoints
     are not protected: call :meth:`jaxga.Grid.check_endpoints` afterwards.
 
-    Raises :class:`~jaxga.errors.ParameterError` for a negative or non-finite radius.
+    Raises :class:`~jaxga.core.errors.ParameterError` for a negative or non-finite radius.
     """
     if isinstance(radius, bool) or not isinstance(radius, numbers.Real):
         raise ParameterError(f"inflate radius must be a number of cells, got {radius!r}")
@@ -190,7 +192,7 @@ def coarsen_blocked(blocked: np.ndarray, factor: int) -> np.ndarray:
 def coarsen(grid: Grid, factor: int) -> Grid:
     """``grid`` with ``factor x factor`` cells merged into one (:func:`coarsen_blocked`);
     the start and goal move to the coarse cells holding them, ``(x // k, y // k)``. The way
-    to plan on a map over :data:`jaxga.grid.MAX_MAP_CELLS`: load it with
+    to plan on a map over :data:`jaxga.core.grid.MAX_MAP_CELLS`: load it with
     ``load_map(..., coarsen=k)`` (``--coarsen K``), which coarsens before building the
     grid. A coarse endpoint whose block holds an obstacle is blocked:
     :meth:`jaxga.Grid.check_endpoints` says so."""

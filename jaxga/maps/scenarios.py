@@ -15,8 +15,8 @@ import math
 import os
 from pathlib import Path
 
-from jaxga.errors import MapFormatError
-from jaxga.grid import Grid
+from jaxga.core.errors import MapFormatError
+from jaxga.core.grid import Grid
 
 __all__ = ["Scenario", "parse_scen", "read_scen"]
 
@@ -56,7 +56,7 @@ class Scenario:
 def read_scen(path: str | os.PathLike) -> list[Scenario]:
     """Read a Moving AI ``.scen`` file; y is converted to count from the bottom.
 
-    Raises :class:`~jaxga.errors.MapFormatError` for a missing or unreadable file, a
+    Raises :class:`~jaxga.core.errors.MapFormatError` for a missing or unreadable file, a
     missing ``version`` header, a line without 9 fields, a non-numeric field or a start
     or goal off its map, naming the file and line.
     """

@@ -1,0 +1,79 @@
+"""The Python API: many seeded runs of a preset on a map (:func:`run`), sweeps over
+parameter points (:func:`sweep`), and what they return (:class:`Result`).
+
+- :mod:`~jaxga.api.runs`: :func:`run`, :func:`sweep`, loading a preset and a map;
+- :mod:`~jaxga.api.result`: :class:`Result`, per-seed paths, metrics and gaps;
+- :mod:`~jaxga.api.seeds`: accepted seeds, their keys and sharding;
+- :mod:`~jaxga.api.programs`: the compiled programs, cached per shape;
+- :mod:`~jaxga.api.memory`: memory checks before a run;
+- :mod:`~jaxga.api.failures`: runs that found no path, their causes;
+- :mod:`~jaxga.api.parallel`: every core, and several processes, for one experiment;
+- :mod:`~jaxga.api.compilation_cache`: JAX's persistent compilation cache;
+- :mod:`~jaxga.api.lowering`: how programs are lowered (Threefry without a loop on the CPU).
+
+The tools (command line, DOE, comparisons, re-planning) use what is exported here.
+"""
+
+from jaxga.api.memory import (
+    check_result_memory,
+)
+from jaxga.api.programs import (
+    INIT_RUN_BLOCK,
+    PROGRAM_CACHE_SIZE,
+    RUN_BLOCK,
+    clear_compiled,
+    equal_chunks,
+    map_runs,
+    run_blocks,
+)
+from jaxga.api.result import (
+    FITNESS_GAP_TOLERANCE,
+    GAP_TOLERANCE,
+    GAPS,
+    SUMMARY_METRICS,
+    Result,
+    json_number,
+    relative_gap,
+    summarise,
+)
+from jaxga.api.runs import (
+    RUN_OPTIONS,
+    check_one_corner_rule,
+    check_run,
+    checked_capacity,
+    load_problem,
+    run,
+    sweep,
+)
+from jaxga.api.seeds import (
+    SEED_LIMIT,
+    seed_list,
+)
+
+__all__ = [
+    "FITNESS_GAP_TOLERANCE",
+    "GAPS",
+    "GAP_TOLERANCE",
+    "INIT_RUN_BLOCK",
+    "PROGRAM_CACHE_SIZE",
+    "RUN_BLOCK",
+    "RUN_OPTIONS",
+    "Result",
+    "SEED_LIMIT",
+    "SUMMARY_METRICS",
+    "check_one_corner_rule",
+    "check_result_memory",
+    "check_run",
+    "checked_capacity",
+    "clear_compiled",
+    "equal_chunks",
+    "json_number",
+    "load_problem",
+    "map_runs",
+    "relative_gap",
+    "run",
+    "run_blocks",
+    "seed_list",
+    "summarise",
+    "sweep",
+]

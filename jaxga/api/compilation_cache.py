@@ -1,0 +1,67 @@
+"""JAX's persistent compilation cache for jaxga's programs (on disk, across processes).
+
+A cold ``jaxga.run`` spends seconds compiling its programs, most of a short run's time
+(README, performance). JAX can keep compiled programs on disk, keyed by the program and
+the JAX and XLA versions; a later process that compiles the same program (same preset,
+map size and run count) reads it instead. Tracing and lowering still run, so such a
+"warm" compile is shorter than a cold one but not free (``benchmarks/speed.py --warm``;
+decision 014).
+
+``jaxga run`` and the other commands turn the cache on by default. A script or a
+notebook turns it on with :func:`use_compilation_cache` before its first run.
+"""
+
+from __future__ import annotations
+
+import os
+from pathlib import Path
+
+from jaxga.core.errors import ParameterError
+
+__all__ = ["ENV_VAR", "MIN_COMPILE_SECONDS", "default_directory", "use_compilation_cache"]
+
+ENV_VAR = "JAXGA_CACHE_DIR"
+"""Environment variable naming the cache directory; an empty value leaves the cache off."""
+
+MIN_COMPILE_SECONDS = 1.0
+"""Programs that compile faster than this are not written to the cache (JAX's default
+threshold): reading them back would save nothing."""
+
+
+def default_directory() -> str:
+    """``~/.cache/jaxga/jax``: the cache directory when ``$JAXGA_CACHE_DIR`` is not set."""
+    return str(Path.home() / ".cache" / "jaxga" / "jax")
+
+
+def use_compilation_cache(directory: str | os.PathLike | None = None) -> str | None:
+    """Turn on JAX's persistent compilation cache for every program compiled from now on.
+
+    Args:
+        directory: where to keep the compiled programs. ``None`` (the default): the
+            directory ``$JAXGA_CACHE_DIR`` names, else :func:`default_directory`;
+            an empty ``$JAXGA_CACHE_DIR`` leaves the cache off. An explicit
+            ``directory`` wins over the environment.
+
+    Returns:
+        The directory used, or ``None`` when the cache was left off.
+
+    Sets JAX's ``jax_compilation_cache_dir`` and
+    ``jax_persistent_cache_min_compile_time_secs`` (:data:`MIN_COMPILE_SECONDS`) for the
+    whole process; it works after other programs have been compiled. A restarted
+    notebook kernel that calls it before ``jaxga.run`` compiles a preset it compiled
+    before in a fraction of the cold compile time (decision 014). Not part of any
+    paper: an engineering aid (jaxga's results never depend on it).
+    """
+    if directory is None:
+        path = os.environ.get(ENV_VAR, default_directory())
+    else:
+        path = os.fspath(directory)
+        if not path:
+            raise ParameterError("use_compilation_cache: the directory must not be empty")
+    if not path:
+        return None
+    import jax
+
+    jax.config.update("jax_compilation_cache_dir", path)
+    jax.config.update("jax_persistent_cache_min_compile_time_secs", MIN_COMPILE_SECONDS)
+    return path

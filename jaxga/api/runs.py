@@ -1,0 +1,553 @@
+"""``jaxga.run``: many seeded runs of a preset on a map, in one compiled call.
+
+SPEC 10-11. ``run(preset, grid, seeds=N, **overrides) -> Result``: the seeds are a
+``jax.vmap`` (sharded over the available devices), the generations a ``lax.scan``;
+initialisation, evolution and post-optimisation are three compiled functions so that
+their times can be reported separately, as the papers' tables do. Compilation is timed
+on its own.
+"""
+
+from __future__ import annotations
+
+import contextlib
+import functools
+import time
+from collections.abc import Callable, Mapping, Sequence
+from typing import TYPE_CHECKING, Any
+
+import jax
+import jax.numpy as jnp
+import numpy as np
+
+from jaxga.api import parallel
+from jaxga.api.failures import (
+    failure_causes,
+    failure_reason,
+    no_path_result,
+    unstarted_results,
+    warn_unfilled,
+)
+from jaxga.api.lowering import check_environment
+from jaxga.api.memory import NO_PATH_BYTES_PER_RUN, check_memory, check_result_memory
+from jaxga.api.programs import (
+    COMPILE_PROGRESS,
+    compiled_programs,
+    equal_chunks,
+    shape_spec,
+    stack_params,
+)
+from jaxga.api.result import Result
+from jaxga.api.seeds import seed_list, seed_sharding
+from jaxga.config.schema import Config, flatten
+from jaxga.core.errors import ParameterError
+from jaxga.core.grid import Grid, as_integer
+from jaxga.engine import (
+    build,
+    check_migration,
+    check_overrides_read,
+    default_params,
+    static_config,
+    uses_guide,
+)
+from jaxga.engine.maptables import with_tables
+from jaxga.operators.guide import with_guide
+
+if TYPE_CHECKING:
+    from jaxga.maps import MapInfo
+
+
+
+
+
+
+
+
+
+
+
+
+
+
+
+
+
+
+
+
+
+
+
+
+
+
+
+
+
+
+
+
+
+
+
+
+
+
+
+
+
+
+
+def _check_call_options(progress, chunks) -> None:
+    """The options of :func:`run` and :func:`sweep` that do not reach the configuration."""
+    if progress is not None and not callable(progress):
+        raise ParameterError(f"progress must be a callable (stage, fraction), got "
+                             f"{progress!r}")
+    try:
+        chunks = as_integer(chunks)
+    except TypeError:
+        raise ParameterError(f"chunks must be an integer >= 1, got {chunks!r}") from None
+    if chunks < 1:
+        raise ParameterError(f"chunks must be an integer >= 1, got {chunks!r}")
+
+
+def _normalised(key: str, value: Any) -> Any:
+    """``value`` as the configuration stores it (a tuple and a list alike, numpy scalars
+    as Python ones), to compare two values given for ``key``; an invalid value is
+    refused with the key's own message."""
+    from jaxga.config.schema import SCHEMA, freeze
+
+    if key not in SCHEMA:  # refused by name when the preset loads
+        return repr(value)
+    return freeze(SCHEMA[key].check(key, value))
+
+
+def check_one_corner_rule(corner_rule: str | None, config: Config,
+                          overridden: Sequence[str]) -> None:
+    """Refuse a ``corner_rule=`` (``--corner-rule``) that disagrees with an overridden
+    ``map.corner_rule`` (``--set``): two rules for one run."""
+    rule = config["map.corner_rule"]
+    if "map.corner_rule" in overridden and corner_rule is not None and corner_rule != rule:
+        raise ParameterError(f"two corner rules given: {corner_rule!r} (corner_rule, "
+                             f"--corner-rule) and {rule!r} (map.corner_rule)")
+
+
+def load_problem(preset, grid, corner_rule, variant, sets, overrides, generations, *,
+          check_read: bool = True):
+    """``(config, grid, map name)`` of a call, checked; ``check_read=False`` leaves
+    overrides that nothing reads to the caller (:func:`jaxga.compare.compare`)."""
+    from jaxga.config.presets import as_sets, check_file_keys_read, load_preset, parse_set
+    from jaxga.maps import MapInfo, load_map_info
+
+    check_environment()  # a bad $JAXGA_THREEFRY, which `import jaxga` does not refuse
+    map_name = "grid"
+    if isinstance(grid, MapInfo):  # a loaded map that keeps its name (and its endpoints)
+        grid, map_name = grid.grid, grid.name
+    sets = as_sets(sets)
+    ov: dict[str, Any] = {k.replace("__", "."): v for k, v in overrides.items()}
+    if generations is not None:  # a non-integer is left for the configuration to refuse
+        with contextlib.suppress(TypeError):
+            generations = as_integer(generations)
+        ov["generations"] = generations
+    given = flatten(ov)
+    set_values = [parse_set(text) for text in sets]
+    for key, value in set_values:  # one value per key
+        if key in given and _normalised(key, given[key]) != _normalised(key, value):
+            raise ParameterError(f"{key} is given twice, as {given[key]!r} and {value!r}")
+        given[key] = value
+    if isinstance(preset, Config):  # as load_preset: the overrides, then the sets
+        if variant is not None:
+            raise ParameterError(f"variant {variant!r} given with a Config: load the preset "
+                                 "with its variant (jaxga.config.presets.load_preset) instead")
+        config = preset.override(ov).override(dict(set_values))
+    else:
+        config = load_preset(preset, variant=variant, overrides=ov, sets=sets)
+    if check_read:  # never silently ignored
+        overridden = [*flatten(ov), *(key for key, _ in set_values)]
+        check_overrides_read(config, overridden)
+        if not isinstance(preset, Config):  # keys a user TOML file sets, in that file
+            check_file_keys_read(preset, variant)
+        check_one_corner_rule(corner_rule, config, overridden)
+        rule = config["map.corner_rule"]
+        if "map.corner_rule" in overridden and isinstance(grid, Grid) \
+                and corner_rule is None and grid.corner_rule != rule:
+            raise ParameterError(
+                f"map.corner_rule = {rule!r} has no effect with a Grid (or a loaded "
+                f"MapInfo), which keeps its own corner rule ({grid.corner_rule!r}): give "
+                "the Grid that rule "
+                "(corner_rule=... or Grid.replace; --corner-rule on the command line)")
+    if isinstance(grid, Grid):
+        grid = grid.validated()  # a grid made with the plain constructor is checked too
+        if corner_rule is not None:
+            grid = grid.replace(corner_rule=corner_rule)
+    else:
+        rule = config["map.corner_rule"] if corner_rule is None else corner_rule
+        info = load_map_info(grid, corner_rule=rule)
+        grid, map_name = info.grid, info.name
+    grid.check_endpoints()
+    return config, grid, map_name
+
+
+def _point_configs(config: Config, points: Sequence[Mapping[str, Any]]) -> list[Config]:
+    """Validated configurations of the sweep points; only dynamic keys and the
+    population size may vary (they do not change the compiled program)."""
+    out = []
+    base = static_config(config)
+    for point in points:
+        changes = {k.replace("__", "."): v for k, v in point.items()}
+        cfg = config.override(changes)
+        check_overrides_read(cfg, flatten(changes))
+        if static_config(cfg) != base:
+            new = dict(static_config(cfg).items)
+            old = dict(base.items)
+            changed = sorted(k for k in new.keys() | old.keys() if new.get(k) != old.get(k))
+            raise ParameterError(
+                f"sweep point {dict(point)} changes {', '.join(changed)}, which the "
+                "compiled program depends on: only scalar dynamic keys (a crossover or "
+                "mutation rate, a fitness weight, MPMGA's c1 temperature; "
+                "jaxga.config.schema.SCHEMA) and population.size can be swept in one compiled "
+                "call; run the other values separately")
+        # every point's islands must hold its migrants: an inactive individual never
+        # migrates (the check at build time only sees the largest size)
+        check_migration(cfg, int(cfg["population.size"]))
+        out.append(cfg)
+    return out
+
+
+def sweep(
+    preset: str | Config,
+    grid: Grid | MapInfo | str,
+    points: Sequence[Mapping[str, Any]],
+    seeds: int | Sequence[int] = 1,
+    *,
+    generations: int | None = None,
+    corner_rule: str | None = None,
+    variant: str | None = None,
+    sets: Sequence[str] = (),
+    progress: Callable[[str, float], None] | None = None,
+    chunks: int = 1,
+    population_capacity: int | None = None,
+    **overrides: Any,
+) -> list[Result]:
+    """Run every point of a hyper-parameter sweep with every seed, in ONE compiled call.
+
+    ``points`` are mappings of configuration keys (``crossover.probability``, AGACD's
+    ``mutation.pm_low``, fitness weights, ``population.size``, ...) applied on top of the
+    preset and ``overrides``. Dynamic keys become per-run arrays of a ``jax.vmap``; the
+    population size becomes the engine's ``active`` count below a capacity equal to the
+    largest size swept. Keys that change the compiled program (operators, generations,
+    capacity) are refused with a :class:`ParameterError`. Run ``q * S + s`` is point
+    ``q`` with seed ``s``: every point sees the same seeds (common random numbers, as a
+    designed experiment wants). Returns one :class:`Result` per point; their ``timing``
+    is that of the whole sweep.
+
+    ``population_capacity`` (default: the largest size swept) fixes the population
+    capacity. Results depend on it, so a sweep split into several calls (``jaxga.doe``'s
+    resumable blocks) passes the largest size of the WHOLE sweep to every call to get the
+    same results as one call. It must be at least every point's ``population.size``.
+    The runs are split over this process's devices and, after
+    :func:`jaxga.api.parallel.initialize`, over several processes: each computes its share and
+    every process returns the whole, identical result (:mod:`jaxga.api.parallel`; a lost
+    process raises :class:`jaxga.api.parallel.ProcessLostError`).
+    """
+    from jaxga.reference.fitness import fitness_optimum, fitness_weights
+
+    t_start = time.perf_counter()
+    if not isinstance(points, Sequence) or isinstance(points, str) \
+            or not all(isinstance(p, Mapping) and all(isinstance(k, str) for k in p)
+                       for p in points):
+        raise ParameterError(f"points must be a list of mappings key -> value, got "
+                             f"{points!r}")
+    if not points:
+        raise ParameterError("a sweep needs at least one point")
+    _check_call_options(progress, chunks)
+    config, grid, map_name = load_problem(preset, grid, corner_rule, variant, sets, overrides,
+                                   generations)
+    configs = _point_configs(config, points)
+    capacity = checked_capacity(configs, population_capacity)
+    octile, any_angle = _optima(grid)
+    if not octile.found:
+        seed_arr = seed_list(seeds, lambda n: check_memory(
+            n * len(configs), NO_PATH_BYTES_PER_RUN, "for their results"))
+        return [no_path_result(c, map_name, grid, seed_arr, build(c, grid)[0], octile.reason,
+                                time.perf_counter() - t_start, capacity) for c in configs]
+    if uses_guide(config):  # the exact distance fields the field initialiser steers by
+        grid = with_guide(grid)
+    grid = with_tables(grid)  # per-map tables, once per run rather than per generation
+    # the capacity is the largest size swept, also when it is below the preset's size
+    algo, _ = build(config.override({"population.size": capacity}), grid)
+    per_point = [default_params(c, algo.islands) for c in configs]
+    # The exact optimum of each point's own fitness, once per distinct weight set (points
+    # may sweep the weights).
+    fit_keys = [(m, tuple(sorted(w.items()))) for m, w in map(fitness_weights, configs)]
+    fit_opts = {k: fitness_optimum(grid, k[0], **dict(k[1])) for k in dict.fromkeys(fit_keys)}
+    point_opt = [fit_opts[k] for k in fit_keys]
+    n_points = len(configs)
+    seed_arr = seed_list(seeds, lambda n: check_result_memory(n * n_points, algo))
+    n_seeds = len(seed_arr)
+    n_runs = n_seeds * n_points
+    # Runs padded (copies of the last run) to a multiple of processes x local devices;
+    # this process computes its contiguous share and allgather_runs joins the shares.
+    n_total, share = parallel.run_share(n_runs)
+    pad = n_total - n_runs
+    run_seeds = np.concatenate([np.tile(seed_arr, n_points),
+                                np.repeat(seed_arr[-1:], pad)])[share]
+    params = stack_params(per_point, n_seeds)
+    if pad:
+        params = {k: jnp.concatenate([v, jnp.repeat(v[-1:], pad, axis=0)])
+                  for k, v in params.items()}
+    params = {k: v[share] for k, v in params.items()}
+    keys = jax.vmap(jax.random.PRNGKey)(jnp.asarray(run_seeds, jnp.uint32))
+    sh, rep = seed_sharding()
+    if sh is not None:
+        keys, params = jax.device_put((keys, params), sh)
+        grid = jax.device_put(grid, rep)
+
+    def report(stage: str, frac: float) -> None:
+        if progress is not None:
+            progress(stage, frac)
+
+    sizes = equal_chunks(algo.generations, chunks)
+    report("compile", 0.0)
+    t0 = time.perf_counter()
+    token = COMPILE_PROGRESS.set(lambda frac: report("compile", frac))
+    try:
+        progs = compiled_programs(algo, shape_spec(grid), tuple(sorted(shape_spec(params).items())),
+                          len(run_seeds), sizes, jax.local_device_count())
+    finally:
+        COMPILE_PROGRESS.reset(token)
+    compile_s = time.perf_counter() - t0
+
+    t0 = time.perf_counter()
+    state, init_rate, unfilled, fallback = jax.block_until_ready(
+        progs.init(keys, grid, params))
+    init_s = time.perf_counter() - t0
+    init_best = state.best_fitness
+    # Every process's initial best, so that all of them decide alike whether to evolve.
+    started, init_rate, unfilled, fallback = parallel.allgather_runs(
+        (init_best > 0, init_rate, unfilled, fallback))
+    rate = init_rate.reshape(n_total, -1).mean(axis=1)
+    unf = unfilled.reshape(n_total, -1).sum(axis=1)
+    from_fallback = fallback.reshape(n_total, -1).sum(axis=1)
+    warn_unfilled(unf, rate, algo.population * algo.islands, config)
+    common = dict(config=config, configs=configs, points=points, map_name=map_name,
+                  grid=grid, seed_arr=seed_arr, algo=algo, octile=octile,
+                  any_angle=any_angle, point_opt=point_opt, rate=rate, unfilled=unf,
+                  from_fallback=from_fallback)
+    if not started.any():  # nothing can succeed: no evolution, no post-optimisation
+        report("compile", 1.0)
+        timing = {"compile_s": compile_s, "init_s": init_s, "evolve_s": 0.0,
+                  "post_s": 0.0, "total_s": time.perf_counter() - t_start}
+        return unstarted_results(timing=timing, **common)
+
+    t0 = time.perf_counter()
+    progs.compile_rest(lambda frac: report("compile", frac))
+    compile_s += time.perf_counter() - t0
+    report("compile", 1.0)
+
+    t0 = time.perf_counter()
+    hists = []
+    done = 0
+    for n in sizes:
+        state, h = progs.evolve[n](keys, grid, params, state)
+        jax.block_until_ready(state)
+        hists.append(h)
+        done += n
+        report("evolve", done / algo.generations)
+    history = {k: jnp.concatenate([h[k] for h in hists], axis=1) for k in hists[0]}
+    evolve_s = time.perf_counter() - t0
+
+    t0 = time.perf_counter()
+    out = jax.block_until_ready(progs.finish(grid, params, state, history, init_best))
+    post_s = time.perf_counter() - t0
+    timing = {"compile_s": compile_s, "init_s": init_s, "evolve_s": evolve_s,
+              "post_s": post_s, "total_s": time.perf_counter() - t_start}
+
+    host, hist = parallel.allgather_runs((out, history))
+    timing["total_s"] = time.perf_counter() - t_start
+    n_seeds = len(seed_arr)
+    results = []
+    for q, cfg in enumerate(configs):
+        sl = slice(q * n_seeds, (q + 1) * n_seeds)
+        h = jax.tree_util.tree_map(lambda a, sl=sl: a[sl], host)
+        success = h["success"] & h["feasible_post"]
+        causes = failure_causes(success, started[sl], rate[sl], from_fallback[sl], config,
+                         algo.capacity, len(octile.path))
+        results.append(Result(
+            preset=config["name"], map_name=map_name, corner_rule=grid.corner_rule,
+            seeds=seed_arr, success=success, reason=failure_reason(causes),
+            cells=h["cells"], n_cells=h["length"],
+            raw_cells=h["raw_cells"], raw_n_cells=h["raw_length"],
+            length=h["path_length"].astype(float),
+            raw_length=h["raw_path_length"].astype(float),
+            fitness=h["fitness"].astype(float),
+            convergence_generation=h["convergence_generation"],
+            history={k: v[sl] for k, v in hist.items()},
+            metrics=h["metrics"], raw_metrics=h["raw_metrics"], failures=h["failures"],
+            init_success_rate=rate[sl], init_unfilled=unf[sl],
+            optimum=float(octile.length), any_angle_optimum=float(any_angle.length),
+            timing=dict(timing), population=int(cfg["population.size"]) * algo.islands,
+            generations=algo.generations, width=grid.width, config=cfg,
+            point={k.replace("__", "."): v for k, v in points[q].items()},
+            fitness_optimum=point_opt[q].fitness,
+            fitness_optimum_length=point_opt[q].length,
+            fitness_optimum_loop_free=point_opt[q].loop_free,
+            fitness_optimum_reason="" if point_opt[q].found else point_opt[q].reason,
+            start=grid.start_xy, goal=grid.goal_xy, population_capacity=algo.population,
+            init_fallback=from_fallback[sl], causes=causes, path_capacity=algo.capacity,
+        ))
+    return results
+
+
+
+
+@functools.lru_cache(maxsize=32)
+def _optima_cached(digest: bytes, shape: tuple[int, int], blocked: bytes, start: tuple,
+                   goal: tuple, corner_rule: str):
+    from jaxga.reference.optima import any_angle_shortest_path_np, shortest_path_np
+
+    del digest  # the cache key; the arguments are the data
+    b = np.frombuffer(blocked, dtype=bool).reshape(shape)
+    octile = shortest_path_np(b, start, goal, corner_rule)
+    if not octile.found:
+        return octile, None
+    return octile, any_angle_shortest_path_np(b, start, goal, corner_rule)
+
+
+def _optima(grid: Grid):
+    """``(8-connected optimum, any-angle optimum)`` of the grid's problem (jaxga.reference.optima;
+    the any-angle one None when the goal is unreachable), cached for the last 32
+    problems: comparing presets or repeating runs on one problem computes them once
+    (the any-angle optimum of a long problem on a 256 x 256 map takes seconds:
+    decision 015)."""
+    import hashlib
+
+    b = np.ascontiguousarray(grid.blocked_np())
+    raw = b.tobytes()
+    key = (b.shape, grid.start_xy, grid.goal_xy, grid.corner_rule)
+    digest = hashlib.blake2b(raw + repr(key).encode(), digest_size=16).digest()
+    return _optima_cached(digest, b.shape, raw, *key[1:])
+
+
+def checked_capacity(configs: Sequence[Config], requested: Any) -> int:
+    """Individuals per island of the compiled program: ``requested``, checked, or the
+    largest ``population.size`` of the points."""
+    capacity = max(int(c["population.size"]) for c in configs)
+    if requested is None:
+        return capacity
+    try:  # 9.7 is not truncated
+        requested = as_integer(requested)
+    except TypeError:
+        raise ParameterError(f"population_capacity must be an integer, got "
+                             f"{requested!r}") from None
+    if requested < capacity:
+        raise ParameterError(f"population_capacity {requested} is below the largest "
+                             f"population.size ({capacity})")
+    return requested
+
+
+def run(
+    preset: str | Config,
+    grid: Grid | MapInfo | str,
+    seeds: int | Sequence[int] = 1,
+    *,
+    generations: int | None = None,
+    corner_rule: str | None = None,
+    variant: str | None = None,
+    sets: Sequence[str] = (),
+    progress: Callable[[str, float], None] | None = None,
+    chunks: int = 1,
+    population_capacity: int | None = None,
+    **overrides: Any,
+) -> Result:
+    """Run ``preset`` on ``grid`` once per seed, all seeds in one compiled call.
+
+    Args:
+        preset: a preset name (``jaxga presets``), a TOML file, or a :class:`Config`.
+        grid: a :class:`Grid`, a map file or a built-in map name, or a
+            :class:`jaxga.maps.MapInfo` (``load_map_info(name, start=..., goal=...)``:
+            other endpoints, and the results keep the map's name where a Grid is "grid").
+            A map given by name is loaded with ``corner_rule`` or else the preset's
+            ``map.corner_rule``; a Grid or MapInfo keeps its own unless ``corner_rule`` is
+            given.
+        seeds: a count ``N`` (seeds ``0..N-1``) or explicit integer seeds in
+            ``[0, 2**32)``, each once (a repeated seed would repeat its run exactly: a
+            pseudo-replicate; refused). Seed ``s`` always gives the same run, whatever
+            other seeds run with it and on however many devices. A call whose results
+            would need more than half the machine's memory is refused
+            (:class:`ParameterError`).
+        generations: overrides the preset's generation count.
+        overrides: configuration keys with ``.`` written as ``__`` (e.g.
+            ``crossover__probability=0.7``), or ``sets=("crossover.probability=0.7",)``.
+        progress: optional callback ``(stage, fraction)``: ``("compile", 0.0)``, the
+            compilation's progress (after the tracing and after each compiled program,
+            when the programs are not compiled yet), ``("compile", 1.0)``, then
+            ``("evolve", f)`` after each chunk of generations. With ``chunks > 1`` the
+            generations run in up to that many compiled chunks of one size
+            (:func:`equal_chunks`; same result) for a progress bar.
+        population_capacity: individuals per island that the compiled program holds
+            (default ``population.size``; not the configuration key
+            ``population.capacity``, the cells a path can hold); the random numbers of a
+            run depend on it. A
+            point of a :func:`sweep` or a DOE over population sizes ran with the largest
+            size swept as its capacity (``Result.population_capacity``): pass that to
+            repeat its runs bit for bit.
+
+    Returns:
+        A :class:`Result`. Seeds that found no feasible path have ``success`` False and
+        are never reported with a path. An unreachable goal gives all seeds
+        ``success = False`` and ``reason`` naming the cause (nothing is run).
+
+    The compiled programs are cached per algorithm, map shape and run count: calling
+    again with other seeds of the same count, another map of the same size or other
+    dynamic values (``crossover__probability=...``) does not compile again. For many
+    hyper-parameter values in one call use :func:`sweep`.
+    """
+    return sweep(preset, grid, [{}], seeds, generations=generations,
+                 corner_rule=corner_rule, variant=variant, sets=sets, progress=progress,
+                 chunks=chunks, population_capacity=population_capacity, **overrides)[0]
+
+
+RUN_OPTIONS = ("generations", "corner_rule", "variant", "sets", "progress", "chunks",
+               "population_capacity")
+"""Keyword arguments of :func:`run` (besides ``seeds``) that are not configuration keys."""
+
+
+def check_run(preset: str | Config, grid: Grid | str, **options: Any) -> Config:
+    """The configuration :func:`run` would use with these keyword ``options`` (all of
+    :func:`run`'s but ``seeds``), checked as :func:`run` checks it before compiling
+    (preset, map, endpoints, overrides that nothing reads, key combinations, migrants);
+    raises what :func:`run` would raise. Compiles and runs nothing: :func:`jaxga.compare`
+    checks every preset with it before the first one runs."""
+    overrides = dict(options)
+    named = {k: overrides.pop(k) for k in RUN_OPTIONS if k in overrides}
+    _check_call_options(named.get("progress"), named.get("chunks", 1))
+    config, grid, _ = load_problem(preset, grid, named.get("corner_rule"), named.get("variant"),
+                            named.get("sets", ()), overrides, named.get("generations"))
+    (config,) = _point_configs(config, [{}])
+    checked_capacity([config], named.get("population_capacity"))
+    build(config, grid)  # check_migration and check_combination
+    return config
+
+
+
+
+
+
+
+
+
+
+
+
+
+
+
+
+
+
+
+
+
+
+
+

@@ -1,0 +1,259 @@
+"""Algorithm configurations: a validated, flat ``section.key -> value`` mapping.
+
+A configuration says which operator fills each stage of the GA and with which
+parameters (SPEC 4-10). Presets (``presets/*.toml``, one per paper) are configurations;
+a user TOML file or ``--set key=value`` overrides any field. Every key is declared in
+:data:`SCHEMA` with its type, allowed values or range and a one-line meaning: unknown
+keys and out-of-range values are rejected with a message that names the key.
+
+Keys marked *dynamic* never change array shapes (probabilities, weights, temperatures):
+a sweep over them is one compiled call (``jax.vmap``). The others are *static*: they
+choose operators or sizes and are compiled in.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import math
+import re
+import sys
+from collections.abc import Iterable, Iterator, Mapping
+from pathlib import Path
+from typing import Any
+
+from jaxga.config import registry
+from jaxga.config.fields import Field, P, python_scalar
+from jaxga.config.registry import MethodField
+from jaxga.core.errors import ParameterError
+from jaxga.core.grid import CORNER_RULES
+
+if sys.version_info >= (3, 11):
+    import tomllib
+else:  # pragma: no cover
+    import tomli as tomllib
+
+__all__ = ["DEFAULTS", "REQUIRED", "SCHEMA", "Config", "Field", "flatten", "load_toml",
+           "parse_value", "python_scalar"]
+
+FALLBACKS = (*(op.name for op in registry.operators("init")
+               if registry.NEVER_FAILS in op.traits), "none")
+"""``init.fallback``: an initialiser that cannot fail where a path exists, or none."""
+REPAIR_FALLBACKS = ("none", "field")
+TOPOLOGIES = ("none", "ring", "star", "full", "mpmga")
+
+COMMON_FIELDS: dict[str, Field] = {
+    "name": Field(str, "preset name"),
+    "paper": Field(str, "the paper the preset reproduces"),
+    "description": Field(str, "one line on the algorithm"),
+    "map.corner_rule": Field(str, "corner rule of SPEC 1 used unless the run names one",
+                             choices=CORNER_RULES),
+    "population.size": Field(int, "individuals per population (per island)", low=2, high=100_000),
+    "population.capacity": Field(int, "path capacity L: cells a path can hold (not a "
+                                 "number of individuals); 0 = automatic from the map size",
+                                 low=0, high=1_000_000),
+    "generations": Field(int, "generations per run", low=1, high=1_000_000),
+    "init.method": MethodField("init", "initialiser (SPEC 4)"),
+    "init.max_tries": Field(int, "redraws of a failed individual", low=1, high=10_000),
+    "init.fallback": Field(str, "initialiser that fills the slots init.method left empty "
+                           "after init.max_tries attempts ('none': the paper's initialiser "
+                           "alone)", choices=FALLBACKS),
+    "repair.fallback": Field(str, "'field': a repair that does not close (median insertion "
+                             "of the initialisers, the column crossover and the segment "
+                             "mutation; the range mutation's walk) connects down the exact "
+                             "distance field instead of failing ('none': the papers' "
+                             "failure)", choices=REPAIR_FALLBACKS),
+    "fitness.method": MethodField("fitness", "fitness combiner (SPEC 3)"),
+    "fitness.window": Field(bool, "evaluate grid paths on a narrow window when all fit "
+                            "(same results; faster where paths stay short, 1-2 s more "
+                            "compile)"),
+    "selection.method": MethodField("selection", "selection (SPEC 5)"),
+    "crossover.method": MethodField("crossover", "crossover (SPEC 6)"),
+    "crossover.probability": Field(**P, doc="crossover probability pc per pair"),
+    "crossover.adaptive": Field(bool, "AGACD adaptive pc (eq. 26-27)"),
+    "crossover.pc_low": Field(**P, doc="AGACD pc_low"),
+    "crossover.pc_high": Field(**P, doc="AGACD pc_high"),
+    "mutation.method": MethodField("mutation", "mutation (SPEC 7)"),
+    "mutation.probability": Field(**P, doc="mutation probability pm per individual"),
+    "mutation.adaptive": Field(bool, "AGACD adaptive pm (eq. 28-29)"),
+    "mutation.pm_low": Field(**P, doc="AGACD pm_low"),
+    "mutation.pm_high": Field(**P, doc="AGACD pm_high"),
+    "simplify.method": MethodField("simplify", "per-generation simplification (SPEC 9)"),
+    "simplify.probability": Field(**P, doc="simplification probability ps per individual"),
+    "post.method": MethodField("post", "post-optimisation of the final best (SPEC 9)"),
+    "termination.stagnation": Field(int, "IMGA: stop after K generations without improvement; "
+                                    "0 = never", low=0, high=1_000_000),
+    "islands.count": Field(int, "number of islands (1 = single population)", low=1, high=1024),
+    "islands.topology": Field(str, "migration topology (SPEC 8)", choices=TOPOLOGIES),
+    "islands.interval": Field(int, "generations between migrations", low=1, high=1_000_000),
+    "islands.migrants": Field(int, "migrants per island and migration", low=0, high=100_000),
+    "islands.crossover_probabilities": Field(list, "per-island pc (MPMGA A, B, C)"),
+    "islands.mutation_probabilities": Field(list, "per-island pm (MPMGA A, B, C)"),
+}
+
+COMMON_DEFAULTS: dict[str, Any] = {
+    "description": "",
+    "map.corner_rule": "strict",
+    "population.capacity": 0,
+    "init.max_tries": 20,
+    "init.fallback": "field_walk",
+    "repair.fallback": "none",
+    "fitness.window": True,
+    "crossover.adaptive": False,
+    "mutation.adaptive": False,
+    "simplify.method": "none",
+    "simplify.probability": 0.0,
+    "post.method": "none",
+    "termination.stagnation": 0,
+    "islands.count": 1,
+    "islands.topology": "none",
+    "islands.interval": 1,
+    "islands.migrants": 0,
+}
+
+
+
+class _WithOperators(Mapping):
+    """A read-only mapping: ``common`` and what the registered operators add
+    (``part(field)`` of each of their keys, None left out), rebuilt when the registry
+    changes, so operators registered after import are part of it."""
+
+    def __init__(self, common: dict[str, Any], part) -> None:
+        self._common, self._part, self._version, self._merged = common, part, -1, {}
+
+    def _get(self) -> dict[str, Any]:
+        if self._version != registry.version():
+            merged = dict(self._common)
+            for key, field in registry.schema_fields().items():
+                value = self._part(field)
+                if value is not None:
+                    merged[key] = value
+            self._merged, self._version = merged, registry.version()
+        return self._merged
+
+    def __getitem__(self, key: str) -> Any:
+        return self._get()[key]
+
+    def __iter__(self) -> Iterator[str]:
+        return iter(self._get())
+
+    def __len__(self) -> int:
+        return len(self._get())
+
+    def __repr__(self) -> str:
+        return repr(self._get())
+
+
+SCHEMA: Mapping[str, Field] = _WithOperators(COMMON_FIELDS, lambda field: field)
+"""Every configuration key with its :class:`~jaxga.config.fields.Field`: the keys of the run,
+the families' and the islands' (:data:`COMMON_FIELDS`) and the keys the registered
+operators declare (:func:`jaxga.config.registry.schema_fields`)."""
+
+DEFAULTS: Mapping[str, Any] = _WithOperators(COMMON_DEFAULTS, lambda field: field.default)
+"""The value of every key a configuration may leave out: :data:`COMMON_DEFAULTS` and
+the defaults of the operators' keys."""
+
+REQUIRED = ("name", "population.size", "generations", "init.method", "fitness.method",
+            "selection.method", "crossover.method", "mutation.method")
+
+
+def flatten(table: Mapping[str, Any], prefix: str = "") -> dict[str, Any]:
+    """``{"a": {"b": 1}} -> {"a.b": 1}`` (TOML tables to dotted keys)."""
+    out: dict[str, Any] = {}
+    for k, v in table.items():
+        key = f"{prefix}{k}"
+        if isinstance(v, Mapping):
+            out.update(flatten(v, key + "."))
+        else:
+            out[key] = v
+    return out
+
+
+_LOOSE_NUMBER = re.compile(r"[+-]?(\d+\.\d*|\.\d+)([eE][+-]?\d+)?")
+"""Decimal numbers that TOML refuses but nobody reads as words: ``.5``, ``5.``."""
+
+
+def parse_value(text: str) -> Any:
+    """A ``--set`` value: TOML syntax (``0.7``, ``true``, ``"ring"``, ``[0.9, 0.6]``), a
+    decimal number TOML refuses (``.5``, ``5.``), or a bare word taken as a string."""
+    try:
+        return tomllib.loads(f"v = {text}")["v"]
+    except tomllib.TOMLDecodeError:
+        return float(text) if _LOOSE_NUMBER.fullmatch(text.strip()) else text
+
+
+@dataclasses.dataclass(frozen=True)
+class Config:
+    """A validated configuration (immutable, hashable, so it can be a static jit argument)."""
+
+    items: tuple[tuple[str, Any], ...]
+
+    @classmethod
+    def from_mapping(cls, values: Mapping[str, Any]) -> Config:
+        """Validate dotted keys (unknown keys, types, ranges, required keys)."""
+        merged = dict(DEFAULTS)
+        for key, value in values.items():
+            if key not in SCHEMA:
+                near = [k for k in SCHEMA if k.split(".")[-1] == key.split(".")[-1]]
+                hint = f" (did you mean {', '.join(near)}?)" if near else ""
+                raise ParameterError(f"unknown configuration key {key!r}{hint}")
+            merged[key] = SCHEMA[key].check(key, value)
+        missing = [k for k in REQUIRED if k not in merged]
+        if missing:
+            raise ParameterError(f"configuration is missing {', '.join(missing)}")
+        for key in ("fitness.importance_ratios", "islands.crossover_probabilities",
+                    "islands.mutation_probabilities"):
+            if key in merged:
+                _check_number_list(key, merged[key], positive=key.startswith("fitness"))
+        return cls(tuple(sorted((k, freeze(v)) for k, v in merged.items())))
+
+    def __getitem__(self, key: str) -> Any:
+        for k, v in self.items:
+            if k == key:
+                return v
+        raise KeyError(key)
+
+    def get(self, key: str, default: Any = None) -> Any:
+        try:
+            return self[key]
+        except KeyError:
+            return default
+
+    def as_dict(self) -> dict[str, Any]:
+        return {k: (list(v) if isinstance(v, tuple) else v) for k, v in self.items}
+
+    def override(self, changes: Mapping[str, Any]) -> Config:
+        """A new configuration with some keys replaced (validated)."""
+        d = self.as_dict()
+        d.update(changes)
+        return Config.from_mapping(d)
+
+    def dynamic(self) -> dict[str, Any]:
+        """The keys that may be swept without recompilation, with their values."""
+        return {k: v for k, v in self.items if SCHEMA[k].dynamic}
+
+
+def freeze(v: Any) -> Any:
+    """A configuration value in hashable form: lists become tuples."""
+    return tuple(v) if isinstance(v, list) else v
+
+
+def _check_number_list(key: str, value: Iterable, positive: bool) -> None:
+    for x in value:
+        if isinstance(x, bool) or not isinstance(x, (int, float)) or not math.isfinite(x):
+            raise ParameterError(f"{key} must be a list of numbers, got {list(value)!r}")
+        if positive and x <= 0:
+            raise ParameterError(f"{key} entries must be > 0, got {list(value)!r}")
+        if not positive and not 0 <= x <= 1:
+            raise ParameterError(f"{key} entries must be probabilities in [0, 1]")
+
+
+def load_toml(path: str | Path) -> dict[str, Any]:
+    """Read a TOML file into dotted keys; a clear error for a missing or malformed file."""
+    p = Path(path)
+    try:
+        with p.open("rb") as f:
+            return flatten(tomllib.load(f))
+    except FileNotFoundError:
+        raise ParameterError(f"configuration file not found: {p}") from None
+    except tomllib.TOMLDecodeError as e:
+        raise ParameterError(f"{p}: malformed TOML: {e}") from None

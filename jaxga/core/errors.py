@@ -1,0 +1,42 @@
+"""Exceptions raised for bad input.
+
+Every error a user can cause (a malformed map file, a start or goal that is blocked or off
+the map, an unreachable goal, an invalid parameter) is a subclass of :class:`JaxgaError`,
+so callers - and the command line, which turns them into a one-line message and a
+non-zero exit - can tell them from bugs.
+"""
+
+from __future__ import annotations
+
+
+class JaxgaError(ValueError):
+    """Base class of every error caused by bad input to jaxga."""
+
+
+class MapFormatError(JaxgaError):
+    """A map or scenario file is missing, unreadable or malformed."""
+
+
+class EndpointError(JaxgaError):
+    """A start or goal cell is off the map or blocked."""
+
+
+class NoPathError(JaxgaError):
+    """The goal cannot be reached from the start under the grid's corner rule."""
+
+
+class ParameterError(JaxgaError):
+    """A parameter is unknown, of the wrong type or out of range."""
+
+
+class InitialisationWarning(UserWarning):
+    """The initialiser filled only part of a population within its budget of attempts.
+
+    :func:`jaxga.operators.init.initialise` then fills the empty slots with copies of the
+    individuals it made, so the run still works, on fewer distinct individuals than asked for.
+    """
+
+
+class DeviceWarning(RuntimeWarning):
+    """A device count asked for cannot take effect (JAX already runs with another):
+    the results are the same, only the speed differs (:mod:`jaxga.api.parallel`)."""

@@ -1,0 +1,165 @@
+"""The static algorithm and the dynamic parameters of a configuration (SPEC 10).
+
+:class:`Algorithm` is what is compiled in (operators, sizes, flags: a hashable ``jit``
+argument); the dynamic parameters (probabilities, weights, temperatures, the active
+population size) are a pytree, so configurations that differ only in them share one
+program. The path capacity is chosen here when the configuration leaves it at 0.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+from typing import Any
+
+import jax
+import jax.numpy as jnp
+
+from jaxga.config import registry
+from jaxga.config.schema import SCHEMA, Config
+from jaxga.core.errors import ParameterError
+from jaxga.core.grid import Grid
+from jaxga.engine.checks import (
+    PER_ISLAND,
+    check_combination,
+    check_migration,
+    chosen_operators,
+    uses_waypoints,
+)
+
+F32 = jnp.float32
+
+
+I32 = jnp.int32
+
+
+FITNESS_PARAMS: dict[str, tuple[str, ...]] = {
+    op.name: tuple(key.split(".", 1)[1] for key, field in op.params.items() if field.dynamic)
+    for op in registry.operators("fitness")
+}
+"""Each fitness combiner's weights: ``fitness.NAME`` keys that are keywords of its
+objective in :mod:`jaxga.core.objectives` (from the registry; AGACD's Delphi ratios become its
+``weights``)."""
+
+
+FITNESS_DEFAULTS: dict[str, dict[str, float]] = {
+    m: {k: registry.objective_default(m, k) for k in names}
+    for m, names in FITNESS_PARAMS.items()
+}
+"""Each combiner's parameters and their defaults, read from :mod:`jaxga.core.objectives` (the
+papers' values, SPEC 3), so that the two cannot drift apart: what a parameter the
+configuration leaves out is."""
+
+
+@dataclasses.dataclass(frozen=True)
+class Algorithm:
+    """The static part of a GA: which operators, which sizes (a hashable jit argument)."""
+
+    config: Config
+    population: int
+    capacity: int
+    generations: int
+    islands: int
+    waypoints: bool
+
+    def get(self, key: str, default: Any = None) -> Any:
+        return self.config.get(key, default)
+
+
+CAPACITY_FACTOR = 3
+"""The automatic path capacity holds this many times the optimal path's cells."""
+
+
+SMALL_MAP_CAPACITY = 160
+"""The automatic capacity is at least ``min(4 * (H + W), 160)`` cells: the ``4 * (H + W)``
+the papers' 20 x 20 maps have always had (so that their reproductions are unchanged;
+their random walks and connections need the room), for maps up to that size."""
+
+
+def capacity_class(cells: int) -> int:
+    """The smallest size class ``2**k * (1, 1.25, 1.5 or 1.75)`` (at least 8) holding
+    ``cells``: problems of similar size share compiled programs."""
+    cells = max(int(cells), 8)
+    k = max(cells.bit_length() - 3, 0)
+    step = 1 << k  # a quarter of the power of two below cells
+    return -(-cells // step) * step
+
+
+def default_capacity(grid: Grid) -> int:
+    """Path capacity used when the configuration says 0 (``population.capacity``).
+
+    ``CAPACITY_FACTOR`` (3) times the cells of an optimal path, bounded by the free cells
+    the start can reach (no loop-free path holds more), rounded up to a size class
+    (:func:`capacity_class`), and at least ``min(4 * (H + W), 160)``
+    (:data:`SMALL_MAP_CAPACITY`). The 400-cell optimum of a 65 x 65 maze gets 1280 cells,
+    a 30-cell optimum on a 256 x 256 map 160. A path that would not fit is a counted
+    failure of the operator that made it (never truncated). Computed on the host from
+    the exact distance fields (:func:`jaxga.operators.guide.problem_facts`); an unreachable goal
+    gets the minimum (decision 020).
+    """
+    from jaxga.operators.guide import problem_facts
+
+    floor = min(4 * (grid.height + grid.width), SMALL_MAP_CAPACITY)
+    facts = problem_facts(grid)
+    if not facts.reachable:
+        return floor
+    need = min(CAPACITY_FACTOR * facts.optimal_cells, facts.reachable_cells)
+    return max(floor, capacity_class(need))
+
+
+def build(config: Config, grid: Grid) -> tuple[Algorithm, dict]:
+    """The static :class:`Algorithm` and the dynamic parameter pytree of a configuration.
+
+    The population capacity is ``population.size`` (a sweep over sizes builds with its
+    largest size; the ``active`` parameter then says how many are used).
+    """
+    cap_p = int(config["population.size"])
+    capacity = int(config["population.capacity"]) or default_capacity(grid)
+    islands = int(config["islands.count"])
+    check_migration(config, cap_p)
+    algo = Algorithm(
+        config=static_config(config),
+        population=cap_p,
+        capacity=capacity,
+        generations=int(config["generations"]),
+        islands=islands,
+        waypoints=uses_waypoints(config),
+    )
+    return algo, default_params(config, islands)
+
+
+NON_STRUCTURAL = ("name", "paper", "description", "population.size")
+"""Keys that never enter the compiled program (metadata; the size is ``active``)."""
+
+
+def static_config(config: Config) -> Config:
+    """The part of a configuration that is compiled in: operators, sizes, flags.
+
+    Dynamic values (probabilities, weights, temperatures) and metadata are left out, so
+    two configurations that differ only in them share one compiled program.
+    """
+    return Config(tuple((k, v) for k, v in config.items
+                        if not SCHEMA[k].dynamic and k not in NON_STRUCTURAL))
+
+
+def default_params(config: Config, islands: int = 1) -> dict[str, jax.Array]:
+    """Dynamic parameters (float32 scalars, or ``[islands]`` arrays for per-island rates).
+
+    Checks the configuration's combinations first (:func:`check_combination`)."""
+    check_combination(config)
+    params: dict[str, jax.Array] = {
+        k: jnp.asarray(v, F32) for k, v in config.dynamic().items()
+    }
+    params["population.active"] = jnp.asarray(config["population.size"], I32)
+    for op in chosen_operators(config).values():
+        if op.prepare is not None:
+            params.update(op.prepare(config))
+    for key, island_key in PER_ISLAND.items():
+        per_island = config.get(island_key)
+        if per_island is not None:
+            if len(per_island) != islands:
+                raise ParameterError(
+                    f"{island_key} has {len(per_island)} entries for {islands} islands "
+                    f"(islands.count): give one rate per island")
+            params[key] = jnp.asarray(per_island, F32)
+    return params
+

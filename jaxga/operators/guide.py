@@ -1,0 +1,159 @@
+"""Exact distance fields of a problem: what steers the field initialiser and the repairs.
+
+Beyond the papers (SPEC 12, "a path on every map"). The papers' initialisers search
+blindly: random walks, medians, greedy steps towards random targets. On a maze, an
+office or a 256 x 256 city map they rarely reach the goal, and a population that
+starts with no path has nothing to evolve. The exact 8-connected distance from every
+cell to the goal (and from the start), under the grid's corner rule, removes the
+guesswork: from any reachable cell some legal move lowers the distance to the goal by
+exactly its own length, so a walk that only takes moves towards the goal cannot get
+stuck (:func:`jaxga.operators.init.field_walk`; decision 018).
+
+The fields are computed once per problem on the host with SciPy's Dijkstra
+(:func:`scipy.sparse.csgraph.dijkstra`) over the legal-move graph of
+:func:`jaxga.maps.preprocess.legal_moves` (step cost 1, diagonal ``sqrt(2)``), and
+carried to the device as a :class:`Guide` attached to the :class:`~jaxga.core.grid.Grid`
+(:func:`with_guide`), so that every compiled program that receives the grid can read
+them. A move graph is symmetric under every corner rule (a move and its reverse pass
+the same side cells), so the distance *from* the start is also the distance *to* it.
+
+:func:`problem_facts` gives the host-side numbers a run needs before it compiles: the
+optimal length and cell count (for the automatic path capacity) and the size of the
+start's connected region (no loop-free path holds more cells).
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import functools
+import hashlib
+import math
+
+import jax
+import jax.numpy as jnp
+import numpy as np
+
+from jaxga.core.grid import DIRECTIONS, Grid
+
+__all__ = ["Guide", "ProblemFacts", "distance_fields", "problem_facts", "with_guide"]
+
+SQRT2 = math.sqrt(2.0)
+
+
+@jax.tree_util.register_dataclass
+@dataclasses.dataclass(frozen=True)
+class Guide:
+    """The exact distance fields of one problem (flat, index ``y * W + x``).
+
+    Attributes:
+        to_goal: ``float32[H * W]``, the 8-connected distance from each cell to the goal
+            under the grid's corner rule; ``inf`` for blocked cells and cells that cannot
+            reach the goal.
+        from_start: ``float32[H * W]``, the same from the start.
+    """
+
+    to_goal: jax.Array
+    from_start: jax.Array
+
+
+@dataclasses.dataclass(frozen=True)
+class ProblemFacts:
+    """Host-side facts of a start-goal problem (from the exact fields).
+
+    Attributes:
+        reachable: whether the goal can be reached from the start.
+        optimal_length: the 8-connected optimum (``inf`` when unreachable).
+        optimal_cells: cells of an optimal path (every optimal path has as many: its
+            length ``a + b sqrt(2)`` fixes the numbers of straight and diagonal steps);
+            0 when unreachable.
+        reachable_cells: free cells connected to the start (the start included): no
+            loop-free path holds more.
+    """
+
+    reachable: bool
+    optimal_length: float
+    optimal_cells: int
+    reachable_cells: int
+
+
+def _move_graph(blocked: np.ndarray, corner_rule: str):
+    """The legal-move graph as a SciPy CSR matrix (edge weight = step length)."""
+    from scipy.sparse import csr_matrix
+
+    from jaxga.maps.preprocess import legal_moves
+
+    h, w = blocked.shape
+    legal = legal_moves(blocked, corner_rule).reshape(len(DIRECTIONS), -1)
+    rows, cols, costs = [], [], []
+    for d, (dx, dy) in enumerate(DIRECTIONS.tolist()):
+        p = np.flatnonzero(legal[d])
+        rows.append(p)
+        cols.append(p + (dy * w + dx))
+        costs.append(np.full(p.size, SQRT2 if dx and dy else 1.0))
+    n = h * w
+    return csr_matrix((np.concatenate(costs), (np.concatenate(rows), np.concatenate(cols))),
+                      shape=(n, n))
+
+
+@functools.lru_cache(maxsize=4)
+def _fields_cached(key: bytes, shape: tuple[int, int], corner_rule: str, start: int,
+                   goal: int, blocked_bytes: bytes) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    del key  # the cache key (a digest of the arguments); the arguments are the data
+    from scipy.sparse.csgraph import dijkstra
+
+    blocked = np.frombuffer(blocked_bytes, dtype=bool).reshape(shape)
+    graph = _move_graph(blocked, corner_rule)
+    dist, pred = dijkstra(graph, directed=True, indices=[goal, start],
+                          return_predecessors=True)
+    # A blocked endpoint reaches nothing (Dijkstra would still give it distance 0).
+    for row, cell in ((0, goal), (1, start)):
+        if blocked.reshape(-1)[cell]:
+            dist[row] = np.inf
+    return dist[0], dist[1], pred[0]
+
+
+def distance_fields(grid: Grid) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """``(to_goal, from_start, predecessor)``: float64 ``[H * W]`` exact distance fields
+    and, for each cell, its next cell on a shortest path to the goal (-9999 where none),
+    under ``grid.corner_rule``. Cached per map, endpoints and corner rule (the last 4:
+    about 5.5 MB each at 512 x 512)."""
+    b = np.ascontiguousarray(grid.blocked_np())
+    raw = b.tobytes()
+    start, goal = int(grid.start), int(grid.goal)
+    digest = hashlib.blake2b(raw + repr((b.shape, grid.corner_rule, start, goal)).encode(),
+                             digest_size=16).digest()
+    return _fields_cached(digest, b.shape, grid.corner_rule, start, goal, raw)
+
+
+def with_guide(grid: Grid) -> Grid:
+    """``grid`` with its :class:`Guide` attached (``grid.guide``), computed on the host.
+
+    Every function that steers by the fields (:func:`jaxga.operators.init.field_walk`, the
+    fallback of :func:`jaxga.operators.init.initialise`, the field connection of the repairs)
+    reads ``grid.guide``. The guide belongs to the grid's map, endpoints and corner rule:
+    :meth:`Grid.replace` drops it, so a grid with other endpoints gets its own. (A grid
+    changed with ``dataclasses.replace`` keeps a stale guide: its field walks then head
+    for the old goal, and :func:`jaxga.operators.init.initialise` counts them as failures, never
+    as paths.)
+    """
+    if grid.guide is not None:
+        return grid
+    to_goal, from_start, _ = distance_fields(grid)
+    guide = Guide(to_goal=jnp.asarray(to_goal, jnp.float32),
+                  from_start=jnp.asarray(from_start, jnp.float32))
+    return dataclasses.replace(grid, guide=guide)
+
+
+def problem_facts(grid: Grid) -> ProblemFacts:
+    """The optimal length and cell count and the start's region size (see
+    :class:`ProblemFacts`), from the exact fields of :func:`distance_fields`."""
+    to_goal, from_start, pred = distance_fields(grid)
+    start, goal = int(grid.start), int(grid.goal)
+    region = int(np.sum(np.isfinite(from_start)))
+    if not np.isfinite(to_goal[start]):
+        return ProblemFacts(False, math.inf, 0, region)
+    cells, p = 1, start
+    while p != goal:  # follow the shortest-path tree towards the goal
+        p = int(pred[p])
+        cells += 1
+    return ProblemFacts(True, float(to_goal[start]), cells, region)

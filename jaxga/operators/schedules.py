@@ -1,0 +1,54 @@
+"""Time schedules of the adaptive operators, as optax schedules (``step -> value``).
+
+* AGACD (Hao et al. 2021) eq. 27: the crossover probability decays as ``exp(-t / T)``.
+* AGACD eq. 29: the mutation probability grows as ``exp(t / T)``.
+* MPMGA (Hao et al. 2020) eq. 17: the annealing temperature of the segment mutation is
+  ``T_t = c1 * w ** t``.
+
+``t`` is the generation counter (a traced int32 inside the engine's ``lax.scan``) and
+``T`` the number of generations (static). They are plain ``optax.exponential_decay``
+schedules (``init * rate ** (t / steps)``), so users can swap in any other optax schedule
+(``optax.cosine_decay_schedule``, ``optax.join_schedules``, ...) through the same
+keyword of :func:`jaxga.operators.crossover.adaptive_crossover_probability`,
+:func:`jaxga.operators.mutation.adaptive_mutation_probability` and
+:func:`jaxga.operators.mutation.segment_sa`'s caller in :mod:`jaxga.engine`.
+"""
+
+from __future__ import annotations
+
+import math
+
+import jax
+import optax
+
+__all__ = ["agacd_crossover_decay", "agacd_mutation_growth", "mpmga_temperature"]
+
+
+def agacd_crossover_decay(generations: int) -> optax.Schedule:
+    """``t -> exp(-t / T)`` (AGACD eq. 27, the time factor of ``pc``)."""
+    _check(generations)
+    return optax.exponential_decay(1.0, transition_steps=generations,
+                                   decay_rate=math.exp(-1.0))
+
+
+def agacd_mutation_growth(generations: int) -> optax.Schedule:
+    """``t -> exp(t / T)`` (AGACD eq. 29, the time factor of ``pm``)."""
+    _check(generations)
+    return optax.exponential_decay(1.0, transition_steps=generations,
+                                   decay_rate=math.e)
+
+
+def mpmga_temperature(c1: float | jax.Array, w: float) -> optax.Schedule:
+    """``t -> c1 * w ** t`` (MPMGA eq. 17, simulated-annealing temperature).
+
+    ``c1`` may be traced (a swept parameter); ``w`` must be a Python float in (0, 1]
+    (optax inspects the rate when building the schedule).
+    """
+    if not 0.0 < float(w) <= 1.0:
+        raise ValueError(f"temperature decay rate w must be in (0, 1], got {w}")
+    return optax.exponential_decay(c1, transition_steps=1, decay_rate=float(w))
+
+
+def _check(generations: int) -> None:
+    if int(generations) < 1:
+        raise ValueError(f"generations must be >= 1, got {generations}")

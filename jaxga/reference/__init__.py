@@ -1,0 +1,49 @@
+"""Independent references: exact optima of the path problems, and of the papers' fitness functions.
+
+- :mod:`~jaxga.reference.optima`: exact 8-connected shortest paths (Dijkstra, NumPy and JAX)
+  and exact any-angle shortest paths (visibility graph), the certificates of every gap;
+- :mod:`~jaxga.reference.fitness`: the exact optimum of a preset's own fitness over
+  8-connected paths.
+
+The shortest-path functions are re-exported here (``jaxga.reference.shortest_path``).
+"""
+
+from jaxga.reference.optima import (
+    C_OCTILE,
+    SQRT2,
+    XY,
+    OctileGraph,
+    ReferencePath,
+    any_angle_shortest_path,
+    any_angle_shortest_path_np,
+    clear_many_np,
+    clear_np,
+    clear_pairs_np,
+    distances_from,
+    legal_moves_np,
+    obstacle_adjacent_cells,
+    path_length,
+    require,
+    shortest_path,
+    shortest_path_np,
+)
+
+__all__ = [
+    "C_OCTILE",
+    "OctileGraph",
+    "ReferencePath",
+    "SQRT2",
+    "XY",
+    "any_angle_shortest_path",
+    "any_angle_shortest_path_np",
+    "clear_many_np",
+    "clear_np",
+    "clear_pairs_np",
+    "distances_from",
+    "legal_moves_np",
+    "obstacle_adjacent_cells",
+    "path_length",
+    "require",
+    "shortest_path",
+    "shortest_path_np",
+]
