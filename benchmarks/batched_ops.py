@@ -10,7 +10,7 @@ pairs or seeds x segments) and checks that both give the same array:
   (50 x 50, L = 400), against :func:`jaxga._batching.scatter.position_table`;
 * gate order of :func:`jaxga.operators.lift.gated_map` over AGACD's 60 x 159 segments for 20
   seeds: ``argsort(~flags, stable=True)`` against
-  :func:`jaxga.operators.lift.true_first_order`.
+  :func:`jaxga._batching.scatter.true_first_order`.
 """
 
 from __future__ import annotations
@@ -22,8 +22,7 @@ import jax.numpy as jnp
 import numpy as np
 from _results import markdown_table, record, timed
 
-from jaxga._batching.scatter import position_table
-from jaxga.operators.lift import true_first_order
+from jaxga._batching.scatter import position_table, true_first_order
 
 
 def _nest(fn, depth, in_axes=0):

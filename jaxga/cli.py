@@ -13,6 +13,7 @@ stderr and a non-zero exit status, never a Python traceback.
 from __future__ import annotations
 
 import argparse
+import io
 import json
 import math
 import os
@@ -24,6 +25,8 @@ from collections.abc import Callable, Sequence
 from pathlib import Path
 from typing import Any
 
+from jaxga import api
+from jaxga.api import check_one_corner_rule, parallel
 from jaxga.api.compilation_cache import use_compilation_cache
 from jaxga.api.lowering import check_environment
 from jaxga.api.parallel import (
@@ -34,8 +37,25 @@ from jaxga.api.parallel import (
     configure_from_args,
     env_int,
 )
-from jaxga.core.errors import EndpointError, JaxgaError, NoPathError
-from jaxga.core.grid import CORNER_RULES, as_integer
+from jaxga.compare import TESTS, check_metric, compare, one_corner_rule, split_presets
+from jaxga.config import registry
+from jaxga.config.presets import load_preset, parse_set, preset_info
+from jaxga.core.errors import EndpointError, JaxgaError, NoPathError, ParameterError
+from jaxga.core.grid import CORNER_RULES, as_integer, check_corner_rule
+from jaxga.doe import AGACD_TABLE3, DESIGNS, RESPONSE_ALIASES, RESPONSES, Factor, run_doe
+from jaxga.engine import check_file_keys_read, check_overrides_read
+from jaxga.maps import (
+    builtin_names,
+    builtin_scenario_path,
+    load_map,
+    load_map_info,
+    read_scen,
+    scenario_path,
+)
+from jaxga.plot import plot_comparison, plot_main_effects, plot_result
+from jaxga.reference.fitness import fitness_optimum
+from jaxga.reference.optima import any_angle_shortest_path, shortest_path
+from jaxga.replan import replan
 
 EXIT_BAD_INPUT = 2
 EXIT_NO_PATH = 3
@@ -98,7 +118,6 @@ def _apply_scenario(args: argparse.Namespace) -> None:
         if getattr(args, "scen", None) is not None:
             raise JaxgaError("--scen names the scenario file of --scenario N: give N too")
         return
-    from jaxga.maps import load_map_info, read_scen, scenario_path
 
     if args.start is not None or args.goal is not None:
         raise JaxgaError("--scenario gives the start and goal: leave out --start and --goal")
@@ -126,8 +145,6 @@ def _apply_scenario(args: argparse.Namespace) -> None:
 
 
 def _load_grid(args: argparse.Namespace):
-    from jaxga.core.grid import check_corner_rule
-    from jaxga.maps import load_map_info
 
     if args.corner_rule is not None:
         check_corner_rule(args.corner_rule)
@@ -151,11 +168,6 @@ def _xy_list(path) -> list[list[int]]:
 def cmd_optimum(args: argparse.Namespace) -> int:
     """``jaxga optimum``: exact 8-connected and any-angle optima of one map, and with
     ``--preset`` the exact optimum of that preset's fitness."""
-    from jaxga.api import check_one_corner_rule
-    from jaxga.config.presets import check_file_keys_read, load_preset, parse_set
-    from jaxga.engine import check_overrides_read
-    from jaxga.reference.fitness import fitness_optimum
-    from jaxga.reference.optima import any_angle_shortest_path, shortest_path
 
     config = None
     if args.preset is None and (args.set or args.variant):
@@ -220,7 +232,6 @@ def cmd_optimum(args: argparse.Namespace) -> int:
 
 def cmd_maps(args: argparse.Namespace) -> int:
     """``jaxga maps``: list the built-in maps with their sizes."""
-    from jaxga.maps import builtin_names, builtin_scenario_path, load_map
 
     for name in builtin_names():
         g = load_map(name)
@@ -231,7 +242,6 @@ def cmd_maps(args: argparse.Namespace) -> int:
 
 def cmd_presets(args: argparse.Namespace) -> int:
     """``jaxga presets``: list the presets with their papers."""
-    from jaxga.config.presets import preset_info
 
     for name, paper, description in preset_info():
         print(f"{name:10s} {paper}")
@@ -262,7 +272,6 @@ def describe_field(field: Any) -> str:
 def cmd_operators(args: argparse.Namespace) -> int:
     """``jaxga operators [FAMILY]``: the registered operators of each family (or one),
     with their former names, traits, parameters and papers (:mod:`jaxga.config.registry`)."""
-    from jaxga.config import registry
 
     families = registry.FAMILIES if args.family is None else (args.family,)
     for family in families:
@@ -311,11 +320,10 @@ class _Progress:
 
 def cmd_run(args: argparse.Namespace) -> int:
     """``jaxga run``: many seeds of a preset on a map; summary table, JSON, plot."""
-    from jaxga.api import parallel, run
 
     lead = parallel.process_index() == 0
     progress = None if args.quiet or not lead else _Progress()
-    result = run(
+    result = api.run(
         args.preset, _map_for_run(args), seeds=args.seeds, generations=args.generations,
         corner_rule=args.corner_rule, variant=args.variant, sets=args.set or (),
         progress=progress, chunks=10 if progress else 1,
@@ -327,7 +335,6 @@ def cmd_run(args: argparse.Namespace) -> int:
     if args.json:
         _write_json(args.json, result.to_json())
     if args.plot:
-        from jaxga.plot import plot_result
 
         plot_result(result, _grid_for_run(args, rule=result.corner_rule), args.plot)
         print(f"wrote {args.plot}")
@@ -339,7 +346,6 @@ def cmd_run(args: argparse.Namespace) -> int:
 
 def cmd_doe(args: argparse.Namespace) -> int:
     """``jaxga doe``: a designed experiment (AGACD 5.2.1) with its confirmation run."""
-    from jaxga.doe import AGACD_TABLE3, Factor, run_doe
 
     if args.factor:
         factors = [Factor.parse(text) for text in args.factor]
@@ -367,7 +373,6 @@ def cmd_doe(args: argparse.Namespace) -> int:
     if args.json:
         _write_json(args.json, data)
     if args.plot:
-        from jaxga.plot import plot_main_effects
 
         ax = plot_main_effects(data)
         ax.figure.savefig(args.plot, dpi=110)
@@ -381,7 +386,6 @@ def cmd_doe(args: argparse.Namespace) -> int:
 def _not_lead(what: str, seconds: float) -> bool:
     """True (after a one-line note) on every process but process 0 of a multi-process
     run: process 0 prints and writes the results of all processes (issue 7)."""
-    from jaxga.api import parallel
 
     if parallel.process_index() == 0:
         return False
@@ -394,8 +398,6 @@ def _not_lead(what: str, seconds: float) -> bool:
 def cmd_compare(args: argparse.Namespace) -> int:
     """``jaxga compare``: several presets on one map with the same seeds; per-preset
     summary, pairwise tests with effect sizes (Holm-corrected), JSON, box plots."""
-    from jaxga.compare import TESTS, check_metric, compare, one_corner_rule, split_presets
-    from jaxga.core.errors import ParameterError
 
     presets = split_presets(args.presets)
     if len(presets) < 2:
@@ -404,13 +406,10 @@ def cmd_compare(args: argparse.Namespace) -> int:
     if args.test not in TESTS:
         raise ParameterError(f"unknown test {args.test!r}; choose from {', '.join(TESTS)}")
     if args.corner_rule is not None:
-        from jaxga.core.grid import check_corner_rule
 
         check_corner_rule(args.corner_rule)
     grid = args.map
     if args.start is not None or args.goal is not None or args.coarsen is not None:
-        from jaxga.config.presets import load_preset
-        from jaxga.maps import load_map_info
 
         rule = args.corner_rule
         if rule is None:  # the presets' own rule (with --set), which must be one
@@ -430,7 +429,6 @@ def cmd_compare(args: argparse.Namespace) -> int:
     if args.json:
         _write_json(args.json, comp.to_json())
     if args.plot:
-        from jaxga.plot import plot_comparison
 
         plot_comparison(comp, args.plot)
         print(f"wrote {args.plot}")
@@ -446,7 +444,6 @@ def _map_for_run(args: argparse.Namespace):
     """The map as named on the command line: the name itself, or with --start/--goal the
     loaded map with those endpoints, under the run's corner rule (the preset's unless
     --corner-rule), as a MapInfo so that the results keep the map's name."""
-    from jaxga.maps import load_map_info
 
     if args.start is None and args.goal is None and args.coarsen is None:
         return args.map
@@ -457,21 +454,18 @@ def _map_for_run(args: argparse.Namespace):
 
 def _grid_for_run(args: argparse.Namespace, rule: str):
     """The Grid of the run (endpoints applied) under its corner rule ``rule``."""
-    from jaxga.maps import load_map
 
     return load_map(args.map, start=args.start, goal=args.goal, corner_rule=rule,
                     coarsen=args.coarsen)
 
 
 def _preset_rule(args: argparse.Namespace) -> str:
-    from jaxga.config.presets import load_preset
 
     return load_preset(args.preset, variant=args.variant, sets=args.set or ())["map.corner_rule"]
 
 
 def _parse_obstacles(text: str) -> list[tuple[int, int]]:
     """``X,Y;X,Y;...`` (empty: none) as a list of ``(x, y)`` cells."""
-    from jaxga.core.errors import ParameterError
 
     cells = []
     for part in text.replace(" ", "").split(";"):
@@ -498,7 +492,6 @@ def _read_path_json(path: str, run_index: int | None) -> list[tuple[int, int]]:
     ``"path"`` list (``jaxga optimum --json``), or the JSON of ``jaxga run`` (the raw
     8-connected path of run ``run_index``, default the successful run with the shortest
     raw path)."""
-    from jaxga.core.errors import ParameterError
 
     with open(path, encoding="utf-8") as f:
         try:
@@ -535,9 +528,6 @@ def _read_path_json(path: str, run_index: int | None) -> list[tuple[int, int]]:
 def cmd_replan(args: argparse.Namespace) -> int:
     """``jaxga replan``: re-plan a path around new obstacles from the robot's cell
     (MPMGA 5.2.1 / 5.3.1, SPEC 10)."""
-    from jaxga.core.grid import check_corner_rule
-    from jaxga.maps import load_map
-    from jaxga.replan import replan
 
     use_compilation_cache()
     path = _read_path_json(args.path_json, args.run)
@@ -634,7 +624,6 @@ def build_parser() -> argparse.ArgumentParser:
     p.add_argument("--json", metavar="OUT", help="write the result as JSON")
     p.set_defaults(func=cmd_replan)
 
-    from jaxga.doe import DESIGNS, RESPONSE_ALIASES, RESPONSES
 
     p = sub.add_parser("doe", help="a designed experiment over hyper-parameters (AGACD 5.2.1)")
     _add_preset_arguments(p)
@@ -726,8 +715,6 @@ def check_outputs(args: argparse.Namespace) -> None:
             raise JaxgaError(f"cannot write --plot {plot}: {suffix!r} is not an image format "
                              f"matplotlib writes ({', '.join(sorted(formats))})")
         else:  # some formats need outside tools (pgf: LaTeX for any text): try one first
-            import io
-
             probe = Figure()
             probe.text(0.5, 0.5, "jaxga")
             try:

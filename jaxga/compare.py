@@ -47,11 +47,13 @@ from typing import Any
 
 import numpy as np
 
-from jaxga.api import GAPS, RUN_OPTIONS, Result, check_run, run
+from jaxga.api import GAPS, RUN_OPTIONS, Result, check_run, load_problem, run
 from jaxga.api import json_number as _num
+from jaxga.config.presets import as_sets, overridden_keys, parse_set
 from jaxga.config.schema import Config
 from jaxga.core.errors import ParameterError
 from jaxga.core.grid import Grid
+from jaxga.engine import OFF_VALUES, unread_keys
 from jaxga.stats import TwoSampleTest, fisher_success, holm, mann_whitney, wilcoxon_paired
 
 __all__ = ["METRICS", "TESTS", "Comparison", "PairTest", "compare", "compare_results",
@@ -461,9 +463,6 @@ def _options_per_preset(specs, grid, common: Mapping[str, Any]
     (:func:`jaxga.engine.unread_keys`; they would change nothing), then its own
     overrides, which are checked strictly by ``run``. A common key that no preset
     reads is refused, and so are presets that would run under different corner rules."""
-    from jaxga.api import load_problem
-    from jaxga.config.presets import as_sets, overridden_keys, parse_set
-    from jaxga.engine import OFF_VALUES, unread_keys
 
     sets = as_sets(common.get("sets", ()))
     common_keys = overridden_keys({k: v for k, v in common.items() if k not in RUN_OPTIONS},

@@ -69,12 +69,18 @@ from collections.abc import Callable, Iterable, Mapping, Sequence
 from pathlib import Path
 from typing import Any
 
+import jax
 import numpy as np
 
+import jaxga
+from jaxga import api
+from jaxga.api import checked_capacity, load_problem, parallel, seed_list
+from jaxga.config.presets import as_sets, overridden_keys
 from jaxga.config.schema import SCHEMA, Config, parse_value, python_scalar
 from jaxga.core.errors import NoPathError, ParameterError
 from jaxga.core.grid import Grid, as_integer
-from jaxga.engine import unread_keys
+from jaxga.engine import build, check_combination, unread_keys
+from jaxga.reference.optima import shortest_path
 
 # ----------------------------------------------------------------------------- factors
 
@@ -575,7 +581,6 @@ class _Checkpoint:
     ``confirm_<coded>.json``."""
 
     def __init__(self, directory: str | Path, manifest: dict[str, Any]) -> None:
-        from jaxga.api import parallel
 
         self.dir = Path(directory)
         config = manifest.get("config")
@@ -646,7 +651,6 @@ class _Checkpoint:
     def _broadcast_read(self, paths: list[Path], n_seeds: int) -> list[dict[str, list] | None]:
         """Process 0 reads (None for files not written yet); every process gets its result
         or its refusal."""
-        from jaxga.api import parallel
 
         saved, error = None, None
         if self.lead:
@@ -780,12 +784,7 @@ def run_doe(
         NoPathError: the goal is unreachable, or no seed of any design point found a
             path (nothing to fit; the message carries the runs' reason).
     """
-    import jax
 
-    import jaxga
-    from jaxga.api import check_result_memory, checked_capacity, load_problem, seed_list, sweep
-    from jaxga.engine import build, check_combination
-    from jaxga.reference.optima import shortest_path
 
     t_start = time.perf_counter()
     response = RESPONSE_ALIASES.get(response, response) if isinstance(response, str) \
@@ -795,7 +794,6 @@ def run_doe(
     direction = direction or RESPONSES[response]
     if direction not in ("max", "min"):
         raise ParameterError(f"direction must be 'max' or 'min', got {direction!r}")
-    from jaxga.config.presets import as_sets, overridden_keys
 
     sets = as_sets(sets)  # one string is one set
     if not isinstance(factors, (str, bytes, Mapping)) and isinstance(factors, Iterable):
@@ -835,7 +833,7 @@ def run_doe(
     block = min(int(block), n_points)
     # only a block of points is in memory at a time (between blocks, a few floats per seed)
     largest, _ = build(config.override({"population.size": capacity}), loaded)
-    seed_arr = seed_list(seeds, lambda n: check_result_memory(n * block, largest))
+    seed_arr = seed_list(seeds, lambda n: api.check_result_memory(n * block, largest))
     shortest_path(loaded).raise_if_missing()  # nothing to fit: say why (NoPathError)
 
     common = dict(generations=generations, corner_rule=corner_rule, variant=variant,
@@ -876,7 +874,7 @@ def run_doe(
             continue
         padded = idx + [idx[-1]] * (block - len(idx))  # same run count in every call
         t0 = time.perf_counter()
-        out = sweep(preset, grid, [points[q] for q in padded], seed_arr, **common)
+        out = api.sweep(preset, grid, [points[q] for q in padded], seed_arr, **common)
         sweep_s += time.perf_counter() - t0
         compile_s += out[0].timing["compile_s"]
         for q, res in zip(idx, out):
@@ -904,7 +902,7 @@ def run_doe(
         confirm = _decode(saved)
     else:
         best_point = {f.name: f.value(int(c)) for f, c in zip(factors, best)}
-        res = sweep(preset, grid, [best_point], seed_arr, **common)[0]
+        res = api.sweep(preset, grid, [best_point], seed_arr, **common)[0]
         compile_s += res.timing["compile_s"]
         confirm = seed_responses(res)
         if ckpt is not None:

@@ -15,8 +15,10 @@ from typing import Any
 
 import numpy as np
 
+from jaxga.compare import metric_values
 from jaxga.core.errors import ParameterError
 from jaxga.core.grid import Grid, as_integer
+from jaxga.maps import load_map
 
 __all__ = ["plot_box", "plot_comparison", "plot_convergence", "plot_diversity",
            "plot_main_effects", "plot_map", "plot_paths", "plot_result", "plot_seed_scatter"]
@@ -125,7 +127,6 @@ def _check_paths_fit(grid: Grid, result: Any, paths: list[list[tuple[int, int]]]
 def _as_grid(grid: Grid | str, corner_rule: str) -> Grid:
     if isinstance(grid, Grid):
         return grid
-    from jaxga.maps import load_map
 
     return load_map(grid, corner_rule=corner_rule)
 
@@ -225,7 +226,6 @@ def plot_seed_scatter(results, y: str = "length", x: str = "seed", ax=None):
     ``"fitness"``; failed seeds are not drawn. (Per-run times do not exist: the seeds
     of a preset run in one vectorised call.)
     """
-    from jaxga.compare import metric_values
 
     plt = _pyplot()
     if ax is None:

@@ -65,11 +65,14 @@ from typing import Any
 
 import numpy as np
 
+from jaxga import api
+from jaxga.config.presets import as_sets, overridden_keys
 from jaxga.config.schema import SCHEMA
 from jaxga.core.errors import EndpointError, JaxgaError, ParameterError
 from jaxga.core.grid import Grid
+from jaxga.maps import rectangles_map
 from jaxga.maps.preprocess import reachable
-from jaxga.reference.optima import clear_np, path_length, shortest_path_np
+from jaxga.reference.optima import clear_np, path_length, shortest_path, shortest_path_np
 
 __all__ = [
     "MPMGA_SCENARIOS",
@@ -305,7 +308,6 @@ def _run_options(overrides: Mapping[str, Any], generations: int | None,
     program per map (or window) size, whatever the segment (the automatic capacity
     follows the problem's optimum, which would compile again for longer segments;
     decision 020)."""
-    from jaxga.config.presets import as_sets, overridden_keys
 
     kw = dict(overrides)
     keys = set(overridden_keys({k: v for k, v in kw.items() if k != "sets"},
@@ -392,9 +394,8 @@ def replan(
         SCHEMA["population.size"].check("population", population)
     # The GA's configuration is checked now too (overrides that nothing reads, key
     # combinations), not only when a blocked path needs a GA run.
-    from jaxga.api import check_run
 
-    check_run(preset, grid, **_run_options(overrides, generations, population))
+    api.check_run(preset, grid, **_run_options(overrides, generations, population))
     h, w = grid.height, grid.width
     rule = grid.corner_rule
     cells = _dedupe(_as_xy_list(path, "path"))
@@ -501,7 +502,6 @@ def _plan_segment(work: Grid, blocked: np.ndarray, start: XY, rejoin: XY, preset
                   ) -> tuple[list[XY] | None, dict[str, Any], float]:
     """One GA call from ``start`` to ``rejoin`` (MPMGA 5.2.1; SPEC 10); returns the
     segment (or None), a description and the compile time."""
-    from jaxga.api import run
 
     t0 = time.perf_counter()
     rule = work.corner_rule
@@ -525,7 +525,7 @@ def _plan_segment(work: Grid, blocked: np.ndarray, start: XY, rejoin: XY, preset
                 info["window"] = box
     g = Grid.create(sub, start=(start[0] - ox, start[1] - oy),
                     goal=(rejoin[0] - ox, rejoin[1] - oy), corner_rule=rule)
-    r = run(preset, g, seeds=seeds, **_run_options(overrides, generations, population, g))
+    r = api.run(preset, g, seeds=seeds, **_run_options(overrides, generations, population, g))
     info["result"] = r
     n_ok = int(np.sum(r.success))
     info.update(ga_success=n_ok, seeds=len(r.seeds))
@@ -589,8 +589,6 @@ def mpmga_scenario(name: str) -> Scenario:
     cells: 295 -> 320 -> 345 -> 370 on the 25 x 25 map and 759 -> 810 -> 861 -> 912 -> 963
     on the 50 x 50 map. Cell numbers are converted by :func:`mpmga_cell`.
     """
-    from jaxga.maps import rectangles_map
-    from jaxga.reference.optima import shortest_path
 
     if name not in MPMGA_SCENARIOS:
         raise ParameterError(f"unknown scenario {name!r}: expected one of "

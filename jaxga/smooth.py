@@ -100,6 +100,7 @@ import optax
 from jaxga.core.errors import ParameterError
 from jaxga.core.geometry import segments_clear
 from jaxga.core.grid import Grid, blocked_at
+from jaxga.plot import plot_map
 
 __all__ = [
     "DistanceField",
@@ -952,7 +953,6 @@ def plot_smooth(
     labelled with its length, max curvature and min clearance (a fallback says so).
     Returns ``ax``.
     """
-    from jaxga.plot import plot_map
 
     paths = []
     if polyline is not None:

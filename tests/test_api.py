@@ -15,6 +15,7 @@ import pytest
 from jaxga import api, engine
 from jaxga.compare import compare as jaxga_compare
 from jaxga.config.presets import preset_names
+from jaxga.config.schema import SCHEMA
 from jaxga.core.errors import InitialisationWarning, JaxgaError, ParameterError
 from jaxga.maps import load_map, random_map
 from jaxga.operators import schedules
@@ -320,7 +321,7 @@ def test_an_override_that_nothing_reads_is_refused(grid, monkeypatch, preset, ov
                                                    message):
     """As keyword overrides, as ``sets`` (the same values as TOML) and as sweep points,
     before anything compiles."""
-    monkeypatch.setattr(api, "compiled_programs", lambda *a, **k: pytest.fail("compiled"))
+    monkeypatch.setattr(api.runs, "compiled_programs", lambda *a, **k: pytest.fail("compiled"))
     with pytest.raises(ParameterError, match=re.escape(message)):
         api.run(preset, grid, seeds=1, **SMALL, **overrides)
     sets = [f"{k.replace('__', '.')}={json.dumps(v)}" for k, v in overrides.items()]
@@ -364,7 +365,7 @@ def test_overrides_that_are_read_are_accepted_by_every_preset():
             for k in engine.FITNESS_PARAMS[method]:
                 assert f"fitness.{k}" not in unread
             set_dynamic = [k for k, v in config.items  # set to a value of its own
-                           if engine.SCHEMA[k].dynamic and v is not None
+                           if SCHEMA[k].dynamic and v is not None
                            and (k not in DEFAULTS or v != DEFAULTS[k])]
             assert not [k for k in set_dynamic if k in unread], (name, variant)
             if config["islands.count"] > 1:
@@ -521,7 +522,7 @@ def test_a_chunked_run_equals_one_call_and_compiles_one_evolve_program(grid, mon
         compiled.append(out.sizes)  # the evolve programs it holds (compiled when needed)
         return out
 
-    monkeypatch.setattr(api, "compiled_programs", recording)
+    monkeypatch.setattr(api.runs, "compiled_programs", recording)
     seen = []
     misses = programs.cache_info().misses
     chunked = api.run("iga_zhang", grid, seeds=3, chunks=3,
@@ -580,10 +581,10 @@ def test_failure_reason_counts_the_seeds_and_names_an_initialiser_that_never_suc
     rate, made = np.array([0.2, 0.1, 0.3]), np.zeros(3, int)
 
     def reason(success, started, rate=rate, config=cfg, **kw):
-        causes = api.failure_causes(np.array(success), np.array(started), rate, made, config,
-                             **{**fits, **kw})
+        causes = api.failures.failure_causes(np.array(success), np.array(started), rate, made,
+                                             config, **{**fits, **kw})
         assert (causes == "").tolist() == list(success)
-        return api.failure_reason(causes)
+        return api.failures.failure_reason(causes)
 
     assert reason([True, True, True], [True, True, True]) == ""
     some = reason([True, False, True], [True, True, True])
@@ -666,13 +667,13 @@ def test_unfilled_warning_only_for_runs_that_made_some_paths():
     cfg = load_preset("mpmga")
     with warnings.catch_warnings():
         warnings.simplefilter("error")
-        api.warn_unfilled(np.array([0, 0]), np.array([0.3, 0.2]), 60, cfg)
+        api.failures.warn_unfilled(np.array([0, 0]), np.array([0.3, 0.2]), 60, cfg)
         # no path at all is a failed run with a reason (failure_reason), not a warning
-        api.warn_unfilled(np.array([60, 0]), np.array([0.0, 0.2]), 60, cfg)
+        api.failures.warn_unfilled(np.array([60, 0]), np.array([0.0, 0.2]), 60, cfg)
     with pytest.warns(InitialisationWarning, match=r"^2 of 3 runs started with 12-50 of their "
                       r"60 initial individuals copied: the initialiser 'intermittent_connect' "
                       r"succeeded in 1 % of its attempts, and init.max_tries = 20 "):
-        api.warn_unfilled(np.array([12, 60, 50]), np.array([0.015, 0.0, 0.005]), 60, cfg)
+        api.failures.warn_unfilled(np.array([12, 60, 50]), np.array([0.015, 0.0, 0.005]), 60, cfg)
 
 
 @pytest.mark.parametrize("t", [0, 1, 7, 50, 100])
@@ -784,7 +785,7 @@ def test_inconsistent_parameters_are_refused_before_tracing(grid, monkeypatch, p
                                                             overrides, words):
     """Combinations of keys that an operator cannot use (each key valid on its own) give
     a ParameterError naming them, not an error from inside the traced program."""
-    monkeypatch.setattr(api, "compiled_programs", lambda *a, **k: pytest.fail("compiled"))
+    monkeypatch.setattr(api.runs, "compiled_programs", lambda *a, **k: pytest.fail("compiled"))
     with pytest.raises(ParameterError) as err:
         api.run(preset, grid, seeds=1, **{**SMALL, **overrides})
     assert all(w in str(err.value) for w in words), str(err.value)
@@ -807,7 +808,7 @@ def test_inconsistent_parameters_are_refused_before_tracing(grid, monkeypatch, p
 def test_wrong_python_types_are_refused_with_a_jaxga_error(grid, monkeypatch, call, words):
     """Options of the wrong type are named (ParameterError), not a TypeError from deep
     inside, and before anything compiles."""
-    monkeypatch.setattr(api, "compiled_programs", lambda *a, **k: pytest.fail("compiled"))
+    monkeypatch.setattr(api.runs, "compiled_programs", lambda *a, **k: pytest.fail("compiled"))
     with pytest.raises(ParameterError, match=re.escape(words)):
         call(grid)
 
@@ -833,7 +834,7 @@ def test_seeds_outside_32_bits_are_refused(grid, seeds, words):
 
 def test_a_call_whose_results_cannot_fit_in_memory_is_refused(grid, monkeypatch):
     """A clear error before anything is allocated, instead of the process being killed."""
-    monkeypatch.setattr(api, "physical_memory", lambda: 2**30)  # a 1 GiB machine
+    monkeypatch.setattr(api.memory, "physical_memory", lambda: 2**30)  # a 1 GiB machine
     # per run: 3 x 3 float32 history values, 2 int32 paths of 4 * (10 + 10) = 80 cells,
     # 256 bytes and twice 8 x 80 int32 population cells: 6,052 bytes, so 10**5 runs need
     # 0.56 GiB, more than half of 1 GiB
@@ -878,7 +879,7 @@ def test_sweep_capacity_must_be_an_integer_and_no_path_sweeps_check_memory(grid,
     blocked[max(gy - 1, 0):gy + 2, max(gx - 1, 0):gx + 2] = True
     blocked[gy, gx] = False
     walled = grid.replace(blocked=blocked)
-    monkeypatch.setattr(api, "physical_memory", lambda: 2**30)
+    monkeypatch.setattr(api.memory, "physical_memory", lambda: 2**30)
     with pytest.raises(ParameterError, match="GiB for their results"):  # 256 bytes a run
         api.run("sga", walled, seeds=10**7, **SMALL)
     assert api.run("sga", walled, seeds=10**6, **SMALL).seeds.size == 10**6  # 0.24 GiB
@@ -920,7 +921,7 @@ def test_a_grid_made_with_the_plain_constructor_is_checked(monkeypatch):
     from jaxga import Grid
     from jaxga.core.errors import EndpointError
 
-    monkeypatch.setattr(api, "compiled_programs", lambda *a, **k: pytest.fail("compiled"))
+    monkeypatch.setattr(api.runs, "compiled_programs", lambda *a, **k: pytest.fail("compiled"))
     cases = [
         (Grid(blocked=jnp.zeros((5, 5), bool), start=jnp.int32(0), goal=jnp.int32(25)),
          EndpointError, "goal cell index 25 is off the 5 x 5 map"),

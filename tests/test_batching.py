@@ -11,6 +11,7 @@ import numpy as np
 import pytest
 
 from jaxga._batching.numerics import ordered_sum
+from jaxga._batching.scatter import true_first_order
 from jaxga.core.grid import Grid
 from jaxga.core.paths import Population, from_coords, pad
 from jaxga.maps import load_map
@@ -23,7 +24,6 @@ from jaxga.operators.lift import (
     over_pairs,
     over_pairs_gated,
     spliced_pairs_map,
-    true_first_order,
     window_width,
     windowed_map,
 )

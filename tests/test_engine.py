@@ -50,7 +50,7 @@ def test_a_seed_gives_the_same_run_whichever_runs_share_its_batch(tiny_runs):
 
 def test_finish_program_equals_its_functions_compiled_with_xla_defaults():
     """The finish program is compiled with other XLA options
-    (``api.FINISH_COMPILER_OPTIONS``, the older fusion emitters): its post-optimised
+    (``api.programs.FINISH_COMPILER_OPTIONS``, the older fusion emitters): its post-optimised
     paths and every reported length and metric are bit for bit those of the same
     functions compiled with XLA's defaults, on agacd's greedy shortcut post-optimisation."""
     import jax
@@ -59,7 +59,7 @@ def test_finish_program_equals_its_functions_compiled_with_xla_defaults():
     from jaxga.core import objectives
     from jaxga.operators import postprocess as post
 
-    assert api.FINISH_COMPILER_OPTIONS == {"xla_cpu_use_fusion_emitters": False}
+    assert api.programs.FINISH_COMPILER_OPTIONS == {"xla_cpu_use_fusion_emitters": False}
     grid = random_map(10, 10, 0.2, 3, corner_rule="free")
     r = run("agacd", grid, seeds=3, population__size=8, generations=3, init__max_tries=40)
     assert r.success.any()
@@ -176,10 +176,11 @@ def test_adaptive_generation_equals_its_straight_line_composition():
 
     from jaxga.config.presets import load_preset
     from jaxga.core.paths import Population
+    from jaxga.engine import build
     from jaxga.engine import evolution as E
 
     grid = random_map(10, 10, 0.2, 3, corner_rule="free")
-    algo, params = E.build(load_preset("agacd", overrides={
+    algo, params = build(load_preset("agacd", overrides={
         "population.size": 16, "generations": 3, "init.max_tries": 40,
         # wide adaptive ranges: the gates then depend on which fitness the mutation reads
         "crossover.pc_low": 0.9, "crossover.pc_high": 1.0,
@@ -222,10 +223,11 @@ def test_history_row_counts_only_active_individuals_of_every_island():
     import jax.numpy as jnp
 
     from jaxga.config.presets import load_preset
+    from jaxga.engine import build
     from jaxga.engine import evolution as E
 
     grid = random_map(8, 8, 0.1, 1, corner_rule="free")
-    algo, params = E.build(load_preset("sga", overrides={
+    algo, params = build(load_preset("sga", overrides={
         "population.size": 8, "islands.count": 3, "islands.topology": "ring",
         "islands.migrants": 1}), grid)
     params = {**params, "population.active": jnp.int32(5)}
@@ -255,10 +257,11 @@ def test_per_island_rates_apply_to_their_own_island():
     import jax.numpy as jnp
 
     from jaxga.config.presets import load_preset
+    from jaxga.engine import build
     from jaxga.engine import evolution as E
 
     grid = random_map(10, 10, 0.2, 3, corner_rule="free")
-    algo, params = E.build(load_preset("sga", overrides={
+    algo, params = build(load_preset("sga", overrides={
         "population.size": 8, "init.max_tries": 40, "islands.count": 3,
         "islands.topology": "none", "islands.migrants": 0, "selection.method": "none",
         "islands.crossover_probabilities": [0.0, 0.0, 0.0],

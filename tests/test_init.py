@@ -397,7 +397,7 @@ def test_unreachable_goal_every_initialiser_fails():
 
 @jax.jit
 def _small_capacity(key, grid):
-    return [I.get_initialiser(name)(key, grid, SIZE - 1)[2] for name in NAMES]
+    return [registry.initialiser(name)(key, grid, SIZE - 1)[2] for name in NAMES]
 
 
 def test_capacity_too_small_fails():
@@ -407,7 +407,7 @@ def test_capacity_too_small_fails():
     grid = Grid.create(np.zeros((SIZE, SIZE), bool), corner_rule="free")
     assert not np.asarray(_small_capacity(jax.random.PRNGKey(0), with_guide(grid))).any()
     with pytest.raises(ParameterError):
-        I.get_initialiser("nope")
+        registry.initialiser("nope")
 
 
 def test_open_map_median_methods_always_succeed():
@@ -426,7 +426,7 @@ P = 24
 
 
 def test_initialise_reports_total_failure():
-    pop, st_ = I.initialise(jax.random.PRNGKey(0), _walled(), "directional", P, CAP, max_tries=3)
+    pop, st_ = I.initialise(jax.random.PRNGKey(0), _walled(), I.directional, P, CAP, max_tries=3)
     assert int(st_.n_failed) == P and not np.asarray(st_.valid).any()
     assert int(st_.successes) == 0 and float(st_.success_rate) == 0.0
     assert int(st_.attempts) == 3 * P
@@ -437,9 +437,9 @@ def test_initialise_reports_total_failure():
 
 def test_initialise_determinism_and_validity():
     grid = random_map(SIZE, SIZE, 0.25, 17, corner_rule="no_squeeze")
-    a, sa = I.initialise(jax.random.PRNGKey(5), grid, "directional", P, CAP)
-    b, sb = I.initialise(jax.random.PRNGKey(5), grid, "directional", P, CAP)
-    c, _ = I.initialise(jax.random.PRNGKey(6), grid, "directional", P, CAP)
+    a, sa = I.initialise(jax.random.PRNGKey(5), grid, I.directional, P, CAP)
+    b, sb = I.initialise(jax.random.PRNGKey(5), grid, I.directional, P, CAP)
+    c, _ = I.initialise(jax.random.PRNGKey(6), grid, I.directional, P, CAP)
     np.testing.assert_array_equal(np.asarray(a.cells), np.asarray(b.cells))
     np.testing.assert_array_equal(np.asarray(a.length), np.asarray(b.length))
     assert int(sa.attempts) == int(sb.attempts)
@@ -459,7 +459,7 @@ def test_initialise_redraws_and_reports_the_success_rate():
     _, _, ok = direct(jax.random.split(jax.random.PRNGKey(99), 4000))
     p = float(np.mean(np.asarray(ok)))
     assert 0.02 < p < 0.6, p  # single attempts often fail on this map
-    pop, st_ = I.initialise(jax.random.PRNGKey(1), grid, "random_walk", P, CAP, max_tries=200)
+    pop, st_ = I.initialise(jax.random.PRNGKey(1), grid, I.random_walk, P, CAP, max_tries=200)
     assert int(st_.n_failed) == 0 and int(st_.rounds) > 1
     assert check_paths(grid, pop.cells, pop.length, st_.valid) == P
     att, succ = int(st_.attempts), int(st_.successes)
@@ -468,7 +468,7 @@ def test_initialise_redraws_and_reports_the_success_rate():
     lo, hi = stats.binom.ppf([1e-6, 1 - 1e-6], att, p)
     assert lo <= succ <= hi, (succ, att, p)
     # Budget too small: the shortfall is reported and flagged, never hidden.
-    pop, st_ = I.initialise(jax.random.PRNGKey(1), grid, "random_walk", P, CAP, max_tries=1)
+    pop, st_ = I.initialise(jax.random.PRNGKey(1), grid, I.random_walk, P, CAP, max_tries=1)
     nf = int(st_.n_failed)
     valid = np.asarray(st_.valid)
     assert nf == P - valid.sum() and 0 < nf < P
@@ -521,10 +521,10 @@ def test_x64_mode_keeps_int32():
         from jaxga.maps import random_map
         g = with_guide(random_map(10, 10, 0.2, 3, corner_rule="free"))
         names = ("directional", "greedy_random_target", "intermittent_connect", "field_walk")
-        f = jax.jit(lambda k: [I.get_initialiser(n)(k, g, 64) for n in names])
+        f = jax.jit(lambda k: [registry.initialiser(n)(k, g, 64) for n in names])
         for name, (c, n, ok) in zip(names, f(jax.random.PRNGKey(0))):
             assert c.dtype == np.int32 and n.dtype == np.int32 and ok.dtype == bool, name
-        pop, st = I.initialise(jax.random.PRNGKey(0), g, "directional", 4, 64)
+        pop, st = I.initialise(jax.random.PRNGKey(0), g, I.directional, 4, 64)
         assert pop.cells.dtype == np.int32 and pop.length.dtype == np.int32
         assert st.success_rate.dtype == np.float32 and st.attempts.dtype == np.int32
         assert int(st.n_failed) == 0

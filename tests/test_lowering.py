@@ -97,6 +97,6 @@ def test_a_bad_threefry_setting_is_one_line_on_the_command_line_and_refused_by_r
                                    "'rolled', got 'sideways'")
     assert proc.stdout == ""
     monkeypatch.setenv(lowering.ENV_VAR, "sideways")
-    monkeypatch.setattr(jaxga.api, "build", lambda *a, **k: pytest.fail("it went on"))
+    monkeypatch.setattr(jaxga.api.runs, "build", lambda *a, **k: pytest.fail("it went on"))
     with pytest.raises(ParameterError, match="JAXGA_THREEFRY must be"):
         jaxga.run("sga", "classic_ga_gapp3_20x20", seeds=1)

@@ -13,7 +13,7 @@ flat batch of lanes (:func:`jaxga._batching.folding.fold_call`), so that the loo
 sees all its lanes at once, however many ``vmap`` levels (mutants, runs, islands) are
 stacked. It then runs the rounds at full width only while more than ``1 / shrink`` of
 the lanes are unfinished, moves the unfinished ones to the front of a buffer of
-``1 / shrink`` of the lanes (:func:`jaxga.operators.lift.true_first_order`) and finishes them
+``1 / shrink`` of the lanes (:func:`jaxga._batching.scatter.true_first_order`) and finishes them
 there. Each lane computes exactly what it computes alone (same body, same carry, same
 operands; bit for bit), only the discarded work is skipped.
 
@@ -34,7 +34,7 @@ import jax.numpy as jnp
 import numpy as np
 
 from jaxga._batching.folding import fold_call, hoist
-from jaxga.operators.lift import true_first_order
+from jaxga._batching.scatter import true_first_order
 
 __all__ = ["lane_while_loop"]
 

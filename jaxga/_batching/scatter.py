@@ -29,7 +29,7 @@ from jax.custom_batching import custom_vmap
 
 from jaxga._batching.folding import fold_call
 
-__all__ = ["position_table", "table_lookup"]
+__all__ = ["position_table", "table_lookup", "true_first_order"]
 
 MAX_FLAT_ENTRIES = int(np.iinfo(np.int32).max)
 """Flat tables must stay below this many entries (int32 indices); larger batches of rows
@@ -164,3 +164,19 @@ def _lookup_chunked(keys: jax.Array, queries: jax.Array, n_cells: int) -> jax.Ar
         lambda kq: _lookup_rows(kq[0], kq[1], n_cells),
         (k.reshape(n_chunks, per_chunk, -1), q.reshape(n_chunks, per_chunk, -1)),
     ).reshape(n_chunks * per_chunk, -1)[:r]
+
+
+def true_first_order(flags: jax.Array) -> jax.Array:
+    """``int32[n]``: the indices of the True entries of ``flags`` in order, then those of
+    the False entries in order; equal to ``jnp.argsort(~flags, stable=True)``.
+
+    A prefix count and one scatter of a permutation instead of a comparison sort, which
+    on XLA's CPU backend is many times slower and was half of a generation of AGACD's
+    evolution (decision 004).
+    """
+    flags = jnp.asarray(flags, bool)
+    n = flags.shape[0]
+    i = jnp.arange(n, dtype=jnp.int32)
+    trues = jax.lax.associative_scan(jnp.add, flags.astype(jnp.int32))  # inclusive
+    pos = jnp.where(flags, trues - 1, trues[-1] + i - trues)
+    return jnp.zeros((n,), jnp.int32).at[pos].set(i, unique_indices=True)

@@ -16,6 +16,8 @@ from __future__ import annotations
 import os
 from pathlib import Path
 
+import jax
+
 from jaxga.core.errors import ParameterError
 
 __all__ = ["ENV_VAR", "MIN_COMPILE_SECONDS", "default_directory", "use_compilation_cache"]
@@ -60,8 +62,6 @@ def use_compilation_cache(directory: str | os.PathLike | None = None) -> str | N
             raise ParameterError("use_compilation_cache: the directory must not be empty")
     if not path:
         return None
-    import jax
-
     jax.config.update("jax_compilation_cache_dir", path)
     jax.config.update("jax_persistent_cache_min_compile_time_secs", MIN_COMPILE_SECONDS)
     return path

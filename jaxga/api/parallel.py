@@ -63,6 +63,7 @@ import argparse
 import atexit
 import io
 import itertools
+import json
 import math
 import os
 import re
@@ -73,7 +74,9 @@ import warnings
 from collections.abc import Sequence
 from typing import Any
 
+import jax
 import numpy as np
+from jax.errors import JaxRuntimeError
 
 from jaxga.core.errors import DeviceWarning, JaxgaError
 
@@ -134,8 +137,6 @@ def set_local_devices(n: int | None = None, *, warn: bool = True) -> int | None:
     depend on the device count, only the speed does) and leaves it. Returns the device
     count asked for, or None when the user's own setting was kept.
     """
-    import jax
-
     if n is None:
         if user_device_setting() is not None:
             return None
@@ -236,8 +237,6 @@ class _Session:
         """The value of ``key``, written by ``process``; raises ProcessLostError if that
         process ends normally without writing it (a lost process ends this one through
         the monitor)."""
-        from jax.errors import JaxRuntimeError
-
         while True:
             try:
                 return self.client.blocking_key_value_get(key, _POLL_MS)
@@ -274,8 +273,6 @@ def initialize(coordinator: str, num_processes: int, process_id: int, *,
     while its share is awaited.
     """
     global _session
-    import jax
-
     if num_processes < 1 or not 0 <= process_id < num_processes:
         raise JaxgaError(f"need 0 <= process id < number of processes, got process id "
                          f"{process_id} of {num_processes}")
@@ -325,8 +322,6 @@ def _current_session() -> _Session | None:
     ``jax.distributed.initialize`` directly."""
     global _session
     if _session is None:
-        import jax
-
         if jax.distributed.is_initialized() and jax.process_count() > 1:
             from jax._src import distributed
 
@@ -338,8 +333,6 @@ def _current_session() -> _Session | None:
 def run_share(n_runs: int) -> tuple[int, slice]:
     """``(padded run count, this process's slice)``: the runs padded to a multiple of
     processes x local devices, split into equal contiguous shares in process order."""
-    import jax
-
     s = _current_session()
     procs, me = (1, 0) if s is None else (s.num_processes, s.process_id)
     unit = procs * jax.local_device_count()
@@ -356,8 +349,6 @@ def allgather_runs(tree: Any) -> Any:
     runtime's key-value store, in chunks of 2 MB. Raises :class:`ProcessLostError` naming a
     process that stops responding before its share arrives.
     """
-    import jax
-
     s = _current_session()
     leaves, treedef = jax.tree_util.tree_flatten(tree)
     leaves = [np.asarray(x) for x in leaves]
@@ -391,8 +382,6 @@ def broadcast(value: Any) -> Any:
     """Process 0's ``value`` (anything JSON can write) in every process; ``value`` itself
     with one process. For decisions only process 0 can make, e.g. which design points a
     checkpoint on process 0's disk has already finished."""
-    import json
-
     s = _current_session()
     if s is None:
         return value

@@ -10,6 +10,7 @@ from __future__ import annotations
 
 import contextvars
 import functools
+import gc
 from collections.abc import Callable, Sequence
 from typing import Any
 
@@ -268,7 +269,6 @@ def clear_compiled() -> None:
     bounded. The next call compiles again (from the persistent compilation cache, when
     one is configured).
     """
-    import gc
 
     compiled_programs.cache_clear()
     jax.clear_caches()

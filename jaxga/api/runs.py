@@ -11,6 +11,7 @@ from __future__ import annotations
 
 import contextlib
 import functools
+import hashlib
 import time
 from collections.abc import Callable, Mapping, Sequence
 from typing import TYPE_CHECKING, Any
@@ -38,11 +39,13 @@ from jaxga.api.programs import (
 )
 from jaxga.api.result import Result
 from jaxga.api.seeds import seed_list, seed_sharding
-from jaxga.config.schema import Config, flatten
+from jaxga.config.presets import as_sets, load_preset, parse_set
+from jaxga.config.schema import SCHEMA, Config, flatten, freeze
 from jaxga.core.errors import ParameterError
 from jaxga.core.grid import Grid, as_integer
 from jaxga.engine import (
     build,
+    check_file_keys_read,
     check_migration,
     check_overrides_read,
     default_params,
@@ -50,7 +53,10 @@ from jaxga.engine import (
     uses_guide,
 )
 from jaxga.engine.maptables import with_tables
+from jaxga.maps import MapInfo, load_map_info
 from jaxga.operators.guide import with_guide
+from jaxga.reference.fitness import fitness_optimum, fitness_weights
+from jaxga.reference.optima import any_angle_shortest_path_np, shortest_path_np
 
 if TYPE_CHECKING:
     from jaxga.maps import MapInfo
@@ -114,7 +120,6 @@ def _normalised(key: str, value: Any) -> Any:
     """``value`` as the configuration stores it (a tuple and a list alike, numpy scalars
     as Python ones), to compare two values given for ``key``; an invalid value is
     refused with the key's own message."""
-    from jaxga.config.schema import SCHEMA, freeze
 
     if key not in SCHEMA:  # refused by name when the preset loads
         return repr(value)
@@ -135,8 +140,6 @@ def load_problem(preset, grid, corner_rule, variant, sets, overrides, generation
           check_read: bool = True):
     """``(config, grid, map name)`` of a call, checked; ``check_read=False`` leaves
     overrides that nothing reads to the caller (:func:`jaxga.compare.compare`)."""
-    from jaxga.config.presets import as_sets, check_file_keys_read, load_preset, parse_set
-    from jaxga.maps import MapInfo, load_map_info
 
     check_environment()  # a bad $JAXGA_THREEFRY, which `import jaxga` does not refuse
     map_name = "grid"
@@ -249,7 +252,6 @@ def sweep(
     every process returns the whole, identical result (:mod:`jaxga.api.parallel`; a lost
     process raises :class:`jaxga.api.parallel.ProcessLostError`).
     """
-    from jaxga.reference.fitness import fitness_optimum, fitness_weights
 
     t_start = time.perf_counter()
     if not isinstance(points, Sequence) or isinstance(points, str) \
@@ -403,7 +405,6 @@ def sweep(
 @functools.lru_cache(maxsize=32)
 def _optima_cached(digest: bytes, shape: tuple[int, int], blocked: bytes, start: tuple,
                    goal: tuple, corner_rule: str):
-    from jaxga.reference.optima import any_angle_shortest_path_np, shortest_path_np
 
     del digest  # the cache key; the arguments are the data
     b = np.frombuffer(blocked, dtype=bool).reshape(shape)
@@ -419,7 +420,6 @@ def _optima(grid: Grid):
     problems: comparing presets or repeating runs on one problem computes them once
     (the any-angle optimum of a long problem on a 256 x 256 map takes seconds:
     decision 015)."""
-    import hashlib
 
     b = np.ascontiguousarray(grid.blocked_np())
     raw = b.tobytes()

@@ -11,6 +11,8 @@ import dataclasses
 import math
 from typing import Any
 
+import numpy as np
+
 from jaxga.core.errors import ParameterError
 
 __all__ = ["P", "POS", "Field", "python_scalar"]
@@ -61,7 +63,6 @@ def python_scalar(value: Any) -> Any:
     """A numpy scalar (``np.int64(8)``, ``np.float32(0.5)``, ``np.bool_(True)``) as the
     Python value it holds; anything else unchanged. Sweeps and designs built with numpy
     give numpy scalars, which are the same values as far as a configuration goes."""
-    import numpy as np
 
     if isinstance(value, np.generic) and value.dtype.kind in "biuf":
         return value.item()

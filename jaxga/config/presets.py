@@ -180,16 +180,16 @@ def _chain(
     return [*inner, (label, body, variants)]
 
 
-def check_file_keys_read(name_or_path: str | os.PathLike, variant: str | None = None) -> None:
-    """Refuse keys that a user TOML file in the ``base`` chain of ``name_or_path`` sets
-    but that the configuration of THAT file (with ``variant`` where the file's chain
-    has it) never reads (:func:`jaxga.engine.unread_keys`), naming the file: such a key
-    is an override like ``--set``. Built-in presets, the metadata and values equal to
-    the key's default (:data:`jaxga.config.schema.DEFAULTS`: a file that spells out
-    ``tournament_size = 2``) are not checked, nor is ``map.corner_rule``, which is a
-    default that ``corner_rule=`` or a Grid replaces as a built-in preset's is."""
-    from jaxga.engine import check_overrides_read
-
+def file_overrides(name_or_path: str | os.PathLike,
+                   variant: str | None = None) -> list[tuple[str, Config, list[str]]]:
+    """The keys that each user TOML file in the ``base`` chain of ``name_or_path`` sets,
+    with the configuration of THAT file (with ``variant`` where the file's chain has it):
+    ``[(label, config, keys), ...]``. Such a key is an override like ``--set``, checked by
+    :func:`jaxga.engine.check_file_keys_read`. Built-in presets, the metadata and values
+    equal to the key's default (:data:`jaxga.config.schema.DEFAULTS`: a file that spells
+    out ``tournament_size = 2``) are left out, and so is ``map.corner_rule``, a default
+    that ``corner_rule=`` or a Grid replaces as a built-in preset's is."""
+    out = []
     chain = _chain(name_or_path)
     for depth, (label, body, variants) in enumerate(chain):
         if label.startswith("preset "):  # a built-in preset
@@ -201,10 +201,8 @@ def check_file_keys_read(name_or_path: str | os.PathLike, variant: str | None = 
         keys = [k for k in own
                 if k not in ("name", "paper", "description", "map.corner_rule")
                 and (k not in DEFAULTS or config.get(k) != DEFAULTS[k])]
-        try:
-            check_overrides_read(config, keys)
-        except ParameterError as e:
-            raise ParameterError(f"{label}: {e}") from None
+        out.append((label, config, keys))
+    return out
 
 
 def as_sets(sets: Any) -> tuple[str, ...]:

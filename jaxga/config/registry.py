@@ -70,6 +70,7 @@ __all__ = [
     "Operator",
     "accepted_names",
     "canonical",
+    "initialiser",
     "names",
     "operator",
     "operators",
@@ -629,3 +630,15 @@ register(Operator("post", "shortcut_optimal", post.shortcut_optimal,
                   "the shortest any-angle path through the path's nodes (jaxga)",
                   traits=frozenset({CONTINUOUS_ONLY})))
 _none("post", "no post-optimisation (loops removed)")
+
+
+def initialiser(name_or_fn: str | Callable) -> Callable:
+    """An initialiser ``(key, grid, capacity) -> (cells, length, ok)`` by its registered
+    name (family ``init``; an old name is accepted), or the callable itself."""
+    if callable(name_or_fn):
+        return name_or_fn
+    if isinstance(name_or_fn, str) and canonical("init", name_or_fn) is not None:
+        return operator("init", name_or_fn).fn
+    raise ParameterError(
+        f"unknown initialiser {name_or_fn!r}: expected a callable or one of "
+        f"{', '.join(names('init'))}")

@@ -29,6 +29,7 @@ from jaxga.engine.checks import (
     OFF_VALUES,
     PER_ISLAND,
     check_combination,
+    check_file_keys_read,
     check_migration,
     check_overrides_read,
     chosen_operators,
@@ -56,6 +57,7 @@ from jaxga.engine.evolution import (
 )
 
 __all__ = [
+    "check_file_keys_read",
     "Algorithm",
     "CAPACITY_FACTOR",
     "F32",

@@ -25,6 +25,7 @@ from jaxga.engine.checks import (
     chosen_operators,
     uses_waypoints,
 )
+from jaxga.operators.guide import problem_facts
 
 F32 = jnp.float32
 
@@ -96,7 +97,6 @@ def default_capacity(grid: Grid) -> int:
     the exact distance fields (:func:`jaxga.operators.guide.problem_facts`); an unreachable goal
     gets the minimum (decision 020).
     """
-    from jaxga.operators.guide import problem_facts
 
     floor = min(4 * (grid.height + grid.width), SMALL_MAP_CAPACITY)
     facts = problem_facts(grid)

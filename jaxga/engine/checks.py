@@ -8,10 +8,12 @@ the distance-field guide, the field repairs). All read :mod:`jaxga.config.regist
 
 from __future__ import annotations
 
+import os
 from collections.abc import Iterable
 from typing import Any
 
 from jaxga.config import registry
+from jaxga.config.presets import file_overrides
 from jaxga.config.registry import FIELD_REPAIR, NEVER_FAILS, WAYPOINTS
 from jaxga.config.schema import Config
 from jaxga.core.errors import ParameterError
@@ -229,3 +231,14 @@ def field_repairs(config: Config) -> bool:
     decision 019)."""
     return has_trait(chosen_operators(config), FIELD_REPAIR, FIELD_REPAIR_ROLES)
 
+
+def check_file_keys_read(name_or_path: str | os.PathLike, variant: str | None = None) -> None:
+    """Refuse keys that a user TOML file in the ``base`` chain of ``name_or_path`` sets
+    but that the configuration of that file never reads (:func:`unread_keys`, as
+    :func:`check_overrides_read` refuses ``--set``), naming the file; which keys a file
+    sets is :func:`jaxga.config.presets.file_overrides`."""
+    for label, config, keys in file_overrides(name_or_path, variant):
+        try:
+            check_overrides_read(config, keys)
+        except ParameterError as e:
+            raise ParameterError(f"{label}: {e}") from None

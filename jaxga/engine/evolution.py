@@ -32,6 +32,7 @@ from jaxga._batching.numerics import ordered_mean
 from jaxga.config import registry
 from jaxga.config.registry import NEVER_FAILS, Binding
 from jaxga.core import objectives
+from jaxga.core.geometry import clear
 from jaxga.core.grid import Grid
 from jaxga.core.paths import (
     Population,
@@ -46,7 +47,8 @@ from jaxga.operators import crossover as cx
 from jaxga.operators import mutation as mu
 from jaxga.operators import schedules
 from jaxga.operators.init import initialise_population
-from jaxga.operators.lift import windowed_map
+from jaxga.operators.islands import migrate
+from jaxga.operators.lift import gated_map, windowed_map
 
 
 # ----------------------------------------------------------------------------- stages
@@ -84,8 +86,6 @@ def waypoints_feasible(grid: Grid, cells: jax.Array, length: jax.Array) -> jax.A
     the ``P x (L - 1)`` slots are padding; testing every slot with the bounded test was
     two thirds of an AGACD generation.
     """
-    from jaxga.core.geometry import clear
-    from jaxga.operators.lift import gated_map
 
     p, cap = cells.shape
     inside, free, span, step_ok = cell_steps(grid, cells)
@@ -325,7 +325,6 @@ def _island_params(params: dict, islands: int) -> tuple[dict, dict]:
 
 def generation(algo: Algorithm, key, grid: Grid, state: GAState, params: dict):
     """One generation of a run (every island, then migration); honours the freeze."""
-    from jaxga.operators.islands import migrate
 
     t = state.generation
     per, shared = _island_params(params, algo.islands)

@@ -19,8 +19,12 @@ from __future__ import annotations
 import dataclasses
 
 import jax
+import jax.numpy as jnp
 
 from jaxga.core.grid import Grid
+from jaxga.operators.crossover import compute_free_prefix, step_masks
+from jaxga.operators.init import compute_move_tables
+from jaxga.operators.repair import compute_neighbour_masks
 
 __all__ = ["MapTables", "with_tables"]
 
@@ -51,11 +55,7 @@ class MapTables:
 
 @jax.jit
 def _compute(grid: Grid) -> MapTables:
-    import jax.numpy as jnp
 
-    from jaxga.operators.crossover import compute_free_prefix, step_masks
-    from jaxga.operators.init import compute_move_tables
-    from jaxga.operators.repair import compute_neighbour_masks
 
     nbr, legal = compute_move_tables(grid)
     bare = dataclasses.replace(grid, tables=None, guide=None)

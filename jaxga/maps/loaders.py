@@ -39,6 +39,8 @@ import numpy as np
 
 from jaxga.core.errors import EndpointError, MapFormatError
 from jaxga.core.grid import DEFAULT_CORNER_RULE, Grid, check_corner_rule, too_large
+from jaxga.maps import builtin
+from jaxga.maps.preprocess import coarsen_blocked
 
 __all__ = [
     "FORMATS",
@@ -96,7 +98,6 @@ def map_name(source: Source) -> str:
     ``map_name("den312d") == "den312d"``, ``map_name("maps/arena.map") == "arena"``.
     Does not read the file.
     """
-    from jaxga.maps import builtin  # local import: builtin imports this module
 
     if isinstance(source, str) and source in builtin.builtin_names():
         return source
@@ -152,8 +153,6 @@ def load_map_info(
     coarsen: int | None = None,
 ) -> MapInfo:
     """Like :func:`load_map` but return a :class:`MapInfo` (name, path, format, grid)."""
-    from jaxga.maps import builtin  # local import: builtin imports this module
-    from jaxga.maps.preprocess import coarsen_blocked
 
     rule = check_corner_rule(DEFAULT_CORNER_RULE if corner_rule is None else corner_rule)
     if fmt is not None and fmt not in FORMATS:
@@ -441,7 +440,6 @@ def _read_bytes(path: Path, label: str, builtin_hint: bool = False) -> bytes:
     except FileNotFoundError:
         hint = ""
         if builtin_hint:
-            from jaxga.maps import builtin
 
             hint = f" and it is not a built-in map ({', '.join(builtin.builtin_names())})"
         raise MapFormatError(f"{label}: map file not found{hint}") from None

@@ -34,6 +34,7 @@ import jax.numpy as jnp
 import numpy as np
 
 from jaxga.core.grid import DIRECTIONS, Grid
+from jaxga.maps.preprocess import legal_moves
 
 __all__ = ["Guide", "ProblemFacts", "distance_fields", "problem_facts", "with_guide"]
 
@@ -80,7 +81,6 @@ def _move_graph(blocked: np.ndarray, corner_rule: str):
     """The legal-move graph as a SciPy CSR matrix (edge weight = step length)."""
     from scipy.sparse import csr_matrix
 
-    from jaxga.maps.preprocess import legal_moves
 
     h, w = blocked.shape
     legal = legal_moves(blocked, corner_rule).reshape(len(DIRECTIONS), -1)

@@ -22,7 +22,7 @@ bounded) and reporting the success rate.
 
 The walk primitives go from any ``source`` cell to any ``target`` cell and accept an
 ``exclude`` set (cells that count as visited). Initialisers are looked up by name in
-the registry (:mod:`jaxga.config.registry`, :func:`get_initialiser`).
+the registry (:func:`jaxga.config.registry.initialiser`).
 
 Implementation notes shared by the walks
 ----------------------------------------
@@ -74,9 +74,10 @@ from jaxga.core.paths import (
     is_continuous,
     is_loop_free,
     pad,
+    position_lookup,
     remove_loops,
 )
-from jaxga.operators.repair import connect
+from jaxga.operators.repair import connect, splice_loop_free
 
 __all__ = [
     "InitFn",
@@ -85,7 +86,6 @@ __all__ = [
     "directional_probabilities",
     "directional_walk",
     "exclusion_mask",
-    "get_initialiser",
     "greedy_random_target",
     "greedy_walk",
     "initialise",
@@ -1054,8 +1054,6 @@ def field_reconnect(
     Returns ``(cells int32[L], length, ok)``; ``ok`` False = the result exceeds ``L``
     (the cells are then meaningless). Needs ``grid.guide``.
     """
-    from jaxga.core.paths import position_lookup
-    from jaxga.operators.repair import splice_loop_free
 
     guide = _require_guide(grid, "field_reconnect")
     cells = jnp.asarray(cells, _I32)
@@ -1128,21 +1126,6 @@ def field_walk(
     via = jnp.searchsorted(count, r, side="right").astype(_I32) - 1
     cells, length, ok = field_path(k_path, grid, via, capacity, budget, temperature)
     return cells, length, ok & (total > 0)
-
-
-def get_initialiser(name_or_fn: str | InitFn) -> InitFn:
-    """An initialiser by its registered name (:mod:`jaxga.config.registry`, family ``init``; an
-    old name is accepted) or the callable itself."""
-    if callable(name_or_fn):
-        return name_or_fn
-    from jaxga.config import registry  # it imports this module
-
-    if isinstance(name_or_fn, str) and registry.canonical("init", name_or_fn) is not None:
-        return registry.operator("init", name_or_fn).fn
-    raise ParameterError(
-        f"unknown initialiser {name_or_fn!r}: expected a callable or one of "
-        f"{', '.join(registry.names('init'))}"
-    )
 
 
 # ---------------------------------------------------------------------- population
@@ -1228,7 +1211,7 @@ far below it, so the fallback never draws the numbers of a round."""
 def initialise_population(
     key: jax.Array,
     grid: Grid,
-    init_fn: str | InitFn,
+    init_fn: InitFn,
     size: int,
     capacity: int,
     max_tries: int = 200,
@@ -1257,9 +1240,10 @@ def initialise_population(
     Args:
         key: PRNG key; the same key gives the same population.
         grid: the map.
-        init_fn: static; an initialiser ``(key, grid, capacity) -> (cells, length, ok)`` or
-            its registered name (:mod:`jaxga.config.registry`). Bind options with
-            ``functools.partial`` and reuse the same object (a new partial each call recompiles).
+        init_fn: static; an initialiser ``(key, grid, capacity) -> (cells, length, ok)``
+            (by registered name: :func:`jaxga.config.registry.initialiser`). Bind options
+            with ``functools.partial`` and reuse the same object (a new partial each call
+            recompiles).
         size: static population size ``P``.
         capacity: static path capacity ``L``.
         max_tries: static average attempts per individual (default 200: enough for
@@ -1292,7 +1276,11 @@ def initialise_population(
     them saves some run time but nests the initialiser's own compacted loops twice more
     into the program and lengthens its compile (decision 003).
     """
-    fn = get_initialiser(init_fn)
+    if not callable(init_fn):
+        raise ParameterError(
+            f"init_fn must be an initialiser function, got {init_fn!r} (by name: "
+            "jaxga.config.registry.initialiser(name))")
+    fn = init_fn
     capacity = _check_capacity(capacity)
     if size < 1 or max_tries < 1:
         raise ParameterError(f"size and max_tries must be >= 1, got {size}, {max_tries}")

@@ -25,6 +25,7 @@ import jax.numpy as jnp
 import numpy as np
 
 from jaxga._batching.folding import fold_call, hoist
+from jaxga._batching.scatter import true_first_order
 from jaxga.core.grid import Grid
 from jaxga.core.paths import Population
 
@@ -36,7 +37,6 @@ __all__ = [
     "over_pairs",
     "over_pairs_gated",
     "spliced_pairs_map",
-    "true_first_order",
     "windowed_map",
 ]
 
@@ -109,22 +109,6 @@ def over_pairs(op: Callable, *, in_axes_extra: tuple = ()) -> Callable:
     lifted.__name__ = getattr(op, "__name__", "op") + "_population"
     lifted.__doc__ = f"``{lifted.__name__[:-11]}`` applied to consecutive pairs (vmap)."
     return lifted
-
-
-def true_first_order(flags: jax.Array) -> jax.Array:
-    """``int32[n]``: the indices of the True entries of ``flags`` in order, then those of
-    the False entries in order; equal to ``jnp.argsort(~flags, stable=True)``.
-
-    A prefix count and one scatter of a permutation instead of a comparison sort, which
-    on XLA's CPU backend is many times slower and was half of a generation of AGACD's
-    evolution (decision 004).
-    """
-    flags = jnp.asarray(flags, bool)
-    n = flags.shape[0]
-    i = jnp.arange(n, dtype=jnp.int32)
-    trues = jax.lax.associative_scan(jnp.add, flags.astype(jnp.int32))  # inclusive
-    pos = jnp.where(flags, trues - 1, trues[-1] + i - trues)
-    return jnp.zeros((n,), jnp.int32).at[pos].set(i, unique_indices=True)
 
 
 POOL_SHRINK = 4
