@@ -483,9 +483,9 @@ def _options_per_preset(specs, grid, common: Mapping[str, Any]
         merged.update({k: v for k, v in ov.items() if k != "sets"})
         merged_sets = tuple(t for t in sets if parse_set(t)[0] not in own) + own_sets
         config, loaded, _ = load_problem(preset, grid, merged.get("corner_rule"),
-                                  merged.get("variant"), merged_sets,
-                                  {k: v for k, v in merged.items() if k not in RUN_OPTIONS},
-                                  merged.get("generations"), check_read=False)
+                                         merged.get("variant"), merged_sets,
+                                         {k: v for k, v in merged.items() if k not in RUN_OPTIONS},
+                                         merged.get("generations"), check_read=False)
         rules[label] = loaded.corner_rule
         unread = {k: why for k, why in unread_keys(config).items()
                   if k not in own and config.get(k) != OFF_VALUES.get(k, object())}

@@ -812,7 +812,7 @@ def run_doe(
         except TypeError:
             raise ParameterError(f"block must be an integer >= 1, got {block!r}") from None
     config, loaded, map_name = load_problem(preset, grid, corner_rule, variant, sets, overrides,
-                                     generations)
+                                            generations)
     check_factors(config, factors)
     overridden = overridden_keys(overrides, sets)
     both = [f.name for f in factors if f.name in overridden]

@@ -694,7 +694,7 @@ def test_relative_gap_rounds_float32_noise_to_zero_but_keeps_real_gaps():
     from jaxga.api import relative_gap
 
     gap = relative_gap(np.array([30.970598, 31.5, 29.0, 30.0]), 30.9706,
-                        np.array([True, True, True, False]))
+                       np.array([True, True, True, False]))
     assert gap[0] == 0.0 and not np.signbit(gap[0])
     assert gap[1] == pytest.approx(31.5 / 30.9706 - 1)
     assert gap[2] == pytest.approx(29.0 / 30.9706 - 1) and gap[2] < 0

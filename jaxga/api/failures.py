@@ -16,8 +16,8 @@ from jaxga.core.objectives import Metrics
 
 
 def unstarted_results(*, config, configs, points, map_name, grid, seed_arr, algo, octile,
-                       any_angle, point_opt, rate, unfilled, from_fallback,
-                       timing) -> list[Result]:
+                      any_angle, point_opt, rate, unfilled, from_fallback,
+                      timing) -> list[Result]:
     """The results of a sweep whose initialisation gave no run a path: every seed failed,
     each with its cause; nothing evolved (SPEC 10)."""
     n_seeds = len(seed_arr)
@@ -26,9 +26,9 @@ def unstarted_results(*, config, configs, points, map_name, grid, seed_arr, algo
         sl = slice(q * n_seeds, (q + 1) * n_seeds)
         success = np.zeros(n_seeds, bool)
         causes = failure_causes(success, success, rate[sl], from_fallback[sl], config,
-                         algo.capacity, len(octile.path))
+                                algo.capacity, len(octile.path))
         r = no_path_result(cfg, map_name, grid, seed_arr, algo, failure_reason(causes),
-                            timing["total_s"], algo.population)
+                           timing["total_s"], algo.population)
         results.append(dataclasses.replace(
             r, preset=config["name"], init_success_rate=rate[sl], init_unfilled=unfilled[sl],
             optimum=float(octile.length), any_angle_optimum=float(any_angle.length),
@@ -41,7 +41,7 @@ def unstarted_results(*, config, configs, points, map_name, grid, seed_arr, algo
 
 
 def warn_unfilled(unfilled: np.ndarray, init_rate: np.ndarray, capacity: int,
-                   config) -> None:
+                  config) -> None:
     """Warn (:class:`~jaxga.core.errors.InitialisationWarning`) when runs whose initialiser made
     some paths still started with copies in empty slots (SPEC 4; ``jaxga.operators.init.initialise``
     fills slots left empty after ``init.max_tries`` attempts per individual with copies).
@@ -75,8 +75,8 @@ def in_jaxga(module: str) -> bool:
 
 
 def failure_causes(success: np.ndarray, started: np.ndarray, init_rate: np.ndarray,
-            from_fallback: np.ndarray, config, capacity: int,
-            shortest_cells: int) -> np.ndarray:
+                   from_fallback: np.ndarray, config, capacity: int,
+                   shortest_cells: int) -> np.ndarray:
     """Per seed, why it returned no path ("" for a successful seed): its initialisation
     gave it no path (the initialiser never succeeded on this map, with or without the
     fallback; or the path capacity is below the shortest path's cell count), or its best
@@ -114,7 +114,7 @@ def failure_reason(causes: np.ndarray) -> str:
 
 
 def no_path_result(config, map_name, grid, seeds, algo, reason, elapsed,
-                    population_capacity) -> Result:
+                   population_capacity) -> Result:
     s = len(seeds)
     empty = np.zeros((s, 1), np.int32)
     nan = np.full(s, np.nan)

@@ -172,7 +172,7 @@ nothing)."""
 
 @functools.lru_cache(maxsize=PROGRAM_CACHE_SIZE)
 def compiled_programs(algo: Algorithm, grid_spec: Any, params_spec: Any, n_runs: int,
-              sizes: tuple[int, ...], n_devices: int) -> Programs:
+                      sizes: tuple[int, ...], n_devices: int) -> Programs:
     """Trace init / evolve (one per chunk size) / finish for ``n_runs`` runs and compile
     init (the others when first needed: :class:`Programs`).
 

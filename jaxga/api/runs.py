@@ -44,6 +44,7 @@ from jaxga.config.schema import SCHEMA, Config, flatten, freeze
 from jaxga.core.errors import ParameterError
 from jaxga.core.grid import Grid, as_integer
 from jaxga.engine import (
+    Algorithm,
     build,
     check_file_keys_read,
     check_migration,
@@ -60,47 +61,6 @@ from jaxga.reference.optima import any_angle_shortest_path_np, shortest_path_np
 
 if TYPE_CHECKING:
     from jaxga.maps import MapInfo
-
-
-
-
-
-
-
-
-
-
-
-
-
-
-
-
-
-
-
-
-
-
-
-
-
-
-
-
-
-
-
-
-
-
-
-
-
-
-
-
-
 
 
 def _check_call_options(progress, chunks) -> None:
@@ -137,7 +97,7 @@ def check_one_corner_rule(corner_rule: str | None, config: Config,
 
 
 def load_problem(preset, grid, corner_rule, variant, sets, overrides, generations, *,
-          check_read: bool = True):
+                 check_read: bool = True):
     """``(config, grid, map name)`` of a call, checked; ``check_read=False`` leaves
     overrides that nothing reads to the caller (:func:`jaxga.compare.compare`)."""
 
@@ -254,16 +214,10 @@ def sweep(
     """
 
     t_start = time.perf_counter()
-    if not isinstance(points, Sequence) or isinstance(points, str) \
-            or not all(isinstance(p, Mapping) and all(isinstance(k, str) for k in p)
-                       for p in points):
-        raise ParameterError(f"points must be a list of mappings key -> value, got "
-                             f"{points!r}")
-    if not points:
-        raise ParameterError("a sweep needs at least one point")
+    _check_points(points)
     _check_call_options(progress, chunks)
     config, grid, map_name = load_problem(preset, grid, corner_rule, variant, sets, overrides,
-                                   generations)
+                                          generations)
     configs = _point_configs(config, points)
     capacity = checked_capacity(configs, population_capacity)
     octile, any_angle = _optima(grid)
@@ -271,7 +225,7 @@ def sweep(
         seed_arr = seed_list(seeds, lambda n: check_memory(
             n * len(configs), NO_PATH_BYTES_PER_RUN, "for their results"))
         return [no_path_result(c, map_name, grid, seed_arr, build(c, grid)[0], octile.reason,
-                                time.perf_counter() - t_start, capacity) for c in configs]
+                               time.perf_counter() - t_start, capacity) for c in configs]
     if uses_guide(config):  # the exact distance fields the field initialiser steers by
         grid = with_guide(grid)
     grid = with_tables(grid)  # per-map tables, once per run rather than per generation
@@ -285,24 +239,7 @@ def sweep(
     point_opt = [fit_opts[k] for k in fit_keys]
     n_points = len(configs)
     seed_arr = seed_list(seeds, lambda n: check_result_memory(n * n_points, algo))
-    n_seeds = len(seed_arr)
-    n_runs = n_seeds * n_points
-    # Runs padded (copies of the last run) to a multiple of processes x local devices;
-    # this process computes its contiguous share and allgather_runs joins the shares.
-    n_total, share = parallel.run_share(n_runs)
-    pad = n_total - n_runs
-    run_seeds = np.concatenate([np.tile(seed_arr, n_points),
-                                np.repeat(seed_arr[-1:], pad)])[share]
-    params = stack_params(per_point, n_seeds)
-    if pad:
-        params = {k: jnp.concatenate([v, jnp.repeat(v[-1:], pad, axis=0)])
-                  for k, v in params.items()}
-    params = {k: v[share] for k, v in params.items()}
-    keys = jax.vmap(jax.random.PRNGKey)(jnp.asarray(run_seeds, jnp.uint32))
-    sh, rep = seed_sharding()
-    if sh is not None:
-        keys, params = jax.device_put((keys, params), sh)
-        grid = jax.device_put(grid, rep)
+    n_total, keys, params, grid = _this_process_runs(seed_arr, per_point, grid)
 
     def report(stage: str, frac: float) -> None:
         if progress is not None:
@@ -313,8 +250,9 @@ def sweep(
     t0 = time.perf_counter()
     token = COMPILE_PROGRESS.set(lambda frac: report("compile", frac))
     try:
-        progs = compiled_programs(algo, shape_spec(grid), tuple(sorted(shape_spec(params).items())),
-                          len(run_seeds), sizes, jax.local_device_count())
+        progs = compiled_programs(algo, shape_spec(grid),
+                                  tuple(sorted(shape_spec(params).items())), len(keys), sizes,
+                                  jax.local_device_count())
     finally:
         COMPILE_PROGRESS.reset(token)
     compile_s = time.perf_counter() - t0
@@ -347,15 +285,8 @@ def sweep(
     report("compile", 1.0)
 
     t0 = time.perf_counter()
-    hists = []
-    done = 0
-    for n in sizes:
-        state, h = progs.evolve[n](keys, grid, params, state)
-        jax.block_until_ready(state)
-        hists.append(h)
-        done += n
-        report("evolve", done / algo.generations)
-    history = {k: jnp.concatenate([h[k] for h in hists], axis=1) for k in hists[0]}
+    state, history = _evolve_in_chunks(progs, sizes, keys, grid, params, state,
+                                       lambda frac: report("evolve", frac))
     evolve_s = time.perf_counter() - t0
 
     t0 = time.perf_counter()
@@ -366,6 +297,71 @@ def sweep(
 
     host, hist = parallel.allgather_runs((out, history))
     timing["total_s"] = time.perf_counter() - t_start
+    return _point_results(host, hist, started=started, timing=timing, **common)
+
+
+def _check_points(points: Any) -> None:
+    """A sweep's points: a non-empty list of mappings from key strings to values."""
+    if not isinstance(points, Sequence) or isinstance(points, str) \
+            or not all(isinstance(p, Mapping) and all(isinstance(k, str) for k in p)
+                       for p in points):
+        raise ParameterError(f"points must be a list of mappings key -> value, got "
+                             f"{points!r}")
+    if not points:
+        raise ParameterError("a sweep needs at least one point")
+
+
+def _this_process_runs(seed_arr: np.ndarray, per_point: Sequence[dict],
+                       grid: Grid) -> tuple[int, jax.Array, dict, Grid]:
+    """``(n_total, keys, params, grid)`` of this process's runs, on its devices.
+
+    Run ``q * S + s`` is point ``q`` with seed ``s``; the runs are padded (copies of the
+    last run) to ``n_total``, a multiple of processes x local devices; this process
+    computes its contiguous share and :func:`jaxga.api.parallel.allgather_runs` joins
+    the shares."""
+    n_seeds, n_points = len(seed_arr), len(per_point)
+    n_runs = n_seeds * n_points
+    n_total, share = parallel.run_share(n_runs)
+    pad = n_total - n_runs
+    run_seeds = np.concatenate([np.tile(seed_arr, n_points),
+                                np.repeat(seed_arr[-1:], pad)])[share]
+    params = stack_params(per_point, n_seeds)
+    if pad:
+        params = {k: jnp.concatenate([v, jnp.repeat(v[-1:], pad, axis=0)])
+                  for k, v in params.items()}
+    params = {k: v[share] for k, v in params.items()}
+    keys = jax.vmap(jax.random.PRNGKey)(jnp.asarray(run_seeds, jnp.uint32))
+    sh, rep = seed_sharding()
+    if sh is not None:
+        keys, params = jax.device_put((keys, params), sh)
+        grid = jax.device_put(grid, rep)
+    return n_total, keys, params, grid
+
+
+def _evolve_in_chunks(progs: Any, sizes: tuple[int, ...], keys: jax.Array, grid: Grid,
+                      params: dict, state: Any,
+                      report: Callable[[float], None]) -> tuple[Any, dict]:
+    """The generations as the compiled chunks ``sizes`` (:func:`equal_chunks`), reporting
+    the fraction done after each; the per-generation history joined."""
+    hists = []
+    done = 0
+    for n in sizes:
+        state, h = progs.evolve[n](keys, grid, params, state)
+        jax.block_until_ready(state)
+        hists.append(h)
+        done += n
+        report(done / sum(sizes))
+    return state, {k: jnp.concatenate([h[k] for h in hists], axis=1) for k in hists[0]}
+
+
+def _point_results(host: dict, hist: dict, *, config: Config, configs: Sequence[Config],
+                   points: Sequence[Mapping[str, Any]], map_name: str, grid: Grid,
+                   seed_arr: np.ndarray, algo: Algorithm, octile: Any, any_angle: Any,
+                   point_opt: Sequence[Any], rate: np.ndarray, unfilled: np.ndarray,
+                   from_fallback: np.ndarray, started: np.ndarray,
+                   timing: dict) -> list[Result]:
+    """One :class:`Result` per point from the gathered outputs of all runs (run
+    ``q * S + s`` is point ``q``, seed ``s``)."""
     n_seeds = len(seed_arr)
     results = []
     for q, cfg in enumerate(configs):
@@ -373,7 +369,7 @@ def sweep(
         h = jax.tree_util.tree_map(lambda a, sl=sl: a[sl], host)
         success = h["success"] & h["feasible_post"]
         causes = failure_causes(success, started[sl], rate[sl], from_fallback[sl], config,
-                         algo.capacity, len(octile.path))
+                                algo.capacity, len(octile.path))
         results.append(Result(
             preset=config["name"], map_name=map_name, corner_rule=grid.corner_rule,
             seeds=seed_arr, success=success, reason=failure_reason(causes),
@@ -385,7 +381,7 @@ def sweep(
             convergence_generation=h["convergence_generation"],
             history={k: v[sl] for k, v in hist.items()},
             metrics=h["metrics"], raw_metrics=h["raw_metrics"], failures=h["failures"],
-            init_success_rate=rate[sl], init_unfilled=unf[sl],
+            init_success_rate=rate[sl], init_unfilled=unfilled[sl],
             optimum=float(octile.length), any_angle_optimum=float(any_angle.length),
             timing=dict(timing), population=int(cfg["population.size"]) * algo.islands,
             generations=algo.generations, width=grid.width, config=cfg,
@@ -398,8 +394,6 @@ def sweep(
             init_fallback=from_fallback[sl], causes=causes, path_capacity=algo.capacity,
         ))
     return results
-
-
 
 
 @functools.lru_cache(maxsize=32)
@@ -522,32 +516,10 @@ def check_run(preset: str | Config, grid: Grid | str, **options: Any) -> Config:
     named = {k: overrides.pop(k) for k in RUN_OPTIONS if k in overrides}
     _check_call_options(named.get("progress"), named.get("chunks", 1))
     config, grid, _ = load_problem(preset, grid, named.get("corner_rule"), named.get("variant"),
-                            named.get("sets", ()), overrides, named.get("generations"))
+                                   named.get("sets", ()), overrides, named.get("generations"))
     (config,) = _point_configs(config, [{}])
     checked_capacity([config], named.get("population_capacity"))
     build(config, grid)  # check_migration and check_combination
     return config
-
-
-
-
-
-
-
-
-
-
-
-
-
-
-
-
-
-
-
-
-
-
 
 

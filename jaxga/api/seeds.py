@@ -18,7 +18,7 @@ SEED_LIMIT = 2**32
 
 
 def seed_list(seeds: int | Sequence[int],
-               check_count: Callable[[int], None] | None = None) -> np.ndarray:
+              check_count: Callable[[int], None] | None = None) -> np.ndarray:
     """The seeds of a call, checked: a count ``N`` (seeds ``0..N-1``) or explicit seeds.
     ``check_count(n)`` runs once the number of seeds is known, before a count is turned
     into an array (so a count too large for memory is refused before it is allocated)."""
