@@ -15,6 +15,8 @@ a ``shrinking`` operator never lengthens a path.
 
 from __future__ import annotations
 
+import functools
+
 import jax
 import jax.numpy as jnp
 import numpy as np
@@ -66,6 +68,20 @@ def _check(ok, op: registry.Operator, what: str) -> None:
         raise AssertionError(f"{op.family} operator {op.name!r}: {what}")
 
 
+@functools.partial(jax.jit, static_argnames="waypoints")
+def _path_checks(grid: Grid, cells, length, waypoints: bool):
+    """Per path: from start to goal, feasible (continuous unless ``waypoints``), loop-free;
+    one compiled program per shape, shared by every operator's check."""
+    feasible = is_feasible if waypoints else is_continuous
+    ends = jax.vmap(lambda a, b: has_endpoints(grid, a, b))(cells, length)
+    feas = jax.vmap(lambda a, b: feasible(grid, a, b))(cells, length)
+    loops = jax.vmap(lambda a, b: is_loop_free(a, b, grid.n_cells))(cells, length)
+    return ends, feas, loops
+
+
+_path_lengths = jax.jit(jax.vmap(path_length, in_axes=(None, 0, 0)))
+
+
 def check_paths(op, grid: Grid, cells, length, *, valid=None, waypoints=False) -> None:
     """Shapes, dtypes and padding of paths ``cells[N, L]``, ``length[N]``; where
     ``valid``: start to goal, feasible (continuous unless ``waypoints``), loop-free."""
@@ -78,11 +94,8 @@ def check_paths(op, grid: Grid, cells, length, *, valid=None, waypoints=False) -
     _check(pad_ok, op, "paths must be padded with their last cell (SPEC 2)")
     if valid is None:
         return
-    feasible = is_feasible if waypoints else is_continuous
-    c, L = jnp.asarray(cells), jnp.asarray(length)
-    ends = jax.vmap(lambda a, b: has_endpoints(grid, a, b))(c, L)
-    feas = jax.vmap(lambda a, b: feasible(grid, a, b))(c, L)
-    loops = jax.vmap(lambda a, b: is_loop_free(a, b, grid.n_cells))(c, L)
+    ends, feas, loops = _path_checks(grid, jnp.asarray(cells), jnp.asarray(length),
+                                     waypoints)
     valid = np.asarray(valid)
     _check(~valid | np.asarray(ends), op, "a path that does not go from start to goal")
     _check(~valid | np.asarray(feas), op, "an infeasible path from feasible input"
@@ -215,8 +228,8 @@ def check_post(op: registry.Operator, grid: Grid, pop: Population) -> None:
     out = run(pop.cells, pop.length)
     cells, length = out
     check_paths(op, grid, cells, length, valid=np.ones(P, bool), waypoints=True)
-    before = jax.vmap(lambda c, n: path_length(grid, c, n))(pop.cells, pop.length)
-    after = jax.vmap(lambda c, n: path_length(grid, c, n))(cells, length)
+    before = _path_lengths(grid, pop.cells, pop.length)
+    after = _path_lengths(grid, cells, length)
     _check(np.asarray(after) <= np.asarray(before) + 1e-4, op, "it lengthened a path")
     _vmap_equals_alone(op, out, lambda c, n: fn(grid, c, n),
                        lambda i: (pop.cells[i], pop.length[i]))

@@ -204,8 +204,9 @@ def test_adaptive_generation_equals_its_straight_line_composition():
     one = functools.partial(E.island_generation, algo, grid=grid, params=params)
     looped = jax.jit(lambda k, s, t: one(key=k, isl=s, t=t))
     straight = jax.jit(straight)
+    init = jax.jit(lambda k: E.init_state(algo, k, with_guide(grid), params)[0])
     for r in range(2):
-        state, _ = E.init_state(algo, jax.random.PRNGKey(r), with_guide(grid), params)
+        state = init(jax.random.PRNGKey(r))
         isl = jax.tree_util.tree_map(lambda x: x[0], state.islands)
         for t in range(2):
             key = jax.random.fold_in(jax.random.PRNGKey(10 + r), t)
