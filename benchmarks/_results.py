@@ -104,8 +104,8 @@ PRESETS = ("sga", "imga", "agacd", "iga_zhang", "mpmga", "iga_zhu")
 (``jaxga.config.presets.preset_names()`` lists them alphabetically)."""
 
 PROGRAMS = ("init", "finish", "evolve")
-"""The programs ``jaxga.api.compiled_programs`` compiles, in compile order (one evolve program
-per chunk size: several when a run is split into chunks)."""
+"""The programs ``jaxga.api.programs.compiled_programs`` compiles, in compile order (one
+evolve program per chunk size: several when a run is split into chunks)."""
 
 
 def xla_seconds_by_program(xla: list) -> dict[str, float]:

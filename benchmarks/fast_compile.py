@@ -13,7 +13,7 @@ results are identical (``_results.result_hash``: every path, fitness, length and
 history). Equal hashes here do not make the two compilations bit-identical in general:
 a small mpmga run differed by 1 ulp in one history value. jaxga compiles the init and
 evolve programs with XLA's default and only the finish program with the older emitters
-(``jaxga.api.FINISH_COMPILER_OPTIONS``, decision 012); the flag is a user's choice
+(``jaxga.api.programs.FINISH_COMPILER_OPTIONS``, decision 012); the flag is a user's choice
 (README, performance).
 """
 

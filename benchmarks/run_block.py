@@ -1,4 +1,4 @@
-"""How many runs one device should compute together: ``jaxga.api.RUN_BLOCK`` swept.
+"""How many runs one device computes together: ``jaxga.api.programs.RUN_BLOCK`` swept.
 
     python benchmarks/run_block.py [--preset sga] [--seeds 1000] [--generations 50]
         [--blocks 128,64,32,24] [--devices N]
@@ -29,7 +29,7 @@ def child(preset: str, seeds: int, generations: int, block: int) -> dict:
     from jaxga import api
     from jaxga.maps import load_map
 
-    api.RUN_BLOCK = block
+    api.programs.RUN_BLOCK = block
     grid = load_map("classic_ga_gapp3_20x20", corner_rule="free")
     size = 20 if preset == "mpmga" else 60
     r = api.run(preset, grid, seeds=seeds, population__size=size, generations=generations)

@@ -91,9 +91,9 @@ def test_every_preset_returns_only_feasible_paths(preset_run, grid):
 
 def test_every_preset_is_deterministic(preset_run, grid):
     name, r, overrides = preset_run
-    before = api.compiled_programs.cache_info().misses
+    before = api.programs.compiled_programs.cache_info().misses
     again = api.run(name, grid, seeds=[2, 0, 1], **overrides)  # other order, same program
-    assert api.compiled_programs.cache_info().misses == before
+    assert api.programs.compiled_programs.cache_info().misses == before
     for i, j in ((0, 2), (1, 0), (2, 1)):
         assert again.success[i] == r.success[j]
         assert np.array_equal(again.cells[i], r.cells[j])
@@ -493,10 +493,10 @@ def test_a_sweep_point_too_small_for_its_migrants_is_refused(grid):
 
 def test_compiled_programs_are_reused_across_maps_seeds_and_values(grid):
     api.run("sga", grid, seeds=[5, 6, 7], **SMALL)
-    before = api.compiled_programs.cache_info()
+    before = api.programs.compiled_programs.cache_info()
     other = random_map(10, 10, 0.25, 11, corner_rule="free")
     r = api.run("sga", other, seeds=[7, 8, 9], crossover__probability=0.5, **SMALL)
-    after = api.compiled_programs.cache_info()
+    after = api.programs.compiled_programs.cache_info()
     assert after.misses == before.misses and after.hits == before.hits + 1
     assert r.timing["compile_s"] < 1.0
 
@@ -515,7 +515,7 @@ def test_a_chunked_run_equals_one_call_and_compiles_one_evolve_program(grid, mon
     kw = {**SMALL, "generations": 4}
     one = api.run("iga_zhang", grid, seeds=3, **kw)
     compiled = []
-    programs = api.compiled_programs
+    programs = api.programs.compiled_programs
 
     def recording(*args):
         out = programs(*args)

@@ -87,12 +87,12 @@ import json, jax
 from jaxga import api
 from jaxga.maps import random_map
 if jax.device_count() > 1:  # and each device computes its runs one block at a time
-    api.RUN_BLOCK = api.INIT_RUN_BLOCK = 1
+    api.programs.RUN_BLOCK = api.programs.INIT_RUN_BLOCK = 1
 g = random_map(10, 10, 0.2, 3, corner_rule="free")
 r = api.run("sga", g, seeds=21, population__size=8, generations=3, init__max_tries=50)
 n = 21 if jax.device_count() == 1 else 24
 print(json.dumps({"devices": jax.device_count(), "blocks": api.run_blocks(n, jax.device_count()),
-                  "init_blocks": api.run_blocks(n, jax.device_count(), api.INIT_RUN_BLOCK),
+                  "init_blocks": api.run_blocks(n, jax.device_count(), api.programs.INIT_RUN_BLOCK),
                   "cells": r.cells.tolist(), "raw": r.raw_cells.tolist(),
                   "fitness": r.fitness.tolist(), "length": r.length.tolist(),
                   **{h: r.history[h].tolist() for h in ("best", "mean", "std")}}))
@@ -102,7 +102,7 @@ print(json.dumps({"devices": jax.device_count(), "blocks": api.run_blocks(n, jax
 def test_results_do_not_depend_on_the_device_count():
     """Seeds sharded over 4 forced host devices (21 seeds padded to 24), each device
     computing its runs one at a time (``api.map_runs``), == one device, one ``vmap`` of
-    21 (initialised in 3 blocks of 7, ``api.INIT_RUN_BLOCK``): the same paths and the
+    21 (initialised in 3 blocks of 7, ``api.programs.INIT_RUN_BLOCK``): the same paths and the
     same float bits for every reported value (sums in a fixed order,
     ``jaxga._batching.numerics``)."""
     import json

@@ -516,6 +516,7 @@ def test_x64_mode_keeps_int32():
     code = textwrap.dedent("""
         import sys, jax, numpy as np
         jax.config.update("jax_compilation_cache_dir", sys.argv[1])
+        from jaxga.config import registry
         from jaxga.operators import init as I
         from jaxga.operators.guide import with_guide
         from jaxga.maps import random_map

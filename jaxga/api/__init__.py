@@ -18,9 +18,6 @@ from jaxga.api.memory import (
     check_result_memory,
 )
 from jaxga.api.programs import (
-    INIT_RUN_BLOCK,
-    PROGRAM_CACHE_SIZE,
-    RUN_BLOCK,
     clear_compiled,
     equal_chunks,
     map_runs,
@@ -54,9 +51,6 @@ __all__ = [
     "FITNESS_GAP_TOLERANCE",
     "GAPS",
     "GAP_TOLERANCE",
-    "INIT_RUN_BLOCK",
-    "PROGRAM_CACHE_SIZE",
-    "RUN_BLOCK",
     "RUN_OPTIONS",
     "Result",
     "SEED_LIMIT",
