@@ -31,6 +31,20 @@ def grid():
     return random_map(10, 10, 0.2, 3, corner_rule="free")
 
 
+ZHANG_DEFAULTS = {"a": 2.0, "v": 1.0, "v_t": 0.5, "r": 0.5}
+
+
+def _zhang_fitness(path: np.ndarray, a: float, v: float, v_t: float, r: float) -> float:
+    """Zhang eq. 2 on any polyline: 1 / (length + a m (v - v_t) pi r / (2 v v_t)), m the
+    nodes where the heading changes."""
+    seg = np.diff(path.astype(float), axis=0)
+    cross = seg[:-1, 0] * seg[1:, 1] - seg[:-1, 1] * seg[1:, 0]
+    back = (seg[:-1] * seg[1:]).sum(axis=1) < 0
+    turns = int(np.sum((np.abs(cross) > 1e-9) | back))
+    return 1.0 / (np.hypot(seg[:, 0], seg[:, 1]).sum()
+                  + a * turns * (v - v_t) * math.pi * r / (2 * v * v_t))
+
+
 @pytest.fixture(scope="module", params=sorted(preset_names()))
 def preset_run(request, grid):
     name = request.param
@@ -42,6 +56,7 @@ def preset_run(request, grid):
 
 def test_every_preset_returns_only_feasible_paths(preset_run, grid):
     name, r, _ = preset_run
+    waypoints = engine.uses_waypoints(r.config)  # AGACD; Zhang's eq. 5 deletions
     blocked = grid.blocked_np()
     octile = shortest_path(grid).length
     bound = any_angle_shortest_path(grid).length
@@ -54,14 +69,15 @@ def test_every_preset_returns_only_feasible_paths(preset_run, grid):
         raw = r.path(i, raw=True)
         assert raw[0] == grid.start_xy and raw[-1] == grid.goal_xy
         assert all(clear_np(blocked, grid.corner_rule, p, q) for p, q in zip(raw, raw[1:]))
-        if name not in ("agacd",):  # grid-step presets: the raw path is 8-connected
+        if not waypoints:  # grid-step presets: the raw path is 8-connected
             assert all(max(abs(p[0] - q[0]), abs(p[1] - q[1])) == 1
                        for p, q in zip(raw, raw[1:])), name
             assert r.raw_length[i] >= octile - 1e-4
     assert r.history["best"].shape == (3, 3)
     assert np.all(np.diff(r.history["best"], axis=1) >= 0)
-    # no run beats the exact optimum of its own fitness (AGACD's waypoint fitness has none)
-    if name == "agacd":
+    # no run beats the exact optimum of its own fitness (over 8-connected paths: none for
+    # waypoint paths)
+    if waypoints:
         assert math.isnan(r.fitness_optimum) and np.isnan(r.fitness_gap).all()
     else:
         opt = fitness_optimum(grid, r.config)
@@ -72,13 +88,13 @@ def test_every_preset_returns_only_feasible_paths(preset_run, grid):
         assert r.fitness_optimum_reason == ""
     # every raw gap against the optimum of the raw paths' kind: never below it
     assert np.all(r.raw_gap[r.success] >= 0) and np.all(r.gap[r.success] >= 0), name
-    assert r.raw_optimum == (bound if name == "agacd" else octile)
+    assert r.raw_optimum == (bound if waypoints else octile)
     # the JSON layout of `jaxga run --json`: enough to identify and repeat the runs
     js = r.to_json()
     assert js["preset"] == name and len(js["runs"]) == 3
     assert {"compile_s", "init_s", "evolve_s", "post_s", "total_s"} <= set(js["timing"])
-    assert js["fitness_optimum"] == (None if name == "agacd" else r.fitness_optimum)
-    assert ("waypoint" in js["fitness_optimum_reason"]) == (name == "agacd")
+    assert js["fitness_optimum"] == (None if waypoints else r.fitness_optimum)
+    assert ("waypoint" in js["fitness_optimum_reason"]) == waypoints
     assert js["start"] == list(grid.start_xy) and js["goal"] == list(grid.goal_xy)
     assert js["config"] == r.config.as_dict() and js["config"]["generations"] == 3
     assert js["population_capacity"] == 8 and js["raw_optimum"] == r.raw_optimum
@@ -124,9 +140,12 @@ def test_reported_values_agree_with_the_returned_paths(preset_run, grid):
         post, raw = r.path(i), r.path(i, raw=True)
         assert math.isclose(r.length[i], path_length(np.array(post)), rel_tol=1e-5)
         assert math.isclose(r.raw_length[i], path_length(np.array(raw)), rel_tol=1e-5)
-        if name != "agacd":  # the five grid-step fitnesses have an independent scorer
-            method, weights = fitness_weights(r.config)
+        method, weights = fitness_weights(r.config)
+        if not engine.uses_waypoints(r.config):  # grid-step fitnesses: independent scorer
             ref = path_fitness_np(blocked, grid.goal_xy, method, weights, np.array(raw))
+            assert math.isclose(ref, float(r.fitness[i]), rel_tol=1e-5), (name, i)
+        elif method == "iga_zhang":  # Zhang's eq. 2 on a polyline, from the paper
+            ref = _zhang_fitness(np.array(raw), **{**ZHANG_DEFAULTS, **weights})
             assert math.isclose(ref, float(r.fitness[i]), rel_tol=1e-5), (name, i)
         # the first generation whose best-so-far is the final best (0: the initial
         # population held it, so every generation's best-so-far equals it)

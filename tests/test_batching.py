@@ -383,8 +383,10 @@ def test_engine_evaluation_in_the_window_equals_full_width(setting, preset):
     from jaxga.engine import build, evaluate
 
     grid, pop = setting
+    # the waypoint presets (agacd; iga_zhang's eq. 5 deletions) have no window: their
+    # grid-step variants
     over = ({"crossover.method": "common_point", "mutation.method": "neighbour_point"}
-            if preset == "agacd" else {})  # agacd proper works on waypoints (no window)
+            if preset in ("agacd", "iga_zhang") else {})
     cells = pop.cells.at[1, 5].set(pop.cells[1, 20])  # a jump: infeasible
     active = jnp.arange(cells.shape[0]) < 9
     out = []

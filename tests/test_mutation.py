@@ -46,6 +46,7 @@ OPS = {
     ),
     "corner_cut": (M.corner_cut, (), (), "continuous"),
     "corner_cut_knight": (functools.partial(M.corner_cut, knight=True), (), (), "waypoint"),
+    "delete_corner": (M.delete_corner, (), (), "waypoint"),
     "with_probability": (
         M.with_probability(M.one_point), (jnp.float32(0.5),), (None,), "continuous",
     ),
@@ -293,6 +294,33 @@ def test_corner_cut_staircase():
     # knight=True (eq. 5): after dropping (1, 0), (0,0) -> (2,1) is a clear knight move,
     # so (1, 1) goes too; the pass continues from the last KEPT node (0, 0).
     assert _apply("corner_cut_knight", grid, stair) == ([(0, 0), (2, 1), (3, 3)], False)
+
+
+def test_delete_corner_mutates_one_random_position_by_eq_3_to_5():
+    """Zhang's mutation at ONE random interior position: the node goes when it is a
+    corner of eq. 3-4 (its neighbours adjacent) or eq. 5 (a clear knight move), else
+    nothing changes and the mutation counts as failed."""
+    grid = Grid.create(np.zeros((SIZE, SIZE), bool), start=(0, 0), goal=(3, 3), corner_rule="free")
+    # one interior node: the position is forced
+    assert _apply("delete_corner", grid, [(0, 0), (1, 0), (1, 1)]) == ([(0, 0), (1, 1)], False)
+    assert _apply("delete_corner", grid, [(0, 0), (1, 0), (2, 0)]) == (
+        [(0, 0), (1, 0), (2, 0)], True)  # straight: no corner
+    assert _apply("delete_corner", grid, [(0, 0), (1, 1), (2, 1)]) == ([(0, 0), (2, 1)], False)
+    b = np.zeros((SIZE, SIZE), bool)
+    b[0, 1] = True  # (1, 0): the other cell beside the knight move (0,0) -> (2,1)
+    walled = Grid.create(b, start=(0, 0), goal=(2, 1), corner_rule="free")
+    assert _apply("delete_corner", walled, [(0, 0), (1, 1), (2, 1)]) == (
+        [(0, 0), (1, 1), (2, 1)], True)
+    # a staircase: exactly one node goes per mutation, and over many draws every interior
+    # node goes (each is a corner), about equally often
+    stair = [(0, 0), (1, 0), (1, 1), (2, 1), (2, 2), (3, 2), (3, 3)]
+    counts, n_failed = _outcomes("delete_corner", grid, stair, 25)
+    assert n_failed == 0
+    assert all(len(path) == len(stair) - 1 for path in counts)
+    gone = {next(c for c in stair if c not in path) for path in counts}
+    assert gone == set(stair[1:-1])
+    share = np.array(list(counts.values())) / sum(counts.values())
+    assert share.min() > 0.5 / 5 and share.max() < 2.0 / 5
 
 
 def test_corner_cut_respects_corner_rule_and_zhang_side_cells():

@@ -600,6 +600,9 @@ register(Operator("mutation", "replace_point_or_regrow", None,
                   "half replace_point, half regrow_segment (Zhu & Pan 4.5, 4.7 step 3)",
                   traits=frozenset({FIELD_REPAIR}), population=_half_replace_point_half_regrow,
                   aliases=("zhu_mixed",)))
+register(Operator("mutation", "delete_corner", mu.delete_corner,
+                  "delete the node at one random position when it is a 45, 90 or 135 degree "
+                  "corner (Zhang eq. 3-5)", traits=frozenset({SHRINKING, WAYPOINTS})))
 _none("mutation", "no mutation")
 
 

@@ -54,6 +54,7 @@ from jaxga.operators.repair import concat, connect, splice_loop_free
 __all__ = [
     "adaptive_mutation_probability",
     "corner_cut",
+    "delete_corner",
     "either",
     "mutation_population",
     "neighbour_point",
@@ -475,6 +476,48 @@ def corner_cut(
     dropped = jnp.concatenate([jnp.zeros((1,), bool), cut, jnp.zeros((1,), bool)])
     out, out_len = compact(cells, (idx < length) & ~dropped)
     return out, out_len, jnp.zeros((), bool)
+
+
+def delete_corner(
+    key: jax.Array,
+    grid: Grid,
+    cells: jax.Array,
+    length: jax.Array,
+    *,
+    knight: bool = True,
+) -> tuple[jax.Array, jax.Array, jax.Array]:
+    """Zhang's improved mutation at one random mutation position (Zhang, "Research
+    Method" and "Improved Mutation Operators", eq. 3-5).
+
+    The paper mutates an individual at one position drawn at random ("use the random
+    number method to determine the individual's mutation position, and mutate the gene at
+    this position") and deletes that gene ``N_i`` when ``N_{i-1}, N_i, N_{i+1}`` form a
+    45 degree corner (``N_{i+1} - N_{i-1}`` = 10 or 1 on its 10-wide grid: the neighbours
+    are orthogonally adjacent, eq. 3), a 90 degree corner (11: diagonally adjacent, eq. 4)
+    or a 135 degree corner (12 or 21: a knight move apart, eq. 5) "if the upper and lower
+    grids of the gene position of the mutation point are free". jaxga draws the position
+    uniformly among the interior nodes and applies the rule in all 8 directions and on any
+    width: ``N_i`` is deleted when ``N_{i-1} -> N_{i+1}`` is a legal move under the
+    corner rule (eq. 3-4: the path stays continuous) or, with ``knight`` (static), a clear
+    knight move (eq. 5, :func:`_knight_clear`: the path becomes a feasible waypoint path,
+    scored by Zhang's fitness of segment lengths and turns). Not a corner, or a path
+    without an interior node: no mutation, reported as ``failed`` (the parent is kept).
+    A feasible loop-free input stays feasible, loop-free, and one node shorter.
+    """
+    cells = jnp.asarray(cells, _I32)
+    length = jnp.asarray(length, _I32)
+    cap = cells.shape[0]
+    if cap < 3:
+        return cells, length, jnp.ones((), bool)
+    i, has_node = _interior(jax.random.bits(key, (), _U32), length)
+    prev, nxt = cells[i - 1], cells[jnp.minimum(i + 1, cap - 1)]
+    corner = move_legal(grid, prev, nxt)
+    if knight:
+        corner |= _knight_clear(grid, prev, nxt)
+    idx = jnp.arange(cap, dtype=_I32)
+    shifted = cells[jnp.minimum(idx + 1, cap - 1)]
+    new = jnp.where(idx < i, cells, shifted)
+    return _finish(has_node & corner, new, length - 1, cells, length)
 
 
 # ------------------------------------------------------------- probabilities

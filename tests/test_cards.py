@@ -1,0 +1,96 @@
+"""Paper cards (docs/cards/*.toml): the chain the engine builds for a preset is the paper's.
+
+A card is written from the paper, not from the preset's TOML: per stage the operator and
+every parameter the paper gives. The chain is read from what the engine actually binds:
+the registered operator of each role (:func:`jaxga.engine.chosen_operators`), the keyword
+options of its function after :meth:`~jaxga.config.registry.Operator.bind` (defaults
+included, so an option the registry never sets shows its default), the operator's own
+configuration keys and the stage's rate.
+"""
+
+from __future__ import annotations
+
+import functools
+import inspect
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+from jaxga.config.presets import load_preset
+from jaxga.core.grid import Grid
+from jaxga.engine import binding, build, chosen_operators
+
+try:
+    import tomllib
+except ModuleNotFoundError:  # Python 3.10
+    import tomli as tomllib
+
+CARDS = sorted((Path(__file__).resolve().parents[1] / "docs" / "cards").glob("*.toml"))
+RATED = ("crossover", "mutation", "simplify")
+
+
+def engine_chain(preset: str) -> dict:
+    """``{"generations": G, family: {"operator": name, option: value, ...}}`` as built."""
+    grid = Grid.create(np.zeros((8, 8), bool))
+    config = load_preset(preset)
+    algo, params = build(config, grid)
+    ctx = binding(algo, params, fit_fn=lambda *a: 0.0)
+    chain: dict = {"generations": algo.generations}
+    for role, op in chosen_operators(config).items():
+        family = role.split(".")[0]
+        if role == "init.fallback":
+            chain.setdefault("init", {})["fallback"] = op.name
+            continue
+        entry = chain.setdefault(family, {})
+        entry["operator"] = op.name
+        if op.fn is not None:
+            bound = op.bind(ctx)
+            fn, kw = ((bound.func, bound.keywords) if isinstance(bound, functools.partial)
+                      else (bound, {}))
+            for name, p in inspect.signature(fn).parameters.items():
+                if p.kind is p.KEYWORD_ONLY and p.default is not p.empty:
+                    entry[name] = p.default
+            entry.update({k: v for k, v in kw.items() if not callable(v)})
+        entry.update({key.split(".", 1)[1]: config[key] for key in op.params})
+        if family in RATED and (op.fn is not None or op.population is not None):
+            entry["probability"] = config[f"{family}.probability"]
+    return chain
+
+
+def differences(card: dict, chain: dict) -> list[str]:
+    """Where the engine's chain differs from the card (the card's keys only, and every
+    family's operator)."""
+    out = []
+    if card.get("generations") != chain["generations"]:
+        out.append(f"generations: card {card.get('generations')}, "
+                   f"engine {chain['generations']}")
+    for family in ("init", "fitness", "selection", "crossover", "mutation", "simplify",
+                   "post"):
+        want, got = card.get(family, {}), chain.get(family, {})
+        if "operator" not in want:
+            out.append(f"{family}: the card names no operator")
+        for key, value in want.items():
+            if key not in got:
+                out.append(f"{family}.{key}: card {value!r}, engine has no such option "
+                           f"(operator {got.get('operator')!r})")
+            elif got[key] != value:
+                out.append(f"{family}.{key}: card {value!r}, engine {got[key]!r}")
+    return out
+
+
+@pytest.mark.parametrize("path", CARDS, ids=[p.stem for p in CARDS])
+def test_the_engine_builds_the_papers_chain(path):
+    card = tomllib.loads(path.read_text())
+    assert card["preset"] == path.stem
+    assert differences(card, engine_chain(card["preset"])) == []
+
+
+def test_a_card_catches_a_chain_that_differs():
+    """The comparison fails on a chain that misses an option or uses another operator."""
+    card = tomllib.loads(CARDS[0].read_text())
+    chain = engine_chain(card["preset"])
+    changed = {**chain, "crossover": {**chain["crossover"], "operator": "column"}}
+    assert any(d.startswith("crossover.operator") for d in differences(card, changed))
+    missing = {**chain, "mutation": {"operator": chain["mutation"]["operator"]}}
+    assert differences(card, missing)
