@@ -95,7 +95,8 @@ def test_imga_section_5_1():
         "crossover.probability": 0.8, "mutation.probability": 0.2,
         "fitness.method": "imga", "fitness.a": 6.0, "fitness.b": 1.0, "fitness.c": 3.0,
         "termination.stagnation": 40,
-        "init.method": "median_insertion", "selection.method": "layered_thirds",
+        "init.method": "median_insertion", "init.unique": True,  # 4.1 (iii)
+        "selection.method": "layered_thirds",
         "crossover.method": "common_point", "mutation.method": "neighbour_point",
         "simplify.method": "none", "post.method": "shortcut_greedy",
         "islands.count": 1,

@@ -54,6 +54,9 @@ COMMON_FIELDS: dict[str, Field] = {
     "generations": Field(int, "generations per run", low=1, high=1_000_000),
     "init.method": MethodField("init", "initialiser (SPEC 4)"),
     "init.max_tries": Field(int, "redraws of a failed individual", low=1, high=10_000),
+    "init.unique": Field(bool, "reject an initial individual identical to one already "
+                         "accepted, as a failed draw (IMGA 4.1 (iii): M non-repeating "
+                         "chromosomes; the fallback's individuals are not checked)"),
     "init.fallback": Field(str, "initialiser that fills the slots init.method left empty "
                            "after init.max_tries attempts ('none': the paper's initialiser "
                            "alone)", choices=FALLBACKS),
@@ -95,6 +98,7 @@ COMMON_DEFAULTS: dict[str, Any] = {
     "map.corner_rule": "strict",
     "population.capacity": 0,
     "init.max_tries": 20,
+    "init.unique": False,
     "init.fallback": "field_walk",
     "repair.fallback": "none",
     "fitness.window": True,

@@ -261,6 +261,7 @@ def init_state(algo: Algorithm, key: jax.Array, grid: Grid, params: dict) -> tup
         pop, stats = initialise_population(
             k, grid, init_fn, algo.population, algo.capacity,
             max_tries=int(algo.get("init.max_tries")), fallback=fallback,
+            unique=bool(algo.get("init.unique", False)),
         )
         # Once per run: at full width (the window pays off in the generations' loop).
         fitness, feas = evaluate(algo, grid, params, pop.cells, pop.length, active,
