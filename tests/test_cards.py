@@ -5,7 +5,8 @@ every parameter the paper gives. The chain is read from what the engine actually
 the registered operator of each role (:func:`jaxga.engine.chosen_operators`), the keyword
 options of its function after :meth:`~jaxga.config.registry.Operator.bind` (defaults
 included, so an option the registry never sets shows its default), the operator's own
-configuration keys and the stage's rate.
+configuration keys, the family's common keys (``init.unique``, ``crossover.adaptive``,
+...) and the stage's rate.
 """
 
 from __future__ import annotations
@@ -18,6 +19,7 @@ import numpy as np
 import pytest
 
 from jaxga.config.presets import load_preset
+from jaxga.config.schema import COMMON_FIELDS
 from jaxga.core.grid import Grid
 from jaxga.engine import binding, build, chosen_operators
 
@@ -36,7 +38,8 @@ def engine_chain(preset: str) -> dict:
     config = load_preset(preset)
     algo, params = build(config, grid)
     ctx = binding(algo, params, fit_fn=lambda *a: 0.0)
-    chain: dict = {"generations": algo.generations}
+    chain: dict = {"generations": algo.generations,
+                   "population": int(config["population.size"])}
     for role, op in chosen_operators(config).items():
         family = role.split(".")[0]
         if role == "init.fallback":
@@ -53,6 +56,10 @@ def engine_chain(preset: str) -> dict:
                     entry[name] = p.default
             entry.update({k: v for k, v in kw.items() if not callable(v)})
         entry.update({key.split(".", 1)[1]: config[key] for key in op.params})
+        entry.update({key.split(".", 1)[1]: config[key] for key in COMMON_FIELDS
+                      if key.startswith(f"{family}.") and key not in (
+                          f"{family}.method", f"{family}.fallback", f"{family}.probability")
+                      and config.get(key) is not None})
         if family in RATED and (op.fn is not None or op.population is not None):
             entry["probability"] = config[f"{family}.probability"]
     return chain
@@ -61,10 +68,11 @@ def engine_chain(preset: str) -> dict:
 def differences(card: dict, chain: dict) -> list[str]:
     """Where the engine's chain differs from the card (the card's keys only, and every
     family's operator)."""
-    out = []
-    if card.get("generations") != chain["generations"]:
-        out.append(f"generations: card {card.get('generations')}, "
-                   f"engine {chain['generations']}")
+    out = [f"{key}: card {card.get(key)!r}, engine {chain[key]!r}"
+           for key in ("generations", "population")
+           if key in card and card[key] != chain[key]]
+    if "generations" not in card:
+        out.append("generations: the card gives none")
     for family in ("init", "fitness", "selection", "crossover", "mutation", "simplify",
                    "post"):
         want, got = card.get(family, {}), chain.get(family, {})
