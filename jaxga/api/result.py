@@ -80,7 +80,8 @@ class Result:
     fitness_optimum: float = math.nan
     """The exact optimum of the preset's fitness over 8-connected paths
     (:func:`jaxga.reference.fitness.fitness_optimum`); NaN where it is not computed
-    (AGACD's waypoint fitness, maps over its size limit)."""
+    (runs of waypoint paths, which it does not bound: AGACD, Zhang's eq. 5; maps over
+    its size limit)."""
     fitness_optimum_length: float = math.nan
     """The length of the path that reaches :attr:`fitness_optimum`: where the fitness
     charges turns it can be longer than :attr:`optimum`."""
@@ -125,8 +126,8 @@ class Result:
     def raw_gap(self) -> np.ndarray:
         """Relative gap of each raw length to the exact optimum of its kind: the
         8-connected optimum for 8-connected raw paths, the any-angle optimum for the
-        waypoint paths of AGACD (whose straight segments may beat the 8-connected
-        optimum); NaN for failed seeds."""
+        waypoint paths of AGACD and Zhang's eq. 5 (whose straight segments may beat the
+        8-connected optimum); NaN for failed seeds."""
         return relative_gap(self.raw_length, self.raw_optimum, self.success)
 
     @property
