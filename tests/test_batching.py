@@ -380,13 +380,13 @@ def test_engine_evaluation_in_the_window_equals_full_width(setting, preset):
     160 cells (``fitness.window`` on and off; a population of short paths, some made
     discontinuous)."""
     from jaxga.config.presets import load_preset
-    from jaxga.engine import build, evaluate
+    from jaxga.engine import build, evaluate, uses_waypoints
 
     grid, pop = setting
-    # the waypoint presets (agacd; iga_zhang's eq. 5 deletions) have no window: their
+    # waypoint presets (agacd; iga_zhang's eq. 5 deletions) have no window: their
     # grid-step variants
     over = ({"crossover.method": "common_point", "mutation.method": "neighbour_point"}
-            if preset in ("agacd", "iga_zhang") else {})
+            if uses_waypoints(load_preset(preset)) else {})
     cells = pop.cells.at[1, 5].set(pop.cells[1, 20])  # a jump: infeasible
     active = jnp.arange(cells.shape[0]) < 9
     out = []
