@@ -307,3 +307,41 @@ def test_init_unique_gives_non_repeating_initial_chromosomes():
         assert int(np.asarray(stats.n_failed).sum()) == 0  # every slot filled by a draw
         repeats[unique] = len(cells) - len(paths)
     assert repeats[True] == 0 and repeats[False] > 0, repeats
+
+
+@pytest.mark.parametrize("timing", ["before_variation", "after_variation"])
+def test_migration_timing_decides_whether_the_migrants_were_varied(timing):
+    """``islands.timing``: MPMGA's Fig. 1 migrates before crossover and mutation, SPEC 8
+    after. Island A mutates every individual, B and C keep theirs (rates 0, no selection),
+    so what sinks from A into B and C is among A's initial worst four (two into each) before
+    the variation, and A's mutated individuals after it."""
+    import jax
+
+    from jaxga.config.presets import load_preset
+    from jaxga.engine import build
+    from jaxga.engine import evolution as E
+
+    grid = random_map(10, 10, 0.2, 3, corner_rule="free")
+    algo, params = build(load_preset("sga", overrides={
+        "population.size": 8, "init.max_tries": 40, "islands.count": 3,
+        "islands.topology": "mpmga", "islands.migrants": 2, "islands.timing": timing,
+        "selection.method": "none", "islands.crossover_probabilities": [0.0, 0.0, 0.0],
+        "islands.mutation_probabilities": [1.0, 0.0, 0.0]}), grid)
+    state, _ = jax.jit(lambda k: E.init_state(algo, k, with_guide(grid), params))(
+        jax.random.PRNGKey(0))
+    new = jax.jit(lambda k, s: E.generation(algo, k, grid, s, params))(
+        jax.random.PRNGKey(1), state)
+
+    def rows(isl, i):
+        return [tuple(c[:n]) for c, n in zip(np.asarray(isl.cells[i]),
+                                             np.asarray(isl.length[i]))]
+
+    old_bc = set(rows(state.islands, 1) + rows(state.islands, 2))
+    arrived = {r for i in (1, 2) for r in rows(new.islands, i) if r not in old_bc}
+    a_before = rows(state.islands, 0)
+    order = np.argsort(np.asarray(state.islands.fitness[0]), kind="stable")
+    assert len(arrived) >= 2
+    if timing == "before_variation":  # A's four worst (two into B, two into C), unvaried
+        assert arrived <= {a_before[j] for j in order[:4]}
+    else:
+        assert not arrived <= set(a_before)

@@ -24,6 +24,7 @@ _FNS = {
     "stratified": S.stratified,
     "stratified_value": functools.partial(S.stratified, bands="value"),
     "tournament3": functools.partial(S.tournament, k=3),
+    "shuffle": S.shuffle,
 }
 _RUNS = {name: jax.jit(jax.vmap(fn)) for name, fn in _FNS.items()}
 
@@ -199,6 +200,23 @@ def test_layered_thirds_is_shuffled():
     nz = want > 0
     assert (counts[~nz] == 0).all()
     assert scipy.stats.chisquare(counts[nz], want[nz] * N_KEYS).pvalue > 1e-4
+
+
+def test_shuffle_is_a_random_permutation_of_the_active_individuals():
+    """MPMGA's pairing (presets/mpmga.toml): every active individual once on the active
+    slots, active individuals on the inactive ones, each active individual equally likely
+    in each active slot, so the pairs (2k, 2k + 1) change from draw to draw."""
+    f = np.array([3.0, 0.5, 8.0, 1.0, 6.0, 0.7, 2.0, 5.0], np.float32)
+    active = np.array([True, True, False, True, True, True, False, True])
+    idx = _draws(S.shuffle, f, active)
+    on = np.flatnonzero(active)
+    for row in idx:
+        assert sorted(row[on].tolist()) == on.tolist()
+        assert active[row[~active]].all()
+    counts = np.stack([np.bincount(idx[:, s], minlength=8)[on] for s in on])
+    assert scipy.stats.chisquare(counts.ravel()).pvalue > 1e-4  # uniform over slots
+    mates = {tuple(sorted(row[:2].tolist())) for row in idx}
+    assert len(mates) > 10  # slot 0's mate is not fixed
 
 
 def test_stratified_drops_the_last_quartile_and_refills_by_roulette():

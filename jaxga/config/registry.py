@@ -504,7 +504,9 @@ register(Operator(
                                                default=2)},
     options=lambda ctx: {"k": int(ctx.config.get("selection.tournament_size"))},
 ))
-_none("selection", "no selection: individuals keep their slots (MPMGA: migration instead)")
+register(Operator("selection", "shuffle", sel.shuffle,
+                  "no selection pressure, random pairs: each individual once (MPMGA 4.4)"))
+_none("selection", "no selection: individuals keep their slots (fixed pairs 2k, 2k + 1)")
 
 
 # crossover (SPEC 6)

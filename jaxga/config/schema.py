@@ -40,6 +40,7 @@ FALLBACKS = (*(op.name for op in registry.operators("init")
 """``init.fallback``: an initialiser that cannot fail where a path exists, or none."""
 REPAIR_FALLBACKS = ("none", "field")
 TOPOLOGIES = ("none", "ring", "star", "full", "mpmga")
+MIGRATION_TIMINGS = ("after_variation", "before_variation")
 
 COMMON_FIELDS: dict[str, Field] = {
     "name": Field(str, "preset name"),
@@ -89,6 +90,8 @@ COMMON_FIELDS: dict[str, Field] = {
     "islands.topology": Field(str, "migration topology (SPEC 8)", choices=TOPOLOGIES),
     "islands.interval": Field(int, "generations between migrations", low=1, high=1_000_000),
     "islands.migrants": Field(int, "migrants per island and migration", low=0, high=100_000),
+    "islands.timing": Field(str, "migration after the generation's variation (SPEC 8) or "
+                            "before it (MPMGA Fig. 1)", choices=MIGRATION_TIMINGS),
     "islands.crossover_probabilities": Field(list, "per-island pc (MPMGA A, B, C)"),
     "islands.mutation_probabilities": Field(list, "per-island pm (MPMGA A, B, C)"),
 }
@@ -112,6 +115,7 @@ COMMON_DEFAULTS: dict[str, Any] = {
     "islands.topology": "none",
     "islands.interval": 1,
     "islands.migrants": 0,
+    "islands.timing": "after_variation",
 }
 
 

@@ -325,7 +325,9 @@ def _island_params(params: dict, islands: int) -> tuple[dict, dict]:
 
 
 def generation(algo: Algorithm, key, grid: Grid, state: GAState, params: dict):
-    """One generation of a run (every island, then migration); honours the freeze."""
+    """One generation of a run: every island's variation and the migration, in the order of
+    ``islands.timing`` (SPEC 8: vary, then migrate; MPMGA Fig. 1: migrate, then vary);
+    honours the freeze."""
 
     t = state.generation
     per, shared = _island_params(params, algo.islands)
@@ -334,8 +336,13 @@ def generation(algo: Algorithm, key, grid: Grid, state: GAState, params: dict):
     def one(k, isl, p_isl):
         return island_generation(algo, k, grid, isl, t, {**shared, **p_isl})
 
-    islands, fails = jax.vmap(one)(keys[:-1], state.islands, per)
-    islands = migrate(algo, keys[-1], islands, t, _active(algo, params))
+    islands = state.islands
+    before = algo.get("islands.timing") == "before_variation"
+    if before:  # MPMGA section 2 / Fig. 1: evaluate, migrate, then cross and mutate
+        islands = migrate(algo, keys[-1], islands, t, _active(algo, params))
+    islands, fails = jax.vmap(one)(keys[:-1], islands, per)
+    if not before:  # SPEC 8: vary every island, then migrate
+        islands = migrate(algo, keys[-1], islands, t, _active(algo, params))
     best_c, best_n, best_f = _best_of(islands)
     better = best_f > state.best_fitness
     new = GAState(

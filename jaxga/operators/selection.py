@@ -46,6 +46,7 @@ __all__ = [
     "rank_order",
     "roulette",
     "roulette_elite",
+    "shuffle",
     "stratified",
     "tournament",
 ]
@@ -228,6 +229,23 @@ def stratified(
     refill = _roulette_draw(k_fill, _weights(fitness, kept), kept, p)
     seq = jnp.where(k < n_keep, order, jnp.where(k < m, refill, order[0]))
     return _place_on_active(k_place, seq, active)
+
+
+def shuffle(key: jax.Array, fitness: jax.Array, active: jax.Array | None = None) -> jax.Array:
+    """No selection pressure, random mates: every active individual exactly once, in a
+    uniformly random order over the active slots (the inactive slots, never evaluated,
+    hold active individuals too, as every selection's do).
+
+    MPMGA (Hao et al. 2020) section 4.4 replaces selection by migration and does not say how
+    crossover pairs are formed; with the slots left in place, slot 2k would always mate with
+    slot 2k + 1. The shuffle gives every generation new random pairs (consecutive slots are
+    the pairs of SPEC 6) and changes no individual's number of copies.
+    """
+    fitness, active = _prepare(fitness, active)
+    order = jnp.argsort(~active, stable=True).astype(_I32)  # active first, by index
+    m = jnp.maximum(jnp.sum(active), 1)
+    seq = order[jnp.arange(order.shape[0]) % m]  # inactive slots: active ones again
+    return _place_on_active(key, seq, active)
 
 
 def tournament(
