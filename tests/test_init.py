@@ -568,3 +568,27 @@ def test_large_map_walks_keep_a_capacity_sized_visited_set_with_the_same_paths(
         np.testing.assert_array_equal(np.asarray(a), np.asarray(b))
     assert np.asarray(hashed[2]).any()
     check_paths(grid, *hashed, source=src, target=dst, exclude=excl[excl >= 0], cap=cap)
+
+
+def test_the_directional_walk_is_the_papers_uncapped_walk_on_a_20x20_map():
+    """Zhu & Pan's Algorithm 1 allows 10,000 steps; jaxga's walk stops at the chromosome's
+    capacity (160 cells on a 20 x 20 map). The walk never revisits a cell, so it ends within
+    the map's free cells either way: with room for every free cell the walks are the same,
+    walk for walk, so the capacity does not lower Table 2's success rate there."""
+    from jaxga.maps import load_map
+
+    grid = load_map("classic_ga_gapp3_20x20", corner_rule="free")
+    keys = jax.random.split(jax.random.PRNGKey(0), 1000)
+    free = int((~grid.blocked_np()).sum())
+    out = {}
+    for cap in (160, free):
+        walk = jax.jit(jax.vmap(lambda k, cap=cap: I.directional_walk(
+            k, grid, grid.start, grid.goal, cap)))
+        cells, n, ok = (np.asarray(x) for x in walk(keys))
+        out[cap] = cells, n, ok
+    (c1, n1, ok1), (c2, n2, ok2) = out[160], out[free]
+    np.testing.assert_array_equal(ok1, ok2)
+    np.testing.assert_array_equal(n1[ok1], n2[ok2])
+    assert 0.3 < ok1.mean() < 0.7 and n1[ok1].max() < 160
+    for a, b, n in zip(c1[ok1], c2[ok2], n1[ok1]):
+        np.testing.assert_array_equal(a[:n], b[:n])

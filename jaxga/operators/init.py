@@ -461,7 +461,10 @@ def directional_walk(
     Pan's "literature [28]" (CGA) initialiser.
 
     The step cap is ``capacity - 1`` moves (the paper's cap is 10,000 iterations, which
-    a self-avoiding walk on maps of fewer cells never reaches).
+    a self-avoiding walk on maps of fewer cells never reaches). A walk that would outgrow
+    the chromosome is a counted failure, never truncated; on a 20 x 20 map with the
+    automatic capacity (160) the walks are the uncapped walks, walk for walk (the test
+    ``test_the_directional_walk_is_the_papers_uncapped_walk_on_a_20x20_map``).
 
     This is also the regrowing step of Zhu & Pan's range mutation (section 4.5: "set p_i
     as the start point and p_j as the target point. Determine a new path by using the
