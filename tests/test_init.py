@@ -592,3 +592,53 @@ def test_the_directional_walk_is_the_papers_uncapped_walk_on_a_20x20_map():
     assert 0.3 < ok1.mean() < 0.7 and n1[ok1].max() < 160
     for a, b, n in zip(c1[ok1], c2[ok2], n1[ok1]):
         np.testing.assert_array_equal(a[:n], b[:n])
+
+
+def _imga_insertion_sequential(rng, blocked, start, goal, node_cap=2000):
+    """An independent transcription of IMGA 4.1 (3)(i)-(ii): a random free middle cell,
+    then the median of the first discontinuous pair inserted (a random free 8-neighbour of
+    a blocked median; none: discarded), left to right, one node at a time; ``None`` when
+    discarded or past ``node_cap`` nodes (the paper's loop is unbounded)."""
+    h, w = blocked.shape
+    free = [(x, y) for y in range(h) for x in range(w)
+            if not blocked[y, x] and (x, y) not in (start, goal)]
+    path = [start, free[rng.integers(len(free))], goal]
+    i = 0
+    while i < len(path) - 1:
+        (x0, y0), (x1, y1) = path[i], path[i + 1]
+        if max(abs(x1 - x0), abs(y1 - y0)) <= 1:  # eq. 2: continuous
+            i += 1
+            continue
+        mx, my = (x0 + x1) // 2, (y0 + y1) // 2  # eq. 3
+        if blocked[my, mx]:
+            around = [(mx + dx, my + dy) for dx in (-1, 0, 1) for dy in (-1, 0, 1)
+                      if (dx or dy) and 0 <= mx + dx < w and 0 <= my + dy < h
+                      and not blocked[my + dy, mx + dx]]
+            if not around:
+                return None
+            mx, my = around[rng.integers(len(around))]
+        path.insert(i + 1, (mx, my))
+        if len(path) > node_cap:
+            return None
+    return path
+
+
+@pytest.mark.parametrize("name,lo,hi", [("classic_ga_gapp3_20x20", 0.25, 0.45),
+                                        ("aco_classic_20x20_v1_lihongxin", 0.0, 0.0)])
+def test_median_insertion_succeeds_as_often_as_the_papers_sequential_insertion(name, lo, hi):
+    """jaxga's parallel median insertion (64 rounds, capacity 160) against a sequential
+    transcription of the paper with a 2000-node cap, 300 draws each: both about a third
+    on gapp3, and both never on aco_classic, whose long walls make the paper's insertion
+    cycle (a blocked median's neighbour reopens the gap) whatever the cap: imga's
+    ``init.fallback`` fills that population, not the insertion's round cap."""
+    from jaxga.maps import load_map
+
+    grid = load_map(name, corner_rule="free")
+    blocked = grid.blocked_np()
+    rng = np.random.default_rng(0)
+    seq = np.mean([_imga_insertion_sequential(rng, blocked, grid.start_xy, grid.goal_xy)
+                   is not None for _ in range(300)])
+    keys = jax.random.split(jax.random.PRNGKey(0), 300)
+    ok = np.asarray(jax.jit(jax.vmap(lambda k: I.median_insertion(k, grid, 160)))(keys)[2])
+    assert lo <= seq <= hi and lo <= ok.mean() <= hi, (seq, ok.mean())
+    assert abs(seq - ok.mean()) <= 0.1
