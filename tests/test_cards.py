@@ -15,10 +15,11 @@ import functools
 import inspect
 from pathlib import Path
 
+import jax.numpy as jnp
 import numpy as np
 import pytest
 
-from jaxga.config.presets import load_preset
+from jaxga.config.presets import load_preset, preset_names
 from jaxga.config.schema import COMMON_FIELDS
 from jaxga.core.grid import Grid
 from jaxga.engine import binding, build, chosen_operators
@@ -37,7 +38,7 @@ def engine_chain(preset: str) -> dict:
     grid = Grid.create(np.zeros((8, 8), bool))
     config = load_preset(preset)
     algo, params = build(config, grid)
-    ctx = binding(algo, params, fit_fn=lambda *a: 0.0)
+    ctx = binding(algo, params, t=jnp.int32(0), fit_fn=lambda *a: 0.0)
     chain: dict = {"generations": algo.generations,
                    "population": int(config["population.size"])}
     for role, op in chosen_operators(config).items():
@@ -60,14 +61,25 @@ def engine_chain(preset: str) -> dict:
                       if key.startswith(f"{family}.") and key not in (
                           f"{family}.method", f"{family}.fallback", f"{family}.probability")
                       and config.get(key) is not None})
-        if family in RATED and (op.fn is not None or op.population is not None):
-            entry["probability"] = config[f"{family}.probability"]
-    return chain
+        rate = config.get(f"{family}.probability")  # None: adaptive or per island
+        if family in RATED and (op.fn is not None or op.population is not None) and (
+                rate is not None):
+            entry["probability"] = rate
+    chain["islands"] = {key.split(".", 1)[1]: config[key] for key in COMMON_FIELDS
+                        if key.startswith("islands.") and config.get(key) is not None}
+    return _lists(chain)
+
+
+def _lists(value):
+    """Tuples as lists (a card's TOML arrays are lists), recursively."""
+    if isinstance(value, dict):
+        return {k: _lists(v) for k, v in value.items()}
+    return list(value) if isinstance(value, tuple) else value
 
 
 def differences(card: dict, chain: dict) -> list[str]:
     """Where the engine's chain differs from the card (the card's keys only, and every
-    family's operator)."""
+    family's operator); a card without ``[islands]`` means one population."""
     out = [f"{key}: card {card.get(key)!r}, engine {chain[key]!r}"
            for key in ("generations", "population")
            if key in card and card[key] != chain[key]]
@@ -84,6 +96,9 @@ def differences(card: dict, chain: dict) -> list[str]:
                            f"(operator {got.get('operator')!r})")
             elif got[key] != value:
                 out.append(f"{family}.{key}: card {value!r}, engine {got[key]!r}")
+    want, got = card.get("islands", {"count": 1}), chain["islands"]
+    out += [f"islands.{key}: card {value!r}, engine {got.get(key)!r}"
+            for key, value in want.items() if got.get(key) != value]
     return out
 
 
@@ -102,3 +117,7 @@ def test_a_card_catches_a_chain_that_differs():
     assert any(d.startswith("crossover.operator") for d in differences(card, changed))
     missing = {**chain, "mutation": {"operator": chain["mutation"]["operator"]}}
     assert differences(card, missing)
+
+
+def test_every_preset_has_a_card():
+    assert sorted(p.stem for p in CARDS) == sorted(preset_names())
