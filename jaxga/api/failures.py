@@ -16,7 +16,7 @@ from jaxga.core.objectives import Metrics
 
 
 def unstarted_results(*, config, configs, points, map_name, grid, seed_arr, algo, octile,
-                      any_angle, point_opt, rate, unfilled, from_fallback,
+                      any_angle, point_opt, rate, unfilled, from_fallback, initial,
                       timing) -> list[Result]:
     """The results of a sweep whose initialisation gave no run a path: every seed failed,
     each with its cause; nothing evolved (SPEC 10)."""
@@ -36,7 +36,8 @@ def unstarted_results(*, config, configs, points, map_name, grid, seed_arr, algo
             fitness_optimum=point_opt[q].fitness, fitness_optimum_length=point_opt[q].length,
             fitness_optimum_loop_free=point_opt[q].loop_free,
             fitness_optimum_reason="" if point_opt[q].found else point_opt[q].reason,
-            init_fallback=from_fallback[sl], causes=causes, path_capacity=algo.capacity))
+            init_fallback=from_fallback[sl], causes=causes, path_capacity=algo.capacity,
+            initial_fitness=initial[sl].astype(float)))
     return results
 
 
@@ -134,6 +135,7 @@ def no_path_result(config, map_name, grid, seeds, algo, reason, elapsed,
         generations=algo.generations, width=grid.width, config=config,
         fitness_optimum_reason=reason, start=grid.start_xy, goal=grid.goal_xy,
         population_capacity=population_capacity, init_fallback=np.zeros(s, np.int32),
+        initial_fitness=np.zeros(s),
         causes=np.full(s, reason, dtype=object), path_capacity=algo.capacity,
     )
 

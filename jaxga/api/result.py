@@ -99,6 +99,9 @@ class Result:
     ``population.size`` of a sweep, or ``population_capacity=``): the random numbers of a
     run depend on it, so ``run(..., population_capacity=K)`` repeats a sweep point's runs
     bit for bit."""
+    initial_fitness: np.ndarray | None = None
+    """Per seed, the best fitness of the initial population (0 where it held no path):
+    with :attr:`fitness` (the evolution's best) it says what the generations added."""
     init_fallback: np.ndarray | None = None
     """Per seed, how many initial individuals (all islands together) the fallback
     initialiser made (``init.fallback``): the slots the preset's own initialiser left
@@ -233,6 +236,8 @@ class Result:
                 "length": float(self.length[i]) if ok else None,
                 "raw_length": float(self.raw_length[i]) if ok else None,
                 "fitness": float(self.fitness[i]),
+                "initial_fitness": (None if self.initial_fitness is None
+                                    else float(self.initial_fitness[i])),
                 "convergence_generation": int(self.convergence_generation[i]),
                 # the other metrics of the summary table, null for a failed seed
                 **{k: json_number(float(self._column(k)[i])) if ok else None

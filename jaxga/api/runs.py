@@ -271,8 +271,9 @@ def sweep(
     init_s = time.perf_counter() - t0
     init_best = state.best_fitness
     # Every process's initial best, so that all of them decide alike whether to evolve.
-    started, init_rate, unfilled, fallback = parallel.allgather_runs(
-        (init_best > 0, init_rate, unfilled, fallback))
+    initial, init_rate, unfilled, fallback = parallel.allgather_runs(
+        (init_best, init_rate, unfilled, fallback))
+    started = initial > 0
     rate = init_rate.reshape(n_total, -1).mean(axis=1)
     unf = unfilled.reshape(n_total, -1).sum(axis=1)
     from_fallback = fallback.reshape(n_total, -1).sum(axis=1)
@@ -280,7 +281,7 @@ def sweep(
     common = dict(config=config, configs=configs, points=points, map_name=map_name,
                   grid=grid, seed_arr=seed_arr, algo=algo, octile=octile,
                   any_angle=any_angle, point_opt=point_opt, rate=rate, unfilled=unf,
-                  from_fallback=from_fallback)
+                  from_fallback=from_fallback, initial=initial)
     if not started.any():  # nothing can succeed: no evolution, no post-optimisation
         report("compile", 1.0)
         timing = {"compile_s": compile_s, "init_s": init_s, "evolve_s": 0.0,
@@ -366,7 +367,7 @@ def _point_results(host: dict, hist: dict, *, config: Config, configs: Sequence[
                    points: Sequence[Mapping[str, Any]], map_name: str, grid: Grid,
                    seed_arr: np.ndarray, algo: Algorithm, octile: Any, any_angle: Any,
                    point_opt: Sequence[Any], rate: np.ndarray, unfilled: np.ndarray,
-                   from_fallback: np.ndarray, started: np.ndarray,
+                   from_fallback: np.ndarray, initial: np.ndarray, started: np.ndarray,
                    timing: dict) -> list[Result]:
     """One :class:`Result` per point from the gathered outputs of all runs (run
     ``q * S + s`` is point ``q``, seed ``s``)."""
@@ -390,6 +391,7 @@ def _point_results(host: dict, hist: dict, *, config: Config, configs: Sequence[
             history={k: v[sl] for k, v in hist.items()},
             metrics=h["metrics"], raw_metrics=h["raw_metrics"], failures=h["failures"],
             init_success_rate=rate[sl], init_unfilled=unfilled[sl],
+            initial_fitness=initial[sl].astype(float),
             optimum=float(octile.length), any_angle_optimum=float(any_angle.length),
             timing=dict(timing), population=int(cfg["population.size"]) * algo.islands,
             generations=algo.generations, width=grid.width, config=cfg,
