@@ -58,8 +58,9 @@ def _bounded_compiled_programs():
 
 
 SLOWEST_FILES = ("test_api.py", "test_notebooks.py", "test_distributed.py",
-                 "test_crossover.py", "test_field.py", "test_registry.py", "test_batching.py",
-                 "test_init.py", "test_engine.py", "test_mutation.py", "test_doe.py")
+                 "test_crossover.py", "test_behaviour.py", "test_field.py", "test_registry.py",
+                 "test_batching.py", "test_init.py", "test_engine.py", "test_mutation.py",
+                 "test_doe.py")
 """The test files that take the longest on the 2-core CI machine with a cold compilation
 cache (``benchmarks/suite_time.py``; decision 024), roughly slowest first: they run first.
 
