@@ -41,7 +41,7 @@ from jaxga.maps import (
 )
 
 DATA = Path(__file__).parent / "data"
-EXT = {"01": "txt", "movingai": "map", "ascii": "ascii", "png": "png"}
+EXT = {"01": "txt", "movingai": "map", "ascii": "ascii", "png": "png", "ros": "yaml"}
 FAST = settings(max_examples=25, deadline=None, suppress_health_check=[HealthCheck.too_slow])
 
 blocked_arrays = hnp.arrays(
@@ -248,7 +248,7 @@ MALFORMED = [
     ("char.map", "type octile\nheight 2\nwidth 2\nmap\n..\n.#\n", "line 6, column 2: unknown"),
     ("header_only.map", "type octile\nheight 2\nwidth 2\n", "missing the 'map' line"),
     ("scen_as_map.txt", "version 1\n", "scenario file, not a map"),
-    ("bad.png", "this is not a png", "unreadable PNG"),
+    ("bad.png", "this is not a png", "unreadable image"),
 ]
 
 

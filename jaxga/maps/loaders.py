@@ -1,4 +1,5 @@
-"""Read and write grid maps: 0/1 text, Moving AI ``.map``, ASCII art and PNG images.
+"""Read and write grid maps: 0/1 text, Moving AI ``.map``, ASCII art, PNG images and ROS
+``map_server`` maps (YAML + image).
 
 Every loader returns a :class:`jaxga.Grid` in the library's convention (SPEC 1):
 ``blocked[y, x]`` with ``y = 0`` the **bottom** row. The file formats differ in which
@@ -13,9 +14,16 @@ row comes first:
 * ``"ascii"`` - ASCII art: ``.`` free, ``#`` or ``@`` blocked, at most one ``S``
   (start) and one ``G`` (goal), both free cells. **The first text line is the top
   row**, as a human draws it; it is flipped.
-* ``"png"`` - an image: a pixel darker than half luminance (ITU-R BT.601 luma) is
-  blocked, transparent pixels count as white (free). **The image's top row is the top
-  of the map**; it is flipped.
+* ``"png"`` - an image: a pixel whose luminance (ITU-R BT.601 luma, 0 black to 1 white)
+  is below ``threshold`` (default 0.5, ``load_map(..., threshold=)``, ``--threshold``)
+  is blocked; transparent pixels count as white (free). **The image's top row is the
+  top of the map**; it is flipped. A robot's map with unknown (grey) areas is better
+  loaded as a ROS map, which keeps unknown apart from free.
+* ``"ros"`` - a ROS ``map_server`` YAML file (``.yaml``/``.yml``) and the image it names
+  (:mod:`jaxga.maps.ros`: ``resolution``, ``origin``, ``negate``, ``occupied_thresh``,
+  ``free_thresh``, ``mode``). Occupied cells are blocked, unknown ones too unless
+  ``unknown="free"``. :attr:`MapInfo.ros` keeps the metadata: metres per cell and the
+  origin, for world coordinates (``start_world=``, ``goal_world=``).
 
 The format is chosen from the file's content and extension (see :func:`detect_format`)
 unless ``fmt=`` names it. Anything malformed - a missing or empty file, ragged rows, an
@@ -41,6 +49,14 @@ from jaxga.core.errors import EndpointError, MapFormatError
 from jaxga.core.grid import DEFAULT_CORNER_RULE, Grid, check_corner_rule, too_large
 from jaxga.maps import builtin
 from jaxga.maps.preprocess import coarsen_blocked
+from jaxga.maps.ros import (
+    RosMap,
+    occupancy,
+    read_ros_image,
+    read_ros_yaml,
+    ros_blocked,
+    world_to_cell,
+)
 
 __all__ = [
     "FORMATS",
@@ -55,7 +71,7 @@ __all__ = [
     "save_map",
 ]
 
-FORMATS: tuple[str, ...] = ("01", "movingai", "ascii", "png")
+FORMATS: tuple[str, ...] = ("01", "movingai", "ascii", "png", "ros")
 """The map formats :func:`load_map` reads and :func:`save_map` writes."""
 
 MOVINGAI_PASSABLE = frozenset(".GS")
@@ -64,6 +80,9 @@ ASCII_FREE = frozenset(".SG")
 ASCII_BLOCKED = frozenset("#@")
 
 _PNG_MAGIC = b"\x89PNG\r\n\x1a\n"
+IMAGE_SUFFIXES = (".png", ".pgm", ".ppm", ".pbm", ".bmp", ".gif", ".jpg", ".jpeg", ".tif",
+                  ".tiff")
+"""Image files read as ``"png"`` maps (thresholded luminance; Pillow reads the others)."""
 _ZERO_ONE = frozenset("01")
 _SEPARATORS = frozenset(" \t,")
 
@@ -82,6 +101,7 @@ class MapInfo:
         format: one of :data:`FORMATS`.
         builtin: True when ``source`` was the name of a built-in map.
         grid: the loaded :class:`~jaxga.Grid`.
+        ros: a ROS map's metadata (resolution in metres per cell, origin), else None.
     """
 
     name: str
@@ -89,6 +109,12 @@ class MapInfo:
     format: str
     builtin: bool
     grid: Grid
+    ros: RosMap | None = None
+
+    @property
+    def resolution(self) -> float | None:
+        """Metres per cell (a ROS map's ``resolution``), None for the other formats."""
+        return None if self.ros is None else self.ros.resolution
 
 
 # --------------------------------------------------------------------------- public
@@ -112,6 +138,10 @@ def load_map(
     corner_rule: str | None = None,
     fmt: str | None = None,
     coarsen: int | None = None,
+    threshold: float = 0.5,
+    unknown: str = "blocked",
+    start_world: tuple[float, float] | None = None,
+    goal_world: tuple[float, float] | None = None,
 ) -> Grid:
     """Load a map file or a built-in map as a :class:`~jaxga.Grid`.
 
@@ -131,6 +161,12 @@ def load_map(
             ``S``/``G``) are given on the original map and move to the coarse cells
             holding them, ``(x // k, y // k)``. The way to plan on a map of more than
             :data:`jaxga.core.grid.MAX_MAP_CELLS` cells.
+        threshold: PNG images: a pixel with luminance below it (0 black, 1 white) is
+            blocked.
+        unknown: ROS maps: ``"blocked"`` (default) or ``"free"`` for unknown cells.
+        start_world, goal_world: ROS maps: the endpoints in metres (world frame); the
+            cells that hold them (:func:`jaxga.maps.ros.world_to_cell`). Not with
+            ``start``/``goal``.
 
     Raises:
         MapFormatError: missing, unreadable or malformed file; unknown built-in name; a
@@ -140,7 +176,8 @@ def load_map(
             here; see :meth:`jaxga.Grid.check_endpoints`.)
     """
     return load_map_info(source, start=start, goal=goal, corner_rule=corner_rule, fmt=fmt,
-                         coarsen=coarsen).grid
+                         coarsen=coarsen, threshold=threshold, unknown=unknown,
+                         start_world=start_world, goal_world=goal_world).grid
 
 
 def load_map_info(
@@ -151,6 +188,10 @@ def load_map_info(
     corner_rule: str | None = None,
     fmt: str | None = None,
     coarsen: int | None = None,
+    threshold: float = 0.5,
+    unknown: str = "blocked",
+    start_world: tuple[float, float] | None = None,
+    goal_world: tuple[float, float] | None = None,
 ) -> MapInfo:
     """Like :func:`load_map` but return a :class:`MapInfo` (name, path, format, grid)."""
 
@@ -178,8 +219,13 @@ def load_map_info(
         message = too_large(-(-w0 // factor), -(-h0 // factor))
         if message:
             raise MapFormatError(f"{label}: {message}")
+    ros = None
     if kind == "png":
-        blocked = _parse_png(path, label)
+        blocked = _parse_png(path, label, threshold)
+        file_start = file_goal = None
+    elif kind == "ros":
+        ros = read_ros_yaml(path, label)
+        blocked = ros_blocked(occupancy(read_ros_image(ros, label), ros), unknown)
         file_start = file_goal = None
     else:
         text = _decode(raw, label)
@@ -194,6 +240,19 @@ def load_map_info(
 
     s = start if start is not None else file_start
     g = goal if goal is not None else file_goal
+    for name, xy, world in (("start", start, start_world), ("goal", goal, goal_world)):
+        if world is None:
+            continue
+        if ros is None:
+            raise EndpointError(f"{label}: a {name} in metres needs a map with a resolution "
+                                "and an origin (a ROS map_server .yaml)")
+        if xy is not None:
+            raise EndpointError(f"{label}: give the {name} in cells or in metres, not both")
+        try:
+            cell = world_to_cell(ros, world, blocked.shape, f"the {name}")
+        except EndpointError as e:
+            raise EndpointError(f"{label}: {e}") from None
+        s, g = (cell, g) if name == "start" else (s, cell)
     if factor > 1:
         h0, w0 = blocked.shape
         for name, xy in (("start", s), ("goal", g)):
@@ -210,13 +269,15 @@ def load_map_info(
     except EndpointError as e:
         raise EndpointError(f"{label}: {e}") from None
     name = str(source) if is_builtin else path.stem
-    return MapInfo(name=name, path=path, format=kind, builtin=is_builtin, grid=grid)
+    return MapInfo(name=name, path=path, format=kind, builtin=is_builtin, grid=grid, ros=ros)
 
 
 def detect_format(path: Source, raw: bytes | None = None) -> str:
     """Guess a map file's format from its content and extension.
 
-    PNG signature or ``.png`` extension -> ``"png"``; ``.map`` extension or a first
+    PNG signature or an image extension (:data:`IMAGE_SUFFIXES`: ``.png``, ``.pgm``,
+    ...) -> ``"png"``; ``.yaml``/``.yml`` -> ``"ros"``;
+    ``.map`` extension or a first
     non-blank line starting with ``type`` -> ``"movingai"``; a first non-blank line
     starting with ``0`` or ``1`` -> ``"01"``; anything else -> ``"ascii"``
     (whose parser then reports any unknown character). ``raw`` is the file content if
@@ -226,8 +287,10 @@ def detect_format(path: Source, raw: bytes | None = None) -> str:
     if raw is None:
         raw = _read_bytes(p, str(p))
     suffix = p.suffix.lower()
-    if raw.startswith(_PNG_MAGIC) or suffix == ".png":
+    if raw.startswith(_PNG_MAGIC) or suffix in IMAGE_SUFFIXES:
         return "png"
+    if suffix in (".yaml", ".yml"):
+        return "ros"
     if suffix == ".map":
         return "movingai"
     first = ""
@@ -386,7 +449,9 @@ def parse_ascii(text: str, label: str = "<text>") -> tuple[np.ndarray, XY | None
 
 
 # -------------------------------------------------------------------------- writers
-def save_map(grid: Grid | np.ndarray, path: Source, *, fmt: str | None = None) -> Path:
+def save_map(grid: Grid | np.ndarray, path: Source, *, fmt: str | None = None,
+             resolution: float = 1.0,
+             origin: tuple[float, float, float] = (0.0, 0.0, 0.0)) -> Path:
     """Write a grid (or a ``bool[H, W]`` array, row 0 = bottom) as a map file.
 
     ``fmt`` is one of :data:`FORMATS`; by default it follows the extension (``.map`` ->
@@ -394,13 +459,14 @@ def save_map(grid: Grid | np.ndarray, path: Source, *, fmt: str | None = None) -
     text). Each format is written in the orientation its loader expects, so
     ``load_map(save_map(g, p))`` gives back the same ``blocked`` array. ASCII art marks
     the grid's start ``S`` and goal ``G`` when they are free and distinct, so those
-    round-trip too; the other formats do not store endpoints. Returns the path.
+    round-trip too; the other formats do not store endpoints. ``.yaml``/``.yml`` writes a
+    ROS map as ``map_saver`` does: the YAML (``resolution``, ``origin``, trinary
+    thresholds) and a binary PGM beside it (free 254, occupied 0). Returns the path.
     """
     p = Path(os.fspath(path))
     if fmt is None:
-        fmt = {".map": "movingai", ".png": "png", ".ascii": "ascii", ".asc": "ascii"}.get(
-            p.suffix.lower(), "01"
-        )
+        fmt = {".map": "movingai", ".png": "png", ".ascii": "ascii", ".asc": "ascii",
+               ".yaml": "ros", ".yml": "ros"}.get(p.suffix.lower(), "01")
     if fmt not in FORMATS:
         raise MapFormatError(f"unknown map format {fmt!r}: expected one of {', '.join(FORMATS)}")
     if isinstance(grid, Grid):
@@ -416,6 +482,16 @@ def save_map(grid: Grid | np.ndarray, path: Source, *, fmt: str | None = None) -
         import matplotlib.image as mpimg
 
         mpimg.imsave(p, (~blocked).astype(float), cmap="gray", vmin=0.0, vmax=1.0, origin="lower")
+        return p
+    if fmt == "ros":
+        image = p.with_suffix(".pgm")
+        pixels = np.where(blocked[::-1], 0, 254).astype(np.uint8)
+        image.write_bytes(f"P5\n# CREATOR: jaxga {resolution:.3f} m/pix\n{w} {h}\n255\n"
+                          .encode("ascii") + pixels.tobytes())
+        x0, y0, yaw = (float(v) for v in origin)
+        p.write_text(f"image: {image.name}\nmode: trinary\nresolution: {resolution:.6f}\n"
+                     f"origin: [{x0:.6f}, {y0:.6f}, {yaw:.6f}]\nnegate: 0\n"
+                     "occupied_thresh: 0.65\nfree_thresh: 0.196\n", encoding="utf-8")
         return p
     if fmt == "01":
         lines = [" ".join("1" if b else "0" for b in row) for row in blocked]
@@ -498,6 +574,8 @@ def _declared_size(raw: bytes, kind: str) -> tuple[int, int] | None:
         if raw.startswith(_PNG_MAGIC) and raw[12:16] == b"IHDR" and len(raw) >= 24:
             return int.from_bytes(raw[16:20], "big"), int.from_bytes(raw[20:24], "big")
         return None
+    if kind == "ros":  # the image's size is checked once it is read
+        return None
     head = raw[:4096].decode("utf-8", errors="replace")
     if kind == "movingai":
         dims = {}
@@ -524,15 +602,20 @@ def _check_ragged(rows: list[list[bool]], lineno: int, label: str) -> None:
         )
 
 
-def _parse_png(path: Path, label: str) -> np.ndarray:
-    """Threshold an image at half luminance; image top row -> top of the map (row H-1)."""
+def _parse_png(path: Path, label: str, threshold: float = 0.5) -> np.ndarray:
+    """Threshold an image's luminance (blocked below ``threshold``); image top row -> top
+    of the map (row H-1)."""
     import matplotlib.image as mpimg
 
+    if isinstance(threshold, bool) or not isinstance(threshold, (int, float)) or not (
+            0.0 < threshold <= 1.0):
+        raise MapFormatError(f"{label}: the image threshold must be a luminance in (0, 1], "
+                             f"got {threshold!r}")
     try:
         img = np.asarray(mpimg.imread(path))
     except Exception as e:  # Pillow/matplotlib raise many types for bad images
         msg = str(e).splitlines()[0] if str(e) else type(e).__name__
-        raise MapFormatError(f"{label}: unreadable PNG image ({msg})") from None
+        raise MapFormatError(f"{label}: unreadable image ({msg})") from None
     if (
         img.ndim not in (2, 3)
         or img.size == 0
@@ -554,4 +637,4 @@ def _parse_png(path: Path, label: str) -> np.ndarray:
             lum = color[..., 0]
         if alpha is not None:  # composite over white: transparent = free
             lum = lum * alpha + (1.0 - alpha)
-    return np.ascontiguousarray((lum < 0.5)[::-1])
+    return np.ascontiguousarray((lum < threshold)[::-1])

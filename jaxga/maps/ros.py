@@ -1,0 +1,241 @@
+"""ROS ``map_server`` maps: a YAML file and its image (PGM, PNG, ...) as a blocked grid.
+
+A map saved by ROS ``map_saver`` (ROS 1 ``map_server``, ROS 2 ``nav2_map_server``) is two
+files: ``office.yaml``::
+
+    image: office.pgm
+    mode: trinary            # ROS 2 only; ROS 1 maps are trinary
+    resolution: 0.050000     # metres per cell
+    origin: [-10.0, -12.5, 0.0]   # x, y (metres) and yaw (radians) of the lower-left cell
+    negate: 0
+    occupied_thresh: 0.65
+    free_thresh: 0.196
+
+and the image, whose top row is the top of the map (it is flipped to the library's
+``y = 0`` bottom row, SPEC 1). Each pixel becomes an occupancy as ``map_server`` computes
+it: the pixel's shade ``s`` is the mean of its colour channels over 255 (alpha excluded),
+``p = 1 - s`` (``s`` when ``negate``) is its occupancy probability, and
+
+* ``trinary``: ``p > occupied_thresh`` occupied, ``p < free_thresh`` free, anything
+  between unknown (``map_saver``'s grey 205 has ``p = 0.196``: unknown);
+* ``scale``: as trinary, except that the band between the thresholds is graded
+  occupancy (1-99) and a transparent pixel (alpha < 255) is unknown;
+* ``raw``: the pixel value is the occupancy itself (0-100), anything above 100 unknown.
+
+Planning: occupied cells are blocked; unknown cells are blocked too unless
+``unknown="free"``; scale mode's graded cells count as unknown (jaxga plans on free and
+blocked cells only, and a cell that is possibly occupied is not driven through by
+default). Cell ``(x, y)`` covers the square of side ``resolution`` whose lower-left
+corner is at ``origin + R(yaw) (x resolution, y resolution)``; :func:`world_to_cell` and
+:func:`cell_to_world` convert (cell centres).
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import math
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+import yaml
+from PIL import Image, UnidentifiedImageError
+
+from jaxga.core.errors import EndpointError, MapFormatError
+
+__all__ = [
+    "MODES",
+    "UNKNOWN_AS",
+    "RosMap",
+    "cell_to_world",
+    "occupancy",
+    "read_ros_image",
+    "read_ros_yaml",
+    "ros_blocked",
+    "world_to_cell",
+]
+
+MODES = ("trinary", "scale", "raw")
+"""``map_server``'s interpretations of the image (the YAML's ``mode``)."""
+
+UNKNOWN_AS = ("blocked", "free")
+"""How unknown cells are planned on: blocked (default) or free."""
+
+
+@dataclasses.dataclass(frozen=True)
+class RosMap:
+    """The metadata of a ``map_server`` YAML file.
+
+    Attributes:
+        image: the image file (absolute, or relative to the YAML's folder as written).
+        resolution: metres per cell (> 0).
+        origin: ``(x, y, yaw)``: the lower-left cell's lower-left corner in metres and the
+            map's rotation in radians.
+        negate: swap the meaning of black and white.
+        occupied_thresh: occupancy probability above which a cell is occupied.
+        free_thresh: occupancy probability below which a cell is free.
+        mode: one of :data:`MODES`.
+    """
+
+    image: Path
+    resolution: float
+    origin: tuple[float, float, float]
+    negate: bool = False
+    occupied_thresh: float = 0.65
+    free_thresh: float = 0.196
+    mode: str = "trinary"
+
+
+def _number(value: Any, key: str, label: str) -> float:
+    if isinstance(value, bool) or not isinstance(value, (int, float)) or not math.isfinite(
+            value):
+        raise MapFormatError(f"{label}: {key} must be a finite number, got {value!r}")
+    return float(value)
+
+
+def read_ros_yaml(path: str | Path, label: str | None = None) -> RosMap:
+    """Read a ``map_server`` YAML file (``image``, ``resolution``, ``origin``, ``negate``,
+    ``occupied_thresh``, ``free_thresh``, ``mode``; unknown keys are ignored, as
+    ``map_server`` does). Raises :class:`~jaxga.core.errors.MapFormatError` with one line
+    naming the file and the key for a missing or invalid value."""
+    path = Path(path)
+    label = label or str(path)
+    try:
+        data = yaml.safe_load(path.read_text(encoding="utf-8"))
+    except FileNotFoundError:
+        raise MapFormatError(f"{label}: no such file") from None
+    except (OSError, UnicodeDecodeError, yaml.YAMLError) as e:
+        first = str(e).splitlines()[0] if str(e) else type(e).__name__
+        raise MapFormatError(f"{label}: not a readable YAML file ({first})") from None
+    if not isinstance(data, dict):
+        raise MapFormatError(f"{label}: not a map_server YAML file (no 'key: value' pairs)")
+    for key in ("image", "resolution", "origin"):
+        if key not in data:
+            raise MapFormatError(f"{label}: the map_server key {key!r} is missing")
+    if not isinstance(data["image"], str) or not data["image"]:
+        raise MapFormatError(f"{label}: image must be a file name, got {data['image']!r}")
+    resolution = _number(data["resolution"], "resolution", label)
+    if resolution <= 0:
+        raise MapFormatError(f"{label}: resolution must be > 0 metres per cell, got {resolution}")
+    origin = data["origin"]
+    if not isinstance(origin, (list, tuple)) or len(origin) != 3:
+        raise MapFormatError(f"{label}: origin must be [x, y, yaw], got {origin!r}")
+    origin = tuple(_number(v, "origin", label) for v in origin)
+    negate = data.get("negate", 0)
+    if negate not in (0, 1) or isinstance(negate, float):
+        raise MapFormatError(f"{label}: negate must be 0 or 1, got {negate!r}")
+    occ = _number(data.get("occupied_thresh", 0.65), "occupied_thresh", label)
+    free = _number(data.get("free_thresh", 0.196), "free_thresh", label)
+    if not 0.0 <= free < occ <= 1.0:
+        raise MapFormatError(f"{label}: thresholds must satisfy 0 <= free_thresh < "
+                             f"occupied_thresh <= 1, got free_thresh {free}, "
+                             f"occupied_thresh {occ}")
+    mode = data.get("mode", "trinary")
+    if mode not in MODES:
+        raise MapFormatError(f"{label}: mode must be one of {', '.join(MODES)}, got {mode!r}")
+    image = Path(data["image"])
+    if not image.is_absolute():
+        image = path.parent / image
+    return RosMap(image=image, resolution=resolution, origin=origin, negate=bool(negate),
+                  occupied_thresh=occ, free_thresh=free, mode=mode)
+
+
+def read_ros_image(meta: RosMap, label: str | None = None) -> np.ndarray:
+    """The image of a ``map_server`` map as ``uint8[H, W, C]`` (C = 1-4), top row first,
+    read with Pillow (PGM, PNG, BMP, ...). 16-bit images are scaled to 8 bits."""
+    label = label or str(meta.image)
+    try:
+        with Image.open(meta.image) as img:
+            img.load()
+            if img.mode in ("I;16", "I;16B", "I"):
+                arr = np.asarray(img, np.float64)
+                top = 65535.0 if arr.max(initial=0) > 255 else 255.0
+                arr = np.round(arr / top * 255.0).astype(np.uint8)
+            elif img.mode in ("L", "LA", "RGB", "RGBA"):
+                arr = np.asarray(img, np.uint8)
+            else:
+                arr = np.asarray(img.convert("RGBA"), np.uint8)
+    except FileNotFoundError:
+        raise MapFormatError(f"{label}: the map image {str(meta.image)!r} does not exist") \
+            from None
+    except (OSError, UnidentifiedImageError, ValueError) as e:
+        first = str(e).splitlines()[0] if str(e) else type(e).__name__
+        raise MapFormatError(f"{label}: unreadable map image {str(meta.image)!r} ({first})") \
+            from None
+    if arr.ndim == 2:
+        arr = arr[..., None]
+    if arr.size == 0:
+        raise MapFormatError(f"{label}: the map image {str(meta.image)!r} is empty")
+    return arr
+
+
+def occupancy(pixels: np.ndarray, meta: RosMap) -> np.ndarray:
+    """``int8[H, W]`` occupancy as ``map_server`` publishes it: 0 free, 100 occupied, -1
+    unknown, 1-99 graded (scale mode); rows as in the image (top first).
+
+    ``pixels``: ``uint8[H, W, C]``; with C = 2 or 4 the last channel is alpha.
+    """
+    pixels = np.asarray(pixels)
+    if pixels.ndim == 2:
+        pixels = pixels[..., None]
+    c = pixels.shape[2]
+    has_alpha = c in (2, 4)
+    colour = pixels[..., : c - 1] if has_alpha else pixels
+    shade = colour.astype(np.float64).mean(axis=2)  # 0-255
+    if meta.negate:
+        shade = 255.0 - shade
+    if meta.mode == "raw":
+        value = np.round(shade)
+        return np.where(value > 100, -1, value).astype(np.int8)
+    p = (255.0 - shade) / 255.0
+    out = np.full(p.shape, -1, np.int8)
+    out[p > meta.occupied_thresh] = 100
+    out[p < meta.free_thresh] = 0
+    if meta.mode == "scale":
+        band = (out == -1)
+        ratio = (p - meta.free_thresh) / (meta.occupied_thresh - meta.free_thresh)
+        out[band] = np.clip(np.round(99.0 * ratio[band]), 1, 99).astype(np.int8)
+        if has_alpha:
+            out[pixels[..., -1] < 255] = -1
+    return out
+
+
+def ros_blocked(occ: np.ndarray, unknown: str = "blocked") -> np.ndarray:
+    """Blocked cells for planning, ``bool[H, W]`` with ``y = 0`` the bottom row (the
+    image's rows flipped): occupied (100), and unknown (-1) or graded (1-99) cells unless
+    ``unknown="free"``."""
+    if unknown not in UNKNOWN_AS:
+        raise MapFormatError(f"unknown cells must be one of {', '.join(UNKNOWN_AS)}, "
+                             f"got {unknown!r}")
+    occ = np.asarray(occ)
+    blocked = occ == 100 if unknown == "free" else occ != 0
+    return np.ascontiguousarray(blocked[::-1])
+
+
+def _rotation(yaw: float) -> np.ndarray:
+    c, s = math.cos(yaw), math.sin(yaw)
+    return np.array([[c, -s], [s, c]])
+
+
+def cell_to_world(meta: RosMap, cell: tuple[int, int]) -> tuple[float, float]:
+    """The world coordinates (metres) of cell ``(x, y)``'s centre (``y = 0`` bottom)."""
+    local = (np.asarray(cell, float) + 0.5) * meta.resolution
+    x, y = np.asarray(meta.origin[:2]) + _rotation(meta.origin[2]) @ local
+    return float(x), float(y)
+
+
+def world_to_cell(meta: RosMap, point: tuple[float, float], shape: tuple[int, int],
+                  what: str = "point") -> tuple[int, int]:
+    """The cell ``(x, y)`` (``y = 0`` bottom) that holds world point ``point`` (metres);
+    :class:`~jaxga.core.errors.EndpointError` naming ``what`` when it lies off the
+    ``shape = (H, W)`` map."""
+    local = _rotation(-meta.origin[2]) @ (np.asarray(point, float) - np.asarray(meta.origin[:2]))
+    x, y = (int(math.floor(v / meta.resolution + 1e-9)) for v in local)
+    h, w = shape
+    if not (0 <= x < w and 0 <= y < h):
+        x0, y0 = meta.origin[:2]
+        raise EndpointError(
+            f"{what} ({point[0]:g}, {point[1]:g}) m is off the map: it covers x "
+            f"{x0:g}..{x0 + w * meta.resolution:g} m, y {y0:g}..{y0 + h * meta.resolution:g} m"
+            + (" (before its yaw rotation)" if meta.origin[2] else ""))
+    return x, y

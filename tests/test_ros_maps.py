@@ -1,0 +1,145 @@
+"""ROS map_server maps (YAML + image) as map_saver writes them: cells, resolution, origin,
+thresholds, modes, world coordinates and the one-line errors."""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+import pytest
+
+from jaxga import EndpointError, MapFormatError
+from jaxga.maps import load_map, load_map_info
+from jaxga.maps.ros import RosMap, cell_to_world, occupancy, world_to_cell
+
+# A 5 x 4 image, top row first, as map_saver writes it: 254 free, 0 occupied, 205 unknown.
+IMAGE = np.array([
+    [0, 254, 254, 254, 205],
+    [254, 254, 0, 254, 205],
+    [254, 254, 0, 254, 254],
+    [254, 254, 254, 254, 254],
+], np.uint8)
+ROS1_YAML = """image: {image}
+resolution: 0.050000
+origin: [-2.000000, -1.500000, 0.000000]
+negate: 0
+occupied_thresh: 0.65
+free_thresh: 0.196
+
+"""
+
+
+def write_pgm(path, pixels: np.ndarray, comment: str = "# CREATOR: map_saver.cpp 0.050 m/pix"):
+    """A binary PGM (P5) exactly as ROS 1 map_saver writes one."""
+    h, w = pixels.shape
+    path.write_bytes(f"P5\n{comment}\n{w} {h}\n255\n".encode() + pixels.tobytes())
+    return path
+
+
+@pytest.fixture
+def office(tmp_path):
+    write_pgm(tmp_path / "office.pgm", IMAGE)
+    (tmp_path / "office.yaml").write_text(ROS1_YAML.format(image="office.pgm"))
+    return tmp_path / "office.yaml"
+
+
+def test_a_map_saver_map_loads_with_its_cells_resolution_and_origin(office):
+    info = load_map_info(office)
+    assert info.format == "ros" and info.name == "office"
+    assert info.resolution == 0.05 and info.ros.origin == (-2.0, -1.5, 0.0)
+    blocked = info.grid.blocked_np()
+    assert blocked.shape == (4, 5)
+    # the image's top row is the map's top row (y = 3); unknown (205) is blocked
+    want = np.array([
+        [0, 0, 0, 0, 0],
+        [0, 0, 1, 0, 0],
+        [0, 0, 1, 0, 1],
+        [1, 0, 0, 0, 1],
+    ], bool)
+    np.testing.assert_array_equal(blocked, want)
+    free = load_map(office, unknown="free").blocked_np()
+    np.testing.assert_array_equal(free, want & ~np.array([[0] * 5, [0] * 5, [0, 0, 0, 0, 1],
+                                                           [0, 0, 0, 0, 1]], bool))
+
+
+def test_thresholds_negate_and_modes_follow_map_server():
+    meta = RosMap(image=None, resolution=1.0, origin=(0.0, 0.0, 0.0))
+    shades = np.array([[0, 50, 89, 90, 204, 205, 206, 255]], np.uint8)
+    # p = (255 - s) / 255: 0 -> 1.0, 89 -> 0.651 (> 0.65), 90 -> 0.647, 205 -> 0.196 (not <),
+    # 206 -> 0.192 (< 0.196)
+    assert occupancy(shades, meta).tolist() == [[100, 100, 100, -1, -1, -1, 0, 0]]
+    neg = RosMap(image=None, resolution=1.0, origin=(0.0, 0.0, 0.0), negate=True)
+    # negate: p = s / 255: 50 -> 0.19608 (not < 0.196), 204 -> 0.8 (> 0.65)
+    assert occupancy(shades, neg).tolist() == [[0, -1, -1, -1, 100, 100, 100, 100]]
+    scale = RosMap(image=None, resolution=1.0, origin=(0.0, 0.0, 0.0), mode="scale")
+    got = occupancy(shades, scale)[0]
+    assert got[[0, 1, 2, 6, 7]].tolist() == [100, 100, 100, 0, 0]
+    p = (255 - 90) / 255
+    assert got[3] == round(99 * (p - 0.196) / (0.65 - 0.196)) and 1 <= got[5] <= 99
+    alpha = np.stack([shades, np.array([[255] * 7 + [0]], np.uint8)], -1)
+    assert occupancy(alpha, scale)[0, -1] == -1  # transparent: unknown in scale mode
+    raw = RosMap(image=None, resolution=1.0, origin=(0.0, 0.0, 0.0), mode="raw")
+    assert occupancy(np.array([[0, 37, 100, 101, 255]], np.uint8), raw).tolist() == [
+        [0, 37, 100, -1, -1]]
+    rgb = np.repeat(shades[..., None], 3, -1)
+    assert occupancy(rgb, meta).tolist() == occupancy(shades, meta).tolist()
+
+
+def test_world_coordinates_name_the_cell_that_holds_the_point(office):
+    info = load_map_info(office, start_world=(-1.98, -1.49), goal_world=(-1.76, -1.31),
+                         corner_rule="strict")
+    assert info.grid.start_xy == (0, 0)
+    assert info.grid.goal_xy == (4, 3)  # x 0.24 m / 0.05 = 4.8, y 0.19 / 0.05 = 3.8
+    meta = info.ros
+    assert cell_to_world(meta, (4, 3)) == pytest.approx((-2 + 4.5 * 0.05, -1.5 + 3.5 * 0.05))
+    # a map turned by 90 degrees: the cell's x axis points along the world's y
+    turned = RosMap(image=None, resolution=0.5, origin=(1.0, 2.0, math.pi / 2))
+    assert world_to_cell(turned, (0.8, 2.3), (4, 4)) == (0, 0)
+    assert world_to_cell(turned, (0.8, 3.3), (4, 4)) == (2, 0)
+    assert world_to_cell(turned, (-0.2, 2.3), (4, 4)) == (0, 2)
+    for cell in [(0, 0), (3, 1), (2, 3)]:
+        assert world_to_cell(turned, cell_to_world(turned, cell), (4, 4)) == cell
+
+
+@pytest.mark.parametrize("yaml_text,message", [
+    ("resolution: 0.05\norigin: [0, 0, 0]\n", "'image' is missing"),
+    ("image: office.pgm\norigin: [0, 0, 0]\n", "'resolution' is missing"),
+    ("image: office.pgm\nresolution: -1\norigin: [0, 0, 0]\n", "resolution must be > 0"),
+    ("image: office.pgm\nresolution: 0.05\norigin: [0, 0]\n", "origin must be [x, y, yaw]"),
+    ("image: office.pgm\nresolution: 0.05\norigin: [0, 0, 0]\nfree_thresh: 0.7\n",
+     "0 <= free_thresh < occupied_thresh <= 1"),
+    ("image: office.pgm\nresolution: 0.05\norigin: [0, 0, 0]\nmode: fancy\n",
+     "mode must be one of trinary, scale, raw"),
+    ("image: missing.pgm\nresolution: 0.05\norigin: [0, 0, 0]\n", "does not exist"),
+    ("image: [office.pgm\n", "not a readable YAML file"),
+])
+def test_malformed_ros_maps_give_one_line(office, yaml_text, message):
+    bad = office.with_name("bad.yaml")
+    bad.write_text(yaml_text)
+    with pytest.raises(MapFormatError) as e:
+        load_map(bad)
+    assert message in str(e.value) and "\n" not in str(e.value) and "bad.yaml" in str(e.value)
+
+
+def test_endpoints_in_metres_need_a_ros_map_and_must_lie_on_it(office, tmp_path):
+    with pytest.raises(EndpointError, match=r"is off the map: it covers x -2\.\.-1\.75 m"):
+        load_map(office, start_world=(0.0, 0.0))
+    with pytest.raises(EndpointError, match="in cells or in metres, not both"):
+        load_map(office, start=(0, 0), start_world=(-1.98, -1.49))
+    txt = tmp_path / "m.txt"
+    txt.write_text("0 0\n0 0\n")
+    with pytest.raises(EndpointError, match="needs a map with a resolution"):
+        load_map(txt, goal_world=(1.0, 1.0))
+
+
+def test_a_pgm_alone_and_a_png_threshold(tmp_path):
+    """A map image without its YAML loads as an image (luminance below the threshold is
+    blocked): ROS's unknown grey 205 (luminance 0.80) is free at the default 0.5 and
+    blocked at 0.85."""
+    pgm = write_pgm(tmp_path / "office.pgm", IMAGE)
+    grey = (IMAGE[::-1] == 205)
+    occupied = (IMAGE[::-1] == 0)
+    np.testing.assert_array_equal(load_map(pgm).blocked_np(), occupied)
+    np.testing.assert_array_equal(load_map(pgm, threshold=0.85).blocked_np(), occupied | grey)
+    with pytest.raises(MapFormatError, match="threshold must be a luminance in"):
+        load_map(pgm, threshold=0.0)
