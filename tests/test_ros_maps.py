@@ -143,3 +143,21 @@ def test_a_pgm_alone_and_a_png_threshold(tmp_path):
     np.testing.assert_array_equal(load_map(pgm, threshold=0.85).blocked_np(), occupied | grey)
     with pytest.raises(MapFormatError, match="threshold must be a luminance in"):
         load_map(pgm, threshold=0.0)
+
+
+def test_inflation_by_cells_or_by_the_robots_radius_in_metres(office):
+    """0.05 m cells: a 0.1 m robot radius is 2 cells; the inflated map equals
+    jaxga.maps.inflate of the loaded one, and an endpoint the growth covers is named."""
+    from jaxga.maps import inflate
+
+    plain = load_map(office, start=(0, 0), goal=(4, 0))
+    by_metres = load_map(office, start=(0, 0), goal=(4, 0), robot_radius=0.05)
+    by_cells = load_map(office, start=(0, 0), goal=(4, 0), inflate=1)
+    np.testing.assert_array_equal(by_metres.blocked_np(), inflate(plain, 1).blocked_np())
+    np.testing.assert_array_equal(by_cells.blocked_np(), by_metres.blocked_np())
+    assert by_cells.blocked_np().sum() > plain.blocked_np().sum()
+    with pytest.raises(EndpointError, match=r"the goal \(4, 0\) lies within 2 cells of an "
+                                            "obstacle"):
+        load_map(office, start=(0, 0), goal=(4, 0), robot_radius=0.1)
+    with pytest.raises(MapFormatError, match="not both"):
+        load_map(office, inflate=1, robot_radius=0.05)

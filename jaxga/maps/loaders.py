@@ -40,6 +40,7 @@ blocked borders); :meth:`jaxga.Grid.check_endpoints` does that later.
 from __future__ import annotations
 
 import dataclasses
+import math
 import os
 from pathlib import Path
 
@@ -48,7 +49,7 @@ import numpy as np
 from jaxga.core.errors import EndpointError, MapFormatError
 from jaxga.core.grid import DEFAULT_CORNER_RULE, Grid, check_corner_rule, too_large
 from jaxga.maps import builtin
-from jaxga.maps.preprocess import coarsen_blocked
+from jaxga.maps.preprocess import coarsen_blocked, inflate_blocked
 from jaxga.maps.ros import (
     RosMap,
     occupancy,
@@ -142,6 +143,8 @@ def load_map(
     unknown: str = "blocked",
     start_world: tuple[float, float] | None = None,
     goal_world: tuple[float, float] | None = None,
+    inflate: float | None = None,
+    robot_radius: float | None = None,
 ) -> Grid:
     """Load a map file or a built-in map as a :class:`~jaxga.Grid`.
 
@@ -167,6 +170,11 @@ def load_map(
         start_world, goal_world: ROS maps: the endpoints in metres (world frame); the
             cells that hold them (:func:`jaxga.maps.ros.world_to_cell`). Not with
             ``start``/``goal``.
+        inflate: grow the obstacles by this many cells (:func:`jaxga.maps.inflate`: every
+            cell whose centre lies within that distance of a blocked cell's centre),
+            on the map's own cells, before ``coarsen``.
+        robot_radius: ROS maps: the robot's radius plus safety margin in metres; the
+            obstacles grow by ``robot_radius / resolution`` cells. Not with ``inflate``.
 
     Raises:
         MapFormatError: missing, unreadable or malformed file; unknown built-in name; a
@@ -177,7 +185,8 @@ def load_map(
     """
     return load_map_info(source, start=start, goal=goal, corner_rule=corner_rule, fmt=fmt,
                          coarsen=coarsen, threshold=threshold, unknown=unknown,
-                         start_world=start_world, goal_world=goal_world).grid
+                         start_world=start_world, goal_world=goal_world, inflate=inflate,
+                         robot_radius=robot_radius).grid
 
 
 def load_map_info(
@@ -192,6 +201,8 @@ def load_map_info(
     unknown: str = "blocked",
     start_world: tuple[float, float] | None = None,
     goal_world: tuple[float, float] | None = None,
+    inflate: float | None = None,
+    robot_radius: float | None = None,
 ) -> MapInfo:
     """Like :func:`load_map` but return a :class:`MapInfo` (name, path, format, grid)."""
 
@@ -253,6 +264,7 @@ def load_map_info(
         except EndpointError as e:
             raise EndpointError(f"{label}: {e}") from None
         s, g = (cell, g) if name == "start" else (s, cell)
+    blocked = _inflated(blocked, ros, inflate, robot_radius, s, g, label)
     if factor > 1:
         h0, w0 = blocked.shape
         for name, xy in (("start", s), ("goal", g)):
@@ -270,6 +282,36 @@ def load_map_info(
         raise EndpointError(f"{label}: {e}") from None
     name = str(source) if is_builtin else path.stem
     return MapInfo(name=name, path=path, format=kind, builtin=is_builtin, grid=grid, ros=ros)
+
+
+def _inflated(blocked: np.ndarray, ros: RosMap | None, cells: float | None,
+              metres: float | None, start: XY | None, goal: XY | None,
+              label: str) -> np.ndarray:
+    """``blocked`` with its obstacles grown by ``cells`` (or ``metres / resolution``); an
+    endpoint that only the growth blocks is an :class:`EndpointError` naming it."""
+    if metres is not None:
+        if cells is not None:
+            raise MapFormatError(f"{label}: give the inflation in cells or the robot's "
+                                 "radius in metres, not both")
+        if ros is None:
+            raise MapFormatError(f"{label}: a robot radius in metres needs a map with a "
+                                 "resolution (a ROS map_server .yaml); inflate by cells "
+                                 "instead")
+        if isinstance(metres, bool) or not isinstance(metres, (int, float)) or not (
+                math.isfinite(metres) and metres >= 0):
+            raise MapFormatError(f"{label}: the robot radius must be >= 0 metres, got "
+                                 f"{metres!r}")
+        cells = metres / ros.resolution
+    if cells is None:
+        return blocked
+    out = inflate_blocked(blocked, cells)
+    h, w = blocked.shape
+    for name, xy in (("start", start or (0, 0)), ("goal", goal or (w - 1, h - 1))):
+        x, y = xy
+        if 0 <= x < w and 0 <= y < h and out[y, x] and not blocked[y, x]:
+            raise EndpointError(f"{label}: the {name} {tuple(xy)} lies within {cells:g} "
+                                "cells of an obstacle: the inflated map blocks it")
+    return out
 
 
 def detect_format(path: Source, raw: bytes | None = None) -> str:

@@ -122,12 +122,17 @@ def inflate(grid: Grid, radius: float) -> Grid:
 
     Raises :class:`~jaxga.core.errors.ParameterError` for a negative or non-finite radius.
     """
+    return grid.replace(blocked=inflate_blocked(grid.blocked_np(), radius))
+
+
+def inflate_blocked(blocked: np.ndarray, radius: float) -> np.ndarray:
+    """:func:`inflate` on a ``bool[H, W]`` array (a new array)."""
     if isinstance(radius, bool) or not isinstance(radius, numbers.Real):
         raise ParameterError(f"inflate radius must be a number of cells, got {radius!r}")
     r = float(radius)
     if not math.isfinite(r) or r < 0:
         raise ParameterError(f"inflate radius must be finite and >= 0, got {radius!r}")
-    b = grid.blocked_np()
+    b = np.asarray(blocked, bool)
     h, w = b.shape
     r = min(r, math.hypot(h, w))  # a larger radius cannot add anything
     k = int(math.floor(r + 1e-9))
@@ -141,7 +146,7 @@ def inflate(grid: Grid, radius: float) -> Grid:
                 ys, yd = slice(max(0, -dy), h - max(0, dy)), slice(max(0, dy), h - max(0, -dy))
                 xs, xd = slice(max(0, -dx), w - max(0, dx)), slice(max(0, dx), w - max(0, -dx))
                 out[yd, xd] |= b[ys, xs]
-    return grid.replace(blocked=out)
+    return out
 
 
 def fill_enclosed(grid: Grid) -> Grid:
