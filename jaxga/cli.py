@@ -47,6 +47,7 @@ from jaxga.engine import check_file_keys_read, check_overrides_read
 from jaxga.maps import (
     builtin_names,
     builtin_scenario_path,
+    detect_format,
     load_map,
     load_map_info,
     read_scen,
@@ -71,14 +72,50 @@ def _parse_xy(text: str) -> tuple[int, int]:
     return x, y
 
 
+def _parse_point(text: str) -> tuple[float, float]:
+    try:
+        x, y = (float(v) for v in text.split(","))
+    except ValueError:
+        raise argparse.ArgumentTypeError(
+            f"expected X,Y (two numbers in metres separated by a comma), got {text!r}"
+        ) from None
+    if not (math.isfinite(x) and math.isfinite(y)):
+        raise argparse.ArgumentTypeError(f"expected finite coordinates, got {text!r}")
+    return x, y
+
+
+MAP_HELP = ("a map file (0/1 text, Moving AI .map, ASCII, an image such as PNG or PGM, a "
+            "ROS map_server .yaml) or a built-in map name (see `jaxga maps`)")
+
+
+def _add_source_arguments(p: argparse.ArgumentParser) -> None:
+    """How a map file is read and grown: image threshold, ROS unknown cells, inflation."""
+    p.add_argument("--threshold", type=float, metavar="LUMA", default=0.5,
+                   help="images: a pixel darker than this luminance (0 black .. 1 white) is "
+                   "blocked (default 0.5)")
+    p.add_argument("--unknown", choices=("blocked", "free"), default="blocked",
+                   help="ROS maps: plan through unknown cells (free) or not (blocked, default)")
+    grow = p.add_mutually_exclusive_group()
+    grow.add_argument("--inflate", type=float, metavar="CELLS",
+                      help="grow the obstacles by this many cells (centre to centre)")
+    grow.add_argument("--robot-radius", type=float, metavar="METRES",
+                      help="ROS maps: grow the obstacles by the robot's radius plus margin, "
+                      "in metres (divided by the map's resolution)")
+
+
 def _add_map_arguments(p: argparse.ArgumentParser, rule_default: str = "strict") -> None:
-    p.add_argument("--map", required=True, help="a map file (0/1 text, .map, ASCII, PNG) or a "
-                   "built-in map name (see `jaxga maps`)")
+    p.add_argument("--map", required=True, help=MAP_HELP)
     p.add_argument("--start", type=_parse_xy, metavar="X,Y",
                    help="start cell; x = column, y = row from the bottom (default: the "
                    "file's S or (0, 0))")
     p.add_argument("--goal", type=_parse_xy, metavar="X,Y",
                    help="goal cell (default: the file's G or (W-1, H-1))")
+    p.add_argument("--start-world", type=_parse_point, metavar="X,Y",
+                   help="ROS maps: the start in metres (world frame), instead of --start; "
+                   "with a negative X write --start-world=-1.5,2")
+    p.add_argument("--goal-world", type=_parse_point, metavar="X,Y",
+                   help="ROS maps: the goal in metres (world frame), instead of --goal")
+    _add_source_arguments(p)
     p.add_argument("--scenario", type=int, metavar="N",
                    help="start and goal of problem N (0 = the first) of a Moving AI "
                    "scenario file: --scen, or else the built-in map's own, or "
@@ -119,8 +156,10 @@ def _apply_scenario(args: argparse.Namespace) -> None:
             raise JaxgaError("--scen names the scenario file of --scenario N: give N too")
         return
 
-    if args.start is not None or args.goal is not None:
-        raise JaxgaError("--scenario gives the start and goal: leave out --start and --goal")
+    if any(getattr(args, k, None) is not None
+           for k in ("start", "goal", "start_world", "goal_world")):
+        raise JaxgaError("--scenario gives the start and goal: leave out --start and --goal "
+                         "(and --start-world, --goal-world)")
     # a missing or malformed map is named first
     grid = load_map_info(args.map, coarsen=args.coarsen).grid
     path = Path(args.scen) if args.scen is not None else scenario_path(args.map)
@@ -144,12 +183,36 @@ def _apply_scenario(args: argparse.Namespace) -> None:
           file=sys.stderr)
 
 
+_SOURCE_OPTIONS = ("start", "goal", "coarsen", "start_world", "goal_world", "inflate",
+                   "robot_radius")
+
+
+def _map_options(args: argparse.Namespace) -> dict:
+    """The keyword arguments of :func:`jaxga.maps.load_map_info` given on the command
+    line (endpoints, coarsening, image threshold, ROS unknown cells, inflation)."""
+    opts = {k: getattr(args, k, None) for k in _SOURCE_OPTIONS}
+    opts["threshold"] = getattr(args, "threshold", 0.5)
+    opts["unknown"] = getattr(args, "unknown", "blocked")
+    return opts
+
+
+def _plain_map(args: argparse.Namespace) -> bool:
+    """Whether the map is used as named, with none of the loading options."""
+    opts = _map_options(args)
+    return (all(opts[k] is None for k in _SOURCE_OPTIONS) and opts["threshold"] == 0.5
+            and opts["unknown"] == "blocked")
+
+
+def _load_info(args: argparse.Namespace, rule: str | None):
+    """The map of the command line, loaded with its options under corner rule ``rule``."""
+    return load_map_info(args.map, corner_rule=rule, **_map_options(args))
+
+
 def _load_grid(args: argparse.Namespace):
 
     if args.corner_rule is not None:
         check_corner_rule(args.corner_rule)
-    info = load_map_info(args.map, start=args.start, goal=args.goal, corner_rule=args.corner_rule,
-                         coarsen=args.coarsen)
+    info = _load_info(args, args.corner_rule)
     return info, info.grid.check_endpoints()
 
 
@@ -193,9 +256,11 @@ def cmd_optimum(args: argparse.Namespace) -> int:
     print(f"map          {info.name} ({grid.width} x {grid.height}, corner rule "
           f"{grid.corner_rule!r})")
     print(f"start, goal  {grid.start_xy} -> {grid.goal_xy}")
-    print(f"8-connected  {octile.length:.4f}  ({octile.n_cells} cells, {t1 - t0:.3f} s)")
-    print(f"any-angle    {any_angle.length:.4f}  ({any_angle.n_cells} waypoints, "
-          f"{t2 - t1:.3f} s)")
+    res = info.resolution
+    print(f"8-connected  {octile.length:.4f}{_metres(octile.length, res)}  "
+          f"({octile.n_cells} cells, {t1 - t0:.3f} s)")
+    print(f"any-angle    {any_angle.length:.4f}{_metres(any_angle.length, res)}  "
+          f"({any_angle.n_cells} waypoints, {t2 - t1:.3f} s)")
     fit = None
     if config is not None:
         fit = fitness_optimum(grid, config)
@@ -216,6 +281,7 @@ def cmd_optimum(args: argparse.Namespace) -> int:
             "path": _xy_list(octile.path),
             "any_angle_length": float(any_angle.length),
             "any_angle_path": _xy_list(any_angle.path),
+            "resolution": res,
         }
         if fit is not None:
             out["fitness"] = {
@@ -323,8 +389,10 @@ def cmd_run(args: argparse.Namespace) -> int:
 
     lead = parallel.process_index() == 0
     progress = None if args.quiet or not lead else _Progress()
+    source = _map_for_run(args)
+    resolution = getattr(source, "resolution", None)
     result = api.run(
-        args.preset, _map_for_run(args), seeds=args.seeds, generations=args.generations,
+        args.preset, source, seeds=args.seeds, generations=args.generations,
         corner_rule=args.corner_rule, variant=args.variant, sets=args.set or (),
         progress=progress, chunks=10 if progress else 1,
         population_capacity=args.population_capacity,
@@ -332,8 +400,10 @@ def cmd_run(args: argparse.Namespace) -> int:
     if _not_lead(f"{len(result.seeds)} seeds", result.timing["total_s"]):
         return 0
     print(result.summary())
+    if resolution is not None:
+        print(_metres_summary(result, resolution))
     if args.json:
-        _write_json(args.json, result.to_json())
+        _write_json(args.json, {**result.to_json(), "resolution": resolution})
     if args.plot:
 
         plot_result(result, _grid_for_run(args, rule=result.corner_rule), args.plot)
@@ -409,14 +479,12 @@ def cmd_compare(args: argparse.Namespace) -> int:
 
         check_corner_rule(args.corner_rule)
     grid = args.map
-    if args.start is not None or args.goal is not None or args.coarsen is not None:
-
+    if not _plain_map(args):
         rule = args.corner_rule
         if rule is None:  # the presets' own rule (with --set), which must be one
             rule = one_corner_rule({p: load_preset(p, sets=args.set or ())["map.corner_rule"]
                                     for p in presets})
-        grid = load_map_info(args.map, start=args.start, goal=args.goal, corner_rule=rule,
-                             coarsen=args.coarsen)
+        grid = _load_info(args, rule)
     progress = None if args.quiet else (lambda label: print(f"running {label} ...",
                                                               file=sys.stderr, flush=True))
     comp = compare(presets, grid, seeds=args.seeds, metric=args.metric, test=args.test,
@@ -445,18 +513,41 @@ def _map_for_run(args: argparse.Namespace):
     loaded map with those endpoints, under the run's corner rule (the preset's unless
     --corner-rule), as a MapInfo so that the results keep the map's name."""
 
-    if args.start is None and args.goal is None and args.coarsen is None:
+    if _plain_map(args) and detect_format_of(args.map) != "ros":
         return args.map
-    return load_map_info(args.map, start=args.start, goal=args.goal,
-                         corner_rule=args.corner_rule or _preset_rule(args),
-                         coarsen=args.coarsen)
+    return _load_info(args, args.corner_rule or _preset_rule(args))
+
+
+def detect_format_of(source: str) -> str | None:
+    """The format of a map file (None for a built-in name or a missing file)."""
+    if source in builtin_names() or not Path(source).is_file():
+        return None
+    return detect_format(source)
+
+
+def _metres(length: float, resolution: float | None) -> str:
+    """`` (X m)`` for a length in cells on a map with a resolution, else ``""``."""
+    if resolution is None or not math.isfinite(length):
+        return ""
+    return f" ({length * resolution:.3f} m)"
+
+
+def _metres_summary(result, resolution: float) -> str:
+    """One line: the successful seeds' lengths in metres."""
+    ok = result.success
+    if not ok.any():
+        return f"metres      resolution {resolution:g} m per cell; no path found"
+    post, raw = result.length[ok] * resolution, result.raw_length[ok] * resolution
+    return (f"metres      resolution {resolution:g} m per cell: length mean {post.mean():.3f} "
+            f"m, best {post.min():.3f} m (raw mean {raw.mean():.3f} m); optimum "
+            f"{result.optimum * resolution:.3f} m, any-angle "
+            f"{result.any_angle_optimum * resolution:.3f} m")
 
 
 def _grid_for_run(args: argparse.Namespace, rule: str):
     """The Grid of the run (endpoints applied) under its corner rule ``rule``."""
 
-    return load_map(args.map, start=args.start, goal=args.goal, corner_rule=rule,
-                    coarsen=args.coarsen)
+    return _load_info(args, rule).grid
 
 
 def _preset_rule(args: argparse.Namespace) -> str:
@@ -535,7 +626,7 @@ def cmd_replan(args: argparse.Namespace) -> int:
     if args.corner_rule is not None:
         check_corner_rule(args.corner_rule)
     rule = args.corner_rule or _preset_rule(args)
-    grid = load_map(args.map, corner_rule=rule)
+    grid = _load_info(args, rule).grid
     result = replan(
         grid, path, obstacles, args.position, args.preset, seeds=args.seeds,
         generations=args.generations, population=args.population, window=args.window,
@@ -592,8 +683,8 @@ def build_parser() -> argparse.ArgumentParser:
     p.set_defaults(func=cmd_run)
 
     p = sub.add_parser("replan", help="re-plan a path around new obstacles (MPMGA 5.2.1)")
-    p.add_argument("--map", required=True, help="a map file (0/1 text, .map, ASCII, PNG) or a "
-                   "built-in map name (see `jaxga maps`)")
+    p.add_argument("--map", required=True, help=MAP_HELP)
+    _add_source_arguments(p)
     p.add_argument("--path-json", required=True, metavar="FILE",
                    help="the planned path: a JSON list of [x, y], jaxga optimum's JSON, or "
                    "jaxga run's JSON (its raw path)")

@@ -8,6 +8,7 @@ import json
 import subprocess
 import sys
 
+import numpy as np
 import pytest
 
 from jaxga.cli import EXIT_BAD_INPUT, EXIT_NO_PATH, check_outputs, main
@@ -579,3 +580,48 @@ def test_a_map_over_the_size_limit_is_one_line_and_coarsen_plans_on_it(tmp_path,
     data = json.loads(out.read_text())
     assert data["path"][0] == [5, 150] and data["path"][-1] == [295, 150]
     assert data["length"] > 290  # around the wall, on the coarse map
+
+
+def test_a_ros_map_is_planned_on_in_world_coordinates_with_inflation(tmp_path, capsys):
+    """A map written as ROS 1 map_saver writes it (binary PGM: 254 free, 0 occupied, 205
+    unknown; YAML with resolution and origin), planned on from the command line with the
+    endpoints in metres and the obstacles grown by the robot's radius: the cells, the
+    resolution and the origin exactly; every path avoids the occupied, the unknown and
+    the inflated cells. (8 x 8, sga, 3 seeds of 8 individuals for 3 generations under
+    corner rule free: the compiled programs of the test above.)"""
+    from jaxga.maps import inflate, load_map
+    from jaxga.reference.optima import shortest_path
+
+    img = np.full((8, 8), 254, np.uint8)  # top row first
+    img[2:5, 3] = 0       # a wall, rows y = 3..5 at x = 3
+    img[0, 5:] = 205      # unknown strip along the top (y = 7)
+    (tmp_path / "lab.pgm").write_bytes(b"P5\n# CREATOR: map_saver.cpp 0.250 m/pix\n8 8\n255\n"
+                                       + img.tobytes())
+    yaml = tmp_path / "lab.yaml"
+    yaml.write_text("image: lab.pgm\nresolution: 0.250000\norigin: [-1.000000, -2.000000, "
+                    "0.000000]\nnegate: 0\noccupied_thresh: 0.65\nfree_thresh: 0.196\n\n")
+    where = ["--map", str(yaml), "--start-world=-0.9,-1.9", "--goal-world=0.6,-0.65",
+             "--robot-radius", "0.25", "--corner-rule", "free"]
+    out = tmp_path / "opt.json"
+    assert main(["optimum", *where, "--json", str(out)]) == 0
+    doc = json.loads(out.read_text())
+    # (-0.9 + 1) / 0.25 = 0.4 -> x 0; (-1.9 + 2) / 0.25 -> y 0;
+    # (0.6 + 1) / 0.25 = 6.4 -> x 6; (-0.65 + 2) / 0.25 = 5.4 -> y 5
+    assert doc["start"] == [0, 0] and doc["goal"] == [6, 5] and doc["resolution"] == 0.25
+    plain = load_map(yaml, corner_rule="free", start=(0, 0), goal=(6, 5))
+    blocked = plain.blocked_np()
+    assert blocked[3:6, 3].all() and blocked[7, 5:].all() and blocked.sum() == 6
+    grown = inflate(plain, 1).blocked_np()
+    assert doc["length"] == pytest.approx(shortest_path(plain.replace(blocked=grown)).length)
+    assert f"({doc['length'] * 0.25:.3f} m)" in capsys.readouterr().out
+    out = tmp_path / "run.json"
+    rc = main(["run", "--preset", "sga", *where, "--seeds", "3", "--generations", "3",
+               "--set", "population.size=8", "--quiet", "--json", str(out)])
+    captured = capsys.readouterr()
+    assert rc == 0, captured.err
+    doc = json.loads(out.read_text())
+    assert doc["resolution"] == 0.25 and doc["start"] == [0, 0] and doc["goal"] == [6, 5]
+    assert "resolution 0.25 m per cell" in captured.out
+    assert any(r["success"] for r in doc["runs"])
+    for r in (r for r in doc["runs"] if r["success"]):
+        assert not any(grown[y, x] for x, y in r["raw_path"])
