@@ -205,9 +205,9 @@ class Comparison:
         head = ["preset", "pop x gen", "success", f"{self.metric} mean", "sd", "min", "max",
                 "raw gap", "gap", "gap own fitness", "s/run"]
         rows = [[r["label"], f"{r['population']} x {r['generations']}",
-                 f"{r['n_success']}/{r['n']}", f"{r['mean']:.4f}", f"{r['sd']:.4f}",
-                 f"{r['min']:.4f}", f"{r['max']:.4f}", f"{100 * r['raw_gap']:.2f}%",
-                 f"{100 * r['gap']:.2f}%", _percent(r["fitness_gap"]),
+                 f"{r['n_success']}/{r['n']}", *(_number(r[k]) for k in
+                                                  ("mean", "sd", "min", "max")),
+                 _percent(r["raw_gap"]), _percent(r["gap"]), _percent(r["fitness_gap"]),
                  f"{r['time_per_run_s']:.3f}"]
                 for r in self.preset_rows()]
         return head, rows
@@ -220,10 +220,10 @@ class Comparison:
         rows = []
         for t in self.tests(metric):
             r = t.result
-            rows.append([t.a, t.b, str(r.n_a), str(r.n_b), f"{t.median_a:.4f}",
-                         f"{t.median_b:.4f}", f"{r.statistic:.1f}", _p(r.p_value),
-                         _p(t.p_holm), f"{r.a12:.3f}" if mw else "-",
-                         f"{r.rank_biserial:+.3f}",
+            rows.append([t.a, t.b, str(r.n_a), str(r.n_b), _number(t.median_a),
+                         _number(t.median_b), _number(r.statistic, ".1f"), _p(r.p_value),
+                         _p(t.p_holm), _number(r.a12, ".3f") if mw else "-",
+                         _number(r.rank_biserial, "+.3f"),
                          "yes" if t.p_holm < self.alpha else "no"])
         return head, rows
 
@@ -282,7 +282,7 @@ class Comparison:
             for m in metrics:
                 t = by[(m, a, b)]
                 e = t.result.a12 if mw else t.result.rank_biserial
-                cells.append(f"{_p(t.p_holm)} / {e:.2f}")
+                cells.append(f"{_p(t.p_holm)} / {_number(e, '.2f')}")
             rows.append([a, b] + cells)
         return head, rows
 
@@ -348,12 +348,18 @@ class Comparison:
 
 
 def _percent(v: float) -> str:
+    """A share as ``12.34%``; ``-`` where there is none (no seed found a path)."""
     return "-" if math.isnan(v) else f"{100 * v:.2f}%"
+
+
+def _number(v: float, spec: str = ".4f") -> str:
+    """``v`` formatted by ``spec``; ``-`` where there is none (no seed found a path)."""
+    return "-" if math.isnan(v) else format(v, spec)
 
 
 def _p(p: float) -> str:
     if not math.isfinite(p):
-        return "nan"
+        return "-"
     return f"{p:.2e}" if p < 1e-3 else f"{p:.4f}"
 
 

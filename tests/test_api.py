@@ -133,7 +133,8 @@ def test_reported_values_agree_with_the_returned_paths(preset_run, grid):
         best = r.history["best"][i]
         run = js["runs"][i]
         assert run["seed"] == r.seeds[i] and run["success"] == bool(r.success[i])
-        assert best[-1] == r.fitness[i] == np.float32(run["fitness"])
+        assert (best[-1] == r.fitness[i] == np.float32(run["fitness"])) if r.success[i] \
+            else (np.isnan(r.fitness[i]) and run["fitness"] is None)
         # the initial population's best: where the best-so-far history starts from
         # (a population without a path never makes one: success needs an initial path)
         assert 0 <= r.initial_fitness[i] <= best[0]
@@ -585,6 +586,30 @@ def test_unreachable_goal_is_a_no_path_result():
     assert "no metrics: no seed found a path" in text and "nan" not in text
     assert {row[0] for row in r.summary_rows()} >= {"angle_sum", "turns", "gap"}
     assert all(math.isnan(v) for row in r.summary_rows() for v in row[1:])
+
+
+def test_failed_seeds_are_missing_values_not_zeros():
+    """A seed that found no path has NaN length, raw length, fitness and metrics, no
+    path (None), a null fitness in the JSON and no part in the summary's statistics;
+    the seeds that found one are unaffected (two initial paths per seed, one attempt
+    each: most of the 8 seeds get none on gapp3)."""
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore", InitialisationWarning)
+        r = api.run("sga", "classic_ga_gapp3_20x20", seeds=8, population__size=2,
+                    generations=3, init__max_tries=1, init__fallback="none")
+    ok = r.success
+    assert ok.any() and (~ok).any(), ok
+    for values in (r.length, r.raw_length, r.fitness, *r.metrics.values()):
+        assert np.isnan(values[~ok]).all() and np.isfinite(values[ok]).all()
+    assert all(r.path(i) is None and r.path(i, raw=True) is None for i in np.flatnonzero(~ok))
+    assert all(r.path(i)[0] == (0, 0) for i in np.flatnonzero(ok))
+    assert np.nanmean(r.length) == pytest.approx(r.length[ok].mean())
+    doc = r.to_json()
+    assert all(run["fitness"] is None and run["length"] is None
+               for run, good in zip(doc["runs"], ok) if not good)
+    json.dumps(doc, allow_nan=False)
+    text = r.summary()
+    assert f"success {int(ok.sum())}/8" in text and "nan" not in text
 
 
 def test_start_equal_to_goal_has_gap_zero_without_warnings(grid):

@@ -221,6 +221,20 @@ def test_failed_seeds_are_excluded_from_tests_and_counted_in_success(comparison)
     assert c.to_json()["presets"]["imga"]["reason"] == ""
 
 
+def test_a_preset_that_found_no_path_reads_0_of_n_without_nan(comparison):
+    """Failed seeds are missing values (NaN in the Result): the tables say 0/N and leave
+    the cells they cannot fill as '-', never 'nan'."""
+    sga, imga = comparison.results["sga"], comparison.results["imga"]
+    nan = np.full(SEEDS, np.nan)
+    none = dataclasses.replace(sga, success=np.zeros(SEEDS, bool), length=nan,
+                               raw_length=nan, fitness=nan, reason="no path")
+    c = compare_results({"sga": none, "imga": imga})
+    text, md = c.summary(), c.to_markdown()
+    assert f"0/{SEEDS}" in text and "nan" not in text.lower() and "nan" not in md.lower()
+    row = next(line for line in text.splitlines() if line.lstrip().startswith("sga "))
+    assert row.count(" - ") >= 4  # mean, sd, min, max (and the gaps)
+
+
 def test_paired_wilcoxon_option(comparison):
     c = compare_results(comparison.results, test="wilcoxon", metrics=["raw_length"])
     assert c.metrics == ("length", "raw_length")

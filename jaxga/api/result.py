@@ -47,7 +47,12 @@ def relative_gap(length: np.ndarray, optimum: float, success: np.ndarray) -> np.
 
 @dataclasses.dataclass
 class Result:
-    """Per-seed results of :func:`run` (NumPy arrays, leading axis = seeds)."""
+    """Per-seed results of :func:`run` (NumPy arrays, leading axis = seeds).
+
+    A seed that found no path has no length, fitness or metrics: they are NaN (never 0),
+    :meth:`path` returns None, its convergence generation is -1 and :attr:`causes` says
+    why. ``np.nanmean(r.length)`` or ``r.length[r.success]`` averages the paths found.
+    """
 
     preset: str
     map_name: str
@@ -113,8 +118,11 @@ class Result:
     """The cells a path can hold (``population.capacity``, or the automatic capacity of
     :func:`jaxga.engine.default_capacity`)."""
 
-    def path(self, i: int, raw: bool = False) -> list[tuple[int, int]]:
-        """Seed ``i``'s best path as ``(x, y)`` cells (post-optimised unless ``raw``)."""
+    def path(self, i: int, raw: bool = False) -> list[tuple[int, int]] | None:
+        """Seed ``i``'s best path as ``(x, y)`` cells (post-optimised unless ``raw``); None
+        for a seed that found no path (:attr:`causes` says why)."""
+        if not self.success[i]:
+            return None
         c = self.raw_cells[i] if raw else self.cells[i]
         n = int(self.raw_n_cells[i] if raw else self.n_cells[i])
         return [(int(p) % self.width, int(p) // self.width) for p in c[:n]]
@@ -235,7 +243,7 @@ class Result:
                 "raw_path": [list(p) for p in self.path(i, raw=True)] if ok else [],
                 "length": float(self.length[i]) if ok else None,
                 "raw_length": float(self.raw_length[i]) if ok else None,
-                "fitness": float(self.fitness[i]),
+                "fitness": json_number(float(self.fitness[i])),
                 "initial_fitness": (None if self.initial_fitness is None
                                     else float(self.initial_fitness[i])),
                 "convergence_generation": int(self.convergence_generation[i]),

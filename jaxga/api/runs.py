@@ -377,6 +377,11 @@ def _point_results(host: dict, hist: dict, *, config: Config, configs: Sequence[
         sl = slice(q * n_seeds, (q + 1) * n_seeds)
         h = jax.tree_util.tree_map(lambda a, sl=sl: a[sl], host)
         success = h["success"] & h["feasible_post"]
+
+        def found(v, success=success):  # a failed seed's numbers are missing, not 0
+            v = np.asarray(v, float)
+            return np.where(success.reshape((-1,) + (1,) * (v.ndim - 1)), v, np.nan)
+
         causes = failure_causes(success, started[sl], rate[sl], from_fallback[sl], config,
                                 algo.capacity, len(octile.path))
         results.append(Result(
@@ -384,12 +389,13 @@ def _point_results(host: dict, hist: dict, *, config: Config, configs: Sequence[
             seeds=seed_arr, success=success, reason=failure_reason(causes),
             cells=h["cells"], n_cells=h["length"],
             raw_cells=h["raw_cells"], raw_n_cells=h["raw_length"],
-            length=h["path_length"].astype(float),
-            raw_length=h["raw_path_length"].astype(float),
-            fitness=h["fitness"].astype(float),
+            length=found(h["path_length"]), raw_length=found(h["raw_path_length"]),
+            fitness=found(h["fitness"]),
             convergence_generation=h["convergence_generation"],
             history={k: v[sl] for k, v in hist.items()},
-            metrics=h["metrics"], raw_metrics=h["raw_metrics"], failures=h["failures"],
+            metrics={k: found(v) for k, v in h["metrics"].items()},
+            raw_metrics={k: found(v) for k, v in h["raw_metrics"].items()},
+            failures=h["failures"],
             init_success_rate=rate[sl], init_unfilled=unfilled[sl],
             initial_fitness=initial[sl].astype(float),
             optimum=float(octile.length), any_angle_optimum=float(any_angle.length),
