@@ -445,7 +445,7 @@ def cmd_doe(args: argparse.Namespace) -> int:
     if args.plot:
 
         ax = plot_main_effects(data)
-        ax.figure.savefig(args.plot, dpi=110)
+        ax.figure.savefig(args.plot, dpi=110, bbox_inches="tight")
         import matplotlib.pyplot as plt
 
         plt.close(ax.figure)

@@ -37,40 +37,71 @@ def _pyplot():
     return plt
 
 
+PATH_STYLES = (
+    {"lw": 4.0, "alpha": 0.45, "solid_capstyle": "round", "zorder": 2},
+    {"lw": 1.3, "ls": "--", "marker": "o", "ms": 2.5, "zorder": 3},
+    {"lw": 1.0, "ls": ":", "marker": "x", "ms": 3.0, "zorder": 4},
+)
+"""Line styles of the paths of :func:`plot_map`, in order: a wide translucent line under a
+thin dashed one, so that two paths that coincide (a raw path the post-optimiser left as
+it was) both stay visible."""
+
+
 def plot_map(grid: Grid, paths: Sequence[tuple[Sequence[tuple[int, int]], str]] = (), ax=None):
-    """Draw the map (obstacles black), start/goal markers and ``(path, label)`` polylines."""
+    """Draw the map (obstacles black), start/goal markers and ``(path, label)`` polylines
+    (styles :data:`PATH_STYLES`); the legend sits outside the map, right of it, so that
+    it hides no cell."""
     plt = _pyplot()
     if ax is None:
-        _, ax = plt.subplots(figsize=(5, 5))
+        _, ax = plt.subplots(figsize=(6.2, 5))
     b = grid.blocked_np()
     ax.imshow(b, origin="lower", cmap="Greys", vmin=0, vmax=1,
               extent=(-0.5, grid.width - 0.5, -0.5, grid.height - 0.5))
-    for path, label in paths:
-        if len(path):
+    for i, (path, label) in enumerate(paths):
+        if path is not None and len(path):
             xy = np.asarray(path, float)
-            ax.plot(xy[:, 0], xy[:, 1], marker=".", lw=1.5, label=label)
+            ax.plot(xy[:, 0], xy[:, 1], label=label, color=f"C{i}",
+                    **PATH_STYLES[i % len(PATH_STYLES)])
     (sx, sy), (gx, gy) = grid.start_xy, grid.goal_xy
     ax.plot([sx], [sy], "go", ms=8, label="start")
     ax.plot([gx], [gy], "r*", ms=11, label="goal")
     ax.set_xlim(-0.5, grid.width - 0.5)
     ax.set_ylim(-0.5, grid.height - 0.5)
     ax.set_aspect("equal")
-    ax.legend(loc="upper left", fontsize=7, framealpha=0.8)
+    ax.legend(loc="upper left", bbox_to_anchor=(1.02, 1.0), borderaxespad=0.0, fontsize=7)
     return ax
 
 
-def plot_convergence(histories: dict[str, np.ndarray], ax=None, label: str = ""):
-    """Best-so-far fitness per generation: mean over seeds with a +-1 sd band."""
+def _no_path(ax, what: str = "no path found") -> None:
+    """Say in the middle of ``ax`` that there is nothing to draw."""
+    ax.text(0.5, 0.5, what, transform=ax.transAxes, ha="center", va="center", fontsize=11,
+            color="firebrick", gid="no-path",
+            bbox={"boxstyle": "round", "facecolor": "white", "edgecolor": "firebrick"})
+
+
+def plot_convergence(histories: dict[str, np.ndarray], ax=None, label: str = "",
+                     success: np.ndarray | None = None):
+    """Best-so-far fitness per generation: mean over seeds with a +-1 sd band; with
+    ``success``, over the seeds that found a path only (a failed seed's fitness is no
+    value), and "no path found" when none did."""
     plt = _pyplot()
     if ax is None:
         _, ax = plt.subplots(figsize=(5, 3.5))
     best = np.asarray(histories["best"], float)
-    gens = np.arange(1, best.shape[1] + 1)
-    mean, sd = best.mean(axis=0), best.std(axis=0)
-    ax.plot(gens, mean, label=(label + " " if label else "") + "best fitness (mean over seeds)")
-    ax.fill_between(gens, mean - sd, mean + sd, alpha=0.25)
     ax.set_xlabel("generation")
     ax.set_ylabel("fitness")
+    which = "seeds"
+    if success is not None:
+        success = np.asarray(success, bool)
+        if not success.any() or best.shape[1] == 0:
+            _no_path(ax, "no path found: no fitness to plot")
+            return ax
+        best = best[success]
+        which = f"the {int(success.sum())} seeds with a path"
+    gens = np.arange(1, best.shape[1] + 1)
+    mean, sd = best.mean(axis=0), best.std(axis=0)
+    ax.plot(gens, mean, label=(label + " " if label else "") + f"best fitness (mean over {which})")
+    ax.fill_between(gens, mean - sd, mean + sd, alpha=0.25)
     ax.legend(fontsize=7)
     return ax
 
@@ -87,6 +118,7 @@ def plot_paths(result, grid: Grid | str, seed: int | None = None, ax=None):
         raise ParameterError(f"the result is on a map {result.width} cells wide "
                              f"({result.map_name}), this map is {grid.width} wide")
     paths = []
+    chosen = seed is None
     if seed is None and result.success.any():
         seed = int(np.nanargmin(np.where(result.success, result.length, np.nan)))
     if seed is not None:
@@ -104,9 +136,16 @@ def plot_paths(result, grid: Grid | str, seed: int | None = None, ax=None):
         _check_paths_fit(grid, result, [p for p, _ in paths])
     ax = plot_map(grid, paths, ax=ax)
     title = f"{result.preset} on {result.map_name}"
-    if seed is not None:
-        title += f", seed {int(result.seeds[seed])}"
-    ax.set_title(title)
+    n_ok = int(np.sum(result.success))
+    if seed is not None and result.success[seed]:
+        title += (f"\nbest of {n_ok} paths found ({len(result.seeds)} seeds): seed "
+                  f"{int(result.seeds[seed])}" if chosen else f", seed {int(result.seeds[seed])}")
+    else:
+        which = (f"seed {int(result.seeds[seed])}" if seed is not None
+                 else f"any of {len(result.seeds)} seeds")
+        title += f"\nno path found by {which}"
+        _no_path(ax)
+    ax.set_title(title, fontsize=9)
     return ax
 
 
@@ -204,8 +243,17 @@ def plot_box(data, metric: str | None = None, ax=None, reference: dict | None = 
         values = {k: np.asarray(v, float) for k, v in data.items()}
         metric = metric or "value"
     clean = [v[np.isfinite(v)] for v in values.values()]
-    ax.boxplot(clean, patch_artist=True, tick_labels=list(values),
-               boxprops={"facecolor": "#cfe2f3"}, medianprops={"color": "k", "gid": "median"})
+    drawn = [i for i, v in enumerate(clean) if v.size]
+    if drawn:
+        ax.boxplot([clean[i] for i in drawn], positions=[i + 1 for i in drawn],
+                   patch_artist=True, boxprops={"facecolor": "#cfe2f3"},
+                   medianprops={"color": "k", "gid": "median"})
+    for i, v in enumerate(clean):
+        if not v.size:  # a preset that found no path keeps its column, saying so
+            ax.text(i + 1, 0.5, "no path\nfound", transform=ax.get_xaxis_transform(),
+                    ha="center", va="center", fontsize=8, color="firebrick", gid="no-path")
+    ax.set_xticks(range(1, len(clean) + 1), labels=list(values))
+    ax.set_xlim(0.5, len(clean) + 0.5)
     for i, (label, y) in enumerate((reference or {}).items()):
         ax.axhline(y, color=f"C{(i + 3) % 10}", ls="--", lw=1, label=f"{label} ({y:.4g})")
     if reference:
@@ -262,24 +310,28 @@ def plot_comparison(comparison, out: str | Path | None = None, metric: str | Non
 
 
 def _finish(fig, out: str | Path | None):
-    """Lay the figure out; with ``out``, save it there (110 dpi) and close it."""
+    """Lay the figure out; with ``out``, save it there (110 dpi, cropped to everything
+    drawn: ``bbox_inches="tight"`` keeps the axis labels and the outside legend) and
+    close it."""
     fig.tight_layout()
     if out is not None:
-        fig.savefig(out, dpi=110)
+        fig.savefig(out, dpi=110, bbox_inches="tight")
         _pyplot().close(fig)
     return fig
 
 
-def plot_main_effects(doe_json: dict, ax=None):
+def plot_main_effects(doe_json: Any, ax=None):
     """DOE main-effects plot (AGACD 5.2.1): mean response at coded level -1, 0, 1, one
     line per factor (its real levels in the legend); dashed: the grand mean of the design
     points.
 
-    ``doe_json`` is the ``jaxga doe --json`` layout (``factors``, ``points`` with
-    ``coded`` and ``mean``, ``response``); the level means are computed from the points
-    (points without a mean left out). Returns the axes.
+    ``doe_json`` is a :class:`jaxga.doe.DoeResult` or its ``jaxga doe --json`` layout
+    (``factors``, ``points`` with ``coded`` and ``mean``, ``response``); the level means
+    are computed from the points (points without a mean left out). Returns the axes.
     """
     plt = _pyplot()
+    if hasattr(doe_json, "to_json"):
+        doe_json = doe_json.to_json()
     if ax is None:
         _, ax = plt.subplots(figsize=(6, 4))
     points = [p for p in doe_json["points"] if p.get("mean") is not None]
@@ -305,9 +357,9 @@ def plot_main_effects(doe_json: dict, ax=None):
 def plot_result(result, grid: Grid | str, out: str | Path | None = None):
     """Map with the best seed's raw and post-optimised paths, and the convergence curve."""
     plt = _pyplot()
-    fig, (a1, a2) = plt.subplots(1, 2, figsize=(10, 4.6))
+    fig, (a1, a2) = plt.subplots(1, 2, figsize=(11, 4.6))
     plot_paths(result, grid, ax=a1)
-    if result.history["best"].shape[1]:
-        plot_convergence(result.history, ax=a2)
-    a2.set_title(f"{len(result.seeds)} seeds")
+    plot_convergence(result.history, ax=a2, success=result.success)
+    a2.set_title(f"{int(np.sum(result.success))} of {len(result.seeds)} seeds found a path",
+                 fontsize=9)
     return _finish(fig, out)

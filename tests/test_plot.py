@@ -155,3 +155,98 @@ def test_plot_comparison_and_plot_result_figures(comparison, grid, tmp_path):
     assert out.stat().st_size > 0
     a1, a2 = fig.axes
     assert len(a1.get_lines()) == 4 and a2.get_xlabel() == "generation"
+
+
+def _renderer(fig):
+    fig.canvas.draw()
+    return fig.canvas.get_renderer()
+
+
+def test_the_legend_sits_outside_the_map_and_hides_no_cell(comparison, grid):
+    ax = plot_paths(comparison.results["imga"], grid)
+    r = _renderer(ax.figure)
+    legend, box = ax.get_legend().get_window_extent(r), ax.get_window_extent(r)
+    assert legend.x0 >= box.x1  # right of the map, not on it
+    plt.close(ax.figure)
+
+
+def test_identical_raw_and_post_optimised_paths_stay_distinguishable(comparison, grid):
+    """A post-optimiser that changes nothing gives two equal polylines: the raw one is
+    drawn wide and translucent under the post-optimised one, thin and dashed."""
+    import dataclasses
+
+    r = comparison.results["sga"]  # no post-optimiser: the two paths are the same
+    i = int(np.flatnonzero(r.success)[0])
+    assert r.path(i) == r.path(i, raw=True)
+    r = dataclasses.replace(r, success=np.arange(SEEDS) == i)
+    ax = plot_paths(r, grid)
+    lines = {ln.get_label().split(" ")[0]: ln for ln in ax.get_lines()}
+    raw, post = lines["raw"], lines["post-optimised"]
+    assert raw.get_linewidth() > 2 * post.get_linewidth()
+    assert post.get_linestyle() != raw.get_linestyle() and raw.get_alpha() < 1
+    assert post.get_zorder() > raw.get_zorder() and raw.get_color() != post.get_color()
+    assert f"best of 1 paths found ({SEEDS} seeds): seed {int(r.seeds[i])}" in ax.get_title()
+    plt.close(ax.figure)
+
+
+def test_a_saved_result_figure_holds_its_labels_and_legend(comparison, grid, tmp_path):
+    """Saved cropped to everything drawn: every axis label, title and the legend lie in
+    the figure's tight bounding box, and the PNG is exactly that box (and the crop's
+    margin) at 110 dpi."""
+    fig = plot_result(comparison.results["imga"], grid)
+    r = _renderer(fig)
+    tight = fig.get_tightbbox(r)  # inches
+    box = tight.transformed(fig.dpi_scale_trans)  # display pixels
+    texts = [t for ax in fig.axes for t in (ax.xaxis.label, ax.yaxis.label, ax.title)
+             if t.get_text()]
+    for artist in [*texts, fig.axes[0].get_legend()]:
+        ext = artist.get_window_extent(r)
+        assert box.x0 - 1 <= ext.x0 and ext.x1 <= box.x1 + 1, artist
+        assert box.y0 - 1 <= ext.y0 and ext.y1 <= box.y1 + 1, artist
+    plt.close(fig)
+    out = tmp_path / "result.png"
+    plot_result(comparison.results["imga"], grid, out)
+    img = mpimg.imread(out)
+    pad = 2 * matplotlib.rcParams["savefig.pad_inches"]  # the crop's margin, both sides
+    assert abs(img.shape[1] - (tight.width + pad) * 110) <= 3, (img.shape, tight)
+    assert abs(img.shape[0] - (tight.height + pad) * 110) <= 3, (img.shape, tight)
+
+
+def test_a_run_without_a_path_says_so_in_both_panels(comparison, grid, tmp_path):
+    import dataclasses
+
+    r = comparison.results["sga"]
+    nan = np.full(SEEDS, np.nan)
+    none = dataclasses.replace(r, success=np.zeros(SEEDS, bool), length=nan, raw_length=nan,
+                               fitness=nan)
+    fig = plot_result(none, grid)
+    said = [t for ax in fig.axes for t in ax.texts if t.get_gid() == "no-path"]
+    assert len(said) == 2 and all("no path found" in t.get_text() for t in said)
+    assert not fig.axes[1].get_lines()  # no flat fitness curve at 0
+    assert f"0 of {SEEDS} seeds found a path" in fig.axes[1].get_title()
+    plt.close(fig)
+    # a comparison keeps the failed preset's box-plot column, labelled
+    c = compare_results({"sga": none, "imga": comparison.results["imga"]})
+    ax = plot_box(c)
+    assert [t.get_text() for t in ax.get_xticklabels()] == ["sga", "imga"]
+    assert [t.get_text() for t in ax.texts if t.get_gid() == "no-path"] == ["no path\nfound"]
+    plt.close(ax.figure)
+
+
+def test_main_effects_plot_takes_a_doe_result_or_its_json(tmp_path):
+    from jaxga.plot import plot_main_effects
+
+    doc = {"preset": "sga", "map": "m", "response": "length",
+           "factors": {"population.size": [4, 6, 8]},
+           "points": [{"coded": {"population.size": c}, "mean": m}
+                      for c, m in ((-1, 30.0), (0, 29.0), (1, 28.5))]}
+
+    class Doe:  # a DoeResult stands in: plot_main_effects reads its to_json()
+        def to_json(self):
+            return doc
+
+    for data in (doc, Doe()):
+        ax = plot_main_effects(data)
+        line = ax.get_lines()[0]
+        np.testing.assert_array_equal(line.get_ydata(), [30.0, 29.0, 28.5])
+        plt.close(ax.figure)
