@@ -39,7 +39,7 @@ from jaxga.api.parallel import (
 )
 from jaxga.compare import TESTS, check_metric, compare, one_corner_rule, split_presets
 from jaxga.config import registry
-from jaxga.config.presets import load_preset, parse_set, preset_info
+from jaxga.config.presets import load_preset, parse_set, preset_info, preset_settings
 from jaxga.core.errors import EndpointError, JaxgaError, NoPathError, ParameterError
 from jaxga.core.grid import CORNER_RULES, as_integer, check_corner_rule
 from jaxga.doe import AGACD_TABLE3, DESIGNS, RESPONSE_ALIASES, RESPONSES, Factor, run_doe
@@ -307,8 +307,19 @@ def cmd_maps(args: argparse.Namespace) -> int:
 
 
 def cmd_presets(args: argparse.Namespace) -> int:
-    """``jaxga presets``: list the presets with their papers."""
+    """``jaxga presets``: list the presets with their papers; ``--show NAME`` prints one
+    preset's every setting with its source (the file and the comment next to the key,
+    or the default)."""
 
+    if args.show is not None:
+        rows = preset_settings(args.show, variant=args.variant)
+        width = max(len(key) for key, _, _ in rows)
+        for key, value, source in rows:
+            text = json.dumps(value) if isinstance(value, (list, str, bool)) else str(value)
+            print(f"{key:{width}s} = {text:12s} # {source}")
+        return 0
+    if args.variant is not None:
+        raise JaxgaError("--variant goes with --show NAME")
     for name, paper, description in preset_info():
         print(f"{name:10s} {paper}")
         if description:
@@ -763,7 +774,11 @@ def build_parser() -> argparse.ArgumentParser:
     add_parallel_arguments(p)
     p.set_defaults(func=cmd_compare)
 
-    p = sub.add_parser("presets", help="list the presets and their papers")
+    p = sub.add_parser("presets", help="list the presets and their papers, or show one "
+                       "preset's settings (--show NAME)")
+    p.add_argument("--show", metavar="NAME", help="print every setting of this preset (or "
+                   "TOML file) with its source: the preset file and its comment, or default")
+    p.add_argument("--variant", help="with --show: apply this variant")
     p.set_defaults(func=cmd_presets)
 
     p = sub.add_parser("operators", help="list the operators of each family, with their "

@@ -625,3 +625,23 @@ def test_a_ros_map_is_planned_on_in_world_coordinates_with_inflation(tmp_path, c
     assert any(r["success"] for r in doc["runs"])
     for r in (r for r in doc["runs"] if r["success"]):
         assert not any(grown[y, x] for x, y in r["raw_path"])
+
+
+def test_presets_show_prints_every_setting_with_its_source(capsys):
+    """`jaxga presets --show NAME`: one line per key of the resolved configuration, with
+    the file (or variant) that sets it and the comment written next to it there."""
+    from jaxga.config.presets import load_preset
+
+    assert main(["presets", "--show", "iga_zhu"]) == 0
+    lines = capsys.readouterr().out.splitlines()
+    keys = [line.split("=")[0].strip() for line in lines]
+    assert keys == sorted(load_preset("iga_zhu").as_dict())
+    size = next(line for line in lines if line.startswith("population.size "))
+    assert "= 200" in size and "# iga_zhu.toml: Table 3, IGA Popnum = 200" in size
+    adaptive = next(line for line in lines if line.startswith("crossover.adaptive "))
+    assert adaptive.endswith("# default")
+    assert main(["presets", "--show", "sga", "--variant", "agacd"]) == 0
+    method = next(line for line in capsys.readouterr().out.splitlines()
+                  if line.startswith("fitness.method "))
+    assert '"agacd"' in method and "sga.toml [variants.agacd]: AGACD 4.4 eq. 7-8" in method
+    assert main(["presets", "--variant", "agacd"]) == EXIT_BAD_INPUT

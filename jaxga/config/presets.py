@@ -293,3 +293,60 @@ def load_preset(
         key, value = parse_set(text)
         config = _validated({**config.as_dict(), key: value}, f"--set {text!r}")
     return config
+
+
+def _key_comments(text: str) -> dict[str, str]:
+    """``{dotted key: its comment}`` of a TOML preset file: the comment after ``key =
+    value`` plus the comment-only lines right under it (continuations); keys of
+    ``[variants.X]`` tables as ``variants.X.key``."""
+    out: dict[str, str] = {}
+    table, last = "", None
+    for line in text.splitlines():
+        stripped = line.strip()
+        if stripped.startswith("[") and not stripped.startswith("[["):
+            table, last = stripped.strip("[]").strip(), None
+            continue
+        if stripped.startswith("#"):
+            if last is not None and line.startswith(" "):  # an indented continuation
+                out[last] += " " + stripped.lstrip("#").strip()
+            else:
+                last = None
+            continue
+        if "=" not in stripped:
+            last = None
+            continue
+        key = stripped.split("=", 1)[0].strip()
+        value_comment = stripped.split("=", 1)[1]
+        comment = value_comment.split("#", 1)[1].strip() if "#" in value_comment else ""
+        last = f"{table}.{key}" if table else key
+        out[last] = comment
+    return out
+
+
+def preset_settings(name_or_path: str | os.PathLike,
+                    variant: str | None = None) -> list[tuple[str, Any, str]]:
+    """Every setting of a preset (and variant) with its source: ``(key, value, source)``,
+    where the source is the file (or variant) that sets the key, with the comment written
+    next to it (the paper's section, the decision), or ``"default"`` for a key the
+    preset leaves at the schema's default (``jaxga presets --show``)."""
+    config = load_preset(name_or_path, variant=variant)
+    chain = _chain(name_or_path)
+    sources: dict[str, str] = {}
+    for label, body, variants in chain:
+        if label.startswith("preset "):
+            text = _preset_file(label.split("'")[1]).read_text(encoding="utf-8")
+        else:
+            text = Path(label).read_text(encoding="utf-8")
+        comments = _key_comments(text)
+        name = label.split("'")[1] + ".toml" if label.startswith("preset ") else label
+        for key in body:
+            note = comments.get(key, "")
+            sources[key] = f"{name}: {note}" if note else name
+        if variant is not None and variant in variants:
+            for key in variants[variant]:
+                note = comments.get(f"variants.{variant}.{key}", "")
+                where = f"{name} [variants.{variant}]"
+                sources[key] = f"{where}: {note}" if note else where
+    return [(key, value, sources.get(key, "default"))
+            for key, value in sorted(config.as_dict().items())]
+
