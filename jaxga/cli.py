@@ -26,7 +26,7 @@ from pathlib import Path
 from typing import Any
 
 from jaxga import api
-from jaxga.api import check_one_corner_rule, parallel
+from jaxga.api import check_one_corner_rule, configured_rule, parallel
 from jaxga.api.compilation_cache import use_compilation_cache
 from jaxga.api.lowering import check_environment
 from jaxga.api.parallel import (
@@ -37,7 +37,7 @@ from jaxga.api.parallel import (
     configure_from_args,
     env_int,
 )
-from jaxga.compare import TESTS, check_metric, compare, one_corner_rule, split_presets
+from jaxga.compare import TESTS, check_metric, compare, split_presets
 from jaxga.config import registry
 from jaxga.config.presets import load_preset, parse_set, preset_info, preset_settings
 from jaxga.core.errors import EndpointError, JaxgaError, NoPathError, ParameterError
@@ -84,6 +84,8 @@ def _parse_point(text: str) -> tuple[float, float]:
     return x, y
 
 
+RULE_DEFAULT = ("the map's own: free on the papers' classic 20 x 20 maps, strict on every "
+                "other map (no path touches a blocked cell's corner)")
 MAP_HELP = ("a map file (0/1 text, Moving AI .map, ASCII, an image such as PNG or PGM, a "
             "ROS map_server .yaml) or a built-in map name (see `jaxga maps`)")
 
@@ -138,7 +140,7 @@ def _add_coarsen_argument(p: argparse.ArgumentParser) -> None:
 def _add_preset_arguments(p: argparse.ArgumentParser) -> None:
     """The options of a GA experiment: preset, map, variant, generations, overrides."""
     p.add_argument("--preset", required=True, help="a preset name (jaxga presets) or a TOML file")
-    _add_map_arguments(p, rule_default="the preset's map.corner_rule")
+    _add_map_arguments(p, rule_default=RULE_DEFAULT)
     p.add_argument("--variant", help="a preset variant, e.g. 50x50 for agacd")
     p.add_argument("--generations", type=int, help="override the preset's generations")
     p.add_argument("--set", action="append", metavar="KEY=VALUE",
@@ -245,8 +247,9 @@ def cmd_optimum(args: argparse.Namespace) -> int:
         if other:
             raise JaxgaError(f"jaxga optimum reads only the fitness keys and map.corner_rule "
                              f"of a preset, not {', '.join(other)}")
-        if args.corner_rule is None:  # as `jaxga run`: the preset's corner rule
-            args.corner_rule = config["map.corner_rule"]
+        # as `jaxga run`: --corner-rule, else a map.corner_rule the preset sets, else
+        # the map's own rule
+        args.corner_rule = configured_rule(args.corner_rule, config)
     info, grid = _load_grid(args)
     t0 = time.perf_counter()
     octile = shortest_path(grid).raise_if_missing()
@@ -491,11 +494,8 @@ def cmd_compare(args: argparse.Namespace) -> int:
         check_corner_rule(args.corner_rule)
     grid = args.map
     if not _plain_map(args):
-        rule = args.corner_rule
-        if rule is None:  # the presets' own rule (with --set), which must be one
-            rule = one_corner_rule({p: load_preset(p, sets=args.set or ())["map.corner_rule"]
-                                    for p in presets})
-        grid = _load_info(args, rule)
+        # --corner-rule, else the map's own rule: a preset that names another is refused
+        grid = _load_info(args, args.corner_rule)
     progress = None if args.quiet else (lambda label: print(f"running {label} ...",
                                                               file=sys.stderr, flush=True))
     comp = compare(presets, grid, seeds=args.seeds, metric=args.metric, test=args.test,
@@ -561,9 +561,10 @@ def _grid_for_run(args: argparse.Namespace, rule: str):
     return _load_info(args, rule).grid
 
 
-def _preset_rule(args: argparse.Namespace) -> str:
-
-    return load_preset(args.preset, variant=args.variant, sets=args.set or ())["map.corner_rule"]
+def _preset_rule(args: argparse.Namespace) -> str | None:
+    """A corner rule the preset (with --set) names, or None: the map's own."""
+    return configured_rule(None, load_preset(args.preset, variant=args.variant,
+                                             sets=args.set or ()))
 
 
 def _parse_obstacles(text: str) -> list[tuple[int, int]]:
@@ -670,7 +671,7 @@ def build_parser() -> argparse.ArgumentParser:
     sub.required = True
 
     p = sub.add_parser("optimum", help="exact 8-connected and any-angle optima of a map")
-    _add_map_arguments(p, rule_default="strict, or the preset's map.corner_rule")
+    _add_map_arguments(p, rule_default=RULE_DEFAULT)
     p.add_argument("--preset", help="also the exact optimum of this preset's fitness over "
                    "8-connected paths (not for agacd, whose fitness scores waypoint paths)")
     p.add_argument("--variant", help="a preset variant, e.g. 50x50 for agacd")
@@ -706,7 +707,7 @@ def build_parser() -> argparse.ArgumentParser:
     p.add_argument("--position", required=True, type=_parse_xy, metavar="X,Y",
                    help="the robot's current cell on the path")
     p.add_argument("--corner-rule", default=None, metavar="RULE",
-                   help=f"one of {', '.join(CORNER_RULES)} (default: the preset's)")
+                   help=f"one of {', '.join(CORNER_RULES)} (default: {RULE_DEFAULT})")
     p.add_argument("--preset", default="mpmga", help="the GA preset (default mpmga)")
     p.add_argument("--variant", help="a preset variant")
     p.add_argument("--seeds", type=int, default=4, help="seeded GA runs (default 4)")
@@ -755,7 +756,7 @@ def build_parser() -> argparse.ArgumentParser:
     p = sub.add_parser("compare", help="compare presets on a map with statistical tests")
     p.add_argument("--presets", required=True, metavar="A,B,...",
                    help="comma-separated preset names (jaxga presets) or TOML files")
-    _add_map_arguments(p, rule_default="the presets' map.corner_rule, which must agree")
+    _add_map_arguments(p, rule_default=RULE_DEFAULT)
     p.add_argument("--seeds", type=int, default=30,
                    help="seeded runs per preset, the same seeds for all (default 30)")
     p.add_argument("--metric", default="length",

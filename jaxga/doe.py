@@ -410,6 +410,8 @@ class DoeResult:
     """Individuals per island of every point's and the confirmation's compiled program
     (the largest ``population.size`` of the design): ``jaxga.run(...,
     population_capacity=...)`` with a point's values repeats its runs bit for bit."""
+    corner_rule: str = ""
+    """The corner rule the design ran under (the map's own unless one was named)."""
 
     @property
     def values(self) -> list[dict[str, Any]]:
@@ -443,7 +445,7 @@ class DoeResult:
         best_values = {f.name: f.value(int(c)) for f, c in zip(self.factors, self.best_coded)}
         return {
             "preset": self.preset,
-            "map": self.map_name,
+            "map": self.map_name, "corner_rule": self.corner_rule,
             "response": self.response,
             "direction": self.direction,
             "design": self.design,
@@ -505,7 +507,8 @@ class DoeResult:
         """Table, fitted equation, main effects, predicted best, confirmation, timing."""
         names = [f.name for f in self.factors]
         lines = [
-            f"DOE {self.design} on preset {self.preset}, map {self.map_name}: "
+            f"DOE {self.design} on preset {self.preset}, map {self.map_name} (corner rule "
+            f"{self.corner_rule!r}): "
             f"{len(self.coded)} points x {len(self.seeds)} seeds, response {self.response} "
             f"({'maximised' if self.direction == 'max' else 'minimised'})",
             self.table(), "", "fitted (least squares): " + self.equation(), "",
@@ -917,5 +920,5 @@ def run_doe(
         confirmation=confirm[response], confirmation_all=confirm,
         timing={"compile_s": compile_s, "sweep_s": sweep_s, "confirmation_s": confirm_s,
                 "total_s": time.perf_counter() - t_start},
-        config=config, population_capacity=capacity,
+        config=config, population_capacity=capacity, corner_rule=loaded.corner_rule,
     )

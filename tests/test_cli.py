@@ -557,7 +557,7 @@ def test_scenario_reaches_run_after_the_devices_are_configured(monkeypatch, caps
     info = seen["grid"]
     assert isinstance(info, MapInfo) and info.name == "maze-32-32-2"
     assert (info.grid.start_xy, info.grid.goal_xy) == (problem.start, problem.goal)
-    assert info.grid.corner_rule == "free"  # the preset's rule, as without --scenario
+    assert info.grid.corner_rule == "strict"  # the map's own rule, as without --scenario
     capsys.readouterr()
 
 
@@ -645,3 +645,24 @@ def test_presets_show_prints_every_setting_with_its_source(capsys):
                   if line.startswith("fitness.method "))
     assert '"agacd"' in method and "sga.toml [variants.agacd]: AGACD 4.4 eq. 7-8" in method
     assert main(["presets", "--variant", "agacd"]) == EXIT_BAD_INPUT
+
+
+def test_optimum_and_run_report_the_same_optimum_for_one_map(tmp_path):
+    """One corner rule per map: a user's map is strict in `jaxga optimum` and in `jaxga
+    run` of a paper preset alike (before, the run took the preset's free rule and found
+    another optimum); naming a rule changes both the same way."""
+    art = tmp_path / "squeeze.txt"  # a diagonal squeeze: free and strict optima differ
+    art.write_text("00000000\n00000000\n00000000\n00010000\n00100000\n00000000\n"
+                   "00000000\n00000000\n")
+    for extra in ([], ["--corner-rule", "free"]):
+        opt, run = tmp_path / "opt.json", tmp_path / "run.json"
+        assert main(["optimum", "--map", str(art), *extra, "--json", str(opt)]) == 0
+        assert main(["run", "--preset", "sga", "--map", str(art), *extra, "--seeds", "3",
+                     "--generations", "3", "--set", "population.size=8", "--quiet",
+                     "--json", str(run)]) == 0
+        o, r = json.loads(opt.read_text()), json.loads(run.read_text())
+        assert o["corner_rule"] == r["corner_rule"] == (extra[1] if extra else "strict")
+        assert o["length"] == pytest.approx(r["optimum"])
+    strict = json.loads(tmp_path.joinpath("opt.json").read_text())["length"]
+    assert main(["optimum", "--map", str(art), "--json", str(opt)]) == 0
+    assert json.loads(opt.read_text())["length"] > strict  # the squeeze is closed

@@ -378,7 +378,7 @@ def test_builtin_listing_and_loading():
         assert info.builtin and info.name == n and info.format == "01"
         g = info.grid
         assert g.shape == (20, 20) and g.start_xy == (0, 0) and g.goal_xy == (19, 19)
-        assert g.corner_rule == "strict"
+        assert g.corner_rule == "free"  # the papers' convention on their classic maps
         g.check_endpoints()
         assert map_name(n) == n
         with pytest.raises(MapFormatError, match="no scenario file"):
@@ -699,3 +699,19 @@ def test_coarsen_a_grid_and_bad_factors():
             coarsen(g, bad)
         with pytest.raises((ParameterError, MapFormatError), match="positive integer"):
             load_map("classic_ga_gapp3_20x20", coarsen=bad)
+
+
+def test_one_corner_rule_per_map_everywhere():
+    """The papers' classic 20 x 20 maps are planned under their convention (free), every
+    other map under strict (no path touches a blocked cell's corner): load_map, the
+    optimum and a preset's run by name agree, whichever preset runs."""
+    from jaxga.config.presets import load_preset
+    from jaxga.maps import default_corner_rule
+
+    assert default_corner_rule("classic_ga_gapp3_20x20") == "free"
+    assert default_corner_rule("den312d") == "strict"
+    assert default_corner_rule("some/user_map.png") == "strict"
+    assert load_map("routeplanning_yangbo_20x20").corner_rule == "free"
+    assert load_map("maze-32-32-2").corner_rule == "strict"
+    assert load_map("maze-32-32-2", corner_rule="free").corner_rule == "free"
+    assert {load_preset(p)["map.corner_rule"] for p in ("sga", "hybrid", "iga_zhu")} == {"map"}

@@ -32,7 +32,7 @@ VARIANTS = {
     "iga_zhu": [],
     "imga": [],
     "mpmga": ["50x50"],
-    "sga": ["50x50", "iga_zhu", "imga", "mpmga"],
+    "sga": ["50x50", "agacd", "iga_zhu", "imga", "mpmga"],
 }
 
 
@@ -65,9 +65,8 @@ def test_every_preset_and_variant_loads_and_validates(name):
         config = load_preset(name, variant)
         assert isinstance(config, Config)
         assert config["name"] == name
-        # SPEC 1: presets reproducing a paper squeeze between diagonal obstacles; jaxga's
-        # own preset is for users' maps, whose default is no corner cutting
-        assert config["map.corner_rule"] == ("free" if name in PAPER_PRESETS else "strict")
+        # the corner rule is the map's (jaxga.maps.default_corner_rule), not a preset's
+        assert config["map.corner_rule"] == "map"
         assert all(key in SCHEMA for key, _ in config.items)
         if variant is not None:
             assert variant in config["description"]
@@ -150,7 +149,8 @@ def test_mpmga_table_2():
         "fitness.method": "mpmga", "fitness.alpha": 0.8, "fitness.beta": 0.2,
         "fitness.c": 1.0,
         "mutation.temperature_c1": 1.0, "mutation.temperature_w": 0.7,
-        "islands.topology": "mpmga", "islands.interval": 1, "selection.method": "none",
+        "islands.topology": "mpmga", "islands.interval": 1, "selection.method": "shuffle",
+        "islands.timing": "before_variation",
         "init.method": "intermittent_connect", "crossover.method": "heterologous",
         "mutation.method": "segment_sa", "post.method": "shortcut_greedy",
     })
@@ -398,7 +398,7 @@ def test_standalone_user_file(tmp_path):
     ]) + "\n")
     config = load_preset(user)
     check(config, {"name": "mine", "generations": 5, "population.size": 8,
-                   "selection.tournament_size": 3, "map.corner_rule": "strict",
+                   "selection.tournament_size": 3, "map.corner_rule": "map",
                    "mutation.method": "replace_point"})  # the former name, accepted
 
 

@@ -41,7 +41,7 @@ from jaxga.api.programs import (
 from jaxga.api.result import Result
 from jaxga.api.seeds import seed_list, seed_sharding
 from jaxga.config.presets import as_sets, load_preset, parse_set
-from jaxga.config.schema import SCHEMA, Config, flatten, freeze
+from jaxga.config.schema import MAP_RULE, SCHEMA, Config, flatten, freeze
 from jaxga.core.errors import ParameterError
 from jaxga.core.grid import Grid, as_integer
 from jaxga.engine import (
@@ -92,12 +92,22 @@ def _normalised(key: str, value: Any) -> Any:
     return freeze(SCHEMA[key].check(key, value))
 
 
+def configured_rule(corner_rule: str | None, config: Config) -> str | None:
+    """The corner rule a call names: ``corner_rule`` (``--corner-rule``), else the
+    configuration's ``map.corner_rule`` unless it is ``"map"``; None = the map's own."""
+    if corner_rule is not None:
+        return corner_rule
+    rule = config["map.corner_rule"]
+    return None if rule == MAP_RULE else rule
+
+
 def check_one_corner_rule(corner_rule: str | None, config: Config,
                           overridden: Sequence[str]) -> None:
     """Refuse a ``corner_rule=`` (``--corner-rule``) that disagrees with an overridden
     ``map.corner_rule`` (``--set``): two rules for one run."""
     rule = config["map.corner_rule"]
-    if "map.corner_rule" in overridden and corner_rule is not None and corner_rule != rule:
+    if "map.corner_rule" in overridden and corner_rule is not None and rule != MAP_RULE \
+            and corner_rule != rule:
         raise ParameterError(f"two corner rules given: {corner_rule!r} (corner_rule, "
                              f"--corner-rule) and {rule!r} (map.corner_rule)")
 
@@ -137,20 +147,19 @@ def load_problem(preset, grid, corner_rule, variant, sets, overrides, generation
             check_file_keys_read(preset, variant)
         check_one_corner_rule(corner_rule, config, overridden)
         rule = config["map.corner_rule"]
-        if "map.corner_rule" in overridden and isinstance(grid, Grid) \
-                and corner_rule is None and grid.corner_rule != rule:
+        if isinstance(grid, Grid) and corner_rule is None and rule != MAP_RULE \
+                and grid.corner_rule != rule:  # set by an override or a user's file
             raise ParameterError(
-                f"map.corner_rule = {rule!r} has no effect with a Grid (or a loaded "
-                f"MapInfo), which keeps its own corner rule ({grid.corner_rule!r}): give "
-                "the Grid that rule "
+                f"different corner rules: map.corner_rule = {rule!r} has no effect with a "
+                f"Grid (or a loaded MapInfo), which keeps its own corner rule "
+                f"({grid.corner_rule!r}): give the Grid that rule "
                 "(corner_rule=... or Grid.replace; --corner-rule on the command line)")
     if isinstance(grid, Grid):
         grid = grid.validated()  # a grid made with the plain constructor is checked too
         if corner_rule is not None:
             grid = grid.replace(corner_rule=corner_rule)
     else:
-        rule = config["map.corner_rule"] if corner_rule is None else corner_rule
-        info = load_map_info(grid, corner_rule=rule)
+        info = load_map_info(grid, corner_rule=configured_rule(corner_rule, config))
         grid, map_name = info.grid, info.name
     grid.check_endpoints()
     return config, grid, map_name
@@ -476,8 +485,10 @@ def run(
         grid: a :class:`Grid`, a map file or a built-in map name, or a
             :class:`jaxga.maps.MapInfo` (``load_map_info(name, start=..., goal=...)``:
             other endpoints, and the results keep the map's name where a Grid is "grid").
-            A map given by name is loaded with ``corner_rule`` or else the preset's
-            ``map.corner_rule``; a Grid or MapInfo keeps its own unless ``corner_rule`` is
+            A map given by name is loaded with ``corner_rule``, else a ``map.corner_rule``
+            the configuration sets, else the map's own rule
+            (:func:`jaxga.maps.default_corner_rule`: free on the papers' classic maps,
+            strict elsewhere); a Grid or MapInfo keeps its own unless ``corner_rule`` is
             given.
         seeds: a count ``N`` (seeds ``0..N-1``) or explicit integer seeds in
             ``[0, 2**32)``, each once (a repeated seed would repeat its run exactly: a

@@ -40,14 +40,18 @@ FALLBACKS = (*(op.name for op in registry.operators("init")
 """``init.fallback``: an initialiser that cannot fail where a path exists, or none."""
 REPAIR_FALLBACKS = ("none", "field")
 TOPOLOGIES = ("none", "ring", "star", "full", "mpmga")
+MAP_RULE = "map"
+"""``map.corner_rule = "map"``: the map's own corner rule (the default)."""
 MIGRATION_TIMINGS = ("after_variation", "before_variation")
 
 COMMON_FIELDS: dict[str, Field] = {
     "name": Field(str, "preset name"),
     "paper": Field(str, "the paper the preset reproduces"),
     "description": Field(str, "one line on the algorithm"),
-    "map.corner_rule": Field(str, "corner rule of SPEC 1 used unless the run names one",
-                             choices=CORNER_RULES),
+    "map.corner_rule": Field(str, "corner rule of SPEC 1: 'map' = the map's own "
+                             "(free on the papers' classic 20 x 20 maps, strict elsewhere; "
+                             "jaxga.maps.default_corner_rule), or one rule for this "
+                             "configuration", choices=(MAP_RULE, *CORNER_RULES)),
     "population.size": Field(int, "individuals per population (per island)", low=2, high=100_000),
     "population.capacity": Field(int, "path capacity L: cells a path can hold (not a "
                                  "number of individuals); 0 = automatic from the map size",
@@ -98,7 +102,7 @@ COMMON_FIELDS: dict[str, Field] = {
 
 COMMON_DEFAULTS: dict[str, Any] = {
     "description": "",
-    "map.corner_rule": "strict",
+    "map.corner_rule": "map",
     "population.capacity": 0,
     "init.max_tries": 20,
     "init.unique": False,

@@ -17,6 +17,7 @@ from jaxga.maps.builtin import (
     builtin_path,
     builtin_scenario_path,
     builtin_scenarios,
+    default_corner_rule,
     scenario_path,
 )
 from jaxga.maps.generators import maze_map, random_map, rectangles_map, rooms_map
@@ -56,6 +57,7 @@ __all__ = [
     "scenario_path",
     "coarsen",
     "coarsen_blocked",
+    "default_corner_rule",
     "detect_format",
     "endpoints_connected",
     "fill_enclosed",

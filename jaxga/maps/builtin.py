@@ -24,6 +24,7 @@ __all__ = [
     "builtin_path",
     "builtin_scenario_path",
     "builtin_scenarios",
+    "default_corner_rule",
     "scenario_path",
 ]
 
@@ -37,6 +38,19 @@ _MAP_SUFFIXES = (".txt", ".map")
 def _index() -> dict[str, Path]:
     files = sorted(p for p in DATA_DIR.iterdir() if p.suffix in _MAP_SUFFIXES and p.is_file())
     return {p.stem: p for p in files}
+
+
+def default_corner_rule(source: str | os.PathLike) -> str:
+    """The corner rule (SPEC 1) a map is planned under unless one is named: ``"free"``
+    for the six classic 20 x 20 GA maps (the papers' convention: their GAs squeeze
+    between diagonal obstacles, and their reported lengths assume it), ``"strict"`` for
+    every other map: the built-in Moving AI maps (the convention of their scenario
+    files) and any map a user brings, so that a path never touches a blocked cell's
+    corner. Every command and function that loads a map by name uses this rule, so one
+    map has one optimum everywhere."""
+    if isinstance(source, str) and source in _index() and _index()[source].suffix == ".txt":
+        return "free"
+    return "strict"
 
 
 def builtin_names() -> list[str]:

@@ -47,8 +47,9 @@ from pathlib import Path
 import numpy as np
 
 from jaxga.core.errors import EndpointError, MapFormatError
-from jaxga.core.grid import DEFAULT_CORNER_RULE, Grid, check_corner_rule, too_large
+from jaxga.core.grid import Grid, check_corner_rule, too_large
 from jaxga.maps import builtin
+from jaxga.maps.builtin import default_corner_rule
 from jaxga.maps.preprocess import coarsen_blocked, inflate_blocked
 from jaxga.maps.ros import (
     RosMap,
@@ -157,7 +158,8 @@ def load_map(
             marker (ASCII), else ``(0, 0)``.
         goal: ``(x, y)`` goal; default: the file's ``G`` marker, else ``(W - 1, H - 1)``.
         corner_rule: ``"free"``, ``"no_squeeze"`` or ``"strict"``; default
-            :data:`jaxga.core.grid.DEFAULT_CORNER_RULE` (``"strict"``).
+            the map's own (:func:`jaxga.maps.default_corner_rule`): ``"free"`` on the
+            papers' classic 20 x 20 maps, ``"strict"`` on every other map.
         fmt: force a format from :data:`FORMATS` instead of detecting it.
         coarsen: merge ``k x k`` cells into one, blocked when any of them is
             (:func:`jaxga.maps.coarsen_blocked`); ``start`` and ``goal`` (and a file's
@@ -206,7 +208,8 @@ def load_map_info(
 ) -> MapInfo:
     """Like :func:`load_map` but return a :class:`MapInfo` (name, path, format, grid)."""
 
-    rule = check_corner_rule(DEFAULT_CORNER_RULE if corner_rule is None else corner_rule)
+    rule = check_corner_rule(default_corner_rule(source) if corner_rule is None
+                             else corner_rule)
     if fmt is not None and fmt not in FORMATS:
         raise MapFormatError(f"unknown map format {fmt!r}: expected one of {', '.join(FORMATS)}")
     is_builtin = isinstance(source, str) and source in builtin.builtin_names()
