@@ -25,6 +25,10 @@ from collections.abc import Callable, Sequence
 from pathlib import Path
 from typing import Any
 
+import jax
+import jax.numpy as jnp
+import numpy as np
+
 from jaxga import api
 from jaxga.api import check_one_corner_rule, configured_rule, parallel
 from jaxga.api.compilation_cache import use_compilation_cache
@@ -53,10 +57,11 @@ from jaxga.maps import (
     read_scen,
     scenario_path,
 )
-from jaxga.plot import plot_comparison, plot_main_effects, plot_result
+from jaxga.plot import plot_comparison, plot_main_effects, plot_replan, plot_result
 from jaxga.reference.fitness import fitness_optimum
 from jaxga.reference.optima import any_angle_shortest_path, shortest_path
 from jaxga.replan import replan
+from jaxga.smooth import smooth_population
 
 EXIT_BAD_INPUT = 2
 EXIT_NO_PATH = 3
@@ -416,16 +421,71 @@ def cmd_run(args: argparse.Namespace) -> int:
     print(result.summary())
     if resolution is not None:
         print(_metres_summary(result, resolution))
+    curves = None
+    if args.smooth and result.success.any():
+        curves = smooth_runs(result, _grid_for_run(args, rule=result.corner_rule))
+        print(_smooth_summary(result, curves))
     if args.json:
-        _write_json(args.json, {**result.to_json(), "resolution": resolution})
+        doc = {**result.to_json(), "resolution": resolution}
+        if curves is not None:
+            for run, curve in zip(doc["runs"], curves):
+                run["smooth"] = curve
+        _write_json(args.json, doc)
     if args.plot:
-
-        plot_result(result, _grid_for_run(args, rule=result.corner_rule), args.plot)
+        best = None
+        if curves is not None:
+            i = int(np.nanargmin(np.where(result.success, result.length, np.nan)))
+            best = np.asarray(curves[i]["points"]) if curves[i] else None
+        plot_result(result, _grid_for_run(args, rule=result.corner_rule), args.plot,
+                    curve=best)
         print(f"wrote {args.plot}")
     if not result.success.any():
         print(f"jaxga: no path: {result.reason}", file=sys.stderr)
         return EXIT_NO_PATH
     return 0
+
+
+def smooth_runs(result, grid) -> list[dict | None]:
+    """``jaxga run --smooth``: every successful seed's post-optimised path smoothed into
+    a certified-clear cubic B-spline (:func:`jaxga.smooth.smooth_population`, one
+    vectorised call), as JSON-ready dicts (None for a seed without a path): the dense
+    ``points`` ``[[x, y], ...]``, ``length``, ``max_curvature``, ``min_clearance`` (cells),
+    ``clear`` and ``used_fallback`` (the polyline returned where no clear curve was
+    found)."""
+    ok = np.flatnonzero(result.success)
+    paths = [result.path(int(i)) for i in ok]
+    cap = max(len(p) for p in paths)
+    cells = np.array([[y * grid.width + x for x, y in p] + [p[-1][1] * grid.width + p[-1][0]]
+                      * (cap - len(p)) for p in paths], np.int32)
+    lengths = np.array([len(p) for p in paths], np.int32)
+    res = jax.device_get(smooth_population(grid, jnp.asarray(cells), jnp.asarray(lengths)))
+    out: list[dict | None] = [None] * len(result.seeds)
+    for k, i in enumerate(ok):
+        out[int(i)] = {
+            "points": np.asarray(res.points[k], float).round(4).tolist(),
+            "length": float(res.length[k]), "max_curvature": float(res.max_curvature[k]),
+            "min_clearance": float(res.min_clearance[k]), "clear": bool(res.clear[k]),
+            "used_fallback": bool(res.used_fallback[k]),
+        }
+    return out
+
+
+def _smooth_summary(result, curves: list[dict | None]) -> str:
+    """One line on the smoothed paths."""
+    done = [c for c in curves if c is not None]
+    curved = [c for c in done if not c["used_fallback"]]
+    line = (f"smooth      {len(curved)} of {len(done)} paths smoothed into a certified clear "
+            "curve")
+    if curved:
+        ratio = np.mean([c["length"] for c in curved]) / np.nanmean(
+            [result.length[i] for i, c in enumerate(curves) if c and not c["used_fallback"]])
+        line += (f" (mean length {np.mean([c['length'] for c in curved]):.4f}, "
+                 f"{100 * (ratio - 1):+.2f} % against the polylines; max curvature "
+                 f"{max(c['max_curvature'] for c in curved):.3f}, min clearance "
+                 f"{min(c['min_clearance'] for c in curved):.3f} cells)")
+    if len(curved) < len(done):
+        line += f"; {len(done) - len(curved)} kept as polylines (no clear curve found)"
+    return line
 
 
 def cmd_doe(args: argparse.Namespace) -> int:
@@ -648,6 +708,9 @@ def cmd_replan(args: argparse.Namespace) -> int:
     print(result.summary())
     if args.json:
         _write_json(args.json, result.to_json())
+    if args.plot:
+        plot_replan(result, grid, path, obstacles, args.plot)
+        print(f"wrote {args.plot}")
     if not result.success:
         print(f"jaxga: no path: {result.reason}", file=sys.stderr)
         return EXIT_NO_PATH
@@ -690,6 +753,10 @@ def build_parser() -> argparse.ArgumentParser:
                    "population_capacity to repeat one of its points bit for bit")
     p.add_argument("--json", metavar="OUT", help="write every run as JSON")
     p.add_argument("--plot", metavar="OUT.png", help="plot the map, best paths and convergence")
+    p.add_argument("--smooth", action="store_true",
+                   help="smooth every path found into a certified-clear cubic B-spline "
+                   "(jaxga.smooth): a summary line, each run's curve in the JSON, the best "
+                   "seed's in the plot")
     p.add_argument("--quiet", action="store_true", help="no progress bar")
     add_parallel_arguments(p)
     p.set_defaults(func=cmd_run)
@@ -725,6 +792,8 @@ def build_parser() -> argparse.ArgumentParser:
     p.add_argument("--set", action="append", metavar="KEY=VALUE",
                    help="override a configuration key, e.g. mutation.temperature_c1=50")
     p.add_argument("--json", metavar="OUT", help="write the result as JSON")
+    p.add_argument("--plot", metavar="OUT.png", help="draw the old path, the new obstacles "
+                   "and the re-planned path")
     p.set_defaults(func=cmd_replan)
 
 

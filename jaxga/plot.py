@@ -21,7 +21,8 @@ from jaxga.core.grid import Grid, as_integer
 from jaxga.maps import load_map
 
 __all__ = ["plot_box", "plot_comparison", "plot_convergence", "plot_diversity",
-           "plot_main_effects", "plot_map", "plot_paths", "plot_result", "plot_seed_scatter"]
+           "plot_main_effects", "plot_map", "plot_paths", "plot_replan", "plot_result",
+           "plot_seed_scatter"]
 
 
 def _pyplot():
@@ -354,11 +355,47 @@ def plot_main_effects(doe_json: Any, ax=None):
                  fontsize=9)
     ax.legend(fontsize=7)
     return ax
-def plot_result(result, grid: Grid | str, out: str | Path | None = None):
-    """Map with the best seed's raw and post-optimised paths, and the convergence curve."""
+def plot_replan(replanned: Any, grid: Grid, old_path: Sequence[tuple[int, int]],
+                obstacles: Sequence[tuple[int, int]], out: str | Path | None = None):
+    """``jaxga replan --plot``: the map with the new obstacles (red squares), the old
+    path (grey, dashed), the robot's cell and the re-planned path from it to the goal
+    (or "no path found"). ``replanned`` is a :class:`jaxga.replan.ReplanResult`."""
+    plt = _pyplot()
+    fig, ax = plt.subplots(figsize=(6.4, 5))
+    plot_map(grid, [], ax=ax)
+    if len(obstacles):
+        xy = np.asarray(obstacles, float)
+        ax.scatter(xy[:, 0], xy[:, 1], marker="s", s=60, color="red", zorder=5,
+                   label=f"new obstacles ({len(obstacles)})")
+    old = np.asarray(old_path, float)
+    ax.plot(old[:, 0], old[:, 1], color="0.45", ls="--", lw=1.5, zorder=3, label="old path")
+    if replanned.success:
+        new = np.asarray(replanned.path, float)
+        ax.plot(new[:, 0], new[:, 1], color="C0", lw=2.2, zorder=4,
+                label=f"re-planned ({replanned.length:.2f})")
+    else:
+        _no_path(ax, f"no path found: {replanned.status}")
+    robot = replanned.prefix[-1] if replanned.prefix else (old[0][0], old[0][1])
+    ax.plot([robot[0]], [robot[1]], marker="^", color="darkorange", ms=10, ls="none",
+            zorder=6, label="robot")
+    ax.legend(loc="upper left", bbox_to_anchor=(1.02, 1.0), borderaxespad=0.0, fontsize=7)
+    ax.set_title(f"re-plan: {replanned.status} (corner rule {replanned.corner_rule!r})",
+                 fontsize=9)
+    return _finish(fig, out)
+
+
+def plot_result(result, grid: Grid | str, out: str | Path | None = None,
+                curve: np.ndarray | None = None):
+    """Map with the best seed's raw and post-optimised paths (and ``curve``, the smooth
+    curve's dense points, ``float[N, 2]``), and the convergence curve."""
     plt = _pyplot()
     fig, (a1, a2) = plt.subplots(1, 2, figsize=(11, 4.6))
     plot_paths(result, grid, ax=a1)
+    if curve is not None and len(curve):
+        c = np.asarray(curve, float)
+        a1.plot(c[:, 0], c[:, 1], color="C2", lw=1.6, zorder=4, label="smooth curve")
+        a1.legend(loc="upper left", bbox_to_anchor=(1.02, 1.0), borderaxespad=0.0,
+                  fontsize=7)
     plot_convergence(result.history, ax=a2, success=result.success)
     a2.set_title(f"{int(np.sum(result.success))} of {len(result.seeds)} seeds found a path",
                  fontsize=9)

@@ -351,9 +351,21 @@ def test_run_json_holds_the_paths_from_the_given_endpoints(tmp_path, capsys):
     rc = main(["run", "--preset", "sga", "--map", str(art), "--start", "1,0",
                "--goal", "6,7", "--corner-rule", "free", "--seeds", "3",
                "--generations", "3", "--set", "population.size=8", "--quiet",
-               "--json", str(out), "--plot", str(png)])
+               "--json", str(out), "--plot", str(png), "--smooth"])
     captured = capsys.readouterr()
     assert rc == 0, captured.err
+    # --smooth: each path found has its curve (or its polyline) in the JSON, from the
+    # start to the goal, with the certificate's numbers; a line in the summary
+    assert "paths smoothed into a certified clear curve" in captured.out
+    for r in json.loads(out.read_text())["runs"]:
+        if not r["success"]:
+            assert r["smooth"] is None
+            continue
+        curve = np.asarray(r["smooth"]["points"])
+        assert np.allclose(curve[0], [1, 0], atol=1e-3) and np.allclose(curve[-1], [6, 7],
+                                                                        atol=1e-3)
+        assert r["smooth"]["clear"] and r["smooth"]["min_clearance"] > 0
+        assert r["smooth"]["length"] <= r["length"] + 1e-3  # no longer than its polyline
     blocked = load_map(str(art)).blocked_np()
     doc = json.loads(out.read_text())
     assert doc["corner_rule"] == "free" and len(doc["runs"]) == 3
@@ -379,8 +391,9 @@ def test_run_json_holds_the_paths_from_the_given_endpoints(tmp_path, capsys):
     rc = main(["replan", "--path-json", str(out), "--map", str(art), "--corner-rule", "free",
                "--position", "{},{}".format(*position), "--obstacles", "{},{}".format(*wall),
                "--preset", "sga", "--seeds", "3", "--generations", "3", "--population", "8",
-               "--fallback", "--json", str(replanned)])
+               "--fallback", "--json", str(replanned), "--plot", str(tmp_path / "re.png")])
     assert rc == 0, capsys.readouterr().err
+    assert (tmp_path / "re.png").stat().st_size > 0
     data = json.loads(replanned.read_text())
     path = data["path"]
     assert data["success"] and path[0] == position and path[-1] == [6, 7]

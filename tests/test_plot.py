@@ -20,6 +20,7 @@ from jaxga.plot import (  # noqa: E402
     plot_comparison,
     plot_diversity,
     plot_paths,
+    plot_replan,
     plot_result,
     plot_seed_scatter,
 )
@@ -250,3 +251,30 @@ def test_main_effects_plot_takes_a_doe_result_or_its_json(tmp_path):
         line = ax.get_lines()[0]
         np.testing.assert_array_equal(line.get_ydata(), [30.0, 29.0, 28.5])
         plt.close(ax.figure)
+
+
+def test_a_replan_figure_shows_the_old_path_the_obstacles_and_the_new_path(grid):
+    """`jaxga replan --plot`: the old path dashed grey, the new obstacles as red squares,
+    the robot's cell, the re-planned path from it (exactly the result's cells)."""
+    from types import SimpleNamespace
+
+    old = [(0, 0), (1, 1), (2, 2), (3, 3)]
+    new = [(1, 1), (2, 1), (3, 2), (3, 3)]
+    done = SimpleNamespace(success=True, path=new, length=3.41, status="replanned",
+                           prefix=[(0, 0), (1, 1)], corner_rule="free")
+    fig = plot_replan(done, grid.replace(start=(0, 0), goal=(3, 3)), old, [(2, 2)])
+    ax = fig.axes[0]
+    lines = {ln.get_label(): ln for ln in ax.get_lines()}
+    np.testing.assert_array_equal(lines["old path"].get_xydata(), old)
+    assert lines["old path"].get_linestyle() == "--"
+    np.testing.assert_array_equal(lines["re-planned (3.41)"].get_xydata(), new)
+    assert tuple(lines["robot"].get_xydata()[0]) == (1, 1)
+    squares = [c for c in ax.collections if c.get_label().startswith("new obstacles")]
+    assert len(squares) == 1 and squares[0].get_offsets().tolist() == [[2, 2]]
+    plt.close(fig)
+    failed = SimpleNamespace(success=False, path=[], length=float("inf"),
+                             status="unreachable", prefix=[(0, 0), (1, 1)],
+                             corner_rule="free")
+    fig = plot_replan(failed, grid.replace(start=(0, 0), goal=(3, 3)), old, [(2, 2)])
+    assert [t.get_text() for t in fig.axes[0].texts] == ["no path found: unreachable"]
+    plt.close(fig)
