@@ -775,7 +775,8 @@ def build_parser() -> argparse.ArgumentParser:
                    help="the robot's current cell on the path")
     p.add_argument("--corner-rule", default=None, metavar="RULE",
                    help=f"one of {', '.join(CORNER_RULES)} (default: {RULE_DEFAULT})")
-    p.add_argument("--preset", default="mpmga", help="the GA preset (default mpmga)")
+    p.add_argument("--preset", default="hybrid", help="the GA preset (default hybrid, whose "
+                   "initialiser cannot fail where a detour exists; mpmga = the paper's)")
     p.add_argument("--variant", help="a preset variant")
     p.add_argument("--seeds", type=int, default=4, help="seeded GA runs (default 4)")
     p.add_argument("--generations", type=int, default=20, help="GA generations (default 20)")

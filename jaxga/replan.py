@@ -87,6 +87,10 @@ __all__ = [
 
 XY = tuple[int, int]
 
+DEFAULT_PRESET = "hybrid"
+"""The re-planning GA unless one is named: jaxga's own preset, whose initialiser walks down
+the exact distance field (it found the detour of every reachable re-plan; MPMGA's
+intermittent initialiser can fail on a corridor's detour)."""
 DEFAULT_SEEDS = 4
 DEFAULT_GENERATIONS = 20
 DEFAULT_POPULATION = 10
@@ -330,7 +334,7 @@ def replan(
     path: Sequence[XY] | np.ndarray,
     new_obstacles: Iterable[XY] | np.ndarray | None,
     position: XY | int,
-    preset: Any = "mpmga",
+    preset: Any = DEFAULT_PRESET,
     *,
     seeds: int | Sequence[int] = DEFAULT_SEEDS,
     generations: int = DEFAULT_GENERATIONS,
@@ -356,6 +360,9 @@ def replan(
         position: the robot's current cell ``(x, y)`` (its first occurrence on ``path``)
             or an index into ``path``.
         preset: the GA (a preset name, TOML file or :class:`jaxga.config.schema.Config`).
+            Default ``"hybrid"``: its field-walk initialiser cannot fail where a segment
+            exists, so the re-plan finds the detour whenever there is one (within the
+            path capacity); ``"mpmga"`` is the paper's own re-planning GA.
         seeds: seeded GA runs in one compiled call; the best successful one is used.
         generations: GA generations (small: this is a real-time re-plan).
         population: ``population.size`` override (per island for island presets); None

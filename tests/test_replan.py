@@ -206,7 +206,7 @@ def test_invalid_robot_cell_and_arguments(sc25):
             replan(g, p, obstacles, sc25.position, population=2.5)
         # MPMGA's rates are per island: a single rate would change nothing
         with pytest.raises(ParameterError, match="crossover.probability has no effect"):
-            replan(g, p, obstacles, sc25.position, crossover__probability=0.7)
+            replan(g, p, obstacles, sc25.position, "mpmga", crossover__probability=0.7)
         with pytest.raises(ParameterError, match="fitness.omega has no effect"):
             replan(g, p, obstacles, sc25.position, sets=("fitness.omega=0.5",))
         with pytest.raises(ParameterError, match="population.size is given twice"):
@@ -332,3 +332,33 @@ def test_cli_replan_bad_path_file(tmp_path, sc25, capsys):
     assert main([*args, str(bad)]) == EXIT_BAD_INPUT
     assert "(20, 11) is not on the path" in capsys.readouterr().err
     assert main([*args, str(tmp_path / "missing.json")]) == EXIT_BAD_INPUT
+
+
+@pytest.mark.parametrize("block", [((10, 11, 12), (12, 13)), ((10, 11, 12), (11, 12, 13))])
+def test_the_default_replan_finds_the_detour_an_exact_search_finds(block):
+    """A corridor three cells wide (rows 11-13 of a 25 x 25 map, the file's map shape and
+    budget), the path along its middle, a 3 x 2 block on the path: the exact search on the
+    updated map finds a detour, and so does the default re-plan (preset hybrid), spliced
+    feasibly from the robot's cell to the goal. A 3 x 3 block closes the corridor: no
+    detour exists, and the re-plan says so instead of returning a path."""
+    from jaxga.core.grid import Grid
+    from jaxga.reference.optima import shortest_path_np
+
+    blocked = np.ones((25, 25), bool)
+    blocked[11:14, 1:24] = False
+    grid = Grid.create(blocked, start=(1, 12), goal=(23, 12), corner_rule="strict")
+    path = [(x, 12) for x in range(1, 24)]
+    obstacles = [(x, y) for x in block[0] for y in block[1]]
+    updated = blocked.copy()
+    for x, y in obstacles:
+        updated[y, x] = True
+    exact = shortest_path_np(updated, (3, 12), (23, 12), "strict")
+    r = replan(grid, path, obstacles, (3, 12), **BUDGET)
+    if len(block[1]) == 2:
+        assert exact.found
+        assert r.success and r.status == "replanned" and not r.used_fallback, r.reason
+        assert_feasible(grid, obstacles, r.path, (3, 12), (23, 12))
+        assert r.length >= exact.length - 1e-9
+    else:
+        assert not exact.found
+        assert not r.success and r.path == [] and r.status == "unreachable"

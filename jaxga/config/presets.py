@@ -31,7 +31,9 @@ out of range, malformed TOML, a malformed ``--set``) is a
 
 from __future__ import annotations
 
+import copy
 import difflib
+import functools
 import os
 import sys
 from collections.abc import Mapping, Sequence
@@ -89,6 +91,13 @@ def _parse(text: str, label: str) -> dict[str, Any]:
 
 
 def _read_builtin(name: str) -> dict[str, Any]:
+    """A built-in preset's parsed table (a fresh copy: the parse is cached, since a
+    re-plan or a sweep loads the same preset again and again)."""
+    return copy.deepcopy(_parsed_builtin(name))
+
+
+@functools.lru_cache(maxsize=64)
+def _parsed_builtin(name: str) -> dict[str, Any]:
     return _parse(_preset_file(name).read_text(encoding="utf-8"), f"preset {name!r}")
 
 
