@@ -679,3 +679,36 @@ def test_optimum_and_run_report_the_same_optimum_for_one_map(tmp_path):
     strict = json.loads(tmp_path.joinpath("opt.json").read_text())["length"]
     assert main(["optimum", "--map", str(art), "--json", str(opt)]) == 0
     assert json.loads(opt.read_text())["length"] > strict  # the squeeze is closed
+
+
+def test_the_python_api_turns_the_compilation_cache_on_by_default(tmp_path, monkeypatch):
+    """Every jaxga.run / sweep / compare / run_doe / replan goes through
+    ensure_compilation_cache (via load_problem): the cache is turned on as on the command
+    line unless a directory is already configured, which it leaves alone; an empty
+    $JAXGA_CACHE_DIR keeps it off."""
+    import jax
+
+    from jaxga import api
+    from jaxga.api import compilation_cache as cc
+    from jaxga.api import runs
+
+    updates = []
+    monkeypatch.setattr(jax.config, "update", lambda k, v: updates.append((k, v)))
+    for configured in ("/already/there", None):
+        monkeypatch.setattr(type(jax.config), "jax_compilation_cache_dir", configured,
+                            raising=False)
+        monkeypatch.setenv("JAXGA_CACHE_DIR", str(tmp_path / "c"))
+        updates.clear()
+        got = cc.ensure_compilation_cache()
+        if configured:
+            assert got == configured and updates == []  # left as it is
+        else:
+            assert got == str(tmp_path / "c")
+            assert ("jax_compilation_cache_dir", str(tmp_path / "c")) in updates
+            monkeypatch.setenv("JAXGA_CACHE_DIR", "")
+            updates.clear()
+            assert cc.ensure_compilation_cache() is None and updates == []
+    calls = []
+    monkeypatch.setattr(runs, "ensure_compilation_cache", lambda: calls.append(1))
+    api.check_run("sga", "classic_ga_gapp3_20x20")
+    assert calls == [1]

@@ -7,8 +7,11 @@ map size and run count) reads it instead. Tracing and lowering still run, so suc
 "warm" compile is shorter than a cold one but not free (``benchmarks/speed.py --warm``;
 decision 014).
 
-``jaxga run`` and the other commands turn the cache on by default. A script or a
-notebook turns it on with :func:`use_compilation_cache` before its first run.
+``jaxga run`` and the other commands turn the cache on by default, and so does the
+Python API: the first :func:`jaxga.run` (``sweep``, ``compare``, ``run_doe``, ``replan``)
+of a process calls :func:`ensure_compilation_cache`, which turns it on unless a cache
+directory is already configured. One setting opts out everywhere: an empty
+``$JAXGA_CACHE_DIR``.
 """
 
 from __future__ import annotations
@@ -20,7 +23,8 @@ import jax
 
 from jaxga.core.errors import ParameterError
 
-__all__ = ["ENV_VAR", "MIN_COMPILE_SECONDS", "default_directory", "use_compilation_cache"]
+__all__ = ["ENV_VAR", "MIN_COMPILE_SECONDS", "default_directory", "ensure_compilation_cache",
+           "use_compilation_cache"]
 
 ENV_VAR = "JAXGA_CACHE_DIR"
 """Environment variable naming the cache directory; an empty value leaves the cache off."""
@@ -65,3 +69,16 @@ def use_compilation_cache(directory: str | os.PathLike | None = None) -> str | N
     jax.config.update("jax_compilation_cache_dir", path)
     jax.config.update("jax_persistent_cache_min_compile_time_secs", MIN_COMPILE_SECONDS)
     return path
+
+
+def ensure_compilation_cache() -> str | None:
+    """The Python API's default: the persistent cache on, as :func:`use_compilation_cache`
+    turns it on, unless a cache directory is already configured (by that function, by
+    JAX's ``jax_compilation_cache_dir`` or ``$JAX_COMPILATION_CACHE_DIR``), which is left
+    as it is; an empty ``$JAXGA_CACHE_DIR`` leaves the cache off. Returns the directory
+    in use, or None."""
+    current = jax.config.jax_compilation_cache_dir
+    if current:
+        return current
+    return use_compilation_cache()
+

@@ -22,6 +22,7 @@ import jax.numpy as jnp
 import numpy as np
 
 from jaxga.api import parallel
+from jaxga.api.compilation_cache import ensure_compilation_cache
 from jaxga.api.failures import (
     failure_causes,
     failure_reason,
@@ -118,6 +119,7 @@ def load_problem(preset, grid, corner_rule, variant, sets, overrides, generation
     overrides that nothing reads to the caller (:func:`jaxga.compare.compare`)."""
 
     check_environment()  # a bad $JAXGA_THREEFRY, which `import jaxga` does not refuse
+    ensure_compilation_cache()  # on by default, as on the command line (decision 014)
     map_name = "grid"
     if isinstance(grid, MapInfo):  # a loaded map that keeps its name (and its endpoints)
         grid, map_name = grid.grid, grid.name
