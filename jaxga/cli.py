@@ -422,8 +422,10 @@ def cmd_run(args: argparse.Namespace) -> int:
     if resolution is not None:
         print(_metres_summary(result, resolution))
     curves = None
+    grid = (_grid_for_run(args, rule=result.corner_rule)
+            if args.plot or (args.smooth and result.success.any()) else None)
     if args.smooth and result.success.any():
-        curves = smooth_runs(result, _grid_for_run(args, rule=result.corner_rule))
+        curves = smooth_runs(result, grid)
         print(_smooth_summary(result, curves))
     if args.json:
         doc = {**result.to_json(), "resolution": resolution}
@@ -436,8 +438,7 @@ def cmd_run(args: argparse.Namespace) -> int:
         if curves is not None:
             i = int(np.nanargmin(np.where(result.success, result.length, np.nan)))
             best = np.asarray(curves[i]["points"]) if curves[i] else None
-        plot_result(result, _grid_for_run(args, rule=result.corner_rule), args.plot,
-                    curve=best)
+        plot_result(result, grid, args.plot, curve=best)
         print(f"wrote {args.plot}")
     if not result.success.any():
         print(f"jaxga: no path: {result.reason}", file=sys.stderr)

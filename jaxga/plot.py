@@ -69,8 +69,13 @@ def plot_map(grid: Grid, paths: Sequence[tuple[Sequence[tuple[int, int]], str]] 
     ax.set_xlim(-0.5, grid.width - 0.5)
     ax.set_ylim(-0.5, grid.height - 0.5)
     ax.set_aspect("equal")
-    ax.legend(loc="upper left", bbox_to_anchor=(1.02, 1.0), borderaxespad=0.0, fontsize=7)
+    _legend_outside(ax)
     return ax
+
+
+def _legend_outside(ax) -> None:
+    """The legend right of the axes, outside the map, so that it hides no cell."""
+    ax.legend(loc="upper left", bbox_to_anchor=(1.02, 1.0), borderaxespad=0.0, fontsize=7)
 
 
 def _no_path(ax, what: str = "no path found") -> None:
@@ -378,7 +383,7 @@ def plot_replan(replanned: Any, grid: Grid, old_path: Sequence[tuple[int, int]],
     robot = replanned.prefix[-1] if replanned.prefix else (old[0][0], old[0][1])
     ax.plot([robot[0]], [robot[1]], marker="^", color="darkorange", ms=10, ls="none",
             zorder=6, label="robot")
-    ax.legend(loc="upper left", bbox_to_anchor=(1.02, 1.0), borderaxespad=0.0, fontsize=7)
+    _legend_outside(ax)
     ax.set_title(f"re-plan: {replanned.status} (corner rule {replanned.corner_rule!r})",
                  fontsize=9)
     return _finish(fig, out)
@@ -394,8 +399,7 @@ def plot_result(result, grid: Grid | str, out: str | Path | None = None,
     if curve is not None and len(curve):
         c = np.asarray(curve, float)
         a1.plot(c[:, 0], c[:, 1], color="C2", lw=1.6, zorder=4, label="smooth curve")
-        a1.legend(loc="upper left", bbox_to_anchor=(1.02, 1.0), borderaxespad=0.0,
-                  fontsize=7)
+        _legend_outside(a1)
     plot_convergence(result.history, ax=a2, success=result.success)
     a2.set_title(f"{int(np.sum(result.success))} of {len(result.seeds)} seeds found a path",
                  fontsize=9)
