@@ -53,7 +53,7 @@ def cold_child(script: str, spec: str, **env: str) -> tuple[dict, str]:
     stdout line parsed as JSON, and its stderr.
 
     The child imports ``jaxga`` from this checkout and the benchmark helpers from
-    ``benchmarks/``; it has no persistent compilation cache (``JAXGA_CACHE_DIR`` and
+    ``benchmarks/``; it has no persistent compilation cache (``JAXGA_CACHE_DIR`` empty,
     ``JAX_COMPILATION_CACHE_DIR`` removed), so it compiles cold. ``env`` adds or replaces
     environment variables (``XLA_FLAGS``, ``JAXGA_DEVICES``, ``PYTHONPATH`` to import
     another checkout's ``jaxga``, ...). A failing child raises
@@ -63,8 +63,8 @@ def cold_child(script: str, spec: str, **env: str) -> tuple[dict, str]:
 
     here = Path(__file__).resolve().parent
     child_env = dict(os.environ, PYTHONPATH=f"{here.parent}{os.pathsep}{here}")
-    for key in ("JAXGA_CACHE_DIR", "JAX_COMPILATION_CACHE_DIR"):
-        child_env.pop(key, None)
+    child_env.pop("JAX_COMPILATION_CACHE_DIR", None)
+    child_env["JAXGA_CACHE_DIR"] = ""  # the Python API turns a cache on unless this is empty
     child_env.update(env)
     proc = subprocess.run([sys.executable, script, "--child", spec], env=child_env,
                           capture_output=True, text=True)
@@ -104,8 +104,7 @@ PRESETS = ("sga", "imga", "agacd", "iga_zhang", "mpmga", "iga_zhu")
 (``jaxga.config.presets.preset_names()`` lists them alphabetically)."""
 
 PROGRAMS = ("init", "finish", "evolve")
-"""The programs ``jaxga.api.programs.compiled_programs`` compiles, in compile order (one
-evolve program per chunk size: several when a run is split into chunks)."""
+"""The programs ``jaxga.api.programs.compiled_programs`` compiles, in compile order."""
 
 
 def xla_seconds_by_program(xla: list) -> dict[str, float]:

@@ -1,7 +1,8 @@
-"""How many runs one device computes together: ``jaxga.api.programs.RUN_BLOCK`` swept.
+"""How many runs one device computes together: the largest of
+``jaxga.api.programs.RUN_BUCKETS`` (the runs per call of the compiled programs) swept.
 
     python benchmarks/run_block.py [--preset sga] [--seeds 1000] [--generations 50]
-        [--blocks 128,64,32,24] [--devices N]
+        [--blocks 64,32,16] [--devices N]
 
 Each block limit runs in a child process (cold compile, ``N`` XLA host devices, default
 one per core as jaxga uses) on ``classic_ga_gapp3_20x20`` (population 60; mpmga 3
@@ -21,7 +22,7 @@ from _results import cold_child, markdown_table, parse_args, record, result_hash
 
 
 def child(preset: str, seeds: int, generations: int, block: int) -> dict:
-    """One cold run with ``RUN_BLOCK = block`` (in a fresh process)."""
+    """One cold run with calls of at most ``block`` runs per device (a fresh process)."""
     import resource
 
     import jax
@@ -29,13 +30,13 @@ def child(preset: str, seeds: int, generations: int, block: int) -> dict:
     from jaxga import api
     from jaxga.maps import load_map
 
-    api.programs.RUN_BLOCK = block
+    api.programs.RUN_BUCKETS = (*(b for b in api.programs.RUN_BUCKETS if b < block), block)
     grid = load_map("classic_ga_gapp3_20x20", corner_rule="free")
     size = 20 if preset == "mpmga" else 60
     r = api.run(preset, grid, seeds=seeds, population__size=size, generations=generations)
     n_dev = jax.local_device_count()
-    blocks = api.run_blocks(-(-seeds // n_dev) * n_dev, n_dev)
-    return {"devices": n_dev, "blocks": blocks, "block_runs": -(-seeds // n_dev) // blocks,
+    block_runs, blocks = api.run_layout(seeds, n_dev)
+    return {"devices": n_dev, "blocks": blocks, "block_runs": block_runs,
             "population": r.population, **{k: r.timing[k] for k in
                                             ("compile_s", "init_s", "evolve_s")},
             "peak_mib": resource.getrusage(resource.RUSAGE_SELF).ru_maxrss // 1024,
@@ -47,7 +48,7 @@ def main() -> None:
     ap.add_argument("--preset", default="sga")
     ap.add_argument("--seeds", type=int, default=1000)
     ap.add_argument("--generations", type=int, default=50)
-    ap.add_argument("--blocks", default="128,64,32,24")
+    ap.add_argument("--blocks", default="64,32,16")
     ap.add_argument("--devices", type=int, default=os.cpu_count() or 1)
     ap.add_argument("--no-write", action="store_true")
     args = parse_args(ap, child)
@@ -65,9 +66,9 @@ def main() -> None:
     body = (
         f"{args.preset}, classic_ga_gapp3_20x20 (corner rule free), {args.seeds} seeds, "
         f"{args.generations} generations, {args.devices} XLA host device(s), cold compiles. "
-        "RUN_BLOCK: the largest block; blocks/device and runs/block: what "
-        "`api.run_blocks` made of each device's share. Times in seconds.\n\n"
-        + markdown_table(["RUN_BLOCK", "blocks/device", "runs/block", "compile", "init",
+        "block: the largest runs per device of a call (`RUN_BUCKETS[-1]`); calls and "
+        "runs/device: what `api.run_layout` made of the runs. Times in seconds.\n\n"
+        + markdown_table(["block", "calls", "runs/device", "compile", "init",
                           "evolve", "ind-gen/s", "peak MiB", "results hash"], rows)
         + f"\n\nAll results identical: {'yes' if len(hashes) == 1 else 'NO'}."
     )

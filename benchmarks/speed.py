@@ -96,7 +96,7 @@ def measure(preset, setting, seeds, generations, devices, warm=False,
     ``timeout``: seconds per child (``subprocess.TimeoutExpired`` after stopping it)."""
     env = dict(os.environ, PYTHONPATH=f"{HERE.parent}{os.pathsep}{HERE}",
                XLA_FLAGS=f"--xla_force_host_platform_device_count={devices}")
-    env.pop("JAXGA_CACHE_DIR", None)
+    env["JAXGA_CACHE_DIR"] = ""  # cold: the Python API turns a cache on unless empty
     cmd = [sys.executable, __file__, "--child", f"{preset}:{setting}:{seeds}:{generations}"]
 
     def one() -> dict:

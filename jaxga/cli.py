@@ -30,7 +30,7 @@ import jax.numpy as jnp
 import numpy as np
 
 from jaxga import api
-from jaxga.api import check_one_corner_rule, configured_rule, parallel
+from jaxga.api import RUN_BUCKETS, check_one_corner_rule, configured_rule, parallel
 from jaxga.api.compilation_cache import use_compilation_cache
 from jaxga.api.lowering import check_environment
 from jaxga.api.parallel import (
@@ -41,6 +41,7 @@ from jaxga.api.parallel import (
     configure_from_args,
     env_int,
 )
+from jaxga.api.warmup import warmup
 from jaxga.compare import TESTS, check_metric, compare, split_presets
 from jaxga.config import registry
 from jaxga.config.presets import load_preset, parse_set, preset_info, preset_settings
@@ -413,7 +414,7 @@ def cmd_run(args: argparse.Namespace) -> int:
     result = api.run(
         args.preset, source, seeds=args.seeds, generations=args.generations,
         corner_rule=args.corner_rule, variant=args.variant, sets=args.set or (),
-        progress=progress, chunks=10 if progress else 1,
+        progress=progress,
         population_capacity=args.population_capacity,
     )
     if _not_lead(f"{len(result.seeds)} seeds", result.timing["total_s"]):
@@ -718,6 +719,39 @@ def cmd_replan(args: argparse.Namespace) -> int:
     return 0
 
 
+def _int_list(text: str) -> list[int]:
+    try:
+        return [int(v) for v in text.split(",") if v.strip()]
+    except ValueError:
+        raise JaxgaError(f"expected integers separated by commas, got {text!r}") from None
+
+
+def cmd_warmup(args: argparse.Namespace) -> int:
+    """``jaxga warmup``: compile the presets' programs ahead into the persistent cache."""
+    # XLA compiles every program afresh (no read from JAX's own cache), so that each is
+    # stored whole (jaxga.api.executables); before this process compiles anything
+    jax.config.update("jax_enable_compilation_cache", False)
+    presets = [p for p in args.presets.split(",") if p] if args.presets else None
+    maps: list = [*_int_list(args.sizes)] if args.sizes else []
+    maps += list(args.map or ())
+    if not maps:
+        raise JaxgaError("nothing to warm up: give --sizes or --map")
+    lead = parallel.process_index() == 0
+
+    def show(row: dict) -> None:
+        if lead:
+            print(f"{row['preset']:>10}  {row['map']:<28} {row['runs']:>3} runs/device  "
+                  f"compile {row['compile_s']:6.1f} s", flush=True)
+
+    t0 = time.perf_counter()
+    rows = warmup(presets, maps, runs=_int_list(args.runs), corner_rule=args.corner_rule,
+                  report=show)
+    if lead:
+        print(f"{len(rows)} program sets ready in {time.perf_counter() - t0:.0f} s "
+              f"(cache: {jax.config.jax_compilation_cache_dir})")
+    return 0
+
+
 class _Parser(argparse.ArgumentParser):
     """argparse, reporting a bad command line in the one-line form of every other jaxga
     error (``jaxga: error: ...``, exit 2) instead of a usage block."""
@@ -859,6 +893,24 @@ def build_parser() -> argparse.ArgumentParser:
                    "crossover, mutation, simplify or post")
     p.set_defaults(func=cmd_operators)
 
+    p = sub.add_parser("warmup", help="compile presets' programs ahead into the persistent "
+                       "compilation cache (any seed count and generation count then reuses "
+                       "them)")
+    p.add_argument("--presets", metavar="A,B,...",
+                   help="presets to compile (default: every built-in preset)")
+    p.add_argument("--sizes", default="20,32,64", metavar="N,N,...",
+                   help="open N x N maps to compile for (default 20,32,64; '' for none)")
+    p.add_argument("--map", action="append", metavar="MAP",
+                   help="also a built-in map name or a map file (repeatable)")
+    p.add_argument("--runs", default=",".join(map(str, RUN_BUCKETS)), metavar="R,R,...",
+                   help="runs per device of the programs (default: every size, "
+                   f"{','.join(map(str, RUN_BUCKETS))})")
+    p.add_argument("--corner-rule", default=None, metavar="RULE",
+                   help=f"one of {', '.join(CORNER_RULES)} (default: strict on the open maps, "
+                   "a named map's own)")
+    add_parallel_arguments(p)
+    p.set_defaults(func=cmd_warmup)
+
     p = sub.add_parser("maps", help="list the built-in maps")
     p.set_defaults(func=cmd_maps)
     return parser
@@ -947,7 +999,7 @@ def main(argv: Sequence[str] | None = None) -> int:
             if hasattr(args, "devices"):  # subcommands with add_parallel_arguments
                 configure_from_args(args)  # before JAX's backend starts
             _apply_scenario(args)  # after it: loading the map starts JAX
-            if args.func in (cmd_run, cmd_doe, cmd_compare):
+            if args.func in (cmd_run, cmd_doe, cmd_compare, cmd_warmup):
                 use_compilation_cache()
             return args.func(args)
     except ProcessLostError as e:

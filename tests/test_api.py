@@ -348,7 +348,7 @@ def test_an_override_that_nothing_reads_is_refused(grid, monkeypatch, preset, ov
                                                    message):
     """As keyword overrides, as ``sets`` (the same values as TOML) and as sweep points,
     before anything compiles."""
-    monkeypatch.setattr(api.runs, "compiled_programs", lambda *a, **k: pytest.fail("compiled"))
+    monkeypatch.setattr(api.programs, "compiled_programs", lambda *a, **k: pytest.fail("compiled"))
     with pytest.raises(ParameterError, match=re.escape(message)):
         api.run(preset, grid, seeds=1, **SMALL, **overrides)
     sets = [f"{k.replace('__', '.')}={json.dumps(v)}" for k, v in overrides.items()]
@@ -528,42 +528,22 @@ def test_compiled_programs_are_reused_across_maps_seeds_and_values(grid):
     assert r.timing["compile_s"] < 1.0
 
 
-@pytest.mark.parametrize("generations, chunks, sizes", [
-    (45, 10, (5,) * 9), (40, 10, (4,) * 10), (35, 10, (5,) * 7), (300, 10, (30,) * 10),
-    (47, 10, (47,)), (3, 10, (1, 1, 1)), (6, 4, (2, 2, 2)), (7, 1, (7,)), (5, 0, (5,)),
-])
-def test_progress_chunks_have_one_size(generations, chunks, sizes):
-    """Each chunk size is an evolve program of its own: unequal chunks (iga_zhang's 45
-    generations as 5 x 5 + 5 x 4) compiled the evolution twice for the CLI's progress bar."""
-    assert api.equal_chunks(generations, chunks) == sizes
-
-
-def test_a_chunked_run_equals_one_call_and_compiles_one_evolve_program(grid, monkeypatch):
-    kw = {**SMALL, "generations": 4}
+def test_progress_is_reported_after_every_chunk_and_chunks_is_deprecated(grid):
+    """Progress: the compilation's steps (when it compiles), then after every call of the
+    evolve chunk (25 generations; 60 = 25 + 25 + 10); ``chunks`` changes nothing but
+    warns."""
+    kw = {**SMALL, "generations": 60}
     one = api.run("iga_zhang", grid, seeds=3, **kw)
-    compiled = []
-    programs = api.programs.compiled_programs
-
-    def recording(*args):
-        out = programs(*args)
-        compiled.append(out.sizes)  # the evolve programs it holds (compiled when needed)
-        return out
-
-    monkeypatch.setattr(api.runs, "compiled_programs", recording)
     seen = []
-    misses = programs.cache_info().misses
-    chunked = api.run("iga_zhang", grid, seeds=3, chunks=3,
-                      progress=lambda stage, frac: seen.append((stage, frac)), **kw)
-    assert compiled == [(2,)]  # 4 generations in at most 3 chunks: 2 x 2, not 2 + 1 + 1
-    # while compiling, progress after the tracing and after each program (init, the one
-    # evolve program, finish); no other test compiles this program set before
-    assert programs.cache_info().misses == misses + 1
-    assert seen == [("compile", 0.0), ("compile", 0.25), ("compile", 0.5), ("compile", 0.75),
-                    ("compile", 1.0), ("evolve", 0.5), ("evolve", 1.0)]
+    with pytest.warns(DeprecationWarning, match="chunks is ignored"):
+        again = api.run("iga_zhang", grid, seeds=3, chunks=3,
+                        progress=lambda stage, frac: seen.append((stage, frac)), **kw)
+    assert seen == [("compile", 0.0), ("compile", 1.0), ("evolve", 25 / 60),
+                    ("evolve", 50 / 60), ("evolve", 1.0)]
     for field in ("cells", "length", "fitness", "convergence_generation"):
-        np.testing.assert_array_equal(getattr(chunked, field), getattr(one, field))
+        np.testing.assert_array_equal(getattr(again, field), getattr(one, field))
     for h in ("best", "mean", "std"):
-        np.testing.assert_array_equal(chunked.history[h], one.history[h])
+        np.testing.assert_array_equal(again.history[h], one.history[h])
 
 
 def test_unreachable_goal_is_a_no_path_result():
@@ -836,7 +816,7 @@ def test_inconsistent_parameters_are_refused_before_tracing(grid, monkeypatch, p
                                                             overrides, words):
     """Combinations of keys that an operator cannot use (each key valid on its own) give
     a ParameterError naming them, not an error from inside the traced program."""
-    monkeypatch.setattr(api.runs, "compiled_programs", lambda *a, **k: pytest.fail("compiled"))
+    monkeypatch.setattr(api.programs, "compiled_programs", lambda *a, **k: pytest.fail("compiled"))
     with pytest.raises(ParameterError) as err:
         api.run(preset, grid, seeds=1, **{**SMALL, **overrides})
     assert all(w in str(err.value) for w in words), str(err.value)
@@ -859,7 +839,7 @@ def test_inconsistent_parameters_are_refused_before_tracing(grid, monkeypatch, p
 def test_wrong_python_types_are_refused_with_a_jaxga_error(grid, monkeypatch, call, words):
     """Options of the wrong type are named (ParameterError), not a TypeError from deep
     inside, and before anything compiles."""
-    monkeypatch.setattr(api.runs, "compiled_programs", lambda *a, **k: pytest.fail("compiled"))
+    monkeypatch.setattr(api.programs, "compiled_programs", lambda *a, **k: pytest.fail("compiled"))
     with pytest.raises(ParameterError, match=re.escape(words)):
         call(grid)
 
@@ -972,7 +952,7 @@ def test_a_grid_made_with_the_plain_constructor_is_checked(monkeypatch):
     from jaxga import Grid
     from jaxga.core.errors import EndpointError
 
-    monkeypatch.setattr(api.runs, "compiled_programs", lambda *a, **k: pytest.fail("compiled"))
+    monkeypatch.setattr(api.programs, "compiled_programs", lambda *a, **k: pytest.fail("compiled"))
     cases = [
         (Grid(blocked=jnp.zeros((5, 5), bool), start=jnp.int32(0), goal=jnp.int32(25)),
          EndpointError, "goal cell index 25 is off the 5 x 5 map"),

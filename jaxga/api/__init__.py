@@ -18,10 +18,12 @@ from jaxga.api.memory import (
     check_result_memory,
 )
 from jaxga.api.programs import (
+    GENERATION_CHUNK,
+    RUN_BUCKETS,
     clear_compiled,
-    equal_chunks,
     map_runs,
     run_blocks,
+    run_layout,
 )
 from jaxga.api.result import (
     FITNESS_GAP_TOLERANCE,
@@ -49,6 +51,8 @@ from jaxga.api.seeds import (
 )
 
 __all__ = [
+    "GENERATION_CHUNK",
+    "RUN_BUCKETS",
     "FITNESS_GAP_TOLERANCE",
     "GAPS",
     "GAP_TOLERANCE",
@@ -62,13 +66,13 @@ __all__ = [
     "check_run",
     "checked_capacity",
     "clear_compiled",
-    "equal_chunks",
     "json_number",
     "load_problem",
     "map_runs",
     "relative_gap",
     "run",
     "run_blocks",
+    "run_layout",
     "seed_list",
     "summarise",
     "sweep",

@@ -1,16 +1,23 @@
-"""The compiled programs of a run, cached per shape: init, evolve (per chunk size), finish.
+"""The compiled programs of a run, cached per shape: init, evolve (one chunk), finish.
 
-A run's programs are traced once per (algorithm, map shape and corner rule, parameter
-shapes, run count, chunk sizes, devices) and kept (:data:`PROGRAM_CACHE_SIZE`); runs are
-split into blocks (:func:`run_blocks`) and generations into equal chunks
-(:func:`equal_chunks`).
+One program set serves many calls (issue 41): the runs go through programs of a few
+sizes (:data:`RUN_BUCKETS` runs per device, padded with copies of the last run; more
+runs are several calls of the largest size, :func:`run_layout`), and the generations
+through one evolve program of :data:`GENERATION_CHUNK` generations called as often as
+needed (the last call runs only the generations left: ``jaxga.engine.evolve``'s
+``count``). A program set is traced once per (algorithm without its generation count,
+map shape and corner rule, parameter shapes, runs per call, devices) and kept
+(:data:`PROGRAM_CACHE_SIZE`). Every run's result depends only on its seed and parameters,
+never on the runs that share its call, so the padding changes no result.
 """
 
 from __future__ import annotations
 
 import contextvars
+import dataclasses
 import functools
 import gc
+import math
 from collections.abc import Callable, Sequence
 from typing import Any
 
@@ -18,7 +25,9 @@ import jax
 import jax.numpy as jnp
 import numpy as np
 
+from jaxga.api import executables
 from jaxga.api.seeds import seed_sharding
+from jaxga.config.schema import Config
 from jaxga.core.errors import ParameterError
 from jaxga.engine import (
     Algorithm,
@@ -33,24 +42,40 @@ def shape_spec(tree: Any) -> Any:
 
 
 class Programs:
-    """The programs of a batch of runs: init compiled at once, the evolve programs (one per
-    chunk size) and finish compiled when first needed, so that a batch whose
-    initialisation found no path at all compiles nothing more (:func:`sweep`)."""
+    """The programs of a batch of runs: init compiled at once, evolve and finish compiled
+    when first needed, so that a batch whose initialisation found no path at all compiles
+    nothing more (:func:`sweep`). Each is read from :mod:`jaxga.api.executables` when
+    stored there; the functions are traced (``trace()``) only when one is not."""
 
-    def __init__(self, traced: dict[str, Any], sizes: tuple[int, ...]) -> None:
-        self._traced = traced
+    NAMES = ("init", "evolve", "finish")
+
+    def __init__(self, trace: Callable[[], dict[str, Any]], keys: dict[str, str | None],
+                 devices: Sequence[Any]) -> None:
+        self._trace = trace
+        self._traced: dict[str, Any] | None = None
+        self._keys = keys
+        self._devices = devices
         self._compiled: dict[str, Any] = {}
-        self.sizes = tuple(sorted(set(sizes)))
+        self.read = 0  # how many programs came from the store
 
     def _compile(self, names: Sequence[str], report: Callable[[float], None]) -> None:
-        """Compile the ``names`` not compiled yet, one after the other, reporting the
-        fraction of all programs (and the tracing) done after each but the last."""
-        steps = 1 + len(self._traced)  # the tracing, then each program
+        """Compile (or read) the ``names`` not compiled yet, one after the other,
+        reporting the fraction of all programs (and the tracing) done after each but
+        the last."""
+        steps = 1 + len(self.NAMES)  # the tracing, then each program
         for name in names:
             if name in self._compiled:
                 continue
-            self._compiled[name] = self._traced[name].lower().compile(
-                FINISH_COMPILER_OPTIONS if name == "finish" else None)
+            program = executables.load(self._keys[name], self._devices)
+            if program is None:
+                if self._traced is None:
+                    self._traced = self._trace()
+                program = executables.compile_and_store(
+                    self._keys[name], self._traced[name].lower(),
+                    FINISH_COMPILER_OPTIONS if name == "finish" else None)
+            else:
+                self.read += 1
+            self._compiled[name] = program
             done = 1 + len(self._compiled)
             if done < steps:
                 report(done / steps)
@@ -59,17 +84,19 @@ class Programs:
         self._compile(["init"], report)
 
     def compile_rest(self, report: Callable[[float], None]) -> None:
-        self._compile([*(f"evolve{n}" for n in self.sizes), "finish"], report)
+        self._compile(["evolve", "finish"], report)
 
     @property
     def init(self) -> Any:
         return self._compiled["init"]
 
     @property
-    def evolve(self) -> dict[int, Any]:
-        """The compiled evolve program of each chunk size (compiled now if need be)."""
+    def evolve(self) -> Any:
+        """The compiled evolve program (compiled now if need be): ``(keys, grid, params,
+        state, count) -> (state, history)``, :data:`GENERATION_CHUNK` generations of
+        which the first ``count`` run."""
         self.compile_rest(lambda frac: None)
-        return {n: self._compiled[f"evolve{n}"] for n in self.sizes}
+        return self._compiled["evolve"]
 
     @property
     def finish(self) -> Any:
@@ -77,12 +104,66 @@ class Programs:
         return self._compiled["finish"]
 
 
+GENERATION_CHUNK = 25
+"""Generations per call of the compiled evolve program: a run of ``G`` generations makes
+``ceil(G / 25)`` calls, the last running only the generations left, so every generation
+count shares one program, and progress is reported after every call. The skipped steps
+of a last call cost a branch each."""
+
+
+RUN_BUCKETS = (8, 32)
+"""Runs per device of the compiled programs: a call's runs are padded to the smallest
+size that holds them (8 or 32 per device), and more than 32 per device are several
+calls of 32 (:func:`run_layout`). So 1-8 seeds share one program and 9-32 another, and
+any count above runs the 32-run program as often as needed: two program sets per preset
+and map shape serve every seed count. On maps up to 64 x 64 a run computes in
+milliseconds, so padding one run to eight costs far less than compiling a program for
+it. Blocks of 20-50 runs compute fastest (decision 011), so 1000 seeds as 32 calls of
+32 runs lose no throughput (``benchmarks/compile_once.py``)."""
+
+
+LARGE_MAP_BUCKETS = (1, 2, 4, 8, 16, 32)
+"""Runs per device on maps of more than :data:`LARGE_MAP_CELLS` cells, where a run's
+computation, not the compilation, is most of the waiting: powers of two, so the padding
+at most doubles it."""
+
+
+LARGE_MAP_CELLS = 64 * 64
+
+
+def run_layout(n_runs: int, n_devices: int = 1, cells: int = 0,
+               compiled: Sequence[int] = ()) -> tuple[int, int]:
+    """``(runs per device of each call, calls)`` for ``n_runs`` runs on ``n_devices``
+    devices.
+
+    The smallest of :data:`RUN_BUCKETS` (:data:`LARGE_MAP_BUCKETS` on maps of more than
+    :data:`LARGE_MAP_CELLS` ``cells``) that holds each device's share, in one call; or,
+    when no bucket holds it, calls of the largest bucket. ``compiled``: bucket sizes this
+    process has already compiled for the same programs; the smallest of them that holds
+    the share is taken instead of compiling a new size (a DOE's confirmation run, a
+    replan after a larger run: no new compilation, at the cost of the padded runs).
+    """
+    if n_runs < 1 or n_devices < 1:
+        raise ParameterError(f"need at least one run and one device, got {n_runs} runs on "
+                             f"{n_devices} devices")
+    buckets = LARGE_MAP_BUCKETS if cells > LARGE_MAP_CELLS else RUN_BUCKETS
+    per_device = math.ceil(n_runs / n_devices)
+    largest = buckets[-1]
+    if per_device > largest:
+        return largest, math.ceil(per_device / largest)
+    have = [b for b in compiled if per_device <= b <= largest]
+    if have:
+        return min(have), 1
+    return min(b for b in buckets if b >= per_device), 1
+
+
 RUN_BLOCK = 64
-"""Largest number of runs one device computes together (see :func:`map_runs`).
+"""Largest number of runs :func:`map_runs` computes in one ``vmap`` by default.
 
 Blocks of 20-50 runs compute faster than blocks of 125, and one ``vmap`` of 50 runs is
-within noise of two blocks of 25 (``benchmarks/run_block.py``; decision 011). 64 keeps
-shares up to 64 runs in one ``vmap`` and splits larger ones into blocks of 32-64."""
+within noise of two blocks of 25 (``benchmarks/run_block.py``; decision 011). The
+programs of :func:`compiled_programs` hold at most ``RUN_BUCKETS[-1]`` runs per device,
+so only their initialisation is split further (:data:`INIT_RUN_BLOCK`)."""
 
 
 INIT_RUN_BLOCK = 10
@@ -171,19 +252,62 @@ call, so that the cached function keeps its arguments (a programs' cache hit rep
 nothing)."""
 
 
+def program_algorithm(algo: Algorithm) -> Algorithm:
+    """``algo`` as the compiled programs see it: without its number of generations (a
+    run-time value: the dynamic parameter ``generations`` and the calls of the evolve
+    chunk), so that runs of any length share one program set."""
+    config = Config(tuple((k, v) for k, v in algo.config.items if k != "generations"))
+    return dataclasses.replace(algo, config=config, generations=0)
+
+
+_COMPILED_BUCKETS: dict[Any, set[int]] = {}
+"""Runs per device of the program sets compiled in this process, per (algorithm, map
+spec, per-run parameter spec, devices): :func:`run_layout` reuses a larger one rather
+than compile a new size."""
+
+
+def compiled_buckets(algo: Algorithm, grid: Any, params: dict) -> set[int]:
+    """The bucket sizes (runs per device) this process has compiled for the programs of
+    ``algo`` on ``grid`` with these per-run ``params``."""
+    return set(_COMPILED_BUCKETS.get(_family(program_algorithm(algo), shape_spec(grid),
+                                             params), ()))
+
+
+def _family(algo: Algorithm, grid_spec: Any, params: dict) -> Any:
+    per_run = tuple(sorted((k, (tuple(v.shape[1:]), str(v.dtype))) for k, v in params.items()))
+    return algo, grid_spec, per_run, jax.local_device_count()
+
+
+def programs_for(algo: Algorithm, grid: Any, params: dict, n_runs: int) -> Programs:
+    """The program set of ``n_runs`` runs per call (a multiple of the local devices) with
+    these parameters (arrays with the runs first), compiled if this process has not yet
+    (:func:`compiled_programs`)."""
+    algo = program_algorithm(algo)
+    n_dev = jax.local_device_count()
+    grid_spec = shape_spec(grid)
+    progs = compiled_programs(algo, grid_spec, tuple(sorted(shape_spec(params).items())),
+                              n_runs, n_dev)
+    _COMPILED_BUCKETS.setdefault(_family(algo, grid_spec, params), set()).add(n_runs // n_dev)
+    return progs
+
+
 @functools.lru_cache(maxsize=PROGRAM_CACHE_SIZE)
 def compiled_programs(algo: Algorithm, grid_spec: Any, params_spec: Any, n_runs: int,
-                      sizes: tuple[int, ...], n_devices: int) -> Programs:
-    """Trace init / evolve (one per chunk size) / finish for ``n_runs`` runs and compile
-    init (the others when first needed: :class:`Programs`).
+                      n_devices: int) -> Programs:
+    """Trace init / evolve / finish for ``n_runs`` runs and compile init (the others when
+    first needed: :class:`Programs`).
 
-    Cached per (algorithm, map shape and corner rule, parameter shapes, run count, chunks,
-    devices): a second call with another map of the same shape, other seeds or other
+    Cached per (algorithm, map shape and corner rule, parameter shapes, run count,
+    devices): a second call with another map of the same shape, other seeds, another
+    number of generations (``algo`` comes through :func:`program_algorithm`) or other
     dynamic parameter values (probabilities, weights, temperatures, population size
     below the capacity) reuses the compiled programs (``jaxga.replan`` relies on it).
     The programs are compiled one after the other.
     """
     del n_devices  # part of the cache key only
+    if algo.generations:
+        raise ParameterError("compiled_programs takes program_algorithm(algo): the number of "
+                             "generations is a run-time value")
     params_spec = dict(params_spec)
     sh, rep = seed_sharding()
 
@@ -191,19 +315,20 @@ def compiled_programs(algo: Algorithm, grid_spec: Any, params_spec: Any, n_runs:
         state, stats = init_state(algo, jax.random.fold_in(k, 0), grid, params)
         return state, stats.success_rate, stats.n_failed, stats.from_fallback
 
-    def do_evolve(k, grid, params, state, n):
-        return evolve(algo, jax.random.fold_in(k, 1), grid, state, params, n)
+    def do_evolve(k, grid, params, state, count):
+        return evolve(algo, jax.random.fold_in(k, 1), grid, state, params,
+                      GENERATION_CHUNK, count)
 
-    def do_finish(grid, params, state, hist, init_best):
-        return finish(algo, grid, state, hist, params, init_best)
+    def do_finish(grid, params, state):
+        return finish(algo, grid, state, None, params)
 
     # Every per-run input and output has the run axis first: one sharding for all of
     # them, so each device runs its share and the result does not depend on the device
-    # count. The map is replicated. With several devices the program is a shard_map: each
-    # device runs its own share as a program of its own. Under a jit sharded by XLA
-    # instead, every while_loop whose trip count depends on the runs (the operators'
-    # gated blocks, connection rounds) had to agree on its condition across devices at
-    # every iteration (decision 011).
+    # count. The map and the evolve chunk's generation count are replicated. With
+    # several devices the program is a shard_map: each device runs its own share as a
+    # program of its own. Under a jit sharded by XLA instead, every while_loop whose trip
+    # count depends on the runs (the operators' gated blocks, connection rounds) had to
+    # agree on its condition across devices at every iteration (decision 011).
     n_dev = 1 if sh is None else sh.mesh.size
 
     def jit(fn, in_axes, block=None):
@@ -219,42 +344,27 @@ def compiled_programs(algo: Algorithm, grid_spec: Any, params_spec: Any, n_runs:
                        in_shardings=tuple(rep if a is None else sh for a in in_axes))
 
     keys = jax.ShapeDtypeStruct((n_runs, 2), jnp.uint32)
-    init_t = jit(do_init, (0, None, 0), INIT_RUN_BLOCK).trace(keys, grid_spec, params_spec)
-    state_spec = init_t.out_info[0]
-    evolve_t = {n: jit(functools.partial(do_evolve, n=n), (0, None, 0, 0)).trace(
-        keys, grid_spec, params_spec, state_spec) for n in sorted(set(sizes))}
-    hist_spec = evolve_t[sizes[0]].out_info[1]
-    full_hist = jax.tree_util.tree_map(
-        lambda h: jax.ShapeDtypeStruct((n_runs, sum(sizes)), h.dtype), hist_spec)
-    finish_t = jit(do_finish, (None, 0, 0, 0, 0)).trace(
-        grid_spec, params_spec, state_spec, full_hist,
-        jax.ShapeDtypeStruct((n_runs,), jnp.float32))
-    traced = {"init": init_t, **{f"evolve{n}": t for n, t in evolve_t.items()},
-              "finish": finish_t}
+
+    def trace() -> dict[str, Any]:
+        init_t = jit(do_init, (0, None, 0), INIT_RUN_BLOCK).trace(keys, grid_spec,
+                                                                  params_spec)
+        state_spec = init_t.out_info[0]
+        evolve_t = jit(do_evolve, (0, None, 0, 0, None)).trace(
+            keys, grid_spec, params_spec, state_spec, jax.ShapeDtypeStruct((), jnp.int32))
+        finish_t = jit(do_finish, (None, 0, 0)).trace(grid_spec, params_spec, state_spec)
+        return {"init": init_t, "evolve": evolve_t, "finish": finish_t}
+
+    devices = [jax.devices()[0]] if sh is None else list(sh.mesh.devices.flat)
+    settings = (INIT_RUN_BLOCK, RUN_BLOCK, GENERATION_CHUNK, FINISH_COMPILER_OPTIONS)
+    stored = {name: executables.program_key(name, algo, grid_spec, params_spec, n_runs,
+                                            devices, settings) for name in Programs.NAMES}
     # One after the other: compiling them in threads (one per core) was no faster
     # (decision 011).
     report = COMPILE_PROGRESS.get() or (lambda frac: None)
-    programs = Programs(traced, sizes)
-    report(1 / (1 + len(traced)))
+    programs = Programs(trace, stored, devices)
+    report(1 / (1 + len(Programs.NAMES)))
     programs.compile_init(report)
     return programs
-
-
-def equal_chunks(generations: int, chunks: int) -> tuple[int, ...]:
-    """Split ``generations`` into at most ``chunks`` compiled chunks of one size.
-
-    The number of chunks is the largest divisor of ``generations`` not above ``chunks``
-    (45 generations in at most 10 chunks: 9 chunks of 5; a prime count above ``chunks``:
-    one chunk). Every chunk size is a compiled evolve program of its own, so unequal
-    chunks (45 as 5 x 5 + 5 x 4) would compile the evolution twice for a progress bar;
-    equal chunks compile it once. Chunking never changes a result (generation ``t`` uses
-    the key ``fold_in(key, t)``, :func:`jaxga.engine.evolve`).
-    """
-    if generations < 1:
-        raise ParameterError(f"generations must be at least 1, got {generations}")
-    limit = max(1, min(int(chunks), generations))
-    n = max(d for d in range(1, limit + 1) if generations % d == 0)
-    return (generations // n,) * n
 
 
 def clear_compiled() -> None:
@@ -272,15 +382,14 @@ def clear_compiled() -> None:
     """
 
     compiled_programs.cache_clear()
+    _COMPILED_BUCKETS.clear()
     jax.clear_caches()
     gc.collect()
 
 
-def stack_params(per_point: Sequence[dict], seeds: int) -> dict:
-    """Per-run parameters: every point repeated once per seed (run ``q * S + s``)."""
-    # built with NumPy and put on the device once per key (a re-plan's small calls were
-    # spending a tenth of their time in eager jnp.stack / jnp.repeat dispatches)
-    return {k: jnp.asarray(np.repeat(np.stack([np.asarray(p[k]) for p in per_point]), seeds,
-                                     axis=0))
+def stack_params(per_point: Sequence[dict], seeds: int) -> dict[str, np.ndarray]:
+    """Per-run parameters (NumPy): every point repeated once per seed (run ``q * S + s``)."""
+    # NumPy, put on the devices once per call of the programs (a re-plan's small calls
+    # were spending a tenth of their time in eager jnp.stack / jnp.repeat dispatches)
+    return {k: np.repeat(np.stack([np.asarray(p[k]) for p in per_point]), seeds, axis=0)
             for k in per_point[0]}
-

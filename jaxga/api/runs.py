@@ -10,18 +10,21 @@ on its own.
 from __future__ import annotations
 
 import contextlib
+import dataclasses
 import functools
 import hashlib
 import math
 import time
+import warnings
 from collections.abc import Callable, Mapping, Sequence
 from typing import TYPE_CHECKING, Any
 
 import jax
 import jax.numpy as jnp
 import numpy as np
+from jax.errors import JaxRuntimeError
 
-from jaxga.api import parallel
+from jaxga.api import executables, parallel
 from jaxga.api.compilation_cache import ensure_compilation_cache
 from jaxga.api.failures import (
     failure_causes,
@@ -34,9 +37,11 @@ from jaxga.api.lowering import check_environment
 from jaxga.api.memory import NO_PATH_BYTES_PER_RUN, check_memory, check_result_memory
 from jaxga.api.programs import (
     COMPILE_PROGRESS,
-    compiled_programs,
-    equal_chunks,
-    shape_spec,
+    GENERATION_CHUNK,
+    clear_compiled,
+    compiled_buckets,
+    programs_for,
+    run_layout,
     stack_params,
 )
 from jaxga.api.result import Result
@@ -51,6 +56,7 @@ from jaxga.engine import (
     check_file_keys_read,
     check_migration,
     check_overrides_read,
+    convergence_generation,
     default_params,
     static_config,
     uses_guide,
@@ -230,9 +236,31 @@ def sweep(
     process raises :class:`jaxga.api.parallel.ProcessLostError`).
     """
 
+    args = (preset, grid, points, seeds)
+    options = dict(generations=generations, corner_rule=corner_rule, variant=variant,
+                   sets=sets, progress=progress, chunks=chunks,
+                   population_capacity=population_capacity, **overrides)
+    while True:
+        try:
+            return _sweep(*args, **options)
+        except JaxRuntimeError:
+            # a stored program that does not run (jaxga.api.executables): forget the
+            # stored programs this process read (deleted: never read again) and run again
+            if not executables.forget_read():
+                raise
+            clear_compiled()
+
+
+def _sweep(preset, grid, points, seeds, *, generations, corner_rule, variant, sets,
+           progress, chunks, population_capacity, **overrides) -> list[Result]:
+    """:func:`sweep`'s work."""
     t_start = time.perf_counter()
     _check_points(points)
     _check_call_options(progress, chunks)
+    if chunks != 1:
+        warnings.warn("chunks is ignored: the generations run in compiled chunks of "
+                      f"{GENERATION_CHUNK} and progress is reported after each",
+                      DeprecationWarning, stacklevel=3)
     config, grid, map_name = load_problem(preset, grid, corner_rule, variant, sets, overrides,
                                           generations)
     configs = _point_configs(config, points)
@@ -258,33 +286,33 @@ def sweep(
     point_opt = [fit_opts[k] for k in fit_keys]
     n_points = len(configs)
     seed_arr = seed_list(seeds, lambda n: check_result_memory(n * n_points, algo))
-    n_total, keys, params, grid = _this_process_runs(seed_arr, per_point, grid)
+    runs = _this_process_runs(seed_arr, per_point, grid, algo)
+    grid = runs.grid
 
     def report(stage: str, frac: float) -> None:
         if progress is not None:
             progress(stage, frac)
 
-    sizes = equal_chunks(algo.generations, chunks)
     report("compile", 0.0)
     t0 = time.perf_counter()
     token = COMPILE_PROGRESS.set(lambda frac: report("compile", frac))
     try:
-        progs = compiled_programs(algo, shape_spec(grid),
-                                  tuple(sorted(shape_spec(params).items())), len(keys), sizes,
-                                  jax.local_device_count())
+        progs = programs_for(algo, grid, runs.calls[0][1], runs.per_call)
     finally:
         COMPILE_PROGRESS.reset(token)
     compile_s = time.perf_counter() - t0
 
     t0 = time.perf_counter()
-    state, init_rate, unfilled, fallback = jax.block_until_ready(
-        progs.init(keys, grid, params))
+    inits = jax.block_until_ready([progs.init(k, grid, p) for k, p in runs.calls])
     init_s = time.perf_counter() - t0
-    init_best = state.best_fitness
+    states = [state for state, *_ in inits]
+    init_best = runs.joined([state.best_fitness for state in states])
+    init_rate, unfilled, fallback = (runs.joined([i[j] for i in inits]) for j in (1, 2, 3))
     # Every process's initial best, so that all of them decide alike whether to evolve.
     initial, init_rate, unfilled, fallback = parallel.allgather_runs(
         (init_best, init_rate, unfilled, fallback))
     started = initial > 0
+    n_total = len(initial)
     rate = init_rate.reshape(n_total, -1).mean(axis=1)
     unf = unfilled.reshape(n_total, -1).sum(axis=1)
     from_fallback = fallback.reshape(n_total, -1).sum(axis=1)
@@ -305,16 +333,17 @@ def sweep(
     report("compile", 1.0)
 
     t0 = time.perf_counter()
-    state, history = _evolve_in_chunks(progs, sizes, keys, grid, params, state,
-                                       lambda frac: report("evolve", frac))
+    states, history = _evolve_in_chunks(progs, algo.generations, runs, grid, states,
+                                        lambda frac: report("evolve", frac))
     evolve_s = time.perf_counter() - t0
 
     t0 = time.perf_counter()
-    out = jax.block_until_ready(progs.finish(grid, params, state, history, init_best))
+    outs = jax.block_until_ready([progs.finish(grid, p, st)
+                                  for (_, p), st in zip(runs.calls, states)])
     post_s = time.perf_counter() - t0
     timing = {"compile_s": compile_s, "init_s": init_s, "evolve_s": evolve_s,
               "post_s": post_s, "total_s": time.perf_counter() - t_start}
-
+    out = jax.tree_util.tree_map(lambda *parts: runs.joined(parts), *outs)
     host, hist = parallel.allgather_runs((out, history))
     timing["total_s"] = time.perf_counter() - t_start
     return _point_results(host, hist, started=started, timing=timing, **common)
@@ -331,14 +360,32 @@ def _check_points(points: Any) -> None:
         raise ParameterError("a sweep needs at least one point")
 
 
-def _this_process_runs(seed_arr: np.ndarray, per_point: Sequence[dict],
-                       grid: Grid) -> tuple[int, jax.Array, dict, Grid]:
-    """``(n_total, keys, params, grid)`` of this process's runs, on its devices.
+@dataclasses.dataclass(frozen=True)
+class _Runs:
+    """This process's runs as calls of the compiled programs: ``calls`` = ``(keys,
+    params)`` of ``per_call`` runs each (on the devices), the last run repeated to fill
+    them; the first ``n_local`` runs are this process's share."""
+
+    calls: list[tuple[jax.Array, dict]]
+    per_call: int
+    n_local: int
+    grid: Grid
+
+    def joined(self, parts: Sequence[Any]) -> np.ndarray:
+        """The calls' outputs (runs first) joined, the padding dropped."""
+        return np.concatenate([np.asarray(p) for p in parts])[:self.n_local]
+
+
+def _this_process_runs(seed_arr: np.ndarray, per_point: Sequence[dict], grid: Grid,
+                       algo: Algorithm) -> _Runs:
+    """This process's runs, laid out as calls of the compiled programs, on its devices.
 
     Run ``q * S + s`` is point ``q`` with seed ``s``; the runs are padded (copies of the
-    last run) to ``n_total``, a multiple of processes x local devices; this process
-    computes its contiguous share and :func:`jaxga.api.parallel.allgather_runs` joins
-    the shares."""
+    last run) to a multiple of processes x local devices; this process computes its
+    contiguous share (:func:`jaxga.api.parallel.allgather_runs` joins the shares), as
+    calls of a few sizes (:func:`jaxga.api.programs.run_layout`), the last run copied to
+    fill them. A run's result depends only on its own key and parameters, so neither
+    padding changes any result."""
     n_seeds, n_points = len(seed_arr), len(per_point)
     n_runs = n_seeds * n_points
     n_total, share = parallel.run_share(n_runs)
@@ -346,32 +393,53 @@ def _this_process_runs(seed_arr: np.ndarray, per_point: Sequence[dict],
     run_seeds = np.concatenate([np.tile(seed_arr, n_points),
                                 np.repeat(seed_arr[-1:], pad)])[share]
     params = stack_params(per_point, n_seeds)
-    if pad:
-        params = {k: jnp.concatenate([v, jnp.repeat(v[-1:], pad, axis=0)])
-                  for k, v in params.items()}
-    params = {k: v[share] for k, v in params.items()}
+    params = {k: np.concatenate([v, np.repeat(v[-1:], pad, axis=0)])[share]
+              for k, v in params.items()}
+    n_local = len(run_seeds)
+    n_dev = jax.local_device_count()
+    per_device, n_calls = run_layout(n_local, n_dev, grid.height * grid.width,
+                                     compiled_buckets(algo, grid, params))
+    per_call = per_device * n_dev
+    fill = n_calls * per_call - n_local
+    run_seeds = np.concatenate([run_seeds, np.repeat(run_seeds[-1:], fill)])
+    params = {k: np.concatenate([v, np.repeat(v[-1:], fill, axis=0)])
+              for k, v in params.items()}
     keys = jax.vmap(jax.random.PRNGKey)(jnp.asarray(run_seeds, jnp.uint32))
     sh, rep = seed_sharding()
     if sh is not None:
-        keys, params = jax.device_put((keys, params), sh)
         grid = jax.device_put(grid, rep)
-    return n_total, keys, params, grid
+    calls = []
+    for c in range(n_calls):
+        sl = slice(c * per_call, (c + 1) * per_call)
+        call = (keys[sl], {k: v[sl] for k, v in params.items()})
+        calls.append(jax.device_put(call, sh) if sh is not None else jax.device_put(call))
+    return _Runs(calls, per_call, n_local, grid)
 
 
-def _evolve_in_chunks(progs: Any, sizes: tuple[int, ...], keys: jax.Array, grid: Grid,
-                      params: dict, state: Any,
-                      report: Callable[[float], None]) -> tuple[Any, dict]:
-    """The generations as the compiled chunks ``sizes`` (:func:`equal_chunks`), reporting
-    the fraction done after each; the per-generation history joined."""
-    hists = []
+def _evolve_in_chunks(progs: Any, generations: int, runs: _Runs, grid: Grid,
+                      states: list, report: Callable[[float], None]) -> tuple[list, dict]:
+    """``generations`` generations as calls of the compiled evolve chunk
+    (:data:`GENERATION_CHUNK` generations, the last call running the ones left), every
+    call of runs in each chunk, reporting the fraction done after each chunk; the
+    per-generation history joined (NumPy, this process's runs)."""
+    sh, rep = seed_sharding()
+    hists: list[list[dict]] = [[] for _ in states]
     done = 0
-    for n in sizes:
-        state, h = progs.evolve[n](keys, grid, params, state)
-        jax.block_until_ready(state)
-        hists.append(h)
-        done += n
-        report(done / sum(sizes))
-    return state, {k: jnp.concatenate([h[k] for h in hists], axis=1) for k in hists[0]}
+    while done < generations:
+        count = min(GENERATION_CHUNK, generations - done)
+        n = jnp.asarray(count, jnp.int32)
+        if rep is not None:
+            n = jax.device_put(n, rep)
+        for i, ((k, p), st) in enumerate(zip(runs.calls, states)):
+            states[i], h = progs.evolve(k, grid, p, st, n)
+            hists[i].append((count, h))
+        jax.block_until_ready(states)
+        done += count
+        report(done / generations)
+    history = {key: runs.joined([np.concatenate([np.asarray(h[key])[:, :c] for c, h in call],
+                                                axis=1) for call in hists])
+               for key in hists[0][0][1]}
+    return states, history
 
 
 def _point_results(host: dict, hist: dict, *, config: Config, configs: Sequence[Config],
@@ -383,6 +451,7 @@ def _point_results(host: dict, hist: dict, *, config: Config, configs: Sequence[
     """One :class:`Result` per point from the gathered outputs of all runs (run
     ``q * S + s`` is point ``q``, seed ``s``)."""
     n_seeds = len(seed_arr)
+    conv = convergence_generation(hist["best"], host["fitness"], initial)
     results = []
     for q, cfg in enumerate(configs):
         sl = slice(q * n_seeds, (q + 1) * n_seeds)
@@ -402,7 +471,7 @@ def _point_results(host: dict, hist: dict, *, config: Config, configs: Sequence[
             raw_cells=h["raw_cells"], raw_n_cells=h["raw_length"],
             length=found(h["path_length"]), raw_length=found(h["raw_path_length"]),
             fitness=found(h["fitness"]),
-            convergence_generation=h["convergence_generation"],
+            convergence_generation=conv[sl],
             history={k: v[sl] for k, v in hist.items()},
             metrics={k: found(v) for k, v in h["metrics"].items()},
             raw_metrics={k: found(v) for k, v in h["raw_metrics"].items()},
@@ -504,9 +573,10 @@ def run(
         progress: optional callback ``(stage, fraction)``: ``("compile", 0.0)``, the
             compilation's progress (after the tracing and after each compiled program,
             when the programs are not compiled yet), ``("compile", 1.0)``, then
-            ``("evolve", f)`` after each chunk of generations. With ``chunks > 1`` the
-            generations run in up to that many compiled chunks of one size
-            (:func:`equal_chunks`; same result) for a progress bar.
+            ``("evolve", f)`` after each chunk of
+            :data:`jaxga.api.programs.GENERATION_CHUNK` generations.
+        chunks: ignored (deprecated): the generations always run in compiled chunks of
+            :data:`jaxga.api.programs.GENERATION_CHUNK`, whatever their number.
         population_capacity: individuals per island that the compiled program holds
             (default ``population.size``; not the configuration key
             ``population.capacity``, the cells a path can hold); the random numbers of a
@@ -520,10 +590,12 @@ def run(
         are never reported with a path. An unreachable goal gives all seeds
         ``success = False`` and ``reason`` naming the cause (nothing is run).
 
-    The compiled programs are cached per algorithm, map shape and run count: calling
-    again with other seeds of the same count, another map of the same size or other
-    dynamic values (``crossover__probability=...``) does not compile again. For many
-    hyper-parameter values in one call use :func:`sweep`.
+    The compiled programs are cached per algorithm and map shape and serve any number
+    of generations and of seeds (runs padded to 8 or 32 per device, more as several
+    calls: :mod:`jaxga.api.programs`): calling again with other seeds, another number
+    of generations, another map of the same size or other dynamic values
+    (``crossover__probability=...``) does not compile again. For many hyper-parameter
+    values in one call use :func:`sweep`.
     """
     return sweep(preset, grid, [{}], seeds, generations=generations,
                  corner_rule=corner_rule, variant=variant, sets=sets, progress=progress,

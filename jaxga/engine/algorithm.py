@@ -150,6 +150,9 @@ def default_params(config: Config, islands: int = 1) -> dict[str, jax.Array]:
         k: jnp.asarray(v, F32) for k, v in config.dynamic().items()
     }
     params["population.active"] = jnp.asarray(config["population.size"], I32)
+    # dynamic, so that one compiled program serves every generation count (AGACD's
+    # schedules read it; the API runs the generations in fixed compiled chunks)
+    params["generations"] = jnp.asarray(config["generations"], I32)
     for op in chosen_operators(config).values():
         if op.prepare is not None:
             params.update(op.prepare(config))

@@ -27,6 +27,7 @@ from collections.abc import Callable
 
 import jax
 import jax.numpy as jnp
+import numpy as np
 
 from jaxga._batching.numerics import ordered_mean
 from jaxga.config import registry
@@ -144,8 +145,15 @@ def binding(algo: Algorithm, params: dict, t: jax.Array | None = None,
     """What the stages bind operators with (:class:`jaxga.config.registry.Binding`): the static
     algorithm, the dynamic parameters, generation ``t``, the fitness function and
     whether ``repair.fallback = "field"``."""
-    return Binding(algo, params, generation=t, generations=algo.generations,
+    return Binding(algo, params, generation=t, generations=run_generations(algo, params),
                    fitness_fn=fit_fn, field_repair=_field_repair(algo))
+
+
+def run_generations(algo: Algorithm, params: dict) -> jax.Array | int:
+    """The run's number of generations ``T`` (AGACD eq. 27, 29): the dynamic parameter
+    ``generations`` (:func:`jaxga.engine.default_params`), so that one compiled program
+    serves every generation count; ``algo.generations`` for parameters without it."""
+    return params.get("generations", algo.generations)
 
 
 def _select(algo: Algorithm, key, fitness, active) -> jax.Array:
@@ -163,9 +171,9 @@ def _crossover(algo: Algorithm, key, grid, pop, fitness, active, t, params, fit_
         # AGACD eq. 26-27: f = the fitter of the pair; f_max, f_avg of the population
         # (taken over the selected pool, which is the population entering crossover).
         pc = cx.adaptive_pair_probability(
-            fitness, t, algo.generations, params["crossover.pc_low"],
+            fitness, t, run_generations(algo, params), params["crossover.pc_low"],
             params["crossover.pc_high"], active,
-            schedule=schedules.agacd_crossover_decay(algo.generations),
+            schedule=schedules.agacd_crossover_decay(run_generations(algo, params)),
         )
     else:
         pc = params["crossover.probability"]
@@ -180,9 +188,9 @@ def _mutation(algo: Algorithm, key, grid, pop, fitness, active, t, params, fit_f
         f_max = jnp.max(jnp.where(active, fitness, -jnp.inf))
         f_avg = ordered_mean(fitness, active)
         pm = mu.adaptive_mutation_probability(
-            fitness, f_max, f_avg, t, algo.generations, params["mutation.pm_low"],
-            params["mutation.pm_high"],
-            schedule=schedules.agacd_mutation_growth(algo.generations),
+            fitness, f_max, f_avg, t, run_generations(algo, params),
+            params["mutation.pm_low"], params["mutation.pm_high"],
+            schedule=schedules.agacd_mutation_growth(run_generations(algo, params)),
         )
     else:
         pm = jnp.broadcast_to(params["mutation.probability"], (pop.size,))
@@ -374,30 +382,69 @@ def history_row(algo: Algorithm, state: GAState, params: dict) -> dict:
 
 
 def evolve(algo: Algorithm, key, grid: Grid, state: GAState, params: dict,
-           generations: int | None = None):
+           generations: int | None = None, count: jax.Array | None = None):
     """``lax.scan`` over generations; returns ``(final state, history)``.
 
     Generation ``t`` uses the key ``fold_in(key, t)``, so running ``G`` generations in one
     call or in chunks (for a progress bar) gives the same result. The history holds, per
     generation, the best-so-far fitness and the mean and sd of the active fitness.
+
+    ``count`` (optional, a traced integer): only the first ``count`` of the
+    ``generations`` steps run; the others leave the state as it is (their history rows
+    repeat the last one and are to be dropped). One compiled chunk of ``generations``
+    steps then serves every generation count (:mod:`jaxga.api.programs`); ``count`` must
+    not be batched (a ``vmap``'s ``in_axes`` None), so the skip is a real branch.
     """
     n = algo.generations if generations is None else generations
     ts = state.generation + jnp.arange(n, dtype=I32)
 
-    def body(st, t):
-        st = generation(algo, jax.random.fold_in(key, t), grid, st, params)
+    def step(st, t):
+        return generation(algo, jax.random.fold_in(key, t), grid, st, params)
+
+    if count is None:
+        def body(st, t):
+            st = step(st, t)
+            return st, history_row(algo, st, params)
+
+        return jax.lax.scan(body, state, ts)
+
+    def counted(st, x):
+        t, i = x
+        st = jax.lax.cond(i < count, step, lambda s, _: s, st, t)
         return st, history_row(algo, st, params)
 
-    return jax.lax.scan(body, state, ts)
+    return jax.lax.scan(counted, state, (ts, jnp.arange(n, dtype=I32)))
 
 
-def finish(algo: Algorithm, grid: Grid, state: GAState, history: dict, params: dict,
+def convergence_generation(best: jax.Array, final_best: jax.Array,
+                           initial_best: jax.Array | None = None) -> jax.Array:
+    """The first generation whose best-so-far fitness equals the final best (AGACD
+    Tables 8, 12), per run: 0 when the initial population already held it (given
+    ``initial_best``), -1 when no feasible path was found (``final_best`` 0).
+
+    ``best``: ``[..., G]`` best-so-far fitness per generation (the history's ``best``);
+    ``final_best`` and ``initial_best``: ``[...]``. Works on NumPy arrays as on JAX ones
+    (the API computes it on the host from the gathered history, so that the compiled
+    programs do not depend on the number of generations).
+    """
+    xp = jnp if isinstance(best, jax.Array) else np
+    final_best = xp.asarray(final_best)
+    if initial_best is not None:
+        best = xp.concatenate([xp.asarray(initial_best)[..., None], best], axis=-1)
+        offset = 0
+    else:
+        offset = 1
+    conv = xp.argmax(best >= final_best[..., None], axis=-1).astype(xp.int32) + offset
+    return xp.where(final_best > 0, conv, -1).astype(xp.int32)
+
+
+def finish(algo: Algorithm, grid: Grid, state: GAState, history: dict | None, params: dict,
            initial_best: jax.Array | None = None) -> dict:
     """Post-optimise the best path and compute the reported metrics (SPEC 3, 9, 10).
 
-    ``convergence_generation`` is the first generation whose best-so-far fitness equals
-    the final best (AGACD Tables 8, 12): 0 when the initial population already held it
-    (pass ``initial_best``), -1 when no feasible path was found.
+    ``convergence_generation``: :func:`convergence_generation` of ``history["best"]``
+    (left out when ``history`` is None: the compiled programs of :mod:`jaxga.api`
+    compute it on the host, so that they serve every generation count).
     """
     raw_c, raw_n = state.best_cells, state.best_length
     success = state.best_fitness > 0
@@ -406,20 +453,12 @@ def finish(algo: Algorithm, grid: Grid, state: GAState, history: dict, params: d
         opt_c, opt_n = remove_loops(raw_c, raw_n, grid.n_cells)
     else:
         opt_c, opt_n = post_op.bind(binding(algo, params))(grid, raw_c, raw_n)
-    best = history["best"]
-    if initial_best is not None:
-        best = jnp.concatenate([jnp.reshape(initial_best, (1,)), best])
-        offset = 0
-    else:
-        offset = 1
-    reached = best >= state.best_fitness
-    conv = jnp.argmax(reached).astype(I32) + offset
     # Raw and post-optimised paths measured as one batch of two: one copy of the metric
     # code in the compiled program instead of two.
     both_len, both_metrics = jax.vmap(
         lambda c, n: (objectives.path_length(grid, c, n), objectives.metrics(grid, c, n))
     )(jnp.stack([raw_c, opt_c]), jnp.stack([raw_n, opt_n]))
-    return {
+    out = {
         "success": success,
         "raw_cells": raw_c, "raw_length": raw_n,
         "cells": opt_c, "length": opt_n,
@@ -428,8 +467,11 @@ def finish(algo: Algorithm, grid: Grid, state: GAState, history: dict, params: d
         "path_length": both_len[1],
         "raw_metrics": {k: v[0] for k, v in both_metrics._asdict().items()},
         "metrics": {k: v[1] for k, v in both_metrics._asdict().items()},
-        "convergence_generation": jnp.where(success, conv, -1),
         "generations_run": state.generation,
         "failures": state.failures,
         "feasible_post": is_feasible(grid, opt_c, opt_n) & has_endpoints(grid, opt_c, opt_n),
     }
+    if history is not None:
+        out["convergence_generation"] = convergence_generation(
+            history["best"], state.best_fitness, initial_best)
+    return out

@@ -6,10 +6,11 @@
   ``T_t = c1 * w ** t``.
 
 ``t`` is the generation counter (a traced int32 inside the engine's ``lax.scan``) and
-``T`` the number of generations (static). They are plain ``optax.exponential_decay``
-schedules (``init * rate ** (t / steps)``), so users can swap in any other optax schedule
-(``optax.cosine_decay_schedule``, ``optax.join_schedules``, ...) through the same
-keyword of :func:`jaxga.operators.crossover.adaptive_crossover_probability`,
+``T`` the number of generations (traced: a run-time value). They compute what
+``optax.exponential_decay`` schedules compute (``init * rate ** (t / steps)``), so
+users can swap in any other optax schedule (``optax.cosine_decay_schedule``,
+``optax.join_schedules``, ...) through the same keyword of
+:func:`jaxga.operators.crossover.adaptive_crossover_probability`,
 :func:`jaxga.operators.mutation.adaptive_mutation_probability` and
 :func:`jaxga.operators.mutation.segment_sa`'s caller in :mod:`jaxga.engine`.
 """
@@ -19,23 +20,35 @@ from __future__ import annotations
 import math
 
 import jax
+import jax.numpy as jnp
 import optax
 
 __all__ = ["agacd_crossover_decay", "agacd_mutation_growth", "mpmga_temperature"]
 
 
-def agacd_crossover_decay(generations: int) -> optax.Schedule:
-    """``t -> exp(-t / T)`` (AGACD eq. 27, the time factor of ``pc``)."""
-    _check(generations)
-    return optax.exponential_decay(1.0, transition_steps=generations,
-                                   decay_rate=math.exp(-1.0))
+def agacd_crossover_decay(generations: int | jax.Array) -> optax.Schedule:
+    """``t -> exp(-t / T)`` (AGACD eq. 27, the time factor of ``pc``); ``T`` may be traced."""
+    return _exponential(generations, math.exp(-1.0))
 
 
-def agacd_mutation_growth(generations: int) -> optax.Schedule:
-    """``t -> exp(t / T)`` (AGACD eq. 29, the time factor of ``pm``)."""
-    _check(generations)
-    return optax.exponential_decay(1.0, transition_steps=generations,
-                                   decay_rate=math.e)
+def agacd_mutation_growth(generations: int | jax.Array) -> optax.Schedule:
+    """``t -> exp(t / T)`` (AGACD eq. 29, the time factor of ``pm``); ``T`` may be traced."""
+    return _exponential(generations, math.e)
+
+
+def _exponential(generations: int | jax.Array, rate: float) -> optax.Schedule:
+    """``optax.exponential_decay(1.0, transition_steps=T, decay_rate=rate)`` with a ``T``
+    that may be traced (the number of generations is a run-time value, so that one
+    compiled program serves every count; optax inspects ``transition_steps`` in Python).
+    The same operations as optax's schedule, so the same float32 values
+    (``tests/test_mutation.py`` checks them against optax for a static ``T``)."""
+    if not isinstance(generations, jax.Array):
+        _check(generations)
+
+    def schedule(count):
+        return jnp.where(count <= 0, 1.0, 1.0 * jnp.power(rate, count / generations))
+
+    return schedule
 
 
 def mpmga_temperature(c1: float | jax.Array, w: float) -> optax.Schedule:

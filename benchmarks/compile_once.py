@@ -1,0 +1,187 @@
+"""Compile once, run many: the waiting a user sees before results (issue 41's targets).
+
+    python benchmarks/compile_once.py [--presets sga,imga,...] [--sizes 20,32,64]
+        [--devices N] [--no-write]
+
+Three measurements, each in fresh processes on this machine:
+
+1. **First command, cold.** README's first command (``jaxga run --preset iga_zhu --map
+   classic_ga_gapp3_20x20 --seeds 100``) in a new process with an empty persistent cache:
+   seconds until it has printed its table (the process's wall time; the package is
+   installed already). Target: 20 s.
+2. **After a warm-up.** ``jaxga warmup --presets P --sizes ...`` once per preset into a
+   fresh cache, then one new process per case (a map, a seed count, a generation count)
+   that runs ``jaxga.run`` and reports ``timing["compile_s"]`` (tracing, lowering and
+   reading the programs from the cache, or compiling what the cache lacks) and how many
+   programs XLA compiled (``jax.monitoring``'s backend-compile events; 0 = all read from
+   the cache). Target: compile <= 2 s for every map up to 64 x 64, seed count up to 1024
+   and generation count. The cases: the warmed sizes' open maps and maps of those sizes
+   with obstacles (their path capacity may differ: ``jaxga.engine.default_capacity``),
+   and a 25 x 25 map (a size not warmed).
+3. **A second run in one process.** ``jaxga.run`` of each preset on a 20 x 20 map with 10
+   seeds and 50 generations, then on another 20 x 20 map with 30 seeds and 300
+   generations: the programs XLA compiles or reads for the second run. Target: 0.
+
+Throughput (individual-generations per second, 1000 seeds) is ``benchmarks/speed.py``'s.
+"""
+
+from __future__ import annotations
+
+import argparse
+import json
+import os
+import subprocess
+import sys
+import tempfile
+import time
+from pathlib import Path
+
+from _results import PRESETS, markdown_table, record
+
+HERE = Path(__file__).resolve().parent
+COMPILE_EVENT = "/jax/core/compile/backend_compile_duration"
+CACHE_EVENT = "/jax/compilation_cache/cache_retrieval_time_sec"
+
+CASES = [  # (map, seeds, generations)
+    ("open:20", 5, 50),
+    ("random:20", 1000, 20),
+    ("random:32", 100, 300),
+    ("open:64", 1024, 10),
+    ("random:64", 30, 100),
+    ("random:25", 10, 50),
+]
+
+
+def grid_of(spec: str):
+    from jaxga.api.warmup import open_map
+    from jaxga.maps.generators import random_map
+
+    kind, size = spec.split(":")
+    n = int(size)
+    if kind == "open":
+        return open_map(n)
+    return random_map(n, n, 0.2, seed=3, start=(0, 0), goal=(n - 1, n - 1))
+
+
+def child(spec: str) -> None:
+    import jax
+
+    from jaxga.api.parallel import set_local_devices
+
+    set_local_devices(int(os.environ["JAXGA_DEVICES"]))  # as the CLI: before JAX starts
+
+    compiled, loaded = [], []
+    jax.monitoring.register_event_duration_secs_listener(
+        lambda event, secs, **kw: (compiled if event == COMPILE_EVENT else loaded
+                                   if event == CACHE_EVENT else []).append(secs))
+    from jaxga import api
+    from jaxga.maps import load_map
+
+    job = json.loads(spec)
+    if job["kind"] == "case":
+        grid = grid_of(job["map"])
+        r = api.run(job["preset"], grid, seeds=job["seeds"], generations=job["generations"])
+        print(json.dumps({"compile_s": r.timing["compile_s"], "xla": len(compiled),
+                          "loaded": len(loaded), "capacity": r.path_capacity,
+                          "success": float(r.success.mean())}))
+        return
+    # second run in one process
+    a = load_map("classic_ga_gapp3_20x20")
+    b = grid_of("random:20").replace(corner_rule=a.corner_rule)
+    api.run(job["preset"], a, seeds=10, generations=50)
+    compiled.clear()
+    loaded.clear()
+    r = api.run(job["preset"], b, seeds=30, generations=300)
+    print(json.dumps({"compile_s": r.timing["compile_s"], "xla": len(compiled),
+                      "loaded": len(loaded)}))
+
+
+def in_child(job: dict, cache: str, devices: int) -> dict:
+    env = dict(os.environ, PYTHONPATH=f"{HERE.parent}{os.pathsep}{HERE}",
+               JAXGA_CACHE_DIR=cache, JAXGA_DEVICES=str(devices))
+    proc = subprocess.run([sys.executable, __file__, "--child", json.dumps(job)], env=env,
+                          capture_output=True, text=True)
+    if proc.returncode != 0:
+        raise RuntimeError(proc.stderr[-3000:])
+    return json.loads(proc.stdout.strip().splitlines()[-1])
+
+
+def jaxga_command(args: list[str], cache: str, devices: int) -> float:
+    env = dict(os.environ, JAXGA_CACHE_DIR=cache, JAXGA_DEVICES=str(devices))
+    t0 = time.perf_counter()
+    proc = subprocess.run([sys.executable, "-m", "jaxga.cli", *args], env=env,
+                          capture_output=True, text=True, cwd=HERE.parent)
+    if proc.returncode != 0:
+        raise RuntimeError(proc.stderr[-3000:])
+    return time.perf_counter() - t0
+
+
+def main() -> None:
+    ap = argparse.ArgumentParser(description=__doc__)
+    ap.add_argument("--presets", default=",".join((*PRESETS, "hybrid")))
+    ap.add_argument("--sizes", default="20,32,64")
+    ap.add_argument("--devices", type=int, default=os.cpu_count() or 1)
+    ap.add_argument("--child")
+    ap.add_argument("--no-write", action="store_true")
+    args = ap.parse_args()
+    if args.child:
+        return child(args.child)
+    presets = args.presets.split(",")
+
+    with tempfile.TemporaryDirectory(prefix="jaxga-first-") as cache:
+        first = jaxga_command(["run", "--preset", "iga_zhu", "--map",
+                               "classic_ga_gapp3_20x20", "--seeds", "100", "--quiet"],
+                              cache, args.devices)
+    print(f"first command, cold: {first:.1f} s", flush=True)
+
+    warm_rows, second_rows = [], []
+    worst = 0.0
+    for preset in presets:
+        with tempfile.TemporaryDirectory(prefix="jaxga-warm-") as cache:
+            warm_s = jaxga_command(["warmup", "--presets", preset, "--sizes", args.sizes],
+                                   cache, args.devices)
+            for m, seeds, gens in CASES:
+                out = in_child({"kind": "case", "preset": preset, "map": m, "seeds": seeds,
+                                "generations": gens}, cache, args.devices)
+                size = int(m.split(":")[1])
+                warmed = str(size) in args.sizes.split(",")
+                if warmed:
+                    worst = max(worst, out["compile_s"])
+                warm_rows.append([preset, f"{warm_s:.0f}", m.replace(":", " "), seeds, gens,
+                                  out["capacity"], "yes" if warmed else "no",
+                                  out["compile_s"], out["xla"], out["loaded"]])
+                print(warm_rows[-1], flush=True)
+        with tempfile.TemporaryDirectory(prefix="jaxga-second-") as cache:
+            out = in_child({"kind": "second", "preset": preset}, cache, args.devices)
+        second_rows.append([preset, out["compile_s"], out["xla"], out["loaded"]])
+        print(second_rows[-1], flush=True)
+
+    body = (
+        f"{args.devices} XLA host device(s) (the CLI's default: one per core). Targets: "
+        "first command <= 20 s; after a warm-up, compile <= 2 s on any map up to 64 x 64 "
+        "with any seed and generation count; a second run in one process compiles "
+        "nothing.\n\n"
+        f"**First command, cold cache, fresh process** (`jaxga run --preset iga_zhu --map "
+        f"classic_ga_gapp3_20x20 --seeds 100`, after `pip install`): **{first:.1f} s** to "
+        "the printed table.\n\n"
+        f"**After `jaxga warmup --presets P --sizes {args.sizes}`** (warm-up seconds per "
+        "preset), one fresh process per case. compile s = `timing['compile_s']` "
+        "(tracing, lowering, and reading the programs from the cache or compiling them); "
+        "XLA = programs XLA compiled (not in the cache); read = programs read from the "
+        "cache; capacity = the path capacity of the problem (part of the programs' "
+        "shape). Maps: `open N` = `jaxga.api.warmup.open_map(N)`, `random N` = "
+        "`random_map(N, N, 0.2, seed=3)` corner to corner; corner rule strict.\n\n"
+        + markdown_table(["preset", "warm-up s", "map", "seeds", "generations", "capacity",
+                          "size warmed", "compile s", "XLA", "read"], warm_rows)
+        + f"\n\nLongest compile on a warmed size: {worst:.2f} s.\n\n"
+        "**Second run in one process** (10 seeds x 50 generations on "
+        "`classic_ga_gapp3_20x20`, then 30 seeds x 300 generations on another 20 x 20 map "
+        "under the same corner rule): what the second run compiled or read.\n\n"
+        + markdown_table(["preset", "compile s", "XLA", "read"], second_rows)
+    )
+    record("compile once, run many (benchmarks/compile_once.py)", body,
+           write=not args.no_write)
+
+
+if __name__ == "__main__":
+    main()

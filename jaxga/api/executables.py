@@ -1,0 +1,160 @@
+"""Compiled programs kept on disk whole, so that a later process neither traces, lowers
+nor compiles them (issue 41).
+
+JAX's persistent compilation cache (:mod:`jaxga.api.compilation_cache`) saves XLA's
+compilation only: a later process still traces the Python functions and lowers them to
+StableHLO to find the entry (2-4 s per program set on the 2-core machine, decision 014).
+This store keeps each compiled program (``jax.experimental.serialize_executable``)
+under a key made of everything the tracing depends on: the program's name, the
+algorithm (operators, sizes, static settings), the shapes and static parts of the map and
+of the parameters, the runs per call, the devices, the JAX, jaxlib and jaxga versions
+(jaxga's by a digest of its source files, so an edited checkout never reads a stale
+program), the lowering choice (:mod:`jaxga.api.lowering`) and ``XLA_FLAGS``. A program is
+stored only when every operator it uses is one of jaxga's own: a user's operator
+(registered in a notebook) can change without any of these, so its programs go through
+JAX's cache alone, which keys on the lowered program.
+
+The files live beside JAX's cache entries (``<cache dir>/jaxga-programs/``) and the store
+is on and off with that cache. They are Python pickles that run code when loaded:
+like JAX's own cache directory, it must be writable only by its user. A file that cannot
+be read (truncated, written by another version) is ignored and compiled again; a program
+read from it that fails to run has every program this process read deleted, and the call
+runs again with programs compiled afresh (:func:`jaxga.api.runs.sweep`).
+"""
+
+from __future__ import annotations
+
+import contextlib
+import functools
+import hashlib
+import os
+import pickle
+import tempfile
+from pathlib import Path
+from typing import Any
+
+import jax
+import jaxlib
+from jax.experimental.serialize_executable import deserialize_and_load, serialize
+
+from jaxga.api.lowering import threefry_unrolled
+from jaxga.engine import chosen_operators
+
+SUBDIRECTORY = "jaxga-programs"
+
+
+@functools.lru_cache(maxsize=1)
+def source_digest() -> str:
+    """A digest of jaxga's Python source files (any edit changes it)."""
+    root = Path(__file__).resolve().parents[1]
+    h = hashlib.blake2b(digest_size=16)
+    for path in sorted(root.rglob("*.py")):
+        h.update(str(path.relative_to(root)).encode())
+        h.update(path.read_bytes())
+    return h.hexdigest()
+
+
+def directory() -> Path | None:
+    """Where the programs are kept: under JAX's configured cache directory (a local
+    one); None when no cache is configured."""
+    base = jax.config.jax_compilation_cache_dir
+    if not base or "://" in str(base):
+        return None
+    return Path(base) / SUBDIRECTORY
+
+
+def _only_builtin_operators(algo: Any) -> bool:
+    return all(op.fn is None or (getattr(op.fn, "__module__", "") or "").startswith("jaxga.")
+               for op in chosen_operators(algo.config).values())
+
+
+def program_key(name: str, algo: Any, grid_spec: Any, params_spec: Any, n_runs: int,
+                devices: Any, settings: Any = ()) -> str | None:
+    """The file name of a program, or None when it is not to be stored (no cache
+    directory, or an operator that is not jaxga's own). ``settings``: the values of the
+    caller's module settings that shape the program (block sizes, compiler options)."""
+    if directory() is None or not _only_builtin_operators(algo):
+        return None
+    leaves, tree = jax.tree_util.tree_flatten((grid_spec, params_spec))
+    parts = (
+        name, repr(algo), str(tree), repr(leaves),
+        n_runs, settings, [(d.platform, d.device_kind, d.id) for d in devices],
+        jax.process_count(), jax.__version__, jaxlib.__version__, source_digest(),
+        threefry_unrolled(), os.environ.get("XLA_FLAGS", ""),
+        jax.config.jax_enable_x64, jax.config.jax_default_prng_impl,
+        jax.config.jax_threefry_partitionable,
+    )
+    return hashlib.blake2b(repr(parts).encode(), digest_size=20).hexdigest()
+
+
+_CACHE_HITS = [0]
+
+
+def _count_cache_hits(event: str, **_kwargs: Any) -> None:
+    if event == "/jax/compilation_cache/cache_hits":
+        _CACHE_HITS[0] += 1
+
+
+jax.monitoring.register_event_listener(_count_cache_hits)
+
+
+def compile_and_store(key: str | None, lowered: Any, options: dict | None = None) -> Any:
+    """``lowered.compile(options)``, stored under ``key`` when XLA compiled it: an
+    XLA:CPU program that JAX read from its own persistent cache does not serialise whole
+    (it loads but fails at run time: "Function ... not found"), so such a program is
+    not stored (``jaxga warmup`` compiles with JAX's cache off, so that it stores every
+    program)."""
+    hits = _CACHE_HITS[0]
+    program = lowered.compile(options)
+    if _CACHE_HITS[0] == hits:
+        save(key, program)
+    return program
+
+
+_READ: set[str] = set()
+"""The keys of the programs this process has read from the store."""
+
+
+def forget_read() -> bool:
+    """Delete every stored program this process has read (after one failed to run);
+    True if there were any."""
+    keys = list(_READ)
+    _READ.clear()
+    for key in keys:
+        with contextlib.suppress(OSError):
+            (directory() / f"{key}.pkl").unlink()
+    return bool(keys)
+
+
+def load(key: str | None, devices: Any) -> Any | None:
+    """The compiled program stored under ``key`` on these devices, or None."""
+    if key is None:
+        return None
+    path = directory() / f"{key}.pkl"
+    if not path.is_file():
+        return None
+    try:
+        with open(path, "rb") as f:
+            payload, in_tree, out_tree = pickle.load(f)
+        program = deserialize_and_load(payload, in_tree, out_tree,
+                                       execution_devices=list(devices))
+    except Exception:  # noqa: BLE001 - an unreadable entry is compiled again
+        return None
+    _READ.add(key)
+    return program
+
+
+def save(key: str | None, compiled: Any) -> None:
+    """Store a compiled program under ``key`` (atomically; nothing when it cannot)."""
+    if key is None:
+        return
+    try:
+        blob = pickle.dumps(serialize(compiled))
+        folder = directory()
+        folder.mkdir(parents=True, exist_ok=True)
+        fd, tmp = tempfile.mkstemp(dir=folder, suffix=".tmp")
+        with os.fdopen(fd, "wb") as f:
+            f.write(blob)
+        os.replace(tmp, folder / f"{key}.pkl")
+    except Exception:  # noqa: BLE001 - a program that cannot be stored is only compiled
+        return

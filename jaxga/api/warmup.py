@@ -1,0 +1,98 @@
+"""``jaxga warmup``: compile a day's programs ahead, into the persistent cache (issue 41).
+
+A program set (:mod:`jaxga.api.programs`) depends on the preset, the map's shape and
+corner rule, the path capacity and the runs per call (8 or 32 per device); not on
+the seeds, the number of generations or the dynamic parameter values. :func:`warmup`
+compiles, for each preset and map, the set of every run size (one generation of each),
+so that a later process finds them in the persistent compilation cache
+(:mod:`jaxga.api.compilation_cache`) and only traces and loads. A map given as a size
+``N`` is an open ``N x N`` map from corner to corner (a user's map: corner rule strict);
+a map of that size with obstacles holds the same programs when its path capacity is the
+same (it is on maps whose optimal path is short enough, :func:`jaxga.engine.default_capacity`).
+"""
+
+from __future__ import annotations
+
+import time
+from collections.abc import Callable, Sequence
+from typing import Any
+
+import jax
+import numpy as np
+
+from jaxga.api.compilation_cache import ensure_compilation_cache
+from jaxga.api.programs import RUN_BUCKETS
+from jaxga.api.runs import run
+from jaxga.config.presets import preset_names
+from jaxga.core.errors import ParameterError
+from jaxga.core.grid import Grid
+from jaxga.maps import MapInfo
+
+__all__ = ["open_map", "warmup"]
+
+
+def open_map(size: int, corner_rule: str = "strict") -> Grid:
+    """An open ``size x size`` map from its bottom-left to its top-right corner."""
+    if not isinstance(size, int | np.integer) or isinstance(size, bool) or size < 2:
+        raise ParameterError(f"a warm-up map size must be an integer >= 2, got {size!r}")
+    return Grid.create(np.zeros((size, size), bool), corner_rule=corner_rule)
+
+
+def warmup(
+    presets: Sequence[str] | None = None,
+    maps: Sequence[int | str | Grid | MapInfo] = (20, 32, 64),
+    *,
+    runs: Sequence[int] = RUN_BUCKETS,
+    corner_rule: str | None = None,
+    report: Callable[[dict[str, Any]], None] | None = None,
+) -> list[dict[str, Any]]:
+    """Compile every program set ``presets`` x ``maps`` x ``runs`` needs (one generation
+    of each), with the persistent compilation cache on (:func:`ensure_compilation_cache`).
+
+    Args:
+        presets: preset names or TOML files (default: every built-in preset).
+        maps: map sizes (an open ``N x N`` map, :func:`open_map`), built-in map names,
+            map files, Grids or MapInfos.
+        runs: runs per device (default :data:`jaxga.api.programs.RUN_BUCKETS`: every
+            size a run can take), compiled smallest first.
+        corner_rule: the corner rule of every map (default: sizes strict, named maps
+            their own, :func:`jaxga.maps.default_corner_rule`).
+        report: called with each row as it is done.
+
+    The programs are stored whole (:mod:`jaxga.api.executables`) when XLA compiles them;
+    one that JAX reads from its own cache is not (it would not serialise whole), so a
+    warm-up stores every program only in a process that has not used JAX's cache, as
+    ``jaxga warmup`` (which turns JAX's cache off before compiling anything).
+
+    Returns:
+        One row per preset, map and run size: ``preset``, ``map``, ``runs`` (per
+        device), ``compile_s`` (tracing, and compiling or loading from the cache) and
+        ``total_s``.
+    """
+    if ensure_compilation_cache() is None:
+        raise ParameterError("the persistent compilation cache is off ($JAXGA_CACHE_DIR is "
+                             "empty): a warm-up would compile for this process only")
+    presets = list(preset_names()) if presets is None else list(presets)
+    sizes = sorted({int(r) for r in runs})
+    if not sizes or sizes[0] < 1 or sizes[-1] > RUN_BUCKETS[-1]:
+        raise ParameterError(f"runs per device must be in 1..{RUN_BUCKETS[-1]}, got "
+                             f"{list(runs)}")
+    n_dev = jax.local_device_count()
+    rows = []
+    for preset in presets:
+        for m in maps:
+            if isinstance(m, int | np.integer) and not isinstance(m, bool):
+                grid, name = open_map(int(m), corner_rule or "strict"), f"open {m} x {m}"
+            else:
+                grid, name = m, getattr(m, "name", m if isinstance(m, str) else "grid")
+            for per_device in sizes:  # smallest first: a larger one would be reused
+                t0 = time.perf_counter()
+                r = run(preset, grid, seeds=per_device * n_dev, generations=1,
+                        corner_rule=None if isinstance(m, int | np.integer) else corner_rule)
+                row = {"preset": preset, "map": str(name), "runs": per_device,
+                       "compile_s": r.timing["compile_s"],
+                       "total_s": time.perf_counter() - t0}
+                rows.append(row)
+                if report is not None:
+                    report(row)
+    return rows

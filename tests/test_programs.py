@@ -1,0 +1,255 @@
+"""Compile once, run many (issue 41): one program set serves every seed count and every
+generation count, and the padding changes no run's result."""
+
+from __future__ import annotations
+
+import dataclasses
+import json
+import math
+import os
+import subprocess
+import sys
+from pathlib import Path
+
+import jax
+import numpy as np
+import optax
+import pytest
+
+from jaxga import api, engine
+from jaxga.api import executables, programs
+from jaxga.config import registry
+from jaxga.core.errors import ParameterError
+from jaxga.engine.maptables import with_tables
+from jaxga.maps.generators import random_map
+from jaxga.operators import schedules
+from jaxga.operators.guide import with_guide
+
+ROOT = Path(__file__).resolve().parents[1]
+
+# A configuration no other test file uses, so that the first call here compiles.
+OPTIONS = dict(population__size=7, init__max_tries=30, crossover__probability=0.85)
+
+
+@pytest.fixture(scope="module")
+def grid():
+    return random_map(11, 11, 0.2, 5, corner_rule="free")
+
+
+@pytest.fixture()
+def compiled(monkeypatch):
+    """The names of the programs XLA compiles during a test (init, evolve, finish)."""
+    names: list[str] = []
+    original = programs.Programs._compile
+
+    def recording(self, wanted, report):
+        names.extend(n for n in wanted if n not in self._compiled)
+        return original(self, wanted, report)
+
+    monkeypatch.setattr(programs.Programs, "_compile", recording)
+    return names
+
+
+def unpadded(grid, seeds, generations):
+    """The runs as the engine computes them without the API: ``vmap``s of exactly these
+    seeds, all generations in one ``lax.scan`` (the API's programs before issue 41)."""
+    config = api.check_run("sga", grid, generations=generations, **OPTIONS)
+    algo, params = engine.build(config, grid)
+    g = with_tables(with_guide(grid) if engine.uses_guide(config) else grid)
+
+    keys = jax.vmap(jax.random.PRNGKey)(np.asarray(seeds, np.uint32))
+    # per-run parameters, as the API passes them (a constant would let XLA fold them:
+    # a mean over a constant count of individuals rounds differently)
+    per_run = {k: np.repeat(np.asarray(v)[None], len(keys), axis=0) for k, v in params.items()}
+    init = jax.jit(jax.vmap(lambda k, p: engine.init_state(
+        algo, jax.random.fold_in(k, 0), g, p)[0]))
+    evolve = jax.jit(jax.vmap(lambda k, p, st: engine.evolve(
+        algo, jax.random.fold_in(k, 1), g, st, p)))
+    finish = jax.jit(jax.vmap(lambda p, st, h, b: engine.finish(algo, g, st, h, p, b)))
+    state = init(keys, per_run)
+    init_best = state.best_fitness
+    state, hist = evolve(keys, per_run, state)
+    out = finish(per_run, state, hist, init_best)
+    return jax.tree_util.tree_map(np.asarray, (out, hist))
+
+
+def assert_same_runs(result, rows, ref, ref_hist):
+    """``result``'s seeds equal the reference's ``rows``, bit for bit."""
+    np.testing.assert_array_equal(result.cells, ref["cells"][rows])
+    np.testing.assert_array_equal(result.n_cells, ref["length"][rows])
+    np.testing.assert_array_equal(result.fitness, np.where(ref["success"][rows],
+                                                           ref["fitness"][rows], np.nan))
+    np.testing.assert_array_equal(result.convergence_generation,
+                                  ref["convergence_generation"][rows])
+    np.testing.assert_array_equal(result.failures, ref["failures"][rows])
+    for h in ("best", "mean", "std"):
+        np.testing.assert_array_equal(result.history[h], ref_hist[h][rows])
+
+
+def test_10_20_and_30_seeds_and_50_or_300_generations_run_one_program_set(grid, compiled):
+    """Must show (issue 41): runs of 10, 20 and 30 seeds, then of 50 and 300 generations
+    and 3 seeds compile init, evolve and finish once; every seed's result equals its
+    unpadded run (a 50-generation run and the first 50 generations of a 300-generation
+    one included)."""
+    runs = {n: api.run("sga", grid, seeds=n, generations=50, **OPTIONS) for n in (10, 20, 30)}
+    long = api.run("sga", grid, seeds=3, generations=300, **OPTIONS)
+    assert sorted(compiled) == ["evolve", "finish", "init"]
+    ref, ref_hist = unpadded(grid, range(30), 50)
+    for n, r in runs.items():
+        assert_same_runs(r, slice(0, n), ref, ref_hist)
+    assert (runs[30].success.sum() >= 25) and np.isfinite(runs[30].length).any()
+    for h in ("best", "mean", "std"):  # generation t draws fold_in(key, t) in any chunk
+        np.testing.assert_array_equal(long.history[h][:, :50], ref_hist[h][:3])
+    assert long.history["best"].shape == (3, 300)
+
+
+def test_more_runs_than_the_largest_program_are_several_calls_of_it(grid, compiled):
+    """70 seeds on one device are 3 calls of the 32-run program (the last padded), with
+    the results of the unpadded runs; 7 generations are one call of the 25-generation
+    chunk that runs 7 of them."""
+    n_dev = jax.local_device_count()
+    assert api.run_layout(70, n_dev) == (32, math.ceil(70 / n_dev / 32))
+    r = api.run("sga", grid, seeds=70, generations=7, **OPTIONS)
+    assert compiled.count("evolve") <= 1  # the 32-run programs (of the test above)
+    ref, ref_hist = unpadded(grid, range(70), 7)
+    assert_same_runs(r, slice(0, 70), ref, ref_hist)
+    assert r.history["best"].shape == (70, 7)
+
+
+def test_a_smaller_call_reuses_a_larger_compiled_program(grid, compiled):
+    api.run("sga", grid, seeds=12, generations=5, **OPTIONS)  # 32 runs per device
+    compiled.clear()
+    r = api.run("sga", grid, seeds=[4, 9], generations=5, **OPTIONS)
+    assert compiled == [] and r.timing["compile_s"] < 1.0
+
+
+@pytest.mark.parametrize("n_runs, n_devices, cells, have, want", [
+    (1, 1, 0, (), (8, 1)), (8, 1, 0, (), (8, 1)), (9, 1, 0, (), (32, 1)),
+    (30, 1, 0, (), (32, 1)), (33, 1, 0, (), (32, 2)), (1000, 1, 0, (), (32, 32)),
+    (1000, 2, 0, (), (32, 16)), (10, 2, 0, (), (8, 1)), (17, 2, 0, (), (32, 1)),
+    (3, 1, 0, (32,), (32, 1)), (3, 1, 0, (8, 32), (8, 1)), (40, 1, 0, (8,), (32, 2)),
+    (3, 1, 256 * 256, (), (4, 1)), (1, 1, 100 * 100, (), (1, 1)),
+    (17, 1, 100 * 100, (), (32, 1)), (9, 1, 100 * 100, (), (16, 1)),
+    (65, 1, 100 * 100, (), (32, 3)), (3, 1, 100 * 100, (8,), (8, 1)),
+])
+def test_run_layout(n_runs, n_devices, cells, have, want):
+    """Runs per device and calls: the smallest bucket holding a device's share, calls of
+    the largest above it, a larger program already compiled reused, powers of two on
+    maps over 64 x 64."""
+    assert api.run_layout(n_runs, n_devices, cells, have) == want
+
+
+def test_run_layout_refuses_no_runs():
+    with pytest.raises(ParameterError, match="at least one run"):
+        api.run_layout(0)
+
+
+@pytest.mark.parametrize("generations", [1, 7, 45, 300])
+def test_agacd_schedules_equal_optax_exponential_decay(generations):
+    """The schedules take a traced generation count and give the float32 values of
+    optax's schedule with a static one, both compiled (the engine's case; eager
+    op-by-op evaluation rounds ``pow`` differently)."""
+    t = np.arange(0, generations + 2, dtype=np.int32)
+    for ours, rate in ((schedules.agacd_crossover_decay, math.exp(-1.0)),
+                       (schedules.agacd_mutation_growth, math.e)):
+        want = jax.jit(optax.exponential_decay(1.0, transition_steps=generations,
+                                               decay_rate=rate))(t)
+        traced = jax.jit(lambda g, t, ours=ours: ours(g)(t))(np.int32(generations), t)
+        np.testing.assert_array_equal(np.asarray(traced), np.asarray(want))
+        static = jax.jit(ours(generations))(t)
+        np.testing.assert_array_equal(np.asarray(static), np.asarray(want))
+    with pytest.raises(ValueError, match="generations must be >= 1"):
+        schedules.agacd_crossover_decay(0)
+
+
+NEW_PROCESS = """
+import json, sys
+import numpy as np
+from jaxga import api, engine
+from jaxga.maps.generators import random_map
+if sys.argv[1] == "read":  # tracing would call these
+    engine.evolution.generation = engine.evolution.init_state = None
+r = api.run("sga", random_map(11, 11, 0.2, 5, corner_rule="free"), seeds=6, generations=9,
+            population__size=7, init__max_tries=30, crossover__probability=0.85)
+print(json.dumps({"cells": np.asarray(r.cells).tolist(),
+                  "best": np.asarray(r.history["best"]).tolist(),
+                  "compile_s": r.timing["compile_s"]}))
+"""
+
+
+def test_a_new_process_reads_the_stored_programs_without_tracing(tmp_path):
+    """The compiled programs are kept whole beside JAX's cache: a new process traces
+    nothing (the traced functions are removed), reads every program and gives the same
+    results bit for bit."""
+    env = dict(os.environ, JAXGA_CACHE_DIR=str(tmp_path))
+    env.pop("JAX_COMPILATION_CACHE_DIR", None)
+    out = []
+    for mode in ("compile", "read"):
+        proc = subprocess.run([sys.executable, "-c", NEW_PROCESS, mode], env=env,
+                              capture_output=True, text=True, cwd=ROOT)
+        assert proc.returncode == 0, proc.stderr[-2000:]
+        out.append(json.loads(proc.stdout.strip().splitlines()[-1]))
+    assert len(list((tmp_path / executables.SUBDIRECTORY).glob("*.pkl"))) == 3
+    assert out[1]["cells"] == out[0]["cells"] and out[1]["best"] == out[0]["best"]
+    assert out[1]["compile_s"] < out[0]["compile_s"]
+
+
+def test_an_unreadable_stored_program_is_compiled_again(tmp_path, monkeypatch):
+    monkeypatch.setattr(type(jax.config), "jax_compilation_cache_dir",
+                        property(lambda self: str(tmp_path)), raising=False)
+    assert executables.directory() == tmp_path / executables.SUBDIRECTORY
+    executables.directory().mkdir()
+    (executables.directory() / "k.pkl").write_bytes(b"not a program")
+    assert executables.load("k", jax.devices()[:1]) is None
+    assert executables.load("missing", jax.devices()[:1]) is None
+    compiled = jax.jit(lambda x: x + 1).lower(np.int32(1)).compile()
+    executables.save("k", compiled)
+    assert int(executables.load("k", jax.devices()[:1])(np.int32(4))) == 5
+
+
+def test_programs_with_a_users_operator_are_not_stored(grid):
+    """A user's operator can change without anything in the key changing: its programs
+    go through JAX's cache alone (keyed on the lowered program)."""
+    config = api.check_run("sga", grid, **OPTIONS)
+    algo, _ = engine.build(config, grid)
+    args = (None, (), 8, jax.devices()[:1])
+    assert executables.program_key("init", algo, *args) is not None
+    real = registry.operator("mutation", config["mutation.method"])
+    registry.register(registry.Operator("mutation", "users_copy", lambda *a: real.fn(*a),
+                                        "a user's operator (test)"))
+    try:
+        user = dataclasses.replace(algo, config=engine.static_config(config.override(
+            {"mutation.method": "users_copy"})))
+        assert executables.program_key("init", user, *args) is None
+    finally:
+        registry.unregister("mutation", "users_copy")
+
+
+def test_a_stored_program_that_fails_to_run_is_forgotten_and_compiled_again(
+        grid, monkeypatch):
+    """A program read from the store that fails when it runs (an XLA:CPU program read
+    from JAX's own cache did: "Function ... not found") is deleted with the others this
+    process read, and the call runs again with fresh compilations: a result, not a
+    crash."""
+    from jax.errors import JaxRuntimeError
+
+    want = api.run("sga", grid, seeds=3, generations=4, **OPTIONS)
+    api.clear_compiled()
+    served = set()
+
+    def load_broken_once(key, devices):
+        if key is None or key in served:
+            return None
+        served.add(key)
+        executables._READ.add(key)  # as a real read records it
+
+        def broken(*args):
+            raise JaxRuntimeError("NOT_FOUND: Function fusion.1 not found (type id: 1)")
+
+        return broken
+
+    monkeypatch.setattr(executables, "load", load_broken_once)
+    got = api.run("sga", grid, seeds=3, generations=4, **OPTIONS)
+    assert served  # the broken programs were served, then forgotten
+    np.testing.assert_array_equal(got.cells, want.cells)
+    np.testing.assert_array_equal(got.history["best"], want.history["best"])
