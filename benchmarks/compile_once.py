@@ -44,9 +44,9 @@ CACHE_EVENT = "/jax/compilation_cache/cache_retrieval_time_sec"
 
 CASES = [  # (map, seeds, generations)
     ("open:20", 5, 50),
-    ("random:20", 1000, 20),
+    ("random:20", 1024, 20),
     ("random:32", 100, 300),
-    ("open:64", 1024, 10),
+    ("open:64", 40, 10),
     ("random:64", 30, 100),
     ("random:25", 10, 50),
 ]

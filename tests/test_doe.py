@@ -317,6 +317,25 @@ def _assert_same_runs(a: dict[str, np.ndarray], b: dict[str, np.ndarray]) -> Non
         np.testing.assert_array_equal(a[key], b[key], err_msg=key)
 
 
+def test_the_confirmation_runs_the_designs_program(one_call, monkeypatch):
+    """Issue 41, item 3: the design (27 runs) and its confirmation (3 runs) run one
+    compiled program set (the confirmation's runs padded to the design's call), and a
+    second experiment in the process compiles nothing."""
+    import jax
+
+    from jaxga.api import programs
+
+    real = programs.compiled_programs
+    runs_per_call = []
+    monkeypatch.setattr(programs, "compiled_programs",
+                        lambda *a: runs_per_call.append(a[3]) or real(*a))
+    misses = real.cache_info().misses
+    again = run_doe("agacd", MAP, SMALL, "agacd-table4", seeds=3, **KW)
+    assert runs_per_call == [32 * jax.local_device_count()] * 2  # design, confirmation
+    assert real.cache_info().misses == misses
+    _assert_same_runs(again.confirmation_all, one_call.confirmation_all)
+
+
 def test_doe_points_equal_separate_runs(one_call):
     from jaxga.doe import seed_responses
 

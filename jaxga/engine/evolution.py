@@ -390,10 +390,10 @@ def evolve(algo: Algorithm, key, grid: Grid, state: GAState, params: dict,
     generation, the best-so-far fitness and the mean and sd of the active fitness.
 
     ``count`` (optional, a traced integer): only the first ``count`` of the
-    ``generations`` steps run; the others leave the state as it is (their history rows
-    repeat the last one and are to be dropped). One compiled chunk of ``generations``
-    steps then serves every generation count (:mod:`jaxga.api.programs`); ``count`` must
-    not be batched (a ``vmap``'s ``in_axes`` None), so the skip is a real branch.
+    ``generations`` steps run (a loop with a run-time trip count); the history rows after
+    them are zeros, to be dropped. One compiled chunk of ``generations`` steps then serves
+    every generation count (:mod:`jaxga.api.programs`); ``count`` must not be batched (a
+    ``vmap``'s ``in_axes`` None), so that every run of a batch loops ``count`` times.
     """
     n = algo.generations if generations is None else generations
     ts = state.generation + jnp.arange(n, dtype=I32)
@@ -408,12 +408,18 @@ def evolve(algo: Algorithm, key, grid: Grid, state: GAState, params: dict,
 
         return jax.lax.scan(body, state, ts)
 
-    def counted(st, x):
-        t, i = x
-        st = jax.lax.cond(i < count, step, lambda s, _: s, st, t)
-        return st, history_row(algo, st, params)
+    # a loop of ``count`` steps writing the history rows in place (a scan of n steps with
+    # a branch per step was slower: the branch copies the state at every step)
+    rows = jax.eval_shape(lambda st: history_row(algo, st, params), state)
+    history = jax.tree_util.tree_map(lambda r: jnp.zeros((n, *r.shape), r.dtype), rows)
 
-    return jax.lax.scan(counted, state, (ts, jnp.arange(n, dtype=I32)))
+    def counted(i, carry):
+        st, hist = carry
+        st = step(st, ts[i])
+        row = history_row(algo, st, params)
+        return st, jax.tree_util.tree_map(lambda h, r: h.at[i].set(r), hist, row)
+
+    return jax.lax.fori_loop(0, jnp.minimum(count, n), counted, (state, history))
 
 
 def convergence_generation(best: jax.Array, final_best: jax.Array,
