@@ -46,7 +46,6 @@ CASES = [  # (map, seeds, generations)
     ("open:20", 5, 50),
     ("random:20", 1024, 20),
     ("random:32", 100, 300),
-    ("open:64", 40, 10),
     ("random:64", 30, 100),
     ("random:25", 10, 50),
 ]

@@ -1,5 +1,5 @@
 """How many runs one device computes together: the largest of
-``jaxga.api.programs.RUN_BUCKETS`` (the runs per call of the compiled programs) swept.
+``jaxga.api.programs.RUNS_PER_DEVICE`` (the runs per device of a large call) swept.
 
     python benchmarks/run_block.py [--preset sga] [--seeds 1000] [--generations 50]
         [--blocks 64,32,16] [--devices N]
@@ -30,7 +30,7 @@ def child(preset: str, seeds: int, generations: int, block: int) -> dict:
     from jaxga import api
     from jaxga.maps import load_map
 
-    api.programs.RUN_BUCKETS = (*(b for b in api.programs.RUN_BUCKETS if b < block), block)
+    api.programs.RUNS_PER_DEVICE = block
     grid = load_map("classic_ga_gapp3_20x20", corner_rule="free")
     size = 20 if preset == "mpmga" else 60
     r = api.run(preset, grid, seeds=seeds, population__size=size, generations=generations)
@@ -66,7 +66,7 @@ def main() -> None:
     body = (
         f"{args.preset}, classic_ga_gapp3_20x20 (corner rule free), {args.seeds} seeds, "
         f"{args.generations} generations, {args.devices} XLA host device(s), cold compiles. "
-        "block: the largest runs per device of a call (`RUN_BUCKETS[-1]`); calls and "
+        "block: the largest runs per device of a call (`RUNS_PER_DEVICE`); calls and "
         "runs/device: what `api.run_layout` made of the runs. Times in seconds.\n\n"
         + markdown_table(["block", "calls", "runs/device", "compile", "init",
                           "evolve", "ind-gen/s", "peak MiB", "results hash"], rows)

@@ -30,7 +30,7 @@ import jax.numpy as jnp
 import numpy as np
 
 from jaxga import api
-from jaxga.api import RUN_BUCKETS, check_one_corner_rule, configured_rule, parallel
+from jaxga.api import check_one_corner_rule, configured_rule, parallel
 from jaxga.api.compilation_cache import use_compilation_cache
 from jaxga.api.lowering import check_environment
 from jaxga.api.parallel import (
@@ -740,12 +740,12 @@ def cmd_warmup(args: argparse.Namespace) -> int:
 
     def show(row: dict) -> None:
         if lead:
-            print(f"{row['preset']:>10}  {row['map']:<28} {row['runs']:>3} runs/device  "
+            print(f"{row['preset']:>10}  {row['map']:<28} {row['seeds']:>4} seeds  "
                   f"compile {row['compile_s']:6.1f} s", flush=True)
 
     t0 = time.perf_counter()
-    rows = warmup(presets, maps, runs=_int_list(args.runs), corner_rule=args.corner_rule,
-                  report=show)
+    rows = warmup(presets, maps, seeds=_int_list(args.seeds) if args.seeds else None,
+                  corner_rule=args.corner_rule, report=show)
     if lead:
         print(f"{len(rows)} program sets ready in {time.perf_counter() - t0:.0f} s "
               f"(cache: {jax.config.jax_compilation_cache_dir})")
@@ -902,9 +902,9 @@ def build_parser() -> argparse.ArgumentParser:
                    help="open N x N maps to compile for (default 20,32,64; '' for none)")
     p.add_argument("--map", action="append", metavar="MAP",
                    help="also a built-in map name or a map file (repeatable)")
-    p.add_argument("--runs", default=",".join(map(str, RUN_BUCKETS)), metavar="R,R,...",
-                   help="runs per device of the programs (default: every size, "
-                   f"{','.join(map(str, RUN_BUCKETS))})")
+    p.add_argument("--seeds", metavar="N,N,...",
+                   help="seed counts to compile for (default: 8 and 32 per device, the "
+                   "two program sizes that serve every seed count)")
     p.add_argument("--corner-rule", default=None, metavar="RULE",
                    help=f"one of {', '.join(CORNER_RULES)} (default: strict on the open maps, "
                    "a named map's own)")

@@ -20,6 +20,8 @@ from jaxga.api.memory import (
 from jaxga.api.programs import (
     GENERATION_CHUNK,
     RUN_BUCKETS,
+    RUNS_PER_DEVICE,
+    SMALL_CALL_RUNS,
     clear_compiled,
     map_runs,
     run_blocks,
@@ -53,6 +55,8 @@ from jaxga.api.seeds import (
 __all__ = [
     "GENERATION_CHUNK",
     "RUN_BUCKETS",
+    "RUNS_PER_DEVICE",
+    "SMALL_CALL_RUNS",
     "FITNESS_GAP_TOLERANCE",
     "GAPS",
     "GAP_TOLERANCE",

@@ -111,15 +111,24 @@ count shares one program, and progress is reported after every call. The skipped
 of a last call cost a branch each."""
 
 
-RUN_BUCKETS = (8, 32)
-"""Runs per device of the compiled programs: a call's runs are padded to the smallest
-size that holds them (8 or 32 per device), and more than 32 per device are several
-calls of 32 (:func:`run_layout`). So 1-8 seeds share one program and 9-32 another, and
-any count above runs the 32-run program as often as needed: two program sets per preset
-and map shape serve every seed count. On maps up to 64 x 64 a run computes in
-milliseconds, so padding one run to eight costs far less than compiling a program for
-it. Blocks of 20-50 runs compute fastest (decision 011), so 1000 seeds as 32 calls of
-32 runs lose no throughput (``benchmarks/compile_once.py``)."""
+SMALL_CALL_RUNS = 8
+"""Runs of the small program: a call of up to 8 runs (all devices together) is one
+program of 8 runs, so a few seeds (a re-plan's 4) compute little."""
+
+
+RUNS_PER_DEVICE = 32
+"""Runs per device of the large program: a call of more than :data:`SMALL_CALL_RUNS`
+runs is one or more calls of ``32 x devices`` runs (the last padded)."""
+
+
+RUN_BUCKETS = (SMALL_CALL_RUNS, RUNS_PER_DEVICE)
+"""The two program sizes (:func:`run_layout`): 1-8 seeds share one program, and any count
+above runs the 32-per-device program as often as needed, on any number of devices (10,
+20 and 30 seeds: one program). So two program sets per preset and map serve every seed
+count. On maps up to 64 x 64 a run computes in milliseconds, so padding a few runs to a
+call of 32 per device costs far less than compiling a program for them; blocks of 20-50
+runs per device compute fastest (decision 011), and 1000 seeds as calls of 32 per device
+keep the throughput within 7 % (``benchmarks/throughput_ab.py``)."""
 
 
 LARGE_MAP_BUCKETS = (1, 2, 4, 8, 16, 32)
@@ -136,25 +145,30 @@ def run_layout(n_runs: int, n_devices: int = 1, cells: int = 0,
     """``(runs per device of each call, calls)`` for ``n_runs`` runs on ``n_devices``
     devices.
 
-    The smallest of :data:`RUN_BUCKETS` (:data:`LARGE_MAP_BUCKETS` on maps of more than
-    :data:`LARGE_MAP_CELLS` ``cells``) that holds each device's share, in one call; or,
-    when no bucket holds it, calls of the largest bucket. ``compiled``: bucket sizes this
-    process has already compiled for the same programs; the smallest of them that holds
-    the share is taken instead of compiling a new size (a DOE's confirmation run, a
-    replan after a larger run: no new compilation, at the cost of the padded runs).
+    Up to :data:`SMALL_CALL_RUNS` runs: one call of ``ceil(8 / devices)`` per device;
+    more: calls of :data:`RUNS_PER_DEVICE` per device. On maps of more than
+    :data:`LARGE_MAP_CELLS` ``cells``: the smallest of :data:`LARGE_MAP_BUCKETS` that
+    holds each device's share, or calls of 32. ``compiled``: runs per device of the
+    programs this process has already compiled for the same algorithm and map; the
+    smallest of them that holds the share is taken instead of compiling a new size (a
+    DOE's confirmation run, a replan after a larger run: no new compilation, at the cost
+    of the padded runs).
     """
     if n_runs < 1 or n_devices < 1:
         raise ParameterError(f"need at least one run and one device, got {n_runs} runs on "
                              f"{n_devices} devices")
-    buckets = LARGE_MAP_BUCKETS if cells > LARGE_MAP_CELLS else RUN_BUCKETS
     per_device = math.ceil(n_runs / n_devices)
-    largest = buckets[-1]
+    largest = RUNS_PER_DEVICE
     if per_device > largest:
         return largest, math.ceil(per_device / largest)
     have = [b for b in compiled if per_device <= b <= largest]
     if have:
         return min(have), 1
-    return min(b for b in buckets if b >= per_device), 1
+    if cells > LARGE_MAP_CELLS:
+        return min(b for b in LARGE_MAP_BUCKETS if b >= per_device), 1
+    if n_runs <= SMALL_CALL_RUNS:
+        return math.ceil(SMALL_CALL_RUNS / n_devices), 1
+    return largest, 1
 
 
 RUN_BLOCK = 64

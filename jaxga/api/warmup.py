@@ -1,7 +1,7 @@
 """``jaxga warmup``: compile a day's programs ahead, into the persistent cache (issue 41).
 
 A program set (:mod:`jaxga.api.programs`) depends on the preset, the map's shape and
-corner rule, the path capacity and the runs per call (8 or 32 per device); not on
+corner rule, the path capacity and the runs per call (8, or 32 per device); not on
 the seeds, the number of generations or the dynamic parameter values. :func:`warmup`
 compiles, for each preset and map, the set of every run size (one generation of each),
 so that a later process finds them in the persistent compilation cache
@@ -21,7 +21,7 @@ import jax
 import numpy as np
 
 from jaxga.api.compilation_cache import ensure_compilation_cache
-from jaxga.api.programs import RUN_BUCKETS
+from jaxga.api.programs import RUNS_PER_DEVICE, SMALL_CALL_RUNS
 from jaxga.api.runs import run
 from jaxga.config.presets import preset_names
 from jaxga.core.errors import ParameterError
@@ -42,7 +42,7 @@ def warmup(
     presets: Sequence[str] | None = None,
     maps: Sequence[int | str | Grid | MapInfo] = (20, 32, 64),
     *,
-    runs: Sequence[int] = RUN_BUCKETS,
+    seeds: Sequence[int] | None = None,
     corner_rule: str | None = None,
     report: Callable[[dict[str, Any]], None] | None = None,
 ) -> list[dict[str, Any]]:
@@ -53,8 +53,9 @@ def warmup(
         presets: preset names or TOML files (default: every built-in preset).
         maps: map sizes (an open ``N x N`` map, :func:`open_map`), built-in map names,
             map files, Grids or MapInfos.
-        runs: runs per device (default :data:`jaxga.api.programs.RUN_BUCKETS`: every
-            size a run can take), compiled smallest first.
+        seeds: seed counts to compile for (default: 8 and 32 per device, the two
+            program sizes that serve every seed count on maps up to 64 x 64,
+            :func:`jaxga.api.programs.run_layout`), compiled smallest first.
         corner_rule: the corner rule of every map (default: sizes strict, named maps
             their own, :func:`jaxga.maps.default_corner_rule`).
         report: called with each row as it is done.
@@ -65,19 +66,18 @@ def warmup(
     ``jaxga warmup`` (which turns JAX's cache off before compiling anything).
 
     Returns:
-        One row per preset, map and run size: ``preset``, ``map``, ``runs`` (per
-        device), ``compile_s`` (tracing, and compiling or loading from the cache) and
+        One row per preset, map and seed count: ``preset``, ``map``, ``seeds``,
+        ``compile_s`` (tracing, and compiling or loading from the cache) and
         ``total_s``.
     """
     if ensure_compilation_cache() is None:
         raise ParameterError("the persistent compilation cache is off ($JAXGA_CACHE_DIR is "
                              "empty): a warm-up would compile for this process only")
     presets = list(preset_names()) if presets is None else list(presets)
-    sizes = sorted({int(r) for r in runs})
-    if not sizes or sizes[0] < 1 or sizes[-1] > RUN_BUCKETS[-1]:
-        raise ParameterError(f"runs per device must be in 1..{RUN_BUCKETS[-1]}, got "
-                             f"{list(runs)}")
     n_dev = jax.local_device_count()
+    counts = sorted({int(n) for n in (seeds or (SMALL_CALL_RUNS, RUNS_PER_DEVICE * n_dev))})
+    if not counts or counts[0] < 1:
+        raise ParameterError(f"seed counts must be >= 1, got {list(seeds or ())}")
     rows = []
     for preset in presets:
         for m in maps:
@@ -85,11 +85,11 @@ def warmup(
                 grid, name = open_map(int(m), corner_rule or "strict"), f"open {m} x {m}"
             else:
                 grid, name = m, getattr(m, "name", m if isinstance(m, str) else "grid")
-            for per_device in sizes:  # smallest first: a larger one would be reused
+            for count in counts:  # smallest first: a larger one would be reused
                 t0 = time.perf_counter()
-                r = run(preset, grid, seeds=per_device * n_dev, generations=1,
+                r = run(preset, grid, seeds=count, generations=1,
                         corner_rule=None if isinstance(m, int | np.integer) else corner_rule)
-                row = {"preset": preset, "map": str(name), "runs": per_device,
+                row = {"preset": preset, "map": str(name), "seeds": count,
                        "compile_s": r.timing["compile_s"],
                        "total_s": time.perf_counter() - t0}
                 rows.append(row)
