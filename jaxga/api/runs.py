@@ -243,10 +243,11 @@ def sweep(
     while True:
         try:
             return _sweep(*args, **options)
-        except JaxRuntimeError:
-            # a stored program that does not run (jaxga.api.executables): forget the
-            # stored programs this process read (deleted: never read again) and run again
-            if not executables.forget_read():
+        except JaxRuntimeError as err:
+            # a stored program that does not run (jaxga.api.executables: "Function ...
+            # not found"): forget the stored programs this process read (deleted: never
+            # read again) and run again
+            if "NOT_FOUND" not in str(err) or not executables.forget_read():
                 raise
             clear_compiled()
 
