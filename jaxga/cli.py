@@ -903,7 +903,7 @@ def build_parser() -> argparse.ArgumentParser:
     p.add_argument("--map", action="append", metavar="MAP",
                    help="also a built-in map name or a map file (repeatable)")
     p.add_argument("--seeds", metavar="N,N,...",
-                   help="seed counts to compile for (default: 8 and 32 per device, the "
+                   help="seed counts to compile for (default: 4 and 32 per device, the "
                    "two program sizes that serve every seed count)")
     p.add_argument("--corner-rule", default=None, metavar="RULE",
                    help=f"one of {', '.join(CORNER_RULES)} (default: strict on the open maps, "

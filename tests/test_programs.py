@@ -124,17 +124,17 @@ def test_a_smaller_call_reuses_a_larger_compiled_program(grid, compiled):
 
 
 @pytest.mark.parametrize("n_runs, n_devices, cells, have, want", [
-    (1, 1, 0, (), (8, 1)), (8, 1, 0, (), (8, 1)), (9, 1, 0, (), (32, 1)),
+    (1, 1, 0, (), (4, 1)), (4, 1, 0, (), (4, 1)), (5, 1, 0, (), (32, 1)),
     (30, 1, 0, (), (32, 1)), (33, 1, 0, (), (32, 2)), (1000, 1, 0, (), (32, 32)),
-    (1000, 2, 0, (), (32, 16)), (4, 2, 0, (), (4, 1)), (8, 2, 0, (), (4, 1)),
-    (10, 2, 0, (), (32, 1)), (30, 2, 0, (), (32, 1)), (5, 3, 0, (), (3, 1)),
-    (3, 1, 0, (32,), (32, 1)), (3, 1, 0, (8, 32), (8, 1)), (40, 1, 0, (8,), (32, 2)),
+    (1000, 2, 0, (), (32, 16)), (4, 2, 0, (), (2, 1)), (3, 3, 0, (), (2, 1)),
+    (10, 2, 0, (), (32, 1)), (30, 2, 0, (), (32, 1)), (8, 2, 0, (), (32, 1)),
+    (3, 1, 0, (32,), (32, 1)), (3, 1, 0, (4, 32), (4, 1)), (40, 1, 0, (4,), (32, 2)),
     (3, 1, 256 * 256, (), (4, 1)), (1, 1, 100 * 100, (), (1, 1)),
     (17, 1, 100 * 100, (), (32, 1)), (9, 1, 100 * 100, (), (16, 1)),
     (65, 1, 100 * 100, (), (32, 3)), (3, 1, 100 * 100, (8,), (8, 1)),
 ])
 def test_run_layout(n_runs, n_devices, cells, have, want):
-    """Runs per device and calls: up to 8 runs one call of 8 over the devices, more runs
+    """Runs per device and calls: up to 4 runs one call of 4 over the devices, more runs
     calls of 32 per device (10, 20 and 30 seeds one program on one or two devices), a
     larger program already compiled reused, powers of two on maps over 64 x 64."""
     assert api.run_layout(n_runs, n_devices, cells, have) == want

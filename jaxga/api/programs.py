@@ -111,9 +111,10 @@ count shares one program, and progress is reported after every call. The skipped
 of a last call cost a branch each."""
 
 
-SMALL_CALL_RUNS = 8
-"""Runs of the small program: a call of up to 8 runs (all devices together) is one
-program of 8 runs, so a few seeds (a re-plan's 4) compute little."""
+SMALL_CALL_RUNS = 4
+"""Runs of the small program: a call of up to 4 runs (all devices together) is one
+program of 4 runs, so a re-plan's 4 seeds compute no padding (with 8 its median latency
+rose from 40 to 60 ms: ``benchmarks/replan.py``)."""
 
 
 RUNS_PER_DEVICE = 32
@@ -122,7 +123,7 @@ runs is one or more calls of ``32 x devices`` runs (the last padded)."""
 
 
 RUN_BUCKETS = (SMALL_CALL_RUNS, RUNS_PER_DEVICE)
-"""The two program sizes (:func:`run_layout`): 1-8 seeds share one program, and any count
+"""The two program sizes (:func:`run_layout`): 1-4 seeds share one program, and any count
 above runs the 32-per-device program as often as needed, on any number of devices (10,
 20 and 30 seeds: one program). So two program sets per preset and map serve every seed
 count. On maps up to 64 x 64 a run computes in milliseconds, so padding a few runs to a
@@ -145,7 +146,7 @@ def run_layout(n_runs: int, n_devices: int = 1, cells: int = 0,
     """``(runs per device of each call, calls)`` for ``n_runs`` runs on ``n_devices``
     devices.
 
-    Up to :data:`SMALL_CALL_RUNS` runs: one call of ``ceil(8 / devices)`` per device;
+    Up to :data:`SMALL_CALL_RUNS` runs: one call of ``ceil(4 / devices)`` per device;
     more: calls of :data:`RUNS_PER_DEVICE` per device. On maps of more than
     :data:`LARGE_MAP_CELLS` ``cells``: the smallest of :data:`LARGE_MAP_BUCKETS` that
     holds each device's share, or calls of 32. ``compiled``: runs per device of the

@@ -592,7 +592,7 @@ def run(
         ``success = False`` and ``reason`` naming the cause (nothing is run).
 
     The compiled programs are cached per algorithm and map shape and serve any number
-    of generations and of seeds (runs padded to 8 or 32 per device, more as several
+    of generations and of seeds (runs padded to 4, or 32 per device, more as several
     calls: :mod:`jaxga.api.programs`): calling again with other seeds, another number
     of generations, another map of the same size or other dynamic values
     (``crossover__probability=...``) does not compile again. For many hyper-parameter

@@ -1,7 +1,7 @@
 """``jaxga warmup``: compile a day's programs ahead, into the persistent cache (issue 41).
 
 A program set (:mod:`jaxga.api.programs`) depends on the preset, the map's shape and
-corner rule, the path capacity and the runs per call (8, or 32 per device); not on
+corner rule, the path capacity and the runs per call (4, or 32 per device); not on
 the seeds, the number of generations or the dynamic parameter values. :func:`warmup`
 compiles, for each preset and map, the set of every run size (one generation of each),
 so that a later process finds them in the persistent compilation cache
@@ -53,7 +53,7 @@ def warmup(
         presets: preset names or TOML files (default: every built-in preset).
         maps: map sizes (an open ``N x N`` map, :func:`open_map`), built-in map names,
             map files, Grids or MapInfos.
-        seeds: seed counts to compile for (default: 8 and 32 per device, the two
+        seeds: seed counts to compile for (default: 4 and 32 per device, the two
             program sizes that serve every seed count on maps up to 64 x 64,
             :func:`jaxga.api.programs.run_layout`), compiled smallest first.
         corner_rule: the corner rule of every map (default: sizes strict, named maps
