@@ -731,7 +731,7 @@ def cmd_warmup(args: argparse.Namespace) -> int:
     # XLA compiles every program afresh (no read from JAX's own cache), so that each is
     # stored whole (jaxga.api.executables); before this process compiles anything
     jax.config.update("jax_enable_compilation_cache", False)
-    presets = [p for p in args.presets.split(",") if p] if args.presets else None
+    presets = split_presets(args.presets) if args.presets else None
     maps: list = [*_int_list(args.sizes)] if args.sizes else []
     maps += list(args.map or ())
     if not maps:

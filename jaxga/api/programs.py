@@ -107,8 +107,8 @@ class Programs:
 GENERATION_CHUNK = 25
 """Generations per call of the compiled evolve program: a run of ``G`` generations makes
 ``ceil(G / 25)`` calls, the last running only the generations left, so every generation
-count shares one program, and progress is reported after every call. The skipped steps
-of a last call cost a branch each."""
+count shares one program, and progress is reported after every call (the last call's
+loop runs only its ``count`` steps)."""
 
 
 SMALL_CALL_RUNS = 4
