@@ -415,7 +415,7 @@ def cmd_run(args: argparse.Namespace) -> int:
         args.preset, source, seeds=args.seeds, generations=args.generations,
         corner_rule=args.corner_rule, variant=args.variant, sets=args.set or (),
         progress=progress,
-        population_capacity=args.population_capacity,
+        population_capacity=args.population_capacity, size_class=args.size_class,
     )
     if _not_lead(f"{len(result.seeds)} seeds", result.timing["total_s"]):
         return 0
@@ -562,7 +562,8 @@ def cmd_compare(args: argparse.Namespace) -> int:
                                                               file=sys.stderr, flush=True))
     comp = compare(presets, grid, seeds=args.seeds, metric=args.metric, test=args.test,
                    progress=progress, generations=args.generations,
-                   corner_rule=args.corner_rule, sets=args.set or ())
+                   corner_rule=args.corner_rule, sets=args.set or (),
+                   size_class=args.size_class)
     if _not_lead(f"{len(presets)} presets x {args.seeds} seeds",
                  sum(r.timing["total_s"] for r in comp.results.values())):
         return 0
@@ -745,11 +746,16 @@ def cmd_warmup(args: argparse.Namespace) -> int:
 
     t0 = time.perf_counter()
     rows = warmup(presets, maps, seeds=_int_list(args.seeds) if args.seeds else None,
-                  corner_rule=args.corner_rule, report=show)
+                  corner_rule=args.corner_rule, size_class=args.size_class, report=show)
     if lead:
         print(f"{len(rows)} program sets ready in {time.perf_counter() - t0:.0f} s "
               f"(cache: {jax.config.jax_compilation_cache_dir})")
     return 0
+
+
+SIZE_CLASS_HELP = ("run on the map padded with blocked cells to its size class (sides of 32 "
+                   "or 64 cells): maps of one class share compiled programs (results are "
+                   "the map's, but not seed for seed those of the unpadded map)")
 
 
 class _Parser(argparse.ArgumentParser):
@@ -786,6 +792,7 @@ def build_parser() -> argparse.ArgumentParser:
                    "population.size; not the key population.capacity, the cells of a "
                    "path); a run's random numbers depend on it: give a DOE's or sweep's "
                    "population_capacity to repeat one of its points bit for bit")
+    p.add_argument("--size-class", action="store_true", help=SIZE_CLASS_HELP)
     p.add_argument("--json", metavar="OUT", help="write every run as JSON")
     p.add_argument("--plot", metavar="OUT.png", help="plot the map, best paths and convergence")
     p.add_argument("--smooth", action="store_true",
@@ -870,6 +877,7 @@ def build_parser() -> argparse.ArgumentParser:
     p.add_argument("--test", default="mannwhitneyu",
                    help="mannwhitneyu (default; independent samples) or wilcoxon (paired "
                    "by seed; only when the presets share random numbers)")
+    p.add_argument("--size-class", action="store_true", help=SIZE_CLASS_HELP)
     p.add_argument("--generations", type=int, help="override every preset's generations")
     p.add_argument("--set", action="append", metavar="KEY=VALUE",
                    help="override a configuration key in every preset")
@@ -908,6 +916,9 @@ def build_parser() -> argparse.ArgumentParser:
     p.add_argument("--corner-rule", default=None, metavar="RULE",
                    help=f"one of {', '.join(CORNER_RULES)} (default: strict on the open maps, "
                    "a named map's own)")
+    p.add_argument("--size-class", action="store_true",
+                   help="compile the size classes' programs (for runs with --size-class): "
+                   "--sizes 32,64 then serve every map up to 64 x 64")
     add_parallel_arguments(p)
     p.set_defaults(func=cmd_warmup)
 

@@ -573,7 +573,7 @@ def compare(
         metric, metrics, test, alpha: see :func:`compare_results`.
         progress: optional callback, called with the label before each preset runs.
         common_options: passed to every :func:`jaxga.api.run` call (``generations``,
-            ``corner_rule``, ``variant``, ``sets``, overrides such as
+            ``corner_rule``, ``variant``, ``sets``, ``size_class``, overrides such as
             ``population__size=10``); per-preset overrides win over them. A common
             configuration key that a preset never reads (``crossover.probability`` for
             AGACD, whose rates are adaptive) is left out of that preset's run, where it

@@ -12,6 +12,7 @@ import sys
 from pathlib import Path
 
 import jax
+import jax.numpy as jnp
 import numpy as np
 import optax
 import pytest
@@ -20,20 +21,31 @@ from jaxga import api, engine
 from jaxga.api import executables, programs
 from jaxga.config import registry
 from jaxga.core.errors import ParameterError
+from jaxga.core.paths import is_feasible
 from jaxga.engine.maptables import with_tables
 from jaxga.maps.generators import random_map
 from jaxga.operators import schedules
 from jaxga.operators.guide import with_guide
+from jaxga.reference.optima import shortest_path_np
 
 ROOT = Path(__file__).resolve().parents[1]
 
-# A configuration no other test file uses, so that the first call here compiles.
-OPTIONS = dict(population__size=7, init__max_tries=30, crossover__probability=0.85)
+# A configuration no other test file uses, so that the first call here compiles; its path
+# capacity is the 32 x 32 size class's, so that the map padded to its class runs with the
+# capacity of the unpadded one (test_maps_of_one_size_class_run_one_program_set).
+OPTIONS = dict(population__size=7, init__max_tries=30, crossover__probability=0.85,
+               population__capacity=160)
 
 
 @pytest.fixture(scope="module")
 def grid():
     return random_map(11, 11, 0.2, 5, corner_rule="free")
+
+
+@pytest.fixture(scope="module")
+def reference(grid):
+    """Seeds 0-69 over 50 generations as the engine computes them without the API."""
+    return unpadded(grid, range(70), 50)
 
 
 @pytest.fixture()
@@ -86,7 +98,8 @@ def assert_same_runs(result, rows, ref, ref_hist):
         np.testing.assert_array_equal(result.history[h], ref_hist[h][rows])
 
 
-def test_10_20_and_30_seeds_and_50_or_300_generations_run_one_program_set(grid, compiled):
+def test_10_20_and_30_seeds_and_50_or_300_generations_run_one_program_set(grid, compiled,
+                                                                         reference):
     """Must show (issue 41): runs of 10, 20 and 30 seeds, then of 50 and 300 generations
     and 3 seeds compile init, evolve and finish once; every seed's result equals its
     unpadded run (a 50-generation run and the first 50 generations of a 300-generation
@@ -94,7 +107,7 @@ def test_10_20_and_30_seeds_and_50_or_300_generations_run_one_program_set(grid, 
     runs = {n: api.run("sga", grid, seeds=n, generations=50, **OPTIONS) for n in (10, 20, 30)}
     long = api.run("sga", grid, seeds=3, generations=300, **OPTIONS)
     assert sorted(compiled) == ["evolve", "finish", "init"]
-    ref, ref_hist = unpadded(grid, range(30), 50)
+    ref, ref_hist = reference
     for n, r in runs.items():
         assert_same_runs(r, slice(0, n), ref, ref_hist)
     assert (runs[30].success.sum() >= 25) and np.isfinite(runs[30].length).any()
@@ -103,17 +116,20 @@ def test_10_20_and_30_seeds_and_50_or_300_generations_run_one_program_set(grid, 
     assert long.history["best"].shape == (3, 300)
 
 
-def test_more_runs_than_the_largest_program_are_several_calls_of_it(grid, compiled):
+def test_more_runs_than_the_largest_program_are_several_calls_of_it(grid, compiled,
+                                                                   reference):
     """70 seeds on one device are 3 calls of the 32-run program (the last padded), with
     the results of the unpadded runs; 7 generations are one call of the 25-generation
     chunk that runs 7 of them."""
     n_dev = jax.local_device_count()
     assert api.run_layout(70, n_dev) == (32, math.ceil(70 / n_dev / 32))
-    r = api.run("sga", grid, seeds=70, generations=7, **OPTIONS)
+    r = api.run("sga", grid, seeds=70, generations=50, **OPTIONS)
     assert compiled.count("evolve") <= 1  # the 32-run programs (of the test above)
-    ref, ref_hist = unpadded(grid, range(70), 7)
-    assert_same_runs(r, slice(0, 70), ref, ref_hist)
-    assert r.history["best"].shape == (70, 7)
+    assert_same_runs(r, slice(0, 70), *reference)
+    short = api.run("sga", grid, seeds=70, generations=7, **OPTIONS)
+    assert short.history["best"].shape == (70, 7)
+    for h in ("best", "mean", "std"):
+        np.testing.assert_array_equal(short.history[h], reference[1][h][:, :7])
 
 
 def test_a_smaller_call_reuses_a_larger_compiled_program(grid, compiled):
@@ -121,6 +137,41 @@ def test_a_smaller_call_reuses_a_larger_compiled_program(grid, compiled):
     compiled.clear()
     r = api.run("sga", grid, seeds=[4, 9], generations=5, **OPTIONS)
     assert compiled == [] and r.timing["compile_s"] < 1.0
+
+
+def _reachable_map(size: int, seed: int):
+    while True:
+        grid = random_map(size, size, 0.2, seed, corner_rule="free")
+        if shortest_path_np(grid.blocked_np(), grid.start_xy, grid.goal_xy, "free").found:
+            return grid
+        seed += 1000
+
+
+def test_maps_of_one_size_class_run_one_program_set(grid, compiled, reference):
+    """Must show (issue 41): with ``size_class`` a 20 x 20, a 25 x 25 and an 11 x 11 map
+    (all of the 32 x 32 class) compile init, evolve and finish once; every path is a
+    feasible path on its own map, reported in its own cells; seeds repeat exactly; and
+    SGA's draws do not depend on the map's width, so each seed of the padded 11 x 11 map
+    equals its unpadded run bit for bit (the configuration's capacity is the class's)."""
+    maps = [_reachable_map(20, 3), _reachable_map(25, 4), grid]
+    runs = [api.run("sga", g, seeds=10, generations=50, size_class=True, **OPTIONS)
+            for g in maps]
+    assert sorted(compiled) == ["evolve", "finish", "init"]
+    for g, r in zip(maps, runs):
+        assert r.success.sum() >= 8
+        assert r.width == g.width and r.start == g.start_xy and r.goal == g.goal_xy
+        for i in np.flatnonzero(r.success):
+            assert bool(is_feasible(g, jnp.asarray(r.cells[i]), jnp.int32(r.n_cells[i])))
+            assert r.cells[i].max() < g.n_cells and r.length[i] >= r.optimum - 1e-4
+    again = api.run("sga", maps[1], seeds=[3, 7], generations=50, size_class=True, **OPTIONS)
+    np.testing.assert_array_equal(again.cells, runs[1].cells[[3, 7]])
+    assert sorted(compiled) == ["evolve", "finish", "init"]
+    assert_same_runs(runs[2], slice(0, 10), *reference)
+
+
+def test_size_class_must_be_a_bool(grid):
+    with pytest.raises(ParameterError, match="size_class must be True or False"):
+        api.run("sga", grid, seeds=1, size_class="yes", **OPTIONS)
 
 
 @pytest.mark.parametrize("n_runs, n_devices, cells, have, want", [
@@ -171,7 +222,8 @@ from jaxga.maps.generators import random_map
 if sys.argv[1] == "read":  # tracing would call these
     engine.evolution.generation = engine.evolution.init_state = None
 r = api.run("sga", random_map(11, 11, 0.2, 5, corner_rule="free"), seeds=6, generations=9,
-            population__size=7, init__max_tries=30, crossover__probability=0.85)
+            population__size=7, init__max_tries=30, crossover__probability=0.85,
+            population__capacity=160)
 print(json.dumps({"cells": np.asarray(r.cells).tolist(),
                   "best": np.asarray(r.history["best"]).tolist(),
                   "compile_s": r.timing["compile_s"]}))
@@ -234,7 +286,7 @@ def test_a_stored_program_that_fails_to_run_is_forgotten_and_compiled_again(
     crash."""
     from jax.errors import JaxRuntimeError
 
-    want = api.run("sga", grid, seeds=3, generations=4, **OPTIONS)
+    want = api.run("sga", grid, seeds=12, generations=4, **OPTIONS)  # programs compiled above
     api.clear_compiled()
     served = set()
 
@@ -250,7 +302,7 @@ def test_a_stored_program_that_fails_to_run_is_forgotten_and_compiled_again(
         return broken
 
     monkeypatch.setattr(executables, "load", load_broken_once)
-    got = api.run("sga", grid, seeds=3, generations=4, **OPTIONS)
+    got = api.run("sga", grid, seeds=12, generations=4, **OPTIONS)
     assert served  # the broken programs were served, then forgotten
     np.testing.assert_array_equal(got.cells, want.cells)
     np.testing.assert_array_equal(got.history["best"], want.history["best"])

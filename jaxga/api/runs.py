@@ -46,6 +46,7 @@ from jaxga.api.programs import (
 )
 from jaxga.api.result import Result
 from jaxga.api.seeds import seed_list, seed_sharding
+from jaxga.api.size_classes import class_capacity, map_cells, pad_to_class
 from jaxga.config.presets import as_sets, load_preset, parse_set
 from jaxga.config.schema import MAP_RULE, SCHEMA, Config, flatten, freeze
 from jaxga.core.errors import ParameterError
@@ -76,8 +77,10 @@ WAYPOINT_FITNESS = ("this configuration evolves waypoint paths; the exact fitnes
 """Why a run of waypoint paths (AGACD, Zhang's eq. 5 deletions) has no fitness gap."""
 
 
-def _check_call_options(progress, chunks) -> None:
+def _check_call_options(progress, chunks, size_class=False) -> None:
     """The options of :func:`run` and :func:`sweep` that do not reach the configuration."""
+    if not isinstance(size_class, (bool, np.bool_)):
+        raise ParameterError(f"size_class must be True or False, got {size_class!r}")
     if progress is not None and not callable(progress):
         raise ParameterError(f"progress must be a callable (stage, fraction), got "
                              f"{progress!r}")
@@ -212,6 +215,7 @@ def sweep(
     progress: Callable[[str, float], None] | None = None,
     chunks: int = 1,
     population_capacity: int | None = None,
+    size_class: bool = False,
     **overrides: Any,
 ) -> list[Result]:
     """Run every point of a hyper-parameter sweep with every seed, in ONE compiled call.
@@ -230,6 +234,7 @@ def sweep(
     capacity. Results depend on it, so a sweep split into several calls (``jaxga.doe``'s
     resumable blocks) passes the largest size of the WHOLE sweep to every call to get the
     same results as one call. It must be at least every point's ``population.size``.
+    ``size_class`` as in :func:`run`.
     The runs are split over this process's devices and, after
     :func:`jaxga.api.parallel.initialize`, over several processes: each computes its share and
     every process returns the whole, identical result (:mod:`jaxga.api.parallel`; a lost
@@ -239,7 +244,8 @@ def sweep(
     args = (preset, grid, points, seeds)
     options = dict(generations=generations, corner_rule=corner_rule, variant=variant,
                    sets=sets, progress=progress, chunks=chunks,
-                   population_capacity=population_capacity, **overrides)
+                   population_capacity=population_capacity, size_class=size_class,
+                   **overrides)
     while True:
         try:
             return _sweep(*args, **options)
@@ -253,11 +259,11 @@ def sweep(
 
 
 def _sweep(preset, grid, points, seeds, *, generations, corner_rule, variant, sets,
-           progress, chunks, population_capacity, **overrides) -> list[Result]:
+           progress, chunks, population_capacity, size_class, **overrides) -> list[Result]:
     """:func:`sweep`'s work."""
     t_start = time.perf_counter()
     _check_points(points)
-    _check_call_options(progress, chunks)
+    _check_call_options(progress, chunks, size_class)
     if chunks != 1:
         warnings.warn("chunks is ignored: the generations run in compiled chunks of "
                       f"{GENERATION_CHUNK} and progress is reported after each",
@@ -272,17 +278,24 @@ def _sweep(preset, grid, points, seeds, *, generations, corner_rule, variant, se
             n * len(configs), NO_PATH_BYTES_PER_RUN, "for their results"))
         return [no_path_result(c, map_name, grid, seed_arr, build(c, grid)[0], octile.reason,
                                time.perf_counter() - t_start, capacity) for c in configs]
+    # the programs run on the map padded to its size class (decision 029), if asked
+    map_grid, grid, build_config = grid, grid, config.override({"population.size": capacity})
+    if size_class:
+        grid = pad_to_class(map_grid)
+        if not int(config["population.capacity"]):
+            build_config = build_config.override(
+                {"population.capacity": class_capacity(map_grid)})
     if uses_guide(config):  # the exact distance fields the field initialiser steers by
         grid = with_guide(grid)
     grid = with_tables(grid)  # per-map tables, once per run rather than per generation
     # the capacity is the largest size swept, also when it is below the preset's size
-    algo, _ = build(config.override({"population.size": capacity}), grid)
+    algo, _ = build(build_config, grid)
     per_point = [default_params(c, algo.islands) for c in configs]
     # The exact optimum of each point's own fitness, once per distinct weight set (points
     # may sweep the weights). It covers 8-connected paths: no bound for waypoint paths.
     fit_keys = [(m, tuple(sorted(w.items()))) for m, w in map(fitness_weights, configs)]
     fit_opts = {k: (FitnessOptimum(False, k[0], math.nan, reason=WAYPOINT_FITNESS)
-                    if algo.waypoints else fitness_optimum(grid, k[0], **dict(k[1])))
+                    if algo.waypoints else fitness_optimum(map_grid, k[0], **dict(k[1])))
                 for k in dict.fromkeys(fit_keys)}
     point_opt = [fit_opts[k] for k in fit_keys]
     n_points = len(configs)
@@ -319,7 +332,7 @@ def _sweep(preset, grid, points, seeds, *, generations, corner_rule, variant, se
     from_fallback = fallback.reshape(n_total, -1).sum(axis=1)
     warn_unfilled(unf, rate, algo.population * algo.islands, config)
     common = dict(config=config, configs=configs, points=points, map_name=map_name,
-                  grid=grid, seed_arr=seed_arr, algo=algo, octile=octile,
+                  grid=map_grid, seed_arr=seed_arr, algo=algo, octile=octile,
                   any_angle=any_angle, point_opt=point_opt, rate=rate, unfilled=unf,
                   from_fallback=from_fallback, initial=initial)
     if not started.any():  # nothing can succeed: no evolution, no post-optimisation
@@ -346,6 +359,8 @@ def _sweep(preset, grid, points, seeds, *, generations, corner_rule, variant, se
               "post_s": post_s, "total_s": time.perf_counter() - t_start}
     out = jax.tree_util.tree_map(lambda *parts: runs.joined(parts), *outs)
     host, hist = parallel.allgather_runs((out, history))
+    for key in ("cells", "raw_cells"):  # reported on the map, not its padding
+        host[key] = map_cells(host[key], grid.width, map_grid.width)
     timing["total_s"] = time.perf_counter() - t_start
     return _point_results(host, hist, started=started, timing=timing, **common)
 
@@ -548,6 +563,7 @@ def run(
     progress: Callable[[str, float], None] | None = None,
     chunks: int = 1,
     population_capacity: int | None = None,
+    size_class: bool = False,
     **overrides: Any,
 ) -> Result:
     """Run ``preset`` on ``grid`` once per seed, all seeds in one compiled call.
@@ -585,6 +601,13 @@ def run(
             point of a :func:`sweep` or a DOE over population sizes ran with the largest
             size swept as its capacity (``Result.population_capacity``): pass that to
             repeat its runs bit for bit.
+        size_class: run on the map padded with blocked cells to its size class
+            (:mod:`jaxga.api.size_classes`: sides of 32 or 64 cells, and the class's
+            path capacity), so that all maps of a class share compiled programs: a
+            20 x 20 and a 25 x 25 map compile once. Results are reported on the map
+            itself; they differ seed by seed from the unpadded runs (the cell indices
+            and some operators' array sizes change with the shape) but not in what they
+            are: feasible paths on the map. Maps over 64 cells a side are not padded.
 
     Returns:
         A :class:`Result`. Seeds that found no feasible path have ``success`` False and
@@ -594,17 +617,19 @@ def run(
     The compiled programs are cached per algorithm and map shape and serve any number
     of generations and of seeds (runs padded to 4, or 32 per device, more as several
     calls: :mod:`jaxga.api.programs`): calling again with other seeds, another number
-    of generations, another map of the same size or other dynamic values
+    of generations, another map of the same size (with ``size_class``, of the same
+    size class) or other dynamic values
     (``crossover__probability=...``) does not compile again. For many hyper-parameter
     values in one call use :func:`sweep`.
     """
     return sweep(preset, grid, [{}], seeds, generations=generations,
                  corner_rule=corner_rule, variant=variant, sets=sets, progress=progress,
-                 chunks=chunks, population_capacity=population_capacity, **overrides)[0]
+                 chunks=chunks, population_capacity=population_capacity,
+                 size_class=size_class, **overrides)[0]
 
 
 RUN_OPTIONS = ("generations", "corner_rule", "variant", "sets", "progress", "chunks",
-               "population_capacity")
+               "population_capacity", "size_class")
 """Keyword arguments of :func:`run` (besides ``seeds``) that are not configuration keys."""
 
 
@@ -616,7 +641,8 @@ def check_run(preset: str | Config, grid: Grid | str, **options: Any) -> Config:
     checks every preset with it before the first one runs."""
     overrides = dict(options)
     named = {k: overrides.pop(k) for k in RUN_OPTIONS if k in overrides}
-    _check_call_options(named.get("progress"), named.get("chunks", 1))
+    _check_call_options(named.get("progress"), named.get("chunks", 1),
+                        named.get("size_class", False))
     config, grid, _ = load_problem(preset, grid, named.get("corner_rule"), named.get("variant"),
                                    named.get("sets", ()), overrides, named.get("generations"))
     (config,) = _point_configs(config, [{}])

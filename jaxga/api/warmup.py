@@ -44,6 +44,7 @@ def warmup(
     *,
     seeds: Sequence[int] | None = None,
     corner_rule: str | None = None,
+    size_class: bool = False,
     report: Callable[[dict[str, Any]], None] | None = None,
 ) -> list[dict[str, Any]]:
     """Compile every program set ``presets`` x ``maps`` x ``runs`` needs (one generation
@@ -58,6 +59,10 @@ def warmup(
             :func:`jaxga.api.programs.run_layout`), compiled smallest first.
         corner_rule: the corner rule of every map (default: sizes strict, named maps
             their own, :func:`jaxga.maps.default_corner_rule`).
+        size_class: compile the programs of runs with ``size_class=True``
+            (:mod:`jaxga.api.size_classes`): the maps' size classes, so that sizes 32 and
+            64 serve every map up to 64 x 64 whose problem fits its class's path
+            capacity.
         report: called with each row as it is done.
 
     The programs are stored whole (:mod:`jaxga.api.executables`) when XLA compiles them;
@@ -88,7 +93,8 @@ def warmup(
             for count in counts:  # smallest first: a larger one would be reused
                 t0 = time.perf_counter()
                 r = run(preset, grid, seeds=count, generations=1,
-                        corner_rule=None if isinstance(m, int | np.integer) else corner_rule)
+                        corner_rule=None if isinstance(m, int | np.integer) else corner_rule,
+                        size_class=size_class)
                 row = {"preset": preset, "map": str(name), "seeds": count,
                        "compile_s": r.timing["compile_s"],
                        "total_s": time.perf_counter() - t0}

@@ -84,6 +84,7 @@ class Grid:
         corner_rule: ``"free"``, ``"no_squeeze"`` or ``"strict"`` (static).
         guide: the exact distance fields of :mod:`jaxga.operators.guide`, or None.
         tables: the per-map lookup tables of :mod:`jaxga.engine.maptables`, or None.
+        outside: the padding cells of a map padded to its size class, or None.
 
     Build grids with :meth:`Grid.create` (or a loader in :mod:`jaxga.maps`), which checks
     shapes, dtypes and that the endpoints lie on the map. Whether the endpoints are free
@@ -105,6 +106,13 @@ class Grid:
     generation by every operator that reads them (:func:`jaxga.engine.maptables.with_tables`).
     They belong to this map and corner rule: :meth:`replace` and :meth:`validated` drop
     them."""
+
+    outside: Any = None
+    """``bool[H, W]`` or None: cells that are not part of the map but padding around it
+    (:func:`jaxga.api.size_classes.pad_to_class`: a map padded to its size class so that
+    maps of one class share compiled programs). They are blocked, so no path enters
+    them, and they count as off the map where that differs from an obstacle: the safety
+    and clearance measures of :mod:`jaxga.core.objectives` (:func:`proximity_obstacles`)."""
 
     # ----------------------------------------------------------------- construction
     @classmethod
@@ -229,6 +237,16 @@ class Grid:
             )
         except Exception:  # traced values inside jit
             return f"Grid(shape={self.blocked.shape}, corner_rule={self.corner_rule!r})"
+
+
+def proximity_obstacles(grid: Grid, border_blocked: bool) -> jax.Array:
+    """``bool[H, W]``: the cells that count as obstacles for safety and clearance
+    measures: the blocked cells of the map, and the padding cells (``grid.outside``) only
+    when cells off the map count as obstacles (``border_blocked``), as off-map cells
+    do."""
+    if grid.outside is None:
+        return grid.blocked
+    return jnp.where(grid.outside, border_blocked, grid.blocked)
 
 
 def as_integer(value) -> int:

@@ -65,7 +65,7 @@ import numpy as np
 
 from jaxga._batching.numerics import ordered_sum
 from jaxga.core.errors import ParameterError
-from jaxga.core.grid import Grid
+from jaxga.core.grid import Grid, proximity_obstacles
 
 __all__ = [
     "AGACD_WEIGHTS",
@@ -450,7 +450,8 @@ def imga_safety(
 
 
 def _imga_safety(grid: Grid, g: _Geometry, penalty: _Scalar, border_blocked: bool) -> jax.Array:
-    near = _near_obstacle(grid.blocked, border_blocked).reshape(-1)[g.cells]
+    obstacles = proximity_obstacles(grid, border_blocked)
+    near = _near_obstacle(obstacles, border_blocked).reshape(-1)[g.cells]
     return _f32(penalty) * jnp.sum(near & g.node, dtype=FLOAT)
 
 
@@ -583,7 +584,8 @@ def _agacd_safety(
         raise ParameterError(
             f"agacd_safety method must be auto, bits, table or sort, got {method!r}"
         )
-    blocked_ext = jnp.pad(grid.blocked, 1, constant_values=border_blocked)
+    blocked_ext = jnp.pad(proximity_obstacles(grid, border_blocked), 1,
+                          constant_values=border_blocked)
     if method == "table":
         count = _count_table(g.x, g.y, g.node, blocked_ext)
     elif method == "sort":
@@ -656,9 +658,12 @@ def _segment_box_clearance(
     return jnp.min(dist, initial=jnp.inf), jnp.any(touch)
 
 
-def _clearance_per_segment(grid: Grid, g: _Geometry) -> tuple[jax.Array, jax.Array]:
-    """``(distance float32[S], touches bool[S])`` of every segment (a node if L = 1)."""
+def _clearance_per_segment(grid: Grid, g: _Geometry,
+                           border_blocked: bool = False) -> tuple[jax.Array, jax.Array]:
+    """``(distance float32[S], touches bool[S])`` of every segment (a node if L = 1), to
+    the cells :func:`jaxga.core.grid.proximity_obstacles` counts."""
     h, w = _check_grid(grid)
+    obstacles = proximity_obstacles(grid, border_blocked)
     if g.cells.shape[0] == 1:
         a = b = (g.x, g.y)
     else:
@@ -666,7 +671,7 @@ def _clearance_per_segment(grid: Grid, g: _Geometry) -> tuple[jax.Array, jax.Arr
     batch = max(1, min(a[0].shape[0], (1 << 15) // (h * w)))
 
     def one(seg):
-        return _segment_box_clearance(*seg, grid.blocked)
+        return _segment_box_clearance(*seg, obstacles)
 
     dist, touch = jax.lax.map(one, (a[0], a[1], b[0], b[1]), batch_size=batch)
     return dist.astype(FLOAT), touch
@@ -674,7 +679,7 @@ def _clearance_per_segment(grid: Grid, g: _Geometry) -> tuple[jax.Array, jax.Arr
 
 def _min_clearance(grid: Grid, g: _Geometry, border_blocked: bool) -> jax.Array:
     h, w = grid.blocked.shape
-    dist, _ = _clearance_per_segment(grid, g)
+    dist, _ = _clearance_per_segment(grid, g, border_blocked)
     result = jnp.min(dist)  # padding segments are points on the polyline: harmless
     if border_blocked:
         xf, yf = g.x.astype(FLOAT), g.y.astype(FLOAT)

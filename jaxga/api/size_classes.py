@@ -1,0 +1,97 @@
+"""Map-size classes: maps padded with blocked cells so that maps of one class share programs.
+
+A compiled program is specialised to the map's shape and the path capacity (issue 41).
+With ``size_class=True`` (:func:`jaxga.run`, ``--size-class``) a map of up to
+:data:`MAX_CLASS_SIDE` cells a side is padded, on its top and right, to its class
+(:func:`class_shape`: each side rounded up to one of :data:`CLASS_SIDES`), and its path
+capacity is raised to the class's (:func:`class_capacity`), so that a 20 x 20 and a
+25 x 25 map run the same programs, and one warm-up of the class (``jaxga warmup
+--size-class``) serves every map in it.
+
+The padding keeps every cell's ``(x, y)``: the map is the bottom-left corner of the
+padded one. Padding cells are blocked (no path enters them) and marked as off the map
+(``Grid.outside``), so that the safety and clearance measures count them as they count
+the map's edge (:func:`jaxga.core.grid.proximity_obstacles`). Results are reported on
+the map itself: :func:`map_cells` turns the padded cell indices back into the map's.
+
+What changes with the padding, and why a run is not the unpadded run bit for bit: a cell
+index is ``y * W + x`` with the padded width, and operators whose draws or work limits
+depend on the map's shape (MPMGA's and IMGA's connection queues, Zhu's mutation radius,
+the number of anchor rows, the path capacity) draw from arrays of another size. Which
+seeds succeed and which paths they find then differ seed by seed; what is kept is
+feasibility on the map, the path lengths' distribution, and determinism per seed
+(``tests/test_size_classes.py``).
+"""
+
+from __future__ import annotations
+
+import dataclasses
+
+import jax.numpy as jnp
+import numpy as np
+
+from jaxga.core.grid import Grid
+from jaxga.engine.algorithm import capacity_class, default_capacity
+
+CLASS_SIDES: tuple[int, ...] = (32, 64)
+"""A padded side is the smallest of these holding the map's side."""
+
+MAX_CLASS_SIDE = CLASS_SIDES[-1]
+"""Maps with a side over this are not padded: on them a run's computation, not its
+compilation, is the waiting, and padding would add to it."""
+
+CAPACITY_PER_SIDE = 5
+"""A class's path capacity is this many times its longer side (160 cells for the 32
+class: the papers' 20 x 20 maps have 160; 320 for the 64 class: what a random 64 x 64
+map's 3 x optimal path needs). A problem needing more gets its own capacity."""
+
+
+def class_shape(height: int, width: int) -> tuple[int, int] | None:
+    """``(H, W)`` of the size class of an ``height x width`` map, or None when a side is
+    over :data:`MAX_CLASS_SIDE` (such maps keep their shape)."""
+    if max(height, width) > MAX_CLASS_SIDE:
+        return None
+    return (next(s for s in CLASS_SIDES if s >= height),
+            next(s for s in CLASS_SIDES if s >= width))
+
+
+def class_capacity(grid: Grid) -> int:
+    """The path capacity of ``grid``'s problem in its size class: the class's
+    (:data:`CAPACITY_PER_SIDE` times its longer side), or the problem's own
+    (:func:`jaxga.engine.algorithm.default_capacity`) when that is larger."""
+    shape = class_shape(grid.height, grid.width)
+    own = default_capacity(grid)
+    if shape is None:
+        return own
+    return max(own, capacity_class(CAPACITY_PER_SIDE * max(shape)))
+
+
+def pad_to_class(grid: Grid) -> Grid:
+    """``grid`` padded with blocked cells on its top and right to its size class
+    (:func:`class_shape`), the padding marked in ``Grid.outside``; the endpoints keep
+    their ``(x, y)``. A map already of a class shape gets an all-False ``outside`` (so
+    that it runs the class's programs); a map over :data:`MAX_CLASS_SIDE` is returned
+    unchanged. Tables and fields attached to ``grid`` are dropped (they belong to its
+    shape)."""
+    shape = class_shape(grid.height, grid.width)
+    if shape is None:
+        return grid
+    h, w = grid.shape
+    blocked = np.ones(shape, bool)
+    blocked[:h, :w] = grid.blocked_np()
+    outside = np.ones(shape, bool)
+    outside[:h, :w] = False
+    (sx, sy), (gx, gy) = grid.start_xy, grid.goal_xy
+    return dataclasses.replace(
+        grid, blocked=jnp.asarray(blocked), outside=jnp.asarray(outside),
+        start=jnp.int32(sy * shape[1] + sx), goal=jnp.int32(gy * shape[1] + gx),
+        guide=None, tables=None)
+
+
+def map_cells(cells: np.ndarray, padded_width: int, width: int) -> np.ndarray:
+    """Cell indices of a padded map (``y * padded_width + x``) as the map's own
+    (``y * width + x``); the same array when the widths agree."""
+    cells = np.asarray(cells)
+    if padded_width == width:
+        return cells
+    return ((cells // padded_width) * width + cells % padded_width).astype(cells.dtype)
