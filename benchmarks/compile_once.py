@@ -1,7 +1,7 @@
 """Compile once, run many: the waiting a user sees before results (issue 41's targets).
 
     python benchmarks/compile_once.py [--presets sga,imga,...] [--sizes 20,32,64]
-        [--devices N] [--no-write]
+        [--devices N] [--size-class] [--no-write]
 
 Three measurements, each in fresh processes on this machine:
 
@@ -22,6 +22,12 @@ Three measurements, each in fresh processes on this machine:
    seeds and 50 generations, then on another 20 x 20 map with 30 seeds and 300
    generations: the programs XLA compiles or reads for the second run. Target: 0.
 
+With ``--size-class`` (its own section of the results) every run pads its map to its
+size class (``jaxga.run(..., size_class=True)``, ``jaxga warmup --size-class``, default
+sizes 32,64: the two classes), measurement 1 is left out (the first command does not use
+classes), and the second run of measurement 3 is on a 25 x 25 map (the 20 x 20 map's
+class).
+
 Throughput (individual-generations per second, 1000 seeds) is ``benchmarks/speed.py``'s.
 """
 
@@ -29,6 +35,7 @@ from __future__ import annotations
 
 import argparse
 import json
+import math
 import os
 import subprocess
 import sys
@@ -49,6 +56,7 @@ CASES = [  # (map, seeds, generations)
     ("random:64", 30, 100),
     ("random:25", 10, 50),
 ]
+CLASS_CASES = [*CASES, ("random:50", 30, 100)]
 
 
 def grid_of(spec: str):
@@ -80,26 +88,34 @@ def child(spec: str) -> None:
     if job["kind"] == "case":
         import gc
 
+        from jaxga.api.size_classes import class_capacity, class_shape
         from jaxga.api.warmup import open_map
         from jaxga.engine import default_capacity
 
         grid = grid_of(job["map"])
-        r = api.run(job["preset"], grid, seeds=job["seeds"], generations=job["generations"])
+        r = api.run(job["preset"], grid, seeds=job["seeds"], generations=job["generations"],
+                    size_class=job["size_class"])
         stored = sum(p.read for p in gc.get_objects() if isinstance(p, api.programs.Programs))
         size = int(job["map"].split(":")[1])
+        if job["size_class"]:  # the open map of the class's size, as warmed
+            size = max(class_shape(size, size))
+            open_capacity = class_capacity(open_map(size))
+        else:
+            open_capacity = default_capacity(open_map(size))
         print(json.dumps({"compile_s": r.timing["compile_s"], "xla": len(compiled),
                           "loaded": len(loaded), "stored": stored,
-                          "capacity": r.path_capacity,
-                          "open_capacity": default_capacity(open_map(size)),
+                          "capacity": r.path_capacity, "shape": size,
+                          "open_capacity": open_capacity,
                           "success": float(r.success.mean())}))
         return
     # second run in one process
     a = load_map("classic_ga_gapp3_20x20")
-    b = grid_of("random:20").replace(corner_rule=a.corner_rule)
-    api.run(job["preset"], a, seeds=10, generations=50)
+    b = grid_of("random:25" if job["size_class"] else "random:20")
+    b = b.replace(corner_rule=a.corner_rule)
+    api.run(job["preset"], a, seeds=10, generations=50, size_class=job["size_class"])
     compiled.clear()
     loaded.clear()
-    r = api.run(job["preset"], b, seeds=30, generations=300)
+    r = api.run(job["preset"], b, seeds=30, generations=300, size_class=job["size_class"])
     print(json.dumps({"compile_s": r.timing["compile_s"], "xla": len(compiled),
                       "loaded": len(loaded)}))
 
@@ -127,7 +143,10 @@ def jaxga_command(args: list[str], cache: str, devices: int) -> float:
 def main() -> None:
     ap = argparse.ArgumentParser(description=__doc__)
     ap.add_argument("--presets", default=",".join((*PRESETS, "hybrid")))
-    ap.add_argument("--sizes", default="20,32,64")
+    ap.add_argument("--sizes", help="warm-up sizes (default 20,32,64; with --size-class "
+                    "32,64)")
+    ap.add_argument("--size-class", action="store_true",
+                    help="every run and the warm-up with size classes")
     ap.add_argument("--devices", type=int, default=os.cpu_count() or 1)
     ap.add_argument("--child")
     ap.add_argument("--no-write", action="store_true")
@@ -135,24 +154,26 @@ def main() -> None:
     if args.child:
         return child(args.child)
     presets = args.presets.split(",")
-
-    with tempfile.TemporaryDirectory(prefix="jaxga-first-") as cache:
-        first = jaxga_command(["run", "--preset", "iga_zhu", "--map",
-                               "classic_ga_gapp3_20x20", "--seeds", "100", "--quiet"],
-                              cache, args.devices)
-    print(f"first command, cold: {first:.1f} s", flush=True)
+    sc = args.size_class
+    args.sizes = args.sizes or ("32,64" if sc else "20,32,64")
+    first = math.nan
+    if not sc:
+        with tempfile.TemporaryDirectory(prefix="jaxga-first-") as cache:
+            first = jaxga_command(["run", "--preset", "iga_zhu", "--map",
+                                   "classic_ga_gapp3_20x20", "--seeds", "100", "--quiet"],
+                                  cache, args.devices)
+        print(f"first command, cold: {first:.1f} s", flush=True)
 
     warm_rows, second_rows = [], []
     worst = 0.0
     for preset in presets:
         with tempfile.TemporaryDirectory(prefix="jaxga-warm-") as cache:
-            warm_s = jaxga_command(["warmup", "--presets", preset, "--sizes", args.sizes],
-                                   cache, args.devices)
-            for m, seeds, gens in CASES:
+            warm_s = jaxga_command(["warmup", "--presets", preset, "--sizes", args.sizes,
+                                    *(["--size-class"] if sc else [])], cache, args.devices)
+            for m, seeds, gens in CLASS_CASES if sc else CASES:
                 out = in_child({"kind": "case", "preset": preset, "map": m, "seeds": seeds,
-                                "generations": gens}, cache, args.devices)
-                size = int(m.split(":")[1])
-                warmed = (str(size) in args.sizes.split(",")
+                                "generations": gens, "size_class": sc}, cache, args.devices)
+                warmed = (str(out["shape"]) in args.sizes.split(",")
                           and out["capacity"] == out["open_capacity"])
                 if warmed:
                     worst = max(worst, out["compile_s"])
@@ -162,10 +183,16 @@ def main() -> None:
                                   out["xla"]])
                 print(warm_rows[-1], flush=True)
         with tempfile.TemporaryDirectory(prefix="jaxga-second-") as cache:
-            out = in_child({"kind": "second", "preset": preset}, cache, args.devices)
+            out = in_child({"kind": "second", "preset": preset, "size_class": sc}, cache,
+                           args.devices)
         second_rows.append([preset, out["compile_s"], out["xla"], out["loaded"]])
         print(second_rows[-1], flush=True)
 
+    if sc:
+        body = size_class_body(args, warm_rows, worst, second_rows)
+        record("compile once, run many: size classes (benchmarks/compile_once.py "
+               "--size-class)", body, write=not args.no_write)
+        return
     body = (
         f"{args.devices} XLA host device(s) (the CLI's default: one per core). Targets: "
         "first command <= 20 s; after a warm-up, compile <= 2 s on any map up to 64 x 64 "
@@ -195,6 +222,30 @@ def main() -> None:
     )
     record("compile once, run many (benchmarks/compile_once.py)", body,
            write=not args.no_write)
+
+
+def size_class_body(args, warm_rows: list, worst: float, second_rows: list) -> str:
+    """The results section of a ``--size-class`` run."""
+    return (
+        f"{args.devices} XLA host device(s). Every run with `size_class=True` (the map "
+        "padded with blocked cells to its class: sides of 32 or 64 cells, and the class's "
+        "path capacity, 160 or 320, unless the problem needs more). Target: after a "
+        "warm-up, compile <= 2 s on any map up to 64 x 64 with any seed and generation "
+        "count; a second run in one process on another map of the class compiles "
+        "nothing.\n\n"
+        f"**After `jaxga warmup --presets P --sizes {args.sizes} --size-class`** (warm-up "
+        "seconds per preset), one fresh process per case; columns as in \"compile once, "
+        "run many\" (shape warmed = the map's class was warmed and its capacity is the "
+        "class's).\n\n"
+        + markdown_table(["preset", "warm-up s", "map", "seeds", "generations", "capacity",
+                          "shape warmed", "compile s", "stored", "JAX cache", "XLA"],
+                         warm_rows)
+        + f"\n\nLongest compile on a warmed shape: {worst:.2f} s.\n\n"
+        "**Second run in one process** (10 seeds x 50 generations on "
+        "`classic_ga_gapp3_20x20`, then 30 seeds x 300 generations on a random 25 x 25 "
+        "map, both with `size_class=True`): what the second run compiled or read.\n\n"
+        + markdown_table(["preset", "compile s", "XLA", "read"], second_rows)
+    )
 
 
 if __name__ == "__main__":

@@ -17,7 +17,7 @@ from jaxga.core.objectives import Metrics
 
 def unstarted_results(*, config, configs, points, map_name, grid, seed_arr, algo, octile,
                       any_angle, point_opt, rate, unfilled, from_fallback, initial,
-                      timing) -> list[Result]:
+                      timing, size_class) -> list[Result]:
     """The results of a sweep whose initialisation gave no run a path: every seed failed,
     each with its cause; nothing evolved (SPEC 10)."""
     n_seeds = len(seed_arr)
@@ -37,7 +37,7 @@ def unstarted_results(*, config, configs, points, map_name, grid, seed_arr, algo
             fitness_optimum_loop_free=point_opt[q].loop_free,
             fitness_optimum_reason="" if point_opt[q].found else point_opt[q].reason,
             init_fallback=from_fallback[sl], causes=causes, path_capacity=algo.capacity,
-            initial_fitness=initial[sl].astype(float)))
+            initial_fitness=initial[sl].astype(float), size_class=size_class))
     return results
 
 

@@ -117,6 +117,9 @@ class Result:
     path_capacity: int = 0
     """The cells a path can hold (``population.capacity``, or the automatic capacity of
     :func:`jaxga.engine.default_capacity`)."""
+    size_class: bool = False
+    """Whether the runs went on the map padded to its size class
+    (:mod:`jaxga.api.size_classes`): ``run(..., size_class=True)`` repeats them."""
 
     def path(self, i: int, raw: bool = False) -> list[tuple[int, int]] | None:
         """Seed ``i``'s best path as ``(x, y)`` cells (post-optimised unless ``raw``); None
@@ -270,7 +273,7 @@ class Result:
             "fitness_optimum_reason": self.fitness_optimum_reason,
             "timing": dict(self.timing), "population": self.population,
             "population_capacity": self.population_capacity,
-            "path_capacity": self.path_capacity,
+            "path_capacity": self.path_capacity, "size_class": self.size_class,
             "generations": self.generations,
             # every setting of the run (preset, file, --set and sweep point resolved)
             "config": None if self.config is None else self.config.as_dict(),

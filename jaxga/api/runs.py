@@ -334,7 +334,7 @@ def _sweep(preset, grid, points, seeds, *, generations, corner_rule, variant, se
     common = dict(config=config, configs=configs, points=points, map_name=map_name,
                   grid=map_grid, seed_arr=seed_arr, algo=algo, octile=octile,
                   any_angle=any_angle, point_opt=point_opt, rate=rate, unfilled=unf,
-                  from_fallback=from_fallback, initial=initial)
+                  from_fallback=from_fallback, initial=initial, size_class=size_class)
     if not started.any():  # nothing can succeed: no evolution, no post-optimisation
         report("compile", 1.0)
         timing = {"compile_s": compile_s, "init_s": init_s, "evolve_s": 0.0,
@@ -463,7 +463,7 @@ def _point_results(host: dict, hist: dict, *, config: Config, configs: Sequence[
                    seed_arr: np.ndarray, algo: Algorithm, octile: Any, any_angle: Any,
                    point_opt: Sequence[Any], rate: np.ndarray, unfilled: np.ndarray,
                    from_fallback: np.ndarray, initial: np.ndarray, started: np.ndarray,
-                   timing: dict) -> list[Result]:
+                   timing: dict, size_class: bool) -> list[Result]:
     """One :class:`Result` per point from the gathered outputs of all runs (run
     ``q * S + s`` is point ``q``, seed ``s``)."""
     n_seeds = len(seed_arr)
@@ -504,6 +504,7 @@ def _point_results(host: dict, hist: dict, *, config: Config, configs: Sequence[
             fitness_optimum_reason="" if point_opt[q].found else point_opt[q].reason,
             start=grid.start_xy, goal=grid.goal_xy, population_capacity=algo.population,
             init_fallback=from_fallback[sl], causes=causes, path_capacity=algo.capacity,
+            size_class=size_class,
         ))
     return results
 
