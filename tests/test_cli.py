@@ -251,6 +251,37 @@ def test_population_capacity_reaches_the_run(capsys, monkeypatch):
     assert "\n" not in err
 
 
+def test_size_class_reaches_run_compare_and_warmup(monkeypatch):
+    """--size-class of jaxga run, compare and warmup is passed on (False without it)."""
+    import jax
+
+    import jaxga.api
+    import jaxga.cli
+
+    seen = []
+
+    class Stop(Exception):
+        pass
+
+    def fake(*args, **kwargs):
+        seen.append(kwargs["size_class"])
+        raise Stop
+
+    monkeypatch.setattr(jaxga.api, "run", fake)
+    monkeypatch.setattr(jaxga.cli, "compare", fake)
+    monkeypatch.setattr(jaxga.cli, "warmup", fake)
+    monkeypatch.setattr(jax.config, "update", lambda *a: None)  # warmup's cache switch
+    commands = (["run", "--preset", "sga", "--map", "classic_ga_gapp3_20x20", "--quiet"],
+                ["compare", "--presets", "sga,imga", "--map", "classic_ga_gapp3_20x20",
+                 "--quiet"],
+                ["warmup", "--presets", "sga", "--sizes", "32"])
+    for argv in commands:
+        for flag in ([], ["--size-class"]):
+            with pytest.raises(Stop):
+                main([*argv, *flag])
+    assert seen == [False, True] * 3
+
+
 @pytest.mark.parametrize("option, name, words", [
     ("--plot", "out.xyz", "'xyz' is not an image format"),
     ("--plot", "missing/out.png", "does not exist"),

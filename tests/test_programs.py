@@ -174,6 +174,33 @@ def test_size_class_must_be_a_bool(grid):
         api.run("sga", grid, seeds=1, size_class="yes", **OPTIONS)
 
 
+def test_warmup_runs_each_program_size_once_per_preset_and_map(monkeypatch):
+    """``warmup`` runs every preset on every map once per program size (4 runs, then 32
+    per device: smallest first, as a larger one would be reused), one generation each,
+    with the size class asked for; a size is an open map, a name the map itself."""
+    from jaxga.api import warmup as warmup_module
+
+    calls = []
+
+    def fake_run(preset, grid, *, seeds, generations, corner_rule, size_class):
+        shape = grid.shape if hasattr(grid, "shape") else grid
+        if hasattr(grid, "shape"):
+            assert not grid.blocked_np().any() and grid.corner_rule == "strict"
+        calls.append((preset, shape, seeds, generations, corner_rule, size_class))
+        return type("R", (), {"timing": {"compile_s": 0.5}})()
+
+    monkeypatch.setattr(warmup_module, "run", fake_run)
+    rows = warmup_module.warmup(["sga", "imga"], [32, "classic_ga_gapp3_20x20"],
+                                size_class=True)
+    big = programs.RUNS_PER_DEVICE * jax.local_device_count()
+    assert calls == [(p, m, n, 1, None, True) for p in ("sga", "imga")
+                     for m in ((32, 32), "classic_ga_gapp3_20x20") for n in (4, big)]
+    assert [r["map"] for r in rows[:2]] == ["open 32 x 32"] * 2
+    assert all(r["compile_s"] == 0.5 for r in rows)
+    with pytest.raises(ParameterError, match="integer >= 2"):
+        warmup_module.warmup(["sga"], [1])
+
+
 @pytest.mark.parametrize("n_runs, n_devices, cells, have, want", [
     (1, 1, 0, (), (4, 1)), (4, 1, 0, (), (4, 1)), (5, 1, 0, (), (32, 1)),
     (30, 1, 0, (), (32, 1)), (33, 1, 0, (), (32, 2)), (1000, 1, 0, (), (32, 32)),
