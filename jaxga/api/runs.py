@@ -606,9 +606,10 @@ def run(
             (:mod:`jaxga.api.size_classes`: sides of 32 or 64 cells, and the class's
             path capacity), so that all maps of a class share compiled programs: a
             20 x 20 and a 25 x 25 map compile once. Results are reported on the map
-            itself; they differ seed by seed from the unpadded runs (the cell indices
-            and some operators' array sizes change with the shape) but not in what they
-            are: feasible paths on the map. Maps over 64 cells a side are not padded.
+            itself. Where an operator's arrays are sized by the map's shape (IMGA,
+            MPMGA, Zhu's IGA) or the capacity differs, they differ seed by seed from the
+            unpadded runs but not in what they are: feasible paths on the map, of the
+            same distribution. Maps over 64 cells a side are not padded.
 
     Returns:
         A :class:`Result`. Seeds that found no feasible path have ``success`` False and

@@ -14,13 +14,14 @@ padded one. Padding cells are blocked (no path enters them) and marked as off th
 the map's edge (:func:`jaxga.core.grid.proximity_obstacles`). Results are reported on
 the map itself: :func:`map_cells` turns the padded cell indices back into the map's.
 
-What changes with the padding, and why a run is not the unpadded run bit for bit: a cell
-index is ``y * W + x`` with the padded width, and operators whose draws or work limits
-depend on the map's shape (MPMGA's and IMGA's connection queues, Zhu's mutation radius,
-the number of anchor rows, the path capacity) draw from arrays of another size. Which
-seeds succeed and which paths they find then differ seed by seed; what is kept is
-feasibility on the map, the path lengths' distribution, and determinism per seed
-(``tests/test_size_classes.py``).
+What the padding changes: a cell index is ``y * W + x`` with the padded width inside the
+run, and operators whose draws or work limits depend on the map's shape (IMGA's and
+MPMGA's connection queues, MPMGA's anchor rows, Zhu's mutation radius and column
+crossover) and the path capacity (a small map's own can be below its class's) size their
+arrays by it. Such runs are other runs of the same method: they differ seed by seed from
+the unpadded ones, not in feasibility, success or the lengths' distribution
+(``benchmarks/size_classes.py``). The other presets' padded runs equal the unpadded ones
+seed for seed when the capacity is the same (``tests/test_programs.py``; decision 029).
 """
 
 from __future__ import annotations
