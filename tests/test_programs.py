@@ -305,6 +305,21 @@ def test_programs_with_a_users_operator_are_not_stored(grid):
         registry.unregister("mutation", "users_copy")
 
 
+def test_each_process_of_a_multi_process_run_reads_only_its_own_programs(grid, monkeypatch):
+    """In a run over several processes the programs of process 0 and process 1 have
+    different keys: a program addresses its own process's devices (read by another
+    process it returned arrays that process cannot fetch: tests/test_distributed.py)."""
+    config = api.check_run("sga", grid, **OPTIONS)
+    algo, _ = engine.build(config, grid)
+    args = ("init", algo, None, (), 8, jax.devices()[:1])
+    keys = []
+    for index in (0, 1):
+        monkeypatch.setattr(jax, "process_count", lambda: 2)
+        monkeypatch.setattr(jax, "process_index", lambda index=index: index)
+        keys.append(executables.program_key(*args))
+    assert None not in keys and keys[0] != keys[1]
+
+
 def test_a_stored_program_that_fails_to_run_is_forgotten_and_compiled_again(
         grid, monkeypatch):
     """A program read from the store that fails when it runs (an XLA:CPU program read

@@ -72,7 +72,8 @@ def test_the_padding_counts_as_off_the_map_for_safety_and_clearance():
             a = f(grid, cells, length, border_blocked=border)
             b = f(padded, padded_cells, length, border_blocked=border)
             assert float(a) == float(b), (f.__name__, border)
-    # hand values: the obstacle (1, 1) is 8-adjacent to no node; the edge is
+    # hand values: no node is 8-adjacent to the obstacle (1, 1), every node to the edge;
+    # the obstacle's square is 1.5 from the path, the edge 0.5
     assert float(objectives.imga_safety(padded, padded_cells, length)) == 0.0
     assert float(objectives.imga_safety(padded, padded_cells, length,
                                         border_blocked=True)) == 5.0 * len(xy)

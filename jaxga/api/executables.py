@@ -79,7 +79,10 @@ def program_key(name: str, algo: Any, grid_spec: Any, params_spec: Any, n_runs: 
     parts = (
         name, repr(algo), str(tree), repr(leaves),
         n_runs, settings, [(d.platform, d.device_kind, d.id) for d in devices],
-        jax.process_count(), jax.__version__, jaxlib.__version__, source_digest(),
+        # in a run over several processes each process's program addresses its own
+        # devices: one process must never read a program another one stored
+        jax.process_count(), jax.process_index(),
+        jax.__version__, jaxlib.__version__, source_digest(),
         threefry_unrolled(), os.environ.get("XLA_FLAGS", ""),
         jax.config.jax_enable_x64, jax.config.jax_default_prng_impl,
         jax.config.jax_threefry_partitionable,
