@@ -755,7 +755,8 @@ def cmd_warmup(args: argparse.Namespace) -> int:
 
 SIZE_CLASS_HELP = ("run on the map padded with blocked cells to its size class (sides of 32 "
                    "or 64 cells): maps of one class share compiled programs (results are "
-                   "the map's, but not seed for seed those of the unpadded map)")
+                   "the map's; imga, mpmga and iga_zhu, or a capacity that changes, give "
+                   "other runs than the unpadded map's: decision 029)")
 
 
 class _Parser(argparse.ArgumentParser):

@@ -241,9 +241,9 @@ class Grid:
 
 def proximity_obstacles(grid: Grid, border_blocked: bool) -> jax.Array:
     """``bool[H, W]``: the cells that count as obstacles for safety and clearance
-    measures: the blocked cells of the map, and the padding cells (``grid.outside``) only
-    when cells off the map count as obstacles (``border_blocked``), as off-map cells
-    do."""
+    measures (IMGA eq. 6, AGACD eq. 18-20, the clearance and tangency metrics of SPEC 3):
+    the blocked cells of the map, and the padding cells (``grid.outside``) only when
+    cells off the map count as obstacles (``border_blocked``), as off-map cells do."""
     if grid.outside is None:
         return grid.blocked
     return jnp.where(grid.outside, border_blocked, grid.blocked)
