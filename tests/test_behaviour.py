@@ -1,7 +1,8 @@
 """Each preset behaves as its paper says on a classic 20 x 20 map (issue 39, item 3).
 
-One run per preset at the paper's own settings (population, generations, rates), six
-seeds, the paper's initialiser alone (``init.fallback = none``), on a built-in classic map:
+One run per preset at the paper's own settings (population, generations, rates), four
+seeds (one call of the 4-run program: more seeds would run the 32-run one), the paper's
+initialiser alone (``init.fallback = none``), on a built-in classic map:
 ``classic_ga_gapp3_20x20`` (Zhu & Pan's Map 3 by its optimum) and, for imga,
 ``acoga_skolayat_G_20x20`` (the map whose optimum is IMGA Table 3's "literature [37]"
 length; on gapp3 IMGA's layered selection settles on the border path within the first
@@ -16,7 +17,7 @@ import pytest
 
 from jaxga import api
 
-SEEDS = 6
+SEEDS = 4
 MAPS = {"imga": "acoga_skolayat_G_20x20"}
 RUNS = {  # test id -> (preset, variant)
     "sga_agacd": ("sga", "agacd"),  # AGACD's BGA (Table 6 numbers, AGACD's fitness)
@@ -55,7 +56,7 @@ def test_the_generations_improve_on_the_initial_best(runs, name):
     r = runs(name)
     assert r.success.all(), name
     improved = r.fitness > r.initial_fitness
-    assert improved.sum() >= SEEDS - 2, (name, r.initial_fitness, r.fitness)
+    assert improved.sum() >= SEEDS - 1, (name, r.initial_fitness, r.fitness)
 
 
 def test_hybrid_starts_near_the_optimum_and_ends_within_one_percent(runs):
