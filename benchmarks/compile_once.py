@@ -211,14 +211,8 @@ def main() -> None:
         "warmed = a warmed size with the capacity of the warmed open map. Maps: `open N` "
         "= `jaxga.api.warmup.open_map(N)`, `random N` = `random_map(N, N, 0.2, seed=3)` "
         "corner to corner; corner rule strict.\n\n"
-        + markdown_table(["preset", "warm-up s", "map", "seeds", "generations", "capacity",
-                          "shape warmed", "compile s", "stored", "JAX cache", "XLA"],
-                         warm_rows)
-        + f"\n\nLongest compile on a warmed shape: {worst:.2f} s.\n\n"
-        "**Second run in one process** (10 seeds x 50 generations on "
-        "`classic_ga_gapp3_20x20`, then 30 seeds x 300 generations on another 20 x 20 map "
-        "under the same corner rule): what the second run compiled or read.\n\n"
-        + markdown_table(["preset", "compile s", "XLA", "read"], second_rows)
+        + tables(warm_rows, worst, second_rows, "another 20 x 20 map under the same corner "
+                 "rule")
     )
     record("compile once, run many (benchmarks/compile_once.py)", body,
            write=not args.no_write)
@@ -237,13 +231,20 @@ def size_class_body(args, warm_rows: list, worst: float, second_rows: list) -> s
         "seconds per preset), one fresh process per case; columns as in \"compile once, "
         "run many\" (shape warmed = the map's class was warmed and its capacity is the "
         "class's).\n\n"
-        + markdown_table(["preset", "warm-up s", "map", "seeds", "generations", "capacity",
-                          "shape warmed", "compile s", "stored", "JAX cache", "XLA"],
-                         warm_rows)
+        + tables(warm_rows, worst, second_rows, "a random 25 x 25 map, both with "
+                 "`size_class=True`")
+    )
+
+
+def tables(warm_rows: list, worst: float, second_rows: list, second_map: str) -> str:
+    """The warm-up table, the longest warmed compile and the second-run table."""
+    return (
+        markdown_table(["preset", "warm-up s", "map", "seeds", "generations", "capacity",
+                        "shape warmed", "compile s", "stored", "JAX cache", "XLA"], warm_rows)
         + f"\n\nLongest compile on a warmed shape: {worst:.2f} s.\n\n"
         "**Second run in one process** (10 seeds x 50 generations on "
-        "`classic_ga_gapp3_20x20`, then 30 seeds x 300 generations on a random 25 x 25 "
-        "map, both with `size_class=True`): what the second run compiled or read.\n\n"
+        f"`classic_ga_gapp3_20x20`, then 30 seeds x 300 generations on {second_map}): what "
+        "the second run compiled or read.\n\n"
         + markdown_table(["preset", "compile s", "XLA", "read"], second_rows)
     )
 
