@@ -26,7 +26,6 @@ from jaxga.engine.maptables import with_tables
 from jaxga.maps.generators import random_map
 from jaxga.operators import schedules
 from jaxga.operators.guide import with_guide
-from jaxga.reference.optima import shortest_path_np
 
 ROOT = Path(__file__).resolve().parents[1]
 
@@ -139,21 +138,14 @@ def test_a_smaller_call_reuses_a_larger_compiled_program(grid, compiled):
     assert compiled == [] and r.timing["compile_s"] < 1.0
 
 
-def _reachable_map(size: int, seed: int):
-    while True:
-        grid = random_map(size, size, 0.2, seed, corner_rule="free")
-        if shortest_path_np(grid.blocked_np(), grid.start_xy, grid.goal_xy, "free").found:
-            return grid
-        seed += 1000
-
-
 def test_maps_of_one_size_class_run_one_program_set(grid, compiled, reference):
     """Must show (issue 41): with ``size_class`` a 20 x 20, a 25 x 25 and an 11 x 11 map
     (all of the 32 x 32 class) compile init, evolve and finish once; every path is a
     feasible path on its own map, reported in its own cells; seeds repeat exactly; and
     SGA's draws do not depend on the map's width, so each seed of the padded 11 x 11 map
     equals its unpadded run bit for bit (the configuration's capacity is the class's)."""
-    maps = [_reachable_map(20, 3), _reachable_map(25, 4), grid]
+    maps = [random_map(n, n, 0.2, seed, corner_rule="free") for n, seed in ((20, 3), (25, 4))]
+    maps.append(grid)
     runs = [api.run("sga", g, seeds=10, generations=50, size_class=True, **OPTIONS)
             for g in maps]
     assert sorted(compiled) == ["evolve", "finish", "init"]

@@ -31,7 +31,7 @@ import dataclasses
 import jax.numpy as jnp
 import numpy as np
 
-from jaxga.core.grid import Grid
+from jaxga.core.grid import Grid, index_to_xy, xy_to_index
 from jaxga.engine.algorithm import capacity_class, default_capacity
 
 CLASS_SIDES: tuple[int, ...] = (32, 64)
@@ -77,11 +77,9 @@ def pad_to_class(grid: Grid) -> Grid:
     shape = class_shape(grid.height, grid.width)
     if shape is None:
         return grid
-    h, w = grid.shape
-    blocked = np.ones(shape, bool)
-    blocked[:h, :w] = grid.blocked_np()
-    outside = np.ones(shape, bool)
-    outside[:h, :w] = False
+    pad = ((0, shape[0] - grid.height), (0, shape[1] - grid.width))
+    blocked = np.pad(grid.blocked_np(), pad, constant_values=True)
+    outside = np.pad(np.zeros(grid.shape, bool), pad, constant_values=True)
     (sx, sy), (gx, gy) = grid.start_xy, grid.goal_xy
     return dataclasses.replace(
         grid, blocked=jnp.asarray(blocked), outside=jnp.asarray(outside),
@@ -91,8 +89,8 @@ def pad_to_class(grid: Grid) -> Grid:
 
 def map_cells(cells: np.ndarray, padded_width: int, width: int) -> np.ndarray:
     """Cell indices of a padded map (``y * padded_width + x``) as the map's own
-    (``y * width + x``); the same array when the widths agree."""
-    cells = np.asarray(cells)
+    (``y * width + x``, :func:`jaxga.core.grid.index_to_xy` then ``xy_to_index``); the
+    same array when the widths agree."""
     if padded_width == width:
-        return cells
-    return ((cells // padded_width) * width + cells % padded_width).astype(cells.dtype)
+        return np.asarray(cells)
+    return np.asarray(xy_to_index(index_to_xy(cells, padded_width), width))
