@@ -665,7 +665,7 @@ def test_a_map_over_the_size_limit_is_refused_from_its_header(tmp_path, monkeypa
         assert coarse.start_xy == (1, 2) and coarse.goal_xy == (299, 299)
         np.testing.assert_array_equal(coarse.blocked_np(),
                                       b.reshape(300, 2, 300, 2).any(axis=(1, 3)))
-    with pytest.raises(EndpointError, match=r"goal \(600, 0\) is off the 600 x 600 map"):
+    with pytest.raises(EndpointError, match=r"goal map cell \(600, 0\) is off the 600 x 600 map"):
         load_map(tmp_path / "big.txt", coarsen=2, goal=(600, 0))
     with pytest.raises(JaxgaError, match="more than jaxga plans on"):
         Grid.create(np.zeros((513, 512), bool))

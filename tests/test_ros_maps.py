@@ -156,8 +156,10 @@ def test_inflation_by_cells_or_by_the_robots_radius_in_metres(office):
     np.testing.assert_array_equal(by_metres.blocked_np(), inflate(plain, 1).blocked_np())
     np.testing.assert_array_equal(by_cells.blocked_np(), by_metres.blocked_np())
     assert by_cells.blocked_np().sum() > plain.blocked_np().sum()
-    with pytest.raises(EndpointError, match=r"the goal \(4, 0\) lies within 2 cells of an "
-                                            "obstacle"):
+    with pytest.raises(EndpointError, match=r"the goal, map cell \(4, 0\) at \(.*\) m, "
+                                            r"lies within 2 cells \(0.1 m\) of an obstacle"):
         load_map(office, start=(0, 0), goal=(4, 0), robot_radius=0.1)
+    # endpoints not given are not checked here: the map's default corners are no one's
+    assert load_map_info(office, robot_radius=0.1).grid.shape == plain.shape
     with pytest.raises(MapFormatError, match="not both"):
         load_map(office, inflate=1, robot_radius=0.05)

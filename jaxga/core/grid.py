@@ -226,7 +226,7 @@ class Grid:
         b = self.blocked_np()
         for name, (x, y) in (("start", self.start_xy), ("goal", self.goal_xy)):
             if b[y, x]:
-                raise EndpointError(f"{name} ({x}, {y}) is a blocked cell")
+                raise EndpointError(f"{name} cell ({x}, {y}) is blocked")
         return self
 
     def __repr__(self) -> str:  # pragma: no cover - cosmetic

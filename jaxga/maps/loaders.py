@@ -50,9 +50,11 @@ from jaxga.core.errors import EndpointError, MapFormatError
 from jaxga.core.grid import Grid, check_corner_rule, too_large
 from jaxga.maps import builtin
 from jaxga.maps.builtin import default_corner_rule
+from jaxga.maps.frame import MapFrame
 from jaxga.maps.preprocess import coarsen_blocked, inflate_blocked
 from jaxga.maps.ros import (
     RosMap,
+    cell_to_world,
     occupancy,
     read_ros_image,
     read_ros_yaml,
@@ -63,6 +65,7 @@ from jaxga.maps.ros import (
 __all__ = [
     "FORMATS",
     "MapInfo",
+    "MapLayers",
     "detect_format",
     "load_map",
     "load_map_info",
@@ -93,6 +96,33 @@ XY = tuple[int, int]
 
 
 @dataclasses.dataclass(frozen=True)
+class MapLayers:
+    """What each planning cell is, for plots: exclusive ``bool[H, W]`` masks (row 0 at the
+    bottom, the planning grid's shape), in the order of precedence of a coarsened cell.
+
+    Attributes:
+        wall: obstacles of the map file (a ROS map's occupied cells, and its graded ones
+            where unknown cells are blocked).
+        margin: cells blocked only by the inflation (``--inflate``, ``--robot-radius``).
+        unknown: a ROS map's unknown cells that are neither wall nor margin.
+        unknown_blocked: whether unknown cells are planned on as blocked.
+    """
+
+    wall: np.ndarray
+    margin: np.ndarray
+    unknown: np.ndarray
+    unknown_blocked: bool = True
+
+    def coarsened(self, factor: int) -> MapLayers:
+        """The layers of the map coarsened by ``factor``: a coarse cell is wall if any of
+        its cells is, else margin if any is, else unknown if any is."""
+        wall = coarsen_blocked(self.wall, factor)
+        margin = coarsen_blocked(self.margin, factor) & ~wall
+        unknown = coarsen_blocked(self.unknown, factor) & ~wall & ~margin
+        return MapLayers(wall, margin, unknown, self.unknown_blocked)
+
+
+@dataclasses.dataclass(frozen=True)
 class MapInfo:
     """A loaded map together with where it came from.
 
@@ -103,7 +133,10 @@ class MapInfo:
         format: one of :data:`FORMATS`.
         builtin: True when ``source`` was the name of a built-in map.
         grid: the loaded :class:`~jaxga.Grid`.
-        ros: a ROS map's metadata (resolution in metres per cell, origin), else None.
+        ros: a ROS map's metadata (resolution in metres per map cell, origin), else None.
+        frame: planning cells against the file's cells and metres (:mod:`jaxga.maps.frame`:
+            the coarsening factor, the resolution and origin of a ROS map).
+        layers: walls, inflation margin and unknown cells of the planning grid, for plots.
     """
 
     name: str
@@ -112,24 +145,37 @@ class MapInfo:
     builtin: bool
     grid: Grid
     ros: RosMap | None = None
+    frame: MapFrame | None = None
+    layers: MapLayers | None = None
 
     @property
     def resolution(self) -> float | None:
-        """Metres per cell (a ROS map's ``resolution``), None for the other formats."""
-        return None if self.ros is None else self.ros.resolution
+        """Metres per PLANNING cell (a ROS map's ``resolution`` times the coarsening
+        factor), None for the formats without one."""
+        return None if self.frame is None else self.frame.cell_size
 
 
 # --------------------------------------------------------------------------- public
-def map_name(source: Source) -> str:
-    """Short display name of a map source: a built-in name itself, else the file stem.
+GENERIC_STEMS = frozenset({"map"})
+"""File stems that name no map (``map_saver`` writes ``map.yaml`` and ``map.pgm``): such a
+map is named by its folder."""
 
-    ``map_name("den312d") == "den312d"``, ``map_name("maps/arena.map") == "arena"``.
-    Does not read the file.
+
+def map_name(source: Source) -> str:
+    """Short display name of a map source: a built-in name itself, else the file stem,
+    or the folder's name for a generic one (:data:`GENERIC_STEMS`).
+
+    ``map_name("den312d") == "den312d"``, ``map_name("maps/arena.map") == "arena"``,
+    ``map_name("worlds/office/map.yaml") == "office"``. Does not read the file.
     """
 
     if isinstance(source, str) and source in builtin.builtin_names():
         return source
-    return Path(os.fspath(source)).stem
+    path = Path(os.fspath(source))
+    if path.stem.lower() in GENERIC_STEMS:
+        folder = path.resolve().parent.name
+        return folder or path.stem
+    return path.stem
 
 
 def load_map(
@@ -234,12 +280,15 @@ def load_map_info(
         if message:
             raise MapFormatError(f"{label}: {message}")
     ros = None
+    unknown_cells = None
     if kind == "png":
         blocked = _parse_png(path, label, threshold)
         file_start = file_goal = None
     elif kind == "ros":
         ros = read_ros_yaml(path, label)
-        blocked = ros_blocked(occupancy(read_ros_image(ros, label), ros), unknown)
+        occ = occupancy(read_ros_image(ros, label), ros)
+        blocked = ros_blocked(occ, unknown)
+        unknown_cells = np.ascontiguousarray((occ == -1)[::-1])
         file_start = file_goal = None
     else:
         text = _decode(raw, label)
@@ -267,13 +316,34 @@ def load_map_info(
         except EndpointError as e:
             raise EndpointError(f"{label}: {e}") from None
         s, g = (cell, g) if name == "start" else (s, cell)
+    walls = blocked & ~unknown_cells if unknown_cells is not None else blocked
+    map_blocked = blocked
     blocked = _inflated(blocked, ros, inflate, robot_radius, s, g, label)
+    layers = MapLayers(
+        wall=walls, margin=blocked & ~map_blocked,
+        unknown=(np.zeros_like(blocked) if unknown_cells is None
+                 else unknown_cells & ~walls & ~(blocked & ~map_blocked)),
+        unknown_blocked=unknown != "free")
+    frame = MapFrame(map_shape=blocked.shape, coarsen=factor,
+                     resolution=None if ros is None else ros.resolution,
+                     origin=None if ros is None else ros.origin)
     if factor > 1:
         h0, w0 = blocked.shape
         for name, xy in (("start", s), ("goal", g)):
             if xy is not None and not (0 <= xy[0] < w0 and 0 <= xy[1] < h0):
-                raise EndpointError(f"{label}: {name} {tuple(xy)} is off the {w0} x {h0} map")
-        blocked = coarsen_blocked(blocked, factor)
+                raise EndpointError(f"{label}: {name} map cell {tuple(xy)} is off the "
+                                    f"{w0} x {h0} map")
+        coarse = coarsen_blocked(blocked, factor)
+        layers = layers.coarsened(factor)
+        for name, xy in (("start", s), ("goal", g)):
+            if xy is not None and coarse[xy[1] // factor, xy[0] // factor] \
+                    and not blocked[xy[1], xy[0]]:
+                raise EndpointError(
+                    f"{label}: the {name}, map cell {tuple(xy)}, lies in coarse cell "
+                    f"({xy[0] // factor}, {xy[1] // factor}) (map cells {factor} x {factor} "
+                    f"from ({xy[0] // factor * factor}, {xy[1] // factor * factor})), which "
+                    "holds an obstacle: coarsened, it is blocked")
+        blocked = coarse
         s = None if s is None else (s[0] // factor, s[1] // factor)
         g = None if g is None else (g[0] // factor, g[1] // factor)
     message = too_large(blocked.shape[1], blocked.shape[0])
@@ -283,8 +353,9 @@ def load_map_info(
         grid = Grid.create(blocked, start=s, goal=g, corner_rule=rule)
     except EndpointError as e:
         raise EndpointError(f"{label}: {e}") from None
-    name = str(source) if is_builtin else path.stem
-    return MapInfo(name=name, path=path, format=kind, builtin=is_builtin, grid=grid, ros=ros)
+    name = map_name(source)
+    return MapInfo(name=name, path=path, format=kind, builtin=is_builtin, grid=grid, ros=ros,
+                   frame=frame, layers=layers)
 
 
 def _inflated(blocked: np.ndarray, ros: RosMap | None, cells: float | None,
@@ -309,11 +380,16 @@ def _inflated(blocked: np.ndarray, ros: RosMap | None, cells: float | None,
         return blocked
     out = inflate_blocked(blocked, cells)
     h, w = blocked.shape
-    for name, xy in (("start", start or (0, 0)), ("goal", goal or (w - 1, h - 1))):
+    size = f"{cells:g} cells" + ("" if metres is None else f" ({metres:g} m)")
+    for name, xy in (("start", start), ("goal", goal)):  # the endpoints given, if any
+        if xy is None:
+            continue
         x, y = xy
         if 0 <= x < w and 0 <= y < h and out[y, x] and not blocked[y, x]:
-            raise EndpointError(f"{label}: the {name} {tuple(xy)} lies within {cells:g} "
-                                "cells of an obstacle: the inflated map blocks it")
+            where = "" if ros is None else " at ({:.3f}, {:.3f}) m".format(
+                *cell_to_world(ros, (x, y)))
+            raise EndpointError(f"{label}: the {name}, map cell ({x}, {y}){where}, lies "
+                                f"within {size} of an obstacle: the inflated map blocks it")
     return out
 
 

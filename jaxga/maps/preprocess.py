@@ -7,15 +7,15 @@ marked as an obstacle too (MPMGA §3 step 3) - :func:`fill_enclosed`. Both retur
 grids (the input is never changed) with the same start, goal and corner rule; they do not
 check that the endpoints stay free - :meth:`jaxga.Grid.check_endpoints` does.
 
-:func:`reachable` is a host-side (NumPy) flood fill over legal moves under the grid's
-corner rule, used by the map generators to guarantee connected endpoints.
+:func:`reachable` gives the cells reachable from a cell over legal moves under the grid's
+corner rule (host-side connected components), used by the map generators to guarantee
+connected endpoints and by re-planning.
 """
 
 from __future__ import annotations
 
 import math
 import numbers
-from collections import deque
 
 import numpy as np
 
@@ -65,36 +65,29 @@ def legal_moves(blocked: np.ndarray, corner_rule: str) -> np.ndarray:
 
 def reachable_np(blocked: np.ndarray, source: tuple[int, int], corner_rule: str) -> np.ndarray:
     """``bool[H, W]``: the free cells reachable from ``source`` by legal 8-connected moves
-    under ``corner_rule`` (breadth-first search in NumPy)."""
+    under ``corner_rule``.
+
+    A connected-component labelling (:func:`scipy.ndimage.label`), exact for every rule:
+    under ``"free"`` every diagonal step between free cells is legal, so the regions are
+    the 8-connected components; under ``"no_squeeze"`` and ``"strict"`` a legal diagonal
+    step has a free side cell, through which two orthogonal steps join the same cells, so
+    the regions are the 4-connected components."""
+    from scipy import ndimage
+
     b = np.asarray(blocked, dtype=bool)
-    h, w = b.shape
-    seen = np.zeros(h * w, dtype=bool)
     x0, y0 = source
     if b[y0, x0]:
-        return seen.reshape(h, w)
-    legal = legal_moves(b, corner_rule).reshape(len(DIRECTIONS), -1)
-    steps = [(d, int(dy) * w + int(dx)) for d, (dx, dy) in enumerate(DIRECTIONS)]
-    legal_lists = [legal[d].tolist() for d in range(len(DIRECTIONS))]
-    seen_l = [False] * (h * w)
-    p0 = y0 * w + x0
-    seen_l[p0] = True
-    queue = deque([p0])
-    while queue:
-        p = queue.popleft()
-        for d, off in steps:
-            if legal_lists[d][p]:
-                q = p + off
-                if not seen_l[q]:
-                    seen_l[q] = True
-                    queue.append(q)
-    return np.array(seen_l, dtype=bool).reshape(h, w)
+        return np.zeros(b.shape, bool)
+    structure = np.ones((3, 3), bool) if check_corner_rule(corner_rule) == "free" else None
+    labels, _ = ndimage.label(~b, structure=structure)
+    return labels == labels[y0, x0]
 
 
 def reachable(grid: Grid, source: tuple[int, int] | None = None) -> np.ndarray:
     """``bool[H, W]``: the cells reachable from ``source`` (default: the grid's start).
 
-    Breadth-first flood fill over legal 8-connected moves under ``grid.corner_rule``
-    (host NumPy, not for use under ``jit``). A blocked source reaches nothing (all
+    Legal 8-connected moves under ``grid.corner_rule`` (:func:`reachable_np`, host
+    NumPy and SciPy, not for use under ``jit``). A blocked source reaches nothing (all
     False); otherwise the source itself is True.
     """
     x, y = grid.start_xy if source is None else (int(source[0]), int(source[1]))

@@ -41,7 +41,8 @@ import numpy as np
 import yaml
 from PIL import Image, UnidentifiedImageError
 
-from jaxga.core.errors import EndpointError, MapFormatError
+from jaxga.core.errors import MapFormatError
+from jaxga.maps.frame import MapFrame
 
 __all__ = [
     "MODES",
@@ -212,15 +213,13 @@ def ros_blocked(occ: np.ndarray, unknown: str = "blocked") -> np.ndarray:
     return np.ascontiguousarray(blocked[::-1])
 
 
-def _rotation(yaw: float) -> np.ndarray:
-    c, s = math.cos(yaw), math.sin(yaw)
-    return np.array([[c, -s], [s, c]])
+def _frame(meta: RosMap, shape: tuple[int, int] = (0, 0)) -> MapFrame:
+    return MapFrame(map_shape=shape, resolution=meta.resolution, origin=meta.origin)
 
 
 def cell_to_world(meta: RosMap, cell: tuple[int, int]) -> tuple[float, float]:
     """The world coordinates (metres) of cell ``(x, y)``'s centre (``y = 0`` bottom)."""
-    local = (np.asarray(cell, float) + 0.5) * meta.resolution
-    x, y = np.asarray(meta.origin[:2]) + _rotation(meta.origin[2]) @ local
+    x, y = _frame(meta).to_world(np.asarray(cell, float))
     return float(x), float(y)
 
 
@@ -228,14 +227,5 @@ def world_to_cell(meta: RosMap, point: tuple[float, float], shape: tuple[int, in
                   what: str = "point") -> tuple[int, int]:
     """The cell ``(x, y)`` (``y = 0`` bottom) that holds world point ``point`` (metres);
     :class:`~jaxga.core.errors.EndpointError` naming ``what`` when it lies off the
-    ``shape = (H, W)`` map."""
-    local = _rotation(-meta.origin[2]) @ (np.asarray(point, float) - np.asarray(meta.origin[:2]))
-    x, y = (int(math.floor(v / meta.resolution + 1e-9)) for v in local)
-    h, w = shape
-    if not (0 <= x < w and 0 <= y < h):
-        x0, y0 = meta.origin[:2]
-        raise EndpointError(
-            f"{what} ({point[0]:g}, {point[1]:g}) m is off the map: it covers x "
-            f"{x0:g}..{x0 + w * meta.resolution:g} m, y {y0:g}..{y0 + h * meta.resolution:g} m"
-            + (" (before its yaw rotation)" if meta.origin[2] else ""))
-    return x, y
+    ``shape = (H, W)`` map (:meth:`jaxga.maps.frame.MapFrame.cell_of`)."""
+    return _frame(meta, shape).cell_of(point, shape, what)

@@ -1,0 +1,142 @@
+"""Where the planning grid lies: its cells against the map file's cells and the world frame.
+
+A map is planned on as loaded, or coarsened (``--coarsen K``: ``K x K`` cells of the file
+merged into one). Three frames describe the same point:
+
+* **planning cells**: the cells of the grid the GA runs on, ``(x, y)`` with ``y = 0`` the
+  bottom row (every :class:`~jaxga.api.result.Result` path is in these);
+* **map cells**: the map file's own cells, the same as the planning cells unless
+  coarsened; a planning cell ``(x, y)`` is the block of map cells ``[xK, xK + K) x [yK,
+  yK + K)`` and is named by the map cell holding its centre (:meth:`MapFrame.map_cell`);
+* **metres** (a ROS ``map_server`` map, which has a ``resolution`` and an ``origin``): a
+  planning cell is ``K x resolution`` metres a side, and the block of planning cell
+  ``(0, 0)`` starts at the origin, as the map file's first cell does, so the world
+  position of a point ``(x, y)`` in planning cells (centres at integer coordinates) is
+  ``origin + R(yaw) ((x + 1/2, y + 1/2) K resolution)`` (REP 103 and ``map_server``'s
+  origin: the lower-left corner of the lower-left cell).
+
+Every length in planning cells times :attr:`MapFrame.cell_size` is metres: a coarsened
+map's lengths are not K times too short.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import math
+
+import numpy as np
+
+from jaxga.core.errors import EndpointError
+
+__all__ = ["MapFrame"]
+
+
+@dataclasses.dataclass(frozen=True)
+class MapFrame:
+    """How planning cells relate to the map file's cells and to metres.
+
+    Attributes:
+        map_shape: ``(H, W)`` of the map file, in its own cells.
+        coarsen: ``K``, map cells a side per planning cell (1: not coarsened).
+        resolution: metres per MAP cell (a ROS map's ``resolution``), None without one.
+        origin: ``(x, y, yaw)`` of a ROS map, metres and radians; None without one.
+    """
+
+    map_shape: tuple[int, int]
+    coarsen: int = 1
+    resolution: float | None = None
+    origin: tuple[float, float, float] | None = None
+
+    @property
+    def has_metres(self) -> bool:
+        """Whether the frame knows metres (a ROS map)."""
+        return self.resolution is not None and self.origin is not None
+
+    @property
+    def cell_size(self) -> float | None:
+        """Metres per PLANNING cell (``coarsen * resolution``), None without a resolution."""
+        return None if self.resolution is None else self.coarsen * self.resolution
+
+    def metres(self, length: float | np.ndarray) -> float | np.ndarray | None:
+        """A length (or array of lengths) in planning cells, in metres; None without a
+        resolution."""
+        size = self.cell_size
+        if size is None:
+            return None
+        return np.asarray(length, float) * size if np.ndim(length) else float(length) * size
+
+    def to_world(self, points: np.ndarray) -> np.ndarray:
+        """``float[..., 2]`` world coordinates (metres) of points in planning cells (cell
+        centres at integer coordinates). Needs a frame with metres."""
+        if not self.has_metres:
+            raise ValueError("this map has no resolution and origin: no world frame")
+        p = (np.asarray(points, float) + 0.5) * self.cell_size
+        c, s = math.cos(self.origin[2]), math.sin(self.origin[2])
+        x = self.origin[0] + c * p[..., 0] - s * p[..., 1]
+        y = self.origin[1] + s * p[..., 0] + c * p[..., 1]
+        return np.stack([x, y], axis=-1)
+
+    def cell_of(self, point: tuple[float, float], shape: tuple[int, int],
+                what: str = "point") -> tuple[int, int]:
+        """The planning cell ``(x, y)`` holding world point ``point`` (metres) on a
+        planning grid of ``shape = (H, W)``; :class:`~jaxga.core.errors.EndpointError`
+        naming ``what`` and the map's extent in metres when it lies off the map."""
+        if not self.has_metres:
+            raise EndpointError(f"{what} in metres needs a map with a resolution and an "
+                                "origin (a ROS map_server .yaml)")
+        c, s = math.cos(self.origin[2]), math.sin(self.origin[2])
+        dx, dy = point[0] - self.origin[0], point[1] - self.origin[1]
+        local = (c * dx + s * dy, -s * dx + c * dy)
+        x, y = (int(math.floor(v / self.cell_size + 1e-9)) for v in local)
+        h, w = shape
+        if not (0 <= x < w and 0 <= y < h):
+            x0, y0 = self.origin[:2]
+            raise EndpointError(
+                f"{what} ({point[0]:g}, {point[1]:g}) m is off the map: it covers x "
+                f"{x0:g}..{x0 + self.map_shape[1] * self.resolution:g} m, y "
+                f"{y0:g}..{y0 + self.map_shape[0] * self.resolution:g} m"
+                + (" (before its yaw rotation)" if self.origin[2] else ""))
+        return x, y
+
+    def map_cell(self, cells: np.ndarray) -> np.ndarray:
+        """``int[..., 2]``: for planning cells ``(x, y)``, the map cell holding the
+        planning cell's centre (the middle of its block, kept on the map where a last
+        block reaches past it). The identity when not coarsened."""
+        c = np.asarray(cells, np.int64)
+        if self.coarsen == 1:
+            return c
+        k = self.coarsen
+        h, w = self.map_shape
+        out = c * k + k // 2
+        return np.minimum(out, np.array([w - 1, h - 1]))
+
+    def planning_cell(self, map_cells: np.ndarray) -> np.ndarray:
+        """``int[..., 2]``: the planning cells holding map cells ``(x, y)``."""
+        return np.asarray(map_cells, np.int64) // self.coarsen
+
+    def describe(self) -> str:
+        """One line for a summary: the cell size and how planning cells relate to the map."""
+        parts = []
+        if self.coarsen > 1:
+            parts.append(f"coarsened {self.coarsen} x {self.coarsen}: a planning cell is "
+                         f"{self.coarsen} x {self.coarsen} map cells")
+        if self.cell_size is not None:
+            parts.append(f"{self.cell_size:g} m per planning cell")
+        return "; ".join(parts)
+
+    def to_json(self) -> dict:
+        """The frame as JSON: both cell frames and the world frame, so that a file is
+        read without its map."""
+        return {
+            "coarsen": self.coarsen,
+            "map_shape": list(self.map_shape),
+            "resolution": self.resolution,
+            "cell_size": self.cell_size,
+            "origin": None if self.origin is None else list(self.origin),
+            "frames": {
+                "path": "planning cells (x, y), y = 0 the bottom row",
+                "map_path": "map file cells (x, y) holding each planning cell's centre",
+                "path_world": "metres in the map's world frame" if self.has_metres
+                else None,
+            },
+        }
