@@ -297,4 +297,4 @@ def test_what_is_not_computed_says_why():
         r = fitness_optimum_np(walled, (0, 0), (4, 4), "free", method)
         assert not r.found and "unreachable" in r.reason, method
         r = fitness_optimum_np(walled, (2, 0), (4, 4), "free", method)
-        assert not r.found and "start (2, 0) is blocked" in r.reason, method
+        assert not r.found and "start cell (2, 0) is blocked" in r.reason, method

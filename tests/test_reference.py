@@ -10,6 +10,7 @@ Moving AI scenarios.
 from __future__ import annotations
 
 import math
+import time
 from fractions import Fraction
 from pathlib import Path
 
@@ -20,7 +21,7 @@ from hypothesis import strategies as st
 from scipy.sparse import coo_matrix
 from scipy.sparse.csgraph import dijkstra
 
-from jaxga.core.errors import EndpointError, NoPathError
+from jaxga.core.errors import EndpointError, JaxgaError, NoPathError
 from jaxga.core.grid import CORNER_RULES, DIRECTIONS, Grid
 from jaxga.reference.optima import (
     OctileGraph,
@@ -367,7 +368,7 @@ def test_blocked_endpoints_are_results_not_exceptions(case) -> None:
     grid = Grid.create(b, s, g, rule)
     for res in (shortest_path(grid), any_angle_shortest_path(grid)):
         assert not res.found and res.status == "endpoint_blocked"
-        assert res.reason == f"start ({s[0]}, {s[1]}) is blocked"
+        assert res.reason == f"start cell ({s[0]}, {s[1]}) is blocked"
         assert math.isinf(res.length) and res.path.shape == (0, 2)
         with pytest.raises(EndpointError, match="is blocked"):
             res.raise_if_missing()
@@ -384,7 +385,8 @@ def test_unreachable_goal_and_off_map() -> None:
         if not reachable:
             assert (
                 res.reason
-                == f"goal (4, 4) unreachable from start (0, 0) under corner rule {rule!r}"
+                == f"goal cell (4, 4) unreachable from start cell (0, 0) under corner rule "
+                   f"{rule!r}"
             )
             assert not any_angle_shortest_path(Grid.create(b, (0, 0), (4, 4), rule)).found
     off = shortest_path_np(b, (0, 0), (5, 0), "strict")
@@ -460,3 +462,58 @@ def test_clear_vertex_cases() -> None:
     d[1, 1] = True  # the other side cell (1, 1)
     assert not clear_np(d, "no_squeeze", (0, 0), (3, 1))
     assert clear_np(d, "free", (0, 0), (3, 1))
+
+
+# ------------------------------------------------------------------------ time budgets
+
+
+def staggered_walls() -> np.ndarray:
+    """400 x 400 cells, walls at every 20th column open at alternate ends: a long, winding
+    optimum (the 8-connected one alone expands most of the map)."""
+    b = np.zeros((400, 400), bool)
+    for k, x in enumerate(range(20, 400, 20)):
+        if k % 2:
+            b[40:, x : x + 2] = True
+        else:
+            b[:-40, x : x + 2] = True
+    return b
+
+
+def test_budget_returns_promptly() -> None:
+    b = staggered_walls()
+    for budget in (0.0, 0.05, 0.3):
+        t0 = time.perf_counter()
+        res = any_angle_shortest_path_np(b, (0, 0), (399, 399), "strict", budget_s=budget)
+        elapsed = time.perf_counter() - t0
+        assert not res.found and res.status == "budget" and res.kind == "any_angle"
+        assert res.reason == f"any-angle optimum not computed (budget {budget:g} s)"
+        assert res.path.shape == (0, 2) and math.isinf(res.length)
+        assert elapsed < budget + 0.5, (budget, elapsed)
+    with pytest.raises(JaxgaError, match="budget"):
+        res.raise_if_missing()
+    octile = OctileGraph(b, "strict").search((0, 0), (399, 399), budget_s=0.0)
+    assert not octile.found and octile.status == "budget"
+
+
+def test_generous_budget_and_known_path_change_nothing() -> None:
+    rng = np.random.default_rng(5)
+    b = rng.random((24, 24)) < 0.2
+    s, g = (0, 0), (23, 23)
+    b[0, 0] = b[23, 23] = False
+    for rule in CORNER_RULES:
+        free = any_angle_shortest_path_np(b, s, g, rule)
+        assert free.found
+        timed = any_angle_shortest_path_np(b, s, g, rule, budget_s=60.0)
+        assert timed.found and timed.length == free.length
+        assert any_angle_shortest_path(Grid.create(b, s, g, rule), budget_s=60.0).found
+        octile = shortest_path_np(b, s, g, rule)
+        given = any_angle_shortest_path_np(b, s, g, rule, known_path=octile.path)
+        assert given.length == pytest.approx(free.length, abs=1e-9)
+        best = any_angle_shortest_path_np(b, s, g, rule, known_path=free.path)
+        assert best.length == pytest.approx(free.length, abs=1e-9)
+        assert best.length == pytest.approx(brute_any_angle_vectorised(b, rule, s, g), abs=1e-9)
+    wall = tuple(int(v) for v in np.argwhere(b)[0][::-1])
+    with pytest.raises(JaxgaError, match="not clear"):
+        any_angle_shortest_path_np(b, s, g, "strict", known_path=[s, wall, g])
+    with pytest.raises(JaxgaError, match="from"):
+        any_angle_shortest_path_np(b, s, g, "strict", known_path=[s, (1, 1)])

@@ -2,12 +2,16 @@
 
 - :mod:`~jaxga.reference.optima`: exact 8-connected shortest paths (Dijkstra, NumPy and JAX)
   and exact any-angle shortest paths (visibility graph), the certificates of every gap;
+- :mod:`~jaxga.reference.lower_bound`: the Euclidean shortest path around the obstacles
+  (the taut string), a proven lower bound of the any-angle optimum that scales with the
+  obstacles' corners, not the map's cells;
 - :mod:`~jaxga.reference.fitness`: the exact optimum of a preset's own fitness over
   8-connected paths.
 
 The shortest-path functions are re-exported here (``jaxga.reference.shortest_path``).
 """
 
+from jaxga.reference.lower_bound import euclidean_lower_bound, euclidean_lower_bound_np
 from jaxga.reference.optima import (
     C_OCTILE,
     SQRT2,
@@ -40,6 +44,8 @@ __all__ = [
     "clear_np",
     "clear_pairs_np",
     "distances_from",
+    "euclidean_lower_bound",
+    "euclidean_lower_bound_np",
     "legal_moves_np",
     "obstacle_adjacent_cells",
     "path_length",

@@ -11,15 +11,18 @@ Contents:
 
 * :func:`shortest_path` - the 8-connected optimum: straight step cost 1, diagonal step
   cost ``sqrt(2)``, diagonal moves restricted by the grid's ``corner_rule`` (SPEC 1).
-  A* with the octile heuristic over a precomputed adjacency list (:class:`OctileGraph`);
+  A* with the octile heuristic over a precomputed sparse adjacency (:class:`OctileGraph`);
   :func:`distances_from` gives the whole Dijkstra distance field.
 * :func:`any_angle_shortest_path` - the shortest polyline whose vertices are cell
   centres and whose every segment is *clear* (SPEC 1). This is the lower bound that a
   post-optimised GA path (SPEC 9, ``shortcut_greedy``) can reach. Every free cell can
   be a vertex (restricting the vertices to cells next to obstacles is *not* exact on a
   lattice of centres; the docstring gives a counterexample), so the search is an A*
-  over the visibility graph of all free cells made fast by provable pruning; edges are
-  checked lazily with the exact, vectorised line of sight :func:`clear_many_np`.
+  over the visibility graph of all free cells made fast by provable pruning (its
+  heuristic is the taut-string distance of :mod:`jaxga.reference.lower_bound`, a proven
+  lower bound that is also reported on its own); edges are checked lazily with the
+  exact, vectorised line of sight :func:`clear_many_np`. An optional time budget makes
+  the search give up promptly (status ``"budget"``) instead.
 * :func:`clear_np` / :func:`clear_many_np` / :func:`clear_pairs_np` - exact,
   integer-only line of sight between cell centres (SPEC 1).
 
@@ -36,9 +39,11 @@ the command line.
 from __future__ import annotations
 
 import dataclasses
+import functools
 import heapq
 import math
-from collections.abc import Sequence
+import time
+from collections.abc import Callable, Sequence
 
 import numpy as np
 
@@ -78,12 +83,14 @@ class ReferencePath:
         length: its length in cell units (``inf`` when not found).
         path: ``int32[k, 2]`` ``(x, y)`` cells from start to goal; consecutive cells are
             8-adjacent legal moves for :func:`shortest_path` and clear segments for
-            :func:`any_angle_shortest_path`. Shape ``(0, 2)`` when not found.
+            :func:`any_angle_shortest_path`. Shape ``(0, 2)`` when not found. For the
+            lower bound of :mod:`jaxga.reference.lower_bound`, ``float64[k, 2]`` points.
         reason: ``""`` when found, else why not, e.g. ``"start (0, 0) is blocked"`` or
             ``"goal (9, 9) unreachable from start (0, 0) under corner rule 'strict'"``.
-        status: ``"found"``, ``"endpoint_blocked"`` (blocked or off-map start/goal) or
-            ``"unreachable"``; decides which exception :meth:`raise_if_missing` raises.
-        kind: ``"octile"`` (8-connected) or ``"any_angle"``.
+        status: ``"found"``, ``"endpoint_blocked"`` (blocked or off-map start/goal),
+            ``"unreachable"`` or ``"budget"`` (the search did not finish within its time
+            budget); decides which exception :meth:`raise_if_missing` raises.
+        kind: ``"octile"`` (8-connected), ``"any_angle"`` or ``"euclidean_bound"``.
         expanded: number of search nodes expanded (a cost measure for benchmarks).
     """
 
@@ -98,13 +105,16 @@ class ReferencePath:
     def raise_if_missing(self) -> ReferencePath:
         """Return ``self`` if a path was found, else raise the matching jaxga error.
 
-        Raises :class:`~jaxga.core.errors.EndpointError` for a blocked/off-map start or goal
-        and :class:`~jaxga.core.errors.NoPathError` for an unreachable goal (SPEC 1).
+        Raises :class:`~jaxga.core.errors.EndpointError` for a blocked/off-map start or goal,
+        :class:`~jaxga.core.errors.NoPathError` for an unreachable goal (SPEC 1) and
+        :class:`~jaxga.core.errors.JaxgaError` for a search cut short by its time budget.
         """
         if self.found:
             return self
         if self.status == "endpoint_blocked":
             raise EndpointError(self.reason)
+        if self.status == "budget":
+            raise JaxgaError(self.reason)
         raise NoPathError(self.reason)
 
     @property
@@ -128,6 +138,53 @@ def _missing(reason: str, status: str, kind: str, expanded: int = 0) -> Referenc
         kind=kind,
         expanded=expanded,
     )
+
+
+class _OutOfBudget(Exception):
+    """Raised inside a search whose time budget is spent; turned into a result."""
+
+
+class _Deadline:
+    """A wall-clock budget: :meth:`check` raises :class:`_OutOfBudget` once ``budget_s``
+    seconds have passed since construction (never when ``budget_s`` is None). The long
+    loops of the searches call it, so that a budgeted search returns promptly."""
+
+    def __init__(self, budget_s: float | None) -> None:
+        self.budget_s = budget_s
+        self.end = math.inf if budget_s is None else time.perf_counter() + float(budget_s)
+
+    def check(self) -> None:
+        if time.perf_counter() > self.end:
+            raise _OutOfBudget
+
+
+def _budget_message(what: str, budget_s: float | None) -> str:
+    return f"{what} optimum not computed (budget {budget_s:g} s)"
+
+
+def _checked_in_chunks(
+    check: Callable[[np.ndarray, np.ndarray], np.ndarray],
+    p: np.ndarray,
+    q: np.ndarray,
+    deadline: _Deadline | None,
+    steps: int = 300_000,
+) -> np.ndarray:
+    """``check(p, q)`` (a vectorised line-of-sight test of the segments ``p[i] -> q[i]``)
+    in chunks of about ``steps`` unit steps, with ``deadline`` checked between chunks, so
+    that one huge call cannot overrun a time budget. In one call without a budget."""
+    p, q = np.broadcast_arrays(np.asarray(p).reshape(-1, 2), np.asarray(q).reshape(-1, 2))
+    if deadline is None or deadline.budget_s is None:
+        return check(p, q)
+    total = np.cumsum(np.max(np.abs(q - p), axis=1) + 1)
+    if total.size == 0 or total[-1] <= steps:
+        return check(p, q)
+    cuts = np.searchsorted(total, np.arange(steps, total[-1], steps)).tolist() + [p.shape[0]]
+    parts, lo = [], 0
+    for hi in cuts:
+        deadline.check()
+        parts.append(check(p[lo:hi], q[lo:hi]))
+        lo = hi
+    return np.concatenate(parts)
 
 
 def path_length(path: np.ndarray) -> float:
@@ -162,17 +219,17 @@ def endpoint_problem(blocked: np.ndarray, start: tuple[int, int], goal: tuple[in
     h, w = blocked.shape
     for name, (x, y) in (("start", start), ("goal", goal)):
         if not (0 <= x < w and 0 <= y < h):
-            return f"{name} ({x}, {y}) is off the {w} x {h} map"
+            return f"{name} cell ({x}, {y}) is off the {w} x {h} map"
         if blocked[y, x]:
-            return f"{name} ({x}, {y}) is blocked"
+            return f"{name} cell ({x}, {y}) is blocked"
     return ""
 
 
 def unreachable_message(start: tuple[int, int], goal: tuple[int, int], rule: str) -> str:
     """The one-line reason given when no path joins ``start`` and ``goal``."""
     return (
-        f"goal ({goal[0]}, {goal[1]}) unreachable from start ({start[0]}, {start[1]}) "
-        f"under corner rule {rule!r}"
+        f"goal cell ({goal[0]}, {goal[1]}) unreachable from start cell ({start[0]}, "
+        f"{start[1]}) under corner rule {rule!r}"
     )
 
 
@@ -191,11 +248,11 @@ def legal_moves_np(blocked: np.ndarray, corner_rule: str) -> np.ndarray:
 class OctileGraph:
     """The 8-connected move graph of one map under one corner rule (SPEC 1).
 
-    Building it costs one vectorised pass plus one Python list per cell (a fraction of a
-    second on a 256 x 256 map: decision 015); afterwards :meth:`search` answers
+    Built in one vectorised pass as a compressed sparse row adjacency (the neighbours of
+    a cell in the order of :data:`~jaxga.core.grid.DIRECTIONS`); :meth:`search` answers
     start/goal queries with A* and the octile heuristic, and :meth:`distances` gives a
-    full Dijkstra field. Reuse one graph for many queries on the same map (the Moving AI
-    benchmark does).
+    full Dijkstra field (:func:`scipy.sparse.csgraph.dijkstra`). Reuse one graph for many
+    queries on the same map (the Moving AI benchmark does).
     """
 
     def __init__(self, blocked: np.ndarray, corner_rule: str = "strict") -> None:
@@ -204,16 +261,18 @@ class OctileGraph:
         h, w = self.blocked.shape
         self.shape = (h, w)
         legal = legal_moves_np(self.blocked, corner_rule).reshape(8, -1)
-        offsets = [int(dy) * w + int(dx) for dx, dy in DIRECTIONS.tolist()]
-        costs = [SQRT2 if dx and dy else 1.0 for dx, dy in DIRECTIONS.tolist()]
-        # Build adjacency lists: for every cell, [(neighbour, cost), ...].
+        src, dst, cost = [], [], []
+        for d, (dx, dy) in enumerate(DIRECTIONS.tolist()):
+            p = np.flatnonzero(legal[d])
+            src.append(p)
+            dst.append(p + (dy * w + dx))
+            cost.append(np.full(p.size, SQRT2 if dx and dy else 1.0))
+        src_a = np.concatenate(src)
+        order = np.argsort(src_a, kind="stable")  # by cell, then by direction
         n = h * w
-        adj: list[list[tuple[int, float]]] = [[] for _ in range(n)]
-        for d in range(8):
-            off, c = offsets[d], costs[d]
-            for p in np.flatnonzero(legal[d]).tolist():
-                adj[p].append((p + off, c))
-        self.adj = adj
+        self.indptr = np.searchsorted(src_a[order], np.arange(n + 1)).astype(np.int64)
+        self.indices = np.concatenate(dst)[order]
+        self.costs = np.concatenate(cost)[order]
         self._xs = np.tile(np.arange(w, dtype=np.float64), h)
         self._ys = np.repeat(np.arange(h, dtype=np.float64), w)
 
@@ -224,12 +283,19 @@ class OctileGraph:
         ddy = np.abs(self._ys - goal // w)
         return (np.maximum(ddx, ddy) + (SQRT2 - 1.0) * np.minimum(ddx, ddy)).tolist()
 
-    def search(self, start_xy: XY, goal_xy: XY) -> ReferencePath:
+    def search(self, start_xy: XY, goal_xy: XY, budget_s: float | None = None) -> ReferencePath:
         """A* with the (consistent) octile heuristic from ``start_xy`` to ``goal_xy``.
 
         Returns a :class:`ReferencePath` of kind ``"octile"``; a blocked/off-map
-        endpoint or an unreachable goal gives ``found=False`` with a reason.
+        endpoint or an unreachable goal gives ``found=False`` with a reason, and so does
+        a search still running after ``budget_s`` seconds (status ``"budget"``).
         """
+        try:
+            return self._search(start_xy, goal_xy, _Deadline(budget_s))
+        except _OutOfBudget:
+            return _missing(_budget_message("8-connected", budget_s), "budget", "octile")
+
+    def _search(self, start_xy: XY, goal_xy: XY, deadline: _Deadline) -> ReferencePath:
         start, goal = _xy(start_xy), _xy(goal_xy)
         problem = endpoint_problem(self.blocked, start, goal)
         if problem:
@@ -240,12 +306,12 @@ class OctileGraph:
         if s == g:
             return ReferencePath(True, 0.0, np.array([start], np.int32), kind="octile")
         hh = self._octile_to(g)
-        n = len(self.adj)
+        n = len(hh)
         inf = math.inf
         dist = [inf] * n
         parent = [-1] * n
         closed = bytearray(n)
-        adj = self.adj
+        ptr, nbr, cost = self.indptr.tolist(), self.indices.tolist(), self.costs.tolist()
         dist[s] = 0.0
         heap: list[tuple[float, int]] = [(hh[s], s)]
         pop, push = heapq.heappop, heapq.heappush
@@ -258,9 +324,12 @@ class OctileGraph:
             expanded += 1
             if u == g:
                 break
+            if not expanded & 4095:
+                deadline.check()
             du = dist[u]
-            for v, c in adj[u]:
-                nd = du + c
+            for j in range(ptr[u], ptr[u + 1]):
+                v = nbr[j]
+                nd = du + cost[j]
                 if nd < dist[v]:
                     dist[v] = nd
                     parent[v] = u
@@ -282,31 +351,17 @@ class OctileGraph:
         this is also the distance *to* ``source_xy``. Raises
         :class:`~jaxga.core.errors.EndpointError` if the source is off the map or blocked.
         """
+        from scipy.sparse import csr_matrix
+        from scipy.sparse.csgraph import dijkstra
+
         src = _xy(source_xy)
         problem = endpoint_problem(self.blocked, src, src)
         if problem:
             raise EndpointError(problem.replace("start", "source", 1))
         h, w = self.shape
-        s = src[1] * w + src[0]
         n = h * w
-        inf = math.inf
-        dist = [inf] * n
-        closed = bytearray(n)
-        adj = self.adj
-        dist[s] = 0.0
-        heap: list[tuple[float, int]] = [(0.0, s)]
-        pop, push = heapq.heappop, heapq.heappush
-        while heap:
-            du, u = pop(heap)
-            if closed[u]:
-                continue
-            closed[u] = 1
-            for v, c in adj[u]:
-                nd = du + c
-                if nd < dist[v]:
-                    dist[v] = nd
-                    push(heap, (nd, v))
-        return np.asarray(dist, dtype=np.float64).reshape(h, w)
+        graph = csr_matrix((self.costs, self.indices, self.indptr), shape=(n, n))
+        return dijkstra(graph, indices=src[1] * w + src[0]).reshape(h, w)
 
 
 def shortest_path_np(
@@ -556,45 +611,33 @@ def _move_masks(b: np.ndarray, rule: str, offsets: list[tuple[int, int]]) -> lis
 
 
 def _radius_graph_distances(
-    b: np.ndarray, rule: str, source: tuple[int, int], radius: int
+    b: np.ndarray, rule: str, source: tuple[int, int], radius: int, deadline: _Deadline
 ) -> tuple[np.ndarray, np.ndarray]:
     """Distances (upper bounds of the any-angle ones) and parents from ``source`` in the
     graph whose edges are the clear segments of Chebyshev length <= ``radius``.
 
-    Vectorised Bellman-Ford (Gauss-Seidel sweeps over shifted arrays). Returns flat
-    ``float64[H*W]`` distances and ``int64[H*W]`` parent cell indices (-1 at the source
-    and unreached cells).
+    Dijkstra (:func:`scipy.sparse.csgraph.dijkstra`) on the edges of
+    :func:`_move_masks`. Returns flat ``float64[H*W]`` distances and ``int64[H*W]``
+    parent cell indices (-1 at the source and unreached cells).
     """
+    from scipy.sparse import csr_matrix
+    from scipy.sparse.csgraph import dijkstra
+
     h, w = b.shape
     offsets = _offsets(radius)
-    masks = _move_masks(b, rule, offsets)
-    d = np.full((h, w), math.inf)
-    par = np.full((h, w), -1, np.int64)
-    d[source[1], source[0]] = 0.0
-    flat_idx = np.arange(h * w, dtype=np.int64).reshape(h, w)
-    plan = []
-    for (dx, dy), mk in zip(offsets, masks, strict=True):
-        ys = slice(max(0, -dy), h - max(0, dy))
-        xs = slice(max(0, -dx), w - max(0, dx))
-        yd = slice(max(0, dy), h - max(0, -dy))
-        xd = slice(max(0, dx), w - max(0, -dx))
-        if ys.start >= ys.stop or xs.start >= xs.stop:
-            continue
-        inf_mask = np.where(mk[ys, xs], 0.0, math.inf)
-        plan.append((ys, xs, yd, xd, inf_mask + math.hypot(dx, dy), flat_idx[ys, xs]))
-    for _ in range(h * w):
-        changed = False
-        for ys, xs, yd, xd, cost, src_idx in plan:
-            cand = d[ys, xs] + cost
-            dst = d[yd, xd]
-            better = cand < dst - 1e-12
-            if better.any():
-                dst[better] = cand[better]
-                par[yd, xd][better] = src_idx[better]
-                changed = True
-        if not changed:
-            break
-    return d.reshape(-1), par.reshape(-1)
+    src, dst, cost = [], [], []
+    for (dx, dy), mask in zip(offsets, _move_masks(b, rule, offsets), strict=True):
+        deadline.check()
+        p = np.flatnonzero(mask)  # a clear move ends on the map
+        src.append(p)
+        dst.append(p + (dy * w + dx))
+        cost.append(np.full(p.size, math.hypot(dx, dy)))
+    n = h * w
+    graph = csr_matrix((np.concatenate(cost), (np.concatenate(src), np.concatenate(dst))),
+                       shape=(n, n))
+    deadline.check()
+    d, par = dijkstra(graph, indices=source[1] * w + source[0], return_predecessors=True)
+    return d, np.where(par < 0, -1, par).astype(np.int64)
 
 
 def _chain(par: np.ndarray, s: int, g: int, w: int) -> np.ndarray:
@@ -605,50 +648,19 @@ def _chain(par: np.ndarray, s: int, g: int, w: int) -> np.ndarray:
     return np.stack([idx % w, idx // w], axis=1)
 
 
-def _string_pull(b: np.ndarray, rule: str, path: np.ndarray) -> np.ndarray:
+def _string_pull(
+    b: np.ndarray, rule: str, path: np.ndarray, deadline: _Deadline | None = None
+) -> np.ndarray:
     """Greedy shortcutting of a clear polyline: from each kept vertex jump to the last
     later vertex it sees (SPEC 9 ``shortcut_greedy``). The result is clear and no longer."""
     out = [0]
     k = path.shape[0]
     while out[-1] != k - 1:
         i = out[-1]
-        vis = clear_many_np(b, rule, path[i], path[i + 1 :])
+        vis = _checked_in_chunks(functools.partial(clear_pairs_np, b, rule), path[i],
+                                 path[i + 1 :], deadline)
         out.append(i + 1 + int(np.flatnonzero(vis)[-1]))  # i + 1 is always visible
     return path[out]
-
-
-def _lower_bound_to(
-    free_graph: OctileGraph, target: tuple[int, int]
-) -> tuple[np.ndarray, np.ndarray]:
-    """Admissible, consistent lower bound of the any-angle distance to ``target`` for
-    every cell: ``max(Euclidean, d8_free / C_OCTILE)`` (flat ``float64[H*W]``).
-
-    ``d8_free`` is the 8-connected distance under the ``"free"`` rule. Along any clear
-    segment ``u -> v`` (under any rule; clear under a rule implies clear under
-    ``"free"``) the cells holding the segment's points at the major-axis cell centres
-    are free and form a legal ``"free"`` 8-path of octile length, and
-    ``octile(u, v) <= C_OCTILE * |uv|``; so ``d8_free <= C_OCTILE * (any-angle)``.
-    The maximum of two consistent heuristics is consistent. Also returns ``d8_free``.
-    """
-    h, w = free_graph.shape
-    d8 = free_graph.distances(target).reshape(-1)
-    ys, xs = np.divmod(np.arange(h * w), w)
-    eu = np.hypot(xs - target[0], ys - target[1])
-    return np.maximum(eu, d8 / C_OCTILE), d8
-
-
-def _landmarks(b: np.ndarray, n: int) -> list[tuple[int, int]]:
-    """Up to ``n`` free cells near the corners (then edge midpoints) of the map."""
-    h, w = b.shape
-    spots = [(0, 0), (w - 1, h - 1), (w - 1, 0), (0, h - 1)]
-    spots += [(w // 2, 0), (w // 2, h - 1), (0, h // 2), (w - 1, h // 2)]
-    fy, fx = np.nonzero(~b)
-    out: list[tuple[int, int]] = []
-    for sx, sy in spots[: max(0, n)]:
-        k = int(np.argmin(np.abs(fx - sx) + np.abs(fy - sy)))
-        if (int(fx[k]), int(fy[k])) not in out:
-            out.append((int(fx[k]), int(fy[k])))
-    return out
 
 
 def _exact_astar(
@@ -657,54 +669,45 @@ def _exact_astar(
     start: tuple[int, int],
     goal: tuple[int, int],
     ub: float,
-    g0: np.ndarray,
-    p0: np.ndarray,
-    vertices: np.ndarray | None,
-    n_landmarks: int = 4,
+    keep: np.ndarray,
+    heuristic: np.ndarray,
+    seeds: tuple[np.ndarray, np.ndarray] | None,
+    deadline: _Deadline,
+    lipschitz: Sequence[np.ndarray] = (),
 ) -> tuple[np.ndarray | None, int]:
-    """A* on the visibility graph of all free cells (or of ``vertices`` plus the ends).
+    """A* on the visibility graph of the cells in ``keep`` (flat ``bool[H*W]``) and the ends.
 
-    ``g0``/``p0``: upper bounds of the distances from the start, realised by actual clear
-    paths through the parents ``p0``. They seed the search: every vertex starts in the
-    open list with ``g0`` (only strict improvements are line-of-sight checked, which is
-    what makes the search affordable); ``ub`` is the length of a known path. Returns the
-    path (None if the goal was not reached) and the number of expansions.
+    ``heuristic``: a consistent lower bound of every kept cell's distance to the goal
+    (flat ``float64[H*W]``); ``ub``: the length of a known path (no path longer is
+    followed). ``seeds = (g0, p0)``: upper bounds of the distances from the start,
+    realised by actual clear paths through the parents ``p0``. They seed the search:
+    every vertex starts in the open list with ``g0`` (only strict improvements are line
+    of sight checked, which is what makes the search affordable). ``lipschitz``: fields
+    ``F`` (flat ``float64[H*W]``) with ``|F(u) - F(v)| <= |u v|`` for every clear segment
+    between vertices of an optimal path (distances in a metric no longer than the
+    Euclidean along clear segments); pairs violating it are not line-of-sight checked.
+    Returns the path (None if the goal was not reached) and the number of expansions.
     """
     h, w = b.shape
     s = start[1] * w + start[0]
     gl = goal[1] * w + goal[0]
-    free_graph = OctileGraph(b, "free")
-    hg, dg = _lower_bound_to(free_graph, goal)
-    hs, ds = _lower_bound_to(free_graph, start)
-    ub = min(float(ub), 1e300) + 1e-9  # finite, so that unreachable cells drop out
-    keep = ~b.reshape(-1) & (hs + hg <= ub)
-    if vertices is not None:
-        keep &= np.asarray(vertices, bool).reshape(-1)
+    keep = keep.copy()
     keep[s] = keep[gl] = True
     zf = np.flatnonzero(keep)  # flat indices of the vertices
     zx, zy = (zf % w).astype(np.float64), (zf // w).astype(np.float64)
     zxy = np.stack([zf % w, zf // w], axis=1)
-    hz = hg[zf]
-    slack = ub - hz
-    # landmark distances for the visibility pre-test (see the loop below)
-    land = [ds, dg]
-    for lx, ly in _landmarks(b, n_landmarks):
-        d8 = free_graph.distances((lx, ly)).reshape(-1)
-        if math.isfinite(d8[s]):
-            land.append(d8)
-    lz = np.stack([d[zf] for d in land])
-    g = g0.copy()
+    hz = heuristic[zf]
+    lz = np.stack([f[zf] for f in lipschitz]) if lipschitz else None
+    slack = ub + 1e-9 - hz
+    if seeds is None:
+        g, par = np.full(h * w, math.inf), np.full(h * w, -1, np.int64)
+    else:
+        g, par = seeds[0].copy(), seeds[1].copy()
     g[s] = 0.0
-    par = p0.copy()
-    if vertices is not None:  # seeds must be realised by paths through the vertex set
-        g[:] = math.inf
-        g[s] = 0.0
-        par[:] = -1
     gz = g[zf]
-    opened = np.isfinite(gz)
     is_open = np.ones(zf.size, bool)
-    seeds = np.flatnonzero(opened)
-    heap = [(float(f), int(k)) for k, f in zip(seeds, (gz + hz)[seeds], strict=True)]
+    opened = np.flatnonzero(np.isfinite(gz))
+    heap = [(float(f), int(k)) for k, f in zip(opened, (gz + hz)[opened], strict=True)]
     heapq.heapify(heap)
     zgoal = int(np.searchsorted(zf, gl))
     expanded = 0
@@ -716,20 +719,16 @@ def _exact_astar(
         expanded += 1
         if k == zgoal:
             break
+        deadline.check()
         tent = gz[k] + np.hypot(zx - zx[k], zy - zy[k])
         cand = np.flatnonzero(is_open & (tent < gz - 1e-12) & (tent <= slack))
+        if lz is not None and cand.size:
+            gap = np.max(np.abs(lz[:, cand] - lz[:, k : k + 1]), axis=0)
+            cand = cand[gap <= tent[cand] - gz[k] + 1e-9]
         if cand.size == 0:
             continue
-        # Pre-test: u -> v clear implies d8_free(u, v) <= octile(u, v) (see
-        # _lower_bound_to), and |d8_free(L, v) - d8_free(L, u)| <= d8_free(u, v) for
-        # every landmark L; pairs violating it are certainly not clear.
-        ax, ay = np.abs(zx[cand] - zx[k]), np.abs(zy[cand] - zy[k])
-        octile = np.maximum(ax, ay) + (SQRT2 - 1.0) * np.minimum(ax, ay)
-        gap = np.max(np.abs(lz[:, cand] - lz[:, k : k + 1]), axis=0)
-        cand = cand[gap <= octile + 1e-9]
-        if cand.size == 0:
-            continue
-        vis = cand[clear_many_np(b, rule, zxy[k], zxy[cand])]
+        vis = cand[_checked_in_chunks(functools.partial(clear_pairs_np, b, rule), zxy[k],
+                                      zxy[cand], deadline)]
         if vis.size == 0:
             continue
         gz[vis] = tent[vis]
@@ -739,6 +738,60 @@ def _exact_astar(
     if is_open[zgoal]:
         return None, expanded
     return _chain(par, s, gl, w), expanded
+
+
+def _path_near(
+    b: np.ndarray,
+    rule: str,
+    start: tuple[int, int],
+    goal: tuple[int, int],
+    points: np.ndarray,
+    deadline: _Deadline,
+    radius: int = 3,
+    skip: int = 2,
+) -> np.ndarray | None:
+    """A clear polyline through cell centres that bends near ``points`` (e.g. the bends of
+    the taut string), or None: an upper bound of the any-angle optimum, usually equal to
+    it or very close when the points are the taut string's bends.
+
+    Dynamic programming over the layered graph whose layers are the start, the free
+    cells within Chebyshev distance ``radius`` of each point in turn, and the goal; an
+    edge joins a cell to every cell of the next ``skip`` layers when the segment is clear
+    (:func:`clear_pairs_np`).
+    """
+    h, w = b.shape
+    layers = [np.array([start], np.int64)]
+    for x, y in np.asarray(points, np.float64).reshape(-1, 2).tolist():
+        xs = np.arange(max(math.ceil(x - radius), 0), min(math.floor(x + radius), w - 1) + 1)
+        ys = np.arange(max(math.ceil(y - radius), 0), min(math.floor(y + radius), h - 1) + 1)
+        cells = np.stack(np.meshgrid(xs, ys), axis=-1).reshape(-1, 2)
+        layers.append(cells[~b[cells[:, 1], cells[:, 0]]])
+    layers.append(np.array([goal], np.int64))
+    dist = [np.zeros(1)] + [np.full(len(lay), math.inf) for lay in layers[1:]]
+    par = [np.zeros((1, 2), np.int64)] + [np.full((len(lay), 2), -1) for lay in layers[1:]]
+    for j in range(1, len(layers)):
+        deadline.check()
+        for i in range(max(0, j - skip), j):
+            a = np.flatnonzero(np.isfinite(dist[i]))
+            ai = np.repeat(a, len(layers[j]))
+            cj = np.tile(np.arange(len(layers[j])), a.size)
+            tent = dist[i][ai] + np.hypot(*(layers[i][ai] - layers[j][cj]).T)
+            better = tent < dist[j][cj]
+            ai, cj, tent = ai[better], cj[better], tent[better]
+            ok = _checked_in_chunks(functools.partial(clear_pairs_np, b, rule),
+                                    layers[i][ai], layers[j][cj], deadline)
+            ai, cj, tent = ai[ok], cj[ok], tent[ok]
+            order = np.lexsort((tent, cj))
+            first = order[np.unique(cj[order], return_index=True)[1]]
+            dist[j][cj[first]] = tent[first]
+            par[j][cj[first]] = np.stack([np.full(first.size, i), ai[first]], axis=1)
+    if not math.isfinite(dist[-1][0]):
+        return None
+    out = [(len(layers) - 1, 0)]
+    while out[-1][0] != 0:
+        j, k = out[-1]
+        out.append((int(par[j][k, 0]), int(par[j][k, 1])))
+    return np.array([layers[j][k] for j, k in out[::-1]], np.int64)
 
 
 def _crop_box(
@@ -763,6 +816,8 @@ def any_angle_shortest_path_np(
     exact: bool = True,
     vertices: np.ndarray | None = None,
     radius: int = 2,
+    budget_s: float | None = None,
+    known_path: np.ndarray | None = None,
 ) -> ReferencePath:
     """Any-angle optimum on a raw ``bool[H, W]`` array; see :func:`any_angle_shortest_path`.
 
@@ -778,6 +833,13 @@ def any_angle_shortest_path_np(
             ``found=False`` when no path uses only those vertices).
         radius: Chebyshev length of the moves of the seeding graph; a speed knob only,
             it never changes the exact result.
+        budget_s: wall-clock seconds the search may take; past them it stops and returns
+            ``found=False`` with status ``"budget"`` (and the reason "any-angle optimum
+            not computed (budget N s)"). None: no limit.
+        known_path: optional ``int[k, 2]`` clear path from start to goal (e.g. a GA
+            result after post-optimisation): its length tightens the pruning, and it is
+            returned when nothing shorter exists. Checked (every segment clear, the ends
+            right); a path that fails raises :class:`~jaxga.core.errors.JaxgaError`.
     """
     b = _as_blocked(blocked)
     _check_rule(corner_rule)
@@ -787,25 +849,74 @@ def any_angle_shortest_path_np(
         return _missing(problem, "endpoint_blocked", "any_angle")
     if start == goal:
         return ReferencePath(True, 0.0, np.array([start], np.int32), kind="any_angle")
-    octile = OctileGraph(b, corner_rule).search(start, goal)
+    known = None if known_path is None else _checked_path(b, corner_rule, start, goal, known_path)
+    try:
+        return _any_angle(b, corner_rule, start, goal, exact, vertices, max(1, int(radius)),
+                          known, _Deadline(budget_s))
+    except _OutOfBudget:
+        return _missing(_budget_message("any-angle", budget_s), "budget", "any_angle")
+
+
+def _checked_path(
+    b: np.ndarray, rule: str, start: tuple[int, int], goal: tuple[int, int], path: np.ndarray
+) -> np.ndarray:
+    """``path`` as ``int64[k, 2]`` if it is a clear polyline from ``start`` to ``goal``."""
+    p = np.asarray(path).reshape(-1, 2)
+    if (p.shape[0] < 2 or not np.array_equal(p, np.round(p)) or tuple(p[0]) != start
+            or tuple(p[-1]) != goal):
+        raise JaxgaError(f"known_path must run from {start} to {goal} through cells")
+    p = p.astype(np.int64)
+    if not clear_pairs_np(b, rule, p[:-1], p[1:]).all():
+        raise JaxgaError(f"known_path is not clear under corner rule {rule!r}")
+    return p
+
+
+def _any_angle(
+    b: np.ndarray,
+    rule: str,
+    start: tuple[int, int],
+    goal: tuple[int, int],
+    exact: bool,
+    vertices: np.ndarray | None,
+    radius: int,
+    known: np.ndarray | None,
+    deadline: _Deadline,
+) -> ReferencePath:
+    """The search of :func:`any_angle_shortest_path_np` (see its steps in
+    :func:`any_angle_shortest_path`); raises :class:`_OutOfBudget` past the deadline."""
+    from jaxga.reference.lower_bound import GeodesicBounds
+
+    octile = OctileGraph(b, rule)._search(start, goal, deadline)
     if not octile.found:
         return dataclasses.replace(octile, kind="any_angle")
+    ub = octile.length
+    if known is not None and path_length(known) >= ub:
+        known = None
+    if known is not None:
+        ub = path_length(known)
     if vertices is None:
         # no path shorter than the 8-connected one leaves the ellipse's bounding box
-        x0, x1, y0, y1 = _crop_box(b, start, goal, octile.length)
+        x0, x1, y0, y1 = _crop_box(b, start, goal, ub)
     else:
         x0, x1, y0, y1 = 0, b.shape[1] - 1, 0, b.shape[0] - 1
     cb = np.ascontiguousarray(b[y0 : y1 + 1, x0 : x1 + 1])
     cs, cg = (start[0] - x0, start[1] - y0), (goal[0] - x0, goal[1] - y0)
-    cw = cb.shape[1]
-    g0, p0 = _radius_graph_distances(cb, corner_rule, cs, max(1, int(radius)))
-    best = _string_pull(cb, corner_rule, _chain(p0, cs[1] * cw + cs[0], cg[1] * cw + cg[0], cw))
+    ch, cw = cb.shape
+    g0, p0 = _radius_graph_distances(cb, rule, cs, radius, deadline)
+    best = _string_pull(cb, rule, _chain(p0, cs[1] * cw + cs[0], cg[1] * cw + cg[0], cw),
+                        deadline)
+    if known is not None and path_length(known) < path_length(best):
+        best = known - np.array([x0, y0])
     expanded = 0
     if vertices is not None:
         vm = np.asarray(vertices, bool)
         if vm.shape != b.shape:
             raise JaxgaError(f"vertices must have the map's shape {b.shape}, got {vm.shape}")
-        path, expanded = _exact_astar(cb, corner_rule, cs, cg, math.inf, g0, p0, vm)
+        ys, xs = np.divmod(np.arange(ch * cw), cw)
+        to_goal = np.hypot(xs - cg[0], ys - cg[1])
+        keep = vm.reshape(-1) & ~cb.reshape(-1)
+        # seeds must be realised by paths through the vertex set: none
+        path, expanded = _exact_astar(cb, rule, cs, cg, math.inf, keep, to_goal, None, deadline)
         if path is None:
             return _missing(
                 f"goal {goal} unreachable from start {start} through the given vertices",
@@ -815,9 +926,18 @@ def any_angle_shortest_path_np(
             )
         best = path
     elif exact:
-        path, expanded = _exact_astar(cb, corner_rule, cs, cg, path_length(best), g0, p0, None)
-        if path is not None and path_length(path) < path_length(best):  # always reached
-            best = _string_pull(cb, corner_rule, path)
+        geo = GeodesicBounds(cb, rule, cs, cg, path_length(best), deadline)
+        near = _path_near(cb, rule, cs, cg, geo.bends, deadline)
+        if near is not None and path_length(near) < path_length(best):
+            best = near
+        ub = path_length(best)
+        if geo.bound < ub - 1e-9:  # else the upper-bound path is optimal already
+            to_start, to_goal = geo.cells(ub, start_upper=g0)
+            keep = to_start + to_goal <= ub + 1e-9
+            path, expanded = _exact_astar(cb, rule, cs, cg, ub, keep, to_goal, (g0, p0),
+                                          deadline, (to_start, to_goal))
+            if path is not None and path_length(path) < path_length(best):  # always reached
+                best = _string_pull(cb, rule, path, deadline)
     best = (best + np.array([x0, y0])).astype(np.int32)
     return ReferencePath(True, path_length(best), best, kind="any_angle", expanded=expanded)
 
@@ -841,7 +961,9 @@ def obstacle_adjacent_cells(blocked: np.ndarray) -> np.ndarray:
     return near & ~b
 
 
-def any_angle_shortest_path(grid: Grid, *, exact: bool = True) -> ReferencePath:
+def any_angle_shortest_path(
+    grid: Grid, *, exact: bool = True, budget_s: float | None = None
+) -> ReferencePath:
     """The any-angle optimum of ``grid``: the shortest clear polyline through cell centres.
 
     Vertices are cell centres and every segment must be clear under ``grid.corner_rule``
@@ -872,40 +994,43 @@ def any_angle_shortest_path(grid: Grid, *, exact: bool = True) -> ReferencePath:
     and 8 % at 17-32.
 
     **So every free cell is a vertex**, and the search is made affordable by pruning that
-    provably keeps every vertex and edge of an optimal path:
+    provably keeps every vertex and edge of an optimal path (``s``, ``g``: start and goal;
+    ``geo_s(v)``, ``geo_g(v)``: the Euclidean shortest distances in the plane around the
+    blocked cells, :mod:`jaxga.reference.lower_bound`, which no clear polyline beats):
 
     1. The 8-connected optimum ``U8`` is computed first (reachability, upper bound). No
        path of length ``<= U8`` leaves the bounding box of the ellipse
        ``|s v| + |v g| <= U8`` (a segment's crossed cells lie in the bounding box of its
        ends), so the map is cropped to that box.
-    2. Upper bounds: Bellman-Ford distances ``g0`` of the graph whose edges are the clear
+    2. Upper bounds: Dijkstra distances ``g0`` of the graph whose edges are the clear
        segments of Chebyshev length ``<= radius``; its shortest path, greedily
        string-pulled, has length ``U >= optimum``. ``exact=False`` returns this path.
-    3. Lower bounds ``LB(v, t) = max(|v t|, d8free(v, t) / 1.0824)`` where ``d8free`` is
-       the 8-connected distance under "free" and 1.0824 = sqrt(4 - 2 sqrt 2) the largest
-       octile/Euclidean ratio: the cells holding a clear segment's points at the
-       major-axis centres form a legal "free" 8-path of octile length. ``LB`` is
-       consistent, so it is the A* heuristic; vertices with
-       ``LB(v, s) + LB(v, g) > U`` cannot be on an optimal path and are dropped.
+       Then the taut string (the Euclidean shortest path around the obstacles, bending
+       at their convex corners) is computed, and the best clear polyline through cells
+       within 3 of its bends (:func:`_path_near`) lowers ``U``, often to the optimum.
+       If the taut string's length equals ``U``, ``U`` is optimal.
+    3. Lower bounds: the taut-string distances ``geo_s(v)``, ``geo_g(v)`` of every cell
+       that a path of length ``<= U`` can visit
+       (:class:`~jaxga.reference.lower_bound.GeodesicBounds`, a shortest path map
+       restricted to a geodesic ellipse). ``geo_g`` is a metric distance, so a consistent
+       A* heuristic, and a lower bound of the any-angle distance (every clear polyline
+       is a path of the plane); cells with ``geo_s(v) + geo_g(v) > U`` cannot be on an
+       optimal path and are dropped.
     4. A* over the remaining cells, seeded with every ``g0`` (all seeds open; a standard
        exchange argument shows every vertex of an optimal path is closed with its exact
        distance). Expanding ``u`` line-of-sight checks only vertices ``v`` that it would
        strictly improve and that can still finish within ``U``; this also skips every
        ``v`` already seen from an ancestor of ``u`` (an ancestor relaxed it at least as
-       well). Before the exact check, pairs with
-       ``|d8free(L, v) - d8free(L, u)| > octile(u, v)`` for a landmark ``L`` (start, goal,
-       crop corners) are discarded: a clear ``u -> v`` implies
-       ``d8free(u, v) <= octile(u, v)``.
+       well). Before the exact check, pairs with ``|geo_t(u) - geo_t(v)| > |u v|`` for
+       ``t`` = start or goal are discarded (a clear segment is a geodesic).
 
-    The result was checked equal (to 1e-9) to a brute-force Dijkstra over the complete
-    visibility graph of all free cells on about 8,000 random grids up to 16 x 16 and 400
-    up to 32 x 32 (random cells and random rectangles, all three rules); the tests repeat
-    this on a few hundred small grids.
+    The tests check the result against a brute-force Dijkstra over the complete
+    visibility graph of all free cells on a few hundred small random grids (random cells
+    and random rectangles, all three rules) and on the classic 20 x 20 maps.
 
-    Time: milliseconds on a 20 x 20 map; on a 256 x 256 map it grows with the path's
-    length, from under a second to seconds for the longest Moving AI scenarios;
-    ``exact=False`` is faster there (``benchmarks/movingai_optima.py``; decision 015).
+    ``budget_s`` (:func:`any_angle_shortest_path_np`) bounds the wall-clock time: every
+    long loop of the search checks the clock, so a search past its budget returns
+    ``found=False`` (status ``"budget"``) promptly.
     """
-    return any_angle_shortest_path_np(
-        grid.blocked_np(), grid.start_xy, grid.goal_xy, grid.corner_rule, exact=exact
-    )
+    return any_angle_shortest_path_np(grid.blocked_np(), grid.start_xy, grid.goal_xy,
+                                      grid.corner_rule, exact=exact, budget_s=budget_s)
