@@ -3,12 +3,16 @@
 Every function takes ``ax=None`` (a new figure when None) and returns the axes (the
 ``plot_result`` / ``plot_comparison`` figures return the figure).
 
-Maps are drawn with ``origin="lower"`` (row 0 at the bottom, SPEC 1); cell ``(x, y)`` is
-the unit square centred on ``(x, y)``.
+Maps are drawn with ``origin="lower"`` (row 0 at the bottom); cell ``(x, y)`` is the unit
+square centred on ``(x, y)``. A map with a resolution (a ROS ``map_server`` map) is drawn
+in metres instead (:class:`MapView`), and a map with :class:`~jaxga.maps.MapLayers` shows
+free, unknown, wall and inflation-margin cells in distinct shades (:data:`CELL_CLASSES`).
 """
 
 from __future__ import annotations
 
+import dataclasses
+import math
 from collections.abc import Sequence
 from pathlib import Path
 from typing import Any
@@ -18,11 +22,13 @@ import numpy as np
 from jaxga.compare import metric_values
 from jaxga.core.errors import ParameterError
 from jaxga.core.grid import Grid, as_integer
-from jaxga.maps import load_map
+from jaxga.maps import load_map_info
+from jaxga.maps.frame import MapFrame
+from jaxga.maps.loaders import MapLayers
 
-__all__ = ["plot_box", "plot_comparison", "plot_convergence", "plot_diversity",
-           "plot_main_effects", "plot_map", "plot_paths", "plot_replan", "plot_result",
-           "plot_seed_scatter"]
+__all__ = ["CELL_CLASSES", "MapView", "cell_classes", "plot_box", "plot_comparison",
+           "plot_convergence", "plot_diversity", "plot_main_effects", "plot_map",
+           "plot_paths", "plot_replan", "plot_result", "plot_seed_scatter"]
 
 
 def _pyplot():
@@ -47,30 +53,204 @@ PATH_STYLES = (
 thin dashed one, so that two paths that coincide (a raw path the post-optimiser left as
 it was) both stay visible."""
 
+CELL_CLASSES: tuple[tuple[str, str, tuple[int, int, int]], ...] = (
+    ("free", "free", (255, 255, 255)),
+    ("unknown_free", "unknown (planned as free)", (222, 222, 222)),
+    ("unknown_blocked", "unknown (planned as blocked)", (172, 172, 172)),
+    ("wall", "wall", (0, 0, 0)),
+    ("margin", "inflation margin (blocked)", (246, 190, 182)),
+)
+"""``(key, legend label, RGB)`` of each kind of cell, indexed by the codes of
+:func:`cell_classes`: white free space, light grey unknown space the planner may cross,
+mid grey unknown space it may not, black walls and a light red tint for the cells that
+only the inflation by the robot's radius blocks (free in the map, too close to a wall for
+the robot's centre)."""
 
-def plot_map(grid: Grid, paths: Sequence[tuple[Sequence[tuple[int, int]], str]] = (), ax=None):
-    """Draw the map (obstacles black), start/goal markers and ``(path, label)`` polylines
-    (styles :data:`PATH_STYLES`); the legend sits outside the map, right of it, so that
-    it hides no cell."""
+_PALETTE = np.array([rgb for _, _, rgb in CELL_CLASSES], np.uint8)
+_CODE = {key: i for i, (key, _, _) in enumerate(CELL_CLASSES)}
+
+
+def cell_classes(grid: Grid, layers: MapLayers | None = None) -> np.ndarray:
+    """``int8[H, W]`` codes into :data:`CELL_CLASSES` of every planning cell, row 0 at the
+    bottom: what the map says each cell is, for a plot that tells walls from unknown space
+    and from the inflation margin.
+
+    The grid decides what is blocked (it is what the planner saw); ``layers`` only say why:
+    a blocked cell is margin where ``layers.margin`` holds, unknown (blocked) where
+    ``layers.unknown`` does, else wall; a free cell is unknown (planned as free) where
+    ``layers.unknown`` holds, else free. Without layers (or with layers of another shape)
+    cells are free or wall, as on a plain map.
+    """
+    blocked = grid.blocked_np()
+    codes = np.where(blocked, _CODE["wall"], _CODE["free"]).astype(np.int8)
+    if layers is None or np.shape(layers.wall) != blocked.shape:
+        return codes
+    unknown = np.asarray(layers.unknown, bool)
+    margin = np.asarray(layers.margin, bool)
+    codes[~blocked & unknown] = _CODE["unknown_free"]
+    codes[blocked & unknown] = _CODE["unknown_blocked"]
+    codes[blocked & margin] = _CODE["margin"]
+    return codes
+
+
+@dataclasses.dataclass(frozen=True)
+class MapView:
+    """Where the planning cells lie on a map plot's axes, so that every artist (the map's
+    image, paths, markers) is placed the same way.
+
+    Without metres (``frame`` None or without a resolution) the axes are in planning
+    cells, cell ``(x, y)`` centred on ``(x, y)``. With metres and a yaw of 0 they are the
+    map's world frame (``x``, ``y`` in metres, :meth:`MapFrame.to_world`); with a non-zero
+    yaw, metres along the map's own axes from its origin (the map is not turned on the
+    page, the axis labels say so).
+    """
+
+    frame: MapFrame | None = None
+
+    @property
+    def metres(self) -> bool:
+        """Whether the axes are in metres."""
+        return self.frame is not None and self.frame.has_metres
+
+    @property
+    def world(self) -> bool:
+        """Whether the axes are the world frame itself (metres, map yaw 0)."""
+        return self.metres and self.frame.origin[2] == 0  # type: ignore[union-attr]
+
+    def xy(self, points: Any) -> np.ndarray:
+        """``float[..., 2]`` plot coordinates of points in planning cells."""
+        p = np.asarray(points, float)
+        if not self.metres:
+            return p
+        if self.world:
+            return self.frame.to_world(p)  # type: ignore[union-attr]
+        return (p + 0.5) * self.frame.cell_size  # type: ignore[union-attr, operator]
+
+    def extent(self, shape: tuple[int, int]) -> tuple[float, float, float, float]:
+        """``(left, right, bottom, top)`` of a map of ``shape = (H, W)`` planning cells:
+        the outer edges of its corner cells (imshow's ``extent`` and the axes' limits)."""
+        h, w = shape
+        (x0, y0), (x1, y1) = self.xy([(-0.5, -0.5), (w - 0.5, h - 0.5)])
+        return float(x0), float(x1), float(y0), float(y1)
+
+    def labels(self) -> tuple[str, str]:
+        """The x and y axis labels: "" on a map in cells (as the papers' maps are drawn)."""
+        if not self.metres:
+            return "", ""
+        if self.world:
+            return "x (m)", "y (m)"
+        yaw = math.degrees(self.frame.origin[2])  # type: ignore[union-attr]
+        return (f"x along the map (m from its origin; map turned {yaw:.4g}° in the world)",
+                "y along the map (m)")
+
+    def length(self, cells: float) -> str:
+        """A path length in planning cells, as the legend writes it (metres when known)."""
+        if self.metres:
+            return f"{self.frame.metres(cells):.2f} m"  # type: ignore[union-attr]
+        return f"{cells:.2f}"
+
+    def point(self, cell: tuple[int, int]) -> str:
+        """A cell's position for a legend: its world coordinates in metres (what
+        ``--start-world`` takes, whatever the map's yaw), nothing without metres."""
+        if not self.metres:
+            return ""
+        x, y = self.frame.to_world(np.asarray(cell, float))  # type: ignore[union-attr]
+        return f" ({x:.2f}, {y:.2f}) m" + ("" if self.world else " in the world")
+
+
+def plot_map(grid: Grid, paths: Sequence[tuple[Sequence[tuple[int, int]], str]] = (), ax=None,
+             layers: MapLayers | None = None, frame: MapFrame | None = None,
+             endpoints: tuple[tuple[int, int], tuple[int, int]] | None = None,
+             include: Sequence[tuple[int, int]] = ()):
+    """Draw the map, start/goal markers and ``(path, label)`` polylines (styles
+    :data:`PATH_STYLES`); the legend sits outside the map, right of it, so that it hides no
+    cell.
+
+    The cells are one RGB image (:func:`cell_classes`, :data:`CELL_CLASSES`), so that a
+    map of 500 x 500 cells draws in a fraction of a second: obstacles black on white, and
+    with ``layers`` (:class:`~jaxga.maps.MapLayers`) unknown cells grey and the inflation
+    margin tinted, explained by a key below the legend. ``frame`` with a resolution puts
+    the axes in metres (:class:`MapView`). ``endpoints`` ``(start, goal)`` replaces the
+    grid's own (a re-plan's path runs between its own ends).
+
+    The axes span the whole map, except on a map whose unknown cells frame the mapped
+    area (a robot's map is mostly unknown space around the building): there they span
+    the cells that are not unknown, the paths, the endpoints and the ``include`` cells,
+    with a small margin (the image still holds the whole map; :func:`_view_box`).
+    """
     plt = _pyplot()
     if ax is None:
-        _, ax = plt.subplots(figsize=(6.2, 5))
-    b = grid.blocked_np()
-    ax.imshow(b, origin="lower", cmap="Greys", vmin=0, vmax=1,
-              extent=(-0.5, grid.width - 0.5, -0.5, grid.height - 0.5))
+        size = (6.2, 5) if max(grid.shape) <= 100 else (7.6, 6.2)
+        _, ax = plt.subplots(figsize=size)
+    view = MapView(frame)
+    codes = cell_classes(grid, layers)
+    extent = view.extent(grid.shape)
+    ax.imshow(_PALETTE[codes], origin="lower", extent=extent, interpolation="auto",
+              gid="map-cells")
     for i, (path, label) in enumerate(paths):
         if path is not None and len(path):
-            xy = np.asarray(path, float)
+            xy = view.xy(path)
             ax.plot(xy[:, 0], xy[:, 1], label=label, color=f"C{i}",
                     **PATH_STYLES[i % len(PATH_STYLES)])
-    (sx, sy), (gx, gy) = grid.start_xy, grid.goal_xy
-    ax.plot([sx], [sy], "go", ms=8, label="start")
-    ax.plot([gx], [gy], "r*", ms=11, label="goal")
-    ax.set_xlim(-0.5, grid.width - 0.5)
-    ax.set_ylim(-0.5, grid.height - 0.5)
+    start, goal = endpoints if endpoints is not None else (grid.start_xy, grid.goal_xy)
+    (sx, sy), (gx, gy) = view.xy(start), view.xy(goal)
+    ax.plot([sx], [sy], "go", ms=8, label="start" + view.point(start))
+    ax.plot([gx], [gy], "r*", ms=11, label="goal" + view.point(goal))
+    shown = [start, goal, *include, *(c for path, _ in paths if path is not None for c in path)]
+    (x0, y0), (x1, y1) = _view_box(codes, shown)
+    (left, bottom), (right, top) = view.xy([(x0 - 0.5, y0 - 0.5), (x1 + 0.5, y1 + 0.5)])
+    ax.set_xlim(left, right)
+    ax.set_ylim(bottom, top)
     ax.set_aspect("equal")
+    xlabel, ylabel = view.labels()
+    if xlabel:
+        ax.set_xlabel(xlabel)
+        ax.set_ylabel(ylabel)
+    if layers is not None:
+        _cell_key(ax, codes)
     _legend_outside(ax)
     return ax
+
+
+def _view_box(codes: np.ndarray, shown: Sequence[tuple[int, int]]
+              ) -> tuple[tuple[int, int], tuple[int, int]]:
+    """The cells a map plot spans, ``((x0, y0), (x1, y1))`` inclusive: the whole map, or
+    on a map with unknown cells the box around its other cells and the ``shown`` ones
+    (paths, endpoints), widened by 3 % of the map's larger side: a robot's map is padded
+    with unknown space that would shrink the building to a corner of the figure."""
+    h, w = codes.shape
+    whole = ((0, 0), (w - 1, h - 1))
+    unknown = (codes == _CODE["unknown_free"]) | (codes == _CODE["unknown_blocked"])
+    if not unknown.any() or unknown.all():
+        return whole
+    rows, cols = np.flatnonzero(~unknown.all(axis=1)), np.flatnonzero(~unknown.all(axis=0))
+    x0, x1, y0, y1 = cols[0], cols[-1], rows[0], rows[-1]
+    if len(shown):
+        xy = np.asarray(shown, int).reshape(-1, 2)
+        x0, x1 = min(x0, xy[:, 0].min()), max(x1, xy[:, 0].max())
+        y0, y1 = min(y0, xy[:, 1].min()), max(y1, xy[:, 1].max())
+    pad = max(1, math.ceil(0.03 * max(h, w)))
+    return ((max(0, int(x0) - pad), max(0, int(y0) - pad)),
+            (min(w - 1, int(x1) + pad), min(h - 1, int(y1) + pad)))
+
+
+def _cell_key(ax, codes: np.ndarray) -> None:
+    """A key of the kinds of cell the map holds, outside the axes at their lower right
+    (the paths' legend is at the upper right): a robot's map mixes walls, unknown space and
+    the inflation margin, which the picture tells apart only with it."""
+    from matplotlib.legend import Legend
+    from matplotlib.patches import Patch
+
+    present = np.zeros(len(CELL_CLASSES), bool)
+    present[np.unique(codes)] = True
+    handles = [Patch(facecolor=np.array(rgb) / 255, edgecolor="0.4", lw=0.5, label=label)
+               for (_, label, rgb), shown in zip(CELL_CLASSES, present, strict=True) if shown]
+    key = Legend(ax, handles, [h.get_label() for h in handles], loc="lower left",
+                 bbox_to_anchor=(1.02, 0.0), borderaxespad=0.0, fontsize=7,
+                 title="cells", title_fontsize=7)
+    key.set_gid("cell-key")
+    ax.add_artist(key)
+    key.set_clip_on(False)  # outside the axes: in the saved figure's tight crop
 
 
 def _legend_outside(ax) -> None:
@@ -85,44 +265,120 @@ def _no_path(ax, what: str = "no path found") -> None:
             bbox={"boxstyle": "round", "facecolor": "white", "edgecolor": "firebrick"})
 
 
+FLAT_TOLERANCE = 1e-6
+"""Relative change of a seed's best fitness below which :func:`plot_convergence` calls it
+unchanged: float32 fitness sums wobble by about 1e-7 of their value between equal paths."""
+
+
 def plot_convergence(histories: dict[str, np.ndarray], ax=None, label: str = "",
-                     success: np.ndarray | None = None):
-    """Best-so-far fitness per generation: mean over seeds with a +-1 sd band; with
-    ``success``, over the seeds that found a path only (a failed seed's fitness is no
-    value), and "no path found" when none did."""
+                     success: np.ndarray | None = None, initial: np.ndarray | None = None):
+    """Best-so-far fitness per generation (higher is better): mean over seeds with a +-1
+    sd band; with ``success``, over the seeds that found a path only (a failed seed's
+    fitness is no value), and "no path found" when none did.
+
+    ``initial`` (per seed, the initial population's best fitness,
+    :attr:`jaxga.api.result.Result.initial_fitness`) adds generation 0 where every seed's
+    initial population held a path. The fitness axis is labelled with plain numbers, as
+    many digits as its ticks need (no offset or power of ten to add in one's head), and
+    a curve that never moves says so on the panel (the initial population often holds the
+    best path already) instead of drawing a line at an arbitrary height; otherwise the
+    legend gives the first and last values and the relative change.
+    """
     plt = _pyplot()
     if ax is None:
         _, ax = plt.subplots(figsize=(5, 3.5))
     best = np.asarray(histories["best"], float)
     ax.set_xlabel("generation")
-    ax.set_ylabel("fitness")
+    ax.set_ylabel("best fitness (higher is better)")
     which = "seeds"
+    keep = np.ones(best.shape[0], bool)
     if success is not None:
-        success = np.asarray(success, bool)
-        if not success.any() or best.shape[1] == 0:
+        keep = np.asarray(success, bool)
+        if not keep.any() or best.shape[1] == 0:
             _no_path(ax, "no path found: no fitness to plot")
             return ax
-        best = best[success]
-        which = f"the {int(success.sum())} seeds with a path"
-    gens = np.arange(1, best.shape[1] + 1)
+        best = best[keep]
+        which = f"the {int(keep.sum())} seeds with a path"
+    first_gen = 1
+    if initial is not None:
+        init = np.asarray(initial, float)[keep]
+        if init.shape == best.shape[:1] and np.all(init > 0):
+            best = np.c_[init, best]
+            first_gen = 0
+    gens = np.arange(first_gen, first_gen + best.shape[1])
     mean, sd = best.mean(axis=0), best.std(axis=0)
-    ax.plot(gens, mean, label=(label + " " if label else "") + f"best fitness (mean over {which})")
+    scale = max(float(np.max(np.abs(best))), np.finfo(float).tiny)
+    flat = np.ptp(best, axis=1) <= FLAT_TOLERANCE * scale
+    name = (label + " " if label else "") + f"best fitness (mean over {which})"
+    if not flat.all() and len(gens) > 1:
+        change = (mean[-1] - mean[0]) / abs(mean[0]) if mean[0] else math.inf
+        name += (f"\n{_sig(mean[0])} at generation {gens[0]} -> {_sig(mean[-1])} at "
+                 f"{gens[-1]} ({100 * change:+.3g} %)")
+    ax.plot(gens, mean, label=name)
     ax.fill_between(gens, mean - sd, mean + sd, alpha=0.25)
-    ax.legend(fontsize=7)
+    from matplotlib.ticker import FuncFormatter, MaxNLocator
+
+    ax.xaxis.set_major_locator(MaxNLocator(integer=True))
+    ax.yaxis.set_major_formatter(FuncFormatter(
+        lambda v, _pos: f"{v:.{_decimals(ax.yaxis.get_majorticklocs())}f}"))
+    lo, hi = float(np.min(mean - sd)), float(np.max(mean + sd))
+    if hi - lo <= FLAT_TOLERANCE * scale:  # a line at one height: put it mid-panel
+        centre = float(np.mean(mean))
+        half = 0.01 * abs(centre) or 1.0
+        ax.set_ylim(centre - half, centre + half)
+    if flat.all():
+        start = ("from generation 0:\nthe initial population already held it"
+                 if first_gen == 0 else f"over generations 1 to {gens[-1]}")
+        ax.text(0.5, 0.9, f"best fitness {_sig(float(np.mean(mean)))} unchanged {start}",
+                transform=ax.transAxes, ha="center", va="top", fontsize=8, gid="flat-note",
+                bbox={"boxstyle": "round", "facecolor": "white", "edgecolor": "0.6"})
+    elif flat.any():
+        ax.text(0.02, 0.04, f"best fitness unchanged in {int(flat.sum())} of {len(flat)} "
+                "seeds", transform=ax.transAxes, ha="left", va="bottom", fontsize=7,
+                gid="flat-note")
+    ax.legend(fontsize=7, loc="lower right")
     return ax
 
 
-def plot_paths(result, grid: Grid | str, seed: int | None = None, ax=None):
+def _sig(value: float) -> str:
+    """A fitness value with enough significant digits to tell nearby values apart."""
+    return f"{value:.6g}"
+
+
+def _decimals(locs: Sequence[float]) -> int:
+    """The fewest decimals that write every tick location exactly (to a thousandth of the
+    tick spacing): plain tick labels that differ from one another, without an offset."""
+    v = np.asarray(locs, float)
+    v = v[np.isfinite(v)]
+    if v.size == 0:
+        return 0
+    steps = np.diff(np.unique(v))
+    if steps.size == 0:  # one tick: four significant digits
+        m = float(np.max(np.abs(v)))
+        return 0 if m == 0 else max(0, 3 - math.floor(math.log10(m)))
+    tol = 1e-3 * float(np.min(steps))
+    for d in range(16):
+        if np.all(np.abs(np.round(v, d) - v) <= tol):
+            return d
+    return 16
+
+
+def plot_paths(result, grid: Grid | str, seed: int | None = None, ax=None, info: Any = None):
     """The map with one run's raw and post-optimised paths and the start/goal markers.
 
     ``seed`` is an index into ``result.seeds`` (default: the successful run with the
     shortest post-optimised length). Raw = the GA's own best path, post-optimised = after
-    the preset's post-optimiser (SPEC 9); the legend gives both lengths.
+    the preset's post-optimiser; the legend gives both lengths (in metres on a map with a
+    resolution). ``info`` (a :class:`~jaxga.maps.MapInfo`) brings the map's name, its
+    cell classes (walls, unknown, inflation margin) and its frame; without it the frame
+    is ``result.frame``. The title names the map, the preset and the corner rule.
     """
-    grid = _as_grid(grid, result.corner_rule)
+    grid, info = _map_of(grid, result.corner_rule, info)
     if grid.width != result.width:
         raise ParameterError(f"the result is on a map {result.width} cells wide "
                              f"({result.map_name}), this map is {grid.width} wide")
+    frame = _frame_of(result, info)
+    view = MapView(frame)
     paths = []
     chosen = seed is None
     if seed is None and result.success.any():
@@ -137,15 +393,20 @@ def plot_paths(result, grid: Grid | str, seed: int | None = None, ax=None):
                                  f"0..{len(result.seeds) - 1}; got {seed!r}")
         seed = index
     if seed is not None and result.success[seed]:
-        paths = [(result.path(seed, raw=True), f"raw ({result.raw_length[seed]:.2f})"),
-                 (result.path(seed), f"post-optimised ({result.length[seed]:.2f})")]
+        paths = [(result.path(seed, raw=True),
+                  f"raw ({view.length(float(result.raw_length[seed]))})"),
+                 (result.path(seed), f"post-optimised ({view.length(float(result.length[seed]))})")]
         _check_paths_fit(grid, result, [p for p, _ in paths])
-    ax = plot_map(grid, paths, ax=ax)
-    title = f"{result.preset} on {result.map_name}"
+    ax = plot_map(grid, paths, ax=ax, layers=None if info is None else info.layers,
+                  frame=frame)
+    name = info.name if info is not None else result.map_name
+    title = f"{result.preset} on {name}, corner rule {result.corner_rule!r}"
+    if view.metres:
+        title += f", {frame.cell_size:g} m cells"
     n_ok = int(np.sum(result.success))
     if seed is not None and result.success[seed]:
         title += (f"\nbest of {n_ok} paths found ({len(result.seeds)} seeds): seed "
-                  f"{int(result.seeds[seed])}" if chosen else f", seed {int(result.seeds[seed])}")
+                  f"{int(result.seeds[seed])}" if chosen else f"\nseed {int(result.seeds[seed])}")
     else:
         which = (f"seed {int(result.seeds[seed])}" if seed is not None
                  else f"any of {len(result.seeds)} seeds")
@@ -153,6 +414,13 @@ def plot_paths(result, grid: Grid | str, seed: int | None = None, ax=None):
         _no_path(ax)
     ax.set_title(title, fontsize=9)
     return ax
+
+
+def _frame_of(result: Any, info: Any) -> MapFrame | None:
+    """The frame a result is drawn in: the map's (``info``), else the result's own."""
+    if info is not None and info.frame is not None:
+        return info.frame
+    return getattr(result, "frame", None)
 
 
 def _check_paths_fit(grid: Grid, result: Any, paths: list[list[tuple[int, int]]]) -> None:
@@ -169,11 +437,14 @@ def _check_paths_fit(grid: Grid, result: Any, paths: list[list[tuple[int, int]]]
                 f"endpoints the result was computed on")
 
 
-def _as_grid(grid: Grid | str, corner_rule: str) -> Grid:
+def _map_of(grid: Grid | str, corner_rule: str, info: Any) -> tuple[Grid, Any]:
+    """The grid to draw and its :class:`~jaxga.maps.MapInfo` (None when unknown): a map
+    file's name is loaded with its layers and frame, so that a ROS map given by its path
+    is drawn as one given by its :class:`~jaxga.maps.MapInfo`."""
     if isinstance(grid, Grid):
-        return grid
-
-    return load_map(grid, corner_rule=corner_rule)
+        return grid, info
+    loaded = load_map_info(grid, corner_rule=corner_rule)
+    return loaded.grid, info if info is not None else loaded
 
 
 def _labelled(results) -> dict:
@@ -360,47 +631,81 @@ def plot_main_effects(doe_json: Any, ax=None):
                  fontsize=9)
     ax.legend(fontsize=7)
     return ax
+
+
 def plot_replan(replanned: Any, grid: Grid, old_path: Sequence[tuple[int, int]],
-                obstacles: Sequence[tuple[int, int]], out: str | Path | None = None):
+                obstacles: Sequence[tuple[int, int]], out: str | Path | None = None,
+                info: Any = None):
     """``jaxga replan --plot``: the map with the new obstacles (red squares), the old
     path (grey, dashed), the robot's cell and the re-planned path from it to the goal
-    (or "no path found"). ``replanned`` is a :class:`jaxga.replan.ReplanResult`."""
+    (or "no path found"). ``replanned`` is a :class:`jaxga.replan.ReplanResult`.
+
+    The start and goal markers are the old path's ends (``old_path[0]``,
+    ``old_path[-1]``), never the map's default corners: a re-plan runs between them.
+    ``info`` (a :class:`~jaxga.maps.MapInfo`) brings the map's name, cell classes and
+    metres, as in :func:`plot_paths`; the title names the map, the preset and the corner
+    rule.
+    """
     plt = _pyplot()
-    fig, ax = plt.subplots(figsize=(6.4, 5))
-    plot_map(grid, [], ax=ax)
+    fig, ax = plt.subplots(figsize=(6.4, 5) if max(grid.shape) <= 100 else (7.6, 6.2))
+    if not len(old_path):
+        raise ParameterError("the old path is empty: nothing was re-planned")
+    ends = (tuple(int(v) for v in old_path[0]), tuple(int(v) for v in old_path[-1]))
+    frame = None if info is None else info.frame
+    view = MapView(frame)
+    plot_map(grid, [], ax=ax, layers=None if info is None else info.layers, frame=frame,
+             endpoints=ends, include=[*old_path, *obstacles,  # type: ignore[arg-type]
+                                      *(replanned.path or [])])
     if len(obstacles):
-        xy = np.asarray(obstacles, float)
+        xy = view.xy(obstacles)
         ax.scatter(xy[:, 0], xy[:, 1], marker="s", s=60, color="red", zorder=5,
                    label=f"new obstacles ({len(obstacles)})")
-    old = np.asarray(old_path, float)
+    old = view.xy(old_path)
     ax.plot(old[:, 0], old[:, 1], color="0.45", ls="--", lw=1.5, zorder=3, label="old path")
     if replanned.success:
-        new = np.asarray(replanned.path, float)
+        new = view.xy(replanned.path)
         ax.plot(new[:, 0], new[:, 1], color="C0", lw=2.2, zorder=4,
-                label=f"re-planned ({replanned.length:.2f})")
+                label=f"re-planned ({view.length(float(replanned.length))})")
     else:
         _no_path(ax, f"no path found: {replanned.status}")
-    robot = replanned.prefix[-1] if replanned.prefix else (old[0][0], old[0][1])
+    robot = view.xy(replanned.prefix[-1] if replanned.prefix else old_path[0])
     ax.plot([robot[0]], [robot[1]], marker="^", color="darkorange", ms=10, ls="none",
             zorder=6, label="robot")
     _legend_outside(ax)
-    ax.set_title(f"re-plan: {replanned.status} (corner rule {replanned.corner_rule!r})",
-                 fontsize=9)
+    runs = list(getattr(replanned, "ga", None) or [])
+    name = info.name if info is not None else (runs[0].map_name if runs else "")
+    about = [f"preset {runs[0].preset}"] if runs else []
+    about.append(f"corner rule {replanned.corner_rule!r}")
+    ax.set_title(f"re-plan{' on ' + name if name else ''}: {replanned.status}\n"
+                 f"{', '.join(about)}", fontsize=9)
     return _finish(fig, out)
 
 
 def plot_result(result, grid: Grid | str, out: str | Path | None = None,
-                curve: np.ndarray | None = None):
+                curve: np.ndarray | None = None, info: Any = None):
     """Map with the best seed's raw and post-optimised paths (and ``curve``, the smooth
-    curve's dense points, ``float[N, 2]``), and the convergence curve."""
+    curve's dense points in planning cells, ``float[N, 2]``), and the convergence curve.
+
+    ``info`` (a :class:`~jaxga.maps.MapInfo`) brings the map's name, its cell classes
+    (walls, unknown space, inflation margin) and metres (:func:`plot_paths`); a large map
+    gets a larger figure, so that a one-cell wall stays visible.
+    """
     plt = _pyplot()
-    fig, (a1, a2) = plt.subplots(1, 2, figsize=(11, 4.6))
-    plot_paths(result, grid, ax=a1)
+    shape = grid.shape if isinstance(grid, Grid) else (0, 0)
+    large = max(shape) > 100 or (info is not None and max(info.grid.shape) > 100)
+    fig, (a1, a2) = plt.subplots(1, 2, figsize=(14, 6.2) if large else (11, 4.6),
+                                 width_ratios=(1.5, 1) if large else (1, 1))
+    a1 = plot_paths(result, grid, ax=a1, info=info)
+    if large:  # as tall as the map (cropped to its mapped area) needs, no taller
+        (x0, x1), (y0, y1) = a1.get_xlim(), a1.get_ylim()
+        aspect = abs(x1 - x0) / max(abs(y1 - y0), 1e-12)
+        fig.set_size_inches(14, min(7.5, max(4.6, 5.3 / aspect + 1.4)))
     if curve is not None and len(curve):
-        c = np.asarray(curve, float)
+        c = MapView(_frame_of(result, info)).xy(curve)
         a1.plot(c[:, 0], c[:, 1], color="C2", lw=1.6, zorder=4, label="smooth curve")
         _legend_outside(a1)
-    plot_convergence(result.history, ax=a2, success=result.success)
+    plot_convergence(result.history, ax=a2, success=result.success,
+                     initial=getattr(result, "initial_fitness", None))
     a2.set_title(f"{int(np.sum(result.success))} of {len(result.seeds)} seeds found a path",
                  fontsize=9)
     return _finish(fig, out)

@@ -278,3 +278,295 @@ def test_a_replan_figure_shows_the_old_path_the_obstacles_and_the_new_path(grid)
     fig = plot_replan(failed, grid.replace(start=(0, 0), goal=(3, 3)), old, [(2, 2)])
     assert [t.get_text() for t in fig.axes[0].texts] == ["no path found: unreachable"]
     plt.close(fig)
+
+
+# ----------------------------------------------------------------------- robot maps
+def _layers_map(unknown_blocked: bool = True):
+    """A hand-made 6 x 8 robot map: a wall column at x = 3, its inflation margin at x = 2
+    and x = 4, unknown space in the right column (x = 7); the rest free. Returns the grid
+    and its MapLayers."""
+    from jaxga.core.grid import Grid
+    from jaxga.maps.loaders import MapLayers
+
+    h, w = 6, 8
+    wall, margin, unknown = (np.zeros((h, w), bool) for _ in range(3))
+    wall[1:5, 3] = True
+    margin[1:5, 2] = margin[1:5, 4] = True
+    unknown[:, 7] = True
+    blocked = wall | margin | (unknown if unknown_blocked else False)
+    grid = Grid.create(blocked, start=(0, 0), goal=(6, 5), corner_rule="strict")
+    return grid, MapLayers(wall, margin, unknown, unknown_blocked)
+
+
+def _colour(key: str) -> tuple[int, int, int]:
+    from jaxga.plot import CELL_CLASSES
+
+    return next(rgb for k, _, rgb in CELL_CLASSES if k == key)
+
+
+def _cell_image(ax) -> np.ndarray:
+    images = [im for im in ax.get_images() if im.get_gid() == "map-cells"]
+    assert len(images) == 1
+    return np.asarray(images[0].get_array())
+
+
+@pytest.mark.parametrize("unknown_blocked", [True, False])
+def test_a_robot_map_draws_walls_margin_unknown_and_free_cells_in_their_own_shades(
+        unknown_blocked):
+    from jaxga.plot import CELL_CLASSES, plot_map
+
+    grid, layers = _layers_map(unknown_blocked)
+    ax = plot_map(grid, layers=layers)
+    img = _cell_image(ax)
+    assert img.shape == (6, 8, 3)
+    unknown = "unknown_blocked" if unknown_blocked else "unknown_free"
+    for (x, y), key in {(3, 2): "wall", (2, 2): "margin", (4, 4): "margin",
+                        (7, 0): unknown, (7, 5): unknown, (0, 0): "free",
+                        (3, 0): "free", (6, 5): "free"}.items():
+        assert tuple(img[y, x]) == _colour(key), (x, y, key)  # row 0 at the bottom
+    assert len({rgb for _, _, rgb in CELL_CLASSES}) == len(CELL_CLASSES)  # all distinct
+    key = next(a for a in ax.get_children() if a.get_gid() == "cell-key")
+    labels = [t.get_text() for t in key.get_texts()]
+    assert labels == ["free", "unknown (planned as blocked)" if unknown_blocked
+                      else "unknown (planned as free)", "wall", "inflation margin (blocked)"]
+    plt.close(ax.figure)
+
+
+def test_a_map_without_layers_is_black_on_white_as_before(grid):
+    from jaxga.plot import plot_map
+
+    ax = plot_map(grid)
+    img = _cell_image(ax)
+    expected = np.where(grid.blocked_np()[..., None], 0, 255)
+    np.testing.assert_array_equal(img, np.broadcast_to(expected, img.shape))
+    assert not [a for a in ax.get_children() if a.get_gid() == "cell-key"]
+    assert ax.get_xlim() == (-0.5, 9.5) and ax.get_ylim() == (-0.5, 9.5)
+    assert ax.get_xlabel() == "" and ax.get_ylabel() == ""
+    plt.close(ax.figure)
+
+
+def test_a_large_map_is_one_image_not_a_patch_per_cell():
+    """A 512 x 512 map draws as one image (a patch per cell would take minutes)."""
+    import time
+
+    from jaxga.maps.loaders import MapLayers
+    from jaxga.plot import plot_map
+
+    big = random_map(512, 512, 0.2, 3, corner_rule="free")
+    b = big.blocked_np()
+    layers = MapLayers(b, np.zeros_like(b), np.zeros_like(b))
+    t0 = time.perf_counter()
+    ax = plot_map(big, layers=layers)
+    ax.figure.canvas.draw()
+    seconds = time.perf_counter() - t0
+    assert len(ax.get_images()) == 1 and not ax.patches and not ax.collections
+    assert _cell_image(ax).shape == (512, 512, 3)
+    assert seconds < 5.0  # about 0.2 s; generous for a loaded machine
+    plt.close(ax.figure)
+
+
+def _frame(shape, yaw: float = 0.0, resolution: float = 0.25):
+    from jaxga.maps.frame import MapFrame
+
+    return MapFrame(map_shape=shape, resolution=resolution, origin=(-1.5, 2.0, yaw))
+
+
+def test_a_map_with_a_resolution_is_drawn_in_metres_in_the_world_frame():
+    from jaxga.plot import plot_map
+
+    grid, _ = _layers_map()
+    frame = _frame(grid.shape)
+    path = [(0, 0), (1, 1), (1, 2), (0, 3)]
+    ax = plot_map(grid, [(path, "p")], frame=frame)
+    world = (-1.5, -1.5 + 8 * 0.25, 2.0, 2.0 + 6 * 0.25)  # origin + W, H cells of 0.25 m
+    assert ax.get_xlim() == pytest.approx(world[:2]) and ax.get_ylim() == pytest.approx(world[2:])
+    assert _cell_image(ax).shape == (6, 8, 3)
+    assert ax.get_images()[0].get_extent() == pytest.approx(world)
+    lines = {ln.get_label(): ln for ln in ax.get_lines()}
+    np.testing.assert_allclose(lines["p"].get_xydata(), frame.to_world(np.array(path)))
+    start = next(ln for k, ln in lines.items() if k.startswith("start"))
+    np.testing.assert_allclose(start.get_xydata()[0], frame.to_world(np.array([0, 0])))
+    assert start.get_label() == "start (-1.38, 2.12) m"  # the cell's centre
+    assert ax.get_xlabel() == "x (m)" and ax.get_ylabel() == "y (m)"
+    plt.close(ax.figure)
+
+
+def test_a_turned_map_is_drawn_in_metres_along_its_own_axes_and_says_so():
+    import math
+
+    from jaxga.plot import plot_map
+
+    grid, _ = _layers_map()
+    frame = _frame(grid.shape, yaw=math.pi / 6)
+    ax = plot_map(grid, [([(1, 1), (2, 0)], "p")], frame=frame)
+    assert ax.get_xlim() == pytest.approx((0, 2.0)) and ax.get_ylim() == pytest.approx((0, 1.5))
+    line = next(ln for ln in ax.get_lines() if ln.get_label() == "p")
+    np.testing.assert_allclose(line.get_xydata(), [(0.375, 0.375), (0.625, 0.125)])
+    assert "along the map" in ax.get_xlabel() and "30°" in ax.get_xlabel()
+    assert "(m" in ax.get_ylabel()
+    plt.close(ax.figure)
+
+
+def test_unknown_space_around_a_robot_map_is_cropped_from_the_view():
+    """The axes span the mapped area (and the paths), not the unknown padding of a
+    robot's map; the image still holds the whole map."""
+    from jaxga.core.grid import Grid
+    from jaxga.maps.loaders import MapLayers
+    from jaxga.plot import plot_map
+
+    unknown = np.ones((100, 100), bool)
+    unknown[40:60, 30:50] = False  # the building
+    blocked = unknown.copy()
+    grid = Grid.create(blocked, start=(31, 41), goal=(48, 58), corner_rule="strict")
+    layers = MapLayers(np.zeros_like(blocked), np.zeros_like(blocked), unknown)
+    ax = plot_map(grid, layers=layers, frame=_frame(grid.shape, resolution=0.1))
+    x0, x1 = ax.get_xlim()
+    y0, y1 = ax.get_ylim()
+    # the building's cells 30..49 x 40..59 plus 3 cells a side, in metres from the origin
+    assert (x0, x1) == pytest.approx((-1.5 + 2.7, -1.5 + 5.3))
+    assert (y0, y1) == pytest.approx((2.0 + 3.7, 2.0 + 6.3))
+    assert ax.get_images()[0].get_extent() == pytest.approx((-1.5, 8.5, 2.0, 12.0))
+    plt.close(ax.figure)
+
+
+@pytest.fixture(scope="module")
+def office(comparison, grid, tmp_path_factory):
+    """The fixture map saved as a ROS map ``office/map.yaml`` (0.25 m cells, origin
+    (-1.5, 2.0)) and loaded back, and the imga result moved onto it."""
+    import dataclasses
+
+    from jaxga.maps import load_map_info, save_map
+
+    folder = tmp_path_factory.mktemp("maps") / "office"
+    folder.mkdir()
+    path = save_map(grid, folder / "map.yaml", fmt="ros", resolution=0.25,
+                    origin=(-1.5, 2.0, 0.0))
+    info = load_map_info(path, start=grid.start_xy, goal=grid.goal_xy, corner_rule="free")
+    assert info.name == "office" and info.frame.has_metres
+    np.testing.assert_array_equal(info.grid.blocked_np(), grid.blocked_np())
+    r = dataclasses.replace(comparison.results["imga"], frame=info.frame,
+                            map_name=info.name)
+    return r, info
+
+
+def test_a_result_on_a_ros_map_is_drawn_in_metres_titled_with_the_map(office, tmp_path):
+    r, info = office
+    i = int(np.nanargmin(np.where(r.success, r.length, np.nan)))
+    fig = plot_result(r, info.grid, tmp_path / "office.png", info=info)
+    a1 = fig.axes[0]
+    title = a1.get_title()
+    assert "office" in title and r.preset in title and repr(r.corner_rule) in title
+    assert a1.get_xlim() == pytest.approx((-1.5, 1.0)) and a1.get_ylim() == pytest.approx(
+        (2.0, 4.5))  # 10 x 10 cells of 0.25 m from the origin
+    post = next(ln for ln in a1.get_lines() if ln.get_label().startswith("post-optimised"))
+    np.testing.assert_allclose(post.get_xydata(), r.world_path(i))
+    assert f"{r.length[i] * 0.25:.2f} m" in post.get_label()
+    assert mpimg.imread(tmp_path / "office.png").shape[0] > 100
+
+
+def test_the_map_name_comes_from_the_result_without_info(office):
+    r, info = office
+    ax = plot_paths(r, info.grid)  # result.frame: metres without the MapInfo
+    assert "office" in ax.get_title() and ax.get_xlabel() == "x (m)"
+    plt.close(ax.figure)
+
+
+def test_a_replan_figure_uses_the_paths_ends_and_names_the_map(grid):
+    """The start and goal drawn are the old path's ends, not the map's corners; the
+    title names the map, the preset and the corner rule."""
+    from types import SimpleNamespace
+
+    from jaxga.maps import MapInfo
+    from jaxga.maps.frame import MapFrame
+
+    info = MapInfo(name="lab", path=None, format="ros", builtin=False, grid=grid,
+                   frame=MapFrame(map_shape=grid.shape))
+    old = [(2, 1), (3, 2), (4, 3), (5, 5)]
+    done = SimpleNamespace(success=True, path=old[1:], length=3.65, status="replanned",
+                           prefix=old[:2], corner_rule="free",
+                           ga=[SimpleNamespace(preset="hybrid", map_name="lab")])
+    assert grid.start_xy != old[0] and grid.goal_xy != old[-1]
+    fig = plot_replan(done, grid, old, [(4, 4)], info=info)
+    ax = fig.axes[0]
+    lines = {ln.get_label(): ln for ln in ax.get_lines()}
+    assert tuple(lines["start"].get_xydata()[0]) == old[0]
+    assert tuple(lines["goal"].get_xydata()[0]) == old[-1]
+    title = ax.get_title()
+    assert "lab" in title and "hybrid" in title and "'free'" in title
+    plt.close(fig)
+
+
+# ------------------------------------------------------------------------ convergence
+def _history(values: np.ndarray) -> dict:
+    values = np.asarray(values, float)
+    return {"best": values, "mean": values, "std": np.zeros_like(values)}
+
+
+def _drawn(ax):
+    ax.figure.canvas.draw()
+    return [t.get_text() for t in ax.get_yticklabels() if t.get_text()]
+
+
+def test_the_fitness_axis_has_plain_labels_without_an_offset():
+    """Values like 9.6903e-3 with float noise of 1e-9: no "1e-9+9.6903e-3" offset."""
+    from jaxga.plot import plot_convergence
+
+    rng = np.random.default_rng(0)
+    noisy = 9.6903e-3 + 1e-9 * rng.random((3, 30))
+    ax = plot_convergence(_history(noisy))
+    labels = _drawn(ax)
+    assert ax.yaxis.get_offset_text().get_text() == ""
+    assert len(set(labels)) == len(labels) >= 3 and all("e" not in t for t in labels)
+    lo, hi = ax.get_ylim()
+    assert lo < 9.6903e-3 < hi and hi - lo > 1e-5  # the line mid-panel, not filling it
+    plt.close(ax.figure)
+    # a small real improvement: ticks written with as many digits as they need
+    rising = np.linspace(9.6903e-3, 9.6909e-3, 30)[None, :] + np.zeros((3, 1))
+    ax = plot_convergence(_history(rising))
+    labels = _drawn(ax)
+    assert ax.yaxis.get_offset_text().get_text() == ""
+    assert len(set(labels)) == len(labels) >= 3
+    locs = ax.get_yticks()  # each label is its tick's value, to a hundredth of a step
+    np.testing.assert_allclose([float(t) for t in labels], locs,
+                               atol=np.min(np.diff(locs)) / 100)
+    assert not [t for t in ax.texts if t.get_gid() == "flat-note"]
+    assert "(+0.00619 %)" in ax.get_lines()[0].get_label()  # the relative change
+    plt.close(ax.figure)
+
+
+def test_a_flat_convergence_curve_says_the_initial_population_held_the_best():
+    from jaxga.plot import plot_convergence
+
+    flat = np.full((4, 20), 2.32279e-3)
+    ax = plot_convergence(_history(flat), success=np.ones(4, bool),
+                          initial=np.full(4, 2.32279e-3))
+    notes = [t.get_text() for t in ax.texts if t.get_gid() == "flat-note"]
+    assert len(notes) == 1 and "unchanged from generation 0" in notes[0]
+    assert "initial population already held it" in notes[0]
+    assert ax.get_lines()[0].get_xdata()[0] == 0  # generation 0: the initial population
+    plt.close(ax.figure)
+    ax = plot_convergence(_history(flat))  # no initial fitness: generations 1..20
+    notes = [t.get_text() for t in ax.texts if t.get_gid() == "flat-note"]
+    assert len(notes) == 1 and "unchanged over generations 1 to 20" in notes[0]
+    plt.close(ax.figure)
+    some = np.r_[flat[:2], np.linspace(1e-3, 2e-3, 20)[None].repeat(2, axis=0)]
+    ax = plot_convergence(_history(some))
+    notes = [t.get_text() for t in ax.texts if t.get_gid() == "flat-note"]
+    assert notes == ["best fitness unchanged in 2 of 4 seeds"]
+    plt.close(ax.figure)
+
+
+def test_a_result_figure_notes_a_run_that_the_initial_population_solved(comparison, grid):
+    import dataclasses
+
+    r = comparison.results["imga"]
+    best = np.asarray(r.fitness, float)
+    solved = dataclasses.replace(
+        r, initial_fitness=best,
+        history={**r.history, "best": np.repeat(best[:, None], r.history["best"].shape[1],
+                                                axis=1)})
+    fig = plot_result(solved, grid)
+    notes = [t.get_text() for t in fig.axes[1].texts if t.get_gid() == "flat-note"]
+    assert len(notes) == 1 and "generation 0" in notes[0]
+    assert fig.axes[1].yaxis.get_offset_text().get_text() == ""
+    plt.close(fig)
