@@ -19,6 +19,7 @@ import math
 import os
 import re
 import sys
+import threading
 import time
 import warnings
 from collections.abc import Callable, Sequence
@@ -29,7 +30,7 @@ import jax
 import jax.numpy as jnp
 import numpy as np
 
-from jaxga import api
+from jaxga import api, export
 from jaxga.api import check_one_corner_rule, configured_rule, parallel
 from jaxga.api.compilation_cache import use_compilation_cache
 from jaxga.api.lowering import check_environment
@@ -41,6 +42,9 @@ from jaxga.api.parallel import (
     configure_from_args,
     env_int,
 )
+from jaxga.api.references import any_angle_references, octile_optimum
+from jaxga.api.result import json_number
+from jaxga.api.timeline import Timeline, process_age, time_line
 from jaxga.api.warmup import warmup
 from jaxga.compare import TESTS, check_metric, compare, split_presets
 from jaxga.config import registry
@@ -52,7 +56,6 @@ from jaxga.engine import check_file_keys_read, check_overrides_read
 from jaxga.maps import (
     builtin_names,
     builtin_scenario_path,
-    detect_format,
     load_map,
     load_map_info,
     read_scen,
@@ -60,7 +63,6 @@ from jaxga.maps import (
 )
 from jaxga.plot import plot_comparison, plot_main_effects, plot_replan, plot_result
 from jaxga.reference.fitness import fitness_optimum
-from jaxga.reference.optima import any_angle_shortest_path, shortest_path
 from jaxga.replan import replan
 from jaxga.smooth import smooth_population
 
@@ -76,6 +78,18 @@ def _parse_xy(text: str) -> tuple[int, int]:
             f"expected X,Y (two integers separated by a comma), got {text!r}"
         ) from None
     return x, y
+
+
+def _budget(text: str) -> float | None:
+    """``--budget``: seconds >= 0 (0: no limit)."""
+    try:
+        value = float(text)
+    except ValueError:
+        raise argparse.ArgumentTypeError(f"expected a number of seconds, got {text!r}") \
+            from None
+    if not math.isfinite(value) or value < 0:
+        raise argparse.ArgumentTypeError(f"expected a number of seconds >= 0, got {text!r}")
+    return value or None
 
 
 def _parse_point(text: str) -> tuple[float, float]:
@@ -119,8 +133,7 @@ def _add_map_arguments(p: argparse.ArgumentParser, rule_default: str = "strict")
     p.add_argument("--goal", type=_parse_xy, metavar="X,Y",
                    help="goal cell (default: the file's G or (W-1, H-1))")
     p.add_argument("--start-world", type=_parse_point, metavar="X,Y",
-                   help="ROS maps: the start in metres (world frame), instead of --start; "
-                   "with a negative X write --start-world=-1.5,2")
+                   help="ROS maps: the start in metres (world frame), instead of --start")
     p.add_argument("--goal-world", type=_parse_point, metavar="X,Y",
                    help="ROS maps: the goal in metres (world frame), instead of --goal")
     _add_source_arguments(p)
@@ -225,10 +238,8 @@ def _load_grid(args: argparse.Namespace):
 
 
 def _write_json(path: str, obj) -> None:
-    """Write ``obj`` as one line of JSON to ``path`` and say so on stdout."""
-    with open(path, "w", encoding="utf-8") as f:
-        json.dump(obj, f)
-        f.write("\n")
+    """Write ``obj`` as one line of JSON to ``path`` (atomically) and say so on stdout."""
+    export.atomic_write_text(path, json.dumps(obj) + "\n")
     print(f"wrote {path}")
 
 
@@ -256,20 +267,33 @@ def cmd_optimum(args: argparse.Namespace) -> int:
         # as `jaxga run`: --corner-rule, else a map.corner_rule the preset sets, else
         # the map's own rule
         args.corner_rule = configured_rule(args.corner_rule, config)
-    info, grid = _load_grid(args)
-    t0 = time.perf_counter()
-    octile = shortest_path(grid).raise_if_missing()
-    t1 = time.perf_counter()
-    any_angle = any_angle_shortest_path(grid).raise_if_missing()
+    timeline = _process_timeline()
+    with timeline.phase("load"):
+        info, grid = _load_grid(args)
+    frame = info.frame
+    with timeline.phase("references"):
+        octile = octile_optimum(grid).raise_if_missing()
+    progress = None if args.quiet else _Progress()
+    with timeline.phase("any_angle"):
+        bounds = any_angle_references(grid, octile, args.budget,
+                                      None if progress is None
+                                      else (lambda frac: progress("any-angle", frac)))
+    print(f"map          {info.name} ({grid.width} x {grid.height} cells, corner rule "
+          f"{grid.corner_rule!r}{'; ' + frame.describe() if frame.describe() else ''})")
+    print(f"start, goal  cells {grid.start_xy} -> {grid.goal_xy}" + _world_ends(frame, grid))
+    print(f"8-connected  {octile.length:.4f}{_metres(octile.length, frame)}  "
+          f"({octile.n_cells} cells, {timeline.seconds['references']:.3f} s)")
+    t_aa = timeline.seconds["any_angle"]
+    if math.isfinite(bounds.optimum):
+        print(f"any-angle    {bounds.optimum:.4f}{_metres(bounds.optimum, frame)}  "
+              f"({len(bounds.path)} waypoints, {t_aa:.3f} s)")
+    else:
+        print(f"any-angle    {bounds.note} ({t_aa:.3f} s); --budget 0 for no limit")
+    if math.isfinite(bounds.lower_bound):
+        print(f"lower bound  {bounds.lower_bound:.4f}{_metres(bounds.lower_bound, frame)}  "
+              "(Euclidean shortest path around the blocked cells, a proven bound of the "
+              "any-angle optimum)")
     t2 = time.perf_counter()
-    print(f"map          {info.name} ({grid.width} x {grid.height}, corner rule "
-          f"{grid.corner_rule!r})")
-    print(f"start, goal  {grid.start_xy} -> {grid.goal_xy}")
-    res = info.resolution
-    print(f"8-connected  {octile.length:.4f}{_metres(octile.length, res)}  "
-          f"({octile.n_cells} cells, {t1 - t0:.3f} s)")
-    print(f"any-angle    {any_angle.length:.4f}{_metres(any_angle.length, res)}  "
-          f"({any_angle.n_cells} waypoints, {t2 - t1:.3f} s)")
     fit = None
     if config is not None:
         fit = fitness_optimum(grid, config)
@@ -288,10 +312,20 @@ def cmd_optimum(args: argparse.Namespace) -> int:
             "goal": list(grid.goal_xy),
             "length": float(octile.length),
             "path": _xy_list(octile.path),
-            "any_angle_length": float(any_angle.length),
-            "any_angle_path": _xy_list(any_angle.path),
-            "resolution": res,
+            "any_angle_length": json_number(bounds.optimum),
+            "any_angle_path": _xy_list(bounds.path),
+            "any_angle_note": bounds.note,
+            "lower_bound": json_number(bounds.lower_bound),
+            "resolution": None if frame is None else frame.cell_size,
+            "frame": None if frame is None else frame.to_json(),
         }
+        if frame is not None and frame.has_metres:
+            out["start_world"], out["goal_world"] = frame.to_world(
+                np.array([grid.start_xy, grid.goal_xy], float)).round(4).tolist()
+            out["path_world"] = frame.to_world(np.asarray(octile.path, float)).round(4).tolist()
+            out["any_angle_path_world"] = (
+                frame.to_world(np.asarray(bounds.path, float)).round(4).tolist()
+                if len(bounds.path) else [])
         if fit is not None:
             out["fitness"] = {
                 "preset": config["name"], "method": config["fitness.method"],
@@ -378,7 +412,11 @@ def cmd_operators(args: argparse.Namespace) -> int:
 class _Progress:
     """Progress of a run on stderr, shown from the first update after the run has taken
     ``delay`` seconds (a quick run shows none): on a terminal a one-line bar redrawn in
-    place; on a pipe or a file (a log) one plain line per update, no carriage returns."""
+    place; on a pipe or a file (a log) one plain line per update, no carriage returns.
+
+    A phase that goes on for more than ``delay`` seconds without an update (a reference
+    search, a plot) is shown too, with its seconds so far (:meth:`tick`, called every half
+    second by a background thread between :meth:`start` and :meth:`close`)."""
 
     def __init__(self, stream: Any = None, clock: Callable[[], float] = time.perf_counter,
                  delay: float = 2.0) -> None:
@@ -389,9 +427,16 @@ class _Progress:
         self.t0 = clock()
         self.delay = delay
         self.shown = False
+        self.stage: str | None = None
+        self.stage_start = self.last = self.t0
+        self._stop: threading.Event | None = None
 
     def __call__(self, stage: str, frac: float) -> None:
-        if not self.shown and self.clock() - self.t0 < self.delay:
+        now = self.clock()
+        if stage != self.stage:
+            self.stage, self.stage_start = stage, now
+        self.last = now
+        if not self.shown and now - self.t0 < self.delay:
             return
         self.shown = True
         if not self.tty:
@@ -403,48 +448,156 @@ class _Progress:
         if stage == "evolve" and frac >= 1.0:
             print(file=self.stream)
 
+    def tick(self) -> None:
+        """Say that the current phase is still running, when it has gone on for more than
+        ``delay`` seconds and nothing was shown for ``delay`` seconds."""
+        now = self.clock()
+        if self.stage is None or now - self.last < self.delay \
+                or now - self.stage_start < self.delay:
+            return
+        self.last = self.clock()
+        self.shown = True
+        text = f"{self.stage} still running ({now - self.stage_start:.0f} s)"
+        if self.tty:
+            print(f"\r{text:49s}", end="", file=self.stream, flush=True)
+        else:
+            print(f"progress: {text}", file=self.stream, flush=True)
+
+    def start(self) -> _Progress:
+        """Call :meth:`tick` every half second in a background thread until :meth:`close`."""
+        self._stop = threading.Event()
+
+        def beat(stop: threading.Event = self._stop) -> None:
+            while not stop.wait(0.5):
+                self.tick()
+
+        threading.Thread(target=beat, daemon=True, name="jaxga-progress").start()
+        return self
+
+    def close(self) -> None:
+        """Stop the background thread (and end a bar's line on a terminal)."""
+        if self._stop is not None:
+            self._stop.set()
+        if self.tty and self.shown:
+            print(file=self.stream, flush=True)
+
 
 def cmd_run(args: argparse.Namespace) -> int:
-    """``jaxga run``: many seeds of a preset on a map; summary table, JSON, plot."""
+    """``jaxga run``: many seeds of a preset on a map; summary table, JSON, path, plot.
+    Every phase is timed, from the process's start to the last file written
+    (:mod:`jaxga.api.timeline`); the time line is printed last."""
 
+    timeline = _process_timeline()
     lead = parallel.process_index() == 0
-    progress = None if args.quiet or not lead else _Progress()
-    source = _map_for_run(args)
-    resolution = getattr(source, "resolution", None)
+    progress = None if args.quiet or not lead else _Progress().start()
+    try:
+        return _run_and_report(args, timeline, progress)
+    finally:
+        if progress is not None:
+            progress.close()
+
+
+def _run_and_report(args: argparse.Namespace, timeline: Timeline,
+                    progress: _Progress | None) -> int:
+    """:func:`cmd_run`'s work, each phase timed on ``timeline`` and shown on ``progress``."""
+
+    def phase(name: str):
+        if progress is not None:
+            progress(name.replace("_", "-"), 0.0)
+        return timeline.phase(name)
+
+    with phase("load"):
+        info = _map_for_run(args)
+    if args.path_out and (info.frame is None or not info.frame.has_metres):
+        raise JaxgaError(f"cannot write --path-out {args.path_out}: the map has no resolution "
+                         "and origin (a ROS map_server .yaml has them); --json has the path "
+                         "in cells")
     result = api.run(
-        args.preset, source, seeds=args.seeds, generations=args.generations,
+        args.preset, info, seeds=args.seeds, generations=args.generations,
         corner_rule=args.corner_rule, variant=args.variant, sets=args.set or (),
-        progress=progress,
-        population_capacity=args.population_capacity, size_class=args.size_class,
+        progress=progress, population_capacity=args.population_capacity,
+        size_class=args.size_class, any_angle_budget=None if args.exact_optimum else "auto",
     )
-    if _not_lead(f"{len(result.seeds)} seeds", result.timing["total_s"]):
+    for key, seconds in result.timing.items():
+        if key != "total_s":
+            timeline.add(key[:-2], seconds)
+    if _not_lead(f"{len(result.seeds)} seeds", timeline.elapsed()):
         return 0
-    print(result.summary())
-    if resolution is not None:
-        print(_metres_summary(result, resolution))
+    print(result.summary(time=False))
     curves = None
-    grid = (_grid_for_run(args, rule=result.corner_rule)
-            if args.plot or (args.smooth and result.success.any()) else None)
     if args.smooth and result.success.any():
-        curves = smooth_runs(result, grid)
+        with phase("smooth"):
+            curves = smooth_runs(result, info.grid)
         print(_smooth_summary(result, curves))
-    if args.json:
-        doc = {**result.to_json(), "resolution": resolution}
-        if curves is not None:
-            for run, curve in zip(doc["runs"], curves):
-                run["smooth"] = curve
-        _write_json(args.json, doc)
+    best = _best_seed(result)
     if args.plot:
-        best = None
-        if curves is not None:
-            i = int(np.nanargmin(np.where(result.success, result.length, np.nan)))
-            best = np.asarray(curves[i]["points"]) if curves[i] else None
-        plot_result(result, grid, args.plot, curve=best)
+        with phase("plot"):
+            curve = None
+            if curves is not None and best is not None and curves[best]:
+                curve = np.asarray(curves[best]["points"])
+            plot_result(result, info.grid, args.plot, curve=curve, info=info)
         print(f"wrote {args.plot}")
+    if args.path_out and best is not None:
+        with phase("write"):
+            export.write_path(args.path_out, _robot_path(result, best, curves))
+        print(f"wrote {args.path_out} (seed {int(result.seeds[best])}, "
+              f"{'smooth curve' if _use_curve(curves, best) else 'waypoints'}, metres)")
+    if args.json:
+        with phase("write"):
+            doc = result.to_json()
+            doc["timing"] = timeline.as_dict()  # every phase but this write
+            if curves is not None:
+                for run, curve in zip(doc["runs"], curves):
+                    run["smooth"] = _curve_json(curve, result.frame)
+            _write_json(args.json, doc)
+    print(time_line(timeline.as_dict()))
     if not result.success.any():
         print(f"jaxga: no path: {result.reason}", file=sys.stderr)
         return EXIT_NO_PATH
     return 0
+
+
+def _process_timeline() -> Timeline:
+    """A timeline that starts at the process's start: its first phase, ``import``, is the
+    interpreter's start and the imports (where the system says when the process began)."""
+    age = process_age()
+    timeline = Timeline()
+    if age is not None:
+        timeline.start -= age
+        timeline.add("import", age)
+    return timeline
+
+
+def _best_seed(result) -> int | None:
+    """The successful seed with the shortest post-optimised path, or None."""
+    if not result.success.any():
+        return None
+    return int(np.nanargmin(np.where(result.success, result.length, np.nan)))
+
+
+def _use_curve(curves, i: int) -> bool:
+    """Whether seed ``i``'s smooth curve is the path to export: smoothed and certified
+    clear (a curve that fell back to the polyline is the waypoint path)."""
+    return bool(curves is not None and curves[i] and curves[i]["clear"]
+                and not curves[i]["used_fallback"])
+
+
+def _robot_path(result, i: int, curves) -> np.ndarray:
+    """Seed ``i``'s path in metres for ``--path-out``: its smooth curve when it has a
+    certified one, else its post-optimised waypoints."""
+    if _use_curve(curves, i):
+        return result.frame.to_world(np.asarray(curves[i]["points"], float))
+    return result.world_path(i)
+
+
+def _curve_json(curve: dict | None, frame) -> dict | None:
+    """A smooth curve's JSON, with its points, length and clearance in metres too."""
+    if curve is None or frame is None or not frame.has_metres:
+        return curve
+    return {**curve,
+            "points_world": frame.to_world(np.asarray(curve["points"], float)).round(4).tolist(),
+            "length_m": curve["length"] * frame.cell_size,
+            "min_clearance_m": curve["min_clearance"] * frame.cell_size}
 
 
 def smooth_runs(result, grid) -> list[dict | None]:
@@ -563,7 +716,8 @@ def cmd_compare(args: argparse.Namespace) -> int:
     comp = compare(presets, grid, seeds=args.seeds, metric=args.metric, test=args.test,
                    progress=progress, generations=args.generations,
                    corner_rule=args.corner_rule, sets=args.set or (),
-                   size_class=args.size_class)
+                   size_class=args.size_class,
+                   any_angle_budget=None if args.exact_optimum else "auto")
     if _not_lead(f"{len(presets)} presets x {args.seeds} seeds",
                  sum(r.timing["total_s"] for r in comp.results.values())):
         return 0
@@ -583,39 +737,26 @@ def cmd_compare(args: argparse.Namespace) -> int:
 
 
 def _map_for_run(args: argparse.Namespace):
-    """The map as named on the command line: the name itself, or with --start/--goal the
-    loaded map with those endpoints, under the run's corner rule (the preset's unless
-    --corner-rule), as a MapInfo so that the results keep the map's name."""
+    """The map of the command line loaded with its options (endpoints, inflation,
+    coarsening) under the run's corner rule (the preset's unless --corner-rule), as a
+    MapInfo: the results keep the map's name and frame (cells, metres)."""
 
-    if _plain_map(args) and detect_format_of(args.map) != "ros":
-        return args.map
     return _load_info(args, args.corner_rule or _preset_rule(args))
 
 
-def detect_format_of(source: str) -> str | None:
-    """The format of a map file (None for a built-in name or a missing file)."""
-    if source in builtin_names() or not Path(source).is_file():
-        return None
-    return detect_format(source)
-
-
-def _metres(length: float, resolution: float | None) -> str:
-    """`` (X m)`` for a length in cells on a map with a resolution, else ``""``."""
-    if resolution is None or not math.isfinite(length):
+def _metres(length: float, frame) -> str:
+    """`` (X m)`` for a length in planning cells on a map with a resolution, else ``""``."""
+    if frame is None or frame.cell_size is None or not math.isfinite(length):
         return ""
-    return f" ({length * resolution:.3f} m)"
+    return f" ({length * frame.cell_size:.3f} m)"
 
 
-def _metres_summary(result, resolution: float) -> str:
-    """One line: the successful seeds' lengths in metres."""
-    ok = result.success
-    if not ok.any():
-        return f"metres      resolution {resolution:g} m per cell; no path found"
-    post, raw = result.length[ok] * resolution, result.raw_length[ok] * resolution
-    return (f"metres      resolution {resolution:g} m per cell: length mean {post.mean():.3f} "
-            f"m, best {post.min():.3f} m (raw mean {raw.mean():.3f} m); optimum "
-            f"{result.optimum * resolution:.3f} m, any-angle "
-            f"{result.any_angle_optimum * resolution:.3f} m")
+def _world_ends(frame, grid) -> str:
+    """``, (x, y) -> (x, y) m`` for the endpoints on a map with a resolution, else ``""``."""
+    if frame is None or not frame.has_metres:
+        return ""
+    (sx, sy), (gx, gy) = frame.to_world(np.array([grid.start_xy, grid.goal_xy], float))
+    return f", ({sx:.3f}, {sy:.3f}) -> ({gx:.3f}, {gy:.3f}) m"
 
 
 def _grid_for_run(args: argparse.Namespace, rule: str):
@@ -693,31 +834,85 @@ def _read_path_json(path: str, run_index: int | None) -> list[tuple[int, int]]:
 
 def cmd_replan(args: argparse.Namespace) -> int:
     """``jaxga replan``: re-plan a path around new obstacles from the robot's cell
-    (MPMGA 5.2.1 / 5.3.1, SPEC 10)."""
+    (MPMGA 5.2.1 / 5.3.1). The path's own ends are its endpoints (never the map's
+    defaults); new obstacles grow like the map (``--inflate`` / ``--robot-radius``)."""
 
     use_compilation_cache()
-    path = _read_path_json(args.path_json, args.run)
-    obstacles = [xy for text in args.obstacles or () for xy in _parse_obstacles(text)]
+    timeline = _process_timeline()
     if args.corner_rule is not None:
         check_corner_rule(args.corner_rule)
     rule = args.corner_rule or _preset_rule(args)
-    grid = _load_info(args, rule).grid
+    with timeline.phase("load"):
+        info = _load_info(args, rule)
+        path = _read_path_json(args.path_json, args.run)
+    grid = info.grid
+    obstacles = [xy for text in args.obstacles or () for xy in _parse_obstacles(text)]
+    for text in args.obstacles_world or ():
+        obstacles += [info.frame.cell_of(p, grid.shape, "--obstacles-world point")
+                      for p in _parse_points(text, "--obstacles-world")]
+    position = args.position
+    if args.position_world is not None:
+        if position is not None:
+            raise JaxgaError("give the robot's position in cells (--position) or in metres "
+                             "(--position-world), not both")
+        position = info.frame.cell_of(args.position_world, grid.shape, "--position-world")
+    if position is None:
+        raise JaxgaError("give the robot's position: --position X,Y (cells) or "
+                         "--position-world X,Y (metres)")
     result = replan(
-        grid, path, obstacles, args.position, args.preset, seeds=args.seeds,
-        generations=args.generations, population=args.population, window=args.window,
-        plan_from=args.plan_from, post=args.post, fallback=args.fallback,
-        variant=args.variant, sets=tuple(args.set or ()),
+        grid, path, obstacles, position, args.preset, seeds=args.seeds,
+        generations=args.generations, population=args.population,
+        window=_window_option(args.window), plan_from=args.plan_from, post=args.post,
+        fallback=args.fallback, variant=args.variant, sets=tuple(args.set or ()),
+        inflate=_inflation_cells(args, info),
     )
+    timeline.add("replan", result.wall_s)
     print(result.summary())
     if args.json:
-        _write_json(args.json, result.to_json())
+        with timeline.phase("write"):
+            _write_json(args.json, result.to_json(info.frame))
     if args.plot:
-        plot_replan(result, grid, path, obstacles, args.plot)
+        with timeline.phase("plot"):
+            plot_replan(result, grid.replace(start=path[0], goal=path[-1]), path, obstacles,
+                        args.plot, info=info)
         print(f"wrote {args.plot}")
+    print(time_line(timeline.as_dict()))
     if not result.success:
         print(f"jaxga: no path: {result.reason}", file=sys.stderr)
         return EXIT_NO_PATH
     return 0
+
+
+def _window_option(text: str) -> int | str | None:
+    """``--window``: ``auto`` (default), ``none`` (the whole map) or a side in cells."""
+    if text in ("auto", "none"):
+        return None if text == "none" else "auto"
+    try:
+        return int(text)
+    except ValueError:
+        raise JaxgaError(f"--window must be auto, none or a side in cells, got {text!r}") \
+            from None
+
+
+def _inflation_cells(args: argparse.Namespace, info) -> float:
+    """The growth of the map's obstacles in planning cells (``--inflate`` cells or
+    ``--robot-radius`` metres), which new obstacles get too; 0 without either."""
+    k = info.frame.coarsen if info.frame is not None else 1
+    if args.robot_radius is not None:
+        return args.robot_radius / info.frame.resolution / k
+    return (args.inflate or 0.0) / k
+
+
+def _parse_points(text: str, option: str) -> list[tuple[float, float]]:
+    """``X,Y;X,Y;...`` in metres (empty: none)."""
+    points = []
+    for part in text.replace(" ", "").split(";"):
+        if part:
+            try:
+                points.append(_parse_point(part))
+            except argparse.ArgumentTypeError as e:
+                raise ParameterError(f"{option}: {e}") from None
+    return points
 
 
 def _int_list(text: str) -> list[int]:
@@ -753,10 +948,13 @@ def cmd_warmup(args: argparse.Namespace) -> int:
     return 0
 
 
-SIZE_CLASS_HELP = ("run on the map padded with blocked cells to its size class (sides of 32 "
-                   "or 64 cells): maps of one class share compiled programs (results are "
-                   "the map's; imga, mpmga and iga_zhu, or a capacity that changes, give "
-                   "other runs than the unpadded map's: decision 029)")
+SIZE_CLASS_HELP = ("pad the map with blocked cells to its size class (each side 32, 64, 128, "
+                   "256, 384 or 512 cells) so that maps of one class share compiled "
+                   "programs; default: on for maps with a side over 64, off for smaller ones "
+                   "(the papers' maps keep their shapes); results are the map's (decision "
+                   "030)")
+EXACT_HELP = ("compute the exact any-angle optimum whatever it costs (default: within the "
+              "GA's own time; beyond it the gap is to a proven lower bound)")
 
 
 class _Parser(argparse.ArgumentParser):
@@ -782,6 +980,10 @@ def build_parser() -> argparse.ArgumentParser:
     p.add_argument("--variant", help="a preset variant, e.g. 50x50 for agacd")
     p.add_argument("--set", action="append", metavar="KEY=VALUE",
                    help="override a preset key, e.g. fitness.omega=0.5")
+    p.add_argument("--budget", type=_budget, default=None, metavar="SECONDS",
+                   help="give the exact any-angle optimum at most this long (default: no "
+                   "limit); beyond it the lower bound is reported")
+    p.add_argument("--quiet", action="store_true", help="no progress lines")
     p.add_argument("--json", metavar="OUT", help="write the optima and paths as JSON")
     p.set_defaults(func=cmd_optimum)
 
@@ -793,8 +995,15 @@ def build_parser() -> argparse.ArgumentParser:
                    "population.size; not the key population.capacity, the cells of a "
                    "path); a run's random numbers depend on it: give a DOE's or sweep's "
                    "population_capacity to repeat one of its points bit for bit")
-    p.add_argument("--size-class", action="store_true", help=SIZE_CLASS_HELP)
-    p.add_argument("--json", metavar="OUT", help="write every run as JSON")
+    p.add_argument("--size-class", action=argparse.BooleanOptionalAction, default=None,
+                   help=SIZE_CLASS_HELP)
+    p.add_argument("--exact-optimum", action="store_true", help=EXACT_HELP)
+    p.add_argument("--json", metavar="OUT", help="write every run as JSON (paths in cells "
+                   "and, on a map with a resolution, in metres)")
+    p.add_argument("--path-out", metavar="FILE.csv|FILE.yaml",
+                   help="write the best seed's path in metres (a map with a resolution): "
+                   "x,y rows (.csv) or a nav_msgs/Path in YAML (.yaml), frame 'map', "
+                   "yaw along the path; the smooth curve with --smooth")
     p.add_argument("--plot", metavar="OUT.png", help="plot the map, best paths and convergence")
     p.add_argument("--smooth", action="store_true",
                    help="smooth every path found into a certified-clear cubic B-spline "
@@ -807,15 +1016,22 @@ def build_parser() -> argparse.ArgumentParser:
     p = sub.add_parser("replan", help="re-plan a path around new obstacles (MPMGA 5.2.1)")
     p.add_argument("--map", required=True, help=MAP_HELP)
     _add_source_arguments(p)
+    _add_coarsen_argument(p)
     p.add_argument("--path-json", required=True, metavar="FILE",
                    help="the planned path: a JSON list of [x, y], jaxga optimum's JSON, or "
                    "jaxga run's JSON (its raw path)")
     p.add_argument("--run", type=int, metavar="I", help="with jaxga run's JSON: the run to use "
                    "(default: the successful run with the shortest raw path)")
     p.add_argument("--obstacles", action="append", metavar="X,Y;X,Y...",
-                   help="cells that became blocked (repeatable)")
-    p.add_argument("--position", required=True, type=_parse_xy, metavar="X,Y",
+                   help="cells that became blocked (repeatable); they grow like the map "
+                   "(--inflate, --robot-radius)")
+    p.add_argument("--obstacles-world", action="append", metavar="X,Y;X,Y...",
+                   help="points in metres that became blocked (a map with a resolution; "
+                   "repeatable)")
+    p.add_argument("--position", type=_parse_xy, metavar="X,Y",
                    help="the robot's current cell on the path")
+    p.add_argument("--position-world", type=_parse_point, metavar="X,Y",
+                   help="the robot's position in metres (the path cell holding it)")
     p.add_argument("--corner-rule", default=None, metavar="RULE",
                    help=f"one of {', '.join(CORNER_RULES)} (default: {RULE_DEFAULT})")
     p.add_argument("--preset", default="hybrid", help="the GA preset (default hybrid, whose "
@@ -825,8 +1041,10 @@ def build_parser() -> argparse.ArgumentParser:
     p.add_argument("--generations", type=int, default=20, help="GA generations (default 20)")
     p.add_argument("--population", type=int, default=10,
                    help="population size, per island for island presets (default 10)")
-    p.add_argument("--window", type=int, metavar="S",
-                   help="run the GA on an S x S crop around the re-planned part")
+    p.add_argument("--window", default="auto", metavar="S|auto|none",
+                   help="run the GA on an S x S crop around the re-planned part (default "
+                   "auto: the smallest of 32, 64, 128, 256 that holds it; none: the whole "
+                   "map)")
     p.add_argument("--plan-from", choices=("robot", "blockage"), default="robot",
                    help="plan from the robot's cell (default) or the cell before the blockage")
     p.add_argument("--post", action="store_true",
@@ -878,7 +1096,9 @@ def build_parser() -> argparse.ArgumentParser:
     p.add_argument("--test", default="mannwhitneyu",
                    help="mannwhitneyu (default; independent samples) or wilcoxon (paired "
                    "by seed; only when the presets share random numbers)")
-    p.add_argument("--size-class", action="store_true", help=SIZE_CLASS_HELP)
+    p.add_argument("--size-class", action=argparse.BooleanOptionalAction, default=None,
+                   help=SIZE_CLASS_HELP)
+    p.add_argument("--exact-optimum", action="store_true", help=EXACT_HELP)
     p.add_argument("--generations", type=int, help="override every preset's generations")
     p.add_argument("--set", action="append", metavar="KEY=VALUE",
                    help="override a configuration key in every preset")
@@ -917,9 +1137,10 @@ def build_parser() -> argparse.ArgumentParser:
     p.add_argument("--corner-rule", default=None, metavar="RULE",
                    help=f"one of {', '.join(CORNER_RULES)} (default: strict on the open maps, "
                    "a named map's own)")
-    p.add_argument("--size-class", action="store_true",
-                   help="compile the size classes' programs (for runs with --size-class): "
-                   "--sizes 32,64 then serve every map up to 64 x 64")
+    p.add_argument("--size-class", action=argparse.BooleanOptionalAction, default=None,
+                   help="compile the size classes' programs (default: as jaxga run, the "
+                   "classes of sizes over 64: --sizes 128,256,384,512 serve every map over "
+                   "64 x 64; --size-class also pads 32 and 64)")
     add_parallel_arguments(p)
     p.set_defaults(func=cmd_warmup)
 
@@ -935,16 +1156,19 @@ def check_outputs(args: argparse.Namespace) -> None:
     pid = getattr(args, "process_id", None)
     if pid is None:
         pid = env_int(ENV_PROCESS_ID)
-    for option in ("json", "plot"):
+    if getattr(args, "path_out", None):
+        export.path_format(args.path_out)  # .csv or .yaml, refused in one line otherwise
+    for option in ("json", "plot", "path_out"):
         path = getattr(args, option, None)
         if not path or pid not in (None, 0):  # only process 0 writes the outputs
             continue
         folder = Path(path).parent
         if Path(path).is_dir():
-            raise JaxgaError(f"cannot write --{option} {path}: it is a directory")
+            raise JaxgaError(f"cannot write --{option.replace('_', '-')} {path}: it is a "
+                             "directory")
         if not folder.is_dir() or not os.access(folder, os.W_OK):
-            raise JaxgaError(f"cannot write --{option} {path}: directory {str(folder)!r} "
-                             "does not exist or is not writable")
+            raise JaxgaError(f"cannot write --{option.replace('_', '-')} {path}: directory "
+                             f"{str(folder)!r} does not exist or is not writable")
     plot = getattr(args, "plot", None)
     if plot:
         from matplotlib.figure import Figure
@@ -966,14 +1190,16 @@ def check_outputs(args: argparse.Namespace) -> None:
                                  f"{suffix!r} here ({err})") from None
 
 
-_NEGATIVE_XY = re.compile(r"-\d+,")
-_XY_OPTIONS = ("--start", "--goal", "--position", "--obstacles")
+_NEGATIVE_XY = re.compile(r"-[\d.]")
+_XY_OPTIONS = ("--start", "--goal", "--position", "--obstacles", "--start-world",
+               "--goal-world", "--position-world", "--obstacles-world")
 
 
 def _join_negative_xy(argv: Sequence[str]) -> list[str]:
-    """``--start -1,0`` as ``--start=-1,0`` (also ``--goal``, ``--position``,
-    ``--obstacles`` and their abbreviations): argparse would take ``-1,0`` for an option
-    and say "expected one argument" instead of naming the cell as off the map."""
+    """``--start -1,0`` as ``--start=-1,0``, ``--start-world -1.5,2`` as
+    ``--start-world=-1.5,2`` (every coordinate option, cells or metres, and their
+    abbreviations): argparse would take ``-1.5,2`` for an option and say "expected one
+    argument" instead of reading the usual negative coordinates of a ROS map."""
     out: list[str] = []
     for arg in argv:
         option = out[-1] if out else ""

@@ -243,8 +243,8 @@ class Comparison:
                 "P(a = b)/2" if self.test == "mannwhitneyu" else
                 "two-sided Wilcoxon signed-rank (paired by seed)")
         return (f"map {r.map_name} (corner rule {r.corner_rule!r}), {len(r.seeds)} seeds; "
-                f"optimum: 8-connected {self.optimum:.4f}, any-angle "
-                f"{self.any_angle_optimum:.4f}\ntests: {test}; failed seeds excluded; p "
+                f"optimum: 8-connected {self.optimum:.4f}, {r.any_angle_text()}\ntests: "
+                f"{test}; failed seeds excluded; p "
                 f"Holm-corrected over the {len(self.tests())} pairs of each metric")
 
     def summary(self, verbose: bool = False) -> str:
@@ -417,7 +417,7 @@ def compare_results(
     if metric not in metrics:
         metrics = (metric,) + metrics
     rs = list(results.values())
-    keys = {(r.map_name, r.corner_rule, r.optimum, r.any_angle_optimum) for r in rs}
+    keys = {(r.map_name, r.corner_rule, r.optimum) for r in rs}
     if len(keys) > 1:
         raise ParameterError("the results to compare are on different maps or corner rules: "
                              + "; ".join(f"{k[0]} ({k[1]})" for k in sorted(keys, key=str)))
@@ -488,7 +488,7 @@ def _options_per_preset(specs, grid, common: Mapping[str, Any]
                   if k in option_names or k.replace("__", ".") not in own}
         merged.update({k: v for k, v in ov.items() if k != "sets"})
         merged_sets = tuple(t for t in sets if parse_set(t)[0] not in own) + own_sets
-        config, loaded, _ = load_problem(preset, grid, merged.get("corner_rule"),
+        config, loaded, _, _ = load_problem(preset, grid, merged.get("corner_rule"),
                                          merged.get("variant"), merged_sets,
                                          {k: v for k, v in merged.items() if k not in RUN_OPTIONS},
                                          merged.get("generations"), check_read=False)
@@ -550,6 +550,20 @@ def split_presets(text: str) -> list[str]:
     return [p.strip() for p in text.split(",") if p.strip()]
 
 
+def same_references(results: Mapping[str, Result]) -> dict[str, Result]:
+    """``results`` measured against one reference: each preset's run computes the any-angle
+    optimum within its own budget (:mod:`jaxga.api.references`), so where one run got it
+    and another only its lower bound, every result gets the exact value, so that their
+    gaps compare."""
+    exact = [r for r in results.values() if math.isfinite(r.any_angle_optimum)]
+    if not exact:
+        return dict(results)
+    best = exact[0]
+    return {k: dataclasses.replace(r, any_angle_optimum=best.any_angle_optimum,
+                                   any_angle_note="", lower_bound=best.lower_bound)
+            for k, r in results.items()}
+
+
 def compare(
     presets: Sequence[PresetSpec] | Mapping[str, PresetSpec] | str,
     grid: Grid | str,
@@ -606,6 +620,6 @@ def compare(
         if progress is not None:
             progress(label)
         results[label] = run(preset, grid, seeds, **options[label])
-    comparison = compare_results(results, metric=metric, metrics=metrics, test=test,
-                                 alpha=alpha)
+    comparison = compare_results(same_references(results), metric=metric, metrics=metrics,
+                                 test=test, alpha=alpha)
     return dataclasses.replace(comparison, left_out=left_out)

@@ -814,7 +814,7 @@ def run_doe(
             block = as_integer(block)
         except TypeError:
             raise ParameterError(f"block must be an integer >= 1, got {block!r}") from None
-    config, loaded, map_name = load_problem(preset, grid, corner_rule, variant, sets, overrides,
+    config, loaded, map_name, _ = load_problem(preset, grid, corner_rule, variant, sets, overrides,
                                             generations)
     check_factors(config, factors)
     overridden = overridden_keys(overrides, sets)

@@ -71,7 +71,8 @@ from jaxga.config.schema import SCHEMA
 from jaxga.core.errors import EndpointError, JaxgaError, ParameterError
 from jaxga.core.grid import Grid
 from jaxga.maps import rectangles_map
-from jaxga.maps.preprocess import reachable
+from jaxga.maps.frame import MapFrame
+from jaxga.maps.preprocess import inflate_blocked, reachable, reachable_np
 from jaxga.reference.optima import clear_np, path_length, shortest_path, shortest_path_np
 
 __all__ = [
@@ -164,11 +165,21 @@ class ReplanResult:
                      f"wall {self.wall_s:.3f}")
         return "\n".join(lines)
 
-    def to_json(self) -> dict[str, Any]:
-        """A JSON-serialisable dict (the ``--json`` layout of ``jaxga replan``)."""
+    def to_json(self, frame: MapFrame | None = None) -> dict[str, Any]:
+        """A JSON-serialisable dict (the ``--json`` layout of ``jaxga replan``); with a
+        ``frame`` (:mod:`jaxga.maps.frame`) the path also in metres (``path_world``,
+        ``length_m``) and in the map file's cells (``map_path``, when coarsened)."""
         def xy(p):
             return None if p is None else [int(p[0]), int(p[1])]
 
+        extra: dict[str, Any] = {}
+        if frame is not None and self.success:
+            cells = np.asarray(self.path, float)
+            if frame.coarsen > 1:
+                extra["map_path"] = frame.map_cell(cells.astype(np.int64)).tolist()
+            if frame.has_metres:
+                extra["path_world"] = frame.to_world(cells).round(4).tolist()
+                extra["length_m"] = float(self.length * frame.cell_size)
         return {
             "success": self.success, "status": self.status, "reason": self.reason,
             "corner_rule": self.corner_rule, "path": [xy(p) for p in self.path],
@@ -183,6 +194,7 @@ class ReplanResult:
             "used_fallback": self.used_fallback, "latency_s": self.latency_s,
             "compile_s": self.compile_s, "wall_s": self.wall_s,
             "prefix": [xy(p) for p in self.prefix],
+            **extra,
         }
 
 
@@ -233,7 +245,7 @@ def _obstacle_mask(new_obstacles: Any, h: int, w: int) -> np.ndarray:
     mask = np.zeros((h, w), bool)
     for x, y in _as_xy_list(new_obstacles, "new_obstacles"):
         if not _on_map((x, y), w, h):
-            raise ParameterError(f"new obstacle ({x}, {y}) is off the {w} x {h} map")
+            raise ParameterError(f"new obstacle cell ({x}, {y}) is off the {w} x {h} map")
         mask[y, x] = True
     return mask
 
@@ -281,6 +293,25 @@ def _dedupe(path: Sequence[XY]) -> list[XY]:
         if not out or out[-1] != c:
             out.append(c)
     return out
+
+
+WINDOW_SIDES: tuple[int, ...] = (32, 64, 128, 256)
+"""Window sides ``window="auto"`` tries, smallest first: a few shapes, so that the
+compiled programs of one side serve every re-plan of that size on any map."""
+
+WINDOW_MARGIN = 8
+"""Cells ``window="auto"`` keeps at least between the re-planned pair and a window's edge,
+room for a detour."""
+
+
+def _window_sizes(window: int | str | None, a: XY, b: XY, h: int, w: int) -> list[int]:
+    """The window sides to try for a re-plan from ``a`` to ``b`` (see :func:`replan`)."""
+    if window is None:
+        return []
+    if window != "auto":
+        return [int(window)]
+    span = max(abs(a[0] - b[0]), abs(a[1] - b[1]))
+    return [s for s in WINDOW_SIDES if span + 2 * WINDOW_MARGIN <= s and s < max(h, w)]
 
 
 def _window_box(a: XY, b: XY, size: int, h: int, w: int) -> tuple[int, int, int, int] | None:
@@ -339,10 +370,11 @@ def replan(
     seeds: int | Sequence[int] = DEFAULT_SEEDS,
     generations: int = DEFAULT_GENERATIONS,
     population: int | None = DEFAULT_POPULATION,
-    window: int | None = None,
+    window: int | str | None = "auto",
     plan_from: str = "robot",
     post: bool = False,
     fallback: bool = False,
+    inflate: float = 0.0,
     **overrides: Any,
 ) -> ReplanResult:
     """Re-plan the rest of ``path`` around ``new_obstacles`` from the robot's cell.
@@ -367,16 +399,22 @@ def replan(
         generations: GA generations (small: this is a real-time re-plan).
         population: ``population.size`` override (per island for island presets); None
             keeps the preset's.
-        window: if given, the GA runs on a ``window`` x ``window`` crop of the map around
-            the planning start and the rejoin cell, so one compiled program serves every
+        window: the GA runs on a ``window`` x ``window`` crop of the map around the
+            planning start and the rejoin cell, so one compiled program serves every
             map size; when they do not fit in the window or the crop cuts them apart,
-            the whole map is used.
+            the whole map is used. ``"auto"`` (default): the smallest of
+            :data:`WINDOW_SIDES` that holds both with a margin and joins them (the cost
+            of a re-plan then follows the detour, not the map); None: the whole map.
         plan_from: ``"robot"`` (MPMGA, SPEC 10: plan from the robot's cell) or
             ``"blockage"`` (from the last path cell before the blocked step).
         post: splice the GA's post-optimised waypoint segment instead of its raw
             8-connected one.
         fallback: if no seed finds a segment, splice the exact A* segment and flag it
             (``used_fallback``) instead of returning ``success=False``.
+        inflate: grow the new obstacles by this many cells (centre to centre,
+            :func:`jaxga.maps.preprocess.inflate_blocked`), as the map was grown for the
+            robot's size (``--inflate``, ``--robot-radius``), so that the new path keeps
+            the same distance from them.
         overrides: further configuration overrides for :func:`jaxga.run`
             (``mutation__temperature_c1=...``; checked at once, as :func:`jaxga.run`
             checks them, also when the path needs no GA run).
@@ -394,15 +432,12 @@ def replan(
         raise ParameterError(f"grid must be a jaxga.Grid, got {type(grid).__name__}")
     if plan_from not in ("robot", "blockage"):
         raise ParameterError(f"plan_from must be 'robot' or 'blockage', got {plan_from!r}")
-    if window is not None and (isinstance(window, bool) or not isinstance(window, int)
-                               or window < 2):
-        raise ParameterError(f"window must be an integer >= 2 or None, got {window!r}")
+    if window != "auto" and window is not None and (
+            isinstance(window, bool) or not isinstance(window, int) or window < 2):
+        raise ParameterError(f"window must be 'auto', an integer >= 2 or None, got "
+                             f"{window!r}")
     if population is not None:  # checked now, also when no GA run is needed
         SCHEMA["population.size"].check("population", population)
-    # The GA's configuration is checked now too (overrides that nothing reads, key
-    # combinations), not only when a blocked path needs a GA run.
-
-    api.check_run(preset, grid, **_run_options(overrides, generations, population))
     h, w = grid.height, grid.width
     rule = grid.corner_rule
     cells = _dedupe(_as_xy_list(path, "path"))
@@ -412,6 +447,8 @@ def replan(
         if not _on_map(c, w, h):
             raise ParameterError(f"path cell {c} is off the {w} x {h} map")
     added = _obstacle_mask(new_obstacles, h, w)
+    if inflate:
+        added = inflate_blocked(added, inflate) & ~grid.blocked_np()
     blocked = grid.blocked_np() | added
 
     # -- the robot's cell
@@ -430,8 +467,14 @@ def replan(
             raise ParameterError(f"robot cell {robot} is not on the path")
         i = cells.index(robot)
     if blocked[robot[1], robot[0]]:
-        why = "a new obstacle" if added[robot[1], robot[0]] else "an obstacle of the map"
+        why = ("a new obstacle" + (f" or within {inflate:g} cells of one" if inflate else "")
+               if added[robot[1], robot[0]] else "an obstacle of the map")
         raise EndpointError(f"robot cell {robot} is blocked ({why})")
+    # The GA's configuration is checked now (overrides that nothing reads, key
+    # combinations), not only when a blocked path needs a GA run; on the map with the
+    # robot's cell as its endpoints (never the map's default corners).
+    api.check_run(preset, grid.replace(start=robot, goal=robot),
+                  **_run_options(overrides, generations, population, grid))
     prefix = cells[: i + 1]
     rest = cells[i:]
     goal = rest[-1]
@@ -520,19 +563,22 @@ def _plan_segment(work: Grid, blocked: np.ndarray, start: XY, rejoin: XY, preset
         return [start], info, 0.0
     ox = oy = 0
     sub = blocked
-    if window is not None:
-        box = _window_box(start, rejoin, int(window), h, w)
-        if box is not None:
-            x0, y0, ww, hh = box
-            crop = blocked[y0:y0 + hh, x0:x0 + ww]
-            local = shortest_path_np(crop, (start[0] - x0, start[1] - y0),
-                                     (rejoin[0] - x0, rejoin[1] - y0), rule)
-            if local.found:
-                ox, oy, sub = x0, y0, crop
-                info["window"] = box
+    for size in _window_sizes(window, start, rejoin, h, w):
+        box = _window_box(start, rejoin, size, h, w)
+        if box is None:
+            continue
+        x0, y0, ww, hh = box
+        crop = blocked[y0:y0 + hh, x0:x0 + ww]
+        if reachable_np(crop, (start[0] - x0, start[1] - y0), rule)[rejoin[1] - y0,
+                                                                      rejoin[0] - x0]:
+            ox, oy, sub = x0, y0, crop
+            info["window"] = box
+            break
     g = Grid.create(sub, start=(start[0] - ox, start[1] - oy),
                     goal=(rejoin[0] - ox, rejoin[1] - oy), corner_rule=rule)
-    r = api.run(preset, g, seeds=seeds, **_run_options(overrides, generations, population, g))
+    # no any-angle reference: a re-plan reports its segment, not a gap
+    r = api.run(preset, g, seeds=seeds, any_angle_budget=0.0,
+                **_run_options(overrides, generations, population, g))
     info["result"] = r
     n_ok = int(np.sum(r.success))
     info.update(ga_success=n_ok, seeds=len(r.seeds))

@@ -5,6 +5,7 @@ from __future__ import annotations
 import argparse
 import io
 import json
+import math
 import subprocess
 import sys
 
@@ -252,7 +253,8 @@ def test_population_capacity_reaches_the_run(capsys, monkeypatch):
 
 
 def test_size_class_reaches_run_compare_and_warmup(monkeypatch):
-    """--size-class of jaxga run, compare and warmup is passed on (False without it)."""
+    """--size-class / --no-size-class of jaxga run, compare and warmup are passed on
+    (None without either: the default, which pads maps over 64 a side)."""
     import jax
 
     import jaxga.api
@@ -276,10 +278,10 @@ def test_size_class_reaches_run_compare_and_warmup(monkeypatch):
                  "--quiet"],
                 ["warmup", "--presets", "sga", "--sizes", "32"])
     for argv in commands:
-        for flag in ([], ["--size-class"]):
+        for flag in ([], ["--size-class"], ["--no-size-class"]):
             with pytest.raises(Stop):
                 main([*argv, *flag])
-    assert seen == [False, True] * 3
+    assert seen == [None, True, False] * 3
 
 
 @pytest.mark.parametrize("option, name, words", [
@@ -542,6 +544,18 @@ def test_progress_is_shown_after_two_seconds_as_a_bar_or_as_log_lines(tty):
     else:
         assert text.splitlines() == ["progress: compile 50%", "progress: compile 100%",
                                      "progress: evolve 50%", "progress: evolve 100%"]
+    # a phase without updates (a reference search) is said to be still running after 2 s
+    stream = _Stream(tty)
+    slow = _Progress(stream, clock)
+    clock.now = 10.0
+    slow("any-angle", 0.0)
+    for now in (10.5, 11.5, 12.2, 13.0, 14.0, 14.3):
+        clock.now = now
+        slow.tick()
+    lines = stream.getvalue().replace("\r", "\n").split("\n")
+    shown = [line.strip() for line in lines if "still running" in line]
+    assert [line.split("progress: ")[-1] for line in shown] == [
+        "any-angle still running (2 s)", "any-angle still running (4 s)"]
 
 
 def test_jaxga_warnings_are_one_line_like_its_errors(capsys, monkeypatch):
@@ -665,7 +679,7 @@ def test_a_ros_map_is_planned_on_in_world_coordinates_with_inflation(tmp_path, c
     assert rc == 0, captured.err
     doc = json.loads(out.read_text())
     assert doc["resolution"] == 0.25 and doc["start"] == [0, 0] and doc["goal"] == [6, 5]
-    assert "resolution 0.25 m per cell" in captured.out
+    assert "0.25 m per planning cell" in captured.out
     assert any(r["success"] for r in doc["runs"])
     for r in (r for r in doc["runs"] if r["success"]):
         assert not any(grown[y, x] for x, y in r["raw_path"])
@@ -743,3 +757,116 @@ def test_the_python_api_turns_the_compilation_cache_on_by_default(tmp_path, monk
     monkeypatch.setattr(runs, "ensure_compilation_cache", lambda: calls.append(1))
     api.check_run("sga", "classic_ga_gapp3_20x20")
     assert calls == [1]
+
+
+def _open_ros_map(folder, size: int, resolution: float, origin: tuple[float, float]):
+    """An open ``size x size`` map_saver map (all free) in ``folder``/map.yaml."""
+    folder.mkdir(parents=True, exist_ok=True)
+    img = np.full((size, size), 254, np.uint8)
+    (folder / "map.pgm").write_bytes(f"P5\n{size} {size}\n255\n".encode() + img.tobytes())
+    yaml_file = folder / "map.yaml"
+    yaml_file.write_text(f"image: map.pgm\nresolution: {resolution}\norigin: [{origin[0]}, "
+                         f"{origin[1]}, 0.0]\nnegate: 0\noccupied_thresh: 0.65\n"
+                         "free_thresh: 0.196\n")
+    return yaml_file
+
+
+def test_metres_after_coarsen_paths_in_both_cell_frames_and_the_path_file(tmp_path, capsys):
+    """A 16 x 16 map of 0.1 m cells (origin (-1, -2)) coarsened 2 x 2 is an 8 x 8 grid of
+    0.2 m cells: the straight path from the world point (-0.95, -1.95) (map cell (0, 0),
+    coarse (0, 0)) to (0.55, -1.95) (map cell (15, 0), coarse (7, 0)) is 7 coarse cells =
+    1.4 m (not 0.7 m), its ends are the coarse cells' centres (-0.9, -1.9) and
+    (0.5, -1.9) m and the map cells (1, 1) and (15, 1); the JSON records the factor and
+    both cell frames; --path-out writes the path in metres as CSV and as a nav_msgs/Path
+    YAML (heading +x: quaternion z 0, w 1), read back equal. Negative coordinates are
+    given without '='. (8 x 8, sga as the tests above: their compiled programs.)"""
+    import yaml
+
+    ros = _open_ros_map(tmp_path / "lab", 16, 0.1, (-1.0, -2.0))
+    out, csv, nav = tmp_path / "run.json", tmp_path / "path.csv", tmp_path / "path.yaml"
+    base = ["run", "--preset", "sga", "--map", str(ros), "--coarsen", "2",
+            "--start-world", "-0.95,-1.95", "--goal-world", "0.55,-1.95",
+            "--corner-rule", "free", "--seeds", "3", "--generations", "3",
+            "--set", "population.size=8", "--quiet"]
+    assert main([*base, "--json", str(out), "--path-out", str(csv)]) == 0
+    text = capsys.readouterr().out
+    assert "coarsened 2 x 2" in text and "0.2 m per planning cell" in text
+    assert "optimum 1.400 m" in text
+    doc = json.loads(out.read_text())
+    assert doc["frame"]["coarsen"] == 2 and doc["frame"]["map_shape"] == [16, 16]
+    assert doc["resolution"] == pytest.approx(0.2) and doc["map"] == "lab"
+    assert doc["start"] == [0, 0] and doc["goal"] == [7, 0]
+    assert doc["map_start"] == [1, 1] and doc["map_goal"] == [15, 1]
+    assert doc["start_world"] == pytest.approx([-0.9, -1.9])
+    assert doc["goal_world"] == pytest.approx([0.5, -1.9])
+    assert doc["optimum"] == pytest.approx(7.0)
+    best = min((r for r in doc["runs"] if r["success"]), key=lambda r: r["length"])
+    assert best["length_m"] == pytest.approx(0.2 * best["length"])
+    assert best["map_path"] == [[2 * x + 1, 2 * y + 1] for x, y in best["path"]]
+    np.testing.assert_allclose(
+        best["path_world"], [[-1 + 0.2 * (x + 0.5), -2 + 0.2 * (y + 0.5)]
+                             for x, y in best["path"]], atol=1e-4)
+    rows = np.loadtxt(csv, delimiter=",", skiprows=1)
+    assert csv.read_text().startswith("x,y\n")
+    np.testing.assert_allclose(rows, best["path_world"], atol=1e-4)
+    assert main([*base, "--path-out", str(nav)]) == 0
+    msg = yaml.safe_load(nav.read_text())
+    points = np.asarray(best["path_world"])
+    assert msg["header"]["frame_id"] == "map" and len(msg["poses"]) == len(points)
+    for i, pose in enumerate(msg["poses"]):
+        assert pose["header"]["frame_id"] == "map"
+        position = [pose["pose"]["position"][k] for k in "xyz"]
+        assert position == pytest.approx([*points[i], 0.0], abs=1e-4)
+        # the yaw along the path: towards the next point (the last: from the one before)
+        dx, dy = points[min(i + 1, len(points) - 1)] - points[max(min(i, len(points) - 2), 0)]
+        q = [pose["pose"]["orientation"][k] for k in "xyzw"]
+        yaw = math.atan2(dy, dx)
+        assert q == pytest.approx([0, 0, math.sin(yaw / 2), math.cos(yaw / 2)], abs=1e-5)
+
+
+def test_path_out_is_refused_before_the_run_where_it_cannot_be_written(tmp_path, capsys):
+    """--path-out needs a map with metres and a .csv or .yaml name: refused in one line
+    before any work."""
+    art = tmp_path / "m.txt"
+    art.write_text("0000\n0000\n")
+    for target, words in ((tmp_path / "p.csv", "has no resolution"),
+                          (tmp_path / "p.txt", "must be .csv")):
+        ros = _open_ros_map(tmp_path / "r", 8, 0.1, (0.0, 0.0))
+        source = art if target.suffix == ".csv" else ros
+        rc = main(["run", "--preset", "sga", "--map", str(source), "--seeds", "1",
+                   "--quiet", "--path-out", str(target)])
+        err = capsys.readouterr().err.strip()
+        assert rc == EXIT_BAD_INPUT and "\n" not in err and words in err, err
+        assert not target.exists()
+
+
+def test_the_time_line_accounts_for_the_whole_wall_time(tmp_path):
+    """`jaxga run` in a fresh process: the time line names every phase it went through
+    (import, load, references, compile, init, evolve, post, any-angle, plot, write) and
+    their seconds add up to the total, which is the process's wall time within a
+    tolerance (the interpreter's exit after the last line is not in it)."""
+    import re
+    import time
+
+    ros = _open_ros_map(tmp_path / "lab", 8, 0.25, (-1.0, -2.0))
+    t0 = time.perf_counter()
+    proc = subprocess.run(
+        [sys.executable, "-m", "jaxga.cli", "run", "--preset", "sga", "--map", str(ros),
+         "--start-world", "-0.9,-1.9", "--goal-world", "0.6,-0.4", "--corner-rule", "free",
+         "--seeds", "3", "--generations", "3", "--set", "population.size=8", "--quiet",
+         "--json", str(tmp_path / "r.json"), "--plot", str(tmp_path / "r.png")],
+        capture_output=True, text=True, timeout=600)
+    wall = time.perf_counter() - t0
+    assert proc.returncode == 0, proc.stderr
+    line = proc.stdout.strip().splitlines()[-1]
+    assert line.startswith("time (s): "), line
+    phases = dict((name, float(v)) for name, v in re.findall(r"([a-z-]+) ([\d.]+)", line))
+    for name in ("import", "load", "references", "compile", "init", "evolve", "post",
+                 "any-angle", "plot", "write"):
+        assert name in phases, (name, line)
+    total = phases.pop("total")
+    assert sum(phases.values()) == pytest.approx(total, abs=0.02)
+    assert phases.get("other", 0.0) < 0.25 + 0.05 * total, line
+    assert total <= wall and wall - total < 1.5 + 0.1 * wall, (wall, line)
+    timing = json.loads((tmp_path / "r.json").read_text())["timing"]
+    assert {"import_s", "plot_s", "any_angle_s", "total_s"} <= set(timing)

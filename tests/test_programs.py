@@ -162,7 +162,7 @@ def test_maps_of_one_size_class_run_one_program_set(grid, compiled, reference):
 
 
 def test_size_class_must_be_a_bool(grid):
-    with pytest.raises(ParameterError, match="size_class must be True or False"):
+    with pytest.raises(ParameterError, match="size_class must be True, False or None"):
         api.run("sga", grid, seeds=1, size_class="yes", **OPTIONS)
 
 

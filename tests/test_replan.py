@@ -230,8 +230,9 @@ def test_sets_of_the_ga_size_replace_replans_defaults(sc25, monkeypatch):
         replan(sc25.grid, sc25.path, [(20, 12)], sc25.position,
                sets=("population.size=30", "generations=30"))
     # the capacity is pinned at 4 (H + W) of the map: one program per map size
+    # and no any-angle reference: a re-plan reports its segment, not a gap
     assert seen == {"sets": ("population.size=30", "generations=30"),
-                    "population__capacity": 4 * (25 + 25)}
+                    "population__capacity": 4 * (25 + 25), "any_angle_budget": 0.0}
     seen.clear()
     with pytest.raises(KeyboardInterrupt):
         replan(sc25.grid, sc25.path, [(20, 12)], sc25.position,
@@ -296,7 +297,7 @@ def test_cli_replan_end_to_end(tmp_path, sc25, capsys):
     (["--position", "20,11", "--obstacles", "x"], EXIT_BAD_INPUT, "--obstacles"),
     (["--position", "20,11", "--obstacles", "4,4;5"], EXIT_BAD_INPUT, "'5'"),
     (["--position", "-1,0"], EXIT_BAD_INPUT, "(-1, 0)"),
-    (["--posit", "20,11", "--obst", "-1,0"], EXIT_BAD_INPUT, "(-1, 0) is off the"),
+    (["--position", "20,11", "--obstacles", "-1,0"], EXIT_BAD_INPUT, "(-1, 0) is off the"),
 ])
 def test_cli_replan_errors(tmp_path, sc25, capsys, extra, code, words):
     m, plain, _ = _cli_files(tmp_path, sc25)
@@ -362,3 +363,62 @@ def test_the_default_replan_finds_the_detour_an_exact_search_finds(block):
     else:
         assert not exact.found
         assert not r.success and r.path == [] and r.status == "unreachable"
+
+
+def test_replan_on_a_ros_map_keeps_the_radius_from_new_obstacles(tmp_path, capsys):
+    """A 25 x 25 map in map_saver's format (0.1 m cells, origin (-1.25, -1.25): a wall and
+    a block of unknown cells, blocked as the map's rule says), planned with a 0.1 m robot
+    radius (1 cell). `jaxga replan` with the robot's position and a new obstacle in metres
+    (negative coordinates, no '='): the path's own ends are the endpoints (the map's
+    default corner (0, 0) is inside the inflated wall and must not matter), the new
+    obstacle grows by the same radius, so every cell of the new path is more than one
+    cell from it, and no cell of it is unknown or within the map's inflation. The same
+    GA budget and 25 x 25 shape as the file's other calls: its compiled programs."""
+    import math
+
+    from jaxga.maps import load_map_info
+
+    img = np.full((25, 25), 254, np.uint8)  # top row first
+    img[:, 0] = 0                 # a wall along the left edge (x = 0)
+    img[8:12, 8:20] = 205         # unknown cells: rows y = 13..16, x = 8..19
+    img[20, 4:21] = 0             # a wall at y = 4
+    (tmp_path / "map.pgm").write_bytes(b"P5\n# CREATOR: map_saver.cpp 0.100 m/pix\n25 25\n"
+                                       b"255\n" + img.tobytes())
+    (tmp_path / "map.yaml").write_text(
+        "image: map.pgm\nresolution: 0.100000\norigin: [-1.250000, -1.250000, 0.000000]\n"
+        "negate: 0\noccupied_thresh: 0.65\nfree_thresh: 0.196\n\n")
+    ros = str(tmp_path / "map.yaml")
+    where = ["--map", ros, "--robot-radius", "0.1", "--corner-rule", "free"]
+    plan = tmp_path / "plan.json"
+    # from cell (3, 2) to (22, 22): (-1.25 + 0.35, -1.25 + 0.25) and (1.0, 1.0) m
+    assert main(["optimum", *where, "--start-world", "-0.9,-1.0", "--goal-world", "1.0,1.0",
+                 "--json", str(plan)]) == 0
+    path = [tuple(c) for c in json.loads(plan.read_text())["path"]]
+    assert path[0] == (3, 2) and path[-1] == (22, 22)
+    robot, hit = path[3], path[12]
+
+    def to_m(c):
+        return f"{-1.25 + 0.1 * (c[0] + 0.5):.2f},{-1.25 + 0.1 * (c[1] + 0.5):.2f}"
+
+    out = tmp_path / "replanned.json"
+    rc = main(["replan", *where, "--path-json", str(plan), "--position-world", to_m(robot),
+               "--obstacles-world", to_m(hit), "--seeds", "4", "--generations", "10",
+               "--population", "10", "--json", str(out), "--plot", str(tmp_path / "r.png")])
+    captured = capsys.readouterr()
+    assert rc == 0, captured.err
+    doc = json.loads(out.read_text())
+    new = [tuple(c) for c in doc["path"]]
+    assert doc["success"] and new[0] == robot and new[-1] == (22, 22)
+    assert all(math.dist(c, hit) > 1.0 for c in new)  # the radius from the new obstacle
+    info = load_map_info(ros, robot_radius=0.1, corner_rule="free")
+    blocked = info.grid.blocked_np()
+    assert not any(blocked[y, x] for x, y in new)
+    assert not any(info.layers.unknown[y, x] or info.layers.wall[y, x] for x, y in new)
+    np.testing.assert_allclose(doc["path_world"], [[-1.25 + 0.1 * (x + 0.5),
+                                                    -1.25 + 0.1 * (y + 0.5)] for x, y in new])
+    assert doc["length_m"] == pytest.approx(0.1 * doc["length"])
+    # without growing the new obstacle the detour may pass next to it: the radius is
+    # what the inflation adds (the API's inflate= is the CLI's --robot-radius)
+    bare = replan(info.grid, path, [hit], robot, **BUDGET)
+    assert bare.success and min(math.dist(c, hit) for c in bare.path) < \
+        min(math.dist(c, hit) for c in new) + 1e-9

@@ -15,8 +15,9 @@ from jaxga.engine.algorithm import default_capacity
 
 @pytest.mark.parametrize(("shape", "expected"), [
     ((1, 1), (32, 32)), ((20, 20), (32, 32)), ((25, 25), (32, 32)), ((32, 32), (32, 32)),
-    ((33, 20), (64, 32)), ((20, 64), (32, 64)), ((64, 64), (64, 64)), ((65, 10), None),
-    ((10, 300), None),
+    ((33, 20), (64, 32)), ((20, 64), (32, 64)), ((64, 64), (64, 64)), ((65, 10), (128, 32)),
+    ((10, 300), (32, 384)), ((384, 384), (384, 384)), ((500, 500), (512, 512)),
+    ((307, 604), (384, 768)), ((200, 1024), (256, 1024)), ((100, 1025), None),
 ])
 def test_class_shape(shape, expected):
     assert class_shape(*shape) == expected
@@ -50,7 +51,7 @@ def test_padding_keeps_every_cell_s_coordinates():
     np.testing.assert_array_equal(map_cells((ys * 32 + xs).ravel(), 32, 5),
                                   (ys * 5 + xs).ravel())
     # over the largest class: unchanged
-    large = Grid.create(np.zeros((65, 3), bool))
+    large = Grid.create(np.zeros((1025, 3), bool))
     assert pad_to_class(large) is large
 
 
@@ -83,3 +84,13 @@ def test_the_padding_counts_as_off_the_map_for_safety_and_clearance():
     np.testing.assert_array_equal(
         np.asarray(objectives.metrics(padded, padded_cells, length)),
         np.asarray(objectives.metrics(grid, cells, length)))
+
+
+def test_by_default_maps_over_64_a_side_are_padded_and_the_papers_maps_are_not():
+    from jaxga.api.size_classes import auto_size_class
+    from jaxga.maps import load_map
+
+    assert not auto_size_class(load_map("classic_ga_gapp3_20x20"))
+    assert not auto_size_class(Grid.create(np.zeros((64, 50), bool)))
+    assert auto_size_class(Grid.create(np.zeros((65, 3), bool)))
+    assert auto_size_class(Grid.create(np.zeros((3, 384), bool)))

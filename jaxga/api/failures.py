@@ -16,8 +16,8 @@ from jaxga.core.objectives import Metrics
 
 
 def unstarted_results(*, config, configs, points, map_name, grid, seed_arr, algo, octile,
-                      any_angle, point_opt, rate, unfilled, from_fallback, initial,
-                      timing, size_class) -> list[Result]:
+                      point_opt, rate, unfilled, from_fallback, initial, timing, size_class,
+                      frame) -> list[Result]:
     """The results of a sweep whose initialisation gave no run a path: every seed failed,
     each with its cause; nothing evolved (SPEC 10)."""
     n_seeds = len(seed_arr)
@@ -28,10 +28,11 @@ def unstarted_results(*, config, configs, points, map_name, grid, seed_arr, algo
         causes = failure_causes(success, success, rate[sl], from_fallback[sl], config,
                                 algo.capacity, len(octile.path))
         r = no_path_result(cfg, map_name, grid, seed_arr, algo, failure_reason(causes),
-                           timing["total_s"], algo.population)
+                           timing, algo.population, frame)
         results.append(dataclasses.replace(
             r, preset=config["name"], init_success_rate=rate[sl], init_unfilled=unfilled[sl],
-            optimum=float(octile.length), any_angle_optimum=float(any_angle.length),
+            optimum=float(octile.length),
+            any_angle_note="not computed: no seed got an initial path",
             timing=dict(timing), point={k.replace("__", "."): v for k, v in points[q].items()},
             fitness_optimum=point_opt[q].fitness, fitness_optimum_length=point_opt[q].length,
             fitness_optimum_loop_free=point_opt[q].loop_free,
@@ -114,8 +115,9 @@ def failure_reason(causes: np.ndarray) -> str:
     return text
 
 
-def no_path_result(config, map_name, grid, seeds, algo, reason, elapsed,
-                   population_capacity) -> Result:
+def no_path_result(config, map_name, grid, seeds, algo, reason, timing,
+                   population_capacity, frame=None) -> Result:
+    """The result of runs that cannot start: every seed failed with ``reason``."""
     s = len(seeds)
     empty = np.zeros((s, 1), np.int32)
     nan = np.full(s, np.nan)
@@ -128,14 +130,14 @@ def no_path_result(config, map_name, grid, seeds, algo, reason, elapsed,
         metrics={k: nan.copy() for k in Metrics._fields},
         raw_metrics={k: nan.copy() for k in Metrics._fields}, failures=np.zeros((s, 3), np.int32),
         init_success_rate=np.zeros(s), init_unfilled=np.zeros(s, np.int32),
-        optimum=math.inf, any_angle_optimum=math.inf,
+        optimum=math.inf, any_angle_optimum=math.inf, any_angle_note=reason,
         timing={"compile_s": 0.0, "init_s": 0.0, "evolve_s": 0.0, "post_s": 0.0,
-                "total_s": elapsed},
+                **timing},
         population=int(config["population.size"]) * algo.islands,
         generations=algo.generations, width=grid.width, config=config,
         fitness_optimum_reason=reason, start=grid.start_xy, goal=grid.goal_xy,
         population_capacity=population_capacity, init_fallback=np.zeros(s, np.int32),
         initial_fitness=np.zeros(s),
-        causes=np.full(s, reason, dtype=object), path_capacity=algo.capacity,
+        causes=np.full(s, reason, dtype=object), path_capacity=algo.capacity, frame=frame,
     )
 

@@ -13,10 +13,12 @@ from typing import Any
 
 import numpy as np
 
+from jaxga.api.timeline import time_line
 from jaxga.config.schema import Config
 from jaxga.engine import (
     uses_waypoints,
 )
+from jaxga.maps.frame import MapFrame
 
 SUMMARY_METRICS = ("length", "raw_length", "angle_sum", "turns", "fitness",
                    "convergence_generation")
@@ -120,6 +122,17 @@ class Result:
     size_class: bool = False
     """Whether the runs went on the map padded to its size class
     (:mod:`jaxga.api.size_classes`): ``run(..., size_class=True)`` repeats them."""
+    lower_bound: float = math.nan
+    """A proven lower bound of :attr:`any_angle_optimum`: the Euclidean shortest path
+    around the blocked cells (:func:`jaxga.reference.lower_bound.euclidean_lower_bound_np`);
+    NaN where it is not computed."""
+    any_angle_note: str = ""
+    """Why :attr:`any_angle_optimum` is NaN ("" when it is computed), e.g.
+    "any-angle optimum not computed (budget 0.52 s)": :attr:`gap` then measures against
+    :attr:`lower_bound` (:attr:`gap_basis`)."""
+    frame: MapFrame | None = None
+    """How the planning cells relate to the map file's cells and to metres
+    (:mod:`jaxga.maps.frame`); None for a map given as a bare :class:`~jaxga.Grid`."""
 
     def path(self, i: int, raw: bool = False) -> list[tuple[int, int]] | None:
         """Seed ``i``'s best path as ``(x, y)`` cells (post-optimised unless ``raw``); None
@@ -131,10 +144,29 @@ class Result:
         return [(int(p) % self.width, int(p) // self.width) for p in c[:n]]
 
     @property
+    def gap_reference(self) -> float:
+        """What :attr:`gap` measures against: the any-angle optimum, else (not computed
+        within its budget) its Euclidean lower bound, else the 8-connected optimum."""
+        for value in (self.any_angle_optimum, self.lower_bound, self.optimum):
+            if math.isfinite(value):
+                return float(value)
+        return math.nan
+
+    @property
+    def gap_basis(self) -> str:
+        """The name of :attr:`gap_reference`: ``"any-angle optimum"``, ``"lower bound"``
+        (the gap is then an upper bound of the gap to the optimum) or ``"8-connected
+        optimum"``."""
+        if math.isfinite(self.any_angle_optimum):
+            return "any-angle optimum"
+        return "lower bound" if math.isfinite(self.lower_bound) else "8-connected optimum"
+
+    @property
     def gap(self) -> np.ndarray:
-        """Relative gap of each post-optimised length to the any-angle optimum (its lower
-        bound); NaN for failed seeds."""
-        return relative_gap(self.length, self.any_angle_optimum, self.success)
+        """Relative gap of each post-optimised length to the any-angle optimum (or, where
+        it was not computed within its budget, to :attr:`gap_reference`: see
+        :attr:`gap_basis`); NaN for failed seeds."""
+        return relative_gap(self.length, self.gap_reference, self.success)
 
     @property
     def raw_gap(self) -> np.ndarray:
@@ -147,7 +179,7 @@ class Result:
     @property
     def raw_optimum(self) -> float:
         """The exact optimum that :attr:`raw_gap` measures against (see there)."""
-        return self.any_angle_optimum if self._raw_waypoints() else self.optimum
+        return self.gap_reference if self._raw_waypoints() else self.optimum
 
     def _raw_waypoints(self) -> bool:
         return self.config is not None and uses_waypoints(self.config)
@@ -205,15 +237,42 @@ class Result:
                      f"({int(made.sum())} in all)")
         return text
 
-    def summary(self) -> str:
-        """A text table: mean, sd, min and max per metric, success rate, optima, timing."""
+    def world_path(self, i: int, raw: bool = False) -> np.ndarray | None:
+        """Seed ``i``'s best path in metres (``float[k, 2]``, the map's world frame: cell
+        centres, :meth:`jaxga.maps.frame.MapFrame.to_world`); None for a failed seed or
+        a map without a resolution."""
+        path = self.path(i, raw=raw)
+        if path is None or self.frame is None or not self.frame.has_metres:
+            return None
+        return self.frame.to_world(np.asarray(path, float))
+
+    def metres_text(self) -> str:
+        """One summary line with the lengths in metres ("" for a map without a resolution)."""
+        f = self.frame
+        if f is None or f.cell_size is None:
+            return ""
+        head = f"metres      {f.describe()}"
+        ok = self.success
+        if not ok.any():
+            return f"{head}; no path found"
+        post, raw = self.length[ok] * f.cell_size, self.raw_length[ok] * f.cell_size
+        ref = (f"any-angle {self.any_angle_optimum * f.cell_size:.3f} m"
+               if math.isfinite(self.any_angle_optimum)
+               else f"lower bound {self.lower_bound * f.cell_size:.3f} m"
+               if math.isfinite(self.lower_bound) else "any-angle not computed")
+        return (f"{head}: length mean {post.mean():.3f} m, best {post.min():.3f} m (raw mean "
+                f"{raw.mean():.3f} m); optimum {self.optimum * f.cell_size:.3f} m, {ref}")
+
+    def summary(self, time: bool = True) -> str:
+        """A text table: mean, sd, min and max per metric, success rate, optima, metres
+        (on a map with a resolution) and, with ``time``, the time line."""
         lines = [
             f"preset {self.preset} on {self.map_name} (corner rule {self.corner_rule!r}), "
             f"{len(self.seeds)} seeds, population {self.population}, "
             f"{self.generations} generations",
             f"success {int(self.success.sum())}/{len(self.seeds)}"
             + (f" ({self.reason})" if self.reason else ""),
-            f"optimum: 8-connected {self.optimum:.4f}, any-angle {self.any_angle_optimum:.4f}"
+            f"optimum: 8-connected {self.optimum:.4f}, {self.any_angle_text()}"
             + self._fitness_optimum_text(),
             f"{'metric':24s} {'mean':>10s} {'sd':>10s} {'min':>10s} {'max':>10s}",
         ]
@@ -222,16 +281,60 @@ class Result:
         else:
             for name, mean, sd, lo, hi in self.summary_rows():
                 lines.append(f"{name:24s} {mean:10.4f} {sd:10.4f} {lo:10.4f} {hi:10.4f}")
-        raw_basis = "any-angle" if self._raw_waypoints() else "8-connected"
-        lines.append(f"gaps: gap = length / any-angle optimum - 1, raw_gap = raw_length / "
-                     f"{raw_basis} optimum - 1, fitness_gap = fitness optimum / fitness - 1")
+        raw_basis = self.gap_basis if self._raw_waypoints() else "8-connected optimum"
+        bound = (" (at least the gap to the optimum)" if self.gap_basis != "any-angle optimum"
+                 else "")
+        lines.append(f"gaps: gap = length / {self.gap_basis} - 1{bound}, raw_gap = "
+                     f"raw_length / {raw_basis} - 1, fitness_gap = fitness optimum / "
+                     "fitness - 1")
         lines.append(self._initial_population_text())
-        t = self.timing
-        lines.append(
-            "time (s): compile {compile_s:.2f}, init {init_s:.3f}, evolve {evolve_s:.3f}, "
-            "post {post_s:.3f}, total {total_s:.2f}".format(**t)
-        )
+        metres = self.metres_text()
+        if metres:
+            lines.append(metres)
+        if time:
+            lines.append(time_line(self.timing))
         return "\n".join(lines)
+
+    def any_angle_text(self) -> str:
+        """``any-angle 402.7829``, or why it is missing and the lower bound."""
+        if math.isfinite(self.any_angle_optimum):
+            return f"any-angle {self.any_angle_optimum:.4f}"
+        text = self.any_angle_note or "any-angle optimum not computed"
+        if math.isfinite(self.lower_bound):
+            text += f", lower bound {self.lower_bound:.4f} (Euclidean, around the obstacles)"
+        return text
+
+    def _frame_json(self, i: int) -> dict[str, Any]:
+        """Seed ``i``'s paths and lengths in the other frames: map cells (when coarsened)
+        and metres (on a map with a resolution)."""
+        f, ok = self.frame, bool(self.success[i])
+        out: dict[str, Any] = {}
+        if f is None:
+            return out
+        if f.coarsen > 1:
+            for key, raw in (("map_path", False), ("map_raw_path", True)):
+                out[key] = f.map_cell(np.asarray(self.path(i, raw=raw))).tolist() if ok else []
+        if f.has_metres:
+            for key, raw in (("path_world", False), ("raw_path_world", True)):
+                out[key] = self.world_path(i, raw=raw).round(4).tolist() if ok else []
+            out["length_m"] = float(self.length[i] * f.cell_size) if ok else None
+            out["raw_length_m"] = float(self.raw_length[i] * f.cell_size) if ok else None
+            clearance = self.metrics.get("min_clearance")
+            out["min_clearance_m"] = (json_number(float(clearance[i]) * f.cell_size)
+                                      if ok and clearance is not None else None)
+        return out
+
+    def _endpoints_world(self) -> dict[str, Any]:
+        """The endpoints in metres (and in map cells when coarsened), where known."""
+        f, out = self.frame, {}
+        if f is None or self.start is None or self.goal is None:
+            return out
+        ends = np.array([self.start, self.goal])
+        if f.coarsen > 1:
+            out["map_start"], out["map_goal"] = f.map_cell(ends).tolist()
+        if f.has_metres:
+            out["start_world"], out["goal_world"] = f.to_world(ends).round(4).tolist()
+        return out
 
     def to_json(self) -> dict[str, Any]:
         """The ``--json`` layout of ``jaxga run``."""
@@ -258,13 +361,18 @@ class Result:
                 "init_fallback": (None if self.init_fallback is None
                                   else int(self.init_fallback[i])),
                 "cause": "" if self.causes is None else str(self.causes[i]),
+                **self._frame_json(i),
             })
         return {
             "preset": self.preset, "map": self.map_name, "corner_rule": self.corner_rule,
             "start": None if self.start is None else list(self.start),
             "goal": None if self.goal is None else list(self.goal),
+            **self._endpoints_world(),
             "optimum": json_number(self.optimum),  # null when the goal is unreachable
             "any_angle_optimum": json_number(self.any_angle_optimum),
+            "any_angle_note": self.any_angle_note,
+            "lower_bound": json_number(self.lower_bound),
+            "gap_basis": self.gap_basis,
             "raw_optimum": json_number(self.raw_optimum),
             "fitness_optimum": json_number(self.fitness_optimum),
             "fitness_optimum_length": json_number(self.fitness_optimum_length),
@@ -275,6 +383,8 @@ class Result:
             "population_capacity": self.population_capacity,
             "path_capacity": self.path_capacity, "size_class": self.size_class,
             "generations": self.generations,
+            "frame": None if self.frame is None else self.frame.to_json(),
+            "resolution": None if self.frame is None else self.frame.cell_size,
             # every setting of the run (preset, file, --set and sweep point resolved)
             "config": None if self.config is None else self.config.as_dict(),
             "runs": runs,

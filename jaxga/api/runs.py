@@ -11,10 +11,7 @@ from __future__ import annotations
 
 import contextlib
 import dataclasses
-import functools
-import hashlib
 import math
-import time
 import warnings
 from collections.abc import Callable, Mapping, Sequence
 from typing import TYPE_CHECKING, Any
@@ -44,9 +41,11 @@ from jaxga.api.programs import (
     run_layout,
     stack_params,
 )
+from jaxga.api.references import AnyAngleBounds, any_angle_references, octile_optimum
 from jaxga.api.result import Result
 from jaxga.api.seeds import seed_list, seed_sharding
-from jaxga.api.size_classes import class_capacity, map_cells, pad_to_class
+from jaxga.api.size_classes import auto_size_class, class_capacity, map_cells, pad_to_class
+from jaxga.api.timeline import Timeline
 from jaxga.config.presets import as_sets, load_preset, parse_set
 from jaxga.config.schema import MAP_RULE, SCHEMA, Config, flatten, freeze
 from jaxga.core.errors import ParameterError
@@ -66,7 +65,6 @@ from jaxga.engine.maptables import with_tables
 from jaxga.maps import MapInfo, load_map_info
 from jaxga.operators.guide import with_guide
 from jaxga.reference.fitness import FitnessOptimum, fitness_optimum, fitness_weights
-from jaxga.reference.optima import any_angle_shortest_path_np, shortest_path_np
 
 if TYPE_CHECKING:
     from jaxga.maps import MapInfo
@@ -77,10 +75,16 @@ WAYPOINT_FITNESS = ("this configuration evolves waypoint paths; the exact fitnes
 """Why a run of waypoint paths (AGACD, Zhang's eq. 5 deletions) has no fitness gap."""
 
 
-def _check_call_options(progress, chunks, size_class=False) -> None:
+def _check_call_options(progress, chunks, size_class=None, any_angle_budget="auto") -> None:
     """The options of :func:`run` and :func:`sweep` that do not reach the configuration."""
-    if not isinstance(size_class, (bool, np.bool_)):
-        raise ParameterError(f"size_class must be True or False, got {size_class!r}")
+    if size_class is not None and not isinstance(size_class, (bool, np.bool_)):
+        raise ParameterError(f"size_class must be True, False or None (automatic), got "
+                             f"{size_class!r}")
+    if not (any_angle_budget is None or any_angle_budget == "auto" or (
+            isinstance(any_angle_budget, (int, float)) and not isinstance(any_angle_budget, bool)
+            and math.isfinite(any_angle_budget) and any_angle_budget >= 0)):
+        raise ParameterError(f"any_angle_budget must be 'auto', a number of seconds >= 0 or "
+                             f"None (no limit), got {any_angle_budget!r}")
     if progress is not None and not callable(progress):
         raise ParameterError(f"progress must be a callable (stage, fraction), got "
                              f"{progress!r}")
@@ -124,14 +128,16 @@ def check_one_corner_rule(corner_rule: str | None, config: Config,
 
 def load_problem(preset, grid, corner_rule, variant, sets, overrides, generations, *,
                  check_read: bool = True):
-    """``(config, grid, map name)`` of a call, checked; ``check_read=False`` leaves
-    overrides that nothing reads to the caller (:func:`jaxga.compare.compare`)."""
+    """``(config, grid, map name, frame)`` of a call, checked (the frame of a map file or
+    :class:`~jaxga.maps.MapInfo`: :mod:`jaxga.maps.frame`; None for a bare Grid);
+    ``check_read=False`` leaves overrides that nothing reads to the caller
+    (:func:`jaxga.compare.compare`)."""
 
     check_environment()  # a bad $JAXGA_THREEFRY, which `import jaxga` does not refuse
     ensure_compilation_cache()  # on by default, as on the command line (decision 014)
-    map_name = "grid"
+    map_name, frame = "grid", None
     if isinstance(grid, MapInfo):  # a loaded map that keeps its name (and its endpoints)
-        grid, map_name = grid.grid, grid.name
+        grid, map_name, frame = grid.grid, grid.name, grid.frame
     sets = as_sets(sets)
     ov: dict[str, Any] = {k.replace("__", "."): v for k, v in overrides.items()}
     if generations is not None:  # a non-integer is left for the configuration to refuse
@@ -171,9 +177,9 @@ def load_problem(preset, grid, corner_rule, variant, sets, overrides, generation
             grid = grid.replace(corner_rule=corner_rule)
     else:
         info = load_map_info(grid, corner_rule=configured_rule(corner_rule, config))
-        grid, map_name = info.grid, info.name
+        grid, map_name, frame = info.grid, info.name, info.frame
     grid.check_endpoints()
-    return config, grid, map_name
+    return config, grid, map_name, frame
 
 
 def _point_configs(config: Config, points: Sequence[Mapping[str, Any]]) -> list[Config]:
@@ -215,7 +221,8 @@ def sweep(
     progress: Callable[[str, float], None] | None = None,
     chunks: int = 1,
     population_capacity: int | None = None,
-    size_class: bool = False,
+    size_class: bool | None = None,
+    any_angle_budget: float | str | None = "auto",
     **overrides: Any,
 ) -> list[Result]:
     """Run every point of a hyper-parameter sweep with every seed, in ONE compiled call.
@@ -234,7 +241,7 @@ def sweep(
     capacity. Results depend on it, so a sweep split into several calls (``jaxga.doe``'s
     resumable blocks) passes the largest size of the WHOLE sweep to every call to get the
     same results as one call. It must be at least every point's ``population.size``.
-    ``size_class`` as in :func:`run`.
+    ``size_class`` and ``any_angle_budget`` as in :func:`run`.
     The runs are split over this process's devices and, after
     :func:`jaxga.api.parallel.initialize`, over several processes: each computes its share and
     every process returns the whole, identical result (:mod:`jaxga.api.parallel`; a lost
@@ -245,7 +252,7 @@ def sweep(
     options = dict(generations=generations, corner_rule=corner_rule, variant=variant,
                    sets=sets, progress=progress, chunks=chunks,
                    population_capacity=population_capacity, size_class=size_class,
-                   **overrides)
+                   any_angle_budget=any_angle_budget, **overrides)
     while True:
         try:
             return _sweep(*args, **options)
@@ -259,66 +266,72 @@ def sweep(
 
 
 def _sweep(preset, grid, points, seeds, *, generations, corner_rule, variant, sets,
-           progress, chunks, population_capacity, size_class, **overrides) -> list[Result]:
-    """:func:`sweep`'s work."""
-    t_start = time.perf_counter()
+           progress, chunks, population_capacity, size_class, any_angle_budget,
+           **overrides) -> list[Result]:
+    """:func:`sweep`'s work, phase by phase (:mod:`jaxga.api.timeline`)."""
+    timeline = Timeline()
     _check_points(points)
-    _check_call_options(progress, chunks, size_class)
+    _check_call_options(progress, chunks, size_class, any_angle_budget)
     if chunks != 1:
         warnings.warn("chunks is ignored: the generations run in compiled chunks of "
                       f"{GENERATION_CHUNK} and progress is reported after each",
                       DeprecationWarning, stacklevel=3)
-    config, grid, map_name = load_problem(preset, grid, corner_rule, variant, sets, overrides,
-                                          generations)
-    configs = _point_configs(config, points)
-    capacity = checked_capacity(configs, population_capacity)
-    octile, any_angle = _optima(grid)
-    if not octile.found:
-        seed_arr = seed_list(seeds, lambda n: check_memory(
-            n * len(configs), NO_PATH_BYTES_PER_RUN, "for their results"))
-        return [no_path_result(c, map_name, grid, seed_arr, build(c, grid)[0], octile.reason,
-                               time.perf_counter() - t_start, capacity) for c in configs]
-    # the programs run on the map padded to its size class (decision 029), if asked
-    map_grid, grid, build_config = grid, grid, config.override({"population.size": capacity})
-    if size_class:
-        grid = pad_to_class(map_grid)
-        if not int(config["population.capacity"]):
-            build_config = build_config.override(
-                {"population.capacity": class_capacity(map_grid)})
-    if uses_guide(config):  # the exact distance fields the field initialiser steers by
-        grid = with_guide(grid)
-    grid = with_tables(grid)  # per-map tables, once per run rather than per generation
-    # the capacity is the largest size swept, also when it is below the preset's size
-    algo, _ = build(build_config, grid)
-    per_point = [default_params(c, algo.islands) for c in configs]
-    # The exact optimum of each point's own fitness, once per distinct weight set (points
-    # may sweep the weights). It covers 8-connected paths: no bound for waypoint paths.
-    fit_keys = [(m, tuple(sorted(w.items()))) for m, w in map(fitness_weights, configs)]
-    fit_opts = {k: (FitnessOptimum(False, k[0], math.nan, reason=WAYPOINT_FITNESS)
-                    if algo.waypoints else fitness_optimum(map_grid, k[0], **dict(k[1])))
-                for k in dict.fromkeys(fit_keys)}
-    point_opt = [fit_opts[k] for k in fit_keys]
-    n_points = len(configs)
-    seed_arr = seed_list(seeds, lambda n: check_result_memory(n * n_points, algo))
-    runs = _this_process_runs(seed_arr, per_point, grid, algo)
-    grid = runs.grid
 
     def report(stage: str, frac: float) -> None:
         if progress is not None:
             progress(stage, frac)
 
-    report("compile", 0.0)
-    t0 = time.perf_counter()
-    token = COMPILE_PROGRESS.set(lambda frac: report("compile", frac))
-    try:
-        progs = programs_for(algo, grid, runs.calls[0][1], runs.per_call)
-    finally:
-        COMPILE_PROGRESS.reset(token)
-    compile_s = time.perf_counter() - t0
+    with timeline.phase("load"):
+        config, grid, map_name, frame = load_problem(preset, grid, corner_rule, variant, sets,
+                                                     overrides, generations)
+    configs = _point_configs(config, points)
+    capacity = checked_capacity(configs, population_capacity)
+    report("references", 0.0)
+    with timeline.phase("references"):
+        octile = octile_optimum(grid)
+    if not octile.found:
+        seed_arr = seed_list(seeds, lambda n: check_memory(
+            n * len(configs), NO_PATH_BYTES_PER_RUN, "for their results"))
+        return [no_path_result(c, map_name, grid, seed_arr, build(c, grid)[0], octile.reason,
+                               timeline.as_dict(), capacity, frame) for c in configs]
+    # the programs run on the map padded to its size class (decision 029), if asked
+    size_class = auto_size_class(grid) if size_class is None else bool(size_class)
+    map_grid, grid, build_config = grid, grid, config.override({"population.size": capacity})
+    with timeline.phase("references"):
+        if size_class:
+            grid = pad_to_class(map_grid)
+            if not int(config["population.capacity"]):
+                build_config = build_config.override(
+                    {"population.capacity": class_capacity(map_grid)})
+        if uses_guide(config):  # the exact distance fields the field initialiser steers by
+            grid = with_guide(grid)
+        # the capacity is the largest size swept, also when it is below the preset's size
+        algo, _ = build(build_config, grid)
+        per_point = [default_params(c, algo.islands) for c in configs]
+        # The exact optimum of each point's own fitness, once per distinct weight set
+        # (points may sweep the weights). It covers 8-connected paths: no bound for
+        # waypoint paths.
+        fit_keys = [(m, tuple(sorted(w.items()))) for m, w in map(fitness_weights, configs)]
+        fit_opts = {k: (FitnessOptimum(False, k[0], math.nan, reason=WAYPOINT_FITNESS)
+                        if algo.waypoints else fitness_optimum(map_grid, k[0], **dict(k[1])))
+                    for k in dict.fromkeys(fit_keys)}
+        point_opt = [fit_opts[k] for k in fit_keys]
+    n_points = len(configs)
+    seed_arr = seed_list(seeds, lambda n: check_result_memory(n * n_points, algo))
 
-    t0 = time.perf_counter()
-    inits = jax.block_until_ready([progs.init(k, grid, p) for k, p in runs.calls])
-    init_s = time.perf_counter() - t0
+    report("compile", 0.0)
+    with timeline.phase("compile"):
+        grid = with_tables(grid)  # per-map tables, once per run rather than per generation
+        runs = _this_process_runs(seed_arr, per_point, grid, algo)
+        grid = runs.grid
+        token = COMPILE_PROGRESS.set(lambda frac: report("compile", frac))
+        try:
+            progs = programs_for(algo, grid, runs.calls[0][1], runs.per_call)
+        finally:
+            COMPILE_PROGRESS.reset(token)
+
+    with timeline.phase("init"):
+        inits = jax.block_until_ready([progs.init(k, grid, p) for k, p in runs.calls])
     states = [state for state, *_ in inits]
     init_best = runs.joined([state.best_fitness for state in states])
     init_rate, unfilled, fallback = (runs.joined([i[j] for i in inits]) for j in (1, 2, 3))
@@ -333,36 +346,51 @@ def _sweep(preset, grid, points, seeds, *, generations, corner_rule, variant, se
     warn_unfilled(unf, rate, algo.population * algo.islands, config)
     common = dict(config=config, configs=configs, points=points, map_name=map_name,
                   grid=map_grid, seed_arr=seed_arr, algo=algo, octile=octile,
-                  any_angle=any_angle, point_opt=point_opt, rate=rate, unfilled=unf,
-                  from_fallback=from_fallback, initial=initial, size_class=size_class)
+                  point_opt=point_opt, rate=rate, unfilled=unf,
+                  from_fallback=from_fallback, initial=initial, size_class=size_class,
+                  frame=frame)
     if not started.any():  # nothing can succeed: no evolution, no post-optimisation
         report("compile", 1.0)
-        timing = {"compile_s": compile_s, "init_s": init_s, "evolve_s": 0.0,
-                  "post_s": 0.0, "total_s": time.perf_counter() - t_start}
+        timing = {"compile_s": 0.0, "init_s": 0.0, "evolve_s": 0.0, "post_s": 0.0,
+                  **timeline.as_dict()}
         return unstarted_results(timing=timing, **common)
 
-    t0 = time.perf_counter()
-    progs.compile_rest(lambda frac: report("compile", frac))
-    compile_s += time.perf_counter() - t0
+    with timeline.phase("compile"):
+        progs.compile_rest(lambda frac: report("compile", frac))
     report("compile", 1.0)
 
-    t0 = time.perf_counter()
-    states, history = _evolve_in_chunks(progs, algo.generations, runs, grid, states,
-                                        lambda frac: report("evolve", frac))
-    evolve_s = time.perf_counter() - t0
+    with timeline.phase("evolve"):
+        states, history = _evolve_in_chunks(progs, algo.generations, runs, grid, states,
+                                            lambda frac: report("evolve", frac))
+    report("post", 0.0)
+    with timeline.phase("post"):
+        outs = jax.block_until_ready([progs.finish(grid, p, st)
+                                      for (_, p), st in zip(runs.calls, states)])
+        out = jax.tree_util.tree_map(lambda *parts: runs.joined(parts), *outs)
+        host, hist = parallel.allgather_runs((out, history))
+        for key in ("cells", "raw_cells"):  # reported on the map, not its padding
+            host[key] = map_cells(host[key], grid.width, map_grid.width)
+    budget = any_angle_budget
+    if budget == "auto":  # the references never take longer than the GA's own work
+        budget = sum(timeline.seconds.get(p, 0.0) for p in ("init", "evolve", "post"))
+    report("any-angle", 0.0)
+    with timeline.phase("any_angle"):
+        bounds = any_angle_references(map_grid, octile, budget,
+                                      lambda frac: report("any-angle", frac),
+                                      _best_path(host, map_grid.width))
+    return _point_results(host, hist, started=started, timing=timeline.as_dict(),
+                          bounds=bounds, **common)
 
-    t0 = time.perf_counter()
-    outs = jax.block_until_ready([progs.finish(grid, p, st)
-                                  for (_, p), st in zip(runs.calls, states)])
-    post_s = time.perf_counter() - t0
-    timing = {"compile_s": compile_s, "init_s": init_s, "evolve_s": evolve_s,
-              "post_s": post_s, "total_s": time.perf_counter() - t_start}
-    out = jax.tree_util.tree_map(lambda *parts: runs.joined(parts), *outs)
-    host, hist = parallel.allgather_runs((out, history))
-    for key in ("cells", "raw_cells"):  # reported on the map, not its padding
-        host[key] = map_cells(host[key], grid.width, map_grid.width)
-    timing["total_s"] = time.perf_counter() - t_start
-    return _point_results(host, hist, started=started, timing=timing, **common)
+
+def _best_path(host: dict, width: int) -> np.ndarray | None:
+    """The shortest feasible post-optimised path of all runs as ``(x, y)`` cells (it
+    bounds the any-angle search), or None when no run found one."""
+    ok = np.flatnonzero(np.asarray(host["success"]) & np.asarray(host["feasible_post"]))
+    if ok.size == 0:
+        return None
+    i = ok[np.argmin(np.asarray(host["path_length"])[ok])]
+    cells = np.asarray(host["cells"][i])[:int(host["length"][i])]
+    return np.stack([cells % width, cells // width], axis=1)
 
 
 def _check_points(points: Any) -> None:
@@ -460,10 +488,11 @@ def _evolve_in_chunks(progs: Any, generations: int, runs: _Runs, grid: Grid,
 
 def _point_results(host: dict, hist: dict, *, config: Config, configs: Sequence[Config],
                    points: Sequence[Mapping[str, Any]], map_name: str, grid: Grid,
-                   seed_arr: np.ndarray, algo: Algorithm, octile: Any, any_angle: Any,
-                   point_opt: Sequence[Any], rate: np.ndarray, unfilled: np.ndarray,
-                   from_fallback: np.ndarray, initial: np.ndarray, started: np.ndarray,
-                   timing: dict, size_class: bool) -> list[Result]:
+                   seed_arr: np.ndarray, algo: Algorithm, octile: Any,
+                   bounds: AnyAngleBounds, point_opt: Sequence[Any], rate: np.ndarray,
+                   unfilled: np.ndarray, from_fallback: np.ndarray, initial: np.ndarray,
+                   started: np.ndarray, timing: dict, size_class: bool,
+                   frame: Any) -> list[Result]:
     """One :class:`Result` per point from the gathered outputs of all runs (run
     ``q * S + s`` is point ``q``, seed ``s``)."""
     n_seeds = len(seed_arr)
@@ -494,7 +523,8 @@ def _point_results(host: dict, hist: dict, *, config: Config, configs: Sequence[
             failures=h["failures"],
             init_success_rate=rate[sl], init_unfilled=unfilled[sl],
             initial_fitness=initial[sl].astype(float),
-            optimum=float(octile.length), any_angle_optimum=float(any_angle.length),
+            optimum=float(octile.length), any_angle_optimum=bounds.optimum,
+            lower_bound=bounds.lower_bound, any_angle_note=bounds.note, frame=frame,
             timing=dict(timing), population=int(cfg["population.size"]) * algo.islands,
             generations=algo.generations, width=grid.width, config=cfg,
             point={k.replace("__", "."): v for k, v in points[q].items()},
@@ -507,32 +537,6 @@ def _point_results(host: dict, hist: dict, *, config: Config, configs: Sequence[
             size_class=size_class,
         ))
     return results
-
-
-@functools.lru_cache(maxsize=32)
-def _optima_cached(digest: bytes, shape: tuple[int, int], blocked: bytes, start: tuple,
-                   goal: tuple, corner_rule: str):
-
-    del digest  # the cache key; the arguments are the data
-    b = np.frombuffer(blocked, dtype=bool).reshape(shape)
-    octile = shortest_path_np(b, start, goal, corner_rule)
-    if not octile.found:
-        return octile, None
-    return octile, any_angle_shortest_path_np(b, start, goal, corner_rule)
-
-
-def _optima(grid: Grid):
-    """``(8-connected optimum, any-angle optimum)`` of the grid's problem (jaxga.reference.optima;
-    the any-angle one None when the goal is unreachable), cached for the last 32
-    problems: comparing presets or repeating runs on one problem computes them once
-    (the any-angle optimum of a long problem on a 256 x 256 map takes seconds:
-    decision 015)."""
-
-    b = np.ascontiguousarray(grid.blocked_np())
-    raw = b.tobytes()
-    key = (b.shape, grid.start_xy, grid.goal_xy, grid.corner_rule)
-    digest = hashlib.blake2b(raw + repr(key).encode(), digest_size=16).digest()
-    return _optima_cached(digest, b.shape, raw, *key[1:])
 
 
 def checked_capacity(configs: Sequence[Config], requested: Any) -> int:
@@ -564,7 +568,8 @@ def run(
     progress: Callable[[str, float], None] | None = None,
     chunks: int = 1,
     population_capacity: int | None = None,
-    size_class: bool = False,
+    size_class: bool | None = None,
+    any_angle_budget: float | str | None = "auto",
     **overrides: Any,
 ) -> Result:
     """Run ``preset`` on ``grid`` once per seed, all seeds in one compiled call.
@@ -588,11 +593,13 @@ def run(
         generations: overrides the preset's generation count.
         overrides: configuration keys with ``.`` written as ``__`` (e.g.
             ``crossover__probability=0.7``), or ``sets=("crossover.probability=0.7",)``.
-        progress: optional callback ``(stage, fraction)``: ``("compile", 0.0)``, the
+        progress: optional callback ``(stage, fraction)``, called as each phase starts
+            and as it advances: ``("references", 0.0)``; ``("compile", 0.0)``, the
             compilation's progress (after the tracing and after each compiled program,
-            when the programs are not compiled yet), ``("compile", 1.0)``, then
-            ``("evolve", f)`` after each chunk of
-            :data:`jaxga.api.programs.GENERATION_CHUNK` generations.
+            when the programs are not compiled yet), ``("compile", 1.0)``; ``("evolve",
+            f)`` after each chunk of :data:`jaxga.api.programs.GENERATION_CHUNK`
+            generations; ``("post", 0.0)``; ``("any-angle", f)`` (the fraction of its
+            budget used).
         chunks: ignored (deprecated): the generations always run in compiled chunks of
             :data:`jaxga.api.programs.GENERATION_CHUNK`, whatever their number.
         population_capacity: individuals per island that the compiled program holds
@@ -603,13 +610,22 @@ def run(
             size swept as its capacity (``Result.population_capacity``): pass that to
             repeat its runs bit for bit.
         size_class: run on the map padded with blocked cells to its size class
-            (:mod:`jaxga.api.size_classes`: sides of 32 or 64 cells, and the class's
-            path capacity), so that all maps of a class share compiled programs: a
-            20 x 20 and a 25 x 25 map compile once. Results are reported on the map
-            itself. Where an operator's arrays are sized by the map's shape (IMGA,
-            MPMGA, Zhu's IGA) or the capacity differs, they differ seed by seed from the
-            unpadded runs but not in what they are: feasible paths on the map, of the
-            same distribution. Maps over 64 cells a side are not padded.
+            (:mod:`jaxga.api.size_classes`: each side 32, 64, 128, 256, 384, 512, 768
+            or 1024 cells, and the class's path capacity), so that all maps of a class
+            share compiled programs: a 20 x 20 and a 25 x 25 map compile once, and so
+            do two 384 x 384 robot maps. None (default): True for maps with a side
+            over 64 (users' maps), False for smaller ones, so that the papers' maps keep
+            their published shapes. Results are reported on the map itself. Where an
+            operator's arrays are sized by the map's shape (IMGA, MPMGA, Zhu's IGA) or
+            the capacity differs, they differ seed by seed from the unpadded runs but
+            not in what they are: feasible paths on the map, of the same distribution.
+        any_angle_budget: seconds the any-angle reference may take after the runs
+            (:mod:`jaxga.api.references`): ``"auto"`` (default) the runs' own time
+            (initialisation, evolution and post-optimisation), so that the references
+            never take longer than the GA; None: no limit (the exact value whatever
+            it costs). Beyond the budget :attr:`Result.any_angle_optimum` is NaN,
+            :attr:`Result.any_angle_note` says so, and the gaps are to the proven
+            lower bound (:attr:`Result.gap_basis`).
 
     Returns:
         A :class:`Result`. Seeds that found no feasible path have ``success`` False and
@@ -627,11 +643,11 @@ def run(
     return sweep(preset, grid, [{}], seeds, generations=generations,
                  corner_rule=corner_rule, variant=variant, sets=sets, progress=progress,
                  chunks=chunks, population_capacity=population_capacity,
-                 size_class=size_class, **overrides)[0]
+                 size_class=size_class, any_angle_budget=any_angle_budget, **overrides)[0]
 
 
 RUN_OPTIONS = ("generations", "corner_rule", "variant", "sets", "progress", "chunks",
-               "population_capacity", "size_class")
+               "population_capacity", "size_class", "any_angle_budget")
 """Keyword arguments of :func:`run` (besides ``seeds``) that are not configuration keys."""
 
 
@@ -644,9 +660,10 @@ def check_run(preset: str | Config, grid: Grid | str, **options: Any) -> Config:
     overrides = dict(options)
     named = {k: overrides.pop(k) for k in RUN_OPTIONS if k in overrides}
     _check_call_options(named.get("progress"), named.get("chunks", 1),
-                        named.get("size_class", False))
-    config, grid, _ = load_problem(preset, grid, named.get("corner_rule"), named.get("variant"),
-                                   named.get("sets", ()), overrides, named.get("generations"))
+                        named.get("size_class"), named.get("any_angle_budget", "auto"))
+    config, grid, _, _ = load_problem(preset, grid, named.get("corner_rule"),
+                                      named.get("variant"), named.get("sets", ()), overrides,
+                                      named.get("generations"))
     (config,) = _point_configs(config, [{}])
     checked_capacity([config], named.get("population_capacity"))
     build(config, grid)  # check_migration and check_combination

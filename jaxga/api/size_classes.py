@@ -6,7 +6,10 @@ With ``size_class=True`` (:func:`jaxga.run`, ``--size-class``) a map of up to
 (:func:`class_shape`: each side rounded up to one of :data:`CLASS_SIDES`), and its path
 capacity is raised to the class's (:func:`class_capacity`), so that a 20 x 20 and a
 25 x 25 map run the same programs, and one warm-up of the class (``jaxga warmup
---size-class``) serves every map in it.
+--size-class``) serves every map in it. By default (``size_class=None``) the maps with
+a side over :data:`AUTO_MIN_SIDE` are padded (users' robot maps: two 384 x 384 maps run
+one program set) and the smaller ones, the papers' maps among them, keep their shape
+(decision 030).
 
 The padding keeps every cell's ``(x, y)``: the map is the bottom-left corner of the
 padded one. Padding cells are blocked (no path enters them) and marked as off the map
@@ -34,17 +37,30 @@ import numpy as np
 from jaxga.core.grid import Grid, index_to_xy, xy_to_index
 from jaxga.engine.algorithm import capacity_class, default_capacity
 
-CLASS_SIDES: tuple[int, ...] = (32, 64)
-"""A padded side is the smallest of these holding the map's side."""
+CLASS_SIDES: tuple[int, ...] = (32, 64, 128, 256, 384, 512, 768, 1024)
+"""A padded side is the smallest of these holding the map's side (each side on its own:
+a 604 x 307 map is in the 768 x 384 class)."""
 
 MAX_CLASS_SIDE = CLASS_SIDES[-1]
-"""Maps with a side over this are not padded: on them a run's computation, not its
-compilation, is the waiting, and padding would add to it."""
+"""The largest class side; every map jaxga plans on (at most
+:data:`jaxga.core.grid.MAX_MAP_CELLS` cells, so no side over 1024 unless the other is
+under 256) has a class but a very long and thin one."""
+
+AUTO_MIN_SIDE = 64
+"""``size_class=None`` (the default) pads maps with a side over this: users' maps, whose
+compilation (tens of seconds) would otherwise dominate a run that takes a second. The
+papers' maps (20 x 20, 50 x 50) keep their published shapes, so that their tables
+reproduce (decision 030)."""
 
 CAPACITY_PER_SIDE = 5
 """A class's path capacity is this many times its longer side (160 cells for the 32
 class: the papers' 20 x 20 maps have 160; 320 for the 64 class: what a random 64 x 64
 map's 3 x optimal path needs). A problem needing more gets its own capacity."""
+
+
+def auto_size_class(grid: Grid) -> bool:
+    """Whether ``size_class=None`` pads ``grid``: a side over :data:`AUTO_MIN_SIDE`."""
+    return max(grid.height, grid.width) > AUTO_MIN_SIDE
 
 
 def class_shape(height: int, width: int) -> tuple[int, int] | None:

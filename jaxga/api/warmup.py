@@ -1,4 +1,4 @@
-"""``jaxga warmup``: compile a day's programs ahead, into the persistent cache (issue 41).
+"""``jaxga warmup``: compile a day's programs ahead, into the persistent cache.
 
 A program set (:mod:`jaxga.api.programs`) depends on the preset, the map's shape and
 corner rule, the path capacity and the runs per call (4, or 32 per device); not on
@@ -44,7 +44,7 @@ def warmup(
     *,
     seeds: Sequence[int] | None = None,
     corner_rule: str | None = None,
-    size_class: bool = False,
+    size_class: bool | None = None,
     report: Callable[[dict[str, Any]], None] | None = None,
 ) -> list[dict[str, Any]]:
     """Compile every program set ``presets`` x ``maps`` x ``runs`` needs (one generation
@@ -62,7 +62,8 @@ def warmup(
         size_class: compile the programs of runs with ``size_class=True``
             (:mod:`jaxga.api.size_classes`): the maps' size classes, so that sizes 32 and
             64 serve every map up to 64 x 64 whose problem fits its class's path
-            capacity.
+            capacity; None (the default) as :func:`jaxga.run`'s default: the classes of
+            maps with a side over 64 (sizes 128, 256, 384 and 512 serve every user map).
         report: called with each row as it is done.
 
     The programs are stored whole (:mod:`jaxga.api.executables`) when XLA compiles them;

@@ -1,0 +1,115 @@
+"""Paths for a robot: a planned path in metres as CSV or as a ``nav_msgs/Path``-shaped YAML.
+
+``jaxga run --path-out FILE`` writes the best seed's path in the map's world frame
+(:mod:`jaxga.maps.frame`): ``FILE.csv`` as ``x,y`` rows in metres, ``FILE.yaml`` (or
+``.yml``) as the YAML form of a ROS ``nav_msgs/Path`` message (``header.frame_id``
+``map``; one ``geometry_msgs/PoseStamped`` per point, ``position`` in metres, ``z = 0``,
+and ``orientation`` the quaternion of the yaw along the path: the direction of the
+segment that leaves the point, the last point keeping the direction it arrives in), which
+``rostopic pub`` / ``ros2 topic pub`` and ``yaml.safe_load`` read.
+
+Every file is written atomically: to a temporary file beside the target, then renamed
+over it, so that a failed write leaves a previous file whole (:func:`atomic_write_text`).
+"""
+
+from __future__ import annotations
+
+import contextlib
+import math
+import os
+import tempfile
+from pathlib import Path
+
+import numpy as np
+import yaml
+
+from jaxga.core.errors import JaxgaError
+
+__all__ = ["PATH_FORMATS", "atomic_write_text", "path_format", "path_text", "path_yaws",
+           "write_path"]
+
+PATH_FORMATS: dict[str, str] = {".csv": "csv", ".yaml": "yaml", ".yml": "yaml"}
+"""File extensions of ``--path-out`` and the format each one writes."""
+
+
+def path_format(path: str | os.PathLike) -> str:
+    """The format of a ``--path-out`` file from its extension, or a one-line error."""
+    suffix = Path(path).suffix.lower()
+    if suffix not in PATH_FORMATS:
+        raise JaxgaError(f"cannot write --path-out {path}: the extension must be .csv "
+                         f"(x,y in metres) or .yaml / .yml (a nav_msgs/Path), got "
+                         f"{suffix or 'none'!r}")
+    return PATH_FORMATS[suffix]
+
+
+def path_yaws(points: np.ndarray) -> np.ndarray:
+    """``float[k]``: the heading (radians, counter-clockwise from +x) at each point of a
+    polyline: the direction of the segment leaving it; the last point keeps the direction
+    it arrives in; a single point faces +x. Repeated points take the next distinct
+    direction."""
+    p = np.asarray(points, float).reshape(-1, 2)
+    k = len(p)
+    yaw = np.zeros(k)
+    if k < 2:
+        return yaw
+    d = p[1:] - p[:-1]
+    seg = np.arctan2(d[:, 1], d[:, 0])
+    moving = np.hypot(d[:, 0], d[:, 1]) > 0
+    if not moving.any():
+        return yaw
+    # each segment without length takes the direction of the next one that has one
+    idx = np.where(moving, np.arange(k - 1), k - 1)
+    idx = np.minimum.accumulate(idx[::-1])[::-1]
+    last = np.flatnonzero(moving)[-1]
+    idx = np.where(idx == k - 1, last, idx)
+    yaw[:-1] = seg[idx]
+    yaw[-1] = seg[last]
+    return yaw
+
+
+def path_text(points: np.ndarray, fmt: str, frame_id: str = "map") -> str:
+    """The text of a path file: ``fmt`` ``"csv"`` or ``"yaml"`` (see the module)."""
+    p = np.asarray(points, float).reshape(-1, 2)
+    if fmt == "csv":
+        return "x,y\n" + "".join(f"{x:.4f},{y:.4f}\n" for x, y in p)
+    if fmt != "yaml":
+        raise JaxgaError(f"unknown path format {fmt!r}: expected csv or yaml")
+    poses = []
+    for (x, y), yaw in zip(p, path_yaws(p), strict=True):
+        poses.append({
+            "header": {"frame_id": frame_id},
+            "pose": {"position": {"x": round(float(x), 4), "y": round(float(y), 4), "z": 0.0},
+                     "orientation": {"x": 0.0, "y": 0.0,
+                                     "z": round(math.sin(yaw / 2), 6),
+                                     "w": round(math.cos(yaw / 2), 6)}},
+        })
+    return yaml.safe_dump({"header": {"frame_id": frame_id}, "poses": poses},
+                          sort_keys=False)
+
+
+def atomic_write_text(path: str | os.PathLike, text: str) -> None:
+    """Write ``text`` to ``path`` through a temporary file beside it, renamed over it: the
+    previous file stays whole if anything fails. Errors name the path."""
+    target = Path(path)
+    try:
+        fd, tmp = tempfile.mkstemp(prefix=f".{target.name}.", suffix=".tmp",
+                                   dir=target.parent if str(target.parent) else ".")
+    except OSError as e:
+        raise JaxgaError(f"cannot write {path}: {e.strerror or e}") from None
+    try:
+        with os.fdopen(fd, "w", encoding="utf-8") as f:
+            f.write(text)
+            f.flush()
+            os.fsync(f.fileno())
+        os.replace(tmp, target)
+    except BaseException as e:
+        with contextlib.suppress(OSError):
+            os.unlink(tmp)
+        if isinstance(e, OSError):
+            raise JaxgaError(f"cannot write {path}: {e.strerror or e}") from None
+        raise
+
+
+def write_path(path: str | os.PathLike, points_world: np.ndarray, frame_id: str = "map") -> None:
+    """Write a path in metres to ``path`` as CSV or YAML (by its extension), atomically."""
+    atomic_write_text(path, path_text(points_world, path_format(path), frame_id))

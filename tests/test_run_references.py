@@ -1,0 +1,75 @@
+"""A run's references within their budget (jaxga.api.references): the exact any-angle
+optimum, or its proven lower bound and a gap to it that says so."""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+import pytest
+
+from jaxga.api import references
+from jaxga.api.result import Result
+from jaxga.core.grid import Grid
+from jaxga.reference.lower_bound import euclidean_lower_bound_np
+from jaxga.reference.optima import any_angle_shortest_path_np
+
+
+def _grid():
+    b = np.zeros((40, 40), bool)
+    b[5:35, 20] = True
+    b[20, 5:20] = True
+    return Grid.create(b, start=(2, 2), goal=(37, 37), corner_rule="strict")
+
+
+def test_no_budget_gives_the_exact_optimum_and_a_budget_of_zero_only_the_bound():
+    grid = _grid()
+    b = grid.blocked_np()
+    octile = references.octile_optimum(grid)
+    exact = any_angle_shortest_path_np(b, grid.start_xy, grid.goal_xy, "strict")
+    bound = euclidean_lower_bound_np(b, grid.start_xy, grid.goal_xy, "strict")
+    references._CACHE.clear()
+    seen = []
+    cut = references.any_angle_references(grid, octile, 0.0, seen.append)
+    assert math.isnan(cut.optimum) and len(cut.path) == 0
+    assert cut.note == "any-angle optimum not computed (budget 0.00 s)"
+    assert math.isnan(cut.lower_bound) or cut.lower_bound == pytest.approx(bound.length)
+    assert seen[-1] == 1.0
+    full = references.any_angle_references(grid, octile, None)  # a larger budget: again
+    assert full.optimum == pytest.approx(exact.length) and full.note == ""
+    assert full.lower_bound == pytest.approx(bound.length)
+    assert full.lower_bound <= full.optimum
+    np.testing.assert_array_equal(full.path, exact.path)
+    again = references.any_angle_references(grid, octile, 0.0)  # cached: no search
+    assert again is full
+
+
+def test_a_result_measures_its_gap_against_what_was_computed():
+    """gap_reference: the exact optimum, else the lower bound (the gap then bounds the true
+    gap from above), else the 8-connected optimum; the summary and JSON say which."""
+    base = dict(preset="p", map_name="m", corner_rule="strict", seeds=np.arange(2),
+                success=np.array([True, False]), reason="", cells=np.zeros((2, 1), int),
+                n_cells=np.ones(2, int), raw_cells=np.zeros((2, 1), int),
+                raw_n_cells=np.ones(2, int), length=np.array([11.0, np.nan]),
+                raw_length=np.array([12.0, np.nan]), fitness=np.array([0.1, np.nan]),
+                convergence_generation=np.zeros(2, int),
+                history={k: np.zeros((2, 1)) for k in ("best", "mean", "std")},
+                metrics={k: np.array([1.0, np.nan]) for k in ("angle_sum", "turns")},
+                raw_metrics={}, failures=np.zeros((2, 3), int),
+                init_success_rate=np.ones(2), init_unfilled=np.zeros(2, int), optimum=12.0,
+                timing={"total_s": 1.0}, population=4, generations=1, width=1)
+    exact = Result(**base, any_angle_optimum=10.0, lower_bound=9.5)
+    assert exact.gap_basis == "any-angle optimum" and exact.gap[0] == pytest.approx(0.1)
+    bound = Result(**base, any_angle_optimum=math.nan, lower_bound=10.0,
+                   any_angle_note="any-angle optimum not computed (budget 0.50 s)")
+    assert bound.gap_basis == "lower bound" and bound.gap[0] == pytest.approx(0.1)
+    assert np.isnan(bound.gap[1])
+    text = bound.summary()
+    assert "any-angle optimum not computed (budget 0.50 s), lower bound 10.0000" in text
+    assert "gap = length / lower bound - 1 (at least the gap to the optimum)" in text
+    doc = bound.to_json()
+    assert doc["gap_basis"] == "lower bound" and doc["any_angle_optimum"] is None
+    assert doc["lower_bound"] == 10.0 and doc["runs"][0]["gap"] == pytest.approx(0.1)
+    neither = Result(**base, any_angle_optimum=math.nan, lower_bound=math.nan)
+    assert neither.gap_basis == "8-connected optimum"
+    assert neither.gap[0] == pytest.approx(11 / 12 - 1)
