@@ -771,17 +771,18 @@ def _preset_rule(args: argparse.Namespace) -> str | None:
                                              sets=args.set or ()))
 
 
-def _parse_obstacles(text: str) -> list[tuple[int, int]]:
-    """``X,Y;X,Y;...`` (empty: none) as a list of ``(x, y)`` cells."""
+def _parse_obstacles(text: str, option: str = "--obstacles", parse=None) -> list:
+    """``X,Y;X,Y;...`` (empty: none) as a list of ``(x, y)``: cells (``_parse_xy``) or,
+    with ``parse=_parse_point``, metres."""
 
-    cells = []
+    items = []
     for part in text.replace(" ", "").split(";"):
         if part:
             try:
-                cells.append(_parse_xy(part))
+                items.append((parse or _parse_xy)(part))
             except argparse.ArgumentTypeError as e:
-                raise ParameterError(f"--obstacles: {e}") from None
-    return cells
+                raise ParameterError(f"{option}: {e}") from None
+    return items
 
 
 def _number_or_inf(value: object) -> float:
@@ -849,7 +850,7 @@ def cmd_replan(args: argparse.Namespace) -> int:
     obstacles = [xy for text in args.obstacles or () for xy in _parse_obstacles(text)]
     for text in args.obstacles_world or ():
         obstacles += [info.frame.cell_of(p, grid.shape, "--obstacles-world point")
-                      for p in _parse_points(text, "--obstacles-world")]
+                      for p in _parse_obstacles(text, "--obstacles-world", _parse_point)]
     position = args.position
     if args.position_world is not None:
         if position is not None:
@@ -901,18 +902,6 @@ def _inflation_cells(args: argparse.Namespace, info) -> float:
     if args.robot_radius is not None:
         return args.robot_radius / info.frame.resolution / k
     return (args.inflate or 0.0) / k
-
-
-def _parse_points(text: str, option: str) -> list[tuple[float, float]]:
-    """``X,Y;X,Y;...`` in metres (empty: none)."""
-    points = []
-    for part in text.replace(" ", "").split(";"):
-        if part:
-            try:
-                points.append(_parse_point(part))
-            except argparse.ArgumentTypeError as e:
-                raise ParameterError(f"{option}: {e}") from None
-    return points
 
 
 def _int_list(text: str) -> list[int]:

@@ -29,6 +29,7 @@ __all__ = [
     "fill_enclosed",
     "inflate",
     "legal_moves",
+    "move_edges",
     "preprocess",
     "reachable",
 ]
@@ -61,6 +62,22 @@ def legal_moves(blocked: np.ndarray, corner_rule: str) -> np.ndarray:
                 ok &= ~(s1 | s2)
         out[d] = ok
     return out
+
+
+def move_edges(blocked: np.ndarray, corner_rule: str
+               ) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """The legal-move graph as edge lists ``(from, to, length)`` of flat cell indices
+    (``y * W + x``), direction by direction (:data:`jaxga.core.grid.DIRECTIONS`): every
+    legal move under ``corner_rule``, 1 long straight and ``sqrt(2)`` diagonal."""
+    h, w = np.shape(blocked)
+    legal = legal_moves(blocked, corner_rule).reshape(len(DIRECTIONS), -1)
+    src, dst, cost = [], [], []
+    for d, (dx, dy) in enumerate(DIRECTIONS.tolist()):
+        p = np.flatnonzero(legal[d])
+        src.append(p)
+        dst.append(p + (dy * w + dx))
+        cost.append(np.full(p.size, math.sqrt(2.0) if dx and dy else 1.0))
+    return np.concatenate(src), np.concatenate(dst), np.concatenate(cost)
 
 
 def reachable_np(blocked: np.ndarray, source: tuple[int, int], corner_rule: str) -> np.ndarray:

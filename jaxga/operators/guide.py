@@ -11,7 +11,7 @@ stuck (:func:`jaxga.operators.init.field_walk`; decision 018).
 
 The fields are computed once per problem on the host with SciPy's Dijkstra
 (:func:`scipy.sparse.csgraph.dijkstra`) over the legal-move graph of
-:func:`jaxga.maps.preprocess.legal_moves` (step cost 1, diagonal ``sqrt(2)``), and
+:func:`jaxga.maps.preprocess.move_edges` (step cost 1, diagonal ``sqrt(2)``), and
 carried to the device as a :class:`Guide` attached to the :class:`~jaxga.core.grid.Grid`
 (:func:`with_guide`), so that every compiled program that receives the grid can read
 them. A move graph is symmetric under every corner rule (a move and its reverse pass
@@ -33,13 +33,10 @@ import jax
 import jax.numpy as jnp
 import numpy as np
 
-from jaxga.core.grid import DIRECTIONS, Grid
-from jaxga.maps.preprocess import legal_moves
+from jaxga.core.grid import Grid
+from jaxga.maps.preprocess import move_edges
 
 __all__ = ["Guide", "ProblemFacts", "distance_fields", "problem_facts", "with_guide"]
-
-SQRT2 = math.sqrt(2.0)
-
 
 @jax.tree_util.register_dataclass
 @dataclasses.dataclass(frozen=True)
@@ -82,17 +79,9 @@ def _move_graph(blocked: np.ndarray, corner_rule: str):
     from scipy.sparse import csr_matrix
 
 
-    h, w = blocked.shape
-    legal = legal_moves(blocked, corner_rule).reshape(len(DIRECTIONS), -1)
-    rows, cols, costs = [], [], []
-    for d, (dx, dy) in enumerate(DIRECTIONS.tolist()):
-        p = np.flatnonzero(legal[d])
-        rows.append(p)
-        cols.append(p + (dy * w + dx))
-        costs.append(np.full(p.size, SQRT2 if dx and dy else 1.0))
-    n = h * w
-    return csr_matrix((np.concatenate(costs), (np.concatenate(rows), np.concatenate(cols))),
-                      shape=(n, n))
+    n = blocked.size
+    rows, cols, costs = move_edges(blocked, corner_rule)
+    return csr_matrix((costs, (rows, cols)), shape=(n, n))
 
 
 @functools.lru_cache(maxsize=4)

@@ -48,8 +48,8 @@ from collections.abc import Callable, Sequence
 import numpy as np
 
 from jaxga.core.errors import EndpointError, JaxgaError, NoPathError
-from jaxga.core.grid import CORNER_RULES, DIRECTIONS, Grid
-from jaxga.maps.preprocess import legal_moves
+from jaxga.core.grid import CORNER_RULES, Grid
+from jaxga.maps.preprocess import legal_moves, move_edges
 
 __all__ = [
     "ReferencePath",
@@ -260,19 +260,12 @@ class OctileGraph:
         self.corner_rule = _check_rule(corner_rule)
         h, w = self.blocked.shape
         self.shape = (h, w)
-        legal = legal_moves_np(self.blocked, corner_rule).reshape(8, -1)
-        src, dst, cost = [], [], []
-        for d, (dx, dy) in enumerate(DIRECTIONS.tolist()):
-            p = np.flatnonzero(legal[d])
-            src.append(p)
-            dst.append(p + (dy * w + dx))
-            cost.append(np.full(p.size, SQRT2 if dx and dy else 1.0))
-        src_a = np.concatenate(src)
+        src_a, dst_a, cost_a = move_edges(self.blocked, self.corner_rule)
         order = np.argsort(src_a, kind="stable")  # by cell, then by direction
         n = h * w
         self.indptr = np.searchsorted(src_a[order], np.arange(n + 1)).astype(np.int64)
-        self.indices = np.concatenate(dst)[order]
-        self.costs = np.concatenate(cost)[order]
+        self.indices = dst_a[order]
+        self.costs = cost_a[order]
         self._xs = np.tile(np.arange(w, dtype=np.float64), h)
         self._ys = np.repeat(np.arange(h, dtype=np.float64), w)
 
