@@ -393,6 +393,52 @@ def test_min_clearance_against_dense_sampling():
         assert dist - 6 / 800 - 1e-6 <= got <= dist + 1e-6
 
 
+def _whole_map_clearance(grid: Grid, cells: jax.Array, length: jax.Array) -> tuple:
+    """Every segment against every cell of the map: (min clearance, min clearance with
+    the border blocked, tangencies)."""
+    g = ob._geometry(grid, cells, length)
+    h, w = grid.shape
+    segs = (g.x[:-1], g.y[:-1], g.x[1:], g.y[1:])
+    d, t = jax.vmap(lambda *s: ob._segment_box_clearance(*s, grid.blocked))(*segs)
+    xf, yf = g.x.astype(jnp.float32), g.y.astype(jnp.float32)
+    edge = jnp.minimum(jnp.minimum(xf, (w - 1) - xf), jnp.minimum(yf, (h - 1) - yf)) + 0.5
+    return (jnp.min(d), jnp.minimum(jnp.min(d), jnp.min(edge)),
+            jnp.sum(t & g.moving, dtype=jnp.int32))
+
+
+_band_and_whole = jax.jit(jax.vmap(
+    lambda g, c, n: ((ob.min_clearance(g, c, n), ob.min_clearance(g, c, n, border_blocked=True),
+                      ob.tangencies(g, c, n)), _whole_map_clearance(g, c, n)),
+    in_axes=(None, 0, 0)))
+
+
+def test_clearance_bands_equal_the_whole_map():
+    """min_clearance and tangencies measure each segment against a band of cells around
+    it, and against the whole map only when the path stays beyond ``CLEARANCE_RADIUS``
+    of every obstacle: the same values, bit for bit, as every segment against every
+    cell, for continuous paths, waypoint paths with long segments, paths far from every
+    obstacle and an open map."""
+    rng = np.random.default_rng(4)
+    size, cap = 24, 12
+    for density in (0.0, 0.01, 0.05, 0.2, 0.4):
+        for _ in range(3):
+            grid = Grid.create(rng.random((size, size)) < density, corner_rule="strict")
+            cells, lengths = [], []
+            for k in range(16):
+                n = int(rng.integers(1, cap + 1))
+                if k % 2:  # a random walk: a continuous path (or repeated nodes)
+                    xy = np.cumsum(rng.integers(-1, 2, (n, 2)), axis=0) + rng.integers(0, size, 2)
+                    xy = np.clip(xy, 0, size - 1)
+                else:  # random waypoints: long segments
+                    xy = rng.integers(0, size, (n, 2))
+                c, ln = make_path([tuple(p) for p in xy.tolist()], cap=cap, width=size)
+                cells.append(c)
+                lengths.append(ln)
+            band, whole = _band_and_whole(grid, jnp.stack(cells), jnp.stack(lengths))
+            for got, want in zip(band, whole):
+                np.testing.assert_array_equal(np.asarray(got), np.asarray(want))
+
+
 def test_metrics_bundle():
     """SPEC 3 reported metrics in one call, consistent with the single functions."""
     grid = make_grid(obstacles=[(3, 0), (0, 3)], goal=(4, 4))

@@ -1,18 +1,22 @@
-"""Post-optimisation (SPEC 9): shortcut_greedy, simplify_adjacent, remove_loops."""
+"""Post-optimisation (MPMGA 4.7, AGACD 4.8, IMGA 4.5, and jaxga's own): shortcut_greedy,
+shortcut_optimal, prune_waypoints, simplify_adjacent, remove_loops."""
 
 from __future__ import annotations
 
+import itertools
 import math
 
 import jax
 import jax.numpy as jnp
 import numpy as np
+import pytest
 from hypothesis import given, settings
 from scipy import stats
 
 from jaxga import Grid
 from jaxga.core import paths
-from jaxga.core.geometry import clear, linear_trial
+from jaxga.core.geometry import _floor_div, clear, linear_trial
+from jaxga.core.grid import CORNER_RULES
 from jaxga.core.objectives import path_length
 from jaxga.core.paths import (
     Population,
@@ -23,8 +27,10 @@ from jaxga.core.paths import (
     pad,
     population_map,
 )
+from jaxga.maps.generators import random_map
 from jaxga.operators import postprocess as PP
 from jaxga.operators.lift import over_individuals
+from jaxga.reference.optima import clear_pairs_np, distances_from, shortest_path_np
 from tests.strategies import CAP, SIZE, grids_and_parents
 
 P = 8
@@ -114,47 +120,221 @@ def test_shortcut_greedy_linear_trial(gp):
 _optimal = jax.jit(jax.vmap(PP.shortcut_optimal, in_axes=(None, 0, 0)))
 _optimal_narrow = jax.jit(jax.vmap(lambda g, c, n: PP.shortcut_optimal(g, c, n, window=3),
                                    in_axes=(None, 0, 0)))
+_prune = jax.jit(jax.vmap(PP.prune_waypoints, in_axes=(None, 0, 0)))
 
 
-def _shortest_subsequence(xy, sees) -> float:
+def _sees_np(grid, path: list[int]) -> np.ndarray:
+    """``bool[n, n]``: line of sight between every two nodes of ``path`` by the NumPy
+    reference (:func:`jaxga.reference.optima.clear_pairs_np`, independent of jaxga.core)."""
+    w = grid.width
+    xy = np.array([(c % w, c // w) for c in path], np.int64)
+    i, j = np.meshgrid(np.arange(len(path)), np.arange(len(path)), indexing="ij")
+    ok = clear_pairs_np(grid.blocked_np(), grid.corner_rule, xy[i.ravel()], xy[j.ravel()])
+    return ok.reshape(len(path), len(path))
+
+
+def _shortest_subsequence(xy, sees, window: int | None = None) -> float:
     """Brute force: the shortest sub-sequence from the first to the last node whose
-    consecutive nodes see each other (every pair, no window)."""
+    consecutive nodes see each other (at most ``window`` positions apart, if given)."""
     n = len(xy)
     best = [0.0] + [math.inf] * (n - 1)
     for j in range(1, n):
-        for i in range(j):
+        for i in range(0 if window is None else max(j - window, 0), j):
             if sees[i, j]:
                 best[j] = min(best[j], best[i] + math.dist(xy[i], xy[j]))
     return best[-1]
 
 
+def _check_minimal(grid, got: list[int]) -> None:
+    """No collinear triple and no waypoint whose neighbours see each other (NumPy
+    reference line of sight)."""
+    w = grid.width
+    xy = np.array([(c % w, c // w) for c in got], np.int64)
+    if len(got) < 3:
+        return
+    d1, d2 = xy[1:-1] - xy[:-2], xy[2:] - xy[1:-1]
+    assert (d1[:, 0] * d2[:, 1] - d1[:, 1] * d2[:, 0] != 0).all(), f"collinear in {got}"
+    assert not clear_pairs_np(grid.blocked_np(), grid.corner_rule, xy[:-2], xy[2:]).any(), \
+        f"removable waypoint in {got}"
+
+
+def _check_optimal(grid, c, n, src_c, src_n, window: int) -> None:
+    """shortcut_optimal's output against the NumPy references, path by path: a feasible
+    sub-sequence with the input's endpoints, minimal (:func:`_check_minimal`), no longer
+    than the greedy pass nor than the previous result (the windowed optimum or the
+    greedy result, whichever is shorter), never shorter than the optimum without a
+    window, which it equals when the paths fit the window."""
+    w = grid.width
+    ends, _, feas, loop_free, out_len = (np.asarray(v) for v in _checks(grid, c, n))
+    assert ends.all() and feas.all() and loop_free.all()
+    in_len = np.asarray(_checks(grid, src_c, src_n)[4])
+    greedy_len = np.asarray(_checks(grid, *_shortcut["clear"](grid, src_c, src_n))[4])
+    assert (out_len <= greedy_len + 1e-4).all() and (out_len <= in_len + 1e-4).all()
+    np.testing.assert_array_equal(np.asarray(jax.vmap(pad)(c, n)), np.asarray(c))
+    for i, (got, src) in enumerate(zip(_as_lists(c, n), _as_lists(src_c, src_n))):
+        positions = [src.index(cell) for cell in got]
+        assert positions == sorted(positions) and got[0] == src[0] and got[-1] == src[-1]
+        _check_minimal(grid, got)
+        sees = _sees_np(grid, src)
+        xy = [(cell % w, cell // w) for cell in src]
+        best = _shortest_subsequence(xy, sees)
+        before = min(_shortest_subsequence(xy, sees, window), float(greedy_len[i]))
+        assert best - 1e-4 <= out_len[i] <= before + 1e-4
+        if len(src) <= window:
+            assert math.isclose(out_len[i], best, rel_tol=1e-5)
+
+
 @settings(max_examples=25)
 @given(grids_and_parents(n=P))
 def test_shortcut_optimal_is_the_shortest_clear_subsequence(gp):
-    """Feasible, same endpoints, a sub-sequence of the input, as short as the brute-force
-    optimum over all sub-sequences (the paths here are shorter than the window), and
-    never longer than the greedy pass; with a window of 3 positions still feasible and
-    never longer than greedy (the greedy result is the fallback)."""
+    """On random maps and paths (shorter than the window): the brute-force optimum over
+    all clear sub-sequences (NumPy line of sight), as few waypoints as possible, never
+    longer than the greedy pass; with a window of 3 positions still feasible and minimal,
+    between the optimum and the shorter of the windowed optimum and the greedy result."""
     grid, parents = gp
-    w = grid.width
-    sees = np.asarray(_pairs["clear"](grid, parents.cells))
-    in_len = np.asarray(_checks(grid, parents.cells, parents.length)[4])
-    greedy_len = np.asarray(_checks(grid, *_shortcut["clear"](grid, parents.cells,
-                                                               parents.length))[4])
-    for fn, exact in ((_optimal, True), (_optimal_narrow, False)):
-        c, n = fn(grid, parents.cells, parents.length)
-        ends, _, feas, loop_free, out_len = (np.asarray(v) for v in _checks(grid, c, n))
-        assert ends.all() and feas.all() and loop_free.all()
-        assert (out_len <= greedy_len + 1e-4).all() and (out_len <= in_len + 1e-4).all()
-        np.testing.assert_array_equal(np.asarray(jax.vmap(pad)(c, n)), np.asarray(c))
-        for i, (got, src) in enumerate(zip(_as_lists(c, n),
-                                           _as_lists(parents.cells, parents.length))):
-            positions = [src.index(cell) for cell in got]
-            assert positions == sorted(positions)  # a sub-sequence
-            if exact:
-                xy = [(cell % w, cell // w) for cell in src]
-                assert math.isclose(out_len[i], _shortest_subsequence(xy, sees[i]),
-                                    rel_tol=1e-5)
+    _check_optimal(grid, *_optimal(grid, parents.cells, parents.length), parents.cells,
+                   parents.length, PP.SHORTCUT_WINDOW)
+    _check_optimal(grid, *_optimal_narrow(grid, parents.cells, parents.length),
+                   parents.cells, parents.length, 3)
+
+
+LONG_SIZE, LONG_CAP = 40, 256
+
+
+def _long_parents(grid, n: int, seed: int) -> tuple[jax.Array, jax.Array]:
+    """``n`` continuous loop-free start-goal paths of up to ``LONG_CAP`` cells: the
+    8-connected optimum, then detours through random free cells (each leg the optimum on
+    the map with the earlier legs blocked)."""
+    rng = np.random.default_rng(seed)
+    b, rule = grid.blocked_np(), grid.corner_rule
+    free = np.argwhere(np.isfinite(distances_from(grid)))[:, ::-1]
+    out = [shortest_path_np(b, grid.start_xy, grid.goal_xy, rule).path]
+    while len(out) < n:
+        used, legs, here = b.copy(), [np.asarray([grid.start_xy])], grid.start_xy
+        for target in [tuple(int(v) for v in free[k])
+                       for k in rng.integers(len(free), size=3)] + [grid.goal_xy]:
+            used[here[1], here[0]] = False
+            leg = shortest_path_np(used, here, target, rule)
+            if not leg.found:
+                break
+            used[leg.path[:, 1], leg.path[:, 0]] = True
+            legs.append(leg.path[1:])
+            here = target
+        else:
+            path = np.concatenate(legs)
+            if len(path) <= LONG_CAP:
+                out.append(path)
+    cells, length = zip(*(paths.from_coords(p, grid.width, LONG_CAP) for p in out))
+    return jnp.stack(cells), jnp.stack(length)
+
+
+@pytest.mark.parametrize("rule", CORNER_RULES)
+def test_shortcut_optimal_long_paths_against_numpy(rule):
+    """Paths longer than the window (the optimum and detours of up to 256 cells on 40 x 40
+    maps): feasible, minimal, between the optimum over all clear sub-sequences and the
+    shorter of the windowed optimum and the greedy result (NumPy references)."""
+    for seed in range(2):
+        grid = random_map(LONG_SIZE, LONG_SIZE, 0.25, seed, corner_rule=rule)
+        cells, length = _long_parents(grid, 4, seed)
+        assert int(jnp.max(length)) > PP.SHORTCUT_WINDOW
+        _check_optimal(grid, *_optimal(grid, cells, length), cells, length,
+                       PP.SHORTCUT_WINDOW)
+
+
+def test_shortcut_optimal_straight_lines_are_one_segment():
+    """100 collinear cells (more than the window) along an axis or a diagonal, and a
+    staircase, on an open map: the two end points; a collinear waypoint is dropped."""
+    grid = Grid.create(np.zeros((100, 100), bool), corner_rule="strict")
+    stair = [(k, k // 2) for k in range(100)]  # slope 1/2: straight and diagonal steps
+    for xy in ([(x, 7) for x in range(100)], [(k, 99 - k) for k in range(100)], stair):
+        assert _one(_optimal, grid, xy, cap=160) == [xy[0], xy[-1]]
+    assert _one(_prune, grid, [(0, 0), (2, 0), (5, 0), (5, 3)], cap=160) == [(0, 0), (5, 3)]
+    wall = np.zeros((100, 100), bool)
+    wall[1:, 3] = True  # x = 3 above row 0: (5, 0) must stay, (2, 0) goes
+    grid = Grid.create(wall, corner_rule="strict")
+    assert _one(_prune, grid, [(0, 0), (2, 0), (5, 0), (5, 3)], cap=160) == [(0, 0), (5, 0),
+                                                                             (5, 3)]
+
+
+def test_shortcut_optimal_l_corridor():
+    """A one-cell-wide L-shaped corridor with legs of 80 cells: its ends and its corner
+    (cut by a diagonal step unless the corner rule is strict); in a two-cell-wide one, a
+    path along the inner walls keeps its corner node, and one along the outer walls
+    wraps the inner corner."""
+    size = 80
+    corridor = np.ones((size, size), bool)
+    corridor[0, :] = False  # row y = 0
+    corridor[:, size - 1] = False  # column x = 79
+    ell = [(x, 0) for x in range(size)] + [(size - 1, y) for y in range(1, size)]
+    for rule in CORNER_RULES:
+        grid = Grid.create(corridor, corner_rule=rule)
+        # the diagonal step (78, 0) -> (79, 1) passes one blocked side cell, (78, 1)
+        corner = [(79, 0)] if rule == "strict" else [(78, 0), (79, 1)]
+        assert _one(_optimal, grid, ell, cap=160) == [(0, 0), *corner, (79, 79)], rule
+    wide = corridor.copy()
+    wide[1, : size - 1] = False  # row y = 1 too: the inner corner is cell (77, 2)
+    wide[2:, size - 2] = False  # column x = 78 too
+    grid = Grid.create(wide, corner_rule="strict")
+    inner = [(x, 1) for x in range(size - 1)] + [(size - 2, y) for y in range(2, size)]
+    assert _one(_optimal, grid, inner, cap=160) == [(0, 1), (78, 1), (78, 79)]
+    # along the outer walls: around the inner corner (77.5, 1.5) (cell (77, 2)'s); from
+    # (73, 0) the segment to (79, 2) would pass exactly through it (strict: not clear)
+    got = _one(_optimal, grid, ell, cap=160)
+    assert got == [(0, 0), (74, 0), (79, 2), (79, 79)]
+    sees = _sees_np(grid, [y * size + x for x, y in ell])
+    length = sum(math.dist(a, b) for a, b in zip(got[:-1], got[1:]))
+    assert math.isclose(length, _shortest_subsequence(ell, sees), rel_tol=1e-6)
+
+
+def test_shortcut_optimal_short_paths_and_x64():
+    """One and two nodes come back unchanged; int32 out under x64."""
+    grid = Grid.create(np.zeros((SIZE, SIZE), bool), corner_rule="strict")
+    for xy in ([(0, 0)], [(0, 0), (1, 1)]):
+        assert _one(_optimal, grid, xy) == xy
+    cells, n = paths.from_coords([(0, 0), (1, 0), (2, 0)], SIZE, 2 + 1)
+    with jax.enable_x64(True):
+        c, n2 = jax.jit(PP.shortcut_optimal)(grid, cells, n)
+        assert c.dtype == jnp.int32 and n2.dtype == jnp.int32 and int(n2) == 2
+
+
+# --------------------------------------------------------------- line-of-sight helpers
+_H, _W = 7, 9
+_ALL_PAIRS = np.array(list(itertools.product(range(_H * _W), repeat=2))
+                      + [(-1, 3), (3, _H * _W), (_H * _W + 5, 2)], np.int32)
+_clear_span = {s: jax.jit(jax.vmap(lambda g, a, b, s=s: clear(g, a, b, max_span=s),
+                                   in_axes=(None, 0, 0))) for s in (1, 3, 8)}
+_short_span = {s: jax.jit(jax.vmap(
+    lambda g, a, b, s=s: PP._clear_short(g, PP._vertex_codes(g.blocked), a, b, s),
+    in_axes=(None, 0, 0))) for s in (1, 3, 8)}
+
+
+@pytest.mark.parametrize("rule", CORNER_RULES)
+def test_clear_short_is_clear_on_every_pair(rule):
+    """shortcut_optimal's line of sight (one 2 x 2 block lookup per crossing) equals
+    jaxga.core.geometry.clear with the same span bound on every ordered pair of cells
+    (and a few off the map) of random 7 x 9 maps."""
+    rng = np.random.default_rng(11)
+    for density in (0.0, 0.15, 0.3, 0.5):
+        grid = Grid.create(rng.random((_H, _W)) < density, corner_rule=rule)
+        for span in (1, 3, 8):
+            want = np.asarray(_clear_span[span](grid, _ALL_PAIRS[:, 0], _ALL_PAIRS[:, 1]))
+            got = np.asarray(_short_span[span](grid, _ALL_PAIRS[:, 0], _ALL_PAIRS[:, 1]))
+            np.testing.assert_array_equal(got, want)
+
+
+def test_floor_div_is_exact():
+    """The line-of-sight tests' floor division through float32 equals the integer one for
+    quotients up to 2**19 in magnitude, remainders 0 and den - 1 included (where a float
+    quotient can round to the wrong side of an integer)."""
+    rng = np.random.default_rng(2)
+    n = 30000
+    den = rng.integers(1, 1 << 12, n)
+    q = rng.integers(-(1 << 19), 1 << 19, n)
+    rem = np.stack([rng.integers(0, den), np.zeros(n, np.int64), den - 1])
+    num = (q * den + rem).astype(np.int32)
+    for k in range(3):
+        got = np.asarray(jax.jit(_floor_div)(jnp.asarray(num[k]), jnp.asarray(den, jnp.int32)))
+        np.testing.assert_array_equal(got, q)
 
 
 def _one(fn, grid, xy, cap=CAP):

@@ -42,6 +42,21 @@ from jaxga.core.grid import Grid, blocked_at, diagonal_legal
 __all__ = ["clear", "clear_xy", "linear_trial", "segments_clear"]
 
 
+def _floor_div(num: jax.Array, den: jax.Array) -> jax.Array:
+    """``floor(num / den)`` of int32 arrays with ``den > 0``, exactly, without an integer
+    division.
+
+    Integer division does not vectorise on CPUs, float division does. The float32
+    quotient is within one of the exact floor whenever it is below ``2**22`` in magnitude
+    (conversion and division each add a relative error of at most ``2**-24``); one
+    integer remainder test then corrects it. Here the quotient is a cell coordinate, at
+    most the map side (:data:`jaxga.core.objectives.MAX_SIDE`).
+    """
+    q = jnp.floor(num.astype(jnp.float32) / den.astype(jnp.float32)).astype(num.dtype)
+    r = num - q * den
+    return q - (r < 0).astype(q.dtype) + (r >= den).astype(q.dtype)
+
+
 def _crossing_checks(
     blocked: jax.Array,
     corner_rule: str,
@@ -66,7 +81,7 @@ def _crossing_checks(
     valid = k <= n
     den = jnp.maximum(2 * n, 1)
     num = (2 * a_minor + 1) * n + d_minor * (2 * k - 1)
-    q = jnp.floor_divide(num, den)
+    q = _floor_div(num, den)
     on_vertex = (num - q * den) == 0
     from_major = a_major + s_major * (k - 1)
     to_major = a_major + s_major * k

@@ -49,7 +49,9 @@ denominator (only possible for a one-node path, start == goal) is floored at
 path geometry once and shares it between its terms.
 
 Cost: the length, the turn-based objectives and the safety terms cost microseconds per
-path; ``min_clearance`` and ``tangencies`` are ``O(L H W)`` and meant for reports
+path; ``min_clearance`` and ``tangencies`` search a band of cells around each segment,
+``O(L (H + W))``, and the whole map, ``O(L H W)``, only for a path that stays more than
+:data:`CLEARANCE_RADIUS` cells from every obstacle: they are meant for reports
 (``benchmarks/objectives.py``; decision 009).
 """
 
@@ -609,25 +611,27 @@ def _agacd_safety(
 
 
 # ----------------------------------------------------------------------- metrics
-def _segment_box_clearance(
+def _box_clearance(
     ax: jax.Array,
     ay: jax.Array,
     bx: jax.Array,
     by: jax.Array,
-    blocked: jax.Array,
+    cx: jax.Array,
+    cy: jax.Array,
+    blk: jax.Array,
 ) -> tuple[jax.Array, jax.Array]:
-    """Distance from segment ``a b`` (cell centres) to the nearest blocked cell square.
+    """Distance from segment ``a b`` (cell centres) to the nearest of the given cell squares.
 
-    Returns ``(distance float32, touches bool)`` for one segment. A cell ``(cx, cy)`` is
-    the closed square ``[cx - 1/2, cx + 1/2] x [cy - 1/2, cy + 1/2]``. Touching (closed
-    intersection) is decided exactly with the separating-axis test in integers; the
-    distance of a disjoint square is the minimum over the two segment endpoints (to
-    the square) and the four square corners (to the segment), which is exact for two
-    disjoint convex polygons.
+    ``cx, cy, blk``: the candidate cells' coordinates and whether each is an obstacle
+    (the others count as absent). Returns ``(distance float32, touches bool)`` for one
+    segment. A cell ``(cx, cy)`` is the closed square ``[cx - 1/2, cx + 1/2] x [cy - 1/2,
+    cy + 1/2]``. Touching (closed intersection) is decided exactly with the
+    separating-axis test in integers; the distance of a disjoint square is the minimum
+    over the two segment endpoints (to the square) and the four square corners (to the
+    segment), which is exact for two disjoint convex polygons. Each cell's distance
+    depends on the segment and that cell only, so any set of candidates holding the
+    nearest cell gives the same value.
     """
-    h, w = blocked.shape
-    cy, cx = jnp.divmod(jnp.arange(h * w, dtype=jnp.int32), jnp.int32(w))
-    blk = blocked.reshape(-1)
     dx, dy = bx - ax, by - ay
     over_x = (jnp.minimum(ax, bx) <= cx) & (cx <= jnp.maximum(ax, bx))
     over_y = (jnp.minimum(ay, by) <= cy) & (cy <= jnp.maximum(ay, by))
@@ -658,29 +662,143 @@ def _segment_box_clearance(
     return jnp.min(dist, initial=jnp.inf), jnp.any(touch)
 
 
-def _clearance_per_segment(grid: Grid, g: _Geometry,
-                           border_blocked: bool = False) -> tuple[jax.Array, jax.Array]:
-    """``(distance float32[S], touches bool[S])`` of every segment (a node if L = 1), to
-    the cells :func:`jaxga.core.grid.proximity_obstacles` counts."""
+def _segment_box_clearance(
+    ax: jax.Array,
+    ay: jax.Array,
+    bx: jax.Array,
+    by: jax.Array,
+    blocked: jax.Array,
+) -> tuple[jax.Array, jax.Array]:
+    """:func:`_box_clearance` against every cell of the map (``O(H W)``)."""
+    h, w = blocked.shape
+    cy, cx = jnp.divmod(jnp.arange(h * w, dtype=jnp.int32), jnp.int32(w))
+    return _box_clearance(ax, ay, bx, by, cx, cy, blocked.reshape(-1))
+
+
+CLEARANCE_RADIUS = 4
+"""Cells within this distance of a segment are searched around it first (a band), so that a
+path's clearance costs ``O(L)`` on a map where it passes near obstacles (see
+:func:`_clearance`)."""
+
+CLEARANCE_PIECE = 4
+"""Major-axis cells per piece of a segment: each piece's share of the band is one fixed,
+small array of cells (:func:`_piece_band_clearance`); a step of a continuous path is one
+piece, a segment of ``s`` cells ``ceil(s / CLEARANCE_PIECE)``."""
+
+CLEARANCE_CHUNK = 128
+"""Pieces per block of :func:`_clearance`'s loop."""
+
+
+def _piece_band_clearance(
+    ax: jax.Array,
+    ay: jax.Array,
+    bx: jax.Array,
+    by: jax.Array,
+    piece: jax.Array,
+    blocked: jax.Array,
+) -> tuple[jax.Array, jax.Array]:
+    """:func:`_box_clearance` of segment ``a b`` against the cells of piece ``piece`` of the
+    band around it.
+
+    The band, along the segment's major axis ``u`` (x when ``|dx| >= |dy|``, so the slope
+    is at most 1): the columns ``u0 - R - 1 .. u1 + R + 1`` (``R`` =
+    :data:`CLEARANCE_RADIUS`, ``u0 <= u1`` the segment's ends) and in each the rows within
+    ``2 R + 3`` of the line at the column clamped to ``[u0, u1]``. A cell whose square is
+    within ``R + 1/4`` of the segment lies in the band: its centre is within ``R + 3/4``
+    of the nearest point ``p`` on each axis, and the line at the clamped column is within
+    ``R + 3/4`` of ``p`` too. So a band distance of at most ``R`` is the segment's exact
+    clearance, and a larger one says that it exceeds ``R``. Piece ``k`` holds the columns
+    ``u0 + k P - R - 1 .. u0 + (k + 1) P + R + 1`` (``P`` = :data:`CLEARANCE_PIECE`), so
+    the pieces ``0 .. ceil((u1 - u0) / P) - 1`` (at least one) cover the band.
+    """
+    h, w = blocked.shape
+    r, size = CLEARANCE_RADIUS, CLEARANCE_PIECE
+    k = 2 * r + 3
+    x_major = jnp.abs(bx - ax) >= jnp.abs(by - ay)
+    au, av = jnp.where(x_major, ax, ay), jnp.where(x_major, ay, ax)
+    bu, bv = jnp.where(x_major, bx, by), jnp.where(x_major, by, bx)
+    du = bu - au
+    u0, u1 = jnp.minimum(au, bu), jnp.maximum(au, bu)
+    cols = u0 + piece * size - (r + 1) + jnp.arange(size + 2 * r + 3, dtype=jnp.int32)
+    frac = (jnp.clip(cols, u0, u1) - au).astype(FLOAT) / jnp.where(du == 0, 1, du).astype(FLOAT)
+    line = jnp.floor(av.astype(FLOAT) + (bv - av).astype(FLOAT) * frac).astype(jnp.int32)
+    cu = jnp.broadcast_to(cols[:, None], (cols.shape[0], 2 * k + 1)).reshape(-1)
+    cv = (line[:, None] + jnp.arange(-k, k + 1, dtype=jnp.int32)[None, :]).reshape(-1)
+    cx, cy = jnp.where(x_major, cu, cv), jnp.where(x_major, cv, cu)
+    inside = (cx >= 0) & (cx < w) & (cy >= 0) & (cy < h)
+    blk = inside & blocked.reshape(-1)[jnp.where(inside, cy * w + cx, 0)]
+    return _box_clearance(ax, ay, bx, by, cx, cy, blk)
+
+
+def _clearance(grid: Grid, g: _Geometry,
+               border_blocked: bool = False) -> tuple[jax.Array, jax.Array]:
+    """``(min distance float32, touches bool[S])``: the path's clearance to the cells
+    :func:`jaxga.core.grid.proximity_obstacles` counts, and whether each segment (a node
+    if L = 1) touches one (False for the zero-length segments after the last moving one:
+    padding, never counted as tangencies).
+
+    Exact, with the work bounded by the path rather than the map where the path passes
+    within :data:`CLEARANCE_RADIUS` of an obstacle: every segment is measured against a
+    band of cells around it, in pieces (:func:`_piece_band_clearance`; one per step of a
+    continuous path), all the path's pieces in one loop of blocks that stops at the
+    last one. A segment whose band distance is at most the radius has its exact
+    clearance; the others are farther, so when any segment is that close the minimum is
+    exact, and touching cells always lie in the band. Otherwise (a path that stays away
+    from every obstacle) every segment is measured against the whole map, ``O(L H W)``.
+    """
     h, w = _check_grid(grid)
     obstacles = proximity_obstacles(grid, border_blocked)
     if g.cells.shape[0] == 1:
         a = b = (g.x, g.y)
     else:
         a, b = (g.x[:-1], g.y[:-1]), (g.x[1:], g.y[1:])
-    batch = max(1, min(a[0].shape[0], (1 << 15) // (h * w)))
+    segs = (a[0], a[1], b[0], b[1])
+    n_seg = a[0].shape[0]
+    span = jnp.maximum(jnp.abs(b[0] - a[0]), jnp.abs(b[1] - a[1]))
+    # Segments after the last moving one are points at the last node (the padding), no
+    # nearer than that segment: they get no piece.
+    j = jnp.arange(n_seg, dtype=jnp.int32)
+    used = jnp.maximum(jnp.max(jnp.where(span > 0, j + 1, 0)), 1)
+    pieces = jnp.where(j < used, jnp.maximum((span + CLEARANCE_PIECE - 1) // CLEARANCE_PIECE, 1),
+                       0)
+    first = jnp.cumsum(pieces) - pieces  # each segment's first piece
+    total = jnp.sum(pieces)
+    chunk = CLEARANCE_CHUNK
 
-    def one(seg):
-        return _segment_box_clearance(*seg, obstacles)
+    def block(state):
+        start, near, touch = state
+        t = start + jnp.arange(chunk, dtype=jnp.int32)
+        seg = jnp.clip(jnp.searchsorted(first, t, side="right") - 1, 0, n_seg - 1)
+        sub = tuple(v[seg] for v in segs)
+        d, hit = jax.vmap(lambda *s: _piece_band_clearance(*s, obstacles))(*sub, t - first[seg])
+        valid = t < total
+        return (start + chunk, jnp.minimum(near, jnp.min(jnp.where(valid, d, jnp.inf))),
+                touch.at[jnp.where(valid & hit, seg, n_seg)].set(True, mode="drop"))
 
-    dist, touch = jax.lax.map(one, (a[0], a[1], b[0], b[1]), batch_size=batch)
-    return dist.astype(FLOAT), touch
+    _, near, touch = jax.lax.while_loop(
+        lambda s: s[0] < total, block,
+        (jnp.int32(0), jnp.asarray(jnp.inf, FLOAT), jnp.zeros((n_seg,), bool)))
+    batch = max(1, min(n_seg, (1 << 15) // (h * w)))
+
+    def whole_map(state: tuple[jax.Array, jax.Array]) -> tuple[jax.Array, jax.Array]:
+        # masking the segments and the map with the carried flag (False in the body) makes
+        # all of the body depend on the loop state, so that XLA cannot hoist any of it out
+        # of the loop (it would then run on every call)
+        done = state[1]
+        blocked = obstacles & ~done
+        d, _ = jax.lax.map(lambda seg: _segment_box_clearance(*seg, blocked),
+                           tuple(jnp.where(done, 0, v) for v in segs), batch_size=batch)
+        return jnp.min(d).astype(FLOAT), jnp.bool_(True)
+
+    # Runs its body only if this path (under vmap: any path) stays beyond the radius.
+    near, _ = jax.lax.while_loop(lambda s: ~s[1], whole_map,
+                                 (near.astype(FLOAT), near <= CLEARANCE_RADIUS))
+    return near, touch
 
 
 def _min_clearance(grid: Grid, g: _Geometry, border_blocked: bool) -> jax.Array:
     h, w = grid.blocked.shape
-    dist, _ = _clearance_per_segment(grid, g, border_blocked)
-    result = jnp.min(dist)  # padding segments are points on the polyline: harmless
+    result, _ = _clearance(grid, g, border_blocked)  # padding segments: harmless points
     if border_blocked:
         xf, yf = g.x.astype(FLOAT), g.y.astype(FLOAT)
         edge = jnp.minimum(jnp.minimum(xf, (w - 1) - xf), jnp.minimum(yf, (h - 1) - yf)) + 0.5
@@ -689,7 +807,7 @@ def _min_clearance(grid: Grid, g: _Geometry, border_blocked: bool) -> jax.Array:
 
 
 def _tangencies(grid: Grid, g: _Geometry) -> jax.Array:
-    _, touch = _clearance_per_segment(grid, g)
+    _, touch = _clearance(grid, g)
     if g.cells.shape[0] == 1:
         return jnp.int32(0)
     return jnp.sum(touch & g.moving, dtype=jnp.int32)
@@ -707,8 +825,9 @@ def min_clearance(
     ``border_blocked`` is False). With ``border_blocked`` (static) the map's outer
     boundary counts as an obstacle too.
 
-    Cost ``O(L * H * W)`` (every segment against every cell, ``lax.map`` over segments):
-    for reports on a few paths, not for fitness.
+    Cost: a band of cells around each segment (:func:`_clearance`), ``O(L * H * W)``
+    (every segment against every cell) only when no segment comes within
+    :data:`CLEARANCE_RADIUS` of an obstacle: for reports on a few paths, not for fitness.
     """
     return _min_clearance(grid, _geometry(grid, cells, length), border_blocked)
 
@@ -718,8 +837,8 @@ def tangencies(grid: Grid, cells: jax.Array, length: jax.Array) -> jax.Array:
 
     IMGA Table 3 "number of tangency": a segment passing an obstacle's corner or edge
     (or, for an infeasible path, crossing an obstacle) counts once however many cells it
-    touches. Zero-length (padding, repeated-node) segments are not counted. Cost
-    ``O(L * H * W)``, like :func:`min_clearance`.
+    touches. Zero-length (padding, repeated-node) segments are not counted. Cost: a band
+    of cells around each segment (:func:`_clearance`).
     """
     return _tangencies(grid, _geometry(grid, cells, length))
 
@@ -742,15 +861,16 @@ class Metrics(NamedTuple):
 
 def metrics(grid: Grid, cells: jax.Array, length: jax.Array) -> Metrics:
     """The metrics reported for a result path (SPEC 3): length, turns, angle sum,
-    minimum clearance and tangencies. ``O(L * H * W)`` because of the clearance."""
+    minimum clearance and tangencies; the clearance costs what :func:`min_clearance`
+    costs."""
     g = _geometry(grid, cells, length)
-    dist, touch = _clearance_per_segment(grid, g)
+    near, touch = _clearance(grid, g)
     tang = jnp.int32(0) if g.cells.shape[0] == 1 else jnp.sum(touch & g.moving, dtype=jnp.int32)
     return Metrics(
         length=_path_length(g),
         turns=_turns(g),
         angle_sum=_angle_sum(g),
-        min_clearance=jnp.min(dist),
+        min_clearance=near,
         tangencies=tang,
     )
 

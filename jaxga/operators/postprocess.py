@@ -5,34 +5,39 @@
   continuous path into a shorter feasible *waypoint* path. Applied to the final best.
 * :func:`shortcut_optimal` - jaxga's (beyond the papers): the shortest clear
   sub-sequence of a continuous path's cells (a dynamic programme over the path), never
-  longer than :func:`shortcut_greedy`'s result. Applied to the final best.
+  longer than :func:`shortcut_greedy`'s result, with minimal waypoints
+  (:func:`prune_waypoints`). Applied to the final best.
 * :func:`simplify_adjacent` - Zhu & Pan's simplification operator (section 4.6): drop the
   detour between a node and the farthest later node one step away. Applied to every
   individual with probability ``ps`` every generation; the path stays continuous.
 * :func:`remove_loops` - MPMGA's deletion operator, re-exported from :mod:`jaxga.core.paths`.
 
 Every function is written for ONE path ``(cells int32[L], length int32)`` (SPEC 2), is
-pure and jittable, has a fixed trip count (a ``lax.scan`` of ``L`` steps or pure
-gathers, no ``while_loop``) and ``vmap``s over a population. Deterministic functions take
-no key and return ``(cells, length)``; :func:`simplify_adjacent` is a per-individual
-operator ``(key, grid, cells, length) -> (cells, length, failed)`` for
+pure and jittable and ``vmap``s over a population; the shortcut passes loop over the
+path's ``length`` positions, not its capacity ``L`` (under ``vmap``, the longest path's).
+Deterministic functions take no key and return ``(cells, length)``;
+:func:`simplify_adjacent` is a per-individual operator
+``(key, grid, cells, length) -> (cells, length, failed)`` for
 :func:`jaxga.operators.lift.over_individuals` and :func:`jaxga.operators.mutation.with_probability`.
 """
 
 from __future__ import annotations
 
+from collections.abc import Callable
+
 import jax
 import jax.numpy as jnp
 
 from jaxga.core.errors import ParameterError
-from jaxga.core.geometry import clear, linear_trial
-from jaxga.core.grid import Grid, move_legal
+from jaxga.core.geometry import _floor_div, clear, linear_trial
+from jaxga.core.grid import Grid, diagonal_legal, move_legal
 from jaxga.core.paths import pad, remove_loops
 
 __all__ = [
     "LINE_OF_SIGHT",
     "compact",
     "line_of_sight",
+    "prune_waypoints",
     "remove_loops",
     "shortcut_greedy",
     "shortcut_optimal",
@@ -70,6 +75,101 @@ def compact(cells: jax.Array, keep: jax.Array) -> tuple[jax.Array, jax.Array]:
     return pad(out, length), length
 
 
+# ------------------------------------------------------------------ line of sight
+def _vertex_codes(blocked: jax.Array) -> jax.Array:
+    """``int32[(H + 1) (W + 1)]``: for every grid vertex ``(X, Y)``, four bits saying which
+    of the cells around it are blocked: bit 0 ``(X-1, Y-1)``, bit 1 ``(X, Y-1)``, bit 2
+    ``(X-1, Y)``, bit 3 ``(X, Y)`` (cells off the map count as blocked). Index ``(y + 1)
+    (W + 1) + x + 1`` is the 2 x 2 block whose lower-left cell is ``(x, y)``."""
+    b = jnp.pad(jnp.asarray(blocked, bool), 1, constant_values=True).astype(jnp.int32)
+    code = b[:-1, :-1] | (b[:-1, 1:] << 1) | (b[1:, :-1] << 2) | (b[1:, 1:] << 3)
+    return code.reshape(-1)
+
+
+def _clear_short(grid: Grid, codes: jax.Array, a: jax.Array, b: jax.Array,
+                 span: int) -> jax.Array:
+    """:func:`jaxga.core.geometry.clear` (exact line of sight) of one segment ``a -> b``
+    spanning at most ``span`` (static) cells a side, from the blocks of :func:`_vertex_codes`.
+
+    The closed form of :func:`jaxga.reference.optima.clear_pairs_np`: with extents
+    ``A >= B`` along the major and minor axes, the segment meets the grid line between
+    major offsets ``i`` and ``i + 1`` (``i < A``) at minor offset ``B (2i + 1) / (2A)``;
+    with ``r, m = divmod(B (2i + 1) + A, 2A)`` it passes a grid vertex iff ``m == 0``.
+    The cells it crosses there are ``(i, r - [m == 0])`` and ``(i + 1, r)`` (the two end
+    cells among them), and at a vertex the side cells ``(i + 1, r - 1)`` and ``(i, r)``
+    must satisfy the corner rule: all four lie in the 2 x 2 block at ``(i, r - 1)``, one
+    lookup per crossing. ``A`` lanes instead of :func:`~jaxga.core.geometry.clear`'s
+    ``2 * max_span``, each with one gather instead of three. A segment longer than
+    ``span`` is reported as not clear, as ``clear(..., max_span=span)`` does.
+    """
+    h, w = grid.shape
+    on_map = (a >= 0) & (a < h * w) & (b >= 0) & (b < h * w)
+    a, b = jnp.where(on_map, a, 0), jnp.where(on_map, b, 0)
+    ax, ay, bx, by = a % w, a // w, b % w, b // w
+    dx, dy = bx - ax, by - ay
+    x_major = jnp.abs(dx) >= jnp.abs(dy)
+    big = jnp.maximum(jnp.abs(dx), jnp.abs(dy))
+    small = jnp.minimum(jnp.abs(dx), jnp.abs(dy))
+    sx, sy = jnp.where(dx < 0, -1, 1), jnp.where(dy < 0, -1, 1)
+    i = jnp.arange(span, dtype=jnp.int32)
+    den = jnp.maximum(2 * big, 1)
+    num = small * (2 * i + 1) + big
+    r = _floor_div(num, den)
+    vertex = num == r * den
+    # lower-left cell of the block at major offset i, minor offset r - 1
+    px = ax + sx * jnp.where(x_major, i, r - 1)
+    py = ay + sy * jnp.where(x_major, r - 1, i)
+    x0, y0 = px + jnp.minimum(sx, 0), py + jnp.minimum(sy, 0)
+    inside = (x0 >= -1) & (x0 < w) & (y0 >= -1) & (y0 < h)
+    code = codes[jnp.where(inside, (y0 + 1) * (w + 1) + x0 + 1, 0)]
+
+    def cell(du: int, dv: int) -> jax.Array:
+        """Whether the block's cell at major offset ``du``, minor ``dv`` is blocked."""
+        xb = jnp.where(x_major, du, dv) * sx - jnp.minimum(sx, 0)
+        yb = jnp.where(x_major, dv, du) * sy - jnp.minimum(sy, 0)
+        return ((code >> (xb + 2 * yb)) & 1) == 1
+
+    after = cell(1, 1)
+    ok = jnp.where(vertex,
+                   ~cell(0, 0) & ~after & diagonal_legal(cell(1, 0), cell(0, 1),
+                                                         grid.corner_rule),
+                   ~cell(0, 1) & ~after)
+    crossings_ok = jnp.all(ok | (i >= big))
+    a_free = ~grid.blocked.reshape(-1)[a]  # the only cell when a == b
+    return on_map & (big <= span) & crossings_ok & a_free
+
+
+def _exact_sight(grid: Grid,
+                 codes: jax.Array | None = None) -> Callable[[jax.Array, jax.Array], jax.Array]:
+    """``sees(a, b)``: :func:`jaxga.core.geometry.clear` of any two cells of ``grid``
+    (:func:`_clear_short` with a span of the map's side); ``codes``: the blocks of
+    :func:`_vertex_codes`, computed here when not given."""
+    codes = _vertex_codes(grid.blocked) if codes is None else codes
+    span = max(max(grid.shape) - 1, 1)
+    return lambda a, b: _clear_short(grid, codes, a, b, span)
+
+
+def _greedy_pass(sees: Callable[[jax.Array, jax.Array], jax.Array], cells: jax.Array,
+                 length: jax.Array) -> tuple[jax.Array, jax.Array]:
+    """:func:`shortcut_greedy`'s pass with the line-of-sight test ``sees(a, b)``."""
+    cells = jnp.asarray(cells, jnp.int32)
+    length = jnp.asarray(length, jnp.int32)
+    n_cap = cells.shape[0]
+    if n_cap < 3:
+        return cells, length
+
+    def step(k, carry):
+        # j + 1 = k, j = k - 1: does the anchor see cells[k]? If so node k - 1 goes.
+        anchor, dropped = carry
+        visible = sees(anchor, cells[k])
+        dropped = dropped.at[k - 1].set(visible)
+        return jnp.where(visible, anchor, cells[k - 1]), dropped
+
+    _, dropped = jax.lax.fori_loop(2, jnp.clip(length, 2, n_cap), step,
+                                   (cells[0], jnp.zeros((n_cap,), bool)))
+    return compact(cells, (jnp.arange(n_cap, dtype=jnp.int32) < length) & ~dropped)
+
+
 # ------------------------------------------------------------------ shortcut_greedy
 def shortcut_greedy(
     grid: Grid, cells: jax.Array, length: jax.Array, *, los: str = "clear"
@@ -97,9 +197,10 @@ def shortcut_greedy(
       S-66-76-G, and applies it to the best path of each run only, because the result is
       no longer continuous. Its worked example is consistent with the greedy pass.
 
-    Implementation: one ``lax.scan`` of ``L - 2`` steps; step ``k`` asks whether the
-    current anchor sees ``cells[k]`` (one line-of-sight test per step, fixed trip count,
-    ``vmap``-friendly), then one compaction.
+    Implementation: one loop over the path's positions ``2 .. length - 1`` (its trip
+    count is the path's length, not the capacity; under ``vmap`` the longest path's);
+    step ``k`` asks whether the current anchor sees ``cells[k]`` (one line-of-sight
+    test per step), then one compaction.
 
     Args:
         grid: the map (``clear`` honours its corner rule; ``linear_trial`` has none).
@@ -115,33 +216,60 @@ def shortcut_greedy(
         such a path).
     """
     sees = line_of_sight(los)
-    cells = jnp.asarray(cells, jnp.int32)
-    length = jnp.asarray(length, jnp.int32)
-    n_cap = cells.shape[0]
-    i = jnp.arange(n_cap, dtype=jnp.int32)
-    if n_cap < 3:
-        return cells, length
+    return _greedy_pass(lambda a, b: sees(grid, a, b), cells, length)
 
-    def step(anchor, k):
-        # j + 1 = k, j = k - 1: does the anchor see cells[k]?
-        active = k < length
-        visible = sees(grid, anchor, cells[k])
-        drop = active & visible
-        anchor = jnp.where(active & ~visible, cells[k - 1], anchor)
-        return anchor, drop
 
-    _, drop = jax.lax.scan(step, cells[0], jnp.arange(2, n_cap, dtype=jnp.int32))
-    # drop[k - 2] says whether node k - 1 is dropped (k = 2 .. L-1).
-    dropped = jnp.concatenate([jnp.zeros((1,), bool), drop, jnp.zeros((1,), bool)])
-    keep = (i < length) & ~dropped
-    return compact(cells, keep)
+def prune_waypoints(grid: Grid, cells: jax.Array,
+                    length: jax.Array) -> tuple[jax.Array, jax.Array]:
+    """Drop waypoints until none is removable: every interior waypoint's neighbours are
+    then NOT in line of sight (:func:`jaxga.core.geometry.clear`).
+
+    A waypoint whose kept predecessor sees its successor adds length (triangle
+    inequality) and a turn for nothing; a collinear middle waypoint always qualifies
+    (the union of two collinear clear segments through a cell centre is clear), so the
+    result has no collinear triple either. Computed as :func:`shortcut_greedy` passes
+    over the waypoints, repeated until a pass drops nothing (a pass that drops nothing
+    has tested every interior waypoint's two neighbours); each pass loops over the
+    waypoints only, so the cost is small on a post-optimised path.
+
+    Returns ``(cells, length)``: a sub-sequence with the same endpoints, feasible if the
+    input is, never longer.
+    """
+    return _prune(_exact_sight(grid), cells, length)
+
+
+def _prune(sees: Callable[[jax.Array, jax.Array], jax.Array], cells: jax.Array,
+           length: jax.Array) -> tuple[jax.Array, jax.Array]:
+    """:func:`prune_waypoints` with the line-of-sight test ``sees(a, b)``."""
+
+    def one_pass(carry):
+        c, n, _ = carry
+        c2, n2 = _greedy_pass(sees, c, n)
+        return c2, n2, n2 < n
+
+    cells, length, _ = jax.lax.while_loop(
+        lambda carry: carry[2], one_pass,
+        (jnp.asarray(cells, jnp.int32), jnp.asarray(length, jnp.int32), jnp.bool_(True)))
+    return cells, length
 
 
 # ----------------------------------------------------------------- shortcut_optimal
+OPTIMAL_CHUNK = 64
+"""Path positions whose line-of-sight tests :func:`shortcut_optimal` computes in one batch."""
+
+
+def _path_length(cells: jax.Array, length: jax.Array, width: int) -> jax.Array:
+    """Euclidean length (cell units, float32) of the first ``length`` nodes of ``cells``."""
+    p = jnp.stack([cells % width, cells // width], axis=-1).astype(jnp.float32)
+    seg = jnp.linalg.norm(p[1:] - p[:-1], axis=-1)
+    return jnp.sum(jnp.where(jnp.arange(cells.shape[0] - 1) < length - 1, seg, 0.0))
+
+
 def shortcut_optimal(
     grid: Grid, cells: jax.Array, length: jax.Array, *, window: int = SHORTCUT_WINDOW
 ) -> tuple[jax.Array, jax.Array]:
-    """The shortest clear sub-sequence of a continuous path (jaxga, beyond the papers).
+    """The shortest clear sub-sequence of a continuous path, as few waypoints as possible
+    (jaxga, beyond the papers).
 
     The papers' greedy pass (:func:`shortcut_greedy`) takes the farthest node the anchor
     sees, which can leave the next segment longer than needed. This is the optimum over
@@ -149,11 +277,19 @@ def shortcut_optimal(
     |c_i c_j|`` over the earlier nodes ``i`` (at most ``window`` positions back) whose
     segment to ``c_j`` is clear (:func:`jaxga.core.geometry.clear`, exact, under the corner
     rule), then the chain of best predecessors from the goal. The greedy result is
-    computed too and the shorter of the two returned, so the result is never longer than
-    the papers' post-optimisation. The window bounds the cost (``L * window`` line-of-
-    sight tests on segments of at most ``window`` cells a side); a straight stretch
-    longer than the window is followed through nodes of the path, which on a continuous
-    path lie within a cell of the straight line.
+    computed too and the shorter of the two kept, so the result is never longer than
+    the papers' post-optimisation. A straight stretch longer than the window is followed
+    through nodes of the path, which on a continuous path lie within a cell of the
+    straight line; the final :func:`prune_waypoints` then drops every waypoint whose
+    neighbours see each other (collinear ones included), so the waypoint path is
+    minimal: no waypoint can go without another change.
+
+    Cost: the line-of-sight tests (``window`` per node, :func:`_clear_short`: one lookup
+    per grid line crossed, ``window`` lanes) are computed in batches of
+    :data:`OPTIMAL_CHUNK` nodes, in a loop that stops at the path's ``length`` rather
+    than its capacity; the programme's own steps are a few gathers each; the greedy
+    passes loop over the input's nodes once, then over the waypoints. Ties between
+    predecessors go to the farthest one.
 
     Args:
         grid: the map.
@@ -164,7 +300,8 @@ def shortcut_optimal(
 
     Returns:
         ``(cells, length)``: a feasible sub-sequence with the same endpoints, no longer
-        than the input and than :func:`shortcut_greedy`'s result.
+        than the input and than :func:`shortcut_greedy`'s result, with no interior
+        waypoint whose two neighbours see each other.
     """
     cells = jnp.asarray(cells, jnp.int32)
     length = jnp.asarray(length, jnp.int32)
@@ -172,23 +309,41 @@ def shortcut_optimal(
     if n_cap < 3:
         return cells, length
     w = min(int(window), n_cap - 1)
+    chunk = min(OPTIMAL_CHUNK, n_cap)
     width = grid.width
-    xy = jnp.stack([cells % width, cells // width], axis=-1).astype(jnp.float32)
-    back = jnp.arange(1, w + 1, dtype=jnp.int32)
     inf = jnp.float32(jnp.inf)
+    xy = jnp.stack([cells % width, cells // width], axis=-1).astype(jnp.float32)
+    back = jnp.arange(w, 0, -1, dtype=jnp.int32)  # farthest first: argmin's tie-break
+    codes = _vertex_codes(grid.blocked)
+    sees = _exact_sight(grid, codes)
 
-    def step(dist, j):
-        i = j - back
-        inside = (i >= 0) & (j < length)
-        ic = jnp.maximum(i, 0)
-        seen = jax.vmap(lambda a: clear(grid, a, cells[j], max_span=w))(cells[ic])
-        d = jnp.where(inside & seen, dist[ic] + jnp.linalg.norm(xy[ic] - xy[j], axis=-1), inf)
-        k = jnp.argmin(d)
-        return dist.at[j].set(jnp.where(j < length, d[k], inf)), ic[k]
+    def block(carry):
+        start, dist, parent = carry
+        targets = start + jnp.arange(chunk, dtype=jnp.int32)
+        dst = jnp.clip(targets, 0, n_cap - 1)
+        src = targets[:, None] - back[None, :]
+        inside = (src >= 0) & (targets[:, None] < length)
+        src = jnp.clip(src, 0, n_cap - 1)
+        # does node t - back[k] see node t (positions w apart span at most w cells)
+        seen = jax.vmap(jax.vmap(lambda a, t: _clear_short(grid, codes, a, t, w)))(
+            cells[src], jnp.broadcast_to(cells[dst][:, None], src.shape))
+        ok = seen & inside
+        seg = jnp.linalg.norm(xy[src] - xy[dst][:, None], axis=-1)
 
-    dist0 = jnp.full((n_cap,), inf).at[0].set(0.0)
-    dist, parent = jax.lax.scan(step, dist0, jnp.arange(1, n_cap, dtype=jnp.int32))
-    parent = jnp.concatenate([jnp.zeros((1,), jnp.int32), parent])
+        def step(k, carry):
+            dist, parent = carry
+            d = jnp.where(ok[k], dist[src[k]] + seg[k], inf)
+            m = jnp.argmin(d)
+            return dist.at[targets[k]].set(d[m]), parent.at[targets[k]].set(src[k, m])
+
+        dist, parent = jax.lax.fori_loop(0, chunk, step, (dist, parent))
+        return start + chunk, dist, parent
+
+    # positions up to n_cap + chunk, so that the last block writes past the path safely
+    dist0 = jnp.full((n_cap + chunk,), inf).at[0].set(0.0)
+    parent0 = jnp.zeros((n_cap + chunk,), jnp.int32)
+    _, dist, parent = jax.lax.while_loop(lambda c: c[0] < length, block,
+                                         (jnp.int32(1), dist0, parent0))
     # The chain of best predecessors from the goal back to the start (marks kept nodes).
     last = jnp.maximum(length - 1, 0)
 
@@ -199,16 +354,23 @@ def shortcut_optimal(
     _, keep = jax.lax.while_loop(lambda c: c[0] > 0, follow,
                                  (last, jnp.zeros((n_cap,), bool).at[0].set(True)))
     reachable = jnp.isfinite(dist[last])  # always, for a feasible continuous path
-    opt_c, opt_n = compact(cells, keep & reachable | ~reachable & (jnp.arange(n_cap) < length))
-    gr_c, gr_n = shortcut_greedy(grid, cells, length)
+    opt_c, opt_n = compact(cells, jnp.where(reachable, keep, jnp.arange(n_cap) < length))
 
-    def total(c, n):
-        p = jnp.stack([c % width, c // width], axis=-1).astype(jnp.float32)
-        seg = jnp.linalg.norm(p[1:] - p[:-1], axis=-1)
-        return jnp.sum(jnp.where(jnp.arange(n_cap - 1) < n - 1, seg, 0.0))
+    # One loop of greedy passes (one copy of the pass in the program): pass 0 is the
+    # papers' greedy pass over the input (shortcut_greedy's result); the shorter of its
+    # result and the programme's is then pruned (prune_waypoints) by passes over its
+    # waypoints until one drops nothing.
+    def one_pass(carry):
+        c, n, first, _ = carry
+        c2, n2 = _greedy_pass(sees, c, n)
+        greedy = first & (_path_length(c2, n2, width) < _path_length(opt_c, opt_n, width))
+        c3 = jnp.where(first & ~greedy, opt_c, c2)
+        n3 = jnp.where(first & ~greedy, opt_n, n2)
+        return c3, n3, jnp.bool_(False), first | (n2 < n)
 
-    use_greedy = total(gr_c, gr_n) < total(opt_c, opt_n)
-    return jnp.where(use_greedy, gr_c, opt_c), jnp.where(use_greedy, gr_n, opt_n)
+    out_c, out_n, _, _ = jax.lax.while_loop(lambda carry: carry[3], one_pass,
+                                            (cells, length, jnp.bool_(True), jnp.bool_(True)))
+    return out_c, out_n
 
 
 # ----------------------------------------------------------------- simplify_adjacent

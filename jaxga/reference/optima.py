@@ -106,7 +106,7 @@ class ReferencePath:
         """Return ``self`` if a path was found, else raise the matching jaxga error.
 
         Raises :class:`~jaxga.core.errors.EndpointError` for a blocked/off-map start or goal,
-        :class:`~jaxga.core.errors.NoPathError` for an unreachable goal (SPEC 1) and
+        :class:`~jaxga.core.errors.NoPathError` for an unreachable goal and
         :class:`~jaxga.core.errors.JaxgaError` for a search cut short by its time budget.
         """
         if self.found:
