@@ -71,9 +71,10 @@ def _only_builtin_operators(algo: Any) -> bool:
 def program_key(name: str, algo: Any, grid_spec: Any, params_spec: Any, n_runs: int,
                 devices: Any, settings: Any = ()) -> str | None:
     """The file name of a program, or None when it is not to be stored (no cache
-    directory, or an operator that is not jaxga's own). ``settings``: the values of the
+    directory, or an operator that is not jaxga's own; ``algo`` None: a program of no
+    algorithm, such as the map tables). ``settings``: the values of the
     caller's module settings that shape the program (block sizes, compiler options)."""
-    if directory() is None or not _only_builtin_operators(algo):
+    if directory() is None or (algo is not None and not _only_builtin_operators(algo)):
         return None
     leaves, tree = jax.tree_util.tree_flatten((grid_spec, params_spec))
     parts = (

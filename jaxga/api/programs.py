@@ -35,6 +35,7 @@ from jaxga.engine import (
     finish,
     init_state,
 )
+from jaxga.engine.maptables import compute_tables
 
 
 def shape_spec(tree: Any) -> Any:
@@ -102,6 +103,28 @@ class Programs:
     def finish(self) -> Any:
         self.compile_rest(lambda frac: None)
         return self._compiled["finish"]
+
+
+_TABLE_PROGRAMS: dict[str, Any] = {}
+
+
+def tables_for(grid: Any) -> Any:
+    """``grid`` with its map tables (:func:`jaxga.engine.maptables.with_tables`), computed
+    by a program kept in the store like the run's own (:mod:`jaxga.api.executables`), so
+    that a later process on a map of the same shape compiles nothing for them."""
+    if grid.tables is not None:
+        return grid
+    bare = dataclasses.replace(grid, guide=None)
+    devices = jax.local_devices()[:1]
+    key = executables.program_key("map tables", None, shape_spec(bare), None, 1, devices)
+    program = _TABLE_PROGRAMS.get(key) if key is not None else None
+    if program is None:
+        program = executables.load(key, devices)
+        if program is None:
+            program = executables.compile_and_store(key, compute_tables.lower(bare))
+        if key is not None:
+            _TABLE_PROGRAMS[key] = program
+    return dataclasses.replace(grid, tables=program(bare))
 
 
 GENERATION_CHUNK = 25
@@ -398,6 +421,7 @@ def clear_compiled() -> None:
 
     compiled_programs.cache_clear()
     _COMPILED_BUCKETS.clear()
+    _TABLE_PROGRAMS.clear()
     jax.clear_caches()
     gc.collect()
 

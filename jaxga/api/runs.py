@@ -40,6 +40,7 @@ from jaxga.api.programs import (
     programs_for,
     run_layout,
     stack_params,
+    tables_for,
 )
 from jaxga.api.references import AnyAngleBounds, any_angle_references, octile_optimum
 from jaxga.api.result import Result
@@ -61,7 +62,6 @@ from jaxga.engine import (
     static_config,
     uses_guide,
 )
-from jaxga.engine.maptables import with_tables
 from jaxga.maps import MapInfo, load_map_info
 from jaxga.operators.guide import with_guide
 from jaxga.reference.fitness import FitnessOptimum, fitness_optimum, fitness_weights
@@ -321,7 +321,7 @@ def _sweep(preset, grid, points, seeds, *, generations, corner_rule, variant, se
 
     report("compile", 0.0)
     with timeline.phase("compile"):
-        grid = with_tables(grid)  # per-map tables, once per run rather than per generation
+        grid = tables_for(grid)  # per-map tables, once per run rather than per generation
         runs = _this_process_runs(seed_arr, per_point, grid, algo)
         grid = runs.grid
         token = COMPILE_PROGRESS.set(lambda frac: report("compile", frac))

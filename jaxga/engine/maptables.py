@@ -54,7 +54,8 @@ class MapTables:
 
 
 @jax.jit
-def _compute(grid: Grid) -> MapTables:
+def compute_tables(grid: Grid) -> MapTables:
+    """The :class:`MapTables` of ``grid`` (a grid without guide or tables), one program."""
 
 
     nbr, legal = compute_move_tables(grid)
@@ -68,4 +69,4 @@ def with_tables(grid: Grid) -> Grid:
     """``grid`` with its :class:`MapTables` attached (``grid.tables``), computed once."""
     if grid.tables is not None:
         return grid
-    return dataclasses.replace(grid, tables=_compute(dataclasses.replace(grid, guide=None)))
+    return dataclasses.replace(grid, tables=compute_tables(dataclasses.replace(grid, guide=None)))
