@@ -94,3 +94,18 @@ def test_by_default_maps_over_64_a_side_are_padded_and_the_papers_maps_are_not()
     assert not auto_size_class(Grid.create(np.zeros((64, 50), bool)))
     assert auto_size_class(Grid.create(np.zeros((65, 3), bool)))
     assert auto_size_class(Grid.create(np.zeros((3, 384), bool)))
+
+
+def test_distance_fields_padded_with_the_map_are_the_padded_maps_own():
+    """A map's distance fields padded with infinity equal the fields computed on the padded
+    map (its padding is blocked: unreachable), bit for bit, so a run computes them once."""
+    from jaxga.maps import random_map
+    from jaxga.operators.guide import with_guide
+
+    for seed in range(3):
+        grid = random_map(70, 90, 0.25, seed=seed)
+        padded_fields = pad_to_class(with_guide(grid)).guide
+        own = with_guide(pad_to_class(grid)).guide
+        for name in ("to_goal", "from_start"):
+            np.testing.assert_array_equal(np.asarray(getattr(padded_fields, name)),
+                                          np.asarray(getattr(own, name)))

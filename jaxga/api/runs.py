@@ -298,13 +298,13 @@ def _sweep(preset, grid, points, seeds, *, generations, corner_rule, variant, se
     size_class = auto_size_class(grid) if size_class is None else bool(size_class)
     map_grid, grid, build_config = grid, grid, config.override({"population.size": capacity})
     with timeline.phase("references"):
+        if uses_guide(config):  # the exact distance fields the field initialiser steers by
+            grid = with_guide(grid)  # (computed on the map, padded with it)
         if size_class:
-            grid = pad_to_class(map_grid)
+            grid = pad_to_class(grid)
             if not int(config["population.capacity"]):
                 build_config = build_config.override(
                     {"population.capacity": class_capacity(map_grid)})
-        if uses_guide(config):  # the exact distance fields the field initialiser steers by
-            grid = with_guide(grid)
         # the capacity is the largest size swept, also when it is below the preset's size
         algo, _ = build(build_config, grid)
         per_point = [default_params(c, algo.islands) for c in configs]

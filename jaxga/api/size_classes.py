@@ -31,6 +31,7 @@ from __future__ import annotations
 
 import dataclasses
 
+import jax
 import jax.numpy as jnp
 import numpy as np
 
@@ -88,8 +89,9 @@ def pad_to_class(grid: Grid) -> Grid:
     (:func:`class_shape`), the padding marked in ``Grid.outside``; the endpoints keep
     their ``(x, y)``. A map already of a class shape gets an all-False ``outside`` (so
     that it runs the class's programs); a map over :data:`MAX_CLASS_SIDE` is returned
-    unchanged. Tables and fields attached to ``grid`` are dropped (they belong to its
-    shape)."""
+    unchanged. Distance fields attached to ``grid`` are padded with infinity (the padding
+    is blocked: no cell of it is reachable), the same fields the padded grid's own
+    computation gives; its tables are dropped (they belong to its shape)."""
     shape = class_shape(grid.height, grid.width)
     if shape is None:
         return grid
@@ -97,10 +99,15 @@ def pad_to_class(grid: Grid) -> Grid:
     blocked = np.pad(grid.blocked_np(), pad, constant_values=True)
     outside = np.pad(np.zeros(grid.shape, bool), pad, constant_values=True)
     (sx, sy), (gx, gy) = grid.start_xy, grid.goal_xy
+    guide = None
+    if grid.guide is not None:  # padding cells are blocked: unreachable, at infinity
+        guide = jax.tree_util.tree_map(
+            lambda f: jnp.asarray(np.pad(np.asarray(f).reshape(grid.shape), pad,
+                                         constant_values=np.inf).reshape(-1)), grid.guide)
     return dataclasses.replace(
         grid, blocked=jnp.asarray(blocked), outside=jnp.asarray(outside),
         start=jnp.int32(sy * shape[1] + sx), goal=jnp.int32(gy * shape[1] + gx),
-        guide=None, tables=None)
+        guide=guide, tables=None)
 
 
 def map_cells(cells: np.ndarray, padded_width: int, width: int) -> np.ndarray:

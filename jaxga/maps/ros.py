@@ -39,7 +39,6 @@ from typing import Any
 
 import numpy as np
 import yaml
-from PIL import Image, UnidentifiedImageError
 
 from jaxga.core.errors import MapFormatError
 from jaxga.maps.frame import MapFrame
@@ -144,6 +143,8 @@ def read_ros_yaml(path: str | Path, label: str | None = None) -> RosMap:
 def read_ros_image(meta: RosMap, label: str | None = None) -> np.ndarray:
     """The image of a ``map_server`` map as ``uint8[H, W, C]`` (C = 1-4), top row first,
     read with Pillow (PGM, PNG, BMP, ...). 16-bit images are scaled to 8 bits."""
+    from PIL import Image, UnidentifiedImageError  # here: Pillow's import is a tenth of a second
+
     label = label or str(meta.image)
     try:
         with Image.open(meta.image) as img:
