@@ -40,7 +40,7 @@ from jaxga.api import run
 from jaxga.config.presets import load_preset
 from jaxga.doe import Factor, run_doe
 from jaxga.maps import load_map_info, read_scen
-from jaxga.reference.optima import any_angle_shortest_path
+from jaxga.reference.any_angle import any_angle_shortest_path
 
 MOVINGAI = SHARED / "movingai"
 MAPS = ("Berlin_1_256", "Boston_2_256", "den312d", "ht_chantry", "lak303d", "maze-32-32-2",

@@ -28,7 +28,8 @@ from pathlib import Path
 
 import numpy as np
 
-from jaxga.reference.optima import OctileGraph, any_angle_shortest_path_np, legal_moves_np
+from jaxga.reference.any_angle import any_angle_shortest_path_np
+from jaxga.reference.optima import OctileGraph, legal_moves_np
 
 sys.path.insert(0, str(Path(__file__).resolve().parent))
 import _results  # noqa: E402  (benchmarks/_results.py: machine line, RESULTS.md)

@@ -86,7 +86,8 @@ from jaxga.doe import AGACD_TABLE3, contrast_coefficients, predicted_best, run_d
 from jaxga.engine import build, default_capacity, fitness_function
 from jaxga.maps import load_map, random_map
 from jaxga.operators import init as init_ops
-from jaxga.reference.optima import any_angle_shortest_path, shortest_path
+from jaxga.reference.any_angle import any_angle_shortest_path
+from jaxga.reference.optima import shortest_path
 from jaxga.replan import mpmga_scenario
 
 TABLES = ("zhu2", "zhu4", "agacd5", "agacd8", "agacd12", "mpmga", "imga", "zhang")

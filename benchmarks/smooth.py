@@ -29,7 +29,8 @@ from jaxga.core.grid import Grid
 from jaxga.core.paths import from_coords
 from jaxga.maps import load_map
 from jaxga.maps.generators import random_map
-from jaxga.reference.optima import any_angle_shortest_path, shortest_path
+from jaxga.reference.any_angle import any_angle_shortest_path
+from jaxga.reference.optima import shortest_path
 from jaxga.smooth import SmoothConfig, distance_field, smooth, smooth_population
 
 P = 100

@@ -511,7 +511,8 @@ def plot_box(data, metric: str | None = None, ax=None, reference: dict | None = 
         if reference is None:
             reference = {}
             if metric == "length":
-                reference["any-angle optimum"] = data.any_angle_optimum
+                if np.isfinite(data.any_angle_optimum):  # not computed within its budget
+                    reference["any-angle optimum"] = data.any_angle_optimum
             if metric in ("length", "raw_length"):
                 reference["8-connected optimum"] = data.optimum
             if metric in ("gap", "raw_gap", "fitness_gap"):

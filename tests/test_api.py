@@ -20,8 +20,9 @@ from jaxga.core.errors import InitialisationWarning, JaxgaError, ParameterError
 from jaxga.maps import load_map, random_map
 from jaxga.operators import schedules
 from jaxga.operators.guide import with_guide
+from jaxga.reference.any_angle import any_angle_shortest_path
 from jaxga.reference.fitness import fitness_optimum, fitness_weights, path_fitness_np
-from jaxga.reference.optima import any_angle_shortest_path, clear_np, path_length, shortest_path
+from jaxga.reference.optima import clear_np, path_length, shortest_path
 
 SMALL = dict(population__size=8, generations=3, init__max_tries=40)
 

@@ -9,7 +9,8 @@ from jaxga import api
 from jaxga.api import run
 from jaxga.maps import random_map
 from jaxga.operators.guide import with_guide
-from jaxga.reference.optima import any_angle_shortest_path, clear_np
+from jaxga.reference.any_angle import any_angle_shortest_path
+from jaxga.reference.optima import clear_np
 
 
 @pytest.fixture(scope="module")

@@ -17,8 +17,9 @@ LAYERS = ("_batching", "core", "maps", "operators", "config", "engine", "referen
           "tools")
 """Bottom to top; the modules directly in ``jaxga/`` are the tools."""
 
-DEFERRED = ("matplotlib", "scipy", "jax._src")
-"""Imports that may sit inside a function: heavy, or JAX internals needed on one path only."""
+DEFERRED = ("matplotlib", "scipy", "jax._src", "PIL")
+"""Imports that may sit inside a function: heavy (Pillow's import is a tenth of a second,
+paid only where an image is read), or JAX internals needed on one path only."""
 
 
 def module_name(path: Path) -> str:

@@ -20,6 +20,7 @@ from scipy.sparse.csgraph import dijkstra
 
 from jaxga.core.errors import JaxgaError
 from jaxga.core.grid import CORNER_RULES, Grid
+from jaxga.reference.any_angle import any_angle_shortest_path_np
 from jaxga.reference.lower_bound import (
     GeodesicBounds,
     euclidean_lower_bound,
@@ -27,12 +28,7 @@ from jaxga.reference.lower_bound import (
     free_space,
     segments_free_np,
 )
-from jaxga.reference.optima import (
-    any_angle_shortest_path_np,
-    clear_np,
-    path_length,
-    shortest_path_np,
-)
+from jaxga.reference.optima import clear_np, path_length, shortest_path_np
 from tests.test_reference import brute_any_angle_vectorised
 
 SQ2 = math.sqrt(2.0)

@@ -15,7 +15,7 @@ from scipy import stats
 
 from jaxga import Grid
 from jaxga.core import paths
-from jaxga.core.geometry import _floor_div, clear, linear_trial
+from jaxga.core.geometry import clear, floor_div, linear_trial
 from jaxga.core.grid import CORNER_RULES
 from jaxga.core.objectives import path_length
 from jaxga.core.paths import (
@@ -333,7 +333,7 @@ def test_floor_div_is_exact():
     rem = np.stack([rng.integers(0, den), np.zeros(n, np.int64), den - 1])
     num = (q * den + rem).astype(np.int32)
     for k in range(3):
-        got = np.asarray(jax.jit(_floor_div)(jnp.asarray(num[k]), jnp.asarray(den, jnp.int32)))
+        got = np.asarray(jax.jit(floor_div)(jnp.asarray(num[k]), jnp.asarray(den, jnp.int32)))
         np.testing.assert_array_equal(got, q)
 
 

@@ -261,7 +261,8 @@ def test_a_new_process_reads_the_stored_programs_without_tracing(tmp_path):
                               capture_output=True, text=True, cwd=ROOT)
         assert proc.returncode == 0, proc.stderr[-2000:]
         out.append(json.loads(proc.stdout.strip().splitlines()[-1]))
-    assert len(list((tmp_path / executables.SUBDIRECTORY).glob("*.pkl"))) == 3
+    # init, evolve and finish, and the map tables' program
+    assert len(list((tmp_path / executables.SUBDIRECTORY).glob("*.pkl"))) == 4
     assert out[1]["cells"] == out[0]["cells"] and out[1]["best"] == out[0]["best"]
     assert out[1]["compile_s"] < out[0]["compile_s"]
 

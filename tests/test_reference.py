@@ -23,17 +23,19 @@ from scipy.sparse.csgraph import dijkstra
 
 from jaxga.core.errors import EndpointError, JaxgaError, NoPathError
 from jaxga.core.grid import CORNER_RULES, DIRECTIONS, Grid
+from jaxga.reference.any_angle import (
+    any_angle_shortest_path,
+    any_angle_shortest_path_np,
+    obstacle_adjacent_cells,
+)
 from jaxga.reference.optima import (
     OctileGraph,
     ReferencePath,
-    any_angle_shortest_path,
-    any_angle_shortest_path_np,
     clear_many_np,
     clear_np,
     clear_pairs_np,
     distances_from,
     legal_moves_np,
-    obstacle_adjacent_cells,
     path_length,
     require,
     shortest_path,
@@ -488,7 +490,9 @@ def test_budget_returns_promptly() -> None:
         assert not res.found and res.status == "budget" and res.kind == "any_angle"
         assert res.reason == f"any-angle optimum not computed (budget {budget:g} s)"
         assert res.path.shape == (0, 2) and math.isinf(res.length)
-        assert elapsed < budget + 0.5, (budget, elapsed)
+        # Without a budget this search runs for minutes; the slack only absorbs the
+        # preprocessing before the first deadline check on a loaded 2-core machine.
+        assert elapsed < budget + 3.0, (budget, elapsed)
     with pytest.raises(JaxgaError, match="budget"):
         res.raise_if_missing()
     octile = OctileGraph(b, "strict").search((0, 0), (399, 399), budget_s=0.0)

@@ -11,8 +11,8 @@ import pytest
 from jaxga.api import references
 from jaxga.api.result import Result
 from jaxga.core.grid import Grid
+from jaxga.reference.any_angle import any_angle_shortest_path_np
 from jaxga.reference.lower_bound import euclidean_lower_bound_np
-from jaxga.reference.optima import any_angle_shortest_path_np
 
 
 def _grid():

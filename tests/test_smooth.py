@@ -25,7 +25,8 @@ from jaxga import Grid, ParameterError
 from jaxga.core.paths import from_coords
 from jaxga.maps import load_map
 from jaxga.maps.scenarios import read_scen
-from jaxga.reference.optima import any_angle_shortest_path, clear_np, shortest_path
+from jaxga.reference.any_angle import any_angle_shortest_path
+from jaxga.reference.optima import clear_np, shortest_path
 from jaxga.smooth import (
     SmoothConfig,
     distance_field,

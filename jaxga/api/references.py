@@ -31,12 +31,9 @@ from collections.abc import Callable
 import numpy as np
 
 from jaxga.core.grid import Grid
+from jaxga.reference.any_angle import any_angle_shortest_path_np
 from jaxga.reference.lower_bound import euclidean_lower_bound_np
-from jaxga.reference.optima import (
-    ReferencePath,
-    any_angle_shortest_path_np,
-    shortest_path_np,
-)
+from jaxga.reference.optima import ReferencePath, shortest_path_np
 
 __all__ = ["AnyAngleBounds", "any_angle_references", "budget_note", "octile_optimum"]
 
@@ -101,7 +98,7 @@ def any_angle_references(grid: Grid, octile: ReferencePath, budget_s: float | No
     limit), and its Euclidean lower bound (computed first, within the same budget; it is
     cheap). ``octile`` is the problem's 8-connected optimum (its length bounds both
     searches); ``known_path``, a clear ``(x, y)`` path such as a run's best, tightens the
-    exact search (:func:`jaxga.reference.optima.any_angle_shortest_path_np`).
+    exact search (:func:`jaxga.reference.any_angle.any_angle_shortest_path_np`).
     ``progress(fraction of the budget used)`` is called while they run."""
     out = _references(grid, octile, budget_s, progress, known_path)
     if progress is not None:

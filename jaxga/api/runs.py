@@ -70,6 +70,11 @@ if TYPE_CHECKING:
     from jaxga.maps import MapInfo
 
 
+MIN_ANY_ANGLE_BUDGET = 0.5
+"""Seconds the any-angle reference gets at least under ``any_angle_budget="auto"``: on a
+small map the exact search takes milliseconds, more than a quick GA's own time, and a
+run's reported gaps should not depend on how fast the machine happened to be."""
+
 WAYPOINT_FITNESS = ("this configuration evolves waypoint paths; the exact fitness optimum "
                     "covers 8-connected paths only, so it bounds nothing here")
 """Why a run of waypoint paths (AGACD, Zhang's eq. 5 deletions) has no fitness gap."""
@@ -372,7 +377,8 @@ def _sweep(preset, grid, points, seeds, *, generations, corner_rule, variant, se
             host[key] = map_cells(host[key], grid.width, map_grid.width)
     budget = any_angle_budget
     if budget == "auto":  # the references never take longer than the GA's own work
-        budget = sum(timeline.seconds.get(p, 0.0) for p in ("init", "evolve", "post"))
+        budget = max(sum(timeline.seconds.get(p, 0.0) for p in ("init", "evolve", "post")),
+                     MIN_ANY_ANGLE_BUDGET)
     report("any-angle", 0.0)
     with timeline.phase("any_angle"):
         bounds = any_angle_references(map_grid, octile, budget,
@@ -622,8 +628,9 @@ def run(
         any_angle_budget: seconds the any-angle reference may take after the runs
             (:mod:`jaxga.api.references`): ``"auto"`` (default) the runs' own time
             (initialisation, evolution and post-optimisation), so that the references
-            never take longer than the GA; None: no limit (the exact value whatever
-            it costs). Beyond the budget :attr:`Result.any_angle_optimum` is NaN,
+            never take longer than the GA, but at least :data:`MIN_ANY_ANGLE_BUDGET`
+            (a small map's exact search takes milliseconds); None: no limit (the exact
+            value whatever it costs). Beyond the budget :attr:`Result.any_angle_optimum` is NaN,
             :attr:`Result.any_angle_note` says so, and the gaps are to the proven
             lower bound (:attr:`Result.gap_basis`).
 

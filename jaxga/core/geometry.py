@@ -39,10 +39,10 @@ import jax.numpy as jnp
 
 from jaxga.core.grid import Grid, blocked_at, diagonal_legal
 
-__all__ = ["clear", "clear_xy", "linear_trial", "segments_clear"]
+__all__ = ["clear", "clear_xy", "floor_div", "linear_trial", "segments_clear"]
 
 
-def _floor_div(num: jax.Array, den: jax.Array) -> jax.Array:
+def floor_div(num: jax.Array, den: jax.Array) -> jax.Array:
     """``floor(num / den)`` of int32 arrays with ``den > 0``, exactly, without an integer
     division.
 
@@ -81,7 +81,7 @@ def _crossing_checks(
     valid = k <= n
     den = jnp.maximum(2 * n, 1)
     num = (2 * a_minor + 1) * n + d_minor * (2 * k - 1)
-    q = _floor_div(num, den)
+    q = floor_div(num, den)
     on_vertex = (num - q * den) == 0
     from_major = a_major + s_major * (k - 1)
     to_major = a_major + s_major * k

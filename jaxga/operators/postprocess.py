@@ -29,7 +29,7 @@ import jax
 import jax.numpy as jnp
 
 from jaxga.core.errors import ParameterError
-from jaxga.core.geometry import _floor_div, clear, linear_trial
+from jaxga.core.geometry import clear, floor_div, linear_trial
 from jaxga.core.grid import Grid, diagonal_legal, move_legal
 from jaxga.core.paths import pad, remove_loops
 
@@ -114,7 +114,7 @@ def _clear_short(grid: Grid, codes: jax.Array, a: jax.Array, b: jax.Array,
     i = jnp.arange(span, dtype=jnp.int32)
     den = jnp.maximum(2 * big, 1)
     num = small * (2 * i + 1) + big
-    r = _floor_div(num, den)
+    r = floor_div(num, den)
     vertex = num == r * den
     # lower-left cell of the block at major offset i, minor offset r - 1
     px = ax + sx * jnp.where(x_major, i, r - 1)

@@ -11,21 +11,23 @@
 The shortest-path functions are re-exported here (``jaxga.reference.shortest_path``).
 """
 
+from jaxga.reference.any_angle import (
+    C_OCTILE,
+    any_angle_shortest_path,
+    any_angle_shortest_path_np,
+    obstacle_adjacent_cells,
+)
 from jaxga.reference.lower_bound import euclidean_lower_bound, euclidean_lower_bound_np
 from jaxga.reference.optima import (
-    C_OCTILE,
     SQRT2,
     XY,
     OctileGraph,
     ReferencePath,
-    any_angle_shortest_path,
-    any_angle_shortest_path_np,
     clear_many_np,
     clear_np,
     clear_pairs_np,
     distances_from,
     legal_moves_np,
-    obstacle_adjacent_cells,
     path_length,
     require,
     shortest_path,

@@ -23,7 +23,7 @@ The optimum is taken over *walks*; if the optimal walk visits a cell twice (a lo
 pays for itself in saved turn costs), it is only a bound for the loop-free paths the GAs
 keep, and :attr:`FitnessOptimum.loop_free` says so. AGACD's fitness is not covered: its
 individuals are waypoint paths, not 8-connected ones (its length gap is measured against
-:func:`jaxga.reference.optima.any_angle_shortest_path`).
+:func:`jaxga.reference.any_angle.any_angle_shortest_path`).
 
 The costs are written here from SPEC 3 and the papers' equations, independently of
 :mod:`jaxga.core.objectives`; the tests check that the two agree on every optimum returned.
@@ -42,12 +42,8 @@ from jaxga.core.errors import ParameterError
 from jaxga.core.grid import DIRECTIONS, Grid
 from jaxga.engine import FITNESS_DEFAULTS, check_combination
 from jaxga.maps.preprocess import legal_moves
-from jaxga.reference.optima import (
-    endpoint_problem,
-    obstacle_adjacent_cells,
-    path_length,
-    unreachable_message,
-)
+from jaxga.reference.any_angle import obstacle_adjacent_cells
+from jaxga.reference.optima import endpoint_problem, path_length, unreachable_message
 
 __all__ = [
     "FitnessOptimum",

@@ -1,6 +1,6 @@
 """A proven lower bound of the any-angle optimum: the taut string among the obstacles.
 
-The any-angle optimum (:func:`jaxga.reference.optima.any_angle_shortest_path`) bends
+The any-angle optimum (:func:`jaxga.reference.any_angle.any_angle_shortest_path`) bends
 only at cell centres. Dropping that restriction gives the Euclidean shortest path in the
 continuous plane between the start and goal centres among the blocked cells, each a
 closed unit square (cells off the map are blocked): the *taut string*. Every clear
@@ -46,18 +46,18 @@ import numpy as np
 from jaxga.core.grid import Grid
 from jaxga.reference.optima import (
     XY,
+    Deadline,
     OctileGraph,
+    OutOfBudget,
     ReferencePath,
-    _as_blocked,
-    _budget_message,
-    _check_rule,
-    _checked_in_chunks,
-    _concat_ranges,
-    _Deadline,
-    _missing,
-    _OutOfBudget,
-    _xy,
+    as_blocked,
+    as_xy,
+    budget_message,
+    check_rule,
+    checked_in_chunks,
+    concat_ranges,
     endpoint_problem,
+    missing_path,
     unreachable_message,
 )
 
@@ -118,8 +118,8 @@ def free_space(blocked: np.ndarray, corner_rule: str = "strict") -> FreeSpace:
     where a path may cross it (``"free"``); every other vertex is no bend point of a
     shortest path (it is flat or a concave corner of the free space).
     """
-    b = _as_blocked(blocked)
-    rule = _check_rule(corner_rule)
+    b = as_blocked(blocked)
+    rule = check_rule(corner_rule)
     h, w = b.shape
     free = np.zeros((h + 2, w + 2), bool)
     free[1:-1, 1:-1] = ~b
@@ -206,7 +206,7 @@ def segments_free_np(
     base_hi = np.where(on_line, true + c0 + 1 + stride, base_lo)
     step = np.where(mir, -stride, stride)
     part = count if ends <= 0 else np.minimum(count, 2 * ends)
-    rows, off = _concat_ranges(part)
+    rows, off = concat_ranges(part)
     if ends > 0:
         off += np.where(off < ends, 0, (count - part)[rows])
     starts = np.cumsum(part) - part
@@ -276,7 +276,7 @@ def _taut_search(
     upper: float,
     stop: int = -1,
     both_ends: bool = False,
-    deadline: _Deadline | None = None,
+    deadline: Deadline | None = None,
 ) -> tuple[np.ndarray, np.ndarray, int]:
     """A* over the visibility graph of ``pts`` (doubled coordinates) from ``source``.
 
@@ -323,7 +323,7 @@ def _taut_search(
         cand = np.flatnonzero(mask)
         if cand.size == 0:
             continue
-        vis = cand[_checked_in_chunks(functools.partial(segments_free_np, space), pts[k],
+        vis = cand[checked_in_chunks(functools.partial(segments_free_np, space), pts[k],
                                       pts[cand], deadline)]
         g[vis] = tent[vis]
         par[vis] = k
@@ -360,7 +360,7 @@ def euclidean_lower_bound_np(
     budget_s: float | None = None,
 ) -> ReferencePath:
     """The taut-string length between the start and goal centres: a proven lower bound
-    of :func:`~jaxga.reference.optima.any_angle_shortest_path_np` under ``corner_rule``.
+    of :func:`~jaxga.reference.any_angle.any_angle_shortest_path_np` under ``corner_rule``.
 
     The Euclidean shortest path in the plane among the blocked cells (closed unit
     squares, the map's outside blocked; pinches crossable only under ``"free"``: see
@@ -389,16 +389,16 @@ def euclidean_lower_bound_np(
         vertices). A blocked start or goal or an unreachable goal gives ``found=False``
         with a reason, as the optima do.
     """
-    b = _as_blocked(blocked)
-    rule = _check_rule(corner_rule)
-    start, goal = _xy(start_xy), _xy(goal_xy)
+    b = as_blocked(blocked)
+    rule = check_rule(corner_rule)
+    start, goal = as_xy(start_xy), as_xy(goal_xy)
     kind = "euclidean_bound"
     problem = endpoint_problem(b, start, goal)
     if problem:
-        return _missing(problem, "endpoint_blocked", kind)
+        return missing_path(problem, "endpoint_blocked", kind)
     if start == goal:
         return ReferencePath(True, 0.0, np.array([start], np.float64), kind=kind)
-    deadline = _Deadline(budget_s)
+    deadline = Deadline(budget_s)
     try:
         if upper is None:
             octile = OctileGraph(b, rule)._search(start, goal, deadline)
@@ -410,11 +410,11 @@ def euclidean_lower_bound_np(
         heur = np.hypot(*(pts - pts[1]).T) / 2
         g, par, expanded = _taut_search(space, pts, turn, inside, 0, heur, float(upper),
                                         stop=1, both_ends=True, deadline=deadline)
-    except _OutOfBudget:
-        return _missing(_budget_message("Euclidean lower bound of the any-angle", budget_s),
+    except OutOfBudget:
+        return missing_path(budget_message("Euclidean lower bound of the any-angle", budget_s),
                         "budget", kind)
     if not math.isfinite(g[1]):
-        return _missing(unreachable_message(start, goal, rule), "unreachable", kind)
+        return missing_path(unreachable_message(start, goal, rule), "unreachable", kind)
     chain = [1]
     while chain[-1] != 0:
         chain.append(int(par[chain[-1]]))
@@ -436,7 +436,7 @@ class GeodesicBounds:
     of the cells (:meth:`cells`) wherever a path of length ``<= upper`` can pass.
 
     The heuristic and the pruning of the exact lattice search
-    (:func:`jaxga.reference.optima.any_angle_shortest_path`). ``geo_s(v)``, ``geo_g(v)``
+    (:func:`jaxga.reference.any_angle.any_angle_shortest_path`). ``geo_s(v)``, ``geo_g(v)``
     denote the taut-string distances of a point ``v`` from the start and to the goal.
 
     Construction computes the distances ``Ds``, ``Dg`` of the corners by
@@ -467,9 +467,9 @@ class GeodesicBounds:
         start: tuple[int, int],
         goal: tuple[int, int],
         upper: float,
-        deadline: _Deadline | None = None,
+        deadline: Deadline | None = None,
     ) -> None:
-        b = _as_blocked(blocked)
+        b = as_blocked(blocked)
         self.shape = b.shape
         self.free = np.flatnonzero(~b.reshape(-1))
         self.space = free_space(b, corner_rule)
@@ -581,7 +581,7 @@ class GeodesicBounds:
         ci, ck = np.concatenate(ci), np.concatenate(ck)
         if deadline is not None:
             deadline.check()
-        ok = _checked_in_chunks(functools.partial(segments_free_np, space, ends=16),
+        ok = checked_in_chunks(functools.partial(segments_free_np, space, ends=16),
                                 cells[ci], e_pts[ck], deadline, steps=2_000_000)
         ci, ck = ci[ok], ck[ok]
         via = np.hypot(*(cells[ci] - e_pts[ck]).T) / 2 + to[ck]
@@ -594,7 +594,7 @@ class GeodesicBounds:
         while todo.size:
             if deadline is not None:
                 deadline.check()
-            seen = _checked_in_chunks(functools.partial(segments_free_np, space),
+            seen = checked_in_chunks(functools.partial(segments_free_np, space),
                                       cells[todo], e_pts[ck[pos]], deadline)
             best[todo[seen]] = via[pos[seen]]
             pos = pos + 1
