@@ -13,6 +13,7 @@ stderr and a non-zero exit status, never a Python traceback.
 from __future__ import annotations
 
 import argparse
+import contextlib
 import io
 import json
 import math
@@ -30,8 +31,9 @@ import jax
 import jax.numpy as jnp
 import numpy as np
 
-from jaxga import api, export
+from jaxga import api, export, interrupts
 from jaxga.api import check_one_corner_rule, configured_rule, parallel
+from jaxga.api.compilation_cache import ENV_VAR as CACHE_ENV_VAR
 from jaxga.api.compilation_cache import use_compilation_cache
 from jaxga.api.lowering import check_environment
 from jaxga.api.parallel import (
@@ -50,6 +52,8 @@ from jaxga.compare import TESTS, check_metric, compare, split_presets
 from jaxga.config import registry
 from jaxga.config.presets import load_preset, parse_set, preset_info, preset_settings
 from jaxga.core.errors import EndpointError, JaxgaError, NoPathError, ParameterError
+from jaxga.core.files import check_outputs as check_output_files
+from jaxga.core.files import same_file
 from jaxga.core.grid import CORNER_RULES, as_integer, check_corner_rule
 from jaxga.doe import AGACD_TABLE3, DESIGNS, RESPONSE_ALIASES, RESPONSES, Factor, run_doe
 from jaxga.engine import check_file_keys_read, check_overrides_read
@@ -61,7 +65,15 @@ from jaxga.maps import (
     read_scen,
     scenario_path,
 )
-from jaxga.plot import plot_comparison, plot_main_effects, plot_replan, plot_result
+from jaxga.maps.inputs import PATH_JSON_CAP, read_input
+from jaxga.maps.ros import read_ros_yaml
+from jaxga.plot import (
+    plot_comparison,
+    plot_main_effects,
+    plot_replan,
+    plot_result,
+    save_figure,
+)
 from jaxga.reference.fitness import fitness_optimum
 from jaxga.replan import replan
 from jaxga.smooth import smooth_population
@@ -111,12 +123,16 @@ MAP_HELP = ("a map file (0/1 text, Moving AI .map, ASCII, an image such as PNG o
 
 
 def _add_source_arguments(p: argparse.ArgumentParser) -> None:
-    """How a map file is read and grown: image threshold, ROS unknown cells, inflation."""
-    p.add_argument("--threshold", type=float, metavar="LUMA", default=0.5,
-                   help="images: a pixel darker than this luminance (0 black .. 1 white) is "
-                   "blocked (default 0.5)")
-    p.add_argument("--unknown", choices=("blocked", "free"), default="blocked",
-                   help="ROS maps: plan through unknown cells (free) or not (blocked, default)")
+    """How a map file is read and grown: image threshold, ROS unknown cells, inflation.
+    The first two default to None, so that one given for a map format it has no effect on
+    is refused (:func:`jaxga.maps.load_map_info`) instead of ignored; the loader applies
+    the defaults the help names."""
+    p.add_argument("--threshold", type=float, metavar="LUMA", default=None,
+                   help="images (PNG, PGM, ...): a pixel darker than this luminance (0 black "
+                   ".. 1 white) is blocked (default 0.5; refused for other formats)")
+    p.add_argument("--unknown", choices=("blocked", "free"), default=None,
+                   help="ROS maps: plan through unknown cells (free) or not (blocked, "
+                   "default; refused for other formats)")
     grow = p.add_mutually_exclusive_group()
     grow.add_argument("--inflate", type=float, metavar="CELLS",
                       help="grow the obstacles by this many cells (centre to centre)")
@@ -144,6 +160,10 @@ def _add_map_arguments(p: argparse.ArgumentParser, rule_default: str = "strict")
                    "converted: the file counts it from the top). Its optimal lengths "
                    "assume no corner cutting: --corner-rule strict to compare")
     p.add_argument("--scen", metavar="FILE", help="the .scen file of --scenario")
+    p.add_argument("--scenario-map-mismatch", choices=("ok",), default=None,
+                   help="ok: use --scenario's problem although it names another map than "
+                   "--map (by default refused: its endpoints and optimal length are that "
+                   "map's)")
     p.add_argument("--corner-rule", default=None, metavar="RULE",
                    help=f"one of {', '.join(CORNER_RULES)} (default: {rule_default})")
     _add_coarsen_argument(p)
@@ -170,11 +190,16 @@ def _apply_scenario(args: argparse.Namespace) -> None:
     """``--scenario N``: ``args.start`` / ``args.goal`` from problem ``N`` of a Moving AI
     scenario file (``--scen``, else :func:`jaxga.maps.scenario_path` of the map; y
     converted to count from the bottom by :func:`jaxga.maps.read_scen`), checked against
-    the map's size; a note on stderr names the file and the problem. Refused with
-    --start/--goal, and --scen without --scenario. Loads the map (starts JAX)."""
+    the map's size and name (:meth:`jaxga.maps.Scenario.is_for`: a problem of another map
+    is refused unless ``--scenario-map-mismatch ok``); a note on stderr names the file and
+    the problem. Refused with --start/--goal, and --scen or --scenario-map-mismatch
+    without --scenario. Loads the map (starts JAX)."""
     if getattr(args, "scenario", None) is None:
         if getattr(args, "scen", None) is not None:
             raise JaxgaError("--scen names the scenario file of --scenario N: give N too")
+        if getattr(args, "scenario_map_mismatch", None) is not None:
+            raise JaxgaError("--scenario-map-mismatch applies to the problem of --scenario "
+                             "N: give N too")
         return
 
     if any(getattr(args, k, None) is not None
@@ -198,9 +223,16 @@ def _apply_scenario(args: argparse.Namespace) -> None:
     if (-(-problem.width // k), -(-problem.height // k)) != (grid.width, grid.height):
         raise JaxgaError(f"{path.name} is for a {problem.width} x {problem.height} map "
                          f"({problem.map_name}), {args.map} is {grid.width} x {grid.height}")
+    other = not problem.is_for(args.map)
+    if other and getattr(args, "scenario_map_mismatch", None) != "ok":
+        raise JaxgaError(f"{path.name}: problem {args.scenario} is for map "
+                         f"{problem.map_name}, not {args.map}: its endpoints and optimal "
+                         "length belong to that map; give its own scenario file (--scen), "
+                         "or --scenario-map-mismatch ok to use it anyway")
     args.start, args.goal = problem.start, problem.goal
     print(f"scenario {args.scenario} of {path.name}: {problem.start} -> {problem.goal}, "
-          f"optimal length {problem.optimal_length:.4f} without corner cutting",
+          f"optimal length {problem.optimal_length:.4f} without corner cutting"
+          + (f" (on {problem.map_name}, not this map)" if other else ""),
           file=sys.stderr)
 
 
@@ -210,18 +242,15 @@ _SOURCE_OPTIONS = ("start", "goal", "coarsen", "start_world", "goal_world", "inf
 
 def _map_options(args: argparse.Namespace) -> dict:
     """The keyword arguments of :func:`jaxga.maps.load_map_info` given on the command
-    line (endpoints, coarsening, image threshold, ROS unknown cells, inflation)."""
-    opts = {k: getattr(args, k, None) for k in _SOURCE_OPTIONS}
-    opts["threshold"] = getattr(args, "threshold", 0.5)
-    opts["unknown"] = getattr(args, "unknown", "blocked")
-    return opts
+    line (endpoints, coarsening, image threshold, ROS unknown cells, inflation); None
+    for an option not given, so that the loader applies its default and refuses an
+    option given for a format it has no effect on."""
+    return {k: getattr(args, k, None) for k in (*_SOURCE_OPTIONS, "threshold", "unknown")}
 
 
 def _plain_map(args: argparse.Namespace) -> bool:
     """Whether the map is used as named, with none of the loading options."""
-    opts = _map_options(args)
-    return (all(opts[k] is None for k in _SOURCE_OPTIONS) and opts["threshold"] == 0.5
-            and opts["unknown"] == "blocked")
+    return all(v is None for v in _map_options(args).values())
 
 
 def _load_info(args: argparse.Namespace, rule: str | None):
@@ -673,11 +702,7 @@ def cmd_doe(args: argparse.Namespace) -> int:
         _write_json(args.json, data)
     if args.plot:
 
-        ax = plot_main_effects(data)
-        ax.figure.savefig(args.plot, dpi=110, bbox_inches="tight")
-        import matplotlib.pyplot as plt
-
-        plt.close(ax.figure)
+        save_figure(plot_main_effects(data).figure, args.plot)
         print(f"wrote {args.plot}")
     return 0
 
@@ -799,13 +824,22 @@ def _read_path_json(path: str, run_index: int | None) -> list[tuple[int, int]]:
     """The robot's path from a JSON file: a list of ``[x, y]``, an object with a
     ``"path"`` list (``jaxga optimum --json``), or the JSON of ``jaxga run`` (the raw
     8-connected path of run ``run_index``, default the successful run with the shortest
-    raw path)."""
+    raw path). Read only from a regular file of at most
+    :data:`jaxga.maps.inputs.PATH_JSON_CAP` bytes (:func:`jaxga.maps.inputs.read_input`):
+    a FIFO, a device or a larger file is refused in one line."""
 
-    with open(path, encoding="utf-8") as f:
-        try:
-            data = json.load(f)
-        except ValueError as e:
-            raise ParameterError(f"{path}: not valid JSON ({e})") from None
+    try:
+        raw = read_input(path, PATH_JSON_CAP, what="path JSON file", error=ParameterError,
+                         note="1 KiB a cell of the largest map jaxga plans on")
+    except FileNotFoundError:
+        raise ParameterError(f"{path}: path JSON file not found") from None
+    except OSError as e:
+        raise ParameterError(f"{path}: cannot read the path JSON file "
+                             f"({e.strerror or e})") from None
+    try:
+        data = json.loads(raw.decode("utf-8"))
+    except ValueError as e:  # UnicodeDecodeError and JSONDecodeError
+        raise ParameterError(f"{path}: not valid JSON ({e})") from None
     expected = (f"{path}: expected a list of [x, y] cells, an object with a \"path\" list, "
                 "or the JSON of `jaxga run`")
     if isinstance(data, dict) and "runs" in data:
@@ -1138,35 +1172,63 @@ def build_parser() -> argparse.ArgumentParser:
     return parser
 
 
+_OUTPUT_OPTIONS = ("json", "plot", "path_out", "checkpoint")
+
+
+def _input_files(args: argparse.Namespace) -> list[tuple[str, str | None]]:
+    """``(label, path)`` of every file the command reads: the map (and a ROS map's image),
+    the scenario file, the path JSON of replan, preset TOML files."""
+    out: list[tuple[str, str | None]] = []
+    maps = getattr(args, "map", None)
+    for m in (maps if isinstance(maps, list) else [maps]):
+        if m and Path(m).is_file():
+            out.append(("map", m))
+            if Path(m).suffix.lower() in (".yaml", ".yml"):
+                with contextlib.suppress(JaxgaError, OSError):  # a bad YAML: named later
+                    out.append(("map's image", str(read_ros_yaml(m).image)))
+    out.append(("scenario file", getattr(args, "scen", None)))
+    if getattr(args, "scenario", None) is not None and maps and not getattr(args, "scen", None):
+        found = scenario_path(maps if isinstance(maps, str) else maps[0])
+        out.append(("scenario file", str(found) if found else None))
+    out.append(("path JSON", getattr(args, "path_json", None)))
+    presets = [getattr(args, "preset", None), *str(getattr(args, "presets", "") or "")
+               .split(",")]
+    out.extend(("preset file", p) for p in presets if p and Path(p).is_file())
+    return out
+
+
 def check_outputs(args: argparse.Namespace) -> None:
-    """Check ``--json`` and ``--plot`` before the work, not after it: the directory must
-    exist and be writable, and the plot's extension must be an image format matplotlib
-    writes (no extension: ``.png`` is added, as matplotlib would, and reported)."""
+    """Check every output (``--json``, ``--plot``, ``--path-out``, a DOE's
+    ``--checkpoint`` folder) before the work, not after it
+    (:func:`jaxga.core.files.check_outputs`): writable where it is, not a folder, not an
+    input of the command nor another output; the plot's extension must be an image format
+    matplotlib writes (no extension: ``.png`` is added, as matplotlib would, and
+    reported)."""
     pid = getattr(args, "process_id", None)
     if pid is None:
         pid = env_int(ENV_PROCESS_ID)
     if getattr(args, "path_out", None):
         export.path_format(args.path_out)  # .csv or .yaml, refused in one line otherwise
-    for option in ("json", "plot", "path_out"):
-        path = getattr(args, option, None)
-        if not path or pid not in (None, 0):  # only process 0 writes the outputs
-            continue
-        folder = Path(path).parent
-        if Path(path).is_dir():
-            raise JaxgaError(f"cannot write --{option.replace('_', '-')} {path}: it is a "
-                             "directory")
-        if not folder.is_dir() or not os.access(folder, os.W_OK):
-            raise JaxgaError(f"cannot write --{option.replace('_', '-')} {path}: directory "
-                             f"{str(folder)!r} does not exist or is not writable")
+    plot = getattr(args, "plot", None)
+    if plot and not Path(plot).suffix:
+        args.plot = plot + ".png"
+    if pid not in (None, 0):  # only process 0 writes the outputs
+        return
+    outputs = {f"--{o.replace('_', '-')}": getattr(args, o, None) for o in _OUTPUT_OPTIONS
+               if o != "checkpoint"}
+    check_output_files(outputs, _input_files(args))
+    folder = getattr(args, "checkpoint", None)
+    if folder:
+        for label, path in [*_input_files(args), *outputs.items()]:
+            if path and Path(path).is_dir() and same_file(path, folder):
+                raise JaxgaError(f"cannot use --checkpoint {folder}: it is the {label}")
     plot = getattr(args, "plot", None)
     if plot:
         from matplotlib.figure import Figure
 
         formats = Figure().canvas.get_supported_filetypes()
         suffix = Path(plot).suffix.lower().lstrip(".")
-        if not suffix:
-            args.plot = plot + ".png"
-        elif suffix not in formats:
+        if suffix not in formats:
             raise JaxgaError(f"cannot write --plot {plot}: {suffix!r} is not an image format "
                              f"matplotlib writes ({', '.join(sorted(formats))})")
         else:  # some formats need outside tools (pgf: LaTeX for any text): try one first
@@ -1203,11 +1265,26 @@ def _join_negative_xy(argv: Sequence[str]) -> list[str]:
 def _one_line_warnings(show: Callable[..., None]) -> Callable[..., None]:
     """A ``warnings.showwarning`` that prints jaxga's own warnings (the categories of
     :mod:`jaxga.core.errors`) as one ``jaxga: warning: ...`` line, like its errors (Python's
-    format adds the file and source line), and hands other warnings to ``show``."""
+    format adds the file and source line), JAX's warnings about compilation-cache entries
+    as one such line per process naming the cache folder, and hands other warnings to
+    ``show``."""
+
+    said: set[str] = set()
 
     def show_warning(message, category, filename, lineno, file=None, line=None) -> None:
+        out = sys.stderr if file is None else file
+        text = str(message)
         if category.__module__.split(".")[0] == "jaxga":
-            print(f"jaxga: warning: {message}", file=sys.stderr if file is None else file)
+            print(f"jaxga: warning: {text}", file=out)
+        elif "compilation cache" in text and "jax" in str(filename):
+            # JAX's multi-line warning for each cache entry it cannot read or write: one
+            # line per process, naming the folder; the program is compiled instead
+            if "cache" not in said:
+                said.add("cache")
+                folder = jax.config.jax_compilation_cache_dir
+                why = text.split(": ", 1)[-1].splitlines()[0][:160]
+                print(f"jaxga: warning: the compilation cache {folder} ({CACHE_ENV_VAR}) "
+                      f"could not be used ({why}): compiling without it", file=out)
         else:
             show(message, category, filename, lineno, file, line)
 
@@ -1258,7 +1335,9 @@ def console() -> None:
     that skips the interpreter's teardown of JAX (its backends and threads: about a third
     of a second a user would wait after the last line) once the output is flushed; every
     file jaxga writes is complete by then (written atomically). A run over several
-    processes exits normally, through ``jax.distributed``'s shutdown."""
+    processes exits normally, through ``jax.distributed``'s shutdown. Ctrl-C and SIGTERM
+    end it at once with 130 or 143 (:mod:`jaxga.interrupts`)."""
+    interrupts.install()
     code = main()
     sys.stdout.flush()
     sys.stderr.flush()

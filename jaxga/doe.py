@@ -63,7 +63,6 @@ import itertools
 import json
 import math
 import os
-import tempfile
 import time
 from collections.abc import Callable, Iterable, Mapping, Sequence
 from pathlib import Path
@@ -78,6 +77,7 @@ from jaxga.api import checked_capacity, load_problem, parallel, seed_list
 from jaxga.config.presets import as_sets, overridden_keys
 from jaxga.config.schema import SCHEMA, Config, parse_value, python_scalar
 from jaxga.core.errors import NoPathError, ParameterError
+from jaxga.core.files import atomic_write
 from jaxga.core.grid import Grid, as_integer
 from jaxga.engine import build, check_combination, unread_keys
 from jaxga.reference.optima import shortest_path
@@ -554,21 +554,9 @@ def _fmt(v: float) -> str:
 
 
 def _atomic_write_json(path: Path, data: Any) -> None:
-    """Write JSON to ``path`` atomically (a temp file in the same directory, fsync,
-    ``os.replace``): a killed process leaves either the old file or the new one."""
-    fd, tmp = tempfile.mkstemp(dir=path.parent, prefix=f".{path.name}.", suffix=".tmp")
-    try:
-        with os.fdopen(fd, "w", encoding="utf-8") as f:
-            json.dump(data, f)
-            f.flush()
-            os.fsync(f.fileno())
-        os.replace(tmp, path)
-    except BaseException:
-        try:
-            os.unlink(tmp)
-        except FileNotFoundError:
-            pass
-        raise
+    """Write JSON to ``path`` atomically (:func:`jaxga.core.files.atomic_write`): a killed
+    process leaves either the old file or the new one."""
+    atomic_write(path, lambda f: json.dump(data, f))
 
 
 def _map_fingerprint(grid: Grid, name: str) -> dict[str, Any]:

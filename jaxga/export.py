@@ -9,21 +9,21 @@ segment that leaves the point, the last point keeping the direction it arrives i
 ``rostopic pub`` / ``ros2 topic pub`` and ``yaml.safe_load`` read.
 
 Every file is written atomically: to a temporary file beside the target, then renamed
-over it, so that a failed write leaves a previous file whole (:func:`atomic_write_text`).
+over it, so that a failed write leaves a previous file whole
+(:func:`jaxga.core.files.atomic_write_text`, re-exported here).
 """
 
 from __future__ import annotations
 
-import contextlib
 import math
 import os
-import tempfile
 from pathlib import Path
 
 import numpy as np
 import yaml
 
 from jaxga.core.errors import JaxgaError
+from jaxga.core.files import atomic_write_text
 
 __all__ = ["PATH_FORMATS", "atomic_write_text", "path_format", "path_text", "path_yaws",
            "write_path"]
@@ -85,29 +85,6 @@ def path_text(points: np.ndarray, fmt: str, frame_id: str = "map") -> str:
         })
     return yaml.safe_dump({"header": {"frame_id": frame_id}, "poses": poses},
                           sort_keys=False)
-
-
-def atomic_write_text(path: str | os.PathLike, text: str) -> None:
-    """Write ``text`` to ``path`` through a temporary file beside it, renamed over it: the
-    previous file stays whole if anything fails. Errors name the path."""
-    target = Path(path)
-    try:
-        fd, tmp = tempfile.mkstemp(prefix=f".{target.name}.", suffix=".tmp",
-                                   dir=target.parent if str(target.parent) else ".")
-    except OSError as e:
-        raise JaxgaError(f"cannot write {path}: {e.strerror or e}") from None
-    try:
-        with os.fdopen(fd, "w", encoding="utf-8") as f:
-            f.write(text)
-            f.flush()
-            os.fsync(f.fileno())
-        os.replace(tmp, target)
-    except BaseException as e:
-        with contextlib.suppress(OSError):
-            os.unlink(tmp)
-        if isinstance(e, OSError):
-            raise JaxgaError(f"cannot write {path}: {e.strerror or e}") from None
-        raise
 
 
 def write_path(path: str | os.PathLike, points_world: np.ndarray, frame_id: str = "map") -> None:

@@ -21,14 +21,15 @@ import numpy as np
 
 from jaxga.compare import metric_values
 from jaxga.core.errors import ParameterError
+from jaxga.core.files import atomic_write
 from jaxga.core.grid import Grid, as_integer
 from jaxga.maps import load_map_info
 from jaxga.maps.frame import MapFrame
 from jaxga.maps.loaders import MapLayers
 
 __all__ = ["CELL_CLASSES", "MapView", "cell_classes", "plot_box", "plot_comparison",
-           "plot_convergence", "plot_diversity", "plot_main_effects", "plot_map",
-           "plot_paths", "plot_replan", "plot_result", "plot_seed_scatter"]
+           "plot_convergence", "plot_diversity", "plot_main_effects", "plot_map", "plot_paths",
+           "plot_replan", "plot_result", "plot_seed_scatter", "save_figure"]
 
 
 def _pyplot():
@@ -587,14 +588,24 @@ def plot_comparison(comparison, out: str | Path | None = None, metric: str | Non
     return _finish(fig, out)
 
 
+def save_figure(fig, out: str | Path) -> None:
+    """Save ``fig`` to ``out`` (110 dpi, cropped to everything drawn: ``bbox_inches="tight"``
+    keeps the axis labels and the outside legend; the format from the extension, PNG
+    without one) atomically (:func:`jaxga.core.files.atomic_write`: a failed save leaves a
+    previous file whole), and close it."""
+    fmt = Path(out).suffix.lower().lstrip(".") or "png"
+    try:
+        atomic_write(out, lambda f: fig.savefig(f, format=fmt, dpi=110, bbox_inches="tight"),
+                     binary=True)
+    finally:
+        _pyplot().close(fig)
+
+
 def _finish(fig, out: str | Path | None):
-    """Lay the figure out; with ``out``, save it there (110 dpi, cropped to everything
-    drawn: ``bbox_inches="tight"`` keeps the axis labels and the outside legend) and
-    close it."""
+    """Lay the figure out; with ``out``, save it there (:func:`save_figure`)."""
     fig.tight_layout()
     if out is not None:
-        fig.savefig(out, dpi=110, bbox_inches="tight")
-        _pyplot().close(fig)
+        save_figure(fig, out)
     return fig
 
 

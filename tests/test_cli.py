@@ -870,3 +870,64 @@ def test_the_time_line_accounts_for_the_whole_wall_time(tmp_path):
     assert total <= wall and wall - total < 1.5 + 0.1 * wall, (wall, line)
     timing = json.loads((tmp_path / "r.json").read_text())["timing"]
     assert {"import_s", "plot_s", "any_angle_s", "total_s"} <= set(timing)
+
+
+def test_inputs_that_do_not_match_are_refused_in_one_line(tmp_path, capsys):
+    """A problem of another map of the same size (refused naming both maps, unless
+    --scenario-map-mismatch ok, which the note then repeats), an option the map's format
+    ignores, and a coarsening that merges start and goal: each one line, exit 2."""
+    scen = tmp_path / "random.scen"
+    scen.write_text("version 1\n7\trandom-32-32-20.map\t32\t32\t5\t16\t31\t24\t31.31370850\n")
+    base = ["optimum", "--quiet", "--corner-rule", "strict", "--scenario", "0", "--scen",
+            str(scen)]
+    assert main([*base, "--map", "maze-32-32-2"]) == EXIT_BAD_INPUT
+    err = capsys.readouterr().err.strip()
+    assert "\n" not in err and ("random.scen: problem 0 is for map random-32-32-20.map, not "
+                                "maze-32-32-2") in err and "--scenario-map-mismatch ok" in err
+    assert main([*base, "--map", "random-32-32-20"]) == 0  # its own map
+    assert "(on random-32-32-20.map" not in capsys.readouterr().err
+    assert main([*base, "--map", "maze-32-32-2", "--scenario-map-mismatch", "ok"]) == 0
+    assert "(on random-32-32-20.map, not this map)" in capsys.readouterr().err
+    art = tmp_path / "m.txt"
+    art.write_text("0 0 0 0\n0 0 0 0\n0 0 0 0\n0 0 0 0\n")
+    png = tmp_path / "m.png"
+    from jaxga.maps import save_map
+
+    save_map(np.zeros((4, 4), bool), png)
+    for args, words in (
+        (["--map", "maze-32-32-2", "--scenario-map-mismatch", "ok"], "give N too"),
+        (["--map", str(art), "--threshold", "0.5"], "has no effect on a 0/1 text map"),
+        (["--map", str(png), "--unknown", "blocked"], "has no effect on an image"),
+        (["--map", str(art), "--coarsen", "2", "--start", "0,0", "--goal", "1,1"],
+         "fall into one coarse cell (0, 0)"),
+    ):
+        assert main(["optimum", "--quiet", *args]) == EXIT_BAD_INPUT, args
+        err = capsys.readouterr().err.strip()
+        assert "\n" not in err and words in err, (args, err)
+    assert main(["optimum", "--quiet", "--map", str(png), "--threshold", "0.5"]) == 0
+
+
+@pytest.mark.skipif(not hasattr(__import__("os"), "mkfifo"), reason="needs FIFOs")
+def test_a_device_or_a_fifo_as_an_input_is_refused_at_once(tmp_path, capsys):
+    """--map /dev/zero, or a FIFO with no writer as the map, the scenario file or replan's
+    path JSON: refused within seconds (not read until memory runs out, not waiting for
+    a writer), in one line naming the file and the cap."""
+    import os
+    import time
+
+    fifo = tmp_path / "pipe"
+    os.mkfifo(fifo)
+    art = tmp_path / "m.txt"
+    art.write_text("0 0 0\n0 0 0\n")
+    cases = [["optimum", "--quiet", "--map", str(fifo)],
+             ["optimum", "--quiet", "--map", str(art), "--scenario", "0", "--scen", str(fifo)],
+             ["replan", "--map", str(art), "--path-json", str(fifo), "--position", "0,0"]]
+    if os.path.exists("/dev/zero"):
+        cases.append(["optimum", "--quiet", "--map", "/dev/zero"])
+    for argv in cases:
+        t0 = time.perf_counter()
+        assert main(argv) == EXIT_BAD_INPUT, argv
+        assert time.perf_counter() - t0 < 5.0, argv
+        err = capsys.readouterr().err.strip()
+        assert "\n" not in err and "not a regular file" in err and "bytes)" in err, err
+        assert ("/dev/zero" if "/dev/zero" in argv else str(fifo)) in err

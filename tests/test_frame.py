@@ -101,6 +101,35 @@ def test_an_endpoint_the_coarsening_blocks_is_named_in_both_frames(tmp_path):
         load_map_info(path, coarsen=2, start=(0, 0), goal=(5, 5))
 
 
+
+def test_a_coarsening_that_merges_start_and_goal_is_refused(tmp_path):
+    """Start (1, 1) and goal (2, 2) of a free 8 x 8 map: coarsened 4 x 4 both lie in coarse
+    cell (0, 0), which would plan a path of length 0 and call it a success; refused in
+    one line naming both endpoints, the coarse cell and a factor that keeps them apart.
+    Coarsened 2 x 2 they stay apart; a start equal to the goal is no merge; the grid
+    function coarsen refuses the same merge."""
+    from jaxga.core.grid import Grid
+    from jaxga.maps import coarsen
+
+    path = _write_ros(tmp_path / "hall", np.full((8, 8), 254))
+    with pytest.raises(EndpointError) as e:
+        load_map_info(path, coarsen=4, start=(1, 1), goal=(2, 2))
+    text = str(e.value)
+    assert "\n" not in text and "map.yaml" in text
+    assert ("coarsened 4 x 4, the start (map cell (1, 1)) and the goal (map cell (2, 2)) fall "
+            "into one coarse cell (0, 0)") in text and "a factor of 2 keeps them apart" in text
+    ok = load_map_info(path, coarsen=2, start=(1, 1), goal=(2, 2)).grid
+    assert (ok.start_xy, ok.goal_xy) == ((0, 0), (1, 1))
+    same = load_map_info(path, coarsen=4, start=(1, 1), goal=(1, 1)).grid
+    assert same.start_xy == same.goal_xy == (0, 0)
+    with pytest.raises(EndpointError, match=r"the start \(map cell \(0, 0\)\) and the goal "
+                                            r"\(map cell \(7, 7\)\) fall into one"):
+        load_map_info(path, coarsen=8)  # the default corners, on a 1 x 1 coarse map
+    grid = Grid.create(np.zeros((6, 6), bool), start=(0, 0), goal=(1, 0))
+    with pytest.raises(EndpointError, match="fall into one coarse cell"):
+        coarsen(grid, 2)
+    assert coarsen(grid.replace(goal=(2, 0)), 2).goal_xy == (1, 0)
+
 def _bfs(blocked, source, rule):
     """Breadth-first search over legal moves: an independent reachability reference."""
     h, w = blocked.shape
@@ -162,7 +191,7 @@ def test_a_failed_write_leaves_the_previous_file_whole(tmp_path, monkeypatch):
         raise OSError(28, "No space left on device")
 
     monkeypatch.setattr("os.replace", full_disk)
-    with pytest.raises(JaxgaError, match=r"cannot write .*out\.json: No space left"):
+    with pytest.raises(JaxgaError, match=r"cannot write .*out\.json: no space left on the device"):
         atomic_write_text(target, "newer")
     assert target.read_text() == "new"
     assert [p.name for p in tmp_path.iterdir()] == ["out.json"]  # no temporary file left

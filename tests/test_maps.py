@@ -287,6 +287,176 @@ def test_endpoint_off_map_is_endpoint_error_naming_file(tmp_path):
         g.check_endpoints()
 
 
+# --------------------------------------------------------- inputs that must match
+def _refused_at_once(read, error=MapFormatError, bound_s: float = 5.0) -> str:
+    """The one-line message of ``read()``'s refusal, which must come within ``bound_s``."""
+    import time
+
+    t0 = time.perf_counter()
+    with pytest.raises(error) as info:
+        read()
+    assert time.perf_counter() - t0 < bound_s
+    message = str(info.value)
+    assert "\n" not in message
+    return message
+
+
+@pytest.mark.skipif(not hasattr(__import__("os"), "mkfifo"), reason="needs FIFOs")
+def test_a_fifo_or_a_device_is_refused_at_once_not_read(tmp_path):
+    """A FIFO with no writer would block an open or a read for ever, /dev/zero never
+    ends: each is refused at once, in one line naming the file and the cap."""
+    import os
+
+    from jaxga.maps.inputs import SCENARIO_CAP, map_file_cap
+
+    fifo = tmp_path / "pipe.map"
+    os.mkfifo(fifo)
+    message = _refused_at_once(lambda: load_map(fifo))
+    assert "pipe.map: is a FIFO" in message and "not a regular file" in message
+    assert f"{map_file_cap():,} bytes" in message
+    scen = tmp_path / "pipe.scen"
+    os.mkfifo(scen)
+    message = _refused_at_once(lambda: read_scen(scen))
+    assert "pipe.scen: is a FIFO" in message and f"{SCENARIO_CAP:,} bytes" in message
+    if Path("/dev/zero").exists():
+        message = _refused_at_once(lambda: load_map("/dev/zero"))
+        assert "/dev/zero: is a character device, not a regular file" in message
+        message = _refused_at_once(lambda: read_scen("/dev/zero"))
+        assert "/dev/zero: is a character device" in message
+
+
+def test_a_file_over_the_cap_is_refused_from_its_size(tmp_path):
+    """A 10 GB (sparse) map file is refused from its size before a byte is read; the cap
+    grows with the coarsening a larger map needs (K x K times the cells)."""
+    from jaxga.core.grid import MAX_MAP_CELLS
+    from jaxga.maps.inputs import MAP_BYTES_PER_CELL, map_file_cap
+
+    huge = tmp_path / "huge.txt"
+    with open(huge, "wb") as f:
+        f.truncate(10 * 10**9)
+    message = _refused_at_once(lambda: load_map(huge), bound_s=1.0)
+    assert "huge.txt: the file holds 10,000,000,000 bytes" in message
+    assert f"more than the {map_file_cap():,} bytes jaxga reads from a map file" in message
+    assert f"{MAX_MAP_CELLS:,} cells" in message and "--coarsen K" in message
+    assert map_file_cap(2) - map_file_cap(1) == 3 * MAP_BYTES_PER_CELL * MAX_MAP_CELLS
+    just_over = tmp_path / "over.txt"
+    with open(just_over, "wb") as f:
+        f.truncate(map_file_cap() + 1)
+    with pytest.raises(MapFormatError, match="bytes jaxga reads from a map file"):
+        load_map(just_over)
+    with pytest.raises(MapFormatError) as info:  # read, then refused for what it holds
+        load_map(just_over, coarsen=2)
+    assert "bytes jaxga reads" not in str(info.value)
+    scen = tmp_path / "huge.scen"
+    with open(scen, "wb") as f:
+        f.truncate(10 * 10**9)
+    assert "huge.scen: the file holds 10,000,000,000 bytes" in _refused_at_once(
+        lambda: read_scen(scen), bound_s=1.0)
+
+
+def _png_chunks(raw: bytes) -> list[tuple[bytes, bytes]]:
+    out, pos = [], 8
+    while pos < len(raw):
+        n = int.from_bytes(raw[pos:pos + 4], "big")
+        out.append((raw[pos + 4:pos + 8], raw[pos + 8:pos + 8 + n]))
+        pos += 12 + n
+    return out
+
+
+def _png(chunks: list[tuple[bytes, bytes]]) -> bytes:
+    import struct
+    import zlib
+
+    return b"\x89PNG\r\n\x1a\n" + b"".join(
+        struct.pack(">I", len(d)) + t + d + struct.pack(">I", zlib.crc32(t + d))
+        for t, d in chunks)
+
+
+def test_a_png_whose_data_does_not_match_its_header_is_refused(tmp_path):
+    """A PNG cut short, and one whose image data holds more rows than its header says,
+    are refused naming both sizes; the intact file loads."""
+    import zlib
+
+    b = np.zeros((6, 8), bool)
+    b[2, 3] = True
+    good = save_map(b, tmp_path / "good.png")
+    raw = good.read_bytes()
+    np.testing.assert_array_equal(load_map(good).blocked_np(), b)
+    cut = tmp_path / "cut.png"
+    cut.write_bytes(raw[: len(raw) * 2 // 3])
+    message = _refused_at_once(lambda: load_map(cut))
+    assert "cut.png: the PNG header says 8 x 6 pixels" in message and "holds" in message
+    # the same pixels under a header that says 3 rows instead of 6: twice the data
+    chunks = _png_chunks(raw)
+    ihdr = chunks[0][1]
+    data = zlib.decompress(b"".join(d for t, d in chunks if t == b"IDAT"))
+    per_row = len(data) // 6
+    short = [(b"IHDR", ihdr[:4] + (3).to_bytes(4, "big") + ihdr[8:]),
+             (b"IDAT", zlib.compress(data)), (b"IEND", b"")]
+    (tmp_path / "rows.png").write_bytes(_png(short))
+    message = _refused_at_once(lambda: load_map(tmp_path / "rows.png"))
+    assert (f"the PNG header says 8 x 3 pixels ({3 * per_row:,} bytes of pixel data) but the "
+            f"file holds {6 * per_row:,} bytes of pixel data") in message
+
+
+@pytest.mark.parametrize("name, text, option, words", [
+    ("m.txt", "0 0\n0 0\n", {"threshold": 0.5}, "has no effect on a 0/1 text map"),
+    ("m.map", "type octile\nheight 1\nwidth 2\nmap\n..\n", {"threshold": 0.3},
+     "has no effect on a Moving AI map"),
+    ("m.ascii", "S.\n.G\n", {"threshold": 0.9}, "has no effect on an ASCII-art map"),
+    ("m.txt", "0 0\n0 0\n", {"unknown": "blocked"}, "unknown cells (--unknown, unknown=)"),
+    ("m.map", "type octile\nheight 1\nwidth 2\nmap\n..\n", {"unknown": "free"},
+     "only a ROS map_server map (.yaml) has unknown cells"),
+    ("m.txt", "0 0\n0 0\n", {"robot_radius": 0.2}, "a robot radius in metres needs a map "
+     "with a resolution"),
+    ("m.txt", "0 0\n0 0\n", {"goal_world": (1.0, 1.0)}, "a goal in metres needs a map with a "
+     "resolution and an origin"),
+])
+def test_an_option_with_no_effect_on_the_format_is_refused(tmp_path, name, text, option,
+                                                          words):
+    """Given explicitly (even at its default value), an option the format ignores is
+    refused in one line naming the file and saying why, rather than ignored."""
+    p = write(tmp_path, name, text)
+    message = _refused_at_once(lambda: load_map(p, **option), error=JaxgaError)
+    assert name in message and words in message
+    load_map(p)  # without it the map loads
+
+
+def test_image_options_apply_to_images_only(tmp_path):
+    """An image takes a threshold (its default 0.5 when none is given) but not the ROS
+    settings: unknown cells, a radius in metres, endpoints in metres."""
+    b = np.zeros((4, 4), bool)
+    b[1, 1] = True
+    png = save_map(b, tmp_path / "m.png")
+    np.testing.assert_array_equal(load_map(png).blocked_np(), b)
+    np.testing.assert_array_equal(load_map(png, threshold=0.5).blocked_np(), b)
+    for option, words in (({"unknown": "free"}, "has no effect on an image"),
+                          ({"robot_radius": 0.1}, "an image has none"),
+                          ({"start_world": (0.0, 0.0)}, "an image has neither")):
+        message = _refused_at_once(lambda o=option: load_map(png, **o), error=JaxgaError)
+        assert "m.png" in message and words in message
+
+
+def test_a_scenario_names_its_map(tmp_path):
+    """A problem is for the map its line names: the file name without folders and
+    extension, so a built-in map's name or a copy elsewhere matches and another map of
+    the same size does not; apply(grid, map_file=) refuses the other map."""
+    from jaxga.maps import Scenario
+
+    problem = Scenario(0, "maps/dao/maze-32-32-2.map", 32, 32, (1, 1), (2, 2), 1.4)
+    for same in ("maze-32-32-2", "/x/maze-32-32-2.map", Path("y/MAZE-32-32-2.png"),
+                 "maps\\dao\\maze-32-32-2.map"):
+        assert problem.is_for(same), same
+    for other in ("random-32-32-20", "/x/maze-32-32-20.map", "maze.map"):
+        assert not problem.is_for(other), other
+    grid = load_map("random-32-32-20")
+    assert problem.apply(grid).start_xy == (1, 1)  # without the map's name: sizes only
+    assert problem.apply(grid, map_file="maze-32-32-2").goal_xy == (2, 2)
+    with pytest.raises(MapFormatError, match="scenario for maps/dao/maze-32-32-2.map is not "
+                                             "for map random-32-32-20"):
+        problem.apply(grid, map_file="random-32-32-20")
+
+
 # -------------------------------------------------------------------------- scenarios
 def test_read_scen_converts_y_on_tiny_file(tmp_path):
     p = write(

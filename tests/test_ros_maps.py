@@ -163,3 +163,70 @@ def test_inflation_by_cells_or_by_the_robots_radius_in_metres(office):
     assert load_map_info(office, robot_radius=0.1).grid.shape == plain.shape
     with pytest.raises(MapFormatError, match="not both"):
         load_map(office, inflate=1, robot_radius=0.05)
+
+
+def test_a_pgm_whose_data_does_not_match_its_header_is_refused(tmp_path, office):
+    """A PGM whose header says 10 x 10 but which holds 400 bytes, or 60, is refused naming
+    both sizes, alone and as a ROS map's image (not read from its header, to fail later on
+    a blocked start); so is a plain (ASCII) PGM with too few values."""
+    header = b"P5\n# CREATOR: map_saver.cpp 0.050 m/pix\n10 10\n255\n"
+    for held in (400, 60):
+        pgm = tmp_path / "office.pgm"  # the image office.yaml names
+        pgm.write_bytes(header + bytes([254]) * held)
+        for source in (pgm, office):
+            with pytest.raises(MapFormatError) as e:
+                load_map(source)
+            text = str(e.value)
+            assert "\n" not in text and source.name in text
+            assert (f"the PGM header says 10 x 10 pixels (100 bytes of pixel data) but the "
+                    f"file holds {held} bytes of pixel data") in text
+    plain = tmp_path / "plain.pgm"
+    plain.write_bytes(b"P2\n3 2\n255\n0 254 254\n254 254\n")
+    with pytest.raises(MapFormatError, match=r"says 3 x 2 pixels \(6 values\) but the file "
+                                             r"holds 5 values"):
+        load_map(plain)
+    plain.write_bytes(b"P2\n3 2\n255\n0 254 254\n254 254 0\n")
+    assert load_map(plain).blocked_np().sum() == 2
+
+
+def test_options_a_ros_map_ignores_are_refused_and_its_own_apply(office, tmp_path):
+    """A ROS map's YAML sets its thresholds: an image threshold is refused, even at its
+    default; the unknown setting applies to it (also given as the default) and is
+    refused on its PGM loaded alone, which has no unknown cells."""
+    for value in (0.5, 0.3):
+        with pytest.raises(MapFormatError, match=r"office\.yaml: the image threshold "
+                                                 r"\(--threshold, threshold=\) has no effect "
+                                                 r"on a ROS map_server map: its YAML's "
+                                                 "occupied_thresh and free_thresh"):
+            load_map(office, threshold=value)
+    np.testing.assert_array_equal(load_map(office, unknown="blocked").blocked_np(),
+                                  load_map(office).blocked_np())
+    pgm = office.with_suffix(".pgm")
+    with pytest.raises(MapFormatError, match=r"office\.pgm: .* has no effect on an image: only "
+                                             r"a ROS map_server map \(\.yaml\) has unknown"):
+        load_map(pgm, unknown="free")
+    assert load_map_info(office, robot_radius=0.05).grid.shape == (4, 5)
+
+
+@pytest.mark.skipif(not hasattr(__import__("os"), "mkfifo"), reason="needs FIFOs")
+def test_a_ros_map_whose_yaml_or_image_is_a_fifo_is_refused_at_once(tmp_path):
+    """Neither the YAML nor the image it names is opened in a way that waits for a
+    writer: each is refused at once, naming the file and the cap."""
+    import os
+    import time
+
+    from jaxga.maps.inputs import YAML_CAP, map_file_cap
+
+    os.mkfifo(tmp_path / "pipe.pgm")
+    (tmp_path / "a.yaml").write_text(ROS1_YAML.format(image="pipe.pgm"))
+    os.mkfifo(tmp_path / "pipe.yaml")
+    for source, words, cap in ((tmp_path / "a.yaml", "pipe.pgm': is a FIFO",
+                                map_file_cap()),
+                               (tmp_path / "pipe.yaml", "pipe.yaml: is a FIFO", YAML_CAP)):
+        t0 = time.perf_counter()
+        with pytest.raises(MapFormatError) as e:
+            load_map(source)
+        assert time.perf_counter() - t0 < 5.0
+        text = str(e.value)
+        assert words in text and "not a regular file" in text and "\n" not in text
+        assert f"at most {cap:,} bytes" in text

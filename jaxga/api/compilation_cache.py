@@ -16,15 +16,18 @@ directory is already configured. One setting opts out everywhere: an empty
 
 from __future__ import annotations
 
+import contextlib
 import os
+import tempfile
+import warnings
 from pathlib import Path
 
 import jax
 
-from jaxga.core.errors import ParameterError
+from jaxga.core.errors import CacheWarning, ParameterError
 
-__all__ = ["ENV_VAR", "MIN_COMPILE_SECONDS", "default_directory", "ensure_compilation_cache",
-           "use_compilation_cache"]
+__all__ = ["ENV_VAR", "MIN_COMPILE_SECONDS", "cache_problem", "default_directory",
+           "ensure_compilation_cache", "use_compilation_cache", "warn_unusable"]
 
 ENV_VAR = "JAXGA_CACHE_DIR"
 """Environment variable naming the cache directory; an empty value leaves the cache off."""
@@ -39,6 +42,34 @@ def default_directory() -> str:
     return str(Path.home() / ".cache" / "jaxga" / "jax")
 
 
+def cache_problem(path: str | os.PathLike) -> str | None:
+    """Why ``path`` cannot hold the cache (it cannot be made a folder, or takes no new
+    file: a real try), or None when it can."""
+    folder = Path(path)
+    try:
+        folder.mkdir(parents=True, exist_ok=True)
+        fd, probe = tempfile.mkstemp(prefix=".jaxga-probe.", dir=folder)
+    except OSError as e:
+        return e.strerror or str(e)
+    os.close(fd)
+    with contextlib.suppress(OSError):
+        os.unlink(probe)
+    return None
+
+
+_WARNED: list[str] = []
+
+
+def warn_unusable(path: str, why: str) -> None:
+    """One :class:`~jaxga.core.errors.CacheWarning` per process naming the cache folder
+    and what follows: programs are compiled without it."""
+    if _WARNED:
+        return
+    _WARNED.append(path)
+    warnings.warn(f"the compilation cache {path} ({ENV_VAR}) cannot be used ({why}): "
+                  "compiling without it", CacheWarning, stacklevel=3)
+
+
 def use_compilation_cache(directory: str | os.PathLike | None = None) -> str | None:
     """Turn on JAX's persistent compilation cache for every program compiled from now on.
 
@@ -49,7 +80,10 @@ def use_compilation_cache(directory: str | os.PathLike | None = None) -> str | N
             ``directory`` wins over the environment.
 
     Returns:
-        The directory used, or ``None`` when the cache was left off.
+        The directory used, or ``None`` when the cache was left off, also when the
+        directory cannot be made or written (then one
+        :class:`~jaxga.core.errors.CacheWarning` says so: the programs are compiled
+        without it).
 
     Sets JAX's ``jax_compilation_cache_dir`` and
     ``jax_persistent_cache_min_compile_time_secs`` (:data:`MIN_COMPILE_SECONDS`) for the
@@ -65,6 +99,10 @@ def use_compilation_cache(directory: str | os.PathLike | None = None) -> str | N
         if not path:
             raise ParameterError("use_compilation_cache: the directory must not be empty")
     if not path:
+        return None
+    why = cache_problem(path)
+    if why is not None:
+        warn_unusable(path, why)
         return None
     jax.config.update("jax_compilation_cache_dir", path)
     jax.config.update("jax_persistent_cache_min_compile_time_secs", MIN_COMPILE_SECONDS)

@@ -43,6 +43,7 @@ from typing import Any
 
 from jaxga.config.schema import DEFAULTS, SCHEMA, Config, flatten, parse_value
 from jaxga.core.errors import ParameterError
+from jaxga.maps.inputs import read_input
 
 if sys.version_info >= (3, 11):
     import tomllib
@@ -101,9 +102,14 @@ def _parsed_builtin(name: str) -> dict[str, Any]:
     return _parse(_preset_file(name).read_text(encoding="utf-8"), f"preset {name!r}")
 
 
+PRESET_FILE_CAP = 1 << 20
+"""The most bytes read from a preset or configuration TOML file (a preset is a few KiB)."""
+
+
 def _read_file(path: Path) -> dict[str, Any]:
     try:
-        text = path.read_text(encoding="utf-8")
+        text = read_input(path, PRESET_FILE_CAP, what="configuration file",
+                          error=ParameterError).decode("utf-8")
     except FileNotFoundError:
         raise ParameterError(f"configuration file not found: {path}") from None
     except UnicodeDecodeError:

@@ -40,3 +40,8 @@ class InitialisationWarning(UserWarning):
 class DeviceWarning(RuntimeWarning):
     """A device count asked for cannot take effect (JAX already runs with another):
     the results are the same, only the speed differs (:mod:`jaxga.api.parallel`)."""
+
+
+class CacheWarning(RuntimeWarning):
+    """The compilation cache (``$JAXGA_CACHE_DIR``) cannot be used or read: programs are
+    compiled without it, so only the speed differs (:mod:`jaxga.api.compilation_cache`)."""

@@ -27,9 +27,14 @@ row comes first:
 
 The format is chosen from the file's content and extension (see :func:`detect_format`)
 unless ``fmt=`` names it. Anything malformed - a missing or empty file, ragged rows, an
-unknown character, a wrong Moving AI header, two ``S`` markers, an unreadable image -
-raises :class:`~jaxga.core.errors.MapFormatError` with a one-line message that names the file,
-the problem and, where it helps, the line.
+unknown character, a wrong Moving AI header, two ``S`` markers, an unreadable image, an
+image whose pixel data does not match its header - raises
+:class:`~jaxga.core.errors.MapFormatError` with a one-line message that names the file,
+the problem and, where it helps, the line. Only a regular file is read, and no more of it
+than a map within the size limit takes (:mod:`jaxga.maps.inputs`): a FIFO, a device or a
+huge file is refused at once. An option given for a format it has no effect on (a
+threshold on anything but an image, unknown cells on anything but a ROS map, metres on a
+map without a resolution) is refused too, not ignored.
 
 Endpoints: ``start`` defaults to ``(0, 0)`` and ``goal`` to ``(W - 1, H - 1)`` unless the
 file names them (ASCII ``S``/``G``); explicit ``start=``/``goal=`` override both. Loaders
@@ -40,6 +45,7 @@ blocked borders); :meth:`jaxga.Grid.check_endpoints` does that later.
 from __future__ import annotations
 
 import dataclasses
+import io
 import math
 import os
 from pathlib import Path
@@ -51,7 +57,16 @@ from jaxga.core.grid import Grid, check_corner_rule, too_large
 from jaxga.maps import builtin
 from jaxga.maps.builtin import default_corner_rule
 from jaxga.maps.frame import MapFrame
-from jaxga.maps.preprocess import coarsen_blocked, inflate_blocked
+from jaxga.maps.inputs import (
+    MAX_READ_COARSEN,
+    YAML_CAP,
+    check_image_data,
+    image_size,
+    map_file_cap,
+    map_file_cap_note,
+    read_input,
+)
+from jaxga.maps.preprocess import check_coarse_endpoints, coarsen_blocked, inflate_blocked
 from jaxga.maps.ros import (
     RosMap,
     cell_to_world,
@@ -186,8 +201,8 @@ def load_map(
     corner_rule: str | None = None,
     fmt: str | None = None,
     coarsen: int | None = None,
-    threshold: float = 0.5,
-    unknown: str = "blocked",
+    threshold: float | None = None,
+    unknown: str | None = None,
     start_world: tuple[float, float] | None = None,
     goal_world: tuple[float, float] | None = None,
     inflate: float | None = None,
@@ -211,25 +226,38 @@ def load_map(
             (:func:`jaxga.maps.coarsen_blocked`); ``start`` and ``goal`` (and a file's
             ``S``/``G``) are given on the original map and move to the coarse cells
             holding them, ``(x // k, y // k)``. The way to plan on a map of more than
-            :data:`jaxga.core.grid.MAX_MAP_CELLS` cells.
-        threshold: PNG images: a pixel with luminance below it (0 black, 1 white) is
-            blocked.
+            :data:`jaxga.core.grid.MAX_MAP_CELLS` cells. A factor that puts two distinct
+            endpoints into one coarse cell, or that blocks the coarse cell of one, is
+            refused (:class:`~jaxga.core.errors.EndpointError`).
+        threshold: images (PNG, PGM, ...): a pixel with luminance below it (0 black, 1
+            white) is blocked; default 0.5. Refused for any other format, on which it
+            would have no effect (a ROS map's YAML sets its own thresholds).
         unknown: ROS maps: ``"blocked"`` (default) or ``"free"`` for unknown cells.
+            Refused for any other format: only a ROS map has unknown cells.
         start_world, goal_world: ROS maps: the endpoints in metres (world frame); the
             cells that hold them (:func:`jaxga.maps.ros.world_to_cell`). Not with
-            ``start``/``goal``.
+            ``start``/``goal``; refused on a map without a resolution and an origin.
         inflate: grow the obstacles by this many cells (:func:`jaxga.maps.inflate`: every
             cell whose centre lies within that distance of a blocked cell's centre),
             on the map's own cells, before ``coarsen``.
         robot_radius: ROS maps: the robot's radius plus safety margin in metres; the
-            obstacles grow by ``robot_radius / resolution`` cells. Not with ``inflate``.
+            obstacles grow by ``robot_radius / resolution`` cells. Not with ``inflate``;
+            refused on a map without a resolution.
+
+    Options that would have no effect on the map's format are refused rather than
+    ignored, so that a map is never planned on other than the caller asked.
 
     Raises:
         MapFormatError: missing, unreadable or malformed file; unknown built-in name; a
             map over :data:`jaxga.core.grid.MAX_MAP_CELLS` cells (after ``coarsen``), refused
-            from the file's header or line count before it is parsed.
-        EndpointError: an endpoint off the map. (Blocked endpoints are *not* checked
-            here; see :meth:`jaxga.Grid.check_endpoints`.)
+            from the file's header or line count before it is parsed; a file that is not
+            a regular file or is larger than jaxga reads for a map
+            (:func:`jaxga.maps.inputs.map_file_cap`); an image whose pixel data does not
+            match its header (:func:`jaxga.maps.inputs.check_image_data`); an option with
+            no effect on the map's format.
+        EndpointError: an endpoint off the map, or start and goal merged or an endpoint
+            blocked by ``coarsen``. (Blocked endpoints are otherwise *not* checked here;
+            see :meth:`jaxga.Grid.check_endpoints`.)
     """
     return load_map_info(source, start=start, goal=goal, corner_rule=corner_rule, fmt=fmt,
                          coarsen=coarsen, threshold=threshold, unknown=unknown,
@@ -245,8 +273,8 @@ def load_map_info(
     corner_rule: str | None = None,
     fmt: str | None = None,
     coarsen: int | None = None,
-    threshold: float = 0.5,
-    unknown: str = "blocked",
+    threshold: float | None = None,
+    unknown: str | None = None,
     start_world: tuple[float, float] | None = None,
     goal_world: tuple[float, float] | None = None,
     inflate: float | None = None,
@@ -270,9 +298,14 @@ def load_map_info(
     label = str(source) if is_builtin else str(path)
 
     bare_name = isinstance(source, str) and not is_builtin and Path(source).name == source
-    raw = _read_bytes(path, label, builtin_hint=bare_name and not Path(source).suffix)
-    kind = fmt or detect_format(path, raw)
     factor = 1 if coarsen is None else _coarsen_factor(coarsen)
+    is_yaml = fmt == "ros" or (fmt is None and path.suffix.lower() in (".yaml", ".yml"))
+    raw = _read_bytes(path, label, builtin_hint=bare_name and not Path(source).suffix,
+                      yaml=is_yaml, coarsen=factor)
+    kind = fmt or detect_format(path, raw)
+    _check_options_apply(kind, label, threshold=threshold, unknown=unknown,
+                         robot_radius=robot_radius, start_world=start_world,
+                         goal_world=goal_world)
     size = _declared_size(raw, kind)
     if size is not None:  # refuse a map too large before parsing it (a second or more)
         w0, h0 = size
@@ -282,12 +315,12 @@ def load_map_info(
     ros = None
     unknown_cells = None
     if kind == "png":
-        blocked = _parse_png(path, label, threshold)
+        blocked = _parse_png(path, label, 0.5 if threshold is None else threshold, raw)
         file_start = file_goal = None
     elif kind == "ros":
-        ros = read_ros_yaml(path, label)
-        occ = occupancy(read_ros_image(ros, label), ros)
-        blocked = ros_blocked(occ, unknown)
+        ros = read_ros_yaml(path, label, data=raw)
+        occ = occupancy(read_ros_image(ros, label, coarsen=factor), ros)
+        blocked = ros_blocked(occ, "blocked" if unknown is None else unknown)
         unknown_cells = np.ascontiguousarray((occ == -1)[::-1])
         file_start = file_goal = None
     else:
@@ -304,11 +337,8 @@ def load_map_info(
     s = start if start is not None else file_start
     g = goal if goal is not None else file_goal
     for name, xy, world in (("start", start, start_world), ("goal", goal, goal_world)):
-        if world is None:
+        if world is None or ros is None:  # without a frame: refused above
             continue
-        if ros is None:
-            raise EndpointError(f"{label}: a {name} in metres needs a map with a resolution "
-                                "and an origin (a ROS map_server .yaml)")
         if xy is not None:
             raise EndpointError(f"{label}: give the {name} in cells or in metres, not both")
         try:
@@ -333,6 +363,8 @@ def load_map_info(
             if xy is not None and not (0 <= xy[0] < w0 and 0 <= xy[1] < h0):
                 raise EndpointError(f"{label}: {name} map cell {tuple(xy)} is off the "
                                     f"{w0} x {h0} map")
+        check_coarse_endpoints(s if s is not None else (0, 0),
+                               g if g is not None else (w0 - 1, h0 - 1), factor, label)
         coarse = coarsen_blocked(blocked, factor)
         layers = layers.coarsened(factor)
         for name, xy in (("start", s), ("goal", g)):
@@ -406,7 +438,7 @@ def detect_format(path: Source, raw: bytes | None = None) -> str:
     """
     p = Path(os.fspath(path))
     if raw is None:
-        raw = _read_bytes(p, str(p))
+        raw = _read_bytes(p, str(p), coarsen=MAX_READ_COARSEN)
     suffix = p.suffix.lower()
     if raw.startswith(_PNG_MAGIC) or suffix in IMAGE_SUFFIXES:
         return "png"
@@ -631,9 +663,18 @@ def save_map(grid: Grid | np.ndarray, path: Source, *, fmt: str | None = None,
 
 
 # -------------------------------------------------------------------------- helpers
-def _read_bytes(path: Path, label: str, builtin_hint: bool = False) -> bytes:
+def _read_bytes(path: Path, label: str, builtin_hint: bool = False, *, yaml: bool = False,
+                coarsen: int = 1) -> bytes:
+    """A map file's bytes (:func:`jaxga.maps.inputs.read_input`: a regular file of at most
+    :data:`~jaxga.maps.inputs.YAML_CAP` bytes for a ROS map's YAML, else
+    :func:`~jaxga.maps.inputs.map_file_cap` for a map coarsened ``coarsen x coarsen``);
+    every failure one line naming the file."""
+    if yaml:
+        cap, note = YAML_CAP, "a map_server YAML holds a few lines of metadata"
+    else:
+        cap, note = map_file_cap(coarsen), map_file_cap_note(coarsen)
     try:
-        raw = path.read_bytes()
+        raw = read_input(path, cap, what="map file", label=label, note=note)
     except FileNotFoundError:
         hint = ""
         if builtin_hint:
@@ -687,14 +728,48 @@ def _coarsen_factor(value) -> int:
     return int(value)
 
 
+_FORMAT_NAMES = {"01": "a 0/1 text map", "movingai": "a Moving AI map",
+                 "ascii": "an ASCII-art map", "png": "an image", "ros": "a ROS map_server map"}
+
+
+def _check_options_apply(kind: str, label: str, *, threshold: float | None,
+                         unknown: str | None, robot_radius: float | None,
+                         start_world: tuple[float, float] | None,
+                         goal_world: tuple[float, float] | None) -> None:
+    """Refuse, in one line saying why, an option given for a map format on which it has
+    no effect: it would be ignored, and the map planned on other than the caller asked."""
+    what = _FORMAT_NAMES.get(kind, f"a {kind} map")
+    if threshold is not None and kind != "png":
+        why = ("its YAML's occupied_thresh and free_thresh decide which pixels are "
+               "blocked" if kind == "ros" else "only an image's pixels are thresholded")
+        raise MapFormatError(f"{label}: the image threshold (--threshold, threshold=) has no "
+                             f"effect on {what}: {why}")
+    if unknown is not None and kind != "ros":
+        why = ("an image's grey pixels are thresholded like the others (load the map's "
+               "map_server .yaml to keep them apart)" if kind == "png"
+               else "this map has none")
+        raise MapFormatError(f"{label}: the setting for unknown cells (--unknown, unknown=) "
+                             f"has no effect on {what}: only a ROS map_server map (.yaml) "
+                             f"has unknown cells; {why}")
+    if kind == "ros":
+        return
+    if robot_radius is not None:
+        raise MapFormatError(f"{label}: a robot radius in metres needs a map with a "
+                             f"resolution (a ROS map_server .yaml), and {what} has none; "
+                             "inflate by cells instead")
+    for name, world in (("start", start_world), ("goal", goal_world)):
+        if world is not None:
+            raise EndpointError(f"{label}: a {name} in metres needs a map with a resolution "
+                                f"and an origin (a ROS map_server .yaml), and {what} has "
+                                "neither; give it in cells")
+
+
 def _declared_size(raw: bytes, kind: str) -> tuple[int, int] | None:
-    """``(width, height)`` of a map file from its header (PNG, Moving AI) or its first
-    line and line count (0/1 text, ASCII art), without parsing it; None if it cannot be
-    told (the parser then reports what is wrong)."""
+    """``(width, height)`` of a map file from its header (an image's, Moving AI) or its
+    first line and line count (0/1 text, ASCII art), without parsing it; None if it cannot
+    be told (the parser then reports what is wrong)."""
     if kind == "png":
-        if raw.startswith(_PNG_MAGIC) and raw[12:16] == b"IHDR" and len(raw) >= 24:
-            return int.from_bytes(raw[16:20], "big"), int.from_bytes(raw[20:24], "big")
-        return None
+        return image_size(raw)
     if kind == "ros":  # the image's size is checked once it is read
         return None
     head = raw[:4096].decode("utf-8", errors="replace")
@@ -723,17 +798,24 @@ def _check_ragged(rows: list[list[bool]], lineno: int, label: str) -> None:
         )
 
 
-def _parse_png(path: Path, label: str, threshold: float = 0.5) -> np.ndarray:
+def _parse_png(path: Path, label: str, threshold: float = 0.5,
+               raw: bytes | None = None) -> np.ndarray:
     """Threshold an image's luminance (blocked below ``threshold``); image top row -> top
-    of the map (row H-1)."""
+    of the map (row H-1). ``raw``: the file's bytes, already read (else read here); an
+    image whose pixel data does not match its header is refused first."""
     import matplotlib.image as mpimg
 
     if isinstance(threshold, bool) or not isinstance(threshold, (int, float)) or not (
             0.0 < threshold <= 1.0):
         raise MapFormatError(f"{label}: the image threshold must be a luminance in (0, 1], "
                              f"got {threshold!r}")
+    if raw is None:
+        raw = _read_bytes(path, label, coarsen=MAX_READ_COARSEN)
+    check_image_data(raw, label)
+    # matplotlib reads a .png (or a PNG by content) as PNG, anything else through Pillow
+    as_png = path.suffix.lower() == ".png" or raw.startswith(_PNG_MAGIC)
     try:
-        img = np.asarray(mpimg.imread(path))
+        img = np.asarray(mpimg.imread(io.BytesIO(raw), format="png" if as_png else "pil"))
     except Exception as e:  # Pillow/matplotlib raise many types for bad images
         msg = str(e).splitlines()[0] if str(e) else type(e).__name__
         raise MapFormatError(f"{label}: unreadable image ({msg})") from None

@@ -19,10 +19,11 @@ import numbers
 
 import numpy as np
 
-from jaxga.core.errors import ParameterError
+from jaxga.core.errors import EndpointError, ParameterError
 from jaxga.core.grid import DIRECTIONS, Grid, check_corner_rule
 
 __all__ = [
+    "check_coarse_endpoints",
     "coarsen",
     "coarsen_blocked",
     "endpoints_connected",
@@ -204,15 +205,41 @@ def coarsen_blocked(blocked: np.ndarray, factor: int) -> np.ndarray:
     return pad.reshape(hc, k, wc, k).any(axis=(1, 3))
 
 
+def check_coarse_endpoints(start: tuple[int, int], goal: tuple[int, int], factor: int,
+                           label: str = "") -> None:
+    """Refuse a coarsening by ``factor`` that puts two distinct endpoints (map cells
+    ``(x, y)``) into one coarse cell: the coarse problem would be solved by a path of
+    length 0, a "success" that says nothing about the map. The message names both
+    endpoints, the coarse cell and the largest smaller factor that keeps them apart;
+    ``label`` (a file) starts it.
+
+    Raises:
+        EndpointError: start and goal differ but share a coarse cell.
+    """
+    k = int(factor)
+    (sx, sy), (gx, gy) = (int(v) for v in start), (int(v) for v in goal)
+    if (sx, sy) == (gx, gy) or (sx // k, sy // k) != (gx // k, gy // k):
+        return
+    apart = next(f for f in range(k - 1, 0, -1)
+                 if (sx // f, sy // f) != (gx // f, gy // f))
+    raise EndpointError(
+        f"{label + ': ' if label else ''}coarsened {k} x {k}, the start (map cell "
+        f"({sx}, {sy})) and the goal (map cell ({gx}, {gy})) fall into one coarse cell "
+        f"({sx // k}, {sy // k}): there is nothing left to plan; coarsen less (a factor of "
+        f"{apart} keeps them apart) or move an endpoint")
+
+
 def coarsen(grid: Grid, factor: int) -> Grid:
     """``grid`` with ``factor x factor`` cells merged into one (:func:`coarsen_blocked`);
     the start and goal move to the coarse cells holding them, ``(x // k, y // k)``. The way
     to plan on a map over :data:`jaxga.core.grid.MAX_MAP_CELLS`: load it with
     ``load_map(..., coarsen=k)`` (``--coarsen K``), which coarsens before building the
     grid. A coarse endpoint whose block holds an obstacle is blocked:
-    :meth:`jaxga.Grid.check_endpoints` says so."""
+    :meth:`jaxga.Grid.check_endpoints` says so. A factor that puts a distinct start and
+    goal into one coarse cell is refused (:func:`check_coarse_endpoints`)."""
     (sx, sy), (gx, gy) = grid.start_xy, grid.goal_xy
     coarse = coarsen_blocked(grid.blocked_np(), factor)  # checks the factor
     k = int(factor)
+    check_coarse_endpoints((sx, sy), (gx, gy), k)
     return Grid.create(coarse, start=(sx // k, sy // k), goal=(gx // k, gy // k),
                        corner_rule=grid.corner_rule)

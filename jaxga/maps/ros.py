@@ -33,6 +33,7 @@ corner is at ``origin + R(yaw) (x resolution, y resolution)``; :func:`world_to_c
 from __future__ import annotations
 
 import dataclasses
+import io
 import math
 from pathlib import Path
 from typing import Any
@@ -41,7 +42,16 @@ import numpy as np
 import yaml
 
 from jaxga.core.errors import MapFormatError
+from jaxga.core.grid import too_large
 from jaxga.maps.frame import MapFrame
+from jaxga.maps.inputs import (
+    YAML_CAP,
+    check_image_data,
+    image_size,
+    map_file_cap,
+    map_file_cap_note,
+    read_input,
+)
 
 __all__ = [
     "MODES",
@@ -93,15 +103,25 @@ def _number(value: Any, key: str, label: str) -> float:
     return float(value)
 
 
-def read_ros_yaml(path: str | Path, label: str | None = None) -> RosMap:
+def read_ros_yaml(path: str | Path, label: str | None = None, *,
+                  data: bytes | None = None) -> RosMap:
     """Read a ``map_server`` YAML file (``image``, ``resolution``, ``origin``, ``negate``,
     ``occupied_thresh``, ``free_thresh``, ``mode``; unknown keys are ignored, as
     ``map_server`` does). Raises :class:`~jaxga.core.errors.MapFormatError` with one line
-    naming the file and the key for a missing or invalid value."""
+    naming the file and the key for a missing or invalid value, or for a file that is not
+    a regular file of at most :data:`jaxga.maps.inputs.YAML_CAP` bytes. ``data``: the
+    file's bytes when already read (``path`` still places a relative image)."""
     path = Path(path)
     label = label or str(path)
     try:
-        data = yaml.safe_load(path.read_text(encoding="utf-8"))
+        if data is None:
+            data = read_input(path, YAML_CAP, what="map_server YAML file", label=label,
+                              note="a map_server YAML holds a few lines of metadata")
+        elif len(data) > YAML_CAP:
+            raise MapFormatError(f"{label}: the file holds {len(data):,} bytes, more than "
+                                 f"the {YAML_CAP:,} bytes jaxga reads from a map_server "
+                                 "YAML file")
+        data = yaml.safe_load(data.decode("utf-8"))
     except FileNotFoundError:
         raise MapFormatError(f"{label}: no such file") from None
     except (OSError, UnicodeDecodeError, yaml.YAMLError) as e:
@@ -140,14 +160,38 @@ def read_ros_yaml(path: str | Path, label: str | None = None) -> RosMap:
                   occupied_thresh=occ, free_thresh=free, mode=mode)
 
 
-def read_ros_image(meta: RosMap, label: str | None = None) -> np.ndarray:
+def read_ros_image(meta: RosMap, label: str | None = None, *, coarsen: int = 1) -> np.ndarray:
     """The image of a ``map_server`` map as ``uint8[H, W, C]`` (C = 1-4), top row first,
-    read with Pillow (PGM, PNG, BMP, ...). 16-bit images are scaled to 8 bits."""
+    read with Pillow (PGM, PNG, BMP, ...). 16-bit images are scaled to 8 bits.
+
+    Refused in one line naming the image: a file that is not a regular file or holds more
+    than :func:`jaxga.maps.inputs.map_file_cap` bytes for a map to be coarsened
+    ``coarsen x coarsen``; an image over :data:`jaxga.core.grid.MAX_MAP_CELLS` cells once
+    coarsened, from its header before its pixels are decoded; a PNG or PGM whose pixel
+    data does not match its header (:func:`jaxga.maps.inputs.check_image_data`)."""
     from PIL import Image, UnidentifiedImageError  # here: Pillow's import is a tenth of a second
 
     label = label or str(meta.image)
+    where = f"{label}: the map image {str(meta.image)!r}"
+    factor = max(int(coarsen), 1)
     try:
-        with Image.open(meta.image) as img:
+        raw = read_input(meta.image, map_file_cap(factor), what="map image", label=where,
+                         note=map_file_cap_note(factor))
+    except FileNotFoundError:
+        raise MapFormatError(f"{label}: the map image {str(meta.image)!r} does not exist") \
+            from None
+    except OSError as e:
+        raise MapFormatError(f"{where}: cannot be read ({e.strerror or e})") from None
+    if not raw:
+        raise MapFormatError(f"{label}: the map image {str(meta.image)!r} is empty")
+    size = image_size(raw)
+    if size is not None:  # refuse a map too large before decoding it
+        message = too_large(-(-size[0] // factor), -(-size[1] // factor))
+        if message:
+            raise MapFormatError(f"{where}: {message}")
+    check_image_data(raw, where)
+    try:
+        with Image.open(io.BytesIO(raw)) as img:
             img.load()
             if img.mode in ("I;16", "I;16B", "I"):
                 arr = np.asarray(img, np.float64)
@@ -157,9 +201,6 @@ def read_ros_image(meta: RosMap, label: str | None = None) -> np.ndarray:
                 arr = np.asarray(img, np.uint8)
             else:
                 arr = np.asarray(img.convert("RGBA"), np.uint8)
-    except FileNotFoundError:
-        raise MapFormatError(f"{label}: the map image {str(meta.image)!r} does not exist") \
-            from None
     except (OSError, UnidentifiedImageError, ValueError) as e:
         first = str(e).splitlines()[0] if str(e) else type(e).__name__
         raise MapFormatError(f"{label}: unreadable map image {str(meta.image)!r} ({first})") \

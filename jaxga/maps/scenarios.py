@@ -6,6 +6,11 @@ width, map height, start x, start y, goal x, goal y, optimal length. Moving AI c
 from the **top**; :func:`read_scen` converts it to the library's bottom-up convention,
 ``y_ours = height - 1 - y_movingai``. The optimal length is the 8-connected shortest path
 without corner cutting (``corner_rule="strict"``).
+
+Each problem names its map (``maze-32-32-2.map``, ``maps/dao/arena.map``); a problem of
+one map is meaningless on another of the same size (its endpoints may be blocked and its
+optimal length is another map's): :meth:`Scenario.is_for` and ``apply(grid, map_file=)``
+compare the names.
 """
 
 from __future__ import annotations
@@ -13,10 +18,12 @@ from __future__ import annotations
 import dataclasses
 import math
 import os
+import re
 from pathlib import Path
 
 from jaxga.core.errors import MapFormatError
 from jaxga.core.grid import Grid
+from jaxga.maps.inputs import SCENARIO_CAP, read_input
 
 __all__ = ["Scenario", "parse_scen", "read_scen"]
 
@@ -43,27 +50,49 @@ class Scenario:
     goal: tuple[int, int]
     optimal_length: float
 
-    def apply(self, grid: Grid) -> Grid:
-        """Return ``grid`` with this problem's start and goal (the map sizes must match)."""
+    def is_for(self, map_file: str | os.PathLike) -> bool:
+        """Whether this problem names the map ``map_file`` (a path, or a built-in map's
+        name, which is its file's name without the extension): the file names compared
+        without their folders and extensions, ignoring case, so that
+        ``maps/dao/arena.map`` is ``/data/arena.map`` (and ``arena.png``, the same map
+        converted) but not ``arena2.map``."""
+        return _map_stem(os.fspath(map_file)) == _map_stem(self.map_name)
+
+    def apply(self, grid: Grid, map_file: str | os.PathLike | None = None) -> Grid:
+        """Return ``grid`` with this problem's start and goal. The map sizes must match,
+        and with ``map_file`` (the map's path or built-in name) the problem must name that
+        map (:meth:`is_for`): a problem of another map would be planned on silently."""
         if (grid.width, grid.height) != (self.width, self.height):
             raise MapFormatError(
                 f"scenario for {self.map_name} is {self.width} x {self.height} but the grid is "
                 f"{grid.width} x {grid.height}"
             )
+        if map_file is not None and not self.is_for(map_file):
+            raise MapFormatError(f"scenario for {self.map_name} is not for map "
+                                 f"{os.fspath(map_file)} (another map of the same size)")
         return grid.replace(start=self.start, goal=self.goal)
+
+
+def _map_stem(name: str) -> str:
+    """A map's file name without folders (``/`` or ``\\``) and extension, case-folded."""
+    base = re.split(r"[\\/]", name.strip())[-1]
+    return Path(base).stem.casefold() if base not in ("", ".", "..") else base
 
 
 def read_scen(path: str | os.PathLike) -> list[Scenario]:
     """Read a Moving AI ``.scen`` file; y is converted to count from the bottom.
 
-    Raises :class:`~jaxga.core.errors.MapFormatError` for a missing or unreadable file, a
-    missing ``version`` header, a line without 9 fields, a non-numeric field or a start
-    or goal off its map, naming the file and line.
+    Raises :class:`~jaxga.core.errors.MapFormatError` for a missing or unreadable file, one
+    that is not a regular file or holds more than :data:`jaxga.maps.inputs.SCENARIO_CAP`
+    bytes, a missing ``version`` header, a line without 9 fields, a non-numeric field or
+    a start or goal off its map, naming the file and line.
     """
     p = Path(os.fspath(path))
     label = str(p)
     try:
-        text = p.read_text(encoding="utf-8-sig")
+        text = read_input(p, SCENARIO_CAP, what="scenario file", label=label,
+                          note="64 bytes a problem, one problem for every cell of the "
+                          "largest map jaxga plans on").decode("utf-8-sig")
     except FileNotFoundError:
         raise MapFormatError(f"{label}: scenario file not found") from None
     except IsADirectoryError:

@@ -1,0 +1,1031 @@
+"""A hostile-input campaign against the ``jaxga`` command line (issue 50, part 5).
+
+About a hundred inputs and faults a careless user or script produces, beyond the cases of
+``tests/test_faults.py``: broken or odd map files (empty, garbage, huge headers, ragged
+rows, lying PGM/PNG headers, truncated images, unusual file names, a folder, /dev/zero, a
+FIFO, symlink loops), ROS YAML files with NaN, negative or absurd values and images that
+are missing, oversized or garbage, bad endpoints, bad options and preset files, outputs
+that would destroy an input or cannot be written, scenarios of another map, replan inputs
+that do not fit the map, unusable compilation caches and environment variables, and
+SIGINT / SIGTERM at several moments (during import, compilation and evolution).
+
+Each case runs ``python -m jaxga.cli ...`` in a fresh process (8 GiB address-space limit,
+no core dumps), in a temporary folder whose files are compared before and after. Every
+case declares what it expects; the outcome is classed automatically:
+
+* ``refused``: exit 2 (4 for a lost process) and exactly one line from jaxga on stderr,
+  ``jaxga: error: ...`` or ``jaxga: bad start or goal: ...`` (``jaxga: warning:`` lines
+  and progress lines aside);
+* ``no path``: exit 3 and one ``jaxga: no path: ...`` line;
+* ``handled``: exit 0, nothing on stderr but jaxga's one-line warnings and progress, and
+  the case's own check of the result passed (an output written and readable, a warning
+  said, ...);
+* ``interrupted``: exit 130 / 143 after the signal the case sent, within 10 s, with
+  ``jaxga: interrupted`` / ``jaxga: terminated`` last;
+
+and the defects: ``traceback`` (a Python traceback on stderr), ``crash`` (killed by
+SIGSEGV, SIGABRT, ... or a fatal Python error), ``signal exit`` (ended by another signal
+instead of exiting 130 / 143), ``hang`` (over the case's timeout), ``silent`` (exit 0 where
+a refusal, or a warning, was expected), ``wrongly refused`` (refused where the input
+should have worked), ``multi-line error`` (the right exit with more than jaxga's one line,
+e.g. a JAX warning), ``damaged file`` (an input or a previous output changed, a file left
+behind, an output written despite a refusal, a temporary file left in a cache),
+``slow`` (a refusal that should come at once took longer than the case allows),
+``slow interrupt``, ``wrong result`` (exit 0 but the case's check failed) and ``other
+exit``.
+
+All cases share one compilation cache in the temporary folder (compiled once by the first
+case, ``baseline``), except the cache cases and the interrupts during compilation, which
+have their own. Maps are small: the built-in ``classic_ga_gapp3_20x20`` and copies of it
+in every format (``--corner-rule free``, so that they reuse its programs), files of at
+most 32 x 32 cells, and a copy of ``benchmarks/maps/tb3_world`` for the ROS options.
+Runs use ``--preset sga --seeds 2 --generations 5``.
+
+Prints the table (case, group, expected, class, exit, seconds, first stderr line,
+command with ``$T`` for the temporary folder) and the counts per class, and records them
+in RESULTS.md.
+
+    python benchmarks/fault_campaign.py [--quick] [--only NAME,...] [--no-write] [--keep]
+"""
+
+from __future__ import annotations
+
+import argparse
+import dataclasses
+import hashlib
+import json
+import os
+import resource
+import shlex
+import shutil
+import signal
+import stat
+import struct
+import subprocess
+import sys
+import tempfile
+import threading
+import time
+import zlib
+from collections import Counter
+from collections.abc import Callable
+from pathlib import Path
+
+from _results import markdown_table, record
+
+HERE = Path(__file__).resolve().parent
+ROOT = HERE.parent
+TB3 = HERE / "maps" / "tb3_world"
+CLASSIC = "classic_ga_gapp3_20x20"
+BASE = ["--preset", "sga", "--seeds", "2", "--generations", "5"]
+QUIET = [*BASE, "--quiet"]
+FREE = ["--corner-rule", "free"]  # a file copy of the classic map shares its programs
+MEMORY_LIMIT = 8 << 30  # bytes of address space per case (JAX runs well within it)
+INTERRUPT_S = 10.0  # a signal must end the process within this many seconds
+
+OK_CLASSES = ("refused", "no path", "handled", "interrupted")
+DEFECTS = ("traceback", "crash", "signal exit", "hang", "silent", "wrongly refused",
+           "multi-line error", "damaged file", "slow", "slow interrupt", "wrong result",
+           "other exit")
+
+Check = Callable[["Outcome"], "str | None"]
+
+
+@dataclasses.dataclass
+class Case:
+    """One hostile input: ``jaxga <argv>`` and what a correct program does with it."""
+
+    name: str
+    group: str
+    argv: list[str]
+    expect: tuple[str, ...] = ("refused",)
+    env: dict[str, str | None] = dataclasses.field(default_factory=dict)
+    outputs: tuple[Path, ...] = ()  # files (or folders) the case may create or replace
+    check: Check | None = None  # for an exit 0 or an interrupt: None = fine, else why not
+    check_fails_as: str = "wrong result"
+    signal: tuple[int, str | None, float, int] | None = None  # signum, stderr trigger
+    # (None: time from start), delay after it, how many signals (0.05 s apart)
+    timeout: float = 60.0
+    max_s: float | None = None  # a refusal later than this is 'slow'
+    stdout: str = "pipe"  # "pipe", "closed" (a pipe whose reader is gone), "full" (/dev/full)
+    caches: tuple[Path, ...] = ()  # this case's own caches, checked for temporaries after
+    teardown: Callable[[], None] | None = None
+    quick: bool = False
+    note: str = ""
+
+
+@dataclasses.dataclass
+class Outcome:
+    rc: int | None
+    seconds: float
+    stdout: str
+    stderr: str
+    signal_to_exit: float | None = None
+    signalled: bool = False
+    cls: str = ""
+    why: str = ""
+
+    @property
+    def err_lines(self) -> list[str]:
+        return [ln for ln in self.stderr.splitlines() if ln.strip()]
+
+
+# --- files --------------------------------------------------------------------------
+
+
+def png(width: int, height: int, gray: bytes, *, header: tuple[int, int] | None = None,
+        truncate: int | None = None) -> bytes:
+    """An 8-bit grayscale PNG of ``gray`` (rows top first); ``header`` = the size the IHDR
+    claims instead, ``truncate`` = keep only this many bytes."""
+    def chunk(kind: bytes, data: bytes) -> bytes:
+        return (struct.pack(">I", len(data)) + kind + data
+                + struct.pack(">I", zlib.crc32(kind + data) & 0xFFFFFFFF))
+
+    w, h = header or (width, height)
+    raw = b"".join(b"\0" + gray[y * width:(y + 1) * width] for y in range(height))
+    out = (b"\x89PNG\r\n\x1a\n" + chunk(b"IHDR", struct.pack(">IIBBBBB", w, h, 8, 0, 0, 0, 0))
+           + chunk(b"IDAT", zlib.compress(raw)) + chunk(b"IEND", b""))
+    return out[:truncate] if truncate else out
+
+
+def alias_bomb(key: str, levels: int = 9) -> str:
+    """A YAML 'billion laughs': ``key`` holds 9 ** levels strings through aliases (a few
+    hundred bytes of text)."""
+    lines = ['l0: &l0 ["lol","lol","lol","lol","lol","lol","lol","lol","lol"]']
+    for i in range(1, levels):
+        lines.append(f"l{i}: &l{i} [" + ",".join([f"*l{i - 1}"] * 9) + "]")
+    lines.append(f"{key}: *l{levels - 1}")
+    return "\n".join(lines) + "\n"
+
+
+def snapshot(root: Path) -> dict[str, tuple]:
+    """Every file, folder and link under ``root``: type, and content hash / target / mode."""
+    out: dict[str, tuple] = {}
+    for dirpath, dirnames, filenames in os.walk(root):
+        for name in dirnames + filenames:
+            p = os.path.join(dirpath, name)
+            try:
+                st = os.lstat(p)
+            except OSError:
+                continue
+            if stat.S_ISREG(st.st_mode):
+                try:
+                    with open(p, "rb") as f:
+                        digest = hashlib.sha256(f.read()).hexdigest()[:16]
+                except OSError as e:
+                    digest = f"unreadable {e.errno}"
+                out[p] = ("file", st.st_size, digest, stat.S_IMODE(st.st_mode))
+            elif stat.S_ISLNK(st.st_mode):
+                out[p] = ("link", os.readlink(p))
+            elif stat.S_ISDIR(st.st_mode):
+                out[p] = ("dir",)
+            elif stat.S_ISFIFO(st.st_mode):
+                out[p] = ("fifo",)
+            elif stat.S_ISCHR(st.st_mode):
+                out[p] = ("char device", st.st_rdev)
+            else:
+                out[p] = ("other", stat.S_IFMT(st.st_mode))
+    return out
+
+
+def is_temporary(name: str) -> bool:
+    return name.endswith(".tmp") or name.startswith(".jaxga-probe")
+
+
+# --- running and classing -----------------------------------------------------------
+
+
+def _limits() -> None:
+    resource.setrlimit(resource.RLIMIT_AS, (MEMORY_LIMIT, MEMORY_LIMIT))
+    resource.setrlimit(resource.RLIMIT_CORE, (0, 0))
+
+
+def execute(case: Case, env: dict[str, str], cwd: Path) -> Outcome:
+    """Run the case in a fresh process; send its signals; collect its output."""
+    run_env = dict(env)
+    for k, v in case.env.items():
+        if v is None:
+            run_env.pop(k, None)
+        else:
+            run_env[k] = v
+    stdout_arg: int | object = subprocess.PIPE
+    to_close = []
+    if case.stdout == "closed":
+        r, w = os.pipe()
+        os.close(r)
+        stdout_arg = w
+        to_close.append(w)
+    elif case.stdout == "full":
+        fh = open("/dev/full", "wb")  # noqa: SIM115 - closed below
+        stdout_arg = fh
+        to_close.append(fh)
+    t0 = time.monotonic()
+    proc = subprocess.Popen([sys.executable, "-m", "jaxga.cli", *case.argv], cwd=cwd,
+                            env=run_env, stdin=subprocess.DEVNULL, stdout=stdout_arg,
+                            stderr=subprocess.PIPE, preexec_fn=_limits)
+    for c in to_close:
+        if isinstance(c, int):
+            os.close(c)
+        else:
+            c.close()
+    err_lines: list[str] = []
+    out_chunks: list[bytes] = []
+
+    def read_err() -> None:
+        for raw in iter(proc.stderr.readline, b""):
+            err_lines.append(raw.decode("utf-8", "replace"))
+
+    def read_out() -> None:
+        out_chunks.append(proc.stdout.read())
+
+    readers = [threading.Thread(target=read_err, daemon=True)]
+    if proc.stdout is not None:
+        readers.append(threading.Thread(target=read_out, daemon=True))
+    for t in readers:
+        t.start()
+    deadline = t0 + case.timeout
+    sent_at = None
+    if case.signal is not None:
+        signum, trigger, delay, times = case.signal
+        seen = trigger is None
+        while proc.poll() is None and time.monotonic() < deadline:
+            if not seen:
+                seen = any(trigger in ln for ln in list(err_lines))
+                if seen:
+                    time.sleep(delay)
+            elif time.monotonic() - t0 >= (delay if trigger is None else 0):
+                break
+            time.sleep(0.02)
+        if proc.poll() is None and seen and time.monotonic() < deadline:
+            sent_at = time.monotonic()
+            for i in range(times):
+                if i:
+                    time.sleep(0.05)
+                proc.send_signal(signum)
+    try:
+        proc.wait(timeout=max(deadline - time.monotonic(), 0.1))
+        rc: int | None = proc.returncode
+    except subprocess.TimeoutExpired:
+        proc.kill()
+        proc.wait()
+        rc = None
+    end = time.monotonic()
+    for t in readers:
+        t.join(timeout=5)
+    return Outcome(rc=rc, seconds=end - t0,
+                   stdout=b"".join(out_chunks).decode("utf-8", "replace"),
+                   stderr="".join(err_lines),
+                   signal_to_exit=None if sent_at is None else end - sent_at,
+                   signalled=sent_at is not None)
+
+
+def _jaxga_line(line: str) -> bool:
+    return line.startswith("progress:") or line.startswith("jaxga: warning:")
+
+
+def classify(case: Case, out: Outcome, damage: list[str]) -> tuple[str, str]:
+    """(class, a few words why) of an outcome."""
+    err = out.err_lines
+    if out.rc is None:
+        return "hang", f"no exit within {case.timeout:.0f} s"
+    if "Fatal Python error" in out.stderr:
+        return "crash", "fatal Python error"
+    if out.rc < 0:
+        try:
+            name = signal.Signals(-out.rc).name
+        except ValueError:
+            name = f"signal {-out.rc}"
+        if -out.rc in (signal.SIGSEGV, signal.SIGABRT, signal.SIGBUS, signal.SIGFPE,
+                       signal.SIGILL, signal.SIGKILL):
+            return "crash", f"killed by {name}"
+        if "Traceback (most recent call last)" in out.stderr:
+            return "traceback", f"traceback, then killed by {name}"
+        return "signal exit", f"ended by {name}, not exit {128 - out.rc}"
+    if "Traceback (most recent call last)" in out.stderr:
+        return "traceback", next((ln for ln in reversed(err) if ln.strip()), "")[:120]
+    if damage:
+        return "damaged file", "; ".join(damage)[:300]
+    others = [ln for ln in err if not _jaxga_line(ln)]
+    if out.rc in (130, 143):
+        if not out.signalled:
+            return "other exit", f"exit {out.rc} without a signal"
+        words = "jaxga: interrupted" if out.rc == 130 else "jaxga: terminated"
+        if not err or err[-1].strip() != words:
+            return "multi-line error", f"last line is not {words!r}"
+        if len(others) > 1:
+            return "multi-line error", f"{len(others)} lines besides warnings"
+        if out.signal_to_exit is not None and out.signal_to_exit > INTERRUPT_S:
+            return "slow interrupt", f"exit {out.signal_to_exit:.1f} s after the signal"
+        problem = case.check(out) if case.check else None
+        if problem:
+            return case.check_fails_as, problem
+        cls = "interrupted"
+    elif out.rc in (2, 4, 3):
+        prefixes = (("jaxga: no path:",) if out.rc == 3
+                    else ("jaxga: error:", "jaxga: bad start or goal:"))
+        if len(others) != 1 or not others[0].startswith(prefixes):
+            return "multi-line error", f"{len(others)} lines besides warnings and progress"
+        cls = "no path" if out.rc == 3 else "refused"
+        if cls == "refused" and case.max_s is not None and out.seconds > case.max_s:
+            return "slow", f"refused after {out.seconds:.1f} s (> {case.max_s:.0f} s)"
+    elif out.rc == 0:
+        if others:
+            return "multi-line error", f"exit 0 with {len(others)} other stderr line(s)"
+        if "handled" not in case.expect:
+            return "silent", "exit 0"
+        problem = case.check(out) if case.check else None
+        if problem:
+            return case.check_fails_as, problem
+        cls = "handled"
+    else:
+        return "other exit", f"exit {out.rc}"
+    if cls in case.expect:
+        return cls, ""
+    if cls == "refused" and "handled" in case.expect:
+        return "wrongly refused", "expected to work"
+    if cls == "interrupted" or case.signal is not None:
+        return "other exit", f"{cls}, expected {' or '.join(case.expect)}"
+    return "wrong result", f"{cls}, expected {' or '.join(case.expect)}"
+
+
+def damage_of(case: Case, before: dict, after: dict, cls_hint: int | None) -> list[str]:
+    """What changed under the files folder that the case had no right to change."""
+    allowed = {str(p) for p in case.outputs}
+    may_write = cls_hint in (0, 130, 143)  # a refusal writes nothing
+
+    def permitted(p: str) -> bool:
+        if is_temporary(os.path.basename(p)):
+            return False
+        return may_write and any(p == a or p.startswith(a + os.sep) for a in allowed)
+
+    out = []
+    for p, v in before.items():
+        if p not in after:
+            out.append(f"removed {p}")
+        elif after[p] != v and not permitted(p):
+            out.append(f"changed {p} ({v[0]} -> {after[p][0]})")
+    for p in after:
+        if p not in before and not permitted(p):
+            out.append(f"left {p}")
+    for cache in case.caches:
+        if cache.is_dir():
+            for dirpath, _, filenames in os.walk(cache):
+                out += [f"left {dirpath}/{n}" for n in filenames if is_temporary(n)]
+    return out
+
+
+# --- checks ---------------------------------------------------------------------------
+
+
+def wrote_json(path: Path, key: str = "runs") -> Check:
+    def check(out: Outcome) -> str | None:
+        try:
+            doc = json.loads(path.read_text())
+        except (OSError, ValueError) as e:
+            return f"{path.name} not written or not JSON ({type(e).__name__})"
+        return None if key in doc else f"{path.name} has no {key!r}"
+    return check
+
+
+def said(text: str) -> Check:
+    def check(out: Outcome) -> str | None:
+        return None if text in out.stdout else f"stdout lacks {text!r}"
+    return check
+
+
+def warned(text: str) -> Check:
+    """Exactly one ``jaxga: warning:`` line, naming ``text``."""
+    def check(out: Outcome) -> str | None:
+        lines = [ln for ln in out.err_lines if ln.startswith("jaxga: warning:")]
+        if len(lines) != 1 or text not in lines[0]:
+            return f"expected one warning naming {text!r}, got {len(lines)}"
+        return None
+    return check
+
+
+def at_most_one_warning(out: Outcome) -> str | None:
+    n = sum(ln.startswith("jaxga: warning:") for ln in out.err_lines)
+    return None if n <= 1 else f"{n} warning lines"
+
+
+def all_of(*checks: Check) -> Check:
+    def check(out: Outcome) -> str | None:
+        return next((p for c in checks if (p := c(out))), None)
+    return check
+
+
+def link_kept(link: Path, target: Path) -> Check:
+    def check(out: Outcome) -> str | None:
+        if not link.is_symlink():
+            return f"{link.name} is no longer a symlink (replaced by a regular file)"
+        return wrote_json(target)(out)
+    return check
+
+
+def still_char_device(path: Path) -> Check:
+    def check(out: Outcome) -> str | None:
+        st = os.lstat(path)
+        return None if stat.S_ISCHR(st.st_mode) else f"{path.name} replaced by a regular file"
+    return check
+
+
+# --- the cases ------------------------------------------------------------------------
+
+
+def build(t: Path) -> list[Case]:
+    """Write the hostile inputs under ``t/files`` and return the cases."""
+    import numpy as np
+
+    from jaxga.maps import load_map, load_map_info, save_map
+
+    f = t / "files"
+    f.mkdir()
+    caches = t / "caches"
+    caches.mkdir()
+    cases: list[Case] = []
+
+    def add(name, group, argv, expect="refused", **kw) -> Case:
+        kw.setdefault("timeout", 120.0 if "handled" in expect or "signal" in kw else 60.0)
+        c = Case(name, group, [str(a) for a in argv],
+                 (expect,) if isinstance(expect, str) else tuple(expect), **kw)
+        cases.append(c)
+        return c
+
+    def run(map_, *extra):
+        return ["run", "--map", map_, *QUIET, *extra]
+
+    def write(name: str, data: str | bytes) -> Path:
+        p = f / name
+        p.parent.mkdir(parents=True, exist_ok=True)
+        if isinstance(data, str):
+            p.write_text(data, encoding="utf-8")
+        else:
+            p.write_bytes(data)
+        return p
+
+    # the classic map, as text, image and PGM; a blocked cell of it
+    grid = load_map(CLASSIC)
+    blocked = grid.blocked_np()
+    h, w = blocked.shape
+    classic = f / "classic.txt"
+    save_map(grid, classic)
+    by, bx = map(int, np.argwhere(blocked)[0])
+    gray_top = bytes((0 if b else 255) for b in blocked[::-1].ravel())
+    classic_png = write("classic.png", png(w, h, gray_top))
+    base_json = f / "base.json"
+    previous = write("previous.json", '{"previous": true}\n')
+
+    # baseline: compiles the shared cache; a file copy of the map must reuse it
+    add("baseline", "control", ["run", "--map", CLASSIC, *QUIET, "--json", base_json],
+        "handled", outputs=(base_json,), check=wrote_json(base_json), timeout=300,
+        quick=True, note="compiles the shared cache")
+    out = f / "copy.json"
+    add("classic-file-copy", "control", run(classic, *FREE, "--json", out), "handled",
+        outputs=(out,), check=wrote_json(out))
+
+    # --- map files -------------------------------------------------------------------
+    add("empty-file", "map", run(write("empty.txt", b"")), quick=True)
+    add("only-whitespace", "map", run(write("blank.txt", "\n  \n\t\n")))
+    add("binary-garbage", "map", run(write("garbage.map", os.urandom(4096))))
+    add("nul-bytes-in-text", "map", run(write("nul.txt", "0 0 0\n0 \0 0\n0 0 0\n")))
+    add("utf16-text-map", "map",
+        run(write("utf16.txt", classic.read_text().encode("utf-16")), *FREE),
+        ("refused", "handled"), check=said("success"))
+    add("crlf-text-map", "map",
+        run(write("crlf.txt", classic.read_text().replace("\n", "\r\n")), *FREE),
+        "handled", check=said("success"), note="a Windows copy of a valid map")
+    add("ragged-rows", "map", run(write("ragged.txt", "0 0 0 0\n0 0\n0 0 0 0 0 0\n")))
+    add("movingai-huge-header", "map", run(write(
+        "huge.map", "type octile\nheight 1000000000\nwidth 1000000000\nmap\n....\n")),
+        max_s=15)
+    add("movingai-negative-height", "map", run(write(
+        "neg.map", "type octile\nheight -4\nwidth 4\nmap\n....\n....\n")))
+    add("movingai-header-lies", "map", run(write(
+        "lies.map", "type octile\nheight 3\nwidth 3\nmap\n.....\n.....\n.....\n")))
+    add("movingai-not-octile", "map", run(write(
+        "hex.map", "type hexagonal\nheight 2\nwidth 2\nmap\n..\n..\n")), ("refused", "handled"))
+    add("ascii-two-starts", "map", run(write("two_s.txt", "S..\n.#.\nS.G\n")))
+    add("ascii-emoji-cells", "map", run(write("emoji.txt", "S..\n.🧱.\n..G\n")))
+    add("one-cell-map", "map", run(write("one.txt", "0\n")), ("refused", "handled"),
+        note="start = goal = the only cell")
+    add("all-blocked", "map", run(write("blocked.txt", ("1 " * 20 + "\n") * 20)))
+    walled = np.zeros((20, 20), int)
+    walled[10, :] = 1
+    add("wall-between-endpoints", "map",
+        run(write("walled.txt", "\n".join(" ".join(map(str, r)) for r in walled) + "\n")),
+        "no path")
+    add("one-row-over-size-limit", "map", run(write("long.txt", "0" * 300_000 + "\n")),
+        max_s=15)
+    add("pgm-header-lies", "map", run(write("lies.pgm", b"P5\n10 10\n255\n" + bytes(400))))
+    add("pgm-huge-header", "map", run(write("huge.pgm", b"P5\n100000 100000\n255\n"
+                                            + bytes(100))), max_s=15)
+    add("pgm-maxval-zero", "map", run(write("max0.pgm", b"P5\n4 4\n0\n" + bytes(16))))
+    add("pgm-negative-width", "map", run(write("negw.pgm", b"P5\n-4 4\n255\n" + bytes(16))))
+    add("pgm-ascii-over-maxval", "map",
+        run(write("p2.pgm", "P2\n3 3\n255\n255 900 255\n255 255 255\n255 255 255\n")))
+    comment_pgm = write("comments.pgm", b"P5\n# made by hand\n%d %d\n# max\n255\n" % (w, h)
+                        + gray_top)
+    add("pgm-header-comments", "map", run(comment_pgm, *FREE), "handled",
+        check=said("success"), note="comments are legal in a PGM header")
+    add("png-truncated", "map", run(write("trunc.png", png(w, h, gray_top, truncate=80))),
+        quick=True)
+    add("png-zero-bytes", "map", run(write("zero.png", b"")))
+    add("png-garbage-after-signature", "map",
+        run(write("junk.png", b"\x89PNG\r\n\x1a\n" + os.urandom(500))))
+    add("png-huge-ihdr", "map", run(write("bomb.png", png(w, h, gray_top,
+                                                          header=(100_000, 100_000)))),
+        max_s=15)
+    add("png-ihdr-lies", "map", run(write("ihdr.png", png(w, h, gray_top, header=(300, 300)))))
+    add("png-threshold-nan", "map", run(classic_png, "--threshold", "nan"))
+    add("png-threshold-above-1", "map", run(classic_png, "--threshold", "7"))
+    add("png-unknown-free", "map", run(classic_png, "--unknown", "free"))
+    add("directory-as-map", "map", run(f))
+    add("dev-zero", "map", run("/dev/zero"), max_s=15, quick=True)
+    fifo = f / "pipe.map"
+    os.mkfifo(fifo)
+    add("fifo-as-map", "map", run(fifo), max_s=15, timeout=30)
+    (f / "loop-a.map").symlink_to(f / "loop-b.map")
+    (f / "loop-b.map").symlink_to(f / "loop-a.map")
+    add("symlink-loop", "map", run(f / "loop-a.map"))
+    (f / "dangling.map").symlink_to(f / "gone.map")
+    add("dangling-symlink", "map", run(f / "dangling.map"))
+    add("unknown-builtin-name", "map", run("classic_ga_gapp3_20x21"))
+    unicode = f / "карта 地图 🗺.txt"
+    shutil.copy(classic, unicode)
+    add("unicode-file-name", "map", run(unicode, *FREE), "handled", check=said("success"))
+    add("unicode-name-ascii-locale", "map", run(unicode, *FREE), ("handled", "refused"),
+        env={"LC_ALL": "C", "LANG": "C", "PYTHONIOENCODING": "ascii"},
+        check=said("success"), note="the name cannot be printed in the locale")
+    newline = f / "two\nlines.txt"
+    shutil.copy(classic, newline)
+    add("newline-in-file-name", "map", run(newline, *FREE), ("handled", "refused"),
+        check=said("success"))
+    dash = f / "-dash.txt"
+    shutil.copy(classic, dash)
+    add("dash-file-name", "map", ["run", "--map=-dash.txt", *QUIET, *FREE], "handled",
+        check=said("success"), note="--map=-dash.txt, relative to the working folder")
+
+    # --- ROS map_server YAML -------------------------------------------------------------
+    room = write("room.pgm", b"P5\n%d %d\n255\n" % (w, h)
+                 + bytes((0 if b else 254) for b in blocked[::-1].ravel()))
+    good = f"image: {room.name}\nresolution: 0.05\norigin: [0.0, 0.0, 0.0]\n"
+
+    def ros(name, text, *extra, **kw):
+        add(name, "ros", run(write(f"{name}.yaml", text), *extra), **kw)
+
+    ros("ros-resolution-nan", good.replace("0.05", ".nan"))
+    ros("ros-origin-inf", good.replace("[0.0, 0.0, 0.0]", "[.inf, 0.0, 0.0]"))
+    ros("ros-resolution-negative", good.replace("0.05", "-0.05"))
+    ros("ros-resolution-zero", good.replace("0.05", "0"))
+    ros("ros-resolution-string", good.replace("0.05", '"fine"'))
+    ros("ros-resolution-tiny", good.replace("0.05", "1e-300"), "--start-world", "1,1",
+        "--goal-world", "0,0", note="a metre is 1e300 cells")
+    ros("ros-origin-huge", good.replace("[0.0, 0.0, 0.0]", "[1e308, 1e308, 0.0]"),
+        "--start-world", "0,0", "--goal-world", "1,1")
+    ros("ros-image-missing", good.replace(room.name, "nowhere.pgm"))
+    ros("ros-image-garbage", good.replace(room.name, write("junk.pgm",
+                                                           os.urandom(900)).name))
+    ros("ros-image-oversized", good.replace(room.name, write(
+        "big.pgm", b"P5\n60000 60000\n255\n" + bytes(64)).name), max_s=15)
+    ros("ros-image-is-the-yaml", good.replace(room.name, "ros-image-is-the-yaml.yaml"))
+    ros("ros-image-is-a-folder", good.replace(room.name, "."))
+    ros("ros-image-dev-zero", good.replace(room.name, "/dev/zero"), max_s=15)
+    ros("ros-image-zero-bytes", good.replace(room.name, write("empty.pgm", b"").name))
+    ros("ros-yaml-syntax-error", "image: [room.pgm\nresolution: 0.05\n")
+    ros("ros-yaml-a-list", "- image\n- resolution\n")
+    ros("ros-thresholds-swapped", good + "occupied_thresh: 0.1\nfree_thresh: 0.9\n")
+    ros("ros-mode-unknown", good + "mode: bogus\n")
+    ros("ros-negate-maybe", good + "negate: maybe\n")
+    ros("ros-python-tag", good + "evil: !!python/object/apply:os.system ['true']\n")
+    ros("ros-alias-bomb-origin", alias_bomb("origin") + good.replace(
+        "origin: [0.0, 0.0, 0.0]\n", ""), max_s=15, timeout=40,
+        note="origin = 9^9 strings by YAML aliases")
+    ros("ros-alias-bomb-image", alias_bomb("image") + good.replace(
+        f"image: {room.name}\n", ""), max_s=15, timeout=40)
+    ros("ros-threshold-option", good, "--threshold", "0.3",
+        note="--threshold has no effect on a ROS map")
+    # a copy of tb3_world (384 x 384, 0.05 m): options that need a resolution
+    tb3 = f / "tb3"
+    shutil.copytree(TB3, tb3)
+    tb3_yaml = tb3 / "map.yaml"
+    info = load_map_info(tb3_yaml)
+    free = np.argwhere(~info.grid.blocked_np())
+    (y0, x0), (y1, x1) = free[len(free) // 3], free[2 * len(free) // 3]
+    ends = ["--start", f"{x0},{y0}", "--goal", f"{x1},{y1}"]
+    add("world-start-off-map", "endpoints", run(tb3_yaml, "--start-world", "1e9,1e9",
+                                                "--goal-world", "0,0"))
+    add("world-start-nan", "endpoints", run(tb3_yaml, "--start-world", "nan,0",
+                                            "--goal-world", "0,0"))
+    add("robot-radius-negative", "options", run(tb3_yaml, *ends, "--robot-radius", "-0.5"))
+    add("robot-radius-huge", "options", run(tb3_yaml, *ends, "--robot-radius", "1e6"))
+    add("path-out-wrong-extension", "outputs", run(tb3_yaml, *ends, "--path-out",
+                                                   f / "path.txt"))
+    add("path-out-is-the-yaml", "outputs", run(tb3_yaml, *ends, "--path-out", tb3_yaml))
+    add("plot-is-the-map-image", "outputs", run(tb3_yaml, *ends, "--plot", tb3 / "map.pgm"))
+    add("json-and-path-out-same", "outputs", run(tb3_yaml, *ends, "--json", f / "same.yaml",
+                                                 "--path-out", f / "same.yaml"))
+
+    # --- endpoints on the classic map ---------------------------------------------------
+    def ends_case(name, *extra, expect="refused", **kw):
+        add(name, "endpoints", ["run", "--map", CLASSIC, *QUIET, *extra], expect, **kw)
+
+    ends_case("start-outside", "--start", "25,3")
+    ends_case("start-negative", "--start", "-1,0")
+    ends_case("goal-blocked", "--goal", f"{bx},{by}")
+    ends_case("start-nan", "--start", "nan,nan", quick=True)
+    ends_case("start-inf", "--start", "inf,0")
+    ends_case("start-huge", "--start", "1e30,1")
+    ends_case("start-letters", "--start", "a,b")
+    ends_case("start-three-numbers", "--start", "1,2,3")
+    ends_case("start-empty", "--start", "")
+    ends_case("start-equals-goal", "--start", "19,19", expect=("refused", "handled"),
+              check=said("success"))
+    ends_case("start-fraction", "--start", "0.5,0.5", expect=("refused", "handled"),
+              check=said("success"))
+    ends_case("start-arabic-digits", "--start", "٠,٠", expect=("refused", "handled"),
+              check=said("success"), note="int() reads Unicode digits")
+    ends_case("world-on-map-without-resolution", "--start-world", "1,1", "--goal-world",
+              "2,2")
+
+    # --- options ------------------------------------------------------------------------
+    def opt(name, *extra, expect="refused", map_=CLASSIC, **kw):
+        add(name, "options", ["run", "--map", map_, *QUIET, *extra], expect, **kw)
+
+    opt("seeds-negative", "--seeds", "-3")
+    opt("seeds-float", "--seeds", "2.5")
+    opt("seeds-absurd", "--seeds", "1000000000000", note="would need terabytes")
+    opt("generations-negative", "--generations", "-5")
+    opt("coarsen-zero", "--coarsen", "0")
+    opt("coarsen-negative", "--coarsen", "-2")
+    opt("coarsen-absurd", "--coarsen", "1000000")
+    opt("coarsen-fraction", "--coarsen", "2.5")
+    opt("coarsen-merges-endpoints", "--coarsen", "20", quick=True)
+    opt("inflate-negative", "--inflate", "-1")
+    opt("inflate-huge", "--inflate", "1e9")
+    opt("inflate-nan", "--inflate", "nan")
+    opt("robot-radius-no-resolution", "--robot-radius", "0.2")
+    opt("unknown-preset", "--preset", "sgaa")
+    opt("corner-rule-unknown", "--corner-rule", "diagonal")
+    opt("variant-unknown", "--variant", "50x50x50")
+    opt("set-no-equals", "--set", "garbage")
+    opt("set-unknown-key", "--set", "nosuch.key=1")
+    opt("set-nan-probability", "--set", "crossover.probability=nan")
+    opt("set-probability-two", "--set", "crossover.probability=2")
+    opt("set-unknown-method", "--set", "mutation.method=teleport")
+    opt("set-population-zero", "--set", "population.size=0")
+    opt("set-population-absurd", "--set", "population.size=1e12")
+    opt("set-wrong-type", "--set", "population.size=[1,2]")
+    opt("population-capacity-zero", "--population-capacity", "0")
+    opt("devices-zero", "--devices", "0")
+    opt("process-id-out-of-range", "--coordinator", "127.0.0.1:1", "--num-processes", "2",
+        "--process-id", "5")
+    opt("process-timeout-nan", "--coordinator", "127.0.0.1:1", "--num-processes", "2",
+        "--process-id", "1", "--process-timeout", "nan", timeout=40)
+    opt("threshold-on-text-map", "--threshold", "0.5")
+
+    def preset_file(name, text, **kw):
+        p = write(f"{name}.toml", text)
+        add(name, "presets", run(CLASSIC, "--preset", p), **kw)
+
+    preset_file("preset-wrong-type", 'base = "sga"\ngenerations = "many"\n')
+    preset_file("preset-unknown-key", 'base = "sga"\n[population]\nsizee = 60\n')
+    preset_file("preset-syntax-error", 'base = "sga\n[population\n')
+    preset_file("preset-missing-base", 'base = "nosuch"\n')
+    preset_file("preset-huge-int", 'base = "sga"\ngenerations = 99999999999999999999999\n')
+    preset_file("preset-binary", os.urandom(300).decode("latin-1"))
+    chain = f / "chain"
+    chain.mkdir()
+    for i in range(1500):
+        (chain / f"p{i}.toml").write_text(f'base = "p{i + 1}.toml"\n' if i < 1499
+                                          else 'base = "sga"\n')
+    add("preset-base-chain-1500", "presets", run(CLASSIC, "--preset", chain / "p0.toml"),
+        ("refused", "handled"), check=said("success"), note="1500 files, each the base of the last")
+    add("preset-is-a-folder", "presets", run(CLASSIC, "--preset", chain))
+
+    # --- outputs ------------------------------------------------------------------------
+    def out_case(name, *extra, expect="refused", map_=CLASSIC, **kw):
+        add(name, "outputs", ["run", "--map", map_, *QUIET, *extra], expect, **kw)
+
+    map_copy = write("victim.txt", classic.read_text())
+    out_case("json-is-the-map", "--json", map_copy, *FREE, map_=map_copy, quick=True)
+    (f / "victim-link.json").symlink_to(map_copy)
+    out_case("json-symlink-to-map", "--json", f / "victim-link.json", *FREE, map_=map_copy)
+    out_case("json-equals-plot", "--json", f / "both.png", "--plot", f / "both.png")
+    out_case("json-in-missing-folder", "--json", f / "missing" / "x.json",
+             expect=("refused", "handled"), outputs=(f / "missing",),
+             check=wrote_json(f / "missing" / "x.json"))
+    (f / "outdir").mkdir()
+    out_case("json-is-a-folder", "--json", f / "outdir")
+    out_case("json-empty-name", "--json", "")
+    out_case("plot-into-proc", "--plot", "/proc/x.png", "--json", previous)
+    out_case("json-proc-file", "--json", "/proc/version")
+    ro = write("readonly.json", '{"keep": true}\n')
+    ro.chmod(0o444)
+    immutable = subprocess.run(["chattr", "+i", str(ro)], capture_output=True).returncode == 0
+    out_case("json-read-only-file", "--json", ro,
+             teardown=(lambda: subprocess.run(["chattr", "-i", str(ro)])) if immutable
+             else None, note="mode 444" + (" and chattr +i" if immutable else ""))
+    out_case("path-out-without-resolution", "--path-out", f / "p.csv")
+    target = write("target.json", "{}\n")
+    (f / "link.json").symlink_to(target)
+    out_case("json-through-symlink", "--json", f / "link.json", expect="handled",
+             outputs=(target, f / "link.json"), check_fails_as="damaged file",
+             check=link_kept(f / "link.json", target),
+             note="the link is expected to stay a link")
+    nul = f / "null-device"
+    try:
+        os.mknod(nul, stat.S_IFCHR | 0o666, os.makedev(1, 3))
+    except OSError:
+        nul = None
+    if nul is not None:
+        out_case("json-to-a-null-device", "--json", nul, expect=("handled", "refused"),
+                 check=still_char_device(nul), check_fails_as="damaged file",
+                 outputs=(nul,), note="a copy of /dev/null; it must stay a device")
+    out_case("plot-no-extension", "--plot", f / "plotfile", expect=("handled", "refused"),
+             outputs=(f / "plotfile", f / "plotfile.png"), check=said("success"))
+
+    # --- scenarios ----------------------------------------------------------------------
+    scen_map = f / "classic.scen"
+    scen_map.write_text("version 1\n0\tclassic.txt\t20\t20\t0\t19\t19\t0\t30.97056274\n")
+    other = write("other.scen", "version 1\n0\tother-20x20.map\t20\t20\t0\t19\t19\t0\t30.97\n")
+
+    def scen(name, *extra, expect="refused", **kw):
+        add(name, "scenarios", run(classic, *FREE, *extra), expect, **kw)
+
+    scen("scen-of-another-map", "--scen", other, "--scenario", "0", quick=True)
+    scen("scenario-out-of-range", "--scen", scen_map, "--scenario", "99999")
+    scen("scenario-negative", "--scen", scen_map, "--scenario", "-1")
+    scen("scen-garbage", "--scen", write("garbage.scen", os.urandom(700)), "--scenario", "0")
+    scen("scen-nan-optimum", "--scen", write(
+        "nan.scen", "version 1\n0\tclassic.txt\t20\t20\t0\t19\t19\t0\tnan\n"), "--scenario", "0")
+    scen("scen-without-scenario", "--scen", scen_map, note="--scen alone has no effect")
+    scen("scenario-on-map-without-scen", "--scenario", "0")
+    scen("json-is-the-scen", "--scen", scen_map, "--scenario", "0", "--json", scen_map)
+    bom = write("bom.scen", "\ufeffversion 1\r\n0\tclassic.txt\t20\t20\t0\t19\t19\t0\t"
+                "30.97056274\r\n")
+    scen("scen-bom-crlf", "--scen", bom, "--scenario", "0", expect="handled",
+         check=said("success"), note="a Windows-edited scenario file")
+
+    # --- replan -------------------------------------------------------------------------
+    def replan(name, path_json, *extra, expect="refused", **kw):
+        add(name, "replan", ["replan", "--map", CLASSIC, "--path-json", path_json,
+                             "--preset", "sga", "--seeds", "2", "--generations", "5",
+                             *extra], expect, **kw)
+
+    obstacle = ["--obstacles", "0,5", "--position", "0,0"]
+    replan("path-json-not-json", write("notjson.json", "this is not JSON"), *obstacle,
+           quick=True)
+    replan("path-json-strings", write("strings.json", '[["a", "b"], ["c", "d"]]'), *obstacle)
+    replan("path-json-empty-list", write("emptylist.json", "[]"), *obstacle)
+    replan("path-json-deep-nesting", write("deep.json", "[" * 100_000 + "]" * 100_000),
+           *obstacle)
+    replan("path-json-overflow", write("overflow.json", "[[1e400, 0], [1, 1]]"), *obstacle)
+    replan("path-json-nan", write("nan.json", "[[NaN, 0], [1, 1]]"), *obstacle)
+    through = [[x, 0] for x in range(20)] + [[19, y] for y in range(1, 20)]
+    walls = [p for p in through if blocked[p[1], p[0]]]
+    replan("path-through-walls", write("walls.json", json.dumps(through)), *obstacle,
+           note=f"{len(walls)} of its cells are blocked")
+    replan("path-json-fifo", fifo, *obstacle, timeout=30, max_s=15)
+    replan("obstacles-off-map", base_json, "--obstacles", "100,100", "--position", "0,0")
+    replan("obstacles-nan", base_json, "--obstacles", "nan,nan", "--position", "0,0")
+    replan("obstacles-empty-item", base_json, "--obstacles", "0,5;;", "--position", "0,0",
+           expect=("refused", "handled"), check=said("replanned"))
+    replan("position-off-path", base_json, "--obstacles", "0,5", "--position", "19,0")
+    replan("run-index-out-of-range", base_json, *obstacle, "--run", "99")
+    replan("window-zero", base_json, *obstacle, "--window", "0")
+    replan("obstacle-on-goal", base_json, "--obstacles", "19,19", "--position", "0,0",
+           expect=("refused", "no path"))
+    replan("replan-json-is-path-json", base_json, *obstacle, "--json", base_json)
+
+    # --- environment --------------------------------------------------------------------
+    def env_case(name, env, *extra, expect="refused", argv=None, **kw):
+        add(name, "environment", argv or ["run", "--map", CLASSIC, *QUIET, *extra], expect,
+            env=env, **kw)
+
+    a_file = write("cache-file", "not a folder\n")
+    # an unusable cache: one warning line, then the run goes on (compiling: stopped there)
+    stop_at_compile = (signal.SIGINT, "progress: compile", 0.2, 1)
+    for name, cache_dir, extra in (
+            ("cache-dir-is-a-file", str(a_file), {}),
+            ("cache-dir-in-proc", "/proc/jaxga-cache", {}),
+            ("cache-under-unwritable-home", None, {"HOME": "/proc/nohome"})):
+        env = {"JAXGA_CACHE_DIR": cache_dir, **extra}
+        shown = cache_dir or "/proc/nohome"
+        env_case(name, env, argv=["run", "--map", CLASSIC, *BASE], expect="interrupted",
+                 signal=stop_at_compile, check=warned(shown), check_fails_as="silent",
+                 quick=name == "cache-dir-is-a-file",
+                 note="one warning expected; stopped once compiling")
+    frozen = caches / "immutable"
+    frozen.mkdir()
+    if subprocess.run(["chattr", "+i", str(frozen)], capture_output=True).returncode == 0:
+        env_case("cache-dir-immutable", {"JAXGA_CACHE_DIR": str(frozen)},
+                 argv=["run", "--map", CLASSIC, *BASE], expect="interrupted",
+                 signal=stop_at_compile, check=warned(str(frozen)), check_fails_as="silent",
+                 teardown=lambda: subprocess.run(["chattr", "-i", str(frozen)]),
+                 note="chattr +i folder; stopped once compiling")
+    # damaged caches: copies of the shared cache made just before the case runs
+    garbage_cache = caches / "programs-garbage"
+    as_file_cache = caches / "programs-a-file"
+    xla_cache = caches / "xla-garbage"
+    env_case("cache-programs-garbage", {"JAXGA_CACHE_DIR": str(garbage_cache)},
+             expect="handled", check=at_most_one_warning, caches=(garbage_cache,),
+             note="every stored program overwritten with garbage")
+    env_case("cache-programs-a-file", {"JAXGA_CACHE_DIR": str(as_file_cache)},
+             expect="handled", check=at_most_one_warning, caches=(as_file_cache,),
+             note="jaxga-programs is a file")
+    env_case("cache-xla-entries-garbage", {"JAXGA_CACHE_DIR": str(xla_cache)},
+             argv=["run", "--map", CLASSIC, *BASE], expect=("interrupted", "handled"),
+             signal=(signal.SIGINT, "progress: compile", 3.0, 1), caches=(xla_cache,),
+             check=warned(str(xla_cache)), check_fails_as="silent",
+             note="stored programs removed, JAX's entries garbage; stopped 3 s into "
+             "compiling")
+    env_case("devices-env-letters", {"JAXGA_DEVICES": "many"})
+    env_case("devices-env-negative", {"JAXGA_DEVICES": "-3"})
+    env_case("threefry-env-garbage", {"JAXGA_THREEFRY": "maybe"})
+    env_case("xla-flags-garbage", {"XLA_FLAGS": "--xla_no_such_flag=1"})
+    env_case("process-timeout-env-text", {"JAXGA_PROCESS_TIMEOUT": "soon",
+                                          "JAXGA_COORDINATOR": "127.0.0.1:1",
+                                          "JAXGA_NUM_PROCESSES": "2",
+                                          "JAXGA_PROCESS_ID": "1"})
+    env_case("stdout-closed-pipe", {}, argv=["maps"], expect=("handled", "refused"),
+             stdout="closed", note="the reader of stdout is gone (| head)")
+    env_case("stdout-full-device", {}, argv=["presets"], stdout="full",
+             note="stdout is /dev/full: the listing is lost")
+
+    # --- signals ------------------------------------------------------------------------
+    def sig(name, argv, signum, trigger, delay=0.0, times=1, cache="own", **kw):
+        env = {}
+        own = ()
+        if cache == "own":
+            own = (caches / name,)
+            env["JAXGA_CACHE_DIR"] = str(own[0])
+        add(name, "signals", argv, "interrupted", env=env, caches=own,
+            signal=(signum, trigger, delay, times), **kw)
+
+    prev_run = ["run", "--map", CLASSIC, *BASE, "--json", previous]
+    sig("sigint-during-compile", prev_run, signal.SIGINT, "progress: compile", quick=True)
+    sig("sigterm-during-compile", prev_run, signal.SIGTERM, "progress: compile")
+    sig("double-sigint-during-compile", prev_run, signal.SIGINT, "progress: compile", times=2)
+    sig("sigint-during-evolve", ["run", "--map", CLASSIC, "--preset", "sga", "--seeds", "2",
+                                 "--generations", "3000000", "--json", previous],
+        signal.SIGINT, "progress: evolve", 0.5, cache="shared")
+    sig("sigint-at-startup", prev_run, signal.SIGINT, None, 0.4,
+        note="0.4 s after start: Python is importing")
+    sig("sigterm-at-startup", prev_run, signal.SIGTERM, None, 0.4)
+    sig("sigint-during-replan-compile",
+        ["replan", "--map", CLASSIC, "--path-json", base_json, *obstacle, "--preset", "sga",
+         "--seeds", "2", "--generations", "5", "--json", previous],
+        signal.SIGINT, None, 7.0, note="7 s after start")
+    sig("sigterm-during-warmup", ["warmup", "--presets", "sga", "--sizes", "20", "--seeds",
+                                  "2"], signal.SIGTERM, None, 7.0, note="7 s after start")
+    checkpoint = f / "doe-checkpoint"
+    sig("sigint-during-doe", ["doe", "--preset", "sga", "--map", CLASSIC, "--design", "L9",
+                              "--seeds", "2", "--generations", "5", "--checkpoint",
+                              checkpoint, "--json", previous],
+        signal.SIGINT, None, 7.0, outputs=(checkpoint,), note="7 s after start")
+    return cases
+
+
+def prepare(case: Case, t: Path) -> None:
+    """Make the damaged copies of the shared cache the cache cases need."""
+    shared = t / "cache"
+    for target in case.caches:
+        if target.exists() or not target.name.startswith(("programs-", "xla-")):
+            continue
+        shutil.copytree(shared, target)
+        programs = target / "jaxga-programs"
+        if target.name == "programs-garbage":
+            for p in programs.glob("*.pkl"):
+                p.write_bytes(os.urandom(2048))
+        elif target.name == "programs-a-file":
+            shutil.rmtree(programs, ignore_errors=True)
+            programs.write_text("not a folder\n")
+        elif target.name == "xla-garbage":
+            shutil.rmtree(programs, ignore_errors=True)
+            for p in target.iterdir():
+                if p.is_file():
+                    p.write_bytes(os.urandom(4096))
+
+
+# --- report ---------------------------------------------------------------------------
+
+
+def shown(text: str, t: Path, width: int) -> str:
+    text = text.replace(str(t), "$T").replace(str(ROOT), ".").replace("\n", "\\n")
+    text = text.replace("|", "\\|").replace("`", "'")
+    return text if len(text) <= width else text[:width - 3] + "..."
+
+
+def command_line(case: Case, t: Path) -> str:
+    words = [f"{k}={shlex.quote(v)}" for k, v in case.env.items() if v is not None]
+    line = " ".join([*words, "jaxga", *(shlex.quote(a) for a in case.argv)])
+    if case.stdout == "closed":
+        line += " | (closed)"
+    elif case.stdout == "full":
+        line += " > /dev/full"
+    if case.signal:
+        signum, trigger, delay, times = case.signal
+        when = (f"at {trigger!r}" + (f" + {delay:g} s" if delay else "")) if trigger \
+            else f"{delay:g} s after start"
+        line += f"  [{'2 x ' if times > 1 else ''}{signal.Signals(signum).name} {when}]"
+    return shown(line, t, 170)
+
+
+def first_line(out: Outcome) -> str:
+    lines = [ln for ln in out.err_lines if not ln.startswith("progress:")]
+    return lines[0] if lines else ""
+
+
+def main() -> None:
+    ap = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
+    ap.add_argument("--quick", action="store_true", help="about 10 cases")
+    ap.add_argument("--only", default="", help="comma-separated case names (baseline added)")
+    ap.add_argument("--no-write", action="store_true", help="print only")
+    ap.add_argument("--keep", action="store_true", help="keep the temporary folder")
+    args = ap.parse_args()
+    t0 = time.monotonic()
+    tmp = Path(tempfile.mkdtemp(prefix="jaxga-faults-"))
+    env = dict(os.environ, PYTHONPATH=str(ROOT), JAXGA_CACHE_DIR=str(tmp / "cache"))
+    for k in ("JAX_COMPILATION_CACHE_DIR", "JAXGA_DEVICES", "JAXGA_THREEFRY", "XLA_FLAGS",
+              "JAXGA_COORDINATOR", "JAXGA_NUM_PROCESSES", "JAXGA_PROCESS_ID",
+              "JAXGA_PROCESS_TIMEOUT", "PYTHONFAULTHANDLER"):
+        env.pop(k, None)
+    work = tmp / "files"
+    cases = build(tmp)
+    names = {c.name for c in cases}
+    if args.only:
+        wanted = {"baseline", *args.only.split(",")}
+        unknown = wanted - names
+        if unknown:
+            raise SystemExit(f"unknown cases: {', '.join(sorted(unknown))}")
+        cases = [c for c in cases if c.name in wanted]
+    elif args.quick:
+        cases = [c for c in cases if c.quick]
+    rows, results = [], []
+    try:
+        for i, case in enumerate(cases, 1):
+            prepare(case, tmp)
+            before = snapshot(work)
+            out = execute(case, env, work)
+            after = snapshot(work)
+            damage = damage_of(case, before, after, out.rc)
+            out.cls, out.why = classify(case, out, damage)
+            if case.teardown:
+                case.teardown()
+            results.append((case, out))
+            flag = "DEFECT " if out.cls in DEFECTS else ""
+            print(f"[{i}/{len(cases)}] {case.name}: {flag}{out.cls} (exit {out.rc}, "
+                  f"{out.seconds:.1f} s) {out.why}\n    {first_line(out)[:160]}", flush=True)
+            rows.append([case.name, case.group, " / ".join(case.expect),
+                         f"**{out.cls}**" if out.cls in DEFECTS else out.cls,
+                         "timeout" if out.rc is None else str(out.rc), f"{out.seconds:.1f}",
+                         shown(first_line(out) or "(none)", tmp, 110),
+                         f"`{command_line(case, tmp)}`"])
+    finally:
+        for case in cases:
+            if case.teardown:
+                case.teardown()
+        if args.keep:
+            print(f"kept {tmp}")
+        else:
+            shutil.rmtree(tmp, ignore_errors=True)
+    total = time.monotonic() - t0
+    counts = Counter(out.cls for _, out in results)
+    count_rows = [[cls, counts[cls], "defect" if cls in DEFECTS else "correct"]
+                  for cls in (*OK_CLASSES, *DEFECTS) if counts[cls]]
+    defects = [(c, o) for c, o in results if o.cls in DEFECTS]
+    body = (
+        f"{len(results)} hostile inputs and faults against the `jaxga` command line, each in "
+        f"a fresh process (`python -m jaxga.cli`, shown as `jaxga`; `$T` = the campaign's "
+        f"temporary folder, `.` = the checkout), classed automatically; the campaign took "
+        f"{total:.0f} s. Runs: `--preset sga --seeds 2 --generations 5` on the built-in "
+        f"`{CLASSIC}` or a copy of it in the format under test (`--corner-rule free`), "
+        "maps of at most 32 x 32 cells, and a copy of `benchmarks/maps/tb3_world`; one "
+        "shared compilation cache (compiled by `baseline`) except where a case names its "
+        "own. refused = exit 2 and one `jaxga: error:` / `jaxga: bad start or goal:` line; "
+        "no path = exit 3 and one `jaxga: no path:` line; handled = exit 0, the case's "
+        "check passed (output written, warning said); interrupted = exit 130 / 143 within "
+        f"{INTERRUPT_S:.0f} s of the signal. A defect is any other class (the script's "
+        "docstring defines them); the files under `$T` are compared before and after each "
+        "case (inputs and previous outputs unchanged, nothing left behind).\n\n"
+        "**Counts per class**\n\n"
+        + markdown_table(["class", "cases", "kind"], count_rows)
+        + "\n\n**Cases** (first stderr line: the first that is not a progress line)\n\n"
+        + markdown_table(["case", "group", "expected", "class", "exit", "s",
+                          "first stderr line", "command"], rows)
+    )
+    if defects:
+        body += "\n\n**Defects**\n\n" + "\n".join(
+            f"- `{c.name}`: {o.cls}: {shown(o.why, tmp, 200)}" for c, o in defects)
+    title = "hostile inputs to the command line (benchmarks/fault_campaign.py)"
+    record(title + (" (--quick)" if args.quick else ""), body,
+           write=not args.no_write and not args.only)
+    print(f"\n{len(results)} cases in {total:.0f} s: "
+          + ", ".join(f"{cls} {n}" for cls, n in counts.most_common()))
+    for c, o in defects:
+        print(f"\nDEFECT {c.name} ({o.cls}: {o.why})\n  {command_line(c, tmp)}\n"
+              + "\n".join("  | " + ln for ln in o.stderr.splitlines()[-15:]))
+
+
+if __name__ == "__main__":
+    main()

@@ -1,0 +1,148 @@
+"""Files jaxga writes: atomically, checked before the work, never over an input.
+
+Every result file (run and DOE JSON, plots, path exports, DOE checkpoints) is written to a
+temporary file beside its target, flushed to disk, then renamed over the target
+(:func:`atomic_write`): an interrupt, a full disk or any other failure leaves the previous
+file whole, removes the temporary file, and raises one line that names the path.
+
+:func:`check_outputs` is run before any work (decision 033): each output must be
+writable where it is (its folder must take a new file: probed, not guessed from the mode
+bits, so that a read-only mount, ``/proc`` or an immutable file is refused at once), must
+not be a folder, and must not be the same file as an input or as another output.
+"""
+
+from __future__ import annotations
+
+import contextlib
+import errno
+import os
+import tempfile
+import threading
+from collections.abc import Callable, Iterable, Mapping
+from pathlib import Path
+from typing import IO
+
+from jaxga.core.errors import JaxgaError
+
+__all__ = ["atomic_write", "atomic_write_text", "check_outputs", "remove_temporaries",
+           "same_file"]
+
+_TEMPORARIES: set[str] = set()
+_LOCK = threading.Lock()
+
+
+def _why(err: OSError) -> str:
+    if err.errno == errno.ENOSPC:
+        return "no space left on the device (the previous file, if any, is unchanged)"
+    return err.strerror or str(err)
+
+
+def atomic_write(path: str | os.PathLike, write: Callable[[IO], None], *,
+                 binary: bool = False) -> None:
+    """Write a file through ``write(f)`` on a temporary file beside ``path``, flushed and
+    synced, then renamed over ``path``.
+
+    A failure (an ``OSError`` such as a full disk, an exception from ``write``, an
+    interrupt) removes the temporary file and leaves any previous ``path`` whole; an
+    ``OSError`` becomes a :class:`JaxgaError` naming ``path``. While the file is being
+    written its temporary name is registered, so that a process ended by a signal removes
+    it first (:func:`remove_temporaries`)."""
+    target = Path(path)
+    folder = target.parent if str(target.parent) else Path(".")
+    try:
+        fd, tmp = tempfile.mkstemp(prefix=f".{target.name}.", suffix=".tmp", dir=folder)
+    except OSError as e:
+        raise JaxgaError(f"cannot write {path}: {_why(e)}") from None
+    with _LOCK:
+        _TEMPORARIES.add(tmp)
+    try:
+        with os.fdopen(fd, "wb" if binary else "w", **({} if binary else
+                                                         {"encoding": "utf-8"})) as f:
+            write(f)
+            f.flush()
+            os.fsync(f.fileno())
+        os.replace(tmp, target)
+    except BaseException as e:
+        with contextlib.suppress(OSError):
+            os.unlink(tmp)
+        if isinstance(e, OSError):
+            raise JaxgaError(f"cannot write {path}: {_why(e)}") from None
+        raise
+    finally:
+        with _LOCK:
+            _TEMPORARIES.discard(tmp)
+
+
+def atomic_write_text(path: str | os.PathLike, text: str) -> None:
+    """Write ``text`` (UTF-8) to ``path`` atomically (:func:`atomic_write`)."""
+    atomic_write(path, lambda f: f.write(text))
+
+
+def remove_temporaries() -> None:
+    """Remove the temporary files of writes still in progress: what a process ended by a
+    signal does before it exits, so that it leaves no ``.NAME.*.tmp`` behind."""
+    with _LOCK:
+        names = list(_TEMPORARIES)
+    for name in names:
+        with contextlib.suppress(OSError):
+            os.unlink(name)
+
+
+def same_file(a: str | os.PathLike, b: str | os.PathLike) -> bool:
+    """Whether two paths name one file: the same inode where both exist (hard and symbolic
+    links included), else the same absolute path once symbolic links are resolved."""
+    try:
+        return os.path.samefile(a, b)
+    except OSError:
+        return Path(a).resolve() == Path(b).resolve()
+
+
+def _probe_folder(folder: Path) -> str | None:
+    """Why a new file cannot be made in ``folder``, or None when it can (a real try)."""
+    if not folder.is_dir():
+        return f"folder {str(folder)!r} does not exist"
+    try:
+        fd, tmp = tempfile.mkstemp(prefix=".jaxga-probe.", suffix=".tmp", dir=folder)
+    except OSError as e:
+        return f"folder {str(folder)!r} is not writable ({_why(e)})"
+    os.close(fd)
+    with contextlib.suppress(OSError):
+        os.unlink(tmp)
+    return None
+
+
+def check_outputs(outputs: Mapping[str, str | os.PathLike | None],
+                  inputs: Iterable[tuple[str, str | os.PathLike | None]] = ()) -> None:
+    """Refuse, in one line, outputs that cannot be written or would destroy something.
+
+    Args:
+        outputs: what each output option names (``{"--json": "run.json", ...}``); None or
+            empty entries are skipped.
+        inputs: ``(label, path)`` of every file the command reads (the map, a ROS map's
+            image, a scenario, a path JSON, a preset TOML); None entries are skipped.
+
+    Raises:
+        JaxgaError: an output that is a folder, whose folder is missing or takes no new
+            file, that exists and cannot be replaced, or that is the same file as an input
+            or as another output.
+    """
+    given = [(option, Path(path)) for option, path in outputs.items() if path]
+    sources = [(label, Path(path)) for label, path in inputs if path]
+    for i, (option, path) in enumerate(given):
+        if path.is_dir():
+            raise JaxgaError(f"cannot write {option} {path}: it is a folder")
+        for label, source in sources:
+            if same_file(path, source):
+                raise JaxgaError(f"cannot write {option} {path}: it is the {label} this "
+                                 "command reads")
+        for other, earlier in given[:i]:
+            if same_file(path, earlier):
+                raise JaxgaError(f"cannot write {option} {path}: {other} names the same "
+                                 "file")
+        folder = path.parent if str(path.parent) else Path(".")
+        why = _probe_folder(folder)
+        if why is not None:
+            raise JaxgaError(f"cannot write {option} {path}: {why}")
+        if path.exists() and not os.access(path, os.W_OK):
+            raise JaxgaError(f"cannot write {option} {path}: the existing file cannot be "
+                             "replaced (read-only or immutable)")

@@ -1,0 +1,80 @@
+"""Ctrl-C and ``kill``: the command line stops at once, with 130 or 143, leaving no file half
+written (decision 033).
+
+Python runs a signal handler only between bytecodes of the main thread, so a process busy in
+XLA's compiler or in a long NumPy call would notice Ctrl-C only when that call returns
+(seconds to minutes), and a normal exit would then tear JAX down under threads still
+compiling. :func:`install` therefore also hands each signal to a watcher thread through
+:func:`signal.set_wakeup_fd`; whichever notices first ends the process with
+:func:`os._exit` after removing the temporary files of writes in progress
+(:func:`jaxga.core.files.remove_temporaries`). Every file jaxga writes is renamed into place
+whole (:func:`jaxga.core.files.atomic_write`), so the previous file, a finished DOE
+point or a stored program is either there whole or not there at all, and a DOE resumes
+from its checkpoint.
+
+Only the ``jaxga`` console script installs this; the Python API leaves signals alone.
+"""
+
+from __future__ import annotations
+
+import os
+import signal
+import socket
+import sys
+import threading
+
+from jaxga.core.files import remove_temporaries
+
+__all__ = ["EXIT_CODES", "install"]
+
+EXIT_CODES: dict[int, int] = {signal.SIGINT: 130, signal.SIGTERM: 143}
+"""The exit status for each handled signal: 128 + its number, as a shell reports it."""
+
+_WORDS = {signal.SIGINT: "interrupted", signal.SIGTERM: "terminated"}
+_ONCE = threading.Lock()
+_WAKEUP: list[socket.socket] = []  # the socket pair of install(), kept open with the process
+
+
+def stop(signum: int) -> None:
+    """End the process for signal ``signum``: one line on stderr, the temporary files of
+    writes in progress removed, exit status :data:`EXIT_CODES` (no interpreter teardown:
+    nothing is left to flush but the standard streams)."""
+    if not _ONCE.acquire(blocking=False):  # the other path is already ending the process
+        threading.Event().wait()
+    remove_temporaries()
+    try:
+        sys.stdout.flush()
+    except (OSError, ValueError):  # a closed pipe or stream: nothing left to say there
+        pass
+    try:
+        print(f"jaxga: {_WORDS.get(signum, 'stopped')}", file=sys.stderr, flush=True)
+    except (OSError, ValueError):
+        pass
+    os._exit(EXIT_CODES.get(signum, 128 + signum))
+
+
+def _on_signal(signum: int, frame: object) -> None:
+    stop(signum)
+
+
+def _watch(reader: socket.socket) -> None:
+    while True:
+        try:
+            data = reader.recv(16)
+        except OSError:
+            return
+        for signum in data:
+            if signum in EXIT_CODES:
+                stop(signum)
+
+
+def install() -> None:
+    """Make SIGINT and SIGTERM end the process promptly (:func:`stop`), even while the
+    main thread is inside a long native call. Call once, from the main thread."""
+    reader, writer = socket.socketpair()
+    writer.setblocking(False)
+    signal.set_wakeup_fd(writer.fileno(), warn_on_full_buffer=False)
+    for signum in EXIT_CODES:
+        signal.signal(signum, _on_signal)
+    threading.Thread(target=_watch, args=(reader,), name="jaxga-signals", daemon=True).start()
+    _WAKEUP[:] = [reader, writer]

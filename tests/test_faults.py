@@ -1,0 +1,211 @@
+"""Faults a careless user or script produces: interrupts, outputs that would destroy
+something, writes that fail, caches that cannot be used.
+
+Interrupts run the real console script in a subprocess (a signal handler is a
+process-wide thing); the rest run :func:`jaxga.cli.main` in-process. The map-input cases
+(a scenario of another map, a coarsening that merges the endpoints, options without
+effect, images that disagree with their header, unbounded files) are in
+``test_maps.py`` / ``test_cli.py`` beside the loaders they check.
+"""
+
+from __future__ import annotations
+
+import errno
+import json
+import os
+import signal
+import subprocess
+import sys
+import time
+from pathlib import Path
+
+import pytest
+
+from jaxga import cli
+from jaxga.cli import main
+from jaxga.core import files
+from jaxga.core.errors import JaxgaError
+from jaxga.core.files import atomic_write_text, check_outputs
+
+EXIT_BAD_INPUT = 2
+RUN = ["run", "--preset", "sga", "--map", "classic_ga_gapp3_20x20", "--seeds", "2",
+       "--generations", "3", "--quiet"]
+
+
+def _start(tmp_path: Path, argv: list[str]) -> subprocess.Popen:
+    """The console script on ``argv`` with an empty compilation cache of its own, so that
+    it compiles (the longest phase, spent in XLA's native code)."""
+    env = dict(os.environ, JAXGA_CACHE_DIR=str(tmp_path / "cache"), PYTHONFAULTHANDLER="")
+    return subprocess.Popen([sys.executable, "-m", "jaxga.cli", *argv], cwd=tmp_path, env=env,
+                            stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
+
+
+def _wait_for(proc: subprocess.Popen, words: str, timeout: float = 120.0) -> list[str]:
+    """stderr lines up to and including the first that contains ``words``."""
+    seen: list[str] = []
+    deadline = time.monotonic() + timeout
+    while time.monotonic() < deadline:
+        line = proc.stderr.readline()
+        if not line:
+            break
+        seen.append(line)
+        if words in line:
+            return seen
+    proc.kill()
+    pytest.fail(f"never printed {words!r}: {''.join(seen)}")
+
+
+@pytest.mark.parametrize("signum, code, word", [(signal.SIGINT, 130, "interrupted"),
+                                                 (signal.SIGTERM, 143, "terminated")])
+def test_a_signal_during_compilation_ends_the_run_at_once(tmp_path, signum, code, word):
+    """Ctrl-C or kill while XLA compiles: exit 130 / 143 within seconds, one line, no core
+    dump, the previous results file whole and no temporary file beside it."""
+    previous = tmp_path / "run.json"
+    previous.write_text('{"previous": true}\n')
+    proc = _start(tmp_path, [*RUN[:-1], "--json", str(previous)])
+    _wait_for(proc, "compile")  # the progress line of a compilation over 2 s
+    sent = time.monotonic()
+    proc.send_signal(signum)
+    _, err = proc.communicate(timeout=60)
+    waited = time.monotonic() - sent
+    assert proc.returncode == code, err
+    assert waited < 10, waited
+    assert err.strip().splitlines()[-1] == f"jaxga: {word}"
+    assert "Traceback" not in err and "Fatal Python error" not in err
+    assert json.loads(previous.read_text()) == {"previous": True}
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["cache", "run.json"]
+
+
+def test_outputs_that_would_destroy_an_input_or_each_other_are_refused(tmp_path, capsys,
+                                                                         monkeypatch):
+    """--json naming the map, --json and --plot naming one file, --path-out over the path
+    JSON replan reads, a preset file as --json: refused before any work, inputs intact."""
+    import jaxga.api
+
+    monkeypatch.setattr(jaxga.api, "run", lambda *a, **k: pytest.fail("the run started"))
+    grid = tmp_path / "lab.txt"
+    grid.write_text("S...\n.##.\n...G\n")
+    preset = tmp_path / "mine.toml"
+    preset.write_text('base = "sga"\n')
+    cases = [
+        (["run", "--preset", "sga", "--map", str(grid), "--json", str(grid)], "the map"),
+        (["run", "--preset", "sga", "--map", str(grid), "--json", str(tmp_path / "a.png"),
+          "--plot", str(tmp_path / "a.png")], "--json names the same file"),
+        (["run", "--preset", str(preset), "--map", str(grid), "--json", str(preset)],
+         "the preset file"),
+        (["run", "--preset", "sga", "--map", str(grid), "--json",
+          str(tmp_path / "x" / ".." / "lab.txt")], "the map"),
+    ]
+    for argv, words in cases:
+        rc = main(argv)
+        err = capsys.readouterr().err.strip()
+        assert rc == EXIT_BAD_INPUT and words in err and "\n" not in err, (argv, err)
+    assert grid.read_text() == "S...\n.##.\n...G\n"
+    assert preset.read_text() == 'base = "sga"\n'
+    assert not (tmp_path / "a.png").exists()
+
+
+def test_a_ros_maps_image_and_a_hard_link_count_as_the_input(tmp_path):
+    image = tmp_path / "office.pgm"
+    image.write_bytes(b"P5\n2 2\n255\n" + bytes([254, 0, 254, 254]))
+    yaml_file = tmp_path / "office.yaml"
+    yaml_file.write_text("image: office.pgm\nresolution: 0.05\norigin: [0, 0, 0]\n")
+    os.link(yaml_file, tmp_path / "same.yaml")
+    args = cli.build_parser().parse_args(
+        ["run", "--preset", "sga", "--map", str(yaml_file), "--plot", str(image)])
+    with pytest.raises(JaxgaError, match="the map's image"):
+        cli.check_outputs(args)
+    args = cli.build_parser().parse_args(
+        ["run", "--preset", "sga", "--map", str(yaml_file), "--json",
+         str(tmp_path / "same.yaml")])
+    with pytest.raises(JaxgaError, match="it is the map"):
+        cli.check_outputs(args)
+
+
+def test_an_output_that_cannot_be_written_is_refused_before_the_work(tmp_path):
+    (tmp_path / "folder").mkdir()
+    with pytest.raises(JaxgaError, match="it is a folder"):
+        check_outputs({"--json": tmp_path / "folder"})
+    with pytest.raises(JaxgaError, match="does not exist"):
+        check_outputs({"--plot": tmp_path / "no" / "a.png"})
+    if Path("/proc/self").is_dir():  # a folder that takes no new file, even for root
+        with pytest.raises(JaxgaError, match="not writable"):
+            check_outputs({"--plot": "/proc/jaxga.png"})
+    check_outputs({"--json": tmp_path / "fine.json", "--plot": None})
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["folder"]  # the probe is gone
+
+
+def test_a_full_disk_leaves_the_previous_file_whole_and_names_it(tmp_path, monkeypatch,
+                                                                 capsys):
+    """ENOSPC while the results are written (simulated at the flush to disk): exit 2, one
+    line naming the file, the previous file parses as before, no temporary file left."""
+    out = tmp_path / "run.json"
+    out.write_text('{"previous": true}\n')
+
+    def full(fd: int) -> None:
+        raise OSError(errno.ENOSPC, os.strerror(errno.ENOSPC))
+
+    monkeypatch.setattr(files.os, "fsync", full)
+    rc = main([*RUN, "--json", str(out)])
+    err = capsys.readouterr().err.strip()
+    assert rc == EXIT_BAD_INPUT and "\n" not in err
+    assert str(out) in err and "no space left" in err
+    assert json.loads(out.read_text()) == {"previous": True}
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["run.json"]
+
+
+def test_an_atomic_write_that_fails_midway_keeps_the_old_file(tmp_path):
+    target = tmp_path / "plot.png"
+    target.write_bytes(b"old")
+
+    def broken(f) -> None:
+        f.write(b"half")
+        raise RuntimeError("the figure could not be drawn")
+
+    with pytest.raises(RuntimeError):
+        files.atomic_write(target, broken, binary=True)
+    assert target.read_bytes() == b"old" and [p.name for p in tmp_path.iterdir()] == ["plot.png"]
+    atomic_write_text(target, "new")
+    assert target.read_text() == "new"
+
+
+def test_an_unusable_cache_folder_is_one_warning_line_and_the_run_goes_on(tmp_path, capsys,
+                                                                       monkeypatch):
+    """$JAXGA_CACHE_DIR naming a file: one jaxga line naming it, and the run goes on (here
+    on the test session's own cache, which stays configured)."""
+    from jaxga.api import compilation_cache
+
+    blocker = tmp_path / "not-a-folder"
+    blocker.write_text("")
+    monkeypatch.setenv("JAXGA_CACHE_DIR", str(blocker))
+    monkeypatch.setattr(compilation_cache, "_WARNED", [])
+    rc = main([*RUN, "--json", str(tmp_path / "out.json")])
+    err = capsys.readouterr().err.strip()
+    assert rc == 0 and err.splitlines() == [
+        f"jaxga: warning: the compilation cache {blocker} (JAXGA_CACHE_DIR) cannot be used "
+        f"({os.strerror(errno.EEXIST)}): compiling without it"], err
+    assert json.loads((tmp_path / "out.json").read_text())["runs"]
+
+
+def test_jax_cache_warnings_become_one_jaxga_line(capsys):
+    """JAX warns once per cache entry it cannot read, over several lines: the command line
+    shows one line per process naming the folder."""
+    import warnings
+
+    import jax
+
+    show = cli._one_line_warnings(lambda *a: pytest.fail(f"passed on: {a}"))
+    jax_file = str(Path(jax.__file__).parent / "_src" / "compiler.py")
+    for key in ("a", "b"):
+        show(UserWarning(f"Error reading persistent compilation cache entry for 'jit_{key}': "
+                         "EOFError: Ran out of input\n  warnings.warn("), UserWarning,
+             jax_file, 782)
+    lines = capsys.readouterr().err.strip().splitlines()
+    assert len(lines) == 1 and lines[0].startswith("jaxga: warning: the compilation cache ")
+    assert "(JAXGA_CACHE_DIR) could not be used (EOFError: Ran out of input)" in lines[0]
+    assert lines[0].endswith("compiling without it")
+    with warnings.catch_warnings():
+        other = []
+        cli._one_line_warnings(lambda *a: other.append(a))(
+            UserWarning("something else"), UserWarning, jax_file, 1)
+        assert len(other) == 1
