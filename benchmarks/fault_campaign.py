@@ -28,7 +28,9 @@ SIGSEGV, SIGABRT, ... or a fatal Python error), ``signal exit`` (ended by anothe
 instead of exiting 130 / 143), ``hang`` (over the case's timeout), ``silent`` (exit 0 where
 a refusal, or a warning, was expected), ``wrongly refused`` (refused where the input
 should have worked), ``multi-line error`` (the right exit with more than jaxga's one line,
-e.g. a JAX warning), ``damaged file`` (an input or a previous output changed, a file left
+e.g. a JAX warning), ``foreign warning`` (exit 0 with a JAX, XLA or Python warning on
+stderr instead of jaxga's one line; other lines, such as a scenario's description, are
+allowed), ``damaged file`` (an input or a previous output changed, a file left
 behind, an output written despite a refusal, a temporary file left in a cache),
 ``slow`` (a refusal that should come at once took longer than the case allows),
 ``slow interrupt``, ``wrong result`` (exit 0 but the case's check failed) and ``other
@@ -55,6 +57,7 @@ import dataclasses
 import hashlib
 import json
 import os
+import re
 import resource
 import shlex
 import shutil
@@ -82,11 +85,13 @@ QUIET = [*BASE, "--quiet"]
 FREE = ["--corner-rule", "free"]  # a file copy of the classic map shares its programs
 MEMORY_LIMIT = 8 << 30  # bytes of address space per case (JAX runs well within it)
 INTERRUPT_S = 10.0  # a signal must end the process within this many seconds
+WARNING_LIKE = re.compile(r"warn|error|exception|traceback|^\s|^[WEF]\d{4} ", re.IGNORECASE)
+"""A stderr line of a successful run that is not jaxga's own: a JAX/XLA/Python warning."""
 
 OK_CLASSES = ("refused", "no path", "handled", "interrupted")
 DEFECTS = ("traceback", "crash", "signal exit", "hang", "silent", "wrongly refused",
-           "multi-line error", "damaged file", "slow", "slow interrupt", "wrong result",
-           "other exit")
+           "multi-line error", "foreign warning", "damaged file", "slow", "slow interrupt",
+           "wrong result", "other exit")
 
 Check = Callable[["Outcome"], "str | None"]
 
@@ -329,8 +334,9 @@ def classify(case: Case, out: Outcome, damage: list[str]) -> tuple[str, str]:
         if cls == "refused" and case.max_s is not None and out.seconds > case.max_s:
             return "slow", f"refused after {out.seconds:.1f} s (> {case.max_s:.0f} s)"
     elif out.rc == 0:
-        if others:
-            return "multi-line error", f"exit 0 with {len(others)} other stderr line(s)"
+        noisy = [ln for ln in others if WARNING_LIKE.search(ln)]
+        if noisy:
+            return "foreign warning", f"exit 0 with {len(noisy)} warning-like line(s)"
         if "handled" not in case.expect:
             return "silent", "exit 0"
         problem = case.check(out) if case.check else None
@@ -506,8 +512,6 @@ def build(t: Path) -> list[Case]:
         "hex.map", "type hexagonal\nheight 2\nwidth 2\nmap\n..\n..\n")), ("refused", "handled"))
     add("ascii-two-starts", "map", run(write("two_s.txt", "S..\n.#.\nS.G\n")))
     add("ascii-emoji-cells", "map", run(write("emoji.txt", "S..\n.🧱.\n..G\n")))
-    add("one-cell-map", "map", run(write("one.txt", "0\n")), ("refused", "handled"),
-        note="start = goal = the only cell")
     add("all-blocked", "map", run(write("blocked.txt", ("1 " * 20 + "\n") * 20)))
     walled = np.zeros((20, 20), int)
     walled[10, :] = 1
@@ -598,10 +602,10 @@ def build(t: Path) -> list[Case]:
     ros("ros-negate-maybe", good + "negate: maybe\n")
     ros("ros-python-tag", good + "evil: !!python/object/apply:os.system ['true']\n")
     ros("ros-alias-bomb-origin", alias_bomb("origin") + good.replace(
-        "origin: [0.0, 0.0, 0.0]\n", ""), max_s=15, timeout=40,
+        "origin: [0.0, 0.0, 0.0]\n", ""), max_s=15, timeout=20,
         note="origin = 9^9 strings by YAML aliases")
     ros("ros-alias-bomb-image", alias_bomb("image") + good.replace(
-        f"image: {room.name}\n", ""), max_s=15, timeout=40)
+        f"image: {room.name}\n", ""), max_s=15, timeout=20)
     ros("ros-threshold-option", good, "--threshold", "0.3",
         note="--threshold has no effect on a ROS map")
     # a copy of tb3_world (384 x 384, 0.05 m): options that need a resolution
@@ -759,7 +763,8 @@ def build(t: Path) -> list[Case]:
     scen("scen-nan-optimum", "--scen", write(
         "nan.scen", "version 1\n0\tclassic.txt\t20\t20\t0\t19\t19\t0\tnan\n"), "--scenario", "0")
     scen("scen-without-scenario", "--scen", scen_map, note="--scen alone has no effect")
-    scen("scenario-on-map-without-scen", "--scenario", "0")
+    add("scenario-on-map-without-scen", "scenarios",
+        run(write("noscen.txt", classic.read_text()), *FREE, "--scenario", "0"))
     scen("json-is-the-scen", "--scen", scen_map, "--scenario", "0", "--json", scen_map)
     bom = write("bom.scen", "\ufeffversion 1\r\n0\tclassic.txt\t20\t20\t0\t19\t19\t0\t"
                 "30.97056274\r\n")
@@ -788,8 +793,6 @@ def build(t: Path) -> list[Case]:
     replan("path-json-fifo", fifo, *obstacle, timeout=30, max_s=15)
     replan("obstacles-off-map", base_json, "--obstacles", "100,100", "--position", "0,0")
     replan("obstacles-nan", base_json, "--obstacles", "nan,nan", "--position", "0,0")
-    replan("obstacles-empty-item", base_json, "--obstacles", "0,5;;", "--position", "0,0",
-           expect=("refused", "handled"), check=said("replanned"))
     replan("position-off-path", base_json, "--obstacles", "0,5", "--position", "19,0")
     replan("run-index-out-of-range", base_json, *obstacle, "--run", "99")
     replan("window-zero", base_json, *obstacle, "--window", "0")
@@ -831,14 +834,14 @@ def build(t: Path) -> list[Case]:
              expect="handled", check=at_most_one_warning, caches=(garbage_cache,),
              note="every stored program overwritten with garbage")
     env_case("cache-programs-a-file", {"JAXGA_CACHE_DIR": str(as_file_cache)},
-             expect="handled", check=at_most_one_warning, caches=(as_file_cache,),
-             note="jaxga-programs is a file")
+             argv=["run", "--map", CLASSIC, *BASE], expect="interrupted",
+             signal=(signal.SIGINT, "progress: compile", 0.5, 1), caches=(as_file_cache,),
+             check=at_most_one_warning,
+             note="jaxga-programs is a file; stopped once compiling")
     env_case("cache-xla-entries-garbage", {"JAXGA_CACHE_DIR": str(xla_cache)},
-             argv=["run", "--map", CLASSIC, *BASE], expect=("interrupted", "handled"),
-             signal=(signal.SIGINT, "progress: compile", 3.0, 1), caches=(xla_cache,),
-             check=warned(str(xla_cache)), check_fails_as="silent",
-             note="stored programs removed, JAX's entries garbage; stopped 3 s into "
-             "compiling")
+             expect="handled", caches=(xla_cache,), check=warned(str(xla_cache)),
+             check_fails_as="silent",
+             note="stored programs removed, every JAX entry garbage: one warning expected")
     env_case("devices-env-letters", {"JAXGA_DEVICES": "many"})
     env_case("devices-env-negative", {"JAXGA_DEVICES": "-3"})
     env_case("threefry-env-garbage", {"JAXGA_THREEFRY": "maybe"})
@@ -867,7 +870,7 @@ def build(t: Path) -> list[Case]:
     sig("sigterm-during-compile", prev_run, signal.SIGTERM, "progress: compile")
     sig("double-sigint-during-compile", prev_run, signal.SIGINT, "progress: compile", times=2)
     sig("sigint-during-evolve", ["run", "--map", CLASSIC, "--preset", "sga", "--seeds", "2",
-                                 "--generations", "3000000", "--json", previous],
+                                 "--generations", "1000000", "--json", previous],
         signal.SIGINT, "progress: evolve", 0.5, cache="shared")
     sig("sigint-at-startup", prev_run, signal.SIGINT, None, 0.4,
         note="0.4 s after start: Python is importing")
@@ -879,9 +882,10 @@ def build(t: Path) -> list[Case]:
     sig("sigterm-during-warmup", ["warmup", "--presets", "sga", "--sizes", "20", "--seeds",
                                   "2"], signal.SIGTERM, None, 7.0, note="7 s after start")
     checkpoint = f / "doe-checkpoint"
-    sig("sigint-during-doe", ["doe", "--preset", "sga", "--map", CLASSIC, "--design", "L9",
-                              "--seeds", "2", "--generations", "5", "--checkpoint",
-                              checkpoint, "--json", previous],
+    sig("sigint-during-doe", ["doe", "--preset", "sga", "--map", CLASSIC, "--design", "full",
+                              "--factor", "crossover.probability=0.6,0.7,0.8", "--seeds",
+                              "2", "--generations", "5", "--checkpoint", checkpoint,
+                              "--json", previous],
         signal.SIGINT, None, 7.0, outputs=(checkpoint,), note="7 s after start")
     return cases
 
@@ -1023,8 +1027,12 @@ def main() -> None:
     print(f"\n{len(results)} cases in {total:.0f} s: "
           + ", ".join(f"{cls} {n}" for cls, n in counts.most_common()))
     for c, o in defects:
+        lines = o.stderr.splitlines()
+        if len(lines) > 24:
+            lines = [*lines[:8], f"... ({len(lines) - 20} lines)", *lines[-12:]]
         print(f"\nDEFECT {c.name} ({o.cls}: {o.why})\n  {command_line(c, tmp)}\n"
-              + "\n".join("  | " + ln for ln in o.stderr.splitlines()[-15:]))
+              + "".join(f"  | {ln}\n" for ln in lines)
+              + "".join(f"  > {ln}\n" for ln in o.stdout.splitlines()[:6]))
 
 
 if __name__ == "__main__":
