@@ -21,7 +21,8 @@ case declares what it expects; the outcome is classed automatically:
   the case's own check of the result passed (an output written and readable, a warning
   said, ...);
 * ``interrupted``: exit 130 / 143 after the signal the case sent, within 10 s, with
-  ``jaxga: interrupted`` / ``jaxga: terminated`` last;
+  ``jaxga: interrupted`` / ``jaxga: terminated`` last and no warning or error before it
+  (progress and status lines are allowed);
 
 and the defects: ``traceback`` (a Python traceback on stderr), ``crash`` (killed by
 SIGSEGV, SIGABRT, ... or a fatal Python error), ``signal exit`` (ended by another signal
@@ -307,7 +308,8 @@ def classify(case: Case, out: Outcome, damage: list[str]) -> tuple[str, str]:
             return "traceback", f"traceback, then killed by {name}"
         return "signal exit", f"ended by {name}, not exit {128 - out.rc}"
     if "Traceback (most recent call last)" in out.stderr:
-        return "traceback", next((ln for ln in reversed(err) if ln.strip()), "")[:120]
+        exc = [ln for ln in err if re.match(r"\w+(Error|Exception|Interrupt)\b", ln)]
+        return "traceback", f"{(exc or err)[-1][:120]}; exit {out.rc}"
     if damage:
         return "damaged file", "; ".join(damage)[:300]
     others = [ln for ln in err if not _jaxga_line(ln)]
@@ -317,8 +319,9 @@ def classify(case: Case, out: Outcome, damage: list[str]) -> tuple[str, str]:
         words = "jaxga: interrupted" if out.rc == 130 else "jaxga: terminated"
         if not err or err[-1].strip() != words:
             return "multi-line error", f"last line is not {words!r}"
-        if len(others) > 1:
-            return "multi-line error", f"{len(others)} lines besides warnings"
+        noisy = [ln for ln in others[:-1] if WARNING_LIKE.search(ln)]
+        if noisy:
+            return "multi-line error", f"{len(noisy)} warning-like line(s) before it"
         if out.signal_to_exit is not None and out.signal_to_exit > INTERRUPT_S:
             return "slow interrupt", f"exit {out.signal_to_exit:.1f} s after the signal"
         problem = case.check(out) if case.check else None
@@ -417,6 +420,18 @@ def at_most_one_warning(out: Outcome) -> str | None:
 def all_of(*checks: Check) -> Check:
     def check(out: Outcome) -> str | None:
         return next((p for c in checks if (p := c(out))), None)
+    return check
+
+
+def free_path(path: Path, blocked) -> Check:
+    """``path`` holds a JSON ``"path"`` of cells, all free on ``blocked[y, x]``."""
+    def check(out: Outcome) -> str | None:
+        try:
+            cells = json.loads(path.read_text())["path"]
+        except (OSError, ValueError, KeyError) as e:
+            return f"{path.name} not written or without a path ({type(e).__name__})"
+        bad = [c for c in cells if blocked[c[1], c[0]]]
+        return f"the new path crosses blocked cells {bad[:3]}" if bad else None
     return check
 
 
@@ -582,9 +597,11 @@ def build(t: Path) -> list[Case]:
     ros("ros-resolution-negative", good.replace("0.05", "-0.05"))
     ros("ros-resolution-zero", good.replace("0.05", "0"))
     ros("ros-resolution-string", good.replace("0.05", '"fine"'))
-    ros("ros-resolution-tiny", good.replace("0.05", "1e-300"), "--start-world", "1,1",
+    ros("ros-resolution-exponent", good.replace("0.05", "5e-2"), *FREE, expect="handled",
+        check=said("success"), note="yaml-cpp (map_server) reads 5e-2 as a number")
+    ros("ros-resolution-tiny", good.replace("0.05", "1.0e-300"), "--start-world", "1,1",
         "--goal-world", "0,0", note="a metre is 1e300 cells")
-    ros("ros-origin-huge", good.replace("[0.0, 0.0, 0.0]", "[1e308, 1e308, 0.0]"),
+    ros("ros-origin-huge", good.replace("[0.0, 0.0, 0.0]", "[1.0e+308, 1.0e+308, 0.0]"),
         "--start-world", "0,0", "--goal-world", "1,1")
     ros("ros-image-missing", good.replace(room.name, "nowhere.pgm"))
     ros("ros-image-garbage", good.replace(room.name, write("junk.pgm",
@@ -721,6 +738,8 @@ def build(t: Path) -> list[Case]:
     (f / "outdir").mkdir()
     out_case("json-is-a-folder", "--json", f / "outdir")
     out_case("json-empty-name", "--json", "")
+    out_case("json-dash", "--json", "-", expect=("refused", "handled"), outputs=(f / "-",),
+             note="'-' for stdout, or a file named '-'")
     out_case("plot-into-proc", "--plot", "/proc/x.png", "--json", previous)
     out_case("json-proc-file", "--json", "/proc/version")
     ro = write("readonly.json", '{"keep": true}\n')
@@ -786,10 +805,16 @@ def build(t: Path) -> list[Case]:
            *obstacle)
     replan("path-json-overflow", write("overflow.json", "[[1e400, 0], [1, 1]]"), *obstacle)
     replan("path-json-nan", write("nan.json", "[[NaN, 0], [1, 1]]"), *obstacle)
-    through = [[x, 0] for x in range(20)] + [[19, y] for y in range(1, 20)]
+    row = next(y for y in range(6, h) if blocked[y].any())  # a row with walls across it
+    through = ([[0, y] for y in range(row)] + [[x, row] for x in range(w)]
+               + [[w - 1, y] for y in range(row + 1, h)])
     walls = [p for p in through if blocked[p[1], p[0]]]
+    assert walls, "the path must cross a wall"
+    walls_out = f / "walls-replanned.json"
     replan("path-through-walls", write("walls.json", json.dumps(through)), *obstacle,
-           note=f"{len(walls)} of its cells are blocked")
+           "--json", walls_out, expect=("refused", "handled"), outputs=(walls_out,),
+           check=free_path(walls_out, blocked),
+           note=f"{len(walls)} of its cells are blocked: refused, or repaired into a free path")
     replan("path-json-fifo", fifo, *obstacle, timeout=30, max_s=15)
     replan("obstacles-off-map", base_json, "--obstacles", "100,100", "--position", "0,0")
     replan("obstacles-nan", base_json, "--obstacles", "nan,nan", "--position", "0,0")
@@ -831,17 +856,18 @@ def build(t: Path) -> list[Case]:
     as_file_cache = caches / "programs-a-file"
     xla_cache = caches / "xla-garbage"
     env_case("cache-programs-garbage", {"JAXGA_CACHE_DIR": str(garbage_cache)},
-             expect="handled", check=at_most_one_warning, caches=(garbage_cache,),
-             note="every stored program overwritten with garbage")
+             argv=["run", "--map", CLASSIC, *BASE], expect="interrupted",
+             signal=(signal.SIGINT, "progress: compile", 0.5, 1), caches=(garbage_cache,),
+             check=at_most_one_warning,
+             note="every stored program overwritten with garbage; stopped once compiling")
     env_case("cache-programs-a-file", {"JAXGA_CACHE_DIR": str(as_file_cache)},
              argv=["run", "--map", CLASSIC, *BASE], expect="interrupted",
              signal=(signal.SIGINT, "progress: compile", 0.5, 1), caches=(as_file_cache,),
              check=at_most_one_warning,
              note="jaxga-programs is a file; stopped once compiling")
-    env_case("cache-xla-entries-garbage", {"JAXGA_CACHE_DIR": str(xla_cache)},
-             expect="handled", caches=(xla_cache,), check=warned(str(xla_cache)),
-             check_fails_as="silent",
-             note="stored programs removed, every JAX entry garbage: one warning expected")
+    env_case("cache-jax-entries-garbage", {"JAXGA_CACHE_DIR": str(xla_cache)},
+             expect="handled", caches=(xla_cache,), check=at_most_one_warning,
+             note="JAX's own entries garbage, jaxga's stored programs whole")
     env_case("devices-env-letters", {"JAXGA_DEVICES": "many"})
     env_case("devices-env-negative", {"JAXGA_DEVICES": "-3"})
     env_case("threefry-env-garbage", {"JAXGA_THREEFRY": "maybe"})
@@ -905,7 +931,6 @@ def prepare(case: Case, t: Path) -> None:
             shutil.rmtree(programs, ignore_errors=True)
             programs.write_text("not a folder\n")
         elif target.name == "xla-garbage":
-            shutil.rmtree(programs, ignore_errors=True)
             for p in target.iterdir():
                 if p.is_file():
                     p.write_bytes(os.urandom(4096))
@@ -935,6 +960,13 @@ def command_line(case: Case, t: Path) -> str:
     return shown(line, t, 170)
 
 
+def aligned(table: str, columns: str) -> str:
+    """``table`` (:func:`markdown_table`) with its columns aligned l(eft) or r(ight)."""
+    lines = table.split("\n")
+    lines[1] = "|" + "|".join("---:" if c == "r" else "---" for c in columns) + "|"
+    return "\n".join(lines)
+
+
 def first_line(out: Outcome) -> str:
     lines = [ln for ln in out.err_lines if not ln.startswith("progress:")]
     return lines[0] if lines else ""
@@ -955,7 +987,7 @@ def main() -> None:
               "JAXGA_PROCESS_TIMEOUT", "PYTHONFAULTHANDLER"):
         env.pop(k, None)
     work = tmp / "files"
-    cases = build(tmp)
+    cases = everything = build(tmp)
     names = {c.name for c in cases}
     if args.only:
         wanted = {"baseline", *args.only.split(",")}
@@ -986,7 +1018,7 @@ def main() -> None:
                          shown(first_line(out) or "(none)", tmp, 110),
                          f"`{command_line(case, tmp)}`"])
     finally:
-        for case in cases:
+        for case in everything:  # the files were made for every case, selected or not
             if case.teardown:
                 case.teardown()
         if args.keep:
@@ -1013,10 +1045,10 @@ def main() -> None:
         "docstring defines them); the files under `$T` are compared before and after each "
         "case (inputs and previous outputs unchanged, nothing left behind).\n\n"
         "**Counts per class**\n\n"
-        + markdown_table(["class", "cases", "kind"], count_rows)
+        + aligned(markdown_table(["class", "cases", "kind"], count_rows), "lrl")
         + "\n\n**Cases** (first stderr line: the first that is not a progress line)\n\n"
-        + markdown_table(["case", "group", "expected", "class", "exit", "s",
-                          "first stderr line", "command"], rows)
+        + aligned(markdown_table(["case", "group", "expected", "class", "exit", "s",
+                                  "first stderr line", "command"], rows), "lllllrll")
     )
     if defects:
         body += "\n\n**Defects**\n\n" + "\n".join(

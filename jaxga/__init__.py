@@ -2,6 +2,10 @@
 
 import contextlib
 
+from jaxga import interrupts
+
+interrupts.install_in_console_script()  # first: a Ctrl-C during the imports exits cleanly
+
 from jaxga.api import Result, lowering, run, sweep
 from jaxga.api.compilation_cache import use_compilation_cache
 from jaxga.compare import Comparison, compare

@@ -53,7 +53,7 @@ from jaxga.config import registry
 from jaxga.config.presets import load_preset, parse_set, preset_info, preset_settings
 from jaxga.core.errors import EndpointError, JaxgaError, NoPathError, ParameterError
 from jaxga.core.files import check_outputs as check_output_files
-from jaxga.core.files import same_file
+from jaxga.core.files import remove_temporaries, same_file
 from jaxga.core.grid import CORNER_RULES, as_integer, check_corner_rule
 from jaxga.doe import AGACD_TABLE3, DESIGNS, RESPONSE_ALIASES, RESPONSES, Factor, run_doe
 from jaxga.engine import check_file_keys_read, check_overrides_read
@@ -840,6 +840,8 @@ def _read_path_json(path: str, run_index: int | None) -> list[tuple[int, int]]:
         data = json.loads(raw.decode("utf-8"))
     except ValueError as e:  # UnicodeDecodeError and JSONDecodeError
         raise ParameterError(f"{path}: not valid JSON ({e})") from None
+    except RecursionError:
+        raise ParameterError(f"{path}: not a path JSON file (nested too deeply)") from None
     expected = (f"{path}: expected a list of [x, y] cells, an object with a \"path\" list, "
                 "or the JSON of `jaxga run`")
     if isinstance(data, dict) and "runs" in data:
@@ -1337,7 +1339,10 @@ def console() -> None:
     file jaxga writes is complete by then (written atomically). A run over several
     processes exits normally, through ``jax.distributed``'s shutdown. Ctrl-C and SIGTERM
     end it at once with 130 or 143 (:mod:`jaxga.interrupts`)."""
-    interrupts.install()
+    interrupts.install(remove_temporaries)
+    for stream in (sys.stdout, sys.stderr):  # a map named in Unicode, an ASCII terminal
+        with contextlib.suppress(AttributeError, ValueError):
+            stream.reconfigure(errors="backslashreplace")
     code = main()
     sys.stdout.flush()
     sys.stderr.flush()

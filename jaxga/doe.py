@@ -594,7 +594,7 @@ class _Checkpoint:
         if path.exists():
             try:
                 old = json.loads(path.read_text(encoding="utf-8"))
-            except (OSError, ValueError) as e:
+            except (OSError, ValueError, RecursionError) as e:
                 return f"checkpoint {self.dir}: unreadable manifest: {e}"
             if old != manifest:
                 keys = sorted(k for k in old.keys() | manifest.keys()
@@ -615,7 +615,7 @@ class _Checkpoint:
         or null) per seed; ``ParameterError`` naming the file otherwise."""
         try:
             data = json.loads(path.read_text(encoding="utf-8"))
-        except (OSError, ValueError) as e:
+        except (OSError, ValueError, RecursionError) as e:
             raise ParameterError(f"checkpoint file {path} is unreadable ({e}): delete it "
                                  f"and run again to recompute it") from None
         responses = data.get("responses") if isinstance(data, dict) else None

@@ -7,12 +7,15 @@ XLA's compiler or in a long NumPy call would notice Ctrl-C only when that call r
 compiling. :func:`install` therefore also hands each signal to a watcher thread through
 :func:`signal.set_wakeup_fd`; whichever notices first ends the process with
 :func:`os._exit` after removing the temporary files of writes in progress
-(:func:`jaxga.core.files.remove_temporaries`). Every file jaxga writes is renamed into place
-whole (:func:`jaxga.core.files.atomic_write`), so the previous file, a finished DOE
-point or a stored program is either there whole or not there at all, and a DOE resumes
-from its checkpoint.
+(the ``cleanup`` given to :func:`install`: :func:`jaxga.core.files.remove_temporaries`).
+Every file jaxga writes is renamed into place whole (:func:`jaxga.core.files.atomic_write`),
+so the previous file, a finished DOE point or a stored program is either there whole or
+not there at all, and a DOE resumes from its checkpoint.
 
-Only the ``jaxga`` console script installs this; the Python API leaves signals alone.
+Only the ``jaxga`` console script installs this, as the first thing ``import jaxga`` does
+in that process (:func:`install_in_console_script`: a Ctrl-C during the imports is handled
+too); the Python API leaves signals alone. The module uses the standard library only, so
+that it loads before JAX.
 """
 
 from __future__ import annotations
@@ -22,10 +25,10 @@ import signal
 import socket
 import sys
 import threading
+from collections.abc import Callable
+from pathlib import Path
 
-from jaxga.core.files import remove_temporaries
-
-__all__ = ["EXIT_CODES", "install"]
+__all__ = ["EXIT_CODES", "install", "install_in_console_script", "stop"]
 
 EXIT_CODES: dict[int, int] = {signal.SIGINT: 130, signal.SIGTERM: 143}
 """The exit status for each handled signal: 128 + its number, as a shell reports it."""
@@ -33,6 +36,7 @@ EXIT_CODES: dict[int, int] = {signal.SIGINT: 130, signal.SIGTERM: 143}
 _WORDS = {signal.SIGINT: "interrupted", signal.SIGTERM: "terminated"}
 _ONCE = threading.Lock()
 _WAKEUP: list[socket.socket] = []  # the socket pair of install(), kept open with the process
+_CLEANUP: list[Callable[[], None]] = []
 
 
 def stop(signum: int) -> None:
@@ -41,7 +45,11 @@ def stop(signum: int) -> None:
     nothing is left to flush but the standard streams)."""
     if not _ONCE.acquire(blocking=False):  # the other path is already ending the process
         threading.Event().wait()
-    remove_temporaries()
+    for cleanup in _CLEANUP:
+        try:
+            cleanup()
+        except Exception:  # noqa: BLE001, S110 - exiting anyway: nothing to report it to
+            pass
     try:
         sys.stdout.flush()
     except (OSError, ValueError):  # a closed pipe or stream: nothing left to say there
@@ -68,9 +76,14 @@ def _watch(reader: socket.socket) -> None:
                 stop(signum)
 
 
-def install() -> None:
+def install(cleanup: Callable[[], None] | None = None) -> None:
     """Make SIGINT and SIGTERM end the process promptly (:func:`stop`), even while the
-    main thread is inside a long native call. Call once, from the main thread."""
+    main thread is inside a long native call; ``cleanup`` (if given) runs first on such an
+    exit. Installs once (a later call only sets ``cleanup``); from the main thread only."""
+    if cleanup is not None:
+        _CLEANUP[:] = [cleanup]
+    if _WAKEUP or threading.current_thread() is not threading.main_thread():
+        return
     reader, writer = socket.socketpair()
     writer.setblocking(False)
     signal.set_wakeup_fd(writer.fileno(), warn_on_full_buffer=False)
@@ -78,3 +91,21 @@ def install() -> None:
         signal.signal(signum, _on_signal)
     threading.Thread(target=_watch, args=(reader,), name="jaxga-signals", daemon=True).start()
     _WAKEUP[:] = [reader, writer]
+
+
+def install_in_console_script() -> None:
+    """:func:`install` when this process is the ``jaxga`` console script (``sys.argv[0]``
+    names it), so that a signal during the imports already exits cleanly; nothing in any
+    other program."""
+    if _is_console_script(sys.argv, getattr(sys, "orig_argv", [])):
+        install()
+
+
+def _is_console_script(argv: list[str], orig_argv: list[str]) -> bool:
+    """The ``jaxga`` script, or ``python -m jaxga.cli`` (whose ``sys.argv[0]`` is still
+    ``-m`` while the package loads: the interpreter's own arguments say which module)."""
+    if argv and Path(argv[0]).name in ("jaxga", "jaxga.exe"):
+        return True
+    if "-m" in orig_argv[:-1]:
+        return orig_argv[orig_argv.index("-m") + 1] in ("jaxga.cli", "jaxga")
+    return False

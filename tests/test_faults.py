@@ -210,3 +210,95 @@ def test_jax_cache_warnings_become_one_jaxga_line(capsys):
         cli._one_line_warnings(lambda *a: other.append(a))(
             UserWarning("something else"), UserWarning, jax_file, 1)
         assert len(other) == 1
+
+
+@pytest.mark.parametrize("signum, code", [(signal.SIGINT, 130), (signal.SIGTERM, 143)])
+def test_a_signal_while_jaxga_imports_exits_cleanly(tmp_path, signum, code):
+    """The handlers go in before the package's heavy imports (JAX), so a signal a second
+    after start, wherever it lands, ends the process with the shell's code and one line."""
+    proc = _start(tmp_path, RUN)
+    time.sleep(1.0)
+    proc.send_signal(signum)
+    _, err = proc.communicate(timeout=60)
+    assert proc.returncode == code, err
+    assert "Traceback" not in err and err.strip().splitlines()[-1].startswith("jaxga: ")
+
+
+def test_only_the_console_script_handles_signals():
+    from jaxga.interrupts import _is_console_script
+
+    assert _is_console_script(["/venv/bin/jaxga", "run"], ["python", "/venv/bin/jaxga", "run"])
+    assert _is_console_script(["-m"], ["python3", "-m", "jaxga.cli", "run"])
+    assert not _is_console_script(["-m"], ["python3", "-m", "ipykernel_launcher", "-f", "x"])
+    assert not _is_console_script(["script.py"], ["python", "script.py", "-m"])
+    assert not _is_console_script([], [])
+
+
+def test_more_outputs_that_would_go_wrong(tmp_path):
+    """An empty name (``--json "$OUT"`` with OUT unset) and an existing device or FIFO are
+    refused; a symbolic link is written through, and stays a link."""
+    with pytest.raises(JaxgaError, match="--json: the file name is empty"):
+        check_outputs({"--json": ""})
+    fifo = tmp_path / "pipe"
+    os.mkfifo(fifo)
+    with pytest.raises(JaxgaError, match="not a regular file"):
+        check_outputs({"--plot": fifo})
+    target = tmp_path / "target.json"
+    target.write_text("old")
+    link = tmp_path / "link.json"
+    link.symlink_to(target)
+    check_outputs({"--json": link})
+    atomic_write_text(link, "new")
+    assert link.is_symlink() and target.read_text() == "new"
+
+
+def test_a_unicode_map_name_in_an_ascii_locale_is_printed_escaped(tmp_path):
+    grid = tmp_path / "карта 🗺.txt"
+    grid.write_text("S...\n.##.\n...G\n")
+    env = dict(os.environ, PYTHONIOENCODING="ascii", LC_ALL="C", LANG="C")
+    proc = subprocess.run([sys.executable, "-m", "jaxga.cli", "optimum", "--map", str(grid)],
+                          env=env, capture_output=True, text=True, timeout=120,
+                          encoding="ascii")
+    assert proc.returncode == 0, proc.stderr
+    assert "\\u043a" in proc.stdout + proc.stderr and "Traceback" not in proc.stderr
+
+
+def test_hostile_yaml_json_and_preset_chains_are_one_line(tmp_path):
+    """A YAML alias bomb (9 levels of 9) in a ROS map's origin, a path JSON nested 100,000
+    deep, a preset ``base`` chain of 40 files: refused in one line, at once."""
+    from jaxga.cli import _read_path_json
+    from jaxga.config.presets import load_preset
+    from jaxga.maps.ros import read_ros_yaml
+
+    levels = ['a0: &a0 ["x", "x", "x", "x", "x", "x", "x", "x", "x"]']
+    levels += [f"a{i}: &a{i} [{', '.join([f'*a{i - 1}'] * 9)}]" for i in range(1, 9)]
+    bomb = tmp_path / "bomb.yaml"
+    bomb.write_text("\n".join(levels) + "\nimage: m.pgm\nresolution: 0.05\norigin: *a8\n")
+    t0 = time.monotonic()
+    with pytest.raises(JaxgaError, match="origin must be") as e:
+        read_ros_yaml(bomb)
+    assert time.monotonic() - t0 < 5 and len(str(e.value)) < 300
+    deep = tmp_path / "deep.json"
+    deep.write_text("[" * 100_000)
+    with pytest.raises(JaxgaError, match="nested too deeply|not valid JSON"):
+        _read_path_json(str(deep), None)
+    for i in range(40):
+        (tmp_path / f"p{i}.toml").write_text(f'base = "p{i + 1}.toml"\n' if i < 39 else
+                                             'base = "sga"\n')
+    with pytest.raises(JaxgaError, match="longer than 32 files"):
+        load_preset(tmp_path / "p0.toml")
+
+
+def test_ros_numbers_with_exponents_and_a_far_origin(tmp_path):
+    """``resolution: 5e-2`` is a number to ROS (YAML 1.1 reads a string); an origin so far
+    away that the cell overflows puts a world endpoint off the map, in one line."""
+    from jaxga.core.errors import EndpointError
+    from jaxga.maps import load_map_info
+
+    (tmp_path / "m.pgm").write_bytes(b"P5\n4 4\n255\n" + bytes([254] * 16))
+    (tmp_path / "m.yaml").write_text("image: m.pgm\nresolution: 5e-2\norigin: [0, 0, 0]\n")
+    assert load_map_info(tmp_path / "m.yaml").frame.cell_size == pytest.approx(0.05)
+    (tmp_path / "far.yaml").write_text(
+        "image: m.pgm\nresolution: 0.05\norigin: [1.0e+308, 1.0e+308, 0.0]\n")
+    with pytest.raises(EndpointError, match="off the map"):
+        load_map_info(tmp_path / "far.yaml", start_world=(0.0, 0.0), goal_world=(0.1, 0.1))

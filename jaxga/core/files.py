@@ -40,7 +40,8 @@ def _why(err: OSError) -> str:
 def atomic_write(path: str | os.PathLike, write: Callable[[IO], None], *,
                  binary: bool = False) -> None:
     """Write a file through ``write(f)`` on a temporary file beside ``path``, flushed and
-    synced, then renamed over ``path``.
+    synced, then renamed over ``path`` (over the file it names, when ``path`` is a symbolic
+    link: the link stays).
 
     A failure (an ``OSError`` such as a full disk, an exception from ``write``, an
     interrupt) removes the temporary file and leaves any previous ``path`` whole; an
@@ -48,6 +49,8 @@ def atomic_write(path: str | os.PathLike, write: Callable[[IO], None], *,
     written its temporary name is registered, so that a process ended by a signal removes
     it first (:func:`remove_temporaries`)."""
     target = Path(path)
+    if target.is_symlink():  # write the file the link names; the link stays a link
+        target = Path(os.path.realpath(target))
     folder = target.parent if str(target.parent) else Path(".")
     try:
         fd, tmp = tempfile.mkstemp(prefix=f".{target.name}.", suffix=".tmp", dir=folder)
@@ -126,11 +129,17 @@ def check_outputs(outputs: Mapping[str, str | os.PathLike | None],
             file, that exists and cannot be replaced, or that is the same file as an input
             or as another output.
     """
+    for option, path in outputs.items():
+        if path is not None and not str(path).strip():
+            raise JaxgaError(f"cannot write {option}: the file name is empty")
     given = [(option, Path(path)) for option, path in outputs.items() if path]
     sources = [(label, Path(path)) for label, path in inputs if path]
     for i, (option, path) in enumerate(given):
         if path.is_dir():
             raise JaxgaError(f"cannot write {option} {path}: it is a folder")
+        if path.exists() and not path.is_file():
+            raise JaxgaError(f"cannot write {option} {path}: it exists and is not a regular "
+                             "file (a device, a FIFO or a socket)")
         for label, source in sources:
             if same_file(path, source):
                 raise JaxgaError(f"cannot write {option} {path}: it is the {label} this "

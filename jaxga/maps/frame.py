@@ -87,8 +87,10 @@ class MapFrame:
         c, s = math.cos(self.origin[2]), math.sin(self.origin[2])
         dx, dy = point[0] - self.origin[0], point[1] - self.origin[1]
         local = (c * dx + s * dy, -s * dx + c * dy)
-        x, y = (int(math.floor(v / self.cell_size + 1e-9)) for v in local)
         h, w = shape
+        cells = [v / self.cell_size + 1e-9 for v in local]
+        # a point (or origin) so far away that the cell overflows is off the map too
+        x, y = (int(math.floor(v)) if math.isfinite(v) else -1 for v in cells)
         if not (0 <= x < w and 0 <= y < h):
             x0, y0 = self.origin[:2]
             raise EndpointError(

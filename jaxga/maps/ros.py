@@ -35,6 +35,7 @@ from __future__ import annotations
 import dataclasses
 import io
 import math
+import reprlib
 from pathlib import Path
 from typing import Any
 
@@ -96,10 +97,28 @@ class RosMap:
     mode: str = "trinary"
 
 
+_SHORT = reprlib.Repr()
+_SHORT.maxlevel, _SHORT.maxlist, _SHORT.maxtuple, _SHORT.maxdict = 2, 4, 4, 4
+_SHORT.maxstring = _SHORT.maxother = 40
+
+
+def _short(value: Any) -> str:
+    """A bounded repr of a YAML value for a message (YAML aliases can make a small file
+    hold a value with billions of elements)."""
+    return _SHORT.repr(value)
+
+
 def _number(value: Any, key: str, label: str) -> float:
+    """A finite number; YAML 1.1 reads ``5e-2`` (no dot) as a string, ROS's map_server
+    (yaml-cpp) as a number: such strings are read as numbers too."""
+    if isinstance(value, str):
+        try:
+            value = float(value)
+        except ValueError:
+            pass
     if isinstance(value, bool) or not isinstance(value, (int, float)) or not math.isfinite(
             value):
-        raise MapFormatError(f"{label}: {key} must be a finite number, got {value!r}")
+        raise MapFormatError(f"{label}: {key} must be a finite number, got {_short(value)}")
     return float(value)
 
 
@@ -133,17 +152,17 @@ def read_ros_yaml(path: str | Path, label: str | None = None, *,
         if key not in data:
             raise MapFormatError(f"{label}: the map_server key {key!r} is missing")
     if not isinstance(data["image"], str) or not data["image"]:
-        raise MapFormatError(f"{label}: image must be a file name, got {data['image']!r}")
+        raise MapFormatError(f"{label}: image must be a file name, got {_short(data['image'])}")
     resolution = _number(data["resolution"], "resolution", label)
     if resolution <= 0:
         raise MapFormatError(f"{label}: resolution must be > 0 metres per cell, got {resolution}")
     origin = data["origin"]
     if not isinstance(origin, (list, tuple)) or len(origin) != 3:
-        raise MapFormatError(f"{label}: origin must be [x, y, yaw], got {origin!r}")
+        raise MapFormatError(f"{label}: origin must be [x, y, yaw], got {_short(origin)}")
     origin = tuple(_number(v, "origin", label) for v in origin)
     negate = data.get("negate", 0)
     if negate not in (0, 1) or isinstance(negate, float):
-        raise MapFormatError(f"{label}: negate must be 0 or 1, got {negate!r}")
+        raise MapFormatError(f"{label}: negate must be 0 or 1, got {_short(negate)}")
     occ = _number(data.get("occupied_thresh", 0.65), "occupied_thresh", label)
     free = _number(data.get("free_thresh", 0.196), "free_thresh", label)
     if not 0.0 <= free < occ <= 1.0:
@@ -152,7 +171,7 @@ def read_ros_yaml(path: str | Path, label: str | None = None, *,
                              f"occupied_thresh {occ}")
     mode = data.get("mode", "trinary")
     if mode not in MODES:
-        raise MapFormatError(f"{label}: mode must be one of {', '.join(MODES)}, got {mode!r}")
+        raise MapFormatError(f"{label}: mode must be one of {', '.join(MODES)}, got {_short(mode)}")
     image = Path(data["image"])
     if not image.is_absolute():
         image = path.parent / image
