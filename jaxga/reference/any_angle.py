@@ -126,7 +126,8 @@ def _string_pull(
     b: np.ndarray, rule: str, path: np.ndarray, deadline: Deadline | None = None
 ) -> np.ndarray:
     """Greedy shortcutting of a clear polyline: from each kept vertex jump to the last
-    later vertex it sees (SPEC 9 ``shortcut_greedy``). The result is clear and no longer."""
+    later vertex it sees (``shortcut_greedy``, MPMGA §4.7, IMGA §4.5, AGACD §4.8). The
+    result is clear and no longer."""
     out = [0]
     k = path.shape[0]
     while out[-1] != k - 1:
@@ -296,7 +297,7 @@ def any_angle_shortest_path_np(
     """Any-angle optimum on a raw ``bool[H, W]`` array; see :func:`any_angle_shortest_path`.
 
     Args:
-        blocked: ``bool[H, W]``, row 0 at the bottom (SPEC 1).
+        blocked: ``bool[H, W]``, row 0 at the bottom, as in the papers.
         start_xy, goal_xy: ``(x, y)`` cells.
         corner_rule: ``"free"``, ``"no_squeeze"`` or ``"strict"``.
         exact: False skips the exact search and returns the clear, usually near-optimal
@@ -439,17 +440,17 @@ def any_angle_shortest_path(
     """The any-angle optimum of ``grid``: the shortest clear polyline through cell centres.
 
     Vertices are cell centres and every segment must be clear under ``grid.corner_rule``
-    (SPEC 1, :func:`clear_np`). This is the lower bound for GA paths after
-    post-optimisation (SPEC 9, 11). It is at most the 8-connected optimum (a legal move
-    is a clear segment), at least the straight-line distance, and it exists exactly when
-    the 8-connected path does (the cells crossed by a clear segment, in order, form a
+    (:func:`clear_np`). This is the lower bound for GA paths after post-optimisation (the
+    shortcut of MPMGA §4.7, IMGA §4.5, AGACD §4.8). It is at most the 8-connected optimum
+    (a legal move is a clear segment), at least the straight-line distance, and it exists
+    exactly when the 8-connected path does (the cells crossed by a clear segment, in order, form a
     legal 8-connected path: orthogonal steps between free cells, and diagonal steps only
     at vertex crossings, which obey the corner rule). A blocked start/goal or an
     unreachable goal gives ``found=False`` with a reason, as for :func:`shortest_path`.
 
     **Which cells can be vertices.** The tempting vertex set "start, goal and the free
     cells touching an obstacle" (:func:`obstacle_adjacent_cells`; the visibility graph
-    over obstacle corners of SPEC 11) is exact for paths that may bend anywhere, because
+    over obstacle corners) is exact for paths that may bend anywhere, because
     a taut string bends only at obstacle corners. It is *not* exact when the bends must
     be cell centres: obstacle corners are grid vertices, never centres, and the best
     lattice bend can be far from any obstacle. Example (tested): a 22 x 4 map with the
