@@ -6,7 +6,7 @@ from jaxga import interrupts
 
 interrupts.install_in_console_script()  # first: a Ctrl-C during the imports exits cleanly
 
-from jaxga.api import Result, lowering, run, sweep
+from jaxga.api import GA, Result, lowering, run, sweep
 from jaxga.api.compilation_cache import use_compilation_cache
 from jaxga.compare import Comparison, compare
 from jaxga.core.errors import EndpointError, JaxgaError, MapFormatError, NoPathError, ParameterError
@@ -25,6 +25,7 @@ __all__ = [
     "CORNER_RULES",
     "Comparison",
     "EndpointError",
+    "GA",
     "Grid",
     "JaxgaError",
     "MapFormatError",

@@ -1,6 +1,7 @@
 """The Python API: many seeded runs of a preset on a map (:func:`run`), sweeps over
 parameter points (:func:`sweep`), and what they return (:class:`Result`).
 
+- :mod:`~jaxga.api.ga`: :class:`GA`, the pure core of one preset on one map;
 - :mod:`~jaxga.api.runs`: :func:`run`, :func:`sweep`, loading a preset and a map;
 - :mod:`~jaxga.api.result`: :class:`Result`, per-seed paths, metrics and gaps;
 - :mod:`~jaxga.api.seeds`: accepted seeds, their keys and sharding;
@@ -14,6 +15,7 @@ parameter points (:func:`sweep`), and what they return (:class:`Result`).
 The tools (command line, DOE, comparisons, re-planning) use what is exported here.
 """
 
+from jaxga.api.ga import GA
 from jaxga.api.memory import (
     check_result_memory,
 )
@@ -53,6 +55,7 @@ from jaxga.api.seeds import (
 )
 
 __all__ = [
+    "GA",
     "GENERATION_CHUNK",
     "RUN_BUCKETS",
     "RUNS_PER_DEVICE",

@@ -12,6 +12,7 @@ from __future__ import annotations
 import contextlib
 import dataclasses
 import math
+import re
 import warnings
 from collections.abc import Callable, Mapping, Sequence
 from typing import TYPE_CHECKING, Any
@@ -262,12 +263,16 @@ def sweep(
         try:
             return _sweep(*args, **options)
         except JaxRuntimeError as err:
-            # a stored program that does not run (jaxga.api.executables: "Function ...
-            # not found"): forget the stored programs this process read (deleted: never
-            # read again) and run again
-            if "NOT_FOUND" not in str(err) or not executables.forget_read():
+            # a stored program that does not run (jaxga.api.executables: "NOT_FOUND:
+            # Function ... not found", or "INTERNAL: Error dispatching computation:
+            # Function ... not found"): forget the stored programs this process read
+            # (deleted: never read again) and run again
+            if not _MISSING_FUNCTION.search(str(err)) or not executables.forget_read():
                 raise
             clear_compiled()
+
+
+_MISSING_FUNCTION = re.compile(r"NOT_FOUND|Function \S+ not found")
 
 
 def _sweep(preset, grid, points, seeds, *, generations, corner_rule, variant, sets,

@@ -1,0 +1,127 @@
+"""The pure core as one object: a preset on a map, for the user's own ``jit``, ``vmap`` and
+``scan`` (decision 034).
+
+:class:`GA` does the host work once (the preset and its overrides, checked; the map loaded
+and its endpoints checked; the exact distance fields of the presets that steer by them;
+the per-map move tables). Everything after the constructor is pure and works under
+``jax.jit``, ``jax.vmap`` (over keys and over parameters) and ``jax.lax.scan``::
+
+    ga = jaxga.GA("iga_zhu", "classic_ga_gapp3_20x20")
+    params = ga.default_params                       # dynamic hyper-parameters (pytree)
+    keys = jax.random.split(jax.random.PRNGKey(0), 100)
+    state = jax.jit(jax.vmap(ga.init, (0, None)))(keys, params)
+    state = jax.vmap(ga.step, (0, 0, None))(keys, state, params)   # one generation
+    out = jax.vmap(ga.finish, (0, None))(state, params)           # paths, lengths, metrics
+
+:meth:`GA.run` is what :func:`jaxga.run` computes for one seed (the same keys: a run of
+``GA.run(jax.random.PRNGKey(seed), params)`` equals seed ``seed`` of ``jaxga.run``),
+written as three pure calls a user can take apart.
+"""
+
+from __future__ import annotations
+
+from typing import Any
+
+import jax
+
+from jaxga.api.runs import load_problem
+from jaxga.config.schema import Config
+from jaxga.core.grid import Grid
+from jaxga.engine import (
+    GAState,
+    build,
+    default_params,
+    evolve,
+    finish,
+    generation,
+    init_state,
+    uses_guide,
+)
+from jaxga.engine.maptables import with_tables
+from jaxga.maps import MapInfo
+from jaxga.operators.guide import with_guide
+
+__all__ = ["GA"]
+
+INIT_STREAM, EVOLVE_STREAM = 0, 1
+"""The key of a run is split by ``fold_in`` into an initialisation stream and an
+evolution stream (generation ``t`` uses ``fold_in(evolve key, t)``), as in
+:func:`jaxga.run`."""
+
+
+class GA:
+    """One preset on one map: host work in the constructor, pure functions after it.
+
+    Args:
+        preset: a preset name (``jaxga presets``), a TOML file, or a
+            :class:`~jaxga.config.schema.Config`.
+        problem: a :class:`~jaxga.core.grid.Grid` (with its start and goal), a loaded
+            :class:`~jaxga.maps.MapInfo`, a map file or a built-in map name.
+        corner_rule: as for :func:`jaxga.run`.
+        variant: a preset variant (e.g. ``"50x50"`` for ``agacd``).
+        sets: ``"key=value"`` overrides, as ``--set`` on the command line.
+        generations: the number of generations of :meth:`evolve` and :meth:`run`.
+        **overrides: configuration keys (``crossover__probability=0.7`` or a nested dict),
+            checked as :func:`jaxga.run` checks them (a key the preset never reads is
+            refused).
+
+    Attributes:
+        config: the checked configuration.
+        grid: the map as the pure functions read it (distance fields and move tables
+            attached).
+        algorithm: the static part of the configuration (:class:`jaxga.engine.Algorithm`).
+        default_params: the dynamic hyper-parameters (a dict of scalar arrays): pass it,
+            or a modified copy, to every pure function; ``jax.vmap`` over any of its
+            entries sweeps it.
+        map_name: the map's name; ``frame``: its world frame (None for a bare grid).
+    """
+
+    def __init__(self, preset: str | Config, problem: Grid | MapInfo | str, *,
+                 corner_rule: str | None = None, variant: str | None = None,
+                 sets: Any = (), generations: int | None = None, **overrides: Any) -> None:
+        config, grid, self.map_name, self.frame = load_problem(
+            preset, problem, corner_rule, variant, sets, overrides, generations)
+        if uses_guide(config):
+            grid = with_guide(grid)
+        self.config = config
+        self.algorithm, _ = build(config, grid)
+        self.grid = with_tables(grid)
+        self.default_params: dict[str, jax.Array] = default_params(
+            config, self.algorithm.islands)
+
+    def init(self, key: jax.Array, params: dict) -> GAState:
+        """The initial population of every island, evaluated (pure; the initialisers of
+        the preset: ``init.method`` and its fallback)."""
+        state, _ = init_state(self.algorithm, jax.random.fold_in(key, INIT_STREAM),
+                              self.grid, params)
+        return state
+
+    def step(self, key: jax.Array, state: GAState, params: dict) -> GAState:
+        """One generation (selection, crossover, mutation, simplification, evaluation,
+        migration; the stagnation rule); pure. ``key``: this generation's key."""
+        return generation(self.algorithm, key, self.grid, state, params)
+
+    def evolve(self, key: jax.Array, state: GAState, params: dict,
+               generations: int | None = None) -> tuple[GAState, dict]:
+        """``generations`` (default: the configuration's) generations as one
+        ``lax.scan``; returns the final state and the history (best-so-far fitness, mean
+        and sd of the population's fitness, per generation). Generation ``t`` uses
+        ``fold_in(fold_in(key, 1), t)``, as :func:`jaxga.run` does."""
+        return evolve(self.algorithm, jax.random.fold_in(key, EVOLVE_STREAM), self.grid,
+                      state, params, generations)
+
+    def finish(self, state: GAState, params: dict, history: dict | None = None) -> dict:
+        """The best path post-optimised (the preset's ``post.method``) and the reported
+        metrics as arrays: ``success``, ``raw_cells`` / ``raw_length`` (the GA's own
+        best), ``cells`` / ``length`` (post-optimised; ``length`` counts nodes),
+        ``path_length``, ``fitness``, ``metrics``, ...; with ``history``, also the
+        convergence generation."""
+        return finish(self.algorithm, self.grid, state, history, params)
+
+    def run(self, key: jax.Array, params: dict, generations: int | None = None) -> dict:
+        """:meth:`init`, :meth:`evolve` and :meth:`finish` of one run: seed ``s`` of
+        :func:`jaxga.run` is ``run(jax.random.PRNGKey(s), ga.default_params)``."""
+        state = self.init(key, params)
+        initial_best = state.best_fitness  # a best found at initialisation converges at 0
+        state, history = self.evolve(key, state, params, generations)
+        return finish(self.algorithm, self.grid, state, history, params, initial_best)

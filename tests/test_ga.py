@@ -1,0 +1,79 @@
+"""The pure core (:class:`jaxga.GA`): host work in the constructor, then pure functions under
+the user's own ``jit``, ``vmap`` (over keys and over parameters) and ``scan``."""
+
+from __future__ import annotations
+
+import jax
+import jax.numpy as jnp
+import numpy as np
+import pytest
+
+import jaxga
+from jaxga.core.errors import ParameterError
+from jaxga.core.paths import is_continuous
+
+MAP = "classic_ga_gapp3_20x20"
+SEEDS = [0, 1, 2, 3]
+GENERATIONS = 25
+
+
+@pytest.fixture(scope="module")
+def ga():
+    return jaxga.GA("sga", MAP, generations=GENERATIONS)
+
+
+def test_a_run_of_the_pure_core_is_seed_for_seed_jaxga_run(ga):
+    """``GA.run(PRNGKey(s))`` under the user's ``jit(vmap)`` gives seed ``s`` of
+    ``jaxga.run``, path for path (sga needs the distance fields its fallback initialiser
+    steers by: the constructor attaches them)."""
+    keys = jax.vmap(jax.random.PRNGKey)(jnp.asarray(SEEDS, jnp.uint32))
+    out = jax.jit(jax.vmap(ga.run, (0, None)))(keys, ga.default_params)
+    ref = jaxga.run("sga", MAP, seeds=SEEDS, generations=GENERATIONS)
+    assert ref.success.all()
+    np.testing.assert_array_equal(np.asarray(out["success"]), ref.success)
+    np.testing.assert_array_equal(np.asarray(out["fitness"]), ref.fitness)
+    np.testing.assert_array_equal(np.asarray(out["length"]), ref.n_cells)
+    np.testing.assert_array_equal(np.asarray(out["raw_length"]), ref.raw_n_cells)
+    for i in range(len(SEEDS)):
+        n = int(ref.n_cells[i])
+        np.testing.assert_array_equal(np.asarray(out["cells"][i, :n]), ref.cells[i, :n])
+    np.testing.assert_array_equal(np.asarray(out["convergence_generation"]),
+                                  ref.convergence_generation)
+
+
+def test_init_step_and_a_users_scan_over_keys_and_a_rate(ga):
+    """init, then the user's own scan of ``step`` for 5 generations, vmapped over 3 keys x 2
+    mutation rates: every population stays continuous and every generation counter is 5;
+    the best fitness never falls."""
+    params = ga.default_params
+    rates = jnp.asarray([0.05, 0.5], jnp.float32)
+    keys = jax.random.split(jax.random.PRNGKey(7), 3)
+
+    def one(key, rate):
+        p = {**params, "mutation.probability": rate}
+        state = ga.init(key, p)
+        first = state.best_fitness
+
+        def body(s, t):
+            return ga.step(jax.random.fold_in(key, t), s, p), s.best_fitness
+
+        state, best = jax.lax.scan(body, state, jnp.arange(5))
+        cells, length = state.islands.cells, state.islands.length
+        continuous = jax.vmap(lambda c, n: is_continuous(ga.grid, c, n))(
+            cells.reshape(-1, cells.shape[-1]), length.reshape(-1))
+        return state.generation, first, best, continuous, ga.finish(state, p)["success"]
+
+    grid_keys, grid_rates = jnp.repeat(keys, 2, axis=0), jnp.tile(rates, 3)
+    generation, first, best, continuous, success = jax.jit(jax.vmap(one))(grid_keys,
+                                                                          grid_rates)
+    assert generation.tolist() == [5] * 6
+    assert np.all(np.diff(np.asarray(best), axis=1) >= 0) and np.all(best[:, 0] == first)
+    assert bool(jnp.all(continuous)) and bool(jnp.all(success))
+
+
+def test_the_constructor_checks_what_jaxga_run_checks():
+    with pytest.raises(ParameterError):
+        jaxga.GA("sga", MAP, no_such__key=1)
+    with pytest.raises(jaxga.EndpointError):
+        jaxga.GA("sga", MAP, corner_rule="free").__class__("sga", jaxga.Grid.create(
+            np.ones((4, 4), bool), start=(0, 0), goal=(3, 3)))
