@@ -29,7 +29,6 @@ import functools
 import hashlib
 import os
 import pickle
-import tempfile
 from pathlib import Path
 from typing import Any
 
@@ -38,6 +37,7 @@ import jaxlib
 from jax.experimental.serialize_executable import deserialize_and_load, serialize
 
 from jaxga.api.lowering import threefry_unrolled
+from jaxga.core.files import atomic_write
 from jaxga.engine import chosen_operators
 
 SUBDIRECTORY = "jaxga-programs"
@@ -156,9 +156,6 @@ def save(key: str | None, compiled: Any) -> None:
         blob = pickle.dumps(serialize(compiled))
         folder = directory()
         folder.mkdir(parents=True, exist_ok=True)
-        fd, tmp = tempfile.mkstemp(dir=folder, suffix=".tmp")
-        with os.fdopen(fd, "wb") as f:
-            f.write(blob)
-        os.replace(tmp, folder / f"{key}.pkl")
+        atomic_write(folder / f"{key}.pkl", lambda f: f.write(blob), binary=True)
     except Exception:  # noqa: BLE001 - a program that cannot be stored is only compiled
         return
