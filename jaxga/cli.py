@@ -1218,10 +1218,11 @@ def check_outputs(args: argparse.Namespace) -> None:
         return
     outputs = {f"--{o.replace('_', '-')}": getattr(args, o, None) for o in _OUTPUT_OPTIONS
                if o != "checkpoint"}
-    check_output_files(outputs, _input_files(args))
+    inputs = _input_files(args)
+    check_output_files(outputs, inputs)
     folder = getattr(args, "checkpoint", None)
     if folder:
-        for label, path in [*_input_files(args), *outputs.items()]:
+        for label, path in [*inputs, *outputs.items()]:
             if path and Path(path).is_dir() and same_file(path, folder):
                 raise JaxgaError(f"cannot use --checkpoint {folder}: it is the {label}")
     plot = getattr(args, "plot", None)

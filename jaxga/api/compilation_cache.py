@@ -16,15 +16,14 @@ directory is already configured. One setting opts out everywhere: an empty
 
 from __future__ import annotations
 
-import contextlib
 import os
-import tempfile
 import warnings
 from pathlib import Path
 
 import jax
 
 from jaxga.core.errors import CacheWarning, ParameterError
+from jaxga.core.files import folder_problem
 
 __all__ = ["ENV_VAR", "MIN_COMPILE_SECONDS", "cache_problem", "default_directory",
            "ensure_compilation_cache", "use_compilation_cache", "warn_unusable"]
@@ -44,17 +43,12 @@ def default_directory() -> str:
 
 def cache_problem(path: str | os.PathLike) -> str | None:
     """Why ``path`` cannot hold the cache (it cannot be made a folder, or takes no new
-    file: a real try), or None when it can."""
-    folder = Path(path)
+    file: :func:`jaxga.core.files.folder_problem`), or None when it can."""
     try:
-        folder.mkdir(parents=True, exist_ok=True)
-        fd, probe = tempfile.mkstemp(prefix=".jaxga-probe.", dir=folder)
+        Path(path).mkdir(parents=True, exist_ok=True)
     except OSError as e:
         return e.strerror or str(e)
-    os.close(fd)
-    with contextlib.suppress(OSError):
-        os.unlink(probe)
-    return None
+    return folder_problem(path)
 
 
 _WARNED: list[str] = []

@@ -24,8 +24,8 @@ from typing import IO
 
 from jaxga.core.errors import JaxgaError
 
-__all__ = ["atomic_write", "atomic_write_text", "check_outputs", "remove_temporaries",
-           "same_file"]
+__all__ = ["atomic_write", "atomic_write_text", "check_outputs", "folder_problem",
+           "remove_temporaries", "same_file"]
 
 _TEMPORARIES: set[str] = set()
 _LOCK = threading.Lock()
@@ -100,8 +100,10 @@ def same_file(a: str | os.PathLike, b: str | os.PathLike) -> bool:
         return Path(a).resolve() == Path(b).resolve()
 
 
-def _probe_folder(folder: Path) -> str | None:
-    """Why a new file cannot be made in ``folder``, or None when it can (a real try)."""
+def folder_problem(folder: str | os.PathLike) -> str | None:
+    """Why a new file cannot be made in ``folder``, or None when it can (a real try: mode
+    bits lie for root, ``/proc`` and read-only mounts)."""
+    folder = Path(folder)
     if not folder.is_dir():
         return f"folder {str(folder)!r} does not exist"
     try:
@@ -149,7 +151,7 @@ def check_outputs(outputs: Mapping[str, str | os.PathLike | None],
                 raise JaxgaError(f"cannot write {option} {path}: {other} names the same "
                                  "file")
         folder = path.parent if str(path.parent) else Path(".")
-        why = _probe_folder(folder)
+        why = folder_problem(folder)
         if why is not None:
             raise JaxgaError(f"cannot write {option} {path}: {why}")
         if path.exists() and not os.access(path, os.W_OK):
