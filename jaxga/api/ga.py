@@ -32,11 +32,11 @@ from jaxga.engine import (
     build,
     default_params,
     evolve,
-    finish,
     generation,
     init_state,
     uses_guide,
 )
+from jaxga.engine import finish as finish_run
 from jaxga.engine.maptables import with_tables
 from jaxga.maps import MapInfo
 from jaxga.operators.guide import with_guide
@@ -110,13 +110,15 @@ class GA:
         return evolve(self.algorithm, jax.random.fold_in(key, EVOLVE_STREAM), self.grid,
                       state, params, generations)
 
-    def finish(self, state: GAState, params: dict, history: dict | None = None) -> dict:
+    def finish(self, state: GAState, params: dict, history: dict | None = None,
+               initial_best: jax.Array | None = None) -> dict:
         """The best path post-optimised (the preset's ``post.method``) and the reported
         metrics as arrays: ``success``, ``raw_cells`` / ``raw_length`` (the GA's own
         best), ``cells`` / ``length`` (post-optimised; ``length`` counts nodes),
         ``path_length``, ``fitness``, ``metrics``, ...; with ``history``, also the
-        convergence generation."""
-        return finish(self.algorithm, self.grid, state, history, params)
+        convergence generation (0 for a best the initial population already held, given
+        its ``initial_best`` fitness)."""
+        return finish_run(self.algorithm, self.grid, state, history, params, initial_best)
 
     def run(self, key: jax.Array, params: dict, generations: int | None = None) -> dict:
         """:meth:`init`, :meth:`evolve` and :meth:`finish` of one run: seed ``s`` of
@@ -124,4 +126,4 @@ class GA:
         state = self.init(key, params)
         initial_best = state.best_fitness  # a best found at initialisation converges at 0
         state, history = self.evolve(key, state, params, generations)
-        return finish(self.algorithm, self.grid, state, history, params, initial_best)
+        return self.finish(state, params, history, initial_best)
