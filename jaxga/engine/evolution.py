@@ -44,12 +44,10 @@ from jaxga.core.paths import (
     remove_loops,
 )
 from jaxga.engine.algorithm import F32, I32, Algorithm
-from jaxga.operators import crossover as cx
-from jaxga.operators import mutation as mu
-from jaxga.operators import schedules
 from jaxga.operators.init import initialise_population
 from jaxga.operators.islands import migrate
 from jaxga.operators.lift import gated_map, windowed_map
+from jaxga.operators.rates import rate_rule
 
 
 # ----------------------------------------------------------------------------- stages
@@ -167,16 +165,8 @@ def _crossover(algo: Algorithm, key, grid, pop, fitness, active, t, params, fit_
     op = registry.operator("crossover", algo.get("crossover.method"))
     if op.fn is None and op.population is None:
         return pop, jnp.int32(0)
-    if algo.get("crossover.adaptive"):
-        # AGACD eq. 26-27: f = the fitter of the pair; f_max, f_avg of the population
-        # (taken over the selected pool, which is the population entering crossover).
-        pc = cx.adaptive_pair_probability(
-            fitness, t, run_generations(algo, params), params["crossover.pc_low"],
-            params["crossover.pc_high"], active,
-            schedule=schedules.agacd_crossover_decay(run_generations(algo, params)),
-        )
-    else:
-        pc = params["crossover.probability"]
+    pc = rate_rule(algo, "crossover")(params, fitness, active, t,
+                                      run_generations(algo, params))
     return op.lift(binding(algo, params, t, fit_fn))(key, grid, pop, pc)
 
 
@@ -184,16 +174,8 @@ def _mutation(algo: Algorithm, key, grid, pop, fitness, active, t, params, fit_f
     op = registry.operator("mutation", algo.get("mutation.method"))
     if op.fn is None and op.population is None:
         return pop, jnp.int32(0)
-    if algo.get("mutation.adaptive"):
-        f_max = jnp.max(jnp.where(active, fitness, -jnp.inf))
-        f_avg = ordered_mean(fitness, active)
-        pm = mu.adaptive_mutation_probability(
-            fitness, f_max, f_avg, t, run_generations(algo, params),
-            params["mutation.pm_low"], params["mutation.pm_high"],
-            schedule=schedules.agacd_mutation_growth(run_generations(algo, params)),
-        )
-    else:
-        pm = jnp.broadcast_to(params["mutation.probability"], (pop.size,))
+    pm = rate_rule(algo, "mutation")(params, fitness, active, t,
+                                     run_generations(algo, params))
     return op.lift(binding(algo, params, t, fit_fn))(key, grid, pop, pm)
 
 
@@ -301,12 +283,12 @@ def island_generation(algo: Algorithm, key, grid: Grid, isl: IslandState, t, par
         pop, f_si = _simplify(algo, k_si, grid, pop, params)
         return pop, jnp.stack([f_mu, f_si]).astype(I32)
 
-    if not algo.get("mutation.adaptive"):  # the mutation does not read the fitness
+    if not rate_rule(algo, "mutation").reads_offspring_fitness:
         pop, fails = vary(pop, fitness)
         new_fitness, feas = evaluate(algo, grid, params, pop.cells, pop.length, active)
     else:
-        # AGACD eq. 28-29: an individual's mutation probability depends on its fitness
-        # after crossover, so the generation evaluates twice. The two evaluations are the
+        # The mutation rate reads the fitness after crossover (AGACD eq. 28-29), so the
+        # generation evaluates twice. The two evaluations are the
         # two steps of one loop, mutation and simplification a branch of step 0: the
         # evaluation is compiled once (fewer kernels to compile; decision 006), with the
         # same results.
