@@ -9,6 +9,7 @@ interrupts.install_in_console_script()  # first: a Ctrl-C during the imports exi
 from jaxga.api import GA, Result, lowering, run, sweep
 from jaxga.api.compilation_cache import use_compilation_cache
 from jaxga.compare import Comparison, compare
+from jaxga.config.registry import Operator, register_operator
 from jaxga.core.errors import EndpointError, JaxgaError, MapFormatError, NoPathError, ParameterError
 from jaxga.core.grid import CORNER_RULES, Grid
 from jaxga.replan import replan
@@ -30,9 +31,11 @@ __all__ = [
     "JaxgaError",
     "MapFormatError",
     "NoPathError",
+    "Operator",
     "ParameterError",
     "Result",
     "compare",
+    "register_operator",
     "replan",
     "run",
     "sweep",

@@ -6,16 +6,12 @@ compiles once per test module.
 
 from __future__ import annotations
 
-import jax
-import jax.numpy as jnp
 import numpy as np
 from hypothesis import reject
 from hypothesis import strategies as st
 
-from jaxga import Grid
-from jaxga.core.paths import Population, remove_loops
 from jaxga.maps import legal_moves, random_map
-from jaxga.operators.repair import connect
+from jaxga.testing import random_parents
 
 SIZE = 10
 CAP = 64
@@ -28,36 +24,6 @@ def grids(draw, corner_rules=("free", "no_squeeze", "strict"), max_density=0.35)
     density = draw(st.floats(0.0, max_density))
     rule = draw(st.sampled_from(corner_rules))
     return random_map(SIZE, SIZE, density, seed, corner_rule=rule)
-
-
-_connect = jax.jit(
-    jax.vmap(lambda k, g, a: connect(k, g, a, 3, CAP), in_axes=(0, None, 0))
-)
-_loops = jax.jit(jax.vmap(lambda c, n: remove_loops(c, n, SIZE * SIZE)))
-
-
-def random_parents(grid: Grid, n: int, seed: int) -> Population:
-    """``n`` continuous, loop-free paths from start to goal (median insertion via a random
-    free cell, retried until ``n`` succeed). Independent of the initialisers under test."""
-    rng = np.random.default_rng(seed)
-    free = np.flatnonzero(~grid.blocked_np().reshape(-1))
-    got_c, got_n = [], []
-    for attempt in range(50):
-        mids = rng.choice(free, 4 * n)
-        anchors = np.stack(
-            [np.full(4 * n, int(grid.start)), mids, np.full(4 * n, int(grid.goal))], 1
-        ).astype(np.int32)
-        keys = jax.random.split(jax.random.PRNGKey(seed * 1000 + attempt), 4 * n)
-        cells, length, ok = _connect(keys, grid, jnp.asarray(anchors))
-        cells, length = _loops(cells, length)
-        ok = np.asarray(ok)
-        got_c += list(np.asarray(cells)[ok])
-        got_n += list(np.asarray(length)[ok])
-        if len(got_c) >= n:
-            break
-    if len(got_c) < n:
-        raise RuntimeError("could not build valid parents")
-    return Population(jnp.asarray(np.stack(got_c[:n])), jnp.asarray(np.array(got_n[:n], np.int32)))
 
 
 @st.composite

@@ -1,5 +1,5 @@
 """The operator registry: every registered operator keeps its family's contract
-(``tests/contracts.py``), a broken one is caught, and the configuration accepts exactly
+(``tests/testing.py``), a broken one is caught, and the configuration accepts exactly
 the registered names (former names included)."""
 
 from __future__ import annotations
@@ -13,27 +13,20 @@ import jax
 import jax.numpy as jnp
 import pytest
 
+from jaxga import testing
 from jaxga.config import registry
 from jaxga.config.presets import load_preset
 from jaxga.config.schema import COMMON_FIELDS, SCHEMA
 from jaxga.core.errors import ParameterError
-from jaxga.engine.maptables import with_tables
-from jaxga.maps import random_map
-from jaxga.operators.guide import with_guide
 from jaxga.operators.postprocess import compact
-from tests import contracts
-from tests.strategies import random_parents
 
 OPERATORS = registry.operators()
 
 
 @pytest.fixture(scope="module")
 def setting():
-    """A 10 x 10 map with 20 % obstacles under the strictest corner rule, as a run sees
-    it (distance fields and per-map tables attached), and six feasible, loop-free
-    parents of capacity 64 built without the operators under test."""
-    grid = with_tables(with_guide(random_map(10, 10, 0.2, 3, corner_rule="strict")))
-    return grid, random_parents(grid, contracts.P, seed=5)
+    """The contract check's own map and parents (:func:`jaxga.testing.default_setting`)."""
+    return testing.default_setting()
 
 
 @pytest.mark.parametrize("op", OPERATORS, ids=[f"{op.family}-{op.name}" for op in OPERATORS])
@@ -41,7 +34,7 @@ def test_every_registered_operator_keeps_its_family_contract(setting, op):
     """With ``repair.fallback = "none"``; the field repairs have their own property tests
     (``tests/test_field.py``)."""
     grid, pop = setting
-    contracts.check_operator(op, grid, pop, jax.random.PRNGKey(7))
+    testing.check_family(op, grid, pop, jax.random.PRNGKey(7))
 
 
 # ------------------------------------------------------- a broken operator is caught
@@ -77,7 +70,7 @@ def test_a_registered_operator_that_breaks_the_contract_fails_it(setting, fn, me
     op = registry.register(registry.Operator("mutation", "broken_toy", fn, "broken (test)"))
     try:
         with pytest.raises(AssertionError, match=message):
-            contracts.check_operator(op, grid, pop, jax.random.PRNGKey(0))
+            testing.check_family(op, grid, pop, jax.random.PRNGKey(0))
     finally:
         registry.unregister("mutation", "broken_toy")
 
@@ -89,7 +82,7 @@ def test_a_shrinking_operator_that_lengthens_fails_the_contract(setting):
                                              traits=frozenset({registry.SHRINKING})))
     try:
         with pytest.raises(AssertionError, match="shrinking"):
-            contracts.check_operator(op, grid, pop, jax.random.PRNGKey(1))
+            testing.check_family(op, grid, pop, jax.random.PRNGKey(1))
     finally:
         registry.unregister("simplify", "toy_grow")
 
@@ -101,7 +94,7 @@ def test_the_configuration_accepts_exactly_the_registered_names():
         key = f"{family}.method"
         for op in registry.operators(family):
             for name in (op.name, *op.aliases):
-                changes = {key: name, **{k: contracts.some_value(op.params[k])
+                changes = {key: name, **{k: testing.some_value(op.params[k])
                                           for k in op.required}}
                 assert base.override(changes)[key] == op.name  # aliases -> current name
         with pytest.raises(ParameterError, match=re.escape(f"{key} = 'no_such_op' is not one of")):
@@ -195,7 +188,7 @@ def test_the_readme_walk_through_adds_a_working_operator(setting):
     try:
         grid, pop = setting
         op = registry.operator("mutation", "drop_point")
-        contracts.check_operator(op, grid, pop, jax.random.PRNGKey(3))
+        testing.check_family(op, grid, pop, jax.random.PRNGKey(3))
         r = api.run("sga", grid, seeds=2, population__size=8, generations=3,
                     sets=["mutation.method=drop_point", "mutation.probability=1.0"])
         assert r.config["mutation.method"] == "drop_point" and r.success.all()

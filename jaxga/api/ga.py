@@ -63,7 +63,8 @@ class GA:
         generations: the number of generations of :meth:`evolve` and :meth:`run`.
         **overrides: configuration keys (``crossover__probability=0.7`` or a nested dict),
             checked as :func:`jaxga.run` checks them (a key the preset never reads is
-            refused).
+            refused); or a family with a function of your own (``mutation=my_mutation``,
+            ``objective=my_objective``; :func:`jaxga.api.runs.own_operators`).
 
     Attributes:
         config: the checked configuration.

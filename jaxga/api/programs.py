@@ -31,6 +31,7 @@ from jaxga.config.schema import Config
 from jaxga.core.errors import ParameterError
 from jaxga.engine import (
     Algorithm,
+    chosen_operators,
     evolve,
     finish,
     init_state,
@@ -324,25 +325,32 @@ def programs_for(algo: Algorithm, grid: Any, params: dict, n_runs: int) -> Progr
     n_dev = jax.local_device_count()
     grid_spec = shape_spec(grid)
     progs = compiled_programs(algo, grid_spec, tuple(sorted(shape_spec(params).items())),
-                              n_runs, n_dev)
+                              n_runs, n_dev, operator_functions(algo))
     _COMPILED_BUCKETS.setdefault(_family(algo, grid_spec, params), set()).add(n_runs // n_dev)
     return progs
 
 
+def operator_functions(algo: Algorithm) -> tuple:
+    """The functions of ``algo``'s operators (part of a compiled program's identity)."""
+    return tuple((op.family, op.name, op.fn, op.population, op.options)
+                 for op in chosen_operators(algo.config).values())
+
+
 @functools.lru_cache(maxsize=PROGRAM_CACHE_SIZE)
 def compiled_programs(algo: Algorithm, grid_spec: Any, params_spec: Any, n_runs: int,
-                      n_devices: int) -> Programs:
+                      n_devices: int, functions: tuple = ()) -> Programs:
     """Trace init / evolve / finish for ``n_runs`` runs and compile init (the others when
     first needed: :class:`Programs`).
 
     Cached per (algorithm, map shape and corner rule, parameter shapes, run count,
-    devices): a second call with another map of the same shape, other seeds, another
-    number of generations (``algo`` comes through :func:`program_algorithm`) or other
+    devices, the chosen operators' functions: an operator registered again under its
+    name is traced again): a second call with another map of the same shape, other
+    seeds, another number of generations (``algo`` comes through :func:`program_algorithm`) or other
     dynamic parameter values (probabilities, weights, temperatures, population size
     below the capacity) reuses the compiled programs (``jaxga.replan`` relies on it).
     The programs are compiled one after the other.
     """
-    del n_devices  # part of the cache key only
+    del n_devices, functions  # parts of the cache key only
     if algo.generations:
         raise ParameterError("compiled_programs takes program_algorithm(algo): the number of "
                              "generations is a run-time value")

@@ -48,6 +48,7 @@ from jaxga.api.result import Result
 from jaxga.api.seeds import seed_list, seed_sharding
 from jaxga.api.size_classes import auto_size_class, class_capacity, map_cells, pad_to_class
 from jaxga.api.timeline import Timeline
+from jaxga.config import registry
 from jaxga.config.presets import as_sets, load_preset, parse_set
 from jaxga.config.schema import MAP_RULE, SCHEMA, Config, flatten, freeze
 from jaxga.core.errors import ParameterError
@@ -132,6 +133,29 @@ def check_one_corner_rule(corner_rule: str | None, config: Config,
                              f"--corner-rule) and {rule!r} (map.corner_rule)")
 
 
+def own_operators(overrides: dict) -> dict:
+    """``overrides`` with each function given for an operator family (``init``,
+    ``fitness`` or its synonym ``objective``, ``selection``, ``crossover``, ``mutation``,
+    ``simplify``, ``post``) registered under its name
+    (:func:`jaxga.config.registry.register_operator`, replacing an earlier one of that
+    name) and chosen as ``<family>.method``."""
+    out = {}
+    for key, value in overrides.items():
+        family = "fitness" if key == "objective" else key
+        if family in registry.FAMILIES and callable(value):
+            op = _registered_fn(family, value) or registry.register_operator(
+                family, value, replace=True)
+            out[f"{family}__method"] = op.name
+        else:
+            out[key] = value
+    return out
+
+
+def _registered_fn(family: str, fn: Any) -> registry.Operator | None:
+    """The registered operator of ``family`` whose function is ``fn``, if any."""
+    return next((op for op in registry.operators(family) if op.fn is fn), None)
+
+
 def load_problem(preset, grid, corner_rule, variant, sets, overrides, generations, *,
                  check_read: bool = True):
     """``(config, grid, map name, frame)`` of a call, checked (the frame of a map file or
@@ -145,7 +169,8 @@ def load_problem(preset, grid, corner_rule, variant, sets, overrides, generation
     if isinstance(grid, MapInfo):  # a loaded map that keeps its name (and its endpoints)
         grid, map_name, frame = grid.grid, grid.name, grid.frame
     sets = as_sets(sets)
-    ov: dict[str, Any] = {k.replace("__", "."): v for k, v in overrides.items()}
+    ov: dict[str, Any] = {k.replace("__", "."): v
+                          for k, v in own_operators(overrides).items()}
     if generations is not None:  # a non-integer is left for the configuration to refuse
         with contextlib.suppress(TypeError):
             generations = as_integer(generations)

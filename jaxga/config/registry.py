@@ -76,6 +76,7 @@ __all__ = [
     "operators",
     "readers",
     "register",
+    "register_operator",
     "schema_fields",
     "unregister",
 ]
@@ -262,6 +263,32 @@ def register(op: Operator) -> Operator:
         _ALIASES[op.family][alias] = op.name
     _VERSION[0] += 1
     return op
+
+
+def register_operator(family: str, fn: Callable, name: str | None = None, *,
+                      summary: str = "", replace: bool = False, **declaration: Any) -> Operator:
+    """Register a function of your own as an operator of ``family`` and return it.
+
+    ``fn`` has the family's signature (module docstring; an objective is a ``fitness``
+    operator ``f(grid, cells, length, feasible) -> float32`` on one masked path, which the
+    engine maps over the population). ``name`` (default ``fn.__name__``) is what
+    ``<family>.method`` takes. ``replace``: replace an operator of that name registered
+    from outside jaxga (a notebook cell run again); jaxga's own are never replaced.
+    ``declaration``: the other fields of :class:`Operator` (``params``, ``traits``,
+    ``options``, ...). Check it with :func:`jaxga.testing.check_operator`.
+    """
+    name = name or getattr(fn, "__name__", None)
+    if not name or not name.isidentifier():
+        raise ValueError(f"an operator needs a name that is an identifier, got {name!r}")
+    current = canonical(family, name) if family in FAMILIES else None
+    if current is not None and replace:
+        old = _REGISTRY[family][current]
+        if old.fn is None or (getattr(old.fn, "__module__", None) or "").startswith("jaxga."):
+            raise ValueError(f"{family} operator {name!r} is jaxga's own: choose another name")
+        unregister(family, current)
+    traits = frozenset(declaration.pop("traits", ()))
+    return register(Operator(family, name, fn, summary or (fn.__doc__ or name).strip()
+                             .split("\n")[0], traits=traits, **declaration))
 
 
 def unregister(family: str, name: str) -> None:

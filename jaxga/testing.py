@@ -1,21 +1,30 @@
-"""The contract of each operator family (:mod:`jaxga.config.registry`), as checks that raise
-``AssertionError`` naming the operator and what it broke.
+"""The operator contract, as a public check: ``jaxga.testing.check_operator``.
 
-``tests/test_registry.py`` runs them on every registered operator, so a new operator is
-tested by being registered; it also shows that a broken operator fails them.
+Run it on an operator of your own before you use it in a run::
 
-Shared by every family: outputs have the documented dtypes and shapes; paths are padded
-with their last cell (SPEC 2) and their lengths lie in ``[1, L]``; the same key gives
-the same result, under ``jax.vmap`` and ``jit`` as alone (two separate traces).
-Path operators (crossover, mutation, simplify): a reported failure returns the parent
-bit for bit, and feasible, loop-free parents from start to goal give feasible, loop-free
-children from start to goal (continuous ones unless the operator makes waypoint paths);
-a ``shrinking`` operator never lengthens a path.
+    import jaxga.testing
+    jaxga.testing.check_operator("mutation", my_mutation)        # a function, or
+    jaxga.testing.check_operator(jaxga.config.registry.operator("mutation", "drop_point"))
+
+It raises ``AssertionError`` naming the operator and the rule it broke; jaxga's own test
+suite runs it on every registered operator (``tests/test_registry.py``).
+
+The contract of each family (the signatures: :mod:`jaxga.config.registry`). Shared by
+every family: outputs have the documented dtypes and shapes; paths are padded with their
+last cell (the fixed-length masked chromosome, docs "the pure core") and their lengths lie
+in ``[1, L]``; the same key gives the same result, under ``jax.vmap`` and ``jit`` as alone
+(two separate traces). Path operators (crossover, mutation, simplify): a reported failure
+returns the parent bit for bit, and feasible, loop-free parents from start to goal give
+feasible, loop-free children from start to goal (continuous ones unless the operator makes
+waypoint paths); a ``shrinking`` operator never lengthens a path. Objectives: float32, one
+per path, finite, positive on feasible paths and 0 on infeasible ones.
 """
 
 from __future__ import annotations
 
 import functools
+from collections.abc import Callable
+from typing import Any
 
 import jax
 import jax.numpy as jnp
@@ -25,8 +34,19 @@ from jaxga.config import registry
 from jaxga.config.presets import load_preset
 from jaxga.core.grid import Grid
 from jaxga.core.objectives import path_length
-from jaxga.core.paths import Population, has_endpoints, is_continuous, is_feasible, is_loop_free
+from jaxga.core.paths import (
+    Population,
+    has_endpoints,
+    is_continuous,
+    is_feasible,
+    is_loop_free,
+    remove_loops,
+)
 from jaxga.engine import binding, build, fitness_function
+from jaxga.engine.maptables import with_tables
+from jaxga.maps import random_map
+from jaxga.operators.guide import with_guide
+from jaxga.operators.repair import connect
 
 P = 6
 """Individuals (or pairs) per check."""
@@ -91,7 +111,7 @@ def check_paths(op, grid: Grid, cells, length, *, valid=None, waypoints=False) -
     _check((length >= 1) & (length <= cap), op, "a length outside [1, L]")
     last = cells[np.arange(n), np.clip(length - 1, 0, cap - 1)]
     pad_ok = np.where(np.arange(cap)[None, :] >= length[:, None], cells == last[:, None], True)
-    _check(pad_ok, op, "paths must be padded with their last cell (SPEC 2)")
+    _check(pad_ok, op, "paths must be padded with their last cell")
     if valid is None:
         return
     ends, feas, loops = _path_checks(grid, jnp.asarray(cells), jnp.asarray(length),
@@ -235,10 +255,10 @@ def check_post(op: registry.Operator, grid: Grid, pop: Population) -> None:
                        lambda i: (pop.cells[i], pop.length[i]))
 
 
-def check_operator(op: registry.Operator, grid: Grid, pop: Population, key,
-                   field_repair: bool = False) -> None:
+def check_family(op: registry.Operator, grid: Grid, pop: Population, key,
+                 field_repair: bool = False) -> None:
     """The contract of ``op``'s family (module docstring) on ``grid`` with feasible,
-    loop-free parents ``pop`` (``P`` paths of the grid's capacity)."""
+    loop-free parents ``pop`` (``P`` paths of the grid's capacity); ``op`` registered."""
     checks = {
         "init": lambda: check_init(op, grid, pop.cells.shape[1], key),
         "fitness": lambda: check_fitness(op, grid, pop),
@@ -252,3 +272,95 @@ def check_operator(op: registry.Operator, grid: Grid, pop: Population, key,
         raise AssertionError(f"no contract for the family {op.family!r}")
     if op.fn is not None or op.population is not None:  # "none": the stage does nothing
         checks[op.family]()
+
+
+CAPACITY = 64
+"""The capacity of the parents :func:`check_operator` makes by default."""
+
+
+@functools.partial(jax.jit, static_argnames="capacity")
+def _connected(keys, grid: Grid, anchors, capacity: int):
+    cells, length, ok = jax.vmap(lambda k, a: connect(k, grid, a, 3, capacity))(keys, anchors)
+    cells, length = jax.vmap(lambda c, n: remove_loops(c, n, grid.n_cells))(cells, length)
+    return cells, length, ok
+
+
+def random_parents(grid: Grid, n: int, seed: int, capacity: int = CAPACITY) -> Population:
+    """``n`` continuous, loop-free paths from start to goal of ``capacity`` slots (start,
+    a random free cell, goal, joined by median insertion, IMGA section 4.1; retried until
+    ``n`` succeed): parents made without the operator under test."""
+    rng = np.random.default_rng(seed)
+    free = np.flatnonzero(~grid.blocked_np().reshape(-1))
+    got_c, got_n = [], []
+    for attempt in range(50):
+        mids = rng.choice(free, 4 * n)
+        anchors = np.stack([np.full(4 * n, int(grid.start)), mids,
+                            np.full(4 * n, int(grid.goal))], 1).astype(np.int32)
+        keys = jax.random.split(jax.random.PRNGKey(seed * 1000 + attempt), 4 * n)
+        cells, length, ok = _connected(keys, grid, jnp.asarray(anchors), capacity)
+        ok = np.asarray(ok)
+        got_c += list(np.asarray(cells)[ok])
+        got_n += list(np.asarray(length)[ok])
+        if len(got_c) >= n:
+            break
+    if len(got_c) < n:
+        raise RuntimeError("could not build valid parents: is the goal reachable?")
+    return Population(jnp.asarray(np.stack(got_c[:n])),
+                      jnp.asarray(np.array(got_n[:n], np.int32)))
+
+
+def default_setting() -> tuple[Grid, Population]:
+    """The map and parents :func:`check_operator` uses by default: a 10 x 10 map with 20 %
+    obstacles under the strictest corner rule, as a run sees it (distance fields and
+    per-map tables attached), and ``P`` feasible, loop-free parents of capacity
+    :data:`CAPACITY`."""
+    grid = with_tables(with_guide(random_map(10, 10, 0.2, 3, corner_rule="strict")))
+    return grid, random_parents(grid, P, seed=5)
+
+
+def check_operator(op: registry.Operator | str, fn: Callable | None = None, *,
+                   grid: Grid | None = None, parents: Population | None = None,
+                   key: jax.Array | None = None, field_repair: bool = False,
+                   **declaration: Any) -> None:
+    """Check an operator against its family's contract (module docstring).
+
+    Args:
+        op: a :class:`~jaxga.config.registry.Operator` (registered or not), or a family
+            name (``"mutation"``, ``"fitness"``, ...) with ``fn``.
+        fn: the operator's function, with its family's signature
+            (:mod:`jaxga.config.registry`), when ``op`` is a family name.
+        grid, parents: the map and the feasible parents to check on (default:
+            :func:`default_setting`); ``parents`` must hold ``P`` paths.
+        key: the PRNG key of the check (default ``PRNGKey(0)``).
+        field_repair: check it as bound with ``repair.fallback = "field"``.
+        **declaration: the rest of the :class:`~jaxga.config.registry.Operator` built
+            from ``fn`` (``name``, ``summary``, ``traits``, ``params``, ``options``).
+
+    Raises:
+        AssertionError: naming the operator and the rule it broke.
+    """
+    if isinstance(op, str):
+        if fn is None:
+            raise TypeError("check_operator(family, fn): give the operator's function")
+        declaration.setdefault("name", getattr(fn, "__name__", "operator"))
+        declaration.setdefault("summary", "an operator under test")
+        op = registry.Operator(family=op, fn=fn, **declaration)
+    if grid is None or parents is None:
+        default_grid, default_pop = default_setting()
+        grid = default_grid if grid is None else grid
+        parents = default_pop if parents is None else parents
+    if parents.cells.shape[0] != P:
+        raise ValueError(f"check_operator needs {P} parents, got {parents.cells.shape[0]}")
+    key = jax.random.PRNGKey(0) if key is None else key
+    registered = registry.canonical(op.family, op.name) is not None
+    if registered and registry.operator(op.family, op.name) is not op:
+        if registry.operator(op.family, op.name).fn is not op.fn:
+            raise ValueError(f"another {op.family} operator is registered as {op.name!r}")
+        op = registry.operator(op.family, op.name)
+    if not registered:
+        registry.register(op)
+    try:
+        check_family(op, grid, parents, key, field_repair)
+    finally:
+        if not registered:
+            registry.unregister(op.family, op.name)

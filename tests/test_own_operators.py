@@ -1,0 +1,115 @@
+"""Bring your own pieces: a mutation and an objective written here, outside ``jaxga/``,
+pass the public contract check (:func:`jaxga.testing.check_operator`) and run in a preset,
+passed as functions to :class:`jaxga.GA` and :func:`jaxga.run`; a broken one is caught."""
+
+from __future__ import annotations
+
+import jax
+import jax.numpy as jnp
+import numpy as np
+import pytest
+
+import jaxga
+import jaxga.testing
+from jaxga.config import registry
+from jaxga.core.grid import index_to_xy, move_legal
+from jaxga.core.objectives import path_length
+from jaxga.core.paths import is_continuous
+from jaxga.operators.postprocess import compact
+
+MAP = "classic_ga_gapp3_20x20"
+
+
+def drop_point(key, grid, cells, length):
+    """Delete one random interior node whose neighbours are one legal move apart."""
+    i = jnp.arange(cells.shape[0])
+    prev, nxt = jnp.roll(cells, 1), jnp.roll(cells, -1)
+    can = (i > 0) & (i < length - 1) & move_legal(grid, prev, nxt)
+    pick = jax.random.categorical(key, jnp.where(can, 0.0, -jnp.inf))
+    new, new_length = compact(cells, (i < length) & (i != pick))
+    ok = jnp.any(can)
+    return jnp.where(ok, new, cells), jnp.where(ok, new_length, length), ~ok
+
+
+def short_and_straight(grid, cells, length, feasible):
+    """1 / (1 + length + direction changes): short paths with few turns."""
+    step = jnp.diff(index_to_xy(cells, grid.width), axis=0)
+    inside = jnp.arange(1, cells.shape[0] - 1) < length - 1
+    turns = jnp.sum(inside & jnp.any(step[1:] != step[:-1], axis=1))
+    f = 1.0 / (1.0 + jnp.sum(jnp.hypot(*step.T.astype(jnp.float32))) + turns)
+    return jnp.where(feasible, f, 0.0).astype(jnp.float32)
+
+
+def teleport(key, grid, cells, length):
+    """A broken mutation: node 1 jumps to the last cell of the map."""
+    return cells.at[1].set(grid.n_cells - 1), length, jnp.bool_(False)
+
+
+@pytest.fixture(scope="module", autouse=True)
+def _unregistered_afterwards():
+    yield
+    for family, fn in (("mutation", drop_point), ("fitness", short_and_straight)):
+        for op in registry.operators(family):
+            if op.fn is fn:
+                registry.unregister(family, op.name)
+
+
+def test_own_operators_pass_the_public_contract_check():
+    jaxga.testing.check_operator("mutation", drop_point, traits={registry.SHRINKING})
+    jaxga.testing.check_operator("fitness", short_and_straight)
+    with pytest.raises(AssertionError, match="not continuous"):
+        jaxga.testing.check_operator("mutation", teleport)
+    assert registry.canonical("mutation", "teleport") is None  # the check leaves no trace
+
+
+def test_own_operators_run_in_a_preset_through_the_pure_core_and_jaxga_run():
+    """sga with the mutation and the objective passed as functions: ``GA.run`` under
+    ``vmap`` over keys equals ``jaxga.run`` seed for seed; every path is continuous; the
+    reported fitness is the objective's; the mutation never lengthened a raw path more
+    than the crossover could (checked through the objective: finite, positive)."""
+    ga = jaxga.GA("sga", MAP, generations=10, mutation=drop_point,
+                  objective=short_and_straight, mutation__probability=0.5)
+    assert ga.config["mutation.method"] == "drop_point"
+    assert ga.config["fitness.method"] == "short_and_straight"
+    keys = jax.vmap(jax.random.PRNGKey)(jnp.arange(3, dtype=jnp.uint32))
+    out = jax.jit(jax.vmap(ga.run, (0, None)))(keys, ga.default_params)
+    ref = jaxga.run("sga", MAP, seeds=3, generations=10, mutation=drop_point,
+                    objective=short_and_straight, mutation__probability=0.5)
+    np.testing.assert_array_equal(np.asarray(out["fitness"]), ref.fitness)
+    assert ref.success.all()
+    for i in range(3):
+        n = int(ref.raw_n_cells[i])
+        cells = jnp.asarray(ref.raw_cells[i])
+        assert bool(is_continuous(ga.grid, cells, n))
+        expected = short_and_straight(ga.grid, cells, n, jnp.bool_(True))
+        assert float(ref.fitness[i]) == pytest.approx(float(expected), rel=1e-6)
+        assert 1.0 / float(ref.fitness[i]) - 1.0 >= float(path_length(ga.grid, cells, n)) - 1e-3
+
+
+def test_a_function_registered_again_under_its_name_is_traced_again():
+    """A notebook cell run twice: the second function replaces the first, and a run uses
+    the new one, not a program compiled for the old."""
+
+    def mutate(key, grid, cells, length):
+        return cells, length, jnp.bool_(True)  # always fails: the parent is kept
+
+    first = jaxga.run("sga", MAP, seeds=2, generations=3, mutation=mutate)
+
+    def mutate(key, grid, cells, length):  # noqa: F811 - the cell run again, edited
+        return drop_point(key, grid, cells, length)
+
+    second = jaxga.run("sga", MAP, seeds=2, generations=3, mutation=mutate,
+                       mutation__probability=1.0)
+    try:
+        assert first.failures[:, 1].sum() > 0
+        assert second.failures[:, 1].sum() < first.failures[:, 1].sum()
+    finally:
+        registry.unregister("mutation", "mutate")
+
+
+def test_jaxgas_own_operators_are_never_replaced():
+    def replace_point(key, grid, cells, length):
+        return cells, length, jnp.bool_(True)
+
+    with pytest.raises(ValueError, match="jaxga's own"):
+        jaxga.GA("sga", MAP, mutation=replace_point)
