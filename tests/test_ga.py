@@ -77,3 +77,22 @@ def test_the_constructor_checks_what_jaxga_run_checks():
     with pytest.raises(jaxga.EndpointError):
         jaxga.GA("sga", MAP, corner_rule="free").__class__("sga", jaxga.Grid.create(
             np.ones((4, 4), bool), start=(0, 0), goal=(3, 3)))
+
+
+def test_vmap_over_three_mutation_rates_equals_three_separate_runs(ga):
+    """One ``jit(vmap)`` of ``GA.run`` over three values of ``mutation.probability`` (seed
+    2 each) gives what three separate ``jaxga.run`` calls with those rates give."""
+    rates = [0.01, 0.2, 0.9]
+    params = {**ga.default_params,
+              "mutation.probability": jnp.asarray(rates, jnp.float32)}
+    axes = {k: (0 if k == "mutation.probability" else None) for k in params}
+    out = jax.jit(jax.vmap(ga.run, (None, axes)))(jax.random.PRNGKey(2), params)
+    for i, rate in enumerate(rates):
+        ref = jaxga.run("sga", MAP, seeds=[2], generations=GENERATIONS,
+                        mutation__probability=rate)
+        assert float(out["fitness"][i]) == float(ref.fitness[0])
+        n = int(ref.n_cells[0])
+        np.testing.assert_array_equal(np.asarray(out["cells"][i, :n]), ref.cells[0, :n])
+        np.testing.assert_array_equal(np.asarray(out["failures"][i]), ref.failures[0])
+    assert len({float(f) for f in np.asarray(out["fitness"])}) > 1 or \
+        len({int(x) for x in np.asarray(out["failures"][:, 1])}) > 1  # the rate mattered
