@@ -31,22 +31,16 @@ from jaxga.engine import (
     GAState,
     build,
     default_params,
-    evolve,
     generation,
-    init_state,
     uses_guide,
 )
 from jaxga.engine import finish as finish_run
 from jaxga.engine.maptables import with_tables
+from jaxga.engine.run import run_evolve, run_init
 from jaxga.maps import MapInfo
 from jaxga.operators.guide import with_guide
 
 __all__ = ["GA"]
-
-INIT_STREAM, EVOLVE_STREAM = 0, 1
-"""The key of a run is split by ``fold_in`` into an initialisation stream and an
-evolution stream (generation ``t`` uses ``fold_in(evolve key, t)``), as in
-:func:`jaxga.run`."""
 
 
 class GA:
@@ -93,8 +87,7 @@ class GA:
     def init(self, key: jax.Array, params: dict) -> GAState:
         """The initial population of every island, evaluated (pure; the initialisers of
         the preset: ``init.method`` and its fallback)."""
-        state, _ = init_state(self.algorithm, jax.random.fold_in(key, INIT_STREAM),
-                              self.grid, params)
+        state, _ = run_init(self.algorithm, key, self.grid, params)
         return state
 
     def step(self, key: jax.Array, state: GAState, params: dict) -> GAState:
@@ -108,8 +101,7 @@ class GA:
         ``lax.scan``; returns the final state and the history (best-so-far fitness, mean
         and sd of the population's fitness, per generation). Generation ``t`` uses
         ``fold_in(fold_in(key, 1), t)``, as :func:`jaxga.run` does."""
-        return evolve(self.algorithm, jax.random.fold_in(key, EVOLVE_STREAM), self.grid,
-                      state, params, generations)
+        return run_evolve(self.algorithm, key, self.grid, state, params, generations)
 
     def finish(self, state: GAState, params: dict, history: dict | None = None,
                initial_best: jax.Array | None = None) -> dict:

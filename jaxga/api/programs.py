@@ -32,11 +32,10 @@ from jaxga.core.errors import ParameterError
 from jaxga.engine import (
     Algorithm,
     chosen_operators,
-    evolve,
     finish,
-    init_state,
 )
 from jaxga.engine.maptables import compute_tables
+from jaxga.engine.run import run_evolve, run_init
 
 
 def shape_spec(tree: Any) -> Any:
@@ -358,12 +357,11 @@ def compiled_programs(algo: Algorithm, grid_spec: Any, params_spec: Any, n_runs:
     sh, rep = seed_sharding()
 
     def do_init(k, grid, params):
-        state, stats = init_state(algo, jax.random.fold_in(k, 0), grid, params)
+        state, stats = run_init(algo, k, grid, params)
         return state, stats.success_rate, stats.n_failed, stats.from_fallback
 
     def do_evolve(k, grid, params, state, count):
-        return evolve(algo, jax.random.fold_in(k, 1), grid, state, params,
-                      GENERATION_CHUNK, count)
+        return run_evolve(algo, k, grid, state, params, GENERATION_CHUNK, count)
 
     def do_finish(grid, params, state):
         return finish(algo, grid, state, None, params)

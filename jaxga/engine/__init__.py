@@ -5,6 +5,7 @@ and the generations (``lax.scan``) that evolve its populations (SPEC 8, 10).
 - :mod:`~jaxga.engine.algorithm`: the compiled-in :class:`Algorithm`, the parameter pytree,
   the path capacity;
 - :mod:`~jaxga.engine.evolution`: the stages, the state, ``generation``, ``evolve``, ``finish``;
+- :mod:`~jaxga.engine.run`: one run's key streams (every driver and :class:`jaxga.GA`);
 - :mod:`~jaxga.engine.maptables`: per-map lookup tables computed once per run.
 """
 
