@@ -14,6 +14,7 @@ import errno
 import json
 import os
 import signal
+import stat
 import subprocess
 import sys
 import time
@@ -167,6 +168,22 @@ def test_an_atomic_write_that_fails_midway_keeps_the_old_file(tmp_path):
     assert target.read_bytes() == b"old" and [p.name for p in tmp_path.iterdir()] == ["plot.png"]
     atomic_write_text(target, "new")
     assert target.read_text() == "new"
+
+
+def test_a_written_file_has_the_permissions_open_would_give_it(tmp_path):
+    """A new output gets 0666 less the umask (not the temporary file's private 0600);
+    a replaced one keeps its own mode."""
+    old = os.umask(0o022)
+    try:
+        atomic_write_text(tmp_path / "new.json", "{}")
+        kept = tmp_path / "kept.json"
+        kept.write_text("old")
+        kept.chmod(0o640)
+        atomic_write_text(kept, "new")
+    finally:
+        os.umask(old)
+    assert stat.S_IMODE((tmp_path / "new.json").stat().st_mode) == 0o644
+    assert stat.S_IMODE(kept.stat().st_mode) == 0o640
 
 
 def test_an_unusable_cache_folder_is_one_warning_line_and_the_command_goes_on(

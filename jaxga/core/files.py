@@ -16,6 +16,7 @@ from __future__ import annotations
 import contextlib
 import errno
 import os
+import stat
 import tempfile
 import threading
 from collections.abc import Callable, Iterable, Mapping
@@ -59,6 +60,7 @@ def atomic_write(path: str | os.PathLike, write: Callable[[IO], None], *,
     with _LOCK:
         _TEMPORARIES.add(tmp)
     try:
+        os.fchmod(fd, _mode_of(target))  # mkstemp's 0600 would make every output private
         with os.fdopen(fd, "wb" if binary else "w", **({} if binary else
                                                          {"encoding": "utf-8"})) as f:
             write(f)
@@ -74,6 +76,17 @@ def atomic_write(path: str | os.PathLike, write: Callable[[IO], None], *,
     finally:
         with _LOCK:
             _TEMPORARIES.discard(tmp)
+
+
+def _mode_of(target: Path) -> int:
+    """The permission bits a written file gets: the replaced file's, else what ``open``
+    gives a new file (0666 less the process's umask)."""
+    with contextlib.suppress(OSError):
+        return stat.S_IMODE(os.stat(target).st_mode)
+    with _LOCK:  # os.umask only reads the mask by setting it
+        mask = os.umask(0o022)
+        os.umask(mask)
+    return 0o666 & ~mask
 
 
 def atomic_write_text(path: str | os.PathLike, text: str) -> None:
