@@ -584,7 +584,10 @@ def compare(
             to compare variants of one preset.
         grid: a :class:`Grid`, map file or built-in map name (as :func:`jaxga.api.run`).
         seeds: a count or explicit seeds, the same for every preset.
-        metric, metrics, test, alpha: see :func:`compare_results`.
+        metric: see :func:`compare_results`.
+        metrics: see :func:`compare_results`.
+        test: see :func:`compare_results`.
+        alpha: see :func:`compare_results`.
         progress: optional callback, called with the label before each preset runs.
         common_options: passed to every :func:`jaxga.api.run` call (``generations``,
             ``corner_rule``, ``variant``, ``sets``, ``size_class``, overrides such as

@@ -329,8 +329,9 @@ def check_operator(op: registry.Operator | str, fn: Callable | None = None, *,
             name (``"mutation"``, ``"fitness"``, ...) with ``fn``.
         fn: the operator's function, with its family's signature
             (:mod:`jaxga.config.registry`), when ``op`` is a family name.
-        grid, parents: the map and the feasible parents to check on (default:
-            :func:`default_setting`); ``parents`` must hold ``P`` paths.
+        grid: the map to check on (default: :func:`default_setting`'s).
+        parents: ``P`` feasible, loop-free parents on ``grid`` (default:
+            :func:`default_setting`'s).
         key: the PRNG key of the check (default ``PRNGKey(0)``).
         field_repair: check it as bound with ``repair.fallback = "field"``.
         **declaration: the rest of the :class:`~jaxga.config.registry.Operator` built

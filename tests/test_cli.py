@@ -322,7 +322,7 @@ def test_console_script_never_prints_a_traceback(tmp_path):
 
 def test_the_command_line_compilation_cache_directory(tmp_path, monkeypatch):
     """`jaxga run` keeps compiled programs in $JAXGA_CACHE_DIR, by default
-    ~/.cache/jaxga/jax; an empty value turns the cache off (README, Quick start). A
+    ~/.cache/jaxga/jax; an empty value turns the cache off (docs, "getting started"). A
     script or notebook calls the same function, optionally with its own directory."""
     import jax
 

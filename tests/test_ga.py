@@ -96,3 +96,31 @@ def test_vmap_over_three_mutation_rates_equals_three_separate_runs(ga):
         np.testing.assert_array_equal(np.asarray(out["failures"][i]), ref.failures[0])
     assert len({float(f) for f in np.asarray(out["fitness"])}) > 1 or \
         len({int(x) for x in np.asarray(out["failures"][:, 1])}) > 1  # the rate mattered
+
+
+def test_a_users_own_scan_over_step_is_jaxga_run_seed_for_seed(ga):
+    """The user's loop: ``init`` on ``fold_in(key, 0)`` is the initial population of
+    ``GA.init(key)``, then a ``lax.scan`` over ``ga.step`` with generation ``t``'s key
+    ``fold_in(fold_in(key, 1), t)``, then ``finish``: seeds 0-3 of ``jaxga.run``, bit for
+    bit (paths, node counts, fitness, failures)."""
+    params = ga.default_params
+
+    def users_run(key):
+        state = ga.init(key, params)
+        evolve_key = jax.random.fold_in(key, 1)
+
+        def body(s, t):
+            return ga.step(jax.random.fold_in(evolve_key, t), s, params), None
+
+        state, _ = jax.lax.scan(body, state, jnp.arange(GENERATIONS))
+        return ga.finish(state, params)
+
+    keys = jax.vmap(jax.random.PRNGKey)(jnp.asarray(SEEDS, jnp.uint32))
+    out = jax.jit(jax.vmap(users_run))(keys)
+    ref = jaxga.run("sga", MAP, seeds=SEEDS, generations=GENERATIONS)
+    np.testing.assert_array_equal(np.asarray(out["fitness"]), ref.fitness)
+    np.testing.assert_array_equal(np.asarray(out["length"]), ref.n_cells)
+    np.testing.assert_array_equal(np.asarray(out["failures"]), ref.failures)
+    for i in range(len(SEEDS)):
+        n = int(ref.n_cells[i])
+        np.testing.assert_array_equal(np.asarray(out["cells"][i, :n]), ref.cells[i, :n])

@@ -1,7 +1,8 @@
 """The layers: dependencies point one way, no private names cross modules, imports at the top.
 
 Read from the source with :mod:`ast` (nothing is imported), against the order of the
-README's folder tree: a module imports only from its own folder and the folders before it.
+folder tree of docs/architecture.md: a module imports only from its own folder and the
+folders before it.
 """
 
 from __future__ import annotations

@@ -165,32 +165,3 @@ def test_operators_command_lists_the_registry():
         for key in op.params:
             assert key in out
     assert "replace_point (formerly one_point)" in out
-
-
-def test_the_readme_walk_through_adds_a_working_operator(setting):
-    """The README's "Operators, and how to add one": its function and its registration
-    run as written; the operator keeps the mutation contract, the configuration accepts
-    it, and a run uses it."""
-    import types
-
-    from jaxga import api
-    from jaxga.core.grid import move_legal
-
-    readme = (Path(__file__).resolve().parents[1] / "README.md").read_text()
-    section = readme.split("## Operators, and how to add one", 1)[1].split("\n## ", 1)[0]
-    function, registration = re.findall(r"```python\n(.*?)```", section, re.S)
-    ns = {"jax": jax, "jnp": jnp, "move_legal": move_legal, "compact": compact}
-    exec(function, ns)  # noqa: S102 - the README's own code
-    ns.update(mu=types.SimpleNamespace(drop_point=ns["drop_point"]),
-              register=registry.register, Operator=registry.Operator,
-              SHRINKING=registry.SHRINKING)
-    exec(registration, ns)  # noqa: S102
-    try:
-        grid, pop = setting
-        op = registry.operator("mutation", "drop_point")
-        testing.check_family(op, grid, pop, jax.random.PRNGKey(3))
-        r = api.run("sga", grid, seeds=2, population__size=8, generations=3,
-                    sets=["mutation.method=drop_point", "mutation.probability=1.0"])
-        assert r.config["mutation.method"] == "drop_point" and r.success.all()
-    finally:
-        registry.unregister("mutation", "drop_point")

@@ -13,17 +13,18 @@ needs the list of operators reads it from here:
 * ``jaxga operators`` (the command line's list, with parameters and traits);
 * the contract tests (``tests/test_registry.py``), parametrised over the registry.
 
-Adding an operator is one function plus one :func:`register` call (README, "Add an
-operator"). The engine's contract per family, i.e. what :meth:`Operator.bind` returns:
+Adding an operator is one function plus one :func:`register_operator` call, from any
+module (docs, "the pure core"); :func:`jaxga.testing.check_operator` runs its family's
+contract on it. The engine's contract per family, i.e. what :meth:`Operator.bind` returns:
 
 ====================  ===================================================================
-``init``              ``init_fn(key, grid, capacity) -> (cells, length, ok)`` (SPEC 4)
-``fitness``           ``f(grid, cells, length, feasible) -> f32`` (SPEC 3)
-``selection``         ``select(key, fitness, active) -> int32[P]`` (SPEC 5)
-``crossover``         ``op(key, grid, c1, l1, c2, l2) -> (c1, l1, c2, l2, n_failed)`` (SPEC 6)
-``mutation``          ``op(key, grid, cells, length) -> (cells, length, failed)`` (SPEC 7)
-``simplify``          as ``mutation``, never lengthening a path (SPEC 9)
-``post``              ``post(grid, cells, length) -> (cells, length)`` (SPEC 9)
+``init``              ``init_fn(key, grid, capacity) -> (cells, length, ok)``
+``fitness``           ``f(grid, cells, length, feasible) -> f32``
+``selection``         ``select(key, fitness, active) -> int32[P]``
+``crossover``         ``op(key, grid, c1, l1, c2, l2) -> (c1, l1, c2, l2, n_failed)``
+``mutation``          ``op(key, grid, cells, length) -> (cells, length, failed)``
+``simplify``          as ``mutation``, never lengthening a path
+``post``              ``post(grid, cells, length) -> (cells, length)``
 ====================  ===================================================================
 
 ``crossover``, ``mutation`` and ``simplify`` operators reach a population through

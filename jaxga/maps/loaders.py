@@ -234,9 +234,10 @@ def load_map(
             would have no effect (a ROS map's YAML sets its own thresholds).
         unknown: ROS maps: ``"blocked"`` (default) or ``"free"`` for unknown cells.
             Refused for any other format: only a ROS map has unknown cells.
-        start_world, goal_world: ROS maps: the endpoints in metres (world frame); the
-            cells that hold them (:func:`jaxga.maps.ros.world_to_cell`). Not with
-            ``start``/``goal``; refused on a map without a resolution and an origin.
+        start_world: ROS maps: the start in metres (world frame); the cell that holds
+            it (:func:`jaxga.maps.ros.world_to_cell`). Not with ``start``; refused on a
+            map without a resolution and an origin.
+        goal_world: the goal in metres, as ``start_world``.
         inflate: grow the obstacles by this many cells (:func:`jaxga.maps.inflate`: every
             cell whose centre lies within that distance of a blocked cell's centre),
             on the map's own cells, before ``coarsen``.

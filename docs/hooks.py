@@ -1,0 +1,74 @@
+"""MkDocs hooks: pages generated from the code, so that they cannot drift from it.
+
+A page that holds ``<!-- generated: operators -->`` gets the operator registry's table
+(:mod:`jaxga.config.registry`); ``<!-- generated: presets -->`` gets one section per paper
+card (``docs/cards/*.toml``: every value of a preset with the paper's section it comes
+from). Loaded by ``mkdocs.yml`` (``hooks:``).
+"""
+
+from __future__ import annotations
+
+import re
+from pathlib import Path
+
+CARDS = Path(__file__).resolve().parent / "cards"
+
+
+def operators_table() -> str:
+    """Markdown: every registered operator, family by family, with its summary, its own
+    keys and its traits."""
+    from jaxga.config import registry
+
+    out = []
+    for family in registry.FAMILIES:
+        out += [f"### {family}", "", "| name | what it does | its keys | traits |",
+                "|---|---|---|---|"]
+        for op in registry.operators(family):
+            keys = ", ".join(f"`{k}`" for k in op.params) or "-"
+            traits = ", ".join(sorted(op.traits)) or "-"
+            former = f" (formerly {', '.join(op.aliases)})" if op.aliases else ""
+            summary = op.summary.replace("|", "/")
+            out.append(f"| `{op.name}`{former} | {summary} | {keys} | {traits} |")
+        out.append("")
+    return "\n".join(out)
+
+
+_LINE = re.compile(r"^(?P<key>[A-Za-z_]+)\s*=\s*(?P<value>[^#]+?)\s*(#\s*(?P<note>.*))?$")
+
+
+def card_section(path: Path) -> str:
+    """Markdown: one paper card as a heading, the card's opening comment and a table of
+    (stage, key, value, where it comes from); a comment that continues on the next
+    lines is joined."""
+    lines = path.read_text().splitlines()
+    intro = []
+    for line in lines:
+        if not line.startswith("#"):
+            break
+        intro.append(line.lstrip("# ").rstrip())
+    rows, section = [], "run"
+    for line in lines[len(intro):]:
+        stripped = line.strip()
+        if stripped.startswith("[") and stripped.endswith("]"):
+            section = stripped[1:-1]
+        elif stripped.startswith("#") and rows and line.startswith(" "):
+            rows[-1][3] += " " + stripped.lstrip("# ")
+        elif (m := _LINE.match(stripped)) and m["key"] != "preset":
+            rows.append([section, m["key"], m["value"], m["note"] or ""])
+    table = ["| stage | key | value | source |", "|---|---|---|---|"]
+    table += [f"| {s} | `{k}` | `{v}` | {n.replace('|', '/')} |" for s, k, v, n in rows]
+    return "\n".join([f"### {path.stem}", "", " ".join(intro), "", *table, ""])
+
+
+def presets_sections() -> str:
+    """Markdown: every paper card, in name order."""
+    return "\n".join(card_section(p) for p in sorted(CARDS.glob("*.toml")))
+
+
+def on_page_markdown(markdown: str, page, config, files) -> str:  # noqa: ARG001 - hook API
+    """Replace the generation markers of a page."""
+    if "<!-- generated: operators -->" in markdown:
+        markdown = markdown.replace("<!-- generated: operators -->", operators_table())
+    if "<!-- generated: presets -->" in markdown:
+        markdown = markdown.replace("<!-- generated: presets -->", presets_sections())
+    return markdown

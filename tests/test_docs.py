@@ -1,0 +1,107 @@
+"""Every code block of the README and of the documentation site runs as written.
+
+A page's blocks run in order, in a fresh folder holding a copy of ``docs/examples/`` (the
+maps the pages use; also as ``docs/examples/`` in it, for the README, which is read from
+the repository's root), like a reader who types them one after another:
+
+* ``python``: executed in one namespace per page;
+* ``bash``: each command run by the shell (a trailing ``\\`` joins lines; ``# comments``
+  are skipped); it must exit 0. A line that installs (``python3 -m venv``, ``pip
+  install``) is not run here: those are the README's two commands (install and run the
+  main job; install and run this suite), which ``.ci/run`` runs on a fresh clone;
+* ``toml``: parsed, and loaded as a preset file when it names a ``base`` preset;
+* ``yaml``: parsed;
+* ``text``: output and synopses, not run.
+
+A block of any other kind fails :func:`test_every_code_block_has_a_known_kind`.
+"""
+
+from __future__ import annotations
+
+import os
+import re
+import shutil
+import subprocess
+import sys
+
+try:
+    import tomllib
+except ModuleNotFoundError:  # Python 3.10
+    import tomli as tomllib
+from pathlib import Path
+
+import pytest
+import yaml
+
+ROOT = Path(__file__).resolve().parents[1]
+DOCS = ROOT / "docs"
+EXAMPLES = DOCS / "examples"
+PAGES = [ROOT / "README.md", *sorted(p for p in DOCS.rglob("*.md") if EXAMPLES not in p.parents)]
+KINDS = {"python", "bash", "toml", "yaml", "text"}
+RUN = {"python", "bash", "toml", "yaml"}
+FENCE = re.compile(r"^(?P<indent>[ ]*)```(?P<kind>[\w-]*)[^\n]*\n(?P<body>.*?)^(?P=indent)```",
+                   re.M | re.S)
+INSTALLS = re.compile(r"(^|&&\s*)(python3? -m venv|pip install)")
+
+
+def blocks(page: Path) -> list[tuple[str, str]]:
+    """``(kind, code)`` of every fenced block of ``page``, in order (indentation removed)."""
+    out = []
+    for m in FENCE.finditer(page.read_text()):
+        indent = len(m["indent"])
+        code = "\n".join(line[indent:] for line in m["body"].splitlines())
+        out.append((m["kind"], code))
+    return out
+
+
+def commands(code: str) -> list[str]:
+    """The shell commands of a bash block: continuation lines joined; comments and lines
+    that install left out."""
+    out = []
+    for line in code.replace("\\\n", " ").splitlines():
+        line = line.strip()
+        if not line or line.startswith("#"):
+            continue
+        if not INSTALLS.search(line):
+            out.append(line)
+    return out
+
+
+RUNNABLE = [p for p in PAGES if any(kind in RUN for kind, _ in blocks(p))]
+
+
+def test_every_code_block_has_a_known_kind():
+    unknown = [(p.relative_to(ROOT), kind) for p in PAGES for kind, _ in blocks(p)
+               if kind not in KINDS]
+    assert not unknown, f"code blocks without a known kind ({', '.join(KINDS)}): {unknown}"
+    assert {p.name for p in RUNNABLE} >= {"README.md", "pure-core.md", "maps.md"}
+
+
+@pytest.mark.parametrize("page", RUNNABLE, ids=[str(p.relative_to(ROOT)) for p in RUNNABLE])
+def test_the_code_blocks_of_a_page_run(page, tmp_path, monkeypatch):
+    shutil.copytree(EXAMPLES, tmp_path, dirs_exist_ok=True)  # the pages' own folder
+    shutil.copytree(EXAMPLES, tmp_path / "docs" / "examples")  # the README's, from the root
+    monkeypatch.chdir(tmp_path)
+    monkeypatch.setenv("MPLBACKEND", "Agg")
+    env = {**os.environ, "PATH": f"{Path(sys.executable).parent}{os.pathsep}"
+           f"{os.environ.get('PATH', '')}"}
+    namespace: dict = {"__name__": "__docs__"}
+    for i, (kind, code) in enumerate(blocks(page)):
+        where = f"{page.relative_to(ROOT)}, block {i + 1}"
+        if kind == "python":
+            exec(compile(code, where, "exec"), namespace)  # noqa: S102 - the page's own code
+        elif kind == "bash":
+            for command in commands(code):
+                done = subprocess.run(command, shell=True, env=env, capture_output=True,
+                                      text=True, timeout=900)
+                assert done.returncode == 0, (f"{where}: `{command}` exited "
+                                              f"{done.returncode}:\n{done.stderr[-2000:]}")
+        elif kind == "toml":
+            data = tomllib.loads(code)
+            if "base" in data:
+                from jaxga.config.presets import load_preset
+
+                (tmp_path / "block.toml").write_text(code)
+                load_preset(str(tmp_path / "block.toml"))
+        elif kind == "yaml":
+            yaml.safe_load(code)
