@@ -1,4 +1,4 @@
-"""Compile once, run many: the waiting a user sees before results (issue 41's targets).
+"""Compile once, run many: the waiting a user sees before results (the targets of decision 028).
 
     python benchmarks/compile_once.py [--presets sga,imga,...] [--sizes 20,32,64]
         [--devices N] [--size-class] [--no-write]

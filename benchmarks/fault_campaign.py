@@ -1,4 +1,4 @@
-"""A hostile-input campaign against the ``jaxga`` command line (issue 50, part 5).
+"""A hostile-input campaign against the ``jaxga`` command line (decision 033).
 
 About a hundred inputs and faults a careless user or script produces, beyond the cases of
 ``tests/test_faults.py``: broken or odd map files (empty, garbage, huge headers, ragged
@@ -972,6 +972,18 @@ def first_line(out: Outcome) -> str:
     return lines[0] if lines else ""
 
 
+def group_table(results: list) -> str:
+    """Markdown: per group of cases, how many ended in each class."""
+    classes = [cls for cls in (*OK_CLASSES, *DEFECTS)
+               if any(o.cls == cls for _, o in results)]
+    groups = list(dict.fromkeys(c.group for c, _ in results))
+    rows = [[g, sum(c.group == g for c, _ in results),
+             *(sum(c.group == g and o.cls == cls for c, o in results) for cls in classes)]
+            for g in groups]
+    align = "l" + "r" * (1 + len(classes))
+    return aligned(markdown_table(["group", "cases", *classes], rows), align)
+
+
 def main() -> None:
     ap = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
     ap.add_argument("--quick", action="store_true", help="about 10 cases")
@@ -1046,9 +1058,8 @@ def main() -> None:
         "case (inputs and previous outputs unchanged, nothing left behind).\n\n"
         "**Counts per class**\n\n"
         + aligned(markdown_table(["class", "cases", "kind"], count_rows), "lrl")
-        + "\n\n**Cases** (first stderr line: the first that is not a progress line)\n\n"
-        + aligned(markdown_table(["case", "group", "expected", "class", "exit", "s",
-                                  "first stderr line", "command"], rows), "lllllrll")
+        + "\n\n**Cases per group** (every case, its command and first stderr line: the "
+        "script's output)\n\n" + group_table(results)
     )
     if defects:
         body += "\n\n**Defects**\n\n" + "\n".join(
@@ -1056,6 +1067,8 @@ def main() -> None:
     title = "hostile inputs to the command line (benchmarks/fault_campaign.py)"
     record(title + (" (--quick)" if args.quick else ""), body,
            write=not args.no_write and not args.only)
+    print("\n" + aligned(markdown_table(["case", "group", "expected", "class", "exit", "s",
+                                         "first stderr line", "command"], rows), "lllllrll"))
     print(f"\n{len(results)} cases in {total:.0f} s: "
           + ", ".join(f"{cls} {n}" for cls, n in counts.most_common()))
     for c, o in defects:

@@ -3,7 +3,7 @@
 For every ``.scen`` file in a folder of Moving AI benchmarks (default
 ``/work/shared/benchmarks/movingai``), load its map, run
 :func:`jaxga.reference.optima.OctileGraph.search` (the engine of
-:func:`jaxga.reference.optima.shortest_path`; SPEC 1 and 11) under the ``"strict"`` corner rule
+:func:`jaxga.reference.optima.shortest_path`) under the ``"strict"`` corner rule
 (the Moving AI convention: no corner cutting) on every scenario, and count how many
 optimal lengths are reproduced within ``--tol`` (default 1e-3). A sample of scenarios
 per map is also cross-checked against ``scipy.sparse.csgraph.dijkstra`` on the legal-move

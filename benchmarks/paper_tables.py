@@ -4,7 +4,7 @@ or row: table, row, column).
 
 Paper files: 000 = IMGA (Li, Hu, Liu 2021), 001 = AGACD (Hao et al. 2021), 002 = Zhang
 Ke-qi's IGA, 003 = MPMGA (Hao et al. 2020), 004 = Zhu & Pan 2024 (checked against the
-files' headers and ``../shared/SPEC.md``). Times are the papers' MATLAB seconds on their
+files' headers). Times are the papers' MATLAB seconds on their
 own machines (Zhu: MATLAB R2023a, 2.30 GHz, 4 GB; AGACD / MPMGA: MATLAB r2018a, AMD
 Ryzen 5 4500U 2.38 GHz; IMGA: MATLAB R2018b).
 """

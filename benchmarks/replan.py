@@ -1,4 +1,4 @@
-"""Latency of local re-planning in MPMGA's two scenarios (MPMGA 5.2.1 / 5.3.1, SPEC 10).
+"""Latency of local re-planning in MPMGA's two scenarios (MPMGA 5.2.1 / 5.3.1).
 
 For each scenario (25 x 25: obstacles at cells 320 and 345, robot at 295, re-plan to
 370; 50 x 50: a 3 x 3 block at 810-812/860-862/910-912, robot at 759, re-plan to 963; the
@@ -14,7 +14,7 @@ beside them: about 0.3-0.4 s (25 x 25) and under 1 s (50 x 50).
                                 [--generations 20] [--population 10] [--no-write]
 
 The default preset is ``jaxga.replan``'s (hybrid); ``--preset mpmga`` times the paper's
-own re-planning GA. Target (issue 40): a median latency of at most 50 ms per re-plan in a
+own re-planning GA. Target: a median latency of at most 50 ms per re-plan in a
 25 x 25 window on the 2-core machine, after compilation.
 """
 
@@ -89,7 +89,7 @@ def main() -> None:
              "segment found", "mean spliced length", "exact optimum robot -> goal",
              "paper (MPMGA)"], rows)
     )
-    record(f"replan: local re-planning latency, MPMGA 5.2.1 / 5.3.1 (SPEC 10), preset "
+    record(f"replan: local re-planning latency, MPMGA 5.2.1 / 5.3.1, preset "
            f"{args.preset}", body,
            write=not args.no_write)
 

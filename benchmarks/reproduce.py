@@ -15,7 +15,7 @@ Tables (``--tables``; default all):
   a population of 200, mean and sd of the lengths made.
 - ``zhu4``: Zhu & Pan Table 4 (the runs of ``benchmarks/zhu_table4.py``, plus the BGA
   row): length mean and sd, smoothness (eq. 8) mean and sd, minimum length, 30 runs.
-- ``agacd5``: AGACD Table 5, the DOE of ``benchmarks/doe_agacd.py``: each design point's
+- ``agacd5``: AGACD Table 5, its designed experiment (``jaxga.doe``): each design point's
   mean fitness, eq. 31's coefficients, the predicted best combination, its confirmation.
 - ``agacd8``: AGACD Tables 7-9 (20 x 20, 20 runs): fitness (before and after the
   optimisation operator), convergence generation, times; best fitness and paired wins
@@ -574,7 +574,7 @@ def table_agacd5(ctx: Context) -> tuple[list[Row], list[str]]:
                    zip(names, r.factors, r.best_coded))
     notes = [f"{seeds} runs per design point (the same seeds for every point); the "
              "response is `Result.fitness`, the best individual's AGACD fitness before the "
-             "optimisation operator, as `benchmarks/doe_agacd.py` records it. jaxga's "
+             "optimisation operator, as this reproduction records it. jaxga's "
              f"least-squares fit predicts its best at {ls} ({r.predicted:.5f}); measured "
              f"there {r.confirmation_mean:.5f}. The confirmation rows run the paper's own "
              "best combination (the preset's Table 6 parameters) with the DOE's seeds "
@@ -1050,6 +1050,13 @@ optimal lengths (**inferred**), the others are **stand-ins**.
 
 {(chr(10) * 2).join(parts)}
 
+Wall time of the whole reproduction: {wall:.0f} s (compilation included); load average
+before {', '.join(f'{v:.1f}' for v in load0)}, after
+{', '.join(f'{v:.1f}' for v in os.getloadavg())} on a shared 2-core machine.
+"""
+    record("Paper reproduction: the five papers' tables beside jaxga", body,
+           write=not args.no_write)
+    print(f"""
 ### jaxga runs
 
 Every run above (a run shared by two tables is listed once): success = runs that
@@ -1058,14 +1065,7 @@ a path; copied = initial individuals that are copies because the initialiser's a
 budget ran out (`Result.init_unfilled`, summed over runs); s per run = (init + evolve
 + post) / runs of the batch, after compilation.
 
-{runs}
-
-Wall time of the whole reproduction: {wall:.0f} s (compilation included); load average
-before {', '.join(f'{v:.1f}' for v in load0)}, after
-{', '.join(f'{v:.1f}' for v in os.getloadavg())} on a shared 2-core machine.
-"""
-    record("Paper reproduction: the five papers' tables beside jaxga", body,
-           write=not args.no_write)
+{runs}""")
 
 
 if __name__ == "__main__":

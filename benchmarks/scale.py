@@ -1,4 +1,4 @@
-"""Seeds per second with 1 device, one device per core, and 2 processes (issue 7).
+"""Seeds per second with 1 device, one device per core, and 2 processes.
 
     python benchmarks/scale.py [--presets sga,mpmga] [--seeds 32] [--generations G]
         [--no-write]

@@ -1,4 +1,4 @@
-"""Time B-spline smoothing (jaxga.smooth, SPEC 12) of 1 and 100 paths on 20 x 20 and 50 x 50.
+"""Time B-spline smoothing (jaxga.smooth) of 1 and 100 paths on 20 x 20 and 50 x 50.
 
 IMGA's Table 4 compares its broken line with BCA, a GA over Bezier control points that
 needs 136.5 s per smoothed path; this measures what smoothing a post-optimised path costs
@@ -119,7 +119,7 @@ def main(argv: list[str] | None = None) -> None:
     table = markdown_table(headers, rows)
     print(table)
     record(
-        "smooth: B-spline smoothing of 1 and 100 paths (SPEC 12)",
+        "smooth: B-spline smoothing of 1 and 100 paths",
         f"{P} optimal paths (any-angle and 8-connected, alternating) between random "
         "start/goal pairs, corner rule strict; default SmoothConfig (200 Adam steps, "
         f"n_ctrl = H + W); median of {args.repeats} calls after the compiling call, "

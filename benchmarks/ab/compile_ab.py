@@ -1,6 +1,6 @@
 """Cold compile of two checkouts, interleaved: a git revision against this working tree.
 
-    python benchmarks/compile_ab.py --base HEAD~1 [--presets sga,iga_zhu] [--reps 2]
+    python benchmarks/ab/compile_ab.py --base HEAD~1 [--presets sga,iga_zhu] [--reps 2]
         [--seeds 1] [--devices 1] [--warm N] [--cli] [--no-write]
 
 The machine's speed drifts within an hour by more than the few per cent a change may
@@ -34,6 +34,7 @@ import sys
 import tempfile
 from pathlib import Path
 
+sys.path.insert(0, str(Path(__file__).resolve().parents[1]))  # benchmarks/: _results
 from _results import (
     CLI_MAP,
     PRESETS,
@@ -49,7 +50,7 @@ from _results import (
     xla_seconds_by_program,
 )
 
-ROOT = Path(__file__).resolve().parents[1]
+ROOT = Path(__file__).resolve().parents[2]
 
 
 def child(preset: str, seeds: int, warm: int, cli: int = 0) -> dict:
@@ -74,7 +75,7 @@ def child(preset: str, seeds: int, warm: int, cli: int = 0) -> dict:
 
 def measure(root: Path, preset: str, seeds: int, devices: int, warm: int, cli: bool) -> dict:
     """:func:`child` in a fresh process importing ``jaxga`` from ``root``."""
-    here = Path(__file__).resolve().parent
+    here = Path(__file__).resolve().parents[1]  # benchmarks/: _results
     m = cold_child(__file__, f"{preset}:{seeds}:{warm}:{int(cli)}",
                    PYTHONPATH=f"{root}{os.pathsep}{here}",
                    JAXGA_DEVICES=str(devices),
@@ -150,7 +151,7 @@ def main() -> None:
                          rows)
         + f"\n\nAll results identical: {'yes' if same else 'NO'}."
     )
-    record("cold compile, base against new (benchmarks/compile_ab.py)", body,
+    record("cold compile, base against new (benchmarks/ab/compile_ab.py)", body,
            write=not a.no_write)
 
 

@@ -1,6 +1,6 @@
 """Are the paper reproductions unchanged? Result hashes of a base revision and this tree.
 
-    python benchmarks/reproduction_hashes.py --base 4d4b9ec [--seeds 100] [--doe-seeds 5]
+    python benchmarks/ab/reproduction_hashes.py --base 4d4b9ec [--seeds 100] [--doe-seeds 5]
 
 Runs the reproductions in two fresh processes, one importing ``jaxga`` from a checkout of
 ``--base`` (``git worktree``, removed afterwards) and one from this working tree, and
@@ -26,11 +26,13 @@ from __future__ import annotations
 
 import argparse
 import json
+import sys
 from pathlib import Path
 
+sys.path.insert(0, str(Path(__file__).resolve().parents[1]))  # benchmarks/: _results
 from _results import PRESETS, child_at, child_at_revision, commit, markdown_table, record
 
-HERE = Path(__file__).resolve().parent
+HERE = Path(__file__).resolve().parents[1]  # benchmarks/
 ROOT = HERE.parent
 ZHU = [(preset, variant, name) for preset, variant in (("iga_zhu", None), ("sga", "iga_zhu"))
        for name in ("classic_ga_gapp3_20x20", "routeplanning_yangbo_20x20")]
@@ -93,7 +95,7 @@ def main() -> None:
     if not args.base:
         ap.error("--base is required")
     opts = {"seeds": args.seeds, "doe_seeds": args.doe_seeds}
-    script = Path(__file__).name
+    script = str(Path(__file__).resolve())  # this file, run with another jaxga
     base_h = child_at_revision(args.base, script, json.dumps({**opts, "fallback": None}))
     off = child_at(ROOT, script, json.dumps({**opts, "fallback": "none"}))
     on = child_at(ROOT, script, json.dumps({**opts, "fallback": "field_walk"}))

@@ -1,6 +1,6 @@
 """Throughput of a base revision and the working tree on the same machine, alternating.
 
-    python benchmarks/throughput_ab.py --base REV [--presets sga] [--settings 20x20,50x50]
+    python benchmarks/ab/throughput_ab.py --base REV [--presets sga] [--settings 20x20,50x50]
         [--seeds 1000] [--rounds 1] [--devices N]
 
 Issue 41's target: individual-generations per second at 20 x 20 and 50 x 50 with 1000
@@ -17,12 +17,14 @@ from __future__ import annotations
 import argparse
 import os
 import subprocess
+import sys
 import tempfile
 from pathlib import Path
 
+sys.path.insert(0, str(Path(__file__).resolve().parents[1]))  # benchmarks/: _results
 from _results import child_at, markdown_table, record
 
-HERE = Path(__file__).resolve().parent
+HERE = Path(__file__).resolve().parents[1]  # benchmarks/
 
 
 def main() -> None:
@@ -68,7 +70,7 @@ def main() -> None:
         f"Base `{args.base}` against the working tree, {args.devices} XLA host device(s), "
         f"cold children alternating, best of {args.rounds} round(s) each. ind-gen/s = "
         "seeds x population x generations / evolve seconds (speed.py's settings). Target "
-        "(issue 41): the tree within 10 % of the base.\n\n"
+        "(decision 028): the tree within 10 % of the base.\n\n"
         + markdown_table(["preset", "setting", "seeds", "base ind-gen/s", "tree ind-gen/s",
                           "change"], rows)
     )

@@ -1,24 +1,26 @@
 """Does every preset still give the same results? Result hashes of a base revision and this tree.
 
-    python benchmarks/preset_hashes.py --base REV [--seeds 20]
+    python benchmarks/ab/preset_hashes.py --base REV [--seeds 20]
 
 Runs every built-in preset of both (its default settings and corner rule) on every
 classic 20 x 20 built-in map, in two fresh processes: one importing ``jaxga`` from a
 checkout of ``--base`` (a temporary ``git worktree``) and one from this working tree.
 Compares a SHA-256 of every per-seed output of each run (``_results.result_hash``:
 paths, raw paths, fitness, lengths, histories). A change that only reorganises code
-(issue 38: the operator registry, renamed operators) must leave every hash equal.
+(moving code, renaming operators, splitting modules) must leave every hash equal.
 Prints the table and records it in RESULTS.md; exits 1 if any hash differs.
 """
 
 from __future__ import annotations
 
 import argparse
+import sys
 from pathlib import Path
 
+sys.path.insert(0, str(Path(__file__).resolve().parents[1]))  # benchmarks/: _results
 from _results import child_at, child_at_revision, commit, markdown_table, parse_args, record
 
-ROOT = Path(__file__).resolve().parents[1]
+ROOT = Path(__file__).resolve().parents[2]
 
 
 def child(seeds: int) -> dict:
@@ -29,7 +31,7 @@ def child(seeds: int) -> dict:
     from jaxga.maps import builtin_names
     try:
         from jaxga.config.presets import preset_names
-    except ImportError:  # a revision before the layer folders (issue 38)
+    except ImportError:  # a revision before the layer folders (before the operator registry)
         from jaxga.presets import preset_names
 
     out = {}
@@ -48,7 +50,7 @@ def main() -> None:
     args = parse_args(ap, child)
     if not args.base:
         ap.error("--base is required")
-    script = Path(__file__).name
+    script = str(Path(__file__).resolve())  # this file, run with another jaxga
     base = child_at_revision(args.base, script, str(args.seeds))
     tree = child_at(ROOT, script, str(args.seeds))
     rows = [[name, base[name], tree.get(name, "-"), "yes" if tree.get(name) == base[name]
