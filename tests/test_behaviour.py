@@ -1,4 +1,4 @@
-"""Each preset behaves as its paper says on a classic 20 x 20 map (issue 39, item 3).
+"""Each preset behaves as its paper says on a classic 20 x 20 map.
 
 One run per preset at the paper's own settings (population, generations, rates), four
 seeds (one call of the 4-run program: more seeds would run the 32-run one), the paper's

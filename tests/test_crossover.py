@@ -1,4 +1,4 @@
-"""Crossover operators (SPEC 6): properties, the papers' worked examples, statistics.
+"""Crossover operators (the papers' sections on crossover): properties, worked examples, statistics.
 
 Every operator is run under ``jax.jit`` through :func:`jaxga.operators.lift.over_pairs` (the
 vmap over pairs) and compared with an independent pure-Python reference that enumerates

@@ -565,7 +565,7 @@ def test_cli_refuses_checkpoint_of_another_configuration(tmp_path, capsys):
 
 
 def test_killed_checkpointed_doe_resumes_to_the_same_result(blocked, tmp_path):
-    """Must-show (issue 5): kill a checkpointed ``jaxga doe`` subprocess midway, rerun
+    """Kill a checkpointed ``jaxga doe`` subprocess midway, rerun
     the same command, and get the JSON of an uninterrupted run of the same command."""
     ckpt, out = tmp_path / "ckpt", tmp_path / "out.json"
     cmd = [sys.executable, "-m", "jaxga.cli", *CLI_ARGS, "--checkpoint", str(ckpt),

@@ -252,7 +252,7 @@ def test_history_row_counts_only_active_individuals_of_every_island():
 
 
 def test_per_island_rates_apply_to_their_own_island():
-    """MPMGA's islands differ by their crossover and mutation rates (SPEC 8): with
+    """MPMGA's islands differ by their crossover and mutation rates (MPMGA section 3.3): with
     selection and migration off, an island whose rates are 0 keeps its population
     through a generation and an island with rate 1 does not (the rates are dynamic
     parameters: one compiled generation for every setting)."""
@@ -313,7 +313,7 @@ def test_init_unique_gives_non_repeating_initial_chromosomes():
 
 @pytest.mark.parametrize("timing", ["before_variation", "after_variation"])
 def test_migration_timing_decides_whether_the_migrants_were_varied(timing):
-    """``islands.timing``: MPMGA's Fig. 1 migrates before crossover and mutation, SPEC 8
+    """``islands.timing``: MPMGA's Fig. 1 migrates before crossover and mutation,
     after. Island A mutates every individual, B and C keep theirs (rates 0, no selection),
     so what sinks from A into B and C is among A's initial worst four (two into each) before
     the variation, and A's mutated individuals after it."""

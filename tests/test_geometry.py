@@ -1,4 +1,4 @@
-"""Exact line of sight (SPEC 1) and AGACD's linear trial (AGACD eq. 3-6)."""
+"""Exact line of sight (the corner rules, decision 027) and AGACD's linear trial (AGACD eq. 3-6)."""
 
 from __future__ import annotations
 

@@ -1,4 +1,4 @@
-"""Initialisers (SPEC 4): Zhu & Pan Table 1, step distributions, properties, redraws.
+"""Initialisers: Zhu & Pan Table 1, step distributions, properties, redraws.
 
 Maps have row y = 0 at the bottom and cells p = y * W + x (0-based), as in the papers.
 Every initialiser is run under ``jax.jit`` + ``jax.vmap``; each jitted function is built

@@ -1,4 +1,4 @@
-"""Migration between islands (SPEC 8, MPMGA 4.4): every topology against a plain NumPy
+"""Migration between islands (MPMGA 4.4): every topology against a plain NumPy
 reference written from the module docstring of :mod:`jaxga.operators.islands`."""
 
 from __future__ import annotations

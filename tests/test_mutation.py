@@ -1,4 +1,4 @@
-"""Mutation operators (SPEC 7): properties under jit + vmap, exact cases, statistics."""
+"""Mutation operators: properties under jit + vmap, exact cases, statistics."""
 
 from __future__ import annotations
 
@@ -95,7 +95,7 @@ _lt_segments = jax.jit(
 
 
 def check_outputs(grid, parents: Population, c, n, failed, n_failed, kind):
-    """The SPEC 2 / issue contract for one population of results."""
+    """The masked-path contract for one population of results."""
     c, n, failed = np.asarray(c), np.asarray(n), np.asarray(failed)
     pc, pn = np.asarray(parents.cells), np.asarray(parents.length)
     assert int(n_failed) == int(failed.sum())  # the population helper counts failures
@@ -499,7 +499,7 @@ def test_segment_sa_zero_temperature_only_improves():
 
 # ------------------------------------------------------------------ probabilities
 def test_adaptive_mutation_probability_exact():
-    """AGACD eq. 28-29 (with SPEC's min(1, .)) on hand-picked inputs."""
+    """AGACD eq. 28-29 (with jaxga's min(1, .)) on hand-picked inputs."""
     amp = jax.jit(M.adaptive_mutation_probability)
     lo, hi = 0.15, 0.3
     f = np.array([1.0, 0.75, 0.5, 0.2], np.float32)  # f_max 1, f_avg 0.5

@@ -1,4 +1,4 @@
-"""Every notebook in ``notebooks/`` runs top to bottom (issue 5), with small settings.
+"""Every notebook in ``notebooks/`` runs top to bottom, with small settings.
 
 Each notebook reads ``JAXGA_NOTEBOOK_QUICK=1`` in its first code cell and then uses tiny
 populations, few generations and few seeds; the kernel shares the suite's persistent

@@ -1,4 +1,4 @@
-"""Objectives, metrics and fitness combiners (SPEC 3) against hand-computed values.
+"""Objectives, metrics and fitness combiners against hand-computed values.
 
 Maps are drawn with row y = 0 at the bottom; a path is a list of (x, y) cells. Every
 function is evaluated under ``jax.jit``. Hand computations are written out in comments.
@@ -111,7 +111,7 @@ def test_path_length_hand_values():
 
 # ------------------------------------------------------------------- turn angles
 def test_turn_angles_hand_values():
-    """SPEC 3 turn angle atan2(|cross|, dot): 0 straight, pi/2 corner, 3pi/4, pi reversal."""
+    """The turn angle atan2(|cross|, dot): 0 straight, pi/2 corner, 3pi/4, pi reversal."""
     a = run(ob.turn_angles, OPEN, L_SHAPE)
     assert a.shape == (12,) and a.dtype == np.float32
     np.testing.assert_allclose(a, np.eye(12)[4] * PI / 2, atol=1e-6)
@@ -148,7 +148,7 @@ def test_turns_count():
 
 
 def test_repeated_nodes_are_skipped():
-    """SPEC 2/3: repeated consecutive nodes add no length, turn or penalty."""
+    """Repeated consecutive nodes add no length, turn or penalty."""
     dup = [(0, 0), (1, 0), (1, 0), (1, 0), (2, 1), (1, 2), (1, 2), (2, 2), (3, 2)]
     for fn in (
         ob.path_length,
@@ -440,7 +440,7 @@ def test_clearance_bands_equal_the_whole_map():
 
 
 def test_metrics_bundle():
-    """SPEC 3 reported metrics in one call, consistent with the single functions."""
+    """The reported metrics in one call, consistent with the single functions."""
     grid = make_grid(obstacles=[(3, 0), (0, 3)], goal=(4, 4))
     m = jax.jit(ob.metrics)(grid, *make_path(MIXED))
     assert isinstance(m, ob.Metrics)
@@ -526,7 +526,7 @@ def test_fitness_sga():
 
 
 def test_infeasible_is_zero():
-    """SPEC 3: infeasible individuals have fitness 0 (population of 3, middle infeasible)."""
+    """Infeasible individuals have fitness 0 (population of 3, middle infeasible)."""
     paths = [make_path(p) for p in (MIXED, STAIRCASE, KNIGHT)]
     cells = jnp.stack([c for c, _ in paths])
     length = jnp.stack([n for _, n in paths])
@@ -581,7 +581,7 @@ def _population16(paths: list[tuple[jax.Array, jax.Array]]) -> list[tuple]:
 
 
 def test_padding_invariance():
-    """SPEC 2: the same path with capacity 12 and 16, and with padding that does not
+    """The same path with capacity 12 and 16, and with padding that does not
     repeat the last cell, gives identical values for every function."""
     paths = [MIXED, KNIGHT, L_SHAPE]
     rows = _population16(

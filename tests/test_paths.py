@@ -1,4 +1,4 @@
-"""The masked path representation (SPEC 2) and loop removal (MPMGA deletion operator)."""
+"""The masked path representation (docs: the pure core) and loop removal (MPMGA deletion)."""
 
 from __future__ import annotations
 

@@ -201,7 +201,7 @@ def test_iga_zhang():
         "init.method": "random_walk", "crossover.method": "common_point",
         "generations": 45,
     })
-    # SPEC 3 defaults (the paper gives no numbers): a = 2, v = 1, v_t = 0.5, r = 0.5
+    # jaxga's defaults (the paper gives no numbers): a = 2, v = 1, v_t = 0.5, r = 0.5
     check(config, {"fitness.a": 2.0, "fitness.v": 1.0, "fitness.v_t": 0.5, "fitness.r": 0.5})
     k = (config["fitness.v"] - config["fitness.v_t"]) * math.pi * config["fitness.r"] / (
         2 * config["fitness.v"] * config["fitness.v_t"])

@@ -1,4 +1,4 @@
-"""Compile once, run many (issue 41): one program set serves every seed count and every
+"""Compile once, run many (decision 028): one program set serves every seed count and every
 generation count, and the padding changes no run's result."""
 
 from __future__ import annotations
@@ -63,7 +63,7 @@ def compiled(monkeypatch):
 
 def unpadded(grid, seeds, generations):
     """The runs as the engine computes them without the API: ``vmap``s of exactly these
-    seeds, all generations in one ``lax.scan`` (the API's programs before issue 41)."""
+    seeds, all generations in one ``lax.scan`` (the API's programs before decision 028)."""
     config = api.check_run("sga", grid, generations=generations, **OPTIONS)
     algo, params = engine.build(config, grid)
     g = with_tables(with_guide(grid) if engine.uses_guide(config) else grid)
@@ -99,7 +99,7 @@ def assert_same_runs(result, rows, ref, ref_hist):
 
 def test_10_20_and_30_seeds_and_50_or_300_generations_run_one_program_set(grid, compiled,
                                                                          reference):
-    """Must show (issue 41): runs of 10, 20 and 30 seeds, then of 50 and 300 generations
+    """Runs of 10, 20 and 30 seeds, then of 50 and 300 generations
     and 3 seeds compile init, evolve and finish once; every seed's result equals its
     unpadded run (a 50-generation run and the first 50 generations of a 300-generation
     one included)."""
@@ -139,7 +139,7 @@ def test_a_smaller_call_reuses_a_larger_compiled_program(grid, compiled):
 
 
 def test_maps_of_one_size_class_run_one_program_set(grid, compiled, reference):
-    """Must show (issue 41): with ``size_class`` a 20 x 20, a 25 x 25 and an 11 x 11 map
+    """With ``size_class`` a 20 x 20, a 25 x 25 and an 11 x 11 map
     (all of the 32 x 32 class) compile init, evolve and finish once; every path is a
     feasible path on its own map, reported in its own cells; seeds repeat exactly; and
     SGA's draws do not depend on the map's width, so each seed of the padded 11 x 11 map

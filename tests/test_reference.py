@@ -74,7 +74,7 @@ def load_scen(path: Path, h: int) -> list[tuple[tuple[int, int], tuple[int, int]
 
 
 def move_ok(b: np.ndarray, rule: str, a, c) -> bool:
-    """Independent statement of SPEC 1's move rule."""
+    """Independent statement of the move rule (decision 027)."""
     h, w = b.shape
     (ax, ay), (cx, cy) = a, c
     if not (0 <= ax < w and 0 <= ay < h and 0 <= cx < w and 0 <= cy < h):
@@ -443,7 +443,7 @@ def test_clear_matches_dense_sampling_off_vertices(case) -> None:
 
 
 def test_clear_vertex_cases() -> None:
-    """Hand cases: interiors, and vertices between diagonal obstacles (SPEC 1)."""
+    """Hand cases: interiors, and vertices between diagonal obstacles."""
     b = np.zeros((3, 3), bool)
     b[1, 1] = True
     assert not clear_np(b, "free", (0, 2), (2, 0))  # through the centre of (1, 1)

@@ -1,4 +1,4 @@
-"""Local re-planning (MPMGA 5.2.1 / 5.3.1, SPEC 10): splice feasibility, the paper's two
+"""Local re-planning (MPMGA 5.2.1 / 5.3.1): splice feasibility, the paper's two
 scenarios, no-path results, errors and the ``jaxga replan`` command line.
 
 Every GA call here uses the same preset, map shape (25 x 25, the 50 x 50 scenario runs in a

@@ -1,4 +1,4 @@
-"""Selection operators (SPEC 5): properties under jit + vmap, exact counts, statistics."""
+"""Selection operators: properties under jit + vmap, exact counts, statistics."""
 
 from __future__ import annotations
 

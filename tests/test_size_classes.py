@@ -1,4 +1,4 @@
-"""Map-size classes (issue 41): the padding of a map to its class keeps its cells and its
+"""Map-size classes (decision 029): the padding of a map to its class keeps its cells and its
 edge (runs on padded maps: tests/test_programs.py)."""
 
 from __future__ import annotations

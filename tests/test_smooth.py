@@ -1,4 +1,4 @@
-"""Tests of jaxga.smooth: B-spline smoothing of waypoint paths (SPEC 12, IMGA section 6).
+"""Tests of jaxga.smooth: B-spline smoothing of waypoint paths (IMGA section 6).
 
 Every property of a smoothed curve is checked independently of the module: the curve is
 re-evaluated from its control points with ``scipy.interpolate.BSpline`` 20 times more
