@@ -1,7 +1,7 @@
 """The ``jaxga`` command line.
 
 ``jaxga optimum`` prints the exact 8-connected and any-angle optima of a map
-(SPEC 11, reference optima); ``jaxga run`` runs a preset for many seeds; ``jaxga doe``
+(decisions 015 and 031); ``jaxga run`` runs a preset for many seeds; ``jaxga doe``
 runs a designed experiment (:mod:`jaxga.doe`); ``jaxga compare`` compares presets with
 statistical tests (:mod:`jaxga.compare`); ``jaxga replan`` re-plans around new obstacles
 (:mod:`jaxga.replan`); ``jaxga presets`` and ``jaxga maps`` list the presets and the
@@ -709,7 +709,7 @@ def cmd_doe(args: argparse.Namespace) -> int:
 
 def _not_lead(what: str, seconds: float) -> bool:
     """True (after a one-line note) on every process but process 0 of a multi-process
-    run: process 0 prints and writes the results of all processes (issue 7)."""
+    run: process 0 prints and writes the results of all processes (docs/devices.md)."""
 
     if parallel.process_index() == 0:
         return False

@@ -1,4 +1,4 @@
-"""Designed experiments over GA hyper-parameters (AGACD 5.2.1, eq. 30-31; SPEC 11).
+"""Designed experiments over GA hyper-parameters (AGACD 5.2.1, eq. 30-31).
 
 A :class:`Factor` is a configuration key with three levels coded -1, 0, 1 (low, mid,
 high; AGACD Table 3). A design is an integer array ``coded[N, k]`` of coded levels, one
@@ -439,7 +439,7 @@ class DoeResult:
         return float(point_means(self.confirmation[None])[0])
 
     def to_json(self) -> dict[str, Any]:
-        """The ``--json`` layout of ``jaxga doe`` (issue 5), plus ``design``,
+        """The ``--json`` layout of ``jaxga doe`` (docs/cli.md), plus ``design``,
         ``direction``, ``seeds``, ``n_success`` per point and ``main_effects``."""
         names = [f.name for f in self.factors]
         best_values = {f.name: f.value(int(c)) for f, c in zip(self.factors, self.best_coded)}

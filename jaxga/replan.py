@@ -1,6 +1,6 @@
 """Local re-planning around obstacles that appear on a planned path (MPMGA 5.2.1, 5.3.1).
 
-SPEC 10, "Local re-planning": a robot follows a planned path; obstacles suddenly appear
+Local re-planning (docs/replanning.md): a robot follows a planned path; obstacles suddenly appear
 on it (MPMGA 5.2.1: two pedestrians at grid cells 320 and 345 of the 25 x 25 library map;
 5.3.1: a 3 x 3 block at cells 810-812, 860-862, 910-912 of the 50 x 50 map). From the
 robot's cell the GA plans to the first path cell beyond the blockage (295 -> 370 and
@@ -29,7 +29,7 @@ needed 0.3-0.4 s (25 x 25) and under 1 s (50 x 50) per re-plan in Matlab.
    map of the same size - or in a window of the same size, see ``window`` - after the
    first reuses them;
 5. splice: robot's cell -> GA segment -> the old path after the rejoin cell; loops are
-   cut out (MPMGA's deletion operator, SPEC 9 ``remove_loops``); the rest of the path is
+   cut out (MPMGA's deletion operator, ``remove_loops``); the rest of the path is
    checked again, and a later blocked step is re-planned the same way from the last clear
    cell before it;
 6. the spliced path is verified step by step on the updated map before it is returned.
@@ -102,7 +102,7 @@ for ``mpmga``: 3 islands of 10). The paper re-planned with its global settings."
 # =============================================================================== result
 @dataclasses.dataclass
 class ReplanResult:
-    """The outcome of :func:`replan` (MPMGA 5.2.1 / 5.3.1, SPEC 10).
+    """The outcome of :func:`replan` (MPMGA 5.2.1 / 5.3.1).
 
     Attributes:
         success: True when ``path`` is a feasible path from the robot's cell to the goal.
@@ -200,7 +200,7 @@ class ReplanResult:
 
 # ============================================================================== helpers
 def mpmga_cell(p: int, width: int) -> XY:
-    """MPMGA's grid number ``p`` as jaxga ``(x, y)`` (MPMGA section 3, eq. 1-2; SPEC 1).
+    """MPMGA's grid number ``p`` as jaxga ``(x, y)`` (MPMGA section 3, eq. 1-2; docs/maps.md).
 
     MPMGA numbers cells 0, 1, 2, ... from left to right and bottom to top, so its number
     is jaxga's cell index ``y * W + x`` and this is ``(p % W, p // W)`` (the paper's eq. 1
@@ -254,10 +254,10 @@ def first_blocked_step(blocked: np.ndarray, corner_rule: str, path: Sequence[XY]
                        start: int = 0) -> int | None:
     """Index ``k >= start`` of the first step ``path[k] -> path[k+1]`` that is not clear.
 
-    A step is clear when its segment is (SPEC 1, :func:`jaxga.reference.optima.clear_np`): for
+    A step is clear when its segment is (:func:`jaxga.reference.optima.clear_np`): for
     8-adjacent cells, exactly when the move is legal under the corner rule. Returns None
     when every step from ``start`` on is clear (MPMGA 5.2.1: "obstacles suddenly appear
-    ... blocking the path"; SPEC 10).
+    ... blocking the path").
     """
     for k in range(start, len(path) - 1):
         if not clear_np(blocked, corner_rule, path[k], path[k + 1]):
@@ -267,9 +267,9 @@ def first_blocked_step(blocked: np.ndarray, corner_rule: str, path: Sequence[XY]
 
 def remove_loops_xy(path: Sequence[XY]) -> list[XY]:
     """Cut out everything between two visits of the same cell (MPMGA 4.2 deletion
-    operator, SPEC 9 ``remove_loops``), keeping the first visit; host version.
+    operator, ``remove_loops``), keeping the first visit; host version.
 
-    Used after splicing (MPMGA 5.2.1 / SPEC 10): a detour that touches the old path
+    Used after splicing (MPMGA 5.2.1): a detour that touches the old path
     again must not make the robot walk a loop. Feasibility is kept (the cut joins a cell
     to itself).
     """
@@ -379,8 +379,8 @@ def replan(
 ) -> ReplanResult:
     """Re-plan the rest of ``path`` around ``new_obstacles`` from the robot's cell.
 
-    MPMGA 5.2.1 / 5.3.1 (local path re-planning against sudden obstacles), SPEC 10
-    ("Local re-planning"); the steps and decisions are in the module docstring.
+    MPMGA 5.2.1 / 5.3.1 (local path re-planning against sudden obstacles; docs/replanning.md);
+    the steps and decisions are in the module docstring.
 
     Args:
         grid: the map (its ``blocked`` array and ``corner_rule``; its start and goal are
@@ -405,7 +405,7 @@ def replan(
             the whole map is used. ``"auto"`` (default): the smallest of
             :data:`WINDOW_SIDES` that holds both with a margin and joins them (the cost
             of a re-plan then follows the detour, not the map); None: the whole map.
-        plan_from: ``"robot"`` (MPMGA, SPEC 10: plan from the robot's cell) or
+        plan_from: ``"robot"`` (MPMGA 5.2.1: plan from the robot's cell) or
             ``"blockage"`` (from the last path cell before the blocked step).
         post: splice the GA's post-optimised waypoint segment instead of its raw
             8-connected one.
@@ -550,7 +550,7 @@ def replan(
 def _plan_segment(work: Grid, blocked: np.ndarray, start: XY, rejoin: XY, preset: Any, *,
                   seeds, generations, population, window, post, fallback, overrides
                   ) -> tuple[list[XY] | None, dict[str, Any], float]:
-    """One GA call from ``start`` to ``rejoin`` (MPMGA 5.2.1; SPEC 10); returns the
+    """One GA call from ``start`` to ``rejoin`` (MPMGA 5.2.1); returns the
     segment (or None), a description and the compile time."""
 
     t0 = time.perf_counter()
@@ -633,7 +633,7 @@ MPMGA_SCENARIOS: dict[str, dict[str, Any]] = {
 
 
 def mpmga_scenario(name: str) -> Scenario:
-    """MPMGA's re-planning scenario ``"25x25"`` (5.2.1) or ``"50x50"`` (5.3.1), SPEC 10.
+    """MPMGA's re-planning scenario ``"25x25"`` (5.2.1) or ``"50x50"`` (5.3.1).
 
     The paper's maps exist only as figures, so the map is generated
     (:func:`jaxga.maps.rectangles_map`, corner rule ``"free"`` as in the paper's GA, the

@@ -1,6 +1,6 @@
 """Smooth-curve post-processing of waypoint paths: a cubic B-spline fitted with optax.
 
-SPEC 12 ("smooth-curve post-processing"). IMGA's conclusion (section 6, future research
+Beyond the papers (docs/replanning.md). IMGA's conclusion (section 6, future research
 direction 2) proposes "combining the algorithm with Bezier curve or other curve smoothing
 methods". Its Table 4 / Fig. 9 compares IMGA's broken line (length 27.87, 0.70 s, three
 tangencies to obstacles) with BCA, a GA over piecewise Bezier control points whose curve
@@ -82,7 +82,7 @@ polyline's sharpest corner rounded at grid resolution. The optimiser is given
 ``cap_factor`` (0.9) times the bound as its soft limit; the tests check the outcome.
 
 Units are cells; coordinates are cell centres ``(x, y)`` with row 0 at the bottom
-(SPEC 1). Everything is float32, jittable and vmappable; :class:`SmoothConfig` is static.
+(docs/maps.md). Everything is float32, jittable and vmappable; :class:`SmoothConfig` is static.
 """
 
 from __future__ import annotations
@@ -312,7 +312,7 @@ def _sq_dist_to_set(mask: jax.Array, xs: jax.Array, ys: jax.Array) -> jax.Array:
 
 
 def distance_field(grid: Grid, upsample: int = 4) -> DistanceField:
-    """The signed Euclidean distance field of ``grid``'s blocked cells (SPEC 12).
+    """The signed Euclidean distance field of ``grid``'s blocked cells.
 
     Blocked cells are closed unit squares centred on their ``(x, y)``; the outside of the
     map counts as blocked. Nodes are spaced ``1 / upsample`` and cover the map plus one
@@ -446,7 +446,7 @@ def _eval_grid(coef: jax.Array, per_span: int, midpoints: bool = False):
 
 def curve_points(control: jax.Array, per_span: int = 16) -> jax.Array:
     """``float32[(M - 3) * per_span + 1, 2]``: the clamped cubic B-spline of ``control``
-    (SPEC 12) sampled at ``per_span`` equal parameter steps per span (first point =
+    sampled at ``per_span`` equal parameter steps per span (first point =
     ``control[0]``, last = ``control[-1]``). Jittable; ``per_span`` static."""
     control = jnp.asarray(control, FLOAT)
     p, _, _ = _eval_grid(_span_coefficients(control), per_span)
@@ -500,7 +500,7 @@ def turning_curvature_bound(grid: Grid, cells: jax.Array, length: jax.Array) -> 
     the reasoning (and why not the uncapped ``2 tan(theta / 2) / min(a, b)``); for jaxga
     paths (segments >= 1) it is ``2 tan(theta_max / 2)``. 0 for a path without corners;
     ``inf`` only for a reversal (``theta = pi``). Zero-length segments (repeated nodes,
-    padding) are skipped. IMGA section 6, SPEC 12. float32 scalar; jittable, vmappable.
+    padding) are skipped. IMGA section 6. float32 scalar; jittable, vmappable.
     """
     xy, _ = _polyline_xy(grid, cells, length)
     corner, cross, dot, a, b = _corners(xy)
@@ -527,7 +527,7 @@ def polyline_points(
 ) -> jax.Array:
     """``float32[n_points, 2]``: the polyline resampled with every vertex among the samples.
 
-    The fallback's ``points`` in :func:`smooth` (SPEC 12), so that a fallback and a curve
+    The fallback's ``points`` in :func:`smooth`, so that a fallback and a curve
     have the same shape and draw the same way.
 
     Vertex ``j`` lands on sample ``k_j = j + round((n_points - n) * s_j / S)`` (``s_j``
@@ -563,7 +563,7 @@ def initial_control_points(
 ) -> jax.Array:
     """``float32[n_ctrl, 2]`` control points on the polyline, first = start, last = goal.
 
-    The starting point of :func:`smooth`'s optimisation (SPEC 12).
+    The starting point of :func:`smooth`'s optimisation.
 
     Evenly spaced by arc length: the uniform-speed parametrisation that the bending term
     prefers anyway. (Giving short segments extra control points, e.g. spacing by
@@ -719,7 +719,7 @@ def verify_curve(
 ) -> Verification:
     """Certify that the B-spline of ``control`` stays more than ``tol`` from blocked cells.
 
-    Independent of the distance field (SPEC 12: "verify the curve's clearance exactly").
+    Independent of the distance field and exact.
     A point is in a blocked cell when ``floor(x + 1/2), floor(y + 1/2)`` is blocked or off
     the map; distances are to the closed unit squares of those cells. The curve is sampled
     at ``per_span`` parameter steps per span, the exact distance from every sample to the
@@ -880,7 +880,7 @@ def smooth(
     field: DistanceField | None = None,
     config: SmoothConfig = SmoothConfig(),  # noqa: B008 - frozen, hashable
 ) -> SmoothResult:
-    """Smooth one post-optimised waypoint path into a clear cubic B-spline (SPEC 12).
+    """Smooth one post-optimised waypoint path into a clear cubic B-spline (IMGA section 6).
 
     IMGA section 6 (future work 2) and its Table 4 BCA comparison: the GA's broken line is
     turned into a curve by optimising the control points with ``optax.adam`` on length +
@@ -945,7 +945,7 @@ def plot_smooth(
 ) -> Any:
     """Draw the map, the polyline, the smoothed curve and its control polygon on ``ax``.
 
-    For figures like IMGA's Fig. 9 (its broken line against BCA's Bezier curve; SPEC 12).
+    For figures like IMGA's Fig. 9 (its broken line against BCA's Bezier curve).
 
     ``result`` is a single-path :class:`SmoothResult` (index a population result first);
     ``polyline`` is ``int[k, 2]`` ``(x, y)`` waypoints, or a 1-D sequence of cell indices,

@@ -1,7 +1,7 @@
 """Fold every ``vmap`` level of a call into one flat batch of lanes.
 
 Every operator of jaxga is written for one individual (or one run) and lifted with
-``vmap`` over individuals, islands and runs (SPEC 2). Some computations are cheaper
+``vmap`` over individuals, islands and runs (docs, "the pure core"). Some computations are cheaper
 when they see all their lanes at once, whatever ``vmap`` levels stacked them: a loop
 whose lanes finish at different times (:func:`jaxga._batching.lanes.lane_while_loop`), a gated
 map that should compute only the applied entries of ALL runs rather than a per-run

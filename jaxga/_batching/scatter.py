@@ -1,7 +1,7 @@
 """Scatters that stay ONE flat scatter under ``vmap``.
 
 Every operator of jaxga is written for one individual and lifted with ``vmap`` over
-individuals, islands and seeds (SPEC 2). ``vmap`` turns a scatter into a batched
+individuals, islands and seeds (docs, "the pure core"). ``vmap`` turns a scatter into a batched
 scatter, and XLA's CPU backend then builds an index vector per batch dimension for
 every update (a ``[updates, batch dims + 1]`` concatenation) before a serial update
 loop: for the crossovers' position tables that index construction cost more than the

@@ -1,5 +1,5 @@
 """Compiled programs kept on disk whole, so that a later process neither traces, lowers
-nor compiles them (issue 41).
+nor compiles them (decision 028).
 
 JAX's persistent compilation cache (:mod:`jaxga.api.compilation_cache`) saves XLA's
 compilation only: a later process still traces the Python functions and lowers them to

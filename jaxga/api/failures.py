@@ -19,7 +19,7 @@ def unstarted_results(*, config, configs, points, map_name, grid, seed_arr, algo
                       point_opt, rate, unfilled, from_fallback, initial, timing, size_class,
                       frame) -> list[Result]:
     """The results of a sweep whose initialisation gave no run a path: every seed failed,
-    each with its cause; nothing evolved (SPEC 10)."""
+    each with its cause; nothing evolved."""
     n_seeds = len(seed_arr)
     results = []
     for q, cfg in enumerate(configs):
@@ -45,7 +45,7 @@ def unstarted_results(*, config, configs, points, map_name, grid, seed_arr, algo
 def warn_unfilled(unfilled: np.ndarray, init_rate: np.ndarray, capacity: int,
                   config) -> None:
     """Warn (:class:`~jaxga.core.errors.InitialisationWarning`) when runs whose initialiser made
-    some paths still started with copies in empty slots (SPEC 4; ``jaxga.operators.init.initialise``
+    some paths still started with copies in empty slots (``jaxga.operators.init.initialise``
     fills slots left empty after ``init.max_tries`` attempts per individual with copies).
     Runs whose initialiser made no path are failures with a reason instead."""
     short = (unfilled > 0) & (init_rate > 0)

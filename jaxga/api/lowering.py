@@ -1,7 +1,7 @@
 """How jaxga's programs are lowered for XLA: the Threefry hash without a loop on the CPU.
 
 Every random number of jaxga comes from ``jax.random`` with the default Threefry-2x32
-generator (SPEC 2). On the CPU, JAX lowers each Threefry hash as a ``fori_loop`` over its
+generator. On the CPU, JAX lowers each Threefry hash as a ``fori_loop`` over its
 five key-injection blocks (a ``while`` in the HLO); on every other platform it emits the
 same 20 rounds unrolled. A generation of a GA calls the hash about 20 times (key splits,
 gates, operator draws), and each rolled call is a loop of its own that XLA compiles into

@@ -1,6 +1,6 @@
 """The compiled programs of a run, cached per shape: init, evolve (one chunk), finish.
 
-One program set serves many calls (issue 41): the runs go through programs of a few
+One program set serves many calls (decision 028): the runs go through programs of a few
 sizes (:data:`RUN_BUCKETS` runs per device, padded with copies of the last run; more
 runs are several calls of the largest size, :func:`run_layout`), and the generations
 through one evolve program of :data:`GENERATION_CHUNK` generations called as often as

@@ -1,6 +1,6 @@
 """What a run returns: :class:`Result`, per-seed paths, metrics and gaps to the exact optima.
 
-SPEC 11. Lengths, fitness and gaps per seed; :func:`summarise` over seeds; JSON numbers
+Lengths, fitness and gaps per seed; :func:`summarise` over seeds; JSON numbers
 for the command line's files.
 """
 

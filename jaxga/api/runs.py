@@ -1,6 +1,6 @@
 """``jaxga.run``: many seeded runs of a preset on a map, in one compiled call.
 
-SPEC 10-11. ``run(preset, grid, seeds=N, **overrides) -> Result``: the seeds are a
+``run(preset, grid, seeds=N, **overrides) -> Result``: the seeds are a
 ``jax.vmap`` (sharded over the available devices), the generations a ``lax.scan``;
 initialisation, evolution and post-optimisation are three compiled functions so that
 their times can be reported separately, as the papers' tables do. Compilation is timed

@@ -1,6 +1,6 @@
 """Map-size classes: maps padded with blocked cells so that maps of one class share programs.
 
-A compiled program is specialised to the map's shape and the path capacity (issue 41).
+A compiled program is specialised to the map's shape and the path capacity (decision 029).
 With ``size_class=True`` (:func:`jaxga.run`, ``--size-class``) a map of up to
 :data:`MAX_CLASS_SIDE` cells a side is padded, on its top and right, to its class
 (:func:`class_shape`: each side rounded up to one of :data:`CLASS_SIDES`), and its path

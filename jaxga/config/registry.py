@@ -366,7 +366,7 @@ def _none(family: str, what: str) -> Operator:
     return register(Operator(family, "none", None, what))
 
 
-# init (SPEC 4)
+# init
 register(Operator("init", "random_walk", ini.random_walk,
                   "uniformly random self-avoiding walk from start to goal (Zhu & Pan 4.1; "
                   "the plain GA)"))
@@ -398,7 +398,7 @@ register(Operator(
 ))
 
 
-# fitness (SPEC 3): the objective's keyword arguments are its dynamic parameters
+# fitness: the objective's keyword arguments are its dynamic parameters
 def _objective_options(op_name: str) -> Callable[[Binding], dict]:
     def options(ctx: Binding) -> dict:
         op = operator("fitness", op_name)
@@ -413,7 +413,8 @@ def _objective_options(op_name: str) -> Callable[[Binding], dict]:
 
 def objective_default(method: str, name: str) -> float:
     """The default of weight ``name`` of fitness ``method``: its objective's keyword
-    default in :mod:`jaxga.core.objectives` (the paper's value, SPEC 3)."""
+    default in :mod:`jaxga.core.objectives` (the paper's value where it gives one;
+    docs/presets.md)."""
     return float(inspect.signature(getattr(objectives, method)).parameters[name].default)
 
 
@@ -517,7 +518,7 @@ for _name, (_summary, _params) in _FITNESS.items():
                       options=_objective_options(_name), check=_FITNESS_CHECKS.get(_name),
                       prepare=_agacd_weights if _name == "agacd" else None))
 
-# selection (SPEC 5)
+# selection
 register(Operator("selection", "roulette", sel.roulette,
                   "fitness-proportionate roulette (AGACD 4.5, MPMGA 5.2)"))
 register(Operator("selection", "roulette_elite", sel.roulette_elite,
@@ -537,7 +538,7 @@ register(Operator("selection", "shuffle", sel.shuffle,
 _none("selection", "no selection: individuals keep their slots (fixed pairs 2k, 2k + 1)")
 
 
-# crossover (SPEC 6)
+# crossover
 def _half_common_point_half_column(ctx: Binding) -> Callable:
     """Zhu & Pan 4.4 / 4.7 step 3: half the pairs through the common-point crossover,
     half through the column (non-common point) crossover, drawn per generation."""
@@ -570,7 +571,7 @@ register(Operator("crossover", "common_point_or_column", None,
 _none("crossover", "no crossover")
 
 
-# mutation (SPEC 7)
+# mutation
 def _half_replace_point_half_regrow(ctx: Binding) -> Callable:
     """Zhu & Pan 4.5 / 4.7 step 3: half the individuals through the one-point mutation
     (``replace_point``), half through the range mutation (``regrow_segment``)."""
@@ -636,7 +637,7 @@ register(Operator("mutation", "delete_corner", mu.delete_corner,
 _none("mutation", "no mutation")
 
 
-# simplify (SPEC 9): per generation, with simplify.probability
+# simplify (Zhu & Pan 4.6): per generation, with simplify.probability
 def simplify_adjacent_step(key: jax.Array, grid: Any, cells: jax.Array,
                            length: jax.Array) -> tuple[jax.Array, jax.Array, jax.Array]:
     """:func:`jaxga.operators.postprocess.simplify_adjacent` (Zhu & Pan 4.6) as a per-generation
@@ -655,7 +656,7 @@ register(Operator("simplify", "cut_corners", mu.corner_cut,
                   aliases=("corner_cut",)))
 _none("simplify", "no simplification")
 
-# post (SPEC 9): the final best path
+# post (IMGA 4.5, AGACD 4.8, MPMGA 4.7): the final best path
 register(Operator("post", "shortcut_greedy", post.shortcut_greedy,
                   "delete nodes while the shortcut is collision-free (IMGA 4.5, AGACD 4.8, "
                   "MPMGA 4.7)"))

@@ -1,7 +1,7 @@
 """Algorithm configurations: a validated, flat ``section.key -> value`` mapping.
 
 A configuration says which operator fills each stage of the GA and with which
-parameters (SPEC 4-10). Presets (``presets/*.toml``, one per paper) are configurations;
+parameters (docs/operators.md). Presets (``presets/*.toml``, one per paper) are configurations;
 a user TOML file or ``--set key=value`` overrides any field. Every key is declared in
 :data:`SCHEMA` with its type, allowed values or range and a one-line meaning: unknown
 keys and out-of-range values are rejected with a message that names the key.
@@ -48,7 +48,7 @@ COMMON_FIELDS: dict[str, Field] = {
     "name": Field(str, "preset name"),
     "paper": Field(str, "the paper the preset reproduces"),
     "description": Field(str, "one line on the algorithm"),
-    "map.corner_rule": Field(str, "corner rule of SPEC 1: 'map' = the map's own "
+    "map.corner_rule": Field(str, "corner rule (decision 027): 'map' = the map's own "
                              "(free on the papers' classic 20 x 20 maps, strict elsewhere; "
                              "jaxga.maps.default_corner_rule), or one rule for this "
                              "configuration", choices=(MAP_RULE, *CORNER_RULES)),
@@ -57,7 +57,7 @@ COMMON_FIELDS: dict[str, Field] = {
                                  "number of individuals); 0 = automatic from the map size",
                                  low=0, high=1_000_000),
     "generations": Field(int, "generations per run", low=1, high=1_000_000),
-    "init.method": MethodField("init", "initialiser (SPEC 4)"),
+    "init.method": MethodField("init", "initialiser (see jaxga operators)"),
     "init.max_tries": Field(int, "redraws of a failed individual", low=1, high=10_000),
     "init.unique": Field(bool, "reject an initial individual identical to one already "
                          "accepted, as a failed draw (IMGA 4.1 (iii): M non-repeating "
@@ -70,31 +70,31 @@ COMMON_FIELDS: dict[str, Field] = {
                              "mutation; the range mutation's walk) connects down the exact "
                              "distance field instead of failing ('none': the papers' "
                              "failure)", choices=REPAIR_FALLBACKS),
-    "fitness.method": MethodField("fitness", "fitness combiner (SPEC 3)"),
+    "fitness.method": MethodField("fitness", "fitness combiner (see jaxga operators)"),
     "fitness.window": Field(bool, "evaluate grid paths on a narrow window when all fit "
                             "(same results; faster where paths stay short, 1-2 s more "
                             "compile)"),
-    "selection.method": MethodField("selection", "selection (SPEC 5)"),
-    "crossover.method": MethodField("crossover", "crossover (SPEC 6)"),
+    "selection.method": MethodField("selection", "selection (see jaxga operators)"),
+    "crossover.method": MethodField("crossover", "crossover (see jaxga operators)"),
     "crossover.probability": Field(**P, doc="crossover probability pc per pair"),
     "crossover.adaptive": Field(bool, "AGACD adaptive pc (eq. 26-27)"),
     "crossover.pc_low": Field(**P, doc="AGACD pc_low"),
     "crossover.pc_high": Field(**P, doc="AGACD pc_high"),
-    "mutation.method": MethodField("mutation", "mutation (SPEC 7)"),
+    "mutation.method": MethodField("mutation", "mutation (see jaxga operators)"),
     "mutation.probability": Field(**P, doc="mutation probability pm per individual"),
     "mutation.adaptive": Field(bool, "AGACD adaptive pm (eq. 28-29)"),
     "mutation.pm_low": Field(**P, doc="AGACD pm_low"),
     "mutation.pm_high": Field(**P, doc="AGACD pm_high"),
-    "simplify.method": MethodField("simplify", "per-generation simplification (SPEC 9)"),
+    "simplify.method": MethodField("simplify", "per-generation simplification (Zhu & Pan 4.6)"),
     "simplify.probability": Field(**P, doc="simplification probability ps per individual"),
-    "post.method": MethodField("post", "post-optimisation of the final best (SPEC 9)"),
+    "post.method": MethodField("post", "post-optimisation of the final best (IMGA 4.5)"),
     "termination.stagnation": Field(int, "IMGA: stop after K generations without improvement; "
                                     "0 = never", low=0, high=1_000_000),
     "islands.count": Field(int, "number of islands (1 = single population)", low=1, high=1024),
-    "islands.topology": Field(str, "migration topology (SPEC 8)", choices=TOPOLOGIES),
+    "islands.topology": Field(str, "migration topology (mpmga: MPMGA 4.4)", choices=TOPOLOGIES),
     "islands.interval": Field(int, "generations between migrations", low=1, high=1_000_000),
     "islands.migrants": Field(int, "migrants per island and migration", low=0, high=100_000),
-    "islands.timing": Field(str, "migration after the generation's variation (SPEC 8) or "
+    "islands.timing": Field(str, "migration after the generation's variation (jaxga's default) or "
                             "before it (MPMGA Fig. 1)", choices=MIGRATION_TIMINGS),
     "islands.crossover_probabilities": Field(list, "per-island pc (MPMGA A, B, C)"),
     "islands.mutation_probabilities": Field(list, "per-island pm (MPMGA A, B, C)"),

@@ -1,6 +1,6 @@
 """Exact line of sight between cell centres, and AGACD's linear-trial variant.
 
-SPEC 1. The segment between the centres of cells ``a`` and ``b`` is *clear* when
+The segment between the centres of cells ``a`` and ``b`` is *clear* when
 
 * every cell whose **interior** the segment crosses is free, and
 * wherever the segment passes exactly through a grid vertex, the four cells around that
@@ -111,7 +111,7 @@ def _crossing_checks(
 
 
 def clear(grid: Grid, a: jax.Array, b: jax.Array, max_span: int | None = None) -> jax.Array:
-    """Exact line of sight between the centres of cells ``a`` and ``b`` (SPEC 1).
+    """Exact line of sight between the centres of cells ``a`` and ``b``.
 
     Args:
         grid: the map; its ``corner_rule`` applies where the segment meets a grid vertex.

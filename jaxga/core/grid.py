@@ -1,13 +1,13 @@
 """The grid world: an immutable ``Grid`` pytree, corner rules and cell coordinates.
 
-SPEC section 1. A grid is ``H x W`` cells; ``blocked[y, x]`` is True for an obstacle and
+A grid is ``H x W`` cells; ``blocked[y, x]`` is True for an obstacle and
 ``y = 0`` is the bottom row, as in the papers. Cells are addressed either by their
 coordinates ``(x, y)`` (x = column, y = row counted from the bottom) or by their index
 ``p = y * W + x`` (0-based; the papers' 1-based ``x = mod(p, N) + 1, y = fix(p / N) + 1``
 of AGACD eq. 1-2 name the same cells).
 
 Moves are 8-connected. A diagonal move passes the two orthogonal *side cells*; the
-``corner_rule`` says when that is legal:
+``corner_rule`` says when that is legal (docs/maps.md; decision 027):
 
 * ``"free"``: only the two end cells matter (the papers' GAs squeeze between two
   diagonally touching obstacles);
@@ -33,7 +33,7 @@ import numpy as np
 from jaxga.core.errors import EndpointError, JaxgaError
 
 CORNER_RULES: tuple[str, ...] = ("free", "no_squeeze", "strict")
-"""The corner rules of SPEC 1, in order of strictness."""
+"""The corner rules (decision 027), in order of strictness."""
 
 DEFAULT_CORNER_RULE = "strict"
 
@@ -75,7 +75,7 @@ def check_corner_rule(rule: str) -> str:
 @jax.tree_util.register_dataclass
 @dataclasses.dataclass(frozen=True)
 class Grid:
-    """An occupancy grid with a start, a goal and a corner rule (SPEC 1).
+    """An occupancy grid with a start, a goal and a corner rule.
 
     Attributes:
         blocked: ``bool[H, W]``, True for an obstacle, row 0 at the bottom.
@@ -241,7 +241,7 @@ class Grid:
 
 def proximity_obstacles(grid: Grid, border_blocked: bool) -> jax.Array:
     """``bool[H, W]``: the cells that count as obstacles for safety and clearance
-    measures (IMGA eq. 6, AGACD eq. 18-20, the clearance and tangency metrics of SPEC 3):
+    measures (IMGA eq. 6, AGACD eq. 18-20, jaxga's clearance and tangency metrics):
     the blocked cells of the map, and the padding cells (``grid.outside``) only when
     cells off the map count as obstacles (``border_blocked``), as off-map cells do."""
     if grid.outside is None:
@@ -307,7 +307,7 @@ def blocked_at(blocked: jax.Array, x: jax.Array, y: jax.Array) -> jax.Array:
 def diagonal_legal(
     side1_blocked: jax.Array, side2_blocked: jax.Array, corner_rule: str
 ) -> jax.Array:
-    """Whether a diagonal step past two side cells is allowed by ``corner_rule`` (SPEC 1)."""
+    """Whether a diagonal step past two side cells is allowed by ``corner_rule``."""
     if corner_rule == "free":
         return jnp.ones_like(side1_blocked, dtype=bool)
     if corner_rule == "no_squeeze":
@@ -318,7 +318,7 @@ def diagonal_legal(
 
 
 def move_legal(grid: Grid, a: jax.Array, b: jax.Array) -> jax.Array:
-    """Whether one step from cell index ``a`` to cell index ``b`` is a legal move (SPEC 1).
+    """Whether one step from cell index ``a`` to cell index ``b`` is a legal move.
 
     Legal means: both cells on the map and free, 8-adjacent (Chebyshev distance exactly
     1), and for a diagonal step the side cells satisfy the grid's corner rule. Pure and

@@ -1,6 +1,6 @@
 """Path objectives, reported metrics and the fitness functions of the five papers.
 
-SPEC section 3. Every function here is written for ONE path ``(grid, cells, length)``:
+Every function here is written for ONE path ``(grid, cells, length)``:
 ``cells`` is ``int32[L]`` (cell indices ``p = y * W + x``), ``length`` an int32 scalar
 (the number of valid nodes, ``1 <= length <= L``); the capacity ``L`` is static. All
 functions are pure and jittable. A population (``cells int32[P, L]``, ``length
@@ -19,8 +19,8 @@ Conventions shared by all functions
 -----------------------------------
 * **Padding.** Nodes at or beyond ``length`` are replaced by the last valid cell before
   anything is computed (``length`` is clipped to ``[1, L]``), so the result depends only
-  on ``cells[:length]`` even if the padding does not repeat the last cell (SPEC 2 says it
-  does). Padding segments then have zero length and never create turns.
+  on ``cells[:length]`` even if the padding does not repeat the last cell (jaxga's paths
+  do). Padding segments then have zero length and never create turns.
 * **Repeated nodes.** A node equal to its predecessor is skipped: it adds no length, no
   turn and no safety penalty, and the turn at the next real node is measured between
   the last non-zero segment before it and the segment after it (exactly, for runs of
@@ -276,7 +276,7 @@ def turn_angles(grid: Grid, cells: jax.Array, length: jax.Array) -> jax.Array:
     """Turn angle at every node, ``float32[L]`` in ``[0, pi]`` (radians).
 
     Entry ``i`` is the angle between the direction into node ``i`` and the direction out
-    of it, ``atan2(|cross|, dot)`` (SPEC 3; AGACD eq. 10-17 and MPMGA eq. 7-12 define
+    of it, ``atan2(|cross|, dot)`` (AGACD eq. 10-17 and MPMGA eq. 7-12 define
     the same rotation angle ``theta_i = pi - alpha_i`` through slopes and the law of
     cosines): 0 straight on, pi/4 for a 45-degree turn, pi for a reversal. The start,
     the last node, padding and skipped repeated nodes get 0. In a run of repeated
@@ -313,7 +313,7 @@ def angle_sum(grid: Grid, cells: jax.Array, length: jax.Array) -> jax.Array:
     slopes and ``acos``; here ``atan2(|cross|, dot)``, which gives the same angle without
     the slope special cases). 0 for a straight path. One difference: eq. 13 sets
     ``theta = 0`` whenever the two slopes are equal, which includes a 180-degree
-    reversal; here (SPEC 3) a reversal is pi. Reversals cannot occur on loop-free
+    reversal; here a reversal is pi. Reversals cannot occur on loop-free
     8-connected paths, only on waypoint paths.
     """
     return _angle_sum(_geometry(grid, cells, length))
@@ -385,8 +385,8 @@ def imga_energy(grid: Grid, cells: jax.Array, length: jax.Array) -> jax.Array:
     At every node where the path turns, take the new heading (the outgoing segment) in a
     frame centred on the node whose first quadrant points towards the goal, i.e. each
     heading component is multiplied by the sign of the corresponding component of
-    ``goal - node`` (SPEC 3). Heading in the first quadrant (both components >= 0):
-    +1; third quadrant (both <= 0): +10; second or fourth: +3.
+    ``goal - node`` (jaxga's reading of Fig. 3). Heading in the first quadrant (both
+    components >= 0): +1; third quadrant (both <= 0): +10; second or fourth: +3.
 
     Decisions:
 
@@ -441,7 +441,7 @@ def imga_safety(
 
     IMGA eq. 6 and the text after it: a node with no obstacle among its eight neighbours
     is safe, otherwise the penalty grows by 5. Decisions: every node counts, start and
-    goal included (SPEC 3; eq. 6's upper limit ``n - 1`` would drop the goal, which only
+    goal included (jaxga's choice; eq. 6's upper limit ``n - 1`` would drop the goal, which only
     shifts every path's value by the same constant); a node revisited later counts
     again, a repeated consecutive node once; cells off the map are free unless
     ``border_blocked`` (static). The neighbour test is a per-grid table, so the per-path
@@ -844,7 +844,7 @@ def tangencies(grid: Grid, cells: jax.Array, length: jax.Array) -> jax.Array:
 
 
 class Metrics(NamedTuple):
-    """Reported metrics of one path (SPEC 3 and 10); fields are scalars, or ``[P]``
+    """Reported metrics of one path; fields are scalars, or ``[P]``
     arrays after :func:`jaxga.core.paths.population_map`."""
 
     length: jax.Array
@@ -860,7 +860,7 @@ class Metrics(NamedTuple):
 
 
 def metrics(grid: Grid, cells: jax.Array, length: jax.Array) -> Metrics:
-    """The metrics reported for a result path (SPEC 3): length, turns, angle sum,
+    """The metrics reported for a result path: length, turns, angle sum,
     minimum clearance and tangencies; the clearance costs what :func:`min_clearance`
     costs."""
     g = _geometry(grid, cells, length)
@@ -944,7 +944,7 @@ def agacd(
     AGACD eq. 7-8 with length eq. 9 (:func:`path_length`), smoothness eq. 10-17
     (:func:`angle_sum`, radians) and safety eq. 18-20 (:func:`agacd_safety`, >= 1);
     ``weights`` default to the Delphi weights of eq. 25 (:data:`AGACD_WEIGHTS`, see
-    :func:`delphi_weights`). Decision (SPEC 3): the smoothness is floored at
+    :func:`delphi_weights`). jaxga's choice (the paper does not say): the smoothness is floored at
     ``smoothness_floor`` (default 0.1 rad) so that a straight path (smoothness 0) gets
     the finite ``w2 / 0.1``; any smoothness below the floor is raised to it. 0 when
     ``feasible`` is False.
@@ -971,7 +971,7 @@ def mpmga(
     """MPMGA fitness ``alpha / length + beta * c / smoothness``, float32 (MPMGA eq. 3-5).
 
     Length eq. 6 (:func:`path_length`), smoothness eq. 13-14 (:func:`mpmga_penalty`);
-    defaults alpha 0.8, beta 0.2, c 1 (SPEC 3). The smoothness is floored at
+    defaults alpha 0.8, beta 0.2, c 1 (MPMGA Table 2). The smoothness is floored at
     ``smoothness_floor`` (default 0.1), as for :func:`agacd`: the penalty is 0 exactly
     for a straight path, and at least 5 otherwise. 0 when ``feasible`` is False.
     """
@@ -1036,7 +1036,7 @@ def sga(
     length: jax.Array,
     feasible: jax.Array | bool | None = None,
 ) -> jax.Array:
-    """Plain GA fitness ``1 / length``, float32 (the baseline of every paper; SPEC 3).
+    """Plain GA fitness ``1 / length``, float32 (the baseline of every paper).
 
     0 when ``feasible`` is False.
     """

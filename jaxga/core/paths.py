@@ -1,6 +1,6 @@
 """The masked path representation and the pure functions on one path.
 
-SPEC 2 (the design card). A population is ``cells: int32[P, L]`` plus
+jaxga's representation (docs, "the pure core"). A population is ``cells: int32[P, L]`` plus
 ``length: int32[P]``; ``L`` is a fixed *capacity*, ``mask = arange(L) < length[:, None]``,
 and the padding after ``length`` REPEATS THE LAST CELL, so that segment sums need no
 branch (padded segments have zero length). Every function here is written for ONE path
@@ -10,7 +10,7 @@ population with ``jax.vmap`` (see :func:`population_map`).
 A path ``c0 = start, ..., ck = goal`` is *continuous* when consecutive cells are
 8-adjacent and every move is legal under the grid's corner rule, *feasible* when every
 consecutive segment is clear (line of sight, :func:`jaxga.core.geometry.clear`), and
-*loop-free* when no cell occurs twice (SPEC 1).
+*loop-free* when no cell occurs twice.
 """
 
 from __future__ import annotations
@@ -47,7 +47,7 @@ __all__ = [
 @jax.tree_util.register_dataclass
 @dataclasses.dataclass(frozen=True)
 class Population:
-    """A population of masked paths (SPEC 2): ``cells int32[P, L]``, ``length int32[P]``."""
+    """A population of masked paths: ``cells int32[P, L]``, ``length int32[P]``."""
 
     cells: jax.Array
     length: jax.Array
@@ -158,7 +158,7 @@ def has_endpoints(grid: Grid, cells: jax.Array, length: jax.Array) -> jax.Array:
 
 
 def is_continuous(grid: Grid, cells: jax.Array, length: jax.Array) -> jax.Array:
-    """True when every valid step is a legal 8-connected move (SPEC 1).
+    """True when every valid step is a legal 8-connected move.
 
     Checks the cells themselves too: a one-cell path is continuous iff that cell is free.
     The endpoints are not compared with the grid's start and goal (:func:`has_endpoints`).
@@ -171,7 +171,7 @@ def is_continuous(grid: Grid, cells: jax.Array, length: jax.Array) -> jax.Array:
 
 
 def cell_steps(grid: Grid, cells: jax.Array) -> tuple[jax.Array, ...]:
-    """Per-cell and per-step facts of paths ``cells int32[..., L]`` (SPEC 1).
+    """Per-cell and per-step facts of paths ``cells int32[..., L]``.
 
     Returns ``(inside bool[..., L], free bool[..., L], span int32[..., L-1],
     step_ok bool[..., L-1])``: whether each cell is on the map, whether it is on the map
@@ -200,7 +200,7 @@ def cell_steps(grid: Grid, cells: jax.Array) -> tuple[jax.Array, ...]:
 
 
 def is_feasible(grid: Grid, cells: jax.Array, length: jax.Array) -> jax.Array:
-    """True when every valid segment is clear (SPEC 1; waypoint paths, AGACD).
+    """True when every valid segment is clear (waypoint paths, AGACD).
 
     A continuous path is feasible iff it is continuous; a waypoint path may have long
     segments. The endpoints are not compared with the grid's start and goal.
@@ -272,7 +272,7 @@ def last_occurrence(
     Padding positions map to themselves. With ``n_cells`` (the map size, static) at most
     :data:`TABLE_MAX_CELLS`, one scatter-max into a table of ``n_cells`` entries and one
     gather (many times faster than a sort on small maps: decision 008); otherwise, or without
-    ``n_cells``, a sort, O(L log L), with no map-sized table (PERFORMANCE_NOTES:
+    ``n_cells``, a sort, O(L log L), with no map-sized table (decision 008:
     map-sized tables become memory-bound on large maps): one sort of packed
     ``(cell, position)`` words where they fit 32 bits (:func:`_sorted_by_cell`), else a
     stable argsort. The variants agree on paths whose valid nodes lie on the map (every

@@ -1,5 +1,5 @@
 """The evolution engine: a configuration's checks, its static algorithm and dynamic parameters,
-and the generations (``lax.scan``) that evolve its populations (SPEC 8, 10).
+and the generations (``lax.scan``) that evolve its populations (MPMGA 4.4 for the islands).
 
 - :mod:`~jaxga.engine.checks`: what a configuration uses, and whether it holds together;
 - :mod:`~jaxga.engine.algorithm`: the compiled-in :class:`Algorithm`, the parameter pytree,

@@ -1,4 +1,4 @@
-"""The static algorithm and the dynamic parameters of a configuration (SPEC 10).
+"""The static algorithm and the dynamic parameters of a configuration.
 
 :class:`Algorithm` is what is compiled in (operators, sizes, flags: a hashable ``jit``
 argument); the dynamic parameters (probabilities, weights, temperatures, the active
@@ -47,8 +47,8 @@ FITNESS_DEFAULTS: dict[str, dict[str, float]] = {
     for m, names in FITNESS_PARAMS.items()
 }
 """Each combiner's parameters and their defaults, read from :mod:`jaxga.core.objectives` (the
-papers' values, SPEC 3), so that the two cannot drift apart: what a parameter the
-configuration leaves out is."""
+papers' values where they give one; docs/presets.md), so that the two cannot drift apart:
+what a parameter the configuration leaves out is."""
 
 
 @dataclasses.dataclass(frozen=True)

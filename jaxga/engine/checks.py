@@ -201,7 +201,7 @@ def check_migration(config: Config, population: int) -> None:
     """Migrants must fit the islands of ``population`` individuals (the capacity: a sweep
     over sizes is checked at its largest). Each island receives ``k`` migrants per source
     (ring, full: ``k``; star: the centre ``(I - 1) k``; MPMGA's A-B-C scheme: ``2 k`` into
-    A, and B and C swap ``k`` others than the ``k`` that moved), SPEC 8 / MPMGA 4.4."""
+    A, and B and C swap ``k`` others than the ``k`` that moved), MPMGA 4.4."""
     count, topology = int(config["islands.count"]), config["islands.topology"]
     k = int(config["islands.migrants"])
     if not migrates(config):

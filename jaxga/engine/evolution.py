@@ -1,6 +1,6 @@
 """The evolution engine: one generation as a composition of stages, a run as a ``lax.scan``.
 
-SPEC 8, 10. A generation is
+A generation is
 
     selection -> crossover -> mutation -> (simplification) -> evaluation
 
@@ -230,7 +230,7 @@ def _field_repair(algo: Algorithm) -> bool:
 
 
 def init_state(algo: Algorithm, key: jax.Array, grid: Grid, params: dict) -> tuple:
-    """Initial population of every island (SPEC 4) and its evaluation.
+    """Initial population of every island and its evaluation.
 
     ``init.method`` draws the population within ``init.max_tries`` attempts per
     individual; ``init.fallback = "field_walk"`` then fills exactly the slots it left
@@ -316,7 +316,7 @@ def _island_params(params: dict, islands: int) -> tuple[dict, dict]:
 
 def generation(algo: Algorithm, key, grid: Grid, state: GAState, params: dict):
     """One generation of a run: every island's variation and the migration, in the order of
-    ``islands.timing`` (SPEC 8: vary, then migrate; MPMGA Fig. 1: migrate, then vary);
+    ``islands.timing`` (jaxga's default: vary, then migrate; MPMGA Fig. 1: migrate, then vary);
     honours the freeze."""
 
     t = state.generation
@@ -331,7 +331,7 @@ def generation(algo: Algorithm, key, grid: Grid, state: GAState, params: dict):
     if before:  # MPMGA section 2 / Fig. 1: evaluate, migrate, then cross and mutate
         islands = migrate(algo, keys[-1], islands, t, _active(algo, params))
     islands, fails = jax.vmap(one)(keys[:-1], islands, per)
-    if not before:  # SPEC 8: vary every island, then migrate
+    if not before:  # jaxga's default: vary every island, then migrate
         islands = migrate(algo, keys[-1], islands, t, _active(algo, params))
     best_c, best_n, best_f = _best_of(islands)
     better = best_f > state.best_fitness
@@ -428,7 +428,7 @@ def convergence_generation(best: jax.Array, final_best: jax.Array,
 
 def finish(algo: Algorithm, grid: Grid, state: GAState, history: dict | None, params: dict,
            initial_best: jax.Array | None = None) -> dict:
-    """Post-optimise the best path and compute the reported metrics (SPEC 3, 9, 10).
+    """Post-optimise the best path and compute the reported metrics.
 
     ``convergence_generation``: :func:`convergence_generation` of ``history["best"]``
     (left out when ``history`` is None: the compiled programs of :mod:`jaxga.api`

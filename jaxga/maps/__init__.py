@@ -1,6 +1,6 @@
 """Grid maps: loaders, Moving AI scenarios, built-in maps, generators and preprocessing.
 
-Convention everywhere (SPEC 1): ``blocked[y, x]`` with ``y = 0`` the **bottom** row,
+Convention everywhere (docs/maps.md): ``blocked[y, x]`` with ``y = 0`` the **bottom** row,
 ``x`` the column, cell index ``p = y * W + x``. Loaders flip formats whose first row is
 the top (Moving AI maps and scenarios, ASCII art, images); 0/1 text files are read with
 their first line as the bottom row, like the classic GA maps.

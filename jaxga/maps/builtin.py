@@ -41,7 +41,7 @@ def _index() -> dict[str, Path]:
 
 
 def default_corner_rule(source: str | os.PathLike) -> str:
-    """The corner rule (SPEC 1) a map is planned under unless one is named: ``"free"``
+    """The corner rule (decision 027) a map is planned under unless one is named: ``"free"``
     for the six classic 20 x 20 GA maps (the papers' convention: their GAs squeeze
     between diagonal obstacles, and their reported lengths assume it), ``"strict"`` for
     every other map: the built-in Moving AI maps (the convention of their scenario

@@ -1,7 +1,7 @@
 """Read and write grid maps: 0/1 text, Moving AI ``.map``, ASCII art, PNG images and ROS
 ``map_server`` maps (YAML + image).
 
-Every loader returns a :class:`jaxga.Grid` in the library's convention (SPEC 1):
+Every loader returns a :class:`jaxga.Grid` in the library's convention (docs/maps.md):
 ``blocked[y, x]`` with ``y = 0`` the **bottom** row. The file formats differ in which
 row comes first:
 

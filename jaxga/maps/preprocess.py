@@ -42,7 +42,7 @@ def legal_moves(blocked: np.ndarray, corner_rule: str) -> np.ndarray:
 
     Directions are :data:`jaxga.core.grid.DIRECTIONS`. A move is legal when both cells are on
     the map and free and, for a diagonal move, the two side cells satisfy ``corner_rule``
-    (SPEC 1) - the same rule as :func:`jaxga.core.grid.move_legal`, for every cell at once.
+    (decision 027) - the same rule as :func:`jaxga.core.grid.move_legal`, for every cell at once.
     """
     check_corner_rule(corner_rule)
     b = np.asarray(blocked, dtype=bool)

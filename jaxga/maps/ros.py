@@ -12,7 +12,7 @@ files: ``office.yaml``::
     free_thresh: 0.196
 
 and the image, whose top row is the top of the map (it is flipped to the library's
-``y = 0`` bottom row, SPEC 1). Each pixel becomes an occupancy as ``map_server`` computes
+``y = 0`` bottom row, docs/maps.md). Each pixel becomes an occupancy as ``map_server`` computes
 it: the pixel's shade ``s`` is the mean of its colour channels over 255 (alpha excluded),
 ``p = 1 - s`` (``s`` when ``negate``) is its occupancy probability, and
 

@@ -30,7 +30,7 @@ __all__ = ["Scenario", "parse_scen", "read_scen"]
 
 @dataclasses.dataclass(frozen=True)
 class Scenario:
-    """One Moving AI problem, with coordinates in the bottom-up convention (SPEC 1).
+    """One Moving AI problem, with coordinates in the bottom-up convention (docs/maps.md).
 
     Attributes:
         bucket: the file's bucket number (``floor(optimal_length / 4)`` in these files).

@@ -1,11 +1,11 @@
-"""Crossover operators (SPEC 6): one pair of parents -> two children.
+"""Crossover operators: one pair of parents -> two children.
 
 Every operator has the pair signature of :func:`jaxga.operators.lift.over_pairs`::
 
     op(key, grid, c1, l1, c2, l2, *extra) -> (c1, l1, c2, l2, failed)
 
-for ONE pair of paths (``cells int32[L]``, ``length int32``, padded with the last cell,
-SPEC 2), is pure and jittable, and reaches a population through
+for ONE pair of paths (``cells int32[L]``, ``length int32``, padded with the last cell;
+docs, "the pure core"), is pure and jittable, and reaches a population through
 :func:`jaxga.operators.lift.over_pairs` or, with a crossover probability, through
 :func:`crossover_population`. Operators that need a fitness take ``fitness_fn``, a
 Python callable ``(grid, cells, length) -> f32`` (larger is better, e.g.
@@ -16,7 +16,7 @@ Conventions shared by the operators (decisions where the papers are silent):
 
 * **Children and slots.** Output 1 is the child that starts with parent 1's head (it
   replaces parent 1), output 2 the child that starts with parent 2's head.
-* **Failure** (SPEC 2) means a child that cannot be represented: it would exceed the
+* **Failure** means a child that cannot be represented: it would exceed the
   capacity ``L`` (after loop removal - a child that fits once its loops are cut is NOT a
   failure), or, for :func:`column`, the paper's "crossover failure". A failed child is
   replaced by its parent, unchanged. ``failed`` is the int32 NUMBER OF OUTPUT SLOTS
@@ -30,7 +30,7 @@ Conventions shared by the operators (decisions where the papers are silent):
   deletion operator) would cut them, but in O(L) without its scan: for a head ``a[:m]``
   and a tail ``b[s:]``, the first head position ``k`` whose cell occurs in the tail at
   position ``t`` gives the child ``a[:k] + b[t:]``. This equals ``remove_loops`` of the
-  raw splice whenever both parents are loop-free (the population invariant, SPEC 1);
+  raw splice whenever both parents are loop-free (the population invariant);
   loops already inside a parent are left alone.
 * **Cell lookups** ("where does this cell occur in the other parent?") use a table of
   ``n_cells`` entries on maps of up to :data:`jaxga.core.paths.TABLE_MAX_CELLS` cells and a
@@ -185,7 +185,7 @@ def _join_reverse(
     position in it, so that ``k`` is the smallest ``pos_a_in_b[i]`` below ``cut_b`` over
     the tail positions ``i``, and the child continues at the last such ``i``: the
     same child as ``_join(cb, cut_b, pos_b_in_a, ca, la, start_a)`` whenever ``cb`` is
-    loop-free (SPEC 1: evolving populations are) and ``cut_b`` is at most its length.
+    loop-free (evolving populations are) and ``cut_b`` is at most its length.
     With a ``cb`` that has loops the child is still as continuous as the raw splice (a
     cut junction joins ``cb[k - 1]`` to the cell that follows it in ``cb``), but a loop
     through the junction may remain.
@@ -222,7 +222,7 @@ def common_point(
     then randomly selects a point"); with ``p1[i] == p2[j]`` the children are
     ``p1[:i] + p2[j:]`` and ``p2[:j] + p1[i:]`` (IMGA's example: S-2-12-67-69-89-G x
     S-11-22-67-78-80-G at 67 -> S-2-12-67-78-80-G, S-11-22-67-69-89-G). Loops are then
-    removed (SPEC 6). No common cell -> no crossover: the parents are returned and
+    removed (IMGA 4.3.2). No common cell -> no crossover: the parents are returned and
     nothing is counted as failed. A child that would exceed the capacity even after loop
     removal fails and keeps its parent (the other child is still accepted).
 
@@ -281,7 +281,7 @@ def cut_and_check(
     AGACD joins two parents at random positions and removes infeasible children with its
     collision detection ("both crossover and mutation operations generate infeasible
     path individuals, it is necessary to use a collision detection algorithm to remove
-    these"); its individuals are waypoint paths (feasible: every segment clear, SPEC 1).
+    these"); its individuals are waypoint paths (feasible: every segment clear).
     Here: a cut after node ``i`` of parent 1 and after node ``j`` of parent 2, ``i``
     uniform in ``[0, l1 - 2]`` and ``j`` uniform in ``[0, l2 - 2]`` independently (a cut
     is a gap between two nodes, so both parts are non-empty; a cut at the very start of
@@ -431,7 +431,7 @@ def heterologous(
     ``fitness_fn(grid, cells, length) -> f32`` is static (bind it with
     ``functools.partial``); it is evaluated on the two parents and the two children.
     The second child's loop cut comes from the lookup of parent 1's cells in parent 2
-    (:func:`_join_reverse`, exact for a loop-free parent 2, SPEC 1), as in
+    (:func:`_join_reverse`, exact for a loop-free parent 2), as in
     :func:`common_point`.
     """
     c1, c2 = jnp.asarray(c1, _I32), jnp.asarray(c2, _I32)
@@ -506,7 +506,7 @@ def column_ranges(
     """The candidate range of every column between start and goal (Zhu Algorithm 2 l. 5).
 
     Zhu & Pan walk the columns from the start's to the goal's (their maps have the start
-    bottom-left and the goal top-right); SPEC 6 generalises this to the major axis of
+    bottom-left and the goal top-right); jaxga generalises this to the major axis of
     ``goal - start``: columns x when ``|dx| >= |dy|`` (ties: x), else rows y, walked from
     the start towards the goal. For each column the min and max minor coordinate over
     the cells of BOTH parents in that column (Zhu: "the max grid number and the min grid
@@ -762,7 +762,7 @@ def adaptive_crossover_probability(
                   pc_high                                 if f <  f_avg
         pc = pc_temp * exp(-t / T)
 
-    Eq. 26-27 of the paper and SPEC 6 agree (no discrepancy). Notes: the formula is
+    jaxga follows eq. 26-27 of the paper as printed. Notes: the formula is
     continuous at ``f = f_avg`` (both branches give ``pc_high``) and gives 0 for a pair
     holding the population's best (``f = f_max``), which is therefore never crossed; the
     probability decays to ``pc_temp / e`` at ``t = T``. Decisions: "``f_max == f_avg``"

@@ -1,6 +1,6 @@
 """Exact distance fields of a problem: what steers the field initialiser and the repairs.
 
-Beyond the papers (SPEC 12, "a path on every map"). The papers' initialisers search
+Beyond the papers ("a path on every map", decisions 018 and 019). The papers' initialisers search
 blindly: random walks, medians, greedy steps towards random targets. On a maze, an
 office or a 256 x 256 city map they rarely reach the goal, and a population that
 starts with no path has nothing to evolve. The exact 8-connected distance from every

@@ -1,10 +1,10 @@
 """Initialisers: one start-to-goal path per PRNG key, and a population with bounded redraws.
 
-SPEC section 4. Every initialiser builds ONE individual from ``(key, grid, capacity)`` and
-returns ``(cells int32[capacity], length int32, ok bool)`` in the representation of SPEC 2
-(padding repeats the last cell). When ``ok`` is True the path starts at ``grid.start``,
-ends at ``grid.goal``, is continuous under ``grid.corner_rule``, loop-free and fits the
-capacity; when ``ok`` is False the cells are meaningless and must not be used.
+Every initialiser builds ONE individual from ``(key, grid, capacity)`` and returns
+``(cells int32[capacity], length int32, ok bool)`` in jaxga's representation (padding
+repeats the last cell; docs, "the pure core"). When ``ok`` is True the path starts at
+``grid.start``, ends at ``grid.goal``, is continuous under ``grid.corner_rule``, loop-free
+and fits the capacity; when ``ok`` is False the cells are meaningless and must not be used.
 :func:`initialise` draws a whole population, redrawing failed individuals (vectorised,
 bounded) and reporting the success rate.
 
@@ -409,7 +409,7 @@ def uniform_walk(
 ) -> tuple[jax.Array, jax.Array, jax.Array]:
     """Self-avoiding uniform random walk from cell ``source`` to cell ``target``.
 
-    The plain GA's initialisation (SPEC 4 ``random_walk``; Zhu & Pan section 4.1: "the
+    The plain GA's initialisation (``random_walk``; Zhu & Pan section 4.1: "the
     start grid will be added to the path, a random search for walkable grid to join the
     path will be carried out, until the target grid is found"): at every step move to a
     uniformly random neighbour that is free, legally reachable under the corner rule and
@@ -536,7 +536,7 @@ def directional_probabilities(
 def random_walk(
     key: jax.Array, grid: Grid, capacity: int, stop_adjacent: bool = False
 ) -> tuple[jax.Array, jax.Array, jax.Array]:
-    """The plain GA's random-walk initialiser (SPEC 4 ``random_walk``; Zhu & Pan 4.1).
+    """The plain GA's random-walk initialiser (``random_walk``; Zhu & Pan 4.1).
 
     :func:`uniform_walk` from ``grid.start`` to ``grid.goal``: a uniformly random free,
     unvisited, legally reachable neighbour at every step; a dead end is a failure; the
@@ -772,8 +772,8 @@ def greedy_walk(
     Decisions where AGACD is silent:
 
     * visited cells are NOT excluded (the paper keeps no visited set; its list may
-      revisit cells). Loops are removed after the walk (:func:`jaxga.core.paths.remove_loops`,
-      SPEC 4), which gives exactly the chronological loop erasure of the walk.
+      revisit cells). Loops are removed after the walk (:func:`jaxga.core.paths.remove_loops`),
+      which gives exactly the chronological loop erasure of the walk.
     * ties between equally near neighbours are broken uniformly at random (a fixed
       direction order would bias every path the same way); distances are compared
       exactly as integer squared distances.
@@ -1099,7 +1099,7 @@ def field_walk(
 ) -> tuple[jax.Array, jax.Array, jax.Array]:
     """jaxga's initialiser that cannot fail: random detours down the exact distance fields.
 
-    Not from the papers (SPEC 12, "a path on every map"; decision 018). Draw a cell ``N``
+    Not from the papers ("a path on every map", decision 018). Draw a cell ``N``
     uniformly among the cells through which a path is at most ``(1 + slack)`` times the
     optimum (``from_start[N] + to_goal[N] <= (1 + slack) * optimum``: an ellipse in the
     map's own distances, so it follows corridors and doors, never walls), then build
@@ -1225,7 +1225,7 @@ def initialise_population(
     verify: bool = True,
     fallback: InitFn | None = None,
 ) -> tuple[Population, InitStats]:
-    """A population of ``size`` initial paths, failed individuals redrawn (SPEC 4).
+    """A population of ``size`` initial paths, failed individuals redrawn.
 
     Works in rounds (a ``lax.while_loop`` over rounds, each a ``vmap`` of ``init_fn``
     over ``chunk`` fresh keys): the k-th successful candidate of a round fills the k-th

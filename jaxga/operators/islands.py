@@ -1,4 +1,4 @@
-"""The multi-population migration model (MPMGA section 2 and 4.4; SPEC 8).
+"""The multi-population migration model (MPMGA section 2 and 4.4).
 
 Islands are stacked on a leading axis ``I`` (``cells int32[I, P, L]``); one generation is
 the single-population generation ``vmap``-ed over islands with per-island rates (see
@@ -52,7 +52,7 @@ def migrates(config) -> bool:
 
 
 def migrate(algo, key: jax.Array, islands, t: jax.Array, active: jax.Array):
-    """Apply the configured migration to the island stack (SPEC 8).
+    """Apply the configured migration to the island stack (MPMGA 4.4).
 
     Args:
         algo: the :class:`jaxga.engine.Algorithm` (topology, interval, migrants: static).

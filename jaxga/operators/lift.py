@@ -1,7 +1,7 @@
 """The one small helper that applies per-individual operators to a population.
 
 Every operator of jaxga is written for ONE individual (or one pair) as a pure function of
-an explicit PRNG key (SPEC 2). This module lifts such functions to a population with
+an explicit PRNG key (docs, "the pure core"). This module lifts such functions to a population with
 ``jax.vmap``, splitting the key so that individual ``i`` always gets the same sub-key
 for the same population key (same key, same result), and it implements the common
 failure contract: an operator that fails for an individual (capacity overflow, a
@@ -48,7 +48,7 @@ def keep_parent_on_failure(
     cells: jax.Array,
     length: jax.Array,
 ) -> tuple[jax.Array, jax.Array]:
-    """Return the parent where ``failed`` (SPEC 2: a failed operator keeps its parent)."""
+    """Return the parent where ``failed`` (a failed operator keeps its parent)."""
     return jnp.where(failed, cells, new_cells), jnp.where(failed, length, new_length)
 
 
@@ -142,7 +142,7 @@ def gated_map(
     entries: they are moved to the front (:func:`true_first_order`) and processed in
     blocks of ``block`` inside a ``lax.while_loop`` that stops after the last applied
     entry. A mutation with ``pm = 0.3`` on 60 individuals thus costs 2 blocks of 16
-    instead of 60 operator evaluations (PERFORMANCE_NOTES: under ``vmap`` a gate does
+    instead of 60 operator evaluations (decision 004: under ``vmap`` a gate does
     not skip work by itself). ``fn`` must return a tuple of arrays.
 
     Under ``vmap`` (runs, islands) the applied entries of ALL the batch's calls are
@@ -159,7 +159,7 @@ def gated_map(
 
     ``shrinking=True`` (static) declares ``fn(key, cells, length, ...) -> (cells, length,
     ...)`` a path operator that reads only the first ``length`` cells, returns a path no
-    longer than its input, padded as SPEC 2 says, and has no width-dependent float sum.
+    longer than its input, padded with its last cell, and has no width-dependent float sum.
     A block whose paths all fit :func:`window_width` cells is then computed on that many
     (the operator traced at both widths) and re-padded: the same bits, less work (a
     sequential pass such as :func:`jaxga.operators.mutation.corner_cut` scans the window only).
@@ -395,13 +395,13 @@ def spliced_pairs_map(fn: Callable, args: tuple, window: int | None = None) -> t
     every parent of the whole batch fits ``window`` cells.
 
     ``args = (keys, c1, l1, c2, l2, *rest)``, the parents padded with their last cell
-    (SPEC 2); ``fn`` returns ``(c1', l1', c2', l2', ...)``. ``fn``'s result must depend
-    only on the first ``l1`` / ``l2`` cells of its parents (it may look past them and mask
-    what it finds), it must draw the same random numbers at every width and build
+    (docs, "the pure core"); ``fn`` returns ``(c1', l1', c2', l2', ...)``. ``fn``'s result
+    must depend only on the first ``l1`` / ``l2`` cells of its parents (it may look past
+    them and mask what it finds), it must draw the same random numbers at every width and build
     children no longer than ``l1 + l2 - 1`` cells (a head of one parent and a tail of the
     other: the common-point crossover's are at most ``l1 + l2 - 3``).
     Such children always fit ``2 * window`` cells, as they fit the full width, so the
-    narrow program gives the same children, re-padded with their last cell (SPEC 2),
+    narrow program gives the same children, re-padded with their last cell,
     and the same failure counts. As :func:`windowed_map`, one unbatched test on the
     longest parent of all folded runs picks the program (decision 005).
     """
@@ -453,7 +453,7 @@ def _narrow_call(op: Callable, consts: list, axes: list, lanes: list, paths: tup
 
 
 def _repad(cells: jax.Array, width: int) -> jax.Array:
-    """Rows of paths widened to ``width`` cells by repeating their last cell (SPEC 2)."""
+    """Rows of paths widened to ``width`` cells by repeating their last cell."""
     w = cells.shape[1]
     pad = jnp.broadcast_to(cells[:, w - 1:], (cells.shape[0], width - w))
     return jnp.concatenate([cells, pad], axis=1)

@@ -1,4 +1,4 @@
-"""Mutation operators of the five papers, for ONE individual (SPEC 7).
+"""Mutation operators of the five papers, for ONE individual.
 
 Every operator has the signature ``op(key, grid, cells, length, *extra) -> (cells,
 length, failed)`` and is applied to a population with
@@ -25,7 +25,7 @@ Zhu & Pan section 4.5 call them failures.
 Conventions: positions are drawn from one bulk ``jax.random.bits`` call per individual
 and reduced modulo the number of choices (bias below ``L / 2**32``); every valid result
 starts at ``cells[0]``, ends at ``cells[length-1]``, is loop-free if the input is, and is
-re-padded (SPEC 2). Continuous operators keep a continuous path continuous under the
+re-padded (docs, "the pure core"). Continuous operators keep a continuous path continuous under the
 grid's corner rule; waypoint operators keep a feasible path feasible.
 
 Probabilities: :func:`with_probability` applies an operator with a per-individual
@@ -181,8 +181,8 @@ def one_point(
 
     (i) pick a random node ``p_m`` other than the start and target; (ii) delete it and
     find the set ``Y`` of cells that make ``p_{m-1}`` and ``p_{m+1}`` consecutive; (iii)
-    put a random cell of ``Y`` in place of ``p_m``. Empty ``Y``: no mutation (SPEC 7),
-    reported as ``failed``.
+    put a random cell of ``Y`` in place of ``p_m``. Empty ``Y``: no mutation (jaxga's
+    choice; the paper does not say), reported as ``failed``.
 
     Decisions: "consecutive" means both steps ``p_{m-1} -> y -> p_{m+1}`` are legal
     moves under the grid's corner rule; ``Y`` excludes ``p_m`` itself (a mutation that
@@ -216,7 +216,7 @@ def range_mutation(
     factors: tuple[float, float] = (3.0, 2.0),
     field_repair: bool = False,
 ) -> tuple[jax.Array, jax.Array, jax.Array]:
-    """Zhu & Pan's range mutation (section 4.5, Fig. 7); SPEC 7 ``range``.
+    """Zhu & Pan's range mutation (section 4.5, Fig. 7).
 
     (i) pick two random nodes ``p_i``, ``p_j`` and delete the path between them; (ii)
     "set ``p_i`` as the start point and ``p_j`` as the target point. Determine a new path
@@ -550,11 +550,11 @@ def adaptive_mutation_probability(
     ``pm_low = 0.15``, ``pm_high = 0.3`` (Table 6). Everything broadcasts and may be
     traced (``t`` from the generation counter; ``exp(t/T)`` is an optax schedule too).
 
-    Notes on the paper (SPEC 7 stands where they differ):
+    Notes on the paper (jaxga's choices where it is ambiguous or incomplete):
 
     * eq. 28 as printed reads "f_avg and f_max != f_avg" in its second case; the text
       and eq. 26 make it ``f >= f_avg``.
-    * eq. 29 has no ``min(1, .)``; SPEC adds it. With AGACD's 0.15/0.3 the product stays
+    * eq. 29 has no ``min(1, .)``; jaxga adds it. With AGACD's 0.15/0.3 the product stays
       below ``0.3 e = 0.82``, so the clamp only matters for larger ``pm_high`` (e.g. the
       0.6 of the 50 x 50 comparison table) or ``t > T``.
     * Unlike crossover (eq. 26: ``pc_low``), a converged population (f_max = f_avg) gets
@@ -577,7 +577,7 @@ def adaptive_mutation_probability(
 
 
 def with_probability(op: Callable) -> Callable:
-    """Apply a per-individual operator with probability ``prob`` (SPEC 6-7 rates).
+    """Apply a per-individual operator with probability ``prob`` (a mutation or crossover rate).
 
     Returns ``wrapped(key, grid, cells, length, prob, *extra) -> (cells, length,
     failed)``: with probability ``prob`` (a float32 scalar, traced; per individual when

@@ -1,4 +1,4 @@
-"""Post-optimisation and simplification of paths (SPEC 9).
+"""Post-optimisation and simplification of paths.
 
 * :func:`shortcut_greedy` - the "deletion point method" / "optimization operator" /
   "delete operation" of MPMGA section 4.7, AGACD section 4.8 and IMGA section 4.5: turn a
@@ -12,8 +12,8 @@
   individual with probability ``ps`` every generation; the path stays continuous.
 * :func:`remove_loops` - MPMGA's deletion operator, re-exported from :mod:`jaxga.core.paths`.
 
-Every function is written for ONE path ``(cells int32[L], length int32)`` (SPEC 2), is
-pure and jittable and ``vmap``s over a population; the shortcut passes loop over the
+Every function is written for ONE path ``(cells int32[L], length int32)`` (docs, "the
+pure core"), is pure and jittable and ``vmap``s over a population; the shortcut passes loop over the
 path's ``length`` positions, not its capacity ``L`` (under ``vmap``, the longest path's).
 Deterministic functions take no key and return ``(cells, length)``;
 :func:`simplify_adjacent` is a per-individual operator
@@ -62,7 +62,7 @@ def line_of_sight(los: str):
 
 
 def compact(cells: jax.Array, keep: jax.Array) -> tuple[jax.Array, jax.Array]:
-    """Keep the nodes where ``keep`` is True, in order, and re-pad (SPEC 2).
+    """Keep the nodes where ``keep`` is True, in order, and re-pad with the last kept cell.
 
     One cumulative sum and one scatter of ``L`` lanes (no per-step work). ``keep`` must
     be False on the padding. Returns ``(cells, length)``.
@@ -204,7 +204,7 @@ def shortcut_greedy(
 
     Args:
         grid: the map (``clear`` honours its corner rule; ``linear_trial`` has none).
-        cells, length: one path (SPEC 2). It should be feasible under ``los``.
+        cells, length: one padded path. It should be feasible under ``los``.
         los: ``"clear"`` (exact line of sight, default) or ``"linear_trial"`` (AGACD).
 
     Returns:

@@ -17,7 +17,7 @@ Under the stricter rules the connected path first loses its loops (its remaining
 are steps of the raw path); then, under ``"strict"``, a diagonal step past a blocked side
 cell is made legal by inserting the free side cell (two orthogonal steps), and under
 ``"no_squeeze"`` and ``"strict"`` a diagonal step with both side cells blocked makes the
-connection fail. This is jaxga's extension for the stricter corner rules (SPEC 1).
+connection fail. This is jaxga's extension for the stricter corner rules (decision 027).
 """
 
 from __future__ import annotations
@@ -324,7 +324,7 @@ def _set(table: jax.Array, idx: jax.Array, vals: jax.Array) -> jax.Array:
 
 
 def pad_cells(cells: jax.Array, length: jax.Array) -> jax.Array:
-    """Repeat ``cells[length - 1]`` over the padding (SPEC 2)."""
+    """Repeat ``cells[length - 1]`` over the padding (docs, "the pure core")."""
     idx = jnp.arange(cells.shape[0], dtype=jnp.int32)
     return jnp.where(idx < length, cells, cells[jnp.maximum(length - 1, 0)])
 

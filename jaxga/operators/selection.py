@@ -1,4 +1,4 @@
-"""Selection operators (SPEC 5): which individuals become parents.
+"""Selection operators: which individuals become parents.
 
 Every selection works on a whole population and has the signature::
 
@@ -12,14 +12,14 @@ over runs (``jax.vmap(roulette)(keys, fitness[R, P])``); static options (``k`` o
 
 Conventions shared by every selection (decisions where the papers are silent):
 
-* **Fitness** is "larger is better" and non-negative (SPEC 3: infeasible individuals have
+* **Fitness** is "larger is better" and non-negative (infeasible individuals have
   fitness 0). For the fitness-proportional parts, negative values and NaN count as 0;
   for ranking, NaN ranks below every number. Subnormal values (below ``1.2e-38``) are
   flushed to 0 by XLA on CPU, so they count as 0 as well.
 * **Active mask.** Population-size sweeps use a fixed capacity ``P`` and an ``active``
-  mask (SPEC 11). Inactive individuals are never selected: EVERY output index, also the
-  one written into an inactive slot, is the index of an active individual (so a gather
-  never copies padding). Only the entries of active slots carry the selection's
+  mask (docs/python.md, "Sweeps"). Inactive individuals are never selected: EVERY output
+  index, also the one written into an inactive slot, is the index of an active individual
+  (so a gather never copies padding). Only the entries of active slots carry the selection's
   distribution; the entries of inactive slots are valid but otherwise meaningless
   (:func:`roulette` and :func:`tournament` fill them with further independent draws,
   the rank-based selections with the best individual). With no active individual at all,
@@ -188,7 +188,7 @@ def stratified(
     active: jax.Array | None = None,
     bands: str = "quartile",
 ) -> jax.Array:
-    """Zhang's stratified selection (paper 002, "Stratified Approach"; SPEC 5).
+    """Zhang's stratified selection (paper 002, "Stratified Approach").
 
     The active individuals are divided into four fitness levels A > B > C > D (Zhang eq.
     1); A, B and C are copied once each to the next generation and level D is dropped;
@@ -197,14 +197,14 @@ def stratified(
 
     ``bands`` (static) says how the four levels are formed:
 
-    * ``"quartile"`` (SPEC 5, the default): by rank. With ``M`` active individuals sorted
+    * ``"quartile"`` (the default): by rank. With ``M`` active individuals sorted
       by decreasing fitness (ties: lower index first), rank ``r`` belongs to level
       ``floor(4 r / M)``; the ``M // 4`` worst (ranks ``>= M - M // 4``) form level D.
     * ``"value"``: four equal-width fitness intervals between the active minimum and
       maximum; level D is ``f < f_min + (f_max - f_min) / 4`` (nothing is dropped when
       all fitness values are equal). Zhang's remark that "the number of individuals in
       layer A is less than layer B, and layer B is less than C" only makes sense for
-      value bands, so this variant is offered; SPEC's quartiles stay the default.
+      value bands, so this variant is offered; jaxga keeps quartiles as the default.
 
     The output is shuffled onto the active slots (see the module docstring).
     """
@@ -239,7 +239,7 @@ def shuffle(key: jax.Array, fitness: jax.Array, active: jax.Array | None = None)
     MPMGA (Hao et al. 2020) section 4.4 replaces selection by migration and does not say how
     crossover pairs are formed; with the slots left in place, slot 2k would always mate with
     slot 2k + 1. The shuffle gives every generation new random pairs (consecutive slots are
-    the pairs of SPEC 6) and changes no individual's number of copies.
+    the crossover's pairs) and changes no individual's number of copies.
     """
     fitness, active = _prepare(fitness, active)
     order = jnp.argsort(~active, stable=True).astype(_I32)  # active first, by index

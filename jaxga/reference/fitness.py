@@ -1,4 +1,4 @@
-"""Exact optimum of a preset's own fitness over 8-connected paths (SPEC 3, 11).
+"""Exact optimum of a preset's own fitness over 8-connected paths.
 
 :mod:`jaxga.reference.optima` gives the length optima. Most papers' GAs do not minimise length
 alone: Zhu & Pan (eq. 6-9), Zhang (eq. 2), IMGA (eq. 4-7) and MPMGA (eq. 3-14) add a
@@ -8,7 +8,7 @@ computes that optimum exactly, so a GA can be judged against the value it actual
 maximises (``Result.fitness_gap``).
 
 The search space is the one the grid-step GAs evolve in: paths of 8-adjacent cells from
-start to goal, every move legal under the grid's corner rule (SPEC 1). For the four
+start to goal, every move legal under the grid's corner rule (decision 027). For the four
 fitnesses whose denominator is a sum over moves and nodes (``sga``, ``iga_zhu``,
 ``iga_zhang``, ``imga``), the optimum is a shortest path in the graph of states
 ``(cell, heading of the move that entered it)``: a move costs its weighted length, the
@@ -25,7 +25,7 @@ keep, and :attr:`FitnessOptimum.loop_free` says so. AGACD's fitness is not cover
 individuals are waypoint paths, not 8-connected ones (its length gap is measured against
 :func:`jaxga.reference.any_angle.any_angle_shortest_path`).
 
-The costs are written here from SPEC 3 and the papers' equations, independently of
+The costs are written here from the papers' equations, independently of
 :mod:`jaxga.core.objectives`; the tests check that the two agree on every optimum returned.
 """
 
@@ -408,7 +408,7 @@ def path_fitness_np(
 
 def fitness_optimum(grid: Grid, config: Mapping | str, *,
                     max_cells: int | None = MAX_CELLS, **weights: float) -> FitnessOptimum:
-    """The exact optimum of a preset's fitness on ``grid`` (SPEC 3, 11).
+    """The exact optimum of a preset's fitness on ``grid``.
 
     ``config`` is a :class:`~jaxga.config.schema.Config` (its ``fitness.*`` keys) or a fitness
     method name with ``weights`` as keywords (``fitness_optimum(grid, "iga_zhu",

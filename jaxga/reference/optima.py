@@ -1,25 +1,25 @@
 """Exact reference optima: the 8-connected shortest path, exact line of sight, search budgets.
 
-Every GA result is reported as a gap to an exact optimum (SPEC 11, 12). This module
+Every GA result is reported as a gap to an exact optimum (decisions 015, 031). This module
 computes those optima on the host with NumPy and :mod:`heapq`; it is not the hot path
 and imports nothing from the JAX side of jaxga except the :class:`~jaxga.core.grid.Grid`
 container, so it is an *independent* reference for the JAX code to be tested against
-(in particular :func:`clear_np` is written from SPEC 1 alone, not from
+(in particular :func:`clear_np` is written from its own definition, not from
 ``jaxga.core.geometry``).
 
 Contents:
 
 * :func:`shortest_path` - the 8-connected optimum: straight step cost 1, diagonal step
-  cost ``sqrt(2)``, diagonal moves restricted by the grid's ``corner_rule`` (SPEC 1).
+  cost ``sqrt(2)``, diagonal moves restricted by the grid's ``corner_rule`` (decision 027).
   A* with the octile heuristic over a precomputed sparse adjacency (:class:`OctileGraph`);
   :func:`distances_from` gives the whole Dijkstra distance field.
 * the any-angle optimum is in :mod:`jaxga.reference.any_angle` (it uses the taut string's
   bounds of :mod:`jaxga.reference.lower_bound`, which in turn uses this module); the
   search budget both share is here (:class:`Deadline`, status ``"budget"``).
 * :func:`clear_np` / :func:`clear_many_np` / :func:`clear_pairs_np` - exact,
-  integer-only line of sight between cell centres (SPEC 1).
+  integer-only line of sight between cell centres.
 
-Coordinates are ``(x, y)`` with ``y = 0`` the bottom row (SPEC 1); arrays are indexed
+Coordinates are ``(x, y)`` with ``y = 0`` the bottom row (docs/maps.md); arrays are indexed
 ``blocked[y, x]``. Paths are ``int32[k, 2]`` arrays of ``(x, y)`` cells from start to goal.
 
 A blocked or off-map endpoint and an unreachable goal are *results* here
@@ -177,7 +177,7 @@ def checked_in_chunks(
 
 
 def path_length(path: np.ndarray) -> float:
-    """Sum of the Euclidean lengths of the segments of an ``int[k, 2]`` path (SPEC 3)."""
+    """Sum of the Euclidean lengths of the segments of an ``int[k, 2]`` path."""
     p = np.asarray(path, dtype=np.float64)
     if p.shape[0] < 2:
         return 0.0
@@ -222,12 +222,12 @@ def unreachable_message(start: tuple[int, int], goal: tuple[int, int], rule: str
     )
 
 
-# ======================================================================== moves (SPEC 1)
+# =============================================================================== moves
 def legal_moves_np(blocked: np.ndarray, corner_rule: str) -> np.ndarray:
     """``bool[8, H, W]``: whether the move from ``(x, y)`` in direction ``d`` is legal.
 
     Directions are :data:`jaxga.core.grid.DIRECTIONS` (counter-clockwise from east). A move is
-    legal (SPEC 1) when both end cells are on the map and free and, for a diagonal move,
+    legal when both end cells are on the map and free and, for a diagonal move,
     the two orthogonal side cells satisfy ``corner_rule``: ``"free"`` ignores them,
     ``"no_squeeze"`` forbids both blocked, ``"strict"`` forbids either blocked.
     """
@@ -235,7 +235,7 @@ def legal_moves_np(blocked: np.ndarray, corner_rule: str) -> np.ndarray:
 
 
 class OctileGraph:
-    """The 8-connected move graph of one map under one corner rule (SPEC 1).
+    """The 8-connected move graph of one map under one corner rule.
 
     Built in one vectorised pass as a compressed sparse row adjacency (the neighbours of
     a cell in the order of :data:`~jaxga.core.grid.DIRECTIONS`); :meth:`search` answers
@@ -362,7 +362,7 @@ def shortest_path_np(
 
 
 def shortest_path(grid: Grid) -> ReferencePath:
-    """The 8-connected shortest path of ``grid`` under its corner rule (SPEC 1, 11).
+    """The 8-connected shortest path of ``grid`` under its corner rule.
 
     Straight steps cost 1 and diagonal steps ``sqrt(2)``; a diagonal step is legal when
     its side cells satisfy ``grid.corner_rule``. A* with the octile heuristic (exact:
@@ -375,7 +375,7 @@ def shortest_path(grid: Grid) -> ReferencePath:
 
 
 def distances_from(grid: Grid, source_xy: XY | None = None) -> np.ndarray:
-    """Full 8-connected distance field ``float64[H, W]`` from ``source_xy`` (SPEC 1, 11).
+    """Full 8-connected distance field ``float64[H, W]`` from ``source_xy``.
 
     ``source_xy`` defaults to the grid's start. ``inf`` marks blocked and unreachable
     cells. Because moves are symmetric under every corner rule, ``distances_from(grid,
@@ -386,7 +386,7 @@ def distances_from(grid: Grid, source_xy: XY | None = None) -> np.ndarray:
     return OctileGraph(grid.blocked_np(), grid.corner_rule).distances(src)
 
 
-# ================================================================ line of sight (SPEC 1)
+# ======================================================================= line of sight
 def side_ok(s1: bool, s2: bool, rule: str) -> bool:
     if rule == "free":
         return True
@@ -396,7 +396,7 @@ def side_ok(s1: bool, s2: bool, rule: str) -> bool:
 
 
 def clear_np(blocked: np.ndarray, corner_rule: str, a_xy: XY, b_xy: XY) -> bool:
-    """Exact line of sight between the centres of cells ``a_xy`` and ``b_xy`` (SPEC 1).
+    """Exact line of sight between the centres of cells ``a_xy`` and ``b_xy``.
 
     The segment is *clear* when every cell whose interior it crosses is free (both end
     cells included) and, wherever it passes exactly through a grid vertex, the two cells
@@ -457,7 +457,7 @@ def clear_pairs_np(
 ) -> np.ndarray:
     """Vectorised :func:`clear_np` over pairs of cells: ``bool[n]`` for ``int[n, 2]`` ends.
 
-    Same definition as :func:`clear_np` (SPEC 1) but a different, closed-form computation
+    Same definition as :func:`clear_np` but a different, closed-form computation
     (so that the two check each other in the tests): call the axis of larger extent the
     major one (extents ``A >= B``, offsets ``i`` along it and ``j`` across it, from
     ``a``). The segment meets the grid line between major columns ``i`` and ``i + 1``
@@ -522,7 +522,7 @@ def clear_many_np(
 ) -> np.ndarray:
     """Vectorised :func:`clear_np` from one source to many targets: ``bool[n]``.
 
-    ``targets_xy`` is ``int[n, 2]``; see :func:`clear_pairs_np` for the method (SPEC 1).
+    ``targets_xy`` is ``int[n, 2]``; see :func:`clear_pairs_np` for the method.
     """
     t = np.asarray(targets_xy, dtype=np.int64).reshape(-1, 2)
     a = np.broadcast_to(np.asarray(as_xy(a_xy), dtype=np.int64), t.shape)
