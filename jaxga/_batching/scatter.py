@@ -55,7 +55,7 @@ def position_table(keys: jax.Array, n_cells: int) -> jax.Array:
     mode="drop")``. Used by :func:`jaxga.core.paths.position_lookup` and
     :func:`jaxga.core.paths.last_occurrence` (the crossovers' "where is this cell in the other
     parent" and loop removal): faster than the batched scatter on 20 x 20 and 50 x 50
-    maps (``benchmarks/batched_ops.py``; decision 007).
+    maps (decision 007).
     """
     return _position_table_fn(int(n_cells))(jnp.asarray(keys, jnp.int32))
 

@@ -152,7 +152,7 @@ above runs the 32-per-device program as often as needed, on any number of device
 count. On maps up to 64 x 64 a run computes in milliseconds, so padding a few runs to a
 call of 32 per device costs far less than compiling a program for them; blocks of 20-50
 runs per device compute fastest (decision 011), and 1000 seeds as calls of 32 per device
-keep the throughput within 7 % (``benchmarks/throughput_ab.py``)."""
+keep the throughput within 7 % (``benchmarks/ab/throughput_ab.py``)."""
 
 
 LARGE_MAP_BUCKETS = (1, 2, 4, 8, 16, 32)
@@ -199,7 +199,7 @@ RUN_BLOCK = 64
 """Largest number of runs :func:`map_runs` computes in one ``vmap`` by default.
 
 Blocks of 20-50 runs compute faster than blocks of 125, and one ``vmap`` of 50 runs is
-within noise of two blocks of 25 (``benchmarks/run_block.py``; decision 011). The
+within noise of two blocks of 25 (decision 011). The
 programs of :func:`compiled_programs` hold at most ``RUN_BUCKETS[-1]`` runs per device,
 so only their initialisation is split further (:data:`INIT_RUN_BLOCK`)."""
 

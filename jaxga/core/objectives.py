@@ -52,7 +52,7 @@ Cost: the length, the turn-based objectives and the safety terms cost microsecon
 path; ``min_clearance`` and ``tangencies`` search a band of cells around each segment,
 ``O(L (H + W))``, and the whole map, ``O(L H W)``, only for a path that stays more than
 :data:`CLEARANCE_RADIUS` cells from every obstacle: they are meant for reports
-(``benchmarks/objectives.py``; decision 009).
+(decision 009).
 """
 
 from __future__ import annotations

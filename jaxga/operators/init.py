@@ -44,7 +44,7 @@ Implementation notes shared by the walks
   carry (P = 1000 on a 256 x 256 map: 65 MB), so on maps of more than
   :data:`VISITED_TABLE_CELLS_PER_NODE` cells per node of capacity the walks keep a hash
   set of their own cells instead (decision 008).
-* Cost per attempt (``benchmarks/init_study.py``, decision 002): the random and
+* Cost per attempt (decision 002): the random and
   directional walks are the cheapest, greedy_random_target (640 moves) costs more, and
   median_insertion and intermittent_connect cost the most, both dominated by
   :func:`jaxga.operators.repair.connect` (its ``while_loop`` over insertion rounds runs, under
