@@ -1,7 +1,7 @@
 """A hostile-input campaign against the ``jaxga`` command line (decision 033).
 
 About a hundred inputs and faults a careless user or script produces, beyond the cases of
-``tests/test_faults.py``: broken or odd map files (empty, garbage, huge headers, ragged
+``tests/tools/test_faults.py``: broken or odd map files (empty, garbage, huge headers, ragged
 rows, lying PGM/PNG headers, truncated images, unusual file names, a folder, /dev/zero, a
 FIFO, symlink loops), ROS YAML files with NaN, negative or absurd values and images that
 are missing, oversized or garbage, bad endpoints, bad options and preset files, outputs

@@ -95,7 +95,7 @@ def main() -> None:
         workers[worker_of[f]] += files[f]["wall"]
     ran = collections.defaultdict(list)
     for f, w in worker_of.items():
-        ran[w].append(f"{f.removeprefix('tests/test_').removesuffix('.py')} "
+        ran[w].append(f"{Path(f).stem.removeprefix('test_')} "
                       f"{files[f]['wall']:.0f}")
     body = (
         f"`pytest -q` from the repository root, cold persistent compilation cache (a new "

@@ -7,7 +7,7 @@ Run it on an operator of your own before you use it in a run::
     jaxga.testing.check_operator(jaxga.config.registry.operator("mutation", "drop_point"))
 
 It raises ``AssertionError`` naming the operator and the rule it broke; jaxga's own test
-suite runs it on every registered operator (``tests/test_registry.py``).
+suite runs it on every registered operator (``tests/config/test_registry.py``).
 
 The contract of each family (the signatures: :mod:`jaxga.config.registry`). Shared by
 every family: outputs have the documented dtypes and shapes; paths are padded with their

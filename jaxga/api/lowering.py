@@ -9,7 +9,7 @@ separate kernels and cannot fuse with its neighbours.
 
 :func:`unroll_threefry_on_cpu` makes the CPU use JAX's unrolled lowering. The hash is the
 same function, so every random bit, and so every result of jaxga, is identical (tested
-bit for bit in ``tests/test_lowering.py``); only the compiled program changes, which
+bit for bit in ``tests/api/test_lowering.py``); only the compiled program changes, which
 XLA compiles faster (decision 013).
 
 ``import jaxga`` turns it on. It changes how JAX lowers Threefry on the CPU for the whole

@@ -32,7 +32,7 @@ module decides how that axis is split:
   copies of the last run, dropped afterwards) to a multiple of processes x local devices
   and every process computes the same number of runs, so every process compiles the same
   program. A run's result depends only on its seed and point, so the gathered result is
-  identical to a single-process run (``tests/test_distributed.py`` checks it).
+  identical to a single-process run (``tests/api/test_distributed.py`` checks it).
 
 * **Failures.** Within ``timeout`` seconds (``--process-timeout``, default 60):
   if a process never joins, the others print one line and exit with status 4 (JAX alone

@@ -276,7 +276,7 @@ FINISH_COMPILER_OPTIONS = {"xla_cpu_use_fusion_emitters": False}
 """XLA options of the finish program (post-optimisation, metrics; it runs once per run):
 XLA:CPU's older (LLVM IR) fusion emitters compile it faster than the default MLIR
 emitters, with the same results (checked in the A/B tables and by
-``tests/test_engine.py``), and its run is no slower (decision 012). Always these
+``tests/engine/test_engine.py``), and its run is no slower (decision 012). Always these
 options, whatever the number of runs, so a run's results never depend on how many runs
 share its call. The init and evolve programs keep XLA's defaults: with the older
 emitters they compile faster but run slower on wide batches (decision 012)."""

@@ -24,7 +24,7 @@ crossover) and the path capacity (a small map's own can be below its class's) si
 arrays by it. Such runs are other runs of the same method: they differ seed by seed from
 the unpadded ones, not in feasibility, success or the lengths' distribution
 (``benchmarks/size_classes.py``). The other presets' padded runs equal the unpadded ones
-seed for seed when the capacity is the same (``tests/test_programs.py``; decision 029).
+seed for seed when the capacity is the same (``tests/api/test_programs.py``; decision 029).
 """
 
 from __future__ import annotations

@@ -11,7 +11,7 @@ needs the list of operators reads it from here:
   chains of ``if method == ...``);
 * the rule that refuses keys no stage reads (:func:`jaxga.engine.unread_keys`);
 * ``jaxga operators`` (the command line's list, with parameters and traits);
-* the contract tests (``tests/test_registry.py``), parametrised over the registry.
+* the contract tests (``tests/config/test_registry.py``), parametrised over the registry.
 
 Adding an operator is one function plus one :func:`register_operator` call, from any
 module (docs, "the pure core"); :func:`jaxga.testing.check_operator` runs its family's

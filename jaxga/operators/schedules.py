@@ -41,7 +41,7 @@ def _exponential(generations: int | jax.Array, rate: float) -> optax.Schedule:
     that may be traced (the number of generations is a run-time value, so that one
     compiled program serves every count; optax inspects ``transition_steps`` in Python).
     The same operations as optax's schedule, so the same float32 values
-    (``tests/test_mutation.py`` checks them against optax for a static ``T``)."""
+    (``tests/operators/test_mutation.py`` checks them against optax for a static ``T``)."""
     if not isinstance(generations, jax.Array):
         _check(generations)
 

@@ -16,7 +16,7 @@ nbclient = pytest.importorskip("nbclient")
 
 from tests.conftest import CACHE_DIR  # noqa: E402
 
-NOTEBOOKS = sorted((Path(__file__).resolve().parent.parent / "notebooks").glob("*.ipynb"))
+NOTEBOOKS = sorted((Path(__file__).resolve().parents[2] / "notebooks").glob("*.ipynb"))
 
 
 def test_every_notebook_is_listed():

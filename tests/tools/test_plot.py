@@ -25,7 +25,7 @@ from jaxga.plot import (  # noqa: E402
     plot_seed_scatter,
 )
 
-# the map and settings of tests/test_api.py and tests/test_compare.py (shared programs)
+# the map and settings of tests/api/test_api.py and tests/tools/test_compare.py (shared programs)
 SMALL = dict(population__size=8, generations=3, init__max_tries=40)
 SEEDS = 3
 

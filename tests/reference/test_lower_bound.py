@@ -3,7 +3,7 @@
 Independent checks used here: a brute-force continuous shortest path (scipy Dijkstra over
 the complete graph of ALL grid vertices plus the two centres, every edge decided by an
 exact rational-arithmetic test written here from the definition), the brute-force
-any-angle optimum of tests/test_reference.py (every pair of free cell centres), and
+any-angle optimum of tests/reference/test_reference.py (every pair of free cell centres), and
 lengths computed by hand.
 """
 
@@ -29,7 +29,7 @@ from jaxga.reference.lower_bound import (
     segments_free_np,
 )
 from jaxga.reference.optima import clear_np, path_length, shortest_path_np
-from tests.test_reference import brute_any_angle_vectorised
+from tests.reference.test_reference import brute_any_angle_vectorised
 
 SQ2 = math.sqrt(2.0)
 

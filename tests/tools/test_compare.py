@@ -19,7 +19,7 @@ from jaxga.core.errors import ParameterError
 from jaxga.maps import random_map, save_map
 from jaxga.stats import fisher_success, holm, mann_whitney, wilcoxon_paired
 
-# the map and settings of tests/test_api.py: the compiled programs are shared
+# the map and settings of tests/api/test_api.py: the compiled programs are shared
 SMALL = dict(population__size=8, generations=3, init__max_tries=40)
 SEEDS = 3
 

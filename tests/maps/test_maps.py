@@ -40,7 +40,7 @@ from jaxga.maps import (
     save_map,
 )
 
-DATA = Path(__file__).parent / "data"
+DATA = Path(__file__).parents[1] / "data"
 EXT = {"01": "txt", "movingai": "map", "ascii": "ascii", "png": "png", "ros": "yaml"}
 FAST = settings(max_examples=25, deadline=None, suppress_health_check=[HealthCheck.too_slow])
 

@@ -535,7 +535,7 @@ def test_x64_mode_keeps_int32():
     cache = str(jax.config.jax_compilation_cache_dir or "")
     res = subprocess.run([sys.executable, "-c", code, cache], env=env, capture_output=True,
                          text=True, timeout=300,
-                         cwd=os.path.dirname(os.path.dirname(os.path.abspath(__file__))))
+                         cwd=os.path.dirname(os.path.dirname(os.path.dirname(os.path.abspath(__file__)))))
     assert res.returncode == 0 and "ok" in res.stdout, res.stderr[-2000:]
 
 

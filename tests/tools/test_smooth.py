@@ -37,7 +37,7 @@ from jaxga.smooth import (
     verify_curve,
 )
 
-DATA = Path(__file__).parent / "data"
+DATA = Path(__file__).parents[1] / "data"
 CFG = SmoothConfig(steps=120)
 CAP = 64
 DENSE = 20 * CFG.verify_per_span  # samples per span of the independent check

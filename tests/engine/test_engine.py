@@ -113,7 +113,7 @@ def test_results_do_not_depend_on_the_device_count():
     import sys
     from pathlib import Path
 
-    root = str(Path(__file__).resolve().parents[1])
+    root = str(Path(__file__).resolve().parents[2])
     out = []
     for n in (1, 4):
         env = dict(os.environ, PYTHONPATH=root,

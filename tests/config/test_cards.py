@@ -29,7 +29,7 @@ try:
 except ModuleNotFoundError:  # Python 3.10
     import tomli as tomllib
 
-CARDS = sorted((Path(__file__).resolve().parents[1] / "docs" / "cards").glob("*.toml"))
+CARDS = sorted((Path(__file__).resolve().parents[2] / "docs" / "cards").glob("*.toml"))
 RATED = ("crossover", "mutation", "simplify")
 
 

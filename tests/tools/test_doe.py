@@ -37,7 +37,7 @@ from jaxga.doe import (
     run_doe,
 )
 
-ROOT = Path(__file__).resolve().parents[1]
+ROOT = Path(__file__).resolve().parents[2]
 PAPER = ROOT.parent / "shared" / "papers" / "001_66b815cfd6d0fbaa.txt"
 
 # AGACD Table 4 as printed: run no., real values (population, pc_low, pc_high, pm_low,

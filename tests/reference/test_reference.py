@@ -42,7 +42,7 @@ from jaxga.reference.optima import (
     shortest_path_np,
 )
 
-DATA = Path(__file__).parent / "data"
+DATA = Path(__file__).parents[1] / "data"
 SQ2 = math.sqrt(2.0)
 
 # ------------------------------------------------------------------------------ helpers

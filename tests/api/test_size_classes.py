@@ -1,5 +1,5 @@
 """Map-size classes (decision 029): the padding of a map to its class keeps its cells and its
-edge (runs on padded maps: tests/test_programs.py)."""
+edge (runs on padded maps: tests/api/test_programs.py)."""
 
 from __future__ import annotations
 

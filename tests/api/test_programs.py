@@ -27,7 +27,7 @@ from jaxga.maps.generators import random_map
 from jaxga.operators import schedules
 from jaxga.operators.guide import with_guide
 
-ROOT = Path(__file__).resolve().parents[1]
+ROOT = Path(__file__).resolve().parents[2]
 
 # A configuration no other test file uses, so that the first call here compiles; its path
 # capacity is the 32 x 32 size class's, so that the map padded to its class runs with the
@@ -301,7 +301,7 @@ def test_programs_with_a_users_operator_are_not_stored(grid):
 def test_each_process_of_a_multi_process_run_reads_only_its_own_programs(grid, monkeypatch):
     """In a run over several processes the programs of process 0 and process 1 have
     different keys: a program addresses its own process's devices (read by another
-    process it returned arrays that process cannot fetch: tests/test_distributed.py)."""
+    process it returned arrays that process cannot fetch: tests/api/test_distributed.py)."""
     config = api.check_run("sga", grid, **OPTIONS)
     algo, _ = engine.build(config, grid)
     args = ("init", algo, None, (), 8, jax.devices()[:1])

@@ -32,7 +32,7 @@ def setting():
 @pytest.mark.parametrize("op", OPERATORS, ids=[f"{op.family}-{op.name}" for op in OPERATORS])
 def test_every_registered_operator_keeps_its_family_contract(setting, op):
     """With ``repair.fallback = "none"``; the field repairs have their own property tests
-    (``tests/test_field.py``)."""
+    (``tests/operators/test_field.py``)."""
     grid, pop = setting
     testing.check_family(op, grid, pop, jax.random.PRNGKey(7))
 
@@ -159,7 +159,7 @@ def test_the_old_names_in_a_users_preset_file_still_work(tmp_path):
 def test_operators_command_lists_the_registry():
     out = subprocess.run([sys.executable, "-m", "jaxga.cli", "operators", "mutation"],
                          capture_output=True, text=True, check=True,
-                         cwd=Path(__file__).resolve().parents[1]).stdout
+                         cwd=Path(__file__).resolve().parents[2]).stdout
     for op in registry.operators("mutation"):
         assert re.search(rf"^  {op.name}\b", out, re.M), op.name
         for key in op.params:

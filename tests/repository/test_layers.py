@@ -12,7 +12,7 @@ from pathlib import Path
 
 import pytest
 
-PACKAGE = Path(__file__).resolve().parents[1] / "jaxga"
+PACKAGE = Path(__file__).resolve().parents[2] / "jaxga"
 
 LAYERS = ("_batching", "core", "maps", "operators", "config", "engine", "reference", "api",
           "tools")

@@ -20,7 +20,7 @@ from pathlib import Path
 
 import pytest
 
-ROOT = Path(__file__).resolve().parents[1]
+ROOT = Path(__file__).resolve().parents[2]
 MAP = "classic_ga_gapp3_20x20"
 RUN = ["run", "--preset", "sga", "--map", MAP, "--corner-rule", "free", "--seeds", "6",
        "--generations", "5", "--set", "population.size=10", "--quiet"]

@@ -22,7 +22,7 @@ if sys.version_info >= (3, 11):
 else:  # pragma: no cover
     import tomli as tomllib
 
-ROOT = Path(__file__).resolve().parent.parent
+ROOT = Path(__file__).resolve().parents[2]
 PAPER_PRESETS = ("agacd", "iga_zhang", "iga_zhu", "imga", "mpmga", "sga")
 PRESETS = (*PAPER_PRESETS, "hybrid")
 VARIANTS = {
@@ -191,7 +191,7 @@ def test_iga_zhu_table_3():
 def test_iga_zhang():
     # Zhang Ke-qi: crossover probability 0.8, the corner-removing mutation at one random
     # position with probability 1, stratified selection, fitness from eq. 2; Table 1
-    # iterations 45/40/35 (the whole chain: tests/test_cards.py).
+    # iterations 45/40/35 (the whole chain: tests/config/test_cards.py).
     config = load_preset("iga_zhang")
     check(config, {
         "crossover.probability": 0.8,
