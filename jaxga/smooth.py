@@ -97,6 +97,7 @@ import jax.numpy as jnp
 import numpy as np
 import optax
 
+from jaxga.core.dtypes import F32
 from jaxga.core.errors import ParameterError
 from jaxga.core.geometry import segments_clear
 from jaxga.core.grid import Grid, blocked_at
@@ -118,7 +119,6 @@ __all__ = [
     "verify_curve",
 ]
 
-FLOAT = jnp.float32
 _BIG = 1e6
 _FIELD_PAD = 2  # rings of "outside" cells around the map in the distance field
 
@@ -295,8 +295,8 @@ def _sq_dist_to_set(mask: jax.Array, xs: jax.Array, ys: jax.Array) -> jax.Array:
     so a min over rows per column first, then a min over columns (each a ``lax.map``).
     """
     h, w = mask.shape
-    cy = jnp.arange(h, dtype=FLOAT)
-    cx = jnp.arange(w, dtype=FLOAT)
+    cy = jnp.arange(h, dtype=F32)
+    cx = jnp.arange(w, dtype=F32)
     fy = jnp.square(jnp.maximum(jnp.abs(ys[:, None] - cy[None, :]) - 0.5, 0.0))  # [Ny, H]
     fx = jnp.square(jnp.maximum(jnp.abs(xs[:, None] - cx[None, :]) - 0.5, 0.0))  # [Nx, W]
 
@@ -329,12 +329,12 @@ def distance_field(grid: Grid, upsample: int = 4) -> DistanceField:
     origin = -0.5 - 1.0
     nx, ny = upsample * (w + 2) + 1, upsample * (h + 2) + 1
     # coordinates in the padded frame (cell index = coordinate + p)
-    xs = origin + p + jnp.arange(nx, dtype=FLOAT) / upsample
-    ys = origin + p + jnp.arange(ny, dtype=FLOAT) / upsample
+    xs = origin + p + jnp.arange(nx, dtype=F32) / upsample
+    ys = origin + p + jnp.arange(ny, dtype=F32) / upsample
     d_blocked = jnp.sqrt(_sq_dist_to_set(blocked, xs, ys))
     d_free = jnp.sqrt(_sq_dist_to_set(~blocked, xs, ys))
     return DistanceField(
-        values=(d_blocked - d_free).astype(FLOAT), origin=jnp.asarray(origin, FLOAT),
+        values=(d_blocked - d_free).astype(F32), origin=jnp.asarray(origin, F32),
         upsample=int(upsample),
     )
 
@@ -448,7 +448,7 @@ def curve_points(control: jax.Array, per_span: int = 16) -> jax.Array:
     """``float32[(M - 3) * per_span + 1, 2]``: the clamped cubic B-spline of ``control``
     sampled at ``per_span`` equal parameter steps per span (first point =
     ``control[0]``, last = ``control[-1]``). Jittable; ``per_span`` static."""
-    control = jnp.asarray(control, FLOAT)
+    control = jnp.asarray(control, F32)
     p, _, _ = _eval_grid(_span_coefficients(control), per_span)
     return p.at[0].set(control[0]).at[-1].set(control[-1])
 
@@ -470,7 +470,7 @@ def _polyline_xy(grid: Grid, cells: jax.Array, length: jax.Array):
     n = jnp.clip(jnp.asarray(length, jnp.int32), 1, cells.shape[0])
     i = jnp.arange(cells.shape[0], dtype=jnp.int32)
     cells = jnp.where(i < n, cells, cells[n - 1])
-    xy = jnp.stack([cells % w, cells // w], axis=-1).astype(FLOAT)
+    xy = jnp.stack([cells % w, cells // w], axis=-1).astype(F32)
     return xy, n
 
 
@@ -513,7 +513,7 @@ def turning_curvature_bound(grid: Grid, cells: jax.Array, length: jax.Array) -> 
         jnp.where(cross > 0, (ab - dot) / jnp.where(cross > 0, cross, 1.0), jnp.inf),
     )
     k = 2.0 * tan_half / jnp.minimum(jnp.minimum(a, b), 1.0)
-    return jnp.max(jnp.where(corner, k, 0.0), initial=0.0).astype(FLOAT)
+    return jnp.max(jnp.where(corner, k, 0.0), initial=0.0).astype(F32)
 
 
 def _polyline_turning(xy: jax.Array) -> jax.Array:
@@ -541,10 +541,10 @@ def polyline_points(
         raise ParameterError(f"polyline_points: n_points = {n_points} < capacity {cap}")
     xy, n = _polyline_xy(grid, cells, length)
     seg_len = jnp.sqrt(jnp.sum(jnp.square(xy[1:] - xy[:-1]), axis=-1))
-    cum = jnp.concatenate([jnp.zeros(1, FLOAT), jnp.cumsum(seg_len)])
+    cum = jnp.concatenate([jnp.zeros(1, F32), jnp.cumsum(seg_len)])
     total = cum[-1]
     j = jnp.arange(cap, dtype=jnp.int32)
-    extra = (n_points - n).astype(FLOAT)
+    extra = (n_points - n).astype(F32)
     frac = jnp.where(total > 0, cum / jnp.where(total > 0, total, 1.0), 0.0)
     kj = j + jnp.round(extra * frac).astype(jnp.int32)
     kj = jnp.where(j < n, kj, n_points - 1 + (j - n + 1))  # padding beyond the end
@@ -552,7 +552,7 @@ def polyline_points(
     seg = jnp.clip(jnp.searchsorted(kj, k, side="right").astype(jnp.int32) - 1, 0,
                    jnp.maximum(n - 2, 0))
     k0, k1 = kj[seg], kj[jnp.minimum(seg + 1, cap - 1)]
-    f = jnp.clip((k - k0).astype(FLOAT) / jnp.maximum(k1 - k0, 1).astype(FLOAT), 0.0, 1.0)
+    f = jnp.clip((k - k0).astype(F32) / jnp.maximum(k1 - k0, 1).astype(F32), 0.0, 1.0)
     p0, p1 = xy[seg], xy[jnp.minimum(seg + 1, cap - 1)]
     pts = (p0 + f[:, None] * (p1 - p0)).at[-1].set(xy[n - 1])
     return jnp.where(n > 1, pts, xy[0])
@@ -576,9 +576,9 @@ def initial_control_points(
     i = jnp.arange(seg_len.shape[0], dtype=jnp.int32)
     valid = i < n - 1
     wgt = jnp.where(valid, seg_len, 0.0)
-    cum = jnp.concatenate([jnp.zeros(1, FLOAT), jnp.cumsum(wgt)])
+    cum = jnp.concatenate([jnp.zeros(1, F32), jnp.cumsum(wgt)])
     total = cum[-1]
-    target = jnp.linspace(0.0, 1.0, n_ctrl, dtype=FLOAT) * total
+    target = jnp.linspace(0.0, 1.0, n_ctrl, dtype=F32) * total
     s = jnp.clip(jnp.searchsorted(cum, target, side="right").astype(jnp.int32) - 1, 0,
                  jnp.maximum(n - 2, 0))
     f = jnp.clip((target - cum[s]) / jnp.where(wgt[s] > 0, wgt[s], 1.0), 0.0, 1.0)
@@ -596,7 +596,7 @@ def _window(blocked: jax.Array, p: jax.Array) -> tuple[jax.Array, jax.Array]:
     float32[..., 9, 2], blocked bool[..., 9])`` (cells off the map count as blocked)."""
     cell = jnp.floor(p + 0.5).astype(jnp.int32)
     cells = cell[..., None, :] + jnp.asarray(_OFFSETS, jnp.int32)
-    return cells.astype(FLOAT), blocked_at(blocked, cells[..., 0], cells[..., 1])
+    return cells.astype(F32), blocked_at(blocked, cells[..., 0], cells[..., 1])
 
 
 def _point_clearance(blocked: jax.Array, p: jax.Array) -> jax.Array:
@@ -622,7 +622,7 @@ def _segment_square_distance(p0: jax.Array, p1: jax.Array, c: jax.Array) -> jax.
     d = p1 - p0
     lo, hi = c - 0.5, c + 0.5
     overlap = jnp.all((jnp.minimum(p0, p1) <= hi) & (jnp.maximum(p0, p1) >= lo), axis=-1)
-    corners = [c + jnp.asarray([sx, sy], FLOAT) for sx in (-0.5, 0.5) for sy in (-0.5, 0.5)]
+    corners = [c + jnp.asarray([sx, sy], F32) for sx in (-0.5, 0.5) for sy in (-0.5, 0.5)]
     sides = jnp.stack(
         [d[..., 0] * (q[..., 1] - p0[..., 1]) - d[..., 1] * (q[..., 0] - p0[..., 0])
          for q in corners], axis=-1,
@@ -693,7 +693,7 @@ def _verify(blocked, coef, per_span, refine_chords, refine_factor, tol):
         _, worst = jax.lax.top_k(-lb, k)
         span = worst // per_span
         r = np.linspace(0.0, 1.0, refine_factor + 1, dtype=np.float32)
-        u = ((worst % per_span).astype(FLOAT)[:, None] + jnp.asarray(r)[None, :]) * dt
+        u = ((worst % per_span).astype(F32)[:, None] + jnp.asarray(r)[None, :]) * dt
         sp, _, s2 = _poly(coef[span][:, None], u)  # [k, R + 1, 2]
         h = dt / refine_factor
         dev = h * h / 8.0 * _norm(jnp.maximum(jnp.abs(s2[:, :-1]), jnp.abs(s2[:, 1:])))
@@ -703,8 +703,8 @@ def _verify(blocked, coef, per_span, refine_chords, refine_factor, tol):
         capped = cc >= 1.0 - 0.5 * _norm(sp[:, 1:] - sp[:, :-1])  # nothing within reach
         exact_min = jnp.minimum(exact_min, jnp.min(jnp.where(capped, 1.0, cc)))
     lower = jnp.min(lb)
-    ver = Verification(clear=lower > tol, lower_bound=lower.astype(FLOAT),
-                       min_clearance=exact_min.astype(FLOAT))
+    ver = Verification(clear=lower > tol, lower_bound=lower.astype(F32),
+                       min_clearance=exact_min.astype(F32))
     return ver, p, d1, d2, c
 
 
@@ -733,7 +733,7 @@ def verify_curve(
     certificate up to float32 rounding, which ``tol`` absorbs). Static arguments:
     ``per_span``, ``refine_chords``, ``refine_factor``.
     """
-    control = jnp.asarray(control, FLOAT)
+    control = jnp.asarray(control, F32)
     ver, *_ = _verify(jnp.asarray(grid.blocked, bool), _span_coefficients(control), per_span,
                       refine_chords, refine_factor, tol)
     return ver
@@ -860,15 +860,15 @@ def _smooth_one(grid: Grid, cells: jax.Array, length: jax.Array, field: Distance
     return SmoothResult(
         control=control,
         points=pick(poly, curve),
-        length=pick(s0, curve_len).astype(FLOAT),
-        max_curvature=pick(bound, kmax).astype(FLOAT),
-        mean_curvature=pick(poly_mean, turning / jnp.maximum(curve_len, 1e-12)).astype(FLOAT),
-        min_clearance=pick(poly_clearance, curve_clearance).astype(FLOAT),
+        length=pick(s0, curve_len).astype(F32),
+        max_curvature=pick(bound, kmax).astype(F32),
+        mean_curvature=pick(poly_mean, turning / jnp.maximum(curve_len, 1e-12)).astype(F32),
+        min_clearance=pick(poly_clearance, curve_clearance).astype(F32),
         used_fallback=fb,
         clear=pick(poly_clear, curve_ok),
         curvature_bound=bound,
-        polyline_length=s0.astype(FLOAT),
-        loss=loss.astype(FLOAT),
+        polyline_length=s0.astype(F32),
+        loss=loss.astype(F32),
     )
 
 

@@ -66,6 +66,7 @@ import jax.numpy as jnp
 import numpy as np
 
 from jaxga._batching.numerics import ordered_sum
+from jaxga.core.dtypes import F32
 from jaxga.core.errors import ParameterError
 from jaxga.core.grid import Grid, proximity_obstacles
 
@@ -95,7 +96,6 @@ __all__ = [
     "zhu_penalty",
 ]
 
-FLOAT = jnp.float32
 """dtype of every real-valued result."""
 
 EPS = 1e-6
@@ -109,7 +109,7 @@ _Scalar = float | jax.Array
 
 # ----------------------------------------------------------------------- helpers
 def _f32(v: _Scalar) -> jax.Array:
-    return jnp.asarray(v, dtype=FLOAT)
+    return jnp.asarray(v, dtype=F32)
 
 
 def _check_grid(grid: Grid) -> tuple[int, int]:
@@ -129,8 +129,8 @@ def _atan2_nonneg(y: jax.Array, x: jax.Array) -> jax.Array:
     the odd Taylor series to degree 17 (truncation error < 1e-8), then undo the octant
     reduction. ``atan2(0, 0)`` is 0.
     """
-    y = y.astype(FLOAT)
-    x = x.astype(FLOAT)
+    y = y.astype(F32)
+    x = x.astype(F32)
     ax = jnp.abs(x)
     swap = y > ax
     num = jnp.where(swap, ax, y)
@@ -268,7 +268,7 @@ def path_length(grid: Grid, cells: jax.Array, length: jax.Array) -> jax.Array:
 
 
 def _path_length(g: _Geometry) -> jax.Array:
-    sq = (g.dx * g.dx + g.dy * g.dy).astype(FLOAT)
+    sq = (g.dx * g.dx + g.dy * g.dy).astype(F32)
     return ordered_sum(jnp.sqrt(sq))
 
 
@@ -288,7 +288,7 @@ def turn_angles(grid: Grid, cells: jax.Array, length: jax.Array) -> jax.Array:
 def _turn_angles(g: _Geometry) -> jax.Array:
     a = _atan2_nonneg(jnp.abs(g.cross), g.dot)
     a = jnp.where(g.turning, a, jnp.zeros_like(a))
-    return jnp.concatenate([a, jnp.zeros((1,), FLOAT)])
+    return jnp.concatenate([a, jnp.zeros((1,), F32)])
 
 
 def turns(grid: Grid, cells: jax.Array, length: jax.Array) -> jax.Array:
@@ -320,7 +320,7 @@ def angle_sum(grid: Grid, cells: jax.Array, length: jax.Array) -> jax.Array:
 
 
 def _angle_sum(g: _Geometry) -> jax.Array:
-    return ordered_sum(_turn_angles(g), dtype=FLOAT)
+    return ordered_sum(_turn_angles(g), dtype=F32)
 
 
 def mpmga_penalty(grid: Grid, cells: jax.Array, length: jax.Array) -> jax.Array:
@@ -337,7 +337,7 @@ def _mpmga_penalty(g: _Geometry) -> jax.Array:
     pen = jnp.where(
         g.dot > 0, np.float32(5.0), jnp.where(g.dot == 0, np.float32(25.0), np.float32(125.0))
     )
-    return ordered_sum(jnp.where(g.turning, pen, jnp.zeros_like(pen)), dtype=FLOAT)
+    return ordered_sum(jnp.where(g.turning, pen, jnp.zeros_like(pen)), dtype=F32)
 
 
 def zhu_penalty(
@@ -376,7 +376,7 @@ def _zhu_penalty(
         jnp.where(abs_cross <= g.dot, _f32(c1), _f32(c2)),
         jnp.where(abs_cross >= -g.dot, _f32(c3), _f32(c4)),
     )
-    return ordered_sum(jnp.where(g.turning, cost, jnp.zeros_like(cost)), dtype=FLOAT)
+    return ordered_sum(jnp.where(g.turning, cost, jnp.zeros_like(cost)), dtype=F32)
 
 
 def imga_energy(grid: Grid, cells: jax.Array, length: jax.Array) -> jax.Array:
@@ -414,7 +414,7 @@ def _imga_energy(grid: Grid, g: _Geometry) -> jax.Array:
         np.float32(1.0),
         jnp.where((hx <= 0) & (hy <= 0), np.float32(10.0), np.float32(3.0)),
     )
-    return ordered_sum(jnp.where(g.turning, e, jnp.zeros_like(e)), dtype=FLOAT)
+    return ordered_sum(jnp.where(g.turning, e, jnp.zeros_like(e)), dtype=F32)
 
 
 def _near_obstacle(blocked: jax.Array, border_blocked: bool) -> jax.Array:
@@ -454,7 +454,7 @@ def imga_safety(
 def _imga_safety(grid: Grid, g: _Geometry, penalty: _Scalar, border_blocked: bool) -> jax.Array:
     obstacles = proximity_obstacles(grid, border_blocked)
     near = _near_obstacle(obstacles, border_blocked).reshape(-1)[g.cells]
-    return _f32(penalty) * jnp.sum(near & g.node, dtype=FLOAT)
+    return _f32(penalty) * jnp.sum(near & g.node, dtype=F32)
 
 
 _NEIGHBOURS = np.array(
@@ -607,7 +607,7 @@ def _agacd_safety(
 
         # Runs its body only if this path (under vmap: any path) revisits a cell.
         count, _ = jax.lax.while_loop(lambda s: ~s[1], recount, (count, exact))
-    return _f32(base) + _f32(penalty) * count.astype(FLOAT)
+    return _f32(base) + _f32(penalty) * count.astype(F32)
 
 
 # ----------------------------------------------------------------------- metrics
@@ -639,8 +639,8 @@ def _box_clearance(
     # 2 |n . (c - a)| <= |dx| + |dy| without the doubling (it could overflow int32)
     touch = over_x & over_y & (side <= (jnp.abs(dx) + jnp.abs(dy)) // 2) & blk
 
-    fax, fay, fbx, fby = (v.astype(FLOAT) for v in (ax, ay, bx, by))
-    fcx, fcy = cx.astype(FLOAT), cy.astype(FLOAT)
+    fax, fay, fbx, fby = (v.astype(F32) for v in (ax, ay, bx, by))
+    fcx, fcy = cx.astype(F32), cy.astype(F32)
 
     def point_box(px, py):
         ex = jnp.maximum(jnp.abs(px - fcx) - 0.5, 0.0)
@@ -720,8 +720,8 @@ def _piece_band_clearance(
     du = bu - au
     u0, u1 = jnp.minimum(au, bu), jnp.maximum(au, bu)
     cols = u0 + piece * size - (r + 1) + jnp.arange(size + 2 * r + 3, dtype=jnp.int32)
-    frac = (jnp.clip(cols, u0, u1) - au).astype(FLOAT) / jnp.where(du == 0, 1, du).astype(FLOAT)
-    line = jnp.floor(av.astype(FLOAT) + (bv - av).astype(FLOAT) * frac).astype(jnp.int32)
+    frac = (jnp.clip(cols, u0, u1) - au).astype(F32) / jnp.where(du == 0, 1, du).astype(F32)
+    line = jnp.floor(av.astype(F32) + (bv - av).astype(F32) * frac).astype(jnp.int32)
     cu = jnp.broadcast_to(cols[:, None], (cols.shape[0], 2 * k + 1)).reshape(-1)
     cv = (line[:, None] + jnp.arange(-k, k + 1, dtype=jnp.int32)[None, :]).reshape(-1)
     cx, cy = jnp.where(x_major, cu, cv), jnp.where(x_major, cv, cu)
@@ -777,7 +777,7 @@ def _clearance(grid: Grid, g: _Geometry,
 
     _, near, touch = jax.lax.while_loop(
         lambda s: s[0] < total, block,
-        (jnp.int32(0), jnp.asarray(jnp.inf, FLOAT), jnp.zeros((n_seg,), bool)))
+        (jnp.int32(0), jnp.asarray(jnp.inf, F32), jnp.zeros((n_seg,), bool)))
     batch = max(1, min(n_seg, (1 << 15) // (h * w)))
 
     def whole_map(state: tuple[jax.Array, jax.Array]) -> tuple[jax.Array, jax.Array]:
@@ -788,11 +788,11 @@ def _clearance(grid: Grid, g: _Geometry,
         blocked = obstacles & ~done
         d, _ = jax.lax.map(lambda seg: _segment_box_clearance(*seg, blocked),
                            tuple(jnp.where(done, 0, v) for v in segs), batch_size=batch)
-        return jnp.min(d).astype(FLOAT), jnp.bool_(True)
+        return jnp.min(d).astype(F32), jnp.bool_(True)
 
     # Runs its body only if this path (under vmap: any path) stays beyond the radius.
     near, _ = jax.lax.while_loop(lambda s: ~s[1], whole_map,
-                                 (near.astype(FLOAT), near <= CLEARANCE_RADIUS))
+                                 (near.astype(F32), near <= CLEARANCE_RADIUS))
     return near, touch
 
 
@@ -800,7 +800,7 @@ def _min_clearance(grid: Grid, g: _Geometry, border_blocked: bool) -> jax.Array:
     h, w = grid.blocked.shape
     result, _ = _clearance(grid, g, border_blocked)  # padding segments: harmless points
     if border_blocked:
-        xf, yf = g.x.astype(FLOAT), g.y.astype(FLOAT)
+        xf, yf = g.x.astype(F32), g.y.astype(F32)
         edge = jnp.minimum(jnp.minimum(xf, (w - 1) - xf), jnp.minimum(yf, (h - 1) - yf)) + 0.5
         result = jnp.minimum(result, jnp.min(edge))
     return result
@@ -891,10 +891,10 @@ def delphi_weights(ratios: Sequence[float] | jax.Array) -> jax.Array:
         concrete = None
     if concrete is not None and np.any(concrete <= 0):
         raise ParameterError(f"Delphi importance ratios must be positive, got {ratios!r}")
-    r = jnp.asarray(ratios, dtype=FLOAT).reshape(-1)
+    r = jnp.asarray(ratios, dtype=F32).reshape(-1)
     # suffix products prod_{i=k}^{n-1} I_i for k = 1..n-1, then 1 for w_n itself
     suffix = jnp.cumprod(r[::-1])[::-1]
-    rel = jnp.concatenate([suffix, jnp.ones((1,), FLOAT)])
+    rel = jnp.concatenate([suffix, jnp.ones((1,), F32)])
     return rel / ordered_sum(rel)
 
 
@@ -949,7 +949,7 @@ def agacd(
     the finite ``w2 / 0.1``; any smoothness below the floor is raised to it. 0 when
     ``feasible`` is False.
     """
-    w = jnp.asarray(weights, dtype=FLOAT)
+    w = jnp.asarray(weights, dtype=F32)
     g = _geometry(grid, cells, length)
     smooth = jnp.maximum(_angle_sum(g), _f32(smoothness_floor))
     safety = _agacd_safety(grid, g, cells, length, 1.0, 0.1, border_blocked, safety_method)
@@ -1026,7 +1026,7 @@ def iga_zhang(
     v, v_t = _f32(v), _f32(v_t)
     k = (v - v_t) * np.float32(math.pi) * _f32(r) / (2.0 * v * v_t)
     g = _geometry(grid, cells, length)
-    den = _path_length(g) + _f32(a) * _turns(g).astype(FLOAT) * k
+    den = _path_length(g) + _f32(a) * _turns(g).astype(F32) * k
     return _masked_fitness(_inverse(den), feasible)
 
 

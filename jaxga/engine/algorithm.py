@@ -16,6 +16,7 @@ import jax.numpy as jnp
 
 from jaxga.config import registry
 from jaxga.config.schema import SCHEMA, Config
+from jaxga.core.dtypes import F32, I32
 from jaxga.core.errors import ParameterError
 from jaxga.core.grid import Grid
 from jaxga.engine.checks import (
@@ -26,12 +27,6 @@ from jaxga.engine.checks import (
     uses_waypoints,
 )
 from jaxga.operators.guide import problem_facts
-
-F32 = jnp.float32
-
-
-I32 = jnp.int32
-
 
 FITNESS_PARAMS: dict[str, tuple[str, ...]] = {
     op.name: tuple(key.split(".", 1)[1] for key, field in op.params.items() if field.dynamic)

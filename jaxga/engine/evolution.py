@@ -57,15 +57,6 @@ def fitness_function(algo: Algorithm, params: dict) -> Callable:
     return op.bind(Binding(algo, params))
 
 
-def feasibility(algo: Algorithm, grid: Grid, cells: jax.Array, length: jax.Array) -> jax.Array:
-    """Whether a path is a valid answer: from start to goal, continuous (or, for waypoint
-    algorithms, every segment clear)."""
-    ok = has_endpoints(grid, cells, length)
-    if algo.waypoints:
-        return ok & is_feasible(grid, cells, length)
-    return ok & is_continuous(grid, cells, length)
-
-
 SHORT_SPAN = 4
 """Segments with ``|dx|, |dy| <= SHORT_SPAN`` get the cheap bounded line-of-sight test."""
 

@@ -49,6 +49,7 @@ import jax.numpy as jnp
 import numpy as np
 
 from jaxga._batching.numerics import ordered_mean
+from jaxga.core.dtypes import F32, I32
 from jaxga.core.errors import ParameterError
 from jaxga.core.geometry import clear, linear_trial
 from jaxga.core.grid import Grid, move_legal
@@ -75,8 +76,6 @@ __all__ = [
     "with_probability",
 ]
 
-_I32 = jnp.int32
-_F32 = jnp.float32
 _U32 = jnp.uint32
 _INT_MAX = np.iinfo(np.int32).max
 
@@ -96,7 +95,7 @@ def _kth_true(mask: jax.Array, r: jax.Array) -> jax.Array:
     rows = -(-n // _KTH_ROW)
     padded = jnp.zeros((rows * _KTH_ROW,), bool).at[:n].set(mask)
     row, col = _kth_true_rows(padded.reshape(rows, _KTH_ROW), r)
-    return jnp.where(r < jnp.sum(mask, dtype=_I32), row * _KTH_ROW + col, 0)
+    return jnp.where(r < jnp.sum(mask, dtype=I32), row * _KTH_ROW + col, 0)
 
 
 _KTH_ROW = 16
@@ -109,19 +108,19 @@ def _kth_true_rows(mask: jax.Array, r: jax.Array) -> tuple[jax.Array, jax.Array]
     Two levels (prefix sums over the rows, then within the row) instead of one prefix
     sum over all ``rows * cols`` entries.
     """
-    counts = jnp.sum(mask, axis=1, dtype=_I32)
+    counts = jnp.sum(mask, axis=1, dtype=I32)
     before = prefix_count(counts) - counts  # Trues in the rows above
-    row = jnp.clip(jnp.sum(before <= r, dtype=_I32) - 1, 0, mask.shape[0] - 1)
+    row = jnp.clip(jnp.sum(before <= r, dtype=I32) - 1, 0, mask.shape[0] - 1)
     return row, _kth_true_scan(mask[row], r - before[row])
 
 
 def _kth_true_scan(mask: jax.Array, r: jax.Array) -> jax.Array:
     """:func:`_kth_true` by one prefix sum over the whole mask."""
-    return jnp.argmax(prefix_count(mask) > r).astype(_I32)
+    return jnp.argmax(prefix_count(mask) > r).astype(I32)
 
 
 def _uniform_index(bits: jax.Array, n: jax.Array) -> jax.Array:
-    return (bits % jnp.maximum(n, 1).astype(_U32)).astype(_I32)
+    return (bits % jnp.maximum(n, 1).astype(_U32)).astype(I32)
 
 
 class _Joined(NamedTuple):
@@ -149,10 +148,10 @@ def _join(
     segment ``(left, right)`` (the junction) and whether it fits the capacity.
     """
     n = ca.shape[0]
-    i = jnp.arange(n, dtype=_I32)
+    i = jnp.arange(n, dtype=I32)
     hit = (i < cut) & (pos_in_b >= start_b)
     has = jnp.any(hit)
-    a = jnp.where(has, jnp.argmax(hit).astype(_I32), cut)
+    a = jnp.where(has, jnp.argmax(hit).astype(I32), cut)
     b = jnp.where(has, pos_in_b[jnp.clip(a, 0, n - 1)], start_b)
     return _splice(ca, a, cb, b, lb)
 
@@ -191,7 +190,7 @@ def _join_reverse(
     through the junction may remain.
     """
     n = cb.shape[0]
-    i = jnp.arange(n, dtype=_I32)
+    i = jnp.arange(n, dtype=I32)
     tail = (i >= start_a) & (i < la) & (pos_a_in_b >= 0) & (pos_a_in_b < cut_b)
     first = jnp.min(jnp.where(tail, pos_a_in_b, n))
     has = first < n
@@ -233,16 +232,16 @@ def common_point(
     most of the operator's time, so one lookup instead of two makes it several times
     faster, with the same children (decision 010).
     """
-    c1, c2 = jnp.asarray(c1, _I32), jnp.asarray(c2, _I32)
-    l1, l2 = jnp.asarray(l1, _I32), jnp.asarray(l2, _I32)
+    c1, c2 = jnp.asarray(c1, I32), jnp.asarray(c2, I32)
+    l1, l2 = jnp.asarray(l1, I32), jnp.asarray(l2, I32)
     n = c1.shape[0]
     pos2 = _position_lookup(c2, l2, grid.n_cells)(c1)  # where p1's cells are in p2
-    i = jnp.arange(n, dtype=_I32)
+    i = jnp.arange(n, dtype=I32)
     cand = (
         (i >= 1) & (i <= l1 - 2) & (pos2 >= 1) & (pos2 <= l2 - 2)
         & (c1 != grid.start) & (c1 != grid.goal)
     )
-    count = jnp.sum(cand, dtype=_I32)
+    count = jnp.sum(cand, dtype=I32)
     r = _uniform_index(jax.random.bits(key, (), _U32), count)
     ci = _kth_true(cand, r)
     cj = pos2[ci]
@@ -258,7 +257,7 @@ def _finish(do, take1, take2, k1: _Joined, k2: _Joined, c1, l1, c2, l2, need1=Tr
     that does not depend on its length, e.g. a blocked junction)."""
     a1 = do & take1 & k1.ok
     a2 = do & take2 & k2.ok
-    failed = (do & need1 & ~k1.ok).astype(_I32) + (do & need2 & ~k2.ok).astype(_I32)
+    failed = (do & need1 & ~k1.ok).astype(I32) + (do & need2 & ~k2.ok).astype(I32)
     return (
         _choose(a1, k1.cells, c1), _choose(a1, k1.length, l1),
         _choose(a2, k2.cells, c2), _choose(a2, k2.length, l2),
@@ -304,8 +303,8 @@ def cut_and_check(
         seg_ok = linear_trial
     else:
         raise ParameterError(f"unknown check {check!r}: expected 'clear' or 'linear_trial'")
-    c1, c2 = jnp.asarray(c1, _I32), jnp.asarray(c2, _I32)
-    l1, l2 = jnp.asarray(l1, _I32), jnp.asarray(l2, _I32)
+    c1, c2 = jnp.asarray(c1, I32), jnp.asarray(c2, I32)
+    l1, l2 = jnp.asarray(l1, I32), jnp.asarray(l2, I32)
     bits = jax.random.bits(key, (2,), _U32)
     i = _uniform_index(bits[0], l1 - 1)
     j = _uniform_index(bits[1], l2 - 1)
@@ -333,7 +332,7 @@ def step_masks(grid: Grid, cells: jax.Array) -> jax.Array:
     gathered; on larger maps they are computed for the given cells only.
     """
     n_cells, w, h = grid.n_cells, grid.width, grid.height
-    bit = jnp.left_shift(jnp.int32(1), jnp.arange(9, dtype=_I32))
+    bit = jnp.left_shift(jnp.int32(1), jnp.arange(9, dtype=I32))
 
     def legal9(c):
         c = c[..., None]
@@ -346,13 +345,13 @@ def step_masks(grid: Grid, cells: jax.Array) -> jax.Array:
     if grid.tables is not None:
         return grid.tables.step_masks[jnp.clip(cells, 0, n_cells - 1)]
     if n_cells > TABLE_MAX_CELLS:
-        return jnp.sum(jnp.where(legal9(cells), bit, 0), axis=-1, dtype=_I32)
+        return jnp.sum(jnp.where(legal9(cells), bit, 0), axis=-1, dtype=I32)
     # The bits are packed with a matrix product: XLA fuses an elementwise/reduce table
     # into the gather that reads it (recomputing 9 move_legal per gathered element, much
     # slower here: decision 010) but never a dot. Exact: integers below 2**9 in float32.
-    legal = legal9(jnp.arange(n_cells, dtype=_I32)).astype(_F32)
-    table = jnp.dot(legal, bit.astype(_F32), precision=jax.lax.Precision.HIGHEST)
-    return table.astype(_I32)[jnp.clip(cells, 0, n_cells - 1)]
+    legal = legal9(jnp.arange(n_cells, dtype=I32)).astype(F32)
+    table = jnp.dot(legal, bit.astype(F32), precision=jax.lax.Precision.HIGHEST)
+    return table.astype(I32)[jnp.clip(cells, 0, n_cells - 1)]
 
 
 def heterologous_pairs(
@@ -377,7 +376,7 @@ def heterologous_pairs(
     invariant) this enumerates every valid pair exactly once; with loops in parent 2 only
     the last visit of a cell is seen.
     """
-    c1, c2 = jnp.asarray(c1, _I32), jnp.asarray(c2, _I32)
+    c1, c2 = jnp.asarray(c1, I32), jnp.asarray(c2, I32)
     n = c1.shape[0]
     w = grid.width
     x1, y1 = c1 % w, c1 // w
@@ -386,10 +385,10 @@ def heterologous_pairs(
     inside = (qx >= 0) & (qx < w) & (qy >= 0) & (qy < grid.height)
     q = c1[:, None] + (_OFFSETS9[:, 1] * w + _OFFSETS9[:, 0])
     j = _position_lookup(c2, l2, grid.n_cells)(jnp.where(inside, q, -1)) - 1  # p2[j+1] = q
-    i = jnp.arange(n, dtype=_I32)[:, None]
+    i = jnp.arange(n, dtype=I32)[:, None]
     in_range = (i <= l1 - 2) & (j >= 0) & (j <= l2 - 2)
     m1 = step_masks(grid, c1)
-    o = jnp.arange(9, dtype=_I32)
+    o = jnp.arange(9, dtype=I32)
     cond1 = (jnp.right_shift(m1[:, None], o) & 1) == 1
     # Condition (2): the step p1[i+1] -> p2[j]; coordinates of p2 packed in one word.
     m1n = jnp.concatenate([m1[1:], m1[-1:]])
@@ -434,10 +433,10 @@ def heterologous(
     (:func:`_join_reverse`, exact for a loop-free parent 2), as in
     :func:`common_point`.
     """
-    c1, c2 = jnp.asarray(c1, _I32), jnp.asarray(c2, _I32)
-    l1, l2 = jnp.asarray(l1, _I32), jnp.asarray(l2, _I32)
+    c1, c2 = jnp.asarray(c1, I32), jnp.asarray(c2, I32)
+    l1, l2 = jnp.asarray(l1, I32), jnp.asarray(l2, I32)
     jtab, valid = heterologous_pairs(grid, c1, l1, c2, l2)
-    count = jnp.sum(valid, dtype=_I32)
+    count = jnp.sum(valid, dtype=I32)
     r = _uniform_index(jax.random.bits(key, (), _U32), count)
     i, o = _kth_true_rows(valid, r)
     j = jnp.maximum(jtab[i, o], 0)
@@ -446,7 +445,7 @@ def heterologous(
     k2 = _join_reverse(c2, j + 1, c1, l1, i + 1, pos2)  # one lookup, as common_point
     paths = jnp.stack([c1, c2, k1.cells, k2.cells])
     lens = jnp.stack([l1, l2, k1.length, k2.length])
-    f = jax.vmap(lambda c, ln: jnp.asarray(fitness_fn(grid, c, ln), _F32))(paths, lens)
+    f = jax.vmap(lambda c, ln: jnp.asarray(fitness_fn(grid, c, ln), F32))(paths, lens)
     do = count > 0
     return _finish(do, f[2] > f[0], f[3] > f[1], k1, k2, c1, l1, c2, l2)
 
@@ -487,10 +486,10 @@ def _free_prefix(grid: Grid) -> jax.Array:
 
 def compute_free_prefix(grid: Grid) -> jax.Array:
     """:func:`_free_prefix` computed from the map (what :mod:`jaxga.engine.maptables` stores)."""
-    free = (~grid.blocked).astype(_I32)
+    free = (~grid.blocked).astype(I32)
     h, w = free.shape
-    col = jnp.concatenate([jnp.zeros((w, 1), _I32), prefix_count(free.T, axis=1)], axis=1)
-    row = jnp.concatenate([jnp.zeros((h, 1), _I32), prefix_count(free, axis=1)], axis=1)
+    col = jnp.concatenate([jnp.zeros((w, 1), I32), prefix_count(free.T, axis=1)], axis=1)
+    row = jnp.concatenate([jnp.zeros((h, 1), I32), prefix_count(free, axis=1)], axis=1)
     return jnp.concatenate([col.reshape(-1), row.reshape(-1)])
 
 
@@ -513,7 +512,7 @@ def column_ranges(
     number in column i (p1 & p2)") bound the candidates. Cost: two scatters of ``2 L``
     into ``max(H, W)`` entries.
     """
-    c1, c2 = jnp.asarray(c1, _I32), jnp.asarray(c2, _I32)
+    c1, c2 = jnp.asarray(c1, I32), jnp.asarray(c2, I32)
     h, w = grid.shape
     a = max(h, w)
     sx, sy, gx, gy = grid.start % w, grid.start // w, grid.goal % w, grid.goal // w
@@ -521,18 +520,18 @@ def column_ranges(
     x_major = jnp.abs(dx) >= jnp.abs(dy)
     d = jnp.where(x_major, dx, dy)
     s_major = jnp.where(x_major, sx, sy)
-    sign = jnp.where(d >= 0, 1, -1).astype(_I32)
-    n_steps = jnp.abs(d).astype(_I32)
+    sign = jnp.where(d >= 0, 1, -1).astype(I32)
+    n_steps = jnp.abs(d).astype(I32)
     n = c1.shape[0]
-    i = jnp.arange(n, dtype=_I32)
+    i = jnp.arange(n, dtype=I32)
     cells = jnp.concatenate([c1, c2])
     valid = jnp.concatenate([i < l1, i < l2])
     maj = jnp.where(x_major, cells % w, cells // w)
     mnr = jnp.where(x_major, cells // w, cells % w)
     slot = jnp.where(valid, maj, a)
-    lo_tab = jnp.full((a,), _INT_MAX, _I32).at[slot].min(mnr, mode="drop")
-    hi_tab = jnp.full((a,), -1, _I32).at[slot].max(mnr, mode="drop")
-    k = jnp.arange(a, dtype=_I32)
+    lo_tab = jnp.full((a,), _INT_MAX, I32).at[slot].min(mnr, mode="drop")
+    hi_tab = jnp.full((a,), -1, I32).at[slot].max(mnr, mode="drop")
+    k = jnp.arange(a, dtype=I32)
     major = s_major + sign * k
     mc = jnp.clip(major, 0, a - 1)
     lo, hi = lo_tab[mc], hi_tab[mc]
@@ -585,7 +584,7 @@ def column_anchors(
     Returns ``(anchors int32[A], n_anchors int32, ok bool)`` with ``A = max(H, W)``;
     ``anchors[:n_anchors]`` are start, one cell per interior column, goal.
     """
-    c1, c2 = jnp.asarray(c1, _I32), jnp.asarray(c2, _I32)
+    c1, c2 = jnp.asarray(c1, I32), jnp.asarray(c2, I32)
     h, w = grid.shape
     a = max(h, w)
     cr = column_ranges(grid, c1, l1, c2, l2)
@@ -604,10 +603,10 @@ def column_anchors(
         right = jnp.where(go_left, mid, right)
         left = jnp.where(go_left, left, mid + 1)
     pick = jnp.where(cr.x_major, left * w + mc, mc * w + left)
-    k = jnp.arange(a, dtype=_I32)
+    k = jnp.arange(a, dtype=I32)
     anchors = jnp.where(k == 0, grid.start, jnp.where(k >= cr.n_steps, grid.goal, pick))
     ok = jnp.all(~cr.interior | (cr.n_free > 0))
-    return anchors.astype(_I32), (cr.n_steps + 1).astype(_I32), ok
+    return anchors.astype(I32), (cr.n_steps + 1).astype(I32), ok
 
 
 def column_child(
@@ -699,8 +698,8 @@ def column(
     ``queue``, ``field_repair``: see :func:`column_child` (the first two dominate the
     cost).
     """
-    c1, c2 = jnp.asarray(c1, _I32), jnp.asarray(c2, _I32)
-    l1, l2 = jnp.asarray(l1, _I32), jnp.asarray(l2, _I32)
+    c1, c2 = jnp.asarray(c1, I32), jnp.asarray(c2, I32)
+    l1, l2 = jnp.asarray(l1, I32), jnp.asarray(l2, I32)
     k_child, k_spin = jax.random.split(key)
     cc, cl, ok = column_child(
         k_child, grid, c1, l1, c2, l2, max_rounds=max_rounds, queue=queue,
@@ -708,15 +707,15 @@ def column(
     )
     paths = jnp.stack([c1, c2, cc])
     lens = jnp.stack([l1, l2, cl])
-    f = jax.vmap(lambda c, ln: jnp.asarray(fitness_fn(grid, c, ln), _F32))(paths, lens)
-    wts = jnp.where(jnp.isnan(f), _F32(0), jnp.maximum(f, _F32(0)))
-    u = jax.random.uniform(k_spin, (2,), _F32)
+    f = jax.vmap(lambda c, ln: jnp.asarray(fitness_fn(grid, c, ln), F32))(paths, lens)
+    wts = jnp.where(jnp.isnan(f), F32(0), jnp.maximum(f, F32(0)))
+    u = jax.random.uniform(k_spin, (2,), F32)
     s1 = _spin(wts, u[0])
     if distinct:
         s2 = _spin(wts.at[s1].set(0.0), u[1], jnp.arange(3) != s1)
     else:
         s2 = _spin(wts, u[1])
-    failed = jnp.where(ok, 0, 2).astype(_I32)
+    failed = jnp.where(ok, 0, 2).astype(I32)
     return (
         jnp.where(ok, paths[s1], c1), jnp.where(ok, lens[s1], l1),
         jnp.where(ok, paths[s2], c2), jnp.where(ok, lens[s2], l2),
@@ -728,10 +727,10 @@ def _spin(weights: jax.Array, u: jax.Array, eligible: jax.Array | None = None) -
     """One roulette spin over a few weights (uniform over ``eligible`` if all are 0)."""
     if eligible is None:
         eligible = jnp.ones(weights.shape, bool)
-    w = jnp.where(jnp.sum(weights) > 0, weights, eligible.astype(_F32))
+    w = jnp.where(jnp.sum(weights) > 0, weights, eligible.astype(F32))
     cdf = jnp.cumsum(w)
-    idx = jnp.sum(cdf <= u * cdf[-1], dtype=_I32)
-    last = jnp.max(jnp.where(w > 0, jnp.arange(w.shape[0], dtype=_I32), 0))
+    idx = jnp.sum(cdf <= u * cdf[-1], dtype=I32)
+    last = jnp.max(jnp.where(w > 0, jnp.arange(w.shape[0], dtype=I32), 0))
     return jnp.minimum(idx, last)
 
 
@@ -770,16 +769,16 @@ def adaptive_crossover_probability(
     differ from them by an ulp); the middle branch is clipped to ``[0, pc_high]`` (it
     can only leave that range if ``f > f_max``). Elementwise; broadcasts.
     """
-    f, f_max, f_avg = (jnp.asarray(v, _F32) for v in (f, f_max, f_avg))
-    t, T = jnp.asarray(t, _F32), jnp.asarray(T, _F32)
-    pc_low, pc_high = jnp.asarray(pc_low, _F32), jnp.asarray(pc_high, _F32)
+    f, f_max, f_avg = (jnp.asarray(v, F32) for v in (f, f_max, f_avg))
+    t, T = jnp.asarray(t, F32), jnp.asarray(T, F32)
+    pc_low, pc_high = jnp.asarray(pc_low, F32), jnp.asarray(pc_high, F32)
     gap = f_max - f_avg
-    converged = gap <= _F32(rtol) * jnp.abs(f_max)
-    safe_gap = jnp.where(converged, _F32(1), gap)
+    converged = gap <= F32(rtol) * jnp.abs(f_max)
+    safe_gap = jnp.where(converged, F32(1), gap)
     mid = jnp.clip(pc_high * (f_max - f) / safe_gap, 0, pc_high)
     pc_t = jnp.where(converged, pc_low, jnp.where(f >= f_avg, mid, pc_high))
-    factor = jnp.exp(-t / T) if schedule is None else jnp.asarray(schedule(t), _F32)
-    return (pc_t * factor).astype(_F32)
+    factor = jnp.exp(-t / T) if schedule is None else jnp.asarray(schedule(t), F32)
+    return (pc_t * factor).astype(F32)
 
 
 def adaptive_pair_probability(
@@ -799,7 +798,7 @@ def adaptive_pair_probability(
     ``pc`` of :func:`crossover_population`. ``schedule``: as in
     :func:`adaptive_crossover_probability`.
     """
-    fitness = jnp.asarray(fitness, _F32)
+    fitness = jnp.asarray(fitness, F32)
     if active is None:
         active = jnp.ones(fitness.shape, bool)
     f_max = jnp.max(jnp.where(active, fitness, -jnp.inf))
@@ -821,12 +820,12 @@ def with_probability(op: Callable) -> Callable:
 
     def op_p(key, grid, c1, l1, c2, l2, pc, *extra):
         k_gate, k_op = jax.random.split(key)
-        do = jax.random.uniform(k_gate, (), _F32) < jnp.asarray(pc, _F32)
+        do = jax.random.uniform(k_gate, (), F32) < jnp.asarray(pc, F32)
         n1, m1, n2, m2, failed = op(k_op, grid, c1, l1, c2, l2, *extra)
         return (
             jnp.where(do, n1, c1), jnp.where(do, m1, l1),
             jnp.where(do, n2, c2), jnp.where(do, m2, l2),
-            jnp.where(do, jnp.asarray(failed, _I32), 0),
+            jnp.where(do, jnp.asarray(failed, I32), 0),
         )
 
     op_p.__name__ = getattr(op, "__name__", "op") + "_with_probability"

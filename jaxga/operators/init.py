@@ -66,6 +66,7 @@ import jax.numpy as jnp
 import numpy as np
 
 from jaxga._batching.lanes import lane_while_loop
+from jaxga.core.dtypes import F32, I32
 from jaxga.core.errors import NoPathError, ParameterError
 from jaxga.core.grid import DIRECTIONS, Grid, in_bounds, move_legal
 from jaxga.core.paths import (
@@ -104,8 +105,6 @@ __all__ = [
 InitFn = Callable[[jax.Array, Grid, int], tuple[jax.Array, jax.Array, jax.Array]]
 """``init_fn(key, grid, capacity) -> (cells int32[capacity], length int32, ok bool)``."""
 
-_I32 = jnp.int32
-_F32 = jnp.float32
 _DX = np.asarray(DIRECTIONS[:, 0], np.int32)
 _DY = np.asarray(DIRECTIONS[:, 1], np.int32)
 
@@ -133,7 +132,7 @@ def _move_tables(grid: Grid) -> tuple[jax.Array, jax.Array]:
 def compute_move_tables(grid: Grid) -> tuple[jax.Array, jax.Array]:
     """:func:`_move_tables` computed from the map (what :mod:`jaxga.engine.maptables` stores)."""
     h, w = grid.shape
-    p = jnp.arange(grid.n_cells, dtype=_I32)[:, None]
+    p = jnp.arange(grid.n_cells, dtype=I32)[:, None]
     nx, ny = p % w + _DX, p // w + _DY
     inside = in_bounds(nx, ny, h, w)
     nbr = jnp.where(inside, ny * w + nx, p)
@@ -161,7 +160,7 @@ def exclusion_mask(grid: Grid, exclude: jax.Array | None) -> jax.Array:
         return exclude.reshape(-1)
     if not jnp.issubdtype(exclude.dtype, jnp.integer):
         raise ParameterError(f"exclude must be a bool mask or integer cells, got {exclude.dtype}")
-    cells = exclude.reshape(-1).astype(_I32)
+    cells = exclude.reshape(-1).astype(I32)
     valid = (cells >= 0) & (cells < n)
     return jnp.zeros((n,), bool).at[jnp.where(valid, cells, n)].set(True, mode="drop")
 
@@ -171,13 +170,13 @@ def _free_cells(grid: Grid, allow: jax.Array | None = None) -> tuple[jax.Array, 
     ok = ~grid.blocked.reshape(-1)
     if allow is not None:
         ok &= allow
-    order = jnp.argsort(~ok, stable=True).astype(_I32)
-    return order, jnp.sum(ok, dtype=_I32)
+    order = jnp.argsort(~ok, stable=True).astype(I32)
+    return order, jnp.sum(ok, dtype=I32)
 
 
 def _pick(bits: jax.Array, table: jax.Array, count: jax.Array) -> jax.Array:
     """``table[bits mod count]``: uniform over ``table[:count]`` (bias <= count / 2**32)."""
-    i = (bits % jnp.maximum(count, 1).astype(jnp.uint32)).astype(_I32)
+    i = (bits % jnp.maximum(count, 1).astype(jnp.uint32)).astype(I32)
     return table[i]
 
 
@@ -188,7 +187,7 @@ def _fit(
     if cells.shape[0] >= capacity:
         cells = cells[:capacity]
     else:
-        cells = jnp.concatenate([cells, jnp.full((capacity - cells.shape[0],), cells[-1], _I32)])
+        cells = jnp.concatenate([cells, jnp.full((capacity - cells.shape[0],), cells[-1], I32)])
     ok = ok & (length <= capacity)
     length = jnp.minimum(length, capacity)
     return pad(cells, length), length, ok
@@ -209,11 +208,11 @@ def _directional_scores(
     cx, cy = current % w, current // w
     tx, ty = target % w, target // w
     nx, ny = nbr % w, nbr // w
-    ddx, ddy = (nx - tx).astype(_F32), (ny - ty).astype(_F32)
+    ddx, ddy = (nx - tx).astype(F32), (ny - ty).astype(F32)
     score = 1.0 / jnp.sqrt(ddx * ddx + ddy * ddy)
     s = jnp.sign((tx - cx) * (nx - cx)) + jnp.sign((ty - cy) * (ny - cy))
-    f_two = jnp.asarray(factors[0], _F32)
-    f_one = jnp.asarray(factors[1], _F32)
+    f_two = jnp.asarray(factors[0], F32)
+    f_one = jnp.asarray(factors[1], F32)
     return score * jnp.where(s == 2, f_two, jnp.where(s == 1, f_one, jnp.float32(1.0)))
 
 
@@ -237,8 +236,8 @@ def _self_avoiding_walk(
     candidate = failure; reaching the target = success.
     """
     capacity = _check_capacity(capacity)
-    source = jnp.asarray(source, _I32)
-    target = jnp.asarray(target, _I32)
+    source = jnp.asarray(source, I32)
+    target = jnp.asarray(target, I32)
     n = grid.n_cells
     nbr_t, legal_t = _move_tables(grid)
     use_table = n <= VISITED_TABLE_CELLS_PER_NODE * capacity
@@ -256,8 +255,8 @@ def _self_avoiding_walk(
     done0 = (source == target) | ~on_map | ~source_free
     ok0 = (source == target) & on_map & source_free
     steps = capacity - 1
-    u = jax.random.uniform(key, (max(steps, 1),), _F32)
-    lanes = jnp.arange(8, dtype=_I32)
+    u = jax.random.uniform(key, (max(steps, 1),), F32)
+    lanes = jnp.arange(8, dtype=I32)
 
     def cond(carry):
         t, _, _, done, _, _, _ = carry
@@ -275,7 +274,7 @@ def _self_avoiding_walk(
         if directional:
             score = jnp.where(cand, _directional_scores(grid, cur, nbr, target, factors), 0.0)
         else:
-            score = cand.astype(_F32)
+            score = cand.astype(F32)
         if directional:
             cs = jnp.cumsum(score)
         else:
@@ -290,8 +289,8 @@ def _self_avoiding_walk(
         total = cs[-1]
         # Roulette: the first lane whose cumulative score exceeds u * total (a lane with
         # score 0 never does); guard u * total rounding up to total.
-        idx = jnp.sum(cs <= u[t] * total, dtype=_I32)
-        last = 7 - jnp.argmax(cand[::-1]).astype(_I32)
+        idx = jnp.sum(cs <= u[t] * total, dtype=I32)
+        last = 7 - jnp.argmax(cand[::-1]).astype(I32)
         idx = jnp.minimum(idx, last)
         nxt = nbr[idx]
         if stop_adjacent:
@@ -312,12 +311,12 @@ def _self_avoiding_walk(
         reached = move & (new == target)
         buf = buf.at[n_moves + 1].set(new, mode="drop")  # past n_moves: scratch
         return (t + 1, new, visited, done | dead | reached, ok | reached,
-                n_moves + move.astype(_I32), buf)
+                n_moves + move.astype(I32), buf)
 
     # A while loop over steps that stops when the walk is done (a dead end or the
     # target): under vmap its unfinished lanes are compacted (jaxga._batching.lanes), so a batch
     # of walks that mostly die or arrive early does not run to the step cap.
-    buf0 = jnp.zeros((capacity,), _I32).at[0].set(source)
+    buf0 = jnp.zeros((capacity,), I32).at[0].set(source)
     carry0 = (jnp.int32(0), jnp.clip(source, 0, n - 1), visited, done0, ok0, jnp.int32(0), buf0)
     # Unmasked: a finished walk's step changes only t, done and the scratch entry past
     # n_moves, none of which is read below (with the masked loop, the per-step select of
@@ -326,7 +325,7 @@ def _self_avoiding_walk(
     if not use_table:
         ok &= ~visited[1]  # a full probe window: the walk may have crossed itself
     # Past its last move a walk stays on its final cell.
-    cells = jnp.where(jnp.arange(capacity, dtype=_I32) <= n_moves, buf, cur)
+    cells = jnp.where(jnp.arange(capacity, dtype=I32) <= n_moves, buf, cur)
     length = 1 + n_moves
     return cells, length, ok
 
@@ -346,14 +345,14 @@ _HASH_MULT = np.uint32(0x9E3779B1)
 def _hash_empty(capacity: int) -> jax.Array:
     """An empty set of at most ``capacity`` cells: ``int32[M]`` slots holding ``cell + 1``
     (0 = empty), ``M`` the power of two >= 8 capacity (a load of at most 1/8)."""
-    return jnp.zeros((1 << max(4, (8 * capacity - 1).bit_length()),), _I32)
+    return jnp.zeros((1 << max(4, (8 * capacity - 1).bit_length()),), I32)
 
 
 def _hash_probe(table: jax.Array, cells: jax.Array) -> jax.Array:
     """The ``_HASH_PROBES`` slots a cell may occupy (Fibonacci hashing, linear probing)."""
     bits = int(table.shape[0]).bit_length() - 1
     home = (cells.astype(jnp.uint32) * _HASH_MULT) >> jnp.uint32(32 - bits)
-    return ((home.astype(_I32)[..., None] + jnp.arange(_HASH_PROBES, dtype=_I32))
+    return ((home.astype(I32)[..., None] + jnp.arange(_HASH_PROBES, dtype=I32))
             & (table.shape[0] - 1))
 
 
@@ -381,7 +380,7 @@ def _excluded_cells(grid: Grid, exclude, target) -> Callable[[jax.Array], jax.Ar
     without a map-sized table for a list of cells (a sorted copy and binary search); the
     target is never excluded."""
     n = grid.n_cells
-    target = jnp.asarray(target, _I32)
+    target = jnp.asarray(target, I32)
     if exclude is None:
         return lambda cells: jnp.zeros(cells.shape, bool)
     exclude = jnp.asarray(exclude)
@@ -389,7 +388,7 @@ def _excluded_cells(grid: Grid, exclude, target) -> Callable[[jax.Array], jax.Ar
         mask = exclusion_mask(grid, exclude)
         return lambda cells: mask[jnp.clip(cells, 0, n - 1)] & (cells != target)
     listed = jnp.sort(jnp.where((exclude >= 0) & (exclude < n), exclude, n).reshape(-1)
-                      .astype(_I32))
+                      .astype(I32))
 
     def excluded(cells):
         k = jnp.clip(jnp.searchsorted(listed, cells), 0, listed.shape[0] - 1)
@@ -517,10 +516,10 @@ def directional_probabilities(
         non-candidates). If the target is a legal neighbour it gets probability 1 (the
         walk stops there); with no candidate all probabilities are 0.
     """
-    current = jnp.asarray(current, _I32)
-    target = jnp.asarray(target, _I32)
+    current = jnp.asarray(current, I32)
+    target = jnp.asarray(target, I32)
     nbr_t, legal_t = _move_tables(grid)
-    k = current * 8 + jnp.arange(8, dtype=_I32)
+    k = current * 8 + jnp.arange(8, dtype=I32)
     nbr, legal = nbr_t[k], legal_t[k]
     vis = exclusion_mask(grid, visited).at[current].set(True)
     cand = legal & ~vis[nbr]
@@ -528,7 +527,7 @@ def directional_probabilities(
     total = jnp.sum(score)
     prob = jnp.where(total > 0, score / jnp.where(total > 0, total, 1.0), 0.0)
     at_target = legal & (nbr == target)
-    prob = jnp.where(jnp.any(at_target), at_target.astype(_F32), prob)
+    prob = jnp.where(jnp.any(at_target), at_target.astype(F32), prob)
     return nbr, prob
 
 
@@ -601,14 +600,14 @@ def median_insertion(
     if capacity < 2:
         raise ParameterError("median_insertion needs capacity >= 2 (start and goal)")
     n = grid.n_cells
-    idx = jnp.arange(n, dtype=_I32)
+    idx = jnp.arange(n, dtype=I32)
     free, count = _free_cells(grid, (idx != grid.start) & (idx != grid.goal))
     k_mid, k_conn = jax.random.split(key)
     mid = jnp.where(count > 0, _pick(jax.random.bits(k_mid, (), jnp.uint32), free, count),
                     grid.start)
-    anchors = jnp.stack([grid.start, mid, grid.goal]).astype(_I32)
+    anchors = jnp.stack([grid.start, mid, grid.goal]).astype(I32)
     if capacity < 3:
-        anchors = jnp.stack([grid.start, grid.goal]).astype(_I32)
+        anchors = jnp.stack([grid.start, grid.goal]).astype(I32)
     work = capacity if work_capacity is None else max(int(work_capacity), capacity)
     if queue is None:
         queue = 16 if max(grid.shape) <= 20 else max(grid.shape)
@@ -658,31 +657,31 @@ def intermittent_anchors(
         use_cols = span_c > span_r
     # Free cells of every row (x ascending) and of every column (y ascending).
     blocked = grid.blocked
-    row_order = jnp.argsort(blocked, axis=1, stable=True).astype(_I32)  # [H, W] x's
-    row_count = jnp.sum(~blocked, axis=1, dtype=_I32)
-    col_order = jnp.argsort(blocked, axis=0, stable=True).astype(_I32)  # [H, W] y's
-    col_count = jnp.sum(~blocked, axis=0, dtype=_I32)
+    row_order = jnp.argsort(blocked, axis=1, stable=True).astype(I32)  # [H, W] x's
+    row_count = jnp.sum(~blocked, axis=1, dtype=I32)
+    col_order = jnp.argsort(blocked, axis=0, stable=True).astype(I32)  # [H, W] y's
+    col_count = jnp.sum(~blocked, axis=0, dtype=I32)
 
-    j = jnp.arange(1, k_max - 1, dtype=_I32)  # 1 .. k_max - 2
+    j = jnp.arange(1, k_max - 1, dtype=I32)  # 1 .. k_max - 2
     bits = jax.random.bits(key, (max(k_max - 2, 1),), jnp.uint32)[: k_max - 2]
     # Rows: y = sy + sign * j for j < span.
     ry = jnp.clip(sy + jnp.sign(gy - sy) * j, 0, h - 1)
     r_cnt = row_count[ry]
-    r_rank = (bits % jnp.maximum(r_cnt, 1).astype(jnp.uint32)).astype(_I32)
+    r_rank = (bits % jnp.maximum(r_cnt, 1).astype(jnp.uint32)).astype(I32)
     r_cell = ry * w + row_order[ry, jnp.minimum(r_rank, w - 1)]
     r_use = (j < span_r) & (r_cnt > 0)
     # Columns: x = sx + sign * j for j < span.
     cx = jnp.clip(sx + jnp.sign(gx - sx) * j, 0, w - 1)
     c_cnt = col_count[cx]
-    c_rank = (bits % jnp.maximum(c_cnt, 1).astype(jnp.uint32)).astype(_I32)
+    c_rank = (bits % jnp.maximum(c_cnt, 1).astype(jnp.uint32)).astype(I32)
     c_cell = col_order[jnp.minimum(c_rank, h - 1), cx] * w + cx
     c_use = (j < span_c) & (c_cnt > 0)
     mid = jnp.where(use_cols, c_cell, r_cell)
     use = jnp.where(use_cols, c_use, r_use)
     # Compact: start, the used line cells in order, goal.
-    pos = jnp.cumsum(use, dtype=_I32)  # 1-based slot of each used cell
-    n_mid = jnp.sum(use, dtype=_I32)
-    anchors = jnp.full((k_max,), grid.goal, _I32).at[0].set(grid.start)
+    pos = jnp.cumsum(use, dtype=I32)  # 1-based slot of each used cell
+    n_mid = jnp.sum(use, dtype=I32)
+    anchors = jnp.full((k_max,), grid.goal, I32).at[0].set(grid.start)
     anchors = anchors.at[jnp.where(use, pos, k_max)].set(mid, mode="drop")
     return anchors, n_mid + 2
 
@@ -793,8 +792,8 @@ def greedy_walk(
     if steps < 0:
         raise ParameterError(f"max_steps must be >= 0, got {max_steps}")
     n, w = grid.n_cells, grid.width
-    source = jnp.asarray(source, _I32)
-    target = jnp.asarray(target, _I32)
+    source = jnp.asarray(source, I32)
+    target = jnp.asarray(target, I32)
     nbr_t, legal_t = _move_tables(grid)
     free, n_free = _free_cells(grid)
     bits = jax.random.bits(key, (max(steps, 1), 3), jnp.uint32)[:steps]
@@ -803,7 +802,7 @@ def greedy_walk(
         raise ParameterError(f"goal_probability must be in [0, 1], got {goal_probability}")
     # Per step three words: random target, goal coin (word < p * 2**32), tie rank.
     threshold = None if p_goal >= 1.0 else jnp.uint32(min(round(p_goal * 2**32), 2**32 - 1))
-    lanes = jnp.arange(8, dtype=_I32)
+    lanes = jnp.arange(8, dtype=I32)
     big = jnp.int32(2**30)
     on_map = (source >= 0) & (source < n) & (target >= 0) & (target < n)
     src_free = ~grid.blocked.reshape(-1)[jnp.clip(source, 0, n - 1)]
@@ -824,9 +823,9 @@ def greedy_walk(
         d2 = jnp.where(legal, ddx * ddx + ddy * ddy, big)
         best = jnp.min(d2)
         tie = legal & (d2 == best)
-        n_tie = jnp.sum(tie, dtype=_I32)
-        rank = (b[2] % jnp.maximum(n_tie, 1).astype(jnp.uint32)).astype(_I32)
-        pick = jnp.argmax(tie & (jnp.cumsum(tie, dtype=_I32) - 1 == rank))
+        n_tie = jnp.sum(tie, dtype=I32)
+        rank = (b[2] % jnp.maximum(n_tie, 1).astype(jnp.uint32)).astype(I32)
+        pick = jnp.argmax(tie & (jnp.cumsum(tie, dtype=I32) - 1 == rank))
         dead = n_tie == 0
         move = ~done & ~dead
         new = jnp.where(move, nbr[pick], cur)
@@ -834,8 +833,8 @@ def greedy_walk(
         return (new, done | dead | reached, ok | reached), (new, move)
 
     (_, _, ok), (seq, moved) = jax.lax.scan(step, (jnp.clip(source, 0, n - 1), done0, ok0), bits)
-    raw = jnp.concatenate([source[None], seq]).astype(_I32)
-    raw_len = 1 + jnp.sum(moved, dtype=_I32)
+    raw = jnp.concatenate([source[None], seq]).astype(I32)
+    raw_len = 1 + jnp.sum(moved, dtype=I32)
     raw, length = remove_loops(raw, raw_len, n)
     return _fit(raw, length, ok, capacity)
 
@@ -925,7 +924,7 @@ def field_descent(
         source cannot reach the target (infinite field) or the walk needs more than
         ``capacity - 1`` moves.
     """
-    field = jnp.asarray(field, _F32)
+    field = jnp.asarray(field, F32)
     if field.shape != (grid.n_cells,):
         raise ParameterError(f"field must have shape ({grid.n_cells},), got {field.shape}")
     return _descent(key, grid, field, jnp.int32(0), source, capacity, budget, temperature)
@@ -937,8 +936,8 @@ def _descent(key, grid, table, offset, source, capacity, budget, temperature):
     between lanes would be copied into every lane of the walk's loop)."""
     capacity = _check_capacity(capacity)
     n = grid.n_cells
-    source = jnp.clip(jnp.asarray(source, _I32), 0, n - 1)
-    offset = jnp.asarray(offset, _I32)
+    source = jnp.clip(jnp.asarray(source, I32), 0, n - 1)
+    offset = jnp.asarray(offset, I32)
 
     def field_at(cell):
         return table[offset + cell]
@@ -946,10 +945,10 @@ def _descent(key, grid, table, offset, source, capacity, budget, temperature):
     nbr_t, legal_t = _move_tables(grid)
     cost = jnp.asarray(_STEP_COST)
     steps = capacity - 1
-    u = jax.random.uniform(key, (max(steps, 1),), _F32)
-    lanes = jnp.arange(8, dtype=_I32)
-    temp = jnp.maximum(jnp.asarray(temperature, _F32), jnp.float32(1e-30))
-    budget = jnp.maximum(jnp.asarray(budget, _F32), 0.0)
+    u = jax.random.uniform(key, (max(steps, 1),), F32)
+    lanes = jnp.arange(8, dtype=I32)
+    temp = jnp.maximum(jnp.asarray(temperature, F32), jnp.float32(1e-30))
+    budget = jnp.maximum(jnp.asarray(budget, F32), 0.0)
     reachable = jnp.isfinite(field_at(source))
 
     def cond(carry):
@@ -968,21 +967,21 @@ def _descent(key, grid, table, offset, source, capacity, budget, temperature):
         weight = jnp.where(cand, jnp.exp(-excess / temp), 0.0)
         cs = jnp.cumsum(weight)
         total = cs[-1]
-        idx = jnp.sum(cs <= u[t] * total, dtype=_I32)
-        last = 7 - jnp.argmax(cand[::-1]).astype(_I32)
+        idx = jnp.sum(cs <= u[t] * total, dtype=I32)
+        last = 7 - jnp.argmax(cand[::-1]).astype(I32)
         idx = jnp.minimum(idx, last)
         # Under vmap the loop runs unmasked (below): a finished walk stays where it is.
         move = (here > 0) & (t < steps) & reachable
         new = jnp.where(move, nbr[idx], cur)
         buf = buf.at[n_moves + 1].set(new, mode="drop")  # past n_moves: scratch
         return (t + 1, new, used + jnp.where(move, excess[idx], 0.0),
-                n_moves + move.astype(_I32), buf)
+                n_moves + move.astype(I32), buf)
 
-    buf0 = jnp.zeros((capacity,), _I32).at[0].set(source)
+    buf0 = jnp.zeros((capacity,), I32).at[0].set(source)
     carry0 = (jnp.int32(0), source, jnp.float32(0.0), jnp.int32(0), buf0)
     # Unmasked: a finished walk's step changes only t and the scratch entry past n_moves.
     _, cur, _, n_moves, buf = lane_while_loop(cond, step, carry0, masked=False)
-    cells = jnp.where(jnp.arange(capacity, dtype=_I32) <= n_moves, buf, cur)
+    cells = jnp.where(jnp.arange(capacity, dtype=I32) <= n_moves, buf, cur)
     ok = reachable & (field_at(cur) == 0)
     return cells, 1 + n_moves, ok
 
@@ -1016,18 +1015,18 @@ def field_path(
     capacity = _check_capacity(capacity)
     guide = _require_guide(grid, "field_path")
     n = grid.n_cells
-    via = jnp.clip(jnp.asarray(via, _I32), 0, n - 1)
+    via = jnp.clip(jnp.asarray(via, I32), 0, n - 1)
     via = jnp.where(jnp.isfinite(guide.from_start[via]), via, grid.start)
     optimum = guide.to_goal[grid.start]
     detour = guide.from_start[via] + guide.to_goal[via] - optimum
-    half = jnp.maximum(jnp.asarray(budget, _F32) - detour, 0.0) / 2
+    half = jnp.maximum(jnp.asarray(budget, F32) - detour, 0.0) / 2
     table = jnp.concatenate([guide.from_start, guide.to_goal])
     keys = jax.random.split(key, 2)
     cells, length, ok = jax.vmap(
         lambda k, off: _descent(k, grid, table, off, via, capacity, half, temperature)
-    )(keys, jnp.asarray([0, n], _I32))
+    )(keys, jnp.asarray([0, n], I32))
     # start .. via (the first walk reversed), then via .. goal without its first cell
-    j = jnp.arange(2 * capacity, dtype=_I32)
+    j = jnp.arange(2 * capacity, dtype=I32)
     first = cells[0][jnp.clip(length[0] - 1 - j, 0, capacity - 1)]
     second = cells[1][jnp.clip(j - length[0] + 1, 0, capacity - 1)]
     total = length[0] + length[1] - 1
@@ -1061,16 +1060,16 @@ def field_reconnect(
     """
 
     guide = _require_guide(grid, "field_reconnect")
-    cells = jnp.asarray(cells, _I32)
-    length = jnp.asarray(length, _I32)
+    cells = jnp.asarray(cells, I32)
+    length = jnp.asarray(length, I32)
     cap = cells.shape[0]
-    i, j = jnp.asarray(i, _I32), jnp.asarray(j, _I32)
+    i, j = jnp.asarray(i, I32), jnp.asarray(j, I32)
     walk, walk_len, reached = _descent(key, grid, guide.to_goal, jnp.int32(0), cells[i], cap,
                                        0.0, temperature)
     pos = position_lookup(cells, length, grid.n_cells)(walk)
-    t = jnp.arange(cap, dtype=_I32)
+    t = jnp.arange(cap, dtype=I32)
     meets = (t >= 1) & (t < walk_len) & (pos >= j)
-    k = jnp.argmax(meets).astype(_I32)  # the goal (the path's last cell) always meets
+    k = jnp.argmax(meets).astype(I32)  # the goal (the path's last cell) always meets
     seg = jnp.roll(walk, -1)  # walk[1 : k] as a segment
     new, new_len, fits = splice_loop_free(cells, length, i + 1, seg, k - 1, pos[k],
                                           grid.n_cells)
@@ -1086,7 +1085,7 @@ def _via_candidates(grid: Grid, budget: jax.Array) -> tuple[jax.Array, jax.Array
     optimum = guide.to_goal[grid.start]
     through = guide.from_start + guide.to_goal
     ok = jnp.isfinite(through) & (through - optimum <= budget + _excess_tolerance(optimum))
-    count = jnp.concatenate([jnp.zeros((1,), _I32), jnp.cumsum(ok, dtype=_I32)])
+    count = jnp.concatenate([jnp.zeros((1,), I32), jnp.cumsum(ok, dtype=I32)])
     return count, count[-1]
 
 
@@ -1122,13 +1121,13 @@ def field_walk(
     capacity = _check_capacity(capacity)
     guide = _require_guide(grid, "field_walk")
     optimum = guide.to_goal[grid.start]
-    budget = jnp.maximum(jnp.asarray(slack, _F32), 0.0) * jnp.where(
+    budget = jnp.maximum(jnp.asarray(slack, F32), 0.0) * jnp.where(
         jnp.isfinite(optimum), optimum, 0.0)
     count, total = _via_candidates(grid, budget)
     k_via, k_path = jax.random.split(key)
     r = (jax.random.bits(k_via, (), jnp.uint32)
-         % jnp.maximum(total, 1).astype(jnp.uint32)).astype(_I32)
-    via = jnp.searchsorted(count, r, side="right").astype(_I32) - 1
+         % jnp.maximum(total, 1).astype(jnp.uint32)).astype(I32)
+    via = jnp.searchsorted(count, r, side="right").astype(I32) - 1
     cells, length, ok = field_path(k_path, grid, via, capacity, budget, temperature)
     return cells, length, ok & (total > 0)
 
@@ -1297,32 +1296,32 @@ def initialise_population(
     def candidates(r):
         keys = jax.random.split(jax.random.fold_in(key, r), chunk)
         c, ln, ok = jax.vmap(lambda k: fn(k, grid, capacity))(keys)
-        c = c.astype(_I32)
-        ln = ln.astype(_I32)
+        c = c.astype(I32)
+        ln = ln.astype(I32)
         if verify:
             ok &= jax.vmap(lambda a, b: _valid_path(grid, a, b))(c, ln)
         return c, ln, ok
 
-    cand_ids = jnp.arange(chunk, dtype=_I32)
+    cand_ids = jnp.arange(chunk, dtype=I32)
 
     def body(state):
         cells, length, hashes, filled, r, attempts, successes, dups = state
         c, ln, ok = candidates(r)
-        successes = successes + jnp.sum(ok, dtype=_I32)
+        successes = successes + jnp.sum(ok, dtype=I32)
         if unique:
             h = jax.vmap(_path_hash)(c, ln)
             same_old = jnp.all(h[:, None, :] == hashes[None, :, :], axis=-1) & filled[None, :]
             same_new = (jnp.all(h[:, None, :] == h[None, :, :], axis=-1)
                         & ok[None, :] & (cand_ids[None, :] < cand_ids[:, None]))
             dup = ok & (jnp.any(same_old, axis=1) | jnp.any(same_new, axis=1))
-            dups = dups + jnp.sum(dup, dtype=_I32)
+            dups = dups + jnp.sum(dup, dtype=I32)
             ok &= ~dup
-        rank = jnp.cumsum(ok, dtype=_I32) - 1
-        n_ok = jnp.sum(ok, dtype=_I32)
-        by_rank = jnp.zeros((chunk,), _I32).at[jnp.where(ok, rank, chunk)].set(
+        rank = jnp.cumsum(ok, dtype=I32) - 1
+        n_ok = jnp.sum(ok, dtype=I32)
+        by_rank = jnp.zeros((chunk,), I32).at[jnp.where(ok, rank, chunk)].set(
             cand_ids, mode="drop"
         )
-        empty_rank = jnp.cumsum(~filled, dtype=_I32) - 1
+        empty_rank = jnp.cumsum(~filled, dtype=I32) - 1
         take = ~filled & (empty_rank < n_ok)
         src = by_rank[jnp.clip(empty_rank, 0, chunk - 1)]
         cells = jnp.where(take[:, None], c[src], cells)
@@ -1336,8 +1335,8 @@ def initialise_population(
         return (r < max_rounds) & ~jnp.all(filled)
 
     state0 = (
-        jnp.full((size, capacity), grid.start, _I32),
-        jnp.ones((size,), _I32),
+        jnp.full((size, capacity), grid.start, I32),
+        jnp.ones((size,), I32),
         jnp.zeros((size, 2), jnp.uint32),
         jnp.zeros((size,), bool),
         jnp.int32(0),
@@ -1354,7 +1353,7 @@ def initialise_population(
             cells, length, filled = args
             keys = jax.random.split(jax.random.fold_in(key, FALLBACK_STREAM), size)
             c, ln, ok = jax.vmap(lambda k: fallback(k, grid, capacity))(keys)
-            c, ln = c.astype(_I32), ln.astype(_I32)
+            c, ln = c.astype(I32), ln.astype(I32)
             if verify:
                 ok &= jax.vmap(lambda a, b: _valid_path(grid, a, b))(c, ln)
             take = ~filled & ok
@@ -1364,13 +1363,13 @@ def initialise_population(
         # Computed whether or not a slot is empty: under vmap (many runs) a lax.cond would
         # be a select computing both branches anyway, and on a large map its batching
         # multiplied the program's memory many times over (decision 018).
-        before = jnp.sum(filled, dtype=_I32)
+        before = jnp.sum(filled, dtype=I32)
         cells, length, filled = fill((cells, length, filled))
-        from_fallback = jnp.sum(filled, dtype=_I32) - before
+        from_fallback = jnp.sum(filled, dtype=I32) - before
     # Fill the empty slots with copies of valid individuals (flagged invalid).
-    n_filled = jnp.sum(filled, dtype=_I32)
-    filled_ids = jnp.argsort(~filled, stable=True).astype(_I32)
-    empty_rank = jnp.cumsum(~filled, dtype=_I32) - 1
+    n_filled = jnp.sum(filled, dtype=I32)
+    filled_ids = jnp.argsort(~filled, stable=True).astype(I32)
+    empty_rank = jnp.cumsum(~filled, dtype=I32) - 1
     donor = filled_ids[empty_rank % jnp.maximum(n_filled, 1)]
     use_donor = ~filled & (n_filled > 0)
     cells = jnp.where(use_donor[:, None], cells[donor], cells)
@@ -1378,7 +1377,7 @@ def initialise_population(
     stats = InitStats(
         attempts=attempts,
         successes=successes,
-        success_rate=successes.astype(_F32) / jnp.maximum(attempts, 1).astype(_F32),
+        success_rate=successes.astype(F32) / jnp.maximum(attempts, 1).astype(F32),
         rounds=rounds,
         n_failed=size - n_filled,
         valid=filled,

@@ -44,6 +44,7 @@ import jax
 import jax.numpy as jnp
 import numpy as np
 
+from jaxga.core.dtypes import I32
 from jaxga.core.errors import ParameterError
 from jaxga.core.grid import DIRECTIONS, Grid, blocked_at, move_legal
 from jaxga.operators.init import directional_walk, field_reconnect
@@ -66,7 +67,6 @@ __all__ = [
     "with_probability",
 ]
 
-_I32 = jnp.int32
 _U32 = jnp.uint32
 # NumPy, not jnp: importing jaxga must not start JAX's backend (jaxga.api.parallel sets the
 # device count first).
@@ -76,7 +76,7 @@ _OFF8 = np.asarray(DIRECTIONS, np.int32)
 # ------------------------------------------------------------------------ helpers
 def _below(bits: jax.Array, n: jax.Array) -> jax.Array:
     """Uniform integer in ``[0, n)`` from 32 random bits (``n >= 1``, int32)."""
-    return (bits % jnp.maximum(n, 1).astype(_U32)).astype(_I32)
+    return (bits % jnp.maximum(n, 1).astype(_U32)).astype(I32)
 
 
 def _uniform01(bits: jax.Array) -> jax.Array:
@@ -86,10 +86,10 @@ def _uniform01(bits: jax.Array) -> jax.Array:
 
 def _pick(bits: jax.Array, mask: jax.Array) -> tuple[jax.Array, jax.Array]:
     """Index of a uniformly random True entry of the 1-D ``mask``, and whether one exists."""
-    count = jnp.sum(mask, dtype=_I32)
+    count = jnp.sum(mask, dtype=I32)
     rank = _below(bits, count)
-    hit = mask & (jnp.cumsum(mask, dtype=_I32) - 1 == rank)
-    return jnp.argmax(hit).astype(_I32), count > 0
+    hit = mask & (jnp.cumsum(mask, dtype=I32) - 1 == rank)
+    return jnp.argmax(hit).astype(I32), count > 0
 
 
 def _interior(bits: jax.Array, length: jax.Array) -> tuple[jax.Array, jax.Array]:
@@ -108,7 +108,7 @@ def _segment(b0: jax.Array, b1: jax.Array, length: jax.Array):
     m = length - 1
     u = _below(b0, m)
     v = _below(b1, m - 1)
-    v = v + (v >= u).astype(_I32)
+    v = v + (v >= u).astype(I32)
     return jnp.minimum(u, v), jnp.maximum(u, v) + 1, length >= 3
 
 
@@ -118,7 +118,7 @@ def _neighbours(grid: Grid, cell: jax.Array, offsets: jax.Array) -> tuple[jax.Ar
     x = cell % w + offsets[:, 0]
     y = cell // w + offsets[:, 1]
     free = ~blocked_at(grid.blocked, x, y)  # off the map counts as blocked
-    return jnp.where(free, y * w + x, 0).astype(_I32), free
+    return jnp.where(free, y * w + x, 0).astype(I32), free
 
 
 def _finish(ok, new_cells, new_length, cells, length):
@@ -158,8 +158,8 @@ def neighbour_point(
     that needs more nodes fails), ``max_rounds`` and ``queue``; overflowing any of them
     is a failure, never a corruption.
     """
-    cells = jnp.asarray(cells, _I32)
-    length = jnp.asarray(length, _I32)
+    cells = jnp.asarray(cells, I32)
+    length = jnp.asarray(length, I32)
     cap = cells.shape[0]
     k_conn, k_bits = jax.random.split(key)
     bits = jax.random.bits(k_bits, (2,), _U32)
@@ -191,8 +191,8 @@ def one_point(
     is created; the choice is uniform over ``Y``. Cost: 8 candidates, ``8 L``
     comparisons, no loop.
     """
-    cells = jnp.asarray(cells, _I32)
-    length = jnp.asarray(length, _I32)
+    cells = jnp.asarray(cells, I32)
+    length = jnp.asarray(length, I32)
     cap = cells.shape[0]
     bits = jax.random.bits(key, (2,), _U32)
     m, has_node = _interior(bits[0], length)
@@ -202,7 +202,7 @@ def one_point(
     on_path = jnp.any(cand[:, None] == cells[None, :], axis=1)
     ok = free & move_legal(grid, prev, cand) & move_legal(grid, cand, nxt) & ~on_path
     j, has_cand = _pick(bits[1], ok)
-    new = jnp.where(jnp.arange(cap, dtype=_I32) == m, cand[j], cells)
+    new = jnp.where(jnp.arange(cap, dtype=I32) == m, cand[j], cells)
     return _finish(has_node & has_cand, new, length, cells, length)
 
 
@@ -237,10 +237,10 @@ def range_mutation(
     ``p_i`` (:func:`jaxga.operators.init.field_reconnect`), which cannot dead-end; needs
     ``grid.guide``.
     """
-    cells = jnp.asarray(cells, _I32)
-    length = jnp.asarray(length, _I32)
+    cells = jnp.asarray(cells, I32)
+    length = jnp.asarray(length, I32)
     cap = cells.shape[0]
-    idx = jnp.arange(cap, dtype=_I32)
+    idx = jnp.arange(cap, dtype=I32)
     k_walk, k_bits = jax.random.split(key)
     bits = jax.random.bits(k_bits, (2,), _U32)
     i, j, has_seg = _segment(bits[0], bits[1], length)
@@ -326,8 +326,8 @@ def segment_sa(
     distance field from ``p_i`` (:func:`jaxga.operators.init.field_reconnect`); the mutant is then
     accepted or rejected as any other. Needs ``grid.guide``.
     """
-    cells = jnp.asarray(cells, _I32)
-    length = jnp.asarray(length, _I32)
+    cells = jnp.asarray(cells, I32)
+    length = jnp.asarray(length, I32)
     cap = cells.shape[0]
     k_conn, k_bits = jax.random.split(key)
     bits = jax.random.bits(k_bits, (3,), _U32)
@@ -383,8 +383,8 @@ def point_checked(
     # the same candidate cells (but would build a (2r+1)^2 offset table per node)
     radius = max(1, min(radius, max(grid.blocked.shape) - 1))
     sees = line_of_sight(los)
-    cells = jnp.asarray(cells, _I32)
-    length = jnp.asarray(length, _I32)
+    cells = jnp.asarray(cells, I32)
+    length = jnp.asarray(length, I32)
     cap = cells.shape[0]
     r = np.arange(-radius, radius + 1)
     off = np.stack(np.meshgrid(r, r, indexing="ij"), -1).reshape(-1, 2)
@@ -397,7 +397,7 @@ def point_checked(
     j, has_cand = _pick(bits[1], free & ~on_path)
     c = cand[j]
     ok = has_node & has_cand & sees(grid, prev, c) & sees(grid, c, nxt)
-    new = jnp.where(jnp.arange(cap, dtype=_I32) == i, c, cells)
+    new = jnp.where(jnp.arange(cap, dtype=I32) == i, c, cells)
     return _finish(ok, new, length, cells, length)
 
 
@@ -458,10 +458,10 @@ def corner_cut(
     continuous (``knight=False``) or feasible (``knight=True``), loop-free, and no longer.
     """
     del key
-    cells = jnp.asarray(cells, _I32)
-    length = jnp.asarray(length, _I32)
+    cells = jnp.asarray(cells, I32)
+    length = jnp.asarray(length, I32)
     cap = cells.shape[0]
-    idx = jnp.arange(cap, dtype=_I32)
+    idx = jnp.arange(cap, dtype=I32)
     if cap < 3:
         return cells, length, jnp.zeros((), bool)
 
@@ -472,7 +472,7 @@ def corner_cut(
             cut |= (k + 1 < length) & _knight_clear(grid, prev, nxt)
         return jnp.where(cut, prev, cur), cut
 
-    _, cut = jax.lax.scan(step, cells[0], jnp.arange(1, cap - 1, dtype=_I32))
+    _, cut = jax.lax.scan(step, cells[0], jnp.arange(1, cap - 1, dtype=I32))
     dropped = jnp.concatenate([jnp.zeros((1,), bool), cut, jnp.zeros((1,), bool)])
     out, out_len = compact(cells, (idx < length) & ~dropped)
     return out, out_len, jnp.zeros((), bool)
@@ -504,8 +504,8 @@ def delete_corner(
     without an interior node: no mutation, reported as ``failed`` (the parent is kept).
     A feasible loop-free input stays feasible, loop-free, and one node shorter.
     """
-    cells = jnp.asarray(cells, _I32)
-    length = jnp.asarray(length, _I32)
+    cells = jnp.asarray(cells, I32)
+    length = jnp.asarray(length, I32)
     cap = cells.shape[0]
     if cap < 3:
         return cells, length, jnp.ones((), bool)
@@ -514,7 +514,7 @@ def delete_corner(
     corner = move_legal(grid, prev, nxt)
     if knight:
         corner |= _knight_clear(grid, prev, nxt)
-    idx = jnp.arange(cap, dtype=_I32)
+    idx = jnp.arange(cap, dtype=I32)
     shifted = cells[jnp.minimum(idx + 1, cap - 1)]
     new = jnp.where(idx < i, cells, shifted)
     return _finish(has_node & corner, new, length - 1, cells, length)

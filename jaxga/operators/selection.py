@@ -39,6 +39,7 @@ from __future__ import annotations
 import jax
 import jax.numpy as jnp
 
+from jaxga.core.dtypes import F32, I32
 from jaxga.core.errors import ParameterError
 
 __all__ = [
@@ -51,13 +52,11 @@ __all__ = [
     "tournament",
 ]
 
-_F32 = jnp.float32
-_I32 = jnp.int32
 
 
 # ----------------------------------------------------------------------- helpers
 def _prepare(fitness: jax.Array, active: jax.Array | None) -> tuple[jax.Array, jax.Array]:
-    fitness = jnp.asarray(fitness, _F32)
+    fitness = jnp.asarray(fitness, F32)
     if fitness.ndim != 1:
         raise ParameterError(
             f"selection takes fitness of shape (P,), got {fitness.shape}: vmap over runs"
@@ -71,8 +70,8 @@ def _prepare(fitness: jax.Array, active: jax.Array | None) -> tuple[jax.Array, j
 
 def _weights(fitness: jax.Array, active: jax.Array) -> jax.Array:
     """Roulette weights: fitness clipped at 0 (NaN -> 0) on active individuals, else 0."""
-    w = jnp.where(jnp.isnan(fitness), _F32(0), jnp.maximum(fitness, _F32(0)))
-    return jnp.where(active, w, _F32(0))
+    w = jnp.where(jnp.isnan(fitness), F32(0), jnp.maximum(fitness, F32(0)))
+    return jnp.where(active, w, F32(0))
 
 
 def _roulette_draw(key: jax.Array, weights: jax.Array, eligible: jax.Array, n: int) -> jax.Array:
@@ -83,13 +82,13 @@ def _roulette_draw(key: jax.Array, weights: jax.Array, eligible: jax.Array, n: i
     A zero-weight individual is never drawn (``side="right"`` on the cumulative sums).
     """
     total = jnp.sum(weights)
-    w = jnp.where(total > 0, weights, eligible.astype(_F32))
+    w = jnp.where(total > 0, weights, eligible.astype(F32))
     # associative_scan: jnp.cumsum is an O(P^2) reduce_window on CPU.
     cdf = jax.lax.associative_scan(jnp.add, w)
-    u = jax.random.uniform(key, (n,), _F32) * cdf[-1]
-    idx = jnp.searchsorted(cdf, u, side="right").astype(_I32)
+    u = jax.random.uniform(key, (n,), F32) * cdf[-1]
+    idx = jnp.searchsorted(cdf, u, side="right").astype(I32)
     # u * total can round up to total: fall back on the last index with positive weight.
-    last = jnp.max(jnp.where(w > 0, jnp.arange(w.shape[0], dtype=_I32), 0))
+    last = jnp.max(jnp.where(w > 0, jnp.arange(w.shape[0], dtype=I32), 0))
     return jnp.minimum(idx, last)
 
 
@@ -98,9 +97,9 @@ def rank_order(fitness: jax.Array, active: jax.Array | None = None) -> jax.Array
     then the inactive ones by index. NaN fitness ranks last among the active."""
     fitness, active = _prepare(fitness, active)
     f = jnp.where(jnp.isnan(fitness), -jnp.inf, fitness)
-    iota = jnp.arange(f.shape[0], dtype=_I32)
+    iota = jnp.arange(f.shape[0], dtype=I32)
     neg = jnp.where(active, -f, 0)  # inactive: by index only
-    _, _, order = jax.lax.sort(((~active).astype(_I32), neg, iota), num_keys=2)
+    _, _, order = jax.lax.sort(((~active).astype(I32), neg, iota), num_keys=2)
     return order
 
 
@@ -109,9 +108,9 @@ def _place_on_active(key: jax.Array, seq: jax.Array, active: jax.Array) -> jax.A
     random order and ``seq[M:]`` onto the inactive slots."""
     p = seq.shape[0]
     bits = jax.random.bits(key, (p,), jnp.uint32)
-    iota = jnp.arange(p, dtype=_I32)
-    _, _, slots = jax.lax.sort(((~active).astype(_I32), bits, iota), num_keys=2)
-    return jnp.zeros((p,), _I32).at[slots].set(seq, unique_indices=True)
+    iota = jnp.arange(p, dtype=I32)
+    _, _, slots = jax.lax.sort(((~active).astype(I32), bits, iota), num_keys=2)
+    return jnp.zeros((p,), I32).at[slots].set(seq, unique_indices=True)
 
 
 # -------------------------------------------------------------------- selections
@@ -153,8 +152,8 @@ def roulette_elite(
     fitness, active = _prepare(fitness, active)
     idx = roulette(key, fitness, active)
     f = jnp.where(jnp.isnan(fitness), -jnp.inf, fitness)
-    best = jnp.argmax(jnp.where(active, f, -jnp.inf)).astype(_I32)
-    worst_slot = jnp.argmin(jnp.where(active, f[idx], jnp.inf)).astype(_I32)
+    best = jnp.argmax(jnp.where(active, f, -jnp.inf)).astype(I32)
+    worst_slot = jnp.argmin(jnp.where(active, f[idx], jnp.inf)).astype(I32)
     return jnp.where(jnp.any(active), idx.at[worst_slot].set(best), idx)
 
 
@@ -174,9 +173,9 @@ def layered_thirds(
     """
     fitness, active = _prepare(fitness, active)
     order = rank_order(fitness, active)
-    m = jnp.sum(active, dtype=_I32)
+    m = jnp.sum(active, dtype=I32)
     q = m // 3
-    k = jnp.arange(fitness.shape[0], dtype=_I32)
+    k = jnp.arange(fitness.shape[0], dtype=I32)
     rank = jnp.where(k < 2 * q, k // 2, k - q)  # top layer twice, then ranks q, q+1, ...
     rank = jnp.where(k < m, rank, 0)  # inactive slots: the best
     return _place_on_active(key, order[rank], active)
@@ -211,7 +210,7 @@ def stratified(
     fitness, active = _prepare(fitness, active)
     p = fitness.shape[0]
     order = rank_order(fitness, active)
-    m = jnp.sum(active, dtype=_I32)
+    m = jnp.sum(active, dtype=I32)
     if bands == "quartile":
         n_keep = m - m // 4
     elif bands == "value":
@@ -219,10 +218,10 @@ def stratified(
         f_max = jnp.max(jnp.where(active, f, -jnp.inf))
         f_min = jnp.min(jnp.where(active, f, jnp.inf))
         dropped = active & (f < f_min + (f_max - f_min) / 4)
-        n_keep = m - jnp.sum(dropped, dtype=_I32)
+        n_keep = m - jnp.sum(dropped, dtype=I32)
     else:
         raise ParameterError(f"unknown bands {bands!r}: expected 'quartile' or 'value'")
-    k = jnp.arange(p, dtype=_I32)
+    k = jnp.arange(p, dtype=I32)
     kept_by_rank = k < n_keep
     kept = jnp.zeros((p,), bool).at[order].set(kept_by_rank, unique_indices=True)
     k_fill, k_place = jax.random.split(key)
@@ -242,7 +241,7 @@ def shuffle(key: jax.Array, fitness: jax.Array, active: jax.Array | None = None)
     the crossover's pairs) and changes no individual's number of copies.
     """
     fitness, active = _prepare(fitness, active)
-    order = jnp.argsort(~active, stable=True).astype(_I32)  # active first, by index
+    order = jnp.argsort(~active, stable=True).astype(I32)  # active first, by index
     m = jnp.maximum(jnp.sum(active), 1)
     seq = order[jnp.arange(order.shape[0]) % m]  # inactive slots: active ones again
     return _place_on_active(key, seq, active)
@@ -262,11 +261,11 @@ def tournament(
         raise ParameterError(f"tournament size k must be a positive int, got {k!r}")
     fitness, active = _prepare(fitness, active)
     p = fitness.shape[0]
-    iota = jnp.arange(p, dtype=_I32)
-    _, active_idx = jax.lax.sort(((~active).astype(_I32), iota), num_keys=1)
-    m = jnp.maximum(jnp.sum(active, dtype=_I32), 1)
+    iota = jnp.arange(p, dtype=I32)
+    _, active_idx = jax.lax.sort(((~active).astype(I32), iota), num_keys=1)
+    m = jnp.maximum(jnp.sum(active, dtype=I32), 1)
     bits = jax.random.bits(key, (p, k), jnp.uint32)
-    cand = active_idx[(bits % m.astype(jnp.uint32)).astype(_I32)]
+    cand = active_idx[(bits % m.astype(jnp.uint32)).astype(I32)]
     f = jnp.where(jnp.isnan(fitness), -jnp.inf, fitness)
     win = jnp.argmax(f[cand], axis=1)
-    return jnp.take_along_axis(cand, win[:, None], axis=1)[:, 0].astype(_I32)
+    return jnp.take_along_axis(cand, win[:, None], axis=1)[:, 0].astype(I32)
