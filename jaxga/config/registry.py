@@ -600,10 +600,10 @@ def _annealing_temperature(ctx: Binding) -> dict:
 
 register(Operator("mutation", "neighbour_point", mu.neighbour_point,
                   "move a node to a free 8-neighbour and reconnect (IMGA 4.3.3)"))
-register(Operator("mutation", "replace_point", mu.one_point,
+register(Operator("mutation", "replace_point", mu.replace_point,
                   "replace a node by another cell adjacent to both its neighbours "
                   "(Zhu & Pan 4.5 one-point mutation)", aliases=("one_point",)))
-register(Operator("mutation", "regrow_segment", mu.range_mutation,
+register(Operator("mutation", "regrow_segment", mu.regrow_segment,
                   "delete the path between two nodes and regrow it by Algorithm 1's walk "
                   "(Zhu & Pan 4.5 range mutation)", traits=frozenset({FIELD_REPAIR}),
                   aliases=("range",)))
@@ -650,7 +650,7 @@ def simplify_adjacent_step(key: jax.Array, grid: Any, cells: jax.Array,
 register(Operator("simplify", "simplify_adjacent", simplify_adjacent_step,
                   "replace two-step detours by direct moves (Zhu & Pan 4.6)",
                   traits=frozenset({SHRINKING, NEVER_FAILS})))
-register(Operator("simplify", "cut_corners", mu.corner_cut,
+register(Operator("simplify", "cut_corners", mu.cut_corners,
                   "delete the middle node of a corner whose ends are adjacent (Zhang "
                   "eq. 3-4)", traits=frozenset({SHRINKING, NEVER_FAILS}),
                   aliases=("corner_cut",)))

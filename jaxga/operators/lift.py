@@ -162,7 +162,7 @@ def gated_map(
     longer than its input, padded with its last cell, and has no width-dependent float sum.
     A block whose paths all fit :func:`window_width` cells is then computed on that many
     (the operator traced at both widths) and re-padded: the same bits, less work (a
-    sequential pass such as :func:`jaxga.operators.mutation.corner_cut` scans the window only).
+    sequential pass such as :func:`jaxga.operators.mutation.cut_corners` scans the window only).
 
     ``splicing=True`` (static, with ``dense``) declares ``fn`` a splicing pair operator
     (:func:`spliced_pairs_map`): computed on twice the window when every parent fits it.

@@ -18,7 +18,7 @@ mutation point / candidate cell exists, the connection (median insertion) or the
 walk did not close, a line-of-sight check rejected the mutant, or the result would exceed
 the capacity ``L``. The input is then returned unchanged (bit for bit). A mutant that is
 produced but *rejected by design* (simulated-annealing acceptance in
-:func:`segment_sa`) is not a failure, and the deterministic cleanup :func:`corner_cut`
+:func:`segment_sa`) is not a failure, and the deterministic cleanup :func:`cut_corners`
 never fails. AGACD (section 4.7) calls these "invalid mutations"; IMGA section 4.3.3 and
 Zhu & Pan section 4.5 call them failures.
 
@@ -54,14 +54,14 @@ from jaxga.operators.repair import concat, connect, splice_loop_free
 
 __all__ = [
     "adaptive_mutation_probability",
-    "corner_cut",
+    "cut_corners",
     "delete_corner",
     "either",
     "mutation_population",
     "neighbour_point",
-    "one_point",
+    "replace_point",
     "point_checked",
-    "range_mutation",
+    "regrow_segment",
     "segment_sa",
     "split_half",
     "with_probability",
@@ -174,7 +174,7 @@ def neighbour_point(
 
 
 # ---------------------------------------------------------------- Zhu one point
-def one_point(
+def replace_point(
     key: jax.Array, grid: Grid, cells: jax.Array, length: jax.Array
 ) -> tuple[jax.Array, jax.Array, jax.Array]:
     """Zhu & Pan's one-point mutation (section 4.5, Fig. 6).
@@ -207,7 +207,7 @@ def one_point(
 
 
 # ---------------------------------------------------------------- Zhu range
-def range_mutation(
+def regrow_segment(
     key: jax.Array,
     grid: Grid,
     cells: jax.Array,
@@ -426,7 +426,7 @@ def _knight_clear(grid: Grid, a: jax.Array, b: jax.Array) -> jax.Array:
     return knight & free
 
 
-def corner_cut(
+def cut_corners(
     key: jax.Array,
     grid: Grid,
     cells: jax.Array,

@@ -71,8 +71,8 @@ def test_gated_alternative_equals_either(setting):
     grid, pop = setting
     key = jax.random.PRNGKey(3)
     use_a = jnp.arange(pop.size) % 3 == 0
-    gated = over_individuals_gated(mu.one_point, alternative=mu.range_mutation)
-    plain = over_individuals(mu.with_probability(mu.either(mu.one_point, mu.range_mutation)))
+    gated = over_individuals_gated(mu.replace_point, alternative=mu.regrow_segment)
+    plain = over_individuals(mu.with_probability(mu.either(mu.replace_point, mu.regrow_segment)))
     a = jax.jit(lambda k: gated(k, grid, pop, 0.8, use_a))(key)
     b = jax.jit(lambda k: plain(k, grid, pop, jnp.full((pop.size,), 0.8), use_a))(key)
     assert _same(a, b)
@@ -402,7 +402,7 @@ def test_engine_evaluation_in_the_window_equals_full_width(setting, preset):
         np.testing.assert_array_equal(np.asarray(a), np.asarray(b))
 
 
-@pytest.mark.parametrize("op", [mu.corner_cut, "simplify_adjacent"])
+@pytest.mark.parametrize("op", [mu.cut_corners, "simplify_adjacent"])
 @pytest.mark.parametrize("longest", [40, 80, 160])
 def test_shrinking_gated_operator_on_the_window_equals_full_width(setting, op, longest):
     """``shrinking=True`` (blocks whose paths fit 64 cells run on them, the others at full

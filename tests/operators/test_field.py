@@ -275,7 +275,7 @@ def _repairs(keys, grid, cells, length, repair):
     one = dict(max_rounds=1, field_repair=repair)
     seg = jax.vmap(lambda k, c, n: MU.segment_sa(k, grid, c, n, 1.0, fitness_fn=sga_fitness,
                                                  **one))(keys, cells, length)
-    rng = jax.vmap(lambda k, c, n: MU.range_mutation(k, grid, c, n, field_repair=repair))(
+    rng = jax.vmap(lambda k, c, n: MU.regrow_segment(k, grid, c, n, field_repair=repair))(
         keys, cells, length)
     col = jax.vmap(lambda k, c1, n1, c2, n2: CX.column_child(k, grid, c1, n1, c2, n2, **one))(
         keys, cells, length, jnp.roll(cells, 1, 0), jnp.roll(length, 1, 0))

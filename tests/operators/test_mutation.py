@@ -34,8 +34,8 @@ T_FIXED = jnp.float32(0.01)
 # name -> (operator, extra args, in_axes of the extras, kind of output path)
 OPS = {
     "neighbour_point": (M.neighbour_point, (), (), "continuous"),
-    "one_point": (M.one_point, (), (), "continuous"),
-    "range_mutation": (M.range_mutation, (), (), "continuous"),
+    "replace_point": (M.replace_point, (), (), "continuous"),
+    "regrow_segment": (M.regrow_segment, (), (), "continuous"),
     "segment_sa": (
         functools.partial(M.segment_sa, fitness_fn=objectives.mpmga),
         (T_FIXED,), (None,), "continuous",
@@ -44,11 +44,11 @@ OPS = {
     "point_checked_lt": (
         functools.partial(M.point_checked, los="linear_trial", radius=3), (), (), "linear_trial",
     ),
-    "corner_cut": (M.corner_cut, (), (), "continuous"),
-    "corner_cut_knight": (functools.partial(M.corner_cut, knight=True), (), (), "waypoint"),
+    "cut_corners": (M.cut_corners, (), (), "continuous"),
+    "cut_corners_knight": (functools.partial(M.cut_corners, knight=True), (), (), "waypoint"),
     "delete_corner": (M.delete_corner, (), (), "waypoint"),
     "with_probability": (
-        M.with_probability(M.one_point), (jnp.float32(0.5),), (None,), "continuous",
+        M.with_probability(M.replace_point), (jnp.float32(0.5),), (None,), "continuous",
     ),
 }
 
@@ -175,7 +175,7 @@ def test_full_capacity_overflow_fails_cleanly_and_is_counted():
     grid = Grid.create(np.zeros((SIZE, SIZE), bool), start=(0, 0), goal=(3, 6), corner_rule="free")
     pop = _population(grid, [xy])
     assert int(pop.length[0]) == pop.capacity
-    for name in ("neighbour_point", "range_mutation"):
+    for name in ("neighbour_point", "regrow_segment"):
         fails = ok = 0
         for s in range(20):
             c, n, failed, n_failed = RUN[name](jax.random.PRNGKey(s), grid, pop)
@@ -290,10 +290,10 @@ def test_corner_cut_staircase():
     """Zhang eq. 3-4 on a staircase: every corner node goes, sequentially."""
     grid = Grid.create(np.zeros((SIZE, SIZE), bool), start=(0, 0), goal=(3, 3), corner_rule="free")
     stair = [(0, 0), (1, 0), (1, 1), (2, 1), (2, 2), (3, 2), (3, 3)]
-    assert _apply("corner_cut", grid, stair) == ([(0, 0), (1, 1), (2, 2), (3, 3)], False)
+    assert _apply("cut_corners", grid, stair) == ([(0, 0), (1, 1), (2, 2), (3, 3)], False)
     # knight=True (eq. 5): after dropping (1, 0), (0,0) -> (2,1) is a clear knight move,
     # so (1, 1) goes too; the pass continues from the last KEPT node (0, 0).
-    assert _apply("corner_cut_knight", grid, stair) == ([(0, 0), (2, 1), (3, 3)], False)
+    assert _apply("cut_corners_knight", grid, stair) == ([(0, 0), (2, 1), (3, 3)], False)
 
 
 def test_delete_corner_mutates_one_random_position_by_eq_3_to_5():
@@ -329,22 +329,22 @@ def test_corner_cut_respects_corner_rule_and_zhang_side_cells():
     path = [(0, 0), (1, 0), (1, 1), (1, 2)]
     for rule, expect in [("free", [(0, 0), (1, 1), (1, 2)]), ("strict", path)]:
         grid = Grid.create(blocked, start=(0, 0), goal=(1, 2), corner_rule=rule)
-        assert _apply("corner_cut", grid, path)[0] == expect
+        assert _apply("cut_corners", grid, path)[0] == expect
     # Zhang eq. 5 on his 10-wide grid: N_{i+1} - N_{i-1} = 12 (0 -> 11 -> 12), deleted only
     # if the other cell beside the mutation point (1 = (1, 0)) is free.
     for other_blocked, expect in [(False, [(0, 0), (2, 1)]), (True, [(0, 0), (1, 1), (2, 1)])]:
         b = np.zeros((SIZE, SIZE), bool)
         b[0, 1] = other_blocked
         grid = Grid.create(b, start=(0, 0), goal=(2, 1), corner_rule="free")
-        assert _apply("corner_cut_knight", grid, [(0, 0), (1, 1), (2, 1)])[0] == expect
-        assert _apply("corner_cut", grid, [(0, 0), (1, 1), (2, 1)])[0] == [(0, 0), (1, 1), (2, 1)]
+        assert _apply("cut_corners_knight", grid, [(0, 0), (1, 1), (2, 1)])[0] == expect
+        assert _apply("cut_corners", grid, [(0, 0), (1, 1), (2, 1)])[0] == [(0, 0), (1, 1), (2, 1)]
     # Differences 10, 1 (orthogonal neighbours) and 11 (diagonal): eq. 3-4, and their
     # mirror images (jaxga applies the rule in all directions).
     grid = Grid.create(np.zeros((SIZE, SIZE), bool), start=(1, 1), goal=(1, 1), corner_rule="free")
     for mid, nxt in [((2, 2), (2, 1)), ((2, 2), (1, 2)), ((2, 1), (2, 2)), ((0, 1), (0, 0)),
                      ((0, 0), (1, 0)), ((1, 2), (0, 2))]:
         g = Grid.create(np.zeros((SIZE, SIZE), bool), start=(1, 1), goal=nxt, corner_rule="free")
-        assert _apply("corner_cut", g, [(1, 1), mid, nxt])[0] == [(1, 1), nxt]
+        assert _apply("cut_corners", g, [(1, 1), mid, nxt])[0] == [(1, 1), nxt]
     del grid
 
 
@@ -368,15 +368,15 @@ def test_one_point_candidates_and_corner_rule():
     """Zhu 4.5: the only off-path cell adjacent to both neighbours of (1,0) is (1,1)."""
     line = [(0, 0), (1, 0), (2, 0)]
     grid = Grid.create(np.zeros((SIZE, SIZE), bool), start=(0, 0), goal=(2, 0), corner_rule="free")
-    counts, n_failed = _outcomes("one_point", grid, line, 3)
+    counts, n_failed = _outcomes("replace_point", grid, line, 3)
     assert counts == {((0, 0), (1, 1), (2, 0)): 3 * P} and n_failed == 0
     blocked = np.zeros((SIZE, SIZE), bool)
     blocked[1, 0] = True  # (0, 1): makes (0,0) -> (1,1) illegal under "strict"
     grid = Grid.create(blocked, start=(0, 0), goal=(2, 0), corner_rule="strict")
-    assert _apply("one_point", grid, line) == (line, True)
+    assert _apply("replace_point", grid, line) == (line, True)
     # No interior node: nothing to mutate.
     grid = Grid.create(blocked, start=(0, 0), goal=(1, 0), corner_rule="strict")
-    assert _apply("one_point", grid, [(0, 0), (1, 0)]) == ([(0, 0), (1, 0)], True)
+    assert _apply("replace_point", grid, [(0, 0), (1, 0)]) == ([(0, 0), (1, 0)], True)
 
 
 def test_neighbour_point_exact_outcomes_are_uniform():
@@ -444,7 +444,7 @@ def test_range_mutation_regrows_between_kept_parts():
     """Zhu 4.5: only the stretch between the two nodes changes, by a directional walk."""
     grid = _grid(np.zeros((6, SIZE)), start=(0, 0), goal=(9, 0), rule="strict")
     row = [(x, 0) for x in range(SIZE)]
-    counts, n_failed = _outcomes("range_mutation", grid, row, 40)
+    counts, n_failed = _outcomes("regrow_segment", grid, row, 40)
     changed = [k for k in counts if k != tuple(row)]
     assert changed and n_failed < 40 * P
     for k in changed:
@@ -565,7 +565,7 @@ def test_either_and_split_half():
     assert stats.chisquare(masks.sum(0)).pvalue > 1e-3  # every position equally likely
     grid = Grid.create(np.zeros((4, 4), bool), start=(0, 0), goal=(2, 0), corner_rule="free")
     cells = jnp.asarray([0, 1, 2, 2, 2, 2, 2, 2], jnp.int32)
-    op = jax.jit(M.either(M.one_point, _marker))
+    op = jax.jit(M.either(M.replace_point, _marker))
     c, n, f = op(jax.random.PRNGKey(0), grid, cells, jnp.int32(3), jnp.bool_(True))
     assert np.asarray(c[:3]).tolist() == [0, 5, 2] and not bool(f)
     c, n, f = op(jax.random.PRNGKey(0), grid, cells, jnp.int32(3), jnp.bool_(False))
@@ -577,7 +577,7 @@ def test_x64_mode_keeps_dtypes():
     grid = random_map(SIZE, SIZE, 0.2, 1, corner_rule="strict")
     parents = random_parents(grid, 2, 0)
     with jax.enable_x64(True):
-        for name in ("one_point", "corner_cut_knight", "point_checked", "segment_sa"):
+        for name in ("replace_point", "cut_corners_knight", "point_checked", "segment_sa"):
             op, extra, _, _ = OPS[name]
             c, n, f = jax.jit(op)(
                 jax.random.PRNGKey(0), grid, parents.cells[0], parents.length[0], *extra
