@@ -106,9 +106,10 @@ class GA:
     def finish(self, state: GAState, params: dict, history: dict | None = None,
                initial_best: jax.Array | None = None) -> dict:
         """The best path post-optimised (the preset's ``post.method``) and the reported
-        metrics as arrays: ``success``, ``raw_cells`` / ``raw_length`` (the GA's own
-        best), ``cells`` / ``length`` (post-optimised; ``length`` counts nodes),
-        ``path_length``, ``fitness``, ``metrics``, ...; with ``history``, also the
+        metrics as arrays: ``success``, ``raw_cells`` / ``raw_n_cells`` (the GA's own
+        best and its node count), ``cells`` / ``n_cells`` (post-optimised), ``length`` /
+        ``raw_length`` (Euclidean, as :class:`jaxga.api.result.Result`), ``fitness``,
+        ``metrics``, ...; with ``history``, also the
         convergence generation (0 for a best the initial population already held, given
         its ``initial_best`` fitness)."""
         return finish_run(self.algorithm, self.grid, state, history, params, initial_best)

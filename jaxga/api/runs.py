@@ -424,8 +424,8 @@ def _best_path(host: dict, width: int) -> np.ndarray | None:
     ok = np.flatnonzero(np.asarray(host["success"]) & np.asarray(host["feasible_post"]))
     if ok.size == 0:
         return None
-    i = ok[np.argmin(np.asarray(host["path_length"])[ok])]
-    cells = np.asarray(host["cells"][i])[:int(host["length"][i])]
+    i = ok[np.argmin(np.asarray(host["length"])[ok])]
+    cells = np.asarray(host["cells"][i])[:int(host["n_cells"][i])]
     return np.stack([cells % width, cells // width], axis=1)
 
 
@@ -548,9 +548,9 @@ def _point_results(host: dict, hist: dict, *, config: Config, configs: Sequence[
         results.append(Result(
             preset=config["name"], map_name=map_name, corner_rule=grid.corner_rule,
             seeds=seed_arr, success=success, reason=failure_reason(causes),
-            cells=h["cells"], n_cells=h["length"],
-            raw_cells=h["raw_cells"], raw_n_cells=h["raw_length"],
-            length=found(h["path_length"]), raw_length=found(h["raw_path_length"]),
+            cells=h["cells"], n_cells=h["n_cells"],
+            raw_cells=h["raw_cells"], raw_n_cells=h["raw_n_cells"],
+            length=found(h["length"]), raw_length=found(h["raw_length"]),
             fitness=found(h["fitness"]),
             convergence_generation=conv[sl],
             history={k: v[sl] for k, v in hist.items()},

@@ -439,11 +439,11 @@ def finish(algo: Algorithm, grid: Grid, state: GAState, history: dict | None, pa
     )(jnp.stack([raw_c, opt_c]), jnp.stack([raw_n, opt_n]))
     out = {
         "success": success,
-        "raw_cells": raw_c, "raw_length": raw_n,
-        "cells": opt_c, "length": opt_n,
+        "raw_cells": raw_c, "raw_n_cells": raw_n,
+        "cells": opt_c, "n_cells": opt_n,
         "fitness": state.best_fitness,
-        "raw_path_length": both_len[0],
-        "path_length": both_len[1],
+        "raw_length": both_len[0],
+        "length": both_len[1],
         "raw_metrics": {k: v[0] for k, v in both_metrics._asdict().items()},
         "metrics": {k: v[1] for k, v in both_metrics._asdict().items()},
         "generations_run": state.generation,

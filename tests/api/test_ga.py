@@ -32,8 +32,8 @@ def test_a_run_of_the_pure_core_is_seed_for_seed_jaxga_run(ga):
     assert ref.success.all()
     np.testing.assert_array_equal(np.asarray(out["success"]), ref.success)
     np.testing.assert_array_equal(np.asarray(out["fitness"]), ref.fitness)
-    np.testing.assert_array_equal(np.asarray(out["length"]), ref.n_cells)
-    np.testing.assert_array_equal(np.asarray(out["raw_length"]), ref.raw_n_cells)
+    np.testing.assert_array_equal(np.asarray(out["n_cells"]), ref.n_cells)
+    np.testing.assert_array_equal(np.asarray(out["raw_n_cells"]), ref.raw_n_cells)
     for i in range(len(SEEDS)):
         n = int(ref.n_cells[i])
         np.testing.assert_array_equal(np.asarray(out["cells"][i, :n]), ref.cells[i, :n])
@@ -119,7 +119,7 @@ def test_a_users_own_scan_over_step_is_jaxga_run_seed_for_seed(ga):
     out = jax.jit(jax.vmap(users_run))(keys)
     ref = jaxga.run("sga", MAP, seeds=SEEDS, generations=GENERATIONS)
     np.testing.assert_array_equal(np.asarray(out["fitness"]), ref.fitness)
-    np.testing.assert_array_equal(np.asarray(out["length"]), ref.n_cells)
+    np.testing.assert_array_equal(np.asarray(out["n_cells"]), ref.n_cells)
     np.testing.assert_array_equal(np.asarray(out["failures"]), ref.failures)
     for i in range(len(SEEDS)):
         n = int(ref.n_cells[i])
