@@ -428,6 +428,50 @@ def replan(
         ParameterError: the robot's cell is not on the path, or bad arguments.
     """
     t_start = time.perf_counter()
+    _check_arguments(grid, plan_from, window, population)
+    problem = _problem(grid, path, new_obstacles, position, inflate)
+    # The GA's configuration is checked now (overrides that nothing reads, key
+    # combinations), not only when a blocked path needs a GA run; on the map with the
+    # robot's cell as its endpoints (never the map's default corners).
+    api.check_run(preset, grid.replace(start=problem.robot, goal=problem.robot),
+                  **_run_options(overrides, generations, population, grid))
+    k = first_blocked_step(problem.blocked, problem.rule, problem.rest)
+    blockage = None if k is None else (problem.rest[k], problem.rest[k + 1])
+
+    def result(success: bool, status: str, reason: str, out: list[XY] = (),
+               segments: list[dict] = (), compile_s: float = 0.0,
+               ga: list = ()) -> ReplanResult:
+        return _result(problem, blockage, t_start, success, status, reason, list(out),
+                       list(segments), compile_s, list(ga))
+
+    if k is None:
+        return result(True, "clear", "", problem.rest)
+    goal, robot = problem.goal, problem.robot
+    if problem.blocked[goal[1], goal[0]]:
+        why = ("a new obstacle" if problem.added[goal[1], goal[0]]
+               else "an obstacle of the map")
+        return result(False, "goal_blocked", f"goal {goal} is blocked ({why})")
+    work = grid.replace(blocked=problem.blocked, start=robot, goal=robot)
+    reach = reachable(work, robot)
+    if not reach[goal[1], goal[0]]:
+        return result(False, "unreachable",
+                      f"goal {goal} is unreachable from the robot's cell {robot} after the "
+                      f"new obstacles (corner rule {problem.rule!r})")
+    spliced, segments, compile_s, ga_results = _splice_detours(
+        problem, work, reach, k, plan_from, dict(
+            preset=preset, seeds=seeds, generations=generations, population=population,
+            window=window, post=post, fallback=fallback, overrides=overrides))
+    if spliced is None:
+        return result(False, "ga_failed", segments[-1]["reason"], [], segments, compile_s,
+                      ga_results)
+    used = any(s["used_fallback"] for s in segments)
+    return result(True, "fallback" if used else "replanned",
+                  "GA found no segment; the exact A* segment was spliced" if used else "",
+                  spliced, segments, compile_s, ga_results)
+
+
+def _check_arguments(grid: Grid, plan_from: str, window: Any, population: int | None) -> None:
+    """Refuse bad arguments of :func:`replan` before any work."""
     if not isinstance(grid, Grid):
         raise ParameterError(f"grid must be a jaxga.Grid, got {type(grid).__name__}")
     if plan_from not in ("robot", "blockage"):
@@ -438,8 +482,30 @@ def replan(
                              f"{window!r}")
     if population is not None:  # checked now, also when no GA run is needed
         SCHEMA["population.size"].check("population", population)
+
+
+@dataclasses.dataclass(frozen=True)
+class _Problem:
+    """A re-planning problem, checked: the path (repeated cells merged), the map with the
+    new obstacles (grown by ``inflate``), the robot's cell and where it is on the path."""
+
+    rule: str
+    cells: list[XY]
+    added: np.ndarray  # bool[H, W]: the new obstacles as grown
+    blocked: np.ndarray  # bool[H, W]: the map's and the new obstacles
+    robot: XY
+    prefix: list[XY]  # the path up to the robot's cell
+    rest: list[XY]  # the path from the robot's cell to the goal
+
+    @property
+    def goal(self) -> XY:
+        return self.rest[-1]
+
+
+def _problem(grid: Grid, path: Any, new_obstacles: Any, position: XY | int,
+             inflate: float) -> _Problem:
+    """The checked :class:`_Problem` of :func:`replan`'s arguments."""
     h, w = grid.height, grid.width
-    rule = grid.corner_rule
     cells = _dedupe(_as_xy_list(path, "path"))
     if not cells:
         raise ParameterError("path is empty")
@@ -450,8 +516,6 @@ def replan(
     if inflate:
         added = inflate_blocked(added, inflate) & ~grid.blocked_np()
     blocked = grid.blocked_np() | added
-
-    # -- the robot's cell
     if isinstance(position, (int, np.integer)) and not isinstance(position, bool):
         if not 0 <= int(position) < len(cells):
             raise ParameterError(f"position index {position} is outside the path "
@@ -459,8 +523,7 @@ def replan(
         i = int(position)
         robot = cells[i]
     else:
-        robot_l = _as_xy_list([position], "position")
-        robot = robot_l[0]
+        robot = _as_xy_list([position], "position")[0]
         if not _on_map(robot, w, h):
             raise EndpointError(f"robot cell {robot} is off the {w} x {h} map")
         if robot not in cells:
@@ -470,59 +533,45 @@ def replan(
         why = ("a new obstacle" + (f" or within {inflate:g} cells of one" if inflate else "")
                if added[robot[1], robot[0]] else "an obstacle of the map")
         raise EndpointError(f"robot cell {robot} is blocked ({why})")
-    # The GA's configuration is checked now (overrides that nothing reads, key
-    # combinations), not only when a blocked path needs a GA run; on the map with the
-    # robot's cell as its endpoints (never the map's default corners).
-    api.check_run(preset, grid.replace(start=robot, goal=robot),
-                  **_run_options(overrides, generations, population, grid))
-    prefix = cells[: i + 1]
-    rest = cells[i:]
-    goal = rest[-1]
+    return _Problem(grid.corner_rule, cells, added, blocked, robot, cells[: i + 1], cells[i:])
 
-    def done(success: bool, status: str, reason: str, out: list[XY],
-             segments: list[dict], compile_s: float, ga: list) -> ReplanResult:
-        wall = time.perf_counter() - t_start
-        first = segments[0] if segments else None
-        return ReplanResult(
-            success=success, status=status, reason=reason,
-            path=out if success else [],
-            length=path_length(np.asarray(out)) if success else math.inf,
-            segment=list(first["segment"]) if first else [],
-            rejoin=first["rejoin"] if first else None,
-            blockage=blockage0, segments=segments,
-            used_fallback=any(s["used_fallback"] for s in segments),
-            latency_s=wall - compile_s, compile_s=compile_s, wall_s=wall,
-            prefix=prefix, ga=ga, corner_rule=rule)
 
-    k = first_blocked_step(blocked, rule, rest)
-    blockage0 = None if k is None else (rest[k], rest[k + 1])
-    if k is None:
-        return done(True, "clear", "", list(rest), [], 0.0, [])
-    if blocked[goal[1], goal[0]]:
-        why = "a new obstacle" if added[goal[1], goal[0]] else "an obstacle of the map"
-        return done(False, "goal_blocked", f"goal {goal} is blocked ({why})", [], [], 0.0, [])
-    work = grid.replace(blocked=blocked, start=robot, goal=robot)
-    reach = reachable(work, robot)
-    if not reach[goal[1], goal[0]]:
-        return done(False, "unreachable",
-                    f"goal {goal} is unreachable from the robot's cell {robot} after the "
-                    f"new obstacles (corner rule {rule!r})", [], [], 0.0, [])
+def _result(problem: _Problem, blockage: tuple | None, t_start: float, success: bool,
+            status: str, reason: str, out: list[XY], segments: list[dict], compile_s: float,
+            ga: list) -> ReplanResult:
+    """The :class:`ReplanResult` of a re-plan that ends here."""
+    wall = time.perf_counter() - t_start
+    first = segments[0] if segments else None
+    return ReplanResult(
+        success=success, status=status, reason=reason,
+        path=out if success else [],
+        length=path_length(np.asarray(out)) if success else math.inf,
+        segment=list(first["segment"]) if first else [],
+        rejoin=first["rejoin"] if first else None,
+        blockage=blockage, segments=segments,
+        used_fallback=any(s["used_fallback"] for s in segments),
+        latency_s=wall - compile_s, compile_s=compile_s, wall_s=wall,
+        prefix=problem.prefix, ga=ga, corner_rule=problem.rule)
 
+
+def _splice_detours(problem: _Problem, work: Grid, reach: np.ndarray, k: int,
+                    plan_from: str, ga_options: dict) -> tuple:
+    """Splice a GA segment past each blocked step of the path, from the first (step
+    ``k``): ``(spliced path or None when a segment was not found, segments, compile
+    seconds, GA results)``."""
+    blocked, rule = problem.blocked, problem.rule
     segments: list[dict] = []
     ga_results: list = []
     compile_s = 0.0
-    current = list(rest)
-    for _ in range(len(cells) + 1):  # each pass splices past one blocked step
+    current = list(problem.rest)
+    for _ in range(len(problem.cells) + 1):  # each pass splices past one blocked step
         # rejoin: first cell after the blocked step that is free and reachable
         j = next(j for j in range(k + 1, len(current))
                  if not blocked[current[j][1], current[j][0]]
                  and reach[current[j][1], current[j][0]])
         s_idx = 0 if (plan_from == "robot" and not segments) else k
         start, rejoin = current[s_idx], current[j]
-        seg, info, c_s = _plan_segment(
-            work, blocked, start, rejoin, preset, seeds=seeds, generations=generations,
-            population=population, window=window, post=post, fallback=fallback,
-            overrides=overrides)
+        seg, info, c_s = _plan_segment(work, blocked, start, rejoin, **ga_options)
         compile_s += c_s
         res = info.pop("result", None)
         if res is not None:
@@ -530,8 +579,7 @@ def replan(
         info.update(blockage=(current[k], current[k + 1]))
         segments.append(info)
         if seg is None:
-            return done(False, "ga_failed", info["reason"], [], segments, compile_s,
-                        ga_results)
+            return None, segments, compile_s, ga_results
         spliced = remove_loops_xy(current[:s_idx] + seg + current[j + 1:])
         r_idx = spliced.index(rejoin) if rejoin in spliced else 0
         current = spliced
@@ -539,12 +587,10 @@ def replan(
         if k is None:
             break
     bad = first_blocked_step(blocked, rule, current)
-    if bad is not None or current[0] != robot or current[-1] != goal:  # pragma: no cover
+    if bad is not None or current[0] != problem.robot \
+            or current[-1] != problem.goal:  # pragma: no cover
         raise JaxgaError(f"internal error: spliced path is not feasible at step {bad}")
-    used = any(s["used_fallback"] for s in segments)
-    return done(True, "fallback" if used else "replanned",
-                "GA found no segment; the exact A* segment was spliced" if used else "",
-                current, segments, compile_s, ga_results)
+    return current, segments, compile_s, ga_results
 
 
 def _plan_segment(work: Grid, blocked: np.ndarray, start: XY, rejoin: XY, preset: Any, *,

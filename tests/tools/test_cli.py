@@ -258,7 +258,8 @@ def test_size_class_reaches_run_compare_and_warmup(monkeypatch):
     import jax
 
     import jaxga.api
-    import jaxga.cli
+    import jaxga.cli.compare
+    import jaxga.cli.warmup
 
     seen = []
 
@@ -270,8 +271,8 @@ def test_size_class_reaches_run_compare_and_warmup(monkeypatch):
         raise Stop
 
     monkeypatch.setattr(jaxga.api, "run", fake)
-    monkeypatch.setattr(jaxga.cli, "compare", fake)
-    monkeypatch.setattr(jaxga.cli, "warmup", fake)
+    monkeypatch.setattr(jaxga.cli.compare, "compare", fake)
+    monkeypatch.setattr(jaxga.cli.warmup, "warmup", fake)
     monkeypatch.setattr(jax.config, "update", lambda *a: None)  # warmup's cache switch
     commands = (["run", "--preset", "sga", "--map", "classic_ga_gapp3_20x20", "--quiet"],
                 ["compare", "--presets", "sga,imga", "--map", "classic_ga_gapp3_20x20",
@@ -327,7 +328,7 @@ def test_the_command_line_compilation_cache_directory(tmp_path, monkeypatch):
     import jax
 
     import jaxga
-    from jaxga import cli
+    from jaxga.cli import entry as cli
     from jaxga.core.errors import ParameterError
 
     assert cli.use_compilation_cache is jaxga.use_compilation_cache
@@ -522,7 +523,7 @@ def test_progress_is_shown_after_two_seconds_as_a_bar_or_as_log_lines(tty):
     """A quick run shows nothing; a long one shows every update from the first one
     after 2 s: redrawn in place on a terminal, one plain line each on a pipe (a log
     file gets no carriage returns)."""
-    from jaxga.cli import _Progress
+    from jaxga.cli.run import Progress as _Progress
 
     clock, stream = _Clock(), _Stream(tty)
     quick = _Progress(stream, clock)
@@ -590,7 +591,7 @@ def test_scenario_reaches_run_after_the_devices_are_configured(monkeypatch, caps
     problem's endpoints, loaded only after the devices and processes are configured
     (loading a map starts JAX, after which neither can change)."""
     import jaxga.api
-    import jaxga.cli as cli
+    import jaxga.cli.entry as cli
     from jaxga.maps import MapInfo, builtin_scenarios
 
     calls, seen = [], {}
@@ -602,9 +603,9 @@ def test_scenario_reaches_run_after_the_devices_are_configured(monkeypatch, caps
         seen["grid"] = grid
         raise Stop
 
-    real_apply = cli._apply_scenario
+    real_apply = cli.apply_scenario
     monkeypatch.setattr(cli, "configure_from_args", lambda args: calls.append("devices"))
-    monkeypatch.setattr(cli, "_apply_scenario",
+    monkeypatch.setattr(cli, "apply_scenario",
                         lambda args: (calls.append("scenario"), real_apply(args)))
     monkeypatch.setattr(jaxga.api, "run", fake_run)
     with pytest.raises(Stop):

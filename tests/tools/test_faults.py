@@ -23,7 +23,9 @@ from pathlib import Path
 import pytest
 
 from jaxga import cli
+from jaxga.cli import entry as cli_main
 from jaxga.cli import main
+from jaxga.cli import run as cli_run
 from jaxga.core import files
 from jaxga.core.errors import JaxgaError
 from jaxga.core.files import atomic_write_text, check_outputs
@@ -196,7 +198,7 @@ def test_an_unusable_cache_folder_is_one_warning_line_and_the_command_goes_on(
     blocker.write_text("")
     monkeypatch.setenv("JAXGA_CACHE_DIR", str(blocker))
     monkeypatch.setattr(compilation_cache, "_WARNED", [])
-    monkeypatch.setattr(cli, "cmd_run", lambda args: print("the run goes on") or 0)
+    monkeypatch.setattr(cli_run, "cmd_run", lambda args: print("the run goes on") or 0)
     rc = main(RUN)
     out, err = capsys.readouterr()
     assert rc == 0 and out == "the run goes on\n"
@@ -212,7 +214,7 @@ def test_jax_cache_warnings_become_one_jaxga_line(capsys):
 
     import jax
 
-    show = cli._one_line_warnings(lambda *a: pytest.fail(f"passed on: {a}"))
+    show = cli_main.one_line_warnings(lambda *a: pytest.fail(f"passed on: {a}"))
     jax_file = str(Path(jax.__file__).parent / "_src" / "compiler.py")
     for key in ("a", "b"):
         show(UserWarning(f"Error reading persistent compilation cache entry for 'jit_{key}': "
@@ -224,7 +226,7 @@ def test_jax_cache_warnings_become_one_jaxga_line(capsys):
     assert lines[0].endswith("compiling without it")
     with warnings.catch_warnings():
         other = []
-        cli._one_line_warnings(lambda *a: other.append(a))(
+        cli_main.one_line_warnings(lambda *a: other.append(a))(
             UserWarning("something else"), UserWarning, jax_file, 1)
         assert len(other) == 1
 
@@ -283,7 +285,7 @@ def test_a_unicode_map_name_in_an_ascii_locale_is_printed_escaped(tmp_path):
 def test_hostile_yaml_json_and_preset_chains_are_one_line(tmp_path):
     """A YAML alias bomb (9 levels of 9) in a ROS map's origin, a path JSON nested 100,000
     deep, a preset ``base`` chain of 40 files: refused in one line, at once."""
-    from jaxga.cli import _read_path_json
+    from jaxga.cli.replan import read_path_json as _read_path_json
     from jaxga.config.presets import load_preset
     from jaxga.maps.ros import read_ros_yaml
 

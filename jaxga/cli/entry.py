@@ -1,0 +1,136 @@
+"""The entry point: arguments read, warnings as one line, errors as one line and an exit status."""
+
+from __future__ import annotations
+
+import contextlib
+import os
+import re
+import sys
+import warnings
+from collections.abc import Callable, Sequence
+
+import jax
+
+from jaxga import interrupts
+from jaxga.api.compilation_cache import ENV_VAR as CACHE_ENV_VAR
+from jaxga.api.compilation_cache import use_compilation_cache
+from jaxga.api.lowering import check_environment
+from jaxga.api.parallel import (
+    EXIT_PROCESS_LOST,
+    ProcessLostError,
+    configure_from_args,
+)
+from jaxga.cli.options import EXIT_BAD_INPUT, EXIT_NO_PATH, apply_scenario
+from jaxga.cli.outputs import check_outputs
+from jaxga.cli.parser import build_parser
+from jaxga.core.errors import EndpointError, JaxgaError, NoPathError
+from jaxga.core.files import remove_temporaries
+
+NEGATIVE_XY = re.compile(r"-[\d.]")
+
+
+XY_OPTIONS = ("--start", "--goal", "--position", "--obstacles", "--start-world",
+               "--goal-world", "--position-world", "--obstacles-world")
+
+
+def join_negative_xy(argv: Sequence[str]) -> list[str]:
+    """``--start -1,0`` as ``--start=-1,0``, ``--start-world -1.5,2`` as
+    ``--start-world=-1.5,2`` (every coordinate option, cells or metres, and their
+    abbreviations): argparse would take ``-1.5,2`` for an option and say "expected one
+    argument" instead of reading the usual negative coordinates of a ROS map."""
+    out: list[str] = []
+    for arg in argv:
+        option = out[-1] if out else ""
+        takes_xy = len(option) > 3 and any(o.startswith(option) for o in XY_OPTIONS)
+        if takes_xy and NEGATIVE_XY.match(arg):
+            out[-1] = f"{out[-1]}={arg}"
+        else:
+            out.append(arg)
+    return out
+
+
+def one_line_warnings(show: Callable[..., None]) -> Callable[..., None]:
+    """A ``warnings.showwarning`` that prints jaxga's own warnings (the categories of
+    :mod:`jaxga.core.errors`) as one ``jaxga: warning: ...`` line, like its errors (Python's
+    format adds the file and source line), JAX's warnings about compilation-cache entries
+    as one such line per process naming the cache folder, and hands other warnings to
+    ``show``."""
+
+    said: set[str] = set()
+
+    def show_warning(message, category, filename, lineno, file=None, line=None) -> None:
+        out = sys.stderr if file is None else file
+        text = str(message)
+        if category.__module__.split(".")[0] == "jaxga":
+            print(f"jaxga: warning: {text}", file=out)
+        elif "compilation cache" in text and "jax" in str(filename):
+            # JAX's multi-line warning for each cache entry it cannot read or write: one
+            # line per process, naming the folder; the program is compiled instead
+            if "cache" not in said:
+                said.add("cache")
+                folder = jax.config.jax_compilation_cache_dir
+                why = text.split(": ", 1)[-1].splitlines()[0][:160]
+                print(f"jaxga: warning: the compilation cache {folder} ({CACHE_ENV_VAR}) "
+                      f"could not be used ({why}): compiling without it", file=out)
+        else:
+            show(message, category, filename, lineno, file, line)
+
+    return show_warning
+
+
+def main(argv: Sequence[str] | None = None) -> int:
+    """Entry point of the ``jaxga`` console script; returns the exit status."""
+    parser = build_parser()
+    args = parser.parse_args(join_negative_xy(sys.argv[1:] if argv is None else argv))
+    try:
+        with warnings.catch_warnings():
+            warnings.showwarning = one_line_warnings(warnings.showwarning)
+            check_environment()  # $JAXGA_THREEFRY, which `import jaxga` does not refuse
+            check_outputs(args)
+            if hasattr(args, "devices"):  # subcommands with add_parallel_arguments
+                configure_from_args(args)  # before JAX's backend starts
+            apply_scenario(args)  # after it: loading the map starts JAX
+            if getattr(args, "compiles", False):  # run, doe, compare, warmup
+                use_compilation_cache()
+            return args.func(args)
+    except ProcessLostError as e:
+        # Exit at once: a normal exit would wait in jax.distributed's shutdown barrier
+        # for the lost process (up to --process-timeout).
+        print(f"jaxga: error: {e}", file=sys.stderr, flush=True)
+        sys.stdout.flush()
+        os._exit(EXIT_PROCESS_LOST)
+    except NoPathError as e:
+        print(f"jaxga: no path: {e}", file=sys.stderr)
+        return EXIT_NO_PATH
+    except EndpointError as e:
+        print(f"jaxga: bad start or goal: {e}", file=sys.stderr)
+        return EXIT_BAD_INPUT
+    except JaxgaError as e:
+        print(f"jaxga: error: {e}", file=sys.stderr)
+        return EXIT_BAD_INPUT
+    except OSError as e:
+        print(f"jaxga: error: {e.strerror or e}: {e.filename or ''}".rstrip(": "),
+              file=sys.stderr)
+        return EXIT_BAD_INPUT
+    except KeyboardInterrupt:
+        print("jaxga: interrupted", file=sys.stderr)
+        return 130
+
+
+def console() -> None:
+    """The ``jaxga`` console script: :func:`main`, then, in a single-process run, an exit
+    that skips the interpreter's teardown of JAX (its backends and threads: about a third
+    of a second a user would wait after the last line) once the output is flushed; every
+    file jaxga writes is complete by then (written atomically). A run over several
+    processes exits normally, through ``jax.distributed``'s shutdown. Ctrl-C and SIGTERM
+    end it at once with 130 or 143 (:mod:`jaxga.interrupts`)."""
+    interrupts.install(remove_temporaries)
+    for stream in (sys.stdout, sys.stderr):  # a map named in Unicode, an ASCII terminal
+        with contextlib.suppress(AttributeError, ValueError):
+            stream.reconfigure(errors="backslashreplace")
+    code = main()
+    sys.stdout.flush()
+    sys.stderr.flush()
+    if "jax" in sys.modules and jax.process_count() > 1:
+        sys.exit(code)
+    os._exit(code)

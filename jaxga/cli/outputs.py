@@ -1,0 +1,90 @@
+"""Outputs checked before any work: writable, not an input, not another output (decision 033)."""
+
+from __future__ import annotations
+
+import argparse
+import contextlib
+import io
+from pathlib import Path
+
+from jaxga import export
+from jaxga.api.parallel import (
+    ENV_PROCESS_ID,
+    env_int,
+)
+from jaxga.core.errors import JaxgaError
+from jaxga.core.files import check_outputs as check_output_files
+from jaxga.core.files import same_file
+from jaxga.maps import (
+    scenario_path,
+)
+from jaxga.maps.ros import read_ros_yaml
+
+OUTPUT_OPTIONS = ("json", "plot", "path_out", "checkpoint")
+
+
+def input_files(args: argparse.Namespace) -> list[tuple[str, str | None]]:
+    """``(label, path)`` of every file the command reads: the map (and a ROS map's image),
+    the scenario file, the path JSON of replan, preset TOML files."""
+    out: list[tuple[str, str | None]] = []
+    maps = getattr(args, "map", None)
+    for m in (maps if isinstance(maps, list) else [maps]):
+        if m and Path(m).is_file():
+            out.append(("map", m))
+            if Path(m).suffix.lower() in (".yaml", ".yml"):
+                with contextlib.suppress(JaxgaError, OSError):  # a bad YAML: named later
+                    out.append(("map's image", str(read_ros_yaml(m).image)))
+    out.append(("scenario file", getattr(args, "scen", None)))
+    if getattr(args, "scenario", None) is not None and maps and not getattr(args, "scen", None):
+        found = scenario_path(maps if isinstance(maps, str) else maps[0])
+        out.append(("scenario file", str(found) if found else None))
+    out.append(("path JSON", getattr(args, "path_json", None)))
+    presets = [getattr(args, "preset", None), *str(getattr(args, "presets", "") or "")
+               .split(",")]
+    out.extend(("preset file", p) for p in presets if p and Path(p).is_file())
+    return out
+
+
+def check_outputs(args: argparse.Namespace) -> None:
+    """Check every output (``--json``, ``--plot``, ``--path-out``, a DOE's
+    ``--checkpoint`` folder) before the work, not after it
+    (:func:`jaxga.core.files.check_outputs`): writable where it is, not a folder, not an
+    input of the command nor another output; the plot's extension must be an image format
+    matplotlib writes (no extension: ``.png`` is added, as matplotlib would, and
+    reported)."""
+    pid = getattr(args, "process_id", None)
+    if pid is None:
+        pid = env_int(ENV_PROCESS_ID)
+    if getattr(args, "path_out", None):
+        export.path_format(args.path_out)  # .csv or .yaml, refused in one line otherwise
+    plot = getattr(args, "plot", None)
+    if plot and not Path(plot).suffix:
+        args.plot = plot + ".png"
+    if pid not in (None, 0):  # only process 0 writes the outputs
+        return
+    outputs = {f"--{o.replace('_', '-')}": getattr(args, o, None) for o in OUTPUT_OPTIONS
+               if o != "checkpoint"}
+    inputs = input_files(args)
+    check_output_files(outputs, inputs)
+    folder = getattr(args, "checkpoint", None)
+    if folder:
+        for label, path in [*inputs, *outputs.items()]:
+            if path and Path(path).is_dir() and same_file(path, folder):
+                raise JaxgaError(f"cannot use --checkpoint {folder}: it is the {label}")
+    plot = getattr(args, "plot", None)
+    if plot:
+        from matplotlib.figure import Figure
+
+        formats = Figure().canvas.get_supported_filetypes()
+        suffix = Path(plot).suffix.lower().lstrip(".")
+        if suffix not in formats:
+            raise JaxgaError(f"cannot write --plot {plot}: {suffix!r} is not an image format "
+                             f"matplotlib writes ({', '.join(sorted(formats))})")
+        else:  # some formats need outside tools (pgf: LaTeX for any text): try one first
+            probe = Figure()
+            probe.text(0.5, 0.5, "jaxga")
+            try:
+                probe.savefig(io.BytesIO(), format=suffix)
+            except Exception as err:  # noqa: BLE001 - any backend failure, named
+                raise JaxgaError(f"cannot write --plot {plot}: matplotlib cannot write "
+                                 f"{suffix!r} here ({err})") from None

@@ -1,0 +1,200 @@
+"""``jaxga replan``: a path re-planned around new obstacles (:mod:`jaxga.replan`)."""
+
+from __future__ import annotations
+
+import argparse
+import json
+import math
+import sys
+
+from jaxga.api.compilation_cache import use_compilation_cache
+from jaxga.api.timeline import time_line
+from jaxga.cli.options import (
+    EXIT_NO_PATH,
+    MAP_HELP,
+    RULE_DEFAULT,
+    add_coarsen_argument,
+    add_source_arguments,
+    load_info,
+    parse_obstacles,
+    parse_point,
+    parse_window,
+    parse_xy,
+    preset_rule,
+    write_json,
+)
+from jaxga.cli.run import process_timeline
+from jaxga.core.errors import JaxgaError, ParameterError
+from jaxga.core.grid import CORNER_RULES, as_integer, check_corner_rule
+from jaxga.maps.inputs import PATH_JSON_CAP, read_input
+from jaxga.plot import (
+    plot_replan,
+)
+from jaxga.replan import replan
+
+
+def number_or_inf(value: object) -> float:
+    """A run's ``raw_length`` for ordering: anything that is not a finite number sorts last."""
+    if isinstance(value, bool) or not isinstance(value, (int, float)):
+        return float("inf")
+    try:
+        return float(value) if math.isfinite(value) else float("inf")
+    except OverflowError:  # an integer too large for a float
+        return float("inf")
+
+
+def read_path_json(path: str, run_index: int | None) -> list[tuple[int, int]]:
+    """The robot's path from a JSON file: a list of ``[x, y]``, an object with a
+    ``"path"`` list (``jaxga optimum --json``), or the JSON of ``jaxga run`` (the raw
+    8-connected path of run ``run_index``, default the successful run with the shortest
+    raw path). Read only from a regular file of at most
+    :data:`jaxga.maps.inputs.PATH_JSON_CAP` bytes (:func:`jaxga.maps.inputs.read_input`):
+    a FIFO, a device or a larger file is refused in one line."""
+
+    try:
+        raw = read_input(path, PATH_JSON_CAP, what="path JSON file", error=ParameterError,
+                         note="1 KiB a cell of the largest map jaxga plans on")
+    except FileNotFoundError:
+        raise ParameterError(f"{path}: path JSON file not found") from None
+    except OSError as e:
+        raise ParameterError(f"{path}: cannot read the path JSON file "
+                             f"({e.strerror or e})") from None
+    try:
+        data = json.loads(raw.decode("utf-8"))
+    except ValueError as e:  # UnicodeDecodeError and JSONDecodeError
+        raise ParameterError(f"{path}: not valid JSON ({e})") from None
+    except RecursionError:
+        raise ParameterError(f"{path}: not a path JSON file (nested too deeply)") from None
+    expected = (f"{path}: expected a list of [x, y] cells, an object with a \"path\" list, "
+                "or the JSON of `jaxga run`")
+    if isinstance(data, dict) and "runs" in data:
+        runs = data["runs"]
+        if not (isinstance(runs, list) and all(isinstance(r, dict) for r in runs)):
+            raise ParameterError(f"{expected} (its \"runs\" must be a list of objects)")
+        if run_index is not None:
+            if not 0 <= run_index < len(runs):
+                raise ParameterError(f"{path}: --run {run_index} is outside 0..{len(runs) - 1}")
+            run = runs[run_index]
+        else:
+            ok = [r for r in runs if r.get("success") and r.get("raw_path")]
+            if not ok:
+                raise ParameterError(f"{path}: no successful run with a path")
+            run = min(ok, key=lambda r: number_or_inf(r.get("raw_length")))
+        data = run.get("raw_path") or run.get("path")
+    elif isinstance(data, dict):
+        data = data.get("path")
+    try:  # integers only: 0.9 is not cell 0
+        cells = [(as_integer(x), as_integer(y)) for x, y in data]
+    except (TypeError, ValueError):
+        raise ParameterError(f"{expected} (cells are pairs of integers)") from None
+    if not cells:
+        raise ParameterError(f"{path}: the path is empty")
+    return cells
+
+
+def cmd_replan(args: argparse.Namespace) -> int:
+    """``jaxga replan``: re-plan a path around new obstacles from the robot's cell
+    (MPMGA 5.2.1 / 5.3.1). The path's own ends are its endpoints (never the map's
+    defaults); new obstacles grow like the map (``--inflate`` / ``--robot-radius``)."""
+
+    use_compilation_cache()
+    timeline = process_timeline()
+    if args.corner_rule is not None:
+        check_corner_rule(args.corner_rule)
+    rule = args.corner_rule or preset_rule(args)
+    with timeline.phase("load"):
+        info = load_info(args, rule)
+        path = read_path_json(args.path_json, args.run)
+    grid = info.grid
+    obstacles = [xy for text in args.obstacles or () for xy in parse_obstacles(text)]
+    for text in args.obstacles_world or ():
+        obstacles += [info.frame.cell_of(p, grid.shape, "--obstacles-world point")
+                      for p in parse_obstacles(text, "--obstacles-world", parse_point)]
+    position = args.position
+    if args.position_world is not None:
+        if position is not None:
+            raise JaxgaError("give the robot's position in cells (--position) or in metres "
+                             "(--position-world), not both")
+        position = info.frame.cell_of(args.position_world, grid.shape, "--position-world")
+    if position is None:
+        raise JaxgaError("give the robot's position: --position X,Y (cells) or "
+                         "--position-world X,Y (metres)")
+    result = replan(
+        grid, path, obstacles, position, args.preset, seeds=args.seeds,
+        generations=args.generations, population=args.population,
+        window=parse_window(args.window), plan_from=args.plan_from, post=args.post,
+        fallback=args.fallback, variant=args.variant, sets=tuple(args.set or ()),
+        inflate=inflation_cells(args, info),
+    )
+    timeline.add("replan", result.wall_s)
+    print(result.summary())
+    if args.json:
+        with timeline.phase("write"):
+            write_json(args.json, result.to_json(info.frame))
+    if args.plot:
+        with timeline.phase("plot"):
+            plot_replan(result, grid.replace(start=path[0], goal=path[-1]), path, obstacles,
+                        args.plot, info=info)
+        print(f"wrote {args.plot}")
+    print(time_line(timeline.as_dict()))
+    if not result.success:
+        print(f"jaxga: no path: {result.reason}", file=sys.stderr)
+        return EXIT_NO_PATH
+    return 0
+
+
+def inflation_cells(args: argparse.Namespace, info) -> float:
+    """The growth of the map's obstacles in planning cells (``--inflate`` cells or
+    ``--robot-radius`` metres), which new obstacles get too; 0 without either."""
+    k = info.frame.coarsen if info.frame is not None else 1
+    if args.robot_radius is not None:
+        return args.robot_radius / info.frame.resolution / k
+    return (args.inflate or 0.0) / k
+
+
+def add_parser(commands: argparse._SubParsersAction) -> None:
+    """Add the ``replan`` command to ``jaxga``'s parser."""
+    p = commands.add_parser("replan", help="re-plan a path around new obstacles (MPMGA 5.2.1)")
+    p.add_argument("--map", required=True, help=MAP_HELP)
+    add_source_arguments(p)
+    add_coarsen_argument(p)
+    p.add_argument("--path-json", required=True, metavar="FILE",
+                   help="the planned path: a JSON list of [x, y], jaxga optimum's JSON, or "
+                   "jaxga run's JSON (its raw path)")
+    p.add_argument("--run", type=int, metavar="I", help="with jaxga run's JSON: the run to use "
+                   "(default: the successful run with the shortest raw path)")
+    p.add_argument("--obstacles", action="append", metavar="X,Y;X,Y...",
+                   help="cells that became blocked (repeatable); they grow like the map "
+                   "(--inflate, --robot-radius)")
+    p.add_argument("--obstacles-world", action="append", metavar="X,Y;X,Y...",
+                   help="points in metres that became blocked (a map with a resolution; "
+                   "repeatable)")
+    p.add_argument("--position", type=parse_xy, metavar="X,Y",
+                   help="the robot's current cell on the path")
+    p.add_argument("--position-world", type=parse_point, metavar="X,Y",
+                   help="the robot's position in metres (the path cell holding it)")
+    p.add_argument("--corner-rule", default=None, metavar="RULE",
+                   help=f"one of {', '.join(CORNER_RULES)} (default: {RULE_DEFAULT})")
+    p.add_argument("--preset", default="hybrid", help="the GA preset (default hybrid, whose "
+                   "initialiser cannot fail where a detour exists; mpmga = the paper's)")
+    p.add_argument("--variant", help="a preset variant")
+    p.add_argument("--seeds", type=int, default=4, help="seeded GA runs (default 4)")
+    p.add_argument("--generations", type=int, default=20, help="GA generations (default 20)")
+    p.add_argument("--population", type=int, default=10,
+                   help="population size, per island for island presets (default 10)")
+    p.add_argument("--window", default="auto", metavar="S|auto|none",
+                   help="run the GA on an S x S crop around the re-planned part (default "
+                   "auto: the smallest of 32, 64, 128, 256 that holds it; none: the whole "
+                   "map)")
+    p.add_argument("--plan-from", choices=("robot", "blockage"), default="robot",
+                   help="plan from the robot's cell (default) or the cell before the blockage")
+    p.add_argument("--post", action="store_true",
+                   help="splice the post-optimised (waypoint) segment")
+    p.add_argument("--fallback", action="store_true",
+                   help="splice the exact A* segment if the GA finds none (flagged)")
+    p.add_argument("--set", action="append", metavar="KEY=VALUE",
+                   help="override a configuration key, e.g. mutation.temperature_c1=50")
+    p.add_argument("--json", metavar="OUT", help="write the result as JSON")
+    p.add_argument("--plot", metavar="OUT.png", help="draw the old path, the new obstacles "
+                   "and the re-planned path")
+    p.set_defaults(func=cmd_replan)

@@ -1,0 +1,296 @@
+"""``jaxga run``: a preset for many seeds, its summary, time line, JSON, path file and plot."""
+
+from __future__ import annotations
+
+import argparse
+import sys
+import threading
+import time
+from collections.abc import Callable
+from typing import Any
+
+import jax
+import jax.numpy as jnp
+import numpy as np
+
+from jaxga import api, export
+from jaxga.api import parallel
+from jaxga.api.parallel import add_parallel_arguments
+from jaxga.api.timeline import Timeline, process_age, time_line
+from jaxga.cli.options import (
+    EXACT_HELP,
+    EXIT_NO_PATH,
+    SIZE_CLASS_HELP,
+    add_preset_arguments,
+    map_for_run,
+    not_lead,
+    write_json,
+)
+from jaxga.core.errors import JaxgaError
+from jaxga.plot import (
+    plot_result,
+)
+from jaxga.smooth import smooth_population
+
+
+class Progress:
+    """Progress of a run on stderr, shown from the first update after the run has taken
+    ``delay`` seconds (a quick run shows none): on a terminal a one-line bar redrawn in
+    place; on a pipe or a file (a log) one plain line per update, no carriage returns.
+
+    A phase that goes on for more than ``delay`` seconds without an update (a reference
+    search, a plot) is shown too, with its seconds so far (:meth:`tick`, called every half
+    second by a background thread between :meth:`start` and :meth:`close`)."""
+
+    def __init__(self, stream: Any = None, clock: Callable[[], float] = time.perf_counter,
+                 delay: float = 2.0) -> None:
+        self.stream = sys.stderr if stream is None else stream
+        isatty = getattr(self.stream, "isatty", None)
+        self.tty = bool(isatty()) if callable(isatty) else False
+        self.clock = clock
+        self.t0 = clock()
+        self.delay = delay
+        self.shown = False
+        self.stage: str | None = None
+        self.stage_start = self.last = self.t0
+        self._stop: threading.Event | None = None
+
+    def __call__(self, stage: str, frac: float) -> None:
+        now = self.clock()
+        if stage != self.stage:
+            self.stage, self.stage_start = stage, now
+        self.last = now
+        if not self.shown and now - self.t0 < self.delay:
+            return
+        self.shown = True
+        if not self.tty:
+            print(f"progress: {stage} {100 * frac:.0f}%", file=self.stream, flush=True)
+            return
+        bar = "#" * int(30 * frac)
+        print(f"\r{stage:8s} [{bar:30s}] {100 * frac:5.1f}%", end="", file=self.stream,
+              flush=True)
+        if stage == "evolve" and frac >= 1.0:
+            print(file=self.stream)
+
+    def tick(self) -> None:
+        """Say that the current phase is still running, when it has gone on for more than
+        ``delay`` seconds and nothing was shown for ``delay`` seconds."""
+        now = self.clock()
+        if self.stage is None or now - self.last < self.delay \
+                or now - self.stage_start < self.delay:
+            return
+        self.last = self.clock()
+        self.shown = True
+        text = f"{self.stage} still running ({now - self.stage_start:.0f} s)"
+        if self.tty:
+            print(f"\r{text:49s}", end="", file=self.stream, flush=True)
+        else:
+            print(f"progress: {text}", file=self.stream, flush=True)
+
+    def start(self) -> Progress:
+        """Call :meth:`tick` every half second in a background thread until :meth:`close`."""
+        self._stop = threading.Event()
+
+        def beat(stop: threading.Event = self._stop) -> None:
+            while not stop.wait(0.5):
+                self.tick()
+
+        threading.Thread(target=beat, daemon=True, name="jaxga-progress").start()
+        return self
+
+    def close(self) -> None:
+        """Stop the background thread (and end a bar's line on a terminal)."""
+        if self._stop is not None:
+            self._stop.set()
+        if self.tty and self.shown:
+            print(file=self.stream, flush=True)
+
+
+def cmd_run(args: argparse.Namespace) -> int:
+    """``jaxga run``: many seeds of a preset on a map; summary table, JSON, path, plot.
+    Every phase is timed, from the process's start to the last file written
+    (:mod:`jaxga.api.timeline`); the time line is printed last."""
+
+    timeline = process_timeline()
+    lead = parallel.process_index() == 0
+    progress = None if args.quiet or not lead else Progress().start()
+    try:
+        return run_and_report(args, timeline, progress)
+    finally:
+        if progress is not None:
+            progress.close()
+
+
+def run_and_report(args: argparse.Namespace, timeline: Timeline,
+                    progress: Progress | None) -> int:
+    """:func:`cmd_run`'s work, each phase timed on ``timeline`` and shown on ``progress``."""
+
+    def phase(name: str):
+        if progress is not None:
+            progress(name.replace("_", "-"), 0.0)
+        return timeline.phase(name)
+
+    with phase("load"):
+        info = map_for_run(args)
+    if args.path_out and (info.frame is None or not info.frame.has_metres):
+        raise JaxgaError(f"cannot write --path-out {args.path_out}: the map has no resolution "
+                         "and origin (a ROS map_server .yaml has them); --json has the path "
+                         "in cells")
+    result = api.run(
+        args.preset, info, seeds=args.seeds, generations=args.generations,
+        corner_rule=args.corner_rule, variant=args.variant, sets=args.set or (),
+        progress=progress, population_capacity=args.population_capacity,
+        size_class=args.size_class, any_angle_budget=None if args.exact_optimum else "auto",
+    )
+    for key, seconds in result.timing.items():
+        if key != "total_s":
+            timeline.add(key[:-2], seconds)
+    if not_lead(f"{len(result.seeds)} seeds", timeline.elapsed()):
+        return 0
+    print(result.summary(time=False))
+    curves = None
+    if args.smooth and result.success.any():
+        with phase("smooth"):
+            curves = smooth_runs(result, info.grid)
+        print(smooth_summary(result, curves))
+    best = best_seed(result)
+    if args.plot:
+        with phase("plot"):
+            curve = None
+            if curves is not None and best is not None and curves[best]:
+                curve = np.asarray(curves[best]["points"])
+            plot_result(result, info.grid, args.plot, curve=curve, info=info)
+        print(f"wrote {args.plot}")
+    if args.path_out and best is not None:
+        with phase("write"):
+            export.write_path(args.path_out, robot_path(result, best, curves))
+        print(f"wrote {args.path_out} (seed {int(result.seeds[best])}, "
+              f"{'smooth curve' if use_curve(curves, best) else 'waypoints'}, metres)")
+    if args.json:
+        with phase("write"):
+            doc = result.to_json()
+            doc["timing"] = timeline.as_dict()  # every phase but this write
+            if curves is not None:
+                for run, curve in zip(doc["runs"], curves):
+                    run["smooth"] = curve_json(curve, result.frame)
+            write_json(args.json, doc)
+    print(time_line(timeline.as_dict()))
+    if not result.success.any():
+        print(f"jaxga: no path: {result.reason}", file=sys.stderr)
+        return EXIT_NO_PATH
+    return 0
+
+
+def process_timeline() -> Timeline:
+    """A timeline that starts at the process's start: its first phase, ``import``, is the
+    interpreter's start and the imports (where the system says when the process began)."""
+    age = process_age()
+    timeline = Timeline()
+    if age is not None:
+        timeline.start -= age
+        timeline.add("import", age)
+    return timeline
+
+
+def best_seed(result) -> int | None:
+    """The successful seed with the shortest post-optimised path, or None."""
+    if not result.success.any():
+        return None
+    return int(np.nanargmin(np.where(result.success, result.length, np.nan)))
+
+
+def use_curve(curves, i: int) -> bool:
+    """Whether seed ``i``'s smooth curve is the path to export: smoothed and certified
+    clear (a curve that fell back to the polyline is the waypoint path)."""
+    return bool(curves is not None and curves[i] and curves[i]["clear"]
+                and not curves[i]["used_fallback"])
+
+
+def robot_path(result, i: int, curves) -> np.ndarray:
+    """Seed ``i``'s path in metres for ``--path-out``: its smooth curve when it has a
+    certified one, else its post-optimised waypoints."""
+    if use_curve(curves, i):
+        return result.frame.to_world(np.asarray(curves[i]["points"], float))
+    return result.world_path(i)
+
+
+def curve_json(curve: dict | None, frame) -> dict | None:
+    """A smooth curve's JSON, with its points, length and clearance in metres too."""
+    if curve is None or frame is None or not frame.has_metres:
+        return curve
+    return {**curve,
+            "points_world": frame.to_world(np.asarray(curve["points"], float)).round(4).tolist(),
+            "length_m": curve["length"] * frame.cell_size,
+            "min_clearance_m": curve["min_clearance"] * frame.cell_size}
+
+
+def smooth_runs(result, grid) -> list[dict | None]:
+    """``jaxga run --smooth``: every successful seed's post-optimised path smoothed into
+    a certified-clear cubic B-spline (:func:`jaxga.smooth.smooth_population`, one
+    vectorised call), as JSON-ready dicts (None for a seed without a path): the dense
+    ``points`` ``[[x, y], ...]``, ``length``, ``max_curvature``, ``min_clearance`` (cells),
+    ``clear`` and ``used_fallback`` (the polyline returned where no clear curve was
+    found)."""
+    ok = np.flatnonzero(result.success)
+    paths = [result.path(int(i)) for i in ok]
+    cap = max(len(p) for p in paths)
+    cells = np.array([[y * grid.width + x for x, y in p] + [p[-1][1] * grid.width + p[-1][0]]
+                      * (cap - len(p)) for p in paths], np.int32)
+    lengths = np.array([len(p) for p in paths], np.int32)
+    res = jax.device_get(smooth_population(grid, jnp.asarray(cells), jnp.asarray(lengths)))
+    out: list[dict | None] = [None] * len(result.seeds)
+    for k, i in enumerate(ok):
+        out[int(i)] = {
+            "points": np.asarray(res.points[k], float).round(4).tolist(),
+            "length": float(res.length[k]), "max_curvature": float(res.max_curvature[k]),
+            "min_clearance": float(res.min_clearance[k]), "clear": bool(res.clear[k]),
+            "used_fallback": bool(res.used_fallback[k]),
+        }
+    return out
+
+
+def smooth_summary(result, curves: list[dict | None]) -> str:
+    """One line on the smoothed paths."""
+    done = [c for c in curves if c is not None]
+    curved = [c for c in done if not c["used_fallback"]]
+    line = (f"smooth      {len(curved)} of {len(done)} paths smoothed into a certified clear "
+            "curve")
+    if curved:
+        ratio = np.mean([c["length"] for c in curved]) / np.nanmean(
+            [result.length[i] for i, c in enumerate(curves) if c and not c["used_fallback"]])
+        line += (f" (mean length {np.mean([c['length'] for c in curved]):.4f}, "
+                 f"{100 * (ratio - 1):+.2f} % against the polylines; max curvature "
+                 f"{max(c['max_curvature'] for c in curved):.3f}, min clearance "
+                 f"{min(c['min_clearance'] for c in curved):.3f} cells)")
+    if len(curved) < len(done):
+        line += f"; {len(done) - len(curved)} kept as polylines (no clear curve found)"
+    return line
+
+
+def add_parser(commands: argparse._SubParsersAction) -> None:
+    """Add the ``run`` command to ``jaxga``'s parser."""
+    p = commands.add_parser("run", help="run a preset on a map for many seeds")
+    add_preset_arguments(p)
+    p.add_argument("--seeds", type=int, default=10, help="number of seeded runs (default 10)")
+    p.add_argument("--population-capacity", type=int, metavar="K",
+                   help="individuals per island of the compiled program (default: "
+                   "population.size; not the key population.capacity, the cells of a "
+                   "path); a run's random numbers depend on it: give a DOE's or sweep's "
+                   "population_capacity to repeat one of its points bit for bit")
+    p.add_argument("--size-class", action=argparse.BooleanOptionalAction, default=None,
+                   help=SIZE_CLASS_HELP)
+    p.add_argument("--exact-optimum", action="store_true", help=EXACT_HELP)
+    p.add_argument("--json", metavar="OUT", help="write every run as JSON (paths in cells "
+                   "and, on a map with a resolution, in metres)")
+    p.add_argument("--path-out", metavar="FILE.csv|FILE.yaml",
+                   help="write the best seed's path in metres (a map with a resolution): "
+                   "x,y rows (.csv) or a nav_msgs/Path in YAML (.yaml), frame 'map', "
+                   "yaw along the path; the smooth curve with --smooth")
+    p.add_argument("--plot", metavar="OUT.png", help="plot the map, best paths and convergence")
+    p.add_argument("--smooth", action="store_true",
+                   help="smooth every path found into a certified-clear cubic B-spline "
+                   "(jaxga.smooth): a summary line, each run's curve in the JSON, the best "
+                   "seed's in the plot")
+    p.add_argument("--quiet", action="store_true", help="no progress bar")
+    add_parallel_arguments(p)
+    p.set_defaults(func=cmd_run, compiles=True)
