@@ -775,9 +775,35 @@ def run_doe(
         NoPathError: the goal is unreachable, or no seed of any design point found a
             path (nothing to fit; the message carries the runs' reason).
     """
-
-
     t_start = time.perf_counter()
+    response, direction = _checked_response(response, direction)
+    plan = _plan(preset, grid, factors, design, seeds, generations, corner_rule, variant,
+                 sets, checkpoint, block, progress, overrides)
+    results, reasons, sweep_s, compile_s = _run_points(plan, preset, grid, progress)
+    all_responses = {k: np.stack([r[k] for r in results]) for k in results[0]}
+    if not np.any(all_responses["success"]):  # nothing to fit: say why
+        raise NoPathError("no seed of any design point found a path"
+                          + "".join(f"; {r}" for r in reasons[:2]))
+    coef = fit_linear(plan.coded, point_means(all_responses[response]))
+    best, predicted = predicted_best(coef, direction)
+    t0 = time.perf_counter()
+    confirm, confirm_compile_s = _confirm(plan, preset, grid, best)
+    confirm_s = time.perf_counter() - t0
+    return DoeResult(
+        preset=plan.config["name"], map_name=plan.map_name, design=design,
+        response=response, direction=direction, factors=plan.factors, seeds=plan.seeds,
+        coded=plan.coded, responses=all_responses[response], all_responses=all_responses,
+        coefficients=coef, best_coded=best, predicted=predicted,
+        confirmation=confirm[response], confirmation_all=confirm,
+        timing={"compile_s": compile_s + confirm_compile_s, "sweep_s": sweep_s,
+                "confirmation_s": confirm_s, "total_s": time.perf_counter() - t_start},
+        config=plan.config, population_capacity=plan.capacity,
+        corner_rule=plan.loaded.corner_rule,
+    )
+
+
+def _checked_response(response: Any, direction: str | None) -> tuple[str, str]:
+    """The response's name (an alias replaced) and the direction of its optimum."""
     response = RESPONSE_ALIASES.get(response, response) if isinstance(response, str) \
         else response
     if response not in RESPONSES:
@@ -785,7 +811,32 @@ def run_doe(
     direction = direction or RESPONSES[response]
     if direction not in ("max", "min"):
         raise ParameterError(f"direction must be 'max' or 'min', got {direction!r}")
+    return response, direction
 
+
+@dataclasses.dataclass(frozen=True)
+class _DoePlan:
+    """A designed experiment, checked before any point runs: its configuration and map,
+    the design (coded levels and the points' settings), the seeds, the points per
+    compiled call, the options every call shares and the checkpoint."""
+
+    config: Config
+    loaded: Grid
+    map_name: str
+    factors: tuple[Factor, ...]
+    coded: np.ndarray
+    points: list[dict]
+    capacity: int
+    block: int
+    seeds: np.ndarray
+    common: dict
+    checkpoint: _Checkpoint | None
+
+
+def _plan(preset, grid, factors, design, seeds, generations, corner_rule, variant, sets,
+          checkpoint, block, progress, overrides) -> _DoePlan:
+    """Check every argument and every design point's key combination; the
+    :class:`_DoePlan` of :func:`run_doe`."""
     sets = as_sets(sets)  # one string is one set
     if not isinstance(factors, (str, bytes, Mapping)) and isinstance(factors, Iterable):
         factors = tuple(factors)
@@ -802,8 +853,8 @@ def run_doe(
             block = as_integer(block)
         except TypeError:
             raise ParameterError(f"block must be an integer >= 1, got {block!r}") from None
-    config, loaded, map_name, _ = load_problem(preset, grid, corner_rule, variant, sets, overrides,
-                                            generations)
+    config, loaded, map_name, _ = load_problem(preset, grid, corner_rule, variant, sets,
+                                               overrides, generations)
     check_factors(config, factors)
     overridden = overridden_keys(overrides, sets)
     both = [f.name for f in factors if f.name in overridden]
@@ -812,27 +863,24 @@ def run_doe(
                              "factor's levels would replace the override")
     coded = design_array(design, len(factors))
     points = design_points(factors, coded)
-    n_points = len(points)
     point_configs = [config.override(p) for p in points]
     for c in point_configs:  # key combinations of every point, before any point runs
         check_combination(c)
     capacity = checked_capacity(point_configs, None)  # the largest size
     if block is None:
-        block = 1 if checkpoint is not None else n_points
+        block = 1 if checkpoint is not None else len(points)
     if block < 1:
         raise ParameterError(f"block must be >= 1 design point, got {block}")
-    block = min(int(block), n_points)
+    block = min(int(block), len(points))
     # only a block of points is in memory at a time (between blocks, a few floats per seed)
     largest, _ = build(config.override({"population.size": capacity}), loaded)
     seed_arr = seed_list(seeds, lambda n: api.check_result_memory(n * block, largest))
     shortest_path(loaded).raise_if_missing()  # nothing to fit: say why (NoPathError)
-
     common = dict(generations=generations, corner_rule=corner_rule, variant=variant,
                   sets=tuple(sets), population_capacity=capacity, **overrides)
-
     ckpt = None
     if checkpoint is not None:
-        manifest = {
+        ckpt = _Checkpoint(checkpoint, {
             "format": 1,
             "jaxga": jaxga.__version__,
             "jax": jax.__version__,
@@ -844,13 +892,20 @@ def run_doe(
             "seeds": [int(s) for s in seed_arr],
             "block": block,
             "capacity": capacity,
-        }
-        ckpt = _Checkpoint(checkpoint, manifest)
+        })
+    return _DoePlan(config, loaded, map_name, factors, coded, points, capacity, block,
+                    seed_arr, common, ckpt)
 
+
+def _run_points(plan: _DoePlan, preset, grid, progress) -> tuple:
+    """Every design point's per-seed responses, ``block`` points per compiled call, the
+    points a checkpoint holds read instead of run: ``(responses per point, reasons the
+    seeds found no path, sweep seconds, compile seconds)``."""
+    n_points = len(plan.points)
     results: list[dict[str, np.ndarray] | None] = [None] * n_points
     reasons: list[str] = []  # why the seeds of the points found no path
-    if ckpt is not None:
-        for q, saved in enumerate(ckpt.load_points(n_points, len(seed_arr))):
+    if plan.checkpoint is not None:
+        for q, saved in enumerate(plan.checkpoint.load_points(n_points, len(plan.seeds))):
             if saved is not None:
                 results[q] = _decode(saved)
                 if saved["reason"] and saved["reason"] not in reasons:
@@ -859,13 +914,14 @@ def run_doe(
     if progress is not None:
         progress(done, n_points)
     sweep_s = compile_s = 0.0
-    for b0 in range(0, n_points, block):
-        idx = list(range(b0, min(b0 + block, n_points)))
+    for b0 in range(0, n_points, plan.block):
+        idx = list(range(b0, min(b0 + plan.block, n_points)))
         if all(results[q] is not None for q in idx):
             continue
-        padded = idx + [idx[-1]] * (block - len(idx))  # same run count in every call
+        padded = idx + [idx[-1]] * (plan.block - len(idx))  # same run count in every call
         t0 = time.perf_counter()
-        out = api.sweep(preset, grid, [points[q] for q in padded], seed_arr, **common)
+        out = api.sweep(preset, grid, [plan.points[q] for q in padded], plan.seeds,
+                        **plan.common)
         sweep_s += time.perf_counter() - t0
         compile_s += out[0].timing["compile_s"]
         for q, res in zip(idx, out):
@@ -873,40 +929,24 @@ def run_doe(
                 results[q] = seed_responses(res)
                 if res.reason and res.reason not in reasons:
                     reasons.append(res.reason)
-                if ckpt is not None:
-                    ckpt.save_point(q, results[q], res.reason)
+                if plan.checkpoint is not None:
+                    plan.checkpoint.save_point(q, results[q], res.reason)
                 done += 1
         if progress is not None:
             progress(done, n_points)
+    return results, reasons, sweep_s, compile_s
 
-    all_responses = {k: np.stack([r[k] for r in results]) for k in results[0]}
-    if not np.any(all_responses["success"]):  # nothing to fit: say why
-        raise NoPathError("no seed of any design point found a path"
-                          + "".join(f"; {r}" for r in reasons[:2]))
-    y = point_means(all_responses[response])
-    coef = fit_linear(coded, y)
-    best, predicted = predicted_best(coef, direction)
 
-    saved = ckpt.load_confirmation(best, len(seed_arr)) if ckpt is not None else None
-    t0 = time.perf_counter()
+def _confirm(plan: _DoePlan, preset, grid, best: np.ndarray) -> tuple[dict, float]:
+    """The confirmation run at the predicted best combination (AGACD 5.2.1), with the
+    design's seeds, or the checkpoint's: ``(per-seed responses, compile seconds)``."""
+    saved = (plan.checkpoint.load_confirmation(best, len(plan.seeds))
+             if plan.checkpoint is not None else None)
     if saved is not None:
-        confirm = _decode(saved)
-    else:
-        best_point = {f.name: f.value(int(c)) for f, c in zip(factors, best)}
-        res = api.sweep(preset, grid, [best_point], seed_arr, **common)[0]
-        compile_s += res.timing["compile_s"]
-        confirm = seed_responses(res)
-        if ckpt is not None:
-            ckpt.save_confirmation(best, confirm)
-    confirm_s = time.perf_counter() - t0
-
-    return DoeResult(
-        preset=config["name"], map_name=map_name, design=design, response=response,
-        direction=direction, factors=factors, seeds=seed_arr, coded=coded,
-        responses=all_responses[response], all_responses=all_responses,
-        coefficients=coef, best_coded=best, predicted=predicted,
-        confirmation=confirm[response], confirmation_all=confirm,
-        timing={"compile_s": compile_s, "sweep_s": sweep_s, "confirmation_s": confirm_s,
-                "total_s": time.perf_counter() - t_start},
-        config=config, population_capacity=capacity, corner_rule=loaded.corner_rule,
-    )
+        return _decode(saved), 0.0
+    best_point = {f.name: f.value(int(c)) for f, c in zip(plan.factors, best)}
+    res = api.sweep(preset, grid, [best_point], plan.seeds, **plan.common)[0]
+    confirm = seed_responses(res)
+    if plan.checkpoint is not None:
+        plan.checkpoint.save_confirmation(best, confirm)
+    return confirm, res.timing["compile_s"]

@@ -22,23 +22,35 @@ def ga():
     return jaxga.GA("sga", MAP, generations=GENERATIONS)
 
 
-def test_a_run_of_the_pure_core_is_seed_for_seed_jaxga_run(ga):
+@pytest.fixture(scope="module")
+def reference():
+    """Seeds 0-3 of ``jaxga.run``: what the pure core must give bit for bit."""
+    ref = jaxga.run("sga", MAP, seeds=SEEDS, generations=GENERATIONS)
+    assert ref.success.all()
+    return ref
+
+
+def assert_seed_for_seed(out: dict, ref) -> None:
+    """``GA.finish`` outputs (one row per seed) equal ``ref``'s runs: success, fitness,
+    node counts, failures and the post-optimised paths."""
+    for key, expected in (("success", ref.success), ("fitness", ref.fitness),
+                          ("n_cells", ref.n_cells), ("raw_n_cells", ref.raw_n_cells),
+                          ("failures", ref.failures)):
+        np.testing.assert_array_equal(np.asarray(out[key]), expected, err_msg=key)
+    for i in range(len(ref.seeds)):
+        n = int(ref.n_cells[i])
+        np.testing.assert_array_equal(np.asarray(out["cells"][i, :n]), ref.cells[i, :n])
+
+
+def test_a_run_of_the_pure_core_is_seed_for_seed_jaxga_run(ga, reference):
     """``GA.run(PRNGKey(s))`` under the user's ``jit(vmap)`` gives seed ``s`` of
     ``jaxga.run``, path for path (sga needs the distance fields its fallback initialiser
     steers by: the constructor attaches them)."""
     keys = jax.vmap(jax.random.PRNGKey)(jnp.asarray(SEEDS, jnp.uint32))
     out = jax.jit(jax.vmap(ga.run, (0, None)))(keys, ga.default_params)
-    ref = jaxga.run("sga", MAP, seeds=SEEDS, generations=GENERATIONS)
-    assert ref.success.all()
-    np.testing.assert_array_equal(np.asarray(out["success"]), ref.success)
-    np.testing.assert_array_equal(np.asarray(out["fitness"]), ref.fitness)
-    np.testing.assert_array_equal(np.asarray(out["n_cells"]), ref.n_cells)
-    np.testing.assert_array_equal(np.asarray(out["raw_n_cells"]), ref.raw_n_cells)
-    for i in range(len(SEEDS)):
-        n = int(ref.n_cells[i])
-        np.testing.assert_array_equal(np.asarray(out["cells"][i, :n]), ref.cells[i, :n])
+    assert_seed_for_seed(out, reference)
     np.testing.assert_array_equal(np.asarray(out["convergence_generation"]),
-                                  ref.convergence_generation)
+                                  reference.convergence_generation)
 
 
 def test_init_step_and_a_users_scan_over_keys_and_a_rate(ga):
@@ -98,7 +110,7 @@ def test_vmap_over_three_mutation_rates_equals_three_separate_runs(ga):
         len({int(x) for x in np.asarray(out["failures"][:, 1])}) > 1  # the rate mattered
 
 
-def test_a_users_own_scan_over_step_is_jaxga_run_seed_for_seed(ga):
+def test_a_users_own_scan_over_step_is_jaxga_run_seed_for_seed(ga, reference):
     """The user's loop: ``init`` on ``fold_in(key, 0)`` is the initial population of
     ``GA.init(key)``, then a ``lax.scan`` over ``ga.step`` with generation ``t``'s key
     ``fold_in(fold_in(key, 1), t)``, then ``finish``: seeds 0-3 of ``jaxga.run``, bit for
@@ -116,11 +128,4 @@ def test_a_users_own_scan_over_step_is_jaxga_run_seed_for_seed(ga):
         return ga.finish(state, params)
 
     keys = jax.vmap(jax.random.PRNGKey)(jnp.asarray(SEEDS, jnp.uint32))
-    out = jax.jit(jax.vmap(users_run))(keys)
-    ref = jaxga.run("sga", MAP, seeds=SEEDS, generations=GENERATIONS)
-    np.testing.assert_array_equal(np.asarray(out["fitness"]), ref.fitness)
-    np.testing.assert_array_equal(np.asarray(out["n_cells"]), ref.n_cells)
-    np.testing.assert_array_equal(np.asarray(out["failures"]), ref.failures)
-    for i in range(len(SEEDS)):
-        n = int(ref.n_cells[i])
-        np.testing.assert_array_equal(np.asarray(out["cells"][i, :n]), ref.cells[i, :n])
+    assert_seed_for_seed(jax.jit(jax.vmap(users_run))(keys), reference)
