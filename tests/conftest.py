@@ -5,20 +5,9 @@ from __future__ import annotations
 import os
 from pathlib import Path
 
-TEST_XLA_FLAGS = "--xla_backend_optimization_level=0 --xla_llvm_disable_expensive_passes=true"
-"""XLA:CPU's LLVM backend without optimisation for the suite (decision 036): most of the
-suite's time is compiling small programs that then run for milliseconds, and unoptimised
-machine code compiles about a third faster. XLA's own HLO passes still run; floating point
-keeps IEEE semantics either way (no fast math). ``JAXGA_TEST_XLA_OPTIMISED=1`` runs the
-suite with the compiler's defaults, as users' programs are compiled. Set before JAX starts
-its backend, in this process and, through the environment, in the commands it starts."""
-if os.environ.get("JAXGA_TEST_XLA_OPTIMISED") != "1" and \
-        TEST_XLA_FLAGS not in os.environ.get("XLA_FLAGS", ""):
-    os.environ["XLA_FLAGS"] = f"{os.environ.get('XLA_FLAGS', '')} {TEST_XLA_FLAGS}".strip()
-
-import jax  # noqa: E402 - after XLA_FLAGS
-import pytest  # noqa: E402
-from hypothesis import HealthCheck, settings  # noqa: E402
+import jax
+import pytest
+from hypothesis import HealthCheck, settings
 
 CACHE_DIR = Path(os.environ.get("JAXGA_TEST_JAX_CACHE", Path(__file__).parent / ".jax_cache"))
 jax.config.update("jax_compilation_cache_dir", str(CACHE_DIR))

@@ -45,8 +45,9 @@ def unstarted_results(*, config, configs, points, map_name, grid, seed_arr, algo
 def warn_unfilled(unfilled: np.ndarray, init_rate: np.ndarray, capacity: int,
                   config) -> None:
     """Warn (:class:`~jaxga.core.errors.InitialisationWarning`) when runs whose initialiser made
-    some paths still started with copies in empty slots (``jaxga.operators.init.initialise``
-    fills slots left empty after ``init.max_tries`` attempts per individual with copies).
+    some paths still started with copies in empty slots
+    (``jaxga.operators.init.initialise_population`` fills slots left empty after
+    ``init.max_tries`` attempts per individual with copies).
     Runs whose initialiser made no path are failures with a reason instead."""
     short = (unfilled > 0) & (init_rate > 0)
     if not short.any():

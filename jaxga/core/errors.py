@@ -32,7 +32,7 @@ class ParameterError(JaxgaError):
 class InitialisationWarning(UserWarning):
     """The initialiser filled only part of a population within its budget of attempts.
 
-    :func:`jaxga.operators.init.initialise` then fills the empty slots with copies of the
+    :func:`jaxga.operators.init.initialise_population` then fills the empty slots with copies of the
     individuals it made, so the run still works, on fewer distinct individuals than asked for.
     """
 

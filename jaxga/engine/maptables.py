@@ -36,7 +36,7 @@ class MapTables:
 
     Attributes:
         nbr: ``int32[8 H W]``, neighbour ``d`` of cell ``p`` at ``8 p + d``
-            (:func:`jaxga.operators.init._move_tables`).
+            (:func:`jaxga.operators.init.common.move_tables`).
         legal: ``bool[8 H W]``, whether that move is legal.
         masks: ``int32[H W]``, free neighbours and the cell itself as bits
             (:func:`jaxga.operators.repair.neighbour_masks`).

@@ -73,7 +73,6 @@ __all__ = [
     "cut_and_check",
     "heterologous",
     "heterologous_pairs",
-    "with_probability",
 ]
 
 _U32 = jnp.uint32
@@ -809,29 +808,6 @@ def adaptive_pair_probability(
                                           schedule=schedule)
 
 
-def with_probability(op: Callable) -> Callable:
-    """Gate a pair operator: ``op_p(key, grid, c1, l1, c2, l2, pc, *extra)``.
-
-    With probability ``pc`` (a scalar for this pair) the pair goes through
-    ``op(key', grid, c1, l1, c2, l2, *extra)``; otherwise the parents are returned
-    unchanged with ``failed = 0``. One uniform per pair decides (``u < pc``), drawn from
-    a sub-key independent of the operator's own.
-    """
-
-    def op_p(key, grid, c1, l1, c2, l2, pc, *extra):
-        k_gate, k_op = jax.random.split(key)
-        do = jax.random.uniform(k_gate, (), F32) < jnp.asarray(pc, F32)
-        n1, m1, n2, m2, failed = op(k_op, grid, c1, l1, c2, l2, *extra)
-        return (
-            jnp.where(do, n1, c1), jnp.where(do, m1, l1),
-            jnp.where(do, n2, c2), jnp.where(do, m2, l2),
-            jnp.where(do, jnp.asarray(failed, I32), 0),
-        )
-
-    op_p.__name__ = getattr(op, "__name__", "op") + "_with_probability"
-    return op_p
-
-
 def crossover_population(
     op: Callable, *, in_axes_extra: tuple = (), dense: bool = False, splicing: bool = False
 ) -> Callable:
@@ -845,7 +821,8 @@ def crossover_population(
     (default: all mapped along axis 0). With an odd population the last individual
     passes through. Only the pairs that are crossed are computed
     (:func:`jaxga.operators.lift.over_pairs_gated`); the result is that of
-    ``over_pairs(with_probability(op))``. ``dense=True`` computes every pair and selects
+    every pair crossed and kept with probability ``pc``. ``dense=True`` computes every
+    pair and selects
     (same result; cheaper at the papers' high crossover rates). ``splicing=True`` (with
     ``dense``; operators with the registry trait ``splicing`` only) computes the pairs on
     twice the window (:func:`jaxga.operators.lift.spliced_pairs_map`) when every parent fits it.

@@ -118,12 +118,13 @@ def with_guide(grid: Grid) -> Grid:
     """``grid`` with its :class:`Guide` attached (``grid.guide``), computed on the host.
 
     Every function that steers by the fields (:func:`jaxga.operators.init.field_walk`, the
-    fallback of :func:`jaxga.operators.init.initialise`, the field connection of the repairs)
+    fallback of :func:`jaxga.operators.init.initialise_population`, the field connection
+    of the repairs)
     reads ``grid.guide``. The guide belongs to the grid's map, endpoints and corner rule:
     :meth:`Grid.replace` drops it, so a grid with other endpoints gets its own. (A grid
     changed with ``dataclasses.replace`` keeps a stale guide: its field walks then head
-    for the old goal, and :func:`jaxga.operators.init.initialise` counts them as failures, never
-    as paths.)
+    for the old goal, and :func:`jaxga.operators.init.initialise_population` counts them
+    as failures, never as paths.)
     """
     if grid.guide is not None:
         return grid

@@ -250,14 +250,15 @@ def over_individuals_gated(
     ``i`` goes through ``op`` with probability ``prob[i]`` (a scalar or ``f32[P]``) and is
     otherwise unchanged; ``n_failed`` counts failures of applied operators only. The keys
     are those of :func:`over_individuals`, each split into a gate key and an operator
-    key, so the result equals ``over_individuals(mutation.with_probability(op))``; the
-    work is done only for the applied individuals (:func:`gated_map`).
+    key, so the result equals applying ``op`` to every individual and keeping it with
+    probability ``pm``; the work is done only for the applied individuals
+    (:func:`gated_map`).
     ``in_axes_extra``: 0 (per individual) or None (shared) for each extra argument.
 
     With ``alternative``, the signature is ``lifted(key, grid, pop, prob, use_op,
     *extra)``: an applied individual goes through ``op`` where ``use_op`` (bool[P]) and
     through ``alternative`` elsewhere, with the same key, as
-    ``mutation.either(op, alternative)`` does, but each operator is computed only for
+    choosing between the two per individual does, but each operator is computed only for
     its own individuals (Zhu & Pan's half one-point, half range mutation).
 
     ``shrinking=True`` (static): ``op`` (and ``alternative``) never lengthen a path and
@@ -309,7 +310,7 @@ def over_pairs_gated(
     ``(0, 1), (2, 3), ...``; pair ``k`` goes through ``op`` with probability ``prob[k]``
     (scalar or ``f32[P // 2]``); an odd last individual passes through. Keys as in
     :func:`over_pairs`, each split into a gate and an operator key (the result equals
-    ``over_pairs(crossover.with_probability(op))``); only applied pairs are computed.
+    crossing every pair and keeping it with probability ``pc``); only applied pairs are computed.
     With ``alternative``: ``lifted(key, grid, pop, prob, use_op, *extra)``, pair ``k``
     goes through ``op`` where ``use_op[k]`` else through ``alternative`` (Zhu & Pan's
     half one-point, half column crossover), each computed only for its own pairs.

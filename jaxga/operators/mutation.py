@@ -28,12 +28,12 @@ starts at ``cells[0]``, ends at ``cells[length-1]``, is loop-free if the input i
 re-padded (docs, "the pure core"). Continuous operators keep a continuous path continuous under the
 grid's corner rule; waypoint operators keep a feasible path feasible.
 
-Probabilities: :func:`with_probability` applies an operator with a per-individual
-probability (:func:`mutation_population` lifts that to a population, as
-:func:`jaxga.operators.crossover.crossover_population` does for pairs),
-:func:`adaptive_mutation_probability` is AGACD's eq. 28-29, and
-:func:`either` / :func:`split_half` implement Zhu & Pan's "half the population through
-one operator, half through the other".
+Probabilities: :func:`jaxga.operators.lift.over_individuals_gated` applies an operator
+with a per-individual probability, computing only the individuals it selects (as
+:func:`jaxga.operators.crossover.crossover_population` does for pairs);
+:func:`adaptive_mutation_probability` is AGACD's eq. 28-29, and :func:`split_half` with
+the gated lift's ``alternative`` implements Zhu & Pan's "half the population through one
+operator, half through the other".
 """
 
 from __future__ import annotations
@@ -48,7 +48,7 @@ from jaxga.core.dtypes import I32
 from jaxga.core.errors import ParameterError
 from jaxga.core.grid import DIRECTIONS, Grid, blocked_at, move_legal
 from jaxga.operators.init import directional_walk, field_reconnect
-from jaxga.operators.lift import keep_parent_on_failure, over_individuals_gated
+from jaxga.operators.lift import keep_parent_on_failure
 from jaxga.operators.postprocess import compact, line_of_sight
 from jaxga.operators.repair import concat, connect, splice_loop_free
 
@@ -56,15 +56,12 @@ __all__ = [
     "adaptive_mutation_probability",
     "cut_corners",
     "delete_corner",
-    "either",
-    "mutation_population",
     "neighbour_point",
     "replace_point",
     "point_checked",
     "regrow_segment",
     "segment_sa",
     "split_half",
-    "with_probability",
 ]
 
 _U32 = jnp.uint32
@@ -574,71 +571,6 @@ def adaptive_mutation_probability(
     pm_temp = jnp.where(converged, pm_high, jnp.where(f >= f_avg, scaled, pm_high))
     factor = jnp.exp(t / T) if schedule is None else jnp.asarray(schedule(t), f32)
     return jnp.minimum(f32(1.0), pm_temp * factor)
-
-
-def with_probability(op: Callable) -> Callable:
-    """Apply a per-individual operator with probability ``prob`` (a mutation or crossover rate).
-
-    Returns ``wrapped(key, grid, cells, length, prob, *extra) -> (cells, length,
-    failed)``: with probability ``prob`` (a float32 scalar, traced; per individual when
-    mapped) it returns ``op(sub_key, grid, cells, length, *extra)``, otherwise the input
-    unchanged with ``failed = False``; so the population helper counts only failures of
-    operators that were actually applied. Use with
-    :func:`~jaxga.operators.lift.over_individuals`::
-
-        mutate = over_individuals(with_probability(neighbour_point), in_axes_extra=(0,))
-        pop, n_failed = mutate(key, grid, pop, pm)      # pm: float32[P] (AGACD eq. 29)
-        mutate = over_individuals(with_probability(op), in_axes_extra=(None,))
-        pop, n_failed = mutate(key, grid, pop, 0.2)     # one rate for all (IMGA)
-
-    Under ``vmap`` the operator is evaluated for every individual and the result
-    selected (XLA has no per-lane branch), so the cost does not fall with ``prob``.
-    """
-
-    def wrapped(key, grid, cells, length, prob, *extra):
-        k_coin, k_op = jax.random.split(key)
-        apply = jax.random.uniform(k_coin, (), jnp.float32) < jnp.asarray(prob, jnp.float32)
-        new_c, new_l, failed = op(k_op, grid, cells, length, *extra)
-        out_c, out_l = keep_parent_on_failure(~apply, new_c, new_l, cells, length)
-        return out_c, out_l, apply & failed
-
-    wrapped.__name__ = "with_probability_" + getattr(op, "__name__", "op")
-    return wrapped
-
-
-def mutation_population(op: Callable, *, in_axes_extra: tuple = ()) -> Callable:
-    """Lift a mutation with a mutation probability to a population.
-
-    Returns ``lifted(key, grid, pop, pm, *extra) -> (Population, n_failed)``: individual
-    ``i`` is mutated with probability ``pm[i]``; ``pm`` is a scalar (IMGA 0.2) or
-    ``float32[P]`` (AGACD, :func:`adaptive_mutation_probability`). ``in_axes_extra`` are
-    the vmap axes of ``extra`` (default: all mapped along axis 0). The counterpart of
-    :func:`jaxga.operators.crossover.crossover_population`; equal to
-    ``over_individuals(with_probability(op))`` but only the mutated individuals are
-    computed (:func:`jaxga.operators.lift.over_individuals_gated`). ``n_failed`` counts
-    failures of applied mutations only.
-    """
-    return over_individuals_gated(op, in_axes_extra=in_axes_extra)
-
-
-def either(op_a: Callable, op_b: Callable) -> Callable:
-    """Choose between two operators per individual: ``op_a`` where ``use_a``, else ``op_b``.
-
-    Returns ``wrapped(key, grid, cells, length, use_a, *extra) -> (cells, length,
-    failed)``.
-
-    Both operators receive the same key and extras; under ``vmap`` both are evaluated
-    (see :func:`with_probability`). With :func:`split_half` this is Zhu & Pan's step 3:
-    "randomly selects half of the population to use the one-point mutation and the other
-    half to use the range mutation".
-    """
-
-    def wrapped(key, grid, cells, length, use_a, *extra):
-        ca, la, fa = op_a(key, grid, cells, length, *extra)
-        cb, lb, fb = op_b(key, grid, cells, length, *extra)
-        return jnp.where(use_a, ca, cb), jnp.where(use_a, la, lb), jnp.where(use_a, fa, fb)
-
-    return wrapped
 
 
 def split_half(key: jax.Array, n: int) -> jax.Array:

@@ -18,7 +18,7 @@ path's ``length`` positions, not its capacity ``L`` (under ``vmap``, the longest
 Deterministic functions take no key and return ``(cells, length)``;
 :func:`simplify_adjacent` is a per-individual operator
 ``(key, grid, cells, length) -> (cells, length, failed)`` for
-:func:`jaxga.operators.lift.over_individuals` and :func:`jaxga.operators.mutation.with_probability`.
+:func:`jaxga.operators.lift.over_individuals_gated`.
 """
 
 from __future__ import annotations

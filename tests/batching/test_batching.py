@@ -29,6 +29,7 @@ from jaxga.operators.lift import (
 )
 from jaxga.operators.repair import concat
 from jaxga.reference.optima import shortest_path
+from tests.plain_lifts import either, pair_with_probability, with_probability
 
 
 @pytest.fixture(scope="module")
@@ -55,7 +56,7 @@ def _same(a, b):
 _GATED_INDIVIDUALS = jax.jit(
     lambda k, g, p, prob: over_individuals_gated(mu.neighbour_point)(k, g, p, prob))
 _PLAIN_INDIVIDUALS = jax.jit(
-    lambda k, g, p, prob: over_individuals(mu.with_probability(mu.neighbour_point))(
+    lambda k, g, p, prob: over_individuals(with_probability(mu.neighbour_point))(
         k, g, p, jnp.full((p.size,), prob)))
 
 
@@ -72,7 +73,7 @@ def test_gated_alternative_equals_either(setting):
     key = jax.random.PRNGKey(3)
     use_a = jnp.arange(pop.size) % 3 == 0
     gated = over_individuals_gated(mu.replace_point, alternative=mu.regrow_segment)
-    plain = over_individuals(mu.with_probability(mu.either(mu.replace_point, mu.regrow_segment)))
+    plain = over_individuals(with_probability(either(mu.replace_point, mu.regrow_segment)))
     a = jax.jit(lambda k: gated(k, grid, pop, 0.8, use_a))(key)
     b = jax.jit(lambda k: plain(k, grid, pop, jnp.full((pop.size,), 0.8), use_a))(key)
     assert _same(a, b)
@@ -95,7 +96,7 @@ def test_gated_pairs_with_alternative_equal_compute_all(setting):
         return c2, l2, c1, l1, jnp.int32(0)
 
     gated = over_pairs_gated(cx.common_point, alternative=swap)
-    plain = over_pairs(cx.with_probability(_either_pair(cx.common_point, swap)))
+    plain = over_pairs(pair_with_probability(_either_pair(cx.common_point, swap)))
     a = jax.jit(lambda k: gated(k, grid, pop, 0.6, use_a))(key)
     b = jax.jit(lambda k: plain(k, grid, pop, jnp.full((pop.size // 2,), 0.6), use_a))(key)
     assert _same(a, b)
@@ -165,7 +166,7 @@ _DENSE_PAIRS = jax.jit(
 _GATED_PAIRS = jax.jit(
     lambda k, g, p, prob: cx.crossover_population(cx.common_point)(k, g, p, prob))
 _PLAIN_PAIRS = jax.jit(
-    lambda k, g, p, prob: over_pairs(cx.with_probability(cx.common_point))(
+    lambda k, g, p, prob: over_pairs(pair_with_probability(cx.common_point))(
         k, g, p, jnp.full((p.size // 2,), prob)))
 
 

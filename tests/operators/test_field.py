@@ -197,8 +197,8 @@ def _never(key, grid, capacity):
 def test_the_fallback_fills_exactly_the_slots_the_initialiser_left_empty(init_fn):
     grid = with_guide(rooms_map(24, 24, 5, room_size=5, corner_rule="strict"))
     key = jax.random.PRNGKey(3)
-    pop0, st0 = I.initialise(key, grid, init_fn, 24, FIELD_CAP, max_tries=1)
-    pop1, st1 = I.initialise(key, grid, init_fn, 24, FIELD_CAP, max_tries=1,
+    pop0, st0 = initialise(key, grid, init_fn, 24, FIELD_CAP, max_tries=1)
+    pop1, st1 = initialise(key, grid, init_fn, 24, FIELD_CAP, max_tries=1,
                              fallback=I.field_walk)
     valid0, valid1 = np.asarray(st0.valid), np.asarray(st1.valid)
     assert valid1.all() and int(st1.n_failed) == 0
@@ -215,8 +215,8 @@ def test_the_fallback_fills_exactly_the_slots_the_initialiser_left_empty(init_fn
 def test_a_full_population_is_the_same_with_or_without_the_fallback():
     grid = with_guide(random_map(24, 24, 0.1, 4, corner_rule="free"))
     key = jax.random.PRNGKey(5)
-    pop0, st0 = I.initialise(key, grid, I.directional, 16, FIELD_CAP, max_tries=50)
-    pop1, st1 = I.initialise(key, grid, I.directional, 16, FIELD_CAP, max_tries=50,
+    pop0, st0 = initialise(key, grid, I.directional, 16, FIELD_CAP, max_tries=50)
+    pop1, st1 = initialise(key, grid, I.directional, 16, FIELD_CAP, max_tries=50,
                              fallback=I.field_walk)
     assert np.asarray(st0.valid).all() and int(st1.from_fallback) == 0
     np.testing.assert_array_equal(np.asarray(pop0.cells), np.asarray(pop1.cells))
@@ -227,7 +227,7 @@ def test_the_fallback_cannot_fill_an_unreachable_goal():
     b = np.zeros((12, 12), bool)
     b[6, :] = True
     grid = with_guide(Grid.create(b))
-    _, stats = I.initialise(jax.random.PRNGKey(0), grid, I.random_walk, 8, FIELD_CAP,
+    _, stats = initialise(jax.random.PRNGKey(0), grid, I.random_walk, 8, FIELD_CAP,
                             max_tries=2, fallback=I.field_walk)
     assert int(stats.n_failed) == 8 and int(stats.from_fallback) == 0
 
@@ -265,6 +265,7 @@ def test_the_automatic_capacity_fits_the_problem():
 from jaxga.core.objectives import sga as sga_fitness  # noqa: E402
 from jaxga.operators import crossover as CX  # noqa: E402
 from jaxga.operators import mutation as MU  # noqa: E402
+from tests.plain_lifts import initialise  # noqa: E402
 from tests.strategies import CAP, grids_and_parents  # noqa: E402
 
 

@@ -26,6 +26,7 @@ from jaxga.config import registry
 from jaxga.maps import legal_moves, random_map
 from jaxga.operators import init as I
 from jaxga.operators.guide import with_guide
+from tests.plain_lifts import initialise
 from tests.strategies import CAP, SIZE, check_paths, grids
 
 NAMES = registry.names("init")
@@ -426,7 +427,7 @@ P = 24
 
 
 def test_initialise_reports_total_failure():
-    pop, st_ = I.initialise(jax.random.PRNGKey(0), _walled(), I.directional, P, CAP, max_tries=3)
+    pop, st_ = initialise(jax.random.PRNGKey(0), _walled(), I.directional, P, CAP, max_tries=3)
     assert int(st_.n_failed) == P and not np.asarray(st_.valid).any()
     assert int(st_.successes) == 0 and float(st_.success_rate) == 0.0
     assert int(st_.attempts) == 3 * P
@@ -437,9 +438,9 @@ def test_initialise_reports_total_failure():
 
 def test_initialise_determinism_and_validity():
     grid = random_map(SIZE, SIZE, 0.25, 17, corner_rule="no_squeeze")
-    a, sa = I.initialise(jax.random.PRNGKey(5), grid, I.directional, P, CAP)
-    b, sb = I.initialise(jax.random.PRNGKey(5), grid, I.directional, P, CAP)
-    c, _ = I.initialise(jax.random.PRNGKey(6), grid, I.directional, P, CAP)
+    a, sa = initialise(jax.random.PRNGKey(5), grid, I.directional, P, CAP)
+    b, sb = initialise(jax.random.PRNGKey(5), grid, I.directional, P, CAP)
+    c, _ = initialise(jax.random.PRNGKey(6), grid, I.directional, P, CAP)
     np.testing.assert_array_equal(np.asarray(a.cells), np.asarray(b.cells))
     np.testing.assert_array_equal(np.asarray(a.length), np.asarray(b.length))
     assert int(sa.attempts) == int(sb.attempts)
@@ -459,7 +460,7 @@ def test_initialise_redraws_and_reports_the_success_rate():
     _, _, ok = direct(jax.random.split(jax.random.PRNGKey(99), 4000))
     p = float(np.mean(np.asarray(ok)))
     assert 0.02 < p < 0.6, p  # single attempts often fail on this map
-    pop, st_ = I.initialise(jax.random.PRNGKey(1), grid, I.random_walk, P, CAP, max_tries=200)
+    pop, st_ = initialise(jax.random.PRNGKey(1), grid, I.random_walk, P, CAP, max_tries=200)
     assert int(st_.n_failed) == 0 and int(st_.rounds) > 1
     assert check_paths(grid, pop.cells, pop.length, st_.valid) == P
     att, succ = int(st_.attempts), int(st_.successes)
@@ -468,7 +469,7 @@ def test_initialise_redraws_and_reports_the_success_rate():
     lo, hi = stats.binom.ppf([1e-6, 1 - 1e-6], att, p)
     assert lo <= succ <= hi, (succ, att, p)
     # Budget too small: the shortfall is reported and flagged, never hidden.
-    pop, st_ = I.initialise(jax.random.PRNGKey(1), grid, I.random_walk, P, CAP, max_tries=1)
+    pop, st_ = initialise(jax.random.PRNGKey(1), grid, I.random_walk, P, CAP, max_tries=1)
     nf = int(st_.n_failed)
     valid = np.asarray(st_.valid)
     assert nf == P - valid.sum() and 0 < nf < P
@@ -500,14 +501,14 @@ def test_initialise_unique_and_verify():
     """unique=True gives distinct paths (IMGA's "nonrepeating chromosomes"); an
     initialiser that claims ok for a broken path is caught by verify."""
     grid = Grid.create(np.zeros((3, 3), bool), corner_rule="free")
-    pop, st_ = I.initialise(jax.random.PRNGKey(0), grid, _one_of_three, 3, 9, unique=True)
+    pop, st_ = initialise(jax.random.PRNGKey(0), grid, _one_of_three, 3, 9, unique=True)
     rows = {tuple(r[:n]) for r, n in zip(np.asarray(pop.cells).tolist(),
                                          np.asarray(pop.length).tolist())}
     assert int(st_.n_failed) == 0 and len(rows) == 3 and int(st_.duplicates) > 0
     assert int(st_.successes) == int(st_.attempts)  # duplicates are not failures
-    pop, _ = I.initialise(jax.random.PRNGKey(0), grid, _one_of_three, 6, 9)
+    pop, _ = initialise(jax.random.PRNGKey(0), grid, _one_of_three, 6, 9)
     assert len({tuple(r) for r in np.asarray(pop.cells).tolist()}) <= 3
-    _, st_ = I.initialise(jax.random.PRNGKey(0), grid, _liar, 4, 9, max_tries=2)
+    _, st_ = initialise(jax.random.PRNGKey(0), grid, _liar, 4, 9, max_tries=2)
     assert int(st_.successes) == 0 and int(st_.n_failed) == 4
 
 
@@ -525,7 +526,8 @@ def test_x64_mode_keeps_int32():
         f = jax.jit(lambda k: [registry.initialiser(n)(k, g, 64) for n in names])
         for name, (c, n, ok) in zip(names, f(jax.random.PRNGKey(0))):
             assert c.dtype == np.int32 and n.dtype == np.int32 and ok.dtype == bool, name
-        pop, st = I.initialise(jax.random.PRNGKey(0), g, I.directional, 4, 64)
+        pop, st = jax.jit(I.initialise_population, static_argnums=(2, 3, 4))(
+            jax.random.PRNGKey(0), g, I.directional, 4, 64)
         assert pop.cells.dtype == np.int32 and pop.length.dtype == np.int32
         assert st.success_rate.dtype == np.float32 and st.attempts.dtype == np.int32
         assert int(st.n_failed) == 0

@@ -26,6 +26,7 @@ from jaxga.core.paths import (
 from jaxga.maps import random_map
 from jaxga.operators import mutation as M
 from jaxga.operators.lift import over_individuals
+from tests.plain_lifts import either, mutation_population, with_probability
 from tests.strategies import CAP, SIZE, grids_and_parents, random_parents
 
 P = 8
@@ -48,7 +49,7 @@ OPS = {
     "cut_corners_knight": (functools.partial(M.cut_corners, knight=True), (), (), "waypoint"),
     "delete_corner": (M.delete_corner, (), (), "waypoint"),
     "with_probability": (
-        M.with_probability(M.replace_point), (jnp.float32(0.5),), (None,), "continuous",
+        with_probability(M.replace_point), (jnp.float32(0.5),), (None,), "continuous",
     ),
 }
 
@@ -534,7 +535,7 @@ def test_with_probability_empirical_rate():
     pm = M.adaptive_mutation_probability(fitness, fitness.max(), fitness.mean(), 20, 100)
     pop = Population(jnp.zeros((n, 4), jnp.int32), jnp.ones((n,), jnp.int32))
     keys = jax.random.split(jax.random.PRNGKey(3), n)
-    op = jax.jit(jax.vmap(M.with_probability(_marker), in_axes=(0, None, 0, 0, 0)))
+    op = jax.jit(jax.vmap(with_probability(_marker), in_axes=(0, None, 0, 0, 0)))
     _, _, applied = op(keys, grid, pop.cells, pop.length, pm)
     applied, pm = np.asarray(applied), np.asarray(pm)
     for g in range(3):
@@ -545,12 +546,12 @@ def test_with_probability_empirical_rate():
             assert k == 0
         else:
             assert stats.binomtest(k, int(sel.sum()), p).pvalue > 1e-3, (g, k, p)
-    _, n_failed = jax.jit(over_individuals(M.with_probability(_marker), in_axes_extra=(None,)))(
+    _, n_failed = jax.jit(over_individuals(with_probability(_marker), in_axes_extra=(None,)))(
         jax.random.PRNGKey(4), grid, pop, jnp.float32(0.2)
     )
     assert stats.binomtest(int(n_failed), n, 0.2).pvalue > 1e-3
     # The population helper: a scalar pm and a per-individual pm.
-    lifted = jax.jit(M.mutation_population(_marker))
+    lifted = jax.jit(mutation_population(_marker))
     _, n_failed = lifted(jax.random.PRNGKey(5), grid, pop, jnp.float32(0.3))
     assert stats.binomtest(int(n_failed), n, 0.3).pvalue > 1e-3
     _, n_failed = lifted(jax.random.PRNGKey(6), grid, pop, jnp.asarray(pm))
@@ -565,7 +566,7 @@ def test_either_and_split_half():
     assert stats.chisquare(masks.sum(0)).pvalue > 1e-3  # every position equally likely
     grid = Grid.create(np.zeros((4, 4), bool), start=(0, 0), goal=(2, 0), corner_rule="free")
     cells = jnp.asarray([0, 1, 2, 2, 2, 2, 2, 2], jnp.int32)
-    op = jax.jit(M.either(M.replace_point, _marker))
+    op = jax.jit(either(M.replace_point, _marker))
     c, n, f = op(jax.random.PRNGKey(0), grid, cells, jnp.int32(3), jnp.bool_(True))
     assert np.asarray(c[:3]).tolist() == [0, 5, 2] and not bool(f)
     c, n, f = op(jax.random.PRNGKey(0), grid, cells, jnp.int32(3), jnp.bool_(False))
