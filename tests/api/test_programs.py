@@ -23,6 +23,7 @@ from jaxga.config import registry
 from jaxga.core.errors import ParameterError
 from jaxga.core.paths import is_feasible
 from jaxga.engine.maptables import with_tables
+from jaxga.engine.run import run_evolve, run_init
 from jaxga.maps.generators import random_map
 from jaxga.operators import schedules
 from jaxga.operators.guide import with_guide
@@ -72,10 +73,8 @@ def unpadded(grid, seeds, generations):
     # per-run parameters, as the API passes them (a constant would let XLA fold them:
     # a mean over a constant count of individuals rounds differently)
     per_run = {k: np.repeat(np.asarray(v)[None], len(keys), axis=0) for k, v in params.items()}
-    init = jax.jit(jax.vmap(lambda k, p: engine.init_state(
-        algo, jax.random.fold_in(k, 0), g, p)[0]))
-    evolve = jax.jit(jax.vmap(lambda k, p, st: engine.evolve(
-        algo, jax.random.fold_in(k, 1), g, st, p)))
+    init = jax.jit(jax.vmap(lambda k, p: run_init(algo, k, g, p)[0]))
+    evolve = jax.jit(jax.vmap(lambda k, p, st: run_evolve(algo, k, g, st, p)))
     finish = jax.jit(jax.vmap(lambda p, st, h, b: engine.finish(algo, g, st, h, p, b)))
     state = init(keys, per_run)
     init_best = state.best_fitness
@@ -87,7 +86,7 @@ def unpadded(grid, seeds, generations):
 def assert_same_runs(result, rows, ref, ref_hist):
     """``result``'s seeds equal the reference's ``rows``, bit for bit."""
     np.testing.assert_array_equal(result.cells, ref["cells"][rows])
-    np.testing.assert_array_equal(result.n_cells, ref["length"][rows])
+    np.testing.assert_array_equal(result.n_cells, ref["n_cells"][rows])
     np.testing.assert_array_equal(result.fitness, np.where(ref["success"][rows],
                                                            ref["fitness"][rows], np.nan))
     np.testing.assert_array_equal(result.convergence_generation,
