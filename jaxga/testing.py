@@ -354,11 +354,12 @@ def check_operator(op: registry.Operator | str, fn: Callable | None = None, *,
         raise ValueError(f"check_operator needs {P} parents, got {parents.cells.shape[0]}")
     key = jax.random.PRNGKey(0) if key is None else key
     registered = registry.canonical(op.family, op.name) is not None
-    if registered and registry.operator(op.family, op.name) is not op:
-        if registry.operator(op.family, op.name).fn is not op.fn:
+    if registered:  # check the registered operator (its options, traits), same function
+        current = registry.operator(op.family, op.name)
+        if current.fn is not op.fn:
             raise ValueError(f"another {op.family} operator is registered as {op.name!r}")
-        op = registry.operator(op.family, op.name)
-    if not registered:
+        op = current
+    else:
         registry.register(op)
     try:
         check_family(op, grid, parents, key, field_repair)
