@@ -77,7 +77,21 @@ def test_every_code_block_has_a_known_kind():
     assert {p.name for p in RUNNABLE} >= {"README.md", "pure-core.md", "maps.md"}
 
 
+@pytest.fixture
+def _registry_as_found():
+    """A page registers operators of its own (``jaxga.register_operator``), as a reader
+    would; the other tests in this process must not see them."""
+    from jaxga.config import registry
+
+    before = {family: set(registry.names(family)) for family in registry.FAMILIES}
+    yield
+    for family, names in before.items():
+        for name in set(registry.names(family)) - names:
+            registry.unregister(family, name)
+
+
 @pytest.mark.parametrize("page", RUNNABLE, ids=[str(p.relative_to(ROOT)) for p in RUNNABLE])
+@pytest.mark.usefixtures("_registry_as_found")
 def test_the_code_blocks_of_a_page_run(page, tmp_path, monkeypatch):
     shutil.copytree(EXAMPLES, tmp_path, dirs_exist_ok=True)  # the pages' own folder
     shutil.copytree(EXAMPLES, tmp_path / "docs" / "examples")  # the README's, from the root
