@@ -18,9 +18,9 @@ LAYERS = ("_batching", "core", "maps", "operators", "config", "engine", "referen
           "tools")
 """Bottom to top; the modules directly in ``jaxga/`` and the tool packages are the tools."""
 
-TOOL_PACKAGES = ("cli",)
-"""Folders of ``jaxga/`` that belong to the tools layer (the command line, one module per
-command)."""
+TOOL_PACKAGES = ("cli", "doe")
+"""Folders of ``jaxga/`` that belong to the tools layer: the command line (one module per
+command) and the designed experiments (design, fit, checkpoint, confirmation)."""
 
 DEFERRED = ("matplotlib", "scipy", "jax._src", "PIL")
 """Imports that may sit inside a function: heavy (Pillow's import is a tenth of a second,

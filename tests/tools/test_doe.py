@@ -494,18 +494,19 @@ def test_a_point_file_round_trips_an_overflowing_fitness_and_the_reason(tmp_path
     """What a run can return is read back exactly: a fitness that overflowed float32
     (+inf, written "inf"), a failed seed's NaN lengths (null) and the no-path reason; an
     infinite length is not something a run returns."""
-    from jaxga.doe import RESPONSES, _Checkpoint, _decode
+    from jaxga.doe import RESPONSES
+    from jaxga.doe.checkpoint import Checkpoint, decode
 
     responses = {k: np.array([2.5, np.nan]) for k in RESPONSES}
     responses.update(fitness=np.array([np.inf, 0.0]), success=np.array([1.0, 0.0]),
                      convergence_generation=np.array([3.0, np.nan]),
                      turns=np.array([2.0, np.nan]))
-    ckpt = _Checkpoint(tmp_path, {"format": 1})
+    ckpt = Checkpoint(tmp_path, {"format": 1})
     ckpt.save_point(0, responses, "no feasible path found by 1 of 2 seeds")
     (saved,) = ckpt.load_points(1, 2)
     assert saved["reason"] == "no feasible path found by 1 of 2 seeds"
     assert saved["fitness"] == ["inf", 0.0]
-    back = _decode(saved)
+    back = decode(saved)
     assert set(back) == set(RESPONSES)
     for k in RESPONSES:
         np.testing.assert_array_equal(back[k], responses[k])
