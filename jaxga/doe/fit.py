@@ -34,7 +34,7 @@ def seed_responses(result: Any) -> dict[str, np.ndarray]:
     """Every response of every seed of a :class:`jaxga.api.Result` (float arrays).
 
     ``fitness`` of a failed seed is 0 and ``success`` is 0/1; the length-like responses
-    are NaN for failed seeds (see the module docstring).
+    are NaN for failed seeds (see :mod:`jaxga.doe`).
     """
     ok = np.asarray(result.success, bool)
 
@@ -87,7 +87,7 @@ def fit_linear(coded: np.ndarray, y: np.ndarray) -> np.ndarray:
 
 def contrast_coefficients(coded: np.ndarray, y: np.ndarray) -> np.ndarray:
     """AGACD's own estimate (its Table 5, last row): ``X0 = mean(y)``,
-    ``Xi = mean(F_i * y)``. Not least squares: see the module docstring."""
+    ``Xi = mean(F_i * y)``. Not least squares: see :mod:`jaxga.doe`."""
     coded = np.asarray(coded, float)
     y = np.asarray(y, float)
     return np.concatenate([[y.mean()], (coded * y[:, None]).mean(axis=0)])
