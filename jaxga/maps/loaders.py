@@ -45,10 +45,13 @@ blocked borders); :meth:`jaxga.Grid.check_endpoints` does that later.
 from __future__ import annotations
 
 import dataclasses
+import inspect
 import io
 import math
 import os
+import types
 from pathlib import Path
+from typing import Any
 
 import numpy as np
 
@@ -260,33 +263,26 @@ def load_map(
             blocked by ``coarsen``. (Blocked endpoints are otherwise *not* checked here;
             see :meth:`jaxga.Grid.check_endpoints`.)
     """
-    return load_map_info(source, start=start, goal=goal, corner_rule=corner_rule, fmt=fmt,
-                         coarsen=coarsen, threshold=threshold, unknown=unknown,
-                         start_world=start_world, goal_world=goal_world, inflate=inflate,
-                         robot_radius=robot_radius).grid
+    return load_map_info(**locals()).grid  # every argument above, by name
 
 
-def load_map_info(
-    source: Source,
-    *,
-    start: XY | None = None,
-    goal: XY | None = None,
-    corner_rule: str | None = None,
-    fmt: str | None = None,
-    coarsen: int | None = None,
-    threshold: float | None = None,
-    unknown: str | None = None,
-    start_world: tuple[float, float] | None = None,
-    goal_world: tuple[float, float] | None = None,
-    inflate: float | None = None,
-    robot_radius: float | None = None,
-) -> MapInfo:
-    """Like :func:`load_map` but return a :class:`MapInfo` (name, path, format, grid)."""
+def load_map_info(source: Source, **options: Any) -> MapInfo:
+    """:func:`load_map` with the same keyword options, returning a :class:`MapInfo` (name,
+    path, format, grid, frame, layers) instead of the grid alone.
 
-    rule = check_corner_rule(default_corner_rule(source) if corner_rule is None
-                             else corner_rule)
-    if fmt is not None and fmt not in FORMATS:
-        raise MapFormatError(f"unknown map format {fmt!r}: expected one of {', '.join(FORMATS)}")
+    The options are :func:`load_map`'s own, checked against its signature (one list of
+    options, documented there): an unknown one is a ``TypeError``, as in any call.
+    """
+    try:
+        bound = inspect.signature(load_map).bind(source, **options)
+    except TypeError as e:
+        raise TypeError(f"load_map_info() {e}") from None
+    bound.apply_defaults()
+    o = types.SimpleNamespace(**bound.arguments)
+    rule = check_corner_rule(default_corner_rule(source) if o.corner_rule is None
+                             else o.corner_rule)
+    if o.fmt is not None and o.fmt not in FORMATS:
+        raise MapFormatError(f"unknown map format {o.fmt!r}: expected one of {', '.join(FORMATS)}")
     is_builtin = isinstance(source, str) and source in builtin.builtin_names()
     if is_builtin:
         path = builtin.builtin_path(source)  # type: ignore[arg-type]
@@ -299,14 +295,14 @@ def load_map_info(
     label = str(source) if is_builtin else str(path)
 
     bare_name = isinstance(source, str) and not is_builtin and Path(source).name == source
-    factor = 1 if coarsen is None else _coarsen_factor(coarsen)
-    is_yaml = fmt == "ros" or (fmt is None and path.suffix.lower() in (".yaml", ".yml"))
+    factor = 1 if o.coarsen is None else _coarsen_factor(o.coarsen)
+    is_yaml = o.fmt == "ros" or (o.fmt is None and path.suffix.lower() in (".yaml", ".yml"))
     raw = _read_bytes(path, label, builtin_hint=bare_name and not Path(source).suffix,
                       yaml=is_yaml, coarsen=factor)
-    kind = fmt or detect_format(path, raw)
-    _check_options_apply(kind, label, threshold=threshold, unknown=unknown,
-                         robot_radius=robot_radius, start_world=start_world,
-                         goal_world=goal_world)
+    kind = o.fmt or detect_format(path, raw)
+    _check_options_apply(kind, label, threshold=o.threshold, unknown=o.unknown,
+                         robot_radius=o.robot_radius, start_world=o.start_world,
+                         goal_world=o.goal_world)
     size = _declared_size(raw, kind)
     if size is not None:  # refuse a map too large before parsing it (a second or more)
         w0, h0 = size
@@ -316,12 +312,12 @@ def load_map_info(
     ros = None
     unknown_cells = None
     if kind == "png":
-        blocked = _parse_png(path, label, 0.5 if threshold is None else threshold, raw)
+        blocked = _parse_png(path, label, 0.5 if o.threshold is None else o.threshold, raw)
         file_start = file_goal = None
     elif kind == "ros":
         ros = read_ros_yaml(path, label, data=raw)
         occ = occupancy(read_ros_image(ros, label, coarsen=factor), ros)
-        blocked = ros_blocked(occ, "blocked" if unknown is None else unknown)
+        blocked = ros_blocked(occ, "blocked" if o.unknown is None else o.unknown)
         unknown_cells = np.ascontiguousarray((occ == -1)[::-1])
         file_start = file_goal = None
     else:
@@ -335,9 +331,9 @@ def load_map_info(
             blocked = parse_01(text, label)
             file_start = file_goal = None
 
-    s = start if start is not None else file_start
-    g = goal if goal is not None else file_goal
-    for name, xy, world in (("start", start, start_world), ("goal", goal, goal_world)):
+    s = o.start if o.start is not None else file_start
+    g = o.goal if o.goal is not None else file_goal
+    for name, xy, world in (("start", o.start, o.start_world), ("goal", o.goal, o.goal_world)):
         if world is None or ros is None:  # without a frame: refused above
             continue
         if xy is not None:
@@ -349,12 +345,12 @@ def load_map_info(
         s, g = (cell, g) if name == "start" else (s, cell)
     walls = blocked & ~unknown_cells if unknown_cells is not None else blocked
     map_blocked = blocked
-    blocked = _inflated(blocked, ros, inflate, robot_radius, s, g, label)
+    blocked = _inflated(blocked, ros, o.inflate, o.robot_radius, s, g, label)
     layers = MapLayers(
         wall=walls, margin=blocked & ~map_blocked,
         unknown=(np.zeros_like(blocked) if unknown_cells is None
                  else unknown_cells & ~walls & ~(blocked & ~map_blocked)),
-        unknown_blocked=unknown != "free")
+        unknown_blocked=o.unknown != "free")
     frame = MapFrame(map_shape=blocked.shape, coarsen=factor,
                      resolution=None if ros is None else ros.resolution,
                      origin=None if ros is None else ros.origin)

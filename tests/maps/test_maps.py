@@ -592,6 +592,25 @@ def test_map_name_of_paths_and_builtin_over_cwd(tmp_path, monkeypatch):
     assert load_map(Path("den312d")).shape == (1, 3)  # a Path is always a file
 
 
+
+def test_load_map_info_takes_load_maps_options(tmp_path):
+    """One list of options: load_map_info reads a map as load_map does, with the same
+    options, and refuses an option load_map does not have."""
+    from jaxga.maps import load_map_info
+
+    (tmp_path / "m.txt").write_text("S..\n.#.\n..G\n")
+    for options in ({}, {"start": (0, 1), "corner_rule": "free"}, {"coarsen": 1}):
+        info = load_map_info(tmp_path / "m.txt", **options)
+        grid = load_map(tmp_path / "m.txt", **options)
+        assert (info.grid.start_xy, info.grid.goal_xy, info.grid.corner_rule) == \
+            (grid.start_xy, grid.goal_xy, grid.corner_rule)
+        np.testing.assert_array_equal(info.grid.blocked_np(), grid.blocked_np())
+        assert info.format == "ascii" and info.name == "m"
+    with pytest.raises(TypeError, match="load_map_info.*colour"):
+        load_map_info(tmp_path / "m.txt", colour="red")
+    with pytest.raises(MapFormatError, match="threshold"):  # no effect on an ASCII map
+        load_map_info(tmp_path / "m.txt", threshold=0.3)
+
 # ------------------------------------------------------------------------- generators
 def _check_generated(g: Grid, h: int, w: int) -> None:
     assert g.shape == (h, w)
