@@ -19,7 +19,7 @@ runs ``jaxga.run`` on ``classic_ga_gapp3_20x20`` (population 60, mpmga 3 islands
   loop's bookkeeping, is traced when the program is lowered under the stack of the
   call's ``fold_call``, so it counts as ``folding``).
 
-The compile target of the engine issue is < 10 s per preset; this says what a shorter
+The compile target is < 10 s per preset (decision 012); this says what a shorter
 compile would have to cut.
 """
 

@@ -3,7 +3,7 @@
     python benchmarks/reproduce.py [--seeds N] [--tables zhu2,zhu4,agacd5,agacd8,agacd12,
                                                         mpmga,imga,zhang] [--no-write]
 
-Issue 39, item 4. For each table: the paper's value, jaxga's value under the paper's
+For each table (docs/reproducing.md): the paper's value, jaxga's value under the paper's
 settings (its preset or variant, its run count, corner rule ``free``, the papers'
 initialisers alone: ``init.fallback = none``) and a verdict. The papers' numbers are in
 ``benchmarks/paper_tables.py``, one comment per number naming its table and row.

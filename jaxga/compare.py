@@ -1,6 +1,6 @@
 """``jaxga.compare``: several presets on one map with the same seeds, with statistics.
 
-Issue 5 (comparisons). ``compare(presets, grid, seeds, **options) -> Comparison`` runs
+``compare(presets, grid, seeds, **options) -> Comparison`` runs
 every preset with :func:`jaxga.api.run` and gives, per preset, the summary table of
 :meth:`Result.summary_rows` (AGACD Tables 8-9, Zhu & Pan Table 4), the success rate,
 the gap of the raw path to the exact 8-connected optimum (to the any-angle optimum for
@@ -10,7 +10,7 @@ pair of presets, two-sided tests with effect sizes (:mod:`jaxga.stats`) on one o
 metrics, Holm-corrected over the pairs of each metric, plus Fisher's exact test on the
 success rates.
 
-Decisions recorded here (the issue leaves them open):
+Decisions recorded here (the papers leave them open):
 
 * **Which test.** The default is the Mann-Whitney U test of independent samples. Running
   every preset with the same seeds does not make the design paired: different

@@ -3,13 +3,13 @@
     python benchmarks/ab/throughput_ab.py --base REV [--presets sga] [--settings 20x20,50x50]
         [--seeds 1000] [--rounds 1] [--devices N]
 
-Issue 41's target: individual-generations per second at 20 x 20 and 50 x 50 with 1000
-seeds within 10 % of the code before it. The settings are ``benchmarks/speed.py``'s
-(20 x 20: ``classic_ga_gapp3_20x20``, population 60, 300 generations; 50 x 50:
-``random_map(50, 50, 0.1, seed=0)``, population 80, 500 generations); each measurement
-is one cold child process (``speed.py``'s child, importing ``jaxga`` from the base
-checkout or from this tree), base and tree alternating so that both see the same
-machine load.
+The throughput target of the compile-once work (decision 028): individual-generations per
+second at 20 x 20 and 50 x 50 with 1000 seeds within 10 % of the code before it. The
+settings are ``benchmarks/speed.py``'s (20 x 20: ``classic_ga_gapp3_20x20``, population 60,
+300 generations; 50 x 50: ``random_map(50, 50, 0.1, seed=0)``, population 80, 500
+generations); each measurement is one cold child process (``speed.py``'s child, importing
+``jaxga`` from the base checkout or from this tree), base and tree alternating so that both
+see the same machine load.
 """
 
 from __future__ import annotations

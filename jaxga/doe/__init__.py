@@ -33,7 +33,7 @@ the others which points are finished, so ``DIR`` need only be on process 0's dis
 process loses the block being computed, never a finished point: the restarted command
 completes the rest.
 
-Decisions where AGACD and the issue are silent:
+Decisions where AGACD is silent:
 
 * Failed seeds (no feasible path): their ``fitness`` is 0 (what the engine reports for
   an individual without a feasible path) and ``success`` 0, so these responses average

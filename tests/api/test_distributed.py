@@ -1,4 +1,4 @@
-"""Issue 7: every core, several processes (``jax.distributed`` on loopback), lost processes.
+"""Every core, several processes (``jax.distributed`` on loopback), lost processes.
 
 Every test starts fresh Python processes (JAX's device count and ``jax.distributed`` are
 fixed once a process has started its backend); every wait has a timeout and every child

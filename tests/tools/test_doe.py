@@ -318,7 +318,7 @@ def _assert_same_runs(a: dict[str, np.ndarray], b: dict[str, np.ndarray]) -> Non
 
 
 def test_the_confirmation_runs_the_designs_program(one_call, monkeypatch):
-    """Issue 41, item 3: the design (27 runs) and its confirmation (3 runs) run one
+    """The design (27 runs) and its confirmation (3 runs) run one
     compiled program set (the confirmation's runs padded to the design's call), and a
     second experiment in the process compiles nothing."""
     import jax
