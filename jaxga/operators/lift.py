@@ -17,8 +17,10 @@ Conventions:
 
 from __future__ import annotations
 
+import dataclasses
 import math
 from collections.abc import Callable
+from typing import Any
 
 import jax
 import jax.numpy as jnp
@@ -240,6 +242,59 @@ def _blocks(fn_op, apply, args, defaults, consts, axes, n, b, narrow=None):
     return out
 
 
+@dataclasses.dataclass(frozen=True)
+class _Gates:
+    """What a gated lift draws before any operator runs (:func:`over_individuals_gated`,
+    :func:`over_pairs_gated`): for each individual or pair, whether it goes through an
+    operator (``applied``: a uniform draw of its gate key below its probability), its
+    operator key, which of the two operators (``use_op``, None without an alternative),
+    and the extra arguments, the per-individual ones (``mapped``) apart."""
+
+    applied: jax.Array
+    op_keys: jax.Array
+    use_op: jax.Array | None
+    extra: tuple
+    axes: tuple
+    mapped: list
+
+    @classmethod
+    def draw(cls, keys: jax.Array, prob: Any, extra: tuple, has_alternative: bool,
+             in_axes_extra: tuple) -> _Gates:
+        """Each of ``keys`` (one per individual or pair) split into a gate key and an
+        operator key; with an alternative, ``extra[0]`` is ``use_op``."""
+        use_op = None
+        if has_alternative:
+            use_op, extra = jnp.asarray(extra[0], bool)[:keys.shape[0]], extra[1:]
+        prob = jnp.broadcast_to(jnp.asarray(prob, jnp.float32), (keys.shape[0],))
+        k_gate, k_op = jax.vmap(lambda k: tuple(jax.random.split(k)))(keys)
+        applied = jax.vmap(lambda k: jax.random.uniform(k, (), jnp.float32))(k_gate) < prob
+        axes = in_axes_extra or (0,) * len(extra)
+        mapped = [e for e, ax in zip(extra, axes) if ax == 0]
+        return cls(applied, k_op, use_op, tuple(extra), tuple(axes), mapped)
+
+    def bound(self, fn: Callable | None, grid: Grid, n_paths: int) -> Callable | None:
+        """``fn(key, grid, *paths, *extra)`` as a function of ``(key, *paths, *mapped)``:
+        the grid and the shared extra arguments bound, the per-individual ones in place."""
+        if fn is None:
+            return None
+
+        def call(k, *operands):
+            per = iter(operands[n_paths:])
+            args = [next(per) if ax == 0 else e for e, ax in zip(self.extra, self.axes)]
+            return fn(k, grid, *operands[:n_paths], *args)
+        return call
+
+    def apply(self, op: Callable, alternative: Callable | None, args: tuple, out: tuple,
+              **options: Any) -> tuple:
+        """``out`` with the applied individuals (pairs) replaced by ``op``'s results; with
+        an alternative, by ``op``'s where ``use_op`` and ``alternative``'s elsewhere, each
+        computed for its own individuals only (:func:`gated_map`)."""
+        if self.use_op is None:
+            return gated_map(op, self.applied, args, out, **options)
+        out = gated_map(op, self.applied & self.use_op, args, out, **options)
+        return gated_map(alternative, self.applied & ~self.use_op, args, out, **options)
+
+
 def over_individuals_gated(
     op: Callable, *, alternative: Callable | None = None, in_axes_extra: tuple = (),
     shrinking: bool = False,
@@ -266,32 +321,14 @@ def over_individuals_gated(
     """
 
     def lifted(key: jax.Array, grid: Grid, pop: Population, prob, *extra):
-        use_op = None
-        if alternative is not None:
-            use_op, extra = jnp.asarray(extra[0], bool), extra[1:]
         n = pop.size
-        prob = jnp.broadcast_to(jnp.asarray(prob, jnp.float32), (n,))
-        keys = jax.random.split(key, n)
-        k_gate, k_op = jax.vmap(lambda k: tuple(jax.random.split(k)))(keys)
-        apply = jax.vmap(lambda k: jax.random.uniform(k, (), jnp.float32))(k_gate) < prob
-        axes = in_axes_extra or (0,) * len(extra)
-        mapped = [e for e, ax in zip(extra, axes) if ax == 0]
-
-        def one(fn):
-            def call(k, c, ln, *per):
-                it = iter(per)
-                args = [next(it) if ax == 0 else e for e, ax in zip(extra, axes)]
-                return fn(k, grid, c, ln, *args)
-            return call
-
-        args = (k_op, pop.cells, pop.length, *mapped)
+        gates = _Gates.draw(jax.random.split(key, n), prob, extra, alternative is not None,
+                            in_axes_extra)
+        args = (gates.op_keys, pop.cells, pop.length, *gates.mapped)
         out = (pop.cells, pop.length, jnp.zeros((n,), bool))
-        if use_op is None:
-            out = gated_map(one(op), apply, args, out, shrinking=shrinking)
-        else:
-            out = gated_map(one(op), apply & use_op, args, out, shrinking=shrinking)
-            out = gated_map(one(alternative), apply & ~use_op, args, out, shrinking=shrinking)
-        cells, length, failed = out
+        cells, length, failed = gates.apply(
+            gates.bound(op, grid, 2), gates.bound(alternative, grid, 2), args, out,
+            shrinking=shrinking)
         return Population(cells, length), jnp.sum(failed, dtype=jnp.int32)
 
     lifted.__name__ = getattr(op, "__name__", "op") + "_population"
@@ -323,37 +360,27 @@ def over_pairs_gated(
         raise ValueError("splicing=True needs dense=True and no alternative operator")
 
     def lifted(key: jax.Array, grid: Grid, pop: Population, prob, *extra):
-        use_op = None
-        if alternative is not None:
-            use_op, extra = jnp.asarray(extra[0], bool), extra[1:]
         n_pairs = pop.size // 2
-        prob = jnp.broadcast_to(jnp.asarray(prob, jnp.float32), (n_pairs,))
-        keys = jax.random.split(key, max(n_pairs, 1))[:n_pairs]
-        k_gate, k_op = jax.vmap(lambda k: tuple(jax.random.split(k)))(keys)
-        apply = jax.vmap(lambda k: jax.random.uniform(k, (), jnp.float32))(k_gate) < prob
-        axes = in_axes_extra or (0,) * len(extra)
-        mapped = [e for e, ax in zip(extra, axes) if ax == 0]
+        gates = _Gates.draw(jax.random.split(key, max(n_pairs, 1))[:n_pairs], prob, extra,
+                            alternative is not None, in_axes_extra)
         c, ln = pop.cells, pop.length
         c1, l1 = c[0 : 2 * n_pairs : 2], ln[0 : 2 * n_pairs : 2]
         c2, l2 = c[1 : 2 * n_pairs : 2], ln[1 : 2 * n_pairs : 2]
 
         def one(fn):
-            def call(k, a, la, b, lb, *per):
-                it = iter(per)
-                args = [next(it) if ax == 0 else e for e, ax in zip(extra, axes)]
-                n1, m1, n2, m2, failed = fn(k, grid, a, la, b, lb, *args)
-                return n1, m1, n2, m2, jnp.asarray(failed, jnp.int32)
-            return call
+            if fn is None:
+                return None
+            call = gates.bound(fn, grid, 4)
 
-        args = (k_op, c1, l1, c2, l2, *mapped)
+            def counted(*operands):
+                n1, m1, n2, m2, failed = call(*operands)
+                return n1, m1, n2, m2, jnp.asarray(failed, jnp.int32)
+            return counted
+
+        args = (gates.op_keys, c1, l1, c2, l2, *gates.mapped)
         out = (c1, l1, c2, l2, jnp.zeros((n_pairs,), jnp.int32))
-        if use_op is None:
-            out = gated_map(one(op), apply, args, out, dense=dense, splicing=splicing)
-        else:
-            use_op = use_op[:n_pairs]
-            out = gated_map(one(op), apply & use_op, args, out, dense=dense)
-            out = gated_map(one(alternative), apply & ~use_op, args, out, dense=dense)
-        c1, l1, c2, l2, failed = out
+        c1, l1, c2, l2, failed = gates.apply(one(op), one(alternative), args, out, dense=dense,
+                                             splicing=splicing)
         return _interleave(pop, c1, l1, c2, l2), jnp.sum(failed, dtype=jnp.int32)
 
     lifted.__name__ = getattr(op, "__name__", "op") + "_population"
