@@ -13,7 +13,6 @@ never on the runs that share its call, so the padding changes no result.
 
 from __future__ import annotations
 
-import contextvars
 import dataclasses
 import functools
 import gc
@@ -61,8 +60,8 @@ class Programs:
 
     def _compile(self, names: Sequence[str], report: Callable[[float], None]) -> None:
         """Compile (or read) the ``names`` not compiled yet, one after the other,
-        reporting the fraction of all programs (and the tracing) done after each but
-        the last."""
+        reporting the fraction of the work (the tracing, then each program) done after
+        the tracing and after each program but the last."""
         steps = 1 + len(self.NAMES)  # the tracing, then each program
         for name in names:
             if name in self._compiled:
@@ -71,6 +70,7 @@ class Programs:
             if program is None:
                 if self._traced is None:
                     self._traced = self._trace()
+                    report(1 / steps)
                 program = executables.compile_and_store(
                     self._keys[name], self._traced[name].lower(),
                     FINISH_COMPILER_OPTIONS if name == "finish" else None)
@@ -282,14 +282,6 @@ share its call. The init and evolve programs keep XLA's defaults: with the older
 emitters they compile faster but run slower on wide batches (decision 012)."""
 
 
-COMPILE_PROGRESS: contextvars.ContextVar[Callable[[float], None] | None] = \
-    contextvars.ContextVar("jaxga_compile_progress", default=None)
-"""Where :func:`compiled_programs` reports how far a compilation has got (a fraction below 1,
-after the tracing and after each program but the last): set by :func:`sweep` around the
-call, so that the cached function keeps its arguments (a programs' cache hit reports
-nothing)."""
-
-
 def program_algorithm(algo: Algorithm) -> Algorithm:
     """``algo`` as the compiled programs see it: without its number of generations (a
     run-time value: the dynamic parameter ``generations`` and the calls of the evolve
@@ -316,15 +308,18 @@ def _family(algo: Algorithm, grid_spec: Any, params: dict) -> Any:
     return algo, grid_spec, per_run, jax.local_device_count()
 
 
-def programs_for(algo: Algorithm, grid: Any, params: dict, n_runs: int) -> Programs:
+def programs_for(algo: Algorithm, grid: Any, params: dict, n_runs: int,
+                 report: Callable[[float], None] = lambda frac: None) -> Programs:
     """The program set of ``n_runs`` runs per call (a multiple of the local devices) with
-    these parameters (arrays with the runs first), compiled if this process has not yet
-    (:func:`compiled_programs`)."""
+    these parameters (arrays with the runs first) (:func:`compiled_programs`), its init
+    program compiled (or read) now if this process has not yet: ``report`` is told how
+    far that has got (a fraction below 1, after each program; nothing when it is)."""
     algo = program_algorithm(algo)
     n_dev = jax.local_device_count()
     grid_spec = shape_spec(grid)
     progs = compiled_programs(algo, grid_spec, tuple(sorted(shape_spec(params).items())),
                               n_runs, n_dev, operator_functions(algo))
+    progs.compile_init(report)
     _COMPILED_BUCKETS.setdefault(_family(algo, grid_spec, params), set()).add(n_runs // n_dev)
     return progs
 
@@ -338,8 +333,8 @@ def operator_functions(algo: Algorithm) -> tuple:
 @functools.lru_cache(maxsize=PROGRAM_CACHE_SIZE)
 def compiled_programs(algo: Algorithm, grid_spec: Any, params_spec: Any, n_runs: int,
                       n_devices: int, functions: tuple = ()) -> Programs:
-    """Trace init / evolve / finish for ``n_runs`` runs and compile init (the others when
-    first needed: :class:`Programs`).
+    """The program set (init / evolve / finish) of ``n_runs`` runs, each traced and
+    compiled, or read from the store, when first needed (:class:`Programs`).
 
     Cached per (algorithm, map shape and corner rule, parameter shapes, run count,
     devices, the chosen operators' functions: an operator registered again under its
@@ -404,11 +399,7 @@ def compiled_programs(algo: Algorithm, grid_spec: Any, params_spec: Any, n_runs:
                                             devices, settings) for name in Programs.NAMES}
     # One after the other: compiling them in threads (one per core) was no faster
     # (decision 011).
-    report = COMPILE_PROGRESS.get() or (lambda frac: None)
-    programs = Programs(trace, stored, devices)
-    report(1 / (1 + len(Programs.NAMES)))
-    programs.compile_init(report)
-    return programs
+    return Programs(trace, stored, devices)
 
 
 def clear_compiled() -> None:

@@ -11,6 +11,7 @@ from __future__ import annotations
 
 import contextlib
 import dataclasses
+import inspect
 import math
 import re
 import warnings
@@ -34,8 +35,8 @@ from jaxga.api.failures import (
 from jaxga.api.lowering import check_environment
 from jaxga.api.memory import NO_PATH_BYTES_PER_RUN, check_memory, check_result_memory
 from jaxga.api.programs import (
-    COMPILE_PROGRESS,
     GENERATION_CHUNK,
+    Programs,
     clear_compiled,
     compiled_buckets,
     programs_for,
@@ -280,10 +281,7 @@ def sweep(
     """
 
     args = (preset, grid, points, seeds)
-    options = dict(generations=generations, corner_rule=corner_rule, variant=variant,
-                   sets=sets, progress=progress, chunks=chunks,
-                   population_capacity=population_capacity, size_class=size_class,
-                   any_angle_budget=any_angle_budget, **overrides)
+    options = {**_run_options(locals()), **overrides}
     while True:
         try:
             return _sweep(*args, **options)
@@ -303,119 +301,231 @@ _MISSING_FUNCTION = re.compile(r"NOT_FOUND|Function \S+ not found")
 def _sweep(preset, grid, points, seeds, *, generations, corner_rule, variant, sets,
            progress, chunks, population_capacity, size_class, any_angle_budget,
            **overrides) -> list[Result]:
-    """:func:`sweep`'s work, phase by phase (:mod:`jaxga.api.timeline`)."""
+    """:func:`sweep`'s work as phases over a :class:`_SweepPlan` (each timed by the
+    :class:`~jaxga.api.timeline.Timeline`): the plan (map, configurations, references,
+    the programs' map and parameters), the compiled programs, the initial populations,
+    the evolution, the finish, the any-angle references, the results."""
     timeline = Timeline()
+    report = _reporter(progress)
     _check_points(points)
     _check_call_options(progress, chunks, size_class, any_angle_budget)
     if chunks != 1:
         warnings.warn("chunks is ignored: the generations run in compiled chunks of "
                       f"{GENERATION_CHUNK} and progress is reported after each",
                       DeprecationWarning, stacklevel=3)
+    plan = _plan_sweep(preset, grid, points, seeds, generations, corner_rule, variant, sets,
+                       population_capacity, size_class, overrides, timeline, report)
+    if plan.algo is None:  # no path: nothing to compile
+        return _no_path_results(plan, timeline)
+    runs, progs = _compile_init(plan, timeline, report)
+    start = _initialise(plan, runs, progs, timeline)
+    context = dict(plan.result_context(), **start.result_context())
+    if not start.started.any():  # nothing can succeed: no evolution, no post-optimisation
+        report("compile", 1.0)
+        return unstarted_results(timing={"compile_s": 0.0, "init_s": 0.0, "evolve_s": 0.0,
+                                         "post_s": 0.0, **timeline.as_dict()}, **context)
+    with timeline.phase("compile"):
+        progs.compile_rest(lambda frac: report("compile", frac))
+    report("compile", 1.0)
+    host, hist = _evolve_and_finish(plan, runs, progs, start.states, timeline, report)
+    bounds = _any_angle_bounds(plan, host, any_angle_budget, timeline, report)
+    return _point_results(host, hist, started=start.started, timing=timeline.as_dict(),
+                          bounds=bounds, **context)
 
-    def report(stage: str, frac: float) -> None:
-        if progress is not None:
-            progress(stage, frac)
 
+def _reporter(progress: Callable[[str, float], None] | None) -> Callable[[str, float], None]:
+    """``progress`` or, without one, a function that reports nothing."""
+    return progress if progress is not None else (lambda stage, frac: None)
+
+
+@dataclasses.dataclass(frozen=True)
+class _SweepPlan:
+    """A sweep checked and prepared before anything compiles.
+
+    ``grid`` is the user's map: the results, the references and the paths are on it.
+    ``program_grid`` is the map the programs run on: with the exact distance fields when
+    an operator steers by them, padded to its size class when asked (decision 029).
+    ``algo`` is None when the goal cannot be reached (then nothing runs)."""
+
+    config: Config
+    configs: list[Config]
+    points: Sequence[Mapping[str, Any]]
+    map_name: str
+    frame: Any
+    grid: Grid
+    capacity: int
+    octile: Any
+    seed_arr: np.ndarray
+    size_class: bool = False
+    algo: Algorithm | None = None
+    program_grid: Grid | None = None
+    per_point: list[dict] = dataclasses.field(default_factory=list)
+    point_opt: list[Any] = dataclasses.field(default_factory=list)
+
+    def result_context(self) -> dict[str, Any]:
+        """What every result of the sweep is built with, from the plan."""
+        return dict(config=self.config, configs=self.configs, points=self.points,
+                    map_name=self.map_name, grid=self.grid, seed_arr=self.seed_arr,
+                    algo=self.algo, octile=self.octile, point_opt=self.point_opt,
+                    size_class=self.size_class, frame=self.frame)
+
+
+def _plan_sweep(preset, grid, points, seeds, generations, corner_rule, variant, sets,
+                population_capacity, size_class, overrides, timeline: Timeline,
+                report: Callable[[str, float], None]) -> _SweepPlan:
+    """The map and every point's configuration loaded and checked (phase ``load``), the
+    exact 8-connected optimum (``references``); where a path exists, the programs' map,
+    the algorithm at the sweep's capacity, each point's parameters and the exact optimum
+    of its own fitness (``references``), and the seeds (memory checked)."""
     with timeline.phase("load"):
-        config, grid, map_name, frame = load_problem(preset, grid, corner_rule, variant, sets,
-                                                     overrides, generations)
+        config, map_grid, map_name, frame = load_problem(
+            preset, grid, corner_rule, variant, sets, overrides, generations)
     configs = _point_configs(config, points)
     capacity = checked_capacity(configs, population_capacity)
     report("references", 0.0)
     with timeline.phase("references"):
-        octile = octile_optimum(grid)
+        octile = octile_optimum(map_grid)
+    problem = dict(config=config, configs=configs, points=points, map_name=map_name,
+                   frame=frame, grid=map_grid, capacity=capacity, octile=octile)
     if not octile.found:
-        seed_arr = seed_list(seeds, lambda n: check_memory(
-            n * len(configs), NO_PATH_BYTES_PER_RUN, "for their results"))
-        return [no_path_result(c, map_name, grid, seed_arr, build(c, grid)[0], octile.reason,
-                               timeline.as_dict(), capacity, frame) for c in configs]
+        return _SweepPlan(**problem, seed_arr=seed_list(seeds, lambda n: check_memory(
+            n * len(configs), NO_PATH_BYTES_PER_RUN, "for their results")))
     # the programs run on the map padded to its size class (decision 029), if asked
-    size_class = auto_size_class(grid) if size_class is None else bool(size_class)
-    map_grid, grid, build_config = grid, grid, config.override({"population.size": capacity})
+    size_class = auto_size_class(map_grid) if size_class is None else bool(size_class)
     with timeline.phase("references"):
-        if uses_guide(config):  # the exact distance fields the field initialiser steers by
-            grid = with_guide(grid)  # (computed on the map, padded with it)
-        if size_class:
-            grid = pad_to_class(grid)
-            if not int(config["population.capacity"]):
-                build_config = build_config.override(
-                    {"population.capacity": class_capacity(map_grid)})
+        program_grid, build_config = _program_map(config, map_grid, capacity, size_class)
         # the capacity is the largest size swept, also when it is below the preset's size
-        algo, _ = build(build_config, grid)
+        algo, _ = build(build_config, program_grid)
         per_point = [default_params(c, algo.islands) for c in configs]
-        # The exact optimum of each point's own fitness, once per distinct weight set
-        # (points may sweep the weights). It covers 8-connected paths: no bound for
-        # waypoint paths.
-        fit_keys = [(m, tuple(sorted(w.items()))) for m, w in map(fitness_weights, configs)]
-        fit_opts = {k: (FitnessOptimum(False, k[0], math.nan, reason=WAYPOINT_FITNESS)
-                        if algo.waypoints else fitness_optimum(map_grid, k[0], **dict(k[1])))
-                    for k in dict.fromkeys(fit_keys)}
-        point_opt = [fit_opts[k] for k in fit_keys]
-    n_points = len(configs)
-    seed_arr = seed_list(seeds, lambda n: check_result_memory(n * n_points, algo))
+        point_opt = _fitness_optima(configs, map_grid, algo)
+    seed_arr = seed_list(seeds, lambda n: check_result_memory(n * len(configs), algo))
+    return _SweepPlan(**problem, seed_arr=seed_arr, size_class=size_class, algo=algo,
+                      program_grid=program_grid, per_point=per_point, point_opt=point_opt)
 
+
+def _program_map(config: Config, grid: Grid, capacity: int,
+                 size_class: bool) -> tuple[Grid, Config]:
+    """The map the programs run on (the exact distance fields attached when an operator
+    steers by them, computed on the map and padded with it; padded to its size class
+    when asked) and the configuration they are built from (the sweep's capacity; the
+    class's path capacity unless the configuration sets one)."""
+    build_config = config.override({"population.size": capacity})
+    guided = with_guide(grid) if uses_guide(config) else grid
+    if not size_class:
+        return guided, build_config
+    if not int(config["population.capacity"]):
+        build_config = build_config.override({"population.capacity": class_capacity(grid)})
+    return pad_to_class(guided), build_config
+
+
+def _fitness_optima(configs: Sequence[Config], grid: Grid, algo: Algorithm) -> list[Any]:
+    """The exact optimum of each point's own fitness, once per distinct weight set
+    (points may sweep the weights). It covers 8-connected paths: no bound for waypoint
+    paths."""
+    fit_keys = [(m, tuple(sorted(w.items()))) for m, w in map(fitness_weights, configs)]
+    fit_opts = {k: (FitnessOptimum(False, k[0], math.nan, reason=WAYPOINT_FITNESS)
+                    if algo.waypoints else fitness_optimum(grid, k[0], **dict(k[1])))
+                for k in dict.fromkeys(fit_keys)}
+    return [fit_opts[k] for k in fit_keys]
+
+
+def _no_path_results(plan: _SweepPlan, timeline: Timeline) -> list[Result]:
+    """One "no path" result per point, naming the cause (nothing ran)."""
+    return [no_path_result(c, plan.map_name, plan.grid, plan.seed_arr,
+                           build(c, plan.grid)[0], plan.octile.reason, timeline.as_dict(),
+                           plan.capacity, plan.frame) for c in plan.configs]
+
+
+def _compile_init(plan: _SweepPlan, timeline: Timeline,
+                  report: Callable[[str, float], None]) -> tuple[_Runs, Programs]:
+    """This process's runs as calls of the compiled programs, on the programs' map with
+    its per-map tables (attached once per run rather than computed every generation),
+    and the program set with its init program compiled (phase ``compile``)."""
     report("compile", 0.0)
     with timeline.phase("compile"):
-        grid = tables_for(grid)  # per-map tables, once per run rather than per generation
-        runs = _this_process_runs(seed_arr, per_point, grid, algo)
-        grid = runs.grid
-        token = COMPILE_PROGRESS.set(lambda frac: report("compile", frac))
-        try:
-            progs = programs_for(algo, grid, runs.calls[0][1], runs.per_call)
-        finally:
-            COMPILE_PROGRESS.reset(token)
+        runs = _this_process_runs(plan.seed_arr, plan.per_point,
+                                  tables_for(plan.program_grid), plan.algo)
+        progs = programs_for(plan.algo, runs.grid, runs.calls[0][1], runs.per_call,
+                             lambda frac: report("compile", frac))
+    return runs, progs
 
+
+@dataclasses.dataclass(frozen=True)
+class _Start:
+    """The initial populations of every call and what the initialisation did, for every
+    run of every process (gathered, so that all of them decide alike whether to evolve)."""
+
+    states: list
+    initial: np.ndarray
+    rate: np.ndarray
+    unfilled: np.ndarray
+    from_fallback: np.ndarray
+
+    @property
+    def started(self) -> np.ndarray:
+        """The runs whose initial population holds a path."""
+        return self.initial > 0
+
+    def result_context(self) -> dict[str, Any]:
+        """What every result of the sweep is built with, from the initialisation."""
+        return dict(rate=self.rate, unfilled=self.unfilled, from_fallback=self.from_fallback,
+                    initial=self.initial)
+
+
+def _initialise(plan: _SweepPlan, runs: _Runs, progs: Programs,
+                timeline: Timeline) -> _Start:
+    """Every call's initial population (phase ``init``), the initialisation's success rate,
+    unfilled slots and field-walk fallbacks per run, gathered over the processes; a
+    warning when slots stayed empty."""
     with timeline.phase("init"):
-        inits = jax.block_until_ready([progs.init(k, grid, p) for k, p in runs.calls])
+        inits = jax.block_until_ready([progs.init(k, runs.grid, p) for k, p in runs.calls])
     states = [state for state, *_ in inits]
     init_best = runs.joined([state.best_fitness for state in states])
     init_rate, unfilled, fallback = (runs.joined([i[j] for i in inits]) for j in (1, 2, 3))
-    # Every process's initial best, so that all of them decide alike whether to evolve.
     initial, init_rate, unfilled, fallback = parallel.allgather_runs(
         (init_best, init_rate, unfilled, fallback))
-    started = initial > 0
     n_total = len(initial)
-    rate = init_rate.reshape(n_total, -1).mean(axis=1)
-    unf = unfilled.reshape(n_total, -1).sum(axis=1)
-    from_fallback = fallback.reshape(n_total, -1).sum(axis=1)
-    warn_unfilled(unf, rate, algo.population * algo.islands, config)
-    common = dict(config=config, configs=configs, points=points, map_name=map_name,
-                  grid=map_grid, seed_arr=seed_arr, algo=algo, octile=octile,
-                  point_opt=point_opt, rate=rate, unfilled=unf,
-                  from_fallback=from_fallback, initial=initial, size_class=size_class,
-                  frame=frame)
-    if not started.any():  # nothing can succeed: no evolution, no post-optimisation
-        report("compile", 1.0)
-        timing = {"compile_s": 0.0, "init_s": 0.0, "evolve_s": 0.0, "post_s": 0.0,
-                  **timeline.as_dict()}
-        return unstarted_results(timing=timing, **common)
+    start = _Start(states, initial, init_rate.reshape(n_total, -1).mean(axis=1),
+                   unfilled.reshape(n_total, -1).sum(axis=1),
+                   fallback.reshape(n_total, -1).sum(axis=1))
+    warn_unfilled(start.unfilled, start.rate, plan.algo.population * plan.algo.islands,
+                  plan.config)
+    return start
 
-    with timeline.phase("compile"):
-        progs.compile_rest(lambda frac: report("compile", frac))
-    report("compile", 1.0)
 
+def _evolve_and_finish(plan: _SweepPlan, runs: _Runs, progs: Programs, states: list,
+                       timeline: Timeline, report: Callable[[str, float], None]) -> tuple:
+    """The generations (phase ``evolve``) and the finish program (``post``): every run's
+    outputs and per-generation history, gathered over the processes, the paths on the
+    user's map (not its padding)."""
     with timeline.phase("evolve"):
-        states, history = _evolve_in_chunks(progs, algo.generations, runs, grid, states,
-                                            lambda frac: report("evolve", frac))
+        states, history = _evolve_in_chunks(progs, plan.algo.generations, runs, runs.grid,
+                                            states, lambda frac: report("evolve", frac))
     report("post", 0.0)
     with timeline.phase("post"):
-        outs = jax.block_until_ready([progs.finish(grid, p, st)
+        outs = jax.block_until_ready([progs.finish(runs.grid, p, st)
                                       for (_, p), st in zip(runs.calls, states)])
         out = jax.tree_util.tree_map(lambda *parts: runs.joined(parts), *outs)
         host, hist = parallel.allgather_runs((out, history))
-        for key in ("cells", "raw_cells"):  # reported on the map, not its padding
-            host[key] = map_cells(host[key], grid.width, map_grid.width)
-    budget = any_angle_budget
-    if budget == "auto":  # the references never take longer than the GA's own work
+        for key in ("cells", "raw_cells"):
+            host[key] = map_cells(host[key], runs.grid.width, plan.grid.width)
+    return host, hist
+
+
+def _any_angle_bounds(plan: _SweepPlan, host: dict, budget: float | str | None,
+                      timeline: Timeline,
+                      report: Callable[[str, float], None]) -> AnyAngleBounds:
+    """The any-angle references of the map (phase ``any_angle``), within ``budget``
+    seconds; ``"auto"``: as long as the GA's own work took (init, evolve, post), at least
+    :data:`MIN_ANY_ANGLE_BUDGET`."""
+    if budget == "auto":
         budget = max(sum(timeline.seconds.get(p, 0.0) for p in ("init", "evolve", "post")),
                      MIN_ANY_ANGLE_BUDGET)
     report("any-angle", 0.0)
     with timeline.phase("any_angle"):
-        bounds = any_angle_references(map_grid, octile, budget,
-                                      lambda frac: report("any-angle", frac),
-                                      _best_path(host, map_grid.width))
-    return _point_results(host, hist, started=started, timing=timeline.as_dict(),
-                          bounds=bounds, **common)
+        return any_angle_references(plan.grid, plan.octile, budget,
+                                    lambda frac: report("any-angle", frac),
+                                    _best_path(host, plan.grid.width))
 
 
 def _best_path(host: dict, width: int) -> np.ndarray | None:
@@ -677,15 +787,18 @@ def run(
     (``crossover__probability=...``) does not compile again. For many hyper-parameter
     values in one call use :func:`sweep`.
     """
-    return sweep(preset, grid, [{}], seeds, generations=generations,
-                 corner_rule=corner_rule, variant=variant, sets=sets, progress=progress,
-                 chunks=chunks, population_capacity=population_capacity,
-                 size_class=size_class, any_angle_budget=any_angle_budget, **overrides)[0]
+    return sweep(preset, grid, [{}], seeds, **_run_options(locals()), **overrides)[0]
 
 
-RUN_OPTIONS = ("generations", "corner_rule", "variant", "sets", "progress", "chunks",
-               "population_capacity", "size_class", "any_angle_budget")
-"""Keyword arguments of :func:`run` (besides ``seeds``) that are not configuration keys."""
+RUN_OPTIONS = tuple(name for name, p in inspect.signature(run).parameters.items()
+                    if p.kind is inspect.Parameter.KEYWORD_ONLY)
+"""Keyword arguments of :func:`run` (besides ``seeds``) that are not configuration keys:
+read from its signature, the one list of them (:func:`sweep` takes the same)."""
+
+
+def _run_options(arguments: Mapping[str, Any]) -> dict[str, Any]:
+    """The values of :data:`RUN_OPTIONS` among a call's ``arguments`` (its ``locals()``)."""
+    return {name: arguments[name] for name in RUN_OPTIONS}
 
 
 def check_run(preset: str | Config, grid: Grid | str, **options: Any) -> Config:

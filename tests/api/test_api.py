@@ -1006,3 +1006,24 @@ def test_the_field_repair_reaches_the_operators_that_repair(grid):
     assert repaired.failures[:, 1].sum() < plain.failures[:, 1].sum()
     with pytest.raises(ParameterError, match="repair.fallback has no effect in 'sga'"):
         api.run("sga", grid, seeds=1, repair__fallback="field", **SMALL)
+
+
+def test_run_and_sweep_take_one_list_of_options(monkeypatch):
+    """``run`` and ``sweep`` take the same keyword options (RUN_OPTIONS, read from
+    ``run``'s signature) with the same defaults, and ``run`` passes each on."""
+    import inspect
+
+    from jaxga.api import runs
+
+    def keyword_only(fn):
+        return {n: p.default for n, p in inspect.signature(fn).parameters.items()
+                if p.kind is inspect.Parameter.KEYWORD_ONLY}
+
+    assert tuple(keyword_only(api.run)) == api.RUN_OPTIONS
+    assert keyword_only(api.sweep) == keyword_only(api.run)
+    assert "generations" in api.RUN_OPTIONS and "seeds" not in api.RUN_OPTIONS
+    calls = []
+    monkeypatch.setattr(runs, "sweep", lambda *a, **k: calls.append((a, k)) or ["result"])
+    given = {name: object() for name in api.RUN_OPTIONS}
+    assert api.run("sga", "m", 7, **given, population__size=9) == "result"
+    assert calls == [(("sga", "m", [{}], 7), {**given, "population__size": 9})]
