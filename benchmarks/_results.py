@@ -104,7 +104,8 @@ PRESETS = ("sga", "imga", "agacd", "iga_zhang", "mpmga", "iga_zhu")
 (``jaxga.config.presets.preset_names()`` lists them alphabetically)."""
 
 PROGRAMS = ("init", "finish", "evolve")
-"""The programs ``jaxga.api.programs.compiled_programs`` compiles, in compile order."""
+"""The programs of a program set (``jaxga.api.programs.Programs``), in the order of
+:func:`xla_seconds_by_program`'s entries."""
 
 
 def xla_seconds_by_program(xla: list) -> dict[str, float]:

@@ -61,7 +61,7 @@ class Programs:
     def _compile(self, names: Sequence[str], report: Callable[[float], None]) -> None:
         """Compile (or read) the ``names`` not compiled yet, one after the other,
         reporting the fraction of the work (the tracing, then each program) done after
-        the tracing and after each program but the last."""
+        each program but the last."""
         steps = 1 + len(self.NAMES)  # the tracing, then each program
         for name in names:
             if name in self._compiled:
@@ -70,7 +70,6 @@ class Programs:
             if program is None:
                 if self._traced is None:
                     self._traced = self._trace()
-                    report(1 / steps)
                 program = executables.compile_and_store(
                     self._keys[name], self._traced[name].lower(),
                     FINISH_COMPILER_OPTIONS if name == "finish" else None)
@@ -82,6 +81,12 @@ class Programs:
                 report(done / steps)
 
     def compile_init(self, report: Callable[[float], None]) -> None:
+        """Compile (or read) the init program if it is not yet, reporting the tracing's
+        share of the work first (then :meth:`_compile`'s fractions), so a fresh set
+        reports 1/4, 2/4 here and 3/4 in :meth:`compile_rest`, wherever its programs
+        come from; a compiled one reports nothing."""
+        if "init" not in self._compiled:
+            report(1 / (1 + len(self.NAMES)))
         self._compile(["init"], report)
 
     def compile_rest(self, report: Callable[[float], None]) -> None:
@@ -313,7 +318,7 @@ def programs_for(algo: Algorithm, grid: Any, params: dict, n_runs: int,
     """The program set of ``n_runs`` runs per call (a multiple of the local devices) with
     these parameters (arrays with the runs first) (:func:`compiled_programs`), its init
     program compiled (or read) now if this process has not yet: ``report`` is told how
-    far that has got (a fraction below 1, after each program; nothing when it is)."""
+    far that has got (:meth:`Programs.compile_init`; nothing when it is compiled)."""
     algo = program_algorithm(algo)
     n_dev = jax.local_device_count()
     grid_spec = shape_spec(grid)

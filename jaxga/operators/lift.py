@@ -264,7 +264,8 @@ class _Gates:
         operator key; with an alternative, ``extra[0]`` is ``use_op``."""
         use_op = None
         if has_alternative:
-            use_op, extra = jnp.asarray(extra[0], bool)[:keys.shape[0]], extra[1:]
+            use_op, extra = jnp.asarray(extra[0], bool), extra[1:]
+            use_op = use_op[:keys.shape[0]] if use_op.ndim else use_op  # pairs: P // 2
         prob = jnp.broadcast_to(jnp.asarray(prob, jnp.float32), (keys.shape[0],))
         k_gate, k_op = jax.vmap(lambda k: tuple(jax.random.split(k)))(keys)
         applied = jax.vmap(lambda k: jax.random.uniform(k, (), jnp.float32))(k_gate) < prob

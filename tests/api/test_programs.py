@@ -344,3 +344,34 @@ def test_a_stored_program_that_fails_to_run_is_forgotten_and_compiled_again(
     assert served and calls  # the broken programs were served, then forgotten
     np.testing.assert_array_equal(got.cells, want.cells)
     np.testing.assert_array_equal(got.history["best"], want.history["best"])
+
+
+@pytest.mark.parametrize(("stored", "expected"), [
+    ((), [0.25, 0.5, 0.75]),                             # nothing stored: all compiled
+    (("init", "evolve", "finish"), [0.25, 0.5, 0.75]),   # all read from the store
+    (("init",), [0.25, 0.5, 0.75]),                      # init stored by an interrupted run
+])
+def test_a_program_sets_compile_progress_only_goes_forward(monkeypatch, stored, expected):
+    """A fresh program set reports 1/4 (the tracing's share), 2/4 after init and 3/4
+    after evolve, wherever its programs come from; a compiled set reports nothing."""
+    from jaxga.api import executables
+    from jaxga.api.programs import Programs
+
+    class Traced:
+        def lower(self):
+            return "lowered"
+
+    monkeypatch.setattr(executables, "load", lambda key, devices: key if key in stored else None)
+    monkeypatch.setattr(executables, "compile_and_store", lambda key, lowered, options: key)
+    progs = Programs(lambda: {n: Traced() for n in Programs.NAMES},
+                     {n: n for n in Programs.NAMES}, jax.devices()[:1])
+    fractions = []
+    progs.compile_init(fractions.append)
+    progs.compile_rest(fractions.append)
+    assert fractions == expected
+    assert progs.read == len(stored)
+    assert (progs.init, progs.evolve, progs.finish) == Programs.NAMES
+    again = []
+    progs.compile_init(again.append)
+    progs.compile_rest(again.append)
+    assert again == []
