@@ -12,6 +12,12 @@ same function, so every random bit, and so every result of jaxga, is identical (
 bit for bit in ``tests/api/test_lowering.py``); only the compiled program changes, which
 XLA compiles faster (decision 013).
 
+Only the CPU: the rule is registered for ``platform="cpu"`` alone, so a program lowered
+for a GPU (CUDA or ROCm) keeps JAX's own rule there (the unrolled rounds, or JAX's GPU
+kernel when ``jax_threefry_gpu_kernel_lowering`` is set), whatever this module does;
+``tests/engine/test_platform.py`` lowers the same draws for ``cuda`` and ``rocm`` with
+and without it and finds the same program (docs/devices.md).
+
 ``import jaxga`` turns it on. It changes how JAX lowers Threefry on the CPU for the whole
 process, which only ever changes compile time: set ``JAXGA_THREEFRY=rolled`` in the
 environment before importing jaxga, or call ``unroll_threefry_on_cpu(False)``, to keep
@@ -53,8 +59,9 @@ def unroll_threefry_on_cpu(enable: bool = True) -> bool:
 
     Same random bits either way (the hash of Salmon et al. 2011 that ``jax.random``
     implements); the unrolled form compiles faster and fuses with its consumers.
-    Returns whether the requested lowering is in effect (``False`` when this JAX does
-    not expose the rules).
+    Other platforms are never touched (their lowering is JAX's own). Returns whether
+    the requested lowering is in effect (``False`` when this JAX does not expose the
+    rules).
     """
     rules = _rules()
     if rules is None:

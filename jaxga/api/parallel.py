@@ -1,7 +1,7 @@
 """Every core of a machine, and several processes or hosts, for one experiment.
 
-Issue 7. Runs (seeds x sweep points) are one leading axis (``jaxga.api.sweep``). This
-module decides how that axis is split:
+Runs (seeds x sweep points) are one leading axis (``jaxga.api.sweep``). This module
+decides how that axis is split (docs/devices.md):
 
 * **Devices of one process.** On a CPU, XLA gives a process one device by default and
   leaves the other cores mostly idle (two host devices run faster than one:
@@ -51,10 +51,14 @@ module decides how that axis is split:
   but then JAX's shutdown does not wait for the other processes and a process that ends
   after process 0 is aborted: worse.)
 
-* **GPU.** Nothing here is CPU-specific except the device count: with a CUDA build of
-  JAX (``pip install "jaxga[cuda]"``, i.e. ``jax[cuda12]``) each process shards its share
-  over its visible GPUs. Only the CPU path is tested (no GPU on CI); the GPU path is the
-  same code with another default backend.
+* **GPU.** The runs always go over :func:`run_devices`, the local devices of JAX's
+  default backend: with a CUDA build of JAX (``pip install ".[cuda]"``, i.e.
+  ``jax[cuda12]``) that is every visible GPU (``CUDA_VISIBLE_DEVICES``), one program per
+  GPU as on CPU devices. The one-device-per-core setting is CPU-only by construction: it
+  is JAX's ``jax_num_cpu_devices``, which sizes the CPU backend alone; on a GPU machine
+  that backend computes none of the runs (``benchmarks/device_check.py`` uses it for its
+  CPU reference). Only the CPU path runs in the test suite (no GPU on CI);
+  ``benchmarks/device_check.py`` is the check to run on a GPU.
 """
 
 from __future__ import annotations
@@ -136,6 +140,9 @@ def set_local_devices(n: int | None = None, *, warn: bool = True) -> int | None:
     started with another device count, warns (unless ``warn`` is False; results do not
     depend on the device count, only the speed does) and leaves it. Returns the device
     count asked for, or None when the user's own setting was kept.
+
+    Only the CPU backend's device count (``jax_num_cpu_devices``): where JAX's default
+    backend is a GPU, the runs go over the GPUs (:func:`run_devices`) whatever this sets.
     """
     if n is None:
         if user_device_setting() is not None:
@@ -167,6 +174,15 @@ def use_all_cores() -> int | None:
     Same as :func:`set_local_devices` with no argument.
     """
     return set_local_devices(None)
+
+
+def run_devices() -> list[Any]:
+    """The devices this process splits its runs over: ``jax.local_devices()`` of JAX's
+    default backend (its CPU devices, :func:`set_local_devices`; or its GPUs).
+
+    Starts JAX's backends (after it, :func:`set_local_devices` can no longer change the
+    count)."""
+    return list(jax.local_devices())
 
 
 class _Session:

@@ -72,7 +72,7 @@ class Programs:
                     self._traced = self._trace()
                 program = executables.compile_and_store(
                     self._keys[name], self._traced[name].lower(),
-                    FINISH_COMPILER_OPTIONS if name == "finish" else None)
+                    compiler_options(name, self._devices[0].platform))
             else:
                 self.read += 1
             self._compiled[name] = program
@@ -278,13 +278,29 @@ PROGRAM_CACHE_SIZE = 8
 
 
 FINISH_COMPILER_OPTIONS = {"xla_cpu_use_fusion_emitters": False}
-"""XLA options of the finish program (post-optimisation, metrics; it runs once per run):
-XLA:CPU's older (LLVM IR) fusion emitters compile it faster than the default MLIR
+"""XLA:CPU options of the finish program (post-optimisation, metrics; it runs once per
+run): XLA:CPU's older (LLVM IR) fusion emitters compile it faster than the default MLIR
 emitters, with the same results (checked in the A/B tables and by
 ``tests/engine/test_engine.py``), and its run is no slower (decision 012). Always these
-options, whatever the number of runs, so a run's results never depend on how many runs
-share its call. The init and evolve programs keep XLA's defaults: with the older
-emitters they compile faster but run slower on wide batches (decision 012)."""
+options on the CPU, whatever the number of runs, so a run's results never depend on how
+many runs share its call; never on another platform (:func:`compiler_options`). The
+init and evolve programs keep XLA's defaults: with the older emitters they compile
+faster but run slower on wide batches (decision 012)."""
+
+
+def compiler_options(name: str, platform: str) -> dict[str, bool] | None:
+    """The XLA options program ``name`` (``"init"``, ``"evolve"``, ``"finish"``) is
+    compiled with for devices of ``platform`` (``jax.Device.platform``): a copy of
+    :data:`FINISH_COMPILER_OPTIONS` for the finish program on ``"cpu"``, None (XLA's
+    defaults) otherwise.
+
+    Why only there: they are ``xla_cpu_*`` options, measured on XLA:CPU (decision 012).
+    XLA's GPU compiler has no emitter they select, so passing them there would at best be
+    ignored; not passing them keeps a GPU compile exactly XLA's default one
+    (docs/devices.md)."""
+    if name == "finish" and platform == "cpu":
+        return dict(FINISH_COMPILER_OPTIONS)
+    return None
 
 
 def program_algorithm(algo: Algorithm) -> Algorithm:
