@@ -58,6 +58,7 @@ def _bounded_compiled_programs():
 
 
 SLOWEST_FILES = ("test_docs.py", "test_api.py", "test_notebooks.py", "test_distributed.py",
+                 "test_device_check.py",
                  "test_crossover.py", "test_behaviour.py", "test_field.py", "test_registry.py",
                  "test_batching.py", "test_init.py", "test_engine.py", "test_mutation.py",
                  "test_doe.py")
