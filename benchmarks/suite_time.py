@@ -71,6 +71,8 @@ def main() -> None:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--top", type=int, default=15, help="how many of the slowest tests")
     ap.add_argument("--no-write", action="store_true", help="do not append to RESULTS.md")
+    ap.add_argument("--min-wall", type=float, default=10.0,
+                    help="files whose tests took less (seconds) share one row of the table")
     ap.add_argument("pytest_args", nargs="*", help="extra pytest arguments (after --)")
     a = ap.parse_args()
     with tempfile.TemporaryDirectory(prefix="jaxga-suite-") as tmp:
@@ -82,9 +84,18 @@ def main() -> None:
         """Programs XLA compiled: JAX times a persistent-cache load as a compile too."""
         return int(c["n:" + BACKEND] - c["n:" + SAVED])
 
-    rows = [[f.removeprefix("tests/"), worker_of[f], files[f]["tests"], files[f]["wall"],
-             files[f][BACKEND], compiled(files[f]), int(files[f]["n:" + SAVED]),
-             files[f][TRACE], files[f][LOWER], files[f][SAVED]] for f in order]
+    def row(name: str, worker: str, c: collections.Counter) -> list:
+        return [name, worker, c["tests"], c["wall"], c[BACKEND], compiled(c),
+                int(c["n:" + SAVED]), c[TRACE], c[LOWER], c[SAVED]]
+
+    listed = [f for f in order if files[f]["wall"] >= a.min_wall]
+    rows = [row(f.removeprefix("tests/"), worker_of[f], files[f]) for f in listed]
+    short = collections.Counter()
+    for f in order[len(listed):]:
+        short.update(files[f])
+    if short:  # the files a reader need not look at one by one
+        rows.append(row(f"{len(order) - len(listed)} files under {a.min_wall:g} s each",
+                        "", short))
     total = collections.Counter()
     for f in order:
         total.update(files[f])
