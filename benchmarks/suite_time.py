@@ -71,7 +71,7 @@ def main() -> None:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--top", type=int, default=15, help="how many of the slowest tests")
     ap.add_argument("--no-write", action="store_true", help="do not append to RESULTS.md")
-    ap.add_argument("--min-wall", type=float, default=10.0,
+    ap.add_argument("--min-wall", type=float, default=20.0,
                     help="files whose tests took less (seconds) share one row of the table")
     ap.add_argument("pytest_args", nargs="*", help="extra pytest arguments (after --)")
     a = ap.parse_args()
