@@ -318,6 +318,7 @@ def _sweep(preset, grid, points, seeds, *, generations, corner_rule, variant, se
     if plan.algo is None:  # no path: nothing to compile
         return _no_path_results(plan, timeline)
     runs, progs = _compile_init(plan, timeline, report)
+    report("init", 0.0)
     start = _initialise(plan, runs, progs, timeline)
     context = dict(plan.result_context(), **start.result_context())
     if not start.started.any():  # nothing can succeed: no evolution, no post-optimisation
@@ -327,6 +328,7 @@ def _sweep(preset, grid, points, seeds, *, generations, corner_rule, variant, se
     with timeline.phase("compile"):
         progs.compile_rest(lambda frac: report("compile", frac))
     report("compile", 1.0)
+    report("evolve", 0.0)
     host, hist = _evolve_and_finish(plan, runs, progs, start.states, timeline, report)
     bounds = _any_angle_bounds(plan, host, any_angle_budget, timeline, report)
     return _point_results(host, hist, started=start.started, timing=timeline.as_dict(),

@@ -530,21 +530,22 @@ def test_compiled_programs_are_reused_across_maps_seeds_and_values(grid):
 
 
 def test_progress_is_reported_after_every_chunk_and_chunks_is_deprecated(grid):
-    """Progress: the references, the compilation's steps (when it compiles), then after
-    every call of the evolve chunk (25 generations; 60 = 25 + 25 + 10), the
-    post-optimisation and the any-angle reference; ``chunks`` changes nothing but
-    warns."""
+    """Progress: the references, the compilation's steps (when it compiles), the
+    initialisation, the evolution as it starts and after every call of the evolve chunk
+    (25 generations; 60 = 25 + 25 + 10), the post-optimisation and the any-angle
+    reference, so that a user always sees which phase is running; ``chunks`` changes
+    nothing but warns."""
     kw = {**SMALL, "generations": 60}
     one = api.run("iga_zhang", grid, seeds=3, **kw)
     seen = []
     with pytest.warns(DeprecationWarning, match="chunks is ignored"):
         again = api.run("iga_zhang", grid, seeds=3, chunks=3,
                         progress=lambda stage, frac: seen.append((stage, frac)), **kw)
-    assert seen[:7] == [("references", 0.0), ("compile", 0.0), ("compile", 1.0),
-                        ("evolve", 25 / 60), ("evolve", 50 / 60), ("evolve", 1.0),
-                        ("post", 0.0)]
-    assert [stage for stage, _ in seen[7:]] == ["any-angle"] * len(seen[7:])
-    assert seen[7] == ("any-angle", 0.0) and seen[-1] == ("any-angle", 1.0)
+    assert seen[:9] == [("references", 0.0), ("compile", 0.0), ("init", 0.0),
+                        ("compile", 1.0), ("evolve", 0.0), ("evolve", 25 / 60),
+                        ("evolve", 50 / 60), ("evolve", 1.0), ("post", 0.0)]
+    assert [stage for stage, _ in seen[9:]] == ["any-angle"] * len(seen[9:])
+    assert seen[9] == ("any-angle", 0.0) and seen[-1] == ("any-angle", 1.0)
     for field in ("cells", "length", "fitness", "convergence_generation"):
         np.testing.assert_array_equal(getattr(again, field), getattr(one, field))
     for h in ("best", "mean", "std"):
