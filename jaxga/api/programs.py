@@ -414,7 +414,8 @@ def compiled_programs(algo: Algorithm, grid_spec: Any, params_spec: Any, n_runs:
         finish_t = jit(do_finish, (None, 0, 0)).trace(grid_spec, params_spec, state_spec)
         return {"init": init_t, "evolve": evolve_t, "finish": finish_t}
 
-    devices = [jax.devices()[0]] if sh is None else list(sh.mesh.devices.flat)
+    # this process's own device: with several processes, jax.devices()[0] is process 0's
+    devices = [jax.local_devices()[0]] if sh is None else list(sh.mesh.devices.flat)
     settings = (INIT_RUN_BLOCK, RUN_BLOCK, GENERATION_CHUNK, FINISH_COMPILER_OPTIONS)
     stored = {name: executables.program_key(name, algo, grid_spec, params_spec, n_runs,
                                             devices, settings) for name in Programs.NAMES}
