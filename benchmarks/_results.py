@@ -99,6 +99,15 @@ def child_at_revision(revision: str, script: str, spec: str) -> dict:
                            check=True, capture_output=True)
 
 
+def peak_rss_bytes() -> int:
+    """This process's peak resident memory in bytes (``ru_maxrss``: KiB on Linux, bytes
+    on macOS)."""
+    import resource
+
+    rss = resource.getrusage(resource.RUSAGE_SELF).ru_maxrss
+    return int(rss if sys.platform == "darwin" else rss * 1024)
+
+
 PRESETS = ("sga", "imga", "agacd", "iga_zhang", "mpmga", "iga_zhu")
 """The six presets in the papers' order, the benchmarks' default and table order
 (``jaxga.config.presets.preset_names()`` lists them alphabetically)."""

@@ -50,7 +50,6 @@ import gc
 import json
 import os
 import platform
-import resource
 import sys
 import time
 from collections.abc import Callable, Iterator
@@ -182,9 +181,7 @@ def peak_memory(device: Any) -> dict:
     if "peak_bytes_in_use" in stats:
         return {"bytes": int(stats["peak_bytes_in_use"]),
                 "source": "device.memory_stats()['peak_bytes_in_use']"}
-    rss = resource.getrusage(resource.RUSAGE_SELF).ru_maxrss
-    scale = 1 if sys.platform == "darwin" else 1024  # bytes on macOS, KiB on Linux
-    return {"bytes": int(rss * scale), "source": "process peak RSS (ru_maxrss)"}
+    return {"bytes": _results.peak_rss_bytes(), "source": "process peak RSS (ru_maxrss)"}
 
 
 def out_of_memory(err: BaseException) -> bool:

@@ -19,9 +19,8 @@ from __future__ import annotations
 
 import argparse
 import json
-import resource
 
-from _results import PRESETS, cold_child, markdown_table, record
+from _results import PRESETS, cold_child, markdown_table, peak_rss_bytes, record
 
 
 def child(spec: str) -> None:
@@ -44,7 +43,7 @@ def child(spec: str) -> None:
         "init_ms": 1000 * r.timing["init_s"] / seeds,
         "init_mb": memory["init"],
         "evolve_mb": max(v for k, v in memory.items() if k.startswith("evolve")),
-        "rss_mb": resource.getrusage(resource.RUSAGE_SELF).ru_maxrss / 1024,
+        "rss_mb": peak_rss_bytes() / 2**20,
     }))
 
 

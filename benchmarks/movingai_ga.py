@@ -33,7 +33,7 @@ import time
 from pathlib import Path
 
 import numpy as np
-from _results import PRESETS, SHARED, cold_child, markdown_table, record
+from _results import PRESETS, SHARED, cold_child, markdown_table, peak_rss_bytes, record
 
 MOVINGAI = SHARED / "movingai"
 MAPS = ("maze-32-32-2", "random-32-32-20", "room-32-32-4", "den312d", "warehouse-10-20-10-2-1",
@@ -53,7 +53,6 @@ def scenarios(name: str):
 
 
 def child(spec: str) -> None:
-    import resource
 
     import jaxga.api.parallel
 
@@ -79,7 +78,7 @@ def child(spec: str) -> None:
         out["fallback_share"].append(float(np.mean(r.init_fallback)) / r.population)
         out["scenarios"][label] = {"optimum": p.optimal_length, "success": float(ok.mean()),
                                    "capacity": r.path_capacity, "reason": r.reason}
-    out["rss_mb"] = resource.getrusage(resource.RUSAGE_SELF).ru_maxrss / 1024
+    out["rss_mb"] = peak_rss_bytes() / 2**20
     print(json.dumps(out))
 
 

@@ -49,7 +49,7 @@ import time
 from pathlib import Path
 
 import numpy as np
-from _results import markdown_table, parse_args, record
+from _results import markdown_table, parse_args, peak_rss_bytes, record
 
 from jaxga.api.parallel import cores
 
@@ -67,7 +67,6 @@ def grid_for(setting: str):
 
 def child(preset: str, setting: str, seeds: int, generations: int) -> dict:
     """One measurement (runs in a fresh process)."""
-    import resource
 
     from jaxga.api import run
 
@@ -85,7 +84,7 @@ def child(preset: str, setting: str, seeds: int, generations: int) -> dict:
         "compile_s": t["compile_s"], "init_s": t["init_s"], "evolve_s": t["evolve_s"],
         "post_s": t["post_s"], "population": r.population, "generations": r.generations,
         "success": float(r.success.mean()),
-        "peak_mib": resource.getrusage(resource.RUSAGE_SELF).ru_maxrss / 1024,
+        "peak_mib": peak_rss_bytes() / 2**20,
     }
 
 

@@ -315,7 +315,7 @@ def _sweep(preset, grid, points, seeds, *, generations, corner_rule, variant, se
                       DeprecationWarning, stacklevel=3)
     plan = _plan_sweep(preset, grid, points, seeds, generations, corner_rule, variant, sets,
                        population_capacity, size_class, overrides, timeline, report)
-    if plan.algo is None:  # no path: nothing to compile
+    if not plan.octile.found:  # no path: nothing to compile
         return _no_path_results(plan, timeline)
     runs, progs = _compile_init(plan, timeline, report)
     report("init", 0.0)
@@ -347,7 +347,8 @@ class _SweepPlan:
     ``grid`` is the user's map: the results, the references and the paths are on it.
     ``program_grid`` is the map the programs run on: with the exact distance fields when
     an operator steers by them, padded to its size class when asked (decision 029).
-    ``algo`` is None when the goal cannot be reached (then nothing runs)."""
+    Without a path (``octile.found`` false) nothing runs: no ``algo``, programs' map or
+    parameters."""
 
     config: Config
     configs: list[Config]
