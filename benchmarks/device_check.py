@@ -14,7 +14,7 @@ persistent cache are off. The phases, in order:
    (``Result.timing``: loading, references, compile, init, evolve, post, ...).
 2. **Sweep**: ``jaxga.sweep("sga", ...)`` over 16 values of ``mutation.probability`` x
    1000 seeds (50 generations), through jaxga's own programs and devices
-   (``jaxga.api.programs``: calls of 32 runs per device).
+   (``jaxga.api.programs``: calls of the platform's sizes, ``run_layout``).
 3. **Agreement** with the CPU for the same seeds (:func:`agreement`): the random bits,
    the evaluation of the sweep's paths, and whole runs of two sweep points against the
    pure core (``jaxga.GA.run``, the same seeds) compiled for ``jax.devices("cpu")[0]``
@@ -213,9 +213,11 @@ def main_job(settings: dict) -> dict:
 def sweep(settings: dict) -> tuple[dict, list]:
     """``jaxga.sweep`` of :data:`SWEEP_PRESET` over :data:`SWEEP_POINTS`; the summary and
     the results (the agreement phase checks them)."""
+    import jax
     import numpy as np
 
     import jaxga
+    from jaxga.api import run_layout
 
     t0 = time.perf_counter()
     results = jaxga.sweep(SWEEP_PRESET, MAIN_MAP, [{SWEEP_KEY: p} for p in SWEEP_POINTS],
@@ -224,18 +226,22 @@ def sweep(settings: dict) -> tuple[dict, list]:
     wall = time.perf_counter() - t0
     timing = results[0].timing
     runs = len(SWEEP_POINTS) * settings["sweep_seeds"]
+    n_dev = jax.local_device_count()
+    per_device, calls = run_layout(runs, n_dev, grid_for("20x20").n_cells)
     ind_gen = runs * results[0].population * results[0].generations
     summary = {
         "preset": SWEEP_PRESET, "map": MAIN_MAP, "key": SWEEP_KEY, "points": SWEEP_POINTS,
         "seeds": settings["sweep_seeds"], "generations": int(results[0].generations),
         "population": int(results[0].population), "runs": runs, "wall_s": wall,
+        "runs_per_call": per_device * n_dev, "calls": calls,
         "timing": dict(timing), "runs_per_s": runs / wall,
         "evolve_ind_gen_per_s": ind_gen / timing["evolve_s"],
         "success": float(np.mean([r.success.mean() for r in results])),
         "mean_length": [float(np.mean(r.length[r.success.astype(bool)]))
                         if r.success.any() else None for r in results],
     }
-    say(f"sweep: {runs} runs in {wall:.1f} s (compile {timing['compile_s']:.1f} s), "
+    say(f"sweep: {runs} runs as {calls} call(s) of {per_device * n_dev} in {wall:.1f} s "
+        f"(compile {timing['compile_s']:.1f} s), "
         f"{summary['evolve_ind_gen_per_s']:,.0f} ind-gen/s in the evolution")
     return summary, results
 
@@ -567,7 +573,8 @@ def _sweep_part(report: dict) -> list[str]:
     return [f"{head}: {sw['wall_s']:.1f} s (compile {t['compile_s']:.1f}, init "
             f"{t['init_s']:.2f}, evolve {t['evolve_s']:.2f}), {sw['runs_per_s']:,.1f} "
             f"runs/s, {sw['evolve_ind_gen_per_s']:,.0f} ind-gen/s in the evolution "
-            "(jaxga's programs: 32 runs per device per call)."]
+            f"(jaxga's programs: {sw.get('calls', '?')} call(s) of "
+            f"{sw.get('runs_per_call', '?')} runs)."]
 
 
 def _agreement_part(report: dict) -> list[str]:

@@ -20,12 +20,14 @@ from jaxga.api.memory import (
     check_result_memory,
 )
 from jaxga.api.programs import (
+    ACCELERATOR_BUCKETS,
     GENERATION_CHUNK,
     RUN_BUCKETS,
     RUNS_PER_DEVICE,
     SMALL_CALL_RUNS,
     clear_compiled,
     map_runs,
+    platform_layout,
     run_blocks,
     run_layout,
 )
@@ -56,6 +58,7 @@ from jaxga.api.seeds import (
 
 __all__ = [
     "GA",
+    "ACCELERATOR_BUCKETS",
     "GENERATION_CHUNK",
     "RUN_BUCKETS",
     "RUNS_PER_DEVICE",
@@ -76,6 +79,7 @@ __all__ = [
     "json_number",
     "load_problem",
     "map_runs",
+    "platform_layout",
     "relative_gap",
     "run",
     "run_blocks",

@@ -1,8 +1,9 @@
 """The compiled programs of a run, cached per shape: init, evolve (one chunk), finish.
 
 One program set serves many calls (decision 028): the runs go through programs of a few
-sizes (:data:`RUN_BUCKETS` runs per device, padded with copies of the last run; more
-runs are several calls of the largest size, :func:`run_layout`), and the generations
+sizes (runs per device, padded with copies of the last run; more runs are several calls
+of the largest size, :func:`run_layout`; the sizes are the platform's,
+:func:`platform_layout`), and the generations
 through one evolve program of :data:`GENERATION_CHUNK` generations called as often as
 needed (the last call runs only the generations left: ``jaxga.engine.evolve``'s
 ``count``). A program set is traced once per (algorithm without its generation count,
@@ -169,35 +170,78 @@ at most doubles it."""
 LARGE_MAP_CELLS = 64 * 64
 
 
+ACCELERATOR_BUCKETS = (32, 256, 2048)
+"""Runs per device of the large programs on a GPU (any platform but the CPU), on maps up
+to :data:`LARGE_MAP_CELLS` cells: the smallest that holds a device's share, more runs
+being calls of 2048. A GPU computes a generation of one run as a sequence of small
+kernels whose launches, not the arithmetic, take the time, so a call of 2048 runs takes
+about as long as a call of 32 (``benchmarks/device_check.py``); calls of 32 runs per
+device (the CPU's layout) left it idle."""
+
+
+@dataclasses.dataclass(frozen=True)
+class PlatformLayout:
+    """How runs are laid out as calls on one platform (:func:`platform_layout`).
+
+    Attributes:
+        buckets: runs per device of the large programs, ascending (:func:`run_layout`).
+        run_block: the most runs one ``vmap`` evolves and finishes (:func:`map_runs`).
+        init_run_block: the most runs one ``vmap`` initialises.
+    """
+
+    buckets: tuple[int, ...]
+    run_block: int
+    init_run_block: int
+
+
+def platform_layout(platform: str | None = None) -> PlatformLayout:
+    """The run layout of ``platform`` (default: JAX's default backend, where the programs
+    run).
+
+    On the CPU: calls of :data:`RUNS_PER_DEVICE` runs per device, computed in blocks of
+    :data:`RUN_BLOCK` and initialised in blocks of :data:`INIT_RUN_BLOCK` (decision 011:
+    batches that fit the caches, loops that wait for fewer runs). On a GPU or TPU:
+    calls of :data:`ACCELERATOR_BUCKETS` runs per device, each one ``vmap``, since the
+    time of a generation there is the kernels' launches, whatever the number of runs.
+    A run's result does not depend on its call or block, so the layout changes no result.
+    """
+    platform = jax.default_backend() if platform is None else platform
+    if platform == "cpu":
+        return PlatformLayout((RUNS_PER_DEVICE,), RUN_BLOCK, INIT_RUN_BLOCK)
+    largest = ACCELERATOR_BUCKETS[-1]
+    return PlatformLayout(ACCELERATOR_BUCKETS, largest, largest)
+
+
 def run_layout(n_runs: int, n_devices: int = 1, cells: int = 0,
-               compiled: Sequence[int] = ()) -> tuple[int, int]:
+               compiled: Sequence[int] = (), platform: str | None = None) -> tuple[int, int]:
     """``(runs per device of each call, calls)`` for ``n_runs`` runs on ``n_devices``
-    devices.
+    devices of ``platform`` (default: JAX's default backend).
 
     Up to :data:`SMALL_CALL_RUNS` runs: one call of ``ceil(4 / devices)`` per device;
-    more: calls of :data:`RUNS_PER_DEVICE` per device. On maps of more than
-    :data:`LARGE_MAP_CELLS` ``cells``: the smallest of :data:`LARGE_MAP_BUCKETS` that
-    holds each device's share, or calls of 32. ``compiled``: runs per device of the
-    programs this process has already compiled for the same algorithm and map; the
-    smallest of them that holds the share is taken instead of compiling a new size (a
-    DOE's confirmation run, a replan after a larger run: no new compilation, at the cost
-    of the padded runs).
+    more: the smallest of the platform's buckets (:func:`platform_layout`: 32 on the
+    CPU; 32, 256 or 2048 on a GPU) that holds each device's share, or calls of the
+    largest. On maps of more than :data:`LARGE_MAP_CELLS` ``cells``: the smallest of
+    :data:`LARGE_MAP_BUCKETS` that holds each device's share, or calls of 32, on every
+    platform. ``compiled``: runs per device of the programs this process has already
+    compiled for the same algorithm and map; the smallest of them that holds the share
+    is taken instead of compiling a new size (a DOE's confirmation run, a replan after a
+    larger run: no new compilation, at the cost of the padded runs).
     """
     if n_runs < 1 or n_devices < 1:
         raise ParameterError(f"need at least one run and one device, got {n_runs} runs on "
                              f"{n_devices} devices")
     per_device = math.ceil(n_runs / n_devices)
-    largest = RUNS_PER_DEVICE
+    buckets = (platform_layout(platform).buckets if cells <= LARGE_MAP_CELLS
+               else LARGE_MAP_BUCKETS)
+    largest = buckets[-1]
     if per_device > largest:
         return largest, math.ceil(per_device / largest)
     have = [b for b in compiled if per_device <= b <= largest]
     if have:
         return min(have), 1
-    if cells > LARGE_MAP_CELLS:
-        return min(b for b in LARGE_MAP_BUCKETS if b >= per_device), 1
-    if n_runs <= SMALL_CALL_RUNS:
+    if n_runs <= SMALL_CALL_RUNS and cells <= LARGE_MAP_CELLS:
         return math.ceil(SMALL_CALL_RUNS / n_devices), 1
-    return largest, 1
+    return min(b for b in buckets if b >= per_device), 1
 
 
 RUN_BLOCK = 64
@@ -225,9 +269,9 @@ def run_blocks(n_runs: int, n_devices: int = 1, block: int | None = None) -> int
     The smallest count that divides each device's share into blocks of at most
     ``block`` runs; 1 when no divisor gives blocks of at least ``block // 2`` runs (a
     share of 997 runs stays one block rather than 997 blocks of one). ``block``:
-    default :data:`RUN_BLOCK`.
+    default the platform's (:func:`platform_layout`: :data:`RUN_BLOCK` on the CPU).
     """
-    block = RUN_BLOCK if block is None else int(block)
+    block = platform_layout().run_block if block is None else int(block)
     per_device = n_runs // max(n_devices, 1)
     if per_device <= block or n_runs % max(n_devices, 1):
         return 1
@@ -390,8 +434,12 @@ def compiled_programs(algo: Algorithm, grid_spec: Any, params_spec: Any, n_runs:
     # count depends on the runs (the operators' gated blocks, connection rounds) had to
     # agree on its condition across devices at every iteration (decision 011).
     n_dev = 1 if sh is None else sh.mesh.size
+    # this process's own device: with several processes, jax.devices()[0] is process 0's
+    devices = [jax.local_devices()[0]] if sh is None else list(sh.mesh.devices.flat)
 
-    def jit(fn, in_axes, block=None):
+    layout = platform_layout(devices[0].platform)
+
+    def jit(fn, in_axes, block):
         if sh is None:
             return jax.jit(map_runs(fn, in_axes, n_runs, block))
         P = jax.sharding.PartitionSpec
@@ -406,17 +454,17 @@ def compiled_programs(algo: Algorithm, grid_spec: Any, params_spec: Any, n_runs:
     keys = jax.ShapeDtypeStruct((n_runs, 2), jnp.uint32)
 
     def trace() -> dict[str, Any]:
-        init_t = jit(do_init, (0, None, 0), INIT_RUN_BLOCK).trace(keys, grid_spec,
-                                                                  params_spec)
+        init_t = jit(do_init, (0, None, 0), layout.init_run_block).trace(
+            keys, grid_spec, params_spec)
         state_spec = init_t.out_info[0]
-        evolve_t = jit(do_evolve, (0, None, 0, 0, None)).trace(
+        evolve_t = jit(do_evolve, (0, None, 0, 0, None), layout.run_block).trace(
             keys, grid_spec, params_spec, state_spec, jax.ShapeDtypeStruct((), jnp.int32))
-        finish_t = jit(do_finish, (None, 0, 0)).trace(grid_spec, params_spec, state_spec)
+        finish_t = jit(do_finish, (None, 0, 0), layout.run_block).trace(
+            grid_spec, params_spec, state_spec)
         return {"init": init_t, "evolve": evolve_t, "finish": finish_t}
 
-    # this process's own device: with several processes, jax.devices()[0] is process 0's
-    devices = [jax.local_devices()[0]] if sh is None else list(sh.mesh.devices.flat)
-    settings = (INIT_RUN_BLOCK, RUN_BLOCK, GENERATION_CHUNK, FINISH_COMPILER_OPTIONS)
+    settings = (layout.init_run_block, layout.run_block, GENERATION_CHUNK,
+                FINISH_COMPILER_OPTIONS)
     stored = {name: executables.program_key(name, algo, grid_spec, params_spec, n_runs,
                                             devices, settings) for name in Programs.NAMES}
     # One after the other: compiling them in threads (one per core) was no faster

@@ -21,7 +21,7 @@ import jax
 import numpy as np
 
 from jaxga.api.compilation_cache import ensure_compilation_cache
-from jaxga.api.programs import RUNS_PER_DEVICE, SMALL_CALL_RUNS
+from jaxga.api.programs import SMALL_CALL_RUNS, platform_layout
 from jaxga.api.runs import run
 from jaxga.config.presets import preset_names
 from jaxga.core.errors import ParameterError
@@ -54,9 +54,10 @@ def warmup(
         presets: preset names or TOML files (default: every built-in preset).
         maps: map sizes (an open ``N x N`` map, :func:`open_map`), built-in map names,
             map files, Grids or MapInfos.
-        seeds: seed counts to compile for (default: 4 and 32 per device, the two
-            program sizes that serve every seed count on maps up to 64 x 64,
-            :func:`jaxga.api.programs.run_layout`), compiled smallest first.
+        seeds: seed counts to compile for (default: 4, and the platform's program sizes
+            per device: 32 on the CPU, 32, 256 and 2048 on a GPU; together they serve
+            every seed count on maps up to 64 x 64, :func:`jaxga.api.programs.run_layout`),
+            compiled smallest first.
         corner_rule: the corner rule of every map (default: sizes strict, named maps
             their own, :func:`jaxga.maps.default_corner_rule`).
         size_class: compile the programs of runs with ``size_class=True``
@@ -81,7 +82,8 @@ def warmup(
                              "empty): a warm-up would compile for this process only")
     presets = list(preset_names()) if presets is None else list(presets)
     n_dev = jax.local_device_count()
-    counts = sorted({int(n) for n in (seeds or (SMALL_CALL_RUNS, RUNS_PER_DEVICE * n_dev))})
+    sizes = (SMALL_CALL_RUNS, *(b * n_dev for b in platform_layout().buckets))
+    counts = sorted({int(n) for n in (seeds or sizes)})
     if not counts or counts[0] < 1:
         raise ParameterError(f"seed counts must be >= 1, got {list(seeds or ())}")
     rows = []

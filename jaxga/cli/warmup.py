@@ -54,8 +54,9 @@ def add_parser(commands: argparse._SubParsersAction) -> None:
     p.add_argument("--map", action="append", metavar="MAP",
                    help="also a built-in map name or a map file (repeatable)")
     p.add_argument("--seeds", metavar="N,N,...",
-                   help="seed counts to compile for (default: 4 and 32 per device, the "
-                   "two program sizes that serve every seed count)")
+                   help="seed counts to compile for (default: 4 and the platform's program "
+                   "sizes, 32 per device on the CPU, 32, 256 and 2048 on a GPU: together "
+                   "they serve every seed count)")
     p.add_argument("--corner-rule", default=None, metavar="RULE",
                    help=f"one of {', '.join(CORNER_RULES)} (default: strict on the open maps, "
                    "a named map's own)")

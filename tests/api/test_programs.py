@@ -206,7 +206,37 @@ def test_run_layout(n_runs, n_devices, cells, have, want):
     """Runs per device and calls: up to 4 runs one call of 4 over the devices, more runs
     calls of 32 per device (10, 20 and 30 seeds one program on one or two devices), a
     larger program already compiled reused, powers of two on maps over 64 x 64."""
-    assert api.run_layout(n_runs, n_devices, cells, have) == want
+    assert api.run_layout(n_runs, n_devices, cells, have, platform="cpu") == want
+
+
+@pytest.mark.parametrize("n_runs, n_devices, cells, have, want", [
+    (1, 1, 0, (), (4, 1)), (5, 1, 0, (), (32, 1)), (33, 1, 0, (), (256, 1)),
+    (100, 1, 0, (), (256, 1)), (256, 1, 0, (), (256, 1)), (257, 1, 0, (), (2048, 1)),
+    (16_000, 1, 0, (), (2048, 8)), (100, 2, 0, (), (256, 1)), (5000, 2, 0, (), (2048, 2)),
+    (40, 1, 0, (2048,), (2048, 1)), (40, 1, 0, (32,), (256, 1)),
+    (1, 1, 100 * 100, (), (1, 1)), (100, 1, 100 * 100, (), (32, 4)),
+    (9, 1, 100 * 100, (256,), (16, 1)),
+])
+def test_run_layout_on_a_gpu(n_runs, n_devices, cells, have, want):
+    """On a GPU the large programs hold 32, 256 or 2048 runs per device (one call of the
+    smallest that holds the share, else calls of 2048); maps over 64 x 64 and the small
+    call keep the CPU's rule; a compiled size above the map's largest is not reused."""
+    assert api.run_layout(n_runs, n_devices, cells, have, platform="gpu") == want
+
+
+def test_platform_layouts():
+    """The CPU computes blocks that fit its caches; a GPU one vmap per call."""
+    from jaxga.api import programs
+
+    cpu = api.platform_layout("cpu")
+    assert cpu == programs.PlatformLayout((programs.RUNS_PER_DEVICE,), programs.RUN_BLOCK,
+                                          programs.INIT_RUN_BLOCK)
+    assert api.platform_layout() == cpu  # the suite runs on the CPU
+    for platform in ("gpu", "tpu"):
+        lay = api.platform_layout(platform)
+        assert lay.buckets == api.ACCELERATOR_BUCKETS == tuple(sorted(lay.buckets))
+        assert lay.run_block == lay.init_run_block == lay.buckets[-1]
+        assert api.run_blocks(lay.buckets[-1], 1, lay.run_block) == 1
 
 
 def test_run_layout_refuses_no_runs():
