@@ -12,13 +12,14 @@ persistent cache are off. The phases, in order:
 1. **Main job**: the README's first command, ``jaxga run --preset iga_zhu --map
    classic_ga_gapp3_20x20 --seeds 100``, as ``jaxga.run``, with its time line
    (``Result.timing``: loading, references, compile, init, evolve, post, ...).
-2. **Sweep**: ``jaxga.sweep("sga", ...)`` over 16 values of ``mutation.probability`` x
+2. **Agreement** with the CPU for the same seeds (:func:`agreement`): the random bits,
+   and a short sweep (32 seeds of the first and the last sweep point) on the device:
+   its paths evaluated again, and its runs against the pure core (``jaxga.GA.run``,
+   the same seeds) compiled for ``jax.devices("cpu")[0]`` in this process, with both
+   mean lengths. Second, so that a device lent for minutes still says whether it agrees.
+3. **Sweep**: ``jaxga.sweep("sga", ...)`` over 16 values of ``mutation.probability`` x
    1000 seeds (50 generations), through jaxga's own programs and devices
    (``jaxga.api.programs``: calls of the platform's sizes, ``run_layout``).
-3. **Agreement** with the CPU for the same seeds (:func:`agreement`): the random bits,
-   the evaluation of the sweep's paths, and whole runs of two sweep points against the
-   pure core (``jaxga.GA.run``, the same seeds) compiled for ``jax.devices("cpu")[0]``
-   in this process.
 4. **Throughput** (:func:`throughput`): individual-generations per second of ``sga``
    and ``hybrid`` on 20 x 20, 64 x 64 and 256 x 256 maps, 1k, 10k and 100k runs in ONE
    ``jax.vmap`` call on one device, with each call's compile time and XLA memory. A
@@ -65,8 +66,9 @@ THROUGHPUT_PRESETS = ("sga", "hybrid")
 INITIAL_RUNS = 8
 """Initial populations computed per preset and map for the throughput calls; call ``i``
 starts from population ``i mod 8`` with a key of its own."""
-AGREEMENT_SEEDS = 8
-"""Seeds per sweep point (of the first and the last point) run again on the CPU."""
+AGREEMENT_SEEDS = 32
+"""Seeds of the first and of the last sweep point that the agreement phase runs on the
+device (a ``jaxga.sweep`` of its own, before the long phases) and again on the CPU."""
 LENGTH_RTOL = 1e-5
 """Relative tolerance of a path's float32 length evaluated on another platform.
 
@@ -210,9 +212,8 @@ def main_job(settings: dict) -> dict:
             "mean_length": float(np.mean(r.length[ok])) if ok.any() else None}
 
 
-def sweep(settings: dict) -> tuple[dict, list]:
-    """``jaxga.sweep`` of :data:`SWEEP_PRESET` over :data:`SWEEP_POINTS`; the summary and
-    the results (the agreement phase checks them)."""
+def sweep(settings: dict) -> dict:
+    """``jaxga.sweep`` of :data:`SWEEP_PRESET` over :data:`SWEEP_POINTS`: its summary."""
     import jax
     import numpy as np
 
@@ -243,7 +244,7 @@ def sweep(settings: dict) -> tuple[dict, list]:
     say(f"sweep: {runs} runs as {calls} call(s) of {per_device * n_dev} in {wall:.1f} s "
         f"(compile {timing['compile_s']:.1f} s), "
         f"{summary['evolve_ind_gen_per_s']:,.0f} ind-gen/s in the evolution")
-    return summary, results
+    return summary
 
 
 RUN_FIELDS = ("success", "fitness", "length", "raw_length", "n_cells", "raw_n_cells",
@@ -268,24 +269,29 @@ def _same_run(device: Any, ref: dict, i: int, j: int) -> bool:
     return True
 
 
-def agreement(settings: dict, results: list, device: dict) -> dict:
-    """The sweep's results against the same seeds computed on the CPU, in this process.
+def agreement(settings: dict, device: dict) -> dict:
+    """A short sweep on the device against the same seeds computed on the CPU, in this
+    process: :data:`AGREEMENT_SEEDS` seeds of the first and the last sweep point, run
+    by ``jaxga.sweep`` on the device (jaxga's own programs and layout), first among the
+    long phases so that a device lent for minutes still says whether it agrees.
 
     * **bits**: ``jax.random`` draws of every seed's key (split, fold_in, bits,
       uniform), one compiled program on the device against the same draws op by op on
       ``jax.devices("cpu")[0]``: bit for bit on every platform (Threefry is integer
       arithmetic, Salmon et al. 2011).
-    * **evaluation**: every path of the sweep (post-optimised and raw) evaluated again
+    * **evaluation**: every path of that sweep (post-optimised and raw) evaluated again
       on the CPU (``jaxga.core.objectives.path_length``) against the lengths the device
       reported: bit for bit on the CPU; within :data:`LENGTH_RTOL` on another platform.
-    * **runs**: :data:`AGREEMENT_SEEDS` seeds of the first and the last point, whole runs
-      of the pure core (``jax.jit(jax.vmap(GA.run))``, a program of its own: not
-      jaxga's blocked, sharded, chunked programs) on the CPU, against the sweep's. On
+    * **runs**: the same seeds and points as whole runs of the pure core
+      (``jax.jit(jax.vmap(GA.run))``, a program of its own: not jaxga's blocked,
+      sharded, chunked programs) on the CPU, against the device's. On
       the CPU they must be the same runs bit for bit (``GA.run(PRNGKey(s))`` is seed
       ``s`` of ``jaxga.run``: docs/pure-core.md). On another platform the share of
       identical runs is reported, not required: the selection compares float32
       fitness values, so one ulp of difference in one evaluation can change one choice,
-      after which the run follows the same random stream on another trajectory.
+      after which the run follows the same random stream on another trajectory; the
+      mean lengths of each point on both show whether the trajectories differ only as
+      different seeds would.
 
     ``agree``: bits and evaluation hold, and on the CPU every run is identical.
     """
@@ -298,7 +304,10 @@ def agreement(settings: dict, results: list, device: dict) -> dict:
 
     cpu = jax.devices("cpu")[0]
     same = device["platform"] == "cpu"
-    seeds = list(range(min(AGREEMENT_SEEDS, settings["sweep_seeds"])))
+    seeds = list(range(AGREEMENT_SEEDS))
+    chosen = [SWEEP_POINTS[0], SWEEP_POINTS[-1]]
+    results = jaxga.sweep(SWEEP_PRESET, MAIN_MAP, [{SWEEP_KEY: p} for p in chosen],
+                          seeds=len(seeds), generations=settings["sweep_generations"])
 
     def draws(seed: jax.Array) -> jax.Array:
         key = jax.random.PRNGKey(seed)
@@ -329,10 +338,8 @@ def agreement(settings: dict, results: list, device: dict) -> dict:
         eval_identical = bool(np.array_equal(lengths, reported[found]))
         eval_ok = eval_identical if same else bool(np.all(diff <= LENGTH_RTOL))
 
-        chosen = [0, len(results) - 1]
         keys = jax.vmap(jax.random.PRNGKey)(jnp.asarray(seeds * len(chosen), jnp.uint32))
-        probs = np.repeat(np.asarray([SWEEP_POINTS[q] for q in chosen], np.float32),
-                          len(seeds))
+        probs = np.repeat(np.asarray(chosen, np.float32), len(seeds))
         params = {k: jnp.broadcast_to(v, (len(probs), *jnp.shape(v)))
                   for k, v in ga.default_params.items()}
         params[SWEEP_KEY] = jnp.asarray(probs, jnp.float32)
@@ -341,8 +348,13 @@ def agreement(settings: dict, results: list, device: dict) -> dict:
                                                 jax.device_put(params, cpu))
         ref = jax.tree_util.tree_map(np.asarray, ref)
         ref_s = time.perf_counter() - t0
-    identical = [_same_run(results[q], ref, s, k * len(seeds) + s)
-                 for k, q in enumerate(chosen) for s in range(len(seeds))]
+    identical = [_same_run(results[k], ref, s, k * len(seeds) + s)
+                 for k in range(len(chosen)) for s in range(len(seeds))]
+    ok = ref["success"].astype(bool).reshape(len(chosen), len(seeds))
+    cpu_means = [float(np.mean(ref["length"].reshape(ok.shape)[k][ok[k]]))
+                 if ok[k].any() else None for k in range(len(chosen))]
+    device_means = [float(np.mean(r.length[r.success.astype(bool)]))
+                    if r.success.any() else None for r in results]
     agree = bits_identical and eval_ok and (all(identical) or not same)
     say(f"agreement: bits {'identical' if bits_identical else 'DIFFER'}; "
         f"{int(found.sum())} path lengths {'identical' if eval_identical else 'differ'} "
@@ -356,11 +368,11 @@ def agreement(settings: dict, results: list, device: dict) -> dict:
                        "max_relative_difference": float(diff.max(initial=0)),
                        "tolerance": 0.0 if same else LENGTH_RTOL, "ok": eval_ok},
         "runs": {"compared": len(identical), "identical": int(sum(identical)),
-                 "points": [SWEEP_POINTS[q] for q in chosen], "seeds": seeds,
+                 "points": chosen, "seeds": seeds,
                  "required": same, "reference_s": ref_s,
-                 "device_success": float(np.mean([results[q].success[s] for q in chosen
-                                                  for s in seeds])),
-                 "cpu_success": float(np.mean(ref["success"]))},
+                 "device_success": float(np.mean([r.success for r in results])),
+                 "cpu_success": float(np.mean(ref["success"])),
+                 "device_mean_length": device_means, "cpu_mean_length": cpu_means},
         "agree": agree,
     }
 
@@ -579,9 +591,16 @@ def _sweep_part(report: dict) -> list[str]:
 
 def _agreement_part(report: dict) -> list[str]:
     ag = report.get("agreement", NOT_MEASURED)
+    if ag is NOT_MEASURED:
+        return [f"**Agreement with the CPU**: {ag['error']}: **unknown**."]
     if "error" in ag:
         return [f"**Agreement with the CPU**: {ag['error']}: **DO NOT AGREE**."]
     ev, runs = ag["evaluation"], ag["runs"]
+    means = ""
+    if "device_mean_length" in runs:
+        pairs = ", ".join(f"{p:g}: {_fmt(d)} / {_fmt(c)}" for p, d, c in zip(
+            runs["points"], runs["device_mean_length"], runs["cpu_mean_length"]))
+        means = f"; mean length per `{SWEEP_KEY}`, device / CPU: {pairs}"
     return [
         f"**Agreement with the CPU** ({ag['reference']}): random bits "
         f"{'identical' if ag['bits_identical'] else 'DIFFERENT'}; {ev['paths']} path "
@@ -589,7 +608,7 @@ def _agreement_part(report: dict) -> list[str]:
         f" (largest relative difference {ev['max_relative_difference']:.1e}, tolerance "
         f"{ev['tolerance']:g}); {runs['identical']} of {runs['compared']} whole runs "
         "identical to `GA.run` compiled for the CPU "
-        f"({'required' if runs['required'] else 'reported, not required'}): "
+        f"({'required' if runs['required'] else 'reported, not required'}){means}: "
         f"**{'agree' if ag['agree'] else 'DO NOT AGREE'}**."]
 
 
@@ -705,16 +724,12 @@ def main(argv: list[str] | None = None) -> int:
     say(f"{device['name']} (backend {device['backend']}, jax {device['jax']}); "
         f"{'--small' if args.small else 'full size'}, budget {settings['budget_s']:.0f} s; "
         f"report in {json_path}")
-    results: list = []
     with phase(report, "main job", "main_job", json_path):
         report["main_job"] = main_job(settings)
-    with phase(report, "sweep", "sweep", json_path):
-        report["sweep"], results = sweep(settings)
     with phase(report, "agreement", "agreement", json_path):
-        if not results:
-            raise RuntimeError("no sweep results to compare")
-        report["agreement"] = agreement(settings, results, device)
-    del results
+        report["agreement"] = agreement(settings, device)
+    with phase(report, "sweep", "sweep", json_path):
+        report["sweep"] = sweep(settings)
     with phase(report, "throughput", "throughput", json_path):
         report["throughput"] = throughput(settings, t_start + settings["budget_s"])
     report["peak_memory"] = peak_memory(jax.devices()[0])

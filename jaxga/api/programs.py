@@ -18,6 +18,7 @@ import dataclasses
 import functools
 import gc
 import math
+import warnings
 from collections.abc import Callable, Sequence
 from typing import Any
 
@@ -28,7 +29,7 @@ import numpy as np
 from jaxga.api import executables
 from jaxga.api.seeds import seed_sharding
 from jaxga.config.schema import Config
-from jaxga.core.errors import ParameterError
+from jaxga.core.errors import ParameterError, PlatformWarning
 from jaxga.engine import (
     Algorithm,
     chosen_operators,
@@ -170,13 +171,15 @@ at most doubles it."""
 LARGE_MAP_CELLS = 64 * 64
 
 
-ACCELERATOR_BUCKETS = (32, 256, 2048)
+ACCELERATOR_BUCKETS = (32, 64, 128, 256, 512, 1024, 2048)
 """Runs per device of the large programs on a GPU (any platform but the CPU), on maps up
-to :data:`LARGE_MAP_CELLS` cells: the smallest that holds a device's share, more runs
-being calls of 2048. A GPU computes a generation of one run as a sequence of small
-kernels whose launches, not the arithmetic, take the time, so a call of 2048 runs takes
-about as long as a call of 32 (``benchmarks/device_check.py``); calls of 32 runs per
-device (the CPU's layout) left it idle."""
+to :data:`LARGE_MAP_CELLS` cells: the smallest power of two that holds a device's share
+(the padding at most doubles the work), more runs being calls of 2048, each call one
+``vmap``. Measured on an H200 (RESULTS.md, "device check on 1 x NVIDIA H200"): a run
+costs less the more runs share its call (``sga``: 16,000 runs as calls of 2048 in
+150 s, where calls of 32 had not finished in 400 s; ``iga_zhu``: a call of 256 runs
+cost 5.7 times a call of 32, for 8 times the runs), so a GPU wants large calls, but
+not padding: 100 runs padded to 256 evolved slower than 4 calls of 32."""
 
 
 @dataclasses.dataclass(frozen=True)
@@ -212,6 +215,23 @@ def platform_layout(platform: str | None = None) -> PlatformLayout:
     return PlatformLayout(ACCELERATOR_BUCKETS, largest, largest)
 
 
+_WARNED_PLATFORMS: set[str] = set()
+
+
+def warn_platform(platform: str) -> None:
+    """Warn once per process and platform when the runs compute anywhere but on the CPU
+    (:class:`jaxga.core.errors.PlatformWarning`): jaxga's results are the same bits for a
+    seed, whatever the seeds, devices and layout around it, only on the CPU."""
+    if platform == "cpu" or platform in _WARNED_PLATFORMS:
+        return
+    _WARNED_PLATFORMS.add(platform)
+    warnings.warn(
+        f"the runs compute on the {platform}: there a seed's result is not the CPU's and "
+        "changes with the number of runs in its call (measured on a GPU, docs/devices.md); "
+        "for reproducible results, JAX_PLATFORMS=cpu runs them on the CPU",
+        PlatformWarning, stacklevel=3)
+
+
 def run_layout(n_runs: int, n_devices: int = 1, cells: int = 0,
                compiled: Sequence[int] = (), platform: str | None = None) -> tuple[int, int]:
     """``(runs per device of each call, calls)`` for ``n_runs`` runs on ``n_devices``
@@ -219,8 +239,8 @@ def run_layout(n_runs: int, n_devices: int = 1, cells: int = 0,
 
     Up to :data:`SMALL_CALL_RUNS` runs: one call of ``ceil(4 / devices)`` per device;
     more: the smallest of the platform's buckets (:func:`platform_layout`: 32 on the
-    CPU; 32, 256 or 2048 on a GPU) that holds each device's share, or calls of the
-    largest. On maps of more than :data:`LARGE_MAP_CELLS` ``cells``: the smallest of
+    CPU; powers of two from 32 to 2048 on a GPU) that holds each device's share, or
+    calls of the largest. On maps of more than :data:`LARGE_MAP_CELLS` ``cells``: the smallest of
     :data:`LARGE_MAP_BUCKETS` that holds each device's share, or calls of 32, on every
     platform. ``compiled``: runs per device of the programs this process has already
     compiled for the same algorithm and map; the smallest of them that holds the share
@@ -380,6 +400,7 @@ def programs_for(algo: Algorithm, grid: Any, params: dict, n_runs: int,
     program compiled (or read) now if this process has not yet: ``report`` is told how
     far that has got (:meth:`Programs.compile_init`; nothing when it is compiled)."""
     algo = program_algorithm(algo)
+    warn_platform(jax.default_backend())
     n_dev = jax.local_device_count()
     grid_spec = shape_spec(grid)
     progs = compiled_programs(algo, grid_spec, tuple(sorted(shape_spec(params).items())),

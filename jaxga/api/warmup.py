@@ -55,9 +55,9 @@ def warmup(
         maps: map sizes (an open ``N x N`` map, :func:`open_map`), built-in map names,
             map files, Grids or MapInfos.
         seeds: seed counts to compile for (default: 4, and the platform's program sizes
-            per device: 32 on the CPU, 32, 256 and 2048 on a GPU; together they serve
-            every seed count on maps up to 64 x 64, :func:`jaxga.api.programs.run_layout`),
-            compiled smallest first.
+            per device: 32 on the CPU, powers of two from 32 to 2048 on a GPU; together
+            they serve every seed count on maps up to 64 x 64,
+            :func:`jaxga.api.programs.run_layout`), compiled smallest first.
         corner_rule: the corner rule of every map (default: sizes strict, named maps
             their own, :func:`jaxga.maps.default_corner_rule`).
         size_class: compile the programs of runs with ``size_class=True``

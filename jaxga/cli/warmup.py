@@ -55,7 +55,8 @@ def add_parser(commands: argparse._SubParsersAction) -> None:
                    help="also a built-in map name or a map file (repeatable)")
     p.add_argument("--seeds", metavar="N,N,...",
                    help="seed counts to compile for (default: 4 and the platform's program "
-                   "sizes, 32 per device on the CPU, 32, 256 and 2048 on a GPU: together "
+                   "sizes, 32 per device on the CPU, powers of two from 32 to 2048 on a GPU: "
+                   "together "
                    "they serve every seed count)")
     p.add_argument("--corner-rule", default=None, metavar="RULE",
                    help=f"one of {', '.join(CORNER_RULES)} (default: strict on the open maps, "

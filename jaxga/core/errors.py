@@ -45,3 +45,9 @@ class DeviceWarning(RuntimeWarning):
 class CacheWarning(RuntimeWarning):
     """The compilation cache (``$JAXGA_CACHE_DIR``) cannot be used or read: programs are
     compiled without it, so only the speed differs (:mod:`jaxga.api.compilation_cache`)."""
+
+
+class PlatformWarning(RuntimeWarning):
+    """The runs compute on a platform other than the CPU, where jaxga's results are not
+    reproducible bit for bit: measured on a GPU, a seed's result differs from the CPU's
+    and with the number of runs that share its call (docs/devices.md)."""

@@ -9,6 +9,7 @@ import math
 import os
 import subprocess
 import sys
+import warnings
 from pathlib import Path
 
 import jax
@@ -210,17 +211,18 @@ def test_run_layout(n_runs, n_devices, cells, have, want):
 
 
 @pytest.mark.parametrize("n_runs, n_devices, cells, have, want", [
-    (1, 1, 0, (), (4, 1)), (5, 1, 0, (), (32, 1)), (33, 1, 0, (), (256, 1)),
-    (100, 1, 0, (), (256, 1)), (256, 1, 0, (), (256, 1)), (257, 1, 0, (), (2048, 1)),
-    (16_000, 1, 0, (), (2048, 8)), (100, 2, 0, (), (256, 1)), (5000, 2, 0, (), (2048, 2)),
-    (40, 1, 0, (2048,), (2048, 1)), (40, 1, 0, (32,), (256, 1)),
+    (1, 1, 0, (), (4, 1)), (5, 1, 0, (), (32, 1)), (33, 1, 0, (), (64, 1)),
+    (100, 1, 0, (), (128, 1)), (256, 1, 0, (), (256, 1)), (257, 1, 0, (), (512, 1)),
+    (16_000, 1, 0, (), (2048, 8)), (100, 2, 0, (), (64, 1)), (5000, 2, 0, (), (2048, 2)),
+    (40, 1, 0, (2048,), (2048, 1)), (40, 1, 0, (32,), (64, 1)),
     (1, 1, 100 * 100, (), (1, 1)), (100, 1, 100 * 100, (), (32, 4)),
     (9, 1, 100 * 100, (256,), (16, 1)),
 ])
 def test_run_layout_on_a_gpu(n_runs, n_devices, cells, have, want):
-    """On a GPU the large programs hold 32, 256 or 2048 runs per device (one call of the
-    smallest that holds the share, else calls of 2048); maps over 64 x 64 and the small
-    call keep the CPU's rule; a compiled size above the map's largest is not reused."""
+    """On a GPU the large programs hold a power of two from 32 to 2048 runs per device
+    (one call of the smallest that holds the share, else calls of 2048); maps over
+    64 x 64 and the small call keep the CPU's rule; a compiled size above the map's
+    largest is not reused."""
     assert api.run_layout(n_runs, n_devices, cells, have, platform="gpu") == want
 
 
@@ -405,3 +407,17 @@ def test_a_program_sets_compile_progress_only_goes_forward(monkeypatch, stored, 
     progs.compile_init(again.append)
     progs.compile_rest(again.append)
     assert again == []
+
+
+def test_runs_off_the_cpu_are_warned_about_once(monkeypatch):
+    """A GPU's results are not the CPU's bits: said once per process and platform."""
+    from jaxga.api import programs
+    from jaxga.core.errors import PlatformWarning
+
+    monkeypatch.setattr(programs, "_WARNED_PLATFORMS", set())
+    with pytest.warns(PlatformWarning, match="the runs compute on the gpu: .*JAX_PLATFORMS=cpu"):
+        programs.warn_platform("gpu")
+    with warnings.catch_warnings():
+        warnings.simplefilter("error")
+        programs.warn_platform("gpu")  # once
+        programs.warn_platform("cpu")  # never

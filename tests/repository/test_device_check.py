@@ -85,6 +85,26 @@ def test_a_report_from_elsewhere_renders_its_section(small):
     assert "| sga | 20x20 |" in proc.stdout and "**agree**" in proc.stdout
 
 
+def test_a_report_cut_short_says_what_it_did_not_measure(small, tmp_path):
+    """A run ended by its time limit after the sweep (as on a GPU lent for minutes):
+    the phases it did not reach are 'not measured', the agreement 'unknown', never a
+    verdict."""
+    report, _, _ = small
+    cut = {k: v for k, v in report.items() if k not in ("agreement", "throughput",
+                                                         "peak_memory", "wall_s")}
+    cut["phases"] = {k: report["phases"][k] for k in ("main job", "sweep")}
+    path = tmp_path / "cut.json"
+    path.write_text(json.dumps(cut))
+    proc = _run("--from-json", str(path), "--no-write", timeout=120)
+    assert proc.returncode == 0, proc.stderr
+    assert "**Agreement with the CPU**: not measured" in proc.stdout
+    assert "**unknown**" in proc.stdout and "AGREE" not in proc.stdout
+    assert "the run ended there (a partial report)" in proc.stdout
+    sweep = report["sweep"]
+    assert sweep["runs_per_call"] * sweep["calls"] >= sweep["runs"]
+    assert f"{sweep['calls']} call(s) of {sweep['runs_per_call']} runs" in proc.stdout
+
+
 @pytest.mark.parametrize(("args", "message"), [
     (["--budget-s", "-5"], "--budget-s must be a positive number"),
     (["--budget-s", "soon"], "invalid float value"),
