@@ -204,15 +204,17 @@ def platform_layout(platform: str | None = None) -> PlatformLayout:
     On the CPU: calls of :data:`RUNS_PER_DEVICE` runs per device, computed in blocks of
     :data:`RUN_BLOCK` and initialised in blocks of :data:`INIT_RUN_BLOCK` (decision 011:
     batches that fit the caches, loops that wait for fewer runs). On a GPU or TPU:
-    calls of :data:`ACCELERATOR_BUCKETS` runs per device, each one ``vmap``, since the
-    time of a generation there is the kernels' launches, whatever the number of runs.
-    A run's result does not depend on its call or block, so the layout changes no result.
+    calls of :data:`ACCELERATOR_BUCKETS` runs per device, each evolved and finished as
+    one ``vmap`` (a run costs less the more runs share its call), initialised in blocks
+    of :data:`INIT_RUN_BLOCK` as on the CPU: initialised as one ``vmap`` of 256 or 2048
+    runs, the H200's initialisers failed far more often than the CPU's with the same
+    layout (decision 037; cause not found). On the CPU a run's result does not depend on
+    its call or block, so the layout changes no result there.
     """
     platform = jax.default_backend() if platform is None else platform
     if platform == "cpu":
         return PlatformLayout((RUNS_PER_DEVICE,), RUN_BLOCK, INIT_RUN_BLOCK)
-    largest = ACCELERATOR_BUCKETS[-1]
-    return PlatformLayout(ACCELERATOR_BUCKETS, largest, largest)
+    return PlatformLayout(ACCELERATOR_BUCKETS, ACCELERATOR_BUCKETS[-1], INIT_RUN_BLOCK)
 
 
 _WARNED_PLATFORMS: set[str] = set()
