@@ -24,6 +24,7 @@ from typing import Any
 
 import jax
 
+from jaxga.api.programs import warn_platform
 from jaxga.api.runs import load_problem
 from jaxga.config.schema import Config
 from jaxga.core.grid import Grid
@@ -83,6 +84,7 @@ class GA:
         self.grid = with_tables(grid)
         self.default_params: dict[str, jax.Array] = default_params(
             config, self.algorithm.islands)
+        warn_platform(jax.default_backend())  # where jit puts the user's calls
 
     def init(self, key: jax.Array, params: dict) -> GAState:
         """The initial population of every island, evaluated (pure; the initialisers of

@@ -173,13 +173,10 @@ LARGE_MAP_CELLS = 64 * 64
 
 ACCELERATOR_BUCKETS = (32, 64, 128, 256, 512, 1024, 2048)
 """Runs per device of the large programs on a GPU (any platform but the CPU), on maps up
-to :data:`LARGE_MAP_CELLS` cells: the smallest power of two that holds a device's share
-(the padding at most doubles the work), more runs being calls of 2048, each call one
-``vmap``. Measured on an H200 (RESULTS.md, "device check on 1 x NVIDIA H200"): a run
-costs less the more runs share its call (``sga``: 16,000 runs as calls of 2048 in
-150 s, where calls of 32 had not finished in 400 s; ``iga_zhu``: a call of 256 runs
-cost 5.7 times a call of 32, for 8 times the runs), so a GPU wants large calls, but
-not padding: 100 runs padded to 256 evolved slower than 4 calls of 32."""
+to :data:`LARGE_MAP_CELLS` cells: the smallest power of two that holds a device's share,
+more runs being calls of 2048, each evolved as one ``vmap``. On a GPU a run costs less
+the more runs share its call, but not so much less that padding pays: powers of two
+bound the padding to twice the runs (decision 037)."""
 
 
 @dataclasses.dataclass(frozen=True)
@@ -206,10 +203,9 @@ def platform_layout(platform: str | None = None) -> PlatformLayout:
     batches that fit the caches, loops that wait for fewer runs). On a GPU or TPU:
     calls of :data:`ACCELERATOR_BUCKETS` runs per device, each evolved and finished as
     one ``vmap`` (a run costs less the more runs share its call), initialised in blocks
-    of :data:`INIT_RUN_BLOCK` as on the CPU: initialised as one ``vmap`` of 256 or 2048
-    runs, the H200's initialisers failed far more often than the CPU's with the same
-    layout (decision 037; cause not found). On the CPU a run's result does not depend on
-    its call or block, so the layout changes no result there.
+    of :data:`INIT_RUN_BLOCK` as on the CPU, the one layout whose initialisation was
+    seen to fill the populations on a GPU (decision 037). On the CPU a run's result does
+    not depend on its call or block, so the layout changes no result there.
     """
     platform = jax.default_backend() if platform is None else platform
     if platform == "cpu":
