@@ -69,6 +69,12 @@ starts from population ``i mod 8`` with a key of its own."""
 AGREEMENT_SEEDS = 32
 """Seeds of the first and of the last sweep point that the agreement phase runs on the
 device (a ``jaxga.sweep`` of its own, before the long phases) and again on the CPU."""
+INIT_PRESETS = ("sga", "iga_zhu")
+"""Presets whose initialisation the agreement phase runs as one ``vmap`` of
+:data:`INIT_RUNS` runs on the device and on the CPU (their initialisers, the random and
+the directional walk, failed far more often on an H200 than on the CPU: decision 037)."""
+INIT_RUNS = 256
+"""Runs of that ``vmap`` (32 with ``--small``)."""
 LENGTH_RTOL = 1e-5
 """Relative tolerance of a path's float32 length evaluated on another platform.
 
@@ -78,10 +84,10 @@ one rounding another backend may do differently is the square root's (XLA promis
 precision for it; a GPU's may be an ulp off): 160 terms an ulp each is 160 x 2^-24, about
 1e-5 relative at most. On the CPU the lengths must be identical."""
 
-FULL = {"main_seeds": 100, "main_generations": None, "sweep_seeds": 1000,
-        "sweep_generations": 50, "maps": ("20x20", "64x64", "256x256"),
+FULL = {"init_runs": INIT_RUNS, "main_seeds": 100, "main_generations": None,
+        "sweep_seeds": 1000, "sweep_generations": 50, "maps": ("20x20", "64x64", "256x256"),
         "seeds": (1000, 10_000, 100_000), "generations": 20, "budget_s": 300.0}
-SMALL = {"main_seeds": 8, "main_generations": 20, "sweep_seeds": 2,
+SMALL = {"init_runs": 32, "main_seeds": 8, "main_generations": 20, "sweep_seeds": 2,
          "sweep_generations": 10, "maps": ("20x20",), "seeds": (64,), "generations": 5,
          "budget_s": 180.0}
 
@@ -269,6 +275,39 @@ def _same_run(device: Any, ref: dict, i: int, j: int) -> bool:
     return True
 
 
+def init_agreement(preset: str, n_runs: int) -> dict:
+    """The initial populations of ``n_runs`` seeds of ``preset``, one ``jax.vmap`` on the
+    device against the same on the CPU: how many runs are identical, and each side's
+    mean initialiser success rate (the share of attempts that made a path)."""
+    import jax
+    import jax.numpy as jnp
+    import numpy as np
+
+    import jaxga
+    from jaxga.engine.run import run_init
+
+    ga = jaxga.GA(preset, MAIN_MAP)
+    keys = jax.vmap(jax.random.PRNGKey)(jnp.arange(n_runs, dtype=jnp.uint32))
+
+    def init(key, params):
+        state, stats = run_init(ga.algorithm, key, ga.grid, params)
+        return state, stats.success_rate
+
+    out = {}
+    for side, dev in (("device", jax.devices()[0]), ("cpu", jax.devices("cpu")[0])):
+        with jax.default_device(dev):
+            state, rate = jax.jit(jax.vmap(init, (0, None)))(
+                jax.device_put(keys, dev), jax.device_put(ga.default_params, dev))
+            out[side] = (jax.tree_util.tree_map(np.asarray, state), np.asarray(rate))
+    leaves = [jax.tree_util.tree_leaves(out[side][0]) for side in ("device", "cpu")]
+    same = np.ones(n_runs, bool)
+    for a, b in zip(*leaves):
+        same &= np.array([a[i].tobytes() == b[i].tobytes() for i in range(n_runs)])
+    return {"preset": preset, "runs": n_runs, "identical": int(same.sum()),
+            "device_success_rate": float(out["device"][1].mean()),
+            "cpu_success_rate": float(out["cpu"][1].mean())}
+
+
 def agreement(settings: dict, device: dict) -> dict:
     """A short sweep on the device against the same seeds computed on the CPU, in this
     process: :data:`AGREEMENT_SEEDS` seeds of the first and the last sweep point, run
@@ -293,7 +332,12 @@ def agreement(settings: dict, device: dict) -> dict:
       mean lengths of each point on both show whether the trajectories differ only as
       different seeds would.
 
-    ``agree``: bits and evaluation hold, and on the CPU every run is identical.
+    * **initialisation**: :data:`INIT_RUNS` initial populations of each of
+      :data:`INIT_PRESETS` as one ``vmap`` (:func:`init_agreement`): identical on the CPU;
+      elsewhere, the share of identical runs and both success rates are reported.
+
+    ``agree``: bits and evaluation hold, and on the CPU every run and every initial
+    population is identical.
     """
     import jax
     import jax.numpy as jnp
@@ -355,7 +399,14 @@ def agreement(settings: dict, device: dict) -> dict:
                  if ok[k].any() else None for k in range(len(chosen))]
     device_means = [float(np.mean(r.length[r.success.astype(bool)]))
                     if r.success.any() else None for r in results]
-    agree = bits_identical and eval_ok and (all(identical) or not same)
+    inits = [init_agreement(p, settings["init_runs"]) for p in INIT_PRESETS]
+    say("agreement: initial populations identical "
+        + ", ".join(f"{i['preset']} {i['identical']} of {i['runs']} (success "
+                    f"{100 * i['device_success_rate']:.3g} % / {100 * i['cpu_success_rate']:.3g} %"
+                    " of attempts)" for i in inits))
+    agree = (bits_identical and eval_ok
+             and (not same or (all(identical) and all(i["identical"] == i["runs"]
+                                                      for i in inits))))
     say(f"agreement: bits {'identical' if bits_identical else 'DIFFER'}; "
         f"{int(found.sum())} path lengths {'identical' if eval_identical else 'differ'} "
         f"(max relative difference {float(diff.max(initial=0)):.1e}); "
@@ -373,6 +424,7 @@ def agreement(settings: dict, device: dict) -> dict:
                  "device_success": float(np.mean([r.success for r in results])),
                  "cpu_success": float(np.mean(ref["success"])),
                  "device_mean_length": device_means, "cpu_mean_length": cpu_means},
+        "init": inits,
         "agree": agree,
     }
 
@@ -601,6 +653,10 @@ def _agreement_part(report: dict) -> list[str]:
         pairs = ", ".join(f"{p:g}: {_fmt(d)} / {_fmt(c)}" for p, d, c in zip(
             runs["points"], runs["device_mean_length"], runs["cpu_mean_length"]))
         means = f"; mean length per `{SWEEP_KEY}`, device / CPU: {pairs}"
+    for i in ag.get("init", ()):
+        means += (f"; {i['runs']} initial populations of `{i['preset']}` in one `vmap`: "
+                  f"{i['identical']} identical, initialiser success "
+                  f"{100 * i['device_success_rate']:.3g} % / {100 * i['cpu_success_rate']:.3g} %")
     return [
         f"**Agreement with the CPU** ({ag['reference']}): random bits "
         f"{'identical' if ag['bits_identical'] else 'DIFFERENT'}; {ev['paths']} path "

@@ -68,6 +68,10 @@ def test_the_small_check_measures_everything_and_the_cpu_agrees(small):
     assert agreement["evaluation"]["identical"] and agreement["evaluation"]["paths"] > 0
     assert agreement["runs"]["required"]
     assert agreement["runs"]["identical"] == agreement["runs"]["compared"] > 0
+    assert [i["preset"] for i in agreement["init"]] == ["sga", "iga_zhu"]
+    for i in agreement["init"]:
+        assert i["identical"] == i["runs"] == settings["init_runs"]
+        assert 0 < i["device_success_rate"] == i["cpu_success_rate"] <= 1
 
     assert _positive(report["peak_memory"]["bytes"], report["wall_s"])
     assert "RSS" in report["peak_memory"]["source"]
