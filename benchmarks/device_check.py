@@ -25,7 +25,7 @@ persistent cache are off. The phases, in order:
    ``jax.vmap`` call on one device, with each call's compile time and XLA memory. A
    call XLA says will not fit the device's free memory is not run, and an out-of-memory
    error is caught: both are recorded as "did not fit". What the time budget
-   (``--budget-s``, default 300 s; 180 s with ``--small``) leaves no room for is
+   (``--budget-s``, default 300 s; 240 s with ``--small``) leaves no room for is
    recorded as "skipped (time budget)".
 5. **Peak memory**: ``device.memory_stats()["peak_bytes_in_use"]`` where the backend
    keeps it (GPUs), else the process's peak resident memory (the CPU), named as such.
@@ -89,7 +89,7 @@ FULL = {"init_runs": INIT_RUNS, "main_seeds": 100, "main_generations": None,
         "seeds": (1000, 10_000, 100_000), "generations": 20, "budget_s": 300.0}
 SMALL = {"init_runs": 32, "main_seeds": 8, "main_generations": 20, "sweep_seeds": 2,
          "sweep_generations": 10, "maps": ("20x20",), "seeds": (64,), "generations": 5,
-         "budget_s": 180.0}
+         "budget_s": 240.0}
 
 TITLE = "device check on {device}"
 
