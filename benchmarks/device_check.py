@@ -289,15 +289,15 @@ def init_agreement(preset: str, n_runs: int) -> dict:
     ga = jaxga.GA(preset, MAIN_MAP)
     keys = jax.vmap(jax.random.PRNGKey)(jnp.arange(n_runs, dtype=jnp.uint32))
 
-    def init(key, params):
-        state, stats = run_init(ga.algorithm, key, ga.grid, params)
+    def init(key, grid, params):
+        state, stats = run_init(ga.algorithm, key, grid, params)
         return state, stats.success_rate
 
     out = {}
     for side, dev in (("device", jax.devices()[0]), ("cpu", jax.devices("cpu")[0])):
-        with jax.default_device(dev):
-            state, rate = jax.jit(jax.vmap(init, (0, None)))(
-                jax.device_put(keys, dev), jax.device_put(ga.default_params, dev))
+        with jax.default_device(dev):  # every input on that device: nothing closed over
+            state, rate = jax.jit(jax.vmap(init, (0, None, None)))(
+                *jax.device_put((keys, ga.grid, ga.default_params), dev))
             out[side] = (jax.tree_util.tree_map(np.asarray, state), np.asarray(rate))
     leaves = [jax.tree_util.tree_leaves(out[side][0]) for side in ("device", "cpu")]
     same = np.ones(n_runs, bool)

@@ -187,11 +187,16 @@ class PlatformLayout:
         buckets: runs per device of the large programs, ascending (:func:`run_layout`).
         run_block: the most runs one ``vmap`` evolves and finishes (:func:`map_runs`).
         init_run_block: the most runs one ``vmap`` initialises.
+        reuse_factor: a program already compiled for more runs is reused for a call
+            (instead of compiling its own size) when it holds at most this many times
+            the call's runs per device, or the smallest bucket; None: any size up to the
+            largest bucket.
     """
 
     buckets: tuple[int, ...]
     run_block: int
     init_run_block: int
+    reuse_factor: int | None = None
 
 
 def platform_layout(platform: str | None = None) -> PlatformLayout:
@@ -210,7 +215,8 @@ def platform_layout(platform: str | None = None) -> PlatformLayout:
     platform = jax.default_backend() if platform is None else platform
     if platform == "cpu":
         return PlatformLayout((RUNS_PER_DEVICE,), RUN_BLOCK, INIT_RUN_BLOCK)
-    return PlatformLayout(ACCELERATOR_BUCKETS, ACCELERATOR_BUCKETS[-1], INIT_RUN_BLOCK)
+    return PlatformLayout(ACCELERATOR_BUCKETS, ACCELERATOR_BUCKETS[-1], INIT_RUN_BLOCK,
+                          reuse_factor=2)
 
 
 _WARNED_PLATFORMS: set[str] = set()
@@ -243,18 +249,22 @@ def run_layout(n_runs: int, n_devices: int = 1, cells: int = 0,
     platform. ``compiled``: runs per device of the programs this process has already
     compiled for the same algorithm and map; the smallest of them that holds the share
     is taken instead of compiling a new size (a DOE's confirmation run, a replan after a
-    larger run: no new compilation, at the cost of the padded runs).
+    larger run: no new compilation, at the cost of the padded runs); on a GPU only one
+    of at most twice the share or the smallest bucket (``reuse_factor``), so that a
+    re-plan of 4 runs does not compute a call of 2048.
     """
     if n_runs < 1 or n_devices < 1:
         raise ParameterError(f"need at least one run and one device, got {n_runs} runs on "
                              f"{n_devices} devices")
     per_device = math.ceil(n_runs / n_devices)
-    buckets = (platform_layout(platform).buckets if cells <= LARGE_MAP_CELLS
-               else LARGE_MAP_BUCKETS)
+    layout = platform_layout(platform)
+    buckets = layout.buckets if cells <= LARGE_MAP_CELLS else LARGE_MAP_BUCKETS
     largest = buckets[-1]
     if per_device > largest:
         return largest, math.ceil(per_device / largest)
-    have = [b for b in compiled if per_device <= b <= largest]
+    reuse = largest if layout.reuse_factor is None else min(
+        largest, max(buckets[0], layout.reuse_factor * per_device))
+    have = [b for b in compiled if per_device <= b <= reuse]
     if have:
         return min(have), 1
     if n_runs <= SMALL_CALL_RUNS and cells <= LARGE_MAP_CELLS:

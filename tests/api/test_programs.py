@@ -214,15 +214,18 @@ def test_run_layout(n_runs, n_devices, cells, have, want):
     (1, 1, 0, (), (4, 1)), (5, 1, 0, (), (32, 1)), (33, 1, 0, (), (64, 1)),
     (100, 1, 0, (), (128, 1)), (256, 1, 0, (), (256, 1)), (257, 1, 0, (), (512, 1)),
     (16_000, 1, 0, (), (2048, 8)), (100, 2, 0, (), (64, 1)), (5000, 2, 0, (), (2048, 2)),
-    (40, 1, 0, (2048,), (2048, 1)), (40, 1, 0, (32,), (64, 1)),
+    (40, 1, 0, (2048,), (64, 1)), (40, 1, 0, (32,), (64, 1)), (40, 1, 0, (64, 128), (64, 1)),
+    (40, 1, 0, (128,), (64, 1)), (100, 1, 0, (256,), (128, 1)), (3, 1, 0, (32, 2048), (32, 1)),
+    (3, 1, 0, (2048,), (4, 1)), (20, 1, 0, (32,), (32, 1)),
     (1, 1, 100 * 100, (), (1, 1)), (100, 1, 100 * 100, (), (32, 4)),
     (9, 1, 100 * 100, (256,), (16, 1)),
 ])
 def test_run_layout_on_a_gpu(n_runs, n_devices, cells, have, want):
     """On a GPU the large programs hold a power of two from 32 to 2048 runs per device
     (one call of the smallest that holds the share, else calls of 2048); maps over
-    64 x 64 and the small call keep the CPU's rule; a compiled size above the map's
-    largest is not reused."""
+    64 x 64 and the small call keep the CPU's rule; a compiled size is reused only up to
+    twice the share or the smallest bucket (a re-plan of 3 runs after a sweep of 2048
+    compiles its own 4-run program)."""
     assert api.run_layout(n_runs, n_devices, cells, have, platform="gpu") == want
 
 
@@ -423,3 +426,13 @@ def test_runs_off_the_cpu_are_warned_about_once(monkeypatch):
         warnings.simplefilter("error")
         programs.warn_platform("gpu")  # once
         programs.warn_platform("cpu")  # never
+
+
+def test_the_pure_core_warns_off_the_cpu(monkeypatch):
+    """``jaxga.GA`` says it too, for the backend its users' jit calls will run on."""
+    from jaxga.core.errors import PlatformWarning
+
+    monkeypatch.setattr(programs, "_WARNED_PLATFORMS", set())
+    monkeypatch.setattr(jax, "default_backend", lambda: "gpu")
+    with pytest.warns(PlatformWarning, match="on the gpu"):
+        api.GA("sga", "classic_ga_gapp3_20x20", generations=2)

@@ -69,7 +69,7 @@ def test_the_small_check_measures_everything_and_the_cpu_agrees(small):
     assert agreement["runs"]["required"]
     assert agreement["runs"]["identical"] == agreement["runs"]["compared"] > 0
     assert [i["preset"] for i in agreement["init"]] == ["sga", "iga_zhu"]
-    for i in agreement["init"]:
+    for i in agreement["init"]:  # on the CPU both sides are the CPU: this runs the code
         assert i["identical"] == i["runs"] == settings["init_runs"]
         assert 0 < i["device_success_rate"] == i["cpu_success_rate"] <= 1
 
@@ -87,26 +87,33 @@ def test_a_report_from_elsewhere_renders_its_section(small):
     assert f"## device check on {report['device']['name']}" in proc.stdout
     assert f"- machine: {report['machine']}" in proc.stdout
     assert "| sga | 20x20 |" in proc.stdout and "**agree**" in proc.stdout
+    sweep = report["sweep"]
+    assert f"{sweep['calls']} call(s) of {sweep['runs_per_call']} runs" in proc.stdout
 
 
 def test_a_report_cut_short_says_what_it_did_not_measure(small, tmp_path):
-    """A run ended by its time limit after the sweep (as on a GPU lent for minutes):
+    """A run ended by its time limit after the main job (as on a GPU lent for minutes):
     the phases it did not reach are 'not measured', the agreement 'unknown', never a
-    verdict."""
-    report, _, _ = small
-    cut = {k: v for k, v in report.items() if k not in ("agreement", "throughput",
-                                                         "peak_memory", "wall_s")}
-    cut["phases"] = {k: report["phases"][k] for k in ("main job", "sweep")}
+    verdict. The phases run in the order main job, agreement, sweep, throughput."""
+    report, out, _ = small
+    order = [out.index(f"[device check] {name} ...") for name in
+             ("main job", "agreement", "sweep", "throughput")]
+    assert order == sorted(order)
+    cut = {k: v for k, v in report.items() if k in ("command", "commit", "date", "machine",
+                                                     "python", "device", "settings",
+                                                     "main_job")}
+    cut["phases"] = {"main job": report["phases"]["main job"]}
     path = tmp_path / "cut.json"
     path.write_text(json.dumps(cut))
     proc = _run("--from-json", str(path), "--no-write", timeout=120)
     assert proc.returncode == 0, proc.stderr
     assert "**Agreement with the CPU**: not measured" in proc.stdout
     assert "**unknown**" in proc.stdout and "AGREE" not in proc.stdout
+    assert "**Sweep** (" in proc.stdout and "16 values" in proc.stdout
+    assert proc.stdout.count("not measured (the run ended before this phase)") == 3
     assert "the run ended there (a partial report)" in proc.stdout
     sweep = report["sweep"]
     assert sweep["runs_per_call"] * sweep["calls"] >= sweep["runs"]
-    assert f"{sweep['calls']} call(s) of {sweep['runs_per_call']} runs" in proc.stdout
 
 
 @pytest.mark.parametrize(("args", "message"), [
