@@ -153,7 +153,8 @@ runs is one or more calls of ``32 x devices`` runs (the last padded)."""
 
 
 RUN_BUCKETS = (SMALL_CALL_RUNS, RUNS_PER_DEVICE)
-"""The two program sizes (:func:`run_layout`): 1-4 seeds share one program, and any count
+"""The CPU's two program sizes (:func:`run_layout`; a GPU's: :func:`platform_layout`):
+1-4 seeds share one program, and any count
 above runs the 32-per-device program as often as needed, on any number of devices (10,
 20 and 30 seeds: one program). So two program sets per preset and map serve every seed
 count. On maps up to 64 x 64 a run computes in milliseconds, so padding a few runs to a
@@ -273,12 +274,13 @@ def run_layout(n_runs: int, n_devices: int = 1, cells: int = 0,
 
 
 RUN_BLOCK = 64
-"""Largest number of runs :func:`map_runs` computes in one ``vmap`` by default.
+"""Largest number of runs :func:`map_runs` computes in one ``vmap`` on the CPU
+(:func:`platform_layout`).
 
 Blocks of 20-50 runs compute faster than blocks of 125, and one ``vmap`` of 50 runs is
-within noise of two blocks of 25 (decision 011). The
+within noise of two blocks of 25 (decision 011). The CPU's
 programs of :func:`compiled_programs` hold at most ``RUN_BUCKETS[-1]`` runs per device,
-so only their initialisation is split further (:data:`INIT_RUN_BLOCK`)."""
+so there only their initialisation is split further (:data:`INIT_RUN_BLOCK`)."""
 
 
 INIT_RUN_BLOCK = 10
