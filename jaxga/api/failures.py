@@ -25,7 +25,7 @@ def unstarted_results(*, config, configs, points, map_name, grid, seed_arr, algo
     for q, cfg in enumerate(configs):
         sl = slice(q * n_seeds, (q + 1) * n_seeds)
         success = np.zeros(n_seeds, bool)
-        causes = failure_causes(success, success, rate[sl], from_fallback[sl], config,
+        causes = failure_causes(success, success, rate[sl], from_fallback[sl], cfg,
                                 algo.capacity, len(octile.path))
         r = no_path_result(cfg, map_name, grid, seed_arr, algo, failure_reason(causes),
                            timing, algo.population, frame)

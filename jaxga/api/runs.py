@@ -216,7 +216,8 @@ def load_problem(preset, grid, corner_rule, variant, sets, overrides, generation
 
 def _point_configs(config: Config, points: Sequence[Mapping[str, Any]]) -> list[Config]:
     """Validated configurations of the sweep points; only dynamic keys and the
-    population size may vary (they do not change the compiled program)."""
+    population size may vary (they do not change the compiled program:
+    :func:`jaxga.config.schema.sweepable`)."""
     out = []
     base = static_config(config)
     for point in points:
@@ -229,9 +230,10 @@ def _point_configs(config: Config, points: Sequence[Mapping[str, Any]]) -> list[
             changed = sorted(k for k in new.keys() | old.keys() if new.get(k) != old.get(k))
             raise ParameterError(
                 f"sweep point {dict(point)} changes {', '.join(changed)}, which the "
-                "compiled program depends on: only scalar dynamic keys (a crossover or "
-                "mutation rate, a fitness weight, MPMGA's c1 temperature; "
-                "jaxga.config.schema.SCHEMA) and population.size can be swept in one compiled "
+                "compiled program depends on: only dynamic keys (rates, weights, "
+                "temperatures, init.max_tries, init.fallback, termination.stagnation, "
+                "islands.interval, the per-island rates, AGACD's Delphi ratios; 'dynamic' "
+                "in jaxga presets --show) and population.size can be swept in one compiled "
                 "call; run the other values separately")
         # every point's islands must hold its migrants: an inactive individual never
         # migrates (the check at build time only sees the largest size)
@@ -400,10 +402,32 @@ def _plan_sweep(preset, grid, points, seeds, generations, corner_rule, variant, 
         # the capacity is the largest size swept, also when it is below the preset's size
         algo, _ = build(build_config, program_grid)
         per_point = [default_params(c, algo.islands) for c in configs]
+        _check_param_shapes(per_point, points)
         point_opt = _fitness_optima(configs, map_grid, algo)
     seed_arr = seed_list(seeds, lambda n: check_result_memory(n * len(configs), algo))
     return _SweepPlan(**problem, seed_arr=seed_arr, size_class=size_class, algo=algo,
                       program_grid=program_grid, per_point=per_point, point_opt=point_opt)
+
+
+def _check_param_shapes(per_point: Sequence[dict], points: Sequence[Mapping[str, Any]]) -> None:
+    """Every point's parameters have the first point's keys, shapes and types (one
+    compiled program takes them all): a point that gives a parameter another shape (a
+    per-island list where the others have one rate) is refused, naming it."""
+    def spec(params: dict) -> dict:
+        return {k: (tuple(np.shape(v)), str(np.asarray(v).dtype)) for k, v in params.items()}
+
+    first = spec(per_point[0])
+    for point, params in zip(points[1:], per_point[1:]):
+        other = spec(params)
+        bad = sorted(k for k in first.keys() | other.keys() if first.get(k) != other.get(k))
+        if bad:
+            def said(s: dict, k: str = bad[0]) -> str:
+                return f"shape {s[k][0]} ({s[k][1]})" if k in s else "no value"
+
+            raise ParameterError(
+                f"sweep point {dict(point)} gives the parameter {bad[0]} {said(other)} "
+                f"where the first point gives it {said(first)}: one compiled call takes "
+                "one shape; run these points separately")
 
 
 def _program_map(config: Config, grid: Grid, capacity: int,
@@ -656,7 +680,7 @@ def _point_results(host: dict, hist: dict, *, config: Config, configs: Sequence[
             v = np.asarray(v, float)
             return np.where(success.reshape((-1,) + (1,) * (v.ndim - 1)), v, np.nan)
 
-        causes = failure_causes(success, started[sl], rate[sl], from_fallback[sl], config,
+        causes = failure_causes(success, started[sl], rate[sl], from_fallback[sl], cfg,
                                 algo.capacity, len(octile.path))
         results.append(Result(
             preset=config["name"], map_name=map_name, corner_rule=grid.corner_rule,

@@ -8,6 +8,7 @@ from typing import Any
 
 from jaxga.config import registry
 from jaxga.config.presets import preset_info, preset_settings
+from jaxga.config.schema import sweepable
 from jaxga.core.errors import JaxgaError
 from jaxga.maps import (
     builtin_names,
@@ -26,17 +27,27 @@ def cmd_maps(args: argparse.Namespace) -> int:
     return 0
 
 
+def sweep_kind(key: str) -> str:
+    """``"dynamic"`` for a key a sweep varies in one compiled call (a traced parameter,
+    or the population size: :func:`jaxga.config.schema.sweepable`), ``"static"`` for one
+    compiled in, ``""`` for metadata (name, paper, description)."""
+    if key in ("name", "paper", "description"):
+        return ""
+    return "dynamic" if sweepable(key) else "static"
+
+
 def cmd_presets(args: argparse.Namespace) -> int:
     """``jaxga presets``: list the presets with their papers; ``--show NAME`` prints one
-    preset's every setting with its source (the file and the comment next to the key,
-    or the default)."""
+    preset's every setting, whether a sweep can vary it in one compiled call
+    (``dynamic``) or it is compiled in (``static``), and its source (the file and the
+    comment next to the key, or the default)."""
 
     if args.show is not None:
         rows = preset_settings(args.show, variant=args.variant)
         width = max(len(key) for key, _, _ in rows)
         for key, value, source in rows:
             text = json.dumps(value) if isinstance(value, (list, str, bool)) else str(value)
-            print(f"{key:{width}s} = {text:12s} # {source}")
+            print(f"{key:{width}s} = {text:12s} {sweep_kind(key):7s} # {source}")
         return 0
     if args.variant is not None:
         raise JaxgaError("--variant goes with --show NAME")
@@ -91,7 +102,9 @@ def add_parser(commands: argparse._SubParsersAction) -> None:
     p = commands.add_parser("presets", help="list the presets and their papers, or show one "
                        "preset's settings (--show NAME)")
     p.add_argument("--show", metavar="NAME", help="print every setting of this preset (or "
-                   "TOML file) with its source: the preset file and its comment, or default")
+                   "TOML file), 'dynamic' (a sweep varies it in one compiled call) or "
+                   "'static' (compiled in), with its source: the preset file and its "
+                   "comment, or default")
     p.add_argument("--variant", help="with --show: apply this variant")
     p.set_defaults(func=cmd_presets)
 

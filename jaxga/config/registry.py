@@ -73,6 +73,7 @@ __all__ = [
     "canonical",
     "initialiser",
     "names",
+    "objective_keywords",
     "operator",
     "operators",
     "readers",
@@ -150,7 +151,8 @@ class Operator:
             of its keys that are each in range but together make no sense (run by
             :func:`jaxga.engine.check_combination` before anything is traced).
         prepare: ``prepare(config) -> {key: array}``: dynamic parameters it derives from
-            the configuration (AGACD's Delphi weights from its ratios).
+            the configuration (AGACD's Delphi ratios, with their default where the
+            configuration leaves them out).
     """
 
     family: str
@@ -398,14 +400,23 @@ register(Operator(
 ))
 
 
-# fitness: the objective's keyword arguments are its dynamic parameters
+# fitness: the objective's keyword arguments are its dynamic scalar parameters
+def objective_keywords(op: Operator) -> tuple[str, ...]:
+    """The keys of fitness operator ``op`` that are keyword arguments of its objective in
+    :mod:`jaxga.core.objectives`: its dynamic scalar (float) keys. AGACD's Delphi ratios
+    (a list) are not: the objective takes the weights computed from them."""
+    return tuple(key for key, field in op.params.items()
+                 if field.dynamic and field.kind is float)
+
+
 def _objective_options(op_name: str) -> Callable[[Binding], dict]:
     def options(ctx: Binding) -> dict:
         op = operator("fitness", op_name)
-        kwargs = {key.split(".", 1)[1]: ctx.params[key] for key, field in op.params.items()
-                  if field.dynamic and key in ctx.params}
-        if op_name == "agacd":
-            kwargs["weights"] = ctx.params["fitness.weights"]
+        kwargs = {key.split(".", 1)[1]: ctx.params[key] for key in objective_keywords(op)
+                  if key in ctx.params}
+        if op_name == "agacd":  # AGACD eq. 21-25, from the traced ratios
+            kwargs["weights"] = objectives.delphi_weights(
+                ctx.params["fitness.importance_ratios"])
         return kwargs
 
     return options
@@ -453,10 +464,18 @@ def _check_agacd(config: Mapping) -> None:
     _floor_positive("agacd", config)
 
 
-def _agacd_weights(config: Mapping) -> dict:
-    """AGACD eq. 21-25: the Delphi weights of its importance ratios (default 1.2, 1.4)."""
-    ratios = config.get("fitness.importance_ratios", (1.2, 1.4))
-    return {"fitness.weights": objectives.delphi_weights(jnp.asarray(ratios, jnp.float32))}
+AGACD_RATIOS = (1.2, 1.4)
+"""AGACD's Delphi importance ratios I1, I2 (section 4.4, Table 1): the default of
+``fitness.importance_ratios``."""
+
+
+def _agacd_ratios(config: Mapping) -> dict:
+    """AGACD eq. 21-25: its importance ratios as a traced ``float32[2]`` parameter (default
+    :data:`AGACD_RATIOS`); the objective computes the Delphi weights from them
+    (:func:`jaxga.core.objectives.delphi_weights`), so that a sweep over the ratios is
+    one compiled call."""
+    ratios = config.get("fitness.importance_ratios", AGACD_RATIOS)
+    return {"fitness.importance_ratios": jnp.asarray(ratios, jnp.float32)}
 
 
 def _check_mpmga(config: Mapping) -> None:
@@ -497,8 +516,9 @@ _FITNESS = {
         "fitness.c": _FIT_C}),
     "agacd": ("Delphi-weighted length, smoothness and safety (AGACD eq. 7-8, 18-25)", {
         "fitness.smoothness_floor": _FLOOR,
-        "fitness.importance_ratios": Field(list, "AGACD Delphi importance ratios "
-                                           "(eq. 21-25)")}),
+        "fitness.importance_ratios": Field(list, "AGACD Delphi importance ratios I1, I2 "
+                                           "(eq. 21-25): one per objective but the last",
+                                           dynamic=True)}),
     "mpmga": ("alpha / length + beta c / smoothness (MPMGA eq. 3-5)", {
         "fitness.alpha": Field(**POS, doc="MPMGA length weight alpha"),
         "fitness.beta": Field(**POS, doc="MPMGA smoothness weight beta"),
@@ -516,7 +536,7 @@ _FITNESS = {
 for _name, (_summary, _params) in _FITNESS.items():
     register(Operator("fitness", _name, getattr(objectives, _name), _summary, params=_params,
                       options=_objective_options(_name), check=_FITNESS_CHECKS.get(_name),
-                      prepare=_agacd_weights if _name == "agacd" else None))
+                      prepare=_agacd_ratios if _name == "agacd" else None))
 
 # selection
 register(Operator("selection", "roulette", sel.roulette,
@@ -592,9 +612,9 @@ def _check_annealing(config: Mapping) -> None:
 
 
 def _annealing_temperature(ctx: Binding) -> dict:
-    """MPMGA eq. 17: ``T = c1 * w**t`` at generation ``t``."""
+    """MPMGA eq. 17: ``T = c1 * w**t`` at generation ``t`` (``c1`` and ``w`` traced)."""
     schedule = schedules.mpmga_temperature(ctx.params["mutation.temperature_c1"],
-                                           ctx.config.get("mutation.temperature_w"))
+                                           ctx.params["mutation.temperature_w"])
     return {"temperature": schedule(ctx.generation)}
 
 
@@ -612,9 +632,9 @@ register(Operator(
     "delete a segment, reconnect, accept by simulated annealing (MPMGA 4.6, eq. 15-17)",
     params={
         "mutation.temperature_c1": Field(**POS, doc="MPMGA annealing T = c1 * w**t: c1"),
-        "mutation.temperature_w": Field(float, low=0.0, high=1.0,
-                                        doc="MPMGA annealing T = c1 * w**t: w (static: "
-                                            "optax builds the schedule from it)"),
+        "mutation.temperature_w": Field(float, low=0.0, high=1.0, dynamic=True,
+                                        doc="MPMGA annealing T = c1 * w**t: decay rate w "
+                                            "in (0, 1]"),
     },
     traits=frozenset({NEEDS_FITNESS, FIELD_REPAIR}), options=_annealing_temperature,
     required=("mutation.temperature_c1", "mutation.temperature_w"), check=_check_annealing,

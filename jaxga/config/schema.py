@@ -6,9 +6,13 @@ a user TOML file or ``--set key=value`` overrides any field. Every key is declar
 :data:`SCHEMA` with its type, allowed values or range and a one-line meaning: unknown
 keys and out-of-range values are rejected with a message that names the key.
 
-Keys marked *dynamic* never change array shapes (probabilities, weights, temperatures):
-a sweep over them is one compiled call (``jax.vmap``). The others are *static*: they
-choose operators or sizes and are compiled in.
+Keys marked *dynamic* never change array shapes (probabilities, weights, temperatures,
+integer settings such as ``init.max_tries``, ``termination.stagnation`` and
+``islands.interval``, the per-island rates, AGACD's Delphi ratios and whether
+``init.fallback`` is on): they are traced values of the parameter pytree
+(:func:`jaxga.engine.default_params`), so a sweep over them is one compiled call
+(``jax.vmap``). The others are *static*: they choose operators or sizes and are
+compiled in. :data:`SWEPT_STATIC` names the one static key a sweep may still vary.
 """
 
 from __future__ import annotations
@@ -32,8 +36,8 @@ if sys.version_info >= (3, 11):
 else:  # pragma: no cover
     import tomli as tomllib
 
-__all__ = ["DEFAULTS", "REQUIRED", "SCHEMA", "Config", "Field", "flatten", "load_toml",
-           "parse_value", "python_scalar"]
+__all__ = ["DEFAULTS", "REQUIRED", "SCHEMA", "SWEPT_STATIC", "Config", "Field", "flatten",
+           "load_toml", "parse_value", "python_scalar", "sweepable"]
 
 FALLBACKS = (*(op.name for op in registry.operators("init")
                if registry.NEVER_FAILS in op.traits), "none")
@@ -58,13 +62,16 @@ COMMON_FIELDS: dict[str, Field] = {
                                  low=0, high=1_000_000),
     "generations": Field(int, "generations per run", low=1, high=1_000_000),
     "init.method": MethodField("init", "initialiser (see jaxga operators)"),
-    "init.max_tries": Field(int, "redraws of a failed individual", low=1, high=10_000),
+    "init.max_tries": Field(int, "attempts per individual of init.method, on average (the "
+                            "bound of its rounds of redraws)", low=1, high=10_000,
+                            dynamic=True),
     "init.unique": Field(bool, "reject an initial individual identical to one already "
                          "accepted, as a failed draw (IMGA 4.1 (iii): M non-repeating "
                          "chromosomes; the fallback's individuals are not checked)"),
     "init.fallback": Field(str, "initialiser that fills the slots init.method left empty "
                            "after init.max_tries attempts ('none': the paper's initialiser "
-                           "alone)", choices=FALLBACKS),
+                           "alone; compiled in whenever init.method can fail, switched on "
+                           "and off by a traced flag)", choices=FALLBACKS, dynamic=True),
     "repair.fallback": Field(str, "'field': a repair that does not close (median insertion "
                              "of the initialisers, the column crossover and the segment "
                              "mutation; the range mutation's walk) connects down the exact "
@@ -88,16 +95,20 @@ COMMON_FIELDS: dict[str, Field] = {
     "simplify.method": MethodField("simplify", "per-generation simplification (Zhu & Pan 4.6)"),
     "simplify.probability": Field(**P, doc="simplification probability ps per individual"),
     "post.method": MethodField("post", "post-optimisation of the final best (IMGA 4.5)"),
-    "termination.stagnation": Field(int, "IMGA: stop after K generations without improvement; "
-                                    "0 = never", low=0, high=1_000_000),
+    "termination.stagnation": Field(int, "IMGA 4.4: stop after K generations without "
+                                    "improvement; 0 = never", low=0, high=1_000_000,
+                                    dynamic=True),
     "islands.count": Field(int, "number of islands (1 = single population)", low=1, high=1024),
     "islands.topology": Field(str, "migration topology (mpmga: MPMGA 4.4)", choices=TOPOLOGIES),
-    "islands.interval": Field(int, "generations between migrations", low=1, high=1_000_000),
+    "islands.interval": Field(int, "generations between migrations", low=1, high=1_000_000,
+                              dynamic=True),
     "islands.migrants": Field(int, "migrants per island and migration", low=0, high=100_000),
     "islands.timing": Field(str, "migration after the generation's variation (jaxga's default) or "
                             "before it (MPMGA Fig. 1)", choices=MIGRATION_TIMINGS),
-    "islands.crossover_probabilities": Field(list, "per-island pc (MPMGA A, B, C)"),
-    "islands.mutation_probabilities": Field(list, "per-island pm (MPMGA A, B, C)"),
+    "islands.crossover_probabilities": Field(list, "per-island pc (MPMGA A, B, C): one per "
+                                             "island (islands.count)", dynamic=True),
+    "islands.mutation_probabilities": Field(list, "per-island pm (MPMGA A, B, C): one per "
+                                            "island (islands.count)", dynamic=True),
 }
 
 COMMON_DEFAULTS: dict[str, Any] = {
@@ -166,6 +177,17 @@ the defaults of the operators' keys."""
 
 REQUIRED = ("name", "population.size", "generations", "init.method", "fitness.method",
             "selection.method", "crossover.method", "mutation.method")
+
+SWEPT_STATIC = ("population.size",)
+"""Static keys that a sweep may still vary in one compiled call: the population size (the
+program holds the largest size swept, and a dynamic ``active`` count masks the rest)."""
+
+
+def sweepable(key: str) -> bool:
+    """Whether ``jaxga.sweep`` and ``jaxga.doe`` may vary ``key`` in one compiled call: a
+    dynamic key (:attr:`Field.dynamic`: a traced value of the parameters) or one of
+    :data:`SWEPT_STATIC`."""
+    return key in SWEPT_STATIC or (key in SCHEMA and SCHEMA[key].dynamic)
 
 
 def flatten(table: Mapping[str, Any], prefix: str = "") -> dict[str, Any]:

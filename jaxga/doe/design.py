@@ -13,7 +13,7 @@ from typing import Any
 
 import numpy as np
 
-from jaxga.config.schema import SCHEMA, Config, parse_value, python_scalar
+from jaxga.config.schema import SCHEMA, Config, parse_value, python_scalar, sweepable
 from jaxga.core.errors import ParameterError
 from jaxga.engine import unread_keys
 
@@ -84,8 +84,9 @@ def check_factors(config: Config, factors: Sequence[Factor]) -> None:
 
     A factor must be a configuration key that ``config`` (the preset after overrides)
     reads (:func:`jaxga.engine.unread_keys`: a fitness weight the preset leaves at the
-    objective's default is read), either dynamic (probabilities, weights, temperatures:
-    :data:`jaxga.config.schema.SCHEMA`) or ``population.size`` (the engine's active mask); names
+    objective's default is read), either dynamic (probabilities, weights, temperatures,
+    integer settings such as ``islands.interval``: :data:`jaxga.config.schema.SCHEMA`) or
+    ``population.size`` (the engine's active mask; :func:`jaxga.config.schema.sweepable`); names
     must be distinct; every level must be a valid value of the key.
     """
     if not factors:
@@ -100,11 +101,13 @@ def check_factors(config: Config, factors: Sequence[Factor]) -> None:
             near = [k for k in SCHEMA if k.split(".")[-1] == f.name.split(".")[-1]]
             hint = f" (did you mean {', '.join(near)}?)" if near else ""
             raise ParameterError(f"unknown factor {f.name!r}: not a configuration key{hint}")
-        if not (SCHEMA[f.name].dynamic or f.name == "population.size"):
+        if not sweepable(f.name):
             raise ParameterError(
                 f"factor {f.name!r} changes the compiled program: only dynamic keys "
-                "(probabilities, weights, temperatures) and population.size can be "
-                "factors; run the other values as separate experiments")
+                "(probabilities, weights, temperatures, init.max_tries, "
+                "termination.stagnation, islands.interval; 'dynamic' in jaxga presets "
+                "--show) and population.size can be factors; run the other values as "
+                "separate experiments")
         if f.name in unread:
             raise ParameterError(f"factor {f.name!r} has no effect in preset "
                                  f"{config['name']!r}: {unread[f.name]}")

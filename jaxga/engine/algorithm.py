@@ -1,9 +1,11 @@
 """The static algorithm and the dynamic parameters of a configuration.
 
 :class:`Algorithm` is what is compiled in (operators, sizes, flags: a hashable ``jit``
-argument); the dynamic parameters (probabilities, weights, temperatures, the active
-population size) are a pytree, so configurations that differ only in them share one
-program. The path capacity is chosen here when the configuration leaves it at 0.
+argument); the dynamic parameters (probabilities, weights, temperatures, the integer
+settings that bound no array, the per-island rates, AGACD's Delphi ratios, the fallback
+flag, the active population size) are a pytree, so configurations that differ only in
+them share one program. The path capacity is chosen here when the configuration leaves
+it at 0.
 """
 
 from __future__ import annotations
@@ -24,17 +26,18 @@ from jaxga.engine.checks import (
     check_combination,
     check_migration,
     chosen_operators,
+    compiled_fallback,
     uses_waypoints,
 )
 from jaxga.operators.guide import problem_facts
 
 FITNESS_PARAMS: dict[str, tuple[str, ...]] = {
-    op.name: tuple(key.split(".", 1)[1] for key, field in op.params.items() if field.dynamic)
+    op.name: tuple(key.split(".", 1)[1] for key in registry.objective_keywords(op))
     for op in registry.operators("fitness")
 }
 """Each fitness combiner's weights: ``fitness.NAME`` keys that are keywords of its
-objective in :mod:`jaxga.core.objectives` (from the registry; AGACD's Delphi ratios become its
-``weights``)."""
+objective in :mod:`jaxga.core.objectives` (from the registry; AGACD's Delphi ratios are
+not: the objective takes the weights computed from them, eq. 21-25)."""
 
 
 FITNESS_DEFAULTS: dict[str, dict[str, float]] = {
@@ -129,20 +132,46 @@ NON_STRUCTURAL = ("name", "paper", "description", "population.size")
 def static_config(config: Config) -> Config:
     """The part of a configuration that is compiled in: operators, sizes, flags.
 
-    Dynamic values (probabilities, weights, temperatures) and metadata are left out, so
-    two configurations that differ only in them share one compiled program.
+    Dynamic values (probabilities, weights, temperatures, the integer settings and lists
+    of :data:`jaxga.config.schema.SCHEMA` marked dynamic) and metadata are left out, so
+    two configurations that differ only in them share one compiled program. One dynamic
+    key leaves a static part: ``init.fallback`` is kept as the initialiser compiled in
+    (:func:`jaxga.engine.checks.compiled_fallback`: the same whether the fallback is on
+    or ``"none"``, which a traced flag says).
     """
-    return Config(tuple((k, v) for k, v in config.items
-                        if not SCHEMA[k].dynamic and k not in NON_STRUCTURAL))
+    items = [(k, v) for k, v in config.items
+             if not SCHEMA[k].dynamic and k not in NON_STRUCTURAL]
+    if config.get("init.method") is not None:
+        items.append(("init.fallback", compiled_fallback(config)))
+    return Config(tuple(sorted(items)))
+
+
+def param_value(key: str, value: Any) -> jax.Array:
+    """The traced value of dynamic key ``key``: ``float32`` for a number, ``int32`` for an
+    integer (``init.max_tries``, ``termination.stagnation``, ``islands.interval``), a
+    ``float32`` array for a list (its shape fixed by static keys: ``islands.count``,
+    AGACD's objectives), and for ``init.fallback`` a bool flag, True unless ``"none"``."""
+    if key == "init.fallback":
+        return jnp.asarray(value != "none")
+    kinds = SCHEMA[key].kind if isinstance(SCHEMA[key].kind, tuple) else (SCHEMA[key].kind,)
+    if int in kinds and float not in kinds:
+        return jnp.asarray(value, I32)
+    return jnp.asarray(value, F32)
 
 
 def default_params(config: Config, islands: int = 1) -> dict[str, jax.Array]:
-    """Dynamic parameters (float32 scalars, or ``[islands]`` arrays for per-island rates).
+    """Dynamic parameters: one traced value per dynamic key (:func:`param_value`), the
+    active population size, the generation count and what the chosen operators derive
+    (their ``prepare``: AGACD's Delphi ratios); a per-island rate
+    (``islands.crossover_probabilities``, ``islands.mutation_probabilities``) travels as
+    its rate's ``[islands]`` array (``crossover.probability``, ``mutation.probability``).
 
-    Checks the configuration's combinations first (:func:`check_combination`)."""
+    Checks the configuration's combinations first (:func:`check_combination`); a
+    per-island list whose length is not ``islands`` is refused."""
     check_combination(config)
+    island_keys = set(PER_ISLAND.values())
     params: dict[str, jax.Array] = {
-        k: jnp.asarray(v, F32) for k, v in config.dynamic().items()
+        k: param_value(k, v) for k, v in config.dynamic().items() if k not in island_keys
     }
     params["population.active"] = jnp.asarray(config["population.size"], I32)
     # dynamic, so that one compiled program serves every generation count (AGACD's
@@ -160,4 +189,3 @@ def default_params(config: Config, islands: int = 1) -> dict[str, jax.Array]:
                     f"(islands.count): give one rate per island")
             params[key] = jnp.asarray(per_island, F32)
     return params
-

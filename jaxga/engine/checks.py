@@ -15,7 +15,7 @@ from typing import Any
 from jaxga.config import registry
 from jaxga.config.presets import file_overrides
 from jaxga.config.registry import FIELD_REPAIR, NEVER_FAILS, WAYPOINTS
-from jaxga.config.schema import Config
+from jaxga.config.schema import DEFAULTS, Config
 from jaxga.core.errors import ParameterError
 from jaxga.operators.islands import migrates
 
@@ -30,6 +30,22 @@ def chosen_operators(config: Config) -> dict[str, registry.Operator]:
     if config.get("init.fallback", "none") != "none":
         out["init.fallback"] = registry.operator("init", config["init.fallback"])
     return out
+
+
+def compiled_fallback(config: Config) -> str:
+    """The initialiser compiled into a run's programs as ``init.fallback``: ``"none"`` when
+    ``init.method`` cannot fail (trait :data:`~jaxga.config.registry.NEVER_FAILS`: there is
+    nothing to fill), else the configured fallback, or the default one
+    (:data:`jaxga.config.schema.DEFAULTS`, the field walk) when the configuration says
+    ``"none"``. Whether it runs is the traced flag ``init.fallback`` of the parameters
+    (:func:`jaxga.engine.default_params`): a fallback and ``"none"`` share one compiled
+    program, and ``"none"`` discards every slot it would fill (the same results as
+    without it)."""
+    method = registry.operator("init", config["init.method"])
+    if NEVER_FAILS in method.traits:
+        return "none"
+    fallback = config.get("init.fallback", "none")
+    return fallback if fallback != "none" else DEFAULTS["init.fallback"]
 
 
 FIELD_REPAIR_ROLES = ("init.method", "crossover.method", "mutation.method")
@@ -220,8 +236,13 @@ def uses_guide(config: Config) -> bool:
     """Whether a run of ``config`` steers by the problem's exact distance fields (its grid
     needs :func:`jaxga.operators.guide.with_guide`): an operator with the trait
     :data:`~jaxga.config.registry.NEEDS_GUIDE` (the field initialiser, as ``init.method`` or as
-    the fallback of another initialiser), and the field repairs (``repair.fallback``)."""
+    the fallback compiled in for another initialiser, :func:`compiled_fallback`, also when
+    ``init.fallback = "none"`` switches it off), and the field repairs
+    (``repair.fallback``)."""
+    fallback = compiled_fallback(config) if config.get("init.method") else "none"
     return has_trait(chosen_operators(config), registry.NEEDS_GUIDE) or (
+        fallback != "none"
+        and registry.NEEDS_GUIDE in registry.operator("init", fallback).traits) or (
         config["repair.fallback"] != "none" and field_repairs(config))
 
 

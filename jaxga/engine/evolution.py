@@ -224,24 +224,31 @@ def init_state(algo: Algorithm, key: jax.Array, grid: Grid, params: dict) -> tup
     """Initial population of every island and its evaluation.
 
     ``init.method`` draws the population within ``init.max_tries`` attempts per
-    individual; ``init.fallback = "field_walk"`` then fills exactly the slots it left
-    empty with :func:`jaxga.operators.init.field_walk` (``init.slack``, ``init.temperature``), so a
-    run starts with a whole population wherever a path exists (decision 018). Returns
+    individual (traced: the bound of a ``while_loop`` of rounds); ``init.fallback =
+    "field_walk"`` then fills exactly the slots it left empty with
+    :func:`jaxga.operators.init.field_walk` (``init.slack``, ``init.temperature``), so a
+    run starts with a whole population wherever a path exists (decision 018). The
+    fallback is compiled in whenever ``init.method`` can fail and runs where the traced
+    flag ``params["init.fallback"]`` is set (``"none"`` clears it: the slots stay as the
+    initialiser left them, the results of a program without the fallback). Returns
     ``(GAState, InitStats)`` (one entry per island).
     """
     ctx = binding(algo, params)
     method = registry.operator("init", algo.get("init.method"))
     init_fn = method.bind(ctx)
-    fallback = None
-    if algo.get("init.fallback") != "none" and NEVER_FAILS not in method.traits:
-        fallback = registry.operator("init", algo.get("init.fallback")).bind(ctx)
+    fallback, fallback_on = None, True
+    compiled = algo.get("init.fallback", "none")
+    if compiled != "none" and NEVER_FAILS not in method.traits:
+        fallback = registry.operator("init", compiled).bind(ctx)
+        fallback_on = params["init.fallback"]
     keys = jax.random.split(key, algo.islands)
     active = _active(algo, params)
+    max_tries = params["init.max_tries"]
 
     def one(k):
         pop, stats = initialise_population(
             k, grid, init_fn, algo.population, algo.capacity,
-            max_tries=int(algo.get("init.max_tries")), fallback=fallback,
+            max_tries=max_tries, fallback=fallback, fallback_on=fallback_on,
             unique=bool(algo.get("init.unique", False)),
         )
         # Once per run: at full width (the window pays off in the generations' loop).
@@ -307,8 +314,10 @@ def _island_params(params: dict, islands: int) -> tuple[dict, dict]:
 
 def generation(algo: Algorithm, key, grid: Grid, state: GAState, params: dict):
     """One generation of a run: every island's variation and the migration, in the order of
-    ``islands.timing`` (jaxga's default: vary, then migrate; MPMGA Fig. 1: migrate, then vary);
-    honours the freeze."""
+    ``islands.timing`` (jaxga's default: vary, then migrate; MPMGA Fig. 1: migrate, then vary;
+    every ``islands.interval`` generations, traced); honours the freeze and applies IMGA
+    4.4's stagnation rule (``termination.stagnation``, traced: a run freezes after K
+    generations without improvement, never for K = 0)."""
 
     t = state.generation
     per, shared = _island_params(params, algo.islands)
@@ -319,11 +328,12 @@ def generation(algo: Algorithm, key, grid: Grid, state: GAState, params: dict):
 
     islands = state.islands
     before = algo.get("islands.timing") == "before_variation"
+    interval = params["islands.interval"]
     if before:  # MPMGA section 2 / Fig. 1: evaluate, migrate, then cross and mutate
-        islands = migrate(algo, keys[-1], islands, t, _active(algo, params))
+        islands = migrate(algo, keys[-1], islands, t, _active(algo, params), interval)
     islands, fails = jax.vmap(one)(keys[:-1], islands, per)
     if not before:  # jaxga's default: vary every island, then migrate
-        islands = migrate(algo, keys[-1], islands, t, _active(algo, params))
+        islands = migrate(algo, keys[-1], islands, t, _active(algo, params), interval)
     best_c, best_n, best_f = _best_of(islands)
     better = best_f > state.best_fitness
     new = GAState(
@@ -336,9 +346,10 @@ def generation(algo: Algorithm, key, grid: Grid, state: GAState, params: dict):
         frozen=state.frozen,
         failures=state.failures + jnp.sum(fails, axis=0),
     )
-    k_stop = int(algo.get("termination.stagnation"))
-    if k_stop > 0:
-        new = dataclasses.replace(new, frozen=new.stall >= k_stop)
+    # IMGA 4.4: stop after K generations without improvement (K traced; 0 = never). A
+    # frozen run keeps its old state below, so only an unfrozen one can freeze here.
+    k_stop = params["termination.stagnation"]
+    new = dataclasses.replace(new, frozen=(k_stop > 0) & (new.stall >= k_stop))
     return jax.tree_util.tree_map(lambda old, nw: jnp.where(state.frozen, old, nw), state, new)
 
 

@@ -4,7 +4,7 @@ Islands are stacked on a leading axis ``I`` (``cells int32[I, P, L]``); one gene
 the single-population generation ``vmap``-ed over islands with per-island rates (see
 :func:`jaxga.engine.generation`), then :func:`migrate`, a pure function of the stack.
 
-Topologies (every ``interval`` generations, ``k`` migrants):
+Topologies (every ``interval`` generations, traced; ``k`` migrants, static):
 
 * ``"ring"``: island ``i`` sends copies of its best ``k`` to island ``i + 1`` (mod I),
   where they replace the worst ``k``;
@@ -51,16 +51,19 @@ def migrates(config) -> bool:
             and int(config.get("islands.migrants", 0)) > 0)
 
 
-def migrate(algo, key: jax.Array, islands, t: jax.Array, active: jax.Array):
+def migrate(algo, key: jax.Array, islands, t: jax.Array, active: jax.Array,
+            interval: int | jax.Array = 1):
     """Apply the configured migration to the island stack (MPMGA 4.4).
 
     Args:
-        algo: the :class:`jaxga.engine.Algorithm` (topology, interval, migrants: static).
+        algo: the :class:`jaxga.engine.Algorithm` (topology, migrants: static).
         key: PRNG key (MPMGA's random B-C exchange).
         islands: an ``IslandState`` with leading axis ``I``.
         t: the generation just completed (0-based); migration happens when
             ``(t + 1) % interval == 0``.
         active: ``bool[P]`` active individuals (inactive ones never move).
+        interval: generations between migrations (``islands.interval``, >= 1); may be
+            traced (the parameter ``islands.interval``: a sweep over it is one program).
     """
     n_isl = algo.islands
     topology = algo.get("islands.topology")
@@ -108,5 +111,5 @@ def migrate(algo, key: jax.Array, islands, t: jax.Array, active: jax.Array):
         new = _replace(new, 2, rc, 1, rb, old)
     else:
         raise ValueError(f"unknown migration topology {topology!r}")
-    do = (t + 1) % int(algo.get("islands.interval")) == 0
+    do = (t + 1) % interval == 0
     return jax.tree_util.tree_map(lambda o, nw: jnp.where(do, nw, o), old, new)

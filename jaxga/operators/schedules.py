@@ -3,7 +3,7 @@
 * AGACD (Hao et al. 2021) eq. 27: the crossover probability decays as ``exp(-t / T)``.
 * AGACD eq. 29: the mutation probability grows as ``exp(t / T)``.
 * MPMGA (Hao et al. 2020) eq. 17: the annealing temperature of the segment mutation is
-  ``T_t = c1 * w ** t``.
+  ``T_t = c1 * w ** t``, with ``c1`` and ``w`` traced.
 
 ``t`` is the generation counter (a traced int32 inside the engine's ``lax.scan``) and
 ``T`` the number of generations (traced: a run-time value). They compute what
@@ -51,15 +51,27 @@ def _exponential(generations: int | jax.Array, rate: float) -> optax.Schedule:
     return schedule
 
 
-def mpmga_temperature(c1: float | jax.Array, w: float) -> optax.Schedule:
+def mpmga_temperature(c1: float | jax.Array, w: float | jax.Array) -> optax.Schedule:
     """``t -> c1 * w ** t`` (MPMGA eq. 17, simulated-annealing temperature).
 
-    ``c1`` may be traced (a swept parameter); ``w`` must be a Python float in (0, 1]
-    (optax inspects the rate when building the schedule).
+    ``c1`` and ``w`` may be traced (swept parameters: one compiled program serves every
+    decay rate); a concrete ``w`` must lie in (0, 1]. The operations of
+    ``optax.exponential_decay(c1, transition_steps=1, decay_rate=w)``, so the same
+    float32 values as optax's schedule, which inspects its rate in Python and so cannot
+    take a traced one.
     """
-    if not 0.0 < float(w) <= 1.0:
+    try:
+        concrete = float(w)
+    except (TypeError, jax.errors.ConcretizationTypeError):  # traced: checked on the host
+        concrete = None
+    if concrete is not None and not 0.0 < concrete <= 1.0:
         raise ValueError(f"temperature decay rate w must be in (0, 1], got {w}")
-    return optax.exponential_decay(c1, transition_steps=1, decay_rate=float(w))
+
+    def schedule(count):
+        decreased = count - 0  # optax: count - transition_begin, then / transition_steps
+        return jnp.where(decreased <= 0, c1, c1 * jnp.power(w, decreased / 1))
+
+    return schedule
 
 
 def _check(generations: int) -> None:

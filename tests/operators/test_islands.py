@@ -122,12 +122,12 @@ def test_migration_waits_for_its_interval_and_compiles_to_the_eager_migration():
     state = _state(3, seed=1)
     active = jnp.ones(P, bool)
     key = jax.random.PRNGKey(3)
-    fn = jax.jit(lambda t: migrate(algo, key, state, t, active))
+    fn = jax.jit(lambda t: migrate(algo, key, state, t, active, 3))
     for t in range(6):
         same = np.array_equal(np.asarray(fn(jnp.int32(t)).cells), np.asarray(state.cells))
         assert same == (t % 3 != 2), t
     # the compiled migration is the eager one, move for move
-    a, b = fn(jnp.int32(2)), migrate(algo, key, state, jnp.int32(2), active)
+    a, b = fn(jnp.int32(2)), migrate(algo, key, state, jnp.int32(2), active, 3)
     for x, y in zip(jax.tree_util.tree_leaves(a), jax.tree_util.tree_leaves(b)):
         np.testing.assert_array_equal(np.asarray(x), np.asarray(y))
 

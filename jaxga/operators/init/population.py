@@ -111,11 +111,12 @@ def initialise_population(
     init_fn: InitFn,
     size: int,
     capacity: int,
-    max_tries: int = 200,
+    max_tries: int | jax.Array = 200,
     chunk: int | None = None,
     unique: bool = False,
     verify: bool = True,
     fallback: InitFn | None = None,
+    fallback_on: bool | jax.Array = True,
 ) -> tuple[Population, InitStats]:
     """A population of ``size`` initial paths, failed individuals redrawn.
 
@@ -143,9 +144,12 @@ def initialise_population(
             recompiles).
         size: static population size ``P``.
         capacity: static path capacity ``L``.
-        max_tries: static average attempts per individual (default 200: enough for
+        max_tries: average attempts per individual (default 200: enough for
             per-attempt success rates down to about 1 %; rounds stop as soon as the
             population is full, so a generous budget costs nothing when not needed).
+            May be traced (an ``int32`` scalar, ``init.max_tries`` of the parameters):
+            it only bounds the ``while_loop`` of rounds, so one compiled program serves
+            every budget; a concrete value must be >= 1.
         chunk: static candidates per round (default ``size``).
         unique: static; reject candidates identical to an accepted individual (IMGA 4.1
             step (iii): "M nonrepeating chromosomes"). Paths are compared by two 32-bit
@@ -163,6 +167,10 @@ def initialise_population(
             is the same bit for bit as without a fallback (decision 018).
             ``stats.from_fallback`` counts the slots it filled; candidates are verified
             as the rounds' are (and are not checked for ``unique``).
+        fallback_on: whether the ``fallback`` fills anything; may be traced (the flag
+            ``init.fallback`` of the parameters: the fallback compiled in, switched on
+            and off per run). False leaves every slot as the rounds left it: the result
+            of the same call without a fallback, bit for bit.
 
     Returns:
         ``(Population(cells int32[size, capacity], length int32[size]), InitStats)``.
@@ -179,12 +187,16 @@ def initialise_population(
             "jaxga.config.registry.initialiser(name))")
     fn = init_fn
     capacity = check_capacity(capacity)
-    if size < 1 or max_tries < 1:
+    traced = isinstance(max_tries, jax.Array)
+    if size < 1 or (not traced and max_tries < 1):
         raise ParameterError(f"size and max_tries must be >= 1, got {size}, {max_tries}")
     chunk = size if chunk is None else int(chunk)
     if chunk < 1:
         raise ParameterError(f"chunk must be >= 1, got {chunk}")
-    max_rounds = max(1, math.ceil(size * max_tries / chunk))
+    if traced:  # ceil(size * max_tries / chunk) in int32 (at most 1e5 * 1e4: no overflow)
+        max_rounds = jnp.maximum(1, (size * jnp.asarray(max_tries, I32) + (chunk - 1)) // chunk)
+    else:
+        max_rounds = max(1, math.ceil(size * max_tries / chunk))
 
     def candidates(r):
         keys = jax.random.split(jax.random.fold_in(key, r), chunk)
@@ -249,7 +261,7 @@ def initialise_population(
             c, ln = c.astype(I32), ln.astype(I32)
             if verify:
                 ok &= jax.vmap(lambda a, b: _valid_path(grid, a, b))(c, ln)
-            take = ~filled & ok
+            take = ~filled & ok & fallback_on
             return (jnp.where(take[:, None], c, cells), jnp.where(take, ln, length),
                     filled | take)
 
