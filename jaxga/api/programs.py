@@ -8,12 +8,16 @@ through one evolve program of :data:`GENERATION_CHUNK` generations called as oft
 needed (the last call runs only the generations left: ``jaxga.engine.evolve``'s
 ``count``). A program set is traced once per (algorithm without its generation count,
 map shape and corner rule, parameter shapes, runs per call, devices) and kept
-(:data:`PROGRAM_CACHE_SIZE`). Every run's result depends only on its seed and parameters,
-never on the runs that share its call, so the padding changes no result.
+(:data:`PROGRAM_CACHE_SIZE`); each of its programs is keyed on the part of the
+configuration it reads (:func:`program_view`), so a key that only the initialisation
+(or the finish) reads compiles that program alone. Every run's result depends only on
+its seed and parameters, never on the runs that share its call, so the padding changes
+no result.
 """
 
 from __future__ import annotations
 
+import collections
 import dataclasses
 import functools
 import gc
@@ -43,20 +47,64 @@ def shape_spec(tree: Any) -> Any:
     return jax.tree_util.tree_map(lambda x: jax.ShapeDtypeStruct(jnp.shape(x), x.dtype), tree)
 
 
+PROGRAM_SECTIONS: dict[str, tuple[str, ...]] = {
+    "init": ("init.", "fitness.", "repair."),
+    "finish": ("post.",),
+}
+"""The configuration sections each program reads (:func:`program_view`): the init
+program draws and evaluates the initial populations (its initialisers, the fitness, the
+repairs of median insertion), the finish program post-optimises the best path; the
+evolve program reads every section but ``init.`` and ``post.``."""
+
+
+def program_view(algo: Algorithm, name: str) -> Algorithm:
+    """``algo`` as program ``name`` (``"init"``, ``"evolve"``, ``"finish"``) sees it: its
+    sizes, and the configuration keys of the sections that program reads
+    (:data:`PROGRAM_SECTIONS`). Each program is traced from its view and keyed on it, so a
+    key only one program reads (``init.method``, ``post.method``) compiles that program
+    alone: the others are shared with the configurations that differ only in it. A
+    program traced from its view depends on nothing else (a key outside the view reads
+    as absent), so sharing it is exact."""
+    if name == "evolve":
+        def reads(key: str) -> bool:
+            return not key.startswith(("init.", "post."))
+    else:
+        def reads(key: str) -> bool:
+            return key.startswith(PROGRAM_SECTIONS[name])
+    return dataclasses.replace(
+        algo, config=Config(tuple((k, v) for k, v in algo.config.items if reads(k))))
+
+
+_SHARED_PROGRAMS: collections.OrderedDict[Any, Any] = collections.OrderedDict()
+"""The compiled programs of this process by (program, view, shapes, runs, devices,
+operator functions), most recently used last, at most ``3 * PROGRAM_CACHE_SIZE``: the
+program sets of :func:`compiled_programs` take each program from here first."""
+
+
+def _share(key: Any, program: Any) -> None:
+    _SHARED_PROGRAMS[key] = program
+    _SHARED_PROGRAMS.move_to_end(key)
+    while len(_SHARED_PROGRAMS) > 3 * PROGRAM_CACHE_SIZE:
+        _SHARED_PROGRAMS.popitem(last=False)
+
+
 class Programs:
     """The programs of a batch of runs: init compiled at once, evolve and finish compiled
     when first needed, so that a batch whose initialisation found no path at all compiles
-    nothing more (:func:`sweep`). Each is read from :mod:`jaxga.api.executables` when
-    stored there; the functions are traced (``trace()``) only when one is not."""
+    nothing more (:func:`sweep`). Each is taken from another program set of this process
+    that shares it (``shared``: its key per program, :func:`program_view`), else read
+    from :mod:`jaxga.api.executables` when stored there; the functions are traced
+    (``trace()``) only when one is neither."""
 
     NAMES = ("init", "evolve", "finish")
 
     def __init__(self, trace: Callable[[], dict[str, Any]], keys: dict[str, str | None],
-                 devices: Sequence[Any]) -> None:
+                 devices: Sequence[Any], shared: dict[str, Any] | None = None) -> None:
         self._trace = trace
         self._traced: dict[str, Any] | None = None
         self._keys = keys
         self._devices = devices
+        self._shared = shared or {}
         self._compiled: dict[str, Any] = {}
         self.read = 0  # how many programs came from the store
 
@@ -68,15 +116,20 @@ class Programs:
         for name in names:
             if name in self._compiled:
                 continue
-            program = executables.load(self._keys[name], self._devices)
+            shared = self._shared.get(name)
+            program = _SHARED_PROGRAMS.get(shared) if shared is not None else None
             if program is None:
-                if self._traced is None:
-                    self._traced = self._trace()
-                program = executables.compile_and_store(
-                    self._keys[name], self._traced[name].lower(),
-                    compiler_options(name, self._devices[0].platform))
-            else:
-                self.read += 1
+                program = executables.load(self._keys[name], self._devices)
+                if program is None:
+                    if self._traced is None:
+                        self._traced = self._trace()
+                    program = executables.compile_and_store(
+                        self._keys[name], self._traced[name].lower(),
+                        compiler_options(name, self._devices[0].platform))
+                else:
+                    self.read += 1
+                if shared is not None:
+                    _share(shared, program)
             self._compiled[name] = program
             done = 1 + len(self._compiled)
             if done < steps:
@@ -430,7 +483,9 @@ def operator_functions(algo: Algorithm) -> tuple:
 def compiled_programs(algo: Algorithm, grid_spec: Any, params_spec: Any, n_runs: int,
                       n_devices: int, functions: tuple = ()) -> Programs:
     """The program set (init / evolve / finish) of ``n_runs`` runs, each traced and
-    compiled, or read from the store, when first needed (:class:`Programs`).
+    compiled, or read from the store, when first needed (:class:`Programs`); each
+    program is traced from its own view of ``algo`` (:func:`program_view`) and shared
+    with the sets of this process that have the same view.
 
     Cached per (algorithm, map shape and corner rule, parameter shapes, run count,
     devices, the chosen operators' functions: an operator registered again under its
@@ -447,15 +502,17 @@ def compiled_programs(algo: Algorithm, grid_spec: Any, params_spec: Any, n_runs:
     params_spec = dict(params_spec)
     sh, rep = seed_sharding()
 
+    views = {name: program_view(algo, name) for name in Programs.NAMES}
+
     def do_init(k, grid, params):
-        state, stats = run_init(algo, k, grid, params)
+        state, stats = run_init(views["init"], k, grid, params)
         return state, stats.success_rate, stats.n_failed, stats.from_fallback
 
     def do_evolve(k, grid, params, state, count):
-        return run_evolve(algo, k, grid, state, params, GENERATION_CHUNK, count)
+        return run_evolve(views["evolve"], k, grid, state, params, GENERATION_CHUNK, count)
 
     def do_finish(grid, params, state):
-        return finish(algo, grid, state, None, params)
+        return finish(views["finish"], grid, state, None, params)
 
     # Every per-run input and output has the run axis first: one sharding for all of
     # them, so each device runs its share and the result does not depend on the device
@@ -496,11 +553,15 @@ def compiled_programs(algo: Algorithm, grid_spec: Any, params_spec: Any, n_runs:
 
     settings = (layout.init_run_block, layout.run_block, GENERATION_CHUNK,
                 FINISH_COMPILER_OPTIONS)
-    stored = {name: executables.program_key(name, algo, grid_spec, params_spec, n_runs,
-                                            devices, settings) for name in Programs.NAMES}
+    stored = {name: executables.program_key(name, views[name], grid_spec, params_spec,
+                                            n_runs, devices, settings)
+              for name in Programs.NAMES}
+    shared = {name: (name, views[name], grid_spec, tuple(sorted(params_spec.items())), n_runs,
+                     tuple(devices), operator_functions(views[name]))
+              for name in Programs.NAMES}
     # One after the other: compiling them in threads (one per core) was no faster
     # (decision 011).
-    return Programs(trace, stored, devices)
+    return Programs(trace, stored, devices, shared)
 
 
 def clear_compiled() -> None:
@@ -518,6 +579,7 @@ def clear_compiled() -> None:
     """
 
     compiled_programs.cache_clear()
+    _SHARED_PROGRAMS.clear()
     _COMPILED_BUCKETS.clear()
     _TABLE_PROGRAMS.clear()
     jax.clear_caches()

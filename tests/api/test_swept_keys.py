@@ -1,4 +1,4 @@
-"""Keys that change no array shape are traced parameters (issue 58, decision 038).
+"""Keys that change no array shape are traced parameters (decision 038).
 
 ``init.max_tries``, ``init.fallback``, ``termination.stagnation`` (IMGA 4.4),
 ``islands.interval``, the per-island rates (MPMGA 4.4), ``mutation.temperature_w`` (MPMGA
@@ -6,7 +6,8 @@ eq. 17) and ``fitness.importance_ratios`` (AGACD eq. 21-25) used to be compiled 
 sweep refused them. Now one :func:`jaxga.sweep` over two values of each is one compiled
 program set, and each point equals a separate :func:`jaxga.run` at its value, seed for
 seed. The cases share three program sets (one per preset: the same map, population,
-generations and runs per call), so the whole file compiles three.
+generations and runs per call); the last test adds one finish program (each program is
+keyed on the configuration it reads).
 """
 
 from __future__ import annotations
@@ -141,3 +142,17 @@ def test_integer_keys_are_factors_of_a_designed_experiment():
     check_factors(load_preset("imga"), [Factor("termination.stagnation", (0, 10, 40))])
     with pytest.raises(ParameterError, match="islands.migrants' changes the compiled"):
         check_factors(load_preset("mpmga"), [Factor("islands.migrants", (1, 2, 3))])
+
+
+def test_a_key_only_the_finish_reads_compiles_the_finish_alone():
+    """Each program is keyed on the configuration sections it reads
+    (:func:`jaxga.api.programs.program_view`): ``sga`` with another ``post.method``
+    takes the init and evolve programs of the ``sga`` cases above and compiles only its
+    finish program."""
+    from jaxga.api import programs
+
+    jaxga.run("sga", MAP, **SMALL)  # the programs of the sga cases
+    before = set(programs._SHARED_PROGRAMS)
+    r = jaxga.run("sga", MAP, **SMALL, post__method="shortcut_greedy")
+    assert r.success.all()
+    assert [key[0] for key in programs._SHARED_PROGRAMS if key not in before] == ["finish"]
