@@ -28,10 +28,12 @@ from jaxga.doe.design import check_factors
 from jaxga.engine import PER_ISLAND
 
 MAP = "classic_ga_gapp3_20x20"
-SMALL = dict(seeds=2, generations=4, population__size=8)
-"""Every call of this file: 2 points x 2 seeds and 2 seeds are both one call of the
-4-run program, and any number of generations up to 25 is one call of the evolve chunk,
-so the sweeps and the runs of a preset share one program set."""
+SMALL = dict(seeds=2, generations=4)
+"""Every call of this file: each preset at its own defaults on the README's map, 2
+points x 2 seeds and 2 seeds both one call of the 4-run program, any number of
+generations up to 25 one call of the evolve chunk: the sweeps and the runs of a preset
+share one program set, and the suite's other runs of the preset on this map share it
+too."""
 
 CASES = [
     # (preset, key, value a, value b, base overrides)
@@ -101,7 +103,7 @@ def test_traced_keys_are_parameters_of_the_pure_core(preset):
     """``jaxga.GA``: each of the preset's traced keys is a leaf of ``default_params`` (a
     per-island list under its rate's name, ``[islands]``), and a ``vmap`` over all of them
     traces (``eval_shape``: nothing is compiled)."""
-    ga = jaxga.GA(preset, MAP, population__size=8, generations=2)
+    ga = jaxga.GA(preset, MAP, generations=2)
     params = dict(ga.default_params)
     keys = [k for p, k, *_ in CASES if p == preset]
     leaves = {next((rate for rate, isl in PER_ISLAND.items() if isl == k), k) for k in keys}
