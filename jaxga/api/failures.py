@@ -43,22 +43,27 @@ def unstarted_results(*, config, configs, points, map_name, grid, seed_arr, algo
 
 
 def warn_unfilled(unfilled: np.ndarray, init_rate: np.ndarray, capacity: int,
-                  config) -> None:
+                  config, max_tries: np.ndarray | None = None) -> None:
     """Warn (:class:`~jaxga.core.errors.InitialisationWarning`) when runs whose initialiser made
     some paths still started with copies in empty slots
     (``jaxga.operators.init.initialise_population`` fills slots left empty after
     ``init.max_tries`` attempts per individual with copies).
-    Runs whose initialiser made no path are failures with a reason instead."""
+    Runs whose initialiser made no path are failures with a reason instead.
+    ``max_tries``: each run's ``init.max_tries`` (a sweep may vary it; default: the
+    configuration's)."""
     short = (unfilled > 0) & (init_rate > 0)
     if not short.any():
         return
     n = unfilled[short]
     copied = f"{n.min()}" if n.min() == n.max() else f"{n.min()}-{n.max()}"
+    tries = (np.asarray([config.get("init.max_tries")]) if max_tries is None
+             else np.asarray(max_tries)[short])
+    budget = f"{tries.min()}" if tries.min() == tries.max() else f"{tries.min()}-{tries.max()}"
     warnings.warn(
         f"{int(short.sum())} of {short.size} runs started with {copied} of their {capacity} "
         f"initial individuals copied: the initialiser {config.get('init.method')!r} "
         f"succeeded in {100 * float(init_rate[short].mean()):.2g} % of its "
-        f"attempts, and init.max_tries = {config.get('init.max_tries')} did not fill the "
+        f"attempts, and init.max_tries = {budget} did not fill the "
         "population (raise init.max_tries)",
         InitialisationWarning, stacklevel=caller_stacklevel())
 

@@ -66,9 +66,12 @@ class GA:
         grid: the map as the pure functions read it (distance fields and move tables
             attached).
         algorithm: the static part of the configuration (:class:`jaxga.engine.Algorithm`).
-        default_params: the dynamic hyper-parameters (a dict of scalar arrays): pass it,
-            or a modified copy, to every pure function; ``jax.vmap`` over any of its
-            entries sweeps it.
+        default_params: the dynamic hyper-parameters (a dict of arrays: float32 scalars
+            for rates, weights and temperatures, int32 scalars for ``init.max_tries``,
+            ``termination.stagnation`` and ``islands.interval``, a bool flag for
+            ``init.fallback``, ``[islands]`` per-island rates under their rate's name,
+            AGACD's ``float32[2]`` Delphi ratios): pass it, or a modified copy, to every
+            pure function; ``jax.vmap`` over any of its entries sweeps it.
         map_name: the map's name; ``frame``: its world frame (None for a bare grid).
     """
 

@@ -515,8 +515,9 @@ def _initialise(plan: _SweepPlan, runs: _Runs, progs: Programs,
     start = _Start(states, initial, init_rate.reshape(n_total, -1).mean(axis=1),
                    unfilled.reshape(n_total, -1).sum(axis=1),
                    fallback.reshape(n_total, -1).sum(axis=1))
+    max_tries = np.repeat([int(c["init.max_tries"]) for c in plan.configs], len(plan.seed_arr))
     warn_unfilled(start.unfilled, start.rate, plan.algo.population * plan.algo.islands,
-                  plan.config)
+                  plan.config, max_tries)
     return start
 
 

@@ -158,3 +158,16 @@ def test_a_key_only_the_finish_reads_compiles_the_finish_alone():
     r = jaxga.run("sga", MAP, **SMALL, post__method="shortcut_greedy")
     assert r.success.all()
     assert [key[0] for key in programs._SHARED_PROGRAMS if key not in before] == ["finish"]
+
+
+def test_the_unfilled_warning_names_each_runs_budget():
+    """A sweep over ``init.max_tries`` warns with the budgets of the runs left short, not
+    the preset's."""
+    from jaxga.api.failures import warn_unfilled
+
+    cfg = load_preset("sga")
+    with pytest.warns(InitialisationWarning, match=r"init.max_tries = 1-30 did not fill"):
+        warn_unfilled(np.array([12, 5, 0]), np.array([0.1, 0.2, 0.3]), 60, cfg,
+                      np.array([1, 30, 100]))
+    with pytest.warns(InitialisationWarning, match=r"init.max_tries = 100 did not fill"):
+        warn_unfilled(np.array([12]), np.array([0.1]), 60, cfg)
