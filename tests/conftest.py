@@ -1,4 +1,6 @@
-"""Shared test configuration: JAX's persistent compilation cache and hypothesis profiles."""
+"""Shared test configuration: JAX's persistent compilation cache, hypothesis profiles, the
+``slow`` tier (pyproject.toml) and the per-file budget of compiled programs
+(:mod:`tests.compile_budget`)."""
 
 from __future__ import annotations
 
@@ -8,6 +10,8 @@ from pathlib import Path
 import jax
 import pytest
 from hypothesis import HealthCheck, settings
+
+from tests import compile_budget
 
 CACHE_DIR = Path(os.environ.get("JAXGA_TEST_JAX_CACHE", Path(__file__).parent / ".jax_cache"))
 jax.config.update("jax_compilation_cache_dir", str(CACHE_DIR))
@@ -45,6 +49,10 @@ def mapped_regions() -> int | None:
             return sum(1 for _ in maps)
     except OSError:  # not Linux
         return None
+
+
+def pytest_configure(config: pytest.Config) -> None:
+    compile_budget.register(config)
 
 
 @pytest.fixture(autouse=True)
