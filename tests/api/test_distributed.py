@@ -20,6 +20,8 @@ from pathlib import Path
 
 import pytest
 
+pytestmark = pytest.mark.slow  # processes of their own (jax.distributed, device counts)
+
 ROOT = Path(__file__).resolve().parents[2]
 MAP = "classic_ga_gapp3_20x20"
 RUN = ["run", "--preset", "sga", "--map", MAP, "--corner-rule", "free", "--seeds", "6",

@@ -101,6 +101,7 @@ print(json.dumps({"devices": jax.device_count(), "blocks": api.run_blocks(n, jax
 """
 
 
+@pytest.mark.slow
 def test_results_do_not_depend_on_the_device_count():
     """Seeds sharded over 4 forced host devices (21 seeds padded to 24), each device
     computing its runs one at a time (``api.map_runs``), == one device, one ``vmap`` of

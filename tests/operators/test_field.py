@@ -324,6 +324,7 @@ def test_field_repairs_replace_real_failures():
 
 
 # ------------------------------------------------------------------ map tables
+@pytest.mark.slow
 @pytest.mark.parametrize("preset", ["iga_zhu", "mpmga"])
 def test_map_tables_give_the_same_generations(preset):
     """The per-map tables attached once (jaxga.engine.maptables) instead of computed by every

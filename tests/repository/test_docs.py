@@ -90,6 +90,7 @@ def _registry_as_found():
             registry.unregister(family, name)
 
 
+@pytest.mark.slow
 @pytest.mark.parametrize("page", RUNNABLE, ids=[str(p.relative_to(ROOT)) for p in RUNNABLE])
 @pytest.mark.usefixtures("_registry_as_found")
 def test_the_code_blocks_of_a_page_run(page, tmp_path, monkeypatch):

@@ -24,6 +24,7 @@ def test_every_notebook_is_listed():
     assert [n[:2] for n in names] == ["01", "02", "03", "04", "05"], names
 
 
+@pytest.mark.slow
 @pytest.mark.parametrize("path", NOTEBOOKS, ids=[p.stem for p in NOTEBOOKS])
 def test_notebook_runs(path: Path, monkeypatch, tmp_path):
     monkeypatch.setenv("JAXGA_NOTEBOOK_QUICK", "1")

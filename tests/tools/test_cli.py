@@ -309,6 +309,7 @@ def test_a_plot_without_extension_is_written_as_png_and_reported_so(tmp_path):
     assert args.plot == str(tmp_path / "figure.png")
 
 
+@pytest.mark.slow
 def test_console_script_never_prints_a_traceback(tmp_path):
     """The real entry point, in a subprocess: bad input gives exit 2 and one stderr line."""
     bad = tmp_path / "bad.map"
@@ -841,6 +842,7 @@ def test_path_out_is_refused_before_the_run_where_it_cannot_be_written(tmp_path,
         assert not target.exists()
 
 
+@pytest.mark.slow
 def test_the_time_line_accounts_for_the_whole_wall_time(tmp_path):
     """`jaxga run` in a fresh process: the time line names every phase it went through
     (import, load, references, compile, init, evolve, post, any-angle, plot, write) and
