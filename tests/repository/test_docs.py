@@ -6,9 +6,13 @@ the repository's root), like a reader who types them one after another:
 
 * ``python``: executed in one namespace per page;
 * ``bash``: each command run by the shell (a trailing ``\\`` joins lines; ``# comments``
-  are skipped); it must exit 0. A line that installs (``python3 -m venv``, ``pip
-  install``) is not run here: those are the README's two commands (install and run the
-  main job; install and run this suite), which ``.ci/run`` runs on a fresh clone;
+  are skipped); it must exit 0. A plain ``jaxga ...`` command (no pipes, redirections or
+  variables) runs in this process through ``jaxga.cli.main``, the console script's own
+  function, so that it shares the programs the page's Python compiled (a process of
+  its own would import JAX and read every program again; the console script itself is
+  tested in ``tests/tools/test_cli.py``). A line that installs (``python3 -m venv``,
+  ``pip install``) is not run here: those are the README's two commands (install and run
+  the main job; install and run this suite), which ``.ci/run`` runs on a fresh clone;
 * ``toml``: parsed, and loaded as a preset file when it names a ``base`` preset;
 * ``yaml``: parsed;
 * ``text``: output and synopses, not run.
@@ -18,8 +22,11 @@ A block of any other kind fails :func:`test_every_code_block_has_a_known_kind`.
 
 from __future__ import annotations
 
+import contextlib
+import io
 import os
 import re
+import shlex
 import shutil
 import subprocess
 import sys
@@ -42,6 +49,8 @@ RUN = {"python", "bash", "toml", "yaml"}
 FENCE = re.compile(r"^(?P<indent>[ ]*)```(?P<kind>[\w-]*)[^\n]*\n(?P<body>.*?)^(?P=indent)```",
                    re.M | re.S)
 INSTALLS = re.compile(r"(^|&&\s*)(python3? -m venv|pip install)")
+SHELL = re.compile(r"[|&;<>$`*?()]")
+"""Characters that need the shell: a command with any of them runs in a shell."""
 
 
 def blocks(page: Path) -> list[tuple[str, str]]:
@@ -65,6 +74,25 @@ def commands(code: str) -> list[str]:
         if not INSTALLS.search(line):
             out.append(line)
     return out
+
+
+def run_command(command: str, env: dict) -> tuple[int, str]:
+    """Run one command of a bash block: its exit code and its standard error. A plain
+    ``jaxga`` command runs in this process (module docstring), any other in a shell."""
+    argv = shlex.split(command, comments=True)
+    if argv[0] == "jaxga" and not SHELL.search(command):
+        from jaxga.cli import main
+
+        out, err = io.StringIO(), io.StringIO()
+        with contextlib.redirect_stdout(out), contextlib.redirect_stderr(err):
+            try:
+                code = main(argv[1:])
+            except SystemExit as e:  # argparse refused the command line
+                code = e.code
+        return code, err.getvalue()
+    done = subprocess.run(command, shell=True, env=env, capture_output=True, text=True,
+                          timeout=900)
+    return done.returncode, done.stderr
 
 
 RUNNABLE = [p for p in PAGES if any(kind in RUN for kind, _ in blocks(p))]
@@ -107,10 +135,8 @@ def test_the_code_blocks_of_a_page_run(page, tmp_path, monkeypatch):
             exec(compile(code, where, "exec"), namespace)  # noqa: S102 - the page's own code
         elif kind == "bash":
             for command in commands(code):
-                done = subprocess.run(command, shell=True, env=env, capture_output=True,
-                                      text=True, timeout=900)
-                assert done.returncode == 0, (f"{where}: `{command}` exited "
-                                              f"{done.returncode}:\n{done.stderr[-2000:]}")
+                code, err = run_command(command, env)
+                assert code == 0, f"{where}: `{command}` exited {code}:\n{err[-2000:]}"
         elif kind == "toml":
             data = tomllib.loads(code)
             if "base" in data:
