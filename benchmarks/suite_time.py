@@ -1,8 +1,9 @@
 """Where the test suite's time goes: JAX compilation per test file, cold cache, as in CI.
 
-    python benchmarks/suite_time.py [--top 15] [--no-write] [-- PYTEST_ARGS...]
+    python benchmarks/suite_time.py [--tier all|fast] [--top 15] [--no-write] [-- PYTEST_ARGS...]
 
-Runs the README's test command (``pytest -q``, from the repository root) with an empty
+Runs the README's test command (``pytest -q``, from the repository root; ``--tier fast``:
+the tier for every change, ``pytest -q -m "not slow"``) with an empty
 persistent compilation cache (``JAXGA_TEST_JAX_CACHE`` set to a new temporary
 directory: CI starts from a clean clone) and the ``_compile_listener`` plugin, then
 prints, per test file: its tests, the sum of their wall times, and how much of that was
@@ -10,10 +11,10 @@ XLA's backend compilation (seconds, programs compiled, persistent-cache hits), t
 to jaxprs and lowering to MLIR (JAX's ``jax.monitoring`` events, in the pytest workers
 only; a test's child processes, such as notebook kernels or ``jax.distributed``
 processes, count as wall time only), and
-the compile seconds that persistent-cache hits saved. Then the slowest tests. The suite
-must stay under 15 minutes on CI's 2-core machine (README, tests); this says which
-files to look at when it creeps up. The worker column assumes the suite's own
-``--dist loadfile`` (a whole file on one worker).
+the compile seconds that persistent-cache hits saved. Then the slowest tests. The whole
+suite must stay under 17 minutes on CI's 2-core machine and the fast tier under 4
+(docs/architecture.md); this says which files to look at when it creeps up. The worker
+column assumes the suite's own ``--dist loadfile`` (a whole file on one worker).
 """
 
 from __future__ import annotations
@@ -22,6 +23,7 @@ import argparse
 import collections
 import json
 import os
+import shlex
 import subprocess
 import sys
 import tempfile
@@ -36,6 +38,10 @@ BACKEND = "/jax/core/compile/backend_compile_duration"
 TRACE = "/jax/core/compile/jaxpr_trace_duration"
 LOWER = "/jax/core/compile/jaxpr_to_mlir_module_duration"
 SAVED = "/jax/compilation_cache/compile_time_saved_sec"
+TIERS = {"all": [], "fast": ["-m", "not slow"]}
+"""The pytest arguments of each tier (pyproject.toml's markers)."""
+TITLES = {"all": "test suite time per file, cold compilation cache",
+          "fast": "fast test tier time per file, cold compilation cache"}
 
 
 def run_suite(pytest_args: list[str], profile: Path, cache: Path) -> tuple[float, str]:
@@ -69,6 +75,8 @@ def per_file(profile: Path) -> tuple[dict[str, collections.Counter], list, dict]
 
 def main() -> None:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    ap.add_argument("--tier", choices=sorted(TIERS), default="all",
+                    help="all: the README's pytest -q; fast: pytest -q -m 'not slow'")
     ap.add_argument("--top", type=int, default=15, help="how many of the slowest tests")
     ap.add_argument("--no-write", action="store_true", help="do not append to RESULTS.md")
     ap.add_argument("--min-wall", type=float, default=20.0,
@@ -77,7 +85,7 @@ def main() -> None:
     a = ap.parse_args()
     with tempfile.TemporaryDirectory(prefix="jaxga-suite-") as tmp:
         profile, cache = Path(tmp) / "profile", Path(tmp) / "cache"
-        wall, last = run_suite(a.pytest_args, profile, cache)
+        wall, last = run_suite([*TIERS[a.tier], *a.pytest_args], profile, cache)
         files, tests, worker_of = per_file(profile)
     order = sorted(files, key=lambda f: -files[f]["wall"])
     def compiled(c: collections.Counter) -> int:
@@ -109,7 +117,8 @@ def main() -> None:
         ran[w].append(f"{Path(f).stem.removeprefix('test_')} "
                       f"{files[f]['wall']:.0f}")
     body = (
-        f"`pytest -q` from the repository root, cold persistent compilation cache (a new "
+        f"`{' '.join(['pytest', '-q', *(shlex.quote(x) for x in TIERS[a.tier])])}` from "
+        f"the repository root, cold persistent compilation cache (a new "
         f"temporary `JAXGA_TEST_JAX_CACHE`), JAX's `jax.monitoring` duration events per "
         f"test (plugin `benchmarks/_compile_listener.py`). Seconds. Wall = sum of the "
         f"tests' own times (setup + call + teardown); XLA s = JAX's backend compile events "
@@ -130,7 +139,7 @@ def main() -> None:
         + markdown_table(["test", "wall", "XLA s"],
                          [[n, w, c] for w, c, n in tests[: a.top]])
     )
-    record("test suite time per file, cold compilation cache", body, write=not a.no_write)
+    record(TITLES[a.tier], body, write=not a.no_write)
 
 
 if __name__ == "__main__":
