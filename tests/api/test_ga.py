@@ -11,8 +11,9 @@ import pytest
 import jaxga
 from jaxga.core.errors import ParameterError
 from jaxga.core.paths import is_continuous
+from tests import canonical
 
-MAP = "classic_ga_gapp3_20x20"
+MAP = canonical.MAP
 SEEDS = [0, 1, 2, 3]
 GENERATIONS = 25
 
@@ -25,7 +26,7 @@ def ga():
 @pytest.fixture(scope="module")
 def reference():
     """Seeds 0-3 of ``jaxga.run``: what the pure core must give bit for bit."""
-    ref = jaxga.run("sga", MAP, seeds=SEEDS, generations=GENERATIONS)
+    ref = canonical.run("sga", SEEDS, generations=GENERATIONS)  # the canonical program
     assert ref.success.all()
     return ref
 
@@ -100,8 +101,7 @@ def test_vmap_over_three_mutation_rates_equals_three_separate_runs(ga):
     axes = {k: (0 if k == "mutation.probability" else None) for k in params}
     out = jax.jit(jax.vmap(ga.run, (None, axes)))(jax.random.PRNGKey(2), params)
     for i, rate in enumerate(rates):
-        ref = jaxga.run("sga", MAP, seeds=[2], generations=GENERATIONS,
-                        mutation__probability=rate)
+        ref = canonical.run("sga", [2], generations=GENERATIONS, mutation__probability=rate)
         assert float(out["fitness"][i]) == float(ref.fitness[0])
         n = int(ref.n_cells[0])
         np.testing.assert_array_equal(np.asarray(out["cells"][i, :n]), ref.cells[0, :n])
