@@ -1,11 +1,16 @@
-"""Exact line of sight (the corner rules, decision 027) and AGACD's linear trial (AGACD eq. 3-6)."""
+"""Exact line of sight (the corner rules, decision 027) and AGACD's linear trial (AGACD eq. 3-6).
+
+Every call has the same shapes: one 6 x 7 map (the hand-made cases are drawn on it too),
+pairs in batches of ``M`` (padded with a harmless pair, results sliced back), so each
+jitted function below compiles once per corner rule.
+"""
 
 from __future__ import annotations
 
+import functools
 import itertools
 
 import jax
-import jax.numpy as jnp
 import numpy as np
 import pytest
 from hypothesis import given
@@ -17,11 +22,15 @@ from jaxga.core.grid import CORNER_RULES, move_legal
 from tests._exact_geometry import exact_clear, passes_vertex
 
 H, W = 6, 7  # one fixed shape, so each jitted function compiles once per corner rule
+M = 256  # pairs per call: every batch of pairs is padded to this many
+L = 5  # path length of the segments_clear cases
 
 _pairs_clear = jax.jit(jax.vmap(clear, in_axes=(None, 0, 0)))
 _pairs_legal = jax.jit(jax.vmap(move_legal, in_axes=(None, 0, 0)))
-_pairs_clear_span2 = jax.jit(jax.vmap(lambda g, a, b: clear(g, a, b, 2), in_axes=(None, 0, 0)))
+_pairs_clear_span2 = jax.jit(jax.vmap(functools.partial(clear, max_span=2), in_axes=(None, 0, 0)))
 _pairs_trial = jax.jit(jax.vmap(linear_trial, in_axes=(None, 0, 0)))
+_pairs_clear_xy = jax.jit(jax.vmap(clear_xy, in_axes=(None, 0, 0)))
+_segments_clear = jax.jit(segments_clear)
 
 grids = st.lists(st.booleans(), min_size=H * W, max_size=H * W).map(
     lambda bits: np.array(bits, dtype=bool).reshape(H, W)
@@ -35,9 +44,45 @@ def _xy(p: int) -> tuple[int, int]:
     return p % W, p // W
 
 
+def _cell(x: int, y: int) -> int:
+    return y * W + x
+
+
 def _run(fn, grid, pairs):
-    arr = np.asarray(pairs, dtype=np.int32).reshape(-1, 2)
-    return np.asarray(fn(grid, arr[:, 0], arr[:, 1]))
+    """``fn(grid, a, b)`` on every pair (cell indices, or ``(x, y)`` pairs of pairs), in
+    batches of ``M`` padded with the pair ``(0, 0)``; NumPy results, one per pair."""
+    arr = np.asarray(pairs, dtype=np.int32)
+    arr = arr.reshape((-1, 2) + arr.shape[2:] if arr.ndim > 2 else (-1, 2))
+    k = len(arr)
+    padded = np.zeros((-(-k // M) * M,) + arr.shape[1:], np.int32)
+    padded[:k] = arr
+    out = [np.asarray(fn(grid, padded[j:j + M, 0], padded[j:j + M, 1]))
+           for j in range(0, len(padded), M)]
+    return np.concatenate(out)[:k]
+
+
+def _map(*blocked_xy: tuple[int, int]) -> np.ndarray:
+    """The free 6 x 7 map with the cells ``(x, y)`` blocked (a hand-made case in its
+    lower left corner: every segment of a case stays inside the case's own box)."""
+    blocked = np.zeros((H, W), bool)
+    for x, y in blocked_xy:
+        blocked[y, x] = True
+    return blocked
+
+
+def _clear(blocked, rule, a, b) -> bool:
+    """``clear`` of one pair of ``(x, y)`` cells, through the batched program."""
+    grid = Grid.create(blocked, corner_rule=rule)
+    return bool(_run(_pairs_clear, grid, [(_cell(*a), _cell(*b))])[0])
+
+
+def _clear_xy(blocked, rule, a, b) -> bool:
+    return bool(_run(_pairs_clear_xy, Grid.create(blocked, corner_rule=rule), [(a, b)])[0])
+
+
+def _trial(blocked, rule, a, b) -> bool:
+    grid = Grid.create(blocked, corner_rule=rule)
+    return bool(_run(_pairs_trial, grid, [(_cell(*a), _cell(*b))])[0])
 
 
 @pytest.mark.parametrize("rule", CORNER_RULES)
@@ -56,8 +101,8 @@ def test_clear_matches_exact_reference_on_all_pairs(rule):
 @given(grids, pair_lists, rules)
 def test_clear_is_symmetric_and_matches_reference(blocked, pairs, rule):
     grid = Grid.create(blocked, corner_rule=rule)
-    fwd = _run(_pairs_clear, grid, pairs)
-    bwd = _run(_pairs_clear, grid, [(q, p) for p, q in pairs])
+    both = _run(_pairs_clear, grid, pairs + [(q, p) for p, q in pairs])
+    fwd, bwd = both[: len(pairs)], both[len(pairs):]
     assert fwd.tolist() == bwd.tolist()
     assert fwd.tolist() == [exact_clear(blocked, rule, _xy(p), _xy(q)) for p, q in pairs]
 
@@ -91,30 +136,26 @@ def test_clear_agrees_with_dense_sampling_away_from_vertices(blocked, pairs, rul
 
 
 def test_clear_hand_cases():
-    blocked = np.zeros((3, 3), bool)
-    blocked[1, 0] = blocked[0, 1] = True  # two obstacles touching diagonally at (1, 1)
-    a, b = 0, 4  # (0, 0) -> (1, 1) squeezes between them
-    assert bool(clear(Grid.create(blocked, corner_rule="free"), a, b))
-    assert not bool(clear(Grid.create(blocked, corner_rule="no_squeeze"), a, b))
-    assert not bool(clear(Grid.create(blocked, corner_rule="strict"), a, b))
-    one = np.zeros((3, 3), bool)
-    one[0, 1] = True  # clip a single corner
-    assert bool(clear(Grid.create(one, corner_rule="no_squeeze"), 0, 4))
-    assert not bool(clear(Grid.create(one, corner_rule="strict"), 0, 4))
+    # Two obstacles touching diagonally at the vertex (1, 1): (0, 0) -> (1, 1) squeezes
+    # between them.
+    two = _map((0, 1), (1, 0))
+    assert _clear(two, "free", (0, 0), (1, 1))
+    assert not _clear(two, "no_squeeze", (0, 0), (1, 1))
+    assert not _clear(two, "strict", (0, 0), (1, 1))
+    one = _map((1, 0))  # clip a single corner
+    assert _clear(one, "no_squeeze", (0, 0), (1, 1))
+    assert not _clear(one, "strict", (0, 0), (1, 1))
     # An exact diagonal through the centre of a blocked cell.
-    mid = np.zeros((3, 3), bool)
-    mid[1, 1] = True
-    assert not bool(clear(Grid.create(mid, corner_rule="free"), 0, 8))
+    mid = _map((1, 1))
+    assert not _clear(mid, "free", (0, 0), (2, 2))
     # A knight move (0,0)->(1,2) crosses (0,1) and (1,1) only.
-    knight = np.zeros((3, 3), bool)
-    knight[1, 1] = True
-    assert not bool(clear_xy(Grid.create(knight), (0, 0), (1, 2)))
-    knight[1, 1], knight[0, 1] = False, True
-    assert bool(clear_xy(Grid.create(knight), (0, 0), (1, 2)))
+    assert not _clear_xy(_map((1, 1)), "strict", (0, 0), (1, 2))
+    assert _clear_xy(_map((1, 0)), "strict", (0, 0), (1, 2))
     # Endpoints off the map or blocked are never clear; a free cell sees itself.
-    g = Grid.create(mid)
-    assert not bool(clear_xy(g, (0, 0), (3, 0)))
-    assert not bool(clear(g, 4, 4)) and bool(clear(g, 0, 0))
+    for off in ((W, 0), (-1, 0), (0, H), (0, -1)):
+        assert not _clear_xy(mid, "strict", (0, 0), off), off
+        assert not _clear_xy(mid, "strict", off, (0, 0)), off
+    assert not _clear(mid, "strict", (1, 1), (1, 1)) and _clear(mid, "strict", (0, 0), (0, 0))
 
 
 @given(grids, pair_lists, rules)
@@ -129,46 +170,39 @@ def test_max_span_is_exact_within_the_span(blocked, pairs, rule):
 
 
 def test_segments_clear_masks_padding():
-    blocked = np.zeros((4, 4), bool)
-    blocked[1, 1] = True
-    grid = Grid.create(blocked)
-    path = jnp.array([0, 3, 15, 15, 15], jnp.int32)
-    assert np.asarray(segments_clear(grid, path, 3)).tolist() == [True, True, True, True]
-    assert not np.asarray(segments_clear(grid, jnp.array([0, 10, 10], jnp.int32), 2))[0]
+    grid = Grid.create(_map((1, 1)))
+    path = np.array([_cell(0, 0), _cell(3, 0), _cell(3, 3), _cell(3, 3), _cell(3, 3)], np.int32)
+    assert np.asarray(_segments_clear(grid, path, np.int32(3))).tolist() == [True] * (L - 1)
+    # (0, 0) -> (2, 2) passes through the blocked (1, 1); the padding after it is clear
+    cut = np.array([_cell(0, 0)] + [_cell(2, 2)] * (L - 1), np.int32)
+    got = np.asarray(_segments_clear(grid, cut, np.int32(2))).tolist()
+    assert got == [False] + [True] * (L - 2)
 
 
 def test_linear_trial_hand_cases():
     """AGACD eq. 3-6: probes every 0.1 along the major axis, rounding half down."""
-    blocked = np.zeros((5, 5), bool)
-    blocked[2, 2] = True
-    g = Grid.create(blocked)
-    assert not bool(linear_trial(g, 0, 24))  # the diagonal probes (2, 2)
-    assert bool(linear_trial(g, 0, 4))
-    assert not bool(linear_trial(g, 10, 14))
+    centre = _map((2, 2))
+    assert not _trial(centre, "strict", (0, 0), (4, 4))  # the diagonal probes (2, 2)
+    assert _trial(centre, "strict", (0, 0), (4, 0))
+    assert not _trial(centre, "strict", (0, 2), (4, 2))
     # (0,0)->(4,1): y = x/4 exceeds 0.5 for x in (2, 2.5], which rounds to x = 2, so
     # (2,1) is probed; (3,0) never is (x in (2.5, 3.5] gives y in (0.625, 0.875]).
-    b2 = np.zeros((5, 5), bool)
-    b2[1, 2] = True
-    assert not bool(linear_trial(Grid.create(b2), 0, 5 + 4))
-    b2[1, 2], b2[0, 3] = False, True
-    assert bool(linear_trial(Grid.create(b2), 0, 5 + 4))
+    assert not _trial(_map((2, 1)), "strict", (0, 0), (4, 1))
+    assert _trial(_map((3, 0)), "strict", (0, 0), (4, 1))
     # (0,0)->(3,1) passes the grid vertex (2, 1): the probes jump from (1,0) to (2,1) and
     # never look at the side cell (2,0), which the exact strict check rejects.
-    b3 = np.zeros((5, 5), bool)
-    b3[0, 2] = True
-    assert bool(linear_trial(Grid.create(b3), 0, 5 + 3))
-    assert not bool(clear(Grid.create(b3, corner_rule="strict"), 0, 5 + 3))
-    assert bool(clear(Grid.create(b3, corner_rule="free"), 0, 5 + 3))
+    b3 = _map((2, 0))
+    assert _trial(b3, "strict", (0, 0), (3, 1))
+    assert not _clear(b3, "strict", (0, 0), (3, 1))
+    assert _clear(b3, "free", (0, 0), (3, 1))
     # It has no corner rule: it squeezes between diagonal obstacles where clear() may not.
-    sq = np.zeros((3, 3), bool)
-    sq[1, 0] = sq[0, 1] = True
-    assert bool(linear_trial(Grid.create(sq, corner_rule="strict"), 0, 4))
+    assert _trial(_map((0, 1), (1, 0)), "strict", (0, 0), (1, 1))
 
 
 @given(grids, pair_lists)
 def test_linear_trial_symmetric_where_no_ties(blocked, pairs):
     """The probe walks from the lower end, so swapping the ends gives the same answer."""
     grid = Grid.create(blocked)
-    fwd = _run(_pairs_trial, grid, pairs)
-    bwd = _run(_pairs_trial, grid, [(q, p) for p, q in pairs])
+    both = _run(_pairs_trial, grid, pairs + [(q, p) for p, q in pairs])
+    fwd, bwd = both[: len(pairs)], both[len(pairs):]
     assert fwd.tolist() == bwd.tolist()
