@@ -1,4 +1,9 @@
-"""Selection operators: properties under jit + vmap, exact counts, statistics."""
+"""Selection operators: properties under jit + vmap, exact counts, statistics.
+
+Each operator is jitted once below per way it is called (over runs, once, over keys),
+and every test of one kind calls it on the same shapes, so that the file compiles
+one program per operator and population size.
+"""
 
 from __future__ import annotations
 
@@ -15,7 +20,7 @@ from hypothesis import strategies as st
 from jaxga.operators import selection as S
 
 P = 13  # odd on purpose
-R = 3  # runs per hypothesis example (vmap over runs)
+R = 4  # runs per hypothesis example and per batch of test_same_key_... (vmap over runs)
 
 _FNS = {
     "roulette": S.roulette,
@@ -27,6 +32,17 @@ _FNS = {
     "shuffle": S.shuffle,
 }
 _RUNS = {name: jax.jit(jax.vmap(fn)) for name, fn in _FNS.items()}
+
+
+def _default_and_masked(fn):
+    """One run of ``fn``: with its default mask (everyone active) and with ``active``."""
+    return jax.jit(lambda key, f, active: (fn(key, f), fn(key, f, active)))
+
+
+_ONE = {name: _default_and_masked(fn) for name, fn in _FNS.items()}
+_DRAWS = {name: jax.jit(jax.vmap(fn, in_axes=(0, None, None)))
+          for name, fn in {**_FNS, "tournament2": functools.partial(S.tournament, k=2)}.items()}
+"""Many draws (one per key) on one population."""
 
 
 def _rank_order(f, active):
@@ -105,19 +121,22 @@ def test_selection_properties(fit, act, seed, all_active):
 
 
 def test_same_key_same_result_and_vmap_equals_loop():
-    f = jax.random.uniform(jax.random.PRNGKey(0), (4, P))
-    keys = jax.random.split(jax.random.PRNGKey(1), 4)
-    for name, fn in _FNS.items():
-        batched = np.asarray(_RUNS[name](keys, f, jnp.ones((4, P), bool)))
-        for r in range(4):
-            one = np.asarray(jax.jit(fn)(keys[r], f[r]))
-            np.testing.assert_array_equal(one, batched[r], err_msg=name)
+    f = np.random.default_rng(0).random((R, P), np.float32)
+    keys = np.asarray(jax.random.split(jax.random.PRNGKey(1), R))
+    ones = np.ones(P, bool)
+    for name in _FNS:
+        batched = np.asarray(_RUNS[name](keys, f, np.ones((R, P), bool)))
+        for r in range(R):
+            default, masked = (np.asarray(x) for x in _ONE[name](keys[r], f[r], ones))
+            np.testing.assert_array_equal(default, batched[r], err_msg=name)
+            np.testing.assert_array_equal(masked, batched[r], err_msg=name)
 
 
 def test_no_active_individual_gives_index_zero():
-    f = jnp.arange(P, dtype=jnp.float32)
-    for name, fn in _FNS.items():
-        idx = np.asarray(jax.jit(fn)(jax.random.PRNGKey(0), f, jnp.zeros(P, bool)))
+    f = np.arange(P, dtype=np.float32)
+    key = np.asarray(jax.random.PRNGKey(0))
+    for name in _FNS:
+        idx = np.asarray(_ONE[name](key, f, np.zeros(P, bool))[1])
         assert (idx == 0).all(), name
 
 
@@ -125,19 +144,24 @@ def test_no_active_individual_gives_index_zero():
 N_KEYS = 4000
 
 
-def _draws(fn, f, active=None):
-    keys = jax.random.split(jax.random.PRNGKey(123), N_KEYS)
-    f = jnp.asarray(f, jnp.float32)
+@functools.cache
+def _draw_keys() -> np.ndarray:
+    return np.asarray(jax.random.split(jax.random.PRNGKey(123), N_KEYS))
+
+
+def _draws(name, f, active=None):
+    """``N_KEYS`` draws of the operator ``name`` (of ``_DRAWS``) on one population."""
+    f = np.asarray(f, np.float32)
     if active is None:
-        active = jnp.ones(f.shape, bool)
-    return np.asarray(jax.jit(jax.vmap(fn, in_axes=(0, None, None)))(keys, f, active))
+        active = np.ones(f.shape, bool)
+    return np.asarray(_DRAWS[name](_draw_keys(), f, np.asarray(active, bool)))
 
 
 def test_roulette_frequencies():
     """Expected counts proportional to fitness over the active individuals (Zhu eq. 10)."""
     f = np.array([0, 1, 2, 3, 4, 5, 6, 7], np.float32)
     active = np.array([True] * 7 + [False])
-    idx = _draws(S.roulette, f, active)
+    idx = _draws("roulette", f, active)
     counts = np.bincount(idx.ravel(), minlength=8)
     assert counts[0] == 0 and counts[7] == 0  # zero fitness, inactive
     exp = f[1:7].astype(float) / f[1:7].sum() * counts.sum()
@@ -145,15 +169,15 @@ def test_roulette_frequencies():
     # the test has power: uniform selection would be rejected
     assert scipy.stats.chisquare(counts[1:7]).pvalue < 1e-10
     # all-zero fitness: uniform over the active
-    idx = _draws(S.roulette, np.zeros(8), active)
+    idx = _draws("roulette", np.zeros(8), active)
     counts = np.bincount(idx.ravel(), minlength=8)
     assert counts[7] == 0 and scipy.stats.chisquare(counts[:7]).pvalue > 1e-4
 
 
 def test_roulette_elite_keeps_the_best_and_is_roulette_otherwise():
     f = np.array([0.5, 0.1, 3.0, 0.2, 0.1, 0.4], np.float32)
-    idx = _draws(S.roulette_elite, f)
-    plain = _draws(S.roulette, f)
+    idx = _draws("roulette_elite", f)
+    plain = _draws("roulette", f)
     assert (idx == 2).any(axis=1).all()
     assert ((idx != plain).sum(axis=1) <= 1).all()
 
@@ -166,7 +190,7 @@ def test_tournament_rank_probabilities(k):
     active = np.ones(10, bool)
     active[[2, 7]] = False
     m = 8
-    idx = _draws(functools.partial(S.tournament, k=k), f, active)
+    idx = _draws(f"tournament{k}", f, active)
     assert active[idx].all()
     order = _rank_order(f, active)
     counts = np.array([(idx == i).sum() for i in order])
@@ -183,7 +207,7 @@ def test_layered_thirds_exact_counts(p):
     """IMGA 4.3.1: top third x2, middle third x1, bottom dropped, p mod 3 best of the
     bottom part added; with ties broken by lower index."""
     f = np.array([5, 1, 9, 9, 0, 3, 7, 2, 8, 4, 6, 2][:p], np.float32)
-    idx = _draws(S.layered_thirds, f)[:50]
+    idx = _draws("layered_thirds", f)[:50]
     want = _layered_counts(f, np.ones(p, bool))
     for row in idx:
         np.testing.assert_array_equal(np.bincount(row, minlength=p), want)
@@ -194,7 +218,7 @@ def test_layered_thirds_exact_counts(p):
 def test_layered_thirds_is_shuffled():
     """Slot 0 holds individual i with probability copies_i / P (random pairing)."""
     f = np.arange(12, dtype=np.float32)
-    idx = _draws(S.layered_thirds, f)
+    idx = _draws("layered_thirds", f)
     want = _layered_counts(f, np.ones(12, bool)) / 12
     counts = np.bincount(idx[:, 0], minlength=12)
     nz = want > 0
@@ -208,7 +232,7 @@ def test_shuffle_is_a_random_permutation_of_the_active_individuals():
     in each active slot, so the pairs (2k, 2k + 1) change from draw to draw."""
     f = np.array([3.0, 0.5, 8.0, 1.0, 6.0, 0.7, 2.0, 5.0], np.float32)
     active = np.array([True, True, False, True, True, True, False, True])
-    idx = _draws(S.shuffle, f, active)
+    idx = _draws("shuffle", f, active)
     on = np.flatnonzero(active)
     for row in idx:
         assert sorted(row[on].tolist()) == on.tolist()
@@ -221,7 +245,7 @@ def test_shuffle_is_a_random_permutation_of_the_active_individuals():
 
 def test_stratified_drops_the_last_quartile_and_refills_by_roulette():
     f = np.array([3.0, 0.5, 8.0, 1.0, 6.0, 0.7, 2.0, 5.0, 4.0, 0.2, 7.0, 9.0], np.float32)
-    idx = _draws(S.stratified, f)
+    idx = _draws("stratified", f)
     order = _rank_order(f, np.ones(12, bool))
     kept, dropped = order[:9], order[9:]
     assert sorted(dropped) == [1, 5, 9]  # the three worst
@@ -237,16 +261,19 @@ def test_stratified_drops_the_last_quartile_and_refills_by_roulette():
 def test_stratified_value_bands():
     """Equal-width fitness bands: everything below min + (max - min) / 4 is dropped."""
     f = np.array([0.0, 1.0, 2.0, 2.4, 2.6, 10.0, 9.0, 8.0], np.float32)
-    idx = _draws(functools.partial(S.stratified, bands="value"), f)
+    idx = _draws("stratified_value", f)
     counts = np.stack([np.bincount(row, minlength=8) for row in idx])
     assert (counts[:, [0, 1, 2, 3]] == 0).all() and (counts[:, 4:] >= 1).all()
     # equal fitness: nothing dropped, everyone once
-    idx = _draws(functools.partial(S.stratified, bands="value"), np.ones(8))
+    idx = _draws("stratified_value", np.ones(8))
     assert all(sorted(row) == list(range(8)) for row in idx[:20])
 
 
 def test_dtypes_under_x64():
+    """The result's dtype, traced under x64 (``eval_shape``: as computing it would give,
+    without compiling one program per operation)."""
     with jax.enable_x64(True):
-        f = jnp.arange(P, dtype=jnp.float32)
         for name, fn in _FNS.items():
-            assert fn(jax.random.PRNGKey(0), f).dtype == jnp.int32, name
+            out = jax.eval_shape(
+                lambda fn=fn: fn(jax.random.PRNGKey(0), jnp.arange(P, dtype=jnp.float32)))
+            assert out.dtype == jnp.int32, name
