@@ -1,20 +1,43 @@
-"""Flat scatters under vmap (jaxga._batching.scatter): the same tables as a plain .at[] scatter."""
+"""Flat scatters under vmap (jaxga._batching.scatter): the same tables as a plain .at[] scatter.
+
+Each function under test is jitted once below (at each vmap depth); expected values come
+from NumPy.
+"""
 
 from __future__ import annotations
 
 import jax
-import jax.numpy as jnp
 import numpy as np
 import pytest
 
 from jaxga._batching import scatter
-from jaxga._batching.scatter import position_table, table_lookup
+from jaxga._batching.scatter import _rows_batched, _rows_flat, position_table, table_lookup
 
 
-def _nest(fn, depth):
+def _nested_tables(depth: int):
+    """``position_table(keys, n_cells)`` under ``depth`` vmaps, jitted (n_cells static)."""
+    fn = position_table
     for _ in range(depth):
-        fn = jax.vmap(fn)
-    return fn
+        fn = jax.vmap(fn, in_axes=(0, None))
+    return jax.jit(fn, static_argnums=1)
+
+
+_TABLES = {depth: _nested_tables(depth) for depth in (0, 1, 2)}
+_ROWS_FLAT = jax.jit(_rows_flat, static_argnums=1)
+_ROWS_BATCHED = jax.jit(_rows_batched, static_argnums=1)
+
+
+def _table_reference(keys: np.ndarray, n_cells: int) -> np.ndarray:
+    """``full(n_cells, -1).at[k].max(arange(L), mode="drop")`` of every row ``k`` of
+    ``keys``, in NumPy: a negative key counts from the end, a key still off the table
+    is dropped."""
+    out = np.full(keys.shape[:-1] + (n_cells,), -1, np.int32)
+    for idx in np.ndindex(keys.shape[:-1]):
+        for i, k in enumerate(keys[idx]):
+            k = int(k) + n_cells if k < 0 else int(k)
+            if 0 <= k < n_cells:
+                out[idx + (k,)] = max(out[idx + (k,)], i)
+    return out
 
 
 @pytest.mark.parametrize("shape", [(12,), (7, 12), (3, 5, 12)])
@@ -22,15 +45,9 @@ def test_position_table_is_the_scatter_max_at_any_vmap_depth(shape):
     """``table.at[keys].max(arange(L), mode="drop")`` per row, with negative (counted from
     the end) and off-table keys."""
     n_cells = 20
-    keys = jnp.asarray(np.random.default_rng(3).integers(-25, 25, shape), jnp.int32)
-
-    def ref(k):
-        i = jnp.arange(k.shape[0], dtype=jnp.int32)
-        return jnp.full((n_cells,), -1, jnp.int32).at[k].max(i, mode="drop")
-
-    depth = len(shape) - 1
-    want = np.asarray(_nest(ref, depth)(keys))
-    got = np.asarray(jax.jit(_nest(lambda k: position_table(k, n_cells), depth))(keys))
+    keys = np.random.default_rng(3).integers(-25, 25, shape).astype(np.int32)
+    want = _table_reference(keys, n_cells)
+    got = np.asarray(_TABLES[len(shape) - 1](keys, n_cells))
     assert got.dtype == np.int32 and got.shape == shape[:-1] + (n_cells,)
     assert np.array_equal(got, want)
     assert (want >= 0).any() and (want == -1).any()  # both outcomes are exercised
@@ -40,13 +57,14 @@ def test_the_flat_and_the_batched_rows_give_the_same_tables():
     """position_table computes a batch of rows with one flat scatter, or (beyond
     MAX_FLAT_ENTRIES = 2**31 - 1 entries, where int32 flat indices would overflow) with
     one batched scatter: both equal the per-row scatter."""
-    from jaxga._batching.scatter import MAX_FLAT_ENTRIES, _rows_batched, _rows_flat
+    from jaxga._batching.scatter import MAX_FLAT_ENTRIES
 
     assert MAX_FLAT_ENTRIES == 2**31 - 1
-    keys = jnp.asarray(np.random.default_rng(5).integers(-13, 12, (4, 6, 9)), jnp.int32)
-    want = np.asarray(jax.vmap(jax.vmap(lambda k: position_table(k, 10)))(keys))
-    assert np.array_equal(np.asarray(_rows_flat(keys, 10)), want)
-    assert np.array_equal(np.asarray(_rows_batched(keys, 10)), want)
+    keys = np.random.default_rng(5).integers(-13, 12, (4, 6, 9)).astype(np.int32)
+    want = _table_reference(keys, 10)
+    assert np.array_equal(np.asarray(_TABLES[2](keys, 10)), want)
+    assert np.array_equal(np.asarray(_ROWS_FLAT(keys, 10)), want)
+    assert np.array_equal(np.asarray(_ROWS_BATCHED(keys, 10)), want)
 
 
 def _lookup_reference(keys: np.ndarray, queries: np.ndarray, n_cells: int) -> np.ndarray:
@@ -59,6 +77,22 @@ def _lookup_reference(keys: np.ndarray, queries: np.ndarray, n_cells: int) -> np
             if 0 <= q < n_cells and hits.size:
                 out[idx + (j,)] = hits[-1]
     return out
+
+
+def _lookups(keys, neg, queries, n_cells, mode):
+    """``table_lookup`` of the keys of ``test_table_lookup_...``: of one row, under two
+    vmaps (of ``keys`` and of ``neg``), and of each row of ``keys[0]`` with the queries
+    ``queries[0, 0]`` shared (as a 3 x 3 array); and the position tables of ``neg`` under
+    two vmaps. ``mode`` (static) is not used: it keys the compiled program, which depends
+    on the constants the test patches."""
+    two = jax.vmap(jax.vmap(lambda k, q: table_lookup(k, q, n_cells)))
+    shared = queries[0, 0].reshape(3, 3)
+    return (table_lookup(keys[1, 2], queries[1, 2], n_cells), two(keys, queries),
+            two(neg, queries), jax.vmap(lambda k: table_lookup(k, shared, n_cells))(keys[0]),
+            jax.vmap(jax.vmap(lambda k: position_table(k, n_cells)))(neg))
+
+
+_LOOKUPS = jax.jit(_lookups, static_argnums=(3, 4))
 
 
 @pytest.mark.parametrize("mode", ["at_once", "chunked", "batched_rows"])
@@ -77,20 +111,19 @@ def test_table_lookup_is_the_table_gather_at_any_vmap_depth(monkeypatch, mode):
     keys = rng.integers(0, n_cells + 3, (3, 7, 20)).astype(np.int32)  # repeats, off-table
     queries = rng.integers(-2, n_cells + 2, (3, 7, 9)).astype(np.int32)
     want = _lookup_reference(keys, queries, n_cells)
-    one = jax.jit(lambda k, q: table_lookup(k, q, n_cells))
-    two = jax.jit(jax.vmap(jax.vmap(lambda k, q: table_lookup(k, q, n_cells))))
-    np.testing.assert_array_equal(two(keys, queries), want)
-    np.testing.assert_array_equal(one(keys[1, 2], queries[1, 2]), want[1, 2])
-    # negative keys count from the end, as in position_table
     neg = keys.copy()
     neg[:, :, ::5] = -1
-    table = np.asarray(jax.vmap(jax.vmap(lambda k: position_table(k, n_cells)))(neg))
+    one, two, two_neg, got, table = (np.asarray(x) for x in
+                                     _LOOKUPS(keys, neg, queries, n_cells, mode))
+    np.testing.assert_array_equal(two, want)
+    np.testing.assert_array_equal(one, want[1, 2])
+    # negative keys count from the end, as in position_table (built under the same
+    # patched constants)
+    np.testing.assert_array_equal(table, _table_reference(neg, n_cells))
     gathered = np.take_along_axis(table, np.clip(queries, 0, n_cells - 1), axis=-1)
     np.testing.assert_array_equal(
-        two(neg, queries), np.where((queries >= 0) & (queries < n_cells), gathered, -1))
+        two_neg, np.where((queries >= 0) & (queries < n_cells), gathered, -1))
     # shared queries, per-row keys; 2-D queries
-    shared = jax.jit(jax.vmap(lambda k: table_lookup(k, queries[0, 0].reshape(3, 3), n_cells)))
-    got = shared(keys[0])
     np.testing.assert_array_equal(
         got.reshape(7, 9), _lookup_reference(keys[0], np.broadcast_to(queries[0, 0], (7, 9)),
                                              n_cells))
