@@ -1,4 +1,9 @@
-"""jaxga._batching.folding: every vmap level above a call folded into one flat batch of lanes."""
+"""jaxga._batching.folding: every vmap level above a call folded into one flat batch of lanes.
+
+Inputs are made in NumPy (no eager iota, reshape or swap); what stays eager is the folded
+call itself, whose eager path (the primitive's implementation) is under test. The tests
+that observe a client traced at lowering jit a function of their own, once.
+"""
 
 from __future__ import annotations
 
@@ -8,6 +13,12 @@ import numpy as np
 import pytest
 
 from jaxga._batching.folding import fold_call, hoist
+
+
+def _i32(x):
+    """An int32 JAX array of ``x``, made in NumPy (one transfer per shape, not an eager
+    computation)."""
+    return jnp.asarray(np.asarray(x, np.int32))
 
 
 def _probe(seen):
@@ -28,16 +39,16 @@ def _probe(seen):
 
 def test_without_vmap_the_client_sees_the_call_itself():
     seen = []
-    out = fold_call(_probe(seen), [jnp.arange(3)], [jnp.int32(5)], [jnp.arange(3)])
+    out = fold_call(_probe(seen), [_i32(np.arange(3))], [_i32(5)], [_i32(np.arange(3))])
     assert seen == [((), [(3,)], [None])]
     np.testing.assert_array_equal(out[0], [5, 6, 7])
 
 
 def test_two_levels_fold_into_one_leading_dimension_and_operands_broadcast():
     seen = []
-    x = jnp.arange(2 * 3 * 4).reshape(2, 3, 4)
-    outer = jnp.array([100, 200])  # batched at the outer level only
-    shared = jnp.int32(7)  # batched at no level: stays one copy
+    x = _i32(np.arange(2 * 3 * 4).reshape(2, 3, 4))
+    outer = _i32([100, 200])  # batched at the outer level only
+    shared = _i32(7)  # batched at no level: stays one copy
 
     def call(xi, o):
         return fold_call(_probe(seen), [xi], [o, shared], [xi])[0]
@@ -50,32 +61,37 @@ def test_two_levels_fold_into_one_leading_dimension_and_operands_broadcast():
     np.testing.assert_array_equal(out, want)
     # the same under jit, where the client runs when the program is lowered
     jitted = jax.jit(jax.vmap(jax.vmap(call, in_axes=(0, None)), in_axes=(1, 0)))
-    np.testing.assert_array_equal(jitted(jnp.swapaxes(x, 0, 1), outer), want)
+    np.testing.assert_array_equal(jitted(np.swapaxes(np.asarray(x), 0, 1), outer), want)
     assert seen[-1] == ((2, 3), [(6, 4)], [(6,), None])
 
 
+_apply = jax.jit(lambda fn_op, consts, *args: fn_op(consts, *args), static_argnums=0)
+"""``fn_op(consts, *args)`` of a hoisted function (the consts as jit arguments)."""
+
+
 def test_hoist_turns_closed_over_values_into_operands():
-    table = jnp.array([3, 1, 4, 1, 5])
+    table = _i32([3, 1, 4, 1, 5])
 
     def fn(i, j):
         return {"a": table[i] * j}
 
-    fn_op, consts = hoist(fn, jnp.int32(0), jnp.int32(0))
+    fn_op, consts = hoist(fn, _i32(0), _i32(0))
     assert any(np.array_equal(c, table) for c in consts)
-    other = [jnp.array([10, 20, 30, 40, 50]) if np.array_equal(c, table) else c
+    other = [_i32([10, 20, 30, 40, 50]) if np.array_equal(c, table) else c
              for c in consts]
-    assert int(fn_op(consts, jnp.int32(2), jnp.int32(3))["a"]) == 12
-    assert int(fn_op(other, jnp.int32(2), jnp.int32(3))["a"]) == 90
+    assert int(_apply(fn_op, consts, _i32(2), _i32(3))["a"]) == 12
+    assert int(_apply(fn_op, other, _i32(2), _i32(3))["a"]) == 90
 
 
 def test_the_client_is_traced_once_with_every_level_folded():
     """Nested vmap inside a scan inside jit: the batching rule adds levels without
     tracing the client; it is traced once, at lowering, with all three levels folded."""
     seen = []
-    x = jnp.arange(2 * 3 * 4 * 5).reshape(2, 3, 4, 5)
+    x = _i32(np.arange(2 * 3 * 4 * 5).reshape(2, 3, 4, 5))
+    one = _i32(1)
 
     def call(xi):
-        return fold_call(_probe(seen), [xi], [jnp.int32(1)], [xi])[0]
+        return fold_call(_probe(seen), [xi], [one], [xi])[0]
 
     def scanned(xs):  # the scan body is traced unbatched, then batched by the outer vmap
         return jax.lax.scan(lambda c, row: (c, jax.vmap(jax.vmap(call))(row)), 0, xs)[1]
@@ -90,23 +106,28 @@ def test_a_client_returning_other_shapes_than_declared_is_an_error():
         return [lanes[0][..., :1]]
 
     with pytest.raises(TypeError, match="declared"):
-        fold_call(client, [jnp.arange(3)], [], [jnp.arange(3)])
+        fold_call(client, [_i32(np.arange(3))], [], [_i32(np.arange(3))])
     with pytest.raises(TypeError, match="declared"):  # a dtype, under jit
         jax.jit(lambda x: fold_call(_probe([]), [x], [], [x.astype(jnp.float32)]))(
-            jnp.arange(3))
+            _i32(np.arange(3)))
+
+
+def _ident(lead, lanes, operands, axes):
+    return list(lanes)
+
+
+def _times_bf16(x):
+    return fold_call(_ident, [x], [], [x])[0] * jnp.bfloat16(2)
+
+
+_times_bf16_jit = jax.jit(_times_bf16)
 
 
 def test_declared_outputs_keep_weak_types_and_take_numpy_values():
     """A weakly typed declared output stays weak under jit (as ``lax.while_loop``'s
     carry does), and NumPy values declare the dtype JAX gives them."""
-    def ident(lead, lanes, operands, axes):
-        return list(lanes)
-
-    def f(x):
-        return fold_call(ident, [x], [], [x])[0] * jnp.bfloat16(2)
-
     weak = jnp.asarray(1.5)  # a Python float: weakly typed float32
-    assert jax.jit(f)(weak).dtype == f(weak).dtype == jnp.bfloat16
-    assert jax.jit(f)(jnp.float32(1.5)).dtype == jnp.float32
-    (out,) = fold_call(ident, [np.zeros(3)], [], [np.zeros(3)])  # float64 -> float32
+    assert _times_bf16_jit(weak).dtype == _times_bf16(weak).dtype == jnp.bfloat16
+    assert _times_bf16_jit(np.float32(1.5)).dtype == jnp.float32
+    (out,) = fold_call(_ident, [np.zeros(3)], [], [np.zeros(3)])  # float64 -> float32
     assert out.dtype == jnp.float32
