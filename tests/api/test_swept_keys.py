@@ -12,6 +12,7 @@ keyed on the configuration it reads).
 
 from __future__ import annotations
 
+import dataclasses
 import warnings
 
 import jax
@@ -19,13 +20,14 @@ import numpy as np
 import pytest
 
 import jaxga
-from jaxga.api.programs import compiled_programs
-from jaxga.config.presets import load_preset
-from jaxga.config.schema import SCHEMA, sweepable
+from jaxga.api.programs import Programs, compiled_programs, program_algorithm, program_view
+from jaxga.config.presets import load_preset, preset_names
+from jaxga.config.schema import SCHEMA, Config, sweepable
 from jaxga.core.errors import InitialisationWarning, ParameterError
 from jaxga.doe import Factor
 from jaxga.doe.design import check_factors
-from jaxga.engine import PER_ISLAND
+from jaxga.engine import PER_ISLAND, finish
+from jaxga.engine.run import run_evolve, run_init
 
 MAP = "classic_ga_gapp3_20x20"
 SMALL = dict(seeds=2, generations=4)
@@ -171,3 +173,46 @@ def test_the_unfilled_warning_names_each_runs_budget():
                       np.array([1, 30, 100]))
     with pytest.warns(InitialisationWarning, match=r"init.max_tries = 100 did not fill"):
         warn_unfilled(np.array([12]), np.array([0.1]), 60, cfg)
+
+
+class _ReadsRecorded(Config):
+    """A program's view of a configuration that records every read of a key the full
+    configuration has but the view hides (such a read would silently see the default)."""
+
+    hidden: dict = {}
+    reads: list = []
+
+    def __getitem__(self, key: str):
+        try:
+            return super().__getitem__(key)
+        except KeyError:
+            if key in self.hidden:
+                self.reads.append(key)
+            raise
+
+
+@pytest.mark.parametrize("preset", sorted(preset_names()))
+def test_each_program_reads_only_its_own_view_of_the_configuration(preset):
+    """Every preset's init, evolve and finish programs traced (``jax.eval_shape``: nothing
+    compiles) from their views (:func:`jaxga.api.programs.program_view`) read no key
+    outside them: a program shared by configurations that differ only outside its view
+    computes the same thing for all of them."""
+    ga = jaxga.GA(preset, MAP)
+    algo = program_algorithm(ga.algorithm)
+    full = dict(algo.config.items)
+    views = {}
+    for name in Programs.NAMES:
+        view = program_view(algo, name)
+        config = _ReadsRecorded(view.config.items)
+        config.hidden, config.reads = {k: v for k, v in full.items()
+                                       if k not in dict(view.config.items)}, []
+        views[name] = dataclasses.replace(view, config=config)
+    key, params = jax.random.PRNGKey(0), ga.default_params
+    state, _ = jax.eval_shape(lambda k, g, p: run_init(views["init"], k, g, p),
+                              key, ga.grid, params)
+    state, _ = jax.eval_shape(lambda k, g, s, p: run_evolve(views["evolve"], k, g, s, p, 2),
+                              key, ga.grid, state, params)
+    jax.eval_shape(lambda g, s, p: finish(views["finish"], g, s, None, p),
+                   ga.grid, state, params)
+    assert {name: view.config.reads for name, view in views.items()} == {
+        name: [] for name in Programs.NAMES}
