@@ -24,7 +24,6 @@ from jaxga.core.paths import (
     is_continuous,
     is_feasible,
     is_loop_free,
-    pad,
     population_map,
 )
 from jaxga.maps.generators import random_map
@@ -35,31 +34,93 @@ from tests.strategies import CAP, SIZE, grids_and_parents
 
 P = 8
 
-_shortcut = {
-    los: jax.jit(jax.vmap(lambda g, c, n, los=los: PP.shortcut_greedy(g, c, n, los=los),
-                          in_axes=(None, 0, 0)))
-    for los in PP.LINE_OF_SIGHT
-}
-_simplify = jax.jit(over_individuals(PP.simplify_adjacent))
-_checks = jax.jit(
-    lambda g, c, n: (
+# Every jitted function below is built once, here, and called with a few fixed shapes:
+# the operator tests' SIZE x SIZE maps with P paths of capacity CAP (hand-made paths are
+# tiled to P), the 40 x 40 maps of the long paths, one path of capacity 160 on the open
+# and corridor maps; a corner rule compiles each once per shape. The path checks are
+# one program of their own (per shape), not a copy in each operator's program.
+
+
+@jax.jit
+def _checks(g, c, n):
+    """The path checks of :mod:`jaxga.core.paths` for a population, and its Euclidean
+    lengths."""
+    return (
         population_map(has_endpoints)(g, c, n),
         population_map(is_continuous)(g, c, n),
         population_map(is_feasible)(g, c, n),
         jax.vmap(is_loop_free)(c, n),
         population_map(path_length)(g, c, n),
     )
-)
-# All-pairs line of sight between the nodes of each path: int32[P, L, L].
-_pairs = {
-    los: jax.jit(jax.vmap(
-        lambda g, c, f=f: jax.vmap(jax.vmap(f, in_axes=(None, None, 0)), in_axes=(None, 0, None))(
-            g, c, c
-        ),
-        in_axes=(None, 0),
-    ))
-    for los, f in (("clear", clear), ("linear_trial", linear_trial))
-}
+
+
+def _path(xy, width: int, capacity: int) -> tuple[np.ndarray, np.int32]:
+    """``(x, y)`` coordinates -> ``(cells int32[capacity], length)``, padded with the last
+    cell (:func:`jaxga.core.paths.from_coords` in NumPy: no device arrays to convert)."""
+    xy = np.asarray(xy, np.int64).reshape(-1, 2)
+    assert 1 <= len(xy) <= capacity
+    cells = (xy[:, 1] * width + xy[:, 0]).astype(np.int32)
+    return np.concatenate([cells, np.full(capacity - len(xy), cells[-1], np.int32)]), \
+        np.int32(len(xy))
+
+
+def _assert_padded(c, n) -> None:
+    """Every path is padded as :func:`jaxga.core.paths.pad` pads: each position at or
+    beyond its length repeats its last cell (NumPy)."""
+    c, n = np.asarray(c), np.asarray(n)
+    last = c[np.arange(len(n)), np.clip(n - 1, 0, c.shape[1] - 1)]
+    np.testing.assert_array_equal(c, np.where(np.arange(c.shape[1]) < n[:, None], c,
+                                              last[:, None]))
+
+
+def _sight_pairs(g, c, f):
+    """Line of sight ``f`` between every two nodes of each path: bool[P, L, L]."""
+    each = jax.vmap(jax.vmap(f, in_axes=(None, None, 0)), in_axes=(None, 0, None))
+    return jax.vmap(lambda p: each(g, p, p))(c)
+
+
+@jax.jit
+def _greedy(g, c, n):
+    """``({los: (cells, length)}, {los: sees})``: shortcut_greedy under each line-of-sight
+    test, and that test between every two nodes of each input path (bool[P, L, L])."""
+    out = {los: jax.vmap(lambda c, n, los=los: PP.shortcut_greedy(g, c, n, los=los))(c, n)
+           for los in PP.LINE_OF_SIGHT}
+    sees = {"clear": _sight_pairs(g, c, clear), "linear_trial": _sight_pairs(g, c, linear_trial)}
+    return out, sees
+
+
+@jax.jit
+def _optimal(g, c, n):
+    """shortcut_optimal at the default window (``"default"``) and at a window of 3
+    positions (``"narrow"``)."""
+    return {
+        "default": jax.vmap(lambda c, n: PP.shortcut_optimal(g, c, n))(c, n),
+        "narrow": jax.vmap(lambda c, n: PP.shortcut_optimal(g, c, n, window=3))(c, n),
+    }
+
+
+@jax.jit
+def _optimal_long(g, c, n):
+    """For the long paths: shortcut_optimal at the default window, and the path checks of
+    the input, the optimum and the greedy pass (one program: the checks run on no other
+    paths of this capacity)."""
+    oc, on = jax.vmap(lambda c, n: PP.shortcut_optimal(g, c, n))(c, n)
+    gc, gn = jax.vmap(lambda c, n: PP.shortcut_greedy(g, c, n))(c, n)
+    report = _checks(g, jnp.concatenate([c, oc, gc]), jnp.concatenate([n, on, gn]))
+    src, opt, greedy = (tuple(v[k * len(n): (k + 1) * len(n)] for v in report)
+                        for k in range(3))
+    return oc, on, opt, src[4], greedy[4]
+
+
+# one path of capacity 160: on the open maps the optimum and the pruning, on the
+# corridor maps the optimum
+_optimal_prune_one = jax.jit(jax.vmap(lambda g, c, n: (PP.shortcut_optimal(g, c, n),
+                                                       PP.prune_waypoints(g, c, n)),
+                                      in_axes=(None, 0, 0)))
+_optimal_one = jax.jit(jax.vmap(PP.shortcut_optimal, in_axes=(None, 0, 0)))
+_simplify = jax.jit(over_individuals(PP.simplify_adjacent))
+# under x64: the two operators' dtypes, jitted as in use
+_x64_ops = jax.jit(lambda g, c, n: (PP.shortcut_optimal(g, c, n), PP.shortcut_greedy(g, c, n)))
 
 
 def _greedy_reference(path, sees):
@@ -89,14 +150,15 @@ def _as_lists(c, n):
 def test_shortcut_greedy_properties_and_reference(gp):
     """Feasible, same endpoints, no longer, a sub-sequence, and MPMGA's steps exactly."""
     grid, parents = gp
-    c, n = _shortcut["clear"](grid, parents.cells, parents.length)
+    out, sees = _greedy(grid, parents.cells, parents.length)
+    c, n = out["clear"]
     ends, _, feas, loop_free, out_len = (np.asarray(v) for v in _checks(grid, c, n))
     in_len = np.asarray(_checks(grid, parents.cells, parents.length)[4])
     assert ends.all() and feas.all() and loop_free.all()
     assert (out_len <= in_len + 1e-4).all()
     assert (np.asarray(n) <= np.asarray(parents.length)).all()
-    np.testing.assert_array_equal(np.asarray(jax.vmap(pad)(c, n)), np.asarray(c))
-    sees = np.asarray(_pairs["clear"](grid, parents.cells))
+    _assert_padded(c, n)
+    sees = np.asarray(sees["clear"])
     for i, (got, src) in enumerate(zip(_as_lists(c, n), _as_lists(parents.cells, parents.length))):
         assert got == [src[k] for k in _greedy_reference(list(range(len(src))), sees[i])]
 
@@ -106,8 +168,9 @@ def test_shortcut_greedy_properties_and_reference(gp):
 def test_shortcut_greedy_linear_trial(gp):
     """los="linear_trial" (AGACD section 3) follows the same steps with AGACD's test."""
     grid, parents = gp
-    c, n = _shortcut["linear_trial"](grid, parents.cells, parents.length)
-    sees = np.asarray(_pairs["linear_trial"](grid, parents.cells))
+    out, sees = _greedy(grid, parents.cells, parents.length)
+    c, n = out["linear_trial"]
+    sees = np.asarray(sees["linear_trial"])
     for i, (got, src) in enumerate(zip(_as_lists(c, n), _as_lists(parents.cells, parents.length))):
         # The paper's loop needs every input segment to pass the test; AGACD's linear trial
         # can reject a legal anti-diagonal step, which jaxga then keeps as it is.
@@ -115,12 +178,6 @@ def test_shortcut_greedy_linear_trial(gp):
         for k in range(len(src) - 1):
             s[k, k + 1] = True
         assert got == [src[k] for k in _greedy_reference(list(range(len(src))), s)]
-
-
-_optimal = jax.jit(jax.vmap(PP.shortcut_optimal, in_axes=(None, 0, 0)))
-_optimal_narrow = jax.jit(jax.vmap(lambda g, c, n: PP.shortcut_optimal(g, c, n, window=3),
-                                   in_axes=(None, 0, 0)))
-_prune = jax.jit(jax.vmap(PP.prune_waypoints, in_axes=(None, 0, 0)))
 
 
 def _sees_np(grid, path: list[int]) -> np.ndarray:
@@ -158,19 +215,20 @@ def _check_minimal(grid, got: list[int]) -> None:
         f"removable waypoint in {got}"
 
 
-def _check_optimal(grid, c, n, src_c, src_n, window: int) -> None:
+def _check_optimal(grid, c, n, src_c, src_n, window: int, report, in_len, greedy_len):
     """shortcut_optimal's output against the NumPy references, path by path: a feasible
     sub-sequence with the input's endpoints, minimal (:func:`_check_minimal`), no longer
     than the greedy pass nor than the previous result (the windowed optimum or the
     greedy result, whichever is shorter), never shorter than the optimum without a
-    window, which it equals when the paths fit the window."""
+    window, which it equals when the paths fit the window. ``report``: the output's
+    :func:`_checks`; ``in_len``, ``greedy_len``: the Euclidean lengths of the input and
+    of the greedy pass's output."""
     w = grid.width
-    ends, _, feas, loop_free, out_len = (np.asarray(v) for v in _checks(grid, c, n))
+    ends, _, feas, loop_free, out_len = (np.asarray(v) for v in report)
     assert ends.all() and feas.all() and loop_free.all()
-    in_len = np.asarray(_checks(grid, src_c, src_n)[4])
-    greedy_len = np.asarray(_checks(grid, *_shortcut["clear"](grid, src_c, src_n))[4])
+    in_len, greedy_len = np.asarray(in_len), np.asarray(greedy_len)
     assert (out_len <= greedy_len + 1e-4).all() and (out_len <= in_len + 1e-4).all()
-    np.testing.assert_array_equal(np.asarray(jax.vmap(pad)(c, n)), np.asarray(c))
+    _assert_padded(c, n)
     for i, (got, src) in enumerate(zip(_as_lists(c, n), _as_lists(src_c, src_n))):
         positions = [src.index(cell) for cell in got]
         assert positions == sorted(positions) and got[0] == src[0] and got[-1] == src[-1]
@@ -192,16 +250,19 @@ def test_shortcut_optimal_is_the_shortest_clear_subsequence(gp):
     longer than the greedy pass; with a window of 3 positions still feasible and minimal,
     between the optimum and the shorter of the windowed optimum and the greedy result."""
     grid, parents = gp
-    _check_optimal(grid, *_optimal(grid, parents.cells, parents.length), parents.cells,
-                   parents.length, PP.SHORTCUT_WINDOW)
-    _check_optimal(grid, *_optimal_narrow(grid, parents.cells, parents.length),
-                   parents.cells, parents.length, 3)
+    out = _optimal(grid, parents.cells, parents.length)
+    in_len = _checks(grid, parents.cells, parents.length)[4]
+    greedy_len = _checks(grid, *_greedy(grid, parents.cells, parents.length)[0]["clear"])[4]
+    for name, window in (("default", PP.SHORTCUT_WINDOW), ("narrow", 3)):
+        c, n = out[name]
+        _check_optimal(grid, c, n, parents.cells, parents.length, window, _checks(grid, c, n),
+                       in_len, greedy_len)
 
 
 LONG_SIZE, LONG_CAP = 40, 256
 
 
-def _long_parents(grid, n: int, seed: int) -> tuple[jax.Array, jax.Array]:
+def _long_parents(grid, n: int, seed: int) -> tuple[np.ndarray, np.ndarray]:
     """``n`` continuous loop-free start-goal paths of up to ``LONG_CAP`` cells: the
     8-connected optimum, then detours through random free cells (each leg the optimum on
     the map with the earlier legs blocked)."""
@@ -224,8 +285,8 @@ def _long_parents(grid, n: int, seed: int) -> tuple[jax.Array, jax.Array]:
             path = np.concatenate(legs)
             if len(path) <= LONG_CAP:
                 out.append(path)
-    cells, length = zip(*(paths.from_coords(p, grid.width, LONG_CAP) for p in out))
-    return jnp.stack(cells), jnp.stack(length)
+    cells, length = zip(*(_path(p, grid.width, LONG_CAP) for p in out))
+    return np.stack(cells), np.array(length, np.int32)
 
 
 @pytest.mark.parametrize("rule", CORNER_RULES)
@@ -236,9 +297,10 @@ def test_shortcut_optimal_long_paths_against_numpy(rule):
     for seed in range(2):
         grid = random_map(LONG_SIZE, LONG_SIZE, 0.25, seed, corner_rule=rule)
         cells, length = _long_parents(grid, 4, seed)
-        assert int(jnp.max(length)) > PP.SHORTCUT_WINDOW
-        _check_optimal(grid, *_optimal(grid, cells, length), cells, length,
-                       PP.SHORTCUT_WINDOW)
+        assert int(np.max(length)) > PP.SHORTCUT_WINDOW
+        c, n, report, in_len, greedy_len = _optimal_long(grid, cells, length)
+        _check_optimal(grid, c, n, cells, length, PP.SHORTCUT_WINDOW, report, in_len,
+                       greedy_len)
 
 
 def test_shortcut_optimal_straight_lines_are_one_segment():
@@ -247,13 +309,13 @@ def test_shortcut_optimal_straight_lines_are_one_segment():
     grid = Grid.create(np.zeros((100, 100), bool), corner_rule="strict")
     stair = [(k, k // 2) for k in range(100)]  # slope 1/2: straight and diagonal steps
     for xy in ([(x, 7) for x in range(100)], [(k, 99 - k) for k in range(100)], stair):
-        assert _one(_optimal, grid, xy, cap=160) == [xy[0], xy[-1]]
-    assert _one(_prune, grid, [(0, 0), (2, 0), (5, 0), (5, 3)], cap=160) == [(0, 0), (5, 3)]
+        assert _big(grid, xy, prune=True)[0] == [xy[0], xy[-1]]
+    assert _big(grid, [(0, 0), (2, 0), (5, 0), (5, 3)], prune=True)[1] == [(0, 0), (5, 3)]
     wall = np.zeros((100, 100), bool)
     wall[1:, 3] = True  # x = 3 above row 0: (5, 0) must stay, (2, 0) goes
     grid = Grid.create(wall, corner_rule="strict")
-    assert _one(_prune, grid, [(0, 0), (2, 0), (5, 0), (5, 3)], cap=160) == [(0, 0), (5, 0),
-                                                                             (5, 3)]
+    assert _big(grid, [(0, 0), (2, 0), (5, 0), (5, 3)], prune=True)[1] == [(0, 0), (5, 0),
+                                                                          (5, 3)]
 
 
 def test_shortcut_optimal_l_corridor():
@@ -270,16 +332,16 @@ def test_shortcut_optimal_l_corridor():
         grid = Grid.create(corridor, corner_rule=rule)
         # the diagonal step (78, 0) -> (79, 1) passes one blocked side cell, (78, 1)
         corner = [(79, 0)] if rule == "strict" else [(78, 0), (79, 1)]
-        assert _one(_optimal, grid, ell, cap=160) == [(0, 0), *corner, (79, 79)], rule
+        assert _big(grid, ell) == [(0, 0), *corner, (79, 79)], rule
     wide = corridor.copy()
     wide[1, : size - 1] = False  # row y = 1 too: the inner corner is cell (77, 2)
     wide[2:, size - 2] = False  # column x = 78 too
     grid = Grid.create(wide, corner_rule="strict")
     inner = [(x, 1) for x in range(size - 1)] + [(size - 2, y) for y in range(2, size)]
-    assert _one(_optimal, grid, inner, cap=160) == [(0, 1), (78, 1), (78, 79)]
+    assert _big(grid, inner) == [(0, 1), (78, 1), (78, 79)]
     # along the outer walls: around the inner corner (77.5, 1.5) (cell (77, 2)'s); from
     # (73, 0) the segment to (79, 2) would pass exactly through it (strict: not clear)
-    got = _one(_optimal, grid, ell, cap=160)
+    got = _big(grid, ell)
     assert got == [(0, 0), (74, 0), (79, 2), (79, 79)]
     sees = _sees_np(grid, [y * size + x for x, y in ell])
     length = sum(math.dist(a, b) for a, b in zip(got[:-1], got[1:]))
@@ -290,10 +352,10 @@ def test_shortcut_optimal_short_paths_and_x64():
     """One and two nodes come back unchanged; int32 out under x64."""
     grid = Grid.create(np.zeros((SIZE, SIZE), bool), corner_rule="strict")
     for xy in ([(0, 0)], [(0, 0), (1, 1)]):
-        assert _one(_optimal, grid, xy) == xy
-    cells, n = paths.from_coords([(0, 0), (1, 0), (2, 0)], SIZE, 2 + 1)
+        assert _one("optimal", grid, xy) == xy
+    cells, n = _path([(0, 0), (1, 0), (2, 0)], SIZE, 2 + 1)
     with jax.enable_x64(True):
-        c, n2 = jax.jit(PP.shortcut_optimal)(grid, cells, n)
+        (c, n2), _ = _x64_ops(grid, cells, n)
         assert c.dtype == jnp.int32 and n2.dtype == jnp.int32 and int(n2) == 2
 
 
@@ -301,11 +363,16 @@ def test_shortcut_optimal_short_paths_and_x64():
 _H, _W = 7, 9
 _ALL_PAIRS = np.array(list(itertools.product(range(_H * _W), repeat=2))
                       + [(-1, 3), (3, _H * _W), (_H * _W + 5, 2)], np.int32)
-_clear_span = {s: jax.jit(jax.vmap(lambda g, a, b, s=s: clear(g, a, b, max_span=s),
-                                   in_axes=(None, 0, 0))) for s in (1, 3, 8)}
-_short_span = {s: jax.jit(jax.vmap(
-    lambda g, a, b, s=s: PP._clear_short(g, PP._vertex_codes(g.blocked), a, b, s),
-    in_axes=(None, 0, 0))) for s in (1, 3, 8)}
+_SPANS = (1, 3, 8)
+
+
+@jax.jit
+def _clear_both(g, a, b):
+    """``{span: (clear, _clear_short)}`` on every pair ``(a[k], b[k])``: one program per rule."""
+    codes = PP._vertex_codes(g.blocked)
+    return {s: (jax.vmap(lambda a, b, s=s: clear(g, a, b, max_span=s))(a, b),
+                jax.vmap(lambda a, b, s=s: PP._clear_short(g, codes, a, b, s))(a, b))
+            for s in _SPANS}
 
 
 @pytest.mark.parametrize("rule", CORNER_RULES)
@@ -316,10 +383,13 @@ def test_clear_short_is_clear_on_every_pair(rule):
     rng = np.random.default_rng(11)
     for density in (0.0, 0.15, 0.3, 0.5):
         grid = Grid.create(rng.random((_H, _W)) < density, corner_rule=rule)
-        for span in (1, 3, 8):
-            want = np.asarray(_clear_span[span](grid, _ALL_PAIRS[:, 0], _ALL_PAIRS[:, 1]))
-            got = np.asarray(_short_span[span](grid, _ALL_PAIRS[:, 0], _ALL_PAIRS[:, 1]))
+        out = _clear_both(grid, _ALL_PAIRS[:, 0], _ALL_PAIRS[:, 1])
+        for span in _SPANS:
+            want, got = (np.asarray(v) for v in out[span])
             np.testing.assert_array_equal(got, want)
+
+
+_floor_div = jax.jit(floor_div)
 
 
 def test_floor_div_is_exact():
@@ -333,15 +403,36 @@ def test_floor_div_is_exact():
     rem = np.stack([rng.integers(0, den), np.zeros(n, np.int64), den - 1])
     num = (q * den + rem).astype(np.int32)
     for k in range(3):
-        got = np.asarray(jax.jit(floor_div)(jnp.asarray(num[k]), jnp.asarray(den, jnp.int32)))
+        got = np.asarray(_floor_div(num[k], den.astype(np.int32)))
         np.testing.assert_array_equal(got, q)
 
 
-def _one(fn, grid, xy, cap=CAP):
-    w = grid.width
-    cells, n = paths.from_coords(xy, w, cap)
-    c, n = fn(grid, cells[None], n[None])
-    return paths.to_coords(c[0], n[0], w)
+def _one(kind, grid, xy):
+    """One hand-made path on a SIZE x SIZE map, tiled to P paths of capacity CAP (the
+    shapes of the property tests), through shortcut_greedy (``kind`` a line-of-sight test)
+    or shortcut_optimal (``"optimal"``): the result, as coordinates."""
+    cells, n = _tiled(xy)
+    if kind == "optimal":
+        c, n = _optimal(grid, cells, n)["default"]
+    else:
+        c, n = _greedy(grid, cells, n)[0][kind]
+    c, n = np.asarray(c), np.asarray(n)
+    assert (c == c[0]).all() and (n == n[0]).all()  # every copy alike
+    return paths.to_coords(c[0], n[0], grid.width)
+
+
+def _big(grid, xy, prune=False):
+    """One hand-made path of capacity 160 through shortcut_optimal, or with ``prune``
+    through shortcut_optimal and prune_waypoints: the result(s), as coordinates."""
+    cells, n = _path(xy, grid.width, 160)
+    if not prune:
+        return _coords(grid, *_optimal_one(grid, cells[None], n[None]))
+    return tuple(_coords(grid, *out) for out in _optimal_prune_one(grid, cells[None], n[None]))
+
+
+def _coords(grid, c, n):
+    """The first path of a population, as coordinates."""
+    return paths.to_coords(np.asarray(c)[0], np.asarray(n)[0], grid.width)
 
 
 def test_shortcut_greedy_l_path():
@@ -353,9 +444,9 @@ def test_shortcut_greedy_l_path():
     for rule in ("free", "strict"):
         grid = Grid.create(corridor, corner_rule=rule)
         for los in PP.LINE_OF_SIGHT:
-            assert _one(_shortcut[los], grid, ell) == [(0, 0), (9, 0), (9, 9)]
+            assert _one(los, grid, ell) == [(0, 0), (9, 0), (9, 9)]
         grid = Grid.create(np.zeros((SIZE, SIZE), bool), corner_rule=rule)
-        assert _one(_shortcut["clear"], grid, ell) == [(0, 0), (9, 9)]
+        assert _one("clear", grid, ell) == [(0, 0), (9, 9)]
 
 
 def test_shortcut_greedy_agacd_example():
@@ -365,7 +456,7 @@ def test_shortcut_greedy_agacd_example():
     path = [(0, 0), (1, 0), (2, 0), (2, 1), (2, 2)]  # A .. E
     grid = Grid.create(blocked, start=(0, 0), goal=(2, 2), corner_rule="free")
     for los in PP.LINE_OF_SIGHT:
-        assert _one(_shortcut[los], grid, path) == [(0, 0), (2, 0), (2, 2)], los
+        assert _one(los, grid, path) == [(0, 0), (2, 0), (2, 2)], los
 
 
 def test_shortcut_greedy_segment_through_a_blocked_vertex_cell():
@@ -374,17 +465,17 @@ def test_shortcut_greedy_segment_through_a_blocked_vertex_cell():
     blocked[1, 2] = True  # (2, 1)
     path = [(0, 0), (1, 0), (2, 0), (3, 0), (3, 1), (3, 2)]
     grid = Grid.create(blocked, start=(0, 0), goal=(3, 2), corner_rule="strict")
-    got = _one(_shortcut["clear"], grid, path)
+    got = _one("clear", grid, path)
     assert got == [(0, 0), (3, 0), (3, 2)]
 
 
 def test_shortcut_greedy_short_and_x64():
     grid = Grid.create(np.zeros((SIZE, SIZE), bool), corner_rule="strict")
     for xy in ([(0, 0)], [(0, 0), (1, 1)]):
-        assert _one(_shortcut["clear"], grid, xy) == xy
-    cells, n = paths.from_coords([(0, 0), (1, 0), (2, 0)], SIZE, 2 + 1)
+        assert _one("clear", grid, xy) == xy
+    cells, n = _path([(0, 0), (1, 0), (2, 0)], SIZE, 2 + 1)
     with jax.enable_x64(True):
-        c, n2 = jax.jit(PP.shortcut_greedy)(grid, cells, n)
+        _, (c, n2) = _x64_ops(grid, cells, n)
         assert c.dtype == jnp.int32 and n2.dtype == jnp.int32 and int(n2) == 2
 
 
@@ -419,12 +510,12 @@ def _legal_fn(grid):
 @given(grids_and_parents(n=P))
 def test_simplify_adjacent_properties_and_reference(gp):
     grid, parents = gp
-    key = jax.random.PRNGKey(int(parents.length.sum()))
+    key = jax.random.PRNGKey(int(np.asarray(parents.length).sum()))
     out, n_failed = _simplify(key, grid, parents)
     c, n = out.cells, out.length
     ends, cont, _, loop_free, _ = (np.asarray(v) for v in _checks(grid, c, n))
     assert ends.all() and cont.all() and loop_free.all()
-    np.testing.assert_array_equal(np.asarray(jax.vmap(pad)(c, n)), np.asarray(c))
+    _assert_padded(c, n)
     legal = _legal_fn(grid)
     unchanged = 0
     for got, src in zip(_as_lists(c, n), _as_lists(parents.cells, parents.length)):
@@ -437,19 +528,25 @@ def test_simplify_adjacent_properties_and_reference(gp):
     assert int(n_failed) == unchanged  # it never returns an unchanged path as a success
 
 
+def _tiled(xy):
+    """A hand-made path on a SIZE x SIZE map as P copies of capacity CAP (NumPy)."""
+    cells, n = _path(xy, SIZE, CAP)
+    return np.tile(cells, (P, 1)), np.full(P, n, np.int32)
+
+
 def test_simplify_adjacent_detour_exact_and_uniform_t():
     """A detour (0,0) (1,0) (2,0) (2,1) (2,2) (1,2) (0,2) (0,3): t = 1, 3, 5 simplify
     (dropping (2,0), (2,2), (0,2)), t = 0, 2, 4, 6 fail; t uniform over 0 .. n-2."""
     xy = [(0, 0), (1, 0), (2, 0), (2, 1), (2, 2), (1, 2), (0, 2), (0, 3)]
     grid = Grid.create(np.zeros((SIZE, SIZE), bool), start=(0, 0), goal=(0, 3),
                        corner_rule="strict")
-    cells, n = paths.from_coords(xy, SIZE, CAP)
-    pop = Population(jnp.tile(cells, (P, 1)), jnp.full((P,), n))
+    cells, n = _tiled(xy)
     counts: dict[tuple, int] = {}
     for s in range(150):
-        out, _ = _simplify(jax.random.PRNGKey(s), grid, pop)
-        for got in _as_lists(out.cells, out.length):
-            k = tuple(paths.to_coords(jnp.asarray(got), len(got), SIZE))
+        out, _ = _simplify(jax.random.PRNGKey(s), grid, Population(cells, n))
+        c, m = out.cells, out.length
+        for got in _as_lists(c, m):
+            k = tuple(paths.to_coords(np.asarray(got), len(got), SIZE))
             counts[k] = counts.get(k, 0) + 1
     drop = lambda p: tuple(q for q in xy if q != p)  # noqa: E731
     assert set(counts) == {tuple(xy), drop((2, 0)), drop((2, 2)), drop((0, 2))}
@@ -465,12 +562,12 @@ def test_simplify_adjacent_farthest_neighbour():
     xy = [(1, 1), (1, 0), (2, 0), (2, 1), (2, 2), (2, 3)]
     grid = Grid.create(np.zeros((SIZE, SIZE), bool), start=(1, 1), goal=(2, 3),
                        corner_rule="free")
-    cells, n = paths.from_coords(xy, SIZE, CAP)
-    pop = Population(jnp.tile(cells, (P, 1)), jnp.full((P,), n))
+    cells, n = _tiled(xy)
     seen = set()
     for s in range(40):
-        out, _ = _simplify(jax.random.PRNGKey(s), grid, pop)
-        seen |= {tuple(p) for p in _as_lists(out.cells, out.length)}
+        out, _ = _simplify(jax.random.PRNGKey(s), grid, Population(cells, n))
+        c, m = out.cells, out.length
+        seen |= {tuple(p) for p in _as_lists(c, m)}
     w = SIZE
     idx = lambda pts: tuple(y * w + x for x, y in pts)  # noqa: E731
     # t=0 -> s=4; t=1 ((1,0)) -> s=3 ((2,1)); t=2,3,4 fail.
