@@ -23,13 +23,17 @@ from jaxga.operators.guide import with_guide
 from jaxga.reference.any_angle import any_angle_shortest_path
 from jaxga.reference.fitness import fitness_optimum, fitness_weights, path_fitness_np
 from jaxga.reference.optima import clear_np, path_length, shortest_path
+from tests import canonical
 
-SMALL = dict(population__size=8, generations=3, init__max_tries=40)
+SMALL = dict(generations=canonical.GENERATIONS)
+"""The canonical problems (tests/canonical.py): each preset at its own defaults, few
+generations; only dynamic keys are overridden below, unless a test needs its own program."""
 
 
 @pytest.fixture(scope="module")
 def grid():
-    return random_map(10, 10, 0.2, 3, corner_rule="free")
+    """The canonical map (the README's 20 x 20 map, free corner rule) as a Grid."""
+    return load_map(canonical.MAP)
 
 
 ZHANG_DEFAULTS = {"a": 2.0, "v": 1.0, "v_t": 0.5, "r": 0.5}
@@ -49,10 +53,8 @@ def _zhang_fitness(path: np.ndarray, a: float, v: float, v_t: float, r: float) -
 @pytest.fixture(scope="module", params=sorted(preset_names()))
 def preset_run(request, grid):
     name = request.param
-    overrides = dict(SMALL)
-    if name == "mpmga":  # three islands of 8; migrants must fit the island
-        overrides["islands__migrants"] = 2
-    return name, api.run(name, grid, seeds=3, **overrides), overrides
+    overrides = dict(SMALL)  # the canonical program of the preset (3 seeds: the 4-run one)
+    return name, canonical.run(name, 3, **overrides), overrides
 
 
 def test_every_preset_returns_only_feasible_paths(preset_run, grid):
@@ -100,7 +102,8 @@ def test_every_preset_returns_only_feasible_paths(preset_run, grid):
     assert ("waypoint" in js["fitness_optimum_reason"]) == waypoints
     assert js["start"] == list(grid.start_xy) and js["goal"] == list(grid.goal_xy)
     assert js["config"] == r.config.as_dict() and js["config"]["generations"] == 3
-    assert js["population_capacity"] == 8 and js["raw_optimum"] == r.raw_optimum
+    assert js["population_capacity"] == r.config["population.size"]  # per island
+    assert js["raw_optimum"] == r.raw_optimum
     for i, run in enumerate(js["runs"]):
         for key in ("angle_sum", "turns", "gap", "raw_gap", "fitness_gap"):
             want = r._column(key)[i] if key in ("angle_sum", "turns") else getattr(r, key)[i]
@@ -210,7 +213,7 @@ def test_stagnation_freezes_a_run_after_k_generations_without_improvement(grid):
         f = int(stop.convergence_generation[i])
         assert np.all(np.diff(best[:f]) > 0)
         for h in ("best", "mean", "std"):
-            upto = min(f, n_gen - 1) + 1  # two programs: the same runs, float sums aside
+            upto = min(f, n_gen - 1) + 1  # the same runs until the freeze
             np.testing.assert_allclose(stop.history[h][i, :upto], free.history[h][i, :upto],
                                        rtol=1e-6)
             if f < n_gen:
@@ -241,20 +244,21 @@ def test_a_sweep_point_equals_a_run_with_those_values(grid):
 
 
 def test_population_size_sweep_uses_the_active_mask(grid):
-    results = api.sweep("sga", grid, [{"population.size": s} for s in (4, 6, 8)],
+    # sizes up to sga's own 60: the sweep's capacity is the canonical program's population
+    results = api.sweep("sga", grid, [{"population.size": s} for s in (20, 40, 60)],
                         seeds=1, **SMALL)
-    assert [r.population for r in results] == [4, 6, 8]
+    assert [r.population for r in results] == [20, 40, 60]
     for r in results:
         assert r.success.all()
         assert r.history["best"].shape == (1, 3)
-    # an inactive slot never counts: 4 active individuals cannot have the history of 8
+    # an inactive slot never counts: 20 active individuals cannot have the history of 60
     assert not np.array_equal(results[0].history["mean"], results[2].history["mean"])
     # a point's runs are repeated bit for bit by run() with the sweep's capacity (the
-    # same 3-run program), which every result and its JSON record
-    assert {r.population_capacity for r in results} == {8}
-    again = api.run("sga", grid, seeds=[0, 1, 2], population_capacity=8,
-                    **{**SMALL, "population__size": 4})
-    assert again.population_capacity == 8 and again.to_json()["population_capacity"] == 8
+    # same 4-run program), which every result and its JSON record
+    assert {r.population_capacity for r in results} == {60}
+    again = api.run("sga", grid, seeds=[0, 1, 2], population_capacity=60,
+                    **{**SMALL, "population__size": 20})
+    assert again.population_capacity == 60 and again.to_json()["population_capacity"] == 60
     assert np.array_equal(again.cells[:1], results[0].cells)
     assert np.array_equal(again.history["mean"][:1], results[0].history["mean"])
     with pytest.raises(ParameterError, match="population_capacity 3 is below the largest "
@@ -524,7 +528,7 @@ def test_a_sweep_point_too_small_for_its_migrants_is_refused(grid):
 def test_compiled_programs_are_reused_across_maps_seeds_and_values(grid):
     api.run("sga", grid, seeds=[5, 6, 7], **SMALL)
     before = api.programs.compiled_programs.cache_info()
-    other = random_map(10, 10, 0.25, 11, corner_rule="free")
+    other = random_map(20, 20, 0.25, 11, corner_rule="free")  # the canonical map's shape
     r = api.run("sga", other, seeds=[7, 8, 9], crossover__probability=0.5, **SMALL)
     after = api.programs.compiled_programs.cache_info()
     assert after.misses == before.misses and after.hits == before.hits + 1
@@ -579,12 +583,12 @@ def test_unreachable_goal_is_a_no_path_result():
 def test_failed_seeds_are_missing_values_not_zeros():
     """A seed that found no path has NaN length, raw length, fitness and metrics, no
     path (None), a null fitness in the JSON and no part in the summary's statistics;
-    the seeds that found one are unaffected (two initial paths per seed, one attempt
-    each: most of the 8 seeds get none on gapp3)."""
+    the seeds that found one are unaffected (the canonical sga program, one attempt per
+    initial path and no fallback: the random walk reaches the goal in a few of 60 attempts
+    on gapp3, in none for seed 6)."""
     with warnings.catch_warnings():
         warnings.simplefilter("ignore", InitialisationWarning)
-        r = api.run("sga", "classic_ga_gapp3_20x20", seeds=8, population__size=2,
-                    generations=3, init__max_tries=1, init__fallback="none")
+        r = canonical.run("sga", [6, 7, 8], init__max_tries=1, init__fallback="none")
     ok = r.success
     assert ok.any() and (~ok).any(), ok
     for values in (r.length, r.raw_length, r.fitness, *r.metrics.values()):
@@ -597,7 +601,7 @@ def test_failed_seeds_are_missing_values_not_zeros():
                for run, good in zip(doc["runs"], ok) if not good)
     json.dumps(doc, allow_nan=False)
     text = r.summary()
-    assert f"success {int(ok.sum())}/8" in text and "nan" not in text
+    assert f"success {int(ok.sum())}/3" in text and "nan" not in text
 
 
 def test_start_equal_to_goal_has_gap_zero_without_warnings(grid):
@@ -656,11 +660,11 @@ def test_a_capacity_below_the_shortest_path_is_named_as_the_cause(grid):
 
 
 def test_unfilled_initial_populations_are_warned_about_naming_the_budget(grid):
-    # one attempt per individual on average: the random walk fills 2 of 8 slots here
+    # one attempt per individual on average: the random walk fills 1-3 of 60 slots here
+    # (the canonical sga program: init.max_tries and init.fallback are dynamic)
     with warnings.catch_warnings(record=True) as caught:
         warnings.simplefilter("always")
-        r = api.run("sga", grid, seeds=3, population__size=8, generations=3,
-                    init__max_tries=1, init__fallback="none")
+        r = api.run("sga", grid, seeds=3, init__max_tries=1, init__fallback="none", **SMALL)
     short = (r.init_unfilled > 0) & (r.init_success_rate > 0)
     assert short.any() and r.success.all() and (r.init_fallback == 0).all()
     warned = [w for w in caught if issubclass(w.category, InitialisationWarning)]
@@ -668,7 +672,7 @@ def test_unfilled_initial_populations_are_warned_about_naming_the_budget(grid):
     assert warned[0].filename == __file__  # points at the caller's line, not into jaxga
     text = str(warned[0].message)
     assert text.startswith(f"{int(short.sum())} of 3 runs started with ")
-    assert "of their 8 initial individuals copied" in text
+    assert f"of their {r.population} initial individuals copied" in text and r.population == 60
     assert "'random_walk'" in text and "init.max_tries = 1 " in text
     # the copies are valid individuals: every returned path is still feasible
     blocked = grid.blocked_np()
@@ -682,18 +686,17 @@ def test_the_fallback_fills_exactly_the_slots_the_initialiser_left_empty(grid):
     """The same runs with the fallback on (the default): no copies, no warning; the
     fallback made as many individuals as the initialiser left empty, and the result, its
     summary and its JSON say so."""
-    off = api.run("sga", grid, seeds=3, population__size=8, generations=3,
-                  init__max_tries=1, init__fallback="none")
+    off = api.run("sga", grid, seeds=3, init__max_tries=1, init__fallback="none", **SMALL)
     with warnings.catch_warnings():
         warnings.simplefilter("error", InitialisationWarning)
-        on = api.run("sga", grid, seeds=3, population__size=8, generations=3,
-                     init__max_tries=1)
+        on = api.run("sga", grid, seeds=3, init__max_tries=1, **SMALL)
     np.testing.assert_array_equal(on.init_fallback, off.init_unfilled)
     assert (on.init_unfilled == 0).all() and on.init_fallback.sum() > 0
     np.testing.assert_array_equal(on.init_success_rate, off.init_success_rate)
     made = on.init_fallback[on.init_fallback > 0]
     count = str(made.min()) if made.min() == made.max() else f"{made.min()}-{made.max()}"
-    assert (f"the fallback field_walk made {count} of 8 initial individuals in "
+    assert on.population == 60
+    assert (f"the fallback field_walk made {count} of 60 initial individuals in "
             f"{int((on.init_fallback > 0).sum())} of 3 seeds") in on.summary()
     runs = on.to_json()["runs"]
     assert [run["init_fallback"] for run in runs] == on.init_fallback.tolist()
@@ -806,8 +809,11 @@ def test_map_runs_in_blocks_equals_one_vmap():
     ("sga", {"crossover__adaptive": True}, ["crossover.pc_low and crossover.pc_high"]),
     ("agacd", {"fitness__importance_ratios": [1.0]}, ["2 entries", "[1.0]"]),
     ("agacd", {"fitness__importance_ratios": [1.2, 1.4, 2.0]}, ["2 entries"]),
-    ("mpmga", {"islands__migrants": 9}, ["islands.migrants = 9", "needs 18", "has 8"]),
-    ("mpmga", {"islands__migrants": 5}, ["needs 10 individuals", "'mpmga' topology"]),
+    # islands of 8 (refused before anything compiles: no program of their own)
+    ("mpmga", {"islands__migrants": 9, "population__size": 8},
+     ["islands.migrants = 9", "needs 18", "has 8"]),
+    ("mpmga", {"islands__migrants": 5, "population__size": 8},
+     ["needs 10 individuals", "'mpmga' topology"]),
     ("mpmga", {"islands__count": 2}, ["needs islands.count = 3"]),
     ("iga_zhang", {"fitness__v_t": 0.0}, ["fitness.v_t", "> 0"]),
     ("mpmga", {"fitness__alpha": 0.0, "fitness__beta": 0.0}, ["same fitness"]),
@@ -874,11 +880,11 @@ def test_seeds_outside_32_bits_are_refused(grid, seeds, words):
 def test_a_call_whose_results_cannot_fit_in_memory_is_refused(grid, monkeypatch):
     """A clear error before anything is allocated, instead of the process being killed."""
     monkeypatch.setattr(api.memory, "physical_memory", lambda: 2**30)  # a 1 GiB machine
-    # per run: 3 x 3 float32 history values, 2 int32 paths of 4 * (10 + 10) = 80 cells,
-    # 256 bytes and twice 8 x 80 int32 population cells: 6,052 bytes, so 10**5 runs need
-    # 0.56 GiB, more than half of 1 GiB
+    # per run: 3 x 3 float32 history values, 2 int32 paths of 4 * (20 + 20) = 160 cells,
+    # 256 bytes and twice 60 x 160 int32 population cells: 78,372 bytes, so 10**4 runs
+    # need 0.73 GiB, more than half of 1 GiB
     with pytest.raises(ParameterError, match="GiB for their results and populations"):
-        api.run("sga", grid, seeds=10**5, **SMALL)
+        api.run("sga", grid, seeds=10**4, **SMALL)
     assert api.run("sga", grid, seeds=3, **SMALL).success.all()  # small calls still run
 
 
@@ -891,9 +897,9 @@ def test_integer_types_are_accepted_for_seeds_generations_and_endpoints(grid):
     """numpy and JAX integers, arrays of seeds and one-pass iterables keep working."""
     import jax.numpy as jnp
 
-    # three runs each: the module's 3-run program (``preset_run``), compiled once
+    # three runs each: the module's canonical sga program (``preset_run``), compiled once
     r = api.run("sga", grid.replace(start=iter(grid.start_xy)), seeds=np.arange(3),
-                generations=jnp.int32(3), population__size=8, init__max_tries=40)
+                generations=jnp.int32(3))
     assert r.generations == 3 and list(r.seeds) == [0, 1, 2] and r.success.all()
     # a 0-d integer array is a count: the same three runs
     again = api.run("sga", grid, seeds=jnp.int32(3), **SMALL)
@@ -902,9 +908,9 @@ def test_integer_types_are_accepted_for_seeds_generations_and_endpoints(grid):
                     **SMALL)
     assert list(mixed.seeds) == [0, 1, 2] and np.array_equal(mixed.cells, r.cells)
     # numpy scalars as configuration values (a sweep built with numpy gives them)
-    same = api.run("sga", grid, seeds=3, population__size=np.int64(8), generations=3,
+    same = api.run("sga", grid, seeds=3, population__size=np.int64(60), generations=3,
                    init__max_tries=np.int32(40), crossover__probability=np.float64(0.5))
-    assert same.config["population.size"] == 8 and same.success.all()
+    assert same.config["population.size"] == 60 and same.success.all()
     assert type(same.config["population.size"]) is int
 
 
@@ -924,8 +930,8 @@ def test_sweep_capacity_must_be_an_integer_and_no_path_sweeps_check_memory(grid,
     assert api.run("sga", walled, seeds=10**6, **SMALL).seeds.size == 10**6  # 0.24 GiB
     assert "unreachable" in api.run("sga", walled, seeds=2, **SMALL).reason
     # a no-path result records the capacity asked for, as a run does
-    assert api.run("sga", walled, seeds=2, population_capacity=20,
-                   **SMALL).population_capacity == 20
+    assert api.run("sga", walled, seeds=2, population_capacity=80,
+                   **SMALL).population_capacity == 80
     assert [r.population_capacity for r in api.sweep(
         "sga", walled, [{"population.size": 4}, {"population.size": 6}], 1, **SMALL)] == [6, 6]
 
@@ -997,12 +1003,9 @@ def test_the_field_repair_reaches_the_operators_that_repair(grid):
     """``repair.fallback = "field"`` in iga_zhu (column crossover, range mutation): the
     same runs fail fewer crossovers and mutations, every path stays feasible; in sga
     (no such operator) the key is refused as having no effect."""
-    from jaxga.maps import rooms_map
-
-    rooms = rooms_map(12, 12, 1, room_size=3, corner_rule="free")
-    kw = dict(population__size=8, generations=6)
-    plain = api.run("iga_zhu", rooms, seeds=3, **kw)
-    repaired = api.run("iga_zhu", rooms, seeds=3, repair__fallback="field", **kw)
+    kw = dict(generations=6)  # the canonical iga_zhu program; the repair is compiled in
+    plain = api.run("iga_zhu", grid, seeds=3, **kw)
+    repaired = api.run("iga_zhu", grid, seeds=3, repair__fallback="field", **kw)
     assert repaired.success.all()
     # crossovers: none fails; mutations: only Zhu's one-point ones (no candidate cell)
     assert plain.failures[:, 0].sum() > 0 and repaired.failures[:, 0].sum() == 0
