@@ -1,4 +1,9 @@
-"""Mutation operators: properties under jit + vmap, exact cases, statistics."""
+"""Mutation operators: properties under jit + vmap, exact cases, statistics.
+
+Every jitted function is built once, at module level, and called with fixed shapes:
+``SIZE x SIZE`` maps and ``P`` paths of capacity ``CAP`` (hand-made maps are embedded in
+such maps, hand-made paths tiled to ``P``), so each operator compiles once per corner
+rule. Inputs are built and expected values computed in NumPy (no eager ``jnp``)."""
 
 from __future__ import annotations
 
@@ -20,7 +25,6 @@ from jaxga.core.paths import (
     is_continuous,
     is_feasible,
     is_loop_free,
-    pad,
     population_map,
 )
 from jaxga.maps import random_map
@@ -30,7 +34,7 @@ from tests.plain_lifts import either, mutation_population, with_probability
 from tests.strategies import CAP, SIZE, grids_and_parents, random_parents
 
 P = 8
-T_FIXED = jnp.float32(0.01)
+T_FIXED = np.float32(0.01)
 
 # name -> (operator, extra args, in_axes of the extras, kind of output path)
 OPS = {
@@ -49,7 +53,7 @@ OPS = {
     "cut_corners_knight": (functools.partial(M.cut_corners, knight=True), (), (), "waypoint"),
     "delete_corner": (M.delete_corner, (), (), "waypoint"),
     "with_probability": (
-        with_probability(M.replace_point), (jnp.float32(0.5),), (None,), "continuous",
+        with_probability(M.replace_point), (np.float32(0.5),), (None,), "continuous",
     ),
 }
 
@@ -65,34 +69,48 @@ def _flagged(op):
     return wrapped
 
 
-def _runner(op, in_axes_extra=()):
-    """jit(over_individuals(op)) returning ``(cells, length, failed, n_failed)``."""
+def _lifted(op, in_axes_extra=()):
+    """over_individuals(op) returning ``(cells, length, failed, n_failed)`` (not jitted)."""
     lifted = over_individuals(_flagged(op), in_axes_extra=in_axes_extra)
 
     def run(key, grid, pop, *extra):
         out, n_failed = lifted(key, grid, pop, *extra)
         return out.cells[:, :-1], out.length, out.cells[:, -1].astype(bool), n_failed
 
-    return jax.jit(run)
+    return run
+
+
+def _runner(op, in_axes_extra=()):
+    """jit(over_individuals(op)) returning ``(cells, length, failed, n_failed)``."""
+    return jax.jit(_lifted(op, in_axes_extra))
 
 
 RUN = {name: _runner(op, axes) for name, (op, _, axes, _) in OPS.items()}
 
-_checks = jax.jit(
-    lambda g, c, n: (
+
+@jax.jit
+def _checks(g, c, n):
+    """The path checks of :mod:`jaxga.core.paths`, and per segment whether it passes AGACD's
+    linear trial (segments past a path's end count as passing): one program per rule."""
+    lt_ok = jax.vmap(
+        lambda c, n: jax.vmap(linear_trial, in_axes=(None, 0, 0))(g, c[:-1], c[1:])
+        | (jnp.arange(c.shape[0] - 1) >= n - 1)
+    )(c, n)
+    return (
         population_map(has_endpoints)(g, c, n),
         population_map(is_continuous)(g, c, n),
         population_map(is_feasible)(g, c, n),
         jax.vmap(is_loop_free)(c, n),
+        lt_ok,
     )
-)
-_lt_segments = jax.jit(
-    jax.vmap(
-        lambda g, c, n: jax.vmap(linear_trial, in_axes=(None, 0, 0))(g, c[:-1], c[1:])
-        | (jnp.arange(c.shape[0] - 1) >= n - 1),
-        in_axes=(None, 0, 0),
-    )
-)
+
+
+def _assert_padded(c, n) -> None:
+    """Every path is padded as :func:`jaxga.core.paths.pad` pads: each position at or
+    beyond its length repeats its last cell (NumPy)."""
+    last = c[np.arange(len(n)), np.clip(n - 1, 0, c.shape[1] - 1)]
+    np.testing.assert_array_equal(c, np.where(np.arange(c.shape[1]) < n[:, None], c,
+                                              last[:, None]))
 
 
 def check_outputs(grid, parents: Population, c, n, failed, n_failed, kind):
@@ -106,8 +124,8 @@ def check_outputs(grid, parents: Population, c, n, failed, n_failed, kind):
     np.testing.assert_array_equal(n[failed], pn[failed])
     # Every output: within capacity, padded, endpoints, loop-free, continuous/feasible.
     assert ((n >= 1) & (n <= c.shape[1])).all()
-    np.testing.assert_array_equal(np.asarray(jax.vmap(pad)(c, n)), c)
-    ends, cont, feas, loop_free = (np.asarray(v) for v in _checks(grid, c, n))
+    _assert_padded(c, n)
+    ends, cont, feas, loop_free, bad_out = (np.asarray(v) for v in _checks(grid, c, n))
     assert ends.all() and loop_free.all()
     if kind == "continuous":
         assert cont.all()
@@ -116,8 +134,7 @@ def check_outputs(grid, parents: Population, c, n, failed, n_failed, kind):
     else:
         # AGACD's linear trial is asymmetric and may reject a legal anti-diagonal step of
         # the parent: every segment failing it must be a segment the parent already had.
-        bad_out = np.asarray(_lt_segments(grid, c, n))
-        bad_in = np.asarray(_lt_segments(grid, pc, pn))
+        bad_in = np.asarray(_checks(grid, pc, pn)[4])
         for i in range(len(n)):
             old = {(a, b) for a, b, ok in zip(pc[i, :-1], pc[i, 1:], bad_in[i]) if not ok}
             new = {(a, b) for a, b, ok in zip(c[i, :-1], c[i, 1:], bad_out[i]) if not ok}
@@ -132,7 +149,7 @@ def _property(name):
     @given(grids_and_parents(n=P))
     def test(gp):
         grid, parents = gp
-        key = jax.random.PRNGKey(int(parents.cells.sum()) % 1000)
+        key = jax.random.PRNGKey(int(np.asarray(parents.cells).sum()) % 1000)
         c, n, failed, n_failed = RUN[name](key, grid, parents, *extra)
         check_outputs(grid, parents, c, n, failed, n_failed, kind)
 
@@ -187,28 +204,29 @@ def test_full_capacity_overflow_fails_cleanly_and_is_counted():
 
 
 def _short_parents(grid, n, seed):
-    """``n`` parents of at most TIGHT nodes, at capacity CAP."""
+    """``n`` parents of at most TIGHT nodes, at capacity CAP (NumPy arrays), drawn P at a
+    time (the parents' program of the property tests)."""
     cells, length = [], []
-    for attempt in range(20):
-        pop = random_parents(grid, 4 * n, 100 * seed + attempt)
+    for attempt in range(80):
+        pop = random_parents(grid, P, 100 * seed + attempt)
         sel = np.flatnonzero(np.asarray(pop.length) <= TIGHT)
         cells += list(np.asarray(pop.cells)[sel])
         length += list(np.asarray(pop.length)[sel])
         if len(cells) >= n:
-            return Population(jnp.asarray(np.stack(cells[:n])), jnp.asarray(length[:n]))
+            return Population(np.stack(cells[:n]), np.asarray(length[:n], np.int32))
     raise RuntimeError("no short parents")
 
 
 TIGHT = 15
+# The same connection node table (CAP) as the wide run: identical randomness.
+_RUN_TIGHT = _runner(functools.partial(M.segment_sa, fitness_fn=objectives.mpmga,
+                                       seg_capacity=CAP), OPS["segment_sa"][2])
 
 
 def test_segment_sa_tight_capacity_equals_wide_where_it_fits():
     """segment_sa's randomness does not depend on the capacity: at a tight capacity it
     must reproduce the wide result where it succeeds, and fail (counted) on overflow."""
-    _, extra, axes, kind = OPS["segment_sa"]
-    # The same connection node table (CAP) as the wide run: identical randomness.
-    op = functools.partial(M.segment_sa, fitness_fn=objectives.mpmga, seg_capacity=CAP)
-    run_tight = _runner(op, axes)
+    _, extra, _, kind = OPS["segment_sa"]
     overflow_total = 0
     for seed in range(4):
         grid = random_map(SIZE, SIZE, 0.3, 200 + seed, corner_rule="free")
@@ -216,7 +234,7 @@ def test_segment_sa_tight_capacity_equals_wide_where_it_fits():
         tight = Population(wide.cells[:, :TIGHT], wide.length)
         for k in range(3):
             key = jax.random.PRNGKey(10 * seed + k)
-            c, n, failed, n_failed = run_tight(key, grid, tight, *extra)
+            c, n, failed, n_failed = _RUN_TIGHT(key, grid, tight, *extra)
             check_outputs(grid, tight, c, n, failed, n_failed, kind)
             cw, nw, fw, _ = RUN["segment_sa"](key, grid, wide, *extra)
             c, n, failed = np.asarray(c), np.asarray(n), np.asarray(failed)
@@ -252,9 +270,11 @@ def _grid(small, start, goal, rule="free"):
 
 
 def _population(grid, paths):
+    """The paths, given as ``(x, y)`` lists, repeated to P paths of capacity CAP (NumPy)."""
     w = grid.width
-    rows = [[y * w + x for x, y in xy] for xy in paths]
-    return Population.from_paths((rows * P)[:P], capacity=CAP)
+    rows = [[y * w + x for x, y in xy] for xy in (paths * P)[:P]]
+    cells = np.array([r + [r[-1]] * (CAP - len(r)) for r in rows], np.int32)
+    return Population(cells, np.array([len(r) for r in rows], np.int32))
 
 
 def _xy(grid, cells, n):
@@ -266,7 +286,8 @@ def _apply(name, grid, xy, key=0):
     """The operator on one hand-made path (row 0 of a tiled population)."""
     pop = _population(grid, [xy])
     _, extra, _, _ = OPS[name]
-    c, n, failed, _ = RUN[name](jax.random.PRNGKey(key), grid, pop, *extra)
+    c, n, failed, _ = (np.asarray(v) for v in RUN[name](jax.random.PRNGKey(key), grid, pop,
+                                                         *extra))
     return list(_xy(grid, c[0], n[0])), bool(failed[0])
 
 
@@ -277,7 +298,8 @@ def _outcomes(name, grid, xy, n_calls):
     counts: dict[tuple, int] = {}
     n_failed = 0
     for s in range(n_calls):
-        c, n, failed, nf = RUN[name](jax.random.PRNGKey(1000 + s), grid, pop, *extra)
+        c, n, failed, nf = (np.asarray(v) for v in RUN[name](jax.random.PRNGKey(1000 + s),
+                                                             grid, pop, *extra))
         if s < 3:
             check_outputs(grid, pop, c, n, failed, nf, kind)
         n_failed += int(nf)
@@ -349,6 +371,11 @@ def test_corner_cut_respects_corner_rule_and_zhang_side_cells():
     del grid
 
 
+_KNIGHT_AND_CLEAR = jax.jit(lambda g, a, b: (
+    jax.vmap(M._knight_clear, in_axes=(None, 0, 0))(g, a, b),
+    jax.vmap(clear, in_axes=(None, 0, 0))(g, a, b)))
+
+
 def test_knight_clear_equals_exact_line_of_sight():
     """The 4-cell knight test is geometry.clear for every knight move on random maps."""
     rng = np.random.default_rng(0)
@@ -359,9 +386,9 @@ def test_knight_clear_equals_exact_line_of_sight():
         b = a + np.array(d * 36)
         inside = ((b >= 0) & (b < 6)).all(1)
         a, b = a[inside], b[inside]
-        ia, ib = jnp.asarray(a[:, 1] * 6 + a[:, 0]), jnp.asarray(b[:, 1] * 6 + b[:, 0])
-        got = jax.vmap(M._knight_clear, in_axes=(None, 0, 0))(grid, ia, ib)
-        want = jax.vmap(clear, in_axes=(None, 0, 0))(grid, ia, ib)
+        ia = (a[:, 1] * 6 + a[:, 0]).astype(np.int32)
+        ib = (b[:, 1] * 6 + b[:, 0]).astype(np.int32)
+        got, want = _KNIGHT_AND_CLEAR(grid, ia, ib)
         np.testing.assert_array_equal(np.asarray(got), np.asarray(want))
 
 
@@ -413,6 +440,11 @@ def test_point_checked_uniform_and_rejects_blocked_segments():
     assert stats.binomtest(n_failed, 120 * P, 16 / 18).pvalue > 1e-3
 
 
+_RADII = (1, 9, 10_000)
+_RUN_RADII = jax.jit(lambda key, grid, pop: {
+    r: _lifted(functools.partial(M.point_checked, radius=r))(key, grid, pop) for r in _RADII})
+
+
 def test_point_checked_radius_beyond_the_map_is_the_radius_that_reaches_every_cell():
     """On a 10 x 10 map radius 9 already reaches every cell: radius 10,000 is clamped to
     it (instead of building a (2r + 1)^2 table of 400 million offsets per node).
@@ -423,17 +455,16 @@ def test_point_checked_radius_beyond_the_map_is_the_radius_that_reaches_every_ce
     key = jax.random.PRNGKey(11)
     # the same program: no larger table is built (a larger one would give the same
     # mutants, since cells off the map are never candidates)
+    cells, length = np.asarray(parents.cells)[0], np.asarray(parents.length)[0]
     programs = {r: str(jax.make_jaxpr(functools.partial(M.point_checked, radius=r))(
-        key, grid, parents.cells[0], parents.length[0])) for r in (9, 10_000)}
+        key, grid, cells, length)) for r in (9, 10_000)}
     assert programs[9] == programs[10_000]
-    outs = {r: _runner(functools.partial(M.point_checked, radius=r))(
-        key, grid, parents) for r in (9, 10_000)}
+    outs = _RUN_RADII(key, grid, parents)  # radii 1, 9 and 10,000 in one program
     for a, b in zip(outs[9], outs[10_000]):
         np.testing.assert_array_equal(np.asarray(a), np.asarray(b))
     check_outputs(grid, parents, *outs[10_000], "waypoint")
     # the clamp does not hide the radius: radius 1 moves a node by at most one cell
-    near = _runner(functools.partial(M.point_checked, radius=1))(key, grid, parents)
-    c, n, failed = (np.asarray(v) for v in near[:3])
+    c, n, failed = (np.asarray(v) for v in outs[1][:3])
     pc = np.asarray(parents.cells)
     moved = c != pc
     assert moved.any()
@@ -461,22 +492,33 @@ def _zigzag():
     return [(x // 2, x % 2) for x in range(2 * SIZE)]
 
 
+_DELTA = 0.05
+_ZIGZAG = _population(Grid.create(np.zeros((SIZE, SIZE), bool), corner_rule="free"), [_zigzag()])
+
+
+def _worse(g, c, n):
+    """Fitness 1 on the zigzag, ``1 - _DELTA`` on any other path."""
+    zc, zn = _ZIGZAG.cells[0], _ZIGZAG.length[0]
+    return jnp.where(jnp.all(c == zc) & (n == zn), 1.0, 1.0 - _DELTA)
+
+
+_RUN_WORSE = _runner(functools.partial(M.segment_sa, fitness_fn=_worse), (None,))
+
+
 def test_segment_sa_acceptance_rate_matches_eq_16():
     """MPMGA eq. 15-16 at fixed T: a worse mutant is accepted w.p. 1 / (1 + e^{(f_old -
     f_new)/T}). The fitness gives every changed path exactly f_old - delta, and on the
     zigzag every mutant is changed (median reconnection is strictly shorter)."""
     grid = Grid.create(np.zeros((SIZE, SIZE), bool), start=(0, 0), goal=(9, 1), corner_rule="free")
     pop = _population(grid, [_zigzag()])
-    pc, pn = pop.cells[0], pop.length[0]
-    delta = 0.05
-    worse = lambda g, c, n: jnp.where(jnp.all(c == pc) & (n == pn), 1.0, 1.0 - delta)  # noqa: E731
-    run = _runner(functools.partial(M.segment_sa, fitness_fn=worse), (None,))
+    pn = int(pop.length[0])
+    delta = _DELTA
     for temp in (0.05, 0.02):
         accepted = trials = 0
         for s in range(250):
-            c, n, failed, nf = run(jax.random.PRNGKey(s), grid, pop, jnp.float32(temp))
+            c, n, failed, nf = _RUN_WORSE(jax.random.PRNGKey(s), grid, pop, np.float32(temp))
             assert int(nf) == 0
-            accepted += int((np.asarray(n) != int(pn)).sum())
+            accepted += int((np.asarray(n) != pn).sum())
             trials += P
         p = 1.0 / (1.0 + math.exp(delta / temp))
         assert stats.binomtest(accepted, trials, p).pvalue > 1e-3, (temp, accepted, p)
@@ -484,24 +526,29 @@ def test_segment_sa_acceptance_rate_matches_eq_16():
         assert stats.binomtest(accepted, trials, 1 - p).pvalue < 1e-6
 
 
+_FITNESS = jax.jit(population_map(objectives.mpmga))
+
+
 def test_segment_sa_zero_temperature_only_improves():
     grid = random_map(SIZE, SIZE, 0.1, 4, corner_rule="free")
     parents = random_parents(grid, P, 1)
-    fit = jax.jit(population_map(objectives.mpmga))
-    f0 = np.asarray(fit(grid, parents.cells, parents.length))
+    f0 = np.asarray(_FITNESS(grid, parents.cells, parents.length))
     changed = 0
     for s in range(10):
-        c, n, failed, _ = RUN["segment_sa"](jax.random.PRNGKey(s), grid, parents, jnp.float32(0))
-        f1 = np.asarray(fit(grid, c, n))
+        c, n, failed, _ = RUN["segment_sa"](jax.random.PRNGKey(s), grid, parents, np.float32(0))
+        f1 = np.asarray(_FITNESS(grid, c, n))
         assert (f1 >= f0).all()
         changed += int(np.any(np.asarray(c) != np.asarray(parents.cells), axis=1).sum())
     assert changed > 0
 
 
 # ------------------------------------------------------------------ probabilities
+_AMP = jax.jit(M.adaptive_mutation_probability)
+
+
 def test_adaptive_mutation_probability_exact():
     """AGACD eq. 28-29 (with jaxga's min(1, .)) on hand-picked inputs."""
-    amp = jax.jit(M.adaptive_mutation_probability)
+    amp = _AMP
     lo, hi = 0.15, 0.3
     f = np.array([1.0, 0.75, 0.5, 0.2], np.float32)  # f_max 1, f_avg 0.5
     for t, T in [(0, 100), (50, 100), (100, 100)]:
@@ -526,18 +573,33 @@ def _marker(key, grid, cells, length):
     return cells, length, jnp.ones((), bool)
 
 
+@jax.jit
+def _rates(grid, pop, fitness, p_scalar, p_gated):
+    """The rate tests' four applications of :func:`_marker` in one program: per
+    individual with ``pm`` from eq. 28-29 (one key each, vmapped), through
+    over_individuals at the scalar ``p_scalar``, and through the gated population helper
+    at the scalar ``p_gated`` and at ``pm``."""
+    pm = M.adaptive_mutation_probability(fitness, fitness.max(), fitness.mean(), 20, 100)
+    keys = jax.random.split(jax.random.PRNGKey(3), pop.size)
+    op = jax.vmap(with_probability(_marker), in_axes=(0, None, 0, 0, 0))
+    _, _, applied = op(keys, grid, pop.cells, pop.length, pm)
+    _, failed_scalar = over_individuals(with_probability(_marker), in_axes_extra=(None,))(
+        jax.random.PRNGKey(4), grid, pop, p_scalar)
+    lifted = mutation_population(_marker)
+    _, failed_gated = lifted(jax.random.PRNGKey(5), grid, pop, p_gated)
+    _, failed_gated_pm = lifted(jax.random.PRNGKey(6), grid, pop, pm)
+    return pm, applied, failed_scalar, failed_gated, failed_gated_pm
+
+
 def test_with_probability_empirical_rate():
     """Per-individual pm from eq. 28-29: the applied fraction per group is binomial."""
     grid = Grid.create(np.zeros((4, 4), bool), corner_rule="free")
     n = 6000
     fitness = np.where(np.arange(n) % 3 == 0, 1.0, np.where(np.arange(n) % 3 == 1, 0.8, 0.1))
-    fitness = jnp.asarray(fitness, jnp.float32)
-    pm = M.adaptive_mutation_probability(fitness, fitness.max(), fitness.mean(), 20, 100)
-    pop = Population(jnp.zeros((n, 4), jnp.int32), jnp.ones((n,), jnp.int32))
-    keys = jax.random.split(jax.random.PRNGKey(3), n)
-    op = jax.jit(jax.vmap(with_probability(_marker), in_axes=(0, None, 0, 0, 0)))
-    _, _, applied = op(keys, grid, pop.cells, pop.length, pm)
-    applied, pm = np.asarray(applied), np.asarray(pm)
+    fitness = fitness.astype(np.float32)
+    pop = Population(np.zeros((n, 4), np.int32), np.ones((n,), np.int32))
+    pm, applied, failed_scalar, failed_gated, failed_gated_pm = (
+        np.asarray(v) for v in _rates(grid, pop, fitness, np.float32(0.2), np.float32(0.3)))
     for g in range(3):
         sel = np.arange(n) % 3 == g
         p = float(pm[sel][0])
@@ -546,43 +608,54 @@ def test_with_probability_empirical_rate():
             assert k == 0
         else:
             assert stats.binomtest(k, int(sel.sum()), p).pvalue > 1e-3, (g, k, p)
-    _, n_failed = jax.jit(over_individuals(with_probability(_marker), in_axes_extra=(None,)))(
-        jax.random.PRNGKey(4), grid, pop, jnp.float32(0.2)
-    )
-    assert stats.binomtest(int(n_failed), n, 0.2).pvalue > 1e-3
+    assert stats.binomtest(int(failed_scalar), n, 0.2).pvalue > 1e-3
     # The population helper: a scalar pm and a per-individual pm.
-    lifted = jax.jit(mutation_population(_marker))
-    _, n_failed = lifted(jax.random.PRNGKey(5), grid, pop, jnp.float32(0.3))
-    assert stats.binomtest(int(n_failed), n, 0.3).pvalue > 1e-3
-    _, n_failed = lifted(jax.random.PRNGKey(6), grid, pop, jnp.asarray(pm))
-    assert stats.binomtest(int(n_failed), n, float(pm.mean())).pvalue > 1e-3
+    assert stats.binomtest(int(failed_gated), n, 0.3).pvalue > 1e-3
+    assert stats.binomtest(int(failed_gated_pm), n, float(pm.mean())).pvalue > 1e-3
+
+
+@jax.jit
+def _split_and_either(grid, cells, length, use_a):
+    """split_half of 101 positions, of 10 positions for 400 keys, and
+    either(replace_point, _marker) with each flag of ``use_a``: one program."""
+    mask = M.split_half(jax.random.PRNGKey(0), 101)
+    keys = jax.random.split(jax.random.PRNGKey(1), 400)
+    masks = jax.vmap(M.split_half, in_axes=(0, None))(keys, 10)
+    op = either(M.replace_point, _marker)
+    return mask, masks, [op(jax.random.PRNGKey(0), grid, cells, length, u) for u in use_a]
 
 
 def test_either_and_split_half():
-    mask = np.asarray(M.split_half(jax.random.PRNGKey(0), 101))
-    assert mask.sum() == 50
-    keys = jax.random.split(jax.random.PRNGKey(1), 400)
-    masks = np.asarray(jax.vmap(M.split_half, in_axes=(0, None))(keys, 10))
-    assert stats.chisquare(masks.sum(0)).pvalue > 1e-3  # every position equally likely
     grid = Grid.create(np.zeros((4, 4), bool), start=(0, 0), goal=(2, 0), corner_rule="free")
-    cells = jnp.asarray([0, 1, 2, 2, 2, 2, 2, 2], jnp.int32)
-    op = jax.jit(either(M.replace_point, _marker))
-    c, n, f = op(jax.random.PRNGKey(0), grid, cells, jnp.int32(3), jnp.bool_(True))
-    assert np.asarray(c[:3]).tolist() == [0, 5, 2] and not bool(f)
-    c, n, f = op(jax.random.PRNGKey(0), grid, cells, jnp.int32(3), jnp.bool_(False))
-    assert np.asarray(c[:3]).tolist() == [0, 1, 2] and bool(f)
+    cells = np.asarray([0, 1, 2, 2, 2, 2, 2, 2], np.int32)
+    mask, masks, ((c, n, f), (c2, n2, f2)) = _split_and_either(
+        grid, cells, np.int32(3), np.array([True, False]))
+    assert np.asarray(mask).sum() == 50
+    masks = np.asarray(masks)
+    assert stats.chisquare(masks.sum(0)).pvalue > 1e-3  # every position equally likely
+    assert np.asarray(c)[:3].tolist() == [0, 5, 2] and not bool(f)
+    assert np.asarray(c2)[:3].tolist() == [0, 1, 2] and bool(f2)
+
+
+_X64_NAMES = ("replace_point", "cut_corners_knight", "point_checked", "segment_sa")
+
+
+@jax.jit
+def _x64_ops(grid, cells, length, extras):
+    """The operators of :data:`_X64_NAMES` on one path (their extra arguments given), and
+    adaptive_mutation_probability on Python scalars: one program, run under x64."""
+    outs = [OPS[name][0](jax.random.PRNGKey(0), grid, cells, length, *extra)
+            for name, extra in zip(_X64_NAMES, extras)]
+    return outs, M.adaptive_mutation_probability(0.5, 1.0, 0.5, 3, 10)
 
 
 def test_x64_mode_keeps_dtypes():
     """Under JAX_ENABLE_X64 the operators still return int32 cells/lengths."""
     grid = random_map(SIZE, SIZE, 0.2, 1, corner_rule="strict")
-    parents = random_parents(grid, 2, 0)
+    parents = random_parents(grid, P, 0)
+    cells, length = np.asarray(parents.cells)[0], np.asarray(parents.length)[0]
     with jax.enable_x64(True):
-        for name in ("replace_point", "cut_corners_knight", "point_checked", "segment_sa"):
-            op, extra, _, _ = OPS[name]
-            c, n, f = jax.jit(op)(
-                jax.random.PRNGKey(0), grid, parents.cells[0], parents.length[0], *extra
-            )
-            assert c.dtype == jnp.int32 and n.dtype == jnp.int32 and f.dtype == jnp.bool_
-        pm = M.adaptive_mutation_probability(0.5, 1.0, 0.5, 3, 10)
+        outs, pm = _x64_ops(grid, cells, length, [OPS[name][1] for name in _X64_NAMES])
+        for name, (c, n, f) in zip(_X64_NAMES, outs):
+            assert c.dtype == jnp.int32 and n.dtype == jnp.int32 and f.dtype == jnp.bool_, name
         assert pm.dtype == jnp.float32
