@@ -45,6 +45,16 @@ def teleport(key, grid, cells, length):
     return cells.at[1].set(grid.n_cells - 1), length, jnp.bool_(False)
 
 
+@jax.jit
+def _path_facts(grid, cells, length):
+    """Per path of ``cells[N, L]``: whether it is continuous, :func:`short_and_straight`
+    of it as a feasible path, and its Euclidean length (one program for all runs)."""
+    def one(c, n):
+        return (is_continuous(grid, c, n), short_and_straight(grid, c, n, jnp.bool_(True)),
+                path_length(grid, c, n))
+    return jax.vmap(one)(cells, length)
+
+
 @pytest.fixture(scope="module", autouse=True)
 def _unregistered_afterwards():
     yield
@@ -71,40 +81,41 @@ def test_own_operators_run_in_a_preset_through_the_pure_core_and_jaxga_run():
                   objective=short_and_straight, mutation__probability=0.5)
     assert ga.config["mutation.method"] == "drop_point"
     assert ga.config["fitness.method"] == "short_and_straight"
-    keys = jax.vmap(jax.random.PRNGKey)(jnp.arange(3, dtype=jnp.uint32))
-    out = jax.jit(jax.vmap(ga.run, (0, None)))(keys, ga.default_params)
+    runs = jax.vmap(lambda s, p: ga.run(jax.random.PRNGKey(s), p), (0, None))
+    out = jax.jit(runs)(np.arange(3, dtype=np.uint32), ga.default_params)  # keys inside
     ref = jaxga.run("sga", MAP, seeds=3, generations=10, mutation=drop_point,
                     objective=short_and_straight, mutation__probability=0.5)
     np.testing.assert_array_equal(np.asarray(out["fitness"]), ref.fitness)
     assert ref.success.all()
+    continuous, expected, length = (np.asarray(x) for x in _path_facts(
+        ga.grid, np.asarray(ref.raw_cells), np.asarray(ref.raw_n_cells, np.int32)))
     for i in range(3):
-        n = int(ref.raw_n_cells[i])
-        cells = jnp.asarray(ref.raw_cells[i])
-        assert bool(is_continuous(ga.grid, cells, n))
-        expected = short_and_straight(ga.grid, cells, n, jnp.bool_(True))
-        assert float(ref.fitness[i]) == pytest.approx(float(expected), rel=1e-6)
-        assert 1.0 / float(ref.fitness[i]) - 1.0 >= float(path_length(ga.grid, cells, n)) - 1e-3
+        assert bool(continuous[i])
+        assert float(ref.fitness[i]) == pytest.approx(float(expected[i]), rel=1e-6)
+        assert 1.0 / float(ref.fitness[i]) - 1.0 >= float(length[i]) - 1e-3
 
 
 def test_a_function_registered_again_under_its_name_is_traced_again():
     """A notebook cell run twice: the second function replaces the first, and a run uses
-    the new one, not a program compiled for the old."""
+    the new one, not a program compiled for the old. The first is the previous test's
+    configuration (its programs), the cell edited so that the mutation always fails; the
+    same seeds and parameters, so a run of the old program would equal the first."""
 
-    def mutate(key, grid, cells, length):
-        return cells, length, jnp.bool_(True)  # always fails: the parent is kept
+    def edited_cell():
+        def drop_point(key, grid, cells, length):  # the cell run again, edited
+            return cells, length, jnp.bool_(True)  # always fails: the parent is kept
+        return drop_point
 
-    first = jaxga.run("sga", MAP, seeds=2, generations=3, mutation=mutate)
-
-    def mutate(key, grid, cells, length):  # noqa: F811 - the cell run again, edited
-        return drop_point(key, grid, cells, length)
-
-    second = jaxga.run("sga", MAP, seeds=2, generations=3, mutation=mutate,
-                       mutation__probability=1.0)
+    run = dict(seeds=2, generations=3, objective=short_and_straight,
+               mutation__probability=1.0)
+    first = jaxga.run("sga", MAP, mutation=drop_point, **run)
+    second = jaxga.run("sga", MAP, mutation=edited_cell(), **run)
     try:
-        assert first.failures[:, 1].sum() > 0
-        assert second.failures[:, 1].sum() < first.failures[:, 1].sum()
+        assert registry.operator("mutation", "drop_point").fn is not drop_point
+        assert second.failures[:, 1].sum() > 0
+        assert second.failures[:, 1].sum() > first.failures[:, 1].sum()
     finally:
-        registry.unregister("mutation", "mutate")
+        registry.unregister("mutation", "drop_point")
 
 
 def test_jaxgas_own_operators_are_never_replaced():
