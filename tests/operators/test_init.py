@@ -2,16 +2,19 @@
 
 Maps have row y = 0 at the bottom and cells p = y * W + x (0-based), as in the papers.
 Every initialiser is run under ``jax.jit`` + ``jax.vmap``; each jitted function is built
-once at module level with fixed shapes.
+once at module level with fixed shapes, and computes every case of its map at once (no
+``jax.jit`` in a test body, no eager ``jnp``: inputs are NumPy).
 """
 
 from __future__ import annotations
 
+import contextlib
 import functools
 import os
 import subprocess
 import sys
 import textwrap
+import unittest.mock
 
 import jax
 import jax.numpy as jnp
@@ -26,6 +29,7 @@ from jaxga.config import registry
 from jaxga.maps import legal_moves, random_map
 from jaxga.operators import init as I
 from jaxga.operators.guide import with_guide
+from jaxga.operators.init import walks as init_walks
 from tests.plain_lifts import initialise
 from tests.strategies import CAP, SIZE, check_paths, grids
 
@@ -57,11 +61,35 @@ FIG3_CGA = {
 }
 
 
+FACTORS = {"paper": (3.0, 2.0), "cga": (1.0, 1.0)}
+
+
+@jax.jit
+def _table1(grid):
+    """On the Table 1 map: directional_probabilities of Figures 3a-3c under both factor
+    pairs, ``{fig: {name: (cells, prob)}}``, and the edge cases of
+    :func:`test_directional_probabilities_edge_cases`: one program."""
+    figs = {fig: {name: I.directional_probabilities(grid, cur, 24,
+                                                    jnp.array(visited, jnp.int32), factors)
+                  for name, factors in FACTORS.items()}
+            for fig, (cur, visited, _) in FIG3.items()}
+    mask = np.zeros(25, bool)
+    mask[[0, 1, 7]] = True
+    nbr, prob = I.directional_probabilities(grid, 18, 24)
+    _, none = I.directional_probabilities(grid, 9, 24, jnp.array([3, 4, 13, 14]))
+    edges = {
+        "adjacent": (nbr, prob, jnp.sum(prob)),
+        "no_candidate": jnp.sum(none),
+        "mask": I.directional_probabilities(grid, 12, 24, jnp.asarray(mask))[1],
+        "list": I.directional_probabilities(grid, 12, 24, jnp.array([0, 1, 7, -1, -1]))[1],
+        "mask2d": I.directional_probabilities(grid, 12, 24, jnp.asarray(mask.reshape(5, 5)))[1],
+    }
+    return figs, edges
+
+
 def _probs(fig, factors=(3.0, 2.0)):
-    cur, visited, _ = FIG3[fig]
-    nbr, prob = I.directional_probabilities(
-        table1_grid(), cur, 24, jnp.array(visited, jnp.int32), factors
-    )
+    name = next(k for k, v in FACTORS.items() if v == factors)
+    nbr, prob = _table1(table1_grid())[0][fig][name]
     return {int(c): float(q) for c, q in zip(np.asarray(nbr), np.asarray(prob)) if q > 0}
 
 
@@ -91,42 +119,51 @@ def test_zhu_table1_cga_column(fig):
 
 def test_directional_probabilities_edge_cases():
     grid = table1_grid()
+    edges = _table1(grid)[1]  # the calls, in _table1
     # Target adjacent and legal: the walk steps onto it with probability 1.
-    nbr, prob = I.directional_probabilities(grid, 18, 24)
+    nbr, prob, total = edges["adjacent"]
     assert dict(zip(np.asarray(nbr).tolist(), np.asarray(prob).tolist()))[24] == 1.0
-    assert float(jnp.sum(prob)) == 1.0
+    assert float(total) == 1.0
     # No candidate: all zero. Cell 9 = (4, 1): neighbours 3, 4, 8 (blocked), 13, 14.
-    _, prob = I.directional_probabilities(grid, 9, 24, jnp.array([3, 4, 13, 14]))
-    assert float(jnp.sum(prob)) == 0.0
+    assert float(edges["no_candidate"]) == 0.0
     # A bool mask and a cell list are the same exclusion.
-    mask = np.zeros(25, bool)
-    mask[[0, 1, 7]] = True
-    a = I.directional_probabilities(grid, 12, 24, jnp.asarray(mask))[1]
-    b = I.directional_probabilities(grid, 12, 24, jnp.array([0, 1, 7, -1, -1]))[1]
-    c = I.directional_probabilities(grid, 12, 24, jnp.asarray(mask.reshape(5, 5)))[1]
+    a, b, c = edges["mask"], edges["list"], edges["mask2d"]
     np.testing.assert_array_equal(np.asarray(a), np.asarray(b))
     np.testing.assert_array_equal(np.asarray(a), np.asarray(c))
-    with pytest.raises(ParameterError):
-        I.exclusion_mask(grid, jnp.zeros(7, bool))
+    with pytest.raises(ParameterError):  # raised while tracing: nothing compiled
+        jax.eval_shape(I.exclusion_mask, grid, np.zeros(7, bool))
 
 
 # ------------------------------------------------------- step distributions
 N_DRAWS = 20000
 
 
-@functools.partial(jax.jit, static_argnames=("kind",))
-def _first_steps(keys, grid, source, target, exclude, kind):
-    """The first move of many walks (capacity 2 = one step)."""
-    if kind == "directional":
-        f = lambda k: I.directional_walk(k, grid, source, target, 2, exclude)  # noqa: E731
-    elif kind == "cga":
-        f = lambda k: I.directional_walk(k, grid, source, target, 2, exclude, (1.0, 1.0))  # noqa: E731
-    elif kind == "uniform":
-        f = lambda k: I.uniform_walk(k, grid, source, target, 2, exclude)  # noqa: E731
-    else:
-        f = lambda k: I.greedy_walk(k, grid, source, target, 2, max_steps=1)  # noqa: E731
-    cells, length, _ = jax.vmap(f)(keys)
-    return cells[:, 1], length
+TABLE1_WALKS = ("directional", "cga", "uniform")
+EXCLUDED = 4
+"""The excluded cells of the step tests, padded with -1 to this many (ignored entries)."""
+
+
+@functools.partial(jax.jit, static_argnames=("kinds",))
+def _first_steps(seed, grid, source, target, exclude, kinds=TABLE1_WALKS):
+    """The first move of N_DRAWS walks of each kind (capacity 2 = one step), from the
+    keys ``split(PRNGKey(seed), N_DRAWS)``: ``{kind: (first cells, lengths)}``."""
+    keys = jax.random.split(jax.random.PRNGKey(seed), N_DRAWS)
+    walks = {
+        "directional": lambda k: I.directional_walk(k, grid, source, target, 2, exclude),
+        "cga": lambda k: I.directional_walk(k, grid, source, target, 2, exclude, (1.0, 1.0)),
+        "uniform": lambda k: I.uniform_walk(k, grid, source, target, 2, exclude),
+        "greedy": lambda k: I.greedy_walk(k, grid, source, target, 2, max_steps=1),
+    }
+    out = {}
+    for kind in kinds:
+        cells, length, _ = jax.vmap(walks[kind])(keys)
+        out[kind] = cells[:, 1], length
+    return out
+
+
+def _excluded(cells) -> np.ndarray:
+    """``cells`` as int32[EXCLUDED], padded with -1."""
+    return np.array(list(cells) + [-1] * (EXCLUDED - len(cells)), np.int32)
 
 
 def _chi2(first, probs: dict[int, float]) -> float:
@@ -143,23 +180,21 @@ def test_directional_step_frequencies(fig):
     """Empirical choices of the jitted, vmapped walk match Table 1 (chi-square), and a
     wrong rule (the unadjusted 1/d roulette) is rejected by the same test."""
     cur, visited, want = FIG3[fig]
-    keys = jax.random.split(jax.random.PRNGKey(2024), N_DRAWS)
-    excl = jnp.array(visited, jnp.int32)
-    first, length = _first_steps(keys, table1_grid(), cur, 24, excl, "directional")
+    steps = _first_steps(2024, table1_grid(), cur, 24, _excluded(visited))
+    first, length = steps["directional"]
     assert (np.asarray(length) == 2).all()
     exact = _probs(fig)
     assert _chi2(first, exact) > 1e-3
     assert _chi2(first, _probs(fig, (1.0, 1.0))) < 1e-9
-    # And the CGA variant follows its own column.
-    first_cga, _ = _first_steps(keys, table1_grid(), cur, 24, excl, "cga")
+    # And the CGA variant follows its own column (the same keys).
+    first_cga, _ = steps["cga"]
     assert _chi2(first_cga, _probs(fig, (1.0, 1.0))) > 1e-3
     assert _chi2(first_cga, exact) < 1e-9
 
 
 def test_uniform_walk_step_is_uniform():
     cur, visited, want = FIG3["3b"]
-    keys = jax.random.split(jax.random.PRNGKey(7), N_DRAWS)
-    first, _ = _first_steps(keys, table1_grid(), cur, 24, jnp.array(visited, jnp.int32), "uniform")
+    first, _ = _first_steps(7, table1_grid(), cur, 24, _excluded(visited))["uniform"]
     uniform = {c: 1.0 for c in want}
     assert _chi2(first, uniform) > 1e-3
     assert _chi2(first, FIG3["3b"][2]) < 1e-9
@@ -196,8 +231,7 @@ def test_greedy_step_distribution(rule):
         b[y, x] = True
     grid = Grid.create(b, start=(0, 0), goal=(5, 5), corner_rule=rule)
     cur = 2 * 6 + 2  # (2, 2)
-    keys = jax.random.split(jax.random.PRNGKey(11), N_DRAWS)
-    first, _ = _first_steps(keys, grid, cur, 35, jnp.zeros(1, jnp.int32), "greedy")
+    first, _ = _first_steps(11, grid, cur, 35, _excluded([]), kinds=("greedy",))["greedy"]
     exact = _greedy_step_probs(grid, cur, 35)
     assert _chi2(first, exact) > 1e-3
     # Wrong rules are rejected by the same test: a deterministic tie-break (the first
@@ -210,14 +244,26 @@ def test_greedy_step_distribution(rule):
 
 
 # ---------------------------------------------------------- MPMGA anchors
+@jax.jit
+def _many_anchors(grid):
+    """intermittent_anchors for the keys ``split(PRNGKey(0), 4000)``."""
+    keys = jax.random.split(jax.random.PRNGKey(0), 4000)
+    return jax.vmap(lambda k: I.intermittent_anchors(k, grid))(keys)
+
+
+@jax.jit
+def _anchors(key, grid):
+    """intermittent_anchors along rows and along the major axis: ``{axis: (anchors, n)}``."""
+    return {axis: I.intermittent_anchors(key, grid, axis) for axis in ("rows", "major")}
+
+
 def test_intermittent_anchors_one_free_cell_per_row():
     rng = np.random.default_rng(3)
     b = rng.random((12, 9)) < 0.3
     b[0, 0] = b[11, 8] = False
     b[5, :] = True  # a fully blocked row is skipped
     grid = Grid.create(b, corner_rule="free")
-    f = jax.jit(jax.vmap(lambda k: I.intermittent_anchors(k, grid)))
-    anchors, n = f(jax.random.split(jax.random.PRNGKey(0), 4000))
+    anchors, n = _many_anchors(grid)
     anchors, n = np.asarray(anchors), np.asarray(n)
     assert anchors.shape == (4000, 13) and (n == 2 + 9).all()  # rows 1..10 minus row 5
     rows = anchors[:, : n[0]] // 9
@@ -234,20 +280,22 @@ def test_intermittent_anchors_one_free_cell_per_row():
 def test_intermittent_anchors_orientation_and_same_row():
     b = np.zeros((6, 8), bool)
     # Goal below the start: rows in descending order.
+    key = jax.random.PRNGKey(1)
     grid = Grid.create(b, start=(1, 5), goal=(6, 0), corner_rule="free")
-    anchors, n = I.intermittent_anchors(jax.random.PRNGKey(1), grid)
+    anchors, n = _anchors(key, grid)["rows"]
     rows = np.asarray(anchors)[: int(n)] // 8
     assert rows.tolist() == [5, 4, 3, 2, 1, 0]
     # Same row: falls back to the columns between (x = 2..5), in order.
     grid = Grid.create(b, start=(1, 2), goal=(6, 2), corner_rule="free")
-    anchors, n = I.intermittent_anchors(jax.random.PRNGKey(1), grid)
+    anchors, n = _anchors(key, grid)["rows"]
     a = np.asarray(anchors)[: int(n)]
     assert (a % 8).tolist() == [1, 2, 3, 4, 5, 6]
     # "major" picks the longer span; "columns" uses columns.
     grid = Grid.create(b, start=(0, 0), goal=(7, 2), corner_rule="free")
-    a, n = I.intermittent_anchors(jax.random.PRNGKey(1), grid, "major")
+    out = _anchors(key, grid)
+    a, n = out["major"]
     assert (np.asarray(a)[: int(n)] % 8).tolist() == list(range(8))
-    a, n = I.intermittent_anchors(jax.random.PRNGKey(1), grid, "rows")
+    a, n = out["rows"]
     assert (np.asarray(a)[: int(n)] // 8).tolist() == [0, 1, 2]
     with pytest.raises(ParameterError):
         I.intermittent_anchors(jax.random.PRNGKey(1), grid, "diagonal")
@@ -311,7 +359,7 @@ def test_walks_between_cells_avoid_exclusion(grid, seed):
     excl[:12] = rng.choice(SIZE * SIZE, 12)
     excl[:12][rng.random(12) < 0.3] = -1  # padding entries are ignored
     keys = jax.random.split(jax.random.PRNGKey(seed % 1000), N_KEYS)
-    out = _walks_between(keys, grid, src, dst, jnp.asarray(excl))
+    out = _walks_between(keys, grid, src, dst, excl)
     for name, (cells, length, ok) in out.items():
         ex = () if name == "greedy" else excl[excl >= 0]
         check_paths(grid, cells, length, ok, source=src, target=dst, exclude=ex)
@@ -327,7 +375,7 @@ def test_every_initialiser_and_walk_succeeds_on_an_open_map():
                        corner_rule="free")
     goal = SIZE * SIZE - 1
     checked = dict.fromkeys([*NAMES, "directional", "uniform", "uniform_adj", "greedy"], 0)
-    no_exclusion = jnp.full((CAP,), -1, jnp.int32)
+    no_exclusion = np.full((CAP,), -1, np.int32)
     for seed in range(5):
         keys = jax.random.split(jax.random.PRNGKey(seed), N_KEYS)
         for name, (cells, length, ok) in _all_initialisers(keys, grid).items():
@@ -338,6 +386,19 @@ def test_every_initialiser_and_walk_succeeds_on_an_open_map():
     assert min(checked.values()) > 0, checked
 
 
+@jax.jit
+def _alone_and_batched(keys, grid, src, dst):
+    """``{walk: (alone, batched)}``: the uniform and directional walks of capacity 48 for
+    every key, one at a time (``lax.map``: a loop, no ``vmap``) and as one ``vmap`` batch."""
+    out = {}
+    for walk in ("uniform_walk", "directional_walk"):
+        def one(k, walk=walk):
+            return getattr(I, walk)(k, grid, src, dst, 48)
+
+        out[walk] = jax.lax.map(one, keys), jax.vmap(one)(keys)
+    return out
+
+
 @pytest.mark.parametrize("walk", ["uniform_walk", "directional_walk"])
 def test_batched_walks_equal_walks_one_at_a_time(walk):
     """Under vmap the walk's step loop compacts its unfinished lanes (jaxga._batching.lanes): every
@@ -346,16 +407,17 @@ def test_batched_walks_equal_walks_one_at_a_time(walk):
     grid = random_map(12, 12, 0.2, seed=4)
     free = np.flatnonzero(~grid.blocked_np().reshape(-1))
     src, dst = int(free[0]), int(free[-1])
-    fn = jax.jit(lambda k: getattr(I, walk)(k, grid, src, dst, 48))
     keys = jax.random.split(jax.random.PRNGKey(7), 64)
-    cells, length, ok = jax.jit(jax.vmap(lambda k: getattr(I, walk)(k, grid, src, dst, 48)))(keys)
-    lengths = np.asarray(length)
+    alone, batched = _alone_and_batched(keys, grid, src, dst)[walk]
+    cells, length, ok = (np.asarray(v) for v in batched)
+    alone_c, alone_l, alone_ok = (np.asarray(v) for v in alone)
+    lengths = length
     assert lengths.min() < 8 and lengths.max() > 30  # walks of very different lengths
     for i in range(keys.shape[0]):
-        c1, l1, ok1 = fn(keys[i])
-        assert np.array_equal(np.asarray(c1), np.asarray(cells[i]))
+        c1, l1, ok1 = alone_c[i], alone_l[i], alone_ok[i]
+        assert np.array_equal(c1, cells[i])
         assert int(l1) == lengths[i] and bool(ok1) == bool(ok[i])
-        assert (np.asarray(c1)[lengths[i]:] == np.asarray(c1)[lengths[i] - 1]).all()
+        assert (c1[lengths[i]:] == c1[lengths[i] - 1]).all()
 
 
 def test_range_mutation_style_regrowth_keeps_the_path_simple():
@@ -371,7 +433,7 @@ def test_range_mutation_style_regrowth_keeps_the_path_simple():
     idx = np.arange(CAP)
     exclude = np.where((idx < i) | ((idx > j) & (idx < n)), cells, -1).astype(np.int32)
     keys = jax.random.split(jax.random.PRNGKey(9), N_KEYS)
-    out = _walks_between(keys, grid, int(cells[i]), int(cells[j]), jnp.asarray(exclude))
+    out = _walks_between(keys, grid, int(cells[i]), int(cells[j]), exclude)
     seg_c, seg_l, seg_ok = (np.asarray(a) for a in out["directional"])
     assert seg_ok.any()
     p = cells[:n].tolist()
@@ -452,12 +514,19 @@ def test_initialise_determinism_and_validity():
     assert len({tuple(r) for r in np.asarray(a.cells).tolist()}) > P // 2
 
 
+@jax.jit
+def _random_walks_ok(grid):
+    """Whether each of 4000 single random_walk attempts (keys ``split(PRNGKey(99), 4000)``)
+    succeeds."""
+    keys = jax.random.split(jax.random.PRNGKey(99), 4000)
+    return jax.vmap(lambda k: I.random_walk(k, grid, CAP))(keys)[2]
+
+
 def test_initialise_redraws_and_reports_the_success_rate():
     """random_walk fails most single attempts here; the redraw fills the population and
     the reported per-attempt rate agrees with a direct estimate (binomial bounds)."""
     grid = random_map(SIZE, SIZE, 0.3, 23, corner_rule="free")
-    direct = jax.jit(jax.vmap(lambda k: I.random_walk(k, grid, CAP)))
-    _, _, ok = direct(jax.random.split(jax.random.PRNGKey(99), 4000))
+    ok = _random_walks_ok(grid)
     p = float(np.mean(np.asarray(ok)))
     assert 0.02 < p < 0.6, p  # single attempts often fail on this map
     pop, st_ = initialise(jax.random.PRNGKey(1), grid, I.random_walk, P, CAP, max_tries=200)
@@ -541,9 +610,31 @@ def test_x64_mode_keeps_int32():
     assert res.returncode == 0 and "ok" in res.stdout, res.stderr[-2000:]
 
 
+LARGE_CAP = 32
+
+
+def _large_map_walks(table: bool):
+    """The uniform and directional walks of capacity LARGE_CAP for each key, ``{walk:
+    (cells, length, ok)}``; with ``table`` traced with the map-sized visited table forced
+    (``VISITED_TABLE_CELLS_PER_NODE``, read by :mod:`jaxga.operators.init.walks` when the
+    walk is traced, raised while this function is traced)."""
+
+    def run(keys, grid, src, dst, excl):
+        force = (unittest.mock.patch.object(init_walks, "VISITED_TABLE_CELLS_PER_NODE", 10**9)
+                 if table else contextlib.nullcontext())
+        with force:
+            return {walk: jax.vmap(lambda k, walk=walk: getattr(I, walk)(
+                k, grid, src, dst, LARGE_CAP, excl))(keys)
+                for walk in ("uniform_walk", "directional_walk")}
+
+    return jax.jit(run)
+
+
+_LARGE_MAP_WALKS = {"hashed": _large_map_walks(False), "table": _large_map_walks(True)}
+
+
 @pytest.mark.parametrize("walk", ["uniform_walk", "directional_walk"])
-def test_large_map_walks_keep_a_capacity_sized_visited_set_with_the_same_paths(
-        walk, monkeypatch):
+def test_large_map_walks_keep_a_capacity_sized_visited_set_with_the_same_paths(walk):
     """On a map of more than 64 cells per node of capacity the walks keep their visited
     set as a hash set of their own cells and a sorted list of the excluded ones: the same
     key gives the same walk as with the map-sized table (forced here), exclusions
@@ -553,23 +644,30 @@ def test_large_map_walks_keep_a_capacity_sized_visited_set_with_the_same_paths(
     src = int(free[len(free) // 2])
     near = [c for c in free if max(abs(c % 48 - src % 48), abs(c // 48 - src // 48)) == 6]
     dst = int(near[0])
-    cap = 32  # 48 * 48 > 64 * 32: the hash set
+    cap = LARGE_CAP  # 48 * 48 > 64 * 32: the hash set
     rng = np.random.default_rng(0)
     excl = np.full(cap, -1, np.int32)
-    excl[:20] = rng.choice(free, 20)
+    excl[:20] = rng.choice(free, 20).astype(np.int32)
     keys = jax.random.split(jax.random.PRNGKey(11), 64)
-
-    def walks():
-        return jax.jit(jax.vmap(lambda k: getattr(I, walk)(k, grid, src, dst, cap,
-                                                           jnp.asarray(excl))))(keys)
-
-    hashed = walks()
-    monkeypatch.setattr(I, "VISITED_TABLE_CELLS_PER_NODE", 10**9)
-    table = walks()
+    args = (keys, grid, src, dst, excl)
+    # the two variants are different programs (the table is really forced)
+    traced = {k: str(jax.make_jaxpr(f)(*args)) for k, f in _LARGE_MAP_WALKS.items()}
+    assert traced["hashed"] != traced["table"]
+    hashed = _LARGE_MAP_WALKS["hashed"](*args)[walk]
+    table = _LARGE_MAP_WALKS["table"](*args)[walk]
     for a, b in zip(hashed, table):
         np.testing.assert_array_equal(np.asarray(a), np.asarray(b))
     assert np.asarray(hashed[2]).any()
     check_paths(grid, *hashed, source=src, target=dst, exclude=excl[excl >= 0], cap=cap)
+
+
+@functools.partial(jax.jit, static_argnames=("caps",))
+def _directional_walks(grid, caps):
+    """``{cap: (cells, length, ok)}``: start-to-goal directional walks of each capacity of
+    ``caps`` for the keys ``split(PRNGKey(0), 1000)``."""
+    keys = jax.random.split(jax.random.PRNGKey(0), 1000)
+    return {cap: jax.vmap(lambda k, cap=cap: I.directional_walk(
+        k, grid, grid.start, grid.goal, cap))(keys) for cap in caps}
 
 
 def test_the_directional_walk_is_the_papers_uncapped_walk_on_a_20x20_map():
@@ -580,14 +678,9 @@ def test_the_directional_walk_is_the_papers_uncapped_walk_on_a_20x20_map():
     from jaxga.maps import load_map
 
     grid = load_map("classic_ga_gapp3_20x20", corner_rule="free")
-    keys = jax.random.split(jax.random.PRNGKey(0), 1000)
     free = int((~grid.blocked_np()).sum())
-    out = {}
-    for cap in (160, free):
-        walk = jax.jit(jax.vmap(lambda k, cap=cap: I.directional_walk(
-            k, grid, grid.start, grid.goal, cap)))
-        cells, n, ok = (np.asarray(x) for x in walk(keys))
-        out[cap] = cells, n, ok
+    out = {cap: tuple(np.asarray(x) for x in v)
+           for cap, v in _directional_walks(grid, caps=(160, free)).items()}
     (c1, n1, ok1), (c2, n2, ok2) = out[160], out[free]
     np.testing.assert_array_equal(ok1, ok2)
     np.testing.assert_array_equal(n1[ok1], n2[ok2])
@@ -625,6 +718,14 @@ def _imga_insertion_sequential(rng, blocked, start, goal, node_cap=2000):
     return path
 
 
+@jax.jit
+def _median_insertion_ok(grid):
+    """Whether each of 300 median insertions of capacity 160 (keys ``split(PRNGKey(0),
+    300)``) succeeds: one program for both 20 x 20 maps."""
+    keys = jax.random.split(jax.random.PRNGKey(0), 300)
+    return jax.vmap(lambda k: I.median_insertion(k, grid, 160))(keys)[2]
+
+
 @pytest.mark.parametrize("name,lo,hi", [("classic_ga_gapp3_20x20", 0.25, 0.45),
                                         ("aco_classic_20x20_v1_lihongxin", 0.0, 0.0)])
 def test_median_insertion_succeeds_as_often_as_the_papers_sequential_insertion(name, lo, hi):
@@ -640,7 +741,6 @@ def test_median_insertion_succeeds_as_often_as_the_papers_sequential_insertion(n
     rng = np.random.default_rng(0)
     seq = np.mean([_imga_insertion_sequential(rng, blocked, grid.start_xy, grid.goal_xy)
                    is not None for _ in range(300)])
-    keys = jax.random.split(jax.random.PRNGKey(0), 300)
-    ok = np.asarray(jax.jit(jax.vmap(lambda k: I.median_insertion(k, grid, 160)))(keys)[2])
+    ok = np.asarray(_median_insertion_ok(grid))
     assert lo <= seq <= hi and lo <= ok.mean() <= hi, (seq, ok.mean())
     assert abs(seq - ok.mean()) <= 0.1
