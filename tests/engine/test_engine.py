@@ -1,4 +1,5 @@
-"""The engine end to end on a tiny map: every reported path feasible, same seed same run."""
+"""The engine end to end on the canonical problems (tests/canonical.py): every reported path
+feasible, same seed same run; and the engine's stages on small maps of their own."""
 
 from __future__ import annotations
 
@@ -6,20 +7,19 @@ import numpy as np
 import pytest
 
 from jaxga import api
-from jaxga.api import run
-from jaxga.maps import random_map
+from jaxga.maps import load_map, random_map
 from jaxga.operators.guide import with_guide
 from jaxga.reference.any_angle import any_angle_shortest_path
 from jaxga.reference.optima import clear_np
+from tests import canonical
 
 
 @pytest.fixture(scope="module")
 def tiny_runs():
-    grid = random_map(10, 10, 0.2, 3, corner_rule="free")
-    # test_api's SMALL settings and run count: one compiled program for both modules
-    overrides = dict(population__size=8, generations=3, init__max_tries=40)
-    a = run("sga", grid, seeds=[0, 1, 2], **overrides)
-    b = run("sga", grid, seeds=[9, 2, 5], **overrides)
+    # the canonical sga program (tests/canonical.py), shared with test_api and the docs
+    grid = load_map(canonical.MAP)
+    a = canonical.run("sga", [0, 1, 2], generations=3)
+    b = canonical.run("sga", [9, 2, 5], generations=3)
     return grid, a, b
 
 
@@ -62,8 +62,8 @@ def test_finish_program_equals_its_functions_compiled_with_xla_defaults():
     from jaxga.operators import postprocess as post
 
     assert api.programs.FINISH_COMPILER_OPTIONS == {"xla_cpu_use_fusion_emitters": False}
-    grid = random_map(10, 10, 0.2, 3, corner_rule="free")
-    r = run("agacd", grid, seeds=3, population__size=8, generations=3, init__max_tries=40)
+    grid = load_map(canonical.MAP)
+    r = canonical.run("agacd", 3, generations=3)  # the canonical agacd program
     assert r.success.any()
 
     @jax.jit
@@ -156,7 +156,9 @@ def test_population_waypoint_feasibility_equals_the_per_path_check(rule):
     cells[off] = rng.choice([-1, w * w], int(off.sum()))
     length = rng.integers(1, cap + 1, p).astype(np.int32)
     got = jax.jit(waypoints_feasible)(grid, jnp.asarray(cells), jnp.asarray(length))
-    want = jax.vmap(lambda c, n: is_feasible(grid, c, n))(jnp.asarray(cells), jnp.asarray(length))
+    # the per-path check compiled too (op by op it compiled ~90 programs of its own)
+    want = jax.jit(jax.vmap(is_feasible, (None, 0, 0)))(grid, jnp.asarray(cells),
+                                                         jnp.asarray(length))
     assert np.array_equal(np.asarray(got), np.asarray(want))
     # every tier is exercised, with both outcomes overall
     a, b = cells[:, :-1], cells[:, 1:]
@@ -224,6 +226,7 @@ def test_adaptive_generation_equals_its_straight_line_composition():
 def test_history_row_counts_only_active_individuals_of_every_island():
     """Best-so-far, mean and sd (ddof 0) of the fitness over the active slots of all
     islands (``population.active`` below the capacity), against NumPy."""
+    import jax
     import jax.numpy as jnp
 
     from jaxga.config.presets import load_preset
@@ -234,17 +237,19 @@ def test_history_row_counts_only_active_individuals_of_every_island():
     algo, params = build(load_preset("sga", overrides={
         "population.size": 8, "islands.count": 3, "islands.topology": "ring",
         "islands.migrants": 1}), grid)
+
     params = {**params, "population.active": jnp.int32(5)}
     rng = np.random.default_rng(7)
     fitness = rng.random((3, 8)).astype(np.float32)
+    # the state from NumPy arrays and the row in one compiled program (op by op, each
+    # array and each reduction was a program of its own)
     state = E.GAState(
-        islands=E.IslandState(jnp.zeros((3, 8, algo.capacity), jnp.int32),
-                              jnp.ones((3, 8), jnp.int32), jnp.asarray(fitness),
-                              jnp.ones((3, 8), bool)),
-        best_cells=jnp.zeros((algo.capacity,), jnp.int32), best_length=jnp.int32(1),
-        best_fitness=jnp.float32(0.75), generation=jnp.int32(4), stall=jnp.int32(0),
-        frozen=jnp.bool_(False), failures=jnp.zeros(3, jnp.int32))
-    row = E.history_row(algo, state, params)
+        islands=E.IslandState(np.zeros((3, 8, algo.capacity), np.int32),
+                              np.ones((3, 8), np.int32), fitness, np.ones((3, 8), bool)),
+        best_cells=np.zeros((algo.capacity,), np.int32), best_length=np.int32(1),
+        best_fitness=np.float32(0.75), generation=np.int32(4), stall=np.int32(0),
+        frozen=np.bool_(False), failures=np.zeros(3, np.int32))
+    row = jax.jit(E.history_row, static_argnums=0)(algo, state, params)
     active = fitness[:, :5].astype(np.float64)
     assert float(row["best"]) == 0.75
     np.testing.assert_allclose(float(row["mean"]), active.mean(), rtol=1e-6)
