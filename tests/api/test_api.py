@@ -226,7 +226,7 @@ def test_stagnation_freezes_a_run_after_k_generations_without_improvement(grid):
 
 
 def test_a_sweep_point_equals_a_run_with_those_values(grid):
-    # 3 points x 1 seed and runs of 3 seeds: the same 3-run program as ``preset_run``
+    # 3 points x 1 seed and runs of 3 seeds: the same 4-run (canonical) program as ``preset_run``
     # (compiled programs are keyed by the run count; sharing one keeps the suite short).
     points = [{"crossover.probability": 0.2, "mutation.probability": 0.9},
               {"crossover.probability": 0.9, "mutation.probability": 0.1},
@@ -606,7 +606,7 @@ def test_failed_seeds_are_missing_values_not_zeros():
 
 def test_start_equal_to_goal_has_gap_zero_without_warnings(grid):
     """The optimum is 0 when start == goal: the gap is 0, not 0 / 0."""
-    same = grid.replace(goal=grid.start_xy)  # the 3-run program of ``preset_run``
+    same = grid.replace(goal=grid.start_xy)  # the 4-run (canonical) program of ``preset_run``
     with warnings.catch_warnings():
         warnings.simplefilter("error")
         r = api.run("sga", same, seeds=3, **SMALL)
@@ -751,7 +751,7 @@ def test_clear_compiled_releases_the_programs_memory_mappings(grid):
         pytest.skip("needs /proc (Linux)")
     api.clear_compiled()
     before = regions()
-    # the module's 3-run sga program: after clear_compiled it is loaded again (from the
+    # the canonical 4-run sga program: after clear_compiled it is loaded again (from the
     # persistent compilation cache when there is one), which maps its kernels again
     api.run("sga", grid, seeds=3, **SMALL)
     compiled = regions()
