@@ -11,6 +11,7 @@ from pathlib import Path
 
 import jax
 import jax.numpy as jnp
+import numpy as np
 import pytest
 
 from jaxga import testing
@@ -18,6 +19,7 @@ from jaxga.config import registry
 from jaxga.config.presets import load_preset
 from jaxga.config.schema import COMMON_FIELDS, SCHEMA
 from jaxga.core.errors import ParameterError
+from jaxga.core.paths import Population
 from jaxga.operators.postprocess import compact
 
 OPERATORS = registry.operators()
@@ -25,8 +27,11 @@ OPERATORS = registry.operators()
 
 @pytest.fixture(scope="module")
 def setting():
-    """The contract check's own map and parents (:func:`jaxga.testing.default_setting`)."""
-    return testing.default_setting()
+    """The contract check's own map and parents (:func:`jaxga.testing.default_setting`),
+    the parents as host arrays: the check's slices and rows of them (pairs, one
+    individual alone) are then NumPy's, not one compiled program each."""
+    grid, pop = testing.default_setting()
+    return grid, Population(np.asarray(pop.cells), np.asarray(pop.length))
 
 
 @pytest.mark.parametrize("op", OPERATORS, ids=[f"{op.family}-{op.name}" for op in OPERATORS])
