@@ -25,22 +25,24 @@ from jaxga.core.errors import ParameterError
 from jaxga.core.paths import is_feasible
 from jaxga.engine.maptables import with_tables
 from jaxga.engine.run import run_evolve, run_init
+from jaxga.maps import load_map
 from jaxga.maps.generators import random_map
 from jaxga.operators import schedules
 from jaxga.operators.guide import with_guide
+from tests import canonical
 
 ROOT = Path(__file__).resolve().parents[2]
 
-# A configuration no other test file uses, so that the first call here compiles; its path
-# capacity is the 32 x 32 size class's, so that the map padded to its class runs with the
-# capacity of the unpadded one (test_maps_of_one_size_class_run_one_program_set).
-OPTIONS = dict(population__size=7, init__max_tries=30, crossover__probability=0.85,
-               population__capacity=160)
+# The canonical sga problem (tests/canonical.py) with dynamic overrides only: the programs
+# of 5-32 seeds are the docs' (README: 16 seeds of sga on this map). The map's path
+# capacity, 160, is the 32 x 32 size class's, so that the map padded to its class runs
+# with the capacity of the unpadded one (test_maps_of_one_size_class_run_one_program_set).
+OPTIONS = dict(init__max_tries=30, crossover__probability=0.85)
 
 
 @pytest.fixture(scope="module")
 def grid():
-    return random_map(11, 11, 0.2, 5, corner_rule="free")
+    return load_map(canonical.MAP)
 
 
 @pytest.fixture(scope="module")
@@ -102,7 +104,10 @@ def test_10_20_and_30_seeds_and_50_or_300_generations_run_one_program_set(grid, 
     """Runs of 10, 20 and 30 seeds, then of 50 and 300 generations
     and 3 seeds compile init, evolve and finish once; every seed's result equals its
     unpadded run (a 50-generation run and the first 50 generations of a 300-generation
-    one included)."""
+    one included). The programs compiled earlier in this process (the docs' runs of the
+    same problem) are dropped first: each program of the set is then compiled or read
+    from the store exactly once."""
+    api.clear_compiled()
     runs = {n: api.run("sga", grid, seeds=n, generations=50, **OPTIONS) for n in (10, 20, 30)}
     long = api.run("sga", grid, seeds=3, generations=300, **OPTIONS)
     assert sorted(compiled) == ["evolve", "finish", "init"]
@@ -139,24 +144,28 @@ def test_a_smaller_call_reuses_a_larger_compiled_program(grid, compiled):
 
 
 def test_maps_of_one_size_class_run_one_program_set(grid, compiled, reference):
-    """With ``size_class`` a 20 x 20, a 25 x 25 and an 11 x 11 map
+    """With ``size_class`` a 25 x 25, an 11 x 11 and the canonical 20 x 20 map
     (all of the 32 x 32 class) compile init, evolve and finish once; every path is a
     feasible path on its own map, reported in its own cells; seeds repeat exactly; and
-    SGA's draws do not depend on the map's width, so each seed of the padded 11 x 11 map
-    equals its unpadded run bit for bit (the configuration's capacity is the class's)."""
-    maps = [random_map(n, n, 0.2, seed, corner_rule="free") for n, seed in ((20, 3), (25, 4))]
+    SGA's draws do not depend on the map's width, so each seed of the padded 20 x 20 map
+    equals its unpadded run bit for bit (the map's capacity is the class's)."""
+    maps = [random_map(n, n, 0.2, seed, corner_rule="free") for n, seed in ((25, 4), (11, 5))]
     maps.append(grid)
     runs = [api.run("sga", g, seeds=10, generations=50, size_class=True, **OPTIONS)
             for g in maps]
     assert sorted(compiled) == ["evolve", "finish", "init"]
+    # every seed's path checked in one compiled program per map (op by op, the check
+    # compiled some 60 programs per map shape)
+    feasible = jax.jit(jax.vmap(is_feasible, (None, 0, 0)))
     for g, r in zip(maps, runs):
         assert r.success.sum() >= 8
         assert r.width == g.width and r.start == g.start_xy and r.goal == g.goal_xy
+        ok = np.asarray(feasible(g, jnp.asarray(r.cells), jnp.asarray(r.n_cells, jnp.int32)))
         for i in np.flatnonzero(r.success):
-            assert bool(is_feasible(g, jnp.asarray(r.cells[i]), jnp.int32(r.n_cells[i])))
+            assert bool(ok[i])
             assert r.cells[i].max() < g.n_cells and r.length[i] >= r.optimum - 1e-4
-    again = api.run("sga", maps[1], seeds=[3, 7], generations=50, size_class=True, **OPTIONS)
-    np.testing.assert_array_equal(again.cells, runs[1].cells[[3, 7]])
+    again = api.run("sga", maps[0], seeds=[3, 7], generations=50, size_class=True, **OPTIONS)
+    np.testing.assert_array_equal(again.cells, runs[0].cells[[3, 7]])
     assert sorted(compiled) == ["evolve", "finish", "init"]
     assert_same_runs(runs[2], slice(0, 10), *reference)
 
@@ -273,12 +282,11 @@ NEW_PROCESS = """
 import json, sys
 import numpy as np
 from jaxga import api, engine
-from jaxga.maps.generators import random_map
 if sys.argv[1] == "read":  # tracing would call these
     engine.evolution.generation = engine.evolution.init_state = None
-r = api.run("sga", random_map(11, 11, 0.2, 5, corner_rule="free"), seeds=6, generations=9,
-            population__size=7, init__max_tries=30, crossover__probability=0.85,
-            population__capacity=160)
+# the canonical sga problem (tests/canonical.py), here compiled in a store of its own
+r = api.run("sga", "classic_ga_gapp3_20x20", seeds=3, generations=9, init__max_tries=30,
+            crossover__probability=0.85)
 print(json.dumps({"cells": np.asarray(r.cells).tolist(),
                   "best": np.asarray(r.history["best"]).tolist(),
                   "compile_s": r.timing["compile_s"]}))
