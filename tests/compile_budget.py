@@ -18,6 +18,8 @@ the workers send their counts to the controller).
 
 ``JAXGA_COMPILE_BUDGET=off`` turns the check off (for example while profiling), and
 ``JAXGA_COMPILE_BUDGET=report`` keeps the summary without failing.
+``JAXGA_COMPILE_COUNTS=PATH`` also writes every file's count to ``PATH`` (JSON), for
+setting the budgets.
 """
 
 from __future__ import annotations
@@ -39,6 +41,7 @@ else:  # pragma: no cover
 BACKEND_COMPILE = "/jax/core/compile/backend_compile_duration"
 BUDGETS_FILE = Path(__file__).with_name("compile_budgets.toml")
 ENV = "JAXGA_COMPILE_BUDGET"
+COUNTS_ENV = "JAXGA_COMPILE_COUNTS"
 SHOWN = 12
 """Files named in the terminal summary, most programs first."""
 
@@ -113,6 +116,9 @@ class CompileBudget:
     def pytest_terminal_summary(self, terminalreporter) -> None:
         if not self.per_file:
             return
+        counts = os.environ.get(COUNTS_ENV)
+        if counts:
+            Path(counts).write_text(json.dumps(dict(sorted(self.per_file.items())), indent=1))
         top = self.per_file.most_common(SHOWN)
         terminalreporter.write_line(
             f"compiled programs: {sum(self.per_file.values())} in "
