@@ -20,6 +20,14 @@ like JAX's own cache directory, it must be writable only by its user. A file tha
 be read (truncated, written by another version) is ignored and compiled again; a program
 read from it that fails to run has every program this process read deleted, and the call
 runs again with programs compiled afresh (:func:`jaxga.api.runs.sweep`).
+
+Processes that share the store compile each program once: :func:`load_or_compile` holds
+a lock on the program's key (``fcntl.flock`` on a file under ``locks/``, released by the
+system when a process ends, however it ends) while it compiles, and a process that needs
+the same program meanwhile waits for it and then reads it (a DOE over several processes,
+a notebook beside a command, a test suite's workers). The wait is bounded
+(:data:`LOCK_WAIT_S`): after it, or where files cannot be locked, a process compiles the
+program itself, as without the store.
 """
 
 from __future__ import annotations
@@ -29,6 +37,8 @@ import functools
 import hashlib
 import os
 import pickle
+import time
+from collections.abc import Callable, Iterator
 from pathlib import Path
 from typing import Any
 
@@ -146,6 +156,64 @@ def load(key: str | None, devices: Any) -> Any | None:
         return None
     _READ.add(key)
     return program
+
+
+LOCK_WAIT_S = 900.0
+"""The longest a process waits for another one compiling the same program (a whole GA
+compiles in well under a minute; a process stuck for longer is not waited for)."""
+
+
+@contextlib.contextmanager
+def _compiling(key: str | None) -> Iterator[None]:
+    """Hold the store's lock on ``key`` (module docstring); nothing when there is no key,
+    no ``fcntl`` (not POSIX) or the lock file cannot be made."""
+    try:
+        import fcntl
+    except ImportError:  # pragma: no cover - not POSIX: compiled twice at worst
+        fcntl = None
+    if key is None or fcntl is None:
+        yield
+        return
+    try:
+        folder = directory() / "locks"
+        folder.mkdir(parents=True, exist_ok=True)
+        handle = open(folder / f"{key}.lock", "a")  # noqa: SIM115 - closed below
+    except OSError:
+        yield
+        return
+    with handle:
+        locked, deadline = False, time.monotonic() + LOCK_WAIT_S
+        while True:
+            try:
+                fcntl.flock(handle, fcntl.LOCK_EX | fcntl.LOCK_NB)
+                locked = True
+                break
+            except BlockingIOError:  # another process compiles it: wait (interruptibly)
+                if time.monotonic() > deadline:
+                    break
+                time.sleep(0.05)
+            except OSError:  # a file system without locks
+                break
+        try:
+            yield
+        finally:
+            if locked:
+                fcntl.flock(handle, fcntl.LOCK_UN)
+
+
+def load_or_compile(key: str | None, devices: Any, lower: Callable[[], Any],
+                    options: dict | None = None) -> tuple[Any, bool]:
+    """The program stored under ``key``, else ``lower()`` compiled and stored; and whether
+    it was read. The compilation holds the key's lock, so that processes sharing the store
+    compile it once (module docstring): one that waited reads what the other stored."""
+    program = load(key, devices)
+    if program is not None:
+        return program, True
+    with _compiling(key):
+        program = load(key, devices)  # stored by another process while this one waited
+        if program is not None:
+            return program, True
+        return compile_and_store(key, lower(), options), False
 
 
 def save(key: str | None, compiled: Any) -> None:

@@ -121,21 +121,22 @@ class Programs:
             shared = self._shared.get(name)
             program = _SHARED_PROGRAMS.get(shared) if shared is not None else None
             if program is None:
-                program = executables.load(self._keys[name], self._devices)
-                if program is None:
-                    if self._traced is None:
-                        self._traced = self._trace()
-                    program = executables.compile_and_store(
-                        self._keys[name], self._traced[name].lower(),
-                        compiler_options(name, self._devices[0].platform))
-                else:
-                    self.read += 1
+                program, read = executables.load_or_compile(
+                    self._keys[name], self._devices, functools.partial(self._lower, name),
+                    compiler_options(name, self._devices[0].platform))
+                self.read += read
                 if shared is not None:
                     _share(shared, program)
             self._compiled[name] = program
             done = 1 + len(self._compiled)
             if done < steps:
                 report(done / steps)
+
+    def _lower(self, name: str) -> Any:
+        """The program ``name`` lowered (the functions traced first if they are not)."""
+        if self._traced is None:
+            self._traced = self._trace()
+        return self._traced[name].lower()
 
     def compile_init(self, report: Callable[[float], None]) -> None:
         """Compile (or read) the init program if it is not yet, reporting the tracing's
@@ -181,9 +182,8 @@ def tables_for(grid: Any) -> Any:
     key = executables.program_key("map tables", None, shape_spec(bare), None, 1, devices)
     program = _TABLE_PROGRAMS.get(key) if key is not None else None
     if program is None:
-        program = executables.load(key, devices)
-        if program is None:
-            program = executables.compile_and_store(key, compute_tables.lower(bare))
+        program, _ = executables.load_or_compile(key, devices,
+                                                 lambda: compute_tables.lower(bare))
         if key is not None:
             _TABLE_PROGRAMS[key] = program
     return dataclasses.replace(grid, tables=program(bare))

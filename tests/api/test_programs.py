@@ -9,6 +9,8 @@ import math
 import os
 import subprocess
 import sys
+import threading
+import time
 import warnings
 from pathlib import Path
 
@@ -30,6 +32,9 @@ from jaxga.maps.generators import random_map
 from jaxga.operators import schedules
 from jaxga.operators.guide import with_guide
 from tests import canonical
+
+# the program sets' sizes, sharing, store and memory (programs of their own)
+pytestmark = pytest.mark.slow
 
 ROOT = Path(__file__).resolve().parents[2]
 
@@ -322,6 +327,41 @@ def test_an_unreadable_stored_program_is_compiled_again(tmp_path, monkeypatch):
     compiled = jax.jit(lambda x: x + 1).lower(np.int32(1)).compile()
     executables.save("k", compiled)
     assert int(executables.load("k", jax.devices()[:1])(np.int32(4))) == 5
+
+
+def test_callers_sharing_the_store_compile_a_program_once(tmp_path, monkeypatch):
+    """Two callers that need one program at once (threads here: ``flock`` locks an open
+    file, so two opens conflict as two processes do): one compiles it under its key's
+    lock, the other waits and then reads what the first stored."""
+    monkeypatch.setattr(type(jax.config), "jax_compilation_cache_dir",
+                        property(lambda self: str(tmp_path)), raising=False)
+    lowered = jax.jit(lambda x: x * 3).lower(np.int32(1))
+    compiled_by, started = [], threading.Event()
+
+    def compile_and_store(key, low, options=None):
+        started.set()
+        time.sleep(0.5)  # the second caller arrives meanwhile
+        program = low.compile()
+        executables.save(key, program)
+        compiled_by.append(threading.current_thread().name)
+        return program
+
+    monkeypatch.setattr(executables, "compile_and_store", compile_and_store)
+    got = {}
+
+    def need(name):
+        program, read = executables.load_or_compile("k3", jax.devices()[:1], lambda: lowered)
+        got[name] = (int(program(np.int32(2))), read)
+
+    first = threading.Thread(target=need, args=("a",), name="a")
+    first.start()
+    assert started.wait(30)
+    second = threading.Thread(target=need, args=("b",), name="b")
+    second.start()
+    first.join(60)
+    second.join(60)
+    assert compiled_by == ["a"]
+    assert got == {"a": (6, False), "b": (6, True)}
 
 
 def test_programs_with_a_users_operator_are_not_stored(grid):
