@@ -647,6 +647,7 @@ def test_failure_reason_counts_the_seeds_and_names_an_initialiser_that_never_suc
     assert "and the fallback 'field_walk' made none either" in both
 
 
+@pytest.mark.slow
 def test_a_capacity_below_the_shortest_path_is_named_as_the_cause(grid):
     """Paths cannot hold the shortest path's cells: the reason says so, instead of
     sending the user to raise init.max_tries."""
@@ -999,6 +1000,7 @@ def test_a_map_info_keeps_the_map_name_with_its_endpoints(grid):
     assert np.array_equal(named.cells, plain.cells)
 
 
+@pytest.mark.slow
 def test_the_field_repair_reaches_the_operators_that_repair(grid):
     """``repair.fallback = "field"`` in iga_zhu (column crossover, range mutation): the
     same runs fail fewer crossovers and mutations, every path stays feasible; in sga

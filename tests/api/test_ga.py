@@ -54,6 +54,7 @@ def test_a_run_of_the_pure_core_is_seed_for_seed_jaxga_run(ga, reference):
                                   reference.convergence_generation)
 
 
+@pytest.mark.slow
 def test_init_step_and_a_users_scan_over_keys_and_a_rate(ga):
     """init, then the user's own scan of ``step`` for 5 generations, vmapped over 3 keys x 2
     mutation rates: every population stays continuous and every generation counter is 5;
@@ -92,6 +93,7 @@ def test_the_constructor_checks_what_jaxga_run_checks():
             np.ones((4, 4), bool), start=(0, 0), goal=(3, 3)))
 
 
+@pytest.mark.slow
 def test_vmap_over_three_mutation_rates_equals_three_separate_runs(ga):
     """One ``jit(vmap)`` of ``GA.run`` over three values of ``mutation.probability`` (seed
     2 each) gives what three separate ``jaxga.run`` calls with those rates give."""
@@ -110,6 +112,7 @@ def test_vmap_over_three_mutation_rates_equals_three_separate_runs(ga):
         len({int(x) for x in np.asarray(out["failures"][:, 1])}) > 1  # the rate mattered
 
 
+@pytest.mark.slow
 def test_a_users_own_scan_over_step_is_jaxga_run_seed_for_seed(ga, reference):
     """The user's loop: ``init`` on ``fold_in(key, 0)`` is the initial population of
     ``GA.init(key)``, then a ``lax.scan`` over ``ga.step`` with generation ``t``'s key

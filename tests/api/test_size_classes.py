@@ -55,6 +55,7 @@ def test_padding_keeps_every_cell_s_coordinates():
     assert pad_to_class(large) is large
 
 
+@pytest.mark.slow
 def test_the_padding_counts_as_off_the_map_for_safety_and_clearance():
     """A path along the map's top and right edges: the padding beyond them is blocked,
     but AGACD's and IMGA's safety, the clearance and the tangencies see the map's edge

@@ -36,6 +36,9 @@ from jaxga.operators.repair import concat
 from jaxga.reference.optima import shortest_path
 from tests.plain_lifts import either, pair_with_probability, with_probability
 
+# the gated and spliced batching against full width, operator by operator
+pytestmark = pytest.mark.slow
+
 
 @jax.jit
 def _diversified(grid, pop):

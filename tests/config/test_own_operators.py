@@ -17,6 +17,8 @@ from jaxga.core.objectives import path_length
 from jaxga.core.paths import is_continuous
 from jaxga.operators.postprocess import compact
 
+pytestmark = pytest.mark.slow  # a user's operators through whole GAs (programs of their own)
+
 MAP = "classic_ga_gapp3_20x20"
 
 

@@ -17,6 +17,8 @@ import pytest
 
 from tests import canonical
 
+pytestmark = pytest.mark.slow  # each preset at its paper's generations: quality, not contracts
+
 SEEDS = 4
 MAPS = {"imga": "acoga_skolayat_G_20x20"}
 RUNS = {  # test id -> (preset, variant)

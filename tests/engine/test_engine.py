@@ -13,6 +13,9 @@ from jaxga.reference.any_angle import any_angle_shortest_path
 from jaxga.reference.optima import clear_np
 from tests import canonical
 
+# the engine's generation, islands and migration in depth (each preset's run: test_api)
+pytestmark = pytest.mark.slow
+
 
 @pytest.fixture(scope="module")
 def tiny_runs():
@@ -101,7 +104,6 @@ print(json.dumps({"devices": jax.device_count(), "blocks": api.run_blocks(n, jax
 """
 
 
-@pytest.mark.slow
 def test_results_do_not_depend_on_the_device_count():
     """Seeds sharded over 4 forced host devices (21 seeds padded to 24), each device
     computing its runs one at a time (``api.map_runs``), == one device, one ``vmap`` of

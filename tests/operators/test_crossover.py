@@ -43,6 +43,9 @@ from jaxga.operators.lift import over_pairs
 from jaxga.operators.repair import connect
 from tests.strategies import CAP, SIZE, grids_and_parents
 
+# the crossovers' properties and references in depth (contracts: test_registry)
+pytestmark = pytest.mark.slow
+
 N_CELLS = SIZE * SIZE
 
 

@@ -28,6 +28,9 @@ from jaxga.operators.guide import distance_fields, problem_facts, with_guide
 from jaxga.reference.optima import distances_from, shortest_path
 from tests.strategies import check_paths
 
+# the field walks and repairs in depth, whole GAs with map tables (contracts: test_registry)
+pytestmark = pytest.mark.slow
+
 FIELD_CAP = 256  # one compiled program per map size
 KEYS = 16
 SIZES = (12, 24)
@@ -324,7 +327,6 @@ def test_field_repairs_replace_real_failures():
 
 
 # ------------------------------------------------------------------ map tables
-@pytest.mark.slow
 @pytest.mark.parametrize("preset", ["iga_zhu", "mpmga"])
 def test_map_tables_give_the_same_generations(preset):
     """The per-map tables attached once (jaxga.engine.maptables) instead of computed by every

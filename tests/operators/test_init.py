@@ -33,6 +33,9 @@ from jaxga.operators.init import walks as init_walks
 from tests.plain_lifts import initialise
 from tests.strategies import CAP, SIZE, check_paths, grids
 
+# the initialisers' properties and references in depth (contracts: test_registry)
+pytestmark = pytest.mark.slow
+
 NAMES = registry.names("init")
 WALKS = ("random_walk", "greedy_random_target", "directional")  # fail = goal not reached
 

@@ -13,6 +13,7 @@ import math
 import jax
 import jax.numpy as jnp
 import numpy as np
+import pytest
 from hypothesis import given, settings
 from scipy import stats
 
@@ -32,6 +33,9 @@ from jaxga.operators import mutation as M
 from jaxga.operators.lift import over_individuals
 from tests.plain_lifts import either, mutation_population, with_probability
 from tests.strategies import CAP, SIZE, grids_and_parents, random_parents
+
+# the mutations' properties and references in depth (contracts: test_registry)
+pytestmark = pytest.mark.slow
 
 P = 8
 T_FIXED = np.float32(0.01)

@@ -32,6 +32,9 @@ from jaxga.operators.lift import over_individuals
 from jaxga.reference.optima import clear_pairs_np, distances_from, shortest_path_np
 from tests.strategies import CAP, SIZE, grids_and_parents
 
+# the post-optimisations' properties and references in depth (contracts: test_registry)
+pytestmark = pytest.mark.slow
+
 P = 8
 
 # Every jitted function below is built once, here, and called with a few fixed shapes:

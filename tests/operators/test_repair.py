@@ -28,6 +28,9 @@ from jaxga.operators.repair import (
     splice_loop_free,
 )
 
+# the repairs' properties in depth (every operator's contract: tests/config/test_registry.py)
+pytestmark = pytest.mark.slow
+
 N = 10
 CAP = 64
 BATCH = 4  # connections per call of _connect

@@ -373,6 +373,7 @@ def test_presets_and_maps_list_what_the_package_ships(capsys):
     assert listed == sorted(builtin_names()) and "classic_ga_gapp3_20x20" in listed
 
 
+@pytest.mark.slow
 def test_run_json_holds_the_paths_from_the_given_endpoints(tmp_path, capsys):
     """A successful `jaxga run` with --start and --goal: every path in the JSON runs from
     the given start to the given goal over free cells, the raw path cell to adjacent
@@ -479,6 +480,7 @@ def test_a_plot_format_matplotlib_cannot_write_here_fails_before_the_run(tmp_pat
             check_outputs(argparse.Namespace(plot=str(tmp_path / "p.pgf"), json=None))
 
 
+@pytest.mark.slow
 def test_a_doe_where_no_seed_finds_a_path_names_the_cause(tmp_path, capsys, monkeypatch):
     """Nothing to fit: exit 3 with the reason the runs give (here the capacity), also
     when every point is read back from the checkpoint (the point files keep it)."""
@@ -707,6 +709,7 @@ def test_presets_show_prints_every_setting_with_its_source(capsys):
     assert main(["presets", "--variant", "agacd"]) == EXIT_BAD_INPUT
 
 
+@pytest.mark.slow
 def test_optimum_and_run_report_the_same_optimum_for_one_map(tmp_path):
     """One corner rule per map: a user's map is strict in `jaxga optimum` and in `jaxga
     run` of a paper preset alike (before, the run took the preset's free rule and found

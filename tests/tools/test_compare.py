@@ -114,6 +114,7 @@ def comparison(grid):
     return compare(["sga", "imga"], grid, seeds=SEEDS, **SMALL)
 
 
+@pytest.mark.slow
 def test_presets_as_one_comma_separated_string(comparison, grid):
     """``compare("sga,imga", ...)`` as the command line's --presets, not the letters."""
     again = compare("sga, imga", grid, seeds=SEEDS, **SMALL)

@@ -317,6 +317,7 @@ def _assert_same_runs(a: dict[str, np.ndarray], b: dict[str, np.ndarray]) -> Non
         np.testing.assert_array_equal(a[key], b[key], err_msg=key)
 
 
+@pytest.mark.slow
 def test_the_confirmation_runs_the_designs_program(one_call, monkeypatch):
     """The design (27 runs) and its confirmation (3 runs) run one
     compiled program set (the confirmation's runs padded to the design's call), and a
@@ -565,6 +566,7 @@ def test_cli_refuses_checkpoint_of_another_configuration(tmp_path, capsys):
     assert "different configuration" in err and "\n" not in err
 
 
+@pytest.mark.slow
 def test_killed_checkpointed_doe_resumes_to_the_same_result(blocked, tmp_path):
     """Kill a checkpointed ``jaxga doe`` subprocess midway, rerun
     the same command, and get the JSON of an uninterrupted run of the same command."""

@@ -76,6 +76,7 @@ def test_scenarios_put_the_papers_cells_on_the_planned_path(sc25, sc50):
     assert q[0] == (0, 0) and q[-1] == (49, 49)  # entry grid 0, exit grid 2499
 
 
+@pytest.mark.slow
 def test_mpmga_25x25_scenario(sc25):
     """MPMGA 5.2.1: obstacles at 320 and 345, robot at 295, re-plan to 370."""
     r = replan(sc25.grid, sc25.path, sc25.new_obstacles, sc25.position, **BUDGET)
@@ -270,6 +271,7 @@ def _cli_files(tmp_path, sc):
     return str(m), str(plain), str(run_json)
 
 
+@pytest.mark.slow
 def test_cli_replan_end_to_end(tmp_path, sc25, capsys):
     m, plain, run_json = _cli_files(tmp_path, sc25)
     out = tmp_path / "out.json"

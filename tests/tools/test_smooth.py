@@ -37,6 +37,8 @@ from jaxga.smooth import (
     verify_curve,
 )
 
+pytestmark = pytest.mark.slow  # smoothing on real paths (programs of their own)
+
 DATA = Path(__file__).parents[1] / "data"
 CFG = SmoothConfig(steps=120)
 CAP = 64
