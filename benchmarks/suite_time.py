@@ -24,6 +24,7 @@ import collections
 import json
 import os
 import shlex
+import shutil
 import subprocess
 import sys
 import tempfile
@@ -44,8 +45,8 @@ TITLES = {"all": "test suite time per file, cold compilation cache",
           "fast": "fast test tier time per file, cold compilation cache"}
 
 
-def run_suite(pytest_args: list[str], profile: Path, cache: Path) -> tuple[float, str]:
-    """Run pytest once (cold compilation cache); its wall seconds and its last line."""
+def run_suite(pytest_args: list[str], profile: Path, cache: Path) -> tuple[float, str, int]:
+    """Run pytest once (cold compilation cache); its wall seconds, last line and exit code."""
     env = dict(os.environ, JAXGA_SUITE_PROFILE=str(profile), JAXGA_TEST_JAX_CACHE=str(cache),
                PYTHONPATH=os.pathsep.join(filter(None, [str(HERE), os.environ.get("PYTHONPATH")])))
     cmd = [sys.executable, "-m", "pytest", "-q", "-p", "_compile_listener", *pytest_args]
@@ -55,8 +56,7 @@ def run_suite(pytest_args: list[str], profile: Path, cache: Path) -> tuple[float
     lines = [ln for ln in proc.stdout.strip().splitlines() if ln.strip()]
     if proc.returncode != 0:
         print(proc.stdout[-5000:], proc.stderr[-3000:], file=sys.stderr)
-        raise SystemExit(f"pytest exited with {proc.returncode}")
-    return wall, lines[-1] if lines else ""
+    return wall, lines[-1] if lines else "", proc.returncode
 
 
 def per_file(profile: Path) -> tuple[dict[str, collections.Counter], list, dict]:
@@ -81,12 +81,16 @@ def main() -> None:
     ap.add_argument("--no-write", action="store_true", help="do not append to RESULTS.md")
     ap.add_argument("--min-wall", type=float, default=20.0,
                     help="files whose tests took less (seconds) share one row of the table")
+    ap.add_argument("--keep-profile", type=Path, metavar="DIR",
+                    help="copy the per-test profile (one JSON per worker) to DIR")
     ap.add_argument("pytest_args", nargs="*", help="extra pytest arguments (after --)")
     a = ap.parse_args()
     with tempfile.TemporaryDirectory(prefix="jaxga-suite-") as tmp:
         profile, cache = Path(tmp) / "profile", Path(tmp) / "cache"
-        wall, last = run_suite([*TIERS[a.tier], *a.pytest_args], profile, cache)
+        wall, last, code = run_suite([*TIERS[a.tier], *a.pytest_args], profile, cache)
         files, tests, worker_of = per_file(profile)
+        if a.keep_profile:
+            shutil.copytree(profile, a.keep_profile, dirs_exist_ok=True)
     order = sorted(files, key=lambda f: -files[f]["wall"])
     def compiled(c: collections.Counter) -> int:
         """Programs XLA compiled: JAX times a persistent-cache load as a compile too."""
@@ -139,7 +143,10 @@ def main() -> None:
         + markdown_table(["test", "wall", "XLA s"],
                          [[n, w, c] for w, c, n in tests[: a.top]])
     )
-    record(TITLES[a.tier], body, write=not a.no_write)
+    # A failing suite's table is printed for diagnosis but never recorded as the result.
+    record(TITLES[a.tier], body, write=not a.no_write and code == 0)
+    if code != 0:
+        raise SystemExit(f"pytest exited with {code}")
 
 
 if __name__ == "__main__":
