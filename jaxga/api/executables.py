@@ -44,6 +44,11 @@ from typing import Any
 
 import jax
 import jaxlib
+
+try:
+    import fcntl
+except ImportError:  # pragma: no cover - not POSIX: a program may be compiled twice
+    fcntl = None
 from jax.experimental.serialize_executable import deserialize_and_load, serialize
 
 from jaxga.api.lowering import threefry_unrolled
@@ -167,10 +172,6 @@ compiles in well under a minute; a process stuck for longer is not waited for)."
 def _compiling(key: str | None) -> Iterator[None]:
     """Hold the store's lock on ``key`` (module docstring); nothing when there is no key,
     no ``fcntl`` (not POSIX) or the lock file cannot be made."""
-    try:
-        import fcntl
-    except ImportError:  # pragma: no cover - not POSIX: compiled twice at worst
-        fcntl = None
     if key is None or fcntl is None:
         yield
         return

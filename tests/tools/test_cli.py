@@ -644,6 +644,7 @@ def test_a_map_over_the_size_limit_is_one_line_and_coarsen_plans_on_it(tmp_path,
     assert data["length"] > 290  # around the wall, on the coarse map
 
 
+@pytest.mark.slow
 def test_a_ros_map_is_planned_on_in_world_coordinates_with_inflation(tmp_path, capsys):
     """A map written as ROS 1 map_saver writes it (binary PGM: 254 free, 0 occupied, 205
     unknown; YAML with resolution and origin), planned on from the command line with the

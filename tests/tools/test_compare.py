@@ -16,12 +16,13 @@ from jaxga import api
 from jaxga.cli import EXIT_BAD_INPUT, EXIT_NO_PATH, main
 from jaxga.compare import METRICS, compare, compare_results
 from jaxga.core.errors import ParameterError
-from jaxga.maps import random_map, save_map
+from jaxga.maps import load_map, save_map
 from jaxga.stats import fisher_success, holm, mann_whitney, wilcoxon_paired
+from tests import canonical
 
-# the map and settings of tests/api/test_api.py: the compiled programs are shared
-SMALL = dict(population__size=8, generations=3, init__max_tries=40)
-SEEDS = 3
+# the canonical problems (tests/canonical.py): the programs of tests/api/test_api.py
+SMALL = dict(generations=canonical.GENERATIONS, init__max_tries=40)
+SEEDS = canonical.SEEDS
 
 
 # ---------------------------------------------------------------- statistics
@@ -106,7 +107,7 @@ def test_fisher_success_matches_scipy():
 
 @pytest.fixture(scope="module")
 def grid():
-    return random_map(10, 10, 0.2, 3, corner_rule="free")
+    return load_map(canonical.MAP)
 
 
 @pytest.fixture(scope="module")
@@ -289,7 +290,7 @@ def test_compare_rejects_bad_requests(comparison, grid):
 
 def _cli_args(map_file, *extra):
     return ["compare", "--presets", "sga,imga", "--map", str(map_file), "--seeds", str(SEEDS),
-            "--generations", "3", "--set", "population.size=8", "--set", "init.max_tries=40",
+            "--generations", "3", "--set", "init.max_tries=40",
             "--corner-rule", "free", "--quiet", *extra]
 
 
@@ -310,7 +311,8 @@ def test_cli_compare_end_to_end(tmp_path, grid, comparison, capsys):
         conf = js["presets"][name]["config"]
         assert conf == comparison.results[name].config.as_dict()
         assert conf["name"] == name and conf["generations"] == 3
-        assert conf["population.size"] == js["presets"][name]["population_capacity"] == 8
+        assert (conf["population.size"] == js["presets"][name]["population_capacity"]
+                == comparison.results[name].population_capacity)
     assert "raw gap = raw length" in text  # what the gap columns measure
     # the CLI ran the same seeds as compare(): the same lengths
     for name in ("sga", "imga"):

@@ -96,6 +96,7 @@ def test_mpmga_25x25_scenario(sc25):
     assert len(r.ga) == 1 and r.segments[0]["ga_success"] >= 1
 
 
+@pytest.mark.slow
 def test_mpmga_50x50_scenario_in_a_window(sc50):
     """MPMGA 5.3.1: a 3 x 3 block at 810-812/860-862/910-912, robot at 759, re-plan to 963
     (the GA runs on a 25 x 25 crop: the same compiled program as the 25 x 25 tests)."""
@@ -337,6 +338,7 @@ def test_cli_replan_bad_path_file(tmp_path, sc25, capsys):
     assert main([*args, str(tmp_path / "missing.json")]) == EXIT_BAD_INPUT
 
 
+@pytest.mark.slow
 @pytest.mark.parametrize("block", [((10, 11, 12), (12, 13)), ((10, 11, 12), (11, 12, 13))])
 def test_the_default_replan_finds_the_detour_an_exact_search_finds(block):
     """A corridor three cells wide (rows 11-13 of a 25 x 25 map, the file's map shape and
