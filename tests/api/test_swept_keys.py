@@ -100,6 +100,7 @@ def test_one_sweep_over_a_traced_key_equals_separate_runs(preset, key, a, b, bas
         f"{key}: both values gave the same results, so the case shows nothing"
 
 
+@pytest.mark.slow
 @pytest.mark.parametrize("preset", ["sga", "mpmga", "agacd"])
 def test_traced_keys_are_parameters_of_the_pure_core(preset):
     """``jaxga.GA``: each of the preset's traced keys is a leaf of ``default_params`` (a
@@ -191,6 +192,7 @@ class _ReadsRecorded(Config):
             raise
 
 
+@pytest.mark.slow
 @pytest.mark.parametrize("preset", sorted(preset_names()))
 def test_each_program_reads_only_its_own_view_of_the_configuration(preset):
     """Every preset's init, evolve and finish programs traced (``jax.eval_shape``: nothing

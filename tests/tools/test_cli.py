@@ -777,6 +777,7 @@ def _open_ros_map(folder, size: int, resolution: float, origin: tuple[float, flo
     return yaml_file
 
 
+@pytest.mark.slow
 def test_metres_after_coarsen_paths_in_both_cell_frames_and_the_path_file(tmp_path, capsys):
     """A 16 x 16 map of 0.1 m cells (origin (-1, -2)) coarsened 2 x 2 is an 8 x 8 grid of
     0.2 m cells: the straight path from the world point (-0.95, -1.95) (map cell (0, 0),

@@ -14,7 +14,7 @@ import pytest  # noqa: E402
 from matplotlib.collections import PathCollection, PolyCollection  # noqa: E402
 
 from jaxga.compare import compare_results  # noqa: E402
-from jaxga.maps import random_map  # noqa: E402
+from jaxga.maps import load_map, random_map  # noqa: E402
 from jaxga.plot import (  # noqa: E402
     plot_box,
     plot_comparison,
@@ -24,15 +24,16 @@ from jaxga.plot import (  # noqa: E402
     plot_result,
     plot_seed_scatter,
 )
+from tests import canonical  # noqa: E402
 
-# the map and settings of tests/api/test_api.py and tests/tools/test_compare.py (shared programs)
-SMALL = dict(population__size=8, generations=3, init__max_tries=40)
-SEEDS = 3
+# the canonical problems (tests/canonical.py): the programs of tests/api/test_api.py
+SMALL = dict(generations=canonical.GENERATIONS, init__max_tries=40)
+SEEDS = canonical.SEEDS
 
 
 @pytest.fixture(scope="module")
 def grid():
-    return random_map(10, 10, 0.2, 3, corner_rule="free")
+    return load_map(canonical.MAP)
 
 
 @pytest.fixture(scope="module")
@@ -80,7 +81,7 @@ def test_plot_paths_refuses_a_map_the_result_was_not_computed_on(comparison, gri
     from jaxga.core.errors import ParameterError
 
     r = comparison.results["imga"]
-    with pytest.raises(ParameterError, match="10 cells wide"):
+    with pytest.raises(ParameterError, match="20 cells wide .* this map is 12 wide"):
         plot_paths(r, random_map(10, 12, 0.2, 3, corner_rule="free"))
     walls = np.asarray(grid.blocked).copy()
     i = int(np.flatnonzero(r.success)[0])
@@ -340,7 +341,7 @@ def test_a_map_without_layers_is_black_on_white_as_before(grid):
     expected = np.where(grid.blocked_np()[..., None], 0, 255)
     np.testing.assert_array_equal(img, np.broadcast_to(expected, img.shape))
     assert not [a for a in ax.get_children() if a.get_gid() == "cell-key"]
-    assert ax.get_xlim() == (-0.5, 9.5) and ax.get_ylim() == (-0.5, 9.5)
+    assert ax.get_xlim() == (-0.5, 19.5) and ax.get_ylim() == (-0.5, 19.5)  # 20 x 20 cells
     assert ax.get_xlabel() == "" and ax.get_ylabel() == ""
     plt.close(ax.figure)
 
@@ -456,8 +457,8 @@ def test_a_result_on_a_ros_map_is_drawn_in_metres_titled_with_the_map(office, tm
     a1 = fig.axes[0]
     title = a1.get_title()
     assert "office" in title and r.preset in title and repr(r.corner_rule) in title
-    assert a1.get_xlim() == pytest.approx((-1.5, 1.0)) and a1.get_ylim() == pytest.approx(
-        (2.0, 4.5))  # 10 x 10 cells of 0.25 m from the origin
+    assert a1.get_xlim() == pytest.approx((-1.5, 3.5)) and a1.get_ylim() == pytest.approx(
+        (2.0, 7.0))  # 20 x 20 cells of 0.25 m from the origin
     post = next(ln for ln in a1.get_lines() if ln.get_label().startswith("post-optimised"))
     np.testing.assert_allclose(post.get_xydata(), r.world_path(i))
     assert f"{r.length[i] * 0.25:.2f} m" in post.get_label()

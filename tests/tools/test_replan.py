@@ -111,6 +111,7 @@ def test_mpmga_50x50_scenario_in_a_window(sc50):
 # The file's small budget (10 individuals, init.max_tries 20) leaves a few initial slots of
 # MPMGA's intermittent initialisation filled with copies in the second re-planning, and
 # jaxga.api.run warns so (test_api.py tests that warning); this test is about the splices.
+@pytest.mark.slow
 @pytest.mark.filterwarnings("ignore::jaxga.core.errors.InitialisationWarning")
 def test_every_blocked_part_is_replanned_and_loops_removed(sc25):
     """Two separate blockages: two splices (the second from the last clear cell before
