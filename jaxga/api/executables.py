@@ -83,6 +83,19 @@ def _only_builtin_operators(algo: Any) -> bool:
                for op in chosen_operators(algo.config).values())
 
 
+COMPILE_OPTIONS = ("jax_disable_most_optimizations", "jax_optimization_level",
+                   "jax_exec_time_optimization_effort", "jax_memory_fitting_effort",
+                   "jax_memory_fitting_level")
+"""JAX settings that change the compiled program, part of every program's key."""
+
+
+def _config_value(name: str) -> Any:
+    try:
+        return jax.config.read(name)
+    except (AttributeError, KeyError):  # not in this JAX
+        return None
+
+
 def program_key(name: str, algo: Any, grid_spec: Any, params_spec: Any, n_runs: int,
                 devices: Any, settings: Any = ()) -> str | None:
     """The file name of a program, or None when it is not to be stored (no cache
@@ -102,6 +115,9 @@ def program_key(name: str, algo: Any, grid_spec: Any, params_spec: Any, n_runs: 
         threefry_unrolled(), os.environ.get("XLA_FLAGS", ""),
         jax.config.jax_enable_x64, jax.config.jax_default_prng_impl,
         jax.config.jax_threefry_partitionable,
+        # JAX's options that change what XLA compiles (jax.config.read: they may be
+        # missing as attributes): a program compiled under one is not another's
+        [(name, _config_value(name)) for name in COMPILE_OPTIONS],
     )
     return hashlib.blake2b(repr(parts).encode(), digest_size=20).hexdigest()
 

@@ -382,6 +382,22 @@ def test_programs_with_a_users_operator_are_not_stored(grid):
         registry.unregister("mutation", "users_copy")
 
 
+def test_a_program_compiled_with_other_jax_compile_options_has_another_key(grid):
+    """``jax_disable_most_optimizations`` (and JAX's other compile options) change what
+    XLA compiles: a program stored under one setting is never read under another."""
+    config = api.check_run("sga", grid, **OPTIONS)
+    algo, _ = engine.build(config, grid)
+    args = (None, (), 8, jax.devices()[:1])
+    plain = executables.program_key("init", algo, *args)
+    jax.config.update("jax_disable_most_optimizations", True)
+    try:
+        other = executables.program_key("init", algo, *args)
+    finally:
+        jax.config.update("jax_disable_most_optimizations", False)
+    assert plain is not None and other is not None and other != plain
+    assert executables.program_key("init", algo, *args) == plain
+
+
 def test_each_process_of_a_multi_process_run_reads_only_its_own_programs(grid, monkeypatch):
     """In a run over several processes the programs of process 0 and process 1 have
     different keys: a program addresses its own process's devices (read by another
