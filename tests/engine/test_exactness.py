@@ -11,7 +11,8 @@ floating-point accumulation whose order XLA chooses.
   the ties of unstable sorts flipped (:mod:`tests.lowering_variants`) gives
   ``jaxga.run``'s result bit for bit;
 * the variants themselves change a program that does rely on those orders (the check is
-  not vacuous).
+  not vacuous);
+* a run's initial population is the same alone, in a call of 10 and in one of 256.
 """
 
 from __future__ import annotations
@@ -130,3 +131,19 @@ def test_a_run_is_the_same_with_scatters_reversed_and_sort_ties_flipped(preset):
         out = jax.jit(jax.vmap(lambda k, p: ga.run(k, p), (0, None)))(keys,
                                                                        ga.default_params)
     assert_seed_for_seed(out, ref)
+
+
+@pytest.mark.slow  # three initialisation programs per preset, one of 256 runs
+@pytest.mark.parametrize("preset", preset_names())
+def test_an_initial_population_is_the_same_alone_in_10_and_in_256_runs(preset):
+    """``GA.init`` of run ``i`` in one ``vmap`` of 256 runs equals it in a ``vmap`` of 10
+    and alone, every leaf of the state bit for bit: the batch a run shares changes
+    nothing (decision 037: a GPU's initialisers failed at 256 and 2048 runs per call)."""
+    ga = jaxga.GA(preset, canonical.MAP, generations=canonical.GENERATIONS)
+    keys = jax.random.split(jax.random.PRNGKey(5), 256)
+    many = jax.jit(jax.vmap(ga.init, (0, None)))(keys, ga.default_params)
+    few = jax.jit(jax.vmap(ga.init, (0, None)))(keys[:10], ga.default_params)
+    last = jax.jit(ga.init)(keys[-1], ga.default_params)
+    for a, b, c in zip(*map(jax.tree_util.tree_leaves, (many, few, last))):
+        np.testing.assert_array_equal(np.asarray(a)[:10], np.asarray(b))
+        np.testing.assert_array_equal(np.asarray(a)[-1], np.asarray(c))
