@@ -21,26 +21,18 @@ import jax
 import jax.numpy as jnp
 import numpy as np
 import pytest
-from jax.extend.core import ClosedJaxpr, Jaxpr
+from jax.extend.core import Jaxpr
 
 import jaxga
 from jaxga.config.presets import preset_names
 from tests import canonical
 from tests.api.test_ga import assert_seed_for_seed
+from tests.jaxprs import sub_jaxprs
 from tests.lowering_variants import altered_lowering
 
 SEEDS = [0, 1, 2]
 COMBINING = ("scatter-add", "scatter_add", "scatter-mul", "scatter_mul", "scatter-min",
              "scatter_min", "scatter-max", "scatter_max")
-
-
-def _sub_jaxprs(params: dict):
-    for value in params.values():
-        for v in value if isinstance(value, (tuple, list)) else (value,):
-            if isinstance(v, ClosedJaxpr):
-                yield v.jaxpr
-            elif isinstance(v, Jaxpr):
-                yield v
 
 
 def _where(eqn) -> str:
@@ -59,7 +51,7 @@ def _order_dependent(jaxpr: Jaxpr, found: list[str]) -> None:
             found.append(f"unstable sort at {_where(eqn)}")
         if name in COMBINING and jnp.issubdtype(eqn.outvars[0].aval.dtype, jnp.inexact):
             found.append(f"{name} of {eqn.outvars[0].aval.dtype} at {_where(eqn)}")
-        for sub in _sub_jaxprs(eqn.params):
+        for sub in sub_jaxprs(eqn.params):
             _order_dependent(sub, found)
 
 

@@ -10,23 +10,15 @@ import jax.numpy as jnp
 import numpy as np
 import pytest
 from jax.experimental import io_callback
-from jax.extend.core import ClosedJaxpr, Jaxpr
+from jax.extend.core import Jaxpr
 
 import jaxga
 from jaxga.api import lowering, parallel, programs
 from jaxga.config.presets import preset_names
+from tests.jaxprs import sub_jaxprs
 
 MAP = "classic_ga_gapp3_20x20"
 WIDE = {"float64", "complex128"}
-
-
-def _sub_jaxprs(params: dict):
-    for value in params.values():
-        for v in value if isinstance(value, (tuple, list)) else (value,):
-            if isinstance(v, ClosedJaxpr):
-                yield v.jaxpr
-            elif isinstance(v, Jaxpr):
-                yield v
 
 
 def _contents(jaxpr: Jaxpr, dtypes: set[str], primitives: set[str]) -> None:
@@ -39,7 +31,7 @@ def _contents(jaxpr: Jaxpr, dtypes: set[str], primitives: set[str]) -> None:
         for var in (*eqn.invars, *eqn.outvars):
             if hasattr(var.aval, "dtype"):
                 dtypes.add(str(var.aval.dtype))
-        for sub in _sub_jaxprs(eqn.params):
+        for sub in sub_jaxprs(eqn.params):
             _contents(sub, dtypes, primitives)
 
 
