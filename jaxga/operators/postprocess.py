@@ -28,6 +28,7 @@ from collections.abc import Callable
 import jax
 import jax.numpy as jnp
 
+from jaxga._batching.numerics import ordered_sum
 from jaxga.core.errors import ParameterError
 from jaxga.core.geometry import clear, floor_div, linear_trial
 from jaxga.core.grid import Grid, diagonal_legal, move_legal
@@ -262,7 +263,8 @@ def _path_length(cells: jax.Array, length: jax.Array, width: int) -> jax.Array:
     """Euclidean length (cell units, float32) of the first ``length`` nodes of ``cells``."""
     p = jnp.stack([cells % width, cells // width], axis=-1).astype(jnp.float32)
     seg = jnp.linalg.norm(p[1:] - p[:-1], axis=-1)
-    return jnp.sum(jnp.where(jnp.arange(cells.shape[0] - 1) < length - 1, seg, 0.0))
+    # a fixed order of additions: XLA chooses a reduction's order per backend and batch
+    return ordered_sum(jnp.where(jnp.arange(cells.shape[0] - 1) < length - 1, seg, 0.0))
 
 
 def shortcut_optimal(
