@@ -38,6 +38,7 @@ COMBINING = ("scatter-add", "scatter_add", "scatter-mul", "scatter_mul", "scatte
 def _where(eqn) -> str:
     """The innermost frames of the Python code that made ``eqn`` (file:function)."""
     frames = eqn.source_info.traceback.frames if eqn.source_info.traceback else []
+    frames = [f for f in frames if "/jaxga/" in f.file_name] or frames  # jaxga's own first
     return " <- ".join(f"{'/'.join(f.file_name.rsplit('/', 2)[-2:])}:{f.function_name}"
                        for f in frames[:3])
 
