@@ -44,16 +44,16 @@ from typing import Any
 
 import jax
 import jaxlib
-
-try:
-    import fcntl
-except ImportError:  # pragma: no cover - not POSIX: a program may be compiled twice
-    fcntl = None
 from jax.experimental.serialize_executable import deserialize_and_load, serialize
 
 from jaxga.api.lowering import threefry_unrolled
 from jaxga.core.files import atomic_write
 from jaxga.engine import chosen_operators
+
+try:
+    import fcntl
+except ImportError:  # pragma: no cover - not POSIX: a program may be compiled twice
+    fcntl = None
 
 SUBDIRECTORY = "jaxga-programs"
 
