@@ -34,7 +34,7 @@ import jax.numpy as jnp
 import numpy as np
 
 from jaxga._batching.folding import fold_call, hoist
-from jaxga._batching.scatter import true_first_order
+from jaxga._batching.scatter import true_first_order, true_first_positions
 
 __all__ = ["lane_while_loop"]
 
@@ -169,8 +169,15 @@ def _run(cond_fun, body_fun, carry_tree, lead, flat_c, flat_o, axes, shrink, mas
         # Full width while more than m lanes are unfinished ...
         flat_c = loop(lambda act: jnp.sum(act, dtype=jnp.int32) > m, flat_c, flat_o)
         # ... then the (at most m) unfinished lanes, moved to the front, in m lanes.
-        idx = true_first_order(active(flat_c, flat_o))[:m]
+        act = active(flat_c, flat_o)
+        idx = true_first_order(act)[:m]
         sub_o = [x if ax is None else x[idx] for x, ax in zip(flat_o, axes)]
         sub_c = loop(jnp.any, [x[idx] for x in flat_c], sub_o)
-        flat_c = [x.at[idx].set(s, unique_indices=True) for x, s in zip(flat_c, sub_c)]
+        # Merged back by a gather and a select (lane i's result is sub_c[pos[i]] when
+        # pos[i] < m), not by a scatter: the same bits from the most plainly defined
+        # operations (docs/devices.md, "Exactness").
+        pos = true_first_positions(act)
+        back, moved = jnp.minimum(pos, m - 1), pos < m
+        flat_c = [jnp.where(moved.reshape((-1,) + (1,) * (x.ndim - 1)), s[back], x)
+                  for x, s in zip(flat_c, sub_c)]
     return flat_c

@@ -29,7 +29,7 @@ from jax.custom_batching import custom_vmap
 
 from jaxga._batching.folding import fold_call
 
-__all__ = ["position_table", "table_lookup", "true_first_order"]
+__all__ = ["position_table", "table_lookup", "true_first_order", "true_first_positions"]
 
 MAX_FLAT_ENTRIES = int(np.iinfo(np.int32).max)
 """Flat tables must stay below this many entries (int32 indices); larger batches of rows
@@ -174,9 +174,16 @@ def true_first_order(flags: jax.Array) -> jax.Array:
     on XLA's CPU backend is many times slower and was half of a generation of AGACD's
     evolution (decision 004).
     """
+    pos = true_first_positions(flags)
+    n = pos.shape[0]
+    return jnp.zeros((n,), jnp.int32).at[pos].set(jnp.arange(n, dtype=jnp.int32),
+                                                  unique_indices=True)
+
+
+def true_first_positions(flags: jax.Array) -> jax.Array:
+    """``int32[n]``: the position of each entry in :func:`true_first_order` (its inverse
+    permutation), from a prefix count alone: no scatter, no sort."""
     flags = jnp.asarray(flags, bool)
-    n = flags.shape[0]
-    i = jnp.arange(n, dtype=jnp.int32)
+    i = jnp.arange(flags.shape[0], dtype=jnp.int32)
     trues = jax.lax.associative_scan(jnp.add, flags.astype(jnp.int32))  # inclusive
-    pos = jnp.where(flags, trues - 1, trues[-1] + i - trues)
-    return jnp.zeros((n,), jnp.int32).at[pos].set(i, unique_indices=True)
+    return jnp.where(flags, trues - 1, trues[-1] + i - trues)

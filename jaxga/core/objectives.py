@@ -773,11 +773,12 @@ def _clearance(grid: Grid, g: _Geometry,
         d, hit = jax.vmap(lambda *s: _piece_band_clearance(*s, obstacles))(*sub, t - first[seg])
         valid = t < total
         return (start + chunk, jnp.minimum(near, jnp.min(jnp.where(valid, d, jnp.inf))),
-                touch.at[jnp.where(valid & hit, seg, n_seg)].set(True, mode="drop"))
+                touch.at[jnp.where(valid & hit, seg, n_seg)].set(1, mode="drop"))
 
     _, near, touch = jax.lax.while_loop(
         lambda s: s[0] < total, block,
-        (jnp.int32(0), jnp.asarray(jnp.inf, F32), jnp.zeros((n_seg,), bool)))
+        # uint8 flags, not bool: no bool table updated in a loop (docs/devices.md)
+        (jnp.int32(0), jnp.asarray(jnp.inf, F32), jnp.zeros((n_seg,), jnp.uint8)))
     batch = max(1, min(n_seg, (1 << 15) // (h * w)))
 
     def whole_map(state: tuple[jax.Array, jax.Array]) -> tuple[jax.Array, jax.Array]:
@@ -793,7 +794,7 @@ def _clearance(grid: Grid, g: _Geometry,
     # Runs its body only if this path (under vmap: any path) stays beyond the radius.
     near, _ = jax.lax.while_loop(lambda s: ~s[1], whole_map,
                                  (near.astype(F32), near <= CLEARANCE_RADIUS))
-    return near, touch
+    return near, touch != 0
 
 
 def _min_clearance(grid: Grid, g: _Geometry, border_blocked: bool) -> jax.Array:

@@ -163,12 +163,13 @@ def _greedy_pass(sees: Callable[[jax.Array, jax.Array], jax.Array], cells: jax.A
         # j + 1 = k, j = k - 1: does the anchor see cells[k]? If so node k - 1 goes.
         anchor, dropped = carry
         visible = sees(anchor, cells[k])
-        dropped = dropped.at[k - 1].set(visible)
+        dropped = dropped.at[k - 1].set(visible.astype(jnp.uint8))
         return jnp.where(visible, anchor, cells[k - 1]), dropped
 
+    # uint8 flags, not bool: no bool table updated in a loop (docs/devices.md, "Exactness")
     _, dropped = jax.lax.fori_loop(2, jnp.clip(length, 2, n_cap), step,
-                                   (cells[0], jnp.zeros((n_cap,), bool)))
-    return compact(cells, (jnp.arange(n_cap, dtype=jnp.int32) < length) & ~dropped)
+                                   (cells[0], jnp.zeros((n_cap,), jnp.uint8)))
+    return compact(cells, (jnp.arange(n_cap, dtype=jnp.int32) < length) & (dropped == 0))
 
 
 # ------------------------------------------------------------------ shortcut_greedy
@@ -351,12 +352,12 @@ def shortcut_optimal(
 
     def follow(c):
         node, keep = c
-        return parent[node], keep.at[node].set(True)
+        return parent[node], keep.at[node].set(1)
 
-    _, keep = jax.lax.while_loop(lambda c: c[0] > 0, follow,
-                                 (last, jnp.zeros((n_cap,), bool).at[0].set(True)))
+    _, keep = jax.lax.while_loop(lambda c: c[0] > 0, follow,  # uint8: no bool table
+                                 (last, jnp.zeros((n_cap,), jnp.uint8).at[0].set(1)))
     reachable = jnp.isfinite(dist[last])  # always, for a feasible continuous path
-    opt_c, opt_n = compact(cells, jnp.where(reachable, keep, jnp.arange(n_cap) < length))
+    opt_c, opt_n = compact(cells, jnp.where(reachable, keep != 0, jnp.arange(n_cap) < length))
 
     # One loop of greedy passes (one copy of the pass in the program): pass 0 is the
     # papers' greedy pass over the input (shortcut_greedy's result); the shorter of its

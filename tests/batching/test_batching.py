@@ -15,7 +15,7 @@ import numpy as np
 import pytest
 
 from jaxga._batching.numerics import ordered_sum
-from jaxga._batching.scatter import true_first_order
+from jaxga._batching.scatter import true_first_order, true_first_positions
 from jaxga.core.grid import Grid
 from jaxga.core.paths import Population, from_coords, pad
 from jaxga.maps import load_map
@@ -272,13 +272,14 @@ _ORDER_SIZES = (1, 2, 61, 9540)
 
 @pytest.fixture(scope="module")
 def true_first_orders():
-    """For each of :data:`_ORDER_SIZES`: the flags and ``vmap(true_first_order)`` of them,
-    all computed by one program."""
+    """For each of :data:`_ORDER_SIZES`: the flags and ``vmap(true_first_order)`` and
+    ``vmap(true_first_positions)`` of them, all computed by one program."""
     flags = []
     for n in _ORDER_SIZES:
         rng = np.random.default_rng(n)
         flags.append(rng.random((6, n)) < np.array([0.0, 0.03, 0.5, 0.97, 1.0, 0.3])[:, None])
-    got = jax.jit(lambda fs: [jax.vmap(true_first_order)(f) for f in fs])(flags)
+    got = jax.jit(lambda fs: [(jax.vmap(true_first_order)(f), jax.vmap(true_first_positions)(f))
+                              for f in fs])(flags)
     return dict(zip(_ORDER_SIZES, zip(flags, _host(got))))
 
 
@@ -287,9 +288,20 @@ def test_true_first_order_is_the_stable_argsort(true_first_orders, n):
     """The gate order of gated_map: True entries first, each group in index order,
     exactly ``argsort(~flags, stable=True)``, also under vmap; all-False and all-True rows
     included."""
-    flags, got = true_first_orders[n]
+    flags, (got, _) = true_first_orders[n]
     want = np.argsort(~flags, axis=1, kind="stable")
     assert got.dtype == np.int32 and np.array_equal(got, want)
+
+
+@pytest.mark.parametrize("n", _ORDER_SIZES)
+def test_true_first_positions_are_the_inverse_of_the_order(true_first_orders, n):
+    """``positions[order[j]] == j`` for every ``j``: where each entry lands, as the
+    compacted loops use it to merge their lanes back by a gather."""
+    flags, (order, positions) = true_first_orders[n]
+    want = np.argsort(np.argsort(~flags, axis=1, kind="stable"), axis=1, kind="stable")
+    assert positions.dtype == np.int32 and np.array_equal(positions, want)
+    assert np.array_equal(np.take_along_axis(positions, order, axis=1),
+                          np.broadcast_to(np.arange(n), flags.shape))
 
 
 # ------------------------------------------------------------------- windowed_map

@@ -57,6 +57,17 @@ def compute_move_tables(grid: Grid) -> tuple[jax.Array, jax.Array]:
     return nbr.reshape(-1), legal.reshape(-1)
 
 
+def write_at(buf: jax.Array, i: jax.Array, value: jax.Array) -> jax.Array:
+    """``buf.at[i].set(value, mode="drop")`` for a scalar ``i``, as an elementwise select.
+
+    A walk writes one path cell per step; under ``vmap`` the scatter form becomes one
+    batched scatter per step, the construct suspected in an accelerator's wrong initial
+    populations (docs/devices.md, "Exactness"). The select computes the same bits on
+    every backend from elementwise operations alone. Jittable.
+    """
+    return jnp.where(jnp.arange(buf.shape[0], dtype=I32) == i, value, buf)
+
+
 def exclusion_mask(grid: Grid, exclude: jax.Array | None) -> jax.Array:
     """``bool[H*W]`` mask of cells a self-avoiding walk must not enter.
 

@@ -16,7 +16,7 @@ from jaxga.core.paths import (
     position_lookup,
     remove_loops,
 )
-from jaxga.operators.init.common import check_capacity, fit_to_capacity, move_tables
+from jaxga.operators.init.common import check_capacity, fit_to_capacity, move_tables, write_at
 from jaxga.operators.repair import splice_loop_free
 
 # ------------------------------------------------------------------ field walks
@@ -136,7 +136,7 @@ def _descent(key, grid, table, offset, source, capacity, budget, temperature):
         # Under vmap the loop runs unmasked (below): a finished walk stays where it is.
         move = (here > 0) & (t < steps) & reachable
         new = jnp.where(move, nbr[idx], cur)
-        buf = buf.at[n_moves + 1].set(new, mode="drop")  # past n_moves: scratch
+        buf = write_at(buf, n_moves + 1, new)  # past n_moves: scratch
         return (t + 1, new, used + jnp.where(move, excess[idx], 0.0),
                 n_moves + move.astype(I32), buf)
 

@@ -24,6 +24,7 @@ from jaxga.operators.init.common import (
     free_cells,
     move_tables,
     pick_cell,
+    write_at,
 )
 
 
@@ -75,10 +76,12 @@ def _self_avoiding_walk(
     n = grid.n_cells
     nbr_t, legal_t = move_tables(grid)
     use_table = n <= VISITED_TABLE_CELLS_PER_NODE * capacity
-    if use_table:  # the walk's visited set: one bool per cell of the map
-        visited = exclusion_mask(grid, exclude)
-        visited = visited.at[jnp.clip(target, 0, n - 1)].set(False)
-        visited = visited.at[jnp.clip(source, 0, n - 1)].set(True)
+    if use_table:  # the walk's visited set: one byte per cell of the map
+        # uint8, not bool: a bool table updated in a batched loop is a pattern that one
+        # accelerator backend has mis-executed (docs/devices.md, "Exactness").
+        visited = exclusion_mask(grid, exclude).astype(jnp.uint8)
+        visited = visited.at[jnp.clip(target, 0, n - 1)].set(0)
+        visited = visited.at[jnp.clip(source, 0, n - 1)].set(1)
         seen = None
     else:  # a large map: a set of at most `capacity` cells, and the excluded cells
         seen = _excluded_cells(grid, exclude, target)
@@ -102,7 +105,7 @@ def _self_avoiding_walk(
         nbr = nbr_t[k]
         legal = legal_t[k]
         if use_table:
-            cand = legal & ~visited[nbr]
+            cand = legal & (visited[nbr] == 0)
         else:
             cand = legal & ~_hash_seen(visited[0], nbr) & ~seen(nbr)
         if directional:
@@ -138,12 +141,12 @@ def _self_avoiding_walk(
         move = ~done & (t < steps) & ~dead
         new = jnp.where(move, nxt, cur)
         if use_table:
-            visited = visited.at[new].set(True)
+            visited = visited.at[new].set(1)
         else:
             table, kept = _hash_add(visited[0], new)
             visited = (table, visited[1] | ~kept)
         reached = move & (new == target)
-        buf = buf.at[n_moves + 1].set(new, mode="drop")  # past n_moves: scratch
+        buf = write_at(buf, n_moves + 1, new)  # past n_moves: scratch
         return (t + 1, new, visited, done | dead | reached, ok | reached,
                 n_moves + move.astype(I32), buf)
 
