@@ -777,8 +777,8 @@ def _clearance(grid: Grid, g: _Geometry,
 
     _, near, touch = jax.lax.while_loop(
         lambda s: s[0] < total, block,
-        # uint8 flags, not bool: no bool table updated in a loop (docs/devices.md)
-        (jnp.int32(0), jnp.asarray(jnp.inf, F32), jnp.zeros((n_seg,), jnp.uint8)))
+        # int32 flags, not bool: no bool table updated in a loop (docs/devices.md)
+        (jnp.int32(0), jnp.asarray(jnp.inf, F32), jnp.zeros((n_seg,), jnp.int32)))
     batch = max(1, min(n_seg, (1 << 15) // (h * w)))
 
     def whole_map(state: tuple[jax.Array, jax.Array]) -> tuple[jax.Array, jax.Array]:

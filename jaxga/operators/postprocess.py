@@ -163,12 +163,12 @@ def _greedy_pass(sees: Callable[[jax.Array, jax.Array], jax.Array], cells: jax.A
         # j + 1 = k, j = k - 1: does the anchor see cells[k]? If so node k - 1 goes.
         anchor, dropped = carry
         visible = sees(anchor, cells[k])
-        dropped = dropped.at[k - 1].set(visible.astype(jnp.uint8))
+        dropped = dropped.at[k - 1].set(visible.astype(jnp.int32))
         return jnp.where(visible, anchor, cells[k - 1]), dropped
 
-    # uint8 flags, not bool: no bool table updated in a loop (docs/devices.md, "Exactness")
+    # int32 flags, not bool: no bool table updated in a loop (docs/devices.md, "Exactness")
     _, dropped = jax.lax.fori_loop(2, jnp.clip(length, 2, n_cap), step,
-                                   (cells[0], jnp.zeros((n_cap,), jnp.uint8)))
+                                   (cells[0], jnp.zeros((n_cap,), jnp.int32)))
     return compact(cells, (jnp.arange(n_cap, dtype=jnp.int32) < length) & (dropped == 0))
 
 
@@ -354,8 +354,8 @@ def shortcut_optimal(
         node, keep = c
         return parent[node], keep.at[node].set(1)
 
-    _, keep = jax.lax.while_loop(lambda c: c[0] > 0, follow,  # uint8: no bool table
-                                 (last, jnp.zeros((n_cap,), jnp.uint8).at[0].set(1)))
+    _, keep = jax.lax.while_loop(lambda c: c[0] > 0, follow,  # int32: no bool table
+                                 (last, jnp.zeros((n_cap,), jnp.int32).at[0].set(1)))
     reachable = jnp.isfinite(dist[last])  # always, for a feasible continuous path
     opt_c, opt_n = compact(cells, jnp.where(reachable, keep != 0, jnp.arange(n_cap) < length))
 

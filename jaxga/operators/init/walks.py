@@ -76,10 +76,10 @@ def _self_avoiding_walk(
     n = grid.n_cells
     nbr_t, legal_t = move_tables(grid)
     use_table = n <= VISITED_TABLE_CELLS_PER_NODE * capacity
-    if use_table:  # the walk's visited set: one byte per cell of the map
-        # uint8, not bool: a bool table updated in a batched loop is a pattern that one
+    if use_table:  # the walk's visited set: one int32 per cell of the map
+        # int32, not bool: a bool table updated in a batched loop is a pattern that one
         # accelerator backend has mis-executed (docs/devices.md, "Exactness").
-        visited = exclusion_mask(grid, exclude).astype(jnp.uint8)
+        visited = exclusion_mask(grid, exclude).astype(jnp.int32)
         visited = visited.at[jnp.clip(target, 0, n - 1)].set(0)
         visited = visited.at[jnp.clip(source, 0, n - 1)].set(1)
         seen = None
@@ -168,9 +168,10 @@ def _self_avoiding_walk(
 
 
 VISITED_TABLE_CELLS_PER_NODE = 64
-"""A self-avoiding walk keeps its visited set as one bool per map cell while the map has
-at most this many cells per node of the walk's capacity (up to 101 x 101 cells for a
-capacity of 160; below that the hash set of 32-64 bytes per node would be larger);
+"""A self-avoiding walk keeps its visited set as one int32 per map cell (not bool:
+docs/devices.md, "Exactness") while the map has at most this many cells per node of the
+walk's capacity (up to 101 x 101 cells, 40 kB per walk, for a capacity of 160; a table
+is probed faster than the hash set of 32-64 bytes per node);
 on larger maps as a hash set of the walk's own cells (:func:`_hash_add`) and a sorted
 list of the excluded ones, so that its memory and time grow with the capacity, not with
 the map (a range mutation on a 256 x 256 map held 64 kB per walk; decision 008)."""
