@@ -3,10 +3,12 @@
 one index, the order an unstable sort gives equal keys, and the rounding of a
 floating-point accumulation whose order XLA chooses.
 
-* a lint over every preset's whole run (``GA.run``, traced only): every sort is stable
-  (equal keys keep their positions, on every backend) and every combining scatter
-  (add, mul, min, max) works on integers or booleans, whose result does not depend on
-  the order of its updates;
+* a lint over every preset's whole run (256 runs of ``GA.run`` in one ``vmap``, traced
+  and lowered only): every sort is stable (equal keys keep their positions, on every
+  backend), every combining scatter (add, mul, min, max) works on integers, whose result
+  does not depend on the order of its updates, every scatter and sort is one reviewed in
+  ``order_sites.toml`` (with the reason its result is defined), and the lowered program
+  calls no custom kernel;
 * every preset's run compiled with every ``set`` scatter's updates in reverse order and
   the ties of unstable sorts flipped (:mod:`tests.lowering_variants`) gives
   ``jaxga.run``'s result bit for bit;
@@ -16,6 +18,10 @@ floating-point accumulation whose order XLA chooses.
 """
 
 from __future__ import annotations
+
+import re
+import sys
+from pathlib import Path
 
 import jax
 import jax.numpy as jnp
@@ -30,30 +36,53 @@ from tests.api.test_ga import assert_seed_for_seed
 from tests.jaxprs import sub_jaxprs
 from tests.lowering_variants import altered_lowering
 
+if sys.version_info >= (3, 11):
+    import tomllib
+else:  # pragma: no cover
+    import tomli as tomllib
+
 SEEDS = [0, 1, 2]
-COMBINING = ("scatter-add", "scatter_add", "scatter-mul", "scatter_mul", "scatter-min",
-             "scatter_min", "scatter-max", "scatter_max")
+PACKAGE = str(Path(jaxga.__file__).parent) + "/"
+REVIEWED = tomllib.loads((Path(__file__).parent / "order_sites.toml").read_text())["site"]
+REFUSED = ("unstable sort", "scatter-add of floats", "scatter-mul of floats",
+           "scatter-min of floats", "scatter-max of floats")
+LINT_RUNS = 256  # a batch wide enough for the compacted loops (jaxga._batching.lanes)
 
 
-def _where(eqn) -> str:
-    """The innermost frames of the Python code that made ``eqn`` (file:function)."""
+def _site(eqn, parent: str) -> str:
+    """``module:function`` of the innermost jaxga frame that made ``eqn``, or
+    ``parent``'s (an equation inside a jitted JAX function, such as ``jnp.argsort``,
+    records only the frames inside it)."""
     frames = eqn.source_info.traceback.frames if eqn.source_info.traceback else []
-    frames = [f for f in frames if "/jaxga/" in f.file_name] or frames  # jaxga's own first
-    return " <- ".join(f"{'/'.join(f.file_name.rsplit('/', 2)[-2:])}:{f.function_name}"
-                       for f in frames[:3])
+    for f in frames:
+        if f.file_name.startswith(PACKAGE):
+            return f"{f.file_name[len(PACKAGE):]}:{f.function_name}"
+    return parent
 
 
-def _order_dependent(jaxpr: Jaxpr, found: list[str]) -> None:
-    """Append every unstable sort and every floating-point combining scatter of
-    ``jaxpr`` and of the jaxprs inside it."""
+def _kind(eqn) -> str | None:
+    """What ``eqn`` leaves to the backend, if anything: a sort or a scatter."""
+    name = eqn.primitive.name
+    if name == "sort":
+        return "stable sort" if eqn.params["is_stable"] else "unstable sort"
+    if name == "scatter":
+        return "set scatter"
+    if name.startswith("scatter"):
+        inexact = jnp.issubdtype(eqn.outvars[0].aval.dtype, jnp.inexact)
+        return f"{name.replace('_', '-')} of {'floats' if inexact else 'integers'}"
+    return None
+
+
+def order_sites(jaxpr: Jaxpr, parent: str = "") -> set[tuple[str, str]]:
+    """Every ``(kind, site)`` of a sort or scatter in ``jaxpr`` and the jaxprs inside it."""
+    found = set()
     for eqn in jaxpr.eqns:
-        name = eqn.primitive.name
-        if name == "sort" and not eqn.params["is_stable"]:
-            found.append(f"unstable sort at {_where(eqn)}")
-        if name in COMBINING and jnp.issubdtype(eqn.outvars[0].aval.dtype, jnp.inexact):
-            found.append(f"{name} of {eqn.outvars[0].aval.dtype} at {_where(eqn)}")
+        site = _site(eqn, parent)
+        if kind := _kind(eqn):
+            found.add((kind, site))
         for sub in sub_jaxprs(eqn.params):
-            _order_dependent(sub, found)
+            found |= order_sites(sub, site)
+    return found
 
 
 def test_the_lint_sees_unstable_sorts_and_float_accumulation_inside_loops():
@@ -64,21 +93,47 @@ def test_the_lint_sees_unstable_sorts_and_float_accumulation_inside_loops():
 
         return jax.lax.fori_loop(0, 2, body, x)
 
-    found: list[str] = []
-    _order_dependent(jax.make_jaxpr(risky)(jnp.zeros(4), jnp.array([1, 1])).jaxpr, found)
-    assert len(found) == 2, found
-    assert found[0].startswith("scatter-add of float32") or found[1].startswith(
-        "scatter-add of float32"), found
-    assert any(f.startswith("unstable sort") for f in found), found
+    found = order_sites(jax.make_jaxpr(risky)(jnp.zeros(4), jnp.array([1, 1])).jaxpr)
+    assert {kind for kind, _ in found} == {"scatter-add of floats", "unstable sort"}, found
+
+
+def test_the_reviewed_list_names_each_site_once_with_a_reason():
+    pairs = [(s["kind"], s["at"]) for s in REVIEWED]
+    assert len(pairs) == len(set(pairs))
+    assert all(s["why"].strip() and s["kind"] not in REFUSED for s in REVIEWED)
+
+
+@pytest.fixture(scope="module")
+def preset_sites() -> dict[str, tuple[set[tuple[str, str]], str]]:
+    """Per preset: the order sites of ``LINT_RUNS`` runs of ``GA.run`` in one ``vmap``
+    (traced only) and the StableHLO text of that program."""
+    keys = jax.random.split(jax.random.PRNGKey(0), LINT_RUNS)
+    out = {}
+    for preset in preset_names():
+        ga = jaxga.GA(preset, canonical.MAP, generations=2)
+        traced = jax.jit(jax.vmap(ga.run, (0, None))).trace(keys, ga.default_params)
+        out[preset] = order_sites(traced.jaxpr.jaxpr), traced.lower().as_text()
+    return out
 
 
 @pytest.mark.parametrize("preset", preset_names())
-def test_no_run_holds_an_unstable_sort_or_a_floating_point_combining_scatter(preset):
-    ga = jaxga.GA(preset, canonical.MAP, generations=2)
-    found: list[str] = []
-    _order_dependent(jax.make_jaxpr(ga.run)(jax.random.PRNGKey(0), ga.default_params).jaxpr,
-                     found)
-    assert not found, found
+def test_every_scatter_and_sort_of_a_run_is_reviewed(preset_sites, preset):
+    """No unstable sort, no floating-point combining scatter, no scatter or sort outside
+    tests/engine/order_sites.toml, and no custom call (an opaque kernel) in the lowered
+    program."""
+    found, text = preset_sites[preset]
+    reviewed = {(s["kind"], s["at"]) for s in REVIEWED}
+    refused = sorted(f"{kind} at {site}" for kind, site in found if kind in REFUSED)
+    new = sorted(f"{kind} at {site}" for kind, site in found - reviewed if kind not in REFUSED)
+    assert not refused, f"order-dependent: {refused}"
+    assert not new, f"not in tests/engine/order_sites.toml (review, then add): {new}"
+    assert "custom_call" not in text, re.findall(r"custom_call @\w+", text)
+
+
+def test_every_reviewed_site_is_still_used(preset_sites):
+    used = set().union(*(found for found, _ in preset_sites.values()))
+    stale = [f"{s['kind']} at {s['at']}" for s in REVIEWED if (s["kind"], s["at"]) not in used]
+    assert not stale, f"no preset uses these any more: remove them from order_sites.toml: {stale}"
 
 
 def test_the_variants_change_programs_that_rely_on_those_orders():
