@@ -10,7 +10,9 @@ parameter points (:func:`sweep`), and what they return (:class:`Result`).
 - :mod:`~jaxga.api.failures`: runs that found no path, their causes;
 - :mod:`~jaxga.api.parallel`: every core, and several processes, for one experiment;
 - :mod:`~jaxga.api.compilation_cache`: JAX's persistent compilation cache;
-- :mod:`~jaxga.api.lowering`: how programs are lowered (Threefry without a loop on the CPU).
+- :mod:`~jaxga.api.lowering`: how programs are lowered (Threefry without a loop on the CPU);
+- :mod:`~jaxga.api.device_probe` and :mod:`~jaxga.api.doctor`: does a backend compute what
+  the CPU computes (the gate before runs off the CPU, ``jaxga doctor``).
 
 The tools (command line, DOE, comparisons, re-planning) use what is exported here.
 """

@@ -31,6 +31,7 @@ import jax.numpy as jnp
 import numpy as np
 
 from jaxga.api import executables
+from jaxga.api.device_probe import check_backend
 from jaxga.api.seeds import seed_sharding
 from jaxga.config.schema import Config
 from jaxga.core.errors import ParameterError, PlatformWarning
@@ -465,6 +466,7 @@ def programs_for(algo: Algorithm, grid: Any, params: dict, n_runs: int,
     program compiled (or read) now if this process has not yet: ``report`` is told how
     far that has got (:meth:`Programs.compile_init`; nothing when it is compiled)."""
     algo = program_algorithm(algo)
+    check_backend()  # off the CPU: refuse a backend that failed the device probe
     warn_platform(jax.default_backend())
     n_dev = jax.local_device_count()
     grid_spec = shape_spec(grid)

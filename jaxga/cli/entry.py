@@ -14,13 +14,14 @@ import jax
 from jaxga import interrupts
 from jaxga.api.compilation_cache import ENV_VAR as CACHE_ENV_VAR
 from jaxga.api.compilation_cache import use_compilation_cache
+from jaxga.api.device_probe import DeviceDisagrees
 from jaxga.api.lowering import check_environment
 from jaxga.api.parallel import (
     EXIT_PROCESS_LOST,
     ProcessLostError,
     configure_from_args,
 )
-from jaxga.cli.options import EXIT_BAD_INPUT, EXIT_NO_PATH, apply_scenario
+from jaxga.cli.options import EXIT_BAD_INPUT, EXIT_DEVICE_DISAGREES, EXIT_NO_PATH, apply_scenario
 from jaxga.cli.outputs import check_outputs
 from jaxga.cli.parser import build_parser
 from jaxga.core.errors import EndpointError, JaxgaError, NoPathError
@@ -102,6 +103,9 @@ def main(argv: Sequence[str] | None = None) -> int:
     except NoPathError as e:
         print(f"jaxga: no path: {e}", file=sys.stderr)
         return EXIT_NO_PATH
+    except DeviceDisagrees as e:
+        print(f"jaxga: error: {e}", file=sys.stderr)
+        return EXIT_DEVICE_DISAGREES
     except EndpointError as e:
         print(f"jaxga: bad start or goal: {e}", file=sys.stderr)
         return EXIT_BAD_INPUT

@@ -28,6 +28,11 @@ EXIT_BAD_INPUT = 2
 EXIT_NO_PATH = 3
 
 
+EXIT_DEVICE_DISAGREES = 5
+"""Exit status when JAX's default backend computes jaxga's exact results differently
+from the CPU (``jaxga doctor``, or a run refused by the device probe)."""
+
+
 def parse_xy(text: str) -> tuple[int, int]:
     try:
         x, y = (int(v) for v in text.split(","))

@@ -4,10 +4,10 @@ from __future__ import annotations
 
 import argparse
 
-from jaxga.cli import compare, doe, listings, optimum, replan, run, warmup
+from jaxga.cli import compare, doctor, doe, listings, optimum, replan, run, warmup
 from jaxga.cli.options import EXIT_BAD_INPUT
 
-COMMANDS = (optimum, run, replan, doe, compare, listings, warmup)
+COMMANDS = (optimum, run, replan, doe, compare, listings, warmup, doctor)
 """The modules that add the subcommands, in the order ``jaxga --help`` lists them."""
 
 

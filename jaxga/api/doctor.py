@@ -1,0 +1,203 @@
+"""``jaxga doctor``: does this machine's JAX backend compute jaxga's results?
+
+Runs on JAX's default backend, against the CPU in the same process
+(docs/devices.md, "Exactness"):
+
+- the exact probes of :mod:`jaxga.api.device_probe`: random bits, and one round of the
+  walks of sga's initialiser and of the field walk for 2048 runs in one call, bit for bit;
+- a few whole runs of every preset (``GA.run``): bit for bit on the CPU (in another order
+  of the runs in the call); on another backend, where a one-ulp difference of a division,
+  a square root or a power may send a run on another trajectory, each run's success must
+  equal the CPU's and its path must be clear and as long as it says when the CPU checks
+  it (the share of identical runs is reported);
+- a short throughput figure: individual-generations per second of sga on the probe map.
+
+The verdict is one line: ``agrees with the CPU`` or ``DISAGREES:`` and the first
+failing probe.
+"""
+
+from __future__ import annotations
+
+import concurrent.futures
+import dataclasses
+import hashlib
+import os
+import time
+from collections.abc import Callable, Sequence
+
+import jax
+import jax.numpy as jnp
+import numpy as np
+
+from jaxga.api import device_probe, executables
+from jaxga.api.compilation_cache import ensure_compilation_cache
+from jaxga.api.device_probe import ProbeRow
+from jaxga.api.ga import GA
+from jaxga.api.programs import shape_spec
+from jaxga.config.presets import preset_names
+from jaxga.core.geometry import segments_clear
+from jaxga.core.objectives import path_length
+
+__all__ = ["DoctorReport", "doctor"]
+
+RUN_SEEDS = 4
+"""Seeds of each preset's whole runs (sga's: :data:`THROUGHPUT_SEEDS`)."""
+
+THROUGHPUT_SEEDS = 64
+"""Seeds of sga's whole runs, whose second call gives the throughput figure."""
+
+GENERATIONS = 10
+"""Generations of the whole runs."""
+
+LENGTH_TOLERANCE = 1e-5
+"""Relative difference allowed between a length a backend reports and the CPU's
+evaluation of the same path (an ulp of each square root of a path's segments)."""
+
+
+@dataclasses.dataclass(frozen=True)
+class DoctorReport:
+    """What :func:`doctor` found: ``agrees`` (every probe passed), the ``verdict`` line,
+    one :class:`~jaxga.api.device_probe.ProbeRow` per probe, the throughput in
+    individual-generations per second, the time taken."""
+
+    device: str
+    agrees: bool
+    verdict: str
+    rows: tuple[ProbeRow, ...]
+    throughput: float
+    seconds: float
+
+    def table(self) -> str:
+        """The probes as an aligned text table, then the throughput."""
+        lines = [f"{'probe':<34} {'rule':<6} {'runs':>5} {'differ':>6} {'time':>7}  "
+                 f"{'result':<6} detail"]
+        for r in self.rows:
+            lines.append(f"{r.name:<34} {'exact' if r.exact else 'close':<6} {r.compared:>5} "
+                         f"{r.differ:>6} {r.seconds:>6.1f}s  {'ok' if r.agrees else 'FAIL':<6} "
+                         f"{r.detail}")
+        if not self.throughput:
+            return "\n".join(lines)
+        lines.append(f"throughput: {self.throughput:,.0f} individual-generations/s "
+                     f"(sga, {THROUGHPUT_SEEDS} runs of {GENERATIONS} generations on "
+                     f"{device_probe.PROBE_MAP}, one call)")
+        return "\n".join(lines)
+
+    def as_dict(self) -> dict:
+        """The report as JSON values."""
+        return {"device": self.device, "agrees": self.agrees, "verdict": self.verdict,
+                "probes": [r.as_dict() for r in self.rows],
+                "throughput_individual_generations_per_s": self.throughput,
+                "seconds": self.seconds}
+
+
+def _compiled(ga: GA, seeds: int, device: jax.Device):
+    """The program of ``seeds`` runs of ``ga`` in one call for ``device``: read from
+    jaxga's program store (no tracing) or compiled and stored there. The map is part of
+    the program, so its cells and endpoints are part of the key."""
+    keys = jax.device_put(jnp.zeros((seeds, 2), jnp.uint32), device)
+    params = jax.device_put(ga.default_params, device)
+    the_map = hashlib.blake2b(np.asarray(ga.grid.blocked).tobytes() + repr(
+        (int(ga.grid.start), int(ga.grid.goal))).encode(), digest_size=16).hexdigest()
+    key = executables.program_key("doctor runs", ga.algorithm, shape_spec(ga.grid),
+                                  shape_spec(params), seeds, [device],
+                                  settings=(GENERATIONS, the_map))
+    program, _ = executables.load_or_compile(
+        key, [device], lambda: jax.jit(jax.vmap(ga.run, (0, None))).lower(keys, params))
+    return program
+
+
+def _call(program, ga: GA, keys: np.ndarray, device: jax.Device) -> dict:
+    out = program(jax.device_put(keys, device), jax.device_put(ga.default_params, device))
+    return jax.tree_util.tree_map(np.asarray, out)
+
+
+def _whole_runs(preset: str, ga: GA, programs: tuple, device: jax.Device, seeds: int
+                ) -> tuple[ProbeRow, float]:
+    """``seeds`` runs of ``preset`` on ``device`` and on the CPU (the runs rolled by
+    half): the probe's row and the device's individual-generations per second (its
+    second call)."""
+    t0 = time.perf_counter()
+    here_prog, cpu_prog = programs
+    cpu = jax.devices("cpu")[0]
+    keys = np.asarray(jax.vmap(jax.random.PRNGKey)(jnp.arange(seeds, dtype=jnp.uint32)))
+    here = _call(here_prog, ga, keys, device)
+    t1 = time.perf_counter()
+    _call(here_prog, ga, keys, device)
+    speed = seeds * ga.algorithm.population * GENERATIONS / (time.perf_counter() - t1)
+    shift = seeds // 2
+    there = _call(cpu_prog, ga, np.roll(keys, shift, axis=0), cpu)
+    there = jax.tree_util.tree_map(lambda x: np.roll(x, -shift, axis=0), there)
+    leaves = [jax.tree_util.tree_leaves(x) for x in (here, there)]
+    differ = device_probe._differing(*leaves)
+    exact = device.platform == "cpu"
+    detail = f"identical {seeds - int(differ.sum())}/{seeds}"
+    if exact:
+        agrees = not differ.any()
+    else:  # the device's paths checked on the CPU
+        grid = jax.device_put(ga.grid, cpu)
+        cells, n_cells = jax.device_put((here["cells"], here["n_cells"]), cpu)
+        clear = jax.jit(jax.vmap(lambda c, n: segments_clear(grid, c, n)))(cells, n_cells)
+        length = jax.jit(jax.vmap(lambda c, n: path_length(grid, c, n)))(cells, n_cells)
+        ok = here["success"]
+        close = np.abs(np.asarray(length) - here["length"]) <= (
+            LENGTH_TOLERANCE * np.abs(np.asarray(length)))
+        bad = (ok != there["success"]) | (ok & ~(np.asarray(clear) & close))
+        agrees = not bad.any()
+        detail += f"; {int(bad.sum())} with another success, a blocked path or a wrong length"
+    row = ProbeRow(f"{preset} runs ({GENERATIONS} generations)", seeds,
+                   int(differ.sum()), agrees, time.perf_counter() - t0, exact=exact,
+                   detail=detail)
+    return row, speed
+
+
+def doctor(device: jax.Device | None = None, *, presets: Sequence[str] | None = None,
+           runs: int = device_probe.RUNS,
+           report: Callable[[str], None] = lambda line: None) -> DoctorReport:
+    """Check that ``device`` (default: the first of JAX's default backend) computes
+    jaxga's results as the CPU does (module docstring).
+
+    Args:
+        device: the device to check.
+        presets: the presets of the whole runs (default: every built-in preset; none:
+            the exact probes alone, as the gate of runs off the CPU runs them).
+        runs: runs per call of the exact probes.
+        report: told one line per phase as it finishes (the command line prints them).
+
+    Returns:
+        A :class:`DoctorReport`; its ``verdict`` is the one line to show.
+    """
+    t0 = time.perf_counter()
+    ensure_compilation_cache()  # the whole runs' programs: compiled once per machine
+    device = jax.devices()[0] if device is None else device
+    cpu = jax.devices("cpu")[0]
+    rows = []
+    for row in device_probe.probe(device, runs):
+        rows.append(row)
+        report(f"{row.name}: {'ok' if row.agrees else 'FAIL'} ({row.seconds:.1f} s)")
+    names = list(preset_names() if presets is None else presets)
+    if not names:
+        verdict = device_probe.verdict_line(rows, device)
+        return DoctorReport(device_probe.describe(device), all(r.agrees for r in rows),
+                            verdict, tuple(rows), 0.0, time.perf_counter() - t0)
+    gas = {p: GA(p, device_probe.PROBE_MAP, generations=GENERATIONS) for p in names}
+    seeds = {p: THROUGHPUT_SEEDS if p == "sga" else RUN_SEEDS for p in names}
+    t1 = time.perf_counter()
+
+    def compile_one(p: str) -> tuple:
+        here = _compiled(gas[p], seeds[p], device)
+        return here, here if device == cpu else _compiled(gas[p], seeds[p], cpu)
+
+    # Compiled side by side (XLA compiles outside Python's lock): most of a cold doctor.
+    with concurrent.futures.ThreadPoolExecutor(max(1, min(len(names), os.cpu_count() or 1))
+                                               ) as pool:
+        programs = dict(zip(names, pool.map(compile_one, names)))
+    report(f"whole runs of {len(names)} presets compiled ({time.perf_counter() - t1:.1f} s)")
+    speed = 0.0
+    for p in names:
+        row, s = _whole_runs(p, gas[p], programs[p], device, seeds[p])
+        rows.append(row)
+        speed = s if p == "sga" else speed
+        report(f"{row.name}: {'ok' if row.agrees else 'FAIL'} ({row.seconds:.1f} s)")
+    verdict = device_probe.verdict_line(rows, device)
+    return DoctorReport(device_probe.describe(device), all(r.agrees for r in rows), verdict,
+                        tuple(rows), speed, time.perf_counter() - t0)
