@@ -282,8 +282,12 @@ class Result:
             for name, mean, sd, lo, hi in self.summary_rows():
                 lines.append(f"{name:24s} {mean:10.4f} {sd:10.4f} {lo:10.4f} {hi:10.4f}")
         raw_basis = self.gap_basis if self._raw_waypoints() else "8-connected optimum"
-        bound = (" (at least the gap to the optimum)" if self.gap_basis != "any-angle optimum"
-                 else "")
+        bound = {"lower bound": " (a lower bound of the any-angle optimum: at least the "
+                                "gap to that optimum)",
+                 "8-connected optimum": " (the any-angle optimum was not computed; any-angle "
+                                        "paths may beat the 8-connected optimum, so this is "
+                                        "at most the gap to the any-angle optimum and may be "
+                                        "below zero)"}.get(self.gap_basis, "")
         lines.append(f"gaps: gap = length / {self.gap_basis} - 1{bound}, raw_gap = "
                      f"raw_length / {raw_basis} - 1, fitness_gap = fitness optimum / "
                      "fitness - 1")

@@ -66,10 +66,13 @@ def test_a_result_measures_its_gap_against_what_was_computed():
     assert np.isnan(bound.gap[1])
     text = bound.summary()
     assert "any-angle optimum not computed (budget 0.50 s), lower bound 10.0000" in text
-    assert "gap = length / lower bound - 1 (at least the gap to the optimum)" in text
+    assert ("gap = length / lower bound - 1 (a lower bound of the any-angle optimum: at "
+            "least the gap to that optimum)") in text
     doc = bound.to_json()
     assert doc["gap_basis"] == "lower bound" and doc["any_angle_optimum"] is None
     assert doc["lower_bound"] == 10.0 and doc["runs"][0]["gap"] == pytest.approx(0.1)
     neither = Result(**base, any_angle_optimum=math.nan, lower_bound=math.nan)
     assert neither.gap_basis == "8-connected optimum"
     assert neither.gap[0] == pytest.approx(11 / 12 - 1)
+    text = neither.summary()  # below zero: never called "at least" the gap
+    assert "at least" not in text and "at most the gap to the any-angle optimum" in text
