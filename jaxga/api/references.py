@@ -35,7 +35,8 @@ from jaxga.reference.any_angle import any_angle_shortest_path_np
 from jaxga.reference.lower_bound import euclidean_lower_bound_np
 from jaxga.reference.optima import ReferencePath, shortest_path_np
 
-__all__ = ["AnyAngleBounds", "any_angle_references", "budget_note", "octile_optimum"]
+__all__ = ["SKIPPED_NOTE", "AnyAngleBounds", "any_angle_references", "budget_note",
+           "octile_optimum"]
 
 
 def _problem_key(grid: Grid) -> tuple:
@@ -86,6 +87,10 @@ _CACHE: dict[bytes, AnyAngleBounds] = {}
 _CACHE_SIZE = 32
 
 
+SKIPPED_NOTE = "any-angle optimum not computed (skipped: budget 0)"
+"""The note of references skipped on purpose (a budget of 0: ``--no-reference``)."""
+
+
 def budget_note(budget_s: float | None) -> str:
     """The one line that says the any-angle optimum was not computed within its budget."""
     return f"any-angle optimum not computed (budget {budget_s:.2f} s)"
@@ -118,6 +123,8 @@ def _references(grid: Grid, octile: ReferencePath, budget_s: float | None,
         return known
     if not octile.found:
         return AnyAngleBounds(math.nan, math.nan, octile.reason, budget_s)
+    if budget_s is not None and budget_s <= 0:  # skipped: neither search starts
+        return AnyAngleBounds(math.nan, math.nan, SKIPPED_NOTE, 0.0)
     b = np.frombuffer(raw, dtype=bool).reshape(shape)
     t0 = time.perf_counter()
 

@@ -798,7 +798,9 @@ def run(
             (initialisation, evolution and post-optimisation), so that the references
             never take longer than the GA, but at least :data:`MIN_ANY_ANGLE_BUDGET`
             (a small map's exact search takes milliseconds); None: no limit (the exact
-            value whatever it costs). Beyond the budget :attr:`Result.any_angle_optimum` is NaN,
+            value whatever it costs); 0: skip the any-angle optimum and its lower bound
+            (a plan that needs no gap; the 8-connected optimum, which tells an unreachable
+            goal, is always computed). Beyond the budget :attr:`Result.any_angle_optimum` is NaN,
             :attr:`Result.any_angle_note` says so, and the gaps are to the proven
             lower bound (:attr:`Result.gap_basis`).
 

@@ -140,7 +140,8 @@ def run_and_report(args: argparse.Namespace, timeline: Timeline,
         args.preset, info, seeds=args.seeds, generations=args.generations,
         corner_rule=args.corner_rule, variant=args.variant, sets=args.set or (),
         progress=progress, population_capacity=args.population_capacity,
-        size_class=args.size_class, any_angle_budget=None if args.exact_optimum else "auto",
+        size_class=args.size_class,
+        any_angle_budget=0.0 if args.no_reference else None if args.exact_optimum else "auto",
     )
     for key, seconds in result.timing.items():
         if key != "total_s":
@@ -279,7 +280,11 @@ def add_parser(commands: argparse._SubParsersAction) -> None:
                    "population_capacity to repeat one of its points bit for bit")
     p.add_argument("--size-class", action=argparse.BooleanOptionalAction, default=None,
                    help=SIZE_CLASS_HELP)
-    p.add_argument("--exact-optimum", action="store_true", help=EXACT_HELP)
+    refs = p.add_mutually_exclusive_group()
+    refs.add_argument("--exact-optimum", action="store_true", help=EXACT_HELP)
+    refs.add_argument("--no-reference", action="store_true",
+                      help="skip the any-angle optimum and its lower bound (a plan that needs "
+                      "no gap; the gaps are then to the 8-connected optimum)")
     p.add_argument("--json", metavar="OUT", help="write every run as JSON (paths in cells "
                    "and, on a map with a resolution, in metres)")
     p.add_argument("--path-out", metavar="FILE.csv|FILE.yaml",

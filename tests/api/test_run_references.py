@@ -22,15 +22,20 @@ def _grid():
     return Grid.create(b, start=(2, 2), goal=(37, 37), corner_rule="strict")
 
 
-def test_no_budget_gives_the_exact_optimum_and_a_budget_of_zero_only_the_bound():
+def test_no_budget_gives_the_exact_optimum_and_a_tiny_budget_only_the_bound(monkeypatch):
     grid = _grid()
     b = grid.blocked_np()
     octile = references.octile_optimum(grid)
     exact = any_angle_shortest_path_np(b, grid.start_xy, grid.goal_xy, "strict")
     bound = euclidean_lower_bound_np(b, grid.start_xy, grid.goal_xy, "strict")
     references._CACHE.clear()
+    with monkeypatch.context() as m:  # a budget of 0 skips both searches (--no-reference)
+        m.setattr(references, "euclidean_lower_bound_np", lambda *a, **k: pytest.fail("ran"))
+        skipped = references.any_angle_references(grid, octile, 0.0)
+    assert skipped.note == references.SKIPPED_NOTE
+    assert math.isnan(skipped.optimum) and math.isnan(skipped.lower_bound)
     seen = []
-    cut = references.any_angle_references(grid, octile, 0.0, seen.append)
+    cut = references.any_angle_references(grid, octile, 1e-9, seen.append)
     assert math.isnan(cut.optimum) and len(cut.path) == 0
     assert cut.note == "any-angle optimum not computed (budget 0.00 s)"
     assert math.isnan(cut.lower_bound) or cut.lower_bound == pytest.approx(bound.length)

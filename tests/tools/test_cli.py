@@ -225,9 +225,10 @@ def test_run_refuses_a_set_that_nothing_reads(capsys):
     assert "crossover.probability has no effect in 'agacd': crossover.adaptive = true" in err
 
 
-def test_population_capacity_reaches_the_run(capsys, monkeypatch):
+def test_population_capacity_and_the_reference_budget_reach_the_run(capsys, monkeypatch):
     """--population-capacity is passed to jaxga.run (to repeat a DOE point's runs), and a
-    capacity below the population is refused before anything compiles."""
+    capacity below the population is refused before anything compiles; --no-reference
+    and --exact-optimum set the any-angle budget (0: skipped; None: no limit)."""
     import jaxga.api
 
     seen = {}
@@ -244,7 +245,16 @@ def test_population_capacity_reaches_the_run(capsys, monkeypatch):
     monkeypatch.setattr(jaxga.api, "run", fake_run)
     with pytest.raises(Stop):
         main([*argv, "--population-capacity", "12"])
-    assert seen["population_capacity"] == 12
+    assert seen["population_capacity"] == 12 and seen["any_angle_budget"] == "auto"
+    with pytest.raises(Stop):  # references skipped: a budget of 0
+        main([*argv, "--no-reference"])
+    assert seen["any_angle_budget"] == 0.0
+    with pytest.raises(Stop):
+        main([*argv, "--exact-optimum"])
+    assert seen["any_angle_budget"] is None
+    with pytest.raises(SystemExit) as both:
+        main([*argv, "--exact-optimum", "--no-reference"])
+    assert both.value.code == EXIT_BAD_INPUT and "not allowed with" in capsys.readouterr().err
     monkeypatch.undo()
     assert main([*argv, "--population-capacity", "4"]) == EXIT_BAD_INPUT
     err = capsys.readouterr().err.strip()
