@@ -52,7 +52,7 @@ from jaxga.api.timeline import Timeline
 from jaxga.config import registry
 from jaxga.config.presets import as_sets, load_preset, parse_set
 from jaxga.config.schema import MAP_RULE, SCHEMA, Config, flatten, freeze
-from jaxga.core.errors import ParameterError
+from jaxga.core.errors import EndpointError, ParameterError
 from jaxga.core.grid import Grid, as_integer
 from jaxga.engine import (
     Algorithm,
@@ -66,6 +66,7 @@ from jaxga.engine import (
     uses_guide,
 )
 from jaxga.maps import MapInfo, load_map_info
+from jaxga.maps.frame import MapFrame
 from jaxga.operators.guide import with_guide
 from jaxga.reference.fitness import FitnessOptimum, fitness_optimum, fitness_weights
 
@@ -210,8 +211,29 @@ def load_problem(preset, grid, corner_rule, variant, sets, overrides, generation
     else:
         info = load_map_info(grid, corner_rule=configured_rule(corner_rule, config))
         grid, map_name, frame = info.grid, info.name, info.frame
-    grid.check_endpoints()
+    try:
+        grid.check_endpoints()
+    except EndpointError as e:
+        raise EndpointError(f"{e}{_on_the_map(frame, grid)}") from None
     return config, grid, map_name, frame
+
+
+def _on_the_map(frame: MapFrame | None, grid: Grid) -> str:
+    """Where a blocked endpoint lies in the map's own terms: its map cells (a coarsened
+    map) and its centre in metres (a map with a resolution); "" for a bare grid."""
+    if frame is None or (frame.coarsen == 1 and not frame.has_metres):
+        return ""
+    for xy in (grid.start_xy, grid.goal_xy):  # the first blocked one, as check_endpoints
+        if grid.blocked_np()[xy[1], xy[0]]:
+            where = []
+            if frame.coarsen > 1:
+                middle = tuple(int(v) for v in frame.map_cell(np.asarray(xy)))
+                where.append(f"the coarse cell around map cell {middle}")
+            if frame.has_metres:
+                x, y = frame.to_world(np.asarray(xy, float))
+                where.append(f"centre ({x:.3f}, {y:.3f}) m")
+            return f" ({', '.join(where)})"
+    return ""
 
 
 def _point_configs(config: Config, points: Sequence[Mapping[str, Any]]) -> list[Config]:

@@ -8,6 +8,7 @@ import math
 import numpy as np
 import pytest
 
+import jaxga
 from jaxga import EndpointError, MapFormatError
 from jaxga.maps import load_map, load_map_info
 from jaxga.maps.ros import RosMap, cell_to_world, occupancy, world_to_cell
@@ -230,3 +231,18 @@ def test_a_ros_map_whose_yaml_or_image_is_a_fifo_is_refused_at_once(tmp_path):
         text = str(e.value)
         assert words in text and "not a regular file" in text and "\n" not in text
         assert f"at most {cap:,} bytes" in text
+
+
+def test_a_blocked_endpoint_is_reported_in_the_maps_own_terms(office):
+    """The office's cell (4, 3) is an obstacle, centre (-1.775, -1.325) m: a run refuses a
+    goal there naming the metres; coarsened by 2 (coarse cell (2, 1), centre (-1.75,
+    -1.35) m, around map cell (4, 3)), also the map cell, not the coarse cell alone. The
+    run refuses before anything is compiled."""
+    ends = dict(start_world=(-1.98, -1.49), goal_world=(-1.76, -1.31), corner_rule="strict")
+    with pytest.raises(EndpointError) as err:
+        jaxga.run("sga", load_map_info(office, **ends), seeds=1)
+    assert str(err.value) == "goal cell (4, 3) is blocked (centre (-1.775, -1.325) m)"
+    with pytest.raises(EndpointError) as err:
+        jaxga.run("sga", load_map_info(office, coarsen=2, **ends), seeds=1)
+    assert str(err.value) == ("goal cell (2, 1) is blocked (the coarse cell around map cell "
+                              "(4, 3), centre (-1.750, -1.350) m)")
