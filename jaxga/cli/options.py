@@ -264,6 +264,24 @@ def world_ends(frame, grid) -> str:
     return f", ({sx:.3f}, {sy:.3f}) -> ({gx:.3f}, {gy:.3f}) m"
 
 
+def snap_notes(args: argparse.Namespace, info) -> list[str]:
+    """One line per endpoint given in metres that the plan starts or ends at its cell's
+    centre instead (the planner works on cell centres): where, and how far away."""
+    notes = []
+    if info.frame is None or not info.frame.has_metres:
+        return notes
+    for name, world, xy in (("start", getattr(args, "start_world", None), info.grid.start_xy),
+                            ("goal", getattr(args, "goal_world", None), info.grid.goal_xy)):
+        if world is None:
+            continue
+        x, y = info.frame.to_world(np.asarray(xy, float))
+        away = math.hypot(x - world[0], y - world[1])
+        if away > 5e-4:
+            notes.append(f"note: the {name} ({world[0]:g}, {world[1]:g}) m is planned at the "
+                         f"centre of its cell, ({x:.3f}, {y:.3f}) m, {away:.3f} m away")
+    return notes
+
+
 def grid_for_run(args: argparse.Namespace, rule: str):
     """The Grid of the run (endpoints applied) under its corner rule ``rule``."""
 

@@ -24,6 +24,7 @@ from jaxga.cli.options import (
     add_preset_arguments,
     map_for_run,
     not_lead,
+    snap_notes,
     write_json,
 )
 from jaxga.core.errors import JaxgaError
@@ -149,6 +150,8 @@ def run_and_report(args: argparse.Namespace, timeline: Timeline,
     if not_lead(f"{len(result.seeds)} seeds", timeline.elapsed()):
         return 0
     print(result.summary(time=False))
+    for note in snap_notes(args, info):
+        print(note)
     curves = None
     if args.smooth and result.success.any():
         with phase("smooth"):

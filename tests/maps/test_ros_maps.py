@@ -3,6 +3,7 @@ thresholds, modes, world coordinates and the one-line errors."""
 
 from __future__ import annotations
 
+import argparse
 import math
 
 import numpy as np
@@ -10,6 +11,7 @@ import pytest
 
 import jaxga
 from jaxga import EndpointError, MapFormatError
+from jaxga.cli.options import snap_notes
 from jaxga.maps import load_map, load_map_info
 from jaxga.maps.ros import RosMap, cell_to_world, occupancy, world_to_cell
 
@@ -246,3 +248,14 @@ def test_a_blocked_endpoint_is_reported_in_the_maps_own_terms(office):
         jaxga.run("sga", load_map_info(office, coarsen=2, **ends), seeds=1)
     assert str(err.value) == ("goal cell (2, 1) is blocked (the coarse cell around map cell "
                               "(4, 3), centre (-1.750, -1.350) m)")
+
+
+def test_endpoints_given_in_metres_say_where_the_plan_snaps_them(office):
+    """The planner starts at a cell's centre: -1.98, -1.49 m lies in cell (0, 0), centre
+    (-1.975, -1.475) m, 0.016 m away; a point given at a centre gets no note."""
+    args = argparse.Namespace(start_world=(-1.98, -1.49), goal_world=(-1.825, -1.475))
+    info = load_map_info(office, start_world=args.start_world, goal_world=args.goal_world)
+    assert snap_notes(args, info) == [
+        "note: the start (-1.98, -1.49) m is planned at the centre of its cell, "
+        "(-1.975, -1.475) m, 0.016 m away"]
+    assert snap_notes(argparse.Namespace(start_world=None, goal_world=None), info) == []
