@@ -113,6 +113,7 @@ __all__ = [
     "initial_control_points",
     "plot_smooth",
     "polyline_points",
+    "resample_curve",
     "smooth",
     "smooth_population",
     "turning_curvature_bound",
@@ -442,6 +443,20 @@ def _eval_grid(coef: jax.Array, per_span: int, midpoints: bool = False):
         end = _poly(coef[-1], jnp.float32(1.0))
         out = [jnp.concatenate([v, e[None]], axis=0) for v, e in zip(out, end)]
     return tuple(out)
+
+
+def resample_curve(points: np.ndarray, spacing: float = 1.0) -> np.ndarray:
+    """A dense curve ``float[N, 2]`` (cells) as points every ``spacing`` along its arc,
+    both ends kept: what a robot's path needs (a pose per cell or so), not the thousands
+    of evaluation points the curve was certified at. Each point lies on a chord of the
+    dense curve (host NumPy)."""
+    pts = np.asarray(points, float)
+    if len(pts) < 3 or not spacing > 0:
+        return pts
+    arc = np.concatenate([[0.0], np.cumsum(np.hypot(*np.diff(pts, axis=0).T))])
+    n = max(int(np.ceil(arc[-1] / spacing)), 1)
+    at = np.linspace(0.0, arc[-1], n + 1)
+    return np.stack([np.interp(at, arc, pts[:, 0]), np.interp(at, arc, pts[:, 1])], axis=1)
 
 
 def curve_points(control: jax.Array, per_span: int = 16) -> jax.Array:

@@ -31,7 +31,7 @@ from jaxga.core.errors import JaxgaError
 from jaxga.plot import (
     plot_result,
 )
-from jaxga.smooth import smooth_population
+from jaxga.smooth import resample_curve, smooth_population
 
 
 class Progress:
@@ -213,8 +213,8 @@ def use_curve(curves, i: int) -> bool:
 def robot_path(result, i: int, curves) -> np.ndarray:
     """Seed ``i``'s path in metres for ``--path-out``: its smooth curve when it has a
     certified one, else its post-optimised waypoints."""
-    if use_curve(curves, i):
-        return result.frame.to_world(np.asarray(curves[i]["points"], float))
+    if use_curve(curves, i):  # a pose per planning cell of arc, not every evaluation point
+        return result.frame.to_world(resample_curve(curves[i]["points"]))
     return result.world_path(i)
 
 
@@ -262,10 +262,18 @@ def smooth_summary(result, curves: list[dict | None]) -> str:
     if curved:
         ratio = np.mean([c["length"] for c in curved]) / np.nanmean(
             [result.length[i] for i, c in enumerate(curves) if c and not c["used_fallback"]])
-        line += (f" (mean length {np.mean([c['length'] for c in curved]):.4f}, "
-                 f"{100 * (ratio - 1):+.2f} % against the polylines; max curvature "
-                 f"{max(c['max_curvature'] for c in curved):.3f}, min clearance "
-                 f"{min(c['min_clearance'] for c in curved):.3f} cells)")
+        length = np.mean([c["length"] for c in curved])
+        curvature = max(c["max_curvature"] for c in curved)
+        clearance = min(c["min_clearance"] for c in curved)
+        size = None if result.frame is None else result.frame.cell_size
+        if size:  # a map with a resolution: metres
+            line += (f" (mean length {length * size:.3f} m, {100 * (ratio - 1):+.2f} % against "
+                     f"the polylines; max curvature {curvature / size:.3f} 1/m, min clearance "
+                     f"{clearance * size:.3f} m)")
+        else:
+            line += (f" (mean length {length:.4f}, {100 * (ratio - 1):+.2f} % against the "
+                     f"polylines; max curvature {curvature:.3f}, min clearance "
+                     f"{clearance:.3f} cells)")
     if len(curved) < len(done):
         line += f"; {len(done) - len(curved)} kept as polylines (no clear curve found)"
     return line

@@ -14,6 +14,7 @@ from __future__ import annotations
 
 import math
 from pathlib import Path
+from types import SimpleNamespace
 
 import jax
 import jax.numpy as jnp
@@ -22,8 +23,10 @@ import pytest
 from scipy.interpolate import BSpline
 
 from jaxga import Grid, ParameterError
+from jaxga.cli.run import smooth_summary
 from jaxga.core.paths import from_coords
 from jaxga.maps import load_map
+from jaxga.maps.frame import MapFrame
 from jaxga.maps.scenarios import read_scen
 from jaxga.reference.any_angle import any_angle_shortest_path
 from jaxga.reference.optima import clear_np, shortest_path
@@ -31,6 +34,7 @@ from jaxga.smooth import (
     SmoothConfig,
     distance_field,
     polyline_points,
+    resample_curve,
     smooth,
     smooth_population,
     turning_curvature_bound,
@@ -383,3 +387,32 @@ def test_plot_smooth(cases):
     assert any(lab.startswith("smooth (") for lab in labels)
     assert any(lab.startswith("polyline (") for lab in labels)
     plt.close(fig)
+
+
+def test_a_curve_is_resampled_to_a_point_per_cell_of_arc():
+    """A dense quarter circle of radius 10 (arc 5 pi, about 15.7 cells) in 4001 points:
+    17 points 0.98 cells apart along the arc, both ends kept, every one on the circle
+    within the chords' sagitta."""
+    t = np.linspace(0.0, np.pi / 2, 4001)
+    dense = np.stack([10 * np.cos(t), 10 * np.sin(t)], axis=1)
+    got = resample_curve(dense, 1.0)
+    assert got.shape == (17, 2)
+    np.testing.assert_allclose(got[[0, -1]], dense[[0, -1]])
+    np.testing.assert_allclose(np.hypot(*got.T), 10.0, atol=1e-6)
+    steps = np.hypot(*np.diff(got, axis=0).T)
+    np.testing.assert_allclose(steps, steps[0], rtol=1e-6)
+    assert abs(steps[0] - 5 * np.pi / 16) < 1e-3
+    assert resample_curve(dense[:2], 1.0).shape == (2, 2)  # a segment stays as it is
+
+
+def test_the_smooth_line_speaks_metres_on_a_map_with_a_resolution():
+    """Curvature in 1/m and clearance in m at 0.05 m per cell; cells without a frame."""
+    curves = [{"length": 20.0, "max_curvature": 0.5, "min_clearance": 2.0,
+               "used_fallback": False}]
+    frame = MapFrame(map_shape=(10, 10), coarsen=1, resolution=0.05, origin=(0.0, 0.0, 0.0))
+    result = SimpleNamespace(length=np.array([21.0]), frame=frame)
+    assert smooth_summary(result, curves).endswith(
+        "(mean length 1.000 m, -4.76 % against the polylines; max curvature 10.000 1/m, "
+        "min clearance 0.100 m)")
+    result.frame = None
+    assert smooth_summary(result, curves).endswith("min clearance 2.000 cells)")
