@@ -40,8 +40,8 @@ from jaxga.operators.guide import with_guide
 from jaxga.operators.init.field import field_walk
 from jaxga.operators.init.walks import random_walk
 
-__all__ = ["DeviceDisagrees", "ProbeRow", "check_backend", "probe", "probe_grid",
-           "verdict_line", "verdicts_path"]
+__all__ = ["DeviceDisagrees", "ProbeRow", "check_backend", "needs_probe", "probe",
+           "probe_grid", "verdict_line", "verdicts_path"]
 
 PROBE_MAP = "classic_ga_gapp3_20x20"
 """The map of the walk probes: the plain GA's map of the literature (a 2.6 % success
@@ -216,6 +216,17 @@ def _remember(key: str, line: str, agrees: bool) -> None:
 
 
 _CHECKED: dict[str, tuple[bool, str]] = {}
+
+
+def needs_probe(device: jax.Device | None = None) -> bool:
+    """Whether :func:`check_backend` would run the probes now (a device off the CPU that
+    this process has not checked and whose verdict is not remembered): the runs then
+    show it as a phase of its own."""
+    device = jax.devices()[0] if device is None else device
+    if device.platform == "cpu" or _verdict_key(device) in _CHECKED:
+        return False
+    seen = _remembered().get(_verdict_key(device))
+    return not (isinstance(seen, dict) and isinstance(seen.get("agrees"), bool))
 
 
 def check_backend(device: jax.Device | None = None,

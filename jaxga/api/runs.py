@@ -25,6 +25,7 @@ from jax.errors import JaxRuntimeError
 
 from jaxga.api import executables, parallel
 from jaxga.api.compilation_cache import ensure_compilation_cache
+from jaxga.api.device_probe import check_backend, needs_probe
 from jaxga.api.failures import (
     failure_causes,
     failure_reason,
@@ -489,7 +490,13 @@ def _compile_init(plan: _SweepPlan, timeline: Timeline,
                   report: Callable[[str, float], None]) -> tuple[_Runs, Programs]:
     """This process's runs as calls of the compiled programs, on the programs' map with
     its per-map tables (attached once per run rather than computed every generation),
-    and the program set with its init program compiled (phase ``compile``)."""
+    and the program set with its init program compiled (phase ``compile``). Off the CPU,
+    the device probe first, when this device kind has no verdict yet (phase
+    ``device_probe``; :func:`jaxga.api.device_probe.check_backend`)."""
+    if needs_probe():
+        report("device-probe", 0.0)
+        with timeline.phase("device_probe"):
+            check_backend()
     report("compile", 0.0)
     with timeline.phase("compile"):
         runs = _this_process_runs(plan.seed_arr, plan.per_point,

@@ -19,6 +19,7 @@ PHASES: dict[str, str] = {
     "import": "starting Python and importing jaxga and JAX",
     "load": "reading the map, inflating and coarsening it",
     "references": "the exact 8-connected optimum and the distance fields (path capacity)",
+    "device_probe": "checking, once per device kind, that the device computes as the CPU",
     "compile": "compiling the programs, or reading them from the store",
     "init": "the initial populations",
     "evolve": "the generations",

@@ -14,11 +14,12 @@ import numpy as np
 import pytest
 
 import jaxga
-from jaxga.api import device_probe, programs
+from jaxga.api import device_probe, programs, runs
 from jaxga.api.device_probe import DeviceDisagrees, ProbeRow, check_backend
 from jaxga.cli.entry import main
 from jaxga.cli.options import EXIT_DEVICE_DISAGREES
 from jaxga.core.errors import PlatformWarning
+from tests import canonical
 
 
 @dataclasses.dataclass(frozen=True)
@@ -136,6 +137,24 @@ def test_a_run_on_a_failed_backend_is_refused_in_one_line(verdicts, monkeypatch,
     assert rc == EXIT_DEVICE_DISAGREES
     assert len(err) == 1 and err[0].startswith("jaxga: error: gpu (Test GPU, jaxlib ")
     assert "refusing to compute there" in err[0]
+
+
+def test_the_first_run_on_a_new_device_kind_shows_the_probe_as_a_phase(verdicts,
+                                                                        monkeypatch):
+    """A stand-in GPU that passes: the run reports a ``device-probe`` stage and times a
+    ``device_probe`` phase once; the program set's own check then finds the verdict."""
+    passing = StandIn(device_kind="Good GPU")
+    monkeypatch.setattr(runs, "needs_probe", lambda: device_probe.needs_probe(passing))
+    monkeypatch.setattr(runs, "check_backend",
+                        lambda: check_backend(passing, probes=lambda d: failing(d)[:1]))
+    monkeypatch.setattr(programs, "check_backend", lambda: check_backend(passing, probes=never))
+    stages = []
+    result = canonical.run("sga", progress=lambda stage, frac: stages.append(stage))
+    assert stages.index("device-probe") < stages.index("compile")
+    assert "device_probe_s" in result.timing
+    again = []
+    canonical.run("sga", progress=lambda stage, frac: again.append(stage))
+    assert "device-probe" not in again
 
 
 def test_probe_rows_compare_every_bit_of_every_leaf():
