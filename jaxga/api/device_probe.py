@@ -70,10 +70,11 @@ class DeviceDisagrees(JaxgaError):
 
 @dataclasses.dataclass(frozen=True)
 class ProbeRow:
-    """One probe's outcome: ``compared`` items, ``differ`` of them not the CPU's.
+    """One probe's outcome: ``compared`` runs, ``differ`` of them not the CPU's bit for bit.
 
-    ``exact``: the probe must agree bit for bit (else ``tolerance`` says what it allows);
-    ``agrees``: it did; ``detail``: what else was measured (success rates, ...)."""
+    ``exact``: the probe must agree bit for bit (else its rule is in ``detail``, as the
+    doctor's whole runs off the CPU); ``agrees``: it passed; ``detail``: what else was
+    measured (success rates, identical runs, ...)."""
 
     name: str
     compared: int
@@ -235,7 +236,7 @@ def check_backend(device: jax.Device | None = None,
     from the CPU (:class:`DeviceDisagrees`, one line), unless ``JAXGA_TRUST_DEVICE=1``.
 
     Nothing to do on the CPU. Elsewhere the probes run once per jaxlib version and
-    device kind (about as long as a short run); their verdict is remembered in
+    device kind (seconds: a few small programs); their verdict is remembered in
     :func:`verdicts_path` and in the process. ``probes`` is for tests (a backend made
     to disagree)."""
     device = jax.devices()[0] if device is None else device
