@@ -151,7 +151,7 @@ def _whole_runs(preset: str, ga: GA, programs: tuple, device: jax.Device, seeds:
 
 
 def doctor(device: jax.Device | None = None, *, presets: Sequence[str] | None = None,
-           runs: int = device_probe.RUNS,
+           runs: int | None = None,
            report: Callable[[str], None] = lambda line: None) -> DoctorReport:
     """Check that ``device`` (default: the first of JAX's default backend) computes
     jaxga's results as the CPU does (module docstring).
@@ -160,7 +160,8 @@ def doctor(device: jax.Device | None = None, *, presets: Sequence[str] | None = 
         device: the device to check.
         presets: the presets of the whole runs (default: every built-in preset; none:
             the exact probes alone, as the gate of runs off the CPU runs them).
-        runs: runs per call of the exact probes.
+        runs: runs per call of the exact probes (default
+            :data:`~jaxga.api.device_probe.RUNS`).
         report: told one line per phase as it finishes (the command line prints them).
 
     Returns:
@@ -171,7 +172,7 @@ def doctor(device: jax.Device | None = None, *, presets: Sequence[str] | None = 
     device = jax.devices()[0] if device is None else device
     cpu = jax.devices("cpu")[0]
     rows = []
-    for row in device_probe.probe(device, runs):
+    for row in device_probe.probe(device, device_probe.RUNS if runs is None else runs):
         rows.append(row)
         report(f"{row.name}: {'ok' if row.agrees else 'FAIL'} ({row.seconds:.1f} s)")
     names = list(preset_names() if presets is None else presets)
