@@ -40,8 +40,8 @@ from jaxga.operators.guide import with_guide
 from jaxga.operators.init.field import field_walk
 from jaxga.operators.init.walks import random_walk
 
-__all__ = ["DeviceDisagrees", "ProbeRow", "check_backend", "needs_probe", "probe",
-           "probe_grid", "verdict_line", "verdicts_path"]
+__all__ = ["DeviceDisagrees", "ProbeRow", "check_backend", "differing", "needs_probe", "probe",
+           "probe_grid", "rolled_on_cpu", "verdict_line", "verdicts_path"]
 
 PROBE_MAP = "classic_ga_gapp3_20x20"
 """The map of the walk probes: the plain GA's map of the literature (a 2.6 % success
@@ -99,19 +99,26 @@ def _keys(n: int, salt: int) -> jax.Array:
         jnp.arange(n, dtype=jnp.uint32))
 
 
-def _compare(fn: Callable, keys: np.ndarray, device: jax.Device) -> tuple[list, list]:
-    """``fn`` of every key as one call on ``device``, and on the CPU with the runs in
-    another order (rolled by half a call, then put back): host arrays of both."""
-    cpu = jax.devices("cpu")[0]
+def rolled_on_cpu(on_device: Callable, on_cpu: Callable, keys: np.ndarray,
+                  device: jax.Device) -> tuple[list, list]:
+    """``on_device(keys)`` with the keys on ``device``, and ``on_cpu`` of the same keys on
+    the CPU with the runs in another order (rolled by half a call, then put back): both
+    results as pytrees of host arrays, runs first, in the same order."""
     shift = keys.shape[0] // 2
-    here = jax.jit(fn)(jax.device_put(keys, device))
-    there = jax.jit(fn)(jax.device_put(np.roll(keys, shift, axis=0), cpu))
-    here = [np.asarray(x) for x in jax.tree_util.tree_leaves(here)]
-    there = [np.roll(np.asarray(x), -shift, axis=0) for x in jax.tree_util.tree_leaves(there)]
-    return here, there
+    here = on_device(jax.device_put(keys, device))
+    there = on_cpu(jax.device_put(np.roll(keys, shift, axis=0), jax.devices("cpu")[0]))
+    return (jax.tree_util.tree_map(np.asarray, here),
+            jax.tree_util.tree_map(lambda x: np.roll(np.asarray(x), -shift, axis=0), there))
 
 
-def _differing(here: list, there: list) -> np.ndarray:
+def _compare(fn: Callable, keys: np.ndarray, device: jax.Device) -> tuple[list, list]:
+    """``fn`` of every key as one call on ``device`` and on the CPU (:func:`rolled_on_cpu`):
+    the leaves of both."""
+    here, there = rolled_on_cpu(jax.jit(fn), jax.jit(fn), keys, device)
+    return jax.tree_util.tree_leaves(here), jax.tree_util.tree_leaves(there)
+
+
+def differing(here: list, there: list) -> np.ndarray:
     """Per run (the leading axis): does any leaf differ in any bit?"""
     bad = np.zeros(here[0].shape[0], bool)
     for a, b in zip(here, there):
@@ -131,7 +138,7 @@ def random_bits(device: jax.Device, runs: int = RUNS) -> ProbeRow:
                 jax.random.uniform(jax.random.fold_in(b, 7), (8,), jnp.float32))
 
     here, there = _compare(jax.vmap(one), np.asarray(_keys(runs, 0)), device)
-    bad = _differing(here, there)
+    bad = differing(here, there)
     return ProbeRow("random bits", runs, int(bad.sum()), not bad.any(),
                     time.perf_counter() - t0)
 
@@ -154,7 +161,7 @@ def walks(kind: str, device: jax.Device, runs: int = RUNS,
 
     keys = np.asarray(jax.vmap(lambda k: jax.random.split(k, per_run))(_keys(runs, 1)))
     here, there = _compare(jax.vmap(jax.vmap(one)), keys, device)
-    bad = _differing(here, there)
+    bad = differing(here, there)
     rate_here, rate_there = float(here[3].mean()), float(there[3].mean())
     broken = int((here[2] & ~here[3]).sum())  # a walk that says it arrived, on a broken path
     return ProbeRow(f"{kind} ({runs} runs x {per_run})", runs, int(bad.sum()),
@@ -219,15 +226,22 @@ def _remember(key: str, line: str, agrees: bool) -> None:
 _CHECKED: dict[str, tuple[bool, str]] = {}
 
 
+def _verdict(key: str) -> tuple[bool, str] | None:
+    """This device kind's verdict, from the process or the remembered file; None if it
+    has none yet (kept in the process once read)."""
+    if key not in _CHECKED:
+        seen = _remembered().get(key)
+        if not (isinstance(seen, dict) and isinstance(seen.get("agrees"), bool)):
+            return None
+        _CHECKED[key] = (seen["agrees"], str(seen.get("verdict", "")))
+    return _CHECKED[key]
+
+
 def needs_probe(device: jax.Device | None = None) -> bool:
     """Whether :func:`check_backend` would run the probes now (a device off the CPU that
-    this process has not checked and whose verdict is not remembered): the runs then
-    show it as a phase of its own."""
+    has no verdict yet): the runs then show it as a phase of its own."""
     device = jax.devices()[0] if device is None else device
-    if device.platform == "cpu" or _verdict_key(device) in _CHECKED:
-        return False
-    seen = _remembered().get(_verdict_key(device))
-    return not (isinstance(seen, dict) and isinstance(seen.get("agrees"), bool))
+    return device.platform != "cpu" and _verdict(_verdict_key(device)) is None
 
 
 def check_backend(device: jax.Device | None = None,
@@ -243,16 +257,12 @@ def check_backend(device: jax.Device | None = None,
     if device.platform == "cpu":
         return
     key = _verdict_key(device)
-    if key not in _CHECKED:
-        seen = _remembered().get(key)
-        if isinstance(seen, dict) and isinstance(seen.get("agrees"), bool):
-            _CHECKED[key] = (seen["agrees"], str(seen.get("verdict", "")))
-        else:
-            rows = probes(device)
-            line = verdict_line(rows, device)
-            agrees = all(r.agrees for r in rows)
-            _remember(key, line, agrees)
-            _CHECKED[key] = (agrees, line)
+    if _verdict(key) is None:
+        rows = probes(device)
+        line = verdict_line(rows, device)
+        agrees = all(r.agrees for r in rows)
+        _remember(key, line, agrees)
+        _CHECKED[key] = (agrees, line)
     agrees, line = _CHECKED[key]
     if agrees:
         return

@@ -106,9 +106,13 @@ def _compiled(ga: GA, seeds: int, device: jax.Device):
     return program
 
 
-def _call(program, ga: GA, keys: np.ndarray, device: jax.Device) -> dict:
-    out = program(jax.device_put(keys, device), jax.device_put(ga.default_params, device))
-    return jax.tree_util.tree_map(np.asarray, out)
+def _runner(program, ga: GA) -> Callable:
+    """``keys -> results`` of a compiled whole-run program, the parameters on the keys'
+    device."""
+    def call(keys):
+        params = jax.device_put(ga.default_params, next(iter(keys.devices())))
+        return program(keys, params)
+    return call
 
 
 def _whole_runs(preset: str, ga: GA, programs: tuple, device: jax.Device, seeds: int
@@ -120,15 +124,13 @@ def _whole_runs(preset: str, ga: GA, programs: tuple, device: jax.Device, seeds:
     here_prog, cpu_prog = programs
     cpu = jax.devices("cpu")[0]
     keys = np.asarray(jax.vmap(jax.random.PRNGKey)(jnp.arange(seeds, dtype=jnp.uint32)))
-    here = _call(here_prog, ga, keys, device)
+    here, there = device_probe.rolled_on_cpu(_runner(here_prog, ga), _runner(cpu_prog, ga),
+                                             keys, device)
     t1 = time.perf_counter()
-    _call(here_prog, ga, keys, device)
+    jax.block_until_ready(_runner(here_prog, ga)(jax.device_put(keys, device)))
     speed = seeds * ga.algorithm.population * GENERATIONS / (time.perf_counter() - t1)
-    shift = seeds // 2
-    there = _call(cpu_prog, ga, np.roll(keys, shift, axis=0), cpu)
-    there = jax.tree_util.tree_map(lambda x: np.roll(x, -shift, axis=0), there)
-    leaves = [jax.tree_util.tree_leaves(x) for x in (here, there)]
-    differ = device_probe._differing(*leaves)
+    differ = device_probe.differing(jax.tree_util.tree_leaves(here),
+                                    jax.tree_util.tree_leaves(there))
     exact = device.platform == "cpu"
     detail = f"identical {seeds - int(differ.sum())}/{seeds}"
     if exact:

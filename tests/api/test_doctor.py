@@ -168,7 +168,7 @@ def test_probe_rows_compare_every_bit_of_every_leaf():
     a = [np.zeros((3, 2), np.float32), np.zeros(3, np.int32)]
     b = [x.copy() for x in a]
     b[0][1, 1] = -0.0  # equal as numbers, another bit pattern
-    assert list(device_probe._differing(a, b)) == [False, True, False]
+    assert list(device_probe.differing(a, b)) == [False, True, False]
 
 
 @pytest.mark.slow  # a whole GA compiled for the check
