@@ -117,9 +117,11 @@ class Programs:
         each program but the last."""
         steps = 1 + len(self.NAMES)  # the tracing, then each program
         for name in names:
-            if name in self._compiled:
-                continue
             shared = self._shared.get(name)
+            if name in self._compiled:
+                if shared is not None:  # used again: most recently used among the shared
+                    _share(shared, self._compiled[name])
+                continue
             program = _SHARED_PROGRAMS.get(shared) if shared is not None else None
             if program is None:
                 program, read = executables.load_or_compile(

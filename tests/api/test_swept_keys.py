@@ -153,10 +153,14 @@ def test_a_key_only_the_finish_reads_compiles_the_finish_alone():
     """Each program is keyed on the configuration sections it reads
     (:func:`jaxga.api.programs.program_view`): ``sga`` with another ``post.method``
     takes the init and evolve programs of the ``sga`` cases above and compiles only its
-    finish program."""
+    finish program, also when the shared programs of that program set were pushed out
+    by others (as after eight other program sets): a program set used again shares its
+    programs anew."""
     from jaxga.api import programs
 
     jaxga.run("sga", MAP, **SMALL)  # the programs of the sga cases
+    programs._SHARED_PROGRAMS.clear()
+    jaxga.run("sga", MAP, **SMALL)  # the same program set, used again
     before = set(programs._SHARED_PROGRAMS)
     r = jaxga.run("sga", MAP, **SMALL, post__method="shortcut_greedy")
     assert r.success.all()
