@@ -682,11 +682,27 @@ def _evolve_in_chunks(progs: Any, generations: int, runs: _Runs, grid: Grid,
             hists[i].append((count, h))
         jax.block_until_ready(states)
         done += count
+        if done < generations and _all_frozen(states):
+            # every run stopped (the stagnation rule): the generations left change
+            # nothing, and each would record the run's last row again
+            for call in hists:
+                c, h = call[-1]
+                call.append((generations - done, {
+                    key: np.repeat(np.asarray(v)[:, c - 1:c], generations - done, axis=1)
+                    for key, v in h.items()}))
+            done = generations
         report(done / generations)
     history = {key: runs.joined([np.concatenate([np.asarray(h[key])[:, :c] for c, h in call],
                                                 axis=1) for call in hists])
                for key in hists[0][0][1]}
     return states, history
+
+
+def _all_frozen(states: list) -> bool:
+    """Whether every run of this process's calls is frozen by the stagnation rule (read
+    between two compiled calls; with several processes never, so that every process
+    makes the same calls)."""
+    return jax.process_count() == 1 and all(bool(np.asarray(st.frozen).all()) for st in states)
 
 
 def _point_results(host: dict, hist: dict, *, config: Config, configs: Sequence[Config],

@@ -377,7 +377,10 @@ def evolve(algo: Algorithm, key, grid: Grid, state: GAState, params: dict,
     ``generations`` steps run (a loop with a run-time trip count); the history rows after
     them are zeros, to be dropped. One compiled chunk of ``generations`` steps then serves
     every generation count (:mod:`jaxga.api.programs`); ``count`` must not be batched (a
-    ``vmap``'s ``in_axes`` None), so that every run of a batch loops ``count`` times.
+    ``vmap``'s ``in_axes`` None). That loop also ends once the run is frozen by the
+    stagnation rule (under ``vmap``: once every run of the batch is): a frozen run's
+    generations change nothing, so its remaining rows are its final row and the result
+    is the same as looping on, at the cost of the generations it needs.
     """
     n = algo.generations if generations is None else generations
     ts = state.generation + jnp.arange(n, dtype=I32)
@@ -397,13 +400,22 @@ def evolve(algo: Algorithm, key, grid: Grid, state: GAState, params: dict,
     rows = jax.eval_shape(lambda st: history_row(algo, st, params), state)
     history = jax.tree_util.tree_map(lambda r: jnp.zeros((n, *r.shape), r.dtype), rows)
 
-    def counted(i, carry):
-        st, hist = carry
+    steps = jnp.minimum(count, n)
+
+    def counted(carry):
+        i, st, hist = carry
         st = step(st, ts[i])
         row = history_row(algo, st, params)
-        return st, jax.tree_util.tree_map(lambda h, r: h.at[i].set(r), hist, row)
+        return i + 1, st, jax.tree_util.tree_map(lambda h, r: h.at[i].set(r), hist, row)
 
-    return jax.lax.fori_loop(0, jnp.minimum(count, n), counted, (state, history))
+    ran, state, history = jax.lax.while_loop(
+        lambda c: (c[0] < steps) & ~c[1].frozen, counted, (jnp.int32(0), state, history))
+    # rows a frozen run skipped: what each of those generations would have recorded
+    last = history_row(algo, state, params)
+    skipped = (jnp.arange(n) >= ran) & (jnp.arange(n) < steps)
+    history = jax.tree_util.tree_map(
+        lambda h, r: jnp.where(skipped.reshape((n,) + (1,) * r.ndim), r, h), history, last)
+    return state, history
 
 
 def convergence_generation(best: jax.Array, final_best: jax.Array,
