@@ -237,6 +237,13 @@ class Result:
                      f"({int(made.sum())} in all)")
         return text
 
+    def best_seed(self) -> int | None:
+        """The index of the successful seed with the shortest post-optimised path (the
+        first of equals), or None when no seed found a path."""
+        if not self.success.any():
+            return None
+        return int(np.nanargmin(np.where(self.success, self.length, np.nan)))
+
     def world_path(self, i: int, raw: bool = False) -> np.ndarray | None:
         """Seed ``i``'s best path in metres (``float[k, 2]``, the map's world frame: cell
         centres, :meth:`jaxga.maps.frame.MapFrame.to_world`); None for a failed seed or
@@ -260,8 +267,16 @@ class Result:
                if math.isfinite(self.any_angle_optimum)
                else f"lower bound {self.lower_bound * f.cell_size:.3f} m"
                if math.isfinite(self.lower_bound) else "any-angle not computed")
-        return (f"{head}: length mean {post.mean():.3f} m, best {post.min():.3f} m (raw mean "
+        text = (f"{head}: length mean {post.mean():.3f} m, best {post.min():.3f} m (raw mean "
                 f"{raw.mean():.3f} m); optimum {self.optimum * f.cell_size:.3f} m, {ref}")
+        clear = [c for c in map(self.obstacle_clearance, np.flatnonzero(ok)) if c is not None]
+        if clear and f.resolution is not None:
+            least = min(clear) * f.resolution
+            text += (f"; clearance from the map's obstacles (before inflation) at least "
+                     f"{least:.3f} m")
+            if f.robot_radius is not None:
+                text += f", {least - f.robot_radius:.3f} m beyond the robot's radius"
+        return text
 
     def summary(self, time: bool = True) -> str:
         """A text table: mean, sd, min and max per metric, success rate, optima, metres
@@ -323,10 +338,35 @@ class Result:
                 out[key] = self.world_path(i, raw=raw).round(4).tolist() if ok else []
             out["length_m"] = float(self.length[i] * f.cell_size) if ok else None
             out["raw_length_m"] = float(self.raw_length[i] * f.cell_size) if ok else None
-            clearance = self.metrics.get("min_clearance")
-            out["min_clearance_m"] = (json_number(float(clearance[i]) * f.cell_size)
-                                      if ok and clearance is not None else None)
+            clearance = self.obstacle_clearance(i)
+            out["min_clearance_m"] = (json_number(clearance * f.resolution)
+                                      if clearance is not None else None)
+            margin = self.clearance_margin_m(i)
+            out["clearance_margin_m"] = json_number(margin) if margin is not None else None
         return out
+
+    def obstacle_clearance(self, i: int) -> float | None:
+        """Seed ``i``'s post-optimised path's least distance to the obstacles of the map as
+        loaded, before inflation, in the map file's cells
+        (:class:`jaxga.maps.clearance.ObstacleClearance`: the polyline through the cell
+        centres against the obstacle cells' squares, exact); None for a failed seed or a
+        grid without a loaded map. ``metrics["min_clearance"]`` is the distance to the
+        grid planned on (inflated), in planning cells."""
+        f = self.frame
+        path = self.path(i)
+        if path is None or f is None or f.clearance is None:
+            return None
+        return f.clearance.of_path(np.asarray(path))
+
+    def clearance_margin_m(self, i: int) -> float | None:
+        """Metres between seed ``i``'s path's :meth:`obstacle_clearance` and the robot's
+        radius the map was inflated by (``robot_radius``): what is left beyond the robot's
+        body; None without a radius, a resolution or a path."""
+        f = self.frame
+        clearance = self.obstacle_clearance(i)
+        if clearance is None or f.robot_radius is None or f.resolution is None:
+            return None
+        return clearance * f.resolution - f.robot_radius
 
     def _endpoints_world(self) -> dict[str, Any]:
         """The endpoints in metres (and in map cells when coarsened), where known."""

@@ -744,7 +744,8 @@ def _clearance(grid: Grid, g: _Geometry,
     last one. A segment whose band distance is at most the radius has its exact
     clearance; the others are farther, so when any segment is that close the minimum is
     exact, and touching cells always lie in the band. Otherwise (a path that stays away
-    from every obstacle) every segment is measured against the whole map, ``O(L H W)``.
+    from every obstacle) every segment up to the last moving one is measured against the
+    whole map, ``O(L H W)`` for a path of ``L`` segments.
     """
     h, w = _check_grid(grid)
     obstacles = proximity_obstacles(grid, border_blocked)
@@ -779,7 +780,6 @@ def _clearance(grid: Grid, g: _Geometry,
         lambda s: s[0] < total, block,
         # int32 flags, not bool: no bool table updated in a loop (docs/devices.md)
         (jnp.int32(0), jnp.asarray(jnp.inf, F32), jnp.zeros((n_seg,), jnp.int32)))
-    batch = max(1, min(n_seg, (1 << 15) // (h * w)))
 
     def whole_map(state: tuple[jax.Array, jax.Array]) -> tuple[jax.Array, jax.Array]:
         # masking the segments and the map with the carried flag (False in the body) makes
@@ -787,9 +787,14 @@ def _clearance(grid: Grid, g: _Geometry,
         # of the loop (it would then run on every call)
         done = state[1]
         blocked = obstacles & ~done
-        d, _ = jax.lax.map(lambda seg: _segment_box_clearance(*seg, blocked),
-                           tuple(jnp.where(done, 0, v) for v in segs), batch_size=batch)
-        return jnp.min(d).astype(F32), jnp.bool_(True)
+        masked = tuple(jnp.where(done, 0, v) for v in segs)
+
+        def segment(i, near):  # the segments up to the last moving one (not the padding)
+            d, _ = _segment_box_clearance(*(v[i] for v in masked), blocked)
+            return jnp.minimum(near, d)
+
+        near = jax.lax.fori_loop(0, used, segment, jnp.asarray(jnp.inf, F32))
+        return near.astype(F32), jnp.bool_(True)
 
     # Runs its body only if this path (under vmap: any path) stays beyond the radius.
     near, _ = jax.lax.while_loop(lambda s: ~s[1], whole_map,

@@ -22,11 +22,13 @@ map's lengths are not K times too short.
 from __future__ import annotations
 
 import dataclasses
+import functools
 import math
 
 import numpy as np
 
 from jaxga.core.errors import EndpointError
+from jaxga.maps.clearance import ObstacleClearance
 
 __all__ = ["MapFrame"]
 
@@ -40,12 +42,27 @@ class MapFrame:
         coarsen: ``K``, map cells a side per planning cell (1: not coarsened).
         resolution: metres per MAP cell (a ROS map's ``resolution``), None without one.
         origin: ``(x, y, yaw)`` of a ROS map, metres and radians; None without one.
+        obstacles: ``bool[H, W]`` (map cells): the map's own obstacles, before any
+            inflation, or None where not known (a frame built by hand); what
+            :attr:`clearance` measures to.
+        robot_radius: the robot's radius the map was inflated by (metres), or None.
     """
 
     map_shape: tuple[int, int]
     coarsen: int = 1
     resolution: float | None = None
     origin: tuple[float, float, float] | None = None
+    obstacles: np.ndarray | None = dataclasses.field(default=None, compare=False, repr=False)
+    robot_radius: float | None = None
+
+    @functools.cached_property
+    def clearance(self) -> ObstacleClearance | None:
+        """The exact clearance of paths from :attr:`obstacles`
+        (:class:`jaxga.maps.clearance.ObstacleClearance`, its distance transform computed
+        once per frame, so once per loaded map), or None without obstacles."""
+        if self.obstacles is None:
+            return None
+        return ObstacleClearance(self.obstacles, self.coarsen, self.resolution)
 
     @property
     def has_metres(self) -> bool:

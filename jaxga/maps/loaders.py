@@ -353,7 +353,8 @@ def load_map_info(source: Source, **options: Any) -> MapInfo:
         unknown_blocked=o.unknown != "free")
     frame = MapFrame(map_shape=blocked.shape, coarsen=factor,
                      resolution=None if ros is None else ros.resolution,
-                     origin=None if ros is None else ros.origin)
+                     origin=None if ros is None else ros.origin, obstacles=map_blocked,
+                     robot_radius=o.robot_radius)
     if factor > 1:
         h0, w0 = blocked.shape
         for name, xy in (("start", s), ("goal", g)):
