@@ -9,6 +9,7 @@ interrupts.install_in_console_script()  # first: a Ctrl-C during the imports exi
 from jaxga.api import GA, Result, lowering, run, sweep
 from jaxga.api.compilation_cache import use_compilation_cache
 from jaxga.api.doctor import doctor
+from jaxga.api.planner import Planner
 from jaxga.compare import Comparison, compare
 from jaxga.config.registry import Operator, register_operator
 from jaxga.core.errors import EndpointError, JaxgaError, MapFormatError, NoPathError, ParameterError
@@ -34,6 +35,7 @@ __all__ = [
     "NoPathError",
     "Operator",
     "ParameterError",
+    "Planner",
     "Result",
     "compare",
     "doctor",

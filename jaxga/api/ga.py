@@ -20,6 +20,7 @@ written as three pure calls a user can take apart.
 
 from __future__ import annotations
 
+import dataclasses
 from typing import Any
 
 import jax
@@ -27,10 +28,12 @@ import jax
 from jaxga.api.programs import warn_platform
 from jaxga.api.runs import load_problem
 from jaxga.config.schema import Config
+from jaxga.core.errors import EndpointError, ParameterError
 from jaxga.core.grid import Grid
 from jaxga.engine import (
     GAState,
     build,
+    default_capacity,
     default_params,
     generation,
     uses_guide,
@@ -89,27 +92,70 @@ class GA:
             config, self.algorithm.islands)
         warn_platform(jax.default_backend())  # where jit puts the user's calls
 
-    def init(self, key: jax.Array, params: dict) -> GAState:
+    def grid_for(self, start: tuple[int, int] | None = None,
+                 goal: tuple[int, int] | None = None, *, start_world: Any = None,
+                 goal_world: Any = None) -> Grid:
+        """This map with other endpoints (cells ``(x, y)``, or metres on a map with a
+        resolution), as the pure functions read it: pass it as their ``grid`` argument.
+        Its arrays have the shapes of :attr:`grid`'s, so a program compiled with one
+        such grid as an argument serves every pair (host work: the endpoints checked,
+        the distance fields of the presets that steer by them; the move tables are the
+        map's own)::
+
+            plan = jax.jit(jax.vmap(ga.run, (0, None, None)))
+            out = plan(keys, ga.default_params, ga.grid_for((3, 4), (60, 20)))
+
+        Raises :class:`~jaxga.core.errors.EndpointError` for an endpoint off the map or
+        blocked, and :class:`~jaxga.core.errors.ParameterError` when the pair's paths
+        need more cells than :attr:`algorithm`'s capacity (build the GA with a larger
+        ``population__capacity``)."""
+        ends = []
+        for name, cell, world in (("start", start, start_world), ("goal", goal, goal_world)):
+            if world is not None:
+                if cell is not None or self.frame is None:
+                    raise EndpointError(f"give the {name} once, in cells or (on a map "
+                                        "with a resolution) in metres")
+                cell = self.frame.cell_of(world, self.grid.blocked.shape, f"the {name}")
+            ends.append(getattr(self.grid, f"{name}_xy") if cell is None else cell)
+        grid = self.grid.replace(start=ends[0], goal=ends[1])
+        grid.check_endpoints()
+        need = default_capacity(grid)
+        if need > self.algorithm.capacity:
+            raise ParameterError(
+                f"the paths from {ends[0]} to {ends[1]} need a capacity of {need} cells, "
+                f"this GA holds {self.algorithm.capacity}: build it with "
+                f"population__capacity={need} (or more) to plan any pair")
+        if self.grid.guide is not None:
+            grid = with_guide(grid)
+        return dataclasses.replace(grid, tables=self.grid.tables, outside=self.grid.outside)
+
+    def init(self, key: jax.Array, params: dict, grid: Grid | None = None) -> GAState:
         """The initial population of every island, evaluated (pure; the initialisers of
-        the preset: ``init.method`` and its fallback)."""
-        state, _ = run_init(self.algorithm, key, self.grid, params)
+        the preset: ``init.method`` and its fallback). ``grid``: another pair of
+        endpoints on this map (:meth:`grid_for`), default :attr:`grid`'s."""
+        state, _ = run_init(self.algorithm, key, self._grid(grid), params)
         return state
 
-    def step(self, key: jax.Array, state: GAState, params: dict) -> GAState:
+    def step(self, key: jax.Array, state: GAState, params: dict,
+             grid: Grid | None = None) -> GAState:
         """One generation (selection, crossover, mutation, simplification, evaluation,
         migration; the stagnation rule); pure. ``key``: this generation's key."""
-        return generation(self.algorithm, key, self.grid, state, params)
+        return generation(self.algorithm, key, self._grid(grid), state, params)
+
+    def _grid(self, grid: Grid | None) -> Grid:
+        return self.grid if grid is None else grid
 
     def evolve(self, key: jax.Array, state: GAState, params: dict,
-               generations: int | None = None) -> tuple[GAState, dict]:
+               generations: int | None = None, grid: Grid | None = None
+               ) -> tuple[GAState, dict]:
         """``generations`` (default: the configuration's) generations as one
         ``lax.scan``; returns the final state and the history (best-so-far fitness, mean
         and sd of the population's fitness, per generation). Generation ``t`` uses
         ``fold_in(fold_in(key, 1), t)``, as :func:`jaxga.run` does."""
-        return run_evolve(self.algorithm, key, self.grid, state, params, generations)
+        return run_evolve(self.algorithm, key, self._grid(grid), state, params, generations)
 
     def finish(self, state: GAState, params: dict, history: dict | None = None,
-               initial_best: jax.Array | None = None) -> dict:
+               initial_best: jax.Array | None = None, grid: Grid | None = None) -> dict:
         """The best path post-optimised (the preset's ``post.method``) and the reported
         metrics as arrays: ``success``, ``raw_cells`` / ``raw_n_cells`` (the GA's own
         best and its node count), ``cells`` / ``n_cells`` (post-optimised), ``length`` /
@@ -117,12 +163,15 @@ class GA:
         ``metrics``, ...; with ``history``, also the
         convergence generation (0 for a best the initial population already held, given
         its ``initial_best`` fitness)."""
-        return finish_run(self.algorithm, self.grid, state, history, params, initial_best)
+        return finish_run(self.algorithm, self._grid(grid), state, history, params,
+                          initial_best)
 
-    def run(self, key: jax.Array, params: dict, generations: int | None = None) -> dict:
+    def run(self, key: jax.Array, params: dict, grid: Grid | None = None,
+            generations: int | None = None) -> dict:
         """:meth:`init`, :meth:`evolve` and :meth:`finish` of one run: seed ``s`` of
-        :func:`jaxga.run` is ``run(jax.random.PRNGKey(s), ga.default_params)``."""
-        state = self.init(key, params)
+        :func:`jaxga.run` is ``run(jax.random.PRNGKey(s), ga.default_params)``;
+        ``grid``: another pair of endpoints on this map (:meth:`grid_for`)."""
+        state = self.init(key, params, grid)
         initial_best = state.best_fitness  # a best found at initialisation converges at 0
-        state, history = self.evolve(key, state, params, generations)
-        return self.finish(state, params, history, initial_best)
+        state, history = self.evolve(key, state, params, generations, grid)
+        return self.finish(state, params, history, initial_best, grid)

@@ -157,7 +157,7 @@ def run_and_report(args: argparse.Namespace, timeline: Timeline,
         with phase("smooth"):
             curves = smooth_runs(result, info.grid)
         print(smooth_summary(result, curves))
-    best = best_seed(result)
+    best = result.best_seed()
     if args.plot:
         with phase("plot"):
             curve = None
@@ -194,13 +194,6 @@ def process_timeline() -> Timeline:
         timeline.start -= age
         timeline.add("import", age)
     return timeline
-
-
-def best_seed(result) -> int | None:
-    """The successful seed with the shortest post-optimised path, or None."""
-    if not result.success.any():
-        return None
-    return int(np.nanargmin(np.where(result.success, result.length, np.nan)))
 
 
 def use_curve(curves, i: int) -> bool:

@@ -1,0 +1,102 @@
+"""A planner for a robot node: a map loaded once, then a plan for any start and goal.
+
+A ROS node loads its map when it starts and is then asked for paths between new poses,
+many times. :class:`Planner` does the map's work once (the file read, the inflation by the
+robot's radius, the frame, the distance transform that the clearance is measured with)
+and :meth:`Planner.plan` does only what a new start and goal need: their distance
+fields, the runs (the compiled programs take the endpoints as inputs, so a new pair
+compiles nothing) and the references within their budget::
+
+    planner = jaxga.Planner("map.yaml", robot_radius=0.2)
+    plan = planner.plan(start_world=(1.0, 2.0), goal_world=(-3.5, 0.25))
+    best = plan.best_seed()
+    plan.world_path(best)                    # float[k, 2], metres
+    jaxga.export.write_path("path.yaml", plan.world_path(best))   # nav_msgs/Path, or .csv
+
+Each plan is a :class:`jaxga.api.result.Result`, the same as :func:`jaxga.run` returns.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+from collections.abc import Callable
+from typing import Any
+
+from jaxga.api.result import Result
+from jaxga.api.runs import run
+from jaxga.config.schema import Config
+from jaxga.core.errors import EndpointError
+from jaxga.maps import MapInfo, load_map_info
+
+__all__ = ["Planner"]
+
+Point = tuple[float, float]
+
+
+class Planner:
+    """A preset on one loaded map, planning any start and goal.
+
+    Args:
+        map: a map file (a ROS ``map_server`` YAML, an image, a Moving AI map, ...), a
+            built-in map's name, or a :class:`jaxga.maps.MapInfo` already loaded.
+        preset: the preset (default ``"hybrid"``: a path on any map, close to the exact
+            any-angle optimum), a TOML file or a :class:`Config`.
+        seeds: runs per plan (the best of them is :meth:`Result.best_seed`).
+        robot_radius, inflate, coarsen, unknown, corner_rule: how the map is loaded, as
+            :func:`jaxga.maps.load_map` (ignored for a loaded MapInfo).
+        any_angle_budget: as :func:`jaxga.run`: seconds the any-angle reference may
+            take after each plan's runs (``"auto"``: at most their own time); 0 skips it.
+        **overrides: configuration keys, as :func:`jaxga.run` takes them.
+    """
+
+    def __init__(self, map: str | Any, preset: str | Config = "hybrid", *, seeds: int = 8,
+                 robot_radius: float | None = None, inflate: float | None = None,
+                 coarsen: int | None = None, unknown: str | None = None,
+                 corner_rule: str | None = None, any_angle_budget: float | str | None = "auto",
+                 **overrides: Any) -> None:
+        if isinstance(map, MapInfo):
+            self.map = map
+        else:
+            self.map = load_map_info(map, robot_radius=robot_radius, inflate=inflate,
+                                     coarsen=coarsen, unknown=unknown,
+                                     corner_rule=corner_rule)
+        self.preset = preset
+        self.seeds = seeds
+        self.any_angle_budget = any_angle_budget
+        self.overrides = overrides
+        frame = self.map.frame
+        if frame is not None:
+            _ = frame.clearance  # the distance transform: once per map, not per plan
+
+    def cell(self, point: Point, what: str = "point") -> tuple[int, int]:
+        """The planning cell ``(x, y)`` holding ``point`` in metres (its centre is where
+        the plan starts or ends); a one-line :class:`EndpointError` off the map or on a
+        map without a resolution."""
+        frame = self.map.frame
+        if frame is None:
+            raise EndpointError(f"{what} in metres needs a map with a resolution and an "
+                                "origin (a ROS map_server .yaml)")
+        return frame.cell_of(point, self.map.grid.blocked.shape, what)
+
+    def plan(self, start: tuple[int, int] | None = None, goal: tuple[int, int] | None = None,
+             *, start_world: Point | None = None, goal_world: Point | None = None,
+             seeds: int | None = None, progress: Callable[[str, float], None] | None = None,
+             any_angle_budget: float | str | None = None) -> Result:
+        """Plan from ``start`` to ``goal`` (planning cells ``(x, y)``, y from the bottom) or
+        from ``start_world`` to ``goal_world`` (metres, the map's frame; snapped to the
+        centre of their cells). ``seeds`` and ``any_angle_budget`` default to the
+        planner's; ``progress`` as :func:`jaxga.run`. A blocked or unreachable endpoint
+        is a one-line error or a result with no path that names the cause, as for
+        :func:`jaxga.run`."""
+        ends = []
+        for name, cell, world in (("start", start, start_world), ("goal", goal, goal_world)):
+            if (cell is None) == (world is None):
+                raise EndpointError(f"give the {name} once: in cells ({name}=) or in "
+                                    f"metres ({name}_world=)")
+            ends.append(tuple(int(v) for v in cell) if world is None
+                        else self.cell(world, f"the {name}"))
+        grid = self.map.grid.replace(start=ends[0], goal=ends[1])
+        problem = dataclasses.replace(self.map, grid=grid)
+        budget = self.any_angle_budget if any_angle_budget is None else any_angle_budget
+        return run(self.preset, problem, self.seeds if seeds is None else seeds,
+                   progress=progress, any_angle_budget=budget, **self.overrides)

@@ -1,0 +1,156 @@
+"""A planner a robot node can call (:class:`jaxga.Planner`, :meth:`jaxga.GA.grid_for`): a
+new start and goal on a loaded map compile nothing, in ``jaxga.run``'s programs and in
+the pure core; the clearance is measured to the map's own obstacles, before inflation.
+
+The map is 20 x 20 with the free corner rule, so that its programs are the canonical
+``hybrid`` ones (tests/canonical.py) and the test compiles nothing of its own."""
+
+from __future__ import annotations
+
+import math
+
+import jax
+import jax.monitoring
+import numpy as np
+import pytest
+
+import jaxga
+from jaxga.api import programs
+from jaxga.core.errors import EndpointError, ParameterError
+from jaxga.maps import load_map_info
+from jaxga.maps.clearance import ObstacleClearance, segment_square_distance
+from tests import canonical
+
+RES = 0.1
+COMPILES: list[str] = []
+
+
+def _listen(event: str, duration: float, **_: object) -> None:
+    if event == "/jax/core/compile/backend_compile_duration":
+        COMPILES.append(event)
+
+
+jax.monitoring.register_event_duration_secs_listener(_listen)
+
+
+@pytest.fixture(scope="module")
+def office(tmp_path_factory) -> str:
+    """A 20 x 20 ROS map at 0.1 m: a wall across rows 10-11 (x 0-13), a pillar at
+    (15-16, 4-5); origin (-1, -1)."""
+    img = np.full((20, 20), 254, np.uint8)  # free; rows from the top in the image
+    for y in (10, 11):
+        img[19 - y, 0:14] = 0
+    for y in (4, 5):
+        img[19 - y, 15:17] = 0
+    d = tmp_path_factory.mktemp("office")
+    header = b"P5\n20 20\n255\n"
+    (d / "office.pgm").write_bytes(header + img.tobytes())
+    (d / "office.yaml").write_text(
+        "image: office.pgm\nresolution: 0.1\norigin: [-1.0, -1.0, 0.0]\nnegate: 0\n"
+        "occupied_thresh: 0.65\nfree_thresh: 0.196\n")
+    return str(d / "office.yaml")
+
+
+def test_a_new_pair_on_a_loaded_map_compiles_nothing(office):
+    planner = jaxga.Planner(office, robot_radius=0.1, corner_rule="free", seeds=3,
+                            generations=canonical.GENERATIONS)
+    first = planner.plan((1, 1), (18, 18))
+    assert first.success.all()
+    COMPILES.clear()
+    before = set(programs._SHARED_PROGRAMS)
+    pairs = [((18, 2), (2, 16)), ((5, 17), (17, 8))]
+    plans = [planner.plan(s, g) for s, g in pairs]
+    assert COMPILES == [] and set(programs._SHARED_PROGRAMS) == before
+    for (s, g), plan in zip(pairs, plans, strict=True):
+        assert plan.success.all() and plan.start == s and plan.goal == g
+        for i in range(3):
+            path = plan.path(i)
+            assert tuple(path[0]) == s and tuple(path[-1]) == g
+            np.testing.assert_allclose(plan.world_path(i)[0], np.add(s, 0.5) * RES - 1.0)
+    # metres: the cell holding the point, its centre planned on
+    world = planner.plan(start_world=(-0.85, -0.82), goal_world=(0.84, 0.88))
+    assert (world.start, world.goal) == ((1, 1), (18, 18))
+    np.testing.assert_array_equal(world.cells, first.cells)
+
+
+def test_the_planner_refuses_endpoints_in_one_line(office):
+    planner = jaxga.Planner(office, robot_radius=0.1, corner_rule="free")
+    for call, words in (
+            (lambda: planner.plan((1, 1), (5, 10)), "blocked"),
+            (lambda: planner.plan((1, 1)), "give the goal once"),
+            (lambda: planner.plan((1, 1), (2, 2), goal_world=(0.0, 0.0)), "give the goal once"),
+            (lambda: planner.plan(start_world=(5.0, 0.0), goal_world=(0.0, 0.0)), "off the map")):
+        with pytest.raises(EndpointError, match=words) as e:
+            call()
+        assert "\n" not in str(e.value)
+
+
+@pytest.mark.slow  # two whole GAs compiled (one taking the endpoints, one closing over them)
+def test_the_pure_core_takes_the_endpoints_as_an_input():
+    """``GA.run(key, params, ga.grid_for(...))`` under one ``jit``: a second pair compiles
+    nothing and equals a GA built on that pair with the same capacity, bit for bit."""
+    ga = jaxga.GA("sga", canonical.MAP, generations=canonical.GENERATIONS)
+    plan = jax.jit(jax.vmap(ga.run, (0, None, None)))
+    keys = jax.random.split(jax.random.PRNGKey(3), 3)
+    plan(keys, ga.default_params, ga.grid_for((0, 0), (19, 19)))
+    COMPILES.clear()
+    out = plan(keys, ga.default_params, ga.grid_for((0, 19), (19, 0)))
+    assert COMPILES == []
+    other = jaxga.GA("sga", ga.grid.replace(start=(0, 19), goal=(19, 0)),
+                     generations=canonical.GENERATIONS,
+                     population__capacity=ga.algorithm.capacity)
+    ref = jax.jit(jax.vmap(other.run, (0, None)))(keys, other.default_params)
+    for a, b in zip(jax.tree_util.tree_leaves(out), jax.tree_util.tree_leaves(ref), strict=True):
+        np.testing.assert_array_equal(np.asarray(a), np.asarray(b))
+    with pytest.raises(EndpointError, match="blocked"):
+        ga.grid_for((0, 0), tuple(int(v) for v in np.argwhere(ga.grid.blocked_np())[0][::-1]))
+    small = jaxga.GA("sga", canonical.MAP, population__capacity=16)
+    with pytest.raises(ParameterError, match="population__capacity="):
+        small.grid_for((0, 0), (19, 19))
+
+
+def test_segment_square_distances_by_hand():
+    centres = np.array([[3.0, 0.0], [3.0, 2.0], [0.0, 3.0], [5.0, 5.0]])
+    d = segment_square_distance(np.array([0.0, 0.0]), np.array([2.0, 0.0]), centres)
+    # to the square [2.5, 3.5] x [-0.5, 0.5]: 0.5; [2.5, 3.5] x [1.5, 2.5]: corner (2.5,
+    # 1.5) from the end (2, 0); [-0.5, 0.5] x [2.5, 3.5]: 2.5 above the start
+    np.testing.assert_allclose(d, [0.5, math.hypot(0.5, 1.5), 2.5, math.hypot(2.5, 4.5)])
+    # a diagonal segment grazing a square's corner touches it
+    touch = segment_square_distance(np.array([0.0, 0.0]), np.array([2.0, 2.0]),
+                                    np.array([[1.0, 0.0], [2.0, 0.0]]))
+    # (0.5, 0.5), the first square's corner, lies on the segment; the second square's
+    # corner (1.5, 0.5) is 1 / sqrt(2) from the line y = x
+    assert touch[0] == 0.0
+    assert touch[1] == pytest.approx(1 / math.sqrt(2))
+
+
+def test_the_clearance_is_to_the_map_as_loaded_before_inflation(office):
+    """On the office map inflated by one cell, a path along row 8 (the wall's squares start
+    at y = 9.5) is 1.5 cells = 0.15 m from the wall, although it touches the inflated
+    margin: 0.05 m beyond the robot's 0.1 m radius."""
+    info = load_map_info(office, robot_radius=0.1, corner_rule="free")
+    assert info.grid.blocked_np()[9, 5]  # the margin
+    clearance = info.frame.clearance
+    assert clearance.of_path(np.array([[0, 8], [12, 8]])) == pytest.approx(1.5)
+    # around the pillar (squares x 14.5-16.5, y 3.5-5.5): from (18, 8) to (18, 2), 1.5
+    assert clearance.of_path(np.array([[18, 8], [18, 2]])) == pytest.approx(1.5)
+    # a segment through the wall: 0
+    assert clearance.of_path(np.array([[5, 8], [5, 13]])) == 0.0
+    # coarsened 2 x 2: planning cell (2, 4) is centred at map point (4.5, 8.5), 1 from
+    # the wall
+    coarse = ObstacleClearance(clearance_obstacles(info), coarsen=2)
+    assert coarse.of_path(np.array([[2, 4]])) == pytest.approx(1.0)
+    planner = jaxga.Planner(info, seeds=3, generations=canonical.GENERATIONS)
+    plan = planner.plan((1, 8), (12, 8))
+    best = plan.best_seed()
+    assert plan.obstacle_clearance(best) == pytest.approx(
+        clearance.of_path(np.asarray(plan.path(best))))
+    assert plan.clearance_margin_m(best) == pytest.approx(
+        plan.obstacle_clearance(best) * RES - 0.1)
+    run = plan.to_json()["runs"][best]
+    assert run["min_clearance_m"] == pytest.approx(plan.obstacle_clearance(best) * RES)
+    assert "beyond the robot's radius" in plan.summary()
+
+
+def clearance_obstacles(info) -> np.ndarray:
+    return info.frame.obstacles
