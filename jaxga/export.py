@@ -22,11 +22,12 @@ from pathlib import Path
 import numpy as np
 import yaml
 
-from jaxga.core.errors import JaxgaError
+from jaxga.core.errors import JaxgaError, ParameterError
 from jaxga.core.files import atomic_write_text
+from jaxga.maps.inputs import PATH_JSON_CAP, read_input
 
 __all__ = ["PATH_FORMATS", "atomic_write_text", "path_format", "path_text", "path_yaws",
-           "write_path"]
+           "read_path", "write_path"]
 
 PATH_FORMATS: dict[str, str] = {".csv": "csv", ".yaml": "yaml", ".yml": "yaml"}
 """File extensions of ``--path-out`` and the format each one writes."""
@@ -90,3 +91,41 @@ def path_text(points: np.ndarray, fmt: str, frame_id: str = "map") -> str:
 def write_path(path: str | os.PathLike, points_world: np.ndarray, frame_id: str = "map") -> None:
     """Write a path in metres to ``path`` as CSV or YAML (by its extension), atomically."""
     atomic_write_text(path, path_text(points_world, path_format(path), frame_id))
+
+
+def read_path(path: str | os.PathLike) -> np.ndarray:
+    """``float[k, 2]``: the points in metres of a path file as :func:`write_path` writes
+    it (``.csv`` with an ``x,y`` header, or a ``nav_msgs/Path`` YAML: its poses'
+    positions), so that the path a robot was given can be checked again
+    (``jaxga replan --path``). A one-line :class:`ParameterError` for anything else."""
+    label = os.fspath(path)
+    fmt = PATH_FORMATS.get(Path(path).suffix.lower())
+    if fmt is None:
+        raise ParameterError(f"{label}: a path file is .csv (x,y in metres) or .yaml / .yml "
+                             "(a nav_msgs/Path)")
+    try:
+        text = read_input(path, PATH_JSON_CAP, what="path file",
+                          error=ParameterError).decode("utf-8")
+    except FileNotFoundError:
+        raise ParameterError(f"{label}: path file not found") from None
+    except (OSError, UnicodeDecodeError) as e:
+        raise ParameterError(f"{label}: cannot read the path file ({e})") from None
+    try:
+        if fmt == "csv":
+            lines = [ln.strip() for ln in text.splitlines() if ln.strip()]
+            if not lines or lines[0].replace(" ", "").lower() != "x,y":
+                raise ValueError("the first line must be the header x,y")
+            points = [[float(v) for v in ln.split(",")] for ln in lines[1:]]
+        else:
+            doc = yaml.safe_load(text)
+            points = [[float(pose["pose"]["position"][k]) for k in ("x", "y")]
+                      for pose in doc["poses"]]
+        out = np.asarray(points, float).reshape(-1, 2)
+    except (ValueError, TypeError, KeyError, IndexError, yaml.YAMLError) as e:
+        what = "x,y rows" if fmt == "csv" else "a nav_msgs/Path (poses[].pose.position)"
+        why = str(e).splitlines()[0] if str(e) else type(e).__name__
+        raise ParameterError(f"{label}: not a path file of {what} ({why})") from None
+    if not len(out) or not np.isfinite(out).all():
+        raise ParameterError(f"{label}: the path is empty or holds a value that is not a "
+                             "finite number")
+    return out

@@ -9,8 +9,9 @@ needed 0.3-0.4 s (25 x 25) and under 1 s (50 x 50) per re-plan in Matlab.
 
 :func:`replan` does this with a small GA budget:
 
-1. the robot's cell must be free and on the path (else :class:`~jaxga.core.errors.EndpointError`
-   / :class:`~jaxga.core.errors.ParameterError`);
+1. the robot's cell must be free and on the path, one of its cells or a cell one of its
+   segments crosses (a waypoint path: the robot's cell becomes a waypoint there), else
+   :class:`~jaxga.core.errors.EndpointError` / :class:`~jaxga.core.errors.ParameterError`;
 2. walking the remaining path from the robot's cell, the first *blocked step* is the first
    pair of consecutive path cells whose segment is no longer clear (a cell now blocked, or
    a diagonal step made illegal by the corner rule; :func:`jaxga.reference.optima.clear_np`, so
@@ -73,7 +74,13 @@ from jaxga.core.grid import Grid
 from jaxga.maps import rectangles_map
 from jaxga.maps.frame import MapFrame
 from jaxga.maps.preprocess import inflate_blocked, reachable, reachable_np
-from jaxga.reference.optima import clear_np, path_length, shortest_path, shortest_path_np
+from jaxga.reference.optima import (
+    clear_np,
+    line_walk,
+    path_length,
+    shortest_path,
+    shortest_path_np,
+)
 
 __all__ = [
     "MPMGA_SCENARIOS",
@@ -164,6 +171,15 @@ class ReplanResult:
         lines.append(f"time (s)    latency {self.latency_s:.3f}, compile {self.compile_s:.2f}, "
                      f"wall {self.wall_s:.3f}")
         return "\n".join(lines)
+
+    def metres_text(self, frame: MapFrame | None) -> str:
+        """The re-planned path in metres (a map with a resolution; "" otherwise): its
+        length and its ends' centres."""
+        if frame is None or not frame.has_metres or not self.success:
+            return ""
+        ends = frame.to_world(np.asarray([self.path[0], self.path[-1]], float))
+        return (f"metres      length {self.length * frame.cell_size:.3f} m, "
+                f"({ends[0][0]:.3f}, {ends[0][1]:.3f}) -> ({ends[1][0]:.3f}, {ends[1][1]:.3f})")
 
     def to_json(self, frame: MapFrame | None = None) -> dict[str, Any]:
         """A JSON-serialisable dict (the ``--json`` layout of ``jaxga replan``); with a
@@ -526,14 +542,25 @@ def _problem(grid: Grid, path: Any, new_obstacles: Any, position: XY | int,
         robot = _as_xy_list([position], "position")[0]
         if not _on_map(robot, w, h):
             raise EndpointError(f"robot cell {robot} is off the {w} x {h} map")
-        if robot not in cells:
-            raise ParameterError(f"robot cell {robot} is not on the path")
+        if robot not in cells:  # between two waypoints: it becomes one
+            cells = _with_waypoint(cells, robot)
         i = cells.index(robot)
     if blocked[robot[1], robot[0]]:
         why = ("a new obstacle" + (f" or within {inflate:g} cells of one" if inflate else "")
                if added[robot[1], robot[0]] else "an obstacle of the map")
         raise EndpointError(f"robot cell {robot} is blocked ({why})")
     return _Problem(grid.corner_rule, cells, added, blocked, robot, cells[: i + 1], cells[i:])
+
+
+def _with_waypoint(cells: list[XY], robot: XY) -> list[XY]:
+    """``cells`` with ``robot`` inserted where the path passes through it: in the first
+    segment whose line (:func:`jaxga.reference.optima.line_walk`) enters that cell; a
+    one-line :class:`ParameterError` when no segment does."""
+    for k, (a, b) in enumerate(zip(cells[:-1], cells[1:])):
+        if any(cell == robot for cell, _ in line_walk(a, b)):
+            return [*cells[: k + 1], robot, *cells[k + 1:]]
+    raise ParameterError(f"robot cell {robot} is not on the path (neither one of its cells "
+                         "nor crossed by one of its segments)")
 
 
 def _result(problem: _Problem, blockage: tuple | None, t_start: float, success: bool,

@@ -7,6 +7,9 @@ import json
 import math
 import sys
 
+import numpy as np
+
+from jaxga import export
 from jaxga.api.compilation_cache import use_compilation_cache
 from jaxga.api.timeline import time_line
 from jaxga.cli.options import (
@@ -43,16 +46,18 @@ def number_or_inf(value: object) -> float:
         return float("inf")
 
 
-def read_path_json(path: str, run_index: int | None) -> list[tuple[int, int]]:
+def read_path_json(path: str, run_index: int | None,
+                   raw: bool = False) -> list[tuple[int, int]]:
     """The robot's path from a JSON file: a list of ``[x, y]``, an object with a
-    ``"path"`` list (``jaxga optimum --json``), or the JSON of ``jaxga run`` (the raw
-    8-connected path of run ``run_index``, default the successful run with the shortest
-    raw path). Read only from a regular file of at most
+    ``"path"`` list (``jaxga optimum --json``), or the JSON of ``jaxga run``: the path of
+    run ``run_index`` (default the successful run with the shortest path) the robot was
+    given, post-optimised (``--path-out`` writes it), or with ``raw`` the GA's raw
+    8-connected path. Read only from a regular file of at most
     :data:`jaxga.maps.inputs.PATH_JSON_CAP` bytes (:func:`jaxga.maps.inputs.read_input`):
     a FIFO, a device or a larger file is refused in one line."""
 
     try:
-        raw = read_input(path, PATH_JSON_CAP, what="path JSON file", error=ParameterError,
+        text = read_input(path, PATH_JSON_CAP, what="path JSON file", error=ParameterError,
                          note="1 KiB a cell of the largest map jaxga plans on")
     except FileNotFoundError:
         raise ParameterError(f"{path}: path JSON file not found") from None
@@ -60,13 +65,14 @@ def read_path_json(path: str, run_index: int | None) -> list[tuple[int, int]]:
         raise ParameterError(f"{path}: cannot read the path JSON file "
                              f"({e.strerror or e})") from None
     try:
-        data = json.loads(raw.decode("utf-8"))
+        data = json.loads(text.decode("utf-8"))
     except ValueError as e:  # UnicodeDecodeError and JSONDecodeError
         raise ParameterError(f"{path}: not valid JSON ({e})") from None
     except RecursionError:
         raise ParameterError(f"{path}: not a path JSON file (nested too deeply)") from None
     expected = (f"{path}: expected a list of [x, y] cells, an object with a \"path\" list, "
                 "or the JSON of `jaxga run`")
+    which = "raw_path" if raw else "path"
     if isinstance(data, dict) and "runs" in data:
         runs = data["runs"]
         if not (isinstance(runs, list) and all(isinstance(r, dict) for r in runs)):
@@ -76,11 +82,12 @@ def read_path_json(path: str, run_index: int | None) -> list[tuple[int, int]]:
                 raise ParameterError(f"{path}: --run {run_index} is outside 0..{len(runs) - 1}")
             run = runs[run_index]
         else:
-            ok = [r for r in runs if r.get("success") and r.get("raw_path")]
+            ok = [r for r in runs if r.get("success") and r.get(which)]
             if not ok:
                 raise ParameterError(f"{path}: no successful run with a path")
-            run = min(ok, key=lambda r: number_or_inf(r.get("raw_length")))
-        data = run.get("raw_path") or run.get("path")
+            run = min(ok, key=lambda r: number_or_inf(
+                r.get("raw_length" if raw else "length")))
+        data = run.get(which)
     elif isinstance(data, dict):
         data = data.get("path")
     try:  # integers only: 0.9 is not cell 0
@@ -104,7 +111,12 @@ def cmd_replan(args: argparse.Namespace) -> int:
     rule = args.corner_rule or preset_rule(args)
     with timeline.phase("load"):
         info = load_info(args, rule)
-        path = read_path_json(args.path_json, args.run)
+        if args.path_out:  # refused before any work
+            export.path_format(args.path_out)
+            if info.frame is None or not info.frame.has_metres:
+                raise JaxgaError(f"cannot write --path-out {args.path_out}: the map has no "
+                                 "resolution (metres)")
+        path = read_robot_path(args, info)
     grid = info.grid
     obstacles = [xy for text in args.obstacles or () for xy in parse_obstacles(text)]
     for text in args.obstacles_world or ():
@@ -128,6 +140,13 @@ def cmd_replan(args: argparse.Namespace) -> int:
     )
     timeline.add("replan", result.wall_s)
     print(result.summary())
+    metres = result.metres_text(info.frame)
+    if metres:
+        print(metres)
+    if args.path_out and result.success:
+        with timeline.phase("write"):
+            export.write_path(args.path_out, info.frame.to_world(np.asarray(result.path, float)))
+        print(f"wrote {args.path_out} (metres)")
     if args.json:
         with timeline.phase("write"):
             write_json(args.json, result.to_json(info.frame))
@@ -141,6 +160,29 @@ def cmd_replan(args: argparse.Namespace) -> int:
         print(f"jaxga: no path: {result.reason}", file=sys.stderr)
         return EXIT_NO_PATH
     return 0
+
+
+def read_robot_path(args: argparse.Namespace, info) -> list[tuple[int, int]]:
+    """The path the robot drives, in planning cells: from ``--path-json`` (cells), or from
+    ``--path`` (metres, as ``jaxga run --path-out`` wrote it: each point in the cell
+    holding it, repeats dropped)."""
+    if (args.path_json is None) == (args.path is None):
+        raise JaxgaError("give the robot's path once: --path-json FILE (cells) or --path "
+                         "FILE.csv|FILE.yaml (metres, as --path-out wrote it)")
+    if args.path_json is not None:
+        return read_path_json(args.path_json, args.run, raw=args.raw)
+    if args.run is not None or args.raw:
+        raise JaxgaError("--run and --raw choose a run of jaxga run's JSON (--path-json), "
+                         "not of a --path file")
+    if info.frame is None or not info.frame.has_metres:
+        raise JaxgaError(f"--path {args.path} is in metres: the map needs a resolution and "
+                         "an origin (a ROS map_server .yaml)")
+    cells: list[tuple[int, int]] = []
+    for k, point in enumerate(export.read_path(args.path)):
+        cell = info.frame.cell_of(tuple(point), info.grid.shape, f"--path point {k}")
+        if not cells or cells[-1] != cell:
+            cells.append(cell)
+    return cells
 
 
 def inflation_cells(args: argparse.Namespace, info) -> float:
@@ -158,11 +200,19 @@ def add_parser(commands: argparse._SubParsersAction) -> None:
     p.add_argument("--map", required=True, help=MAP_HELP)
     add_source_arguments(p)
     add_coarsen_argument(p)
-    p.add_argument("--path-json", required=True, metavar="FILE",
-                   help="the planned path: a JSON list of [x, y], jaxga optimum's JSON, or "
-                   "jaxga run's JSON (its raw path)")
+    p.add_argument("--path-json", metavar="FILE",
+                   help="the planned path in cells: a JSON list of [x, y], jaxga optimum's "
+                   "JSON, or jaxga run's JSON (the post-optimised path the robot was given)")
+    p.add_argument("--path", metavar="FILE.csv|FILE.yaml",
+                   help="the path the robot drives in metres, as jaxga run --path-out wrote "
+                   "it (instead of --path-json)")
     p.add_argument("--run", type=int, metavar="I", help="with jaxga run's JSON: the run to use "
-                   "(default: the successful run with the shortest raw path)")
+                   "(default: the successful run with the shortest path)")
+    p.add_argument("--raw", action="store_true", help="with jaxga run's JSON: the GA's raw "
+                   "8-connected path instead of the post-optimised one")
+    p.add_argument("--path-out", metavar="FILE.csv|FILE.yaml",
+                   help="write the re-planned path in metres (a map with a resolution): x,y "
+                   "rows or a nav_msgs/Path")
     p.add_argument("--obstacles", action="append", metavar="X,Y;X,Y...",
                    help="cells that became blocked (repeatable); they grow like the map "
                    "(--inflate, --robot-radius)")

@@ -35,7 +35,7 @@ import dataclasses
 import heapq
 import math
 import time
-from collections.abc import Callable, Sequence
+from collections.abc import Callable, Iterator, Sequence
 
 import numpy as np
 
@@ -417,6 +417,22 @@ def clear_np(blocked: np.ndarray, corner_rule: str, a_xy: XY, b_xy: XY) -> bool:
         return False
     if b[y, x]:
         return False
+    for (cx, cy), sides in line_walk((x, y), (x1, y1)):
+        if sides is not None and not side_ok(bool(b[sides[0][1], sides[0][0]]),
+                                             bool(b[sides[1][1], sides[1][0]]), corner_rule):
+            return False
+        if b[cy, cx]:
+            return False
+    return True
+
+
+def line_walk(a_xy: XY, b_xy: XY) -> Iterator[tuple[XY, tuple[XY, XY] | None]]:
+    """The cells the segment between the centres of ``a_xy`` and ``b_xy`` enters after
+    ``a_xy``, in order (``b_xy`` last), each with the two side cells it passes between
+    when it enters through a grid vertex (a diagonal move), else None. Exact integer
+    arithmetic, as :func:`clear_np` describes."""
+    x, y = as_xy(a_xy)
+    x1, y1 = as_xy(b_xy)
     dx, dy = x1 - x, y1 - y
     sx, sy = (dx > 0) - (dx < 0), (dy > 0) - (dy < 0)
     big_a, big_b = abs(dx), abs(dy)
@@ -424,6 +440,7 @@ def clear_np(blocked: np.ndarray, corner_rule: str, a_xy: XY, b_xy: XY) -> bool:
     while i < big_a or j < big_b:
         tx = (2 * i + 1) * big_b if i < big_a else None
         ty = (2 * j + 1) * big_a if j < big_b else None
+        sides = None
         if ty is None or (tx is not None and tx < ty):
             x += sx
             i += 1
@@ -431,15 +448,12 @@ def clear_np(blocked: np.ndarray, corner_rule: str, a_xy: XY, b_xy: XY) -> bool:
             y += sy
             j += 1
         else:  # exactly through a grid vertex: a diagonal move
-            if not side_ok(bool(b[y, x + sx]), bool(b[y + sy, x]), corner_rule):
-                return False
+            sides = ((x + sx, y), (x, y + sy))
             x += sx
             y += sy
             i += 1
             j += 1
-        if b[y, x]:
-            return False
-    return True
+        yield (x, y), sides
 
 
 def concat_ranges(counts: np.ndarray) -> tuple[np.ndarray, np.ndarray]:

@@ -285,8 +285,8 @@ def test_cli_replan_end_to_end(tmp_path, sc25, capsys):
     path = [tuple(c) for c in data["path"]]
     assert_feasible(sc25.grid, sc25.new_obstacles, path, (20, 11), (24, 24))
     assert "replanned" in capsys.readouterr().out
-    # the JSON of `jaxga run` (its successful run's raw path), obstacles given twice
-    assert main(["replan", "--path-json", run_json, "--map", m, "--obstacles", "20,12",
+    # the JSON of `jaxga run` (--raw: its successful run's raw path), obstacles given twice
+    assert main(["replan", "--path-json", run_json, "--raw", "--map", m, "--obstacles", "20,12",
                  "--obstacles", "20,13", "--position", "20,11", "--seeds", "4",
                  "--generations", "10", "--population", "10", "--json", str(out)]) == 0
     assert json.loads(out.read_text())["rejoin"] == [20, 14]
@@ -327,10 +327,10 @@ def test_cli_replan_bad_path_file(tmp_path, sc25, capsys):
         assert main([*args, str(bad)]) == EXIT_BAD_INPUT, content
         err = capsys.readouterr().err.strip()
         assert "bad.json" in err and "\n" not in err and "Traceback" not in err, err
-    # a raw_length that is not a number sorts last: the other run's path is taken
+    # a length that is not a number sorts last: the other run's path is taken
     bad.write_text(json.dumps({"runs": [
-        {"success": True, "raw_path": [list(c) for c in sc25.path], "raw_length": "x"},
-        {"success": True, "raw_path": [[0, 0], [1, 1]], "raw_length": 1.0}]}))
+        {"success": True, "path": [list(c) for c in sc25.path], "length": "x"},
+        {"success": True, "path": [[0, 0], [1, 1]], "length": 1.0}]}))
     assert main([*args, str(bad)]) == EXIT_BAD_INPUT
     assert "(20, 11) is not on the path" in capsys.readouterr().err
     bad.write_text(bad.read_text().replace('"x"', "1" + "0" * 400))  # too large for a float
@@ -427,3 +427,70 @@ def test_replan_on_a_ros_map_keeps_the_radius_from_new_obstacles(tmp_path, capsy
     bare = replan(info.grid, path, [hit], robot, **BUDGET)
     assert bare.success and min(math.dist(c, hit) for c in bare.path) < \
         min(math.dist(c, hit) for c in new) + 1e-9
+
+
+def _ros_corridor(tmp_path):
+    """A 25 x 25 ROS map at 0.1 m, origin (-1.25, -1.25), with a wall at y = 4 (x 4-20)."""
+    img = np.full((25, 25), 254, np.uint8)  # top row first
+    img[20, 4:21] = 0
+    (tmp_path / "map.pgm").write_bytes(b"P5\n25 25\n255\n" + img.tobytes())
+    (tmp_path / "map.yaml").write_text(
+        "image: map.pgm\nresolution: 0.1\norigin: [-1.25, -1.25, 0.0]\nnegate: 0\n"
+        "occupied_thresh: 0.65\nfree_thresh: 0.196\n")
+    return str(tmp_path / "map.yaml")
+
+
+def test_replan_checks_the_post_optimised_path_the_robot_drives(tmp_path, capsys):
+    """A new obstacle that the post-optimised path (what the robot was given, what
+    --path-out wrote) crosses but the raw 8-connected path keeps clear of: `jaxga replan`
+    on the run's JSON re-plans (the raw path, --raw, is reported clear); the same from
+    the --path-out file in metres; the robot between two waypoints becomes one; the new
+    path is written in metres (--path-out)."""
+    import math
+
+    from jaxga.export import read_path, write_path
+    from jaxga.maps import load_map_info
+    from jaxga.reference.optima import line_walk, shortest_path_np
+
+    ros = _ros_corridor(tmp_path)
+    info = load_map_info(ros, robot_radius=0.1, corner_rule="free")
+    blocked = info.grid.blocked_np()
+    raw = [(int(x), int(y)) for x, y in shortest_path_np(blocked, (2, 8), (22, 20), "free").path]
+    post = [raw[0], raw[-1]]
+    assert clear_np(blocked, "free", *post)
+    crossed = [c for c, _ in line_walk(*post)][:-1]
+    hit = next(c for c in crossed  # crossed by the waypoint segment, beyond 1 cell of raw
+               if min(math.dist(c, r) for r in raw) > 1.5 and c[0] > 6)
+    robot = next(c for c in crossed if c in raw)  # on the raw path; inside the segment
+    run = tmp_path / "run.json"
+    run.write_text(json.dumps({"runs": [{
+        "success": True, "path": [list(c) for c in post], "length": math.dist(*post),
+        "raw_path": [list(c) for c in raw], "raw_length": float(len(raw))}]}))
+    to_m = info.frame.to_world
+    where = ["--map", ros, "--robot-radius", "0.1", "--corner-rule", "free",
+             "--position-world", ",".join(f"{v:.3f}" for v in to_m(np.asarray(robot, float))),
+             "--obstacles-world", ",".join(f"{v:.3f}" for v in to_m(np.asarray(hit, float))),
+             "--seeds", "4", "--generations", "10", "--population", "10"]
+    out, written = tmp_path / "replanned.json", tmp_path / "new.yaml"
+    assert main(["replan", "--path-json", str(run), *where, "--raw", "--json", str(out)]) == 0
+    assert json.loads(out.read_text())["status"] == "clear"
+    assert main(["replan", "--path-json", str(run), *where, "--json", str(out),
+                 "--path-out", str(written)]) == 0
+    doc = json.loads(out.read_text())
+    new = [tuple(c) for c in doc["path"]]
+    assert doc["status"] == "replanned" and new[0] == robot and new[-1] == post[-1]
+    assert all(math.dist(c, hit) > 1.0 for c in new)
+    np.testing.assert_allclose(read_path(written), to_m(np.asarray(new, float)), atol=1e-4)
+    assert "metres      length" in capsys.readouterr().out
+    # the path file the robot was given (metres), as `jaxga run --path-out` writes it
+    given = tmp_path / "given.csv"
+    write_path(given, to_m(np.asarray(post, float)))
+    assert main(["replan", "--path", str(given), *where, "--json", str(out)]) == 0
+    assert json.loads(out.read_text())["status"] == "replanned"
+    capsys.readouterr()
+    for extra, words in ((["--path", str(given), "--path-json", str(run)], "once"),
+                         (["--path", str(given), "--raw"], "--path-json"),
+                         (["--path", str(run)], ".csv")):
+        assert main(["replan", *where, *extra]) == EXIT_BAD_INPUT
+        err = capsys.readouterr().err.strip()
+        assert words in err and "\n" not in err
