@@ -1,0 +1,154 @@
+"""A robot node's planner: new far-apart goals on a map loaded once, in one process.
+
+On public ROS ``map_server`` maps (``benchmarks/maps/SOURCE.md``), ``jaxga.Planner``
+(``hybrid``, 8 seeds, robot radius 0.2 m) loads the map once and plans 10 random pairs
+of free cells at least half the map's longer side apart (one seeded draw per map, in
+the largest 8-connected region of the inflated grid). Plan 1 reads or compiles the
+programs; plans 2-10 are what a robot waits for: their wall times (median, slowest),
+the programs XLA compiled during them (JAX's compile events: must be 0), their phases
+(medians), and the quality: success over the seeds and the median over pairs and seeds
+of the post-optimised length over the exact any-angle optimum (computed here without a
+budget, outside the timing), and the least clearance from the map's own obstacles
+beyond the robot's radius.
+
+Two settings: the planner's default references (the 8-connected optimum, the any-angle
+optimum within a budget of the runs' own time) and ``any_angle_budget=0`` (the any-angle
+reference skipped: ``--no-reference``). Targets (issue: a planner a robot node can call,
+2-core machine): plans 2-10 on a 500 x 500 map, median <= 0.5 s, slowest <= 1 s; 8/8
+success; median gap <= 2 %.
+
+    python benchmarks/planner.py [--map NAME=FILE.yaml] [--pairs 10] [--no-write]
+"""
+
+from __future__ import annotations
+
+import argparse
+import statistics
+import time
+from pathlib import Path
+
+import jax.monitoring
+import numpy as np
+from _results import markdown_table, record
+
+HERE = Path(__file__).resolve().parent
+MAPS = {
+    "tb3_world": HERE / "maps" / "tb3_world" / "map.yaml",
+    "bookstore": HERE / "maps" / "bookstore" / "map.yaml",
+    "small_house": HERE / "maps" / "small_house" / "map.yaml",
+    "depot": HERE / "maps" / "depot" / "depot.yaml",
+}
+RADIUS = 0.2
+SEEDS = 8
+PHASES = ("references", "compile", "init", "evolve", "post", "any_angle")
+COMPILES: list[float] = []
+
+
+def _listen(event: str, duration: float, **_: object) -> None:
+    if event == "/jax/core/compile/backend_compile_duration":
+        COMPILES.append(duration)
+
+
+def far_pairs(grid, count: int, seed: int = 0) -> list[tuple[tuple[int, int], tuple[int, int]]]:
+    """``count`` pairs of free cells of the largest 8-connected region, each pair at least
+    half the map's longer side apart."""
+    from scipy import ndimage
+
+    free = ~grid.blocked_np()
+    labels, _ = ndimage.label(free, structure=np.ones((3, 3)))
+    largest = np.argmax(np.bincount(labels.ravel())[1:]) + 1
+    ys, xs = np.nonzero(labels == largest)
+    rng = np.random.default_rng(seed)
+    pairs = []
+    while len(pairs) < count:
+        i, j = rng.integers(len(xs), size=2)
+        if np.hypot(xs[i] - xs[j], ys[i] - ys[j]) >= 0.5 * max(free.shape):
+            pairs.append(((int(xs[i]), int(ys[i])), (int(xs[j]), int(ys[j]))))
+    return pairs
+
+
+def exact_any_angle(grid) -> float:
+    """The exact any-angle optimum of ``grid``'s problem, without a budget."""
+    from jaxga.api.references import any_angle_references, octile_optimum
+
+    return any_angle_references(grid, octile_optimum(grid), None).optimum
+
+
+def bench_map(name: str, path: Path, pairs_n: int, budget) -> tuple[list, list]:
+    import jaxga
+
+    t0 = time.perf_counter()
+    planner = jaxga.Planner(path, seeds=SEEDS, robot_radius=RADIUS, any_angle_budget=budget)
+    load_s = time.perf_counter() - t0
+    grid = planner.map.grid
+    pairs = far_pairs(grid, pairs_n)
+    walls, compiles, phases, gaps, ok, margins = [], [], [], [], 0, []
+    first = None
+    for k, (s, g) in enumerate(pairs):
+        COMPILES.clear()
+        t = time.perf_counter()
+        plan = planner.plan(s, g)
+        wall = time.perf_counter() - t
+        if k == 0:
+            first = wall
+            continue
+        walls.append(wall)
+        compiles.append(len(COMPILES))
+        phases.append(plan.timing)
+        ok += int(plan.success.sum())
+        optimum = exact_any_angle(grid.replace(start=s, goal=g))
+        gaps += [100 * (v / optimum - 1) for v in plan.length[plan.success]]
+        margins += [plan.clearance_margin_m(i) for i in np.flatnonzero(plan.success)]
+        print(name, budget, k, s, g, f"{wall:.2f} s", plan.timing, flush=True)
+    h, w = grid.blocked.shape
+    row = [name, f"{w} x {h}", "auto" if budget == "auto" else f"{budget:g}",
+           f"{load_s:.2f}", f"{first:.2f}", f"{statistics.median(walls):.2f}",
+           f"{max(walls):.2f}", str(sum(compiles)), f"{ok}/{SEEDS * len(walls)}",
+           f"{statistics.median(gaps):.3f}", f"{min(margins):+.3f}"]
+    phase_row = [name, row[2], *(f"{statistics.median(p.get(f'{n}_s', 0.0) for p in phases):.3f}"
+                                 for n in PHASES)]
+    return row, phase_row
+
+
+def main() -> None:
+    ap = argparse.ArgumentParser(description=__doc__)
+    ap.add_argument("--map", action="append", default=[], metavar="NAME=FILE.yaml")
+    ap.add_argument("--pairs", type=int, default=10)
+    ap.add_argument("--no-write", action="store_true")
+    args = ap.parse_args()
+    maps = dict(MAPS)
+    for spec in args.map:
+        name, file = spec.split("=", 1)
+        maps[name] = Path(file)
+    jax.monitoring.register_event_duration_secs_listener(_listen)
+    rows, phase_rows = [], []
+    for name, path in maps.items():
+        for budget in ("auto", 0.0):
+            row, phase_row = bench_map(name, path, args.pairs, budget)
+            rows.append(row)
+            phase_rows.append(phase_row)
+            print(row, phase_row, flush=True)
+    body = (
+        f"`jaxga.Planner(map, seeds={SEEDS}, robot_radius={RADIUS})` (preset hybrid), the map "
+        f"loaded once (load s), then {args.pairs} random far-apart pairs of free cells "
+        "(at least half the longer side apart) planned one after the other in the same "
+        "process. plan 1 s: the first plan (programs read from the store or compiled); "
+        "median / slowest s: plans 2-10, wall of `Planner.plan`; compiled: programs XLA "
+        "compiled during plans 2-10 (JAX's compile events); success: seeds with a path; "
+        "gap: median over pairs and seeds of the post-optimised length / exact any-angle "
+        "optimum - 1 (computed outside the timing, without a budget); margin: the least "
+        "clearance from the map's own obstacles (before inflation) beyond the robot's "
+        "radius, metres. any-angle budget: auto = the runs' own time (the default), 0 = "
+        "skipped (`--no-reference`). Maps: benchmarks/maps/SOURCE.md.\n\n"
+        + markdown_table(["map", "cells", "any-angle budget", "load s", "plan 1 s",
+                          "median s", "slowest s", "compiled", "success", "gap %",
+                          "margin m"], rows)
+        + "\n\n**Phases of plans 2-10** (medians, seconds, each plan's own time line)\n\n"
+        + markdown_table(["map", "any-angle budget", *PHASES], phase_rows)
+    )
+    record("a robot node's planner: new goals on a loaded map (benchmarks/planner.py)", body,
+           write=not args.no_write)
+
+
+if __name__ == "__main__":
+    main()
