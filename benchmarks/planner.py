@@ -2,8 +2,8 @@
 
 On public ROS ``map_server`` maps (``benchmarks/maps/SOURCE.md``), ``jaxga.Planner``
 (``hybrid``, 8 seeds, robot radius 0.2 m) loads the map once and plans 10 random pairs
-of free cells at least half the map's longer side apart (one seeded draw per map, in
-the largest 8-connected region of the inflated grid). Plan 1 reads or compiles the
+of free cells at least half the longer extent of the largest 8-connected region of the
+inflated grid apart (one seeded draw per map). Plan 1 reads or compiles the
 programs; plans 2-10 are what a robot waits for: their wall times (median, slowest),
 the programs XLA compiled during them (JAX's compile events: must be 0), their phases
 (medians), and the quality: success over the seeds and the median over pairs and seeds
@@ -51,7 +51,7 @@ def _listen(event: str, duration: float, **_: object) -> None:
 
 def far_pairs(grid, count: int, seed: int = 0) -> list[tuple[tuple[int, int], tuple[int, int]]]:
     """``count`` pairs of free cells of the largest 8-connected region, each pair at least
-    half the map's longer side apart."""
+    half the region's longer extent apart."""
     from scipy import ndimage
 
     free = ~grid.blocked_np()
@@ -59,10 +59,11 @@ def far_pairs(grid, count: int, seed: int = 0) -> list[tuple[tuple[int, int], tu
     largest = np.argmax(np.bincount(labels.ravel())[1:]) + 1
     ys, xs = np.nonzero(labels == largest)
     rng = np.random.default_rng(seed)
+    far = 0.5 * max(xs.max() - xs.min(), ys.max() - ys.min())
     pairs = []
     while len(pairs) < count:
         i, j = rng.integers(len(xs), size=2)
-        if np.hypot(xs[i] - xs[j], ys[i] - ys[j]) >= 0.5 * max(free.shape):
+        if np.hypot(xs[i] - xs[j], ys[i] - ys[j]) >= far:
             pairs.append(((int(xs[i]), int(ys[i])), (int(xs[j]), int(ys[j]))))
     return pairs
 
@@ -131,8 +132,9 @@ def main() -> None:
     body = (
         f"`jaxga.Planner(map, seeds={SEEDS}, robot_radius={RADIUS})` (preset hybrid), the map "
         f"loaded once (load s), then {args.pairs} random far-apart pairs of free cells "
-        "(at least half the longer side apart) planned one after the other in the same "
-        "process. plan 1 s: the first plan (programs read from the store or compiled); "
+        "(at least half the free region's longer extent apart) planned one after the "
+        "other in the same process. plan 1 s: the first plan (programs read from the "
+        "store or compiled); "
         "median / slowest s: plans 2-10, wall of `Planner.plan`; compiled: programs XLA "
         "compiled during plans 2-10 (JAX's compile events); success: seeds with a path; "
         "gap: median over pairs and seeds of the post-optimised length / exact any-angle "

@@ -113,6 +113,9 @@ class Result:
     """Per seed, how many initial individuals (all islands together) the fallback
     initialiser made (``init.fallback``): the slots the preset's own initialiser left
     empty after ``init.max_tries`` attempts per individual."""
+    generations_run: np.ndarray | None = None
+    """Per seed, the generations it ran: :attr:`generations` unless the stagnation rule
+    (``termination.stagnation``) stopped it earlier."""
     causes: np.ndarray | None = None
     """Per seed, why it returned no path ("" for a successful seed); :attr:`reason`
     sums them up."""
@@ -284,7 +287,7 @@ class Result:
         lines = [
             f"preset {self.preset} on {self.map_name} (corner rule {self.corner_rule!r}), "
             f"{len(self.seeds)} seeds, population {self.population}, "
-            f"{self.generations} generations",
+            f"{self.generations} generations{self._stopped_text()}",
             f"success {int(self.success.sum())}/{len(self.seeds)}"
             + (f" ({self.reason})" if self.reason else ""),
             f"optimum: 8-connected {self.optimum:.4f}, {self.any_angle_text()}"
@@ -313,6 +316,16 @@ class Result:
         if time:
             lines.append(time_line(self.timing))
         return "\n".join(lines)
+
+    def _stopped_text(self) -> str:
+        """`` (stopped after 3-6: no better best in 5 generations)`` when the stagnation
+        rule ended runs early, else ""."""
+        ran = self.generations_run
+        if ran is None or not len(ran) or ran.max() >= self.generations:
+            return ""
+        span = f"{ran.min()}" if ran.min() == ran.max() else f"{ran.min()}-{ran.max()}"
+        limit = self.config["termination.stagnation"] if self.config is not None else "K"
+        return f" (every run stopped after {span}: no better best in {limit} generations)"
 
     def any_angle_text(self) -> str:
         """``any-angle 402.7829``, or why it is missing and the lower bound."""
@@ -397,6 +410,8 @@ class Result:
                 "initial_fitness": (None if self.initial_fitness is None
                                     else float(self.initial_fitness[i])),
                 "convergence_generation": int(self.convergence_generation[i]),
+                "generations_run": (None if self.generations_run is None
+                                    else int(self.generations_run[i])),
                 # the other metrics of the summary table, null for a failed seed
                 **{k: json_number(float(self._column(k)[i])) if ok else None
                    for k in ("angle_sum", "turns")},

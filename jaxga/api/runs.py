@@ -736,6 +736,7 @@ def _point_results(host: dict, hist: dict, *, config: Config, configs: Sequence[
             length=found(h["length"]), raw_length=found(h["raw_length"]),
             fitness=found(h["fitness"]),
             convergence_generation=conv[sl],
+            generations_run=np.asarray(h["generations_run"]),
             history={k: v[sl] for k, v in hist.items()},
             metrics={k: found(v) for k, v in h["metrics"].items()},
             raw_metrics={k: found(v) for k, v in h["raw_metrics"].items()},
