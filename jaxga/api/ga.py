@@ -119,7 +119,7 @@ class GA:
             ends.append(getattr(self.grid, f"{name}_xy") if cell is None else cell)
         grid = self.grid.replace(start=ends[0], goal=ends[1])
         grid.check_endpoints()
-        need = default_capacity(grid)
+        need = default_capacity(grid, float(self.config["population.capacity_factor"]))
         if need > self.algorithm.capacity:
             raise ParameterError(
                 f"the paths from {ends[0]} to {ends[1]} need a capacity of {need} cells, "

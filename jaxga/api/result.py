@@ -147,22 +147,32 @@ class Result:
         return [(int(p) % self.width, int(p) // self.width) for p in c[:n]]
 
     @property
+    def straight_line(self) -> float:
+        """The distance between the start's and the goal's centres (cells): no path is
+        shorter; NaN where the endpoints are not known."""
+        if self.start is None or self.goal is None:
+            return math.nan
+        return math.dist(self.start, self.goal)
+
+    @property
     def gap_reference(self) -> float:
         """What :attr:`gap` measures against: the any-angle optimum, else (not computed
-        within its budget) its Euclidean lower bound, else the 8-connected optimum."""
-        for value in (self.any_angle_optimum, self.lower_bound, self.optimum):
+        within its budget, or skipped) its Euclidean lower bound around the obstacles,
+        else the straight line from start to goal (:attr:`straight_line`), a lower bound
+        too: a gap is never measured against a length a path can beat."""
+        for value in (self.any_angle_optimum, self.lower_bound, self.straight_line):
             if math.isfinite(value):
                 return float(value)
         return math.nan
 
     @property
     def gap_basis(self) -> str:
-        """The name of :attr:`gap_reference`: ``"any-angle optimum"``, ``"lower bound"``
-        (the gap is then an upper bound of the gap to the optimum) or ``"8-connected
-        optimum"``."""
+        """The name of :attr:`gap_reference`: ``"any-angle optimum"``, ``"lower bound"`` or
+        ``"straight line"`` (for both, the gap is an upper bound of the gap to the
+        optimum, never below zero)."""
         if math.isfinite(self.any_angle_optimum):
             return "any-angle optimum"
-        return "lower bound" if math.isfinite(self.lower_bound) else "8-connected optimum"
+        return "lower bound" if math.isfinite(self.lower_bound) else "straight line"
 
     @property
     def gap(self) -> np.ndarray:
@@ -302,10 +312,9 @@ class Result:
         raw_basis = self.gap_basis if self._raw_waypoints() else "8-connected optimum"
         bound = {"lower bound": " (a lower bound of the any-angle optimum: at least the "
                                 "gap to that optimum)",
-                 "8-connected optimum": " (the any-angle optimum was not computed; any-angle "
-                                        "paths may beat the 8-connected optimum, so this is "
-                                        "at most the gap to the any-angle optimum and may be "
-                                        "below zero)"}.get(self.gap_basis, "")
+                 "straight line": " (the any-angle optimum was not computed; the straight "
+                                  "line from start to goal is a lower bound of it: at least "
+                                  "the gap to that optimum)"}.get(self.gap_basis, "")
         lines.append(f"gaps: gap = length / {self.gap_basis} - 1{bound}, raw_gap = "
                      f"raw_length / {raw_basis} - 1, fitness_gap = fitness optimum / "
                      "fitness - 1")

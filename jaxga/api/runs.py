@@ -464,7 +464,8 @@ def _program_map(config: Config, grid: Grid, capacity: int,
     if not size_class:
         return guided, build_config
     if not int(config["population.capacity"]):
-        build_config = build_config.override({"population.capacity": class_capacity(grid)})
+        build_config = build_config.override({"population.capacity": class_capacity(
+            grid, float(config["population.capacity_factor"]))})
     return pad_to_class(guided), build_config
 
 
@@ -848,7 +849,8 @@ def run(
             (a plan that needs no gap; the 8-connected optimum, which tells an unreachable
             goal, is always computed). Beyond the budget :attr:`Result.any_angle_optimum` is NaN,
             :attr:`Result.any_angle_note` says so, and the gaps are to the proven
-            lower bound (:attr:`Result.gap_basis`).
+            lower bound, or with 0 to the straight line from start to goal
+            (:attr:`Result.gap_basis`): never below zero.
 
     Returns:
         A :class:`Result`. Seeds that found no feasible path have ``success`` False and

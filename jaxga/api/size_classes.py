@@ -30,13 +30,14 @@ seed for seed when the capacity is the same (``tests/api/test_programs.py``; dec
 from __future__ import annotations
 
 import dataclasses
+import math
 
 import jax
 import jax.numpy as jnp
 import numpy as np
 
 from jaxga.core.grid import Grid, index_to_xy, xy_to_index
-from jaxga.engine.algorithm import capacity_class, default_capacity
+from jaxga.engine.algorithm import CAPACITY_FACTOR, capacity_class, default_capacity
 
 CLASS_SIDES: tuple[int, ...] = (32, 64, 128, 256, 384, 512, 768, 1024)
 """A padded side is the smallest of these holding the map's side (each side on its own:
@@ -73,15 +74,18 @@ def class_shape(height: int, width: int) -> tuple[int, int] | None:
             next(s for s in CLASS_SIDES if s >= width))
 
 
-def class_capacity(grid: Grid) -> int:
+def class_capacity(grid: Grid, factor: float = CAPACITY_FACTOR) -> int:
     """The path capacity of ``grid``'s problem in its size class: the class's
-    (:data:`CAPACITY_PER_SIDE` times its longer side), or the problem's own
-    (:func:`jaxga.engine.algorithm.default_capacity`) when that is larger."""
+    (:data:`CAPACITY_PER_SIDE` times its longer side, scaled by ``factor`` /
+    :data:`~jaxga.engine.algorithm.CAPACITY_FACTOR`: ``population.capacity_factor``), or
+    the problem's own (:func:`jaxga.engine.algorithm.default_capacity`) when that is
+    larger."""
     shape = class_shape(grid.height, grid.width)
-    own = default_capacity(grid)
+    own = default_capacity(grid, factor)
     if shape is None:
         return own
-    return max(own, capacity_class(CAPACITY_PER_SIDE * max(shape)))
+    scaled = math.ceil(CAPACITY_PER_SIDE * max(shape) * factor / CAPACITY_FACTOR)
+    return max(own, capacity_class(scaled))
 
 
 def pad_to_class(grid: Grid) -> Grid:

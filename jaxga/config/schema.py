@@ -60,6 +60,10 @@ COMMON_FIELDS: dict[str, Field] = {
     "population.capacity": Field(int, "path capacity L: cells a path can hold (not a "
                                  "number of individuals); 0 = automatic from the map size",
                                  low=0, high=1_000_000),
+    "population.capacity_factor": Field(float, "automatic path capacity (population.capacity "
+                                        "= 0): this many times the cells of an optimal path; "
+                                        "a size class's capacity scales with it",
+                                        low=1.0, high=100.0),
     "generations": Field(int, "generations per run", low=1, high=1_000_000),
     "init.method": MethodField("init", "initialiser (see jaxga operators)"),
     "init.max_tries": Field(int, "attempts per individual of init.method, on average (the "
@@ -115,6 +119,7 @@ COMMON_DEFAULTS: dict[str, Any] = {
     "description": "",
     "map.corner_rule": "map",
     "population.capacity": 0,
+    "population.capacity_factor": 3.0,
     "init.max_tries": 20,
     "init.unique": False,
     "init.fallback": "field_walk",

@@ -744,8 +744,9 @@ def _clearance(grid: Grid, g: _Geometry,
     last one. A segment whose band distance is at most the radius has its exact
     clearance; the others are farther, so when any segment is that close the minimum is
     exact, and touching cells always lie in the band. Otherwise (a path that stays away
-    from every obstacle) every segment up to the last moving one is measured against the
-    whole map, ``O(L H W)`` for a path of ``L`` segments.
+    from every obstacle) each straight run of the path (consecutive segments in one
+    direction, one segment to the map) is measured against the whole map, ``O(R H W)``
+    for a path of ``R`` runs.
     """
     h, w = _check_grid(grid)
     obstacles = proximity_obstacles(grid, border_blocked)
@@ -787,14 +788,26 @@ def _clearance(grid: Grid, g: _Geometry,
         # of the loop (it would then run on every call)
         done = state[1]
         blocked = obstacles & ~done
-        masked = tuple(jnp.where(done, 0, v) for v in segs)
+        xs, ys = jnp.where(done, 0, g.x), jnp.where(done, 0, g.y)
 
-        def segment(i, near):  # the segments up to the last moving one (not the padding)
-            d, _ = _segment_box_clearance(*(v[i] for v in masked), blocked)
+        def run(r, near):  # one straight run of the path: a segment between two nodes
+            a, b = starts[r], jnp.where(r + 1 < n_runs, starts[r + 1], used)
+            d, _ = _segment_box_clearance(xs[a], ys[a], xs[b], ys[b], blocked)
             return jnp.minimum(near, d)
 
-        near = jax.lax.fori_loop(0, used, segment, jnp.asarray(jnp.inf, F32))
+        near = jax.lax.fori_loop(0, n_runs, run, jnp.asarray(jnp.inf, F32))
         return near.astype(F32), jnp.bool_(True)
+
+    # The path's straight runs: consecutive moving segments in one direction lie on one
+    # line, so they are one segment to the map (an 8-connected path's hundreds of steps
+    # are a few dozen runs); zero-length segments inside a run change nothing.
+    if g.cells.shape[0] == 1:
+        starts, n_runs = jnp.zeros((1,), jnp.int32), jnp.int32(1)
+    else:
+        first_move = g.moving & (jnp.cumsum(g.moving.astype(jnp.int32)) == 1)
+        begins = g.moving & (g.turning | first_move) & (j < used)
+        starts = jnp.nonzero(begins, size=n_seg, fill_value=0)[0].astype(jnp.int32)
+        n_runs = jnp.maximum(jnp.sum(begins, dtype=jnp.int32), 1)
 
     # Runs its body only if this path (under vmap: any path) stays beyond the radius.
     near, _ = jax.lax.while_loop(lambda s: ~s[1], whole_map,

@@ -11,6 +11,7 @@ it at 0.
 from __future__ import annotations
 
 import dataclasses
+import math
 from typing import Any
 
 import jax
@@ -64,8 +65,9 @@ class Algorithm:
         return self.config.get(key, default)
 
 
-CAPACITY_FACTOR = 3
-"""The automatic path capacity holds this many times the optimal path's cells."""
+CAPACITY_FACTOR = 3.0
+"""The automatic path capacity holds this many times the optimal path's cells (the default
+of ``population.capacity_factor``)."""
 
 
 SMALL_MAP_CAPACITY = 160
@@ -83,10 +85,11 @@ def capacity_class(cells: int) -> int:
     return -(-cells // step) * step
 
 
-def default_capacity(grid: Grid) -> int:
+def default_capacity(grid: Grid, factor: float = CAPACITY_FACTOR) -> int:
     """Path capacity used when the configuration says 0 (``population.capacity``).
 
-    ``CAPACITY_FACTOR`` (3) times the cells of an optimal path, bounded by the free cells
+    ``factor`` (``population.capacity_factor``, :data:`CAPACITY_FACTOR` = 3) times the
+    cells of an optimal path, bounded by the free cells
     the start can reach (no loop-free path holds more), rounded up to a size class
     (:func:`capacity_class`), and at least ``min(4 * (H + W), 160)``
     (:data:`SMALL_MAP_CAPACITY`). The 400-cell optimum of a 65 x 65 maze gets 1280 cells,
@@ -100,7 +103,7 @@ def default_capacity(grid: Grid) -> int:
     facts = problem_facts(grid)
     if not facts.reachable:
         return floor
-    need = min(CAPACITY_FACTOR * facts.optimal_cells, facts.reachable_cells)
+    need = min(math.ceil(factor * facts.optimal_cells), facts.reachable_cells)
     return max(floor, capacity_class(need))
 
 
@@ -111,7 +114,8 @@ def build(config: Config, grid: Grid) -> tuple[Algorithm, dict]:
     largest size; the ``active`` parameter then says how many are used).
     """
     cap_p = int(config["population.size"])
-    capacity = int(config["population.capacity"]) or default_capacity(grid)
+    capacity = int(config["population.capacity"]) or default_capacity(
+        grid, float(config["population.capacity_factor"]))
     islands = int(config["islands.count"])
     check_migration(config, cap_p)
     algo = Algorithm(
@@ -125,7 +129,8 @@ def build(config: Config, grid: Grid) -> tuple[Algorithm, dict]:
     return algo, default_params(config, islands)
 
 
-NON_STRUCTURAL = ("name", "paper", "description", "population.size")
+NON_STRUCTURAL = ("name", "paper", "description", "population.size",
+                  "population.capacity_factor")
 """Keys that never enter the compiled program (metadata; the size is ``active``)."""
 
 

@@ -107,6 +107,9 @@ def unread_keys(config: Config) -> dict[str, str]:
         where = " as init.method or init.fallback" if family == "init" else ""
         out[key] = (f"{family}.method = {config[f'{family}.method']!r} has no parameter "
                     f"{name!r} (read by {', '.join(map(repr, who))} only{where})")
+    if int(config.get("population.capacity") or 0):
+        out["population.capacity_factor"] = ("population.capacity is set: the capacity is "
+                                             "not automatic")
     if has_trait(chosen, WAYPOINTS):
         out["fitness.window"] = "waypoint paths are evaluated without the narrow window"
     if NEVER_FAILS in chosen["init.method"].traits:

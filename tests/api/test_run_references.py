@@ -51,7 +51,7 @@ def test_no_budget_gives_the_exact_optimum_and_a_tiny_budget_only_the_bound(monk
 
 def test_a_result_measures_its_gap_against_what_was_computed():
     """gap_reference: the exact optimum, else the lower bound (the gap then bounds the true
-    gap from above), else the 8-connected optimum; the summary and JSON say which."""
+    gap from above), else the straight line; the summary and JSON say which."""
     base = dict(preset="p", map_name="m", corner_rule="strict", seeds=np.arange(2),
                 success=np.array([True, False]), reason="", cells=np.zeros((2, 1), int),
                 n_cells=np.ones(2, int), raw_cells=np.zeros((2, 1), int),
@@ -76,8 +76,10 @@ def test_a_result_measures_its_gap_against_what_was_computed():
     doc = bound.to_json()
     assert doc["gap_basis"] == "lower bound" and doc["any_angle_optimum"] is None
     assert doc["lower_bound"] == 10.0 and doc["runs"][0]["gap"] == pytest.approx(0.1)
-    neither = Result(**base, any_angle_optimum=math.nan, lower_bound=math.nan)
-    assert neither.gap_basis == "8-connected optimum"
-    assert neither.gap[0] == pytest.approx(11 / 12 - 1)
-    text = neither.summary()  # below zero: never called "at least" the gap
-    assert "at least" not in text and "at most the gap to the any-angle optimum" in text
+    # neither computed (skipped): the straight line from start to goal, a lower bound
+    # that no path beats, never the 8-connected optimum (which any-angle paths beat)
+    neither = Result(**base, any_angle_optimum=math.nan, lower_bound=math.nan,
+                     start=(0, 0), goal=(6, 8))
+    assert neither.gap_basis == "straight line"
+    assert neither.gap[0] == pytest.approx(11 / 10 - 1)
+    assert "the straight line from start to goal is a lower bound" in neither.summary()

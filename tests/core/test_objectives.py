@@ -727,3 +727,35 @@ def test_agacd_angle_formula_matches_continuous_paths(dirs, start):
     cells, n = make_path([tuple(q) for q in xy], cap=CAP, width=SIZE)
     got = float(_jitted(ob.angle_sum, ())(_PROP_GRID, cells, n))
     assert got == pytest.approx(total, abs=1e-5)
+
+
+def test_min_clearance_agrees_with_the_host_measure_of_the_map_as_loaded():
+    """:func:`ob.min_clearance` (float32, band then straight runs against the whole
+    map) equals :class:`jaxga.maps.clearance.ObstacleClearance` (float64, pruned by a
+    distance transform), two independent exact measures, on shortest paths between random
+    cells of maps with a few small obstacles: paths near them (the band) and far from all
+    of them (the whole map)."""
+    from jaxga.maps.clearance import ObstacleClearance
+    from jaxga.reference.optima import shortest_path_np
+
+    rng = np.random.default_rng(1)
+    h, w, cap = 40, 50, 120
+    measure = jax.jit(jax.vmap(ob.min_clearance, (None, 0, 0)))
+    far = 0
+    for _ in range(3):
+        b = np.zeros((h, w), bool)
+        for _ in range(3):
+            x, y = rng.integers(0, w - 3), rng.integers(0, h - 2)
+            b[y:y + 2, x:x + 3] = True
+        grid = Grid.create(b)
+        free = np.argwhere(~b)[:, ::-1]
+        paths = [np.asarray(shortest_path_np(b, tuple(free[i]), tuple(free[j]), "strict").path)
+                 for i, j in rng.integers(len(free), size=(8, 2)) if i != j]
+        cells = np.zeros((len(paths), cap), np.int32)
+        for k, p in enumerate(paths):
+            cells[k, :len(p)] = p[:, 1] * w + p[:, 0]
+        got = np.asarray(measure(grid, cells, np.array([len(p) for p in paths], np.int32)))
+        want = [ObstacleClearance(b).of_path(p) for p in paths]
+        np.testing.assert_allclose(got, want, rtol=1e-6, atol=1e-5)
+        far += sum(v > ob.CLEARANCE_RADIUS for v in want)
+    assert far >= 3  # the whole-map search was exercised
