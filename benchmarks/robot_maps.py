@@ -108,15 +108,19 @@ def exact_optimum(path: Path, coarsen: int, start, goal) -> tuple[float, float, 
 
 
 def replan_case(name: str, path: Path, run_json: Path, cache: Path, tmp: Path) -> dict:
-    """``jaxga replan`` on ``run_json``'s best path: the robot a quarter along it, a new
-    obstacle (a point in metres) 30 % along it; the first call (which may compile), a
+    """``jaxga replan`` on ``run_json``'s best post-optimised path (the one the robot
+    drives): the robot a quarter along the cells it crosses, a new obstacle (a point in
+    metres) 30 % along them; the first call (which may compile), a
     warm CLI call and the Python API's calls 1-3 in one process."""
     from jaxga.maps import load_map_info
+    from jaxga.reference.optima import line_walk
     from jaxga.replan import replan
 
     doc = json.loads(run_json.read_text())
-    best = min((r for r in doc["runs"] if r["success"]), key=lambda r: r["raw_length"])
-    cells = best["raw_path"]
+    best = min((r for r in doc["runs"] if r["success"]), key=lambda r: r["length"])
+    waypoints = [tuple(c) for c in best["path"]]  # what the robot drives (--path-out)
+    cells = [waypoints[0]] + [c for a, b in zip(waypoints[:-1], waypoints[1:])
+                              for c, _ in line_walk(a, b)]
     frame_info = load_map_info(path, robot_radius=RADIUS)
     frame = frame_info.frame
     robot = cells[len(cells) // 4]
@@ -134,7 +138,7 @@ def replan_case(name: str, path: Path, run_json: Path, cache: Path, tmp: Path) -
     grid = frame_info.grid
     lat = []
     for call in range(3):
-        r = replan(grid, [tuple(c) for c in cells], [tuple(obstacle)], tuple(robot),
+        r = replan(grid, waypoints, [tuple(obstacle)], tuple(robot),
                    seeds=list(range(4 * call, 4 * call + 4)), inflate=radius_cells)
         lat.append(r.wall_s)
     return {"first": first, "warm": warm, "api": lat, "success": out["success"],
@@ -218,12 +222,13 @@ def main() -> None:
         + markdown_table(["map", *PHASES, "total", "wall"], phase_rows)
     )
     if replan_row is not None:
-        body += ("\n\n**Re-planning** (`jaxga replan --robot-radius 0.2` on the run's best "
-                 "path: the robot a quarter along it, a new obstacle given in metres 30 % "
-                 "along it; the window is chosen automatically). first / warm = CLI wall s "
-                 "(fresh processes); API ms = the Python API's calls 1-3 in one process "
-                 "(wall of jaxga.replan); clearance = the new path's least distance (cells) "
-                 "from the new obstacle's cell against the inflation radius.\n\n"
+        body += ("\n\n**Re-planning** (`jaxga replan --robot-radius 0.2` on the run's "
+                 "best post-optimised path: the robot a quarter along it, a new obstacle "
+                 "given in metres 30 % along it; the window is chosen automatically). "
+                 "first / warm = CLI wall s (fresh processes); API ms = the Python API's "
+                 "calls 1-3 in one process (wall of jaxga.replan); clearance = the new "
+                 "path's least distance (cells) from the new obstacle's cell against the "
+                 "inflation radius.\n\n"
                  + markdown_table(["map", "first s", "warm s", "API ms (calls 1-3)",
                                    "window", "success", "clearance"], [replan_row]))
     record("a plan on a real robot map (benchmarks/robot_maps.py)", body,
