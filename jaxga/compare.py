@@ -62,7 +62,8 @@ __all__ = ["METRICS", "TESTS", "Comparison", "PairTest", "compare", "compare_res
 GAP_NOTE = ("mean gaps over the successful seeds: raw gap = raw length (before "
             "post-optimisation) / exact 8-connected optimum - 1 (any-angle optimum for "
             "AGACD's waypoint paths); gap = post-optimised length / exact any-angle "
-            "optimum - 1; gap own fitness = optimum of the preset's fitness / fitness - 1")
+            "optimum - 1 (or a lower bound of it where it was not computed: the JSON's "
+            "gap_basis); gap own fitness = optimum of the preset's fitness / fitness - 1")
 """What the gap columns of the per-preset table measure (printed under it)."""
 
 METRICS = ("length", "raw_length", "gap", "raw_gap", "fitness_gap", "turns", "angle_sum",

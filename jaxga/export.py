@@ -116,6 +116,8 @@ def read_path(path: str | os.PathLike) -> np.ndarray:
             if not lines or lines[0].replace(" ", "").lower() != "x,y":
                 raise ValueError("the first line must be the header x,y")
             points = [[float(v) for v in ln.split(",")] for ln in lines[1:]]
+            if any(len(p) != 2 for p in points):
+                raise ValueError("every row holds two values, x,y")
         else:
             doc = yaml.safe_load(text)
             points = [[float(pose["pose"]["position"][k]) for k in ("x", "y")]

@@ -543,7 +543,7 @@ def _problem(grid: Grid, path: Any, new_obstacles: Any, position: XY | int,
         if not _on_map(robot, w, h):
             raise EndpointError(f"robot cell {robot} is off the {w} x {h} map")
         if robot not in cells:  # between two waypoints: it becomes one
-            cells = _with_waypoint(cells, robot)
+            cells = _with_waypoint(cells, robot, grid.blocked_np(), grid.corner_rule)
         i = cells.index(robot)
     if blocked[robot[1], robot[0]]:
         why = ("a new obstacle" + (f" or within {inflate:g} cells of one" if inflate else "")
@@ -552,13 +552,23 @@ def _problem(grid: Grid, path: Any, new_obstacles: Any, position: XY | int,
     return _Problem(grid.corner_rule, cells, added, blocked, robot, cells[: i + 1], cells[i:])
 
 
-def _with_waypoint(cells: list[XY], robot: XY) -> list[XY]:
+def _with_waypoint(cells: list[XY], robot: XY, blocked: np.ndarray,
+                   corner_rule: str) -> list[XY]:
     """``cells`` with ``robot`` inserted where the path passes through it: in the first
-    segment whose line (:func:`jaxga.reference.optima.line_walk`) enters that cell; a
-    one-line :class:`ParameterError` when no segment does."""
+    segment ``a b`` whose line (:func:`jaxga.reference.optima.line_walk`) enters that
+    cell; a one-line :class:`ParameterError` when no segment does.
+
+    The robot's centre is not on the line, so ``robot b`` may enter cells ``a b`` does
+    not: where ``robot b`` is not clear on the map planned on (``blocked``, before the new
+    obstacles), the rest of the line's own cells follow the robot instead (each step of
+    them is clear exactly when that part of ``a b`` is), so a clear path never shows a
+    blocked step that is not there."""
     for k, (a, b) in enumerate(zip(cells[:-1], cells[1:])):
-        if any(cell == robot for cell, _ in line_walk(a, b)):
-            return [*cells[: k + 1], robot, *cells[k + 1:]]
+        walk = [cell for cell, _ in line_walk(a, b)]
+        if robot in walk:
+            rest = [] if clear_np(blocked, corner_rule, robot, b) else \
+                walk[walk.index(robot) + 1:-1]
+            return [*cells[: k + 1], robot, *rest, *cells[k + 1:]]
     raise ParameterError(f"robot cell {robot} is not on the path (neither one of its cells "
                          "nor crossed by one of its segments)")
 

@@ -143,6 +143,9 @@ class GA:
         return generation(self.algorithm, key, self._grid(grid), state, params)
 
     def _grid(self, grid: Grid | None) -> Grid:
+        if grid is not None and not isinstance(grid, Grid):
+            raise TypeError(f"the grid argument is a Grid (GA.grid_for), got "
+                            f"{type(grid).__name__}: give generations= by keyword")
         return self.grid if grid is None else grid
 
     def evolve(self, key: jax.Array, state: GAState, params: dict,

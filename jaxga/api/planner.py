@@ -9,7 +9,7 @@ compiles nothing) and the references within their budget::
 
     planner = jaxga.Planner("map.yaml", robot_radius=0.2)
     plan = planner.plan(start_world=(1.0, 2.0), goal_world=(-3.5, 0.25))
-    best = plan.best_seed()
+    best = plan.best_seed()                  # None when no seed found a path
     plan.world_path(best)                    # float[k, 2], metres
     jaxga.export.write_path("path.yaml", plan.world_path(best))   # nav_msgs/Path, or .csv
 

@@ -123,6 +123,8 @@ class Programs:
                     _share(shared, self._compiled[name])
                 continue
             program = _SHARED_PROGRAMS.get(shared) if shared is not None else None
+            if program is not None:
+                _SHARED_PROGRAMS.move_to_end(shared)  # most recently used
             if program is None:
                 program, read = executables.load_or_compile(
                     self._keys[name], self._devices, functools.partial(self._lower, name),

@@ -12,7 +12,9 @@ time, so that the references never take longer than the GA itself). What it repo
   :func:`jaxga.reference.lower_bound.euclidean_lower_bound_np`), proven below the
   any-angle optimum and fast (it scales with the obstacles' corners, not the cells): the
   gap to it is an upper bound of the gap to the optimum;
-* otherwise (the bound did not finish either) the gap to the 8-connected optimum.
+* otherwise (the bound did not finish either, or the references were skipped) the gap to
+  the straight line from start to goal, a lower bound too
+  (:attr:`jaxga.api.result.Result.gap_basis`).
 
 Exact results are cached per problem, so that comparing presets or repeating runs on one
 map computes them once; a result cut short by its budget is computed again by a call with

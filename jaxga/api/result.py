@@ -172,7 +172,9 @@ class Result:
         optimum, never below zero)."""
         if math.isfinite(self.any_angle_optimum):
             return "any-angle optimum"
-        return "lower bound" if math.isfinite(self.lower_bound) else "straight line"
+        if math.isfinite(self.lower_bound):
+            return "lower bound"
+        return "straight line" if math.isfinite(self.straight_line) else "none"
 
     @property
     def gap(self) -> np.ndarray:
@@ -282,7 +284,8 @@ class Result:
                if math.isfinite(self.lower_bound) else "any-angle not computed")
         text = (f"{head}: length mean {post.mean():.3f} m, best {post.min():.3f} m (raw mean "
                 f"{raw.mean():.3f} m); optimum {self.optimum * f.cell_size:.3f} m, {ref}")
-        clear = [c for c in map(self.obstacle_clearance, np.flatnonzero(ok)) if c is not None]
+        clear = [c for c in map(self.obstacle_clearance, np.flatnonzero(ok))
+                 if c is not None and math.isfinite(c)]
         if clear and f.resolution is not None:
             least = min(clear) * f.resolution
             text += (f"; clearance from the map's obstacles (before inflation) at least "

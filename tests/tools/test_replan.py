@@ -16,6 +16,7 @@ import pytest
 import jaxga.api
 from jaxga.cli import EXIT_BAD_INPUT, EXIT_NO_PATH, main
 from jaxga.core.errors import EndpointError, ParameterError
+from jaxga.core.grid import Grid
 from jaxga.maps import save_map
 from jaxga.reference.optima import clear_np
 from jaxga.replan import (
@@ -347,7 +348,6 @@ def test_the_default_replan_finds_the_detour_an_exact_search_finds(block):
     updated map finds a detour, and so does the default re-plan (preset hybrid), spliced
     feasibly from the robot's cell to the goal. A 3 x 3 block closes the corridor: no
     detour exists, and the re-plan says so instead of returning a path."""
-    from jaxga.core.grid import Grid
     from jaxga.reference.optima import shortest_path_np
 
     blocked = np.ones((25, 25), bool)
@@ -488,9 +488,31 @@ def test_replan_checks_the_post_optimised_path_the_robot_drives(tmp_path, capsys
     assert main(["replan", "--path", str(given), *where, "--json", str(out)]) == 0
     assert json.loads(out.read_text())["status"] == "replanned"
     capsys.readouterr()
+    three = tmp_path / "three.csv"  # x,y,z rows: never read as pairs of pairs
+    three.write_text("x,y\n1,2,3\n4,5,6\n")
     for extra, words in ((["--path", str(given), "--path-json", str(run)], "once"),
                          (["--path", str(given), "--raw"], "--path-json"),
-                         (["--path", str(run)], ".csv")):
+                         (["--path", str(run)], ".csv"),
+                         (["--path", str(three)], "two values")):
         assert main(["replan", *where, *extra]) == EXIT_BAD_INPUT
         err = capsys.readouterr().err.strip()
         assert words in err and "\n" not in err
+
+
+@pytest.mark.parametrize("rule, blocked, path, robot", [
+    ("free", [(2, 0)], [(0, 0), (3, 1)], (1, 0)),     # robot -> (3, 1) would enter (2, 0)
+    ("strict", [(0, 2)], [(0, 0), (1, 2)], (0, 1)),   # robot -> (1, 2): a squeezed diagonal
+])
+def test_a_robot_between_waypoints_finds_no_blockage_that_is_not_there(rule, blocked, path,
+                                                                       robot):
+    """A robot inside a clear waypoint segment becomes a waypoint without making the rest
+    of the segment look blocked: the line from its centre may enter cells the segment does
+    not, so the segment's own cells follow it there. Nothing new is blocked: nothing runs."""
+    b = np.zeros((3, 5), bool)
+    for x, y in blocked:
+        b[y, x] = True
+    grid = Grid.create(b, corner_rule=rule)
+    assert clear_np(b, rule, *path)
+    r = replan(grid, path, [], robot, **BUDGET)
+    assert r.success and r.status == "clear" and r.path[0] == robot and r.path[-1] == path[-1]
+    assert all(clear_np(b, rule, p, q) for p, q in zip(r.path[:-1], r.path[1:]))
