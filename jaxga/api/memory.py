@@ -3,9 +3,8 @@
 
 from __future__ import annotations
 
-import os
-
 from jaxga.core.errors import ParameterError
+from jaxga.core.grid import physical_memory
 from jaxga.engine import (
     Algorithm,
 )
@@ -15,11 +14,6 @@ RESULT_MEMORY_FRACTION = 0.5
 machine's physical memory (they are all held on the host at the end)."""
 
 
-def physical_memory() -> int | None:
-    try:
-        return os.sysconf("SC_PAGE_SIZE") * os.sysconf("SC_PHYS_PAGES")
-    except (AttributeError, ValueError, OSError):  # not POSIX
-        return None
 
 
 def check_result_memory(n_runs: int, algo: Algorithm) -> None:

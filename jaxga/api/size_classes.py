@@ -39,14 +39,14 @@ import numpy as np
 from jaxga.core.grid import Grid, index_to_xy, xy_to_index
 from jaxga.engine.algorithm import CAPACITY_FACTOR, capacity_class, default_capacity
 
-CLASS_SIDES: tuple[int, ...] = (32, 64, 128, 256, 384, 512, 768, 1024)
+CLASS_SIDES: tuple[int, ...] = (32, 64, 128, 256, 384, 512, 768, 1024, 1536, 2048)
 """A padded side is the smallest of these holding the map's side (each side on its own:
 a 604 x 307 map is in the 768 x 384 class)."""
 
 MAX_CLASS_SIDE = CLASS_SIDES[-1]
 """The largest class side; every map jaxga plans on (at most
-:data:`jaxga.core.grid.MAX_MAP_CELLS` cells, so no side over 1024 unless the other is
-under 256) has a class but a very long and thin one."""
+:data:`jaxga.core.grid.MAX_MAP_CELLS` cells, so no side over 2048 unless the other is
+under 2048) has a class but a very long and thin one."""
 
 AUTO_MIN_SIDE = 64
 """``size_class=None`` (the default) pads maps with a side over this: users' maps, whose

@@ -125,8 +125,8 @@ def add_map_arguments(p: argparse.ArgumentParser, rule_default: str = "strict") 
 def add_coarsen_argument(p: argparse.ArgumentParser) -> None:
     p.add_argument("--coarsen", type=int, metavar="K",
                    help="merge K x K cells into one, blocked if any of them is (for maps "
-                   "over 512 x 512 cells); --start, --goal and --scenario stay in the "
-                   "original map's cells")
+                   "over 2048 x 2048 cells or the memory); --start, --goal and --scenario "
+                   "stay in the original map's cells")
 
 
 def add_preset_arguments(p: argparse.ArgumentParser) -> None:

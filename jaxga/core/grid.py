@@ -23,6 +23,7 @@ from __future__ import annotations
 
 import dataclasses
 import operator
+import os
 from collections.abc import Sequence
 from typing import Any
 
@@ -37,25 +38,62 @@ CORNER_RULES: tuple[str, ...] = ("free", "no_squeeze", "strict")
 
 DEFAULT_CORNER_RULE = "strict"
 
-MAX_MAP_CELLS = 512 * 512
-"""The largest map jaxga plans on (262,144 cells, e.g. 512 x 512). A run's host-side work
-(the exact optima it reports gaps against, the distance fields) and its paths grow with
-the map; beyond this a run would take many minutes or more memory than a workstation
-has. Larger maps are refused at once, naming the way around: a coarser map
-(:func:`jaxga.maps.coarsen`, ``load_map(..., coarsen=k)``, ``--coarsen K``; decision 021)."""
+MAX_MAP_CELLS = 2048 * 2048
+"""The largest map jaxga reads and plans on (4,194,304 cells, e.g. 2048 x 2048): the
+caps on input files follow from it (:mod:`jaxga.maps.inputs`). Within it a map is planned
+on when the memory a plan needs fits the machine (:func:`plan_memory`); a larger map, or
+one the memory does not hold, is refused at once, naming the way around: a coarser map
+(:func:`jaxga.maps.coarsen`, ``load_map(..., coarsen=k)``, ``--coarsen K``; decisions 021
+and 041)."""
+
+PLAN_BASE_BYTES = 1 << 30
+"""Memory of a plan that does not grow with the map: the process, JAX, the compiled
+programs and the runs (1 GiB; a 500 x 500 map's plan peaks at 0.56 GB)."""
+
+PLAN_BYTES_PER_CELL = 512
+"""Memory of a plan per map cell (the map, its distance fields and move tables, the
+references' searches, the clearance's distance transform): about 285 bytes measured
+between a 500 x 500 and a 2330 x 1890 map (0.56 and 1.74 GB peak, decision 041), with room
+to spare."""
+
+
+def plan_memory(cells: int) -> int:
+    """The memory (bytes) a plan on a map of ``cells`` cells is taken to need."""
+    return PLAN_BASE_BYTES + PLAN_BYTES_PER_CELL * int(cells)
+
+
+def physical_memory() -> int | None:
+    """This machine's memory in bytes, None where the system does not say."""
+    try:
+        return os.sysconf("SC_PAGE_SIZE") * os.sysconf("SC_PHYS_PAGES")
+    except (AttributeError, ValueError, OSError):  # not POSIX
+        return None
 
 
 def too_large(width: int, height: int) -> str:
-    """The one-line refusal of a map over :data:`MAX_MAP_CELLS`, or "" if it fits."""
-    if width * height <= MAX_MAP_CELLS:
+    """The one-line refusal of a map over :data:`MAX_MAP_CELLS` cells or whose plan would
+    need more than half of this machine's memory (:func:`plan_memory`), or "" if it
+    fits."""
+    have = physical_memory()
+
+    def fits(cells: int) -> bool:
+        return cells <= MAX_MAP_CELLS and (have is None or plan_memory(cells) <= have // 2)
+
+    cells = width * height
+    if fits(cells):
         return ""
     k = 2
-    while -(-width // k) * -(-height // k) > MAX_MAP_CELLS:
+    while not fits(-(-width // k) * -(-height // k)):
         k += 1
-    return (f"map {width} x {height} has {width * height:,} cells, more than jaxga plans on "
-            f"({MAX_MAP_CELLS:,}, e.g. 512 x 512): make it coarser, e.g. {k} x {k} cells "
-            f"into one (--coarsen {k} of jaxga run, optimum, compare and doe; "
-            f"load_map(..., coarsen={k}); jaxga.maps.coarsen)")
+    if cells > MAX_MAP_CELLS:
+        why = f"more than jaxga plans on ({MAX_MAP_CELLS:,}, e.g. 2048 x 2048)"
+    else:
+        why = (f"and a plan on it needs about {plan_memory(cells) / 2**30:.1f} GiB, more than "
+               f"half of this machine's {have / 2**30:.1f} GiB")
+    return (f"map {width} x {height} has {cells:,} cells, {why}: make it coarser, e.g. "
+            f"{k} x {k} cells into one (--coarsen {k} of jaxga run, optimum, compare and "
+            f"doe; load_map(..., coarsen={k}); jaxga.maps.coarsen)")
+
 
 # The 8 move directions, counter-clockwise from east. Index d gives (dx, dy).
 DIRECTIONS = np.array(

@@ -53,10 +53,10 @@ MAP_BYTES_PER_CELL = 16
 MAP_FILE_SLACK = 1 << 20
 """Bytes a map file may hold beyond its cells (headers, comments, metadata): 1 MiB."""
 
-MAX_READ_COARSEN = 16
+MAX_READ_COARSEN = 4
 """The coarsening factor up to which a larger map file is read: a map of at most
 ``MAX_MAP_CELLS`` cells once coarsened ``K x K`` has ``K * K`` times as many cells. Beyond
-``K = 16`` the cap stays at ``map_file_cap(16)`` (1 GiB and 1 MiB)."""
+``K = 4`` the cap stays at ``map_file_cap(4)`` (1 GiB and 1 MiB)."""
 
 YAML_CAP = MAP_FILE_SLACK
 """The largest ROS ``map_server`` YAML file read (1 MiB: its metadata takes a few hundred
@@ -64,12 +64,12 @@ bytes)."""
 
 SCENARIO_CAP = 64 * MAX_MAP_CELLS
 """The largest Moving AI scenario file read: 64 bytes (a problem line) for every cell of
-the largest map jaxga plans on (16 MiB)."""
+the largest map jaxga plans on (256 MiB)."""
 
-PATH_JSON_CAP = 1024 * MAX_MAP_CELLS
-"""The largest path JSON read for re-planning (``jaxga replan --path-json``): 1 KiB for
-every cell of the largest map jaxga plans on (256 MiB), room for the JSON of ``jaxga
-run`` with its paths in cells and metres for many seeds."""
+PATH_JSON_CAP = 64 * MAX_MAP_CELLS
+"""The largest path JSON read for re-planning (``jaxga replan --path-json``, ``--path``):
+64 bytes for every cell of the largest map jaxga plans on (256 MiB), room for the JSON of
+``jaxga run`` with its paths in cells and metres for many seeds."""
 
 _CHUNK = 1 << 20
 _KINDS = (
@@ -84,7 +84,7 @@ def map_file_cap(coarsen: int = 1) -> int:
     """The most bytes read from a map file or a ROS map's image: :data:`MAP_BYTES_PER_CELL`
     for every cell of a map of :data:`~jaxga.core.grid.MAX_MAP_CELLS` cells once coarsened
     ``coarsen x coarsen`` (up to :data:`MAX_READ_COARSEN`), plus :data:`MAP_FILE_SLACK`.
-    Without coarsening 5 MiB: a map over the size limit is refused anyway."""
+    Without coarsening 65 MiB: a map over the size limit is refused anyway."""
     k = min(max(int(coarsen), 1), MAX_READ_COARSEN)
     return MAP_BYTES_PER_CELL * MAX_MAP_CELLS * k * k + MAP_FILE_SLACK
 

@@ -17,7 +17,8 @@ from jaxga.engine.algorithm import default_capacity
     ((1, 1), (32, 32)), ((20, 20), (32, 32)), ((25, 25), (32, 32)), ((32, 32), (32, 32)),
     ((33, 20), (64, 32)), ((20, 64), (32, 64)), ((64, 64), (64, 64)), ((65, 10), (128, 32)),
     ((10, 300), (32, 384)), ((384, 384), (384, 384)), ((500, 500), (512, 512)),
-    ((307, 604), (384, 768)), ((200, 1024), (256, 1024)), ((100, 1025), None),
+    ((307, 604), (384, 768)), ((200, 1024), (256, 1024)), ((100, 1025), (128, 1536)),
+    ((945, 1165), (1024, 1536)), ((100, 2049), None),
 ])
 def test_class_shape(shape, expected):
     assert class_shape(*shape) == expected
@@ -51,7 +52,7 @@ def test_padding_keeps_every_cell_s_coordinates():
     np.testing.assert_array_equal(map_cells((ys * 32 + xs).ravel(), 32, 5),
                                   (ys * 5 + xs).ravel())
     # over the largest class: unchanged
-    large = Grid.create(np.zeros((1025, 3), bool))
+    large = Grid.create(np.zeros((2049, 3), bool))
     assert pad_to_class(large) is large
 
 

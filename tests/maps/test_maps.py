@@ -828,13 +828,16 @@ def test_a_map_over_the_size_limit_is_refused_from_its_header(tmp_path, monkeypa
     one line naming the limit and the way around it (a coarser map)."""
     from jaxga.core.grid import MAX_MAP_CELLS
 
+    monkeypatch.setattr("jaxga.core.grid.physical_memory", lambda: 24 * 2**30)  # CI's
     header = tmp_path / "huge.map"
-    header.write_text("type octile\nheight 2000\nwidth 2000\nmap\n@@@\n")
+    header.write_text("type octile\nheight 8000\nwidth 8000\nmap\n@@@\n")
     with pytest.raises(MapFormatError) as e:
         load_map(header)
     text = str(e.value)
-    assert "\n" not in text and "2000 x 2000 has 4,000,000 cells" in text
+    assert "\n" not in text and "8000 x 8000 has 64,000,000 cells" in text
     assert f"{MAX_MAP_CELLS:,}" in text and "--coarsen 4" in text and "coarsen=4" in text
+    # the files' own parsers are kept for the limit of a machine with less memory below
+    monkeypatch.setattr("jaxga.core.grid.MAX_MAP_CELLS", 512 * 512)
     side = 600
     b = np.random.default_rng(0).random((side, side)) < 0.1
     from jaxga.maps import loaders
@@ -859,6 +862,23 @@ def test_a_map_over_the_size_limit_is_refused_from_its_header(tmp_path, monkeypa
     with pytest.raises(JaxgaError, match="more than jaxga plans on"):
         Grid.create(np.zeros((513, 512), bool))
     Grid.create(np.zeros((512, 512), bool))  # the limit itself is accepted
+
+
+def test_a_map_the_memory_does_not_hold_is_refused_naming_the_memory(monkeypatch):
+    """Within the cell limit, a map whose plan would need more than half of the machine's
+    memory is refused in one line naming the memory a plan needs and the coarsening that
+    fits; on a machine with the memory it is accepted."""
+    from jaxga.core import grid as grid_module
+
+    monkeypatch.setattr(grid_module, "physical_memory", lambda: 4 * 2**30)  # 4 GiB
+    text = grid_module.too_large(1165, 945)  # 1.1 M cells: 1 GiB + 0.5 GiB
+    assert text == ""
+    text = grid_module.too_large(2000, 2000)  # 4 M cells: 2.9 GiB > 2 GiB
+    assert "\n" not in text and "needs about 2.9 GiB" in text and "4.0 GiB" in text
+    assert "--coarsen 2" in text
+    monkeypatch.setattr(grid_module, "physical_memory", lambda: 24 * 2**30)
+    assert grid_module.too_large(2000, 2000) == ""
+    assert grid_module.plan_memory(1165 * 945) < 4 * 10**9  # the 1165 x 945 map's target
 
 
 @settings(max_examples=40, deadline=None)

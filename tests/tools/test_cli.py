@@ -633,12 +633,16 @@ def test_scenario_reaches_run_after_the_devices_are_configured(monkeypatch, caps
     capsys.readouterr()
 
 
-def test_a_map_over_the_size_limit_is_one_line_and_coarsen_plans_on_it(tmp_path, capsys):
-    """``--map`` of 600 x 600 cells: refused with one line naming --coarsen; with
-    ``--coarsen 2`` the optimum of the 300 x 300 map (endpoints in the original's cells)."""
+def test_a_map_over_the_size_limit_is_one_line_and_coarsen_plans_on_it(tmp_path, capsys,
+                                                                     monkeypatch):
+    """``--map`` of 600 x 600 cells over a limit of 512 x 512 (a machine whose memory
+    holds no more): refused with one line naming --coarsen; with ``--coarsen 2`` the
+    optimum of the 300 x 300 map (endpoints in the original's cells)."""
     import numpy as np
 
     from jaxga.maps import save_map
+
+    monkeypatch.setattr("jaxga.core.grid.MAX_MAP_CELLS", 512 * 512)
 
     b = np.zeros((600, 600), bool)
     b[100:500, 300] = True
