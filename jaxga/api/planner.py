@@ -42,8 +42,13 @@ class Planner:
         preset: the preset (default ``"hybrid"``: a path on any map, close to the exact
             any-angle optimum), a TOML file or a :class:`Config`.
         seeds: runs per plan (the best of them is :meth:`Result.best_seed`).
-        robot_radius, inflate, coarsen, unknown, corner_rule: how the map is loaded, as
-            :func:`jaxga.maps.load_map` (ignored for a loaded MapInfo).
+        robot_radius: the robot's radius in metres, by which the obstacles grow (as
+            :func:`jaxga.maps.load_map`; the following four too, each ignored for a
+            loaded MapInfo).
+        inflate: or the growth in cells.
+        coarsen: K x K map cells into one planning cell.
+        unknown: how a ROS map's unknown cells are planned on.
+        corner_rule: the corner rule (default: the map's own).
         any_angle_budget: as :func:`jaxga.run`: seconds the any-angle reference may
             take after each plan's runs (``"auto"``: at most their own time); 0 skips it.
         **overrides: configuration keys, as :func:`jaxga.run` takes them.
