@@ -28,7 +28,7 @@ import jax
 from jaxga.api.programs import warn_platform
 from jaxga.api.runs import load_problem
 from jaxga.config.schema import Config
-from jaxga.core.errors import EndpointError, ParameterError
+from jaxga.core.errors import ParameterError
 from jaxga.core.grid import Grid
 from jaxga.engine import (
     GAState,
@@ -42,6 +42,7 @@ from jaxga.engine import finish as finish_run
 from jaxga.engine.maptables import with_tables
 from jaxga.engine.run import run_evolve, run_init
 from jaxga.maps import MapInfo
+from jaxga.maps.frame import endpoint_cells
 from jaxga.operators.guide import with_guide
 
 __all__ = ["GA"]
@@ -109,14 +110,8 @@ class GA:
         blocked, and :class:`~jaxga.core.errors.ParameterError` when the pair's paths
         need more cells than :attr:`algorithm`'s capacity (build the GA with a larger
         ``population__capacity``)."""
-        ends = []
-        for name, cell, world in (("start", start, start_world), ("goal", goal, goal_world)):
-            if world is not None:
-                if cell is not None or self.frame is None:
-                    raise EndpointError(f"give the {name} once, in cells or (on a map "
-                                        "with a resolution) in metres")
-                cell = self.frame.cell_of(world, self.grid.blocked.shape, f"the {name}")
-            ends.append(getattr(self.grid, f"{name}_xy") if cell is None else cell)
+        ends = endpoint_cells(self.frame, self.grid, start, goal, start_world, goal_world,
+                              required=False)
         grid = self.grid.replace(start=ends[0], goal=ends[1])
         grid.check_endpoints()
         need = default_capacity(grid, float(self.config["population.capacity_factor"]))

@@ -25,8 +25,8 @@ from typing import Any
 from jaxga.api.result import Result
 from jaxga.api.runs import run
 from jaxga.config.schema import Config
-from jaxga.core.errors import EndpointError
 from jaxga.maps import MapInfo, load_map_info
+from jaxga.maps.frame import endpoint_cells
 
 __all__ = ["Planner"]
 
@@ -73,16 +73,6 @@ class Planner:
         if frame is not None:
             _ = frame.clearance  # the distance transform: once per map, not per plan
 
-    def cell(self, point: Point, what: str = "point") -> tuple[int, int]:
-        """The planning cell ``(x, y)`` holding ``point`` in metres (its centre is where
-        the plan starts or ends); a one-line :class:`EndpointError` off the map or on a
-        map without a resolution."""
-        frame = self.map.frame
-        if frame is None:
-            raise EndpointError(f"{what} in metres needs a map with a resolution and an "
-                                "origin (a ROS map_server .yaml)")
-        return frame.cell_of(point, self.map.grid.blocked.shape, what)
-
     def plan(self, start: tuple[int, int] | None = None, goal: tuple[int, int] | None = None,
              *, start_world: Point | None = None, goal_world: Point | None = None,
              seeds: int | None = None, progress: Callable[[str, float], None] | None = None,
@@ -93,13 +83,8 @@ class Planner:
         planner's; ``progress`` as :func:`jaxga.run`. A blocked or unreachable endpoint
         is a one-line error or a result with no path that names the cause, as for
         :func:`jaxga.run`."""
-        ends = []
-        for name, cell, world in (("start", start, start_world), ("goal", goal, goal_world)):
-            if (cell is None) == (world is None):
-                raise EndpointError(f"give the {name} once: in cells ({name}=) or in "
-                                    f"metres ({name}_world=)")
-            ends.append(tuple(int(v) for v in cell) if world is None
-                        else self.cell(world, f"the {name}"))
+        ends = endpoint_cells(self.map.frame, self.map.grid, start, goal, start_world,
+                              goal_world)
         grid = self.map.grid.replace(start=ends[0], goal=ends[1])
         problem = dataclasses.replace(self.map, grid=grid)
         budget = self.any_angle_budget if any_angle_budget is None else any_angle_budget

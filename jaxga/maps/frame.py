@@ -24,13 +24,14 @@ from __future__ import annotations
 import dataclasses
 import functools
 import math
+from typing import Any
 
 import numpy as np
 
 from jaxga.core.errors import EndpointError
 from jaxga.maps.clearance import ObstacleClearance
 
-__all__ = ["MapFrame"]
+__all__ = ["MapFrame", "endpoint_cells"]
 
 
 @dataclasses.dataclass(frozen=True)
@@ -159,3 +160,26 @@ class MapFrame:
                 else None,
             },
         }
+
+
+def endpoint_cells(frame: MapFrame | None, grid: Any, start: Any = None, goal: Any = None,
+                   start_world: Any = None, goal_world: Any = None, *,
+                   required: bool = True) -> tuple[tuple[int, int], tuple[int, int]]:
+    """The start and goal cells ``(x, y)`` of ``grid``'s map given each once, in cells or
+    in metres (``*_world``, the cell holding the point on a map with a resolution);
+    without ``required`` an endpoint given neither way keeps ``grid``'s. A one-line
+    :class:`EndpointError` otherwise."""
+    ends = []
+    for name, cell, world in (("start", start, start_world), ("goal", goal, goal_world)):
+        if cell is not None and world is not None or (required and cell is None
+                                                      and world is None):
+            raise EndpointError(f"give the {name} once: in cells ({name}=) or in metres "
+                                f"({name}_world=)")
+        if world is not None:
+            if frame is None or not frame.has_metres:
+                raise EndpointError(f"the {name} in metres needs a map with a resolution "
+                                    "and an origin (a ROS map_server .yaml)")
+            cell = frame.cell_of(world, grid.blocked.shape, f"the {name}")
+        ends.append(getattr(grid, f"{name}_xy") if cell is None
+                    else tuple(int(v) for v in cell))
+    return ends[0], ends[1]
