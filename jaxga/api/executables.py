@@ -133,14 +133,28 @@ def _count_cache_hits(event: str, **_kwargs: Any) -> None:
 jax.monitoring.register_event_listener(_count_cache_hits)
 
 
+STORE_OPTION = "xla_debug_buffer_assignment_show_max"
+"""An XLA debug option that only bounds the length of a debugging printout. A program
+that JAX read from its own cache is compiled again with this option set to a value drawn
+from the program's key (:func:`compile_and_store`): JAX's cache key includes the compile
+options, so XLA compiles it afresh, and what it compiles can be stored."""
+
+
 def compile_and_store(key: str | None, lowered: Any, options: dict | None = None) -> Any:
-    """``lowered.compile(options)``, stored under ``key`` when XLA compiled it: an
-    XLA:CPU program that JAX read from its own persistent cache does not serialise whole
-    (it loads but fails at run time: "Function ... not found"), so such a program is
-    not stored (``jaxga warmup`` compiles with JAX's cache off, so that it stores every
-    program)."""
+    """``lowered.compile(options)``, stored under ``key``.
+
+    An XLA:CPU program that JAX read from its own persistent cache does not serialise
+    whole (it loads but fails at run time: "Function ... not found"). JAX's cache holds
+    a program the store lacks when the store's key changed and the program did not (a
+    new jaxga version, a deleted store file): without a stored program every later
+    process would trace and lower it again (seconds), so such a program is compiled
+    once more, with :data:`STORE_OPTION` making JAX's cache miss, and that one is
+    stored."""
     hits = _CACHE_HITS[0]
     program = lowered.compile(options)
+    if key is not None and _CACHE_HITS[0] != hits:
+        hits = _CACHE_HITS[0]
+        program = lowered.compile({**(options or {}), STORE_OPTION: int(key[:12], 16)})
     if _CACHE_HITS[0] == hits:
         save(key, program)
     return program

@@ -4,8 +4,9 @@ A ROS node loads its map when it starts and is then asked for paths between new 
 many times. :class:`Planner` does the map's work once (the file read, the inflation by the
 robot's radius, the frame, the distance transform that the clearance is measured with)
 and :meth:`Planner.plan` does only what a new start and goal need: their distance
-fields, the runs (the compiled programs take the endpoints as inputs, so a new pair
-compiles nothing) and the references within their budget::
+fields, the runs (the compiled programs take the endpoints as inputs and hold the map's
+longest optimal path, so a new pair compiles nothing) and the references within their
+budget::
 
     planner = jaxga.Planner("map.yaml", robot_radius=0.2)
     plan = planner.plan(start_world=(1.0, 2.0), goal_world=(-3.5, 0.25))
@@ -23,8 +24,9 @@ from collections.abc import Callable
 from typing import Any
 
 from jaxga.api.result import Result
-from jaxga.api.runs import run
+from jaxga.api.runs import load_problem, run
 from jaxga.config.schema import Config
+from jaxga.engine.algorithm import map_capacity
 from jaxga.maps import MapInfo, load_map_info
 from jaxga.maps.frame import endpoint_cells
 
@@ -52,6 +54,14 @@ class Planner:
         any_angle_budget: as :func:`jaxga.run`: seconds the any-angle reference may
             take after each plan's runs (``"auto"``: at most their own time); 0 skips it.
         **overrides: configuration keys, as :func:`jaxga.run` takes them.
+
+    Attributes:
+        capacity: the path capacity of the planner's programs, the same for every start
+            and goal: the most cells an optimal path of the map can have, times the
+            preset's ``population.capacity_factor``
+            (:func:`jaxga.engine.algorithm.map_capacity`); None where the preset or the
+            overrides set ``population.capacity``. A plan equals :func:`jaxga.run` on the
+            same pair with ``population.capacity`` set to it.
     """
 
     def __init__(self, map: str | Any, preset: str | Config = "hybrid", *, seeds: int = 8,
@@ -68,6 +78,15 @@ class Planner:
         self.preset = preset
         self.seeds = seeds
         self.any_angle_budget = any_angle_budget
+        config = load_problem(preset, self.map, None, None, (), overrides, None,
+                              check_endpoints=False)[0]
+        self.capacity: int | None = None
+        if not int(config["population.capacity"]) and not {
+                "population.capacity", "population__capacity"} & overrides.keys():
+            # programs sized for the map's longest optimal path, not its size class's
+            self.capacity = map_capacity(self.map.grid,
+                                         float(config["population.capacity_factor"]))
+            overrides = {**overrides, "population__capacity": self.capacity}
         self.overrides = overrides
         frame = self.map.frame
         if frame is not None:

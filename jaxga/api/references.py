@@ -33,9 +33,10 @@ from collections.abc import Callable
 import numpy as np
 
 from jaxga.core.grid import Grid
+from jaxga.operators.guide import distance_fields
 from jaxga.reference.any_angle import any_angle_shortest_path_np
 from jaxga.reference.lower_bound import euclidean_lower_bound_np
-from jaxga.reference.optima import ReferencePath, shortest_path_np
+from jaxga.reference.optima import ReferencePath, octile_length, shortest_path_np
 
 __all__ = ["SKIPPED_NOTE", "AnyAngleBounds", "any_angle_references", "budget_note",
            "octile_optimum"]
@@ -57,10 +58,37 @@ def _octile_cached(digest: bytes, shape: tuple[int, int], blocked: bytes, start:
     return shortest_path_np(b, start, goal, corner_rule)
 
 
-def octile_optimum(grid: Grid) -> ReferencePath:
-    """The exact 8-connected optimum of ``grid``'s problem
-    (:func:`jaxga.reference.optima.shortest_path_np`), cached for the last 32 problems."""
+def octile_optimum(grid: Grid, guided: bool = False) -> ReferencePath:
+    """The exact 8-connected optimum of ``grid``'s problem.
+
+    ``guided``: the run steers by the exact distance fields
+    (:func:`jaxga.operators.guide.distance_fields`, computed once for its programs), so
+    an optimal path is read off the goal's field (each cell's next cell towards the
+    goal) in time proportional to its cells. Otherwise, and where the field says no path
+    exists (the reason named by the search), the A* search of
+    :func:`jaxga.reference.optima.shortest_path_np`, cached for the last 32 problems.
+    Both report the length as :func:`jaxga.reference.optima.octile_length`, so both give
+    the same optimum bit for bit."""
+    if guided:
+        path = _field_path(grid)
+        if path is not None:
+            return ReferencePath(True, octile_length(path), path, kind="octile")
     return _octile_cached(*_problem_key(grid))
+
+
+def _field_path(grid: Grid) -> np.ndarray | None:
+    """An optimal path from start to goal following the goal's distance field, or None
+    where an endpoint is blocked or the goal unreachable."""
+    to_goal, _, towards_goal = distance_fields(grid)
+    start, goal = int(grid.start), int(grid.goal)
+    if not math.isfinite(to_goal[start]) or not math.isfinite(to_goal[goal]):
+        return None
+    cells = [start]
+    while cells[-1] != goal:
+        cells.append(int(towards_goal[cells[-1]]))
+    idx = np.asarray(cells, np.int64)
+    width = grid.blocked_np().shape[1]
+    return np.stack([idx % width, idx // width], axis=1).astype(np.int32)
 
 
 @dataclasses.dataclass(frozen=True)

@@ -160,11 +160,12 @@ def _registered_fn(family: str, fn: Any) -> registry.Operator | None:
 
 
 def load_problem(preset, grid, corner_rule, variant, sets, overrides, generations, *,
-                 check_read: bool = True):
+                 check_read: bool = True, check_endpoints: bool = True):
     """``(config, grid, map name, frame)`` of a call, checked (the frame of a map file or
     :class:`~jaxga.maps.MapInfo`: :mod:`jaxga.maps.frame`; None for a bare Grid);
     ``check_read=False`` leaves overrides that nothing reads to the caller
-    (:func:`jaxga.compare.compare`)."""
+    (:func:`jaxga.compare.compare`), ``check_endpoints=False`` the endpoints (a
+    :class:`~jaxga.api.planner.Planner`'s map, whose endpoints each plan gives)."""
 
     check_environment()  # a bad $JAXGA_THREEFRY, which `import jaxga` does not refuse
     ensure_compilation_cache()  # on by default, as on the command line (decision 014)
@@ -213,7 +214,8 @@ def load_problem(preset, grid, corner_rule, variant, sets, overrides, generation
         info = load_map_info(grid, corner_rule=configured_rule(corner_rule, config))
         grid, map_name, frame = info.grid, info.name, info.frame
     try:
-        grid.check_endpoints()
+        if check_endpoints:
+            grid.check_endpoints()
     except EndpointError as e:
         raise EndpointError(f"{e}{_on_the_map(frame, grid)}") from None
     return config, grid, map_name, frame
@@ -412,7 +414,7 @@ def _plan_sweep(preset, grid, points, seeds, generations, corner_rule, variant, 
     capacity = checked_capacity(configs, population_capacity)
     report("references", 0.0)
     with timeline.phase("references"):
-        octile = octile_optimum(map_grid)
+        octile = octile_optimum(map_grid, guided=uses_guide(config))
     problem = dict(config=config, configs=configs, points=points, map_name=map_name,
                    frame=frame, grid=map_grid, capacity=capacity, octile=octile)
     if not octile.found:

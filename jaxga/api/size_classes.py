@@ -33,10 +33,10 @@ import dataclasses
 import math
 
 import jax
-import jax.numpy as jnp
 import numpy as np
 
-from jaxga.core.grid import Grid, index_to_xy, xy_to_index
+from jaxga.core.dtypes import on_device
+from jaxga.core.grid import Grid
 from jaxga.engine.algorithm import CAPACITY_FACTOR, capacity_class, default_capacity
 
 CLASS_SIDES: tuple[int, ...] = (32, 64, 128, 256, 384, 512, 768, 1024, 1536, 2048)
@@ -106,18 +106,22 @@ def pad_to_class(grid: Grid) -> Grid:
     guide = None
     if grid.guide is not None:  # padding cells are blocked: unreachable, at infinity
         guide = jax.tree_util.tree_map(
-            lambda f: jnp.asarray(np.pad(np.asarray(f).reshape(grid.shape), pad,
-                                         constant_values=np.inf).reshape(-1)), grid.guide)
+            lambda f: on_device(np.pad(np.asarray(f).reshape(grid.shape), pad,
+                                       constant_values=np.inf).reshape(-1)), grid.guide)
     return dataclasses.replace(
-        grid, blocked=jnp.asarray(blocked), outside=jnp.asarray(outside),
-        start=jnp.int32(sy * shape[1] + sx), goal=jnp.int32(gy * shape[1] + gx),
+        grid, blocked=on_device(blocked), outside=on_device(outside),
+        start=on_device(sy * shape[1] + sx, np.int32),
+        goal=on_device(gy * shape[1] + gx, np.int32),
         guide=guide, tables=None)
 
 
 def map_cells(cells: np.ndarray, padded_width: int, width: int) -> np.ndarray:
     """Cell indices of a padded map (``y * padded_width + x``) as the map's own
-    (``y * width + x``, :func:`jaxga.core.grid.index_to_xy` then ``xy_to_index``); the
-    same array when the widths agree."""
+    (``y * width + x``, as :func:`jaxga.core.grid.index_to_xy` then ``xy_to_index``, on
+    the host: in NumPy, so that a fresh process compiles nothing for it); the same array
+    when the widths agree."""
+    cells = np.asarray(cells)
     if padded_width == width:
-        return np.asarray(cells)
-    return np.asarray(xy_to_index(index_to_xy(cells, padded_width), width))
+        return cells
+    y, x = np.divmod(cells, cells.dtype.type(padded_width))
+    return y * cells.dtype.type(width) + x

@@ -31,6 +31,7 @@ import jax
 import jax.numpy as jnp
 import numpy as np
 
+from jaxga.core.dtypes import on_device
 from jaxga.core.errors import EndpointError, JaxgaError
 
 CORNER_RULES: tuple[str, ...] = ("free", "no_squeeze", "strict")
@@ -186,9 +187,9 @@ class Grid:
         sx, sy = check_xy("start", (0, 0) if start is None else start, w, h)
         gx, gy = check_xy("goal", (w - 1, h - 1) if goal is None else goal, w, h)
         return cls(
-            blocked=jnp.asarray(arr),
-            start=jnp.int32(sy * w + sx),
-            goal=jnp.int32(gy * w + gx),
+            blocked=on_device(arr),
+            start=on_device(sy * w + sx, np.int32),
+            goal=on_device(gy * w + gx, np.int32),
             corner_rule=corner_rule,
         )
 

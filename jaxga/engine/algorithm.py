@@ -19,7 +19,7 @@ import jax.numpy as jnp
 
 from jaxga.config import registry
 from jaxga.config.schema import SCHEMA, Config
-from jaxga.core.dtypes import F32, I32
+from jaxga.core.dtypes import F32, I32, on_device
 from jaxga.core.errors import ParameterError
 from jaxga.core.grid import Grid
 from jaxga.engine.checks import (
@@ -30,7 +30,7 @@ from jaxga.engine.checks import (
     compiled_fallback,
     uses_waypoints,
 )
-from jaxga.operators.guide import problem_facts
+from jaxga.operators.guide import longest_optimal_path_cells, problem_facts
 
 FITNESS_PARAMS: dict[str, tuple[str, ...]] = {
     op.name: tuple(key.split(".", 1)[1] for key in registry.objective_keywords(op))
@@ -107,6 +107,16 @@ def default_capacity(grid: Grid, factor: float = CAPACITY_FACTOR) -> int:
     return max(floor, capacity_class(need))
 
 
+def map_capacity(grid: Grid, factor: float = CAPACITY_FACTOR) -> int:
+    """The path capacity that every start and goal on ``grid``'s map fits: as
+    :func:`default_capacity`, with the longest optimal path the map can have
+    (:func:`jaxga.operators.guide.longest_optimal_path_cells`) in place of this problem's.
+    A planner that sizes its programs by it plans any pair of its map without compiling
+    again, and holds no more than the map needs."""
+    floor = min(4 * (grid.height + grid.width), SMALL_MAP_CAPACITY)
+    return max(floor, capacity_class(math.ceil(factor * longest_optimal_path_cells(grid))))
+
+
 def build(config: Config, grid: Grid) -> tuple[Algorithm, dict]:
     """The static :class:`Algorithm` and the dynamic parameter pytree of a configuration.
 
@@ -157,11 +167,11 @@ def param_value(key: str, value: Any) -> jax.Array:
     ``float32`` array for a list (its shape fixed by static keys: ``islands.count``,
     AGACD's objectives), and for ``init.fallback`` a bool flag, True unless ``"none"``."""
     if key == "init.fallback":
-        return jnp.asarray(value != "none")
+        return on_device(value != "none")
     kinds = SCHEMA[key].kind if isinstance(SCHEMA[key].kind, tuple) else (SCHEMA[key].kind,)
     if int in kinds and float not in kinds:
-        return jnp.asarray(value, I32)
-    return jnp.asarray(value, F32)
+        return on_device(value, I32)
+    return on_device(value, F32)
 
 
 def default_params(config: Config, islands: int = 1) -> dict[str, jax.Array]:

@@ -33,6 +33,7 @@ __all__ = [
     "move_edges",
     "preprocess",
     "reachable",
+    "region_labels",
 ]
 
 
@@ -90,15 +91,24 @@ def reachable_np(blocked: np.ndarray, source: tuple[int, int], corner_rule: str)
     the 8-connected components; under ``"no_squeeze"`` and ``"strict"`` a legal diagonal
     step has a free side cell, through which two orthogonal steps join the same cells, so
     the regions are the 4-connected components."""
-    from scipy import ndimage
-
     b = np.asarray(blocked, dtype=bool)
     x0, y0 = source
     if b[y0, x0]:
         return np.zeros(b.shape, bool)
+    labels = region_labels(b, corner_rule)
+    return labels == labels[y0, x0]
+
+
+def region_labels(blocked: np.ndarray, corner_rule: str) -> np.ndarray:
+    """``int[H, W]``: the connected regions of free cells under ``corner_rule``, numbered
+    from 1 (0 on blocked cells); two cells share a label exactly when legal moves join
+    them (see :func:`reachable_np`)."""
+    from scipy import ndimage
+
+    b = np.asarray(blocked, dtype=bool)
     structure = np.ones((3, 3), bool) if check_corner_rule(corner_rule) == "free" else None
     labels, _ = ndimage.label(~b, structure=structure)
-    return labels == labels[y0, x0]
+    return labels
 
 
 def reachable(grid: Grid, source: tuple[int, int] | None = None) -> np.ndarray:

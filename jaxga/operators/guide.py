@@ -30,13 +30,14 @@ import hashlib
 import math
 
 import jax
-import jax.numpy as jnp
 import numpy as np
 
+from jaxga.core.dtypes import on_device
 from jaxga.core.grid import Grid
-from jaxga.maps.preprocess import move_edges
+from jaxga.maps.preprocess import move_edges, region_labels
 
-__all__ = ["Guide", "ProblemFacts", "distance_fields", "problem_facts", "with_guide"]
+__all__ = ["Guide", "ProblemFacts", "distance_fields", "longest_optimal_path_cells",
+           "problem_facts", "with_guide"]
 
 @jax.tree_util.register_dataclass
 @dataclasses.dataclass(frozen=True)
@@ -74,10 +75,16 @@ class ProblemFacts:
     reachable_cells: int
 
 
+@functools.lru_cache(maxsize=1)
+def _move_graph_cached(key: bytes, shape: tuple[int, int], corner_rule: str,
+                       blocked_bytes: bytes):
+    del key  # the cache key (a digest of the arguments); the arguments are the data
+    return _move_graph(np.frombuffer(blocked_bytes, dtype=bool).reshape(shape), corner_rule)
+
+
 def _move_graph(blocked: np.ndarray, corner_rule: str):
     """The legal-move graph as a SciPy CSR matrix (edge weight = step length)."""
     from scipy.sparse import csr_matrix
-
 
     n = blocked.size
     rows, cols, costs = move_edges(blocked, corner_rule)
@@ -91,7 +98,10 @@ def _fields_cached(key: bytes, shape: tuple[int, int], corner_rule: str, start: 
     from scipy.sparse.csgraph import dijkstra
 
     blocked = np.frombuffer(blocked_bytes, dtype=bool).reshape(shape)
-    graph = _move_graph(blocked, corner_rule)
+    # the last map's graph is kept: a planner's new endpoints on its map build none
+    map_key = hashlib.blake2b(blocked_bytes + repr((shape, corner_rule)).encode(),
+                              digest_size=16).digest()
+    graph = _move_graph_cached(map_key, shape, corner_rule, blocked_bytes)
     dist, pred = dijkstra(graph, directed=True, indices=[goal, start],
                           return_predecessors=True)
     # A blocked endpoint reaches nothing (Dijkstra would still give it distance 0).
@@ -129,8 +139,8 @@ def with_guide(grid: Grid) -> Grid:
     if grid.guide is not None:
         return grid
     to_goal, from_start, _ = distance_fields(grid)
-    guide = Guide(to_goal=jnp.asarray(to_goal, jnp.float32),
-                  from_start=jnp.asarray(from_start, jnp.float32))
+    guide = Guide(to_goal=on_device(to_goal, np.float32),
+                  from_start=on_device(from_start, np.float32))
     return dataclasses.replace(grid, guide=guide)
 
 
@@ -147,3 +157,47 @@ def problem_facts(grid: Grid) -> ProblemFacts:
         p = int(pred[p])
         cells += 1
     return ProblemFacts(True, float(to_goal[start]), cells, region)
+
+
+def longest_optimal_path_cells(grid: Grid) -> int:
+    """An upper bound of the cells of an optimal path between any two cells of ``grid``'s
+    map that are connected under its corner rule (endpoints ignored): what a planner's
+    programs must hold for every start and goal it may be given.
+
+    In the largest region, ``d(a, b) <= d(a, c) + d(c, b) <= 2 ecc(c)`` for any cell ``c``
+    (``ecc``: the longest distance from ``c`` within its region), and an optimal path
+    has at most its length + 1 cells (every step is at least 1 long): so ``2 ecc(c) + 1``
+    bounds it, tightest for a central ``c``, here the least of three eccentricities: a
+    cell's, the farthest cell from it, and the middle of the path between that cell and
+    its own farthest (the double sweep). A path in another region has at most that
+    region's cells."""
+    from scipy.sparse.csgraph import dijkstra
+
+    blocked = np.ascontiguousarray(grid.blocked_np())
+    rule = grid.corner_rule
+    if blocked.all():
+        return 1
+    labels = region_labels(blocked, rule)
+    sizes = np.bincount(labels.reshape(-1))
+    sizes[0] = 0  # label 0: blocked cells
+    main = int(np.argmax(sizes))
+    others = np.delete(sizes, [0, main])
+    raw = blocked.tobytes()
+    key = hashlib.blake2b(raw + repr((blocked.shape, rule)).encode(), digest_size=16).digest()
+    graph = _move_graph_cached(key, blocked.shape, rule, raw)
+
+    def sweep(cell: int) -> tuple[float, int, np.ndarray]:
+        dist, pred = dijkstra(graph, directed=True, indices=cell, return_predecessors=True)
+        dist = np.where(np.isfinite(dist), dist, -1.0)
+        far = int(np.argmax(dist))
+        return float(dist[far]), far, pred
+
+    first = int(np.flatnonzero(labels.reshape(-1) == main)[0])
+    ecc_a, b, _ = sweep(first)
+    ecc_b, e, pred = sweep(b)
+    path = [e]
+    while path[-1] != b:
+        path.append(int(pred[path[-1]]))
+    ecc_c, _, _ = sweep(path[len(path) // 2])
+    bound = int(math.floor(2 * min(ecc_a, ecc_b, ecc_c) + 1e-9)) + 1
+    return int(max(min(bound, sizes[main]), others.max(initial=0)))

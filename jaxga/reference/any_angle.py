@@ -359,13 +359,13 @@ def _any_angle(
 ) -> ReferencePath:
     """The search of :func:`any_angle_shortest_path_np` (see its steps in
     :func:`any_angle_shortest_path`); raises :class:`OutOfBudget` past the deadline."""
-    octile = OctileGraph(b, rule)._search(start, goal, deadline)
-    if not octile.found:
-        return dataclasses.replace(octile, kind="any_angle")
-    ub = octile.length
-    if known is not None and path_length(known) >= ub:
-        known = None
-    if known is not None:
+    if known is None:
+        # a clear known path proves the goal reachable and bounds the optimum already
+        octile = OctileGraph(b, rule)._search(start, goal, deadline)
+        if not octile.found:
+            return dataclasses.replace(octile, kind="any_angle")
+        ub = octile.length
+    else:
         ub = path_length(known)
     if vertices is None:
         # no path shorter than the 8-connected one leaves the ellipse's bounding box
@@ -471,8 +471,9 @@ def any_angle_shortest_path(
     ``geo_s(v)``, ``geo_g(v)``: the Euclidean shortest distances in the plane around the
     blocked cells, :mod:`jaxga.reference.lower_bound`, which no clear polyline beats):
 
-    1. The 8-connected optimum ``U8`` is computed first (reachability, upper bound). No
-       path of length ``<= U8`` leaves the bounding box of the ellipse
+    1. The 8-connected optimum ``U8`` is computed first (reachability, upper bound), or
+       ``U8`` is the length of ``known_path`` when one is given (its clear segments prove
+       the goal reachable). No path of length ``<= U8`` leaves the bounding box of the ellipse
        ``|s v| + |v g| <= U8`` (a segment's crossed cells lie in the bounding box of its
        ends), so the map is cropped to that box.
     2. Upper bounds: Dijkstra distances ``g0`` of the graph whose edges are the clear

@@ -54,6 +54,7 @@ __all__ = [
     "clear_np",
     "clear_many_np",
     "clear_pairs_np",
+    "octile_length",
     "path_length",
 ]
 
@@ -174,6 +175,19 @@ def checked_in_chunks(
         parts.append(check(p[lo:hi], q[lo:hi]))
         lo = hi
     return np.concatenate(parts)
+
+
+def octile_length(path: np.ndarray) -> float:
+    """The length of an 8-connected path of ``int[k, 2]`` cells, ``a + b sqrt(2)`` for its
+    ``a`` straight and ``b`` diagonal steps: one value for every path with the same step
+    counts, whichever order its steps come in (so two exact searches that return
+    different optimal paths report the same optimum, bit for bit)."""
+    p = np.asarray(path, dtype=np.int64)
+    if p.shape[0] < 2:
+        return 0.0
+    step = np.abs(np.diff(p, axis=0))
+    diagonal = int(np.count_nonzero((step[:, 0] != 0) & (step[:, 1] != 0)))
+    return float(p.shape[0] - 1 - diagonal) + diagonal * SQRT2
 
 
 def path_length(path: np.ndarray) -> float:
@@ -324,7 +338,7 @@ class OctileGraph:
             cells.append(parent[cells[-1]])
         idx = np.array(cells[::-1], dtype=np.int64)
         path = np.stack([idx % w, idx // w], axis=1).astype(np.int32)
-        return ReferencePath(True, float(dist[g]), path, kind="octile", expanded=expanded)
+        return ReferencePath(True, octile_length(path), path, kind="octile", expanded=expanded)
 
     def distances(self, source_xy: XY) -> np.ndarray:
         """``float64[H, W]`` Dijkstra distances from ``source_xy`` (``inf`` where unreachable).

@@ -17,8 +17,11 @@ import pytest
 import jaxga
 from jaxga.api import programs
 from jaxga.core.errors import EndpointError, ParameterError
+from jaxga.engine.algorithm import map_capacity
 from jaxga.maps import load_map_info
 from jaxga.maps.clearance import ObstacleClearance, segment_square_distance
+from jaxga.operators.guide import longest_optimal_path_cells
+from jaxga.reference.optima import shortest_path_np
 from tests import canonical
 
 RES = 0.1
@@ -154,3 +157,28 @@ def test_the_clearance_is_to_the_map_as_loaded_before_inflation(office):
 
 def clearance_obstacles(info) -> np.ndarray:
     return info.frame.obstacles
+
+
+@pytest.mark.parametrize("rule", ["free", "no_squeeze", "strict"])
+def test_the_maps_longest_optimal_path_bounds_every_pair(rule):
+    """:func:`longest_optimal_path_cells` bounds the cells of the optimal path between any
+    two connected cells of the map (all pairs, by the exact search), also in a region
+    other than the largest; the planner's capacity follows it."""
+    rng = np.random.default_rng(3)
+    blocked = rng.random((9, 12)) < 0.25
+    blocked[:, 9] = True  # a second region on the right
+    grid = jaxga.Grid.create(blocked, corner_rule=rule, start=(0, 0), goal=(0, 0))
+    bound = longest_optimal_path_cells(grid)
+    free = [tuple(int(v) for v in c) for c in np.argwhere(~blocked)[:, ::-1]]
+    most = max(len(p.path) for a in free for b in free
+               if (p := shortest_path_np(blocked, a, b, rule)).found)
+    assert most <= bound <= int((~blocked).sum())
+    assert map_capacity(grid, 1.5) >= math.ceil(1.5 * bound)
+
+
+def test_the_planners_capacity_is_the_maps(office):
+    planner = jaxga.Planner(office, robot_radius=0.1, corner_rule="free")
+    factor = 1.5  # hybrid's population.capacity_factor
+    assert planner.capacity == map_capacity(planner.map.grid, factor)
+    assert jaxga.Planner(office, robot_radius=0.1, corner_rule="free",
+                         population__capacity=96).capacity is None

@@ -7,6 +7,7 @@ import dataclasses
 import json
 import math
 import os
+import shutil
 import subprocess
 import sys
 import threading
@@ -314,6 +315,30 @@ def test_a_new_process_reads_the_stored_programs_without_tracing(tmp_path):
     assert len(list((tmp_path / executables.SUBDIRECTORY).glob("*.pkl"))) == 4
     assert out[1]["cells"] == out[0]["cells"] and out[1]["best"] == out[0]["best"]
     assert out[1]["compile_s"] < out[0]["compile_s"]
+
+
+@pytest.mark.slow  # three processes, two of them compiling the canonical sga programs
+def test_a_program_in_jaxs_cache_but_not_in_the_store_is_stored(tmp_path):
+    """The store lost its programs (a new key for the same program: another jaxga
+    version; files deleted) while JAX's own cache kept them: the next process compiles
+    them afresh (a program read from JAX's cache does not serialise whole), stores them,
+    and the process after it traces nothing."""
+    env = dict(os.environ, JAXGA_CACHE_DIR=str(tmp_path),
+               JAX_PERSISTENT_CACHE_MIN_COMPILE_TIME_SECS="0")
+    env.pop("JAX_COMPILATION_CACHE_DIR", None)
+    store = tmp_path / executables.SUBDIRECTORY
+    out = []
+    for mode in ("compile", "compile", "read"):
+        if len(out) == 1:
+            shutil.rmtree(store)
+            assert any(tmp_path.iterdir())  # JAX's cache entries stay
+        proc = subprocess.run([sys.executable, "-c", NEW_PROCESS, mode], env=env,
+                              capture_output=True, text=True, cwd=ROOT)
+        assert proc.returncode == 0, proc.stderr[-2000:]
+        out.append(json.loads(proc.stdout.strip().splitlines()[-1]))
+        assert len(list(store.glob("*.pkl"))) == 4
+    assert out[2]["cells"] == out[1]["cells"] == out[0]["cells"]
+    assert out[2]["best"] == out[0]["best"]
 
 
 def test_an_unreadable_stored_program_is_compiled_again(tmp_path, monkeypatch):

@@ -13,6 +13,7 @@ from jaxga.api.result import Result
 from jaxga.core.grid import Grid
 from jaxga.reference.any_angle import any_angle_shortest_path_np
 from jaxga.reference.lower_bound import euclidean_lower_bound_np
+from jaxga.reference.optima import clear_pairs_np, octile_length, shortest_path_np
 
 
 def _grid():
@@ -83,3 +84,41 @@ def test_a_result_measures_its_gap_against_what_was_computed():
     assert neither.gap_basis == "straight line"
     assert neither.gap[0] == pytest.approx(11 / 10 - 1)
     assert "the straight line from start to goal is a lower bound" in neither.summary()
+
+
+@pytest.mark.parametrize("rule", ["free", "no_squeeze", "strict"])
+def test_the_octile_optimum_read_off_the_goals_field_is_the_searchs(rule):
+    """With the exact distance fields (the field-walk presets compute them anyway) the
+    8-connected optimum is read off the goal's field: the same length as the A* search,
+    bit for bit; a path from start to goal of legal moves with that length; a blocked or
+    unreachable endpoint gets the search's own reason."""
+    rng = np.random.default_rng(7)
+    blocked = rng.random((14, 17)) < 0.3
+    free = np.argwhere(~blocked)[:, ::-1]
+    for k in range(40):
+        s, g = (tuple(int(v) for v in free[i]) for i in rng.choice(len(free), 2))
+        if k == 0:
+            g = s
+        grid = Grid.create(blocked, start=s, goal=g, corner_rule=rule)
+        field = references.octile_optimum(grid, guided=True)
+        search = shortest_path_np(blocked, s, g, rule)
+        assert (field.found, field.reason, field.status) == (
+            search.found, search.reason, search.status)
+        if not field.found:
+            continue
+        assert field.length == search.length == octile_length(field.path)
+        p = field.path
+        assert tuple(p[0]) == s and tuple(p[-1]) == g
+        assert np.all(np.abs(np.diff(p, axis=0)).max(axis=1) == 1)
+        assert clear_pairs_np(blocked, rule, p[:-1], p[1:]).all()
+    wall = blocked.copy()
+    wall[:, 8] = True  # two halves: unreachable
+    wall[0, 0] = wall[13, 16] = False
+    grid = Grid.create(wall, start=(0, 0), goal=(16, 13), corner_rule=rule)
+    field = references.octile_optimum(grid, guided=True)
+    assert not field.found and field.status == "unreachable"
+    assert field.reason == shortest_path_np(wall, (0, 0), (16, 13), rule).reason
+    wall[0, 0] = True
+    grid = Grid.create(wall, start=(0, 0), goal=(16, 13), corner_rule=rule)
+    field = references.octile_optimum(grid, guided=True)
+    assert not field.found and field.status == "endpoint_blocked" and "blocked" in field.reason
