@@ -23,6 +23,7 @@ from jaxga.compare import metric_values
 from jaxga.core.errors import ParameterError
 from jaxga.core.files import atomic_write
 from jaxga.core.grid import Grid, as_integer
+from jaxga.core.matplotlib_env import matplotlib_ready
 from jaxga.maps import load_map_info
 from jaxga.maps.frame import MapFrame
 from jaxga.maps.loaders import MapLayers
@@ -33,6 +34,7 @@ __all__ = ["CELL_CLASSES", "MapView", "cell_classes", "plot_box", "plot_comparis
 
 
 def _pyplot():
+    matplotlib_ready()
     import matplotlib
 
     if matplotlib.get_backend().lower() not in ("agg", "module://matplotlib_inline.backend_inline"):

@@ -38,6 +38,7 @@ import hashlib
 import os
 import pickle
 import time
+import warnings
 from collections.abc import Callable, Iterator
 from pathlib import Path
 from typing import Any
@@ -47,6 +48,7 @@ import jaxlib
 from jax.experimental.serialize_executable import deserialize_and_load, serialize
 
 from jaxga.api.lowering import threefry_unrolled
+from jaxga.core.errors import CacheWarning
 from jaxga.core.files import atomic_write
 from jaxga.engine import chosen_operators
 
@@ -140,8 +142,9 @@ from the program's key (:func:`compile_and_store`): JAX's cache key includes the
 options, so XLA compiles it afresh, and what it compiles can be stored."""
 
 
-def compile_and_store(key: str | None, lowered: Any, options: dict | None = None) -> Any:
-    """``lowered.compile(options)``, stored under ``key``.
+def compile_and_store(key: str | None, lowered: Any, options: dict | None,
+                      devices: Any) -> Any:
+    """``lowered.compile(options)``, stored under ``key`` as a program for ``devices``.
 
     An XLA:CPU program that JAX read from its own persistent cache does not serialise
     whole (it loads but fails at run time: "Function ... not found"). JAX's cache holds
@@ -156,7 +159,7 @@ def compile_and_store(key: str | None, lowered: Any, options: dict | None = None
         hits = _CACHE_HITS[0]
         program = lowered.compile({**(options or {}), STORE_OPTION: int(key[:12], 16)})
     if _CACHE_HITS[0] == hits:
-        save(key, program)
+        save(key, program, devices)
     return program
 
 
@@ -175,8 +178,47 @@ def forget_read() -> bool:
     return bool(keys)
 
 
+STORE_FORMAT = 2
+"""The layout of a stored program's file: a pickled dict of this format number, the
+program's key, the devices it was compiled for, and the digest and bytes of the program
+itself (JAX's serialised executable and its argument and result trees)."""
+
+
+def _device_names(devices: Any) -> list[list]:
+    return [[d.platform, d.device_kind, d.id] for d in devices]
+
+
+def _entry_problem(entry: Any, key: str, devices: Any) -> str | None:
+    """Why a stored entry is not the program ``key`` on ``devices`` (None when it is),
+    decided before XLA reads any of it: XLA aborts the process on a program meant for
+    other devices or shapes."""
+    if not isinstance(entry, dict) or entry.get("format") != STORE_FORMAT:
+        return "written by another version of jaxga"
+    if entry.get("key") != key:
+        return "holds another program (copied or renamed)"
+    if entry.get("devices") != _device_names(devices):
+        return f"was compiled for other devices ({entry.get('devices')!r})"
+    blob = entry.get("program")
+    if not isinstance(blob, bytes) or \
+            hashlib.blake2b(blob, digest_size=20).hexdigest() != entry.get("digest"):
+        return "is damaged (its digest does not match)"
+    return None
+
+
+def _forget(path: Path, why: str) -> None:
+    """Remove a stored program that cannot be used, saying so in one line."""
+    with contextlib.suppress(OSError):
+        path.unlink()
+    warnings.warn(f"the stored program {path.name} in {path.parent} {why}: removed, "
+                  "compiling it again", CacheWarning, stacklevel=4)
+
+
 def load(key: str | None, devices: Any) -> Any | None:
-    """The compiled program stored under ``key`` on these devices, or None."""
+    """The compiled program stored under ``key`` on these devices, or None.
+
+    The entry's format, key, devices and digest are checked first
+    (:func:`_entry_problem`); an entry that fails a check or does not load is removed
+    with one warning line naming the store, and the program is compiled again."""
     if key is None:
         return None
     path = directory() / f"{key}.pkl"
@@ -184,10 +226,20 @@ def load(key: str | None, devices: Any) -> Any | None:
         return None
     try:
         with open(path, "rb") as f:
-            payload, in_tree, out_tree = pickle.load(f)
+            entry = pickle.load(f)
+    except Exception:  # noqa: BLE001 - any unreadable file is compiled again
+        _forget(path, "cannot be read")
+        return None
+    why = _entry_problem(entry, key, devices)
+    if why is not None:
+        _forget(path, why)
+        return None
+    try:
+        payload, in_tree, out_tree = pickle.loads(entry["program"])
         program = deserialize_and_load(payload, in_tree, out_tree,
                                        execution_devices=list(devices))
-    except Exception:  # noqa: BLE001 - an unreadable entry is compiled again
+    except Exception:  # noqa: BLE001 - an entry XLA refuses is compiled again
+        _forget(path, "does not load on these devices")
         return None
     _READ.add(key)
     return program
@@ -244,15 +296,20 @@ def load_or_compile(key: str | None, devices: Any, lower: Callable[[], Any],
         program = load(key, devices)  # stored by another process while this one waited
         if program is not None:
             return program, True
-        return compile_and_store(key, lower(), options), False
+        return compile_and_store(key, lower(), options, devices), False
 
 
-def save(key: str | None, compiled: Any) -> None:
-    """Store a compiled program under ``key`` (atomically; nothing when it cannot)."""
+def save(key: str | None, compiled: Any, devices: Any) -> None:
+    """Store a program compiled for ``devices`` under ``key`` (atomically; nothing when it
+    cannot), with its key, devices and digest (:data:`STORE_FORMAT`)."""
     if key is None:
         return
     try:
-        blob = pickle.dumps(serialize(compiled))
+        program = pickle.dumps(serialize(compiled))
+        blob = pickle.dumps({
+            "format": STORE_FORMAT, "key": key, "devices": _device_names(devices),
+            "digest": hashlib.blake2b(program, digest_size=20).hexdigest(),
+            "program": program})
         folder = directory()
         folder.mkdir(parents=True, exist_ok=True)
         atomic_write(folder / f"{key}.pkl", lambda f: f.write(blob), binary=True)

@@ -121,6 +121,21 @@ def main(argv: Sequence[str] | None = None) -> int:
         return 130
 
 
+def standard_streams() -> None:
+    """A closed standard input, output or error (``jaxga run ... >&-``) opened on the null
+    device: the output is lost, as asked, and the run does not fail for it. It also keeps
+    the next file jaxga opens off descriptors 0-2, where a library's log line (XLA writes
+    to descriptor 2) would land in a result file."""
+    for fd, name, mode in ((0, "stdin", "r"), (1, "stdout", "w"), (2, "stderr", "w")):
+        with contextlib.suppress(OSError):
+            try:
+                os.fstat(fd)
+            except OSError:  # still closed: the null device takes the descriptor
+                os.dup2(os.open(os.devnull, os.O_RDWR), fd)
+            if getattr(sys, name) is None:  # Python found it closed when it started
+                setattr(sys, name, open(os.devnull, mode))  # noqa: SIM115
+
+
 def console() -> None:
     """The ``jaxga`` console script: :func:`main`, then, in a single-process run, an exit
     that skips the interpreter's teardown of JAX (its backends and threads: about a third
@@ -129,12 +144,15 @@ def console() -> None:
     processes exits normally, through ``jax.distributed``'s shutdown. Ctrl-C and SIGTERM
     end it at once with 130 or 143 (:mod:`jaxga.interrupts`)."""
     interrupts.install(remove_temporaries)
+    standard_streams()
     for stream in (sys.stdout, sys.stderr):  # a map named in Unicode, an ASCII terminal
         with contextlib.suppress(AttributeError, ValueError):
             stream.reconfigure(errors="backslashreplace")
     code = main()
-    sys.stdout.flush()
-    sys.stderr.flush()
+    for stream in (sys.stdout, sys.stderr):  # a stream that cannot take it: said already
+        with contextlib.suppress(OSError, ValueError):
+            stream.flush()
+    remove_temporaries()  # os._exit skips the interpreter's own exit handlers
     if "jax" in sys.modules and jax.process_count() > 1:
         sys.exit(code)
     os._exit(code)

@@ -12,9 +12,11 @@ from jaxga.api.parallel import (
     ENV_PROCESS_ID,
     env_int,
 )
+from jaxga.config.presets import preset_files
 from jaxga.core.errors import JaxgaError
 from jaxga.core.files import check_outputs as check_output_files
 from jaxga.core.files import same_file
+from jaxga.core.matplotlib_env import matplotlib_ready
 from jaxga.maps import (
     scenario_path,
 )
@@ -39,10 +41,20 @@ def input_files(args: argparse.Namespace) -> list[tuple[str, str | None]]:
         found = scenario_path(maps if isinstance(maps, str) else maps[0])
         out.append(("scenario file", str(found) if found else None))
     out.append(("path JSON", getattr(args, "path_json", None)))
+    out.append(("path file", getattr(args, "path", None)))
     presets = [getattr(args, "preset", None), *str(getattr(args, "presets", "") or "")
                .split(",")]
-    out.extend(("preset file", p) for p in presets if p and Path(p).is_file())
+    for p in presets:  # a preset TOML and the files of its base chain
+        if p and Path(p).is_file():
+            out.extend(("preset file", f) for f in preset_files(p))
     return out
+
+
+def _inside(path: str, folder: str) -> bool:
+    """Whether ``path`` names a file in ``folder`` or below it (symbolic links
+    resolved)."""
+    target, top = Path(path).resolve(), Path(folder).resolve()
+    return top in target.parents
 
 
 def check_outputs(args: argparse.Namespace) -> None:
@@ -71,8 +83,14 @@ def check_outputs(args: argparse.Namespace) -> None:
         for label, path in [*inputs, *outputs.items()]:
             if path and Path(path).is_dir() and same_file(path, folder):
                 raise JaxgaError(f"cannot use --checkpoint {folder}: it is the {label}")
+        for option, path in outputs.items():  # the DOE's own files live there
+            if path and _inside(path, folder):
+                raise JaxgaError(f"cannot write {option} {path}: it is inside the "
+                                 f"--checkpoint folder {folder}, whose files the DOE "
+                                 "reads to resume")
     plot = getattr(args, "plot", None)
     if plot:
+        matplotlib_ready()
         from matplotlib.figure import Figure
 
         formats = Figure().canvas.get_supported_filetypes()

@@ -50,7 +50,7 @@ if sys.version_info >= (3, 11):
 else:  # pragma: no cover
     import tomli as tomllib
 
-__all__ = ["load_preset", "preset_info", "preset_names", "preset_variants"]
+__all__ = ["load_preset", "preset_files", "preset_info", "preset_names", "preset_variants"]
 
 _DATA_DIR = "presets_data"  # jaxga/presets_data/ in an installed package
 _RESERVED = ("base", "variants")
@@ -199,6 +199,31 @@ def _chain(
         msg = str(e)
         raise ParameterError(msg if msg.startswith(label) else f"{label}: base: {msg}") from None
     return [*inner, (label, body, variants)]
+
+
+def preset_files(name_or_path: str | os.PathLike) -> list[str]:
+    """The user TOML files a preset reads: ``name_or_path`` itself and every file of its
+    ``base`` chain (innermost first); none for a built-in preset's name. A chain that
+    cannot be read gives the files read before the fault (the fault is named when the
+    preset is loaded)."""
+    files: list[str] = []
+    nxt: Any = name_or_path
+    relative_to: Path | None = None
+    while nxt is not None and _is_path(nxt) and len(files) <= MAX_BASE_CHAIN:
+        path = Path(nxt).expanduser()
+        if relative_to is not None and not path.is_absolute():
+            path = relative_to / path
+        if str(path) in files or not path.is_file():
+            break
+        files.append(str(path))
+        try:
+            nxt = _read_file(path).get("base")
+        except ParameterError:
+            break
+        relative_to = path.parent
+        if not isinstance(nxt, str) or not nxt:
+            break
+    return files[::-1]
 
 
 def file_overrides(name_or_path: str | os.PathLike,

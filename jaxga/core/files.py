@@ -13,12 +13,16 @@ not be a folder, and must not be the same file as an input or as another output.
 
 from __future__ import annotations
 
+import atexit
 import contextlib
 import errno
 import os
+import re
+import shutil
 import stat
 import tempfile
 import threading
+import time
 from collections.abc import Callable, Iterable, Mapping
 from pathlib import Path
 from typing import IO
@@ -26,7 +30,8 @@ from typing import IO
 from jaxga.core.errors import JaxgaError
 
 __all__ = ["atomic_write", "atomic_write_text", "check_outputs", "folder_problem",
-           "remove_temporaries", "same_file"]
+           "remove_stale_temporaries", "remove_temporaries", "same_file",
+           "temporary_folder"]
 
 _TEMPORARIES: set[str] = set()
 _LOCK = threading.Lock()
@@ -47,14 +52,18 @@ def atomic_write(path: str | os.PathLike, write: Callable[[IO], None], *,
     A failure (an ``OSError`` such as a full disk, an exception from ``write``, an
     interrupt) removes the temporary file and leaves any previous ``path`` whole; an
     ``OSError`` becomes a :class:`JaxgaError` naming ``path``. While the file is being
-    written its temporary name is registered, so that a process ended by a signal removes
-    it first (:func:`remove_temporaries`)."""
+    written its temporary name (``.NAME.<pid>.<random>.tmp``) is registered, so that a
+    process ended by a signal removes it first (:func:`remove_temporaries`); one that a
+    process killed outright left is removed by the next write of the same file
+    (:func:`remove_stale_temporaries`)."""
     target = Path(path)
     if target.is_symlink():  # write the file the link names; the link stays a link
         target = Path(os.path.realpath(target))
     folder = target.parent if str(target.parent) else Path(".")
+    remove_stale_temporaries(target)
     try:
-        fd, tmp = tempfile.mkstemp(prefix=f".{target.name}.", suffix=".tmp", dir=folder)
+        fd, tmp = tempfile.mkstemp(prefix=f".{target.name}.{os.getpid()}.", suffix=".tmp",
+                                   dir=folder)
     except OSError as e:
         raise JaxgaError(f"cannot write {path}: {_why(e)}") from None
     with _LOCK:
@@ -94,14 +103,88 @@ def atomic_write_text(path: str | os.PathLike, text: str) -> None:
     atomic_write(path, lambda f: f.write(text))
 
 
+_TEMPORARY = re.compile(r"(?:(\d+)\.)?[a-z0-9_]{8}")
+"""The middle of a temporary file's name, ``.NAME.<pid>.<random>.tmp``: the writing
+process and :func:`tempfile.mkstemp`'s eight characters (no pid: an older version's)."""
+
+OLD_TEMPORARY_S = 3600.0
+"""A temporary file without a process in its name is left by a killed write once it is
+this old (seconds)."""
+
+
+def _alive(pid: int) -> bool:
+    if pid == os.getpid():
+        return True
+    try:
+        os.kill(pid, 0)
+    except ProcessLookupError:
+        return False
+    except (PermissionError, OSError):  # another user's process, or no way to know
+        return True
+    return True
+
+
+def remove_stale_temporaries(path: str | os.PathLike) -> list[str]:
+    """Remove the temporary files of writes of ``path`` that a killed process left
+    (``kill -9`` ends a process before it can remove them, :func:`remove_temporaries`):
+    those whose writing process has ended, and those of an older version (no process in
+    the name) older than :data:`OLD_TEMPORARY_S`. A write in progress in another process
+    is left alone. Returns the names removed; every failure is ignored (the write that
+    follows names its own)."""
+    target = Path(path)
+    folder = target.parent if str(target.parent) else Path(".")
+    prefix = f".{target.name}."
+    removed: list[str] = []
+    try:
+        entries = [e for e in os.scandir(folder)
+                   if e.name.startswith(prefix) and e.name.endswith(".tmp")]
+    except OSError:
+        return removed
+    for entry in entries:
+        match = _TEMPORARY.fullmatch(entry.name[len(prefix):-len(".tmp")])
+        if match is None or entry.path in _TEMPORARIES:
+            continue
+        try:
+            if match.group(1) is not None:
+                stale = not _alive(int(match.group(1)))
+            else:
+                stale = time.time() - entry.stat().st_mtime > OLD_TEMPORARY_S
+            if stale and entry.is_file(follow_symlinks=False):
+                os.unlink(entry.path)
+                removed.append(entry.name)
+        except (OSError, ValueError, OverflowError):
+            continue
+    return removed
+
+
+_FOLDERS: list[str] = []
+
+
+def temporary_folder(prefix: str) -> Path:
+    """A new folder in the temporary directory, removed with everything in it by
+    :func:`remove_temporaries` (the ``jaxga`` command's exit, a signal) or at the
+    interpreter's exit."""
+    folder = tempfile.mkdtemp(prefix=prefix)
+    with _LOCK:
+        if not _FOLDERS:
+            atexit.register(remove_temporaries)
+        _FOLDERS.append(folder)
+    return Path(folder)
+
+
 def remove_temporaries() -> None:
-    """Remove the temporary files of writes still in progress: what a process ended by a
-    signal does before it exits, so that it leaves no ``.NAME.*.tmp`` behind."""
+    """Remove the temporary files of writes still in progress and the folders of
+    :func:`temporary_folder`: what a process ends with, also when ended by a signal, so
+    that it leaves no ``.NAME.*.tmp`` or temporary folder behind."""
     with _LOCK:
         names = list(_TEMPORARIES)
+        folders = list(_FOLDERS)
+        _FOLDERS.clear()
     for name in names:
         with contextlib.suppress(OSError):
             os.unlink(name)
+    for folder in folders:
+        shutil.rmtree(folder, ignore_errors=True)
 
 
 def same_file(a: str | os.PathLike, b: str | os.PathLike) -> bool:

@@ -57,6 +57,7 @@ import numpy as np
 
 from jaxga.core.errors import EndpointError, MapFormatError
 from jaxga.core.grid import Grid, check_corner_rule, too_large
+from jaxga.core.matplotlib_env import matplotlib_ready
 from jaxga.maps import builtin
 from jaxga.maps.builtin import default_corner_rule
 from jaxga.maps.frame import MapFrame
@@ -630,6 +631,7 @@ def save_map(grid: Grid | np.ndarray, path: Source, *, fmt: str | None = None,
         raise MapFormatError(f"cannot save a map of shape {blocked.shape}: need a 2-D array")
     h, w = blocked.shape
     if fmt == "png":
+        matplotlib_ready()
         import matplotlib.image as mpimg
 
         mpimg.imsave(p, (~blocked).astype(float), cmap="gray", vmin=0.0, vmax=1.0, origin="lower")
@@ -801,6 +803,7 @@ def _parse_png(path: Path, label: str, threshold: float = 0.5,
     """Threshold an image's luminance (blocked below ``threshold``); image top row -> top
     of the map (row H-1). ``raw``: the file's bytes, already read (else read here); an
     image whose pixel data does not match its header is refused first."""
+    matplotlib_ready()
     import matplotlib.image as mpimg
 
     if isinstance(threshold, bool) or not isinstance(threshold, (int, float)) or not (

@@ -7,6 +7,7 @@ import dataclasses
 import json
 import math
 import os
+import pickle
 import shutil
 import subprocess
 import sys
@@ -24,7 +25,7 @@ import pytest
 from jaxga import api, engine
 from jaxga.api import executables, programs
 from jaxga.config import registry
-from jaxga.core.errors import ParameterError
+from jaxga.core.errors import CacheWarning, ParameterError
 from jaxga.core.paths import is_feasible
 from jaxga.engine.maptables import with_tables
 from jaxga.engine.run import run_evolve, run_init
@@ -341,17 +342,46 @@ def test_a_program_in_jaxs_cache_but_not_in_the_store_is_stored(tmp_path):
     assert out[2]["best"] == out[0]["best"]
 
 
-def test_an_unreadable_stored_program_is_compiled_again(tmp_path, monkeypatch):
+def test_a_stored_program_that_is_not_its_keys_is_removed_with_one_warning(
+        tmp_path, monkeypatch):
+    """Nothing in the store reaches XLA unless it is the program asked for: an unreadable
+    file, a program copied under another key, an older version's file, one compiled for
+    other devices and a damaged one are each removed with one warning naming the store
+    (XLA would abort the process on a program meant for other shapes or devices), and
+    the program is compiled again; a program stored here loads and runs."""
     monkeypatch.setattr(type(jax.config), "jax_compilation_cache_dir",
                         property(lambda self: str(tmp_path)), raising=False)
-    assert executables.directory() == tmp_path / executables.SUBDIRECTORY
-    executables.directory().mkdir()
-    (executables.directory() / "k.pkl").write_bytes(b"not a program")
-    assert executables.load("k", jax.devices()[:1]) is None
-    assert executables.load("missing", jax.devices()[:1]) is None
-    compiled = jax.jit(lambda x: x + 1).lower(np.int32(1)).compile()
-    executables.save("k", compiled)
-    assert int(executables.load("k", jax.devices()[:1])(np.int32(4))) == 5
+    store = executables.directory()
+    assert store == tmp_path / executables.SUBDIRECTORY
+    store.mkdir()
+    devices = jax.devices()[:1]
+    plus = jax.jit(lambda x: x + 1).lower(np.int32(1)).compile()
+    pair = jax.jit(lambda x, y: (x * y, x)).lower(np.float32(1), np.float32(2)).compile()
+    executables.save("plus", plus, devices)
+    executables.save("pair", pair, devices)
+    assert int(executables.load("plus", devices)(np.int32(4))) == 5
+    entry = pickle.loads((store / "plus.pkl").read_bytes())
+    damaged = dict(entry, program=entry["program"][:-9] + b"x" + entry["program"][-8:])
+    cases = {
+        "not a program": (b"not a program", "cannot be read"),
+        "copied": ((store / "pair.pkl").read_bytes(), "holds another program"),
+        "older": (pickle.dumps(pickle.loads(entry["program"])), "another version"),
+        "devices": (pickle.dumps(dict(entry, devices=[["cuda", "H200", 0]])),
+                    "other devices"),
+        "damaged": (pickle.dumps(damaged), "damaged"),
+    }
+    for what, (data, words) in cases.items():
+        (store / "plus.pkl").write_bytes(data)
+        with pytest.warns(CacheWarning, match=words) as said:
+            assert executables.load("plus", devices) is None, what
+        assert len(said) == 1 and str(store) in str(said[0].message), what
+        assert "\n" not in str(said[0].message)
+        assert not (store / "plus.pkl").exists(), what
+    assert executables.load("missing", devices) is None
+    program, read = executables.load_or_compile("plus", devices, lambda: jax.jit(
+        lambda x: x + 1).lower(np.int32(1)))
+    assert not read and int(program(np.int32(4))) == 5
+    assert int(executables.load("plus", devices)(np.int32(6))) == 7
 
 
 def test_callers_sharing_the_store_compile_a_program_once(tmp_path, monkeypatch):
@@ -363,11 +393,11 @@ def test_callers_sharing_the_store_compile_a_program_once(tmp_path, monkeypatch)
     lowered = jax.jit(lambda x: x * 3).lower(np.int32(1))
     compiled_by, started = [], threading.Event()
 
-    def compile_and_store(key, low, options=None):
+    def compile_and_store(key, low, options, devices):
         started.set()
         time.sleep(0.5)  # the second caller arrives meanwhile
         program = low.compile()
-        executables.save(key, program)
+        executables.save(key, program, devices)
         compiled_by.append(threading.current_thread().name)
         return program
 
@@ -488,7 +518,8 @@ def test_a_program_sets_compile_progress_only_goes_forward(monkeypatch, stored, 
             return "lowered"
 
     monkeypatch.setattr(executables, "load", lambda key, devices: key if key in stored else None)
-    monkeypatch.setattr(executables, "compile_and_store", lambda key, lowered, options: key)
+    monkeypatch.setattr(executables, "compile_and_store",
+                        lambda key, lowered, options, devices: key)
     progs = Programs(lambda: {n: Traced() for n in Programs.NAMES},
                      {n: n for n in Programs.NAMES}, jax.devices()[:1])
     fractions = []

@@ -321,3 +321,105 @@ def test_ros_numbers_with_exponents_and_a_far_origin(tmp_path):
         "image: m.pgm\nresolution: 0.05\norigin: [1.0e+308, 1.0e+308, 0.0]\n")
     with pytest.raises(EndpointError, match="off the map"):
         load_map_info(tmp_path / "far.yaml", start_world=(0.0, 0.0), goal_world=(0.1, 0.1))
+
+
+# ------------------------------------------------------------ round two: inputs behind inputs
+def test_the_files_behind_an_input_are_inputs_too(tmp_path, capsys, monkeypatch):
+    """--json onto a file of the preset's ``base`` chain (relative to the file naming it),
+    a DOE output inside its own --checkpoint folder, replan's --path-out over its --path:
+    refused before any work, the files intact."""
+    import jaxga.api
+
+    monkeypatch.setattr(jaxga.api, "run", lambda *a, **k: pytest.fail("the run started"))
+    grid = tmp_path / "lab.txt"
+    grid.write_text("S...\n.##.\n...G\n")
+    (tmp_path / "presets").mkdir()
+    parent = tmp_path / "presets" / "parent.toml"
+    parent.write_text('base = "sga"\n[mutation]\nprobability = 0.2\n')
+    child = tmp_path / "child.toml"
+    child.write_text('base = "presets/parent.toml"\n')
+    checkpoint = tmp_path / "doe"
+    path_csv = tmp_path / "path.csv"
+    path_csv.write_text("x,y\n0.5,0.5\n3.5,0.5\n")
+    cases = [
+        (["run", "--preset", str(child), "--map", str(grid), "--json", str(parent)],
+         "the preset file"),
+        (["compare", "--presets", f"sga,{child}", "--map", str(grid), "--json",
+          str(parent)], "the preset file"),
+        (["doe", "--preset", "sga", "--map", str(grid), "--checkpoint", str(checkpoint),
+          "--json", str(checkpoint / "manifest.json")], "inside the --checkpoint folder"),
+        (["doe", "--preset", "sga", "--map", str(grid), "--checkpoint", str(checkpoint),
+          "--plot", str(checkpoint / "sub" / ".." / "effects.png")],
+         "inside the --checkpoint folder"),
+        (["replan", "--map", str(grid), "--path", str(path_csv), "--position", "0,0",
+          "--obstacles", "1,0", "--path-out", str(path_csv)], "the path file"),
+    ]
+    checkpoint.mkdir()
+    (checkpoint / "sub").mkdir()
+    for argv, words in cases:
+        rc = main(argv)
+        err = capsys.readouterr().err.strip()
+        assert rc == EXIT_BAD_INPUT and words in err and "\n" not in err, (argv, err)
+    assert parent.read_text() == 'base = "sga"\n[mutation]\nprobability = 0.2\n'
+    assert path_csv.read_text() == "x,y\n0.5,0.5\n3.5,0.5\n"
+    assert not (checkpoint / "manifest.json").exists()
+
+
+def test_a_temporary_file_a_killed_write_left_is_removed_by_the_next_write(tmp_path):
+    """``kill -9`` during a write leaves ``.NAME.<pid>.<random>.tmp``: the next write of
+    that file removes it; one of a process still writing, or of another file, stays."""
+    target = tmp_path / "run.json"
+    dead = subprocess.Popen([sys.executable, "-c", "pass"])
+    dead.wait()
+    left = tmp_path / f".run.json.{dead.pid}.a1b2c3d4.tmp"
+    left.write_text("half a file")
+    writing = tmp_path / f".run.json.{os.getppid()}.zz9y8x7w.tmp"  # a live process
+    writing.write_text("in progress")
+    other = tmp_path / f".other.json.{dead.pid}.a1b2c3d4.tmp"
+    other.write_text("another file's")
+    old = tmp_path / ".run.json.q1w2e3r4.tmp"  # an older version's name, an hour old
+    old.write_text("old")
+    os.utime(old, (time.time() - 2 * files.OLD_TEMPORARY_S,) * 2)
+    recent = tmp_path / ".run.json.p0o9i8u7.tmp"
+    recent.write_text("recent")
+    atomic_write_text(target, "{}")
+    assert target.read_text() == "{}"
+    assert not left.exists() and not old.exists()
+    assert writing.exists() and other.exists() and recent.exists()
+    assert sorted(p.name for p in tmp_path.iterdir() if p.name.startswith(".run.json")) \
+        == sorted([writing.name, recent.name])
+
+
+@pytest.mark.parametrize("redirect", [">&-", "2>&-", ">&- 2>&-"])
+def test_a_closed_stdout_or_stderr_does_not_fail_a_run(tmp_path, redirect):
+    out = tmp_path / "run.json"
+    argv = " ".join([sys.executable, "-m", "jaxga.cli", *RUN, "--json", str(out)])
+    proc = subprocess.run(f"{argv} {redirect}", shell=True, cwd=tmp_path, timeout=300,
+                          capture_output=True, text=True)  # the suite's program store
+    assert proc.returncode == 0, proc.stderr
+    assert [r["success"] for r in json.loads(out.read_text())["runs"]] == [True, True]
+
+
+def test_matplotlib_with_unusable_folders_leaves_nothing_and_a_bad_backend_is_one_line(
+        tmp_path):
+    """``MPLCONFIGDIR`` (or ``HOME``) unwritable: the plot is written, no warning from
+    Matplotlib, no ``matplotlib-*`` folder left in the temporary directory. An invalid
+    ``MPLBACKEND`` with --plot: one line naming the variable, before any work."""
+    scratch = tmp_path / "tmp"
+    scratch.mkdir()
+    base = dict(os.environ, TMPDIR=str(scratch))  # the suite's program store
+    argv = [sys.executable, "-m", "jaxga.cli", *RUN, "--plot", str(tmp_path / "p.png")]
+    for env in ({"MPLCONFIGDIR": "/proc/no-such-folder"}, {"HOME": "/proc/no-such-home"}):
+        proc = subprocess.run(argv, env={**base, **env}, capture_output=True, text=True,
+                              timeout=300)
+        assert proc.returncode == 0, proc.stderr
+        assert (tmp_path / "p.png").stat().st_size > 0
+        assert "Matplotlib" not in proc.stderr and "matplotlib" not in proc.stderr
+        assert list(scratch.iterdir()) == [], env
+        (tmp_path / "p.png").unlink()
+    proc = subprocess.run(argv, env={**base, "MPLBACKEND": "no-such-backend"},
+                          capture_output=True, text=True, timeout=300)
+    err = proc.stderr.strip()
+    assert proc.returncode == EXIT_BAD_INPUT and "\n" not in err, err
+    assert err.startswith("jaxga: error: $MPLBACKEND='no-such-backend'")
+    assert not (tmp_path / "p.png").exists()
