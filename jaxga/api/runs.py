@@ -33,6 +33,7 @@ from jaxga.api.failures import (
     unstarted_results,
     warn_unfilled,
 )
+from jaxga.api.jax_settings import check_jax_settings, check_platform
 from jaxga.api.lowering import check_environment
 from jaxga.api.memory import NO_PATH_BYTES_PER_RUN, check_memory, check_result_memory
 from jaxga.api.programs import (
@@ -168,6 +169,8 @@ def load_problem(preset, grid, corner_rule, variant, sets, overrides, generation
     :class:`~jaxga.api.planner.Planner`'s map, whose endpoints each plan gives)."""
 
     check_environment()  # a bad $JAXGA_THREEFRY, which `import jaxga` does not refuse
+    check_jax_settings()  # 64-bit mode, jit disabled
+    check_platform()
     ensure_compilation_cache()  # on by default, as on the command line (decision 014)
     map_name, frame = "grid", None
     if isinstance(grid, MapInfo):  # a loaded map that keeps its name (and its endpoints)

@@ -15,6 +15,7 @@ from jaxga import interrupts
 from jaxga.api.compilation_cache import ENV_VAR as CACHE_ENV_VAR
 from jaxga.api.compilation_cache import use_compilation_cache
 from jaxga.api.device_probe import DeviceDisagrees
+from jaxga.api.jax_settings import check_jax_settings, check_platform
 from jaxga.api.lowering import check_environment
 from jaxga.api.parallel import (
     EXIT_PROCESS_LOST,
@@ -87,9 +88,11 @@ def main(argv: Sequence[str] | None = None) -> int:
         with warnings.catch_warnings():
             warnings.showwarning = one_line_warnings(warnings.showwarning)
             check_environment()  # $JAXGA_THREEFRY, which `import jaxga` does not refuse
+            check_jax_settings()  # JAX_ENABLE_X64, JAX_DISABLE_JIT
             check_outputs(args)
             if hasattr(args, "devices"):  # subcommands with add_parallel_arguments
                 configure_from_args(args)  # before JAX's backend starts
+            check_platform()  # JAX_PLATFORMS naming a platform that is not there
             apply_scenario(args)  # after it: loading the map starts JAX
             if getattr(args, "compiles", False):  # run, doe, compare, warmup
                 use_compilation_cache()
@@ -153,6 +156,9 @@ def console() -> None:
         with contextlib.suppress(OSError, ValueError):
             stream.flush()
     remove_temporaries()  # os._exit skips the interpreter's own exit handlers
-    if "jax" in sys.modules and jax.process_count() > 1:
+    several = False
+    with contextlib.suppress(Exception):  # a backend that never started: one process
+        several = "jax" in sys.modules and jax.process_count() > 1
+    if several:
         sys.exit(code)
     os._exit(code)

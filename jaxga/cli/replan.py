@@ -6,6 +6,7 @@ import argparse
 import json
 import math
 import sys
+from typing import Any
 
 import numpy as np
 
@@ -46,15 +47,21 @@ def number_or_inf(value: object) -> float:
         return float("inf")
 
 
-def read_path_json(path: str, run_index: int | None,
-                   raw: bool = False) -> list[tuple[int, int]]:
+def read_path_json(path: str, run_index: int | None, raw: bool = False,
+                   frame: Any = None) -> list[tuple[int, int]]:
     """The robot's path from a JSON file: a list of ``[x, y]``, an object with a
     ``"path"`` list (``jaxga optimum --json``), or the JSON of ``jaxga run``: the path of
     run ``run_index`` (default the successful run with the shortest path) the robot was
     given, post-optimised (``--path-out`` writes it), or with ``raw`` the GA's raw
     8-connected path. Read only from a regular file of at most
     :data:`jaxga.maps.inputs.PATH_JSON_CAP` bytes (:func:`jaxga.maps.inputs.read_input`):
-    a FIFO, a device or a larger file is refused in one line."""
+    a FIFO, a device or a larger file is refused in one line.
+
+    ``frame``: the :class:`~jaxga.maps.frame.MapFrame` the replan plans on. The cells of
+    a JSON that records its own frame (``jaxga run`` and ``jaxga optimum`` do) are
+    planning cells of THAT frame: a path planned with another ``--coarsen`` is converted
+    to this one's cells (:func:`recorded_cells`), one planned on a map of another size is
+    refused."""
 
     try:
         text = read_input(path, PATH_JSON_CAP, what="path JSON file", error=ParameterError,
@@ -73,6 +80,7 @@ def read_path_json(path: str, run_index: int | None,
     expected = (f"{path}: expected a list of [x, y] cells, an object with a \"path\" list, "
                 "or the JSON of `jaxga run`")
     which = "raw_path" if raw else "path"
+    recorded = data.get("frame") if isinstance(data, dict) else None
     if isinstance(data, dict) and "runs" in data:
         runs = data["runs"]
         if not (isinstance(runs, list) and all(isinstance(r, dict) for r in runs)):
@@ -96,7 +104,46 @@ def read_path_json(path: str, run_index: int | None,
         raise ParameterError(f"{expected} (cells are pairs of integers)") from None
     if not cells:
         raise ParameterError(f"{path}: the path is empty")
-    return cells
+    return recorded_cells(cells, recorded, frame, path)
+
+
+def recorded_cells(cells: list[tuple[int, int]], recorded: Any, frame: Any,
+                   path: str) -> list[tuple[int, int]]:
+    """``cells``, planning cells of the frame a JSON ``recorded`` (its ``"frame"``: the
+    map's shape and coarsening), as planning cells of ``frame``: each cell's centre
+    (:meth:`~jaxga.maps.frame.MapFrame.map_cell`) in the cell of ``frame`` holding it,
+    repeats dropped. A map of another shape is refused; without a recorded frame the
+    cells are taken as they are."""
+    if not isinstance(recorded, dict):
+        return cells
+    try:
+        was = int(recorded.get("coarsen", 1))
+        shape = tuple(int(v) for v in recorded["map_shape"]) if "map_shape" in recorded \
+            else None
+    except (TypeError, ValueError):
+        raise ParameterError(f"{path}: its \"frame\" is not jaxga's (coarsen, "
+                             "map_shape)") from None
+    now = 1 if frame is None else frame.coarsen
+    if frame is not None and shape is not None and shape != tuple(frame.map_shape):
+        raise ParameterError(
+            f"{path} was planned on a map of {shape[1]} x {shape[0]} cells, --map has "
+            f"{frame.map_shape[1]} x {frame.map_shape[0]}: give the map it was planned on")
+    if was < 1:
+        raise ParameterError(f"{path}: its frame's coarsening {was} is not a positive "
+                             "integer")
+    if was == now:
+        return cells
+    c = np.asarray(cells, np.int64)
+    middle = c * was + was // 2
+    if shape is not None:
+        middle = np.minimum(middle, np.array([shape[1] - 1, shape[0] - 1]))
+    out: list[tuple[int, int]] = []
+    for x, y in (middle // now).tolist():
+        if not out or out[-1] != (x, y):
+            out.append((x, y))
+    print(f"note: {path} was planned {was} x {was} map cells a planning cell, this replan "
+          f"{now} x {now}: its cells converted (each cell's centre)", file=sys.stderr)
+    return out
 
 
 def cmd_replan(args: argparse.Namespace) -> int:
@@ -170,7 +217,7 @@ def read_robot_path(args: argparse.Namespace, info) -> list[tuple[int, int]]:
         raise JaxgaError("give the robot's path once: --path-json FILE (cells) or --path "
                          "FILE.csv|FILE.yaml (metres, as --path-out wrote it)")
     if args.path_json is not None:
-        return read_path_json(args.path_json, args.run, raw=args.raw)
+        return read_path_json(args.path_json, args.run, raw=args.raw, frame=info.frame)
     if args.run is not None or args.raw:
         raise JaxgaError("--run and --raw choose a run of jaxga run's JSON (--path-json), "
                          "not of a --path file")

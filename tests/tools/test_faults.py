@@ -423,3 +423,91 @@ def test_matplotlib_with_unusable_folders_leaves_nothing_and_a_bad_backend_is_on
     assert proc.returncode == EXIT_BAD_INPUT and "\n" not in err, err
     assert err.startswith("jaxga: error: $MPLBACKEND='no-such-backend'")
     assert not (tmp_path / "p.png").exists()
+
+
+@pytest.mark.parametrize("variable, value, words", [
+    ("JAX_ENABLE_X64", "1", "64-bit mode is on ($JAX_ENABLE_X64=1)"),
+    ("JAX_DISABLE_JIT", "1", "jit is disabled ($JAX_DISABLE_JIT=1)"),
+    ("JAX_PLATFORMS", "cuda", "$JAX_PLATFORMS='cuda' names a platform"),
+    ("JAX_PLATFORMS", "no-such-platform", "$JAX_PLATFORMS='no-such-platform'"),
+])
+def test_jaxs_own_switches_are_one_line_naming_the_variable(tmp_path, variable, value,
+                                                            words):
+    if variable == "JAX_PLATFORMS" and value == "cuda":
+        import jax
+
+        if any(d.platform == "gpu" for d in jax.devices()):
+            pytest.skip("this machine has CUDA")
+    proc = subprocess.run([sys.executable, "-m", "jaxga.cli", *RUN],
+                          env=dict(os.environ, **{variable: value}), cwd=tmp_path,
+                          capture_output=True, text=True, timeout=300)
+    err = proc.stderr.strip()
+    assert proc.returncode == EXIT_BAD_INPUT and "\n" not in err, err
+    assert err.startswith("jaxga: error: ") and words in err, err
+
+
+def test_the_api_refuses_64_bit_mode_and_disabled_jit_in_one_line():
+    import jax
+
+    import jaxga
+    from jaxga.core.errors import ParameterError
+
+    for option in ("jax_enable_x64", "jax_disable_jit"):
+        jax.config.update(option, True)
+        try:
+            with pytest.raises(ParameterError, match="64-bit mode|jit is disabled") as e:
+                jaxga.run("sga", "classic_ga_gapp3_20x20", seeds=1, generations=1)
+            assert "\n" not in str(e.value)
+        finally:
+            jax.config.update(option, False)
+
+
+def test_replan_reads_the_frame_its_path_json_records(tmp_path, capsys):
+    """A run's JSON made with --coarsen 2, replanned without it: its coarse cells become
+    the map's (each cell's centre), never taken for map cells; the JSON of a map of
+    another size is refused; a JSON without a frame is taken as it is."""
+    from jaxga.cli.replan import read_path_json
+    from jaxga.core.errors import ParameterError
+    from jaxga.maps.frame import MapFrame
+
+    run = {"frame": {"coarsen": 2, "map_shape": [20, 20]},
+           "runs": [{"success": True, "length": 12.7, "path": [[0, 0], [4, 4], [9, 9]]}]}
+    path = tmp_path / "run.json"
+    path.write_text(json.dumps(run))
+    fine = MapFrame(map_shape=(20, 20))
+    assert read_path_json(str(path), None, frame=fine) == [(1, 1), (9, 9), (19, 19)]
+    assert "planned 2 x 2 map cells a planning cell" in capsys.readouterr().err
+    coarse = MapFrame(map_shape=(20, 20), coarsen=2)
+    assert read_path_json(str(path), None, frame=coarse) == [(0, 0), (4, 4), (9, 9)]
+    quarter = MapFrame(map_shape=(20, 20), coarsen=4)
+    assert read_path_json(str(path), None, frame=quarter) == [(0, 0), (2, 2), (4, 4)]
+    other = MapFrame(map_shape=(20, 24))
+    with pytest.raises(ParameterError, match="planned on a map of 20 x 20 cells, --map "
+                                             "has 24 x 20") as e:
+        read_path_json(str(path), None, frame=other)
+    assert "\n" not in str(e.value)
+    path.write_text(json.dumps({"path": [[0, 0], [3, 3]]}))
+    assert read_path_json(str(path), None, frame=fine) == [(0, 0), (3, 3)]
+
+
+def test_a_scenario_length_that_contradicts_the_exact_optimum_is_reported(tmp_path, capsys):
+    """A scenario file whose stated optimal length is wrong (1.0 where the exact optimum
+    is 64.3137): the note beside it gives the exact one; a right one gets no comment."""
+    data = Path(__file__).resolve().parents[1] / "data"
+    (tmp_path / "maze-32-32-2.map").write_bytes((data / "maze-32-32-2.map").read_bytes())
+    lines = (data / "maze-32-32-2-random-1.scen").read_text().splitlines()
+    first = lines[1].split("\t")
+    wrong = "\t".join([*first[:-1], "1.00000000"])
+    (tmp_path / "maze-32-32-2.map.scen").write_text("\n".join([lines[0], wrong, lines[2]]))
+    for n, words in ((0, "the exact optimum of these endpoints on this map is 64.3137"),
+                     (1, None)):
+        rc = main(["optimum", "--map", str(tmp_path / "maze-32-32-2.map"), "--scenario",
+                   str(n)])
+        err = capsys.readouterr().err
+        assert rc == 0, err
+        note = [line for line in err.splitlines() if line.startswith("scenario ")]
+        assert len(note) == 1, err
+        if words:
+            assert "optimal length 1.0000" in note[0] and words in note[0], note
+        else:
+            assert "but" not in note[0], note
