@@ -1,7 +1,13 @@
-"""Memory checks before a run: refuse, with a one-line error, results that would not fit.
+"""Memory checked before it is allocated: a model of what a call of runs holds
+(:func:`call_memory`, measured by ``benchmarks/memory.py``), a call laid out to fit
+(:func:`jaxga.api.runs` drops the padding of its calls where the padded runs would not
+fit), and one line naming the size and what to change where even that does not fit.
 """
 
 from __future__ import annotations
+
+from collections.abc import Mapping
+from typing import Any
 
 from jaxga.core.errors import ParameterError
 from jaxga.core.grid import physical_memory
@@ -10,24 +16,113 @@ from jaxga.engine import (
 )
 
 RESULT_MEMORY_FRACTION = 0.5
-"""A call is refused when its results alone would need more than this fraction of the
-machine's physical memory (they are all held on the host at the end)."""
+"""A call is refused when it would need more than this fraction of the machine's physical
+memory (:func:`call_memory`)."""
 
 
+STATE_FACTOR = 8
+"""A run's memory while it evolves, in units of its population's cells
+(``population x islands x capacity`` int32): the population, its next generation and
+each operator's working arrays. Measured (``benchmarks/memory.py``: peak resident memory
+over the runs of a call, seven presets, 2,000 and 8,000 individuals) at 5-7."""
+
+INIT_FACTOR = 12
+"""The initialisation's temporaries of one run (its walks' buffers and attempts), in the
+same units, held for the runs one device initialises together (an init block, at most
+10 runs): measured at 6-11."""
+
+BASE_BYTES = 1 << 29
+"""What a process holds beside its runs: JAX (0.17 GB after its import), the compiled
+programs, the map and its tables. (Compiling peaks higher, 0.6-0.8 GB more on the
+CPU, but before the runs' memory is allocated, or beside a small part of it.)"""
+
+
+def population_bytes(algo: Algorithm) -> int:
+    """The bytes of one run's population: ``population x islands x capacity`` int32 cells."""
+    return 4 * algo.population * algo.islands * algo.capacity
+
+
+def run_bytes(algo: Algorithm) -> int:
+    """One run's state and history while its call computes (:data:`STATE_FACTOR`)."""
+    return (STATE_FACTOR * population_bytes(algo) + 12 * algo.generations
+            + 8 * algo.capacity + 256)
+
+
+def call_memory(algo: Algorithm, runs: int, per_call: int, init_block: int = 10) -> int:
+    """The peak memory of ``runs`` runs computed in calls of ``per_call`` (padding
+    included: a padded run costs as much as a real one), initialised ``init_block`` at a
+    time: :data:`BASE_BYTES`, every run's state and history (the states of all calls are
+    held until the finish), and one init block's temporaries."""
+    return (BASE_BYTES + runs * run_bytes(algo)
+            + INIT_FACTOR * min(per_call, init_block) * population_bytes(algo))
+
+
+def memory_budget() -> int | None:
+    """The memory a call may use: :data:`RESULT_MEMORY_FRACTION` of the machine's
+    physical memory (None where it is unknown)."""
+    total = physical_memory()
+    return None if total is None else int(RESULT_MEMORY_FRACTION * total)
+
+
+def too_much_memory(algo: Algorithm, runs: int, per_call: int, init_block: int = 10) -> str:
+    """One line saying why ``runs`` runs in calls of ``per_call`` do not fit the machine
+    and what to change, or ``""`` when they fit (:func:`call_memory`)."""
+    budget = memory_budget()
+    need = call_memory(algo, runs, per_call, init_block)
+    if budget is None or need <= budget:
+        return ""
+    fit = (budget - BASE_BYTES - INIT_FACTOR * min(runs, init_block)
+           * population_bytes(algo)) // run_bytes(algo)
+    hint = (f"at most {int(fit)} fit: run fewer seeds (or sweep points) at a time"
+            if fit >= 1 else "not one run fits: a smaller population.size (or "
+            "population.capacity)")
+    return (f"{runs} runs of a population of {algo.population * algo.islands} on paths of "
+            f"{algo.capacity} cells would need about {need / 2**30:.1f} GiB, more than half "
+            f"of this machine's {physical_memory() / 2**30:.1f} GiB: {hint}")
 
 
 def check_result_memory(n_runs: int, algo: Algorithm) -> None:
-    """A clear error instead of the operating system killing the process: every run keeps
-    three float32 histories of ``generations`` values, two int32 paths of ``capacity``
-    cells and a few hundred bytes of metrics, counters and keys, and while it evolves its
-    population (``population x islands x capacity`` int32 cells, counted twice: the state
-    and its next generation). An estimate, not a bound: blocks of runs need more."""
-    per_run = (12 * algo.generations + 8 * algo.capacity + 256
-               + 2 * 4 * algo.population * algo.islands * algo.capacity)
-    check_memory(n_runs, per_run, (
-        f"for their results and populations ({algo.generations} generations of history, "
-        f"paths of {algo.capacity} cells and a population of "
-        f"{algo.population * algo.islands} per run)"))
+    """A clear error instead of the operating system killing the process, before
+    anything compiles: ``n_runs`` runs, unpadded, in one call (:func:`call_memory`; the
+    layout of the calls, checked again once known, may pad them or split them)."""
+    why = too_much_memory(algo, n_runs, n_runs)
+    if why:
+        raise ParameterError(why)
+
+
+def compiled_peak(stats: Any, calls: int) -> int | None:
+    """The memory a compiled program's ``calls`` calls hold at their peak, from XLA's own
+    account of it (``Compiled.memory_analysis()``): every call's output is kept (the
+    states of all calls live until the finish) and one call's temporaries at a time;
+    None where XLA gives no account."""
+    try:
+        out = int(stats.output_size_in_bytes)
+        temp = int(stats.temp_size_in_bytes)
+        args = int(stats.argument_size_in_bytes)
+    except (AttributeError, TypeError, ValueError):
+        return None
+    return BASE_BYTES + calls * (out + args) + temp
+
+
+def check_compiled_memory(programs: Mapping[str, Any], calls: int, runs: int) -> None:
+    """Refuse, before they run, compiled programs whose calls would not fit (their
+    :func:`compiled_peak` over half the machine's memory): the accurate check, once the
+    programs of a call are known, of what :func:`call_memory` estimated before."""
+    budget = memory_budget()
+    if budget is None:
+        return
+    for name, program in programs.items():
+        try:
+            stats = program.memory_analysis()
+        except Exception:  # noqa: BLE001 - a backend without the analysis: not checked
+            continue
+        need = compiled_peak(stats, calls)
+        if need is not None and need > budget:
+            raise ParameterError(
+                f"{runs} runs in {calls} call(s) would need about {need / 2**30:.1f} GiB "
+                f"in their {name} program (XLA's account of its buffers), more than half "
+                f"of this machine's {physical_memory() / 2**30:.1f} GiB: run fewer seeds "
+                "(or sweep points) at a time, or a smaller population.size")
 
 
 NO_PATH_BYTES_PER_RUN = 256

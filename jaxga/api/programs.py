@@ -159,6 +159,10 @@ class Programs:
     def init(self) -> Any:
         return self._compiled["init"]
 
+    def compiled(self) -> dict[str, Any]:
+        """The programs compiled (or read) so far, by name."""
+        return dict(self._compiled)
+
     @property
     def evolve(self) -> Any:
         """The compiled evolve program (compiled now if need be): ``(keys, grid, params,

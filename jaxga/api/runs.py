@@ -35,12 +35,19 @@ from jaxga.api.failures import (
 )
 from jaxga.api.jax_settings import check_jax_settings, check_platform
 from jaxga.api.lowering import check_environment
-from jaxga.api.memory import NO_PATH_BYTES_PER_RUN, check_memory, check_result_memory
+from jaxga.api.memory import (
+    NO_PATH_BYTES_PER_RUN,
+    check_compiled_memory,
+    check_memory,
+    check_result_memory,
+    too_much_memory,
+)
 from jaxga.api.programs import (
     GENERATION_CHUNK,
     Programs,
     clear_compiled,
     compiled_buckets,
+    platform_layout,
     programs_for,
     run_layout,
     stack_params,
@@ -357,6 +364,7 @@ def _sweep(preset, grid, points, seeds, *, generations, corner_rule, variant, se
                                          "post_s": 0.0, **timeline.as_dict()}, **context)
     with timeline.phase("compile"):
         progs.compile_rest(lambda frac: report("compile", frac))
+    check_compiled_memory(progs.compiled(), len(runs.calls), runs.n_local)
     report("compile", 1.0)
     report("evolve", 0.0)
     host, hist = _evolve_and_finish(plan, runs, progs, start.states, timeline, report)
@@ -505,10 +513,21 @@ def _compile_init(plan: _SweepPlan, timeline: Timeline,
             check_backend()
     report("compile", 0.0)
     with timeline.phase("compile"):
-        runs = _this_process_runs(plan.seed_arr, plan.per_point,
-                                  tables_for(plan.program_grid), plan.algo)
+        grid = tables_for(plan.program_grid)
+        runs = _this_process_runs(plan.seed_arr, plan.per_point, grid, plan.algo)
         progs = programs_for(plan.algo, runs.grid, runs.calls[0][1], runs.per_call,
                              lambda frac: report("compile", frac))
+        try:
+            check_compiled_memory(progs.compiled(), len(runs.calls), runs.n_local)
+        except ParameterError:
+            if len(runs.calls) * runs.per_call <= runs.n_local:
+                raise  # no padding to drop
+            # XLA's account exceeds the estimate: the same runs without their padding
+            runs = _this_process_runs(plan.seed_arr, plan.per_point, grid, plan.algo,
+                                      unpadded=True)
+            progs = programs_for(plan.algo, runs.grid, runs.calls[0][1], runs.per_call,
+                                 lambda frac: report("compile", frac))
+            check_compiled_memory(progs.compiled(), len(runs.calls), runs.n_local)
     return runs, progs
 
 
@@ -630,7 +649,7 @@ class _Runs:
 
 
 def _this_process_runs(seed_arr: np.ndarray, per_point: Sequence[dict], grid: Grid,
-                       algo: Algorithm) -> _Runs:
+                       algo: Algorithm, unpadded: bool = False) -> _Runs:
     """This process's runs, laid out as calls of the compiled programs, on its devices.
 
     Run ``q * S + s`` is point ``q`` with seed ``s``; the runs are padded (copies of the
@@ -650,8 +669,12 @@ def _this_process_runs(seed_arr: np.ndarray, per_point: Sequence[dict], grid: Gr
               for k, v in params.items()}
     n_local = len(run_seeds)
     n_dev = jax.local_device_count()
-    per_device, n_calls = run_layout(n_local, n_dev, grid.height * grid.width,
-                                     compiled_buckets(algo, grid, params))
+    if unpadded:  # one call of exactly these runs (their padded calls would not fit)
+        per_device, n_calls = -(-n_local // n_dev), 1
+    else:
+        per_device, n_calls = fitting_layout(
+            algo, n_local, n_dev, run_layout(n_local, n_dev, grid.height * grid.width,
+                                             compiled_buckets(algo, grid, params)))
     per_call = per_device * n_dev
     fill = n_calls * per_call - n_local
     run_seeds = np.concatenate([run_seeds, np.repeat(run_seeds[-1:], fill)])
@@ -667,6 +690,23 @@ def _this_process_runs(seed_arr: np.ndarray, per_point: Sequence[dict], grid: Gr
         call = (keys[sl], {k: v[sl] for k, v in params.items()})
         calls.append(jax.device_put(call, sh) if sh is not None else jax.device_put(call))
     return _Runs(calls, per_call, n_local, grid)
+
+
+def fitting_layout(algo: Algorithm, n_local: int, n_dev: int,
+                   layout: tuple[int, int]) -> tuple[int, int]:
+    """``layout`` (runs per device, calls), or where its padded runs would not fit the
+    machine's memory (:func:`jaxga.api.memory.too_much_memory`) one call of exactly this
+    process's runs, without padding (a program of that size is compiled); where even
+    those do not fit, :class:`ParameterError` naming the size and what to change."""
+    per_device, n_calls = layout
+    block = platform_layout().init_run_block
+    if not too_much_memory(algo, per_device * n_dev * n_calls, per_device * n_dev, block):
+        return layout
+    exact = -(-n_local // n_dev)
+    why = too_much_memory(algo, exact * n_dev, exact * n_dev, block)
+    if why:
+        raise ParameterError(why)
+    return exact, 1
 
 
 def _evolve_in_chunks(progs: Any, generations: int, runs: _Runs, grid: Grid,

@@ -878,15 +878,40 @@ def test_seeds_outside_32_bits_are_refused(grid, seeds, words):
         api.run("sga", grid, seeds=seeds, **SMALL)
 
 
-def test_a_call_whose_results_cannot_fit_in_memory_is_refused(grid, monkeypatch):
-    """A clear error before anything is allocated, instead of the process being killed."""
-    monkeypatch.setattr(api.memory, "physical_memory", lambda: 2**30)  # a 1 GiB machine
-    # per run: 3 x 3 float32 history values, 2 int32 paths of 4 * (20 + 20) = 160 cells,
-    # 256 bytes and twice 60 x 160 int32 population cells: 78,372 bytes, so 10**4 runs
-    # need 0.73 GiB, more than half of 1 GiB
-    with pytest.raises(ParameterError, match="GiB for their results and populations"):
+def test_a_call_whose_runs_cannot_fit_in_memory_is_refused(grid, monkeypatch):
+    """A clear error before anything is allocated, instead of the process being killed,
+    naming the size and what to change."""
+    monkeypatch.setattr(api.memory, "physical_memory", lambda: 4 * 2**30)  # a 4 GiB machine
+    # per run: 8 x 60 x 160 int32 population cells (307,200 bytes), 3 x 3 float32 history
+    # values, 2 int32 paths of 160 cells, 256 bytes: 10**4 runs need 2.9 GiB beside the
+    # 0.5 GiB base and one init block's temporaries, more than half of 4 GiB; 5,201 fit
+    with pytest.raises(ParameterError, match=r"10000 runs of a population of 60 on paths "
+                       r"of 160 cells would need about 3\.4 GiB, more than half of this "
+                       r"machine's 4\.0 GiB: at most 5201 fit") as e:
         api.run("sga", grid, seeds=10**4, **SMALL)
+    assert "\n" not in str(e.value)
+    with pytest.raises(ParameterError, match="a smaller population.size"):
+        api.run("sga", grid, seeds=2, population__size=100_000, population__capacity=4096,
+                **SMALL)
     assert api.run("sga", grid, seeds=3, **SMALL).success.all()  # small calls still run
+
+
+def test_padded_calls_that_would_not_fit_run_without_their_padding(monkeypatch):
+    """5 runs are one padded call of 32 on the CPU; where 32 runs of a large population
+    would not fit, the 5 run as one call of 5; where 5 do not fit either, one line."""
+    from types import SimpleNamespace
+
+    from jaxga.api.runs import fitting_layout
+
+    monkeypatch.setattr(api.memory, "physical_memory", lambda: 24 * 2**30)  # CI's machine
+    big = SimpleNamespace(population=100_000, islands=1, capacity=160, generations=300)
+    assert fitting_layout(big, 5, 1, (32, 1)) == (5, 1)
+    assert api.memory.call_memory(big, 5, 5) < 12 * 2**30 < api.memory.call_memory(big, 32, 32)
+    small = SimpleNamespace(population=60, islands=1, capacity=160, generations=300)
+    assert fitting_layout(small, 5, 1, (32, 1)) == (32, 1)
+    with pytest.raises(ParameterError, match="40 runs of a population of 100000 .* at most "
+                                             "9 fit"):
+        fitting_layout(big, 40, 1, (64, 1))
 
 
 def test_an_empty_corner_rule_is_refused_not_replaced_by_the_presets(grid):
@@ -1035,3 +1060,46 @@ def test_run_and_sweep_take_one_list_of_options(monkeypatch):
     given = {name: object() for name in api.RUN_OPTIONS}
     assert api.run("sga", "m", 7, **given, population__size=9) == "result"
     assert calls == [(("sga", "m", [{}], 7), {**given, "population__size": 9})]
+
+
+def test_xlas_account_of_a_programs_buffers_is_checked_before_it_runs(monkeypatch):
+    """The compiled programs' own account (temporaries, every call's output) over half
+    the machine: one line naming the program, before anything of it is allocated."""
+    from types import SimpleNamespace
+
+    monkeypatch.setattr(api.memory, "physical_memory", lambda: 8 * 2**30)
+
+    def program(temp_gib: float):
+        stats = SimpleNamespace(output_size_in_bytes=2**28, argument_size_in_bytes=2**20,
+                                temp_size_in_bytes=int(temp_gib * 2**30))
+        return SimpleNamespace(memory_analysis=lambda: stats)
+
+    api.memory.check_compiled_memory({"init": program(1.0), "evolve": program(2.0)}, 4, 20)
+    with pytest.raises(ParameterError, match=r"20 runs in 4 call\(s\) would need about "
+                       r"4\.5 GiB in their evolve program .* 8\.0 GiB") as e:
+        api.memory.check_compiled_memory({"init": program(1.0), "evolve": program(3.0)},
+                                         4, 20)
+    assert "\n" not in str(e.value)
+
+
+@pytest.mark.slow  # compiles a program of 5 runs
+def test_padded_calls_xla_says_would_not_fit_run_without_their_padding(grid, monkeypatch):
+    """Where XLA's account of the padded call exceeds the machine, the same runs run as
+    one call without padding (a program of their own size): the same results."""
+    from jaxga.api import runs as runs_module
+
+    want = api.run("sga", grid, seeds=5, **SMALL)
+    real, seen = runs_module.check_compiled_memory, []
+
+    def refuse_padded(programs, calls, n_runs):
+        seen.append(n_runs)
+        if len(seen) == 1:
+            raise ParameterError("the padded call would not fit")
+        return real(programs, calls, n_runs)
+
+    monkeypatch.setattr(runs_module, "check_compiled_memory", refuse_padded)
+    api.clear_compiled()
+    got = api.run("sga", grid, seeds=5, **SMALL)
+    assert len(seen) >= 2
+    np.testing.assert_array_equal(got.cells, want.cells)
+    np.testing.assert_array_equal(got.history["best"], want.history["best"])
