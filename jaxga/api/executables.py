@@ -205,12 +205,21 @@ def _entry_problem(entry: Any, key: str, devices: Any) -> str | None:
     return None
 
 
+_FORGOTTEN: set[tuple[str, str]] = set()
+"""(store, reason) already said in this process: one line each, however many entries."""
+
+
 def _forget(path: Path, why: str) -> None:
-    """Remove a stored program that cannot be used, saying so in one line."""
+    """Remove a stored program that cannot be used, saying so in one line per store and
+    reason (a store whose files were all swapped says it once)."""
     with contextlib.suppress(OSError):
         path.unlink()
+    if (str(path.parent), why) in _FORGOTTEN:
+        return
+    _FORGOTTEN.add((str(path.parent), why))
     warnings.warn(f"the stored program {path.name} in {path.parent} {why}: removed, "
-                  "compiling it again", CacheWarning, stacklevel=4)
+                  "compiling it again (so is any other entry of the store like it)",
+                  CacheWarning, stacklevel=4)
 
 
 def load(key: str | None, devices: Any) -> Any | None:

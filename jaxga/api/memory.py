@@ -78,7 +78,7 @@ def too_much_memory(algo: Algorithm, runs: int, per_call: int, init_block: int =
             "population.capacity)")
     return (f"{runs} runs of a population of {algo.population * algo.islands} on paths of "
             f"{algo.capacity} cells would need about {need / 2**30:.1f} GiB, more than half "
-            f"of this machine's {physical_memory() / 2**30:.1f} GiB: {hint}")
+            f"of the {physical_memory() / 2**30:.1f} GiB this process may use: {hint}")
 
 
 def check_result_memory(n_runs: int, algo: Algorithm) -> None:
@@ -121,8 +121,8 @@ def check_compiled_memory(programs: Mapping[str, Any], calls: int, runs: int) ->
             raise ParameterError(
                 f"{runs} runs in {calls} call(s) would need about {need / 2**30:.1f} GiB "
                 f"in their {name} program (XLA's account of its buffers), more than half "
-                f"of this machine's {physical_memory() / 2**30:.1f} GiB: run fewer seeds "
-                "(or sweep points) at a time, or a smaller population.size")
+                f"of the {physical_memory() / 2**30:.1f} GiB this process may use: run "
+                "fewer seeds (or sweep points) at a time, or a smaller population.size")
 
 
 NO_PATH_BYTES_PER_RUN = 256
@@ -136,5 +136,6 @@ def check_memory(n_runs: int, per_run: int, what: str) -> None:
     if total is not None and need > RESULT_MEMORY_FRACTION * total:
         raise ParameterError(
             f"{n_runs} runs would need about {need / 2**30:.1f} GiB {what}, more than half "
-            f"of this machine's {total / 2**30:.1f} GiB: run fewer seeds per call")
+            f"of the {total / 2**30:.1f} GiB this process may use: run fewer seeds at a "
+            "time")
 

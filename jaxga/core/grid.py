@@ -21,10 +21,13 @@ static (it changes the compiled code).
 
 from __future__ import annotations
 
+import contextlib
 import dataclasses
 import operator
 import os
+import resource
 from collections.abc import Sequence
+from pathlib import Path
 from typing import Any
 
 import jax
@@ -64,11 +67,22 @@ def plan_memory(cells: int) -> int:
 
 
 def physical_memory() -> int | None:
-    """This machine's memory in bytes, None where the system does not say."""
+    """The memory this process may use, in bytes: the machine's, or a limit the process
+    runs under where it is lower (its address-space limit, ``ulimit -v``; its control
+    group's ``memory.max``, a container's limit); None where the system says nothing."""
     try:
-        return os.sysconf("SC_PAGE_SIZE") * os.sysconf("SC_PHYS_PAGES")
+        have = [os.sysconf("SC_PAGE_SIZE") * os.sysconf("SC_PHYS_PAGES")]
     except (AttributeError, ValueError, OSError):  # not POSIX
-        return None
+        have = []
+    with contextlib.suppress(AttributeError, ValueError, OSError):
+        soft, _ = resource.getrlimit(resource.RLIMIT_AS)
+        if soft not in (resource.RLIM_INFINITY, -1) and soft > 0:
+            have.append(int(soft))
+    with contextlib.suppress(OSError, ValueError):
+        text = Path("/sys/fs/cgroup/memory.max").read_text().strip()
+        if text.isdigit():
+            have.append(int(text))
+    return min(have) if have else None
 
 
 def too_large(width: int, height: int) -> str:
@@ -90,7 +104,7 @@ def too_large(width: int, height: int) -> str:
         why = f"more than jaxga plans on ({MAX_MAP_CELLS:,}, e.g. 2048 x 2048)"
     else:
         why = (f"and a plan on it needs about {plan_memory(cells) / 2**30:.1f} GiB, more than "
-               f"half of this machine's {have / 2**30:.1f} GiB")
+               f"half of the {have / 2**30:.1f} GiB this process may use")
     return (f"map {width} x {height} has {cells:,} cells, {why}: make it coarser, e.g. "
             f"{k} x {k} cells into one (--coarsen {k} of jaxga run, optimum, compare and "
             f"doe; load_map(..., coarsen={k}); jaxga.maps.coarsen)")

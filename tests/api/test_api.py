@@ -886,8 +886,8 @@ def test_a_call_whose_runs_cannot_fit_in_memory_is_refused(grid, monkeypatch):
     # values, 2 int32 paths of 160 cells, 256 bytes: 10**4 runs need 2.9 GiB beside the
     # 0.5 GiB base and one init block's temporaries, more than half of 4 GiB; 5,201 fit
     with pytest.raises(ParameterError, match=r"10000 runs of a population of 60 on paths "
-                       r"of 160 cells would need about 3\.4 GiB, more than half of this "
-                       r"machine's 4\.0 GiB: at most 5201 fit") as e:
+                       r"of 160 cells would need about 3\.4 GiB, more than half of the 4\.0 "
+                       r"GiB this process may use: at most 5201 fit") as e:
         api.run("sga", grid, seeds=10**4, **SMALL)
     assert "\n" not in str(e.value)
     with pytest.raises(ParameterError, match="a smaller population.size"):
@@ -1076,7 +1076,7 @@ def test_xlas_account_of_a_programs_buffers_is_checked_before_it_runs(monkeypatc
 
     api.memory.check_compiled_memory({"init": program(1.0), "evolve": program(2.0)}, 4, 20)
     with pytest.raises(ParameterError, match=r"20 runs in 4 call\(s\) would need about "
-                       r"4\.5 GiB in their evolve program .* 8\.0 GiB") as e:
+                       r"4\.5 GiB in their evolve program .* 8\.0 GiB this process") as e:
         api.memory.check_compiled_memory({"init": program(1.0), "evolve": program(3.0)},
                                          4, 20)
     assert "\n" not in str(e.value)
