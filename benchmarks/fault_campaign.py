@@ -114,6 +114,8 @@ class Case:
     timeout: float = 60.0
     max_s: float | None = None  # a refusal later than this is 'slow'
     stdout: str = "pipe"  # "pipe", "closed" (a pipe whose reader is gone), "full" (/dev/full)
+    closed_fds: tuple[int, ...] = ()  # descriptors closed in the child (`>&-`, `2>&-`)
+    removes: tuple[Path, ...] = ()  # files the case must remove (a killed write's leftovers)
     caches: tuple[Path, ...] = ()  # this case's own caches, checked for temporaries after
     teardown: Callable[[], None] | None = None
     quick: bool = False
@@ -226,9 +228,14 @@ def execute(case: Case, env: dict[str, str], cwd: Path) -> Outcome:
         stdout_arg = fh
         to_close.append(fh)
     t0 = time.monotonic()
+    def child_setup() -> None:
+        _limits()
+        for fd in case.closed_fds:
+            os.close(fd)
+
     proc = subprocess.Popen([sys.executable, "-m", "jaxga.cli", *case.argv], cwd=cwd,
                             env=run_env, stdin=subprocess.DEVNULL, stdout=stdout_arg,
-                            stderr=subprocess.PIPE, preexec_fn=_limits)
+                            stderr=subprocess.PIPE, preexec_fn=child_setup)
     for c in to_close:
         if isinstance(c, int):
             os.close(c)
@@ -368,8 +375,12 @@ def damage_of(case: Case, before: dict, after: dict, cls_hint: int | None) -> li
         return may_write and any(p == a or p.startswith(a + os.sep) for a in allowed)
 
     out = []
+    removes = {str(p) for p in case.removes}
+    for p in removes:
+        if p in after:
+            out.append(f"left {p} (a killed write's file the next write removes)")
     for p, v in before.items():
-        if p not in after:
+        if p not in after and p not in removes:
             out.append(f"removed {p}")
         elif after[p] != v and not permitted(p):
             out.append(f"changed {p} ({v[0]} -> {after[p][0]})")
@@ -881,6 +892,92 @@ def build(t: Path) -> list[Case]:
     env_case("stdout-full-device", {}, argv=["presets"], stdout="full",
              note="stdout is /dev/full: the listing is lost")
 
+    # --- round two: inputs behind inputs, the store, memory, JAX's and Matplotlib's own
+    # switches, closed streams, results against their own records ------------------------
+    def two(name, argv, expect="refused", **kw):
+        add(name, "round two", argv, expect, **kw)
+
+    parent = write("presets/parent.toml", 'base = "sga"\n[mutation]\nprobability = 0.2\n')
+    child = write("child.toml", 'base = "presets/parent.toml"\n')
+    two("json-onto-a-presets-base", ["run", "--map", CLASSIC, "--preset", child, "--seeds",
+                                     "2", "--generations", "5", "--quiet", "--json", parent],
+        quick=True, note="--json names the file the preset's base chain reads")
+    own_checkpoint = f / "doe-own"
+    two("doe-json-into-its-checkpoint",
+        ["doe", "--preset", "sga", "--map", CLASSIC, "--design", "full", "--factor",
+         "crossover.probability=0.6,0.7,0.8", "--seeds", "2", "--generations", "5",
+         "--checkpoint", own_checkpoint, "--json", own_checkpoint / "manifest.json"])
+    dead = subprocess.Popen(["true"])
+    dead.wait()
+    killed = write("killed.json", '{"previous": true}\n')
+    stale = write(f".killed.json.{dead.pid}.k1l2e3d4.tmp", '{"half": ')
+    two("temporary-of-a-killed-write", ["run", "--map", CLASSIC, *QUIET, "--json", killed],
+        "handled", outputs=(killed,), removes=(stale,), check=wrote_json(killed),
+        note="a .NAME.<pid>.<random>.tmp of a dead process beside the output")
+    scratch = t / "scratch-mpl"
+    scratch.mkdir()
+    plot = f / "mpl.png"
+
+    def nothing_left(out: Outcome) -> str | None:
+        left = list(scratch.iterdir())
+        if left:
+            return f"left {left[0]} in the temporary folder"
+        return None if plot.is_file() else "no plot written"
+
+    two("matplotlib-folders-unusable", ["run", "--map", CLASSIC, *QUIET, "--plot", plot],
+        "handled", env={"MPLCONFIGDIR": "/proc/no-mpl", "TMPDIR": str(scratch)},
+        outputs=(plot,), check=nothing_left, check_fails_as="damaged file")
+    two("matplotlib-backend-invalid", ["run", "--map", CLASSIC, *QUIET, "--plot",
+                                       f / "never.png"], env={"MPLBACKEND": "nonsense"})
+    coarse = f / "coarse.json"
+    subprocess.run([sys.executable, "-m", "jaxga.cli", "optimum", "--map", CLASSIC,
+                    "--coarsen", "2", "--json", str(coarse)], capture_output=True,
+                   cwd=ROOT, env={**os.environ, "PYTHONPATH": str(ROOT)}, timeout=300)
+
+    def converted(out: Outcome) -> str | None:
+        return None if "its cells converted" in out.stderr else "no conversion note"
+
+    two("replan-on-a-coarsened-runs-json",
+        ["replan", "--map", CLASSIC, "--path-json", coarse, "--position", "0,0",
+         "--obstacles", "8,8", *QUIET], ("handled", "no path"), check=converted,
+        timeout=300, note="the JSON records --coarsen 2; this replan has none")
+    maze = write("maze.map", (ROOT / "tests" / "data" / "maze-32-32-2.map").read_text())
+    scen_lines = (ROOT / "tests" / "data" / "maze-32-32-2-random-1.scen").read_text() \
+        .splitlines()
+    write("maze.map.scen", "\n".join([scen_lines[0], "\t".join(
+        [*scen_lines[1].split("\t")[:-1], "1.00000000"])]) + "\n")
+
+    def reported(out: Outcome) -> str | None:
+        return None if "the file's length is wrong" in out.stderr else "not reported"
+
+    two("scenario-optimum-contradicts-the-exact-one",
+        ["optimum", "--map", maze, "--scenario", "0"], "handled", check=reported,
+        check_fails_as="silent", note="the .scen says 1.0; the exact optimum is 64.31")
+    for kind, words in (("swapped", "holds another program"),
+                        ("older", "another version"), ("flipped", "")):
+        store = caches / f"programs-{kind}"
+        two(f"store-programs-{kind}", ["run", "--map", CLASSIC, *QUIET], "handled",
+            env={"JAXGA_CACHE_DIR": str(store)}, caches=(store,),
+            check=warned(words) if words else at_most_one_warning,
+            check_fails_as="silent", timeout=300,
+            note={"swapped": "each stored program under another's key",
+                  "older": "every entry in an older version's layout",
+                  "flipped": "64 bytes flipped inside every stored program"}[kind])
+    two("population-of-100000-5-seeds", ["run", "--map", CLASSIC, "--preset", "sga",
+                                          "--seeds", "5", "--generations", "5", "--set",
+                                          "population.size=100000", "--quiet"],
+        max_s=30.0, note="8 GiB address space: refused before anything is allocated")
+    two("jax-64-bit-mode", ["run", "--map", CLASSIC, *QUIET], env={"JAX_ENABLE_X64": "1"})
+    two("jax-platform-cuda-absent", ["run", "--map", CLASSIC, *QUIET],
+        env={"JAX_PLATFORMS": "cuda"})
+    two("jax-jit-disabled", ["run", "--map", CLASSIC, *QUIET], env={"JAX_DISABLE_JIT": "1"})
+    closed_out = f / "closed-stdout.json"
+    two("stdout-descriptor-closed", ["run", "--map", CLASSIC, *QUIET, "--json", closed_out],
+        "handled", closed_fds=(1,), outputs=(closed_out,), check=wrote_json(closed_out),
+        note="`jaxga run ... >&-`")
+    two("stderr-descriptor-closed", ["run", "--map", CLASSIC, *QUIET], "handled",
+        closed_fds=(2,), note="`jaxga run ... 2>&-`")
+
     # --- signals ------------------------------------------------------------------------
     def sig(name, argv, signum, trigger, delay=0.0, times=1, cache="own", **kw):
         env = {}
@@ -930,6 +1027,23 @@ def prepare(case: Case, t: Path) -> None:
         elif target.name == "programs-a-file":
             shutil.rmtree(programs, ignore_errors=True)
             programs.write_text("not a folder\n")
+        elif target.name == "programs-swapped":  # each program under the next one's key
+            files = sorted(programs.glob("*.pkl"))
+            data = [p.read_bytes() for p in files]
+            for p, d in zip(files, data[1:] + data[:1]):
+                p.write_bytes(d)
+        elif target.name == "programs-older":  # an older version's layout of each entry
+            import pickle
+
+            for p in programs.glob("*.pkl"):
+                entry = pickle.loads(p.read_bytes())
+                p.write_bytes(entry["program"] if isinstance(entry, dict) else p.read_bytes())
+        elif target.name == "programs-flipped":  # bytes flipped inside each program
+            for p in programs.glob("*.pkl"):
+                b = bytearray(p.read_bytes())
+                for k in range(len(b) // 2, len(b) // 2 + 64):
+                    b[k] ^= 0xFF
+                p.write_bytes(bytes(b))
         elif target.name == "xla-garbage":
             for p in target.iterdir():
                 if p.is_file():

@@ -64,6 +64,16 @@ def memory_budget() -> int | None:
     return None if total is None else int(RESULT_MEMORY_FRACTION * total)
 
 
+def runs_that_fit(algo: Algorithm, budget: int, init_block: int = 10) -> int:
+    """The most runs one call of them fits in ``budget`` bytes (:func:`call_memory`)."""
+    run, init = run_bytes(algo), INIT_FACTOR * population_bytes(algo)
+    room = budget - BASE_BYTES
+    few = room // (run + init)  # up to one init block: each run brings its temporaries
+    if few < init_block:
+        return max(int(few), 0)
+    return max(int((room - init_block * init) // run), init_block)
+
+
 def too_much_memory(algo: Algorithm, runs: int, per_call: int, init_block: int = 10) -> str:
     """One line saying why ``runs`` runs in calls of ``per_call`` do not fit the machine
     and what to change, or ``""`` when they fit (:func:`call_memory`)."""
@@ -71,8 +81,7 @@ def too_much_memory(algo: Algorithm, runs: int, per_call: int, init_block: int =
     need = call_memory(algo, runs, per_call, init_block)
     if budget is None or need <= budget:
         return ""
-    fit = (budget - BASE_BYTES - INIT_FACTOR * min(runs, init_block)
-           * population_bytes(algo)) // run_bytes(algo)
+    fit = runs_that_fit(algo, budget, init_block)
     hint = (f"at most {int(fit)} fit: run fewer seeds (or sweep points) at a time"
             if fit >= 1 else "not one run fits: a smaller population.size (or "
             "population.capacity)")
@@ -104,19 +113,17 @@ def compiled_peak(stats: Any, calls: int) -> int | None:
     return BASE_BYTES + calls * (out + args) + temp
 
 
-def check_compiled_memory(programs: Mapping[str, Any], calls: int, runs: int) -> None:
+def check_compiled_memory(stats: Mapping[str, Any], calls: int, runs: int) -> None:
     """Refuse, before they run, compiled programs whose calls would not fit (their
-    :func:`compiled_peak` over half the machine's memory): the accurate check, once the
-    programs of a call are known, of what :func:`call_memory` estimated before."""
+    :func:`compiled_peak` over half the memory the process may use): the accurate check,
+    once the programs of a call are known, of what :func:`call_memory` estimated before.
+    ``stats``: XLA's account of each program by name
+    (:meth:`jaxga.api.programs.Programs.memory_stats`; None: not checked)."""
     budget = memory_budget()
     if budget is None:
         return
-    for name, program in programs.items():
-        try:
-            stats = program.memory_analysis()
-        except Exception:  # noqa: BLE001 - a backend without the analysis: not checked
-            continue
-        need = compiled_peak(stats, calls)
+    for name, account in stats.items():
+        need = None if account is None else compiled_peak(account, calls)
         if need is not None and need > budget:
             raise ParameterError(
                 f"{runs} runs in {calls} call(s) would need about {need / 2**30:.1f} GiB "

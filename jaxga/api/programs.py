@@ -109,6 +109,7 @@ class Programs:
         self._devices = devices
         self._shared = shared or {}
         self._compiled: dict[str, Any] = {}
+        self._stats: dict[str, Any] = {}
         self.read = 0  # how many programs came from the store
 
     def _compile(self, names: Sequence[str], report: Callable[[float], None]) -> None:
@@ -159,9 +160,17 @@ class Programs:
     def init(self) -> Any:
         return self._compiled["init"]
 
-    def compiled(self) -> dict[str, Any]:
-        """The programs compiled (or read) so far, by name."""
-        return dict(self._compiled)
+    def memory_stats(self) -> dict[str, Any]:
+        """XLA's account of the buffers of each program compiled (or read) so far
+        (``Compiled.memory_analysis()``, None where the backend gives none), by name;
+        asked once per program (it takes tens of milliseconds)."""
+        for name, program in self._compiled.items():
+            if name not in self._stats:
+                try:
+                    self._stats[name] = program.memory_analysis()
+                except Exception:  # noqa: BLE001 - a backend without the analysis
+                    self._stats[name] = None
+        return dict(self._stats)
 
     @property
     def evolve(self) -> Any:

@@ -364,7 +364,7 @@ def _sweep(preset, grid, points, seeds, *, generations, corner_rule, variant, se
                                          "post_s": 0.0, **timeline.as_dict()}, **context)
     with timeline.phase("compile"):
         progs.compile_rest(lambda frac: report("compile", frac))
-    check_compiled_memory(progs.compiled(), len(runs.calls), runs.n_local)
+    check_compiled_memory(progs.memory_stats(), len(runs.calls), runs.n_local)
     report("compile", 1.0)
     report("evolve", 0.0)
     host, hist = _evolve_and_finish(plan, runs, progs, start.states, timeline, report)
@@ -518,7 +518,7 @@ def _compile_init(plan: _SweepPlan, timeline: Timeline,
         progs = programs_for(plan.algo, runs.grid, runs.calls[0][1], runs.per_call,
                              lambda frac: report("compile", frac))
         try:
-            check_compiled_memory(progs.compiled(), len(runs.calls), runs.n_local)
+            check_compiled_memory(progs.memory_stats(), len(runs.calls), runs.n_local)
         except ParameterError:
             if len(runs.calls) * runs.per_call <= runs.n_local:
                 raise  # no padding to drop
@@ -527,7 +527,7 @@ def _compile_init(plan: _SweepPlan, timeline: Timeline,
                                       unpadded=True)
             progs = programs_for(plan.algo, runs.grid, runs.calls[0][1], runs.per_call,
                                  lambda frac: report("compile", frac))
-            check_compiled_memory(progs.compiled(), len(runs.calls), runs.n_local)
+            check_compiled_memory(progs.memory_stats(), len(runs.calls), runs.n_local)
     return runs, progs
 
 

@@ -1070,9 +1070,8 @@ def test_xlas_account_of_a_programs_buffers_is_checked_before_it_runs(monkeypatc
     monkeypatch.setattr(api.memory, "physical_memory", lambda: 8 * 2**30)
 
     def program(temp_gib: float):
-        stats = SimpleNamespace(output_size_in_bytes=2**28, argument_size_in_bytes=2**20,
-                                temp_size_in_bytes=int(temp_gib * 2**30))
-        return SimpleNamespace(memory_analysis=lambda: stats)
+        return SimpleNamespace(output_size_in_bytes=2**28, argument_size_in_bytes=2**20,
+                               temp_size_in_bytes=int(temp_gib * 2**30))
 
     api.memory.check_compiled_memory({"init": program(1.0), "evolve": program(2.0)}, 4, 20)
     with pytest.raises(ParameterError, match=r"20 runs in 4 call\(s\) would need about "
@@ -1091,11 +1090,11 @@ def test_padded_calls_xla_says_would_not_fit_run_without_their_padding(grid, mon
     want = api.run("sga", grid, seeds=5, **SMALL)
     real, seen = runs_module.check_compiled_memory, []
 
-    def refuse_padded(programs, calls, n_runs):
+    def refuse_padded(stats, calls, n_runs):
         seen.append(n_runs)
         if len(seen) == 1:
             raise ParameterError("the padded call would not fit")
-        return real(programs, calls, n_runs)
+        return real(stats, calls, n_runs)
 
     monkeypatch.setattr(runs_module, "check_compiled_memory", refuse_padded)
     api.clear_compiled()
