@@ -380,7 +380,9 @@ def damage_of(case: Case, before: dict, after: dict, cls_hint: int | None) -> li
         if p in after:
             out.append(f"left {p} (a killed write's file the next write removes)")
     for p, v in before.items():
-        if p not in after and p not in removes:
+        if p in removes:
+            continue
+        if p not in after:
             out.append(f"removed {p}")
         elif after[p] != v and not permitted(p):
             out.append(f"changed {p} ({v[0]} -> {after[p][0]})")
@@ -903,6 +905,7 @@ def build(t: Path) -> list[Case]:
                                      "2", "--generations", "5", "--quiet", "--json", parent],
         quick=True, note="--json names the file the preset's base chain reads")
     own_checkpoint = f / "doe-own"
+    write("doe-own/manifest.json", '{"design": "an earlier DOE, to resume"}\n')
     two("doe-json-into-its-checkpoint",
         ["doe", "--preset", "sga", "--map", CLASSIC, "--design", "full", "--factor",
          "crossover.probability=0.6,0.7,0.8", "--seeds", "2", "--generations", "5",
@@ -930,7 +933,10 @@ def build(t: Path) -> list[Case]:
     two("matplotlib-backend-invalid", ["run", "--map", CLASSIC, *QUIET, "--plot",
                                        f / "never.png"], env={"MPLBACKEND": "nonsense"})
     coarse = f / "coarse.json"
-    subprocess.run([sys.executable, "-m", "jaxga.cli", "optimum", "--map", CLASSIC,
+    rows = ["." * 20 for _ in range(20)]
+    rows[0], rows[-1] = "." * 19 + "G", "S" + "." * 19
+    open20 = write("open20.txt", "\n".join(rows) + "\n")
+    subprocess.run([sys.executable, "-m", "jaxga.cli", "optimum", "--map", str(open20),
                     "--coarsen", "2", "--json", str(coarse)], capture_output=True,
                    cwd=ROOT, env={**os.environ, "PYTHONPATH": str(ROOT)}, timeout=300)
 
@@ -938,13 +944,14 @@ def build(t: Path) -> list[Case]:
         return None if "its cells converted" in out.stderr else "no conversion note"
 
     two("replan-on-a-coarsened-runs-json",
-        ["replan", "--map", CLASSIC, "--path-json", coarse, "--position", "0,0",
-         "--obstacles", "8,8", *QUIET], ("handled", "no path"), check=converted,
+        ["replan", "--map", open20, "--path-json", coarse, "--position", "1,1",
+         "--obstacles", "9,9", *BASE], "handled", check=converted,
         timeout=300, note="the JSON records --coarsen 2; this replan has none")
-    maze = write("maze.map", (ROOT / "tests" / "data" / "maze-32-32-2.map").read_text())
+    maze = write("scen/maze-32-32-2.map",
+                 (ROOT / "tests" / "data" / "maze-32-32-2.map").read_text())
     scen_lines = (ROOT / "tests" / "data" / "maze-32-32-2-random-1.scen").read_text() \
         .splitlines()
-    write("maze.map.scen", "\n".join([scen_lines[0], "\t".join(
+    write("scen/maze-32-32-2.map.scen", "\n".join([scen_lines[0], "\t".join(
         [*scen_lines[1].split("\t")[:-1], "1.00000000"])]) + "\n")
 
     def reported(out: Outcome) -> str | None:
