@@ -31,10 +31,10 @@ INIT_FACTOR = 12
 same units, held for the runs one device initialises together (an init block, at most
 10 runs): measured at 6-11."""
 
-BASE_BYTES = 1 << 29
+BASE_BYTES = 1 << 30
 """What a process holds beside its runs: JAX (0.17 GB after its import), the compiled
-programs, the map and its tables. (Compiling peaks higher, 0.6-0.8 GB more on the
-CPU, but before the runs' memory is allocated, or beside a small part of it.)"""
+programs, the map and its tables, and the compilation's own peak (0.6-0.9 GB more on the
+CPU, measured by ``benchmarks/memory.py``)."""
 
 
 def population_bytes(algo: Algorithm) -> int:

@@ -884,10 +884,10 @@ def test_a_call_whose_runs_cannot_fit_in_memory_is_refused(grid, monkeypatch):
     monkeypatch.setattr(api.memory, "physical_memory", lambda: 4 * 2**30)  # a 4 GiB machine
     # per run: 8 x 60 x 160 int32 population cells (307,200 bytes), 3 x 3 float32 history
     # values, 2 int32 paths of 160 cells, 256 bytes: 10**4 runs need 2.9 GiB beside the
-    # 0.5 GiB base and one init block's temporaries, more than half of 4 GiB; 5,201 fit
+    # 1 GiB base and one init block's temporaries, more than half of 4 GiB; 3,462 fit
     with pytest.raises(ParameterError, match=r"10000 runs of a population of 60 on paths "
-                       r"of 160 cells would need about 3\.4 GiB, more than half of the 4\.0 "
-                       r"GiB this process may use: at most 5201 fit") as e:
+                       r"of 160 cells would need about 3\.9 GiB, more than half of the 4\.0 "
+                       r"GiB this process may use: at most 3462 fit") as e:
         api.run("sga", grid, seeds=10**4, **SMALL)
     assert "\n" not in str(e.value)
     with pytest.raises(ParameterError, match="a smaller population.size"):
