@@ -113,6 +113,9 @@ def test_every_preset_returns_only_feasible_paths(preset_run, grid):
 
 def test_every_preset_is_deterministic(preset_run, grid):
     name, r, overrides = preset_run
+    # the program set back in the process's table (a worker's other tests may have pushed
+    # it out since the fixture ran), then the same seeds in another order: no new set
+    api.run(name, grid, seeds=[0, 1, 2], **overrides)
     before = api.programs.compiled_programs.cache_info().misses
     again = api.run(name, grid, seeds=[2, 0, 1], **overrides)  # other order, same program
     assert api.programs.compiled_programs.cache_info().misses == before
