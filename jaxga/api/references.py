@@ -33,7 +33,7 @@ from collections.abc import Callable
 import numpy as np
 
 from jaxga.core.grid import Grid
-from jaxga.operators.guide import distance_fields
+from jaxga.operators.guide import field_path
 from jaxga.reference.any_angle import any_angle_shortest_path_np
 from jaxga.reference.lower_bound import euclidean_lower_bound_np
 from jaxga.reference.optima import ReferencePath, octile_length, shortest_path_np
@@ -77,18 +77,11 @@ def octile_optimum(grid: Grid, guided: bool = False) -> ReferencePath:
 
 
 def _field_path(grid: Grid) -> np.ndarray | None:
-    """An optimal path from start to goal following the goal's distance field, or None
-    where an endpoint is blocked or the goal unreachable."""
-    to_goal, _, towards_goal = distance_fields(grid)
-    start, goal = int(grid.start), int(grid.goal)
-    if not math.isfinite(to_goal[start]) or not math.isfinite(to_goal[goal]):
+    """:func:`jaxga.operators.guide.field_path` as ``(x, y)`` cells."""
+    idx = field_path(grid)
+    if idx is None:
         return None
-    cells = [start]
-    while cells[-1] != goal:
-        cells.append(int(towards_goal[cells[-1]]))
-    idx = np.asarray(cells, np.int64)
-    width = grid.blocked_np().shape[1]
-    return np.stack([idx % width, idx // width], axis=1).astype(np.int32)
+    return np.stack([idx % grid.width, idx // grid.width], axis=1).astype(np.int32)
 
 
 @dataclasses.dataclass(frozen=True)

@@ -36,8 +36,8 @@ from jaxga.core.dtypes import on_device
 from jaxga.core.grid import Grid
 from jaxga.maps.preprocess import move_edges, region_labels
 
-__all__ = ["Guide", "ProblemFacts", "distance_fields", "longest_optimal_path_cells",
-           "problem_facts", "with_guide"]
+__all__ = ["Guide", "ProblemFacts", "distance_fields", "field_path",
+           "longest_optimal_path_cells", "problem_facts", "with_guide"]
 
 @jax.tree_util.register_dataclass
 @dataclasses.dataclass(frozen=True)
@@ -144,19 +144,29 @@ def with_guide(grid: Grid) -> Grid:
     return dataclasses.replace(grid, guide=guide)
 
 
+def field_path(grid: Grid) -> np.ndarray | None:
+    """An optimal path's cell indices (``y * W + x``) from start to goal, following the
+    goal's field (each cell's next cell towards the goal, :func:`distance_fields`); None
+    where an endpoint is blocked or the goal unreachable."""
+    to_goal, _, towards_goal = distance_fields(grid)
+    start, goal = int(grid.start), int(grid.goal)
+    if not math.isfinite(to_goal[start]) or not math.isfinite(to_goal[goal]):
+        return None
+    cells = [start]
+    while cells[-1] != goal:
+        cells.append(int(towards_goal[cells[-1]]))
+    return np.asarray(cells, np.int64)
+
+
 def problem_facts(grid: Grid) -> ProblemFacts:
     """The optimal length and cell count and the start's region size (see
     :class:`ProblemFacts`), from the exact fields of :func:`distance_fields`."""
-    to_goal, from_start, pred = distance_fields(grid)
-    start, goal = int(grid.start), int(grid.goal)
+    to_goal, from_start, _ = distance_fields(grid)
     region = int(np.sum(np.isfinite(from_start)))
-    if not np.isfinite(to_goal[start]):
+    path = field_path(grid)
+    if path is None:
         return ProblemFacts(False, math.inf, 0, region)
-    cells, p = 1, start
-    while p != goal:  # follow the shortest-path tree towards the goal
-        p = int(pred[p])
-        cells += 1
-    return ProblemFacts(True, float(to_goal[start]), cells, region)
+    return ProblemFacts(True, float(to_goal[int(grid.start)]), len(path), region)
 
 
 def longest_optimal_path_cells(grid: Grid) -> int:

@@ -390,6 +390,7 @@ def test_a_temporary_file_a_killed_write_left_is_removed_by_the_next_write(tmp_p
         == sorted([writing.name, recent.name])
 
 
+@pytest.mark.slow  # starts processes
 @pytest.mark.parametrize("redirect", [">&-", "2>&-", ">&- 2>&-"])
 def test_a_closed_stdout_or_stderr_does_not_fail_a_run(tmp_path, redirect):
     out = tmp_path / "run.json"
@@ -400,6 +401,7 @@ def test_a_closed_stdout_or_stderr_does_not_fail_a_run(tmp_path, redirect):
     assert [r["success"] for r in json.loads(out.read_text())["runs"]] == [True, True]
 
 
+@pytest.mark.slow  # starts processes
 def test_matplotlib_with_unusable_folders_leaves_nothing_and_a_bad_backend_is_one_line(
         tmp_path):
     """``MPLCONFIGDIR`` (or ``HOME``) unwritable: the plot is written, no warning from
@@ -425,6 +427,7 @@ def test_matplotlib_with_unusable_folders_leaves_nothing_and_a_bad_backend_is_on
     assert not (tmp_path / "p.png").exists()
 
 
+@pytest.mark.slow  # starts processes
 @pytest.mark.parametrize("variable, value, words", [
     ("JAX_ENABLE_X64", "1", "64-bit mode is on ($JAX_ENABLE_X64=1)"),
     ("JAX_DISABLE_JIT", "1", "jit is disabled ($JAX_DISABLE_JIT=1)"),
