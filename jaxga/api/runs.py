@@ -514,20 +514,19 @@ def _compile_init(plan: _SweepPlan, timeline: Timeline,
     report("compile", 0.0)
     with timeline.phase("compile"):
         grid = tables_for(plan.program_grid)
-        runs = _this_process_runs(plan.seed_arr, plan.per_point, grid, plan.algo)
-        progs = programs_for(plan.algo, runs.grid, runs.calls[0][1], runs.per_call,
-                             lambda frac: report("compile", frac))
-        try:
-            check_compiled_memory(progs.memory_stats(), len(runs.calls), runs.n_local)
-        except ParameterError:
-            if len(runs.calls) * runs.per_call <= runs.n_local:
-                raise  # no padding to drop
-            # XLA's account exceeds the estimate: the same runs without their padding
+        for unpadded in (False, True):
             runs = _this_process_runs(plan.seed_arr, plan.per_point, grid, plan.algo,
-                                      unpadded=True)
+                                      unpadded)
             progs = programs_for(plan.algo, runs.grid, runs.calls[0][1], runs.per_call,
                                  lambda frac: report("compile", frac))
-            check_compiled_memory(progs.memory_stats(), len(runs.calls), runs.n_local)
+            try:
+                check_compiled_memory(progs.memory_stats(), len(runs.calls), runs.n_local)
+                break
+            except ParameterError:
+                # XLA's account exceeds the estimate: the same runs without their padding,
+                # where there is padding to drop
+                if unpadded or len(runs.calls) * runs.per_call <= runs.n_local:
+                    raise
     return runs, progs
 
 
@@ -670,7 +669,7 @@ def _this_process_runs(seed_arr: np.ndarray, per_point: Sequence[dict], grid: Gr
     n_local = len(run_seeds)
     n_dev = jax.local_device_count()
     if unpadded:  # one call of exactly these runs (their padded calls would not fit)
-        per_device, n_calls = -(-n_local // n_dev), 1
+        per_device, n_calls = unpadded_layout(n_local, n_dev)
     else:
         per_device, n_calls = fitting_layout(
             algo, n_local, n_dev, run_layout(n_local, n_dev, grid.height * grid.width,
@@ -702,11 +701,17 @@ def fitting_layout(algo: Algorithm, n_local: int, n_dev: int,
     block = platform_layout().init_run_block
     if not too_much_memory(algo, per_device * n_dev * n_calls, per_device * n_dev, block):
         return layout
-    exact = -(-n_local // n_dev)
-    why = too_much_memory(algo, exact * n_dev, exact * n_dev, block)
+    exact = unpadded_layout(n_local, n_dev)
+    why = too_much_memory(algo, exact[0] * n_dev, exact[0] * n_dev, block)
     if why:
         raise ParameterError(why)
-    return exact, 1
+    return exact
+
+
+def unpadded_layout(n_local: int, n_dev: int) -> tuple[int, int]:
+    """One call of exactly ``n_local`` runs over ``n_dev`` devices (runs per device,
+    calls): the padding only to a multiple of the devices."""
+    return -(-n_local // n_dev), 1
 
 
 def _evolve_in_chunks(progs: Any, generations: int, runs: _Runs, grid: Grid,

@@ -82,6 +82,14 @@ def _move_graph_cached(key: bytes, shape: tuple[int, int], corner_rule: str,
     return _move_graph(np.frombuffer(blocked_bytes, dtype=bool).reshape(shape), corner_rule)
 
 
+def _map_graph(blocked_bytes: bytes, shape: tuple[int, int], corner_rule: str):
+    """The legal-move graph of a map, the last map's kept (a planner's new endpoints on
+    its map build none)."""
+    key = hashlib.blake2b(blocked_bytes + repr((shape, corner_rule)).encode(),
+                          digest_size=16).digest()
+    return _move_graph_cached(key, shape, corner_rule, blocked_bytes)
+
+
 def _move_graph(blocked: np.ndarray, corner_rule: str):
     """The legal-move graph as a SciPy CSR matrix (edge weight = step length)."""
     from scipy.sparse import csr_matrix
@@ -98,10 +106,7 @@ def _fields_cached(key: bytes, shape: tuple[int, int], corner_rule: str, start: 
     from scipy.sparse.csgraph import dijkstra
 
     blocked = np.frombuffer(blocked_bytes, dtype=bool).reshape(shape)
-    # the last map's graph is kept: a planner's new endpoints on its map build none
-    map_key = hashlib.blake2b(blocked_bytes + repr((shape, corner_rule)).encode(),
-                              digest_size=16).digest()
-    graph = _move_graph_cached(map_key, shape, corner_rule, blocked_bytes)
+    graph = _map_graph(blocked_bytes, shape, corner_rule)
     dist, pred = dijkstra(graph, directed=True, indices=[goal, start],
                           return_predecessors=True)
     # A blocked endpoint reaches nothing (Dijkstra would still give it distance 0).
@@ -192,9 +197,7 @@ def longest_optimal_path_cells(grid: Grid) -> int:
     sizes[0] = 0  # label 0: blocked cells
     main = int(np.argmax(sizes))
     others = np.delete(sizes, [0, main])
-    raw = blocked.tobytes()
-    key = hashlib.blake2b(raw + repr((blocked.shape, rule)).encode(), digest_size=16).digest()
-    graph = _move_graph_cached(key, blocked.shape, rule, raw)
+    graph = _map_graph(blocked.tobytes(), blocked.shape, rule)
 
     def sweep(cell: int) -> tuple[float, int, np.ndarray]:
         dist, pred = dijkstra(graph, directed=True, indices=cell, return_predecessors=True)
