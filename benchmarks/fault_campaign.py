@@ -970,10 +970,19 @@ def build(t: Path) -> list[Case]:
             note={"swapped": "each stored program under another's key",
                   "older": "every entry in an older version's layout",
                   "flipped": "64 bytes flipped inside every stored program"}[kind])
-    two("population-of-100000-5-seeds", ["run", "--map", CLASSIC, "--preset", "sga",
-                                          "--seeds", "5", "--generations", "5", "--set",
-                                          "population.size=100000", "--quiet"],
-        max_s=30.0, note="8 GiB address space: refused before anything is allocated")
+    grouped = f / "grouped.json"
+    two("population-of-100000-5-seeds", ["run", "--map", CLASSIC, "--preset", "hybrid",
+                                          "--seeds", "5", "--generations", "2", "--set",
+                                          "population.size=100000", "--quiet", "--json",
+                                          grouped],
+        "handled", outputs=(grouped,), check=wrote_json(grouped), timeout=300,
+        note="8 GiB address space: 2 runs fit at a time, the 5 run as 3 calls in turn")
+    two("population-of-100000-paths-of-4096", ["run", "--map", CLASSIC, "--preset", "sga",
+                                               "--seeds", "1", "--generations", "2", "--set",
+                                               "population.size=100000", "--set",
+                                               "population.capacity=4096", "--quiet"],
+        max_s=30.0, note="8 GiB address space: not one run fits, refused before anything "
+        "is allocated")
     two("jax-64-bit-mode", ["run", "--map", CLASSIC, *QUIET], env={"JAX_ENABLE_X64": "1"})
     two("jax-platform-cuda-absent", ["run", "--map", CLASSIC, *QUIET],
         env={"JAX_PLATFORMS": "cuda"})

@@ -35,9 +35,9 @@ from jaxga.api import memory, runs
 preset, pop, seeds = sys.argv[1], int(sys.argv[2]), int(sys.argv[3])
 seen, accounts = [], []
 real = runs.fitting_layout
-def spy(algo, n_local, n_dev, layout):
-    out = real(algo, n_local, n_dev, layout)
-    seen.append((algo, out[0] * n_dev * out[1], out[0] * n_dev))
+def spy(algo, n_local, n_dev, layout, padded=True):
+    out = real(algo, n_local, n_dev, layout, padded)
+    seen.append((algo, out[0] * n_dev * out[2], out[0] * n_dev, n_local))
     return out
 runs.fitting_layout = spy
 real_check = runs.check_compiled_memory
@@ -47,9 +47,9 @@ def account(stats, calls, n_runs):
 runs.check_compiled_memory = account
 r = jaxga.run(preset, sys.argv[4], seeds=seeds, generations=int(sys.argv[5]),
               population__size=pop, any_angle_budget=0)
-algo, computed, per_call = seen[-1]
+algo, computed, per_call, n_local = seen[-1]
 print(json.dumps({"peak": resource.getrusage(resource.RUSAGE_SELF).ru_maxrss * 1024,
-                  "estimate": memory.call_memory(algo, computed, per_call),
+                  "estimate": memory.call_memory(algo, computed, per_call, total=n_local),
                   "account": max(accounts, default=0),
                   "runs": computed, "capacity": algo.capacity, "islands": algo.islands,
                   "population": algo.population}))

@@ -1,8 +1,9 @@
 """Memory checked before it is allocated: a model of what a call of runs holds
-(:func:`call_memory`, measured by ``benchmarks/memory.py``), a call laid out to fit
-(:func:`jaxga.api.runs` drops the padding of its calls where the padded runs would not
-fit), and one line naming the size and what to change where even that does not fit.
-"""
+(:func:`call_memory`, measured by ``benchmarks/memory.py``), calls laid out to fit
+(:func:`jaxga.api.runs.fitting_layout` drops the padding of its calls where the padded runs
+would not fit, and computes the runs in groups of calls, one group after another, where
+even those would not fit), and one line naming the size and what to change where not one
+run fits."""
 
 from __future__ import annotations
 
@@ -42,18 +43,31 @@ def population_bytes(algo: Algorithm) -> int:
     return 4 * algo.population * algo.islands * algo.capacity
 
 
+def state_bytes(algo: Algorithm) -> int:
+    """One run's state while its call computes (:data:`STATE_FACTOR`)."""
+    return STATE_FACTOR * population_bytes(algo)
+
+
+def result_bytes(algo: Algorithm) -> int:
+    """What a run's outputs keep once its call has finished: its history (three numbers a
+    generation) and its paths."""
+    return 12 * algo.generations + 8 * algo.capacity + 256
+
+
 def run_bytes(algo: Algorithm) -> int:
-    """One run's state and history while its call computes (:data:`STATE_FACTOR`)."""
-    return (STATE_FACTOR * population_bytes(algo) + 12 * algo.generations
-            + 8 * algo.capacity + 256)
+    """One run's state and outputs while its call computes."""
+    return state_bytes(algo) + result_bytes(algo)
 
 
-def call_memory(algo: Algorithm, runs: int, per_call: int, init_block: int = 10) -> int:
-    """The peak memory of ``runs`` runs computed in calls of ``per_call`` (padding
+def call_memory(algo: Algorithm, runs: int, per_call: int, init_block: int = 10,
+                total: int | None = None) -> int:
+    """The peak memory of ``runs`` runs held together in calls of ``per_call`` (padding
     included: a padded run costs as much as a real one), initialised ``init_block`` at a
-    time: :data:`BASE_BYTES`, every run's state and history (the states of all calls are
-    held until the finish), and one init block's temporaries."""
-    return (BASE_BYTES + runs * run_bytes(algo)
+    time, among ``total`` runs (default ``runs``) whose outputs are kept:
+    :data:`BASE_BYTES`, the state of every run held (the states of a group of calls live
+    until its finish), every run's outputs, and one init block's temporaries."""
+    total = runs if total is None else max(total, runs)
+    return (BASE_BYTES + runs * state_bytes(algo) + total * result_bytes(algo)
             + INIT_FACTOR * min(per_call, init_block) * population_bytes(algo))
 
 
@@ -64,37 +78,58 @@ def memory_budget() -> int | None:
     return None if total is None else int(RESULT_MEMORY_FRACTION * total)
 
 
-def runs_that_fit(algo: Algorithm, budget: int, init_block: int = 10) -> int:
-    """The most runs one call of them fits in ``budget`` bytes (:func:`call_memory`)."""
-    run, init = run_bytes(algo), INIT_FACTOR * population_bytes(algo)
+def runs_that_fit(algo: Algorithm, budget: int, init_block: int = 10,
+                  total: int | None = None) -> int:
+    """The most runs one call of them fits in ``budget`` bytes (:func:`call_memory`),
+    beside the outputs of ``total`` runs (default: the call's own only)."""
+    run, init = state_bytes(algo), INIT_FACTOR * population_bytes(algo)
     room = budget - BASE_BYTES
+    if total is None:
+        run += result_bytes(algo)
+    else:
+        room -= total * result_bytes(algo)
     few = room // (run + init)  # up to one init block: each run brings its temporaries
     if few < init_block:
         return max(int(few), 0)
     return max(int((room - init_block * init) // run), init_block)
 
 
-def too_much_memory(algo: Algorithm, runs: int, per_call: int, init_block: int = 10) -> str:
-    """One line saying why ``runs`` runs in calls of ``per_call`` do not fit the machine
-    and what to change, or ``""`` when they fit (:func:`call_memory`)."""
+def most_runs(algo: Algorithm, budget: int, init_block: int = 10) -> int:
+    """The most runs whose outputs fit in ``budget`` bytes beside one run computed at a
+    time (:func:`call_memory`)."""
+    one = call_memory(algo, 1, 1, init_block) - result_bytes(algo)
+    return max(int((budget - one) // result_bytes(algo)), 0)
+
+
+def too_much_memory(algo: Algorithm, runs: int, per_call: int, init_block: int = 10,
+                    total: int | None = None) -> str:
+    """One line saying why ``runs`` runs held together in calls of ``per_call``, among
+    ``total`` runs (default ``runs``), do not fit the machine and what to change, or
+    ``""`` when they fit (:func:`call_memory`)."""
     budget = memory_budget()
-    need = call_memory(algo, runs, per_call, init_block)
+    total = runs if total is None else max(total, runs)
+    need = call_memory(algo, runs, per_call, init_block, total)
     if budget is None or need <= budget:
         return ""
-    fit = runs_that_fit(algo, budget, init_block)
-    hint = (f"at most {int(fit)} fit: run fewer seeds (or sweep points) at a time"
-            if fit >= 1 else "not one run fits: a smaller population.size (or "
-            "population.capacity)")
-    return (f"{runs} runs of a population of {algo.population * algo.islands} on paths of "
-            f"{algo.capacity} cells would need about {need / 2**30:.1f} GiB, more than half "
-            f"of the {physical_memory() / 2**30:.1f} GiB this process may use: {hint}")
+    if runs_that_fit(algo, budget, init_block) < 1:
+        hint = "not one run fits: a smaller population.size (or population.capacity)"
+    elif total > (most := most_runs(algo, budget, init_block)):
+        hint = f"at most {most} fit: run fewer seeds (or sweep points) at a time"
+    else:
+        hint = f"at most {runs_that_fit(algo, budget, init_block, total)} at a time fit"
+    held = "" if runs == total else f", {runs} at a time,"
+    return (f"{total} run{'s' * (total != 1)} of a population of "
+            f"{algo.population * algo.islands} on paths of {algo.capacity} cells{held} "
+            f"would need about {need / 2**30:.2f} GiB, more than half of the "
+            f"{physical_memory() / 2**30:.2f} GiB this process may use: {hint}")
 
 
 def check_result_memory(n_runs: int, algo: Algorithm) -> None:
     """A clear error instead of the operating system killing the process, before
-    anything compiles: ``n_runs`` runs, unpadded, in one call (:func:`call_memory`; the
-    layout of the calls, checked again once known, may pad them or split them)."""
-    why = too_much_memory(algo, n_runs, n_runs)
+    anything compiles: ``n_runs`` runs computed one at a time, every run's outputs kept
+    (:func:`call_memory`; the layout of the calls, checked again once known, computes as
+    many at a time as fit: :func:`jaxga.api.runs.fitting_layout`)."""
+    why = too_much_memory(algo, 1, 1, total=n_runs)
     if why:
         raise ParameterError(why)
 

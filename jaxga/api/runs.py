@@ -40,6 +40,8 @@ from jaxga.api.memory import (
     check_compiled_memory,
     check_memory,
     check_result_memory,
+    memory_budget,
+    runs_that_fit,
     too_much_memory,
 )
 from jaxga.api.programs import (
@@ -356,19 +358,37 @@ def _sweep(preset, grid, points, seeds, *, generations, corner_rule, variant, se
         return _no_path_results(plan, timeline)
     runs, progs = _compile_init(plan, timeline, report)
     report("init", 0.0)
-    start = _initialise(plan, runs, progs, timeline)
-    context = dict(plan.result_context(), **start.result_context())
-    if not start.started.any():  # nothing can succeed: no evolution, no post-optimisation
+    groups = runs.groups()
+    states, first = _initialise(groups[0], progs, timeline)
+    # every process decides alike: it stops here only where no run of any process's
+    # first group started and every process computes one group
+    started, one_group = parallel.allgather_runs((first[0] > 0, np.array([len(groups) == 1])))
+    if one_group.all() and not started.any():
+        # nothing can succeed: no evolution, no post-optimisation
+        start = _gathered_start(plan, [first])
         report("compile", 1.0)
         return unstarted_results(timing={"compile_s": 0.0, "init_s": 0.0, "evolve_s": 0.0,
-                                         "post_s": 0.0, **timeline.as_dict()}, **context)
+                                         "post_s": 0.0, **timeline.as_dict()},
+                                 **plan.result_context(), **start.result_context())
     with timeline.phase("compile"):
         progs.compile_rest(lambda frac: report("compile", frac))
-    check_compiled_memory(progs.memory_stats(), len(runs.calls), runs.n_local)
+    check_compiled_memory(progs.memory_stats(), len(groups[0].calls), runs.n_local)
     report("compile", 1.0)
     report("evolve", 0.0)
-    host, hist = _evolve_and_finish(plan, runs, progs, start.states, timeline, report)
+    inits, outs = [first], []
+    for g, group in enumerate(groups):
+        if g:
+            states, part = _initialise(group, progs, timeline)
+            inits.append(part)
+        outs.append(_evolve_and_finish(plan, group, progs, states, timeline,
+                                       _grouped_progress(report, g, len(groups))))
+        del states  # the group's device memory goes before the next group's
+    start = _gathered_start(plan, inits)
+    with timeline.phase("post"):
+        host, hist = parallel.allgather_runs(jax.tree_util.tree_map(
+            lambda *parts: np.concatenate(parts), *outs))
     bounds = _any_angle_bounds(plan, host, any_angle_budget, timeline, report)
+    context = dict(plan.result_context(), **start.result_context())
     return _point_results(host, hist, started=start.started, timing=timeline.as_dict(),
                           bounds=bounds, **context)
 
@@ -514,28 +534,27 @@ def _compile_init(plan: _SweepPlan, timeline: Timeline,
     report("compile", 0.0)
     with timeline.phase("compile"):
         grid = tables_for(plan.program_grid)
-        for unpadded in (False, True):
-            runs = _this_process_runs(plan.seed_arr, plan.per_point, grid, plan.algo,
-                                      unpadded)
+        for padded in (True, False):
+            runs = _this_process_runs(plan.seed_arr, plan.per_point, grid, plan.algo, padded)
             progs = programs_for(plan.algo, runs.grid, runs.calls[0][1], runs.per_call,
                                  lambda frac: report("compile", frac))
             try:
-                check_compiled_memory(progs.memory_stats(), len(runs.calls), runs.n_local)
+                check_compiled_memory(progs.memory_stats(), len(runs.groups()[0].calls),
+                                      runs.n_local)
                 break
             except ParameterError:
                 # XLA's account exceeds the estimate: the same runs without their padding,
                 # where there is padding to drop
-                if unpadded or len(runs.calls) * runs.per_call <= runs.n_local:
+                if not padded or len(runs.calls) * runs.per_call <= runs.n_local:
                     raise
     return runs, progs
 
 
 @dataclasses.dataclass(frozen=True)
 class _Start:
-    """The initial populations of every call and what the initialisation did, for every
-    run of every process (gathered, so that all of them decide alike whether to evolve)."""
+    """What the initialisation did, for every run of every process (gathered, so that
+    all of them decide alike whether to evolve)."""
 
-    states: list
     initial: np.ndarray
     rate: np.ndarray
     unfilled: np.ndarray
@@ -552,20 +571,24 @@ class _Start:
                     initial=self.initial)
 
 
-def _initialise(plan: _SweepPlan, runs: _Runs, progs: Programs,
-                timeline: Timeline) -> _Start:
-    """Every call's initial population (phase ``init``), the initialisation's success rate,
-    unfilled slots and field-walk fallbacks per run, gathered over the processes; a
-    warning when slots stayed empty."""
+def _initialise(runs: _Runs, progs: Programs, timeline: Timeline) -> tuple[list, tuple]:
+    """The initial population of every call of ``runs`` (phase ``init``), and this
+    process's best initial fitness, initialisation success rate, unfilled slots and
+    field-walk fallbacks of each of its runs."""
     with timeline.phase("init"):
         inits = jax.block_until_ready([progs.init(k, runs.grid, p) for k, p in runs.calls])
     states = [state for state, *_ in inits]
-    init_best = runs.joined([state.best_fitness for state in states])
-    init_rate, unfilled, fallback = (runs.joined([i[j] for i in inits]) for j in (1, 2, 3))
-    initial, init_rate, unfilled, fallback = parallel.allgather_runs(
-        (init_best, init_rate, unfilled, fallback))
+    return states, (runs.joined([state.best_fitness for state in states]),
+                    *(runs.joined([i[j] for i in inits]) for j in (1, 2, 3)))
+
+
+def _gathered_start(plan: _SweepPlan, parts: Sequence[tuple]) -> _Start:
+    """The initialisation's outputs of this process's groups of calls, gathered over the
+    processes; a warning when slots stayed empty."""
+    joined = [np.concatenate(column) for column in zip(*parts)]
+    initial, init_rate, unfilled, fallback = parallel.allgather_runs(joined)
     n_total = len(initial)
-    start = _Start(states, initial, init_rate.reshape(n_total, -1).mean(axis=1),
+    start = _Start(initial, init_rate.reshape(n_total, -1).mean(axis=1),
                    unfilled.reshape(n_total, -1).sum(axis=1),
                    fallback.reshape(n_total, -1).sum(axis=1))
     max_tries = np.repeat([int(c["init.max_tries"]) for c in plan.configs], len(plan.seed_arr))
@@ -576,9 +599,9 @@ def _initialise(plan: _SweepPlan, runs: _Runs, progs: Programs,
 
 def _evolve_and_finish(plan: _SweepPlan, runs: _Runs, progs: Programs, states: list,
                        timeline: Timeline, report: Callable[[str, float], None]) -> tuple:
-    """The generations (phase ``evolve``) and the finish program (``post``): every run's
-    outputs and per-generation history, gathered over the processes, the paths on the
-    user's map (not its padding)."""
+    """The generations (phase ``evolve``) and the finish program (``post``) of the calls
+    of ``runs``: this process's outputs and per-generation history of each of its runs
+    (NumPy), the paths on the user's map (not its padding)."""
     with timeline.phase("evolve"):
         states, history = _evolve_in_chunks(progs, plan.algo.generations, runs, runs.grid,
                                             states, lambda frac: report("evolve", frac))
@@ -587,10 +610,19 @@ def _evolve_and_finish(plan: _SweepPlan, runs: _Runs, progs: Programs, states: l
         outs = jax.block_until_ready([progs.finish(runs.grid, p, st)
                                       for (_, p), st in zip(runs.calls, states)])
         out = jax.tree_util.tree_map(lambda *parts: runs.joined(parts), *outs)
-        host, hist = parallel.allgather_runs((out, history))
         for key in ("cells", "raw_cells"):
-            host[key] = map_cells(host[key], runs.grid.width, plan.grid.width)
-    return host, hist
+            out[key] = map_cells(out[key], runs.grid.width, plan.grid.width)
+    return out, history
+
+
+def _grouped_progress(report: Callable[[str, float], None], group: int,
+                      groups: int) -> Callable[[str, float], None]:
+    """``report`` for one of ``groups`` groups of calls computed one after another: the
+    evolution's fraction over all of them."""
+    if groups == 1:
+        return report
+    return lambda stage, frac: report(stage, (group + frac) / groups if stage == "evolve"
+                                      else frac)
 
 
 def _any_angle_bounds(plan: _SweepPlan, host: dict, budget: float | str | None,
@@ -635,28 +667,42 @@ def _check_points(points: Any) -> None:
 class _Runs:
     """This process's runs as calls of the compiled programs: ``calls`` = ``(keys,
     params)`` of ``per_call`` runs each (on the devices), the last run repeated to fill
-    them; the first ``n_local`` runs are this process's share."""
+    them; the first ``n_local`` runs are this process's share. ``at_once``: the calls
+    whose states are held together (a group: initialised, evolved and finished before the
+    next group starts); 0: all of them."""
 
     calls: list[tuple[jax.Array, dict]]
     per_call: int
     n_local: int
     grid: Grid
+    at_once: int = 0
 
     def joined(self, parts: Sequence[Any]) -> np.ndarray:
         """The calls' outputs (runs first) joined, the padding dropped."""
         return np.concatenate([np.asarray(p) for p in parts])[:self.n_local]
 
+    def groups(self) -> list[_Runs]:
+        """The groups of calls computed one after another, each with its own real runs
+        (the padding is in the last call)."""
+        at_once = self.at_once or len(self.calls)
+        return [dataclasses.replace(
+            self, calls=self.calls[c:c + at_once], at_once=0,
+            n_local=min(self.n_local - c * self.per_call, at_once * self.per_call))
+            for c in range(0, len(self.calls), at_once)]
+
 
 def _this_process_runs(seed_arr: np.ndarray, per_point: Sequence[dict], grid: Grid,
-                       algo: Algorithm, unpadded: bool = False) -> _Runs:
+                       algo: Algorithm, padded: bool = True) -> _Runs:
     """This process's runs, laid out as calls of the compiled programs, on its devices.
 
     Run ``q * S + s`` is point ``q`` with seed ``s``; the runs are padded (copies of the
     last run) to a multiple of processes x local devices; this process computes its
     contiguous share (:func:`jaxga.api.parallel.allgather_runs` joins the shares), as
     calls of a few sizes (:func:`jaxga.api.programs.run_layout`), the last run copied to
-    fill them. A run's result depends only on its own key and parameters, so neither
-    padding changes any result."""
+    fill them, held together or in groups as the memory allows (:func:`fitting_layout`;
+    ``padded=False``: without the padding of :func:`run_layout`). A run's result depends
+    only on its own key and parameters, so neither padding nor grouping changes any
+    result."""
     n_seeds, n_points = len(seed_arr), len(per_point)
     n_runs = n_seeds * n_points
     n_total, share = parallel.run_share(n_runs)
@@ -668,12 +714,9 @@ def _this_process_runs(seed_arr: np.ndarray, per_point: Sequence[dict], grid: Gr
               for k, v in params.items()}
     n_local = len(run_seeds)
     n_dev = jax.local_device_count()
-    if unpadded:  # one call of exactly these runs (their padded calls would not fit)
-        per_device, n_calls = unpadded_layout(n_local, n_dev)
-    else:
-        per_device, n_calls = fitting_layout(
-            algo, n_local, n_dev, run_layout(n_local, n_dev, grid.height * grid.width,
-                                             compiled_buckets(algo, grid, params)))
+    per_device, n_calls, at_once = fitting_layout(
+        algo, n_local, n_dev, run_layout(n_local, n_dev, grid.height * grid.width,
+                                         compiled_buckets(algo, grid, params)), padded)
     per_call = per_device * n_dev
     fill = n_calls * per_call - n_local
     run_seeds = np.concatenate([run_seeds, np.repeat(run_seeds[-1:], fill)])
@@ -688,24 +731,45 @@ def _this_process_runs(seed_arr: np.ndarray, per_point: Sequence[dict], grid: Gr
         sl = slice(c * per_call, (c + 1) * per_call)
         call = (keys[sl], {k: v[sl] for k, v in params.items()})
         calls.append(jax.device_put(call, sh) if sh is not None else jax.device_put(call))
-    return _Runs(calls, per_call, n_local, grid)
+    return _Runs(calls, per_call, n_local, grid, at_once)
 
 
-def fitting_layout(algo: Algorithm, n_local: int, n_dev: int,
-                   layout: tuple[int, int]) -> tuple[int, int]:
-    """``layout`` (runs per device, calls), or where its padded runs would not fit the
-    machine's memory (:func:`jaxga.api.memory.too_much_memory`) one call of exactly this
-    process's runs, without padding (a program of that size is compiled); where even
-    those do not fit, :class:`ParameterError` naming the size and what to change."""
-    per_device, n_calls = layout
+def fitting_layout(algo: Algorithm, n_local: int, n_dev: int, layout: tuple[int, int],
+                   padded: bool = True) -> tuple[int, int, int]:
+    """``(runs per device, calls, calls held at once)`` for this process's ``n_local``
+    runs on ``n_dev`` devices that fits the machine's memory
+    (:func:`jaxga.api.memory.too_much_memory`): the padded ``layout`` (runs per device,
+    calls), all its calls held together, where it fits; else one call of exactly these
+    runs (a program of that size is compiled); else calls of as many runs as fit, one
+    call at a time (:func:`grouped_layout`). ``padded=False`` skips the padded layout."""
     block = platform_layout().init_run_block
-    if not too_much_memory(algo, per_device * n_dev * n_calls, per_device * n_dev, block):
-        return layout
+    per_device, n_calls = layout
+    if padded and not too_much_memory(algo, per_device * n_dev * n_calls,
+                                      per_device * n_dev, block, n_local):
+        return per_device, n_calls, n_calls
     exact = unpadded_layout(n_local, n_dev)
-    why = too_much_memory(algo, exact[0] * n_dev, exact[0] * n_dev, block)
-    if why:
-        raise ParameterError(why)
-    return exact
+    if not too_much_memory(algo, exact[0] * n_dev, exact[0] * n_dev, block, n_local):
+        return *exact, 1
+    return grouped_layout(algo, n_local, n_dev)
+
+
+def grouped_layout(algo: Algorithm, n_local: int, n_dev: int) -> tuple[int, int, int]:
+    """``n_local`` runs as calls that each fit the machine's memory beside every run's
+    outputs, computed one call after another (init, evolution and finish of a call before
+    the next starts; a run's result depends only on its key and parameters, so the
+    results are those of one call): ``(runs per device, calls, 1)``, the calls as even as
+    the devices allow. :class:`ParameterError` naming the size and what to change where
+    not one call of a run per device fits."""
+    block = platform_layout().init_run_block
+    budget = memory_budget()
+    if budget is None:
+        return *unpadded_layout(n_local, n_dev), 1
+    fit = runs_that_fit(algo, budget, block, n_local)
+    most = min(fit // n_dev, -(-n_local // n_dev))
+    if most < 1:
+        raise ParameterError(too_much_memory(algo, n_dev, n_dev, block, n_local))
+    per_device = -(-n_local // (n_dev * -(-n_local // (most * n_dev))))
+    return per_device, -(-n_local // (per_device * n_dev)), 1
 
 
 def unpadded_layout(n_local: int, n_dev: int) -> tuple[int, int]:

@@ -881,40 +881,89 @@ def test_seeds_outside_32_bits_are_refused(grid, seeds, words):
         api.run("sga", grid, seeds=seeds, **SMALL)
 
 
-def test_a_call_whose_runs_cannot_fit_in_memory_is_refused(grid, monkeypatch):
+def test_a_request_whose_runs_cannot_fit_in_memory_is_refused(grid, monkeypatch):
     """A clear error before anything is allocated, instead of the process being killed,
-    naming the size and what to change."""
-    monkeypatch.setattr(api.memory, "physical_memory", lambda: 4 * 2**30)  # a 4 GiB machine
-    # per run: 8 x 60 x 160 int32 population cells (307,200 bytes), 3 x 3 float32 history
-    # values, 2 int32 paths of 160 cells, 256 bytes: 10**4 runs need 2.9 GiB beside the
-    # 1 GiB base and one init block's temporaries, more than half of 4 GiB; 3,462 fit
-    with pytest.raises(ParameterError, match=r"10000 runs of a population of 60 on paths "
-                       r"of 160 cells would need about 3\.9 GiB, more than half of the 4\.0 "
-                       r"GiB this process may use: at most 3462 fit") as e:
-        api.run("sga", grid, seeds=10**4, **SMALL)
+    naming the size and what to change: where the outputs of every run beside one run
+    computed at a time exceed the machine, or where not one run fits."""
+    monkeypatch.setattr(api.memory, "physical_memory", lambda: int(2.25 * 2**30))
+    # one run at a time: 1 GiB base, its state 8 x 60 x 160 int32 population cells
+    # (307,200 bytes) and its init temporaries 12 x 38,400; every run's outputs 3 x 3
+    # float32 history values, 2 int32 paths of 160 cells and 256 bytes (1,572 bytes):
+    # (1.125 GiB - 1 GiB - 768,000) / 1,572 = 84,891 runs fit, 10**5 need 1.15 GiB
+    with pytest.raises(ParameterError, match=r"100000 runs of a population of 60 on paths "
+                       r"of 160 cells, 1 at a time, would need about 1\.15 GiB, more than "
+                       r"half of the 2\.25 GiB this process may use: at most 84891 fit: run "
+                       r"fewer seeds") as e:
+        api.run("sga", grid, seeds=10**5, **SMALL)
     assert "\n" not in str(e.value)
-    with pytest.raises(ParameterError, match="a smaller population.size"):
+    with pytest.raises(ParameterError, match="not one run fits: a smaller population.size"):
         api.run("sga", grid, seeds=2, population__size=100_000, population__capacity=4096,
                 **SMALL)
     assert api.run("sga", grid, seeds=3, **SMALL).success.all()  # small calls still run
 
 
+def test_runs_that_do_not_fit_together_run_in_groups_with_the_same_results(grid,
+                                                                          monkeypatch):
+    """Where a request's runs do not fit one call, they run as calls that do, one after
+    another (each initialised, evolved and finished before the next): every seed's result
+    is the one it has in a call of its own. 8 runs of sga's canonical problem where only
+    4 fit at a time: two calls of 4 (the canonical program), against two requests of 4."""
+    from jaxga.api import runs as runs_module
+
+    seeds = [11, 12, 13, 14, 15, 16, 17, 18]
+    halves = [api.run("sga", grid, seeds=seeds[:4], **SMALL),
+              api.run("sga", grid, seeds=seeds[4:], **SMALL)]
+    # 4 runs held among 8 need 1 GiB + 4 x 307,200 + 8 x 1,572 + 4 x 460,800 bytes; 5 need
+    # 768,000 more
+    budget = 2**30 + 4 * 307_200 + 8 * 1_572 + 4 * 460_800 + 300_000
+    monkeypatch.setattr(api.memory, "physical_memory", lambda: 2 * budget)
+    layouts, stages = [], []
+    real = runs_module.fitting_layout
+    monkeypatch.setattr(runs_module, "fitting_layout",
+                        lambda *a: layouts.append(real(*a)) or layouts[-1])
+    got = api.run("sga", grid, seeds=seeds, progress=lambda s, f: stages.append((s, f)),
+                  **SMALL)
+    assert layouts == [(4, 2, 1)]  # 4 runs a call, 2 calls, 1 at a time
+    evolve = [f for s, f in stages if s == "evolve"]
+    assert evolve == sorted(evolve) and evolve[-1] == 1.0 and 0.5 in evolve
+    np.testing.assert_array_equal(got.seeds, seeds)
+    for name in ("cells", "n_cells", "raw_cells", "length", "fitness", "success",
+                 "convergence_generation", "init_success_rate", "init_unfilled",
+                 "initial_fitness", "generations_run"):
+        np.testing.assert_array_equal(
+            getattr(got, name), np.concatenate([getattr(h, name) for h in halves]), name)
+    for key, values in got.history.items():
+        np.testing.assert_array_equal(
+            values, np.concatenate([h.history[key] for h in halves]), key)
+    assert got.timing["evolve_s"] > 0 and got.timing["init_s"] > 0
+
+
 def test_padded_calls_that_would_not_fit_run_without_their_padding(monkeypatch):
     """5 runs are one padded call of 32 on the CPU; where 32 runs of a large population
-    would not fit, the 5 run as one call of 5; where 5 do not fit either, one line."""
+    would not fit, the 5 run as one call of 5; where 5 do not fit together either, calls
+    of as many as fit, one at a time; where not one fits, one line."""
     from types import SimpleNamespace
 
-    from jaxga.api.runs import fitting_layout
+    from jaxga.api.runs import fitting_layout, grouped_layout
 
     monkeypatch.setattr(api.memory, "physical_memory", lambda: 24 * 2**30)  # CI's machine
     big = SimpleNamespace(population=100_000, islands=1, capacity=160, generations=300)
-    assert fitting_layout(big, 5, 1, (32, 1)) == (5, 1)
+    assert fitting_layout(big, 5, 1, (32, 1)) == (5, 1, 1)
     assert api.memory.call_memory(big, 5, 5) < 12 * 2**30 < api.memory.call_memory(big, 32, 32)
     small = SimpleNamespace(population=60, islands=1, capacity=160, generations=300)
-    assert fitting_layout(small, 5, 1, (32, 1)) == (32, 1)
-    with pytest.raises(ParameterError, match="40 runs of a population of 100000 .* at most "
-                                             "9 fit"):
-        fitting_layout(big, 40, 1, (64, 1))
+    assert fitting_layout(small, 5, 1, (32, 1)) == (32, 1, 1)
+    assert fitting_layout(small, 100, 1, (32, 4)) == (32, 4, 4)
+    assert fitting_layout(small, 5, 1, (32, 1), padded=False) == (5, 1, 1)
+    # 12 GiB - 1 GiB base = 9 runs of 100,000 x 160 cells (8 x 64 MB state, 12 x 64 MB
+    # init temporaries each): 40 runs as 5 calls of 8, one at a time
+    assert api.memory.runs_that_fit(big, 12 * 2**30) == 9
+    assert fitting_layout(big, 40, 1, (64, 1)) == (8, 5, 1)
+    assert grouped_layout(big, 41, 1) == (9, 5, 1)  # 5 calls of 9, the last with 4 padded
+    assert grouped_layout(big, 41, 2) == (4, 6, 1)  # 6 calls of 2 x 4 devices: 8 at most
+    assert grouped_layout(big, 3, 1) == (3, 1, 1)
+    huge = SimpleNamespace(population=2_000_000, islands=1, capacity=160, generations=300)
+    with pytest.raises(ParameterError, match="not one run fits"):
+        fitting_layout(huge, 2, 1, (4, 1))
 
 
 def test_an_empty_corner_rule_is_refused_not_replaced_by_the_presets(grid):
