@@ -50,10 +50,10 @@ def worker(preset: str, seeds: int, generations: int | None, devices: int | None
         par.initialize(coordinator, 2, process_id, timeout=600)
     import jax
 
+    from jaxga import configure
     from jaxga.api import run
-    from jaxga.cli import use_compilation_cache
 
-    use_compilation_cache()  # as the CLI does: $JAXGA_CACHE_DIR
+    configure()  # as the CLI does: $JAXGA_CACHE_DIR
 
     kw = dict(PAPER[preset])
     if generations:

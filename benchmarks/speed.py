@@ -20,8 +20,8 @@ run: the first generations cost more than the later ones, so the targets are jud
 full runs (the default; decision 023).
 
 With ``--warm`` each configuration runs twice, in two child processes sharing a fresh
-persistent compilation cache (``jaxga.use_compilation_cache``, which ``jaxga run``
-turns on by default): the first child's compile is then cold but includes writing the
+persistent compilation cache (``jaxga.configure``, which ``jaxga run``
+calls): the first child's compile is then cold but includes writing the
 cache (what a user's first ``jaxga run`` pays), the second child's is the "warm" compile
 of every later run of the same preset, map size and seed count (tracing and lowering
 still run; XLA's compilation is read from disk).
@@ -75,9 +75,9 @@ def child(preset: str, setting: str, seeds: int, generations: int) -> dict:
     if preset == "mpmga":  # 3 islands: the setting's population is the total
         overrides["population__size"] = population // 3
     if os.environ.get("JAXGA_CACHE_DIR"):  # --warm: the CLI's persistent cache
-        from jaxga import use_compilation_cache
+        from jaxga import configure
 
-        use_compilation_cache()
+        configure()
     r = run(preset, grid_for(setting), seeds=seeds, **overrides)
     t = r.timing
     return {

@@ -1,17 +1,17 @@
-"""JAX's persistent compilation cache for jaxga's programs (on disk, across processes).
+"""Where compiled programs are kept across processes: jaxga's program store and, when
+asked, JAX's persistent compilation cache.
 
 A cold ``jaxga.run`` spends seconds compiling its programs, most of a short run's time
-(README, performance). JAX can keep compiled programs on disk, keyed by the program and
-the JAX and XLA versions; a later process that compiles the same program (same preset,
-map size and run count) reads it instead. Tracing and lowering still run, so such a
-"warm" compile is shorter than a cold one but not free (``benchmarks/speed.py --warm``;
-decision 014).
+(README, performance). jaxga keeps its own programs whole on disk
+(:mod:`jaxga.api.executables`), so that a later process that needs the same program
+(same preset, map size and run count) reads it instead of tracing, lowering and
+compiling it (decision 014). That store is jaxga's own folder: the Python API uses it by
+default and changes no JAX setting (:func:`store_directory`).
 
-``jaxga run`` and the other commands turn the cache on by default, and so does the
-Python API: the first :func:`jaxga.run` (``sweep``, ``compare``, ``run_doe``, ``replan``)
-of a process calls :func:`ensure_compilation_cache`, which turns it on unless a cache
-directory is already configured. One setting opts out everywhere: an empty
-``$JAXGA_CACHE_DIR``.
+:func:`configure` is the one explicit switch: it names the folder and turns JAX's own
+persistent cache on in it too, a process-wide JAX setting that also serves the user's
+own programs. ``jaxga run`` and the other commands call it. One setting opts out
+everywhere: an empty ``$JAXGA_CACHE_DIR``.
 """
 
 from __future__ import annotations
@@ -25,8 +25,8 @@ import jax
 from jaxga.core.errors import CacheWarning, ParameterError
 from jaxga.core.files import folder_problem
 
-__all__ = ["ENV_VAR", "MIN_COMPILE_SECONDS", "cache_problem", "default_directory",
-           "ensure_compilation_cache", "use_compilation_cache", "warn_unusable"]
+__all__ = ["ENV_VAR", "MIN_COMPILE_SECONDS", "cache_problem", "configure", "default_directory",
+           "store_directory", "use_compilation_cache", "warn_unusable"]
 
 ENV_VAR = "JAXGA_CACHE_DIR"
 """Environment variable naming the cache directory; an empty value leaves the cache off."""
@@ -64,53 +64,77 @@ def warn_unusable(path: str, why: str) -> None:
                   "compiling without it", CacheWarning, stacklevel=3)
 
 
-def use_compilation_cache(directory: str | os.PathLike | None = None) -> str | None:
-    """Turn on JAX's persistent compilation cache for every program compiled from now on.
+_UNSET = object()
+_configured: dict[str, str | None] = {}
+_checked: dict[str, str | None] = {}
+
+
+def configure(cache_dir: str | os.PathLike | None | object = _UNSET, *,
+              jax_cache: bool = True) -> str | None:
+    """Where jaxga keeps its compiled programs, and JAX's persistent compilation cache.
 
     Args:
-        directory: where to keep the compiled programs. ``None`` (the default): the
-            directory ``$JAXGA_CACHE_DIR`` names, else :func:`default_directory`;
-            an empty ``$JAXGA_CACHE_DIR`` leaves the cache off. An explicit
-            ``directory`` wins over the environment.
+        cache_dir: the folder. Default: the folder ``$JAXGA_CACHE_DIR`` names, else
+            :func:`default_directory`; an empty ``$JAXGA_CACHE_DIR`` or ``None``: no
+            folder (every process compiles its programs).
+        jax_cache: also turn on JAX's persistent compilation cache in that folder
+            (JAX's ``jax_compilation_cache_dir`` and
+            ``jax_persistent_cache_min_compile_time_secs``, :data:`MIN_COMPILE_SECONDS`):
+            a setting of the whole process, which serves the user's own programs too.
 
     Returns:
-        The directory used, or ``None`` when the cache was left off, also when the
-        directory cannot be made or written (then one
-        :class:`~jaxga.core.errors.CacheWarning` says so: the programs are compiled
-        without it).
+        The folder in use, or ``None`` when there is none, also when the folder cannot
+        be made or written (then one :class:`~jaxga.core.errors.CacheWarning` says so:
+        the programs are compiled without it).
 
-    Sets JAX's ``jax_compilation_cache_dir`` and
-    ``jax_persistent_cache_min_compile_time_secs`` (:data:`MIN_COMPILE_SECONDS`) for the
-    whole process; it works after other programs have been compiled. A restarted
-    notebook kernel that calls it before ``jaxga.run`` compiles a preset it compiled
-    before in a fraction of the cold compile time (decision 014). Not part of any
-    paper: an engineering aid (jaxga's results never depend on it).
+    Without a call, jaxga keeps its programs in the default folder and touches no JAX
+    setting (:func:`store_directory`). Not part of any paper: an engineering aid
+    (jaxga's results never depend on it).
     """
-    if directory is None:
+    if cache_dir is _UNSET:
         path = os.environ.get(ENV_VAR, default_directory())
+    elif cache_dir is None:
+        path = ""
     else:
-        path = os.fspath(directory)
+        path = os.fspath(cache_dir)
         if not path:
-            raise ParameterError("use_compilation_cache: the directory must not be empty")
+            raise ParameterError("configure: cache_dir must not be empty (None: no folder)")
+    if path:
+        why = cache_problem(path)
+        if why is not None:
+            warn_unusable(path, why)
+            path = ""
+    _configured["dir"] = path or None
+    if path and jax_cache:
+        jax.config.update("jax_compilation_cache_dir", path)
+        jax.config.update("jax_persistent_cache_min_compile_time_secs", MIN_COMPILE_SECONDS)
+    return path or None
+
+
+def use_compilation_cache(directory: str | os.PathLike | None = None) -> str | None:
+    """The former name of :func:`configure`: ``configure(directory)`` (``None``: the
+    default folder), JAX's cache included. Deprecated: call :func:`configure`."""
+    warnings.warn("jaxga.use_compilation_cache is deprecated: call jaxga.configure",
+                  DeprecationWarning, stacklevel=2)
+    return configure(_UNSET if directory is None else directory)
+
+
+def store_directory() -> str | None:
+    """The folder of jaxga's program store (:mod:`jaxga.api.executables`): JAX's own
+    cache folder where one is configured (a local one; a remote one: none), else the
+    folder :func:`configure` named, else ``$JAXGA_CACHE_DIR`` or
+    :func:`default_directory` (made on first use; ``None`` with one
+    :class:`~jaxga.core.errors.CacheWarning` where it cannot be)."""
+    base = jax.config.jax_compilation_cache_dir
+    if base:
+        return None if "://" in str(base) else str(base)
+    if "dir" in _configured:
+        return _configured["dir"]
+    path = os.environ.get(ENV_VAR, default_directory())
     if not path:
         return None
-    why = cache_problem(path)
-    if why is not None:
-        warn_unusable(path, why)
-        return None
-    jax.config.update("jax_compilation_cache_dir", path)
-    jax.config.update("jax_persistent_cache_min_compile_time_secs", MIN_COMPILE_SECONDS)
-    return path
-
-
-def ensure_compilation_cache() -> str | None:
-    """The Python API's default: the persistent cache on, as :func:`use_compilation_cache`
-    turns it on, unless a cache directory is already configured (by that function, by
-    JAX's ``jax_compilation_cache_dir`` or ``$JAX_COMPILATION_CACHE_DIR``), which is left
-    as it is; an empty ``$JAXGA_CACHE_DIR`` leaves the cache off. Returns the directory
-    in use, or None."""
-    current = jax.config.jax_compilation_cache_dir
-    if current:
-        return current
-    return use_compilation_cache()
-
+    if path not in _checked:
+        _checked[path] = cache_problem(path)
+        if _checked[path] is not None:
+            warn_unusable(path, _checked[path])
+    return None if _checked[path] is not None else path

@@ -30,6 +30,7 @@ import jax.numpy as jnp
 import jaxlib
 import numpy as np
 
+from jaxga.api.lowering import jaxga_lowering
 from jaxga.core.errors import JaxgaError, PlatformWarning
 from jaxga.core.files import atomic_write_text
 from jaxga.core.grid import Grid
@@ -114,7 +115,8 @@ def rolled_on_cpu(on_device: Callable, on_cpu: Callable, keys: np.ndarray,
 def _compare(fn: Callable, keys: np.ndarray, device: jax.Device) -> tuple[list, list]:
     """``fn`` of every key as one call on ``device`` and on the CPU (:func:`rolled_on_cpu`):
     the leaves of both."""
-    here, there = rolled_on_cpu(jax.jit(fn), jax.jit(fn), keys, device)
+    with jaxga_lowering():  # the programs jaxga itself runs
+        here, there = rolled_on_cpu(jax.jit(fn), jax.jit(fn), keys, device)
     return jax.tree_util.tree_leaves(here), jax.tree_util.tree_leaves(there)
 
 

@@ -30,7 +30,6 @@ import jax.numpy as jnp
 import numpy as np
 
 from jaxga.api import device_probe, executables
-from jaxga.api.compilation_cache import ensure_compilation_cache
 from jaxga.api.device_probe import ProbeRow
 from jaxga.api.ga import GA
 from jaxga.api.programs import shape_spec
@@ -170,7 +169,6 @@ def doctor(device: jax.Device | None = None, *, presets: Sequence[str] | None = 
         A :class:`DoctorReport`; its ``verdict`` is the one line to show.
     """
     t0 = time.perf_counter()
-    ensure_compilation_cache()  # the whole runs' programs: compiled once per machine
     device = jax.devices()[0] if device is None else device
     cpu = jax.devices("cpu")[0]
     rows = []

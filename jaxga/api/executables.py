@@ -47,7 +47,8 @@ import jax
 import jaxlib
 from jax.experimental.serialize_executable import deserialize_and_load, serialize
 
-from jaxga.api.lowering import threefry_unrolled
+from jaxga.api.compilation_cache import store_directory
+from jaxga.api.lowering import jaxga_lowering, threefry_unrolled
 from jaxga.core.errors import CacheWarning
 from jaxga.core.files import atomic_write
 from jaxga.engine import chosen_operators
@@ -72,12 +73,10 @@ def source_digest() -> str:
 
 
 def directory() -> Path | None:
-    """Where the programs are kept: under JAX's configured cache directory (a local
-    one); None when no cache is configured."""
-    base = jax.config.jax_compilation_cache_dir
-    if not base or "://" in str(base):
-        return None
-    return Path(base) / SUBDIRECTORY
+    """Where the programs are kept: under the cache folder
+    (:func:`jaxga.api.compilation_cache.store_directory`); None without one."""
+    base = store_directory()
+    return None if base is None else Path(base) / SUBDIRECTORY
 
 
 def _only_builtin_operators(algo: Any) -> bool:
@@ -295,8 +294,9 @@ def _compiling(key: str | None) -> Iterator[None]:
 
 def load_or_compile(key: str | None, devices: Any, lower: Callable[[], Any],
                     options: dict | None = None) -> tuple[Any, bool]:
-    """The program stored under ``key``, else ``lower()`` compiled and stored; and whether
-    it was read. The compilation holds the key's lock, so that processes sharing the store
+    """The program stored under ``key``, else ``lower()`` (in jaxga's lowering scope:
+    :func:`jaxga.api.lowering.jaxga_lowering`) compiled and stored; and whether it was
+    read. The compilation holds the key's lock, so that processes sharing the store
     compile it once (module docstring): one that waited reads what the other stored."""
     program = load(key, devices)
     if program is not None:
@@ -305,7 +305,9 @@ def load_or_compile(key: str | None, devices: Any, lower: Callable[[], Any],
         program = load(key, devices)  # stored by another process while this one waited
         if program is not None:
             return program, True
-        return compile_and_store(key, lower(), options, devices), False
+        with jaxga_lowering():  # jaxga's own lowering rules, for this program only
+            lowered = lower()
+        return compile_and_store(key, lowered, options, devices), False
 
 
 def save(key: str | None, compiled: Any, devices: Any) -> None:

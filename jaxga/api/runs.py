@@ -24,7 +24,6 @@ import numpy as np
 from jax.errors import JaxRuntimeError
 
 from jaxga.api import executables, parallel
-from jaxga.api.compilation_cache import ensure_compilation_cache
 from jaxga.api.device_probe import check_backend, needs_probe
 from jaxga.api.failures import (
     failure_causes,
@@ -180,7 +179,6 @@ def load_problem(preset, grid, corner_rule, variant, sets, overrides, generation
     check_environment()  # a bad $JAXGA_THREEFRY, which `import jaxga` does not refuse
     check_jax_settings()  # 64-bit mode, jit disabled
     check_platform()
-    ensure_compilation_cache()  # on by default, as on the command line (decision 014)
     map_name, frame = "grid", None
     if isinstance(grid, MapInfo):  # a loaded map that keeps its name (and its endpoints)
         grid, map_name, frame = grid.grid, grid.name, grid.frame

@@ -20,7 +20,7 @@ from typing import Any
 import jax
 import numpy as np
 
-from jaxga.api.compilation_cache import ensure_compilation_cache
+from jaxga.api.compilation_cache import store_directory
 from jaxga.api.programs import SMALL_CALL_RUNS, platform_layout
 from jaxga.api.runs import run
 from jaxga.config.presets import preset_names
@@ -48,7 +48,7 @@ def warmup(
     report: Callable[[dict[str, Any]], None] | None = None,
 ) -> list[dict[str, Any]]:
     """Compile every program set ``presets`` x ``maps`` x ``runs`` needs (one generation
-    of each), with the persistent compilation cache on (:func:`ensure_compilation_cache`).
+    of each), into the program store (:func:`jaxga.api.compilation_cache.store_directory`).
 
     Args:
         presets: preset names or TOML files (default: every built-in preset).
@@ -77,7 +77,7 @@ def warmup(
         ``compile_s`` (tracing, and compiling or loading from the cache) and
         ``total_s``.
     """
-    if ensure_compilation_cache() is None:
+    if store_directory() is None:
         raise ParameterError("the persistent compilation cache is off ($JAXGA_CACHE_DIR is "
                              "empty): a warm-up would compile for this process only")
     presets = list(preset_names()) if presets is None else list(presets)

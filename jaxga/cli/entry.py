@@ -13,7 +13,7 @@ import jax
 
 from jaxga import interrupts
 from jaxga.api.compilation_cache import ENV_VAR as CACHE_ENV_VAR
-from jaxga.api.compilation_cache import use_compilation_cache
+from jaxga.api.compilation_cache import configure
 from jaxga.api.device_probe import DeviceDisagrees
 from jaxga.api.jax_settings import check_jax_settings, check_platform
 from jaxga.api.lowering import check_environment
@@ -95,7 +95,7 @@ def main(argv: Sequence[str] | None = None) -> int:
             check_platform()  # JAX_PLATFORMS naming a platform that is not there
             apply_scenario(args)  # after it: loading the map starts JAX
             if getattr(args, "compiles", False):  # run, doe, compare, warmup
-                use_compilation_cache()
+                configure()
             return args.func(args)
     except ProcessLostError as e:
         # Exit at once: a normal exit would wait in jax.distributed's shutdown barrier

@@ -11,7 +11,7 @@ from typing import Any
 import numpy as np
 
 from jaxga import export
-from jaxga.api.compilation_cache import use_compilation_cache
+from jaxga.api.compilation_cache import configure
 from jaxga.api.timeline import time_line
 from jaxga.cli.options import (
     EXIT_NO_PATH,
@@ -151,7 +151,7 @@ def cmd_replan(args: argparse.Namespace) -> int:
     (MPMGA 5.2.1 / 5.3.1). The path's own ends are its endpoints (never the map's
     defaults); new obstacles grow like the map (``--inflate`` / ``--robot-radius``)."""
 
-    use_compilation_cache()
+    configure()
     timeline = process_timeline()
     if args.corner_rule is not None:
         check_corner_rule(args.corner_rule)

@@ -2,6 +2,8 @@
 
 from __future__ import annotations
 
+import contextlib
+
 import jax
 import jax.numpy as jnp
 import numpy as np
@@ -33,27 +35,23 @@ def _random_program():
     return jax.jit(jax.vmap(draw))
 
 
-@pytest.fixture
-def restore_lowering():
-    before = lowering.threefry_unrolled()
-    yield
-    lowering.unroll_threefry_on_cpu(before)
-
-
 def _has_loop(fn, keys) -> bool:
     return "stablehlo.while" in fn.lower(keys).as_text()
 
 
-def test_unrolled_and_rolled_threefry_give_identical_bits(restore_lowering):
+def test_unrolled_and_rolled_threefry_give_identical_bits(monkeypatch):
+    """jaxga's scope lowers the hash without a loop (its own programs), JAX's rule outside
+    it has the loop; the same bits from both."""
+    monkeypatch.delenv(lowering.ENV_VAR, raising=False)
     keys = jax.vmap(jax.random.PRNGKey)(jnp.arange(6, dtype=jnp.uint32))
     out = {}
     for unrolled in (False, True):
-        assert lowering.unroll_threefry_on_cpu(unrolled)
         fn = _random_program()
-        # The switch really changes the program (else this test would compare a thing
-        # with itself): the rolled hash is a while loop, the unrolled one is not.
-        assert _has_loop(fn, keys) is (not unrolled)
-        out[unrolled] = jax.tree_util.tree_map(np.asarray, fn(keys))
+        with lowering.jaxga_lowering() if unrolled else contextlib.nullcontext():
+            # The scope really changes the program (else this test would compare a thing
+            # with itself): the rolled hash is a while loop, the unrolled one is not.
+            assert _has_loop(fn, keys) is (not unrolled)
+            out[unrolled] = jax.tree_util.tree_map(np.asarray, fn(keys))
     for a, b in zip(out[False], out[True]):
         assert a.dtype == b.dtype
         np.testing.assert_array_equal(a, b)
@@ -61,21 +59,87 @@ def test_unrolled_and_rolled_threefry_give_identical_bits(restore_lowering):
     assert len({row.tobytes() for row in out[True][0]}) == 6
 
 
-def test_importing_jaxga_unrolls_threefry_unless_told_not_to(monkeypatch, restore_lowering):
-    import os
-
-    if os.environ.get(lowering.ENV_VAR, "unrolled").lower() == "unrolled":
-        assert lowering.threefry_unrolled()
-    monkeypatch.setenv(lowering.ENV_VAR, "rolled")
-    assert lowering.configure_from_environment()
-    assert not lowering.threefry_unrolled()
+def test_the_scope_restores_jaxs_rule_nests_and_obeys_the_environment(monkeypatch):
     keys = jax.vmap(jax.random.PRNGKey)(jnp.arange(2, dtype=jnp.uint32))
+    monkeypatch.delenv(lowering.ENV_VAR, raising=False)
+    assert lowering.threefry_unrolled()
+    with lowering.jaxga_lowering():
+        with lowering.jaxga_lowering():
+            assert not _has_loop(_random_program(), keys)
+        assert not _has_loop(_random_program(), keys)  # the inner exit keeps the outer's
     assert _has_loop(_random_program(), keys)
+    with pytest.raises(RuntimeError), lowering.jaxga_lowering():
+        raise RuntimeError("a failed lowering")
+    assert _has_loop(_random_program(), keys)  # restored after an error too
+    monkeypatch.setenv(lowering.ENV_VAR, "rolled")
+    assert not lowering.threefry_unrolled()
+    with lowering.jaxga_lowering():
+        assert _has_loop(_random_program(), keys)
     monkeypatch.setenv(lowering.ENV_VAR, " ")  # set but empty: the default
     assert lowering.check_environment() == "unrolled"
     monkeypatch.setenv(lowering.ENV_VAR, "sideways")
     with pytest.raises(ParameterError, match="JAXGA_THREEFRY must be 'unrolled' or 'rolled'"):
-        lowering.configure_from_environment()
+        lowering.check_environment()
+
+
+def test_jaxgas_own_programs_are_lowered_in_its_scope(monkeypatch):
+    """Every program jaxga compiles goes through ``executables.load_or_compile``, which
+    lowers it in jaxga's scope: no Threefry loop in it, and JAX's rule back afterwards."""
+    from jaxga.api import executables
+
+    monkeypatch.delenv(lowering.ENV_VAR, raising=False)
+    keys = jax.vmap(jax.random.PRNGKey)(jnp.arange(2, dtype=jnp.uint32))
+    fn, texts = _random_program(), []
+
+    def lower():
+        texts.append(fn.lower(keys).as_text())
+        return fn.lower(keys)
+
+    program, read = executables.load_or_compile(None, jax.devices()[:1], lower)
+    assert not read and "stablehlo.while" not in texts[0]
+    assert _has_loop(_random_program(), keys)
+    np.testing.assert_array_equal(program(keys)[0], fn(keys)[0])
+
+
+USER_PROGRAM = """
+import json, sys
+import jax, jax.numpy as jnp
+def text():
+    fn = jax.jit(jax.vmap(lambda k: jax.random.uniform(k, (3,))))
+    return fn.lower(jax.vmap(jax.random.PRNGKey)(jnp.arange(2, dtype=jnp.uint32))).as_text()
+def settings():
+    return {k: repr(v) for k, v in sorted(jax.config.values.items())}
+seen = [(text(), settings())]
+import jaxga
+seen.append((text(), settings()))
+ga = jaxga.GA("sga", "classic_ga_gapp3_20x20", generations=2)
+seen.append((text(), settings()))
+jax.jit(jax.vmap(ga.run, (0, None)))(jax.random.split(jax.random.PRNGKey(0), 2),
+                                      ga.default_params)
+seen.append((text(), settings()))
+print(json.dumps(seen))
+"""
+
+
+@pytest.mark.slow  # a fresh process, a whole GA traced and compiled
+def test_importing_jaxga_and_building_a_ga_leave_jax_alone(tmp_path):
+    """``import jaxga``, ``jaxga.GA(...)`` and running the GA's pure core change no JAX
+    setting and not the lowering of the user's own ``jax.random`` program."""
+    import json
+    import os
+    import subprocess
+    import sys
+
+    env = {k: v for k, v in os.environ.items() if not k.startswith(("JAX_", "JAXGA_"))}
+    env["HOME"] = str(tmp_path)
+    proc = subprocess.run([sys.executable, "-c", USER_PROGRAM], env=env, capture_output=True,
+                          text=True, timeout=600)
+    assert proc.returncode == 0, proc.stderr[-2000:]
+    seen = json.loads(proc.stdout.splitlines()[-1])
+    assert "stablehlo.while" in seen[0][0]  # JAX's own CPU rule, a loop
+    for text, settings in seen[1:]:
+        assert text == seen[0][0]
+        assert settings == seen[0][1], {k for k in settings if settings[k] != seen[0][1].get(k)}
 
 
 def test_a_bad_threefry_setting_is_one_line_on_the_command_line_and_refused_by_run(

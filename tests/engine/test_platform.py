@@ -3,6 +3,7 @@ CPU-only lowering or compiler option outside the CPU (docs/devices.md, "GPU").""
 
 from __future__ import annotations
 
+import contextlib
 import re
 
 import jax
@@ -78,27 +79,21 @@ def test_a_whole_run_of_every_preset_is_float32_without_host_callbacks(preset):
     assert {"while", "scan"} & primitives  # a whole run was traced, loops and all
 
 
-@pytest.fixture
-def restore_lowering():
-    before = lowering.threefry_unrolled()
-    yield
-    lowering.unroll_threefry_on_cpu(before)
-
-
 @pytest.mark.skipif(lowering._rules() is None,
                     reason="this JAX does not expose the Threefry lowering rules")
-def test_the_unrolled_threefry_changes_only_the_cpu_lowering(restore_lowering):
+def test_the_unrolled_threefry_changes_only_the_cpu_lowering(monkeypatch):
     """``jax.export`` lowers the same draws for the CPU, CUDA and ROCm (no GPU needed):
     jaxga's switch changes the CPU program only; the GPU programs are JAX's own,
     identical whether it is on or off."""
     key = jax.random.PRNGKey(0)
     text = {}
+    monkeypatch.delenv(lowering.ENV_VAR, raising=False)
     for unrolled in (True, False):
-        assert lowering.unroll_threefry_on_cpu(unrolled)
-        for platform in ("cpu", "cuda", "rocm"):
-            fn = jax.jit(lambda k: jax.random.uniform(k, (4,)))  # a fresh jit cache
-            text[unrolled, platform] = jax.export.export(fn, platforms=[platform])(
-                key).mlir_module()
+        with lowering.jaxga_lowering() if unrolled else contextlib.nullcontext():
+            for platform in ("cpu", "cuda", "rocm"):
+                fn = jax.jit(lambda k: jax.random.uniform(k, (4,)))  # a fresh jit cache
+                text[unrolled, platform] = jax.export.export(fn, platforms=[platform])(
+                    key).mlir_module()
     assert text[True, "cpu"] != text[False, "cpu"]
     assert "stablehlo.while" in text[False, "cpu"]
     assert "stablehlo.while" not in text[True, "cpu"]

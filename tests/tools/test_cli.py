@@ -334,35 +334,44 @@ def test_console_script_never_prints_a_traceback(tmp_path):
 
 def test_the_command_line_compilation_cache_directory(tmp_path, monkeypatch):
     """`jaxga run` keeps compiled programs in $JAXGA_CACHE_DIR, by default
-    ~/.cache/jaxga/jax; an empty value turns the cache off (docs, "getting started"). A
-    script or notebook calls the same function, optionally with its own directory."""
+    ~/.cache/jaxga/jax, JAX's persistent cache included (jaxga.configure); an empty value
+    turns it off (docs, "getting started"). A script or notebook calls the same function,
+    optionally with its own directory, or without JAX's cache."""
     import jax
 
     import jaxga
+    from jaxga.api import compilation_cache as cc
     from jaxga.cli import entry as cli
     from jaxga.core.errors import ParameterError
 
-    assert cli.use_compilation_cache is jaxga.use_compilation_cache
-    use_compilation_cache = jaxga.use_compilation_cache
+    assert cli.configure is jaxga.configure
+    monkeypatch.setattr(cc, "_configured", {})
     updates = []
     monkeypatch.setattr(jax.config, "update", lambda k, v: updates.append((k, v)))
     monkeypatch.setenv("HOME", str(tmp_path))
     monkeypatch.delenv("JAXGA_CACHE_DIR", raising=False)
     default = str(tmp_path / ".cache" / "jaxga" / "jax")
-    assert use_compilation_cache() == default
+    assert jaxga.configure() == default
     assert ("jax_compilation_cache_dir", default) in updates
     updates.clear()
     monkeypatch.setenv("JAXGA_CACHE_DIR", str(tmp_path / "mine"))
-    assert use_compilation_cache() == str(tmp_path / "mine")
+    assert jaxga.configure() == str(tmp_path / "mine")
     assert ("jax_compilation_cache_dir", str(tmp_path / "mine")) in updates
     updates.clear()
     monkeypatch.setenv("JAXGA_CACHE_DIR", "")
-    assert use_compilation_cache() is None and updates == []
+    assert jaxga.configure() is None and updates == []
     # an explicit directory wins over the environment, even over an empty one
-    assert use_compilation_cache(tmp_path / "nb") == str(tmp_path / "nb")
+    assert jaxga.configure(tmp_path / "nb") == str(tmp_path / "nb")
     assert ("jax_compilation_cache_dir", str(tmp_path / "nb")) in updates
+    updates.clear()
+    assert jaxga.configure(tmp_path / "own", jax_cache=False) == str(tmp_path / "own")
+    assert updates == [] and cc._configured["dir"] == str(tmp_path / "own")
+    assert jaxga.configure(None) is None and cc._configured["dir"] is None
     with pytest.raises(ParameterError, match="must not be empty"):
-        use_compilation_cache("")
+        jaxga.configure("")
+    with pytest.warns(DeprecationWarning, match="jaxga.configure"):
+        assert jaxga.use_compilation_cache(tmp_path / "old") == str(tmp_path / "old")
+    assert ("jax_compilation_cache_dir", str(tmp_path / "old")) in updates
 
 
 def test_presets_and_maps_list_what_the_package_ships(capsys):
@@ -746,37 +755,34 @@ def test_optimum_and_run_report_the_same_optimum_for_one_map(tmp_path):
     assert json.loads(opt.read_text())["length"] > strict  # the squeeze is closed
 
 
-def test_the_python_api_turns_the_compilation_cache_on_by_default(tmp_path, monkeypatch):
-    """Every jaxga.run / sweep / compare / run_doe / replan goes through
-    ensure_compilation_cache (via load_problem): the cache is turned on as on the command
-    line unless a directory is already configured, which it leaves alone; an empty
-    $JAXGA_CACHE_DIR keeps it off."""
+def test_the_python_api_keeps_its_programs_without_touching_jaxs_settings(tmp_path,
+                                                                          monkeypatch):
+    """Without jaxga.configure, the API keeps its programs in its own store: JAX's cache
+    folder where the user configured one (a remote one: no store), else $JAXGA_CACHE_DIR
+    or the default (made on first use); an empty $JAXGA_CACHE_DIR: none. It changes no
+    JAX setting, also when a run is checked (which used to turn JAX's cache on)."""
     import jax
 
     from jaxga import api
     from jaxga.api import compilation_cache as cc
-    from jaxga.api import runs
 
     updates = []
     monkeypatch.setattr(jax.config, "update", lambda k, v: updates.append((k, v)))
-    for configured in ("/already/there", None):
+    monkeypatch.setattr(cc, "_configured", {})
+    monkeypatch.setattr(cc, "_checked", {})
+    monkeypatch.setenv("JAXGA_CACHE_DIR", str(tmp_path / "c"))
+    for configured, store in (("/already/there", "/already/there"), ("gs://bucket", None),
+                              (None, str(tmp_path / "c"))):
         monkeypatch.setattr(type(jax.config), "jax_compilation_cache_dir", configured,
                             raising=False)
-        monkeypatch.setenv("JAXGA_CACHE_DIR", str(tmp_path / "c"))
-        updates.clear()
-        got = cc.ensure_compilation_cache()
-        if configured:
-            assert got == configured and updates == []  # left as it is
-        else:
-            assert got == str(tmp_path / "c")
-            assert ("jax_compilation_cache_dir", str(tmp_path / "c")) in updates
-            monkeypatch.setenv("JAXGA_CACHE_DIR", "")
-            updates.clear()
-            assert cc.ensure_compilation_cache() is None and updates == []
-    calls = []
-    monkeypatch.setattr(runs, "ensure_compilation_cache", lambda: calls.append(1))
+        assert cc.store_directory() == store
+    assert (tmp_path / "c").is_dir()
+    monkeypatch.setenv("JAXGA_CACHE_DIR", "")
+    assert cc.store_directory() is None
+    monkeypatch.setattr(cc, "_configured", {"dir": str(tmp_path / "own")})
+    assert cc.store_directory() == str(tmp_path / "own")
     api.check_run("sga", "classic_ga_gapp3_20x20")
-    assert calls == [1]
+    assert updates == []
 
 
 def _open_ros_map(folder, size: int, resolution: float, origin: tuple[float, float]):
