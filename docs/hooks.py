@@ -1,7 +1,7 @@
 """MkDocs hooks: pages generated from the code, so that they cannot drift from it.
 
 A page that holds ``<!-- generated: operators -->`` gets the operator registry's table
-(:mod:`jaxga.config.registry`); ``<!-- generated: presets -->`` gets one section per paper
+(:mod:`jaxga.operators.registry`); ``<!-- generated: presets -->`` gets one section per paper
 card (``docs/cards/*.toml``: every value of a preset with the paper's section it comes
 from). Loaded by ``mkdocs.yml`` (``hooks:``).
 """
@@ -17,7 +17,7 @@ CARDS = Path(__file__).resolve().parent / "cards"
 def operators_table() -> str:
     """Markdown: every registered operator, family by family, with its summary, its own
     keys and its traits."""
-    from jaxga.config import registry
+    from jaxga.operators import registry
 
     out = []
     for family in registry.FAMILIES:

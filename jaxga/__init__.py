@@ -9,9 +9,9 @@ from jaxga.api.compilation_cache import configure, use_compilation_cache
 from jaxga.api.doctor import doctor
 from jaxga.api.planner import Planner
 from jaxga.compare import Comparison, compare
-from jaxga.config.registry import Operator, register_operator
 from jaxga.core.errors import EndpointError, JaxgaError, MapFormatError, NoPathError, ParameterError
 from jaxga.core.grid import CORNER_RULES, Grid
+from jaxga.operators.registry import Operator, register_operator
 from jaxga.replan import replan
 
 __all__ = [

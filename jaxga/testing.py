@@ -4,12 +4,12 @@ Run it on an operator of your own before you use it in a run::
 
     import jaxga.testing
     jaxga.testing.check_operator("mutation", my_mutation)        # a function, or
-    jaxga.testing.check_operator(jaxga.config.registry.operator("mutation", "drop_point"))
+    jaxga.testing.check_operator(jaxga.operators.registry.operator("mutation", "drop_point"))
 
 It raises ``AssertionError`` naming the operator and the rule it broke; jaxga's own test
 suite runs it on every registered operator (``tests/config/test_registry.py``).
 
-The contract of each family (the signatures: :mod:`jaxga.config.registry`). Shared by
+The contract of each family (the signatures: :mod:`jaxga.operators.registry`). Shared by
 every family: outputs have the documented dtypes and shapes; paths are padded with their
 last cell (the fixed-length masked chromosome, docs "the pure core") and their lengths lie
 in ``[1, L]``; the same key gives the same result, under ``jax.vmap`` and ``jit`` as alone
@@ -30,7 +30,6 @@ import jax
 import jax.numpy as jnp
 import numpy as np
 
-from jaxga.config import registry
 from jaxga.config.presets import load_preset
 from jaxga.core.grid import Grid
 from jaxga.core.objectives import path_length
@@ -45,6 +44,7 @@ from jaxga.core.paths import (
 from jaxga.engine import binding, build, fitness_function
 from jaxga.engine.maptables import with_tables
 from jaxga.maps import random_map
+from jaxga.operators import registry
 from jaxga.operators.guide import with_guide
 from jaxga.operators.repair import connect
 
@@ -325,16 +325,16 @@ def check_operator(op: registry.Operator | str, fn: Callable | None = None, *,
     """Check an operator against its family's contract (module docstring).
 
     Args:
-        op: a :class:`~jaxga.config.registry.Operator` (registered or not), or a family
+        op: a :class:`~jaxga.operators.registry.Operator` (registered or not), or a family
             name (``"mutation"``, ``"fitness"``, ...) with ``fn``.
         fn: the operator's function, with its family's signature
-            (:mod:`jaxga.config.registry`), when ``op`` is a family name.
+            (:mod:`jaxga.operators.registry`), when ``op`` is a family name.
         grid: the map to check on (default: :func:`default_setting`'s).
         parents: ``P`` feasible, loop-free parents on ``grid`` (default:
             :func:`default_setting`'s).
         key: the PRNG key of the check (default ``PRNGKey(0)``).
         field_repair: check it as bound with ``repair.fallback = "field"``.
-        **declaration: the rest of the :class:`~jaxga.config.registry.Operator` built
+        **declaration: the rest of the :class:`~jaxga.operators.registry.Operator` built
             from ``fn`` (``name``, ``summary``, ``traits``, ``params``, ``options``).
 
     Raises:

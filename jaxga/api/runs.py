@@ -59,7 +59,6 @@ from jaxga.api.result import Result
 from jaxga.api.seeds import seed_list, seed_sharding
 from jaxga.api.size_classes import auto_size_class, class_capacity, map_cells, pad_to_class
 from jaxga.api.timeline import Timeline
-from jaxga.config import registry
 from jaxga.config.presets import as_sets, load_preset, parse_set
 from jaxga.config.schema import MAP_RULE, SCHEMA, Config, flatten, freeze
 from jaxga.core.errors import EndpointError, ParameterError
@@ -77,6 +76,7 @@ from jaxga.engine import (
 )
 from jaxga.maps import MapInfo, load_map_info
 from jaxga.maps.frame import MapFrame
+from jaxga.operators import registry
 from jaxga.operators.guide import with_guide
 from jaxga.reference.fitness import FitnessOptimum, fitness_optimum, fitness_weights
 
@@ -149,7 +149,7 @@ def own_operators(overrides: dict) -> dict:
     """``overrides`` with each function given for an operator family (``init``,
     ``fitness`` or its synonym ``objective``, ``selection``, ``crossover``, ``mutation``,
     ``simplify``, ``post``) registered under its name
-    (:func:`jaxga.config.registry.register_operator`, replacing an earlier one of that
+    (:func:`jaxga.operators.registry.register_operator`, replacing an earlier one of that
     name) and chosen as ``<family>.method``."""
     out = {}
     for key, value in overrides.items():

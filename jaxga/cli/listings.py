@@ -6,7 +6,6 @@ import argparse
 import json
 from typing import Any
 
-from jaxga.config import registry
 from jaxga.config.presets import preset_info, preset_settings
 from jaxga.config.schema import sweepable
 from jaxga.core.errors import JaxgaError
@@ -15,6 +14,7 @@ from jaxga.maps import (
     builtin_scenario_path,
     load_map,
 )
+from jaxga.operators import registry
 
 
 def cmd_maps(args: argparse.Namespace) -> int:
@@ -79,7 +79,7 @@ def describe_field(field: Any) -> str:
 
 def cmd_operators(args: argparse.Namespace) -> int:
     """``jaxga operators [FAMILY]``: the registered operators of each family (or one),
-    with their former names, traits, parameters and papers (:mod:`jaxga.config.registry`)."""
+    with their former names, traits, parameters and papers (:mod:`jaxga.operators.registry`)."""
 
     families = registry.FAMILIES if args.family is None else (args.family,)
     for family in families:

@@ -1,8 +1,9 @@
-"""Configurations: the schema of keys, the operator registry, the built-in presets.
+"""Configurations: the schema of keys and the built-in presets.
 
-- :mod:`~jaxga.config.fields`: one key's type, range, meaning and default;
-- :mod:`~jaxga.config.registry`: every operator, declared once (family, function, keys,
-  traits);
+The keys' fields are :class:`jaxga.core.fields.Field` (type, range, meaning, default); the
+operators and their own keys are declared beside their code and gathered in
+:mod:`jaxga.operators.registry`.
+
 - :mod:`~jaxga.config.schema`: :class:`Config`, ``SCHEMA`` and ``DEFAULTS`` (the common keys
   and the registry's);
 - :mod:`~jaxga.config.presets`: the built-in presets and TOML preset files.

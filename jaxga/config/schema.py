@@ -25,11 +25,11 @@ from collections.abc import Iterable, Iterator, Mapping
 from pathlib import Path
 from typing import Any
 
-from jaxga.config import registry
-from jaxga.config.fields import Field, P, python_scalar
-from jaxga.config.registry import MethodField
 from jaxga.core.errors import ParameterError
+from jaxga.core.fields import Field, P, python_scalar
 from jaxga.core.grid import CORNER_RULES
+from jaxga.operators import registry
+from jaxga.operators.registry import MethodField
 
 if sys.version_info >= (3, 11):
     import tomllib
@@ -172,9 +172,9 @@ class _WithOperators(Mapping):
 
 
 SCHEMA: Mapping[str, Field] = _WithOperators(COMMON_FIELDS, lambda field: field)
-"""Every configuration key with its :class:`~jaxga.config.fields.Field`: the keys of the run,
+"""Every configuration key with its :class:`~jaxga.core.fields.Field`: the keys of the run,
 the families' and the islands' (:data:`COMMON_FIELDS`) and the keys the registered
-operators declare (:func:`jaxga.config.registry.schema_fields`)."""
+operators declare (:func:`jaxga.operators.registry.schema_fields`)."""
 
 DEFAULTS: Mapping[str, Any] = _WithOperators(COMMON_DEFAULTS, lambda field: field.default)
 """The value of every key a configuration may leave out: :data:`COMMON_DEFAULTS` and

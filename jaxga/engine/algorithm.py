@@ -17,7 +17,6 @@ from typing import Any
 import jax
 import jax.numpy as jnp
 
-from jaxga.config import registry
 from jaxga.config.schema import SCHEMA, Config
 from jaxga.core.dtypes import F32, I32, on_device
 from jaxga.core.errors import ParameterError
@@ -30,10 +29,12 @@ from jaxga.engine.checks import (
     compiled_fallback,
     uses_waypoints,
 )
+from jaxga.operators import registry
+from jaxga.operators.fitness import objective_default, objective_keywords
 from jaxga.operators.guide import longest_optimal_path_cells, problem_facts
 
 FITNESS_PARAMS: dict[str, tuple[str, ...]] = {
-    op.name: tuple(key.split(".", 1)[1] for key in registry.objective_keywords(op))
+    op.name: tuple(key.split(".", 1)[1] for key in objective_keywords(op))
     for op in registry.operators("fitness")
 }
 """Each fitness combiner's weights: ``fitness.NAME`` keys that are keywords of its
@@ -42,7 +43,7 @@ not: the objective takes the weights computed from them, eq. 21-25)."""
 
 
 FITNESS_DEFAULTS: dict[str, dict[str, float]] = {
-    m: {k: registry.objective_default(m, k) for k in names}
+    m: {k: objective_default(m, k) for k in names}
     for m, names in FITNESS_PARAMS.items()
 }
 """Each combiner's parameters and their defaults, read from :mod:`jaxga.core.objectives` (the

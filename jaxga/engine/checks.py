@@ -3,7 +3,7 @@
 The registered operators a configuration chooses (by role), the keys no stage reads
 (refused as overrides), combinations of keys (an operator's required keys, its own
 ``check``), migration sizes, and the traits that decide a run's shape (waypoint paths,
-the distance-field guide, the field repairs). All read :mod:`jaxga.config.registry`.
+the distance-field guide, the field repairs). All read :mod:`jaxga.operators.registry`.
 """
 
 from __future__ import annotations
@@ -12,12 +12,12 @@ import os
 from collections.abc import Iterable
 from typing import Any
 
-from jaxga.config import registry
 from jaxga.config.presets import file_overrides
-from jaxga.config.registry import FIELD_REPAIR, NEVER_FAILS, WAYPOINTS
 from jaxga.config.schema import DEFAULTS, Config
 from jaxga.core.errors import ParameterError
+from jaxga.operators import registry
 from jaxga.operators.islands import migrates
+from jaxga.operators.registry import FIELD_REPAIR, NEVER_FAILS, WAYPOINTS
 
 
 def chosen_operators(config: Config) -> dict[str, registry.Operator]:
@@ -34,7 +34,7 @@ def chosen_operators(config: Config) -> dict[str, registry.Operator]:
 
 def compiled_fallback(config: Config) -> str:
     """The initialiser compiled into a run's programs as ``init.fallback``: ``"none"`` when
-    ``init.method`` cannot fail (trait :data:`~jaxga.config.registry.NEVER_FAILS`: there is
+    ``init.method`` cannot fail (trait :data:`~jaxga.operators.registry.NEVER_FAILS`: there is
     nothing to fill), else the configured fallback, or the default one
     (:data:`jaxga.config.schema.DEFAULTS`, the field walk) when the configuration says
     ``"none"``. Whether it runs is the traced flag ``init.fallback`` of the parameters
@@ -62,7 +62,7 @@ def has_trait(chosen: dict[str, registry.Operator], trait: str,
 
 def uses_waypoints(config: Config) -> bool:
     """Whether the population holds waypoint paths (an operator with the trait
-    :data:`~jaxga.config.registry.WAYPOINTS`, AGACD's crossover or point mutation: segments
+    :data:`~jaxga.operators.registry.WAYPOINTS`, AGACD's crossover or point mutation: segments
     checked by line of sight) rather than 8-connected cell paths."""
     return has_trait(chosen_operators(config), WAYPOINTS)
 
@@ -91,7 +91,7 @@ def unread_keys(config: Config) -> dict[str, str]:
     rate under AGACD's adaptive rates eq. 26-29, MPMGA's temperature without its
     simulated-annealing mutation, migration settings of a single island, ...), so
     :func:`jaxga.run` refuses them as overrides instead of ignoring them silently. An
-    operator's own keys (:func:`jaxga.config.registry.schema_fields`) are read exactly when an
+    operator's own keys (:func:`jaxga.operators.registry.schema_fields`) are read exactly when an
     operator the configuration uses declares them (:func:`chosen_operators`); the
     families' shared keys follow what :func:`build`, the stages and
     :func:`jaxga.operators.islands.migrate` read.
@@ -179,7 +179,7 @@ def check_combination(config: Config) -> None:
     configuration does not set (:data:`NEEDS`, the operators' ``required`` keys; a fixed
     crossover or mutation rate, or one per island), a post-optimisation of cell paths on
     waypoint paths, and what each chosen operator's own ``check`` refuses
-    (:mod:`jaxga.config.registry`: MPMGA's decay rate ``w = 0``, eq. 17; Zhang's speeds not
+    (:mod:`jaxga.operators.registry`: MPMGA's decay rate ``w = 0``, eq. 17; Zhang's speeds not
     positive or a turning speed above the straight one, eq. 2; IMGA's, MPMGA's or Zhu's
     fitness weights all 0; a smoothness floor not positive; a Delphi ratio list whose
     length does not match AGACD's three objectives, eq. 21-25). Migrants are checked
@@ -238,7 +238,7 @@ def check_migration(config: Config, population: int) -> None:
 def uses_guide(config: Config) -> bool:
     """Whether a run of ``config`` steers by the problem's exact distance fields (its grid
     needs :func:`jaxga.operators.guide.with_guide`): an operator with the trait
-    :data:`~jaxga.config.registry.NEEDS_GUIDE` (the field initialiser, as ``init.method`` or as
+    :data:`~jaxga.operators.registry.NEEDS_GUIDE` (the field initialiser, as ``init.method`` or as
     the fallback compiled in for another initialiser, :func:`compiled_fallback`, also when
     ``init.fallback = "none"`` switches it off), and the field repairs
     (``repair.fallback``)."""
@@ -251,7 +251,7 @@ def uses_guide(config: Config) -> bool:
 
 def field_repairs(config: Config) -> bool:
     """Whether ``repair.fallback = "field"`` changes an operator of ``config`` (one with
-    the trait :data:`~jaxga.config.registry.FIELD_REPAIR`: its ``field_repair`` option;
+    the trait :data:`~jaxga.operators.registry.FIELD_REPAIR`: its ``field_repair`` option;
     decision 019)."""
     return has_trait(chosen_operators(config), FIELD_REPAIR, FIELD_REPAIR_ROLES)
 

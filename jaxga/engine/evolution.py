@@ -30,8 +30,6 @@ import jax.numpy as jnp
 import numpy as np
 
 from jaxga._batching.numerics import ordered_mean
-from jaxga.config import registry
-from jaxga.config.registry import NEVER_FAILS, Binding
 from jaxga.core import objectives
 from jaxga.core.geometry import clear
 from jaxga.core.grid import Grid
@@ -44,10 +42,12 @@ from jaxga.core.paths import (
     remove_loops,
 )
 from jaxga.engine.algorithm import F32, I32, Algorithm
+from jaxga.operators import registry
 from jaxga.operators.init import initialise_population
 from jaxga.operators.islands import migrate
 from jaxga.operators.lift import gated_map, windowed_map
 from jaxga.operators.rates import rate_rule
+from jaxga.operators.registry import NEVER_FAILS, Binding
 
 
 # ----------------------------------------------------------------------------- stages
@@ -131,7 +131,7 @@ def evaluate(algo: Algorithm, grid: Grid, params: dict, cells, length, active, *
 
 def binding(algo: Algorithm, params: dict, t: jax.Array | None = None,
             fit_fn: Callable | None = None) -> Binding:
-    """What the stages bind operators with (:class:`jaxga.config.registry.Binding`): the static
+    """What the stages bind operators with (:class:`jaxga.operators.registry.Binding`): the static
     algorithm, the dynamic parameters, generation ``t``, the fitness function and
     whether ``repair.fallback = "field"``."""
     return Binding(algo, params, generation=t, generations=run_generations(algo, params),

@@ -9,7 +9,22 @@
 - :mod:`~jaxga.operators.islands`: migration between populations;
 - :mod:`~jaxga.operators.schedules`: time schedules of the adaptive operators;
 - :mod:`~jaxga.operators.guide`: the exact distance fields that steer the field operators;
-- :mod:`~jaxga.operators.lift`: per-individual operators applied to a population.
+- :mod:`~jaxga.operators.lift`: per-individual operators applied to a population;
+- :mod:`~jaxga.operators.fitness`: the papers' objectives as operators;
+- :mod:`~jaxga.operators.simplify`: the per-generation simplifications;
+- :mod:`~jaxga.operators.registry`: the registry every operator is declared in.
 
-Each is registered once in :mod:`jaxga.config.registry`.
+Each operator is declared once, at the end of its family's module; importing this package
+imports every family's module, so the registry holds them all, in the order of
+:data:`jaxga.operators.registry.FAMILIES`.
 """
+
+from jaxga.operators import (  # noqa: F401 - each family's module declares its operators
+    crossover,
+    fitness,
+    init,
+    mutation,
+    postprocess,
+    selection,
+    simplify,
+)

@@ -57,6 +57,18 @@ from jaxga.core.paths import TABLE_MAX_CELLS, remove_loops
 from jaxga.core.paths import position_lookup as _position_lookup
 from jaxga.operators.init import field_path
 from jaxga.operators.lift import over_pairs_gated
+from jaxga.operators.mutation import split_half
+from jaxga.operators.registry import (
+    FIELD_REPAIR,
+    NEEDS_FITNESS,
+    SPLICING,
+    WAYPOINTS,
+    Binding,
+    Operator,
+    operator,
+    register,
+    register_none,
+)
 from jaxga.operators.repair import concat, connect, prefix_count
 
 __all__ = [
@@ -828,3 +840,36 @@ def crossover_population(
     twice the window (:func:`jaxga.operators.lift.spliced_pairs_map`) when every parent fits it.
     """
     return over_pairs_gated(op, in_axes_extra=in_axes_extra, dense=dense, splicing=splicing)
+
+
+# the family's operators (jaxga.operators.registry)
+def _half_common_point_half_column(ctx: Binding) -> Callable:
+    """Zhu & Pan 4.4 / 4.7 step 3: half the pairs through the common-point crossover,
+    half through the column (non-common point) crossover, drawn per generation."""
+    lifted = over_pairs_gated(operator("crossover", "common_point").bind(ctx),
+                              alternative=operator("crossover", "column").bind(ctx))
+
+    def run(key, grid, pop, pc):
+        k_half, key = jax.random.split(key)
+        return lifted(key, grid, pop, pc, split_half(k_half, pop.size // 2))
+
+    return run
+
+
+register(Operator("crossover", "common_point", common_point,
+                  "single point at a cell both parents share (IMGA 4.3.2, Zhu & Pan 4.4)",
+                  traits=frozenset({SPLICING})))
+register(Operator("crossover", "cut_and_check", cut_and_check,
+                  "single point, child kept only if its junction is collision-free "
+                  "(AGACD 4.6)", traits=frozenset({WAYPOINTS})))
+register(Operator("crossover", "heterologous", heterologous,
+                  "single point between different cells, child kept only if fitter "
+                  "(MPMGA 4.5)", traits=frozenset({NEEDS_FITNESS})))
+register(Operator("crossover", "column", column,
+                  "non-common point: join the parents across a column (Zhu & Pan 4.4)",
+                  traits=frozenset({NEEDS_FITNESS, FIELD_REPAIR})))
+register(Operator("crossover", "common_point_or_column", None,
+                  "half the pairs common_point, half column (Zhu & Pan 4.4, 4.7 step 3)",
+                  traits=frozenset({NEEDS_FITNESS, FIELD_REPAIR}),
+                  population=_half_common_point_half_column, aliases=("zhu_mixed",)))
+register_none("crossover", "no crossover")

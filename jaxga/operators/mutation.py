@@ -38,7 +38,8 @@ operator, half through the other".
 
 from __future__ import annotations
 
-from collections.abc import Callable
+import inspect
+from collections.abc import Callable, Mapping
 
 import jax
 import jax.numpy as jnp
@@ -46,10 +47,23 @@ import numpy as np
 
 from jaxga.core.dtypes import I32
 from jaxga.core.errors import ParameterError
+from jaxga.core.fields import POS, Field
 from jaxga.core.grid import DIRECTIONS, Grid, blocked_at, move_legal
+from jaxga.operators import schedules
 from jaxga.operators.init import directional_walk, field_reconnect
-from jaxga.operators.lift import keep_parent_on_failure
+from jaxga.operators.lift import keep_parent_on_failure, over_individuals_gated
 from jaxga.operators.postprocess import compact, line_of_sight
+from jaxga.operators.registry import (
+    FIELD_REPAIR,
+    NEEDS_FITNESS,
+    SHRINKING,
+    WAYPOINTS,
+    Binding,
+    Operator,
+    operator,
+    register,
+    register_none,
+)
 from jaxga.operators.repair import concat, connect, splice_loop_free
 
 __all__ = [
@@ -576,3 +590,70 @@ def adaptive_mutation_probability(
 def split_half(key: jax.Array, n: int) -> jax.Array:
     """``bool[n]`` with exactly ``n // 2`` True entries at uniformly random positions."""
     return jax.random.permutation(key, n) < n // 2
+
+
+# the family's operators (jaxga.operators.registry)
+def _half_replace_point_half_regrow(ctx: Binding) -> Callable:
+    """Zhu & Pan 4.5 / 4.7 step 3: half the individuals through the one-point mutation
+    (``replace_point``), half through the range mutation (``regrow_segment``)."""
+    lifted = over_individuals_gated(operator("mutation", "replace_point").bind(ctx),
+                                    alternative=operator("mutation", "regrow_segment").bind(ctx))
+
+    def run(key, grid, pop, pm):
+        k_half, key = jax.random.split(key)
+        return lifted(key, grid, pop, pm, split_half(k_half, pop.size))
+
+    return run
+
+
+def _check_annealing(config: Mapping) -> None:
+    if not config["mutation.temperature_w"] > 0:
+        raise ParameterError("mutation.temperature_w must be in (0, 1] (MPMGA eq. 17: "
+                             f"T = c1 * w**t), got {config['mutation.temperature_w']}")
+
+
+def _annealing_temperature(ctx: Binding) -> dict:
+    """MPMGA eq. 17: ``T = c1 * w**t`` at generation ``t`` (``c1`` and ``w`` traced)."""
+    schedule = schedules.mpmga_temperature(ctx.params["mutation.temperature_c1"],
+                                           ctx.params["mutation.temperature_w"])
+    return {"temperature": schedule(ctx.generation)}
+
+
+register(Operator("mutation", "neighbour_point", neighbour_point,
+                  "move a node to a free 8-neighbour and reconnect (IMGA 4.3.3)"))
+register(Operator("mutation", "replace_point", replace_point,
+                  "replace a node by another cell adjacent to both its neighbours "
+                  "(Zhu & Pan 4.5 one-point mutation)", aliases=("one_point",)))
+register(Operator("mutation", "regrow_segment", regrow_segment,
+                  "delete the path between two nodes and regrow it by Algorithm 1's walk "
+                  "(Zhu & Pan 4.5 range mutation)", traits=frozenset({FIELD_REPAIR}),
+                  aliases=("range",)))
+register(Operator(
+    "mutation", "segment_sa", segment_sa,
+    "delete a segment, reconnect, accept by simulated annealing (MPMGA 4.6, eq. 15-17)",
+    params={
+        "mutation.temperature_c1": Field(**POS, doc="MPMGA annealing T = c1 * w**t: c1"),
+        "mutation.temperature_w": Field(float, low=0.0, high=1.0, dynamic=True,
+                                        doc="MPMGA annealing T = c1 * w**t: decay rate w "
+                                            "in (0, 1]"),
+    },
+    traits=frozenset({NEEDS_FITNESS, FIELD_REPAIR}), options=_annealing_temperature,
+    required=("mutation.temperature_c1", "mutation.temperature_w"), check=_check_annealing,
+))
+register(Operator(
+    "mutation", "point_checked", point_checked,
+    "move a node within a radius, kept only if collision-free (AGACD 4.7)",
+    params={"mutation.radius": Field(
+        int, "AGACD point mutation radius in cells", low=1, high=10_000,
+        default=inspect.signature(point_checked).parameters["radius"].default)},
+    traits=frozenset({WAYPOINTS}),
+    options=lambda ctx: {"radius": int(ctx.config.get("mutation.radius"))},
+))
+register(Operator("mutation", "replace_point_or_regrow", None,
+                  "half replace_point, half regrow_segment (Zhu & Pan 4.5, 4.7 step 3)",
+                  traits=frozenset({FIELD_REPAIR}), population=_half_replace_point_half_regrow,
+                  aliases=("zhu_mixed",)))
+register(Operator("mutation", "delete_corner", delete_corner,
+                  "delete the node at one random position when it is a 45, 90 or 135 degree "
+                  "corner (Zhang eq. 3-5)", traits=frozenset({SHRINKING, WAYPOINTS})))
+register_none("mutation", "no mutation")

@@ -33,6 +33,7 @@ from jaxga.core.errors import ParameterError
 from jaxga.core.geometry import clear, floor_div, linear_trial
 from jaxga.core.grid import Grid, diagonal_legal, move_legal
 from jaxga.core.paths import pad, remove_loops
+from jaxga.operators.registry import CONTINUOUS_ONLY, Operator, register, register_none
 
 __all__ = [
     "LINE_OF_SIGHT",
@@ -416,3 +417,13 @@ def simplify_adjacent(
     out = jnp.where(k <= t, cells, cells[jnp.minimum(k + d, n_cap - 1)])
     new_length = length - d
     return pad(out, new_length), new_length, ~found
+
+
+# post (IMGA 4.5, AGACD 4.8, MPMGA 4.7): the final best path
+register(Operator("post", "shortcut_greedy", shortcut_greedy,
+                  "delete nodes while the shortcut is collision-free (IMGA 4.5, AGACD 4.8, "
+                  "MPMGA 4.7)"))
+register(Operator("post", "shortcut_optimal", shortcut_optimal,
+                  "the shortest any-angle path through the path's nodes (jaxga)",
+                  traits=frozenset({CONTINUOUS_ONLY})))
+register_none("post", "no post-optimisation (loops removed)")

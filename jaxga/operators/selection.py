@@ -41,6 +41,8 @@ import jax.numpy as jnp
 
 from jaxga.core.dtypes import F32, I32
 from jaxga.core.errors import ParameterError
+from jaxga.core.fields import Field
+from jaxga.operators.registry import Operator, register, register_none
 
 __all__ = [
     "layered_thirds",
@@ -269,3 +271,23 @@ def tournament(
     f = jnp.where(jnp.isnan(fitness), -jnp.inf, fitness)
     win = jnp.argmax(f[cand], axis=1)
     return jnp.take_along_axis(cand, win[:, None], axis=1)[:, 0].astype(I32)
+
+
+# the family's operators (jaxga.operators.registry)
+register(Operator("selection", "roulette", roulette,
+                  "fitness-proportionate roulette (AGACD 4.5, MPMGA 5.2)"))
+register(Operator("selection", "roulette_elite", roulette_elite,
+                  "roulette, the previous best replaces the worst (AGACD 4.5, Zhu & Pan 4.3)"))
+register(Operator("selection", "layered_thirds", layered_thirds,
+                  "top third twice, middle third once (IMGA 4.3.1)"))
+register(Operator("selection", "stratified", stratified,
+                  "layers A > B > C > D, D dropped, refill by roulette (Zhang eq. 1)"))
+register(Operator(
+    "selection", "tournament", tournament, "the best of k uniformly drawn individuals",
+    params={"selection.tournament_size": Field(int, "tournament size k", low=1, high=1000,
+                                               default=2)},
+    options=lambda ctx: {"k": int(ctx.config.get("selection.tournament_size"))},
+))
+register(Operator("selection", "shuffle", shuffle,
+                  "no selection pressure, random pairs: each individual once (MPMGA 4.4)"))
+register_none("selection", "no selection: individuals keep their slots (fixed pairs 2k, 2k + 1)")

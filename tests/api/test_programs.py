@@ -24,14 +24,13 @@ import pytest
 
 from jaxga import api, engine
 from jaxga.api import executables, programs
-from jaxga.config import registry
 from jaxga.core.errors import CacheWarning, ParameterError
 from jaxga.core.paths import is_feasible
 from jaxga.engine.maptables import with_tables
 from jaxga.engine.run import run_evolve, run_init
 from jaxga.maps import load_map
 from jaxga.maps.generators import random_map
-from jaxga.operators import schedules
+from jaxga.operators import registry, schedules
 from jaxga.operators.guide import with_guide
 from tests import canonical
 

@@ -3,7 +3,7 @@
 A card is written from the paper, not from the preset's TOML: per stage the operator and
 every parameter the paper gives. The chain is read from what the engine actually binds:
 the registered operator of each role (:func:`jaxga.engine.chosen_operators`), the keyword
-options of its function after :meth:`~jaxga.config.registry.Operator.bind` (defaults
+options of its function after :meth:`~jaxga.operators.registry.Operator.bind` (defaults
 included, so an option the registry never sets shows its default), the operator's own
 configuration keys, the family's common keys (``init.unique``, ``crossover.adaptive``,
 ...) and the stage's rate.

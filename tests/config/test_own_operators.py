@@ -11,10 +11,10 @@ import pytest
 
 import jaxga
 import jaxga.testing
-from jaxga.config import registry
 from jaxga.core.grid import index_to_xy, move_legal
 from jaxga.core.objectives import path_length
 from jaxga.core.paths import is_continuous
+from jaxga.operators import registry
 from jaxga.operators.postprocess import compact
 
 pytestmark = pytest.mark.slow  # a user's operators through whole GAs (programs of their own)
@@ -126,3 +126,35 @@ def test_jaxgas_own_operators_are_never_replaced():
 
     with pytest.raises(ValueError, match="jaxga's own"):
         jaxga.GA("sga", MAP, mutation=replace_point)
+
+
+def test_an_operator_declared_in_a_module_of_its_own_runs_in_a_preset_file(tmp_path):
+    """A new operator is one module (its function and its declaration, as jaxga's own
+    families have theirs) and a preset file that names it with its own key: importing the
+    module registers it; the preset's key is checked against its declared range; the
+    engine binds it; a run's paths are valid."""
+    import importlib
+
+    from jaxga.core.errors import ParameterError
+    from jaxga.engine import chosen_operators
+
+    module = importlib.import_module("tests.config.own_operator_module")
+    try:
+        jaxga.testing.check_operator(registry.operator("mutation", "drop_points"))
+        preset = tmp_path / "dropping.toml"
+        preset.write_text('base = "sga"\n[mutation]\nmethod = "drop_points"\n'
+                          "probability = 0.5\ndrops = 2\n")
+        ga = jaxga.GA(str(preset), MAP, generations=5)
+        assert ga.config["mutation.drops"] == 2
+        assert chosen_operators(ga.config)["mutation.method"].fn is module.drop_points
+        r = jaxga.run(str(preset), MAP, seeds=3, generations=5)
+        assert r.success.all() and r.config["mutation.method"] == "drop_points"
+        continuous, _, _ = (np.asarray(x) for x in _path_facts(
+            ga.grid, np.asarray(r.raw_cells), np.asarray(r.raw_n_cells, np.int32)))
+        assert continuous.all()
+        preset.write_text(preset.read_text().replace("drops = 2", "drops = 0"))
+        with pytest.raises(ParameterError, match="mutation.drops"):
+            jaxga.run(str(preset), MAP, seeds=1, generations=5)
+    finally:
+        registry.unregister("mutation", "drop_points")
+

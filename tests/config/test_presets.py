@@ -24,7 +24,9 @@ else:  # pragma: no cover
 
 ROOT = Path(__file__).resolve().parents[2]
 PAPER_PRESETS = ("agacd", "iga_zhang", "iga_zhu", "imga", "mpmga", "sga")
-PRESETS = (*PAPER_PRESETS, "hybrid")
+PRESETS = tuple(preset_names())
+"""Every preset file of the package (discovered: a new preset is its TOML file and its
+card, docs/cards, with no list to extend here)."""
 VARIANTS = {
     "hybrid": [],
     "agacd": ["50x50"],
@@ -51,7 +53,7 @@ def check(config: Config, expected: dict) -> None:
 
 
 def test_the_six_paper_presets_and_jaxgas_own_exist():
-    assert preset_names() == sorted(PRESETS)
+    assert set(PAPER_PRESETS) | {"hybrid"} <= set(preset_names())
     info = preset_info()
     assert [name for name, _, _ in info] == sorted(PRESETS)
     for name, paper, description in info:
@@ -60,8 +62,9 @@ def test_the_six_paper_presets_and_jaxgas_own_exist():
 
 @pytest.mark.parametrize("name", PRESETS)
 def test_every_preset_and_variant_loads_and_validates(name):
-    assert preset_variants(name) == sorted(VARIANTS[name])
-    for variant in [None, *VARIANTS[name]]:
+    if name in VARIANTS:  # the variants the papers' settings need
+        assert preset_variants(name) == sorted(VARIANTS[name])
+    for variant in [None, *preset_variants(name)]:
         config = load_preset(name, variant)
         assert isinstance(config, Config)
         assert config["name"] == name

@@ -15,11 +15,11 @@ import numpy as np
 import pytest
 
 from jaxga import testing
-from jaxga.config import registry
 from jaxga.config.presets import load_preset
 from jaxga.config.schema import COMMON_FIELDS, SCHEMA
 from jaxga.core.errors import ParameterError
 from jaxga.core.paths import Population
+from jaxga.operators import registry
 from jaxga.operators.postprocess import compact
 
 OPERATORS = registry.operators()
@@ -108,7 +108,7 @@ def test_the_configuration_accepts_exactly_the_registered_names():
 
 
 def test_registering_adds_the_name_and_keys_and_unregistering_removes_them():
-    from jaxga.config.fields import Field
+    from jaxga.core.fields import Field
 
     field = Field(float, "toy strength", low=0.0, high=2.0, dynamic=True, default=1.0)
     op = registry.Operator("mutation", "toy_op", registry.operator("mutation",

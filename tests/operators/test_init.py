@@ -25,9 +25,9 @@ from hypothesis import strategies as st
 from scipy import stats
 
 from jaxga import Grid, NoPathError, ParameterError
-from jaxga.config import registry
 from jaxga.maps import legal_moves, random_map
 from jaxga.operators import init as I
+from jaxga.operators import registry
 from jaxga.operators.guide import with_guide
 from jaxga.operators.init import walks as init_walks
 from tests.plain_lifts import initialise
@@ -589,7 +589,7 @@ def test_x64_mode_keeps_int32():
     code = textwrap.dedent("""
         import sys, jax, numpy as np
         jax.config.update("jax_compilation_cache_dir", sys.argv[1])
-        from jaxga.config import registry
+        from jaxga.operators import registry
         from jaxga.operators import init as I
         from jaxga.operators.guide import with_guide
         from jaxga.maps import random_map

@@ -109,7 +109,7 @@ def test_every_code_block_has_a_known_kind():
 def _registry_as_found():
     """A page registers operators of its own (``jaxga.register_operator``), as a reader
     would; the other tests in this process must not see them."""
-    from jaxga.config import registry
+    from jaxga.operators import registry
 
     before = {family: set(registry.names(family)) for family in registry.FAMILIES}
     yield

@@ -22,7 +22,8 @@ bounded) and reporting the success rate.
 
 The walk primitives go from any ``source`` cell to any ``target`` cell and accept an
 ``exclude`` set (cells that count as visited). Initialisers are looked up by name in
-the registry (:func:`jaxga.config.registry.initialiser`).
+the registry (:func:`jaxga.operators.registry.initialiser`), where the end of this
+module declares them.
 
 Implementation notes shared by the walks
 ----------------------------------------
@@ -60,6 +61,7 @@ walks), :mod:`~jaxga.operators.init.connect` (median insertion, intermittent pat
 what they share (:mod:`~jaxga.operators.init.common`).
 """
 
+from jaxga.core.fields import Field
 from jaxga.operators.init.common import (  # noqa: F401 - the family's public names
     InitFn,
     check_capacity,
@@ -98,6 +100,13 @@ from jaxga.operators.init.walks import (  # noqa: F401 - the family's public nam
     random_walk,
     uniform_walk,
 )
+from jaxga.operators.registry import (
+    FIELD_REPAIR,
+    NEEDS_GUIDE,
+    NEVER_FAILS,
+    Operator,
+    register,
+)
 
 __all__ = [
     "InitFn",
@@ -119,3 +128,35 @@ __all__ = [
     "random_walk",
     "uniform_walk",
 ]
+
+
+# the family's operators (jaxga.operators.registry)
+register(Operator("init", "random_walk", random_walk,
+                  "uniformly random self-avoiding walk from start to goal (Zhu & Pan 4.1; "
+                  "the plain GA)"))
+register(Operator("init", "median_insertion", median_insertion,
+                  "random free cell per row, connected by median insertion (IMGA 4.1)",
+                  traits=frozenset({FIELD_REPAIR})))
+register(Operator("init", "intermittent_connect", intermittent_connect,
+                  "barrier-free intermittent path + connection + deletion (MPMGA 4.2)",
+                  traits=frozenset({FIELD_REPAIR})))
+register(Operator("init", "greedy_random_target", greedy_random_target,
+                  "greedy walk towards the goal or a random target (AGACD 4.3)"))
+register(Operator("init", "directional", directional,
+                  "walk with directional guidance, eq. 5 weights (Zhu & Pan 4.1, "
+                  "Algorithm 1)"))
+register(Operator(
+    "init", "field_walk", field_walk,
+    "random detour down the exact distance fields; cannot fail where a path exists "
+    "(jaxga; decision notes)",
+    params={
+        "init.slack": Field(float, low=0.0, high=100.0, dynamic=True, default=0.5,
+                            doc="field_walk: paths up to (1 + slack) x the optimal length"),
+        "init.temperature": Field(float, low=0.0, high=1000.0, dynamic=True, default=1.0,
+                                  doc="field_walk: preference for short detours, "
+                                      "exp(-excess / temperature); 0 = optimal moves only"),
+    },
+    traits=frozenset({NEVER_FAILS, NEEDS_GUIDE}),
+    options=lambda ctx: {"slack": ctx.params["init.slack"],
+                         "temperature": ctx.params["init.temperature"]},
+))

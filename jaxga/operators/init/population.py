@@ -139,7 +139,7 @@ def initialise_population(
         key: PRNG key; the same key gives the same population.
         grid: the map.
         init_fn: static; an initialiser ``(key, grid, capacity) -> (cells, length, ok)``
-            (by registered name: :func:`jaxga.config.registry.initialiser`). Bind options
+            (by registered name: :func:`jaxga.operators.registry.initialiser`). Bind options
             with ``functools.partial`` and reuse the same object (a new partial each call
             recompiles).
         size: static population size ``P``.
@@ -184,7 +184,7 @@ def initialise_population(
     if not callable(init_fn):
         raise ParameterError(
             f"init_fn must be an initialiser function, got {init_fn!r} (by name: "
-            "jaxga.config.registry.initialiser(name))")
+            "jaxga.operators.registry.initialiser(name))")
     fn = init_fn
     capacity = check_capacity(capacity)
     traced = isinstance(max_tries, jax.Array)

@@ -1,6 +1,6 @@
 """Configuration fields: one key's type, range, meaning and default (:class:`Field`).
 
-The operators' own keys are declared with their operator in :mod:`jaxga.config.registry`, the
+The operators' own keys are declared with their operator in :mod:`jaxga.operators.registry`, the
 others in :data:`jaxga.config.schema.SCHEMA`; both are built from this module, which imports
 nothing else of jaxga's but its errors.
 """
