@@ -15,7 +15,7 @@ from jaxga import interrupts
 from jaxga.api.compilation_cache import ENV_VAR as CACHE_ENV_VAR
 from jaxga.api.compilation_cache import configure
 from jaxga.api.device_probe import DeviceDisagrees
-from jaxga.api.jax_settings import check_jax_settings, check_platform
+from jaxga.api.jax_settings import check_jax_settings, check_platform, check_xla_flags
 from jaxga.api.lowering import check_environment
 from jaxga.api.parallel import (
     EXIT_PROCESS_LOST,
@@ -89,6 +89,7 @@ def main(argv: Sequence[str] | None = None) -> int:
             warnings.showwarning = one_line_warnings(warnings.showwarning)
             check_environment()  # $JAXGA_THREEFRY, which `import jaxga` does not refuse
             check_jax_settings()  # JAX_ENABLE_X64, JAX_DISABLE_JIT
+            check_xla_flags()  # before the backend starts: XLA ends the process on a bad flag
             check_outputs(args)
             if hasattr(args, "devices"):  # subcommands with add_parallel_arguments
                 configure_from_args(args)  # before JAX's backend starts
@@ -157,8 +158,9 @@ def console() -> None:
             stream.flush()
     remove_temporaries()  # os._exit skips the interpreter's own exit handlers
     several = False
-    with contextlib.suppress(Exception):  # a backend that never started: one process
-        several = "jax" in sys.modules and jax.process_count() > 1
+    with contextlib.suppress(Exception):  # several processes only through jax.distributed
+        # (asked first: jax.process_count() would start a backend that never started)
+        several = jax.distributed.is_initialized() and jax.process_count() > 1
     if several:
         sys.exit(code)
     os._exit(code)

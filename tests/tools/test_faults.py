@@ -433,6 +433,8 @@ def test_matplotlib_with_unusable_folders_leaves_nothing_and_a_bad_backend_is_on
     ("JAX_DISABLE_JIT", "1", "jit is disabled ($JAX_DISABLE_JIT=1)"),
     ("JAX_PLATFORMS", "cuda", "$JAX_PLATFORMS='cuda' names a platform"),
     ("JAX_PLATFORMS", "no-such-platform", "$JAX_PLATFORMS='no-such-platform'"),
+    ("XLA_FLAGS", "--xla_no_such_flag=1", "XLA does not accept $XLA_FLAGS="
+                                           "'--xla_no_such_flag=1' (Unknown flag"),
 ])
 def test_jaxs_own_switches_are_one_line_naming_the_variable(tmp_path, variable, value,
                                                             words):
@@ -442,11 +444,28 @@ def test_jaxs_own_switches_are_one_line_naming_the_variable(tmp_path, variable, 
         if any(d.platform == "gpu" for d in jax.devices()):
             pytest.skip("this machine has CUDA")
     proc = subprocess.run([sys.executable, "-m", "jaxga.cli", *RUN],
-                          env=dict(os.environ, **{variable: value}), cwd=tmp_path,
-                          capture_output=True, text=True, timeout=300)
+                          env=dict(os.environ, HOME=str(tmp_path), **{variable: value}),
+                          cwd=tmp_path, capture_output=True, text=True, timeout=300)
     err = proc.stderr.strip()
     assert proc.returncode == EXIT_BAD_INPUT and "\n" not in err, err
     assert err.startswith("jaxga: error: ") and words in err, err
+
+
+@pytest.mark.slow  # starts processes
+def test_xla_flags_xla_accepts_are_probed_once_and_remembered(tmp_path, monkeypatch):
+    """A flag XLA knows passes; the verdict is remembered per flags, platforms and jaxlib,
+    so a later command does not start a probe process again."""
+    from jaxga.api import jax_settings
+
+    monkeypatch.setenv("HOME", str(tmp_path))
+    monkeypatch.setenv("XLA_FLAGS", "--xla_force_host_platform_device_count=1")
+    jax_settings.check_xla_flags()
+    remembered = json.loads(jax_settings.xla_flags_verdicts().read_text())
+    assert [k.split("|")[0] for k in remembered] == ["--xla_force_host_platform_device_count=1"]
+    monkeypatch.setattr(subprocess, "run", lambda *a, **k: pytest.fail("probed again"))
+    jax_settings.check_xla_flags()
+    monkeypatch.delenv("XLA_FLAGS")
+    jax_settings.check_xla_flags()  # nothing to check
 
 
 def test_the_api_refuses_64_bit_mode_and_disabled_jit_in_one_line():
