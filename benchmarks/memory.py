@@ -31,15 +31,15 @@ GENERATIONS = 3
 CHILD = """
 import json, resource, sys
 import jaxga
-from jaxga.api import memory, runs
+from jaxga.api import calls, memory, runs
 preset, pop, seeds = sys.argv[1], int(sys.argv[2]), int(sys.argv[3])
 seen, accounts = [], []
-real = runs.fitting_layout
+real = calls.fitting_layout
 def spy(algo, n_local, n_dev, layout, padded=True):
     out = real(algo, n_local, n_dev, layout, padded)
     seen.append((algo, out[0] * n_dev * out[2], out[0] * n_dev, n_local))
     return out
-runs.fitting_layout = spy
+calls.fitting_layout = spy
 real_check = runs.check_compiled_memory
 def account(stats, calls, n_runs):
     accounts.extend(memory.compiled_peak(s, calls) for s in stats.values() if s is not None)

@@ -2,7 +2,9 @@
 parameter points (:func:`sweep`), and what they return (:class:`Result`).
 
 - :mod:`~jaxga.api.ga`: :class:`GA`, the pure core of one preset on one map;
-- :mod:`~jaxga.api.runs`: :func:`run`, :func:`sweep`, loading a preset and a map;
+- :mod:`~jaxga.api.problem`: a call's preset and map, loaded and checked once;
+- :mod:`~jaxga.api.runs`: :func:`run`, :func:`sweep`;
+- :mod:`~jaxga.api.calls`: a request's runs as calls of the compiled programs;
 - :mod:`~jaxga.api.result`: :class:`Result`, per-seed paths, metrics and gaps;
 - :mod:`~jaxga.api.seeds`: accepted seeds, their keys and sharding;
 - :mod:`~jaxga.api.programs`: the compiled programs, cached per shape;
@@ -20,6 +22,11 @@ The tools (command line, DOE, comparisons, re-planning) use what is exported her
 from jaxga.api.ga import GA
 from jaxga.api.memory import (
     check_result_memory,
+)
+from jaxga.api.problem import (
+    check_one_corner_rule,
+    configured_rule,
+    load_problem,
 )
 from jaxga.api.programs import (
     ACCELERATOR_BUCKETS,
@@ -45,11 +52,8 @@ from jaxga.api.result import (
 )
 from jaxga.api.runs import (
     RUN_OPTIONS,
-    check_one_corner_rule,
     check_run,
     checked_capacity,
-    configured_rule,
-    load_problem,
     run,
     sweep,
 )

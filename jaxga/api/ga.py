@@ -25,8 +25,8 @@ from typing import Any
 
 import jax
 
+from jaxga.api.problem import load_problem
 from jaxga.api.programs import warn_platform
-from jaxga.api.runs import load_problem
 from jaxga.config.schema import Config
 from jaxga.core.errors import ParameterError
 from jaxga.core.grid import Grid
@@ -63,7 +63,7 @@ class GA:
         **overrides: configuration keys (``crossover__probability=0.7`` or a nested dict),
             checked as :func:`jaxga.run` checks them (a key the preset never reads is
             refused); or a family with a function of your own (``mutation=my_mutation``,
-            ``objective=my_objective``; :func:`jaxga.api.runs.own_operators`).
+            ``objective=my_objective``; :func:`jaxga.api.problem.own_operators`).
 
     Attributes:
         config: the checked configuration.

@@ -23,8 +23,9 @@ import dataclasses
 from collections.abc import Callable
 from typing import Any
 
+from jaxga.api.problem import load_problem
 from jaxga.api.result import Result
-from jaxga.api.runs import load_problem, run
+from jaxga.api.runs import run
 from jaxga.config.schema import Config
 from jaxga.engine.algorithm import map_capacity
 from jaxga.maps import MapInfo, load_map_info

@@ -9,7 +9,6 @@ on its own.
 
 from __future__ import annotations
 
-import contextlib
 import dataclasses
 import inspect
 import math
@@ -19,11 +18,11 @@ from collections.abc import Callable, Mapping, Sequence
 from typing import TYPE_CHECKING, Any
 
 import jax
-import jax.numpy as jnp
 import numpy as np
 from jax.errors import JaxRuntimeError
 
 from jaxga.api import executables, parallel
+from jaxga.api.calls import RunCalls, evolve_in_chunks, this_process_runs
 from jaxga.api.device_probe import check_backend, needs_probe
 from jaxga.api.failures import (
     failure_causes,
@@ -32,41 +31,31 @@ from jaxga.api.failures import (
     unstarted_results,
     warn_unfilled,
 )
-from jaxga.api.jax_settings import check_jax_settings, check_platform
-from jaxga.api.lowering import check_environment
 from jaxga.api.memory import (
     NO_PATH_BYTES_PER_RUN,
     check_compiled_memory,
     check_memory,
     check_result_memory,
-    memory_budget,
-    runs_that_fit,
-    too_much_memory,
 )
+from jaxga.api.problem import load_problem
 from jaxga.api.programs import (
     GENERATION_CHUNK,
     Programs,
     clear_compiled,
-    compiled_buckets,
-    platform_layout,
     programs_for,
-    run_layout,
-    stack_params,
     tables_for,
 )
 from jaxga.api.references import AnyAngleBounds, any_angle_references, octile_optimum
 from jaxga.api.result import Result
-from jaxga.api.seeds import seed_list, seed_sharding
+from jaxga.api.seeds import seed_list
 from jaxga.api.size_classes import auto_size_class, class_capacity, map_cells, pad_to_class
 from jaxga.api.timeline import Timeline
-from jaxga.config.presets import as_sets, load_preset, parse_set
-from jaxga.config.schema import MAP_RULE, SCHEMA, Config, flatten, freeze
-from jaxga.core.errors import EndpointError, ParameterError
+from jaxga.config.schema import Config, flatten
+from jaxga.core.errors import ParameterError
 from jaxga.core.grid import Grid, as_integer
 from jaxga.engine import (
     Algorithm,
     build,
-    check_file_keys_read,
     check_migration,
     check_overrides_read,
     convergence_generation,
@@ -74,9 +63,7 @@ from jaxga.engine import (
     static_config,
     uses_guide,
 )
-from jaxga.maps import MapInfo, load_map_info
-from jaxga.maps.frame import MapFrame
-from jaxga.operators import registry
+from jaxga.maps import MapInfo
 from jaxga.operators.guide import with_guide
 from jaxga.reference.fitness import FitnessOptimum, fitness_optimum, fitness_weights
 
@@ -113,140 +100,6 @@ def _check_call_options(progress, chunks, size_class=None, any_angle_budget="aut
         raise ParameterError(f"chunks must be an integer >= 1, got {chunks!r}") from None
     if chunks < 1:
         raise ParameterError(f"chunks must be an integer >= 1, got {chunks!r}")
-
-
-def _normalised(key: str, value: Any) -> Any:
-    """``value`` as the configuration stores it (a tuple and a list alike, numpy scalars
-    as Python ones), to compare two values given for ``key``; an invalid value is
-    refused with the key's own message."""
-
-    if key not in SCHEMA:  # refused by name when the preset loads
-        return repr(value)
-    return freeze(SCHEMA[key].check(key, value))
-
-
-def configured_rule(corner_rule: str | None, config: Config) -> str | None:
-    """The corner rule a call names: ``corner_rule`` (``--corner-rule``), else the
-    configuration's ``map.corner_rule`` unless it is ``"map"``; None = the map's own."""
-    if corner_rule is not None:
-        return corner_rule
-    rule = config["map.corner_rule"]
-    return None if rule == MAP_RULE else rule
-
-
-def check_one_corner_rule(corner_rule: str | None, config: Config,
-                          overridden: Sequence[str]) -> None:
-    """Refuse a ``corner_rule=`` (``--corner-rule``) that disagrees with an overridden
-    ``map.corner_rule`` (``--set``): two rules for one run."""
-    rule = config["map.corner_rule"]
-    if "map.corner_rule" in overridden and corner_rule is not None and rule != MAP_RULE \
-            and corner_rule != rule:
-        raise ParameterError(f"two corner rules given: {corner_rule!r} (corner_rule, "
-                             f"--corner-rule) and {rule!r} (map.corner_rule)")
-
-
-def own_operators(overrides: dict) -> dict:
-    """``overrides`` with each function given for an operator family (``init``,
-    ``fitness`` or its synonym ``objective``, ``selection``, ``crossover``, ``mutation``,
-    ``simplify``, ``post``) registered under its name
-    (:func:`jaxga.operators.registry.register_operator`, replacing an earlier one of that
-    name) and chosen as ``<family>.method``."""
-    out = {}
-    for key, value in overrides.items():
-        family = "fitness" if key == "objective" else key
-        if family in registry.FAMILIES and callable(value):
-            op = _registered_fn(family, value) or registry.register_operator(
-                family, value, replace=True)
-            out[f"{family}__method"] = op.name
-        else:
-            out[key] = value
-    return out
-
-
-def _registered_fn(family: str, fn: Any) -> registry.Operator | None:
-    """The registered operator of ``family`` whose function is ``fn``, if any."""
-    return next((op for op in registry.operators(family) if op.fn is fn), None)
-
-
-def load_problem(preset, grid, corner_rule, variant, sets, overrides, generations, *,
-                 check_read: bool = True, check_endpoints: bool = True):
-    """``(config, grid, map name, frame)`` of a call, checked (the frame of a map file or
-    :class:`~jaxga.maps.MapInfo`: :mod:`jaxga.maps.frame`; None for a bare Grid);
-    ``check_read=False`` leaves overrides that nothing reads to the caller
-    (:func:`jaxga.compare.compare`), ``check_endpoints=False`` the endpoints (a
-    :class:`~jaxga.api.planner.Planner`'s map, whose endpoints each plan gives)."""
-
-    check_environment()  # a bad $JAXGA_THREEFRY, which `import jaxga` does not refuse
-    check_jax_settings()  # 64-bit mode, jit disabled
-    check_platform()
-    map_name, frame = "grid", None
-    if isinstance(grid, MapInfo):  # a loaded map that keeps its name (and its endpoints)
-        grid, map_name, frame = grid.grid, grid.name, grid.frame
-    sets = as_sets(sets)
-    ov: dict[str, Any] = {k.replace("__", "."): v
-                          for k, v in own_operators(overrides).items()}
-    if generations is not None:  # a non-integer is left for the configuration to refuse
-        with contextlib.suppress(TypeError):
-            generations = as_integer(generations)
-        ov["generations"] = generations
-    given = flatten(ov)
-    set_values = [parse_set(text) for text in sets]
-    for key, value in set_values:  # one value per key
-        if key in given and _normalised(key, given[key]) != _normalised(key, value):
-            raise ParameterError(f"{key} is given twice, as {given[key]!r} and {value!r}")
-        given[key] = value
-    if isinstance(preset, Config):  # as load_preset: the overrides, then the sets
-        if variant is not None:
-            raise ParameterError(f"variant {variant!r} given with a Config: load the preset "
-                                 "with its variant (jaxga.config.presets.load_preset) instead")
-        config = preset.override(ov).override(dict(set_values))
-    else:
-        config = load_preset(preset, variant=variant, overrides=ov, sets=sets)
-    if check_read:  # never silently ignored
-        overridden = [*flatten(ov), *(key for key, _ in set_values)]
-        check_overrides_read(config, overridden)
-        if not isinstance(preset, Config):  # keys a user TOML file sets, in that file
-            check_file_keys_read(preset, variant)
-        check_one_corner_rule(corner_rule, config, overridden)
-        rule = config["map.corner_rule"]
-        if isinstance(grid, Grid) and corner_rule is None and rule != MAP_RULE \
-                and grid.corner_rule != rule:  # set by an override or a user's file
-            raise ParameterError(
-                f"different corner rules: map.corner_rule = {rule!r} has no effect with a "
-                f"Grid (or a loaded MapInfo), which keeps its own corner rule "
-                f"({grid.corner_rule!r}): give the Grid that rule "
-                "(corner_rule=... or Grid.replace; --corner-rule on the command line)")
-    if isinstance(grid, Grid):
-        grid = grid.validated()  # a grid made with the plain constructor is checked too
-        if corner_rule is not None:
-            grid = grid.replace(corner_rule=corner_rule)
-    else:
-        info = load_map_info(grid, corner_rule=configured_rule(corner_rule, config))
-        grid, map_name, frame = info.grid, info.name, info.frame
-    try:
-        if check_endpoints:
-            grid.check_endpoints()
-    except EndpointError as e:
-        raise EndpointError(f"{e}{_on_the_map(frame, grid)}") from None
-    return config, grid, map_name, frame
-
-
-def _on_the_map(frame: MapFrame | None, grid: Grid) -> str:
-    """Where a blocked endpoint lies in the map's own terms: its map cells (a coarsened
-    map) and its centre in metres (a map with a resolution); "" for a bare grid."""
-    if frame is None or (frame.coarsen == 1 and not frame.has_metres):
-        return ""
-    for xy in (grid.start_xy, grid.goal_xy):  # the first blocked one, as check_endpoints
-        if grid.blocked_np()[xy[1], xy[0]]:
-            where = []
-            if frame.coarsen > 1:
-                middle = tuple(int(v) for v in frame.map_cell(np.asarray(xy)))
-                where.append(f"the coarse cell around map cell {middle}")
-            if frame.has_metres:
-                x, y = frame.to_world(np.asarray(xy, float))
-                where.append(f"centre ({x:.3f}, {y:.3f}) m")
-            return f" ({', '.join(where)})"
-    return ""
 
 
 def _point_configs(config: Config, points: Sequence[Mapping[str, Any]]) -> list[Config]:
@@ -519,7 +372,7 @@ def _no_path_results(plan: _SweepPlan, timeline: Timeline) -> list[Result]:
 
 
 def _compile_init(plan: _SweepPlan, timeline: Timeline,
-                  report: Callable[[str, float], None]) -> tuple[_Runs, Programs]:
+                  report: Callable[[str, float], None]) -> tuple[RunCalls, Programs]:
     """This process's runs as calls of the compiled programs, on the programs' map with
     its per-map tables (attached once per run rather than computed every generation),
     and the program set with its init program compiled (phase ``compile``). Off the CPU,
@@ -533,7 +386,7 @@ def _compile_init(plan: _SweepPlan, timeline: Timeline,
     with timeline.phase("compile"):
         grid = tables_for(plan.program_grid)
         for padded in (True, False):
-            runs = _this_process_runs(plan.seed_arr, plan.per_point, grid, plan.algo, padded)
+            runs = this_process_runs(plan.seed_arr, plan.per_point, grid, plan.algo, padded)
             progs = programs_for(plan.algo, runs.grid, runs.calls[0][1], runs.per_call,
                                  lambda frac: report("compile", frac))
             try:
@@ -569,7 +422,7 @@ class _Start:
                     initial=self.initial)
 
 
-def _initialise(runs: _Runs, progs: Programs, timeline: Timeline) -> tuple[list, tuple]:
+def _initialise(runs: RunCalls, progs: Programs, timeline: Timeline) -> tuple[list, tuple]:
     """The initial population of every call of ``runs`` (phase ``init``), and this
     process's best initial fitness, initialisation success rate, unfilled slots and
     field-walk fallbacks of each of its runs."""
@@ -595,13 +448,13 @@ def _gathered_start(plan: _SweepPlan, parts: Sequence[tuple]) -> _Start:
     return start
 
 
-def _evolve_and_finish(plan: _SweepPlan, runs: _Runs, progs: Programs, states: list,
+def _evolve_and_finish(plan: _SweepPlan, runs: RunCalls, progs: Programs, states: list,
                        timeline: Timeline, report: Callable[[str, float], None]) -> tuple:
     """The generations (phase ``evolve``) and the finish program (``post``) of the calls
     of ``runs``: this process's outputs and per-generation history of each of its runs
     (NumPy), the paths on the user's map (not its padding)."""
     with timeline.phase("evolve"):
-        states, history = _evolve_in_chunks(progs, plan.algo.generations, runs, runs.grid,
+        states, history = evolve_in_chunks(progs, plan.algo.generations, runs, runs.grid,
                                             states, lambda frac: report("evolve", frac))
     report("post", 0.0)
     with timeline.phase("post"):
@@ -659,163 +512,6 @@ def _check_points(points: Any) -> None:
                              f"{points!r}")
     if not points:
         raise ParameterError("a sweep needs at least one point")
-
-
-@dataclasses.dataclass(frozen=True)
-class _Runs:
-    """This process's runs as calls of the compiled programs: ``calls`` = ``(keys,
-    params)`` of ``per_call`` runs each (on the devices), the last run repeated to fill
-    them; the first ``n_local`` runs are this process's share. ``at_once``: the calls
-    whose states are held together (a group: initialised, evolved and finished before the
-    next group starts); 0: all of them."""
-
-    calls: list[tuple[jax.Array, dict]]
-    per_call: int
-    n_local: int
-    grid: Grid
-    at_once: int = 0
-
-    def joined(self, parts: Sequence[Any]) -> np.ndarray:
-        """The calls' outputs (runs first) joined, the padding dropped."""
-        return np.concatenate([np.asarray(p) for p in parts])[:self.n_local]
-
-    def groups(self) -> list[_Runs]:
-        """The groups of calls computed one after another, each with its own real runs
-        (the padding is in the last call)."""
-        at_once = self.at_once or len(self.calls)
-        return [dataclasses.replace(
-            self, calls=self.calls[c:c + at_once], at_once=0,
-            n_local=min(self.n_local - c * self.per_call, at_once * self.per_call))
-            for c in range(0, len(self.calls), at_once)]
-
-
-def _this_process_runs(seed_arr: np.ndarray, per_point: Sequence[dict], grid: Grid,
-                       algo: Algorithm, padded: bool = True) -> _Runs:
-    """This process's runs, laid out as calls of the compiled programs, on its devices.
-
-    Run ``q * S + s`` is point ``q`` with seed ``s``; the runs are padded (copies of the
-    last run) to a multiple of processes x local devices; this process computes its
-    contiguous share (:func:`jaxga.api.parallel.allgather_runs` joins the shares), as
-    calls of a few sizes (:func:`jaxga.api.programs.run_layout`), the last run copied to
-    fill them, held together or in groups as the memory allows (:func:`fitting_layout`;
-    ``padded=False``: without the padding of :func:`run_layout`). A run's result depends
-    only on its own key and parameters, so neither padding nor grouping changes any
-    result."""
-    n_seeds, n_points = len(seed_arr), len(per_point)
-    n_runs = n_seeds * n_points
-    n_total, share = parallel.run_share(n_runs)
-    pad = n_total - n_runs
-    run_seeds = np.concatenate([np.tile(seed_arr, n_points),
-                                np.repeat(seed_arr[-1:], pad)])[share]
-    params = stack_params(per_point, n_seeds)
-    params = {k: np.concatenate([v, np.repeat(v[-1:], pad, axis=0)])[share]
-              for k, v in params.items()}
-    n_local = len(run_seeds)
-    n_dev = jax.local_device_count()
-    per_device, n_calls, at_once = fitting_layout(
-        algo, n_local, n_dev, run_layout(n_local, n_dev, grid.height * grid.width,
-                                         compiled_buckets(algo, grid, params)), padded)
-    per_call = per_device * n_dev
-    fill = n_calls * per_call - n_local
-    run_seeds = np.concatenate([run_seeds, np.repeat(run_seeds[-1:], fill)])
-    params = {k: np.concatenate([v, np.repeat(v[-1:], fill, axis=0)])
-              for k, v in params.items()}
-    keys = jax.vmap(jax.random.PRNGKey)(jnp.asarray(run_seeds, jnp.uint32))
-    sh, rep = seed_sharding()
-    if sh is not None:
-        grid = jax.device_put(grid, rep)
-    calls = []
-    for c in range(n_calls):
-        sl = slice(c * per_call, (c + 1) * per_call)
-        call = (keys[sl], {k: v[sl] for k, v in params.items()})
-        calls.append(jax.device_put(call, sh) if sh is not None else jax.device_put(call))
-    return _Runs(calls, per_call, n_local, grid, at_once)
-
-
-def fitting_layout(algo: Algorithm, n_local: int, n_dev: int, layout: tuple[int, int],
-                   padded: bool = True) -> tuple[int, int, int]:
-    """``(runs per device, calls, calls held at once)`` for this process's ``n_local``
-    runs on ``n_dev`` devices that fits the machine's memory
-    (:func:`jaxga.api.memory.too_much_memory`): the padded ``layout`` (runs per device,
-    calls), all its calls held together, where it fits; else one call of exactly these
-    runs (a program of that size is compiled); else calls of as many runs as fit, one
-    call at a time (:func:`grouped_layout`). ``padded=False`` skips the padded layout."""
-    block = platform_layout().init_run_block
-    per_device, n_calls = layout
-    if padded and not too_much_memory(algo, per_device * n_dev * n_calls,
-                                      per_device * n_dev, block, n_local):
-        return per_device, n_calls, n_calls
-    exact = unpadded_layout(n_local, n_dev)
-    if not too_much_memory(algo, exact[0] * n_dev, exact[0] * n_dev, block, n_local):
-        return *exact, 1
-    return grouped_layout(algo, n_local, n_dev)
-
-
-def grouped_layout(algo: Algorithm, n_local: int, n_dev: int) -> tuple[int, int, int]:
-    """``n_local`` runs as calls that each fit the machine's memory beside every run's
-    outputs, computed one call after another (init, evolution and finish of a call before
-    the next starts; a run's result depends only on its key and parameters, so the
-    results are those of one call): ``(runs per device, calls, 1)``, the calls as even as
-    the devices allow. :class:`ParameterError` naming the size and what to change where
-    not one call of a run per device fits."""
-    block = platform_layout().init_run_block
-    budget = memory_budget()
-    if budget is None:
-        return *unpadded_layout(n_local, n_dev), 1
-    fit = runs_that_fit(algo, budget, block, n_local)
-    most = min(fit // n_dev, -(-n_local // n_dev))
-    if most < 1:
-        raise ParameterError(too_much_memory(algo, n_dev, n_dev, block, n_local))
-    per_device = -(-n_local // (n_dev * -(-n_local // (most * n_dev))))
-    return per_device, -(-n_local // (per_device * n_dev)), 1
-
-
-def unpadded_layout(n_local: int, n_dev: int) -> tuple[int, int]:
-    """One call of exactly ``n_local`` runs over ``n_dev`` devices (runs per device,
-    calls): the padding only to a multiple of the devices."""
-    return -(-n_local // n_dev), 1
-
-
-def _evolve_in_chunks(progs: Any, generations: int, runs: _Runs, grid: Grid,
-                      states: list, report: Callable[[float], None]) -> tuple[list, dict]:
-    """``generations`` generations as calls of the compiled evolve chunk
-    (:data:`GENERATION_CHUNK` generations, the last call running the ones left), every
-    call of runs in each chunk, reporting the fraction done after each chunk; the
-    per-generation history joined (NumPy, this process's runs)."""
-    sh, rep = seed_sharding()
-    hists: list[list[dict]] = [[] for _ in states]
-    done = 0
-    while done < generations:
-        count = min(GENERATION_CHUNK, generations - done)
-        n = jnp.asarray(count, jnp.int32)
-        if rep is not None:
-            n = jax.device_put(n, rep)
-        for i, ((k, p), st) in enumerate(zip(runs.calls, states)):
-            states[i], h = progs.evolve(k, grid, p, st, n)
-            hists[i].append((count, h))
-        jax.block_until_ready(states)
-        done += count
-        if done < generations and _all_frozen(states):
-            # every run stopped (the stagnation rule): the generations left change
-            # nothing, and each would record the run's last row again
-            for call in hists:
-                c, h = call[-1]
-                call.append((generations - done, {
-                    key: np.repeat(np.asarray(v)[:, c - 1:c], generations - done, axis=1)
-                    for key, v in h.items()}))
-            done = generations
-        report(done / generations)
-    history = {key: runs.joined([np.concatenate([np.asarray(h[key])[:, :c] for c, h in call],
-                                                axis=1) for call in hists])
-               for key in hists[0][0][1]}
-    return states, history
-
-
-def _all_frozen(states: list) -> bool:
-    """Whether every run of this process's calls is frozen by the stagnation rule (read
-    between two compiled calls; with several processes never, so that every process
-    makes the same calls)."""
-    return jax.process_count() == 1 and all(bool(np.asarray(st.frozen).all()) for st in states)
 
 
 def _point_results(host: dict, hist: dict, *, config: Config, configs: Sequence[Config],

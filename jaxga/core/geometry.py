@@ -50,7 +50,7 @@ def floor_div(num: jax.Array, den: jax.Array) -> jax.Array:
     quotient is within one of the exact floor whenever it is below ``2**22`` in magnitude
     (conversion and division each add a relative error of at most ``2**-24``); one
     integer remainder test then corrects it. Here the quotient is a cell coordinate, at
-    most the map side (:data:`jaxga.core.objectives.MAX_SIDE`).
+    most the map side (:data:`jaxga.core.path_geometry.MAX_SIDE`).
     """
     q = jnp.floor(num.astype(jnp.float32) / den.astype(jnp.float32)).astype(num.dtype)
     r = num - q * den

@@ -51,7 +51,7 @@ path geometry once and shares it between its terms.
 Cost: the length, the turn-based objectives and the safety terms cost microseconds per
 path; ``min_clearance`` and ``tangencies`` search a band of cells around each segment,
 ``O(L (H + W))``, and the whole map, ``O(L H W)``, only for a path that stays more than
-:data:`CLEARANCE_RADIUS` cells from every obstacle: they are meant for reports
+:data:`jaxga.core.clearance.CLEARANCE_RADIUS` cells from every obstacle: they are meant for reports
 (decision 009).
 """
 
@@ -66,9 +66,24 @@ import jax.numpy as jnp
 import numpy as np
 
 from jaxga._batching.numerics import ordered_sum
+from jaxga.core.clearance import (
+    clearance_band,
+    min_clearance,
+    tangencies,
+)
 from jaxga.core.dtypes import F32
 from jaxga.core.errors import ParameterError
 from jaxga.core.grid import Grid, proximity_obstacles
+from jaxga.core.path_geometry import (
+    MAX_SIDE,
+    Geometry,
+    Scalar,
+    as_f32,
+    atan2_nonneg,
+    check_grid,
+    geometry,
+    path_nodes,
+)
 
 __all__ = [
     "AGACD_WEIGHTS",
@@ -101,151 +116,9 @@ __all__ = [
 EPS = 1e-6
 """Floor of a fitness denominator (a one-node path has length 0)."""
 
-MAX_SIDE = 32767
-"""Largest map side for which the int32 cross/dot products below cannot overflow."""
-
-_Scalar = float | jax.Array
 
 
 # ----------------------------------------------------------------------- helpers
-def _f32(v: _Scalar) -> jax.Array:
-    return jnp.asarray(v, dtype=F32)
-
-
-def _check_grid(grid: Grid) -> tuple[int, int]:
-    h, w = grid.blocked.shape
-    if max(h, w) > MAX_SIDE:
-        raise ParameterError(
-            f"objectives support maps up to {MAX_SIDE} cells per side, got {w} x {h}"
-        )
-    return h, w
-
-
-def _atan2_nonneg(y: jax.Array, x: jax.Array) -> jax.Array:
-    """``atan2(y, x)`` for ``y >= 0`` (so the result lies in ``[0, pi]``), float32.
-
-    Branch-free: reduce to ``t = min/max`` in ``[0, 1]``, halve the angle once
-    (``atan t = 2 atan(t / (1 + sqrt(1 + t^2)))``, argument at most ``tan(pi/8)``), sum
-    the odd Taylor series to degree 17 (truncation error < 1e-8), then undo the octant
-    reduction. ``atan2(0, 0)`` is 0.
-    """
-    y = y.astype(F32)
-    x = x.astype(F32)
-    ax = jnp.abs(x)
-    swap = y > ax
-    num = jnp.where(swap, ax, y)
-    den = jnp.where(swap, y, ax)
-    t = num / jnp.where(den > 0, den, jnp.ones_like(den))
-    u = t / (1.0 + jnp.sqrt(1.0 + t * t))
-    u2 = u * u
-    series = jnp.zeros_like(u2)
-    for k in range(17, 1, -2):  # Horner in u^2: 1 - u2/3 + u2^2/5 - ...
-        series = u2 * (((-1) ** ((k - 1) // 2)) / k + series)
-    a = 2.0 * u * (1.0 + series)
-    a = jnp.where(swap, np.float32(math.pi / 2) - a, a)
-    return jnp.where(x < 0, np.float32(math.pi) - a, a)
-
-
-def _fill_forward(key: jax.Array, vx: jax.Array, vy: jax.Array) -> tuple[jax.Array, jax.Array]:
-    """Carry ``(vx, vy)`` forward from the last position whose ``key`` is not -1.
-
-    ``key[j]`` is ``j`` at positions that hold a value and -1 at holes. The result is
-    ``v[m[j]]`` with ``m`` the running maximum of ``key`` (positions before the first
-    value keep their own). Computed by pointer doubling: pass ``p`` lets each position
-    take the pair ``(key, v)`` from ``2**p`` positions to its left when that key is
-    larger, so after ``p`` passes ``key[j]`` is the maximum over the ``2**p`` positions
-    ending at ``j``; the loop stops as soon as ``key`` is non-decreasing, which is
-    exactly when it equals its running maximum. Paths without repeated interior nodes
-    have no holes and run zero passes; otherwise ``ceil(log2(r + 1))`` passes for the
-    longest run of ``r`` holes. (Under ``vmap`` every path of the batch runs the
-    batch's largest pass count, so one pass per hole was much slower on batches whose
-    paths held long runs of repeated nodes: decision 009.)
-    """
-
-    n = key.shape[0]
-
-    def holes(state):
-        s, k = state[0], state[1]
-        # s >= n: every window covers the whole prefix, k is the running maximum (the
-        # bound only guarantees termination; it never stops the loop early)
-        return jnp.any(k[1:] < k[:-1]) & (s < n)
-
-    def shifted(v, s, fill):
-        # v moved s positions to the right, the first s filled: a dynamic slice (s is the
-        # same for every path of a batch, so it stays a slice under vmap, not a gather)
-        return jax.lax.dynamic_slice(jnp.concatenate([jnp.full((n,), fill, v.dtype), v]),
-                                     (n - s,), (n,))
-
-    def shift(state):
-        s, k, ax, ay = state
-        k_prev = shifted(k, s, -1)
-        take = k_prev > k  # a filled -1 never beats a key (keys are >= -1)
-        return (
-            2 * s,
-            jnp.where(take, k_prev, k),
-            jnp.where(take, shifted(ax, s, 0), ax),
-            jnp.where(take, shifted(ay, s, 0), ay),
-        )
-
-    if n < 2:
-        return vx, vy
-    _, _, vx, vy = jax.lax.while_loop(holes, shift, (jnp.int32(1), key, vx, vy))
-    return vx, vy
-
-
-class _Geometry(NamedTuple):
-    """Per-path quantities shared by the objectives (internal)."""
-
-    cells: jax.Array  # int32[L], padding normalised to the last valid cell
-    x: jax.Array  # int32[L]
-    y: jax.Array  # int32[L]
-    node: jax.Array  # bool[L]: a valid node that differs from its predecessor
-    dx: jax.Array  # int32[L-1]: segment j = node j -> node j+1
-    dy: jax.Array
-    moving: jax.Array  # bool[L-1]: non-zero segment
-    cross: jax.Array  # int32[L-1]: incoming x segment j (0 where no incoming)
-    dot: jax.Array  # int32[L-1]
-    turning: jax.Array  # bool[L-1]: the path turns where segment j starts
-
-
-def _nodes(
-    grid: Grid, cells: jax.Array, length: jax.Array
-) -> tuple[jax.Array, jax.Array, jax.Array, jax.Array, jax.Array]:
-    """``(cells, x, y, node, n)``: padding normalised, coordinates, real-node mask, length."""
-    _, w = _check_grid(grid)
-    cells = jnp.asarray(cells, dtype=jnp.int32)
-    cap = cells.shape[0]
-    n = jnp.clip(jnp.asarray(length, dtype=jnp.int32), 1, cap)
-    j = jnp.arange(cap, dtype=jnp.int32)
-    cells = jnp.where(j < n, cells, cells[n - 1])
-    x = cells % jnp.int32(w)
-    y = cells // jnp.int32(w)
-    first = jnp.concatenate([jnp.ones((1,), bool), cells[1:] != cells[:-1]])
-    return cells, x, y, first & (j < n), n
-
-
-def _geometry(grid: Grid, cells: jax.Array, length: jax.Array) -> _Geometry:
-    cells, x, y, node, n = _nodes(grid, cells, length)
-    j = jnp.arange(cells.shape[0], dtype=jnp.int32)
-    dx = x[1:] - x[:-1]
-    dy = y[1:] - y[:-1]
-    moving = (dx != 0) | (dy != 0)
-    # Direction of the last non-zero segment at or before j. Tail padding (j >= n-1) is
-    # marked as "has a value" too: it lies after every real segment, so it never feeds
-    # a real turn, and it keeps paths without interior repeats hole-free (zero passes).
-    js = j[:-1]
-    key = jnp.where(moving | (js >= n - 1), js, jnp.int32(-1))
-    px, py = _fill_forward(key, dx, dy)
-    zero = jnp.zeros((min(1, cells.shape[0] - 1),), jnp.int32)
-    in_x = jnp.concatenate([zero, px[:-1]])
-    in_y = jnp.concatenate([zero, py[:-1]])
-    cross = in_x * dy - in_y * dx
-    dot = in_x * dx + in_y * dy
-    has_in = (in_x != 0) | (in_y != 0)
-    turning = moving & has_in & ((cross != 0) | (dot < 0))
-    return _Geometry(cells, x, y, node, dx, dy, moving, cross, dot, turning)
-
-
 def _masked_fitness(value: jax.Array, feasible: jax.Array | bool | None) -> jax.Array:
     if feasible is None:
         return value
@@ -253,7 +126,7 @@ def _masked_fitness(value: jax.Array, feasible: jax.Array | bool | None) -> jax.
 
 
 def _inverse(denominator: jax.Array) -> jax.Array:
-    return 1.0 / jnp.maximum(denominator, _f32(EPS))
+    return 1.0 / jnp.maximum(denominator, as_f32(EPS))
 
 
 # -------------------------------------------------------------------- objectives
@@ -264,10 +137,10 @@ def path_length(grid: Grid, cells: jax.Array, length: jax.Array) -> jax.Array:
     ``L = sum_i sqrt((x_{i+1} - x_i)^2 + (y_{i+1} - y_i)^2)``. Works for continuous
     (8-adjacent) and waypoint paths; a one-node path has length 0.
     """
-    return _path_length(_geometry(grid, cells, length))
+    return _path_length(geometry(grid, cells, length))
 
 
-def _path_length(g: _Geometry) -> jax.Array:
+def _path_length(g: Geometry) -> jax.Array:
     sq = (g.dx * g.dx + g.dy * g.dy).astype(F32)
     return ordered_sum(jnp.sqrt(sq))
 
@@ -282,11 +155,11 @@ def turn_angles(grid: Grid, cells: jax.Array, length: jax.Array) -> jax.Array:
     the last node, padding and skipped repeated nodes get 0. In a run of repeated
     nodes the turn is reported at the run's last copy.
     """
-    return _turn_angles(_geometry(grid, cells, length))
+    return _turn_angles(geometry(grid, cells, length))
 
 
-def _turn_angles(g: _Geometry) -> jax.Array:
-    a = _atan2_nonneg(jnp.abs(g.cross), g.dot)
+def _turn_angles(g: Geometry) -> jax.Array:
+    a = atan2_nonneg(jnp.abs(g.cross), g.dot)
     a = jnp.where(g.turning, a, jnp.zeros_like(a))
     return jnp.concatenate([a, jnp.zeros((1,), F32)])
 
@@ -298,10 +171,10 @@ def turns(grid: Grid, cells: jax.Array, length: jax.Array) -> jax.Array:
     docstring): a node is a turn unless the path goes straight on through it. Also the
     "number of turns" of IMGA Tables 1 and 3.
     """
-    return _turns(_geometry(grid, cells, length))
+    return _turns(geometry(grid, cells, length))
 
 
-def _turns(g: _Geometry) -> jax.Array:
+def _turns(g: Geometry) -> jax.Array:
     return jnp.sum(g.turning, dtype=jnp.int32)
 
 
@@ -316,10 +189,10 @@ def angle_sum(grid: Grid, cells: jax.Array, length: jax.Array) -> jax.Array:
     reversal; here a reversal is pi. Reversals cannot occur on loop-free
     8-connected paths, only on waypoint paths.
     """
-    return _angle_sum(_geometry(grid, cells, length))
+    return _angle_sum(geometry(grid, cells, length))
 
 
-def _angle_sum(g: _Geometry) -> jax.Array:
+def _angle_sum(g: Geometry) -> jax.Array:
     return ordered_sum(_turn_angles(g), dtype=F32)
 
 
@@ -330,10 +203,10 @@ def mpmga_penalty(grid: Grid, cells: jax.Array, length: jax.Array) -> jax.Array:
     pi/2``, 125 if ``turn > pi/2``; summed over the nodes (eq. 14). The comparisons are
     exact: ``turn = pi/2`` iff ``dot = 0``, ``turn > pi/2`` iff ``dot < 0``.
     """
-    return _mpmga_penalty(_geometry(grid, cells, length))
+    return _mpmga_penalty(geometry(grid, cells, length))
 
 
-def _mpmga_penalty(g: _Geometry) -> jax.Array:
+def _mpmga_penalty(g: Geometry) -> jax.Array:
     pen = jnp.where(
         g.dot > 0, np.float32(5.0), jnp.where(g.dot == 0, np.float32(25.0), np.float32(125.0))
     )
@@ -345,10 +218,10 @@ def zhu_penalty(
     cells: jax.Array,
     length: jax.Array,
     *,
-    c1: _Scalar = 1.0,
-    c2: _Scalar = 2.0,
-    c3: _Scalar = 3.0,
-    c4: _Scalar | None = None,
+    c1: Scalar = 1.0,
+    c2: Scalar = 2.0,
+    c3: Scalar = 3.0,
+    c4: Scalar | None = None,
 ) -> jax.Array:
     """Zhu & Pan smoothness ``fit_2``: a cost per turn by angle bucket, float32 (eq. 8-9).
 
@@ -363,18 +236,18 @@ def zhu_penalty(
     saturates; on an 8-connected loop-free path such turns cannot occur, they only
     arise on waypoint paths). Pass a larger ``c4`` to punish reversals harder.
     """
-    return _zhu_penalty(_geometry(grid, cells, length), c1, c2, c3, c4)
+    return _zhu_penalty(geometry(grid, cells, length), c1, c2, c3, c4)
 
 
 def _zhu_penalty(
-    g: _Geometry, c1: _Scalar, c2: _Scalar, c3: _Scalar, c4: _Scalar | None
+    g: Geometry, c1: Scalar, c2: Scalar, c3: Scalar, c4: Scalar | None
 ) -> jax.Array:
     c4 = c3 if c4 is None else c4
     abs_cross = jnp.abs(g.cross)
     cost = jnp.where(
         g.dot >= 0,
-        jnp.where(abs_cross <= g.dot, _f32(c1), _f32(c2)),
-        jnp.where(abs_cross >= -g.dot, _f32(c3), _f32(c4)),
+        jnp.where(abs_cross <= g.dot, as_f32(c1), as_f32(c2)),
+        jnp.where(abs_cross >= -g.dot, as_f32(c3), as_f32(c4)),
     )
     return ordered_sum(jnp.where(g.turning, cost, jnp.zeros_like(cost)), dtype=F32)
 
@@ -399,11 +272,11 @@ def imga_energy(grid: Grid, cells: jax.Array, length: jax.Array) -> jax.Array:
       right, unlike flipping by a sign of +1).
     * The goal is ``grid.goal`` (not the path's last cell).
     """
-    return _imga_energy(grid, _geometry(grid, cells, length))
+    return _imga_energy(grid, geometry(grid, cells, length))
 
 
-def _imga_energy(grid: Grid, g: _Geometry) -> jax.Array:
-    _, w = _check_grid(grid)
+def _imga_energy(grid: Grid, g: Geometry) -> jax.Array:
+    _, w = check_grid(grid)
     goal = jnp.asarray(grid.goal, dtype=jnp.int32)
     sx = jnp.sign(goal % jnp.int32(w) - g.x[:-1])
     sy = jnp.sign(goal // jnp.int32(w) - g.y[:-1])
@@ -434,7 +307,7 @@ def imga_safety(
     cells: jax.Array,
     length: jax.Array,
     *,
-    penalty: _Scalar = 5.0,
+    penalty: Scalar = 5.0,
     border_blocked: bool = False,
 ) -> jax.Array:
     """IMGA path safety ``S(N)``: ``penalty`` (5) per node with a blocked 8-neighbour.
@@ -447,14 +320,14 @@ def imga_safety(
     ``border_blocked`` (static). The neighbour test is a per-grid table, so the per-path
     cost is one gather per node.
     """
-    g = _geometry(grid, cells, length)
+    g = geometry(grid, cells, length)
     return _imga_safety(grid, g, penalty, border_blocked)
 
 
-def _imga_safety(grid: Grid, g: _Geometry, penalty: _Scalar, border_blocked: bool) -> jax.Array:
+def _imga_safety(grid: Grid, g: Geometry, penalty: Scalar, border_blocked: bool) -> jax.Array:
     obstacles = proximity_obstacles(grid, border_blocked)
     near = _near_obstacle(obstacles, border_blocked).reshape(-1)[g.cells]
-    return _f32(penalty) * jnp.sum(near & g.node, dtype=F32)
+    return as_f32(penalty) * jnp.sum(near & g.node, dtype=F32)
 
 
 _NEIGHBOURS = np.array(
@@ -533,8 +406,8 @@ def agacd_safety(
     cells: jax.Array,
     length: jax.Array,
     *,
-    base: _Scalar = 1.0,
-    penalty: _Scalar = 0.1,
+    base: Scalar = 1.0,
+    penalty: Scalar = 0.1,
     border_blocked: bool = False,
     method: str = "auto",
 ) -> jax.Array:
@@ -562,21 +435,21 @@ def agacd_safety(
     * ``"auto"`` (default): ``"bits"`` while the packed table has at most ``64 L`` words
       (e.g. up to about 1000 x 500 cells for ``L = 256``), else ``"sort"``.
     """
-    g = _geometry(grid, cells, length)
+    g = geometry(grid, cells, length)
     return _agacd_safety(grid, g, cells, length, base, penalty, border_blocked, method)
 
 
 def _agacd_safety(
     grid: Grid,
-    g: _Geometry,
+    g: Geometry,
     cells: jax.Array,
     length: jax.Array,
-    base: _Scalar,
-    penalty: _Scalar,
+    base: Scalar,
+    penalty: Scalar,
     border_blocked: bool,
     method: str,
 ) -> jax.Array:
-    h, w = _check_grid(grid)
+    h, w = check_grid(grid)
     cap = g.cells.shape[0]
     hp, wp = h + 2, w + 2
     small = hp * -(-wp // 32) <= 64 * cap
@@ -602,264 +475,12 @@ def _agacd_safety(
             # masking them with the carried flag makes the body depend on the loop state,
             # so that XLA cannot hoist the fallback out of the loop (it would then run on
             # every call).
-            _, x, y, node, _ = _nodes(grid, cells, length)
+            _, x, y, node, _ = path_nodes(grid, cells, length)
             return fallback(x, y, node & ~state[1], blocked_ext), jnp.bool_(True)
 
         # Runs its body only if this path (under vmap: any path) revisits a cell.
         count, _ = jax.lax.while_loop(lambda s: ~s[1], recount, (count, exact))
-    return _f32(base) + _f32(penalty) * count.astype(F32)
-
-
-# ----------------------------------------------------------------------- metrics
-def _box_clearance(
-    ax: jax.Array,
-    ay: jax.Array,
-    bx: jax.Array,
-    by: jax.Array,
-    cx: jax.Array,
-    cy: jax.Array,
-    blk: jax.Array,
-) -> tuple[jax.Array, jax.Array]:
-    """Distance from segment ``a b`` (cell centres) to the nearest of the given cell squares.
-
-    ``cx, cy, blk``: the candidate cells' coordinates and whether each is an obstacle
-    (the others count as absent). Returns ``(distance float32, touches bool)`` for one
-    segment. A cell ``(cx, cy)`` is the closed square ``[cx - 1/2, cx + 1/2] x [cy - 1/2,
-    cy + 1/2]``. Touching (closed intersection) is decided exactly with the
-    separating-axis test in integers; the distance of a disjoint square is the minimum
-    over the two segment endpoints (to the square) and the four square corners (to the
-    segment), which is exact for two disjoint convex polygons. Each cell's distance
-    depends on the segment and that cell only, so any set of candidates holding the
-    nearest cell gives the same value.
-    """
-    dx, dy = bx - ax, by - ay
-    over_x = (jnp.minimum(ax, bx) <= cx) & (cx <= jnp.maximum(ax, bx))
-    over_y = (jnp.minimum(ay, by) <= cy) & (cy <= jnp.maximum(ay, by))
-    side = jnp.abs(dx * (cy - ay) - dy * (cx - ax))
-    # 2 |n . (c - a)| <= |dx| + |dy| without the doubling (it could overflow int32)
-    touch = over_x & over_y & (side <= (jnp.abs(dx) + jnp.abs(dy)) // 2) & blk
-
-    fax, fay, fbx, fby = (v.astype(F32) for v in (ax, ay, bx, by))
-    fcx, fcy = cx.astype(F32), cy.astype(F32)
-
-    def point_box(px, py):
-        ex = jnp.maximum(jnp.abs(px - fcx) - 0.5, 0.0)
-        ey = jnp.maximum(jnp.abs(py - fcy) - 0.5, 0.0)
-        return ex * ex + ey * ey
-
-    fdx, fdy = fbx - fax, fby - fay
-    len2 = fdx * fdx + fdy * fdy
-    inv = jnp.where(len2 > 0, 1.0 / jnp.where(len2 > 0, len2, 1.0), 0.0)
-    best = jnp.minimum(point_box(fax, fay), point_box(fbx, fby))
-    for sx in (-0.5, 0.5):
-        for sy in (-0.5, 0.5):
-            qx, qy = fcx + sx - fax, fcy + sy - fay
-            t = jnp.clip((qx * fdx + qy * fdy) * inv, 0.0, 1.0)
-            ex, ey = qx - t * fdx, qy - t * fdy
-            best = jnp.minimum(best, ex * ex + ey * ey)
-    dist = jnp.where(touch, 0.0, jnp.sqrt(best))
-    dist = jnp.where(blk, dist, jnp.inf)
-    return jnp.min(dist, initial=jnp.inf), jnp.any(touch)
-
-
-def _segment_box_clearance(
-    ax: jax.Array,
-    ay: jax.Array,
-    bx: jax.Array,
-    by: jax.Array,
-    blocked: jax.Array,
-) -> tuple[jax.Array, jax.Array]:
-    """:func:`_box_clearance` against every cell of the map (``O(H W)``)."""
-    h, w = blocked.shape
-    cy, cx = jnp.divmod(jnp.arange(h * w, dtype=jnp.int32), jnp.int32(w))
-    return _box_clearance(ax, ay, bx, by, cx, cy, blocked.reshape(-1))
-
-
-CLEARANCE_RADIUS = 4
-"""Cells within this distance of a segment are searched around it first (a band), so that a
-path's clearance costs ``O(L)`` on a map where it passes near obstacles (see
-:func:`_clearance`)."""
-
-CLEARANCE_PIECE = 4
-"""Major-axis cells per piece of a segment: each piece's share of the band is one fixed,
-small array of cells (:func:`_piece_band_clearance`); a step of a continuous path is one
-piece, a segment of ``s`` cells ``ceil(s / CLEARANCE_PIECE)``."""
-
-CLEARANCE_CHUNK = 128
-"""Pieces per block of :func:`_clearance`'s loop."""
-
-
-def _piece_band_clearance(
-    ax: jax.Array,
-    ay: jax.Array,
-    bx: jax.Array,
-    by: jax.Array,
-    piece: jax.Array,
-    blocked: jax.Array,
-) -> tuple[jax.Array, jax.Array]:
-    """:func:`_box_clearance` of segment ``a b`` against the cells of piece ``piece`` of the
-    band around it.
-
-    The band, along the segment's major axis ``u`` (x when ``|dx| >= |dy|``, so the slope
-    is at most 1): the columns ``u0 - R - 1 .. u1 + R + 1`` (``R`` =
-    :data:`CLEARANCE_RADIUS`, ``u0 <= u1`` the segment's ends) and in each the rows within
-    ``2 R + 3`` of the line at the column clamped to ``[u0, u1]``. A cell whose square is
-    within ``R + 1/4`` of the segment lies in the band: its centre is within ``R + 3/4``
-    of the nearest point ``p`` on each axis, and the line at the clamped column is within
-    ``R + 3/4`` of ``p`` too. So a band distance of at most ``R`` is the segment's exact
-    clearance, and a larger one says that it exceeds ``R``. Piece ``k`` holds the columns
-    ``u0 + k P - R - 1 .. u0 + (k + 1) P + R + 1`` (``P`` = :data:`CLEARANCE_PIECE`), so
-    the pieces ``0 .. ceil((u1 - u0) / P) - 1`` (at least one) cover the band.
-    """
-    h, w = blocked.shape
-    r, size = CLEARANCE_RADIUS, CLEARANCE_PIECE
-    k = 2 * r + 3
-    x_major = jnp.abs(bx - ax) >= jnp.abs(by - ay)
-    au, av = jnp.where(x_major, ax, ay), jnp.where(x_major, ay, ax)
-    bu, bv = jnp.where(x_major, bx, by), jnp.where(x_major, by, bx)
-    du = bu - au
-    u0, u1 = jnp.minimum(au, bu), jnp.maximum(au, bu)
-    cols = u0 + piece * size - (r + 1) + jnp.arange(size + 2 * r + 3, dtype=jnp.int32)
-    frac = (jnp.clip(cols, u0, u1) - au).astype(F32) / jnp.where(du == 0, 1, du).astype(F32)
-    line = jnp.floor(av.astype(F32) + (bv - av).astype(F32) * frac).astype(jnp.int32)
-    cu = jnp.broadcast_to(cols[:, None], (cols.shape[0], 2 * k + 1)).reshape(-1)
-    cv = (line[:, None] + jnp.arange(-k, k + 1, dtype=jnp.int32)[None, :]).reshape(-1)
-    cx, cy = jnp.where(x_major, cu, cv), jnp.where(x_major, cv, cu)
-    inside = (cx >= 0) & (cx < w) & (cy >= 0) & (cy < h)
-    blk = inside & blocked.reshape(-1)[jnp.where(inside, cy * w + cx, 0)]
-    return _box_clearance(ax, ay, bx, by, cx, cy, blk)
-
-
-def _clearance(grid: Grid, g: _Geometry,
-               border_blocked: bool = False) -> tuple[jax.Array, jax.Array]:
-    """``(min distance float32, touches bool[S])``: the path's clearance to the cells
-    :func:`jaxga.core.grid.proximity_obstacles` counts, and whether each segment (a node
-    if L = 1) touches one (False for the zero-length segments after the last moving one:
-    padding, never counted as tangencies).
-
-    Exact, with the work bounded by the path rather than the map where the path passes
-    within :data:`CLEARANCE_RADIUS` of an obstacle: every segment is measured against a
-    band of cells around it, in pieces (:func:`_piece_band_clearance`; one per step of a
-    continuous path), all the path's pieces in one loop of blocks that stops at the
-    last one. A segment whose band distance is at most the radius has its exact
-    clearance; the others are farther, so when any segment is that close the minimum is
-    exact, and touching cells always lie in the band. Otherwise (a path that stays away
-    from every obstacle) each straight run of the path (consecutive segments in one
-    direction, one segment to the map) is measured against the whole map, ``O(R H W)``
-    for a path of ``R`` runs.
-    """
-    h, w = _check_grid(grid)
-    obstacles = proximity_obstacles(grid, border_blocked)
-    if g.cells.shape[0] == 1:
-        a = b = (g.x, g.y)
-    else:
-        a, b = (g.x[:-1], g.y[:-1]), (g.x[1:], g.y[1:])
-    segs = (a[0], a[1], b[0], b[1])
-    n_seg = a[0].shape[0]
-    span = jnp.maximum(jnp.abs(b[0] - a[0]), jnp.abs(b[1] - a[1]))
-    # Segments after the last moving one are points at the last node (the padding), no
-    # nearer than that segment: they get no piece.
-    j = jnp.arange(n_seg, dtype=jnp.int32)
-    used = jnp.maximum(jnp.max(jnp.where(span > 0, j + 1, 0)), 1)
-    pieces = jnp.where(j < used, jnp.maximum((span + CLEARANCE_PIECE - 1) // CLEARANCE_PIECE, 1),
-                       0)
-    first = jnp.cumsum(pieces) - pieces  # each segment's first piece
-    total = jnp.sum(pieces)
-    chunk = CLEARANCE_CHUNK
-
-    def block(state):
-        start, near, touch = state
-        t = start + jnp.arange(chunk, dtype=jnp.int32)
-        seg = jnp.clip(jnp.searchsorted(first, t, side="right") - 1, 0, n_seg - 1)
-        sub = tuple(v[seg] for v in segs)
-        d, hit = jax.vmap(lambda *s: _piece_band_clearance(*s, obstacles))(*sub, t - first[seg])
-        valid = t < total
-        return (start + chunk, jnp.minimum(near, jnp.min(jnp.where(valid, d, jnp.inf))),
-                touch.at[jnp.where(valid & hit, seg, n_seg)].set(1, mode="drop"))
-
-    _, near, touch = jax.lax.while_loop(
-        lambda s: s[0] < total, block,
-        # int32 flags, not bool: no bool table updated in a loop (docs/devices.md)
-        (jnp.int32(0), jnp.asarray(jnp.inf, F32), jnp.zeros((n_seg,), jnp.int32)))
-
-    def whole_map(state: tuple[jax.Array, jax.Array]) -> tuple[jax.Array, jax.Array]:
-        # masking the segments and the map with the carried flag (False in the body) makes
-        # all of the body depend on the loop state, so that XLA cannot hoist any of it out
-        # of the loop (it would then run on every call)
-        done = state[1]
-        blocked = obstacles & ~done
-        xs, ys = jnp.where(done, 0, g.x), jnp.where(done, 0, g.y)
-
-        def run(r, near):  # one straight run of the path: a segment between two nodes
-            a, b = starts[r], jnp.where(r + 1 < n_runs, starts[r + 1], used)
-            d, _ = _segment_box_clearance(xs[a], ys[a], xs[b], ys[b], blocked)
-            return jnp.minimum(near, d)
-
-        near = jax.lax.fori_loop(0, n_runs, run, jnp.asarray(jnp.inf, F32))
-        return near.astype(F32), jnp.bool_(True)
-
-    # The path's straight runs: consecutive moving segments in one direction lie on one
-    # line, so they are one segment to the map (an 8-connected path's hundreds of steps
-    # are a few dozen runs); zero-length segments inside a run change nothing.
-    if g.cells.shape[0] == 1:
-        starts, n_runs = jnp.zeros((1,), jnp.int32), jnp.int32(1)
-    else:
-        first_move = g.moving & (jnp.cumsum(g.moving.astype(jnp.int32)) == 1)
-        begins = g.moving & (g.turning | first_move) & (j < used)
-        starts = jnp.nonzero(begins, size=n_seg, fill_value=0)[0].astype(jnp.int32)
-        n_runs = jnp.maximum(jnp.sum(begins, dtype=jnp.int32), 1)
-
-    # Runs its body only if this path (under vmap: any path) stays beyond the radius.
-    near, _ = jax.lax.while_loop(lambda s: ~s[1], whole_map,
-                                 (near.astype(F32), near <= CLEARANCE_RADIUS))
-    return near, touch != 0
-
-
-def _min_clearance(grid: Grid, g: _Geometry, border_blocked: bool) -> jax.Array:
-    h, w = grid.blocked.shape
-    result, _ = _clearance(grid, g, border_blocked)  # padding segments: harmless points
-    if border_blocked:
-        xf, yf = g.x.astype(F32), g.y.astype(F32)
-        edge = jnp.minimum(jnp.minimum(xf, (w - 1) - xf), jnp.minimum(yf, (h - 1) - yf)) + 0.5
-        result = jnp.minimum(result, jnp.min(edge))
-    return result
-
-
-def _tangencies(grid: Grid, g: _Geometry) -> jax.Array:
-    _, touch = _clearance(grid, g)
-    if g.cells.shape[0] == 1:
-        return jnp.int32(0)
-    return jnp.sum(touch & g.moving, dtype=jnp.int32)
-
-
-def min_clearance(
-    grid: Grid, cells: jax.Array, length: jax.Array, *, border_blocked: bool = False
-) -> jax.Array:
-    """Smallest Euclidean distance from the path to a blocked cell, float32 (a metric).
-
-    The path is the polyline through the cell centres; a blocked cell is its closed unit
-    square. So a path running along a wall has clearance 0.5, a diagonal step past an
-    obstacle's corner (or a squeeze between two diagonal obstacles) has clearance 0, and
-    a path through an obstacle has 0. ``inf`` when the map has no blocked cell (and
-    ``border_blocked`` is False). With ``border_blocked`` (static) the map's outer
-    boundary counts as an obstacle too.
-
-    Cost: a band of cells around each segment (:func:`_clearance`), ``O(L * H * W)``
-    (every segment against every cell) only when no segment comes within
-    :data:`CLEARANCE_RADIUS` of an obstacle: for reports on a few paths, not for fitness.
-    """
-    return _min_clearance(grid, _geometry(grid, cells, length), border_blocked)
-
-
-def tangencies(grid: Grid, cells: jax.Array, length: jax.Array) -> jax.Array:
-    """Number of path segments that touch a blocked cell (clearance 0), int32 (a metric).
-
-    IMGA Table 3 "number of tangency": a segment passing an obstacle's corner or edge
-    (or, for an infeasible path, crossing an obstacle) counts once however many cells it
-    touches. Zero-length (padding, repeated-node) segments are not counted. Cost: a band
-    of cells around each segment (:func:`_clearance`).
-    """
-    return _tangencies(grid, _geometry(grid, cells, length))
+    return as_f32(base) + as_f32(penalty) * count.astype(F32)
 
 
 class Metrics(NamedTuple):
@@ -882,8 +503,8 @@ def metrics(grid: Grid, cells: jax.Array, length: jax.Array) -> Metrics:
     """The metrics reported for a result path: length, turns, angle sum,
     minimum clearance and tangencies; the clearance costs what :func:`min_clearance`
     costs."""
-    g = _geometry(grid, cells, length)
-    near, touch = _clearance(grid, g)
+    g = geometry(grid, cells, length)
+    near, touch = clearance_band(grid, g)
     tang = jnp.int32(0) if g.cells.shape[0] == 1 else jnp.sum(touch & g.moving, dtype=jnp.int32)
     return Metrics(
         length=_path_length(g),
@@ -928,9 +549,9 @@ def imga(
     length: jax.Array,
     feasible: jax.Array | bool | None = None,
     *,
-    a: _Scalar = 6.0,
-    b: _Scalar = 1.0,
-    c: _Scalar = 3.0,
+    a: Scalar = 6.0,
+    b: Scalar = 1.0,
+    c: Scalar = 3.0,
     border_blocked: bool = False,
 ) -> jax.Array:
     """IMGA fitness ``F = 1 / (a L + b S + c E)``, float32 (IMGA eq. 4; a, b, c = 6, 1, 3).
@@ -938,11 +559,11 @@ def imga(
     ``L`` :func:`path_length` (eq. 5), ``S`` :func:`imga_safety` (eq. 6), ``E``
     :func:`imga_energy` (eq. 7); weights from IMGA §5.1. 0 when ``feasible`` is False.
     """
-    g = _geometry(grid, cells, length)
+    g = geometry(grid, cells, length)
     den = (
-        _f32(a) * _path_length(g)
-        + _f32(b) * _imga_safety(grid, g, 5.0, border_blocked)
-        + _f32(c) * _imga_energy(grid, g)
+        as_f32(a) * _path_length(g)
+        + as_f32(b) * _imga_safety(grid, g, 5.0, border_blocked)
+        + as_f32(c) * _imga_energy(grid, g)
     )
     return _masked_fitness(_inverse(den), feasible)
 
@@ -954,7 +575,7 @@ def agacd(
     feasible: jax.Array | bool | None = None,
     *,
     weights: Sequence[float] | jax.Array = AGACD_WEIGHTS,
-    smoothness_floor: _Scalar = 0.1,
+    smoothness_floor: Scalar = 0.1,
     border_blocked: bool = False,
     safety_method: str = "auto",
 ) -> jax.Array:
@@ -969,8 +590,8 @@ def agacd(
     ``feasible`` is False.
     """
     w = jnp.asarray(weights, dtype=F32)
-    g = _geometry(grid, cells, length)
-    smooth = jnp.maximum(_angle_sum(g), _f32(smoothness_floor))
+    g = geometry(grid, cells, length)
+    smooth = jnp.maximum(_angle_sum(g), as_f32(smoothness_floor))
     safety = _agacd_safety(grid, g, cells, length, 1.0, 0.1, border_blocked, safety_method)
     value = w[0] * _inverse(_path_length(g)) + w[1] / smooth + w[2] * _inverse(safety)
     return _masked_fitness(value, feasible)
@@ -982,10 +603,10 @@ def mpmga(
     length: jax.Array,
     feasible: jax.Array | bool | None = None,
     *,
-    alpha: _Scalar = 0.8,
-    beta: _Scalar = 0.2,
-    c: _Scalar = 1.0,
-    smoothness_floor: _Scalar = 0.1,
+    alpha: Scalar = 0.8,
+    beta: Scalar = 0.2,
+    c: Scalar = 1.0,
+    smoothness_floor: Scalar = 0.1,
 ) -> jax.Array:
     """MPMGA fitness ``alpha / length + beta * c / smoothness``, float32 (MPMGA eq. 3-5).
 
@@ -994,9 +615,9 @@ def mpmga(
     ``smoothness_floor`` (default 0.1), as for :func:`agacd`: the penalty is 0 exactly
     for a straight path, and at least 5 otherwise. 0 when ``feasible`` is False.
     """
-    g = _geometry(grid, cells, length)
-    smooth = jnp.maximum(_mpmga_penalty(g), _f32(smoothness_floor))
-    value = _f32(alpha) * _inverse(_path_length(g)) + _f32(beta) * _f32(c) / smooth
+    g = geometry(grid, cells, length)
+    smooth = jnp.maximum(_mpmga_penalty(g), as_f32(smoothness_floor))
+    value = as_f32(alpha) * _inverse(_path_length(g)) + as_f32(beta) * as_f32(c) / smooth
     return _masked_fitness(value, feasible)
 
 
@@ -1006,11 +627,11 @@ def iga_zhu(
     length: jax.Array,
     feasible: jax.Array | bool | None = None,
     *,
-    omega: _Scalar = 0.7,
-    c1: _Scalar = 1.0,
-    c2: _Scalar = 2.0,
-    c3: _Scalar = 3.0,
-    c4: _Scalar | None = None,
+    omega: Scalar = 0.7,
+    c1: Scalar = 1.0,
+    c2: Scalar = 2.0,
+    c3: Scalar = 3.0,
+    c4: Scalar | None = None,
 ) -> jax.Array:
     """Zhu & Pan fitness ``1 / (omega * fit_1 + (1 - omega) * fit_2)``, float32 (eq. 6).
 
@@ -1018,8 +639,8 @@ def iga_zhu(
     ``c1 < c2 < c3`` for 45/90/135-degree turns, ``c4`` beyond 135, default ``c3``).
     ``omega`` 0.7. 0 when ``feasible`` is False.
     """
-    omega = _f32(omega)
-    g = _geometry(grid, cells, length)
+    omega = as_f32(omega)
+    g = geometry(grid, cells, length)
     den = omega * _path_length(g) + (1.0 - omega) * _zhu_penalty(g, c1, c2, c3, c4)
     return _masked_fitness(_inverse(den), feasible)
 
@@ -1030,10 +651,10 @@ def iga_zhang(
     length: jax.Array,
     feasible: jax.Array | bool | None = None,
     *,
-    a: _Scalar = 2.0,
-    v: _Scalar = 1.0,
-    v_t: _Scalar = 0.5,
-    r: _Scalar = 0.5,
+    a: Scalar = 2.0,
+    v: Scalar = 1.0,
+    v_t: Scalar = 0.5,
+    r: Scalar = 0.5,
 ) -> jax.Array:
     """Zhang fitness ``1 / F`` with ``F = length + a m k``, float32 (Zhang eq. 2).
 
@@ -1042,10 +663,10 @@ def iga_zhang(
     the penalty coefficient ("generally greater than 1"). Defaults a 2, v 1, v_t 0.5,
     r 0.5 (k = pi/4). 0 when ``feasible`` is False.
     """
-    v, v_t = _f32(v), _f32(v_t)
-    k = (v - v_t) * np.float32(math.pi) * _f32(r) / (2.0 * v * v_t)
-    g = _geometry(grid, cells, length)
-    den = _path_length(g) + _f32(a) * _turns(g).astype(F32) * k
+    v, v_t = as_f32(v), as_f32(v_t)
+    k = (v - v_t) * np.float32(math.pi) * as_f32(r) / (2.0 * v * v_t)
+    g = geometry(grid, cells, length)
+    den = _path_length(g) + as_f32(a) * _turns(g).astype(F32) * k
     return _masked_fitness(_inverse(den), feasible)
 
 
@@ -1059,4 +680,4 @@ def sga(
 
     0 when ``feasible`` is False.
     """
-    return _masked_fitness(_inverse(_path_length(_geometry(grid, cells, length))), feasible)
+    return _masked_fitness(_inverse(_path_length(geometry(grid, cells, length))), feasible)

@@ -908,7 +908,7 @@ def test_runs_that_do_not_fit_together_run_in_groups_with_the_same_results(grid,
     another (each initialised, evolved and finished before the next): every seed's result
     is the one it has in a call of its own. 8 runs of sga's canonical problem where only
     4 fit at a time: two calls of 4 (the canonical program), against two requests of 4."""
-    from jaxga.api import runs as runs_module
+    from jaxga.api import calls
 
     seeds = [11, 12, 13, 14, 15, 16, 17, 18]
     halves = [api.run("sga", grid, seeds=seeds[:4], **SMALL),
@@ -918,8 +918,8 @@ def test_runs_that_do_not_fit_together_run_in_groups_with_the_same_results(grid,
     budget = 2**30 + 4 * 307_200 + 8 * 1_572 + 4 * 460_800 + 300_000
     monkeypatch.setattr(api.memory, "physical_memory", lambda: 2 * budget)
     layouts, stages = [], []
-    real = runs_module.fitting_layout
-    monkeypatch.setattr(runs_module, "fitting_layout",
+    real = calls.fitting_layout
+    monkeypatch.setattr(calls, "fitting_layout",
                         lambda *a: layouts.append(real(*a)) or layouts[-1])
     got = api.run("sga", grid, seeds=seeds, progress=lambda s, f: stages.append((s, f)),
                   **SMALL)
@@ -944,7 +944,7 @@ def test_padded_calls_that_would_not_fit_run_without_their_padding(monkeypatch):
     of as many as fit, one at a time; where not one fits, one line."""
     from types import SimpleNamespace
 
-    from jaxga.api.runs import fitting_layout, grouped_layout
+    from jaxga.api.calls import fitting_layout, grouped_layout
 
     monkeypatch.setattr(api.memory, "physical_memory", lambda: 24 * 2**30)  # CI's machine
     big = SimpleNamespace(population=100_000, islands=1, capacity=160, generations=300)

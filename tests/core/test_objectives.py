@@ -22,6 +22,7 @@ from hypothesis import given
 from hypothesis import strategies as st
 
 from jaxga import Grid, ParameterError
+from jaxga.core import clearance, path_geometry
 from jaxga.core import objectives as ob
 from jaxga.core.paths import population_map
 
@@ -130,7 +131,7 @@ def test_fast_atan2_matches_numpy():
     """The branch-free float32 atan2 for y >= 0 agrees with NumPy's to 1e-6 rad."""
     v = np.arange(-60, 61)
     y, x = np.meshgrid(np.abs(v), v)
-    got = np.asarray(jax.jit(ob._atan2_nonneg)(jnp.asarray(y), jnp.asarray(x)))
+    got = np.asarray(jax.jit(path_geometry.atan2_nonneg)(jnp.asarray(y), jnp.asarray(x)))
     want = np.arctan2(y, x).astype(np.float64)
     want[(y == 0) & (x == 0)] = 0.0
     np.testing.assert_allclose(got, want, atol=1e-6, rtol=0)
@@ -174,7 +175,7 @@ def _fill_forward_reference(key: np.ndarray, v: np.ndarray) -> np.ndarray:
 
 
 FILL_WIDTH = 12 * 41  # the longest example below: 12 runs of 41 entries
-_fill_forward_pairs = jax.jit(jax.vmap(ob._fill_forward))
+_fill_forward_pairs = jax.jit(jax.vmap(path_geometry.fill_forward))
 
 
 @given(st.lists(st.tuples(st.booleans(), st.integers(0, 40)), min_size=1, max_size=12),
@@ -202,7 +203,7 @@ def test_long_hole_runs_fill_exactly():
     keys[0, 701:] = np.arange(701, n)
     vx = np.tile(np.arange(n, dtype=np.int32) % 5 - 2, (2, 1))
     vy = -vx
-    px, py = jax.jit(jax.vmap(ob._fill_forward))(keys, vx, vy)
+    px, py = jax.jit(jax.vmap(path_geometry.fill_forward))(keys, vx, vy)
     np.testing.assert_array_equal(px, _fill_forward_reference(keys, vx))
     np.testing.assert_array_equal(py, _fill_forward_reference(keys, vy))
     assert (np.asarray(px)[0, :701] == vx[0, 0]).all()
@@ -323,7 +324,7 @@ def test_agacd_safety_methods_agree_with_brute_force():
     c, ln = jnp.asarray(cells, jnp.int32), jnp.asarray(lengths, jnp.int32)
 
     def every_method(g, cc, nn):
-        _, x, y, node, _ = ob._nodes(g, cc, nn)
+        _, x, y, node, _ = path_geometry.path_nodes(g, cc, nn)
         exact = ob._count_bits(x, y, node, jnp.pad(g.blocked, 1))[1]  # the bare bit table
         methods = ("bits", "table", "sort")
         return [ob.agacd_safety(g, cc, nn, method=m) for m in methods], exact
@@ -396,10 +397,10 @@ def test_min_clearance_against_dense_sampling():
 def _whole_map_clearance(grid: Grid, cells: jax.Array, length: jax.Array) -> tuple:
     """Every segment against every cell of the map: (min clearance, min clearance with
     the border blocked, tangencies)."""
-    g = ob._geometry(grid, cells, length)
+    g = path_geometry.geometry(grid, cells, length)
     h, w = grid.shape
     segs = (g.x[:-1], g.y[:-1], g.x[1:], g.y[1:])
-    d, t = jax.vmap(lambda *s: ob._segment_box_clearance(*s, grid.blocked))(*segs)
+    d, t = jax.vmap(lambda *s: clearance._segment_box_clearance(*s, grid.blocked))(*segs)
     xf, yf = g.x.astype(jnp.float32), g.y.astype(jnp.float32)
     edge = jnp.minimum(jnp.minimum(xf, (w - 1) - xf), jnp.minimum(yf, (h - 1) - yf)) + 0.5
     return (jnp.min(d), jnp.minimum(jnp.min(d), jnp.min(edge)),
@@ -757,5 +758,5 @@ def test_min_clearance_agrees_with_the_host_measure_of_the_map_as_loaded():
         got = np.asarray(measure(grid, cells, np.array([len(p) for p in paths], np.int32)))
         want = [ObstacleClearance(b).of_path(p) for p in paths]
         np.testing.assert_allclose(got, want, rtol=1e-6, atol=1e-5)
-        far += sum(v > ob.CLEARANCE_RADIUS for v in want)
+        far += sum(v > clearance.CLEARANCE_RADIUS for v in want)
     assert far >= 3  # the whole-map search was exercised

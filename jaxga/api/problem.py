@@ -1,0 +1,159 @@
+"""The problem of a call, loaded and checked once: the preset with its overrides and
+``--set`` values, the map with its corner rule and endpoints (:func:`load_problem`), and the
+user's own operator functions registered under their names (:func:`own_operators`).
+"""
+
+from __future__ import annotations
+
+import contextlib
+from collections.abc import Sequence
+from typing import Any
+
+import numpy as np
+
+from jaxga.api.jax_settings import check_jax_settings, check_platform
+from jaxga.api.lowering import check_environment
+from jaxga.config.presets import as_sets, load_preset, parse_set
+from jaxga.config.schema import MAP_RULE, SCHEMA, Config, flatten, freeze
+from jaxga.core.errors import EndpointError, ParameterError
+from jaxga.core.grid import Grid, as_integer
+from jaxga.engine import check_file_keys_read, check_overrides_read
+from jaxga.maps import MapInfo, load_map_info
+from jaxga.maps.frame import MapFrame
+from jaxga.operators import registry
+
+__all__ = ["check_one_corner_rule", "configured_rule", "load_problem", "own_operators"]
+
+
+def _normalised(key: str, value: Any) -> Any:
+    """``value`` as the configuration stores it (a tuple and a list alike, numpy scalars
+    as Python ones), to compare two values given for ``key``; an invalid value is
+    refused with the key's own message."""
+
+    if key not in SCHEMA:  # refused by name when the preset loads
+        return repr(value)
+    return freeze(SCHEMA[key].check(key, value))
+
+
+def configured_rule(corner_rule: str | None, config: Config) -> str | None:
+    """The corner rule a call names: ``corner_rule`` (``--corner-rule``), else the
+    configuration's ``map.corner_rule`` unless it is ``"map"``; None = the map's own."""
+    if corner_rule is not None:
+        return corner_rule
+    rule = config["map.corner_rule"]
+    return None if rule == MAP_RULE else rule
+
+
+def check_one_corner_rule(corner_rule: str | None, config: Config,
+                          overridden: Sequence[str]) -> None:
+    """Refuse a ``corner_rule=`` (``--corner-rule``) that disagrees with an overridden
+    ``map.corner_rule`` (``--set``): two rules for one run."""
+    rule = config["map.corner_rule"]
+    if "map.corner_rule" in overridden and corner_rule is not None and rule != MAP_RULE \
+            and corner_rule != rule:
+        raise ParameterError(f"two corner rules given: {corner_rule!r} (corner_rule, "
+                             f"--corner-rule) and {rule!r} (map.corner_rule)")
+
+
+def own_operators(overrides: dict) -> dict:
+    """``overrides`` with each function given for an operator family (``init``,
+    ``fitness`` or its synonym ``objective``, ``selection``, ``crossover``, ``mutation``,
+    ``simplify``, ``post``) registered under its name
+    (:func:`jaxga.operators.registry.register_operator`, replacing an earlier one of that
+    name) and chosen as ``<family>.method``."""
+    out = {}
+    for key, value in overrides.items():
+        family = "fitness" if key == "objective" else key
+        if family in registry.FAMILIES and callable(value):
+            op = _registered_fn(family, value) or registry.register_operator(
+                family, value, replace=True)
+            out[f"{family}__method"] = op.name
+        else:
+            out[key] = value
+    return out
+
+
+def _registered_fn(family: str, fn: Any) -> registry.Operator | None:
+    """The registered operator of ``family`` whose function is ``fn``, if any."""
+    return next((op for op in registry.operators(family) if op.fn is fn), None)
+
+
+def load_problem(preset, grid, corner_rule, variant, sets, overrides, generations, *,
+                 check_read: bool = True, check_endpoints: bool = True):
+    """``(config, grid, map name, frame)`` of a call, checked (the frame of a map file or
+    :class:`~jaxga.maps.MapInfo`: :mod:`jaxga.maps.frame`; None for a bare Grid);
+    ``check_read=False`` leaves overrides that nothing reads to the caller
+    (:func:`jaxga.compare.compare`), ``check_endpoints=False`` the endpoints (a
+    :class:`~jaxga.api.planner.Planner`'s map, whose endpoints each plan gives)."""
+
+    check_environment()  # a bad $JAXGA_THREEFRY, which `import jaxga` does not refuse
+    check_jax_settings()  # 64-bit mode, jit disabled
+    check_platform()
+    map_name, frame = "grid", None
+    if isinstance(grid, MapInfo):  # a loaded map that keeps its name (and its endpoints)
+        grid, map_name, frame = grid.grid, grid.name, grid.frame
+    sets = as_sets(sets)
+    ov: dict[str, Any] = {k.replace("__", "."): v
+                          for k, v in own_operators(overrides).items()}
+    if generations is not None:  # a non-integer is left for the configuration to refuse
+        with contextlib.suppress(TypeError):
+            generations = as_integer(generations)
+        ov["generations"] = generations
+    given = flatten(ov)
+    set_values = [parse_set(text) for text in sets]
+    for key, value in set_values:  # one value per key
+        if key in given and _normalised(key, given[key]) != _normalised(key, value):
+            raise ParameterError(f"{key} is given twice, as {given[key]!r} and {value!r}")
+        given[key] = value
+    if isinstance(preset, Config):  # as load_preset: the overrides, then the sets
+        if variant is not None:
+            raise ParameterError(f"variant {variant!r} given with a Config: load the preset "
+                                 "with its variant (jaxga.config.presets.load_preset) instead")
+        config = preset.override(ov).override(dict(set_values))
+    else:
+        config = load_preset(preset, variant=variant, overrides=ov, sets=sets)
+    if check_read:  # never silently ignored
+        overridden = [*flatten(ov), *(key for key, _ in set_values)]
+        check_overrides_read(config, overridden)
+        if not isinstance(preset, Config):  # keys a user TOML file sets, in that file
+            check_file_keys_read(preset, variant)
+        check_one_corner_rule(corner_rule, config, overridden)
+        rule = config["map.corner_rule"]
+        if isinstance(grid, Grid) and corner_rule is None and rule != MAP_RULE \
+                and grid.corner_rule != rule:  # set by an override or a user's file
+            raise ParameterError(
+                f"different corner rules: map.corner_rule = {rule!r} has no effect with a "
+                f"Grid (or a loaded MapInfo), which keeps its own corner rule "
+                f"({grid.corner_rule!r}): give the Grid that rule "
+                "(corner_rule=... or Grid.replace; --corner-rule on the command line)")
+    if isinstance(grid, Grid):
+        grid = grid.validated()  # a grid made with the plain constructor is checked too
+        if corner_rule is not None:
+            grid = grid.replace(corner_rule=corner_rule)
+    else:
+        info = load_map_info(grid, corner_rule=configured_rule(corner_rule, config))
+        grid, map_name, frame = info.grid, info.name, info.frame
+    try:
+        if check_endpoints:
+            grid.check_endpoints()
+    except EndpointError as e:
+        raise EndpointError(f"{e}{_on_the_map(frame, grid)}") from None
+    return config, grid, map_name, frame
+
+
+def _on_the_map(frame: MapFrame | None, grid: Grid) -> str:
+    """Where a blocked endpoint lies in the map's own terms: its map cells (a coarsened
+    map) and its centre in metres (a map with a resolution); "" for a bare grid."""
+    if frame is None or (frame.coarsen == 1 and not frame.has_metres):
+        return ""
+    for xy in (grid.start_xy, grid.goal_xy):  # the first blocked one, as check_endpoints
+        if grid.blocked_np()[xy[1], xy[0]]:
+            where = []
+            if frame.coarsen > 1:
+                middle = tuple(int(v) for v in frame.map_cell(np.asarray(xy)))
+                where.append(f"the coarse cell around map cell {middle}")
+            if frame.has_metres:
+                x, y = frame.to_world(np.asarray(xy, float))
+                where.append(f"centre ({x:.3f}, {y:.3f}) m")
+            return f" ({', '.join(where)})"
+    return ""
