@@ -72,3 +72,31 @@ def on_page_markdown(markdown: str, page, config, files) -> str:  # noqa: ARG001
     if "<!-- generated: presets -->" in markdown:
         markdown = markdown.replace("<!-- generated: presets -->", presets_sections())
     return markdown
+
+
+_ROLE = re.compile(r":(?:func|class|meth|mod|data|attr|exc|obj):<code>(~?)([\w.]+)</code>")
+_ID = re.compile(r'id="([\w.]+)"')
+
+
+def resolve_roles(html: str) -> str:
+    """The docstrings' Sphinx roles (``:func:`jaxga.run```), which the renderer leaves as
+    text, as code: a link where the page documents the name (its full name, or the one
+    documented name that ends with it), plain code elsewhere; ``~a.b.c`` shows ``c``."""
+    ids = set(_ID.findall(html))
+
+    def link(m: re.Match) -> str:
+        short, name = m[1], m[2]
+        shown = name.rsplit(".", 1)[-1] if short else name
+        target = name if name in ids else None
+        if target is None:
+            ends = [i for i in ids if i.endswith("." + name)]
+            target = ends[0] if len(ends) == 1 else None
+        code = f"<code>{shown}</code>"
+        return f'<a href="#{target}">{code}</a>' if target else code
+
+    return _ROLE.sub(link, html)
+
+
+def on_page_content(html: str, **kwargs) -> str:
+    """MkDocs hook: the rendered docstrings' roles as links or code (:func:`resolve_roles`)."""
+    return resolve_roles(html)

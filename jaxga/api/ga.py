@@ -42,7 +42,7 @@ from jaxga.engine import finish as finish_run
 from jaxga.engine.maptables import with_tables
 from jaxga.engine.run import run_evolve, run_init
 from jaxga.maps import MapInfo
-from jaxga.maps.frame import endpoint_cells
+from jaxga.maps.frame import MapFrame, endpoint_cells
 from jaxga.operators.guide import with_guide
 
 __all__ = ["GA"]
@@ -76,14 +76,18 @@ class GA:
             ``init.fallback``, ``[islands]`` per-island rates under their rate's name,
             AGACD's ``float32[2]`` Delphi ratios): pass it, or a modified copy, to every
             pure function; ``jax.vmap`` over any of its entries sweeps it.
-        map_name: the map's name; ``frame``: its world frame (None for a bare grid).
+        map_name: the map's name.
+        frame: the map's world frame (:class:`jaxga.maps.frame.MapFrame`: resolution,
+            origin, coarsening), None for a bare grid.
     """
 
     def __init__(self, preset: str | Config, problem: Grid | MapInfo | str, *,
                  corner_rule: str | None = None, variant: str | None = None,
                  sets: Any = (), generations: int | None = None, **overrides: Any) -> None:
-        config, grid, self.map_name, self.frame = load_problem(
+        config, grid, map_name, frame = load_problem(
             preset, problem, corner_rule, variant, sets, overrides, generations)
+        self.map_name: str = map_name
+        self.frame: MapFrame | None = frame
         if uses_guide(config):
             grid = with_guide(grid)
         self.config = config

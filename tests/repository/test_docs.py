@@ -146,3 +146,29 @@ def test_the_code_blocks_of_a_page_run(page, tmp_path, monkeypatch):
                 load_preset(str(tmp_path / "block.toml"))
         elif kind == "yaml":
             yaml.safe_load(code)
+
+
+def _hooks():
+    """docs/hooks.py, the site's MkDocs hooks, as a module."""
+    import importlib.util
+
+    spec = importlib.util.spec_from_file_location("docs_hooks", ROOT / "docs" / "hooks.py")
+    module = importlib.util.module_from_spec(spec)
+    spec.loader.exec_module(module)
+    return module
+
+
+def test_the_docstrings_roles_render_as_links_or_code():
+    """A documented name becomes a link to its anchor (full name, a unique suffix, or
+    ``~`` for the last part only); an undocumented one plain code; no role text is left."""
+    html = ('<h2 id="jaxga.run">run</h2><h3 id="jaxga.GA.evolve">evolve</h3>'
+            '<h3 id="jaxga.api.result.Result.path">path</h3><p>see :func:<code>jaxga.run'
+            '</code>, :meth:<code>evolve</code>, :class:<code>~jaxga.core.grid.Grid</code>, '
+            ':meth:<code>~jaxga.api.result.Result.path</code> and :data:<code>path'
+            '</code></p>')
+    out = _hooks().resolve_roles(html)
+    assert ('see <a href="#jaxga.run"><code>jaxga.run</code></a>, '
+            '<a href="#jaxga.GA.evolve"><code>evolve</code></a>, <code>Grid</code>, '
+            '<a href="#jaxga.api.result.Result.path"><code>path</code></a> and '
+            '<a href="#jaxga.api.result.Result.path"><code>path</code></a>') in out
+    assert ":func:" not in out and ":class:" not in out
