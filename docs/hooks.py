@@ -3,7 +3,9 @@
 A page that holds ``<!-- generated: operators -->`` gets the operator registry's table
 (:mod:`jaxga.operators.registry`); ``<!-- generated: presets -->`` gets one section per paper
 card (``docs/cards/*.toml``: every value of a preset with the paper's section it comes
-from). Loaded by ``mkdocs.yml`` (``hooks:``).
+from); ``<!-- generated: doe -->`` the table of a designed experiment run by the build.
+The figures under ``docs/figures/generated/`` are drawn by the build from runs of the
+current code (:func:`make_figures`). Loaded by ``mkdocs.yml`` (``hooks:``).
 """
 
 from __future__ import annotations
@@ -12,6 +14,9 @@ import re
 from pathlib import Path
 
 CARDS = Path(__file__).resolve().parent / "cards"
+GENERATED = Path(__file__).resolve().parent / "figures" / "generated"
+"""The figures the build draws (not in git: made afresh by every build)."""
+_MADE: dict[str, str] = {}
 
 
 def operators_table() -> str:
@@ -65,8 +70,40 @@ def presets_sections() -> str:
     return "\n".join(card_section(p) for p in sorted(CARDS.glob("*.toml")))
 
 
+def make_figures() -> dict[str, str]:
+    """Run the examples the site shows and draw them into :data:`GENERATED`: the README's
+    main job (Zhu & Pan's GA on the built-in 20 x 20 map: best paths and convergence), a
+    plan on the ROS map of docs/examples with a 0.1 m robot, and AGACD's designed
+    experiment (its Table 3 factors, 2 seeds); returns the markdown of the DOE table."""
+    import matplotlib
+
+    matplotlib.use("Agg")
+    import jaxga
+    from jaxga.doe import AGACD_TABLE3, run_doe
+    from jaxga.plot import plot_result
+
+    GENERATED.mkdir(parents=True, exist_ok=True)
+    main = jaxga.run("iga_zhu", "classic_ga_gapp3_20x20", seeds=20)
+    plot_result(main, "classic_ga_gapp3_20x20", GENERATED / "main_job.png")
+    office = Path(__file__).resolve().parent / "examples" / "office.yaml"
+    planner = jaxga.Planner(str(office), robot_radius=0.1, seeds=8)
+    plan = planner.plan(start_world=(-0.55, -0.55), goal_world=(1.85, 1.85))
+    grid = planner.map.grid.replace(start=plan.start, goal=plan.goal)
+    plot_result(plan, grid, GENERATED / "office_plan.png", info=planner.map)
+    doe = run_doe("agacd", "classic_ga_gapp3_20x20", list(AGACD_TABLE3), "agacd-table4",
+                  seeds=2, generations=30)
+    return {"doe": "```text\n" + doe.table() + "\n\n" + doe.equation() + "\n```"}
+
+
+def on_pre_build(config) -> None:  # noqa: ARG001 - hook API
+    """Draw the figures and run the experiment the pages show (:func:`make_figures`)."""
+    _MADE.update(make_figures())
+
+
 def on_page_markdown(markdown: str, page, config, files) -> str:  # noqa: ARG001 - hook API
     """Replace the generation markers of a page."""
+    if "<!-- generated: doe -->" in markdown:
+        markdown = markdown.replace("<!-- generated: doe -->", _MADE.get("doe", ""))
     if "<!-- generated: operators -->" in markdown:
         markdown = markdown.replace("<!-- generated: operators -->", operators_table())
     if "<!-- generated: presets -->" in markdown:
