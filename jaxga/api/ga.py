@@ -32,6 +32,7 @@ from jaxga.core.errors import ParameterError
 from jaxga.core.grid import Grid
 from jaxga.engine import (
     GAState,
+    RunOutputs,
     build,
     default_capacity,
     default_params,
@@ -157,9 +158,11 @@ class GA:
         return run_evolve(self.algorithm, key, self._grid(grid), state, params, generations)
 
     def finish(self, state: GAState, params: dict, history: dict | None = None,
-               initial_best: jax.Array | None = None, grid: Grid | None = None) -> dict:
+               initial_best: jax.Array | None = None,
+               grid: Grid | None = None) -> RunOutputs:
         """The best path post-optimised (the preset's ``post.method``) and the reported
-        metrics as arrays: ``success``, ``raw_cells`` / ``raw_n_cells`` (the GA's own
+        metrics as arrays (:class:`jaxga.engine.RunOutputs`, also read by name:
+        ``out["fitness"]``): ``success``, ``raw_cells`` / ``raw_n_cells`` (the GA's own
         best and its node count), ``cells`` / ``n_cells`` (post-optimised), ``length`` /
         ``raw_length`` (Euclidean, as :class:`jaxga.api.result.Result`), ``fitness``,
         ``metrics``, ...; with ``history``, also the
@@ -169,7 +172,7 @@ class GA:
                           initial_best)
 
     def run(self, key: jax.Array, params: dict, grid: Grid | None = None,
-            generations: int | None = None) -> dict:
+            generations: int | None = None) -> RunOutputs:
         """:meth:`init`, :meth:`evolve` and :meth:`finish` of one run: seed ``s`` of
         :func:`jaxga.run` is ``run(jax.random.PRNGKey(s), ga.default_params)``;
         ``grid``: another pair of endpoints on this map (:meth:`grid_for`)."""

@@ -461,8 +461,9 @@ def _evolve_and_finish(plan: _SweepPlan, runs: RunCalls, progs: Programs, states
         outs = jax.block_until_ready([progs.finish(runs.grid, p, st)
                                       for (_, p), st in zip(runs.calls, states)])
         out = jax.tree_util.tree_map(lambda *parts: runs.joined(parts), *outs)
-        for key in ("cells", "raw_cells"):
-            out[key] = map_cells(out[key], runs.grid.width, plan.grid.width)
+        out = dataclasses.replace(  # the paths on the user's map
+            out, cells=map_cells(out.cells, runs.grid.width, plan.grid.width),
+            raw_cells=map_cells(out.raw_cells, runs.grid.width, plan.grid.width))
     return out, history
 
 

@@ -24,6 +24,7 @@ from __future__ import annotations
 
 import dataclasses
 from collections.abc import Callable
+from typing import Any
 
 import jax
 import jax.numpy as jnp
@@ -440,13 +441,68 @@ def convergence_generation(best: jax.Array, final_best: jax.Array,
     return xp.where(final_best > 0, conv, -1).astype(xp.int32)
 
 
+@jax.tree_util.register_dataclass
+@dataclasses.dataclass(frozen=True)
+class RunOutputs:
+    """What :func:`finish` reports of one run (arrays with a leading runs axis once
+    mapped over runs). Also read as a mapping by field name (``out["fitness"]``,
+    ``out.keys()``), as the pure core's users and the drivers read it."""
+
+    success: jax.Array
+    """bool: a feasible path was found."""
+    raw_cells: jax.Array
+    """int32[L]: the best path as evolved (padded with its last cell)."""
+    raw_n_cells: jax.Array
+    """int32: its number of cells."""
+    cells: jax.Array
+    """int32[L]: the best path post-optimised (``post.method``)."""
+    n_cells: jax.Array
+    """int32: its number of cells."""
+    fitness: jax.Array
+    """float32: the best fitness (0 without a feasible path)."""
+    raw_length: jax.Array
+    """float32: the raw path's Euclidean length in cells."""
+    length: jax.Array
+    """float32: the post-optimised path's length in cells."""
+    raw_metrics: dict
+    """The raw path's :class:`jaxga.core.objectives.Metrics`, by name."""
+    metrics: dict
+    """The post-optimised path's metrics, by name."""
+    generations_run: jax.Array
+    """int32: generations computed (fewer when the stagnation rule stopped the run)."""
+    failures: jax.Array
+    """int32[3]: failed crossovers, mutations and simplifications."""
+    feasible_post: jax.Array
+    """bool: the post-optimised path is feasible and joins the endpoints."""
+    convergence_generation: jax.Array | None = None
+    """int32: :func:`convergence_generation`, None where the history stayed on the host."""
+
+    def __getitem__(self, key: str) -> Any:
+        if key not in self.keys():
+            raise KeyError(key)
+        return getattr(self, key)
+
+    def __contains__(self, key: object) -> bool:
+        return key in self.keys()
+
+    def keys(self) -> tuple[str, ...]:
+        """The fields that hold a value."""
+        return tuple(f.name for f in dataclasses.fields(self)
+                     if getattr(self, f.name) is not None)
+
+    def items(self) -> list[tuple[str, Any]]:
+        """``(field, value)`` of every field that holds a value."""
+        return [(k, getattr(self, k)) for k in self.keys()]
+
+
 def finish(algo: Algorithm, grid: Grid, state: GAState, history: dict | None, params: dict,
-           initial_best: jax.Array | None = None) -> dict:
-    """Post-optimise the best path and compute the reported metrics.
+           initial_best: jax.Array | None = None) -> RunOutputs:
+    """Post-optimise the best path and compute the reported metrics
+    (:class:`RunOutputs`).
 
     ``convergence_generation``: :func:`convergence_generation` of ``history["best"]``
-    (left out when ``history`` is None: the compiled programs of :mod:`jaxga.api`
-    compute it on the host, so that they serve every generation count).
+    (None when ``history`` is None: the compiled programs of :mod:`jaxga.api` compute it
+    on the host, so that they serve every generation count).
     """
     raw_c, raw_n = state.best_cells, state.best_length
     success = state.best_fitness > 0
@@ -460,20 +516,18 @@ def finish(algo: Algorithm, grid: Grid, state: GAState, history: dict | None, pa
     both_len, both_metrics = jax.vmap(
         lambda c, n: (objectives.path_length(grid, c, n), objectives.metrics(grid, c, n))
     )(jnp.stack([raw_c, opt_c]), jnp.stack([raw_n, opt_n]))
-    out = {
-        "success": success,
-        "raw_cells": raw_c, "raw_n_cells": raw_n,
-        "cells": opt_c, "n_cells": opt_n,
-        "fitness": state.best_fitness,
-        "raw_length": both_len[0],
-        "length": both_len[1],
-        "raw_metrics": {k: v[0] for k, v in both_metrics._asdict().items()},
-        "metrics": {k: v[1] for k, v in both_metrics._asdict().items()},
-        "generations_run": state.generation,
-        "failures": state.failures,
-        "feasible_post": is_feasible(grid, opt_c, opt_n) & has_endpoints(grid, opt_c, opt_n),
-    }
-    if history is not None:
-        out["convergence_generation"] = convergence_generation(
-            history["best"], state.best_fitness, initial_best)
-    return out
+    return RunOutputs(
+        success=success,
+        raw_cells=raw_c, raw_n_cells=raw_n,
+        cells=opt_c, n_cells=opt_n,
+        fitness=state.best_fitness,
+        raw_length=both_len[0],
+        length=both_len[1],
+        raw_metrics={k: v[0] for k, v in both_metrics._asdict().items()},
+        metrics={k: v[1] for k, v in both_metrics._asdict().items()},
+        generations_run=state.generation,
+        failures=state.failures,
+        feasible_post=is_feasible(grid, opt_c, opt_n) & has_endpoints(grid, opt_c, opt_n),
+        convergence_generation=None if history is None else convergence_generation(
+            history["best"], state.best_fitness, initial_best),
+    )
