@@ -169,8 +169,8 @@ def plot_map(grid: Grid, paths: Sequence[tuple[Sequence[tuple[int, int]], str]] 
     :data:`PATH_STYLES`); the legend sits outside the map, right of it, so that it hides no
     cell.
 
-    The cells are one RGB image (:func:`cell_classes`, :data:`CELL_CLASSES`), so that a
-    map of 500 x 500 cells draws in a fraction of a second: obstacles black on white, and
+    The cells are one RGB image (:func:`cell_classes`, :data:`CELL_CLASSES`), drawn at
+    once whatever the map's size: obstacles black on white, and
     with ``layers`` (:class:`~jaxga.maps.MapLayers`) unknown cells grey and the inflation
     margin tinted, explained by a key below the legend. ``frame`` with a resolution puts
     the axes in metres (:class:`MapView`). ``endpoints`` ``(start, goal)`` replaces the

@@ -581,8 +581,8 @@ def initial_control_points(
     The starting point of :func:`smooth`'s optimisation.
 
     Evenly spaced by arc length: the uniform-speed parametrisation that the bending term
-    prefers anyway. (Giving short segments extra control points, e.g. spacing by
-    ``segment length + mean segment length``, was tried: on a long path it bunches them on
+    prefers anyway. (Not spacing that gives short segments extra control points, e.g. by
+    ``segment length + mean segment length``: on a long path it bunches them on
     a short first or last segment, and the slow curve there forms near-cusps with
     curvatures far above the turning bound.)
     """

@@ -13,9 +13,9 @@ means every a is larger), so for a metric to minimise (path length) A12 < 0.5 fa
 ``a``. A comparison with an empty sample (every seed of a preset failed) gives NaN
 statistics and p-value, never an exception.
 
-:mod:`scipy.stats` is imported by the functions that use it, not with the module:
-importing it was a large share of ``import jaxga`` (which imports this module through
-:mod:`jaxga.compare`), paid by every ``jaxga run`` from the command line (decision 016).
+:mod:`scipy.stats` is imported by the functions that use it, not with the module, so
+that ``import jaxga`` (which imports this module through :mod:`jaxga.compare`), and with
+it every ``jaxga run`` from the command line, does not pay for it (decision 016).
 """
 
 from __future__ import annotations

@@ -12,9 +12,9 @@ table of ``rows * n`` entries, offsetting each row's indices by ``row * n``.
 
 Results are bit-for-bit those of the plain ``.at[]`` scatter (integer maxima are
 order-independent). Indices follow ``.at[]``: negative ones count from the end, others
-outside the table are dropped. Not every scatter gains: a flat version of the
-connection's small node-table set (18 updates into 160 entries) was slower than the
-batched scatter, so only the map-sized position tables use this (decision 007).
+outside the table are dropped. Only the map-sized position tables use this: small
+scatters such as the connection's node table stay batched scatters, which are cheaper
+there (decision 007).
 """
 
 from __future__ import annotations
@@ -120,9 +120,9 @@ def table_lookup(keys: jax.Array, queries: jax.Array, n_cells: int) -> jax.Array
     :func:`jaxga._batching.folding.fold_call`). When all rows' tables would
     exceed :data:`LOOKUP_DIRECT_MAX` entries they are built and read in chunks of
     :data:`LOOKUP_CHUNK_ENTRIES` (a ``lax.map`` over chunks of rows), so that each
-    chunk's tables stay in the cache between the scatter and the gather (at once, the
-    lookups of a generation's common-point crossovers on a 50 x 50 map took nearly all
-    of the generation: decision 007). :func:`jaxga.core.paths.position_lookup` uses it on
+    chunk's tables stay in the cache between the scatter and the gather (built all at
+    once, a generation's tables outgrow the caches: decision 007).
+    :func:`jaxga.core.paths.position_lookup` uses it on
     maps of more than :data:`jaxga.core.paths.CHUNKED_LOOKUP_CELLS` cells.
     """
     queries = jnp.asarray(queries, jnp.int32)
@@ -171,8 +171,7 @@ def true_first_order(flags: jax.Array) -> jax.Array:
     the False entries in order; equal to ``jnp.argsort(~flags, stable=True)``.
 
     A prefix count and one scatter of a permutation instead of a comparison sort, which
-    on XLA's CPU backend is many times slower and was half of a generation of AGACD's
-    evolution (decision 004).
+    XLA's CPU backend runs much more slowly (decision 004).
     """
     pos = true_first_positions(flags)
     n = pos.shape[0]

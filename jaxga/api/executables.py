@@ -3,7 +3,7 @@ nor compiles them (decision 028).
 
 JAX's persistent compilation cache (:mod:`jaxga.api.compilation_cache`) saves XLA's
 compilation only: a later process still traces the Python functions and lowers them to
-StableHLO to find the entry (2-4 s per program set on the 2-core machine, decision 014).
+StableHLO to find the entry (decisions 014 and 028).
 This store keeps each compiled program (``jax.experimental.serialize_executable``)
 under a key made of everything the tracing depends on: the program's name, the
 algorithm (operators, sizes, static settings), the shapes and static parts of the map and

@@ -84,7 +84,8 @@ def jaxga_lowering() -> Iterator[None]:
     thread-safe (the rule is swapped on the first entry and restored on the last exit).
 
     Same random bits either way (the hash of Salmon et al. 2011 that ``jax.random``
-    implements); the unrolled form compiles faster and fuses with its consumers.
+    implements); the unrolled form compiles faster and fuses with its consumers
+    (decision 013).
     Other platforms are never touched (their lowering is JAX's own)."""
     if not threefry_unrolled():
         yield

@@ -580,7 +580,7 @@ def compiled_programs(algo: Algorithm, grid_spec: Any, params_spec: Any, n_runs:
     shared = {name: (name, views[name], grid_spec, tuple(sorted(params_spec.items())), n_runs,
                      tuple(devices), operator_functions(views[name]))
               for name in Programs.NAMES}
-    # One after the other: compiling them in threads (one per core) was no faster
+    # One after the other: threads (one per core) do not shorten the compile
     # (decision 011).
     return Programs(trace, stored, devices, shared)
 

@@ -117,10 +117,9 @@ def clear(grid: Grid, a: jax.Array, b: jax.Array, max_span: int | None = None) -
         grid: the map; its ``corner_rule`` applies where the segment meets a grid vertex.
         a, b: int32 cell indices ``y * W + x``.
         max_span: optional static bound on ``|dx|`` and ``|dy|``. The cost becomes
-            ``2 * max_span`` lanes instead of ``W + H - 2`` (4 us -> tens of ns per
-            segment on a 256 x 256 map); a segment longer than that is reported as NOT
-            clear, so pass it only where segments are short by construction (a mutation
-            radius, a knight move).
+            ``2 * max_span`` lanes instead of ``W + H - 2`` (decision 004); a segment
+            longer than that is reported as NOT clear, so pass it only where segments
+            are short by construction (a mutation radius, a knight move).
 
     Returns:
         A bool scalar: True when both end cells are on the map and free, every cell whose

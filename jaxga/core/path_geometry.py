@@ -76,8 +76,8 @@ def fill_forward(key: jax.Array, vx: jax.Array, vy: jax.Array) -> tuple[jax.Arra
     exactly when it equals its running maximum. Paths without repeated interior nodes
     have no holes and run zero passes; otherwise ``ceil(log2(r + 1))`` passes for the
     longest run of ``r`` holes. (Under ``vmap`` every path of the batch runs the
-    batch's largest pass count, so one pass per hole was much slower on batches whose
-    paths held long runs of repeated nodes: decision 009.)
+    batch's largest pass count, so the passes double rather than fill one hole each:
+    decision 009.)
     """
 
     n = key.shape[0]

@@ -271,7 +271,7 @@ def last_occurrence(
 
     Padding positions map to themselves. With ``n_cells`` (the map size, static) at most
     :data:`TABLE_MAX_CELLS`, one scatter-max into a table of ``n_cells`` entries and one
-    gather (many times faster than a sort on small maps: decision 008); otherwise, or without
+    gather (cheaper than a sort on small maps: decision 008); otherwise, or without
     ``n_cells``, a sort, O(L log L), with no map-sized table (decision 008:
     map-sized tables become memory-bound on large maps): one sort of packed
     ``(cell, position)`` words where they fit 32 bits (:func:`_sorted_by_cell`), else a
@@ -308,8 +308,8 @@ def _sorted_by_cell(cells: jax.Array, valid: jax.Array,
     """``(cell int32[L], position int32[L])`` sorted by cell, then position (padding, and
     a valid node off the map, as cell ``n_cells``, after every real cell): ONE sort of
     ``cell << b | position`` words.
-    On XLA's CPU backend that is several times faster than the stable ``argsort`` (a
-    sort of two arrays) of the same pairs (decision 008)."""
+    On XLA's CPU backend that is faster than the stable ``argsort`` (a sort of two
+    arrays) of the same pairs (decision 008)."""
     n = cells.shape[0]
     b = max(n - 1, 1).bit_length()
     key = jnp.where(valid & (cells >= 0) & (cells < n_cells), cells, n_cells)

@@ -13,7 +13,7 @@ fits the linear prediction ``result = X0 + sum_i Xi * Fi`` (AGACD eq. 30) to the
 means by least squares, reports main effects (mean response per level of each factor),
 picks the predicted best coded combination (each coefficient's sign: maximised for
 fitness-like responses, minimised for length-like ones) and runs it as a confirmation run
-with the same seeds (AGACD: predicted 0.28995, measured 0.30684).
+with the same seeds (AGACD 5.2.1 reports predicted 0.28995, measured 0.30684).
 
 With ``checkpoint=DIR`` the points run in blocks of ``block`` points per compiled call
 and each finished point is written to ``DIR`` at once (temp file + ``os.replace``); a

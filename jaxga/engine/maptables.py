@@ -6,9 +6,8 @@ walks of the initialisers and of Zhu's range mutation, the field walks), the fre
 mutations that reconnect), the legal steps of every cell (MPMGA's heterologous
 crossover) and the free-cell prefix counts of every row and column (Zhu's column
 crossover). Inside the generation loop XLA computes them again every generation (it does
-not hoist computations whose outputs outgrow their inputs), which made a generation on
-a large map markedly slower than with the tables given (``benchmarks/map_scale.py``;
-decision 008). :func:`with_tables` computes them once and attaches them to
+not hoist computations whose outputs outgrow their inputs), a cost that grows with the
+map (decision 008). :func:`with_tables` computes them once and attaches them to
 the grid (``Grid.tables``); every function that reads such a table takes it from there
 when present, so the results are the same bit for bit. :func:`jaxga.run` attaches them
 to every run's grid.

@@ -11,8 +11,8 @@ Moving AI scenario, a path JSON for re-planning) is read by :func:`read_input`:
 * at most a **cap** of bytes is read, derived from the largest map jaxga plans on
   (:data:`jaxga.core.grid.MAX_MAP_CELLS`): :func:`map_file_cap` for map files and their
   images, :data:`SCENARIO_CAP`, :data:`YAML_CAP` and :data:`PATH_JSON_CAP` for the rest.
-  A larger file is refused from its size before a byte is read (a 10 GB file in
-  microseconds); a file that grows while it is read is refused once it passes the cap.
+  A larger file is refused from its size before a byte is read; a file that grows while
+  it is read is refused once it passes the cap.
 
 Images are checked against their headers before they are decoded
 (:func:`check_image_data`): the pixel data a PNG or a Netpbm image (PGM, PPM, PBM) holds

@@ -305,7 +305,7 @@ def load_map_info(source: Source, **options: Any) -> MapInfo:
                          robot_radius=o.robot_radius, start_world=o.start_world,
                          goal_world=o.goal_world)
     size = _declared_size(raw, kind)
-    if size is not None:  # refuse a map too large before parsing it (a second or more)
+    if size is not None:  # refuse a map too large from its header (decision 021)
         w0, h0 = size
         message = too_large(-(-w0 // factor), -(-h0 // factor))
         if message:

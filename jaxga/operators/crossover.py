@@ -240,8 +240,8 @@ def common_point(
     lookup (where parent 1's cells are in parent 2; the second child's loop cut is read
     off it too, :func:`_join_reverse`, exact for a loop-free parent 2) and a few gathers
     of length ``L``; no scan, no O(L^2) matrix. The lookups (a scatter per parent) are
-    most of the operator's time, so one lookup instead of two makes it several times
-    faster, with the same children (decision 010).
+    most of the operator's time, so it does one lookup instead of two, with the same
+    children (decision 010).
     """
     c1, c2 = jnp.asarray(c1, I32), jnp.asarray(c2, I32)
     l1, l2 = jnp.asarray(l1, I32), jnp.asarray(l2, I32)
@@ -358,8 +358,8 @@ def step_masks(grid: Grid, cells: jax.Array) -> jax.Array:
     if n_cells > TABLE_MAX_CELLS:
         return jnp.sum(jnp.where(legal9(cells), bit, 0), axis=-1, dtype=I32)
     # The bits are packed with a matrix product: XLA fuses an elementwise/reduce table
-    # into the gather that reads it (recomputing 9 move_legal per gathered element, much
-    # slower here: decision 010) but never a dot. Exact: integers below 2**9 in float32.
+    # into the gather that reads it (recomputing 9 move_legal per gathered element:
+    # decision 010) but never a dot. Exact: integers below 2**9 in float32.
     legal = legal9(jnp.arange(n_cells, dtype=I32)).astype(F32)
     table = jnp.dot(legal, bit.astype(F32), precision=jax.lax.Precision.HIGHEST)
     return table.astype(I32)[jnp.clip(cells, 0, n_cells - 1)]

@@ -79,7 +79,7 @@ def _interleave(pop: Population, c1, l1, c2, l2) -> Population:
     individual of ``pop`` passes through."""
     n_pairs = c1.shape[0]
     # [pairs, 2L] rows c1[i] ++ c2[i], reshaped to [2 pairs, L]: the same rows as stacking on
-    # a new axis 1, but one contiguous copy (the stack was a transposing copy on XLA:CPU)
+    # a new axis 1, but one contiguous copy (a stack is a transposing copy on XLA:CPU)
     cells = jnp.concatenate([c1, c2], axis=-1).reshape(2 * n_pairs, -1)
     length = jnp.stack([l1, l2], axis=1).reshape(-1)
     if pop.size % 2:

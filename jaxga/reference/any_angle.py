@@ -461,10 +461,8 @@ def any_angle_shortest_path(
     obstacle, and the best path bending only at obstacle-adjacent cells is 21.11724.
     Scaling the example (the triangle start-bend-goal has area 1/2, so it holds no other
     lattice point) moves the bend arbitrarily far away, so *no* candidate set defined by
-    a bounded neighbourhood of the obstacles is exact. On the classic 20 x 20 maps the
-    obstacle-adjacent set misses the optimum in 5 of 18 map/rule cases (by up to 0.28);
-    on random grids in about 0.5 % of the cases up to 10 x 10, 4 % at 8-16 cells a side
-    and 8 % at 17-32.
+    a bounded neighbourhood of the obstacles is exact, and the obstacle-adjacent set
+    does miss the optimum on the classic 20 x 20 maps and on random grids (decision 015).
 
     **So every free cell is a vertex**, and the search is made affordable by pruning that
     provably keeps every vertex and edge of an optimal path (``s``, ``g``: start and goal;

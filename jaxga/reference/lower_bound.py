@@ -22,8 +22,7 @@ The free space, per corner rule (see :func:`free_space`):
 
 The bound ignores the rest of the corner rules (under ``"strict"`` a clear segment does
 not even touch a blocked corner, but it gets arbitrarily close), so it is a lower bound
-under every rule, tight up to the lattice effect: on a 500 x 500 ROS map it is 402.60
-where the lattice optimum is 402.78.
+under every rule, tight up to the lattice effect (decision 031).
 
 Points are held in *doubled* integer coordinates: cell ``(x, y)`` occupies
 ``[2x, 2x + 2] x [2y, 2y + 2]``, its centre is ``(2x + 1, 2y + 1)`` and a grid vertex

@@ -116,9 +116,8 @@ def _self_avoiding_walk(
             cs = jnp.cumsum(score)
         else:
             # 0/1 scores: seven unrolled adds give jnp.cumsum's (exact) values without
-            # its reduce_window, which was the costliest op of an SGA initialisation.
-            # Not for the directional scores: there the unrolled adds made iga_zhu's
-            # evolution slower (decision 002).
+            # its costly reduce_window. The directional scores keep jnp.cumsum, where
+            # the unrolled adds cost more than they save (decision 002).
             parts = [score[0]]
             for j in range(1, 8):
                 parts.append(parts[-1] + score[j])
@@ -156,8 +155,8 @@ def _self_avoiding_walk(
     buf0 = jnp.zeros((capacity,), I32).at[0].set(source)
     carry0 = (jnp.int32(0), jnp.clip(source, 0, n - 1), visited, done0, ok0, jnp.int32(0), buf0)
     # Unmasked: a finished walk's step changes only t, done and the scratch entry past
-    # n_moves, none of which is read below (with the masked loop, the per-step select of
-    # the visited table and the buffer slowed a 50 x 50 initialisation: decision 002).
+    # n_moves, none of which is read below, so the loop skips the per-step select of the
+    # visited table and the buffer (decision 002).
     _, cur, visited, _, ok, n_moves, buf = lane_while_loop(cond, step, carry0, masked=False)
     if not use_table:
         ok &= ~visited[1]  # a full probe window: the walk may have crossed itself
