@@ -164,3 +164,18 @@ def test_a_bad_threefry_setting_is_one_line_on_the_command_line_and_refused_by_r
     monkeypatch.setattr(jaxga.api.runs, "build", lambda *a, **k: pytest.fail("it went on"))
     with pytest.raises(ParameterError, match="JAXGA_THREEFRY must be"):
         jaxga.run("sga", "classic_ga_gapp3_20x20", seeds=1)
+
+
+def test_the_top_level_namespace_exports_only_the_public_api():
+    """``jaxga``'s names are its ``__all__`` (and its own subpackages, which Python
+    binds on import): no stray import such as ``contextlib`` or ``lowering``."""
+    import types
+
+    import jaxga
+
+    stray = [name for name, value in vars(jaxga).items()
+             if not name.startswith("_") and name not in jaxga.__all__
+             and not (isinstance(value, types.ModuleType)
+                      and value.__name__ == f"jaxga.{name}")]
+    assert stray == []
+    assert "configure" in jaxga.__all__ and "lowering" not in vars(jaxga)
