@@ -8,6 +8,7 @@ from jaxga.api import GA, Result, run, sweep
 from jaxga.api.compilation_cache import configure, use_compilation_cache
 from jaxga.api.doctor import doctor
 from jaxga.api.planner import Planner
+from jaxga.api.problem import Problem, problem
 from jaxga.compare import Comparison, compare
 from jaxga.core.errors import EndpointError, JaxgaError, MapFormatError, NoPathError, ParameterError
 from jaxga.core.grid import CORNER_RULES, Grid
@@ -26,10 +27,12 @@ __all__ = [
     "Operator",
     "ParameterError",
     "Planner",
+    "Problem",
     "Result",
     "compare",
     "configure",
     "doctor",
+    "problem",
     "register_operator",
     "replan",
     "run",

@@ -25,7 +25,7 @@ from typing import Any
 
 import jax
 
-from jaxga.api.problem import load_problem
+from jaxga.api.problem import Problem, load_problem
 from jaxga.api.programs import warn_platform
 from jaxga.config.schema import Config
 from jaxga.core.errors import ParameterError
@@ -54,7 +54,9 @@ class GA:
 
     Args:
         preset: a preset name (``jaxga presets``), a TOML file, or a
-            :class:`~jaxga.config.schema.Config`.
+            :class:`~jaxga.config.schema.Config`; or a :class:`jaxga.api.problem.Problem`
+            (:func:`jaxga.problem`: a preset on a map, already checked), then without a
+            map or other options.
         problem: a :class:`~jaxga.core.grid.Grid` (with its start and goal), a loaded
             :class:`~jaxga.maps.MapInfo`, a map file or a built-in map name.
         corner_rule: as for :func:`jaxga.run`.
@@ -82,7 +84,8 @@ class GA:
             origin, coarsening), None for a bare grid.
     """
 
-    def __init__(self, preset: str | Config, problem: Grid | MapInfo | str, *,
+    def __init__(self, preset: str | Config | Problem,
+                 problem: Grid | MapInfo | str | None = None, *,
                  corner_rule: str | None = None, variant: str | None = None,
                  sets: Any = (), generations: int | None = None, **overrides: Any) -> None:
         config, grid, map_name, frame = load_problem(

@@ -7,7 +7,7 @@ from __future__ import annotations
 
 import contextlib
 from collections.abc import Sequence
-from typing import Any
+from typing import Any, NamedTuple
 
 import numpy as np
 
@@ -22,7 +22,23 @@ from jaxga.maps import MapInfo, load_map_info
 from jaxga.maps.frame import MapFrame
 from jaxga.operators import registry
 
-__all__ = ["check_one_corner_rule", "configured_rule", "load_problem", "own_operators"]
+__all__ = ["Problem", "check_one_corner_rule", "configured_rule", "load_problem",
+           "own_operators", "problem"]
+
+
+class Problem(NamedTuple):
+    """A preset on a map, loaded and checked once (:func:`problem`): what :class:`jaxga.GA`,
+    :func:`jaxga.run` and :func:`jaxga.sweep` build on when given it instead of a preset
+    and a map, without loading or checking anything again."""
+
+    config: Config
+    """The checked configuration: the preset, its overrides and ``--set`` values."""
+    grid: Grid
+    """The map with its endpoints and corner rule."""
+    map_name: str
+    """The map's name (``"grid"`` for a bare :class:`Grid`)."""
+    frame: MapFrame | None
+    """The map's world frame (resolution, origin, coarsening), None for a bare grid."""
 
 
 def _normalised(key: str, value: Any) -> Any:
@@ -78,17 +94,51 @@ def _registered_fn(family: str, fn: Any) -> registry.Operator | None:
     return next((op for op in registry.operators(family) if op.fn is fn), None)
 
 
+def problem(preset: str | Config, grid: Grid | MapInfo | str, *,
+            corner_rule: str | None = None, variant: str | None = None,
+            sets: Sequence[str] = (), generations: int | None = None,
+            **overrides: Any) -> Problem:
+    """A preset on a map, loaded and checked once, as :func:`jaxga.run` checks them (the
+    same arguments; a key the preset never reads is refused): pass the
+    :class:`Problem` to :class:`jaxga.GA`, :func:`jaxga.run` or :func:`jaxga.sweep` in
+    place of the preset and the map."""
+    return load_problem(preset, grid, corner_rule, variant, sets, overrides, generations)
+
+
+def _given_problem(given: Problem, grid, corner_rule, variant, sets, overrides,
+                   generations) -> Problem:
+    """``given`` itself, with ``generations`` if given; one line refusing anything else
+    (a checked problem is not loaded again: build another with :func:`problem`)."""
+    extra = [name for name, value in (("grid", grid), ("corner_rule", corner_rule),
+                                      ("variant", variant)) if value is not None]
+    extra += ["sets"] * bool(tuple(sets)) + sorted(overrides)
+    if extra:
+        raise ParameterError(f"{', '.join(extra)} given with a Problem, which is already "
+                             "checked: build another with jaxga.problem(...)")
+    if generations is None:
+        return given
+    config = given.config.override({"generations": as_integer(generations)})
+    return given._replace(config=config)
+
+
 def load_problem(preset, grid, corner_rule, variant, sets, overrides, generations, *,
-                 check_read: bool = True, check_endpoints: bool = True):
-    """``(config, grid, map name, frame)`` of a call, checked (the frame of a map file or
-    :class:`~jaxga.maps.MapInfo`: :mod:`jaxga.maps.frame`; None for a bare Grid);
-    ``check_read=False`` leaves overrides that nothing reads to the caller
-    (:func:`jaxga.compare.compare`), ``check_endpoints=False`` the endpoints (a
-    :class:`~jaxga.api.planner.Planner`'s map, whose endpoints each plan gives)."""
+                 check_read: bool = True, check_endpoints: bool = True) -> Problem:
+    """The :class:`Problem` of a call, checked (the frame of a map file or
+    :class:`~jaxga.maps.MapInfo`: :mod:`jaxga.maps.frame`; None for a bare Grid); a
+    :class:`Problem` given as ``preset`` is taken as it is; ``check_read=False`` leaves
+    overrides that nothing reads to the caller (:func:`jaxga.compare.compare`),
+    ``check_endpoints=False`` the endpoints (a :class:`~jaxga.api.planner.Planner`'s map,
+    whose endpoints each plan gives)."""
 
     check_environment()  # a bad $JAXGA_THREEFRY, which `import jaxga` does not refuse
     check_jax_settings()  # 64-bit mode, jit disabled
     check_platform()
+    if isinstance(preset, Problem):
+        return _given_problem(preset, grid, corner_rule, variant, sets, overrides,
+                              generations)
+    if grid is None:
+        raise ParameterError("a map is needed: give a Grid, a map file or a built-in map "
+                             "name (or a jaxga.problem(...) in place of the preset)")
     map_name, frame = "grid", None
     if isinstance(grid, MapInfo):  # a loaded map that keeps its name (and its endpoints)
         grid, map_name, frame = grid.grid, grid.name, grid.frame
@@ -138,7 +188,7 @@ def load_problem(preset, grid, corner_rule, variant, sets, overrides, generation
             grid.check_endpoints()
     except EndpointError as e:
         raise EndpointError(f"{e}{_on_the_map(frame, grid)}") from None
-    return config, grid, map_name, frame
+    return Problem(config, grid, map_name, frame)
 
 
 def _on_the_map(frame: MapFrame | None, grid: Grid) -> str:

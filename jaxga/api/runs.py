@@ -37,7 +37,7 @@ from jaxga.api.memory import (
     check_memory,
     check_result_memory,
 )
-from jaxga.api.problem import load_problem
+from jaxga.api.problem import Problem, load_problem
 from jaxga.api.programs import (
     GENERATION_CHUNK,
     Programs,
@@ -131,8 +131,8 @@ def _point_configs(config: Config, points: Sequence[Mapping[str, Any]]) -> list[
 
 
 def sweep(
-    preset: str | Config,
-    grid: Grid | MapInfo | str,
+    preset: str | Config | Problem,
+    grid: Grid | MapInfo | str | None,
     points: Sequence[Mapping[str, Any]],
     seeds: int | Sequence[int] = 1,
     *,
@@ -587,8 +587,8 @@ def checked_capacity(configs: Sequence[Config], requested: Any) -> int:
 
 
 def run(
-    preset: str | Config,
-    grid: Grid | MapInfo | str,
+    preset: str | Config | Problem,
+    grid: Grid | MapInfo | str | None = None,
     seeds: int | Sequence[int] = 1,
     *,
     generations: int | None = None,
@@ -605,7 +605,10 @@ def run(
     """Run ``preset`` on ``grid`` once per seed, all seeds in one compiled call.
 
     Args:
-        preset: a preset name (``jaxga presets``), a TOML file, or a :class:`Config`.
+        preset: a preset name (``jaxga presets``), a TOML file, or a :class:`Config`; or
+            a :class:`jaxga.api.problem.Problem` (:func:`jaxga.problem`: a preset on a
+            map, already checked), then without ``grid``, ``corner_rule``, ``variant``,
+            ``sets`` or overrides (``generations`` may still be given).
         grid: a :class:`Grid`, a map file or a built-in map name, or a
             :class:`jaxga.maps.MapInfo` (``load_map_info(name, start=..., goal=...)``:
             other endpoints, and the results keep the map's name where a Grid is "grid").

@@ -1155,3 +1155,31 @@ def test_padded_calls_xla_says_would_not_fit_run_without_their_padding(grid, mon
     assert len(seen) >= 2
     np.testing.assert_array_equal(got.cells, want.cells)
     np.testing.assert_array_equal(got.history["best"], want.history["best"])
+
+
+def test_a_problem_checked_once_runs_as_its_preset_and_map(grid):
+    """``jaxga.problem`` loads and checks a preset on a map once; ``run``, ``sweep`` and
+    ``GA`` take it in place of the preset and the map (same results, nothing loaded
+    again); anything that would change it is refused in one line."""
+    import jaxga
+
+    problem = jaxga.problem("sga", grid, crossover__probability=0.7, **SMALL)
+    assert isinstance(problem, jaxga.Problem) and problem.grid.shape == grid.shape
+    assert problem.config["crossover.probability"] == 0.7
+    want = api.run("sga", grid, seeds=3, crossover__probability=0.7, **SMALL)
+    got = api.run(problem, seeds=3)
+    np.testing.assert_array_equal(got.cells, want.cells)
+    np.testing.assert_array_equal(got.fitness, want.fitness)
+    (point,) = api.sweep(problem, None, [{}], seeds=3)
+    np.testing.assert_array_equal(point.cells, want.cells)
+    ga = jaxga.GA(problem)
+    assert ga.config == problem.config and ga.map_name == problem.map_name
+    assert api.run(problem, seeds=1, generations=1).generations == 1
+    for extra, words in (({"grid": grid}, "grid given with a Problem"),
+                         ({"mutation__probability": 0.1}, "mutation__probability given"),
+                         ({"sets": ["fitness.method=imga"]}, "sets given")):
+        with pytest.raises(ParameterError, match=words) as e:
+            api.run(problem, seeds=1, **extra)
+        assert "jaxga.problem" in str(e.value)
+    with pytest.raises(ParameterError, match="a map is needed"):
+        api.run("sga", seeds=1)
