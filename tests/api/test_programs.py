@@ -287,7 +287,8 @@ def test_agacd_schedules_equal_optax_exponential_decay(generations):
 NEW_PROCESS = """
 import json, sys
 import numpy as np
-from jaxga import api, engine
+from jaxga import api, configure, engine
+configure()  # the store and JAX's cache in $JAXGA_CACHE_DIR, as the command line does
 if sys.argv[1] == "read":  # tracing would call these
     engine.evolution.generation = engine.evolution.init_state = None
 # the canonical sga problem (tests/canonical.py), here compiled in a store of its own
