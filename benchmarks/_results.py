@@ -1,5 +1,9 @@
 """Shared by the benchmark scripts: machine description, child processes, and the
-current results in RESULTS.md (with their history in ``history/results.jsonl``)."""
+results: every run appended to ``history/results.jsonl``, and ``RESULTS.md`` generated
+from it (the latest record of each section).
+
+``python benchmarks/_results.py render [--check]`` writes (or checks) ``RESULTS.md``;
+``retire`` and ``amend`` remove a section or replace its text through the history."""
 
 from __future__ import annotations
 
@@ -258,14 +262,17 @@ def markdown_table(headers: list[str], rows: list[list]) -> str:
 RESULTS_HEADER = """# Benchmark results
 
 The current result of every benchmark in `benchmarks/`: one section per script and
-command line, replaced in place when the script runs again (`_results.record`). Each
-section names the command, the commit it measured, the date and the machine. Every
-run is also appended to `benchmarks/history/results.jsonl` (one JSON object per run:
-title, command, commit, date, machine, body), where older readings stay; conclusions
-and rejected experiments are the decision notes in `docs/decisions/`. Sections are
-ordered by script. A section whose commit is older than the code you read measured that
-commit ("recorded in X": measured on the code just before commit X); run its command
-again to refresh it.
+command line, naming the command, the commit it measured, the date and the machine.
+This file is generated from `benchmarks/history/results.jsonl`, where every run is
+appended (one JSON object per run: title, command, commit, date, machine, body): each
+section is the latest record of its title and command (`_results.record`). Do not edit
+it by hand: run the benchmark again, or amend or retire a section with
+`python benchmarks/_results.py amend` / `retire`; `python benchmarks/_results.py render
+--check` says whether the file is current. Older readings stay in the history;
+conclusions and rejected experiments are the decision notes in `docs/decisions/`.
+Sections are ordered by script. A section whose commit is older than the code you read
+measured that commit ("recorded in X": measured on the code just before commit X); run
+its command again to refresh it.
 """
 """The text above the sections of ``RESULTS.md``."""
 
@@ -300,6 +307,10 @@ def commit() -> str:
 
 META = ("command", "commit", "date", "machine")
 """The bullets under a section's title, in order."""
+
+SECTION = ("title", *META, "body")
+"""The fields of a history record that make its section; a record may hold more
+(``edited``, ``edited_on``), which the history keeps and ``RESULTS.md`` does not show."""
 
 
 def _meta(line: str) -> tuple[str, str] | None:
@@ -339,45 +350,188 @@ def render(header: str, sections: list[dict]) -> str:
     return "\n".join(out)
 
 
-def _section_key(sec: dict) -> tuple[str, str]:
-    return sec["title"], script_command(sec["command"])
+def section_key(rec: dict) -> tuple[str, str]:
+    """A section's identity: its title and its :func:`script_command`. A run with the key
+    of a current section replaces it; a run with a new key adds a section."""
+    return rec["title"], script_command(rec["command"])
 
 
-def replace_section(text: str, new: dict) -> str:
-    """``RESULTS.md``'s text with ``new`` in place of the section of the same title and
-    script command (added if there is none), sections ordered by script."""
-    header, sections = parse_sections(text) if text.strip() else (RESULTS_HEADER, [])
-    kept = [s for s in sections if _section_key(s) != _section_key(new)]
-    order = {k: i for i, k in enumerate(_section_key(s) for s in sections)}
-    kept.append(new)
-    kept.sort(key=lambda s: (script_command(s["command"]).split(" ")[0],
-                             order.get(_section_key(s), len(order))))
-    return render(header, kept)
+def read_history(history: Path | None = None) -> list[dict]:
+    """The records of ``history/results.jsonl`` (or ``history``), in file order."""
+    import json
+
+    path = history or HISTORY
+    if not path.exists():
+        return []
+    return [json.loads(line) for line in path.read_text(encoding="utf-8").splitlines()
+            if line.strip()]
+
+
+def current_sections(history: list[dict]) -> list[dict]:
+    """The sections that ``history`` leaves current, in ``RESULTS.md``'s order.
+
+    The records are replayed in order: a record replaces the section of its key
+    (:func:`section_key`) where it stands, or adds one after the others; a record with
+    ``"retired"`` (a reason) removes the section of its key, which a later run of that
+    key adds again. The survivors are then ordered by script name, stably, so a script's
+    sections keep the order in which they first appeared. Each is the record's
+    :data:`SECTION` fields."""
+    live: dict[tuple[str, str], dict] = {}
+    for rec in history:
+        key = section_key(rec)
+        if rec.get("retired"):
+            live.pop(key, None)
+        else:
+            live[key] = rec
+    ordered = sorted(live.values(), key=lambda r: script_command(r["command"]).split(" ")[0])
+    return [{field: rec[field] for field in SECTION} for rec in ordered]
+
+
+def render_history(history: list[dict]) -> str:
+    """The text ``RESULTS.md`` must have for ``history``: :data:`RESULTS_HEADER` and
+    :func:`current_sections`."""
+    return render(RESULTS_HEADER, current_sections(history))
+
+
+def _now() -> str:
+    """The date as a record writes it (UTC, to the minute)."""
+    return _dt.datetime.now(_dt.timezone.utc).strftime("%Y-%m-%d %H:%M UTC")
+
+
+def _write_atomically(path: Path, text: str) -> None:
+    """Write ``path`` through a temporary file in its folder and ``os.replace``, so that a
+    reader (or an interrupted run) never sees half a file."""
+    import tempfile
+
+    path.parent.mkdir(parents=True, exist_ok=True)
+    fd, tmp = tempfile.mkstemp(dir=path.parent, prefix=f".{path.name}.", suffix=".tmp")
+    try:
+        with os.fdopen(fd, "w", encoding="utf-8", newline="\n") as fh:
+            fh.write(text)
+        os.chmod(tmp, path.stat().st_mode & 0o777 if path.exists() else 0o644)
+        os.replace(tmp, path)
+    except BaseException:
+        Path(tmp).unlink(missing_ok=True)
+        raise
+
+
+def _names(keys: list[tuple[str, str]], shown: int = 3) -> str:
+    """The first ``shown`` section keys as ``"title" (script command)``, then how many more."""
+    names = ", ".join(f'"{title}" ({command[:60]})' for title, command in keys[:shown])
+    return names + (f" and {len(keys) - shown} more" if len(keys) > shown else "")
+
+
+def difference(text: str, rendering: str) -> str:
+    """One line saying how ``text`` (``RESULTS.md``) differs from ``rendering`` (its
+    history's): the header, sections edited, sections not in the history, sections
+    missing, their order; empty when the two are equal."""
+    if text == rendering:
+        return ""
+    head_a, secs_a = parse_sections(text) if text.strip() else ("", [])
+    head_b, secs_b = parse_sections(rendering)
+    a = {section_key(s): s for s in secs_a}
+    b = {section_key(s): s for s in secs_b}
+    parts = ["the header"] if head_a != head_b else []
+    edited = [k for k in a if k in b and a[k] != b[k]]
+    extra = [k for k in a if k not in b]
+    missing = [k for k in b if k not in a]
+    if edited:
+        parts.append(f"{len(edited)} section(s) differ from their last record: "
+                     + _names(edited))
+    if extra:
+        parts.append(f"{len(extra)} section(s) not in the history: " + _names(extra))
+    if missing:
+        parts.append(f"{len(missing)} section(s) of the history missing: " + _names(missing))
+    if not parts:
+        parts.append("the order of the sections" if list(a) != list(b) else "the layout")
+    return "; ".join(parts)
+
+
+def check_results(results: Path | None = None, history: Path | None = None) -> str:
+    """Empty when ``RESULTS.md`` (or ``results``) is the rendering of the history (or
+    ``history``); else one line saying what differs and what to do instead of editing."""
+    results, history = results or RESULTS, history or HISTORY
+    text = results.read_text(encoding="utf-8") if results.exists() else ""
+    diff = difference(text, render_history(read_history(history)))
+    if not diff:
+        return ""
+    return (f"{results.name} is not the rendering of {history.name} ({diff}); do not edit "
+            "it by hand: record the benchmark again (or `python benchmarks/_results.py "
+            "amend` / `retire` the section), then `python benchmarks/_results.py render`")
+
+
+def append_record(rec: dict, *, results: Path | None = None,
+                  history: Path | None = None) -> None:
+    """Append ``rec`` to the history and write ``RESULTS.md`` again as the history's
+    rendering (atomically). A ``RESULTS.md`` that was not the rendering before is
+    replaced all the same, with a note saying what was lost (git keeps it)."""
+    import json
+
+    if any(line.startswith("## ") for line in rec.get("body", "").splitlines()):
+        raise ValueError("a result's body cannot hold a level-2 heading ('## ')")
+    results, history = results or RESULTS, history or HISTORY
+    before = check_results(results, history) if results.exists() else ""
+    history.parent.mkdir(parents=True, exist_ok=True)
+    with history.open("a", encoding="utf-8") as fh:
+        fh.write(json.dumps(rec) + "\n")
+    _write_atomically(results, render_history(read_history(history)))
+    if before:
+        print(f"note: rewritten from the history; before this record, {before}",
+              file=sys.stderr)
 
 
 def record(title: str, body: str, *, write: bool = True, results: Path | None = None,
            history: Path | None = None) -> dict:
-    """Make ``body`` the current result of this benchmark: the section of ``RESULTS.md``
-    with this ``title`` and this script command is replaced (or added), and the run is
-    appended to ``history/results.jsonl``. ``write=False`` only prints it."""
-    import json
-
+    """Make ``body`` the current result of this benchmark: the run (title, this command,
+    commit, date, machine, body) is appended to ``history/results.jsonl`` and
+    ``RESULTS.md`` is rendered again from it, so the section with this ``title`` and
+    this script command is replaced (or added). ``write=False`` only prints it."""
     if any(line.startswith("## ") for line in body.splitlines()):
         raise ValueError("a result's body cannot hold a level-2 heading ('## ')")
-    sec = {"title": title, "command": command(), "commit": commit(),
-           "date": _dt.datetime.now(_dt.timezone.utc).strftime("%Y-%m-%d %H:%M UTC"),
+    sec = {"title": title, "command": command(), "commit": commit(), "date": _now(),
            "machine": machine(), "body": body.strip()}
     print(render("", [sec]))
     if write:
-        results = results or RESULTS
-        history = history or HISTORY
-        text = results.read_text(encoding="utf-8") if results.exists() else ""
-        results.write_text(replace_section(text, sec), encoding="utf-8")
-        history.parent.mkdir(parents=True, exist_ok=True)
-        with history.open("a", encoding="utf-8") as fh:
-            fh.write(json.dumps(sec) + "\n")
-        print(f"recorded in {results} and {history}")
+        append_record(sec, results=results, history=history)
+        print(f"recorded in {history or HISTORY} and {results or RESULTS}")
     return sec
+
+
+def _current(title: str, command_line: str, history: Path | None) -> dict:
+    """The current section of this title and script command, or ``ValueError``."""
+    key = (title, script_command(command_line))
+    for sec in current_sections(read_history(history)):
+        if section_key(sec) == key:
+            return sec
+    raise ValueError(f"no current section titled {title!r} with the command {key[1]!r}")
+
+
+def retire(title: str, command_line: str, why: str, *, results: Path | None = None,
+           history: Path | None = None) -> dict:
+    """Remove a section from ``RESULTS.md`` for good: append a record ``{"title",
+    "command", "retired": why, "retired_on": date}`` (its runs stay in the history; a
+    later run of the same title and command brings the section back)."""
+    if not why.strip():
+        raise ValueError("a retired section needs a reason (--why)")
+    sec = _current(title, command_line, history)
+    rec = {"title": sec["title"], "command": sec["command"], "retired": why.strip(),
+           "retired_on": _now()}
+    append_record(rec, results=results, history=history)
+    return rec
+
+
+def amend(title: str, command_line: str, body: str, why: str, *,
+          results: Path | None = None, history: Path | None = None) -> dict:
+    """Replace the text of a section without a new run (a note, a correction): append
+    its latest record with ``body`` and ``"edited": why``, ``"edited_on": date``; the
+    run's command, commit, date and machine stay, so the section still says what was
+    measured, and the history says the text was edited after the run."""
+    if not why.strip():
+        raise ValueError("an amended section needs a reason (--why)")
+    sec = _current(title, command_line, history)
+    rec = {**sec, "body": body.strip(), "edited": why.strip(), "edited_on": _now()}
+    append_record(rec, results=results, history=history)
+    return rec
 
 
 def timed(fn, *args, repeats: int = 5) -> float:
@@ -395,3 +549,51 @@ def timed(fn, *args, repeats: int = 5) -> float:
         times.append(time.perf_counter() - t0)
     return float(np.median(times))
 
+
+def main(argv: list[str] | None = None) -> int:
+    """``render`` writes ``RESULTS.md`` from the history (``--check`` only compares:
+    exit 1 with a one-line summary when the file is not the rendering); ``retire`` and
+    ``amend`` append a record that removes a section or replaces its text."""
+    import argparse
+
+    ap = argparse.ArgumentParser(
+        prog="python benchmarks/_results.py",
+        description="RESULTS.md as the rendering of history/results.jsonl")
+    sub = ap.add_subparsers(dest="action", required=True)
+    ren = sub.add_parser("render", help="write RESULTS.md from the history")
+    ren.add_argument("--check", action="store_true",
+                     help="write nothing; exit 1 if RESULTS.md is not the rendering")
+    for name, helptext in (("retire", "remove a section (its runs stay in the history)"),
+                           ("amend", "replace a section's text without a new run")):
+        p = sub.add_parser(name, help=helptext)
+        p.add_argument("title", help="the section's title")
+        p.add_argument("command", help="its command line (from the script on is enough)")
+        p.add_argument("--why", required=True, help="the reason, kept in the history")
+        if name == "amend":
+            p.add_argument("--body-file", required=True, metavar="PATH",
+                           help="the section's new text (markdown, no '## ' heading)")
+    args = ap.parse_args(argv)
+    if args.action == "render":
+        if args.check:
+            diff = check_results()
+            print(diff or f"{RESULTS.name} is the rendering of {HISTORY.name}",
+                  file=sys.stderr if diff else sys.stdout)
+            return 1 if diff else 0
+        _write_atomically(RESULTS, render_history(read_history()))
+        print(f"wrote {RESULTS} from {HISTORY}")
+        return 0
+    try:
+        if args.action == "retire":
+            retire(args.title, args.command, args.why)
+        else:
+            amend(args.title, args.command, Path(args.body_file).read_text(encoding="utf-8"),
+                  args.why)
+    except (OSError, ValueError) as err:
+        ap.error(str(err))
+    print(f"{'retired' if args.action == 'retire' else 'amended'}: appended to {HISTORY}, "
+          f"wrote {RESULTS}")
+    return 0
+
+
+if __name__ == "__main__":
+    raise SystemExit(main())

@@ -688,19 +688,15 @@ def body(report: dict) -> str:
 
 
 def record(report: dict, write: bool) -> dict:
-    """The report's RESULTS.md section (and history line), with the command, commit,
-    date and machine the report was measured with (``_results.replace_section``)."""
+    """The report's history record and RESULTS.md section, with the command, commit,
+    date and machine the report was measured with (``_results.append_record``)."""
     title = TITLE.format(device=report["device"]["name"])
     sec = {"title": title, "command": report["command"], "commit": report["commit"],
            "date": report["date"], "machine": report["machine"], "body": body(report)}
     print(_results.render("", [sec]))
     if write:
-        text = _results.RESULTS.read_text(encoding="utf-8")
-        _results.RESULTS.write_text(_results.replace_section(text, sec), encoding="utf-8")
-        _results.HISTORY.parent.mkdir(parents=True, exist_ok=True)
-        with _results.HISTORY.open("a", encoding="utf-8") as fh:
-            fh.write(json.dumps(sec) + "\n")
-        print(f"recorded in {_results.RESULTS} and {_results.HISTORY}")
+        _results.append_record(sec)
+        print(f"recorded in {_results.HISTORY} and {_results.RESULTS}")
     return sec
 
 
