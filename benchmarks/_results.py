@@ -455,9 +455,10 @@ def check_results(results: Path | None = None, history: Path | None = None) -> s
     diff = difference(text, render_history(read_history(history)))
     if not diff:
         return ""
-    return (f"{results.name} is not the rendering of {history.name} ({diff}); do not edit "
-            "it by hand: record the benchmark again (or `python benchmarks/_results.py "
-            "amend` / `retire` the section), then `python benchmarks/_results.py render`")
+    return (f"{results.name} is not the rendering of {history.name} ({diff}); it is "
+            "generated, not edited by hand: record the benchmark again, or `python "
+            "benchmarks/_results.py amend` / `retire` the section (`python "
+            "benchmarks/_results.py render` writes it from the history)")
 
 
 def append_record(rec: dict, *, results: Path | None = None,

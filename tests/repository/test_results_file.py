@@ -166,3 +166,7 @@ def test_the_render_command_writes_and_checks(recorder, monkeypatch, capsys):
     assert _results.main(["render"]) == 0
     assert _results.main(["render", "--check"]) == 0
 
+
+def test_the_committed_results_file_is_the_rendering_of_the_committed_history():
+    message = _results.check_results(_results.RESULTS, _results.HISTORY)
+    assert not message, message
