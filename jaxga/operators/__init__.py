@@ -2,7 +2,9 @@
 
 - :mod:`~jaxga.operators.init`: initialisers (the papers' walks and insertions, the field walk);
 - :mod:`~jaxga.operators.selection`: selection schemes;
-- :mod:`~jaxga.operators.crossover`: crossovers;
+- :mod:`~jaxga.operators.crossover`: crossovers (the splice they share in
+  :mod:`~jaxga.operators.joins`, Zhu & Pan's column crossover in
+  :mod:`~jaxga.operators.column_crossover`);
 - :mod:`~jaxga.operators.mutation`: mutations;
 - :mod:`~jaxga.operators.repair`: reconnection of broken paths;
 - :mod:`~jaxga.operators.postprocess`: simplification and post-optimisation;

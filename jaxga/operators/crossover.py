@@ -37,12 +37,15 @@ Conventions shared by the operators (decisions where the papers are silent):
   sort (O(L log L), no map-sized work) on larger maps.
 * **Randomness.** Every random choice is uniform and drawn in bulk from the operator's
   key (32-bit words, ``bits mod n``: bias below ``n / 2**32``). Same key, same result.
+
+The splice and loop cut that the single-point crossovers share are in
+:mod:`jaxga.operators.joins`; Zhu & Pan's column crossover is in
+:mod:`jaxga.operators.column_crossover`. Every operator of the family is registered here.
 """
 
 from __future__ import annotations
 
 from collections.abc import Callable
-from typing import NamedTuple
 
 import jax
 import jax.numpy as jnp
@@ -53,9 +56,20 @@ from jaxga.core.dtypes import F32, I32
 from jaxga.core.errors import ParameterError
 from jaxga.core.geometry import clear, linear_trial
 from jaxga.core.grid import Grid, move_legal
-from jaxga.core.paths import TABLE_MAX_CELLS, remove_loops
+from jaxga.core.paths import TABLE_MAX_CELLS
 from jaxga.core.paths import position_lookup as _position_lookup
-from jaxga.operators.init import field_path
+from jaxga.operators.column_crossover import (
+    column,
+    compute_free_prefix,  # noqa: F401 - jaxga.engine.maptables imports it from here
+)
+from jaxga.operators.joins import (
+    accept_children,
+    join,
+    join_reverse,
+    kth_true,
+    kth_true_rows,
+    uniform_index,
+)
 from jaxga.operators.lift import over_pairs_gated
 from jaxga.operators.mutation import split_half
 from jaxga.operators.registry import (
@@ -69,17 +83,10 @@ from jaxga.operators.registry import (
     register,
     register_none,
 )
-from jaxga.operators.repair import concat, connect, prefix_count
 
 __all__ = [
-    "ColumnRanges",
     "adaptive_crossover_probability",
     "adaptive_pair_probability",
-    "column",
-    "column_anchors",
-    "column_candidate_sets",
-    "column_child",
-    "column_ranges",
     "common_point",
     "crossover_population",
     "cut_and_check",
@@ -88,130 +95,6 @@ __all__ = [
 ]
 
 _U32 = jnp.uint32
-_INT_MAX = np.iinfo(np.int32).max
-
-
-# ------------------------------------------------------------------- helpers
-def _kth_true(mask: jax.Array, r: jax.Array) -> jax.Array:
-    """Index of the ``r``-th (0-based) True of a 1-D mask (0 if there are fewer).
-
-    Masks longer than ``2 * _KTH_ROW`` are searched in rows of ``_KTH_ROW``
-    (:func:`_kth_true_rows`): a prefix sum over the rows' counts and one within a row
-    instead of one over the whole mask: faster on masks of a path's capacity
-    (decision 010).
-    """
-    n = mask.shape[0]
-    if n <= 2 * _KTH_ROW:
-        return _kth_true_scan(mask, r)
-    rows = -(-n // _KTH_ROW)
-    padded = jnp.zeros((rows * _KTH_ROW,), bool).at[:n].set(mask)
-    row, col = _kth_true_rows(padded.reshape(rows, _KTH_ROW), r)
-    return jnp.where(r < jnp.sum(mask, dtype=I32), row * _KTH_ROW + col, 0)
-
-
-_KTH_ROW = 16
-"""Row width of :func:`_kth_true`'s two-level search."""
-
-
-def _kth_true_rows(mask: jax.Array, r: jax.Array) -> tuple[jax.Array, jax.Array]:
-    """``(row, col)`` of the ``r``-th True of a 2-D mask in row-major order.
-
-    Two levels (prefix sums over the rows, then within the row) instead of one prefix
-    sum over all ``rows * cols`` entries.
-    """
-    counts = jnp.sum(mask, axis=1, dtype=I32)
-    before = prefix_count(counts) - counts  # Trues in the rows above
-    row = jnp.clip(jnp.sum(before <= r, dtype=I32) - 1, 0, mask.shape[0] - 1)
-    return row, _kth_true_scan(mask[row], r - before[row])
-
-
-def _kth_true_scan(mask: jax.Array, r: jax.Array) -> jax.Array:
-    """:func:`_kth_true` by one prefix sum over the whole mask."""
-    return jnp.argmax(prefix_count(mask) > r).astype(I32)
-
-
-def _uniform_index(bits: jax.Array, n: jax.Array) -> jax.Array:
-    return (bits % jnp.maximum(n, 1).astype(_U32)).astype(I32)
-
-
-class _Joined(NamedTuple):
-    cells: jax.Array
-    length: jax.Array
-    ok: jax.Array
-    left: jax.Array  # the two cells of the one new segment of the child
-    right: jax.Array
-
-
-def _join(
-    ca: jax.Array,
-    cut: jax.Array,
-    pos_in_b: jax.Array,
-    cb: jax.Array,
-    lb: jax.Array,
-    start_b: jax.Array,
-) -> _Joined:
-    """``ca[:cut] + cb[start_b:lb]`` with the loops cut as ``remove_loops`` cuts them.
-
-    ``pos_in_b[k]`` is the (last) position of ``ca[k]`` in ``cb`` or -1. The first head
-    position ``k < cut`` whose cell occurs in the tail (``pos_in_b[k] >= start_b``) makes
-    the child ``ca[:k] + cb[pos_in_b[k]:]``; with none, the raw splice. Exact for
-    loop-free parents (see the module docstring). Also returns the child's one new
-    segment ``(left, right)`` (the junction) and whether it fits the capacity.
-    """
-    n = ca.shape[0]
-    i = jnp.arange(n, dtype=I32)
-    hit = (i < cut) & (pos_in_b >= start_b)
-    has = jnp.any(hit)
-    a = jnp.where(has, jnp.argmax(hit).astype(I32), cut)
-    b = jnp.where(has, pos_in_b[jnp.clip(a, 0, n - 1)], start_b)
-    return _splice(ca, a, cb, b, lb)
-
-
-def _splice(head: jax.Array, cut: jax.Array, tail: jax.Array, start: jax.Array,
-            tail_len: jax.Array) -> _Joined:
-    """``head[:cut] + tail[start:tail_len]`` (the loop cut already chosen) with its
-    junction ``(head[cut - 1], tail[start])`` and whether it fits the capacity."""
-    n = head.shape[0]
-    cells, length, ok = concat([(head, 0, cut), (tail, start, tail_len)], n)
-    right = tail[jnp.clip(start, 0, n - 1)]
-    left = jnp.where(cut > 0, head[jnp.clip(cut - 1, 0, n - 1)], right)
-    return _Joined(cells, length, ok, left, right)
-
-
-def _join_reverse(
-    cb: jax.Array,
-    cut_b: jax.Array,
-    ca: jax.Array,
-    la: jax.Array,
-    start_a: jax.Array,
-    pos_a_in_b: jax.Array,
-) -> _Joined:
-    """``cb[:cut_b] + ca[start_a:la]`` with the loops cut, from the lookup ``pos_a_in_b``
-    (the last position of each ``ca[k]`` in ``cb``, or -1) that :func:`_join` uses for
-    the other child: no lookup of ``cb``'s cells in ``ca``.
-
-    :func:`_join` looks for the first head position ``k < cut_b`` whose cell occurs in
-    the tail ``ca[start_a:la]``. When ``cb`` is loop-free every cell has at most one
-    position in it, so that ``k`` is the smallest ``pos_a_in_b[i]`` below ``cut_b`` over
-    the tail positions ``i``, and the child continues at the last such ``i``: the
-    same child as ``_join(cb, cut_b, pos_b_in_a, ca, la, start_a)`` whenever ``cb`` is
-    loop-free (evolving populations are) and ``cut_b`` is at most its length.
-    With a ``cb`` that has loops the child is still as continuous as the raw splice (a
-    cut junction joins ``cb[k - 1]`` to the cell that follows it in ``cb``), but a loop
-    through the junction may remain.
-    """
-    n = cb.shape[0]
-    i = jnp.arange(n, dtype=I32)
-    tail = (i >= start_a) & (i < la) & (pos_a_in_b >= 0) & (pos_a_in_b < cut_b)
-    first = jnp.min(jnp.where(tail, pos_a_in_b, n))
-    has = first < n
-    b = jnp.where(has, first, cut_b)
-    a = jnp.where(has, jnp.max(jnp.where(tail & (pos_a_in_b == first), i, -1)), start_a)
-    return _splice(cb, b, ca, a, la)
-
-
-def _choose(take: jax.Array, new: jax.Array, old: jax.Array) -> jax.Array:
-    return jnp.where(take, new, old)
 
 
 # --------------------------------------------------------------- common point
@@ -238,10 +121,10 @@ def common_point(
 
     Continuous, loop-free parents give continuous, loop-free children. Cost: one cell
     lookup (where parent 1's cells are in parent 2; the second child's loop cut is read
-    off it too, :func:`_join_reverse`, exact for a loop-free parent 2) and a few gathers
-    of length ``L``; no scan, no O(L^2) matrix. The lookups (a scatter per parent) are
-    most of the operator's time, so it does one lookup instead of two, with the same
-    children (decision 010).
+    off it too, :func:`~jaxga.operators.joins.join_reverse`, exact for a loop-free
+    parent 2) and a few gathers of length ``L``; no scan, no O(L^2) matrix. The lookups
+    (a scatter per parent) are most of the operator's time, so it does one lookup instead
+    of two, with the same children (decision 010).
     """
     c1, c2 = jnp.asarray(c1, I32), jnp.asarray(c2, I32)
     l1, l2 = jnp.asarray(l1, I32), jnp.asarray(l2, I32)
@@ -253,27 +136,13 @@ def common_point(
         & (c1 != grid.start) & (c1 != grid.goal)
     )
     count = jnp.sum(cand, dtype=I32)
-    r = _uniform_index(jax.random.bits(key, (), _U32), count)
-    ci = _kth_true(cand, r)
+    r = uniform_index(jax.random.bits(key, (), _U32), count)
+    ci = kth_true(cand, r)
     cj = pos2[ci]
-    k1 = _join(c1, ci, pos2, c2, l2, cj)
-    k2 = _join_reverse(c2, cj, c1, l1, ci, pos2)  # no second lookup (p2's cells in p1)
+    k1 = join(c1, ci, pos2, c2, l2, cj)
+    k2 = join_reverse(c2, cj, c1, l1, ci, pos2)  # no second lookup (p2's cells in p1)
     do = count > 0
-    return _finish(do, k1.ok, k2.ok, k1, k2, c1, l1, c2, l2)
-
-
-def _finish(do, take1, take2, k1: _Joined, k2: _Joined, c1, l1, c2, l2, need1=True, need2=True):
-    """Accept child k where ``do & take_k & fits_k``. An overflow counts as a failure
-    where ``do & need_k`` (``need_k`` False: the child was rejected for another reason
-    that does not depend on its length, e.g. a blocked junction)."""
-    a1 = do & take1 & k1.ok
-    a2 = do & take2 & k2.ok
-    failed = (do & need1 & ~k1.ok).astype(I32) + (do & need2 & ~k2.ok).astype(I32)
-    return (
-        _choose(a1, k1.cells, c1), _choose(a1, k1.length, l1),
-        _choose(a2, k2.cells, c2), _choose(a2, k2.length, l2),
-        failed,
-    )
+    return accept_children(do, k1.ok, k2.ok, k1, k2, c1, l1, c2, l2)
 
 
 # --------------------------------------------------------------- cut and check
@@ -317,16 +186,16 @@ def cut_and_check(
     c1, c2 = jnp.asarray(c1, I32), jnp.asarray(c2, I32)
     l1, l2 = jnp.asarray(l1, I32), jnp.asarray(l2, I32)
     bits = jax.random.bits(key, (2,), _U32)
-    i = _uniform_index(bits[0], l1 - 1)
-    j = _uniform_index(bits[1], l2 - 1)
+    i = uniform_index(bits[0], l1 - 1)
+    j = uniform_index(bits[1], l2 - 1)
     pos2 = _position_lookup(c2, l2, grid.n_cells)(c1)
     pos1 = _position_lookup(c1, l1, grid.n_cells)(c2)
-    k1 = _join(c1, i + 1, pos2, c2, l2, j + 1)
-    k2 = _join(c2, j + 1, pos1, c1, l1, i + 1)
+    k1 = join(c1, i + 1, pos2, c2, l2, j + 1)
+    k2 = join(c2, j + 1, pos1, c1, l1, i + 1)
     ok1 = seg_ok(grid, k1.left, k1.right)
     ok2 = seg_ok(grid, k2.left, k2.right)
     do = (l1 >= 2) & (l2 >= 2)
-    return _finish(do, ok1, ok2, k1, k2, c1, l1, c2, l2, need1=ok1, need2=ok2)
+    return accept_children(do, ok1, ok2, k1, k2, c1, l1, c2, l2, need1=ok1, need2=ok2)
 
 
 # --------------------------------------------------------------- heterologous
@@ -441,308 +310,24 @@ def heterologous(
     ``fitness_fn(grid, cells, length) -> f32`` is static (bind it with
     ``functools.partial``); it is evaluated on the two parents and the two children.
     The second child's loop cut comes from the lookup of parent 1's cells in parent 2
-    (:func:`_join_reverse`, exact for a loop-free parent 2), as in
+    (:func:`~jaxga.operators.joins.join_reverse`, exact for a loop-free parent 2), as in
     :func:`common_point`.
     """
     c1, c2 = jnp.asarray(c1, I32), jnp.asarray(c2, I32)
     l1, l2 = jnp.asarray(l1, I32), jnp.asarray(l2, I32)
     jtab, valid = heterologous_pairs(grid, c1, l1, c2, l2)
     count = jnp.sum(valid, dtype=I32)
-    r = _uniform_index(jax.random.bits(key, (), _U32), count)
-    i, o = _kth_true_rows(valid, r)
+    r = uniform_index(jax.random.bits(key, (), _U32), count)
+    i, o = kth_true_rows(valid, r)
     j = jnp.maximum(jtab[i, o], 0)
     pos2 = _position_lookup(c2, l2, grid.n_cells)(c1)
-    k1 = _join(c1, i + 1, pos2, c2, l2, j + 1)
-    k2 = _join_reverse(c2, j + 1, c1, l1, i + 1, pos2)  # one lookup, as common_point
+    k1 = join(c1, i + 1, pos2, c2, l2, j + 1)
+    k2 = join_reverse(c2, j + 1, c1, l1, i + 1, pos2)  # one lookup, as common_point
     paths = jnp.stack([c1, c2, k1.cells, k2.cells])
     lens = jnp.stack([l1, l2, k1.length, k2.length])
     f = jax.vmap(lambda c, ln: jnp.asarray(fitness_fn(grid, c, ln), F32))(paths, lens)
     do = count > 0
-    return _finish(do, f[2] > f[0], f[3] > f[1], k1, k2, c1, l1, c2, l2)
-
-
-# --------------------------------------------------------------------- column
-class ColumnRanges(NamedTuple):
-    """Per-column candidate ranges of the non-common-point crossover (Zhu Algorithm 2).
-
-    Column ``k`` (``k = 0 .. A - 1``, ``A = max(H, W)``) is the line at major coordinate
-    ``major[k] = start_major + k * sign(goal_major - start_major)``; columns
-    ``1 .. n_steps - 1`` lie strictly between the start and the goal (``interior``).
-    ``lo``/``hi`` are the min and max minor coordinate of the two parents' cells in that
-    column (``lo > hi`` when neither parent visits it) and ``n_free`` the number of free
-    cells with minor coordinate in ``[lo, hi]``. ``x_major``: columns are x (True) or
-    rows y (False).
-    """
-
-    x_major: jax.Array
-    n_steps: jax.Array
-    major: jax.Array
-    lo: jax.Array
-    hi: jax.Array
-    n_free: jax.Array
-    interior: jax.Array
-
-
-def _free_prefix(grid: Grid) -> jax.Array:
-    """Flat table of free-cell prefix counts along columns (x-major) and rows (y-major).
-
-    ``[W, H + 1]`` entries ``colcum[x, v] = #free (x, y < v)`` then ``[H, W + 1]`` entries
-    ``rowcum[y, v] = #free (x < v, y)``. Depends on the grid only (computed once per call,
-    not per pair, under ``vmap`` over pairs; read from ``grid.tables`` when attached).
-    """
-    if grid.tables is not None:
-        return grid.tables.free_prefix
-    return compute_free_prefix(grid)
-
-
-def compute_free_prefix(grid: Grid) -> jax.Array:
-    """:func:`_free_prefix` computed from the map (what :mod:`jaxga.engine.maptables` stores)."""
-    free = (~grid.blocked).astype(I32)
-    h, w = free.shape
-    col = jnp.concatenate([jnp.zeros((w, 1), I32), prefix_count(free.T, axis=1)], axis=1)
-    row = jnp.concatenate([jnp.zeros((h, 1), I32), prefix_count(free, axis=1)], axis=1)
-    return jnp.concatenate([col.reshape(-1), row.reshape(-1)])
-
-
-def _prefix_at(table, grid: Grid, x_major, c, v):
-    h, w = grid.shape
-    idx = jnp.where(x_major, c * (h + 1) + v, w * (h + 1) + c * (w + 1) + v)
-    return table[jnp.clip(idx, 0, table.shape[0] - 1)]
-
-
-def column_ranges(
-    grid: Grid, c1: jax.Array, l1: jax.Array, c2: jax.Array, l2: jax.Array
-) -> ColumnRanges:
-    """The candidate range of every column between start and goal (Zhu Algorithm 2 l. 5).
-
-    Zhu & Pan walk the columns from the start's to the goal's (their maps have the start
-    bottom-left and the goal top-right); jaxga generalises this to the major axis of
-    ``goal - start``: columns x when ``|dx| >= |dy|`` (ties: x), else rows y, walked from
-    the start towards the goal. For each column the min and max minor coordinate over
-    the cells of BOTH parents in that column (Zhu: "the max grid number and the min grid
-    number in column i (p1 & p2)") bound the candidates. Cost: two scatters of ``2 L``
-    into ``max(H, W)`` entries.
-    """
-    c1, c2 = jnp.asarray(c1, I32), jnp.asarray(c2, I32)
-    h, w = grid.shape
-    a = max(h, w)
-    sx, sy, gx, gy = grid.start % w, grid.start // w, grid.goal % w, grid.goal // w
-    dx, dy = gx - sx, gy - sy
-    x_major = jnp.abs(dx) >= jnp.abs(dy)
-    d = jnp.where(x_major, dx, dy)
-    s_major = jnp.where(x_major, sx, sy)
-    sign = jnp.where(d >= 0, 1, -1).astype(I32)
-    n_steps = jnp.abs(d).astype(I32)
-    n = c1.shape[0]
-    i = jnp.arange(n, dtype=I32)
-    cells = jnp.concatenate([c1, c2])
-    valid = jnp.concatenate([i < l1, i < l2])
-    maj = jnp.where(x_major, cells % w, cells // w)
-    mnr = jnp.where(x_major, cells // w, cells % w)
-    slot = jnp.where(valid, maj, a)
-    lo_tab = jnp.full((a,), _INT_MAX, I32).at[slot].min(mnr, mode="drop")
-    hi_tab = jnp.full((a,), -1, I32).at[slot].max(mnr, mode="drop")
-    k = jnp.arange(a, dtype=I32)
-    major = s_major + sign * k
-    mc = jnp.clip(major, 0, a - 1)
-    lo, hi = lo_tab[mc], hi_tab[mc]
-    interior = (k >= 1) & (k < n_steps)
-    table = _free_prefix(grid)
-    has = hi >= lo
-    n_free = jnp.where(
-        has,
-        _prefix_at(table, grid, x_major, mc, jnp.clip(hi + 1, 0, a))
-        - _prefix_at(table, grid, x_major, mc, jnp.clip(lo, 0, a)),
-        0,
-    )
-    return ColumnRanges(x_major, n_steps, major, lo, hi, n_free, interior)
-
-
-def column_candidate_sets(
-    grid: Grid, c1: jax.Array, l1: jax.Array, c2: jax.Array, l2: jax.Array
-) -> list[list[int]]:
-    """Host-side: the candidate cells of every interior column, from start to goal.
-
-    Entry ``k - 1`` lists the free cells of column ``k`` with minor coordinate in
-    ``[lo, hi]`` (:func:`column_ranges`), by increasing minor coordinate. Zhu & Pan
-    Figure 5 (5 x 5, P1 = 0-5-10-16-17-23-24, P2 = 0-1-2-8-14-19-24): the first column's
-    set is ``[1, 6, 11, 16]``.
-    """
-    cr = column_ranges(grid, c1, l1, c2, l2)
-    blocked = grid.blocked_np().reshape(-1)
-    w = grid.width
-    out = []
-    for k in range(1, int(cr.n_steps)):
-        c, lo, hi = int(cr.major[k]), int(cr.lo[k]), int(cr.hi[k])
-        cells = [v * w + c if bool(cr.x_major) else c * w + v for v in range(lo, hi + 1)]
-        out.append([p for p in cells if not blocked[p]])
-    return out
-
-
-def column_anchors(
-    key: jax.Array, grid: Grid, c1: jax.Array, l1: jax.Array, c2: jax.Array, l2: jax.Array
-) -> tuple[jax.Array, jax.Array, jax.Array]:
-    """The intermittent child of Zhu's Algorithm 2 (lines 2-9), before connection.
-
-    ``P = [start]``; for every interior column (:func:`column_ranges`) append a cell drawn
-    uniformly among the FREE cells of that column between the parents' min and max; append
-    the goal. Zhu's Figure 5 draws from the whole range (its set ``(1, 6, 11, 16)``); a
-    blocked cell could never be connected, so blocked cells are excluded and a column
-    whose range holds no free cell (or that no parent visits - impossible for continuous
-    parents) makes the crossover fail. The draw is a binary search on per-column prefix
-    counts of free cells (O(log H) per column), not a scan of the column.
-
-    Returns ``(anchors int32[A], n_anchors int32, ok bool)`` with ``A = max(H, W)``;
-    ``anchors[:n_anchors]`` are start, one cell per interior column, goal.
-    """
-    c1, c2 = jnp.asarray(c1, I32), jnp.asarray(c2, I32)
-    h, w = grid.shape
-    a = max(h, w)
-    cr = column_ranges(grid, c1, l1, c2, l2)
-    bits = jax.random.bits(key, (a,), _U32)
-    r = _uniform_index(bits, cr.n_free)
-    table = _free_prefix(grid)
-    mc = jnp.clip(cr.major, 0, a - 1)
-    lo = jnp.clip(cr.lo, 0, a - 1)
-    hi = jnp.clip(cr.hi, 0, a - 1)
-    target = _prefix_at(table, grid, cr.x_major, mc, lo) + r + 1
-    # Smallest v in [lo, hi] with prefix(v + 1) >= target: the (r+1)-th free cell.
-    left, right = lo, jnp.maximum(hi, lo)
-    for _ in range(int(np.ceil(np.log2(a + 1))) + 1):
-        mid = (left + right) // 2
-        go_left = _prefix_at(table, grid, cr.x_major, mc, mid + 1) >= target
-        right = jnp.where(go_left, mid, right)
-        left = jnp.where(go_left, left, mid + 1)
-    pick = jnp.where(cr.x_major, left * w + mc, mc * w + left)
-    k = jnp.arange(a, dtype=I32)
-    anchors = jnp.where(k == 0, grid.start, jnp.where(k >= cr.n_steps, grid.goal, pick))
-    ok = jnp.all(~cr.interior | (cr.n_free > 0))
-    return anchors.astype(I32), (cr.n_steps + 1).astype(I32), ok
-
-
-def column_child(
-    key: jax.Array,
-    grid: Grid,
-    c1: jax.Array,
-    l1: jax.Array,
-    c2: jax.Array,
-    l2: jax.Array,
-    max_rounds: int | None = None,
-    queue: int | None = None,
-    field_repair: bool = False,
-) -> tuple[jax.Array, jax.Array, jax.Array]:
-    """The child of Zhu's non-common-point crossover (Algorithm 2 lines 2-10).
-
-    :func:`column_anchors` (with the first half of ``key``), then "path continuum
-    processing" = median insertion (:func:`jaxga.operators.repair.connect`, Zhu eq. 11-12, with the
-    second half of ``key``), then loop removal. Returns ``(cells int32[L], length, ok)``;
-    ``ok`` False = Zhu's "crossover failure" (a column without candidates, a failed
-    connection, or a capacity overflow; a child spanning more columns than ``L`` cells
-    is one).
-
-    ``max_rounds`` and ``queue`` (static) bound the median insertion
-    (:func:`jaxga.operators.repair.connect`). Under ``vmap`` every pair runs as many rounds as the
-    slowest, and a connection that does not close (a median inside a wall keeps being
-    replaced by random neighbours: the paper's "crossover failure") runs them all, so
-    they set the cost. Defaults: ``max_rounds = 2 * ceil(log2(max(H, W))) + 6`` (twice
-    the rounds an obstacle-free gap needs, plus slack) and ``queue = 2 * max(H, W)``
-    (every initial gap split once). Measured on the 20 x 20 classic map with median-
-    insertion parents: 16 rounds close 30% of the children, 64 rounds 34-38%, at 4x
-    the cost.
-
-    ``field_repair`` (static; jaxga's extension, ``repair.fallback = "field"``): a
-    connection that does not close gives the optimal path through the middle anchor
-    down the exact distance fields (:func:`jaxga.operators.init.field_path`) as the child; needs
-    ``grid.guide``.
-    """
-    n = jnp.asarray(c1).shape[0]
-    h, w = grid.shape
-    a = max(h, w)
-    k_anchor, k_conn = jax.random.split(key)
-    anchors, n_anchors, cols_ok = column_anchors(k_anchor, grid, c1, l1, c2, l2)
-    if a > n:  # a big map and a small capacity: a child spanning more columns cannot fit
-        cols_ok &= n_anchors <= n
-        anchors, n_anchors = anchors[:n], jnp.minimum(n_anchors, n)
-    if max_rounds is None:
-        max_rounds = 2 * int(np.ceil(np.log2(max(a, 2)))) + 6
-    if queue is None:
-        queue = 2 * a
-    cells, length, ok = connect(
-        k_conn, grid, anchors, n_anchors, n, max_rounds=max_rounds, queue=min(n, queue)
-    )
-    cells, length = remove_loops(cells, length, grid.n_cells)
-    ok &= cols_ok
-    if field_repair:
-        f_c, f_n, f_ok = field_path(jax.random.fold_in(k_conn, 7), grid,
-                                    anchors[n_anchors // 2], n, 0.0, 0.0)
-        cells, length = jnp.where(ok, cells, f_c), jnp.where(ok, length, f_n)
-        ok = ok | (cols_ok & f_ok)
-    return cells, length, ok
-
-
-def column(
-    key: jax.Array,
-    grid: Grid,
-    c1: jax.Array,
-    l1: jax.Array,
-    c2: jax.Array,
-    l2: jax.Array,
-    *,
-    fitness_fn: Callable,
-    distinct: bool = False,
-    max_rounds: int | None = None,
-    queue: int | None = None,
-    field_repair: bool = False,
-) -> tuple[jax.Array, jax.Array, jax.Array, jax.Array, jax.Array]:
-    """Zhu & Pan's non-common-point (column) crossover (section 4.4, Algorithm 2, Fig. 5).
-
-    Builds the child of :func:`column_child`; on success, "2 from P1, P2 and P are
-    selected to become child chromosomes using RWS": two roulette spins (Zhu eq. 10)
-    over ``{P1, P2, child}`` with weights ``fitness_fn`` (clipped at 0; uniform if all
-    are 0) fill output slots 1 and 2 in spin order. ``distinct`` (static): False
-    (default) spins independently, as roulette-wheel selection does, so the child may
-    fill both slots; True draws the second spin from the two members not yet drawn.
-    On "crossover failure" both slots keep their parents and ``failed`` is 2.
-
-    ``fitness_fn(grid, cells, length) -> f32`` is static (bind it with
-    ``functools.partial``). ``max_rounds``,
-    ``queue``, ``field_repair``: see :func:`column_child` (the first two dominate the
-    cost).
-    """
-    c1, c2 = jnp.asarray(c1, I32), jnp.asarray(c2, I32)
-    l1, l2 = jnp.asarray(l1, I32), jnp.asarray(l2, I32)
-    k_child, k_spin = jax.random.split(key)
-    cc, cl, ok = column_child(
-        k_child, grid, c1, l1, c2, l2, max_rounds=max_rounds, queue=queue,
-        field_repair=field_repair,
-    )
-    paths = jnp.stack([c1, c2, cc])
-    lens = jnp.stack([l1, l2, cl])
-    f = jax.vmap(lambda c, ln: jnp.asarray(fitness_fn(grid, c, ln), F32))(paths, lens)
-    wts = jnp.where(jnp.isnan(f), F32(0), jnp.maximum(f, F32(0)))
-    u = jax.random.uniform(k_spin, (2,), F32)
-    s1 = _spin(wts, u[0])
-    if distinct:
-        s2 = _spin(wts.at[s1].set(0.0), u[1], jnp.arange(3) != s1)
-    else:
-        s2 = _spin(wts, u[1])
-    failed = jnp.where(ok, 0, 2).astype(I32)
-    return (
-        jnp.where(ok, paths[s1], c1), jnp.where(ok, lens[s1], l1),
-        jnp.where(ok, paths[s2], c2), jnp.where(ok, lens[s2], l2),
-        failed,
-    )
-
-
-def _spin(weights: jax.Array, u: jax.Array, eligible: jax.Array | None = None) -> jax.Array:
-    """One roulette spin over a few weights (uniform over ``eligible`` if all are 0)."""
-    if eligible is None:
-        eligible = jnp.ones(weights.shape, bool)
-    w = jnp.where(jnp.sum(weights) > 0, weights, eligible.astype(F32))
-    cdf = jnp.cumsum(w)
-    idx = jnp.sum(cdf <= u * cdf[-1], dtype=I32)
-    last = jnp.max(jnp.where(w > 0, jnp.arange(w.shape[0], dtype=I32), 0))
-    return jnp.minimum(idx, last)
+    return accept_children(do, f[2] > f[0], f[3] > f[1], k1, k2, c1, l1, c2, l2)
 
 
 # ------------------------------------------------------ crossover probability

@@ -38,7 +38,9 @@ from jaxga.core.paths import (
     remove_loops,
 )
 from jaxga.maps.preprocess import legal_moves
+from jaxga.operators import column_crossover as XC
 from jaxga.operators import crossover as X
+from jaxga.operators import joins as J
 from jaxga.operators.lift import over_pairs
 from jaxga.operators.repair import connect
 from tests.strategies import CAP, SIZE, grids_and_parents
@@ -292,7 +294,7 @@ def _column_and_children(key, grid, pop, max_rounds=None):
     column_child with the documented keys: ``(out, n_failed, (cells, length, ok))``."""
     op = functools.partial(X.column, fitness_fn=_len_fitness, max_rounds=max_rounds)
     out, n_failed = over_pairs(op)(key, grid, pop)
-    child = functools.partial(X.column_child, max_rounds=max_rounds)
+    child = functools.partial(XC.column_child, max_rounds=max_rounds)
     kids = jax.vmap(child, in_axes=(0, None, 0, 0, 0, 0))(
         _child_keys(key, pop.size // 2), grid, *_pairs_of(pop))
     return out, n_failed, kids
@@ -303,7 +305,7 @@ def _column_children_checked(key, grid, pop):
     """column_child of each pair with the keys ``split(key, pairs)``, and the checks of
     the children."""
     keys = jax.random.split(key, pop.size // 2)
-    c, n, ok = jax.vmap(X.column_child, in_axes=(0, None, 0, 0, 0, 0))(keys, grid,
+    c, n, ok = jax.vmap(XC.column_child, in_axes=(0, None, 0, 0, 0, 0))(keys, grid,
                                                                         *_pairs_of(pop))
     return ok, jax.vmap(_checks, in_axes=(None, 0, 0))(grid, c, n)
 
@@ -418,17 +420,17 @@ def test_capacity_overflow_keeps_the_parent_and_counts(name):
     assert lo <= n_failed <= hi and n_failed > 0
 
 
-_COLUMN_RANGES = jax.jit(X.column_ranges)
+_COLUMN_RANGES = jax.jit(XC.column_ranges)
 
 
 def _candidate_sets(grid, c1, l1, c2, l2):
-    """:func:`X.column_candidate_sets` (host-side), with its column_ranges run as one
+    """:func:`XC.column_candidate_sets` (host-side), with its column_ranges run as one
     jitted program instead of op by op."""
     def ranges(*args):
-        return X.ColumnRanges(*(np.asarray(v) for v in _COLUMN_RANGES(*args)))
+        return XC.ColumnRanges(*(np.asarray(v) for v in _COLUMN_RANGES(*args)))
 
-    with unittest.mock.patch.object(X, "column_ranges", ranges):
-        return X.column_candidate_sets(grid, c1, l1, c2, l2)
+    with unittest.mock.patch.object(XC, "column_ranges", ranges):
+        return XC.column_candidate_sets(grid, c1, l1, c2, l2)
 
 
 @jax.jit
@@ -438,8 +440,8 @@ def _column_draws(key, grid, c1, l1, c2, l2):
     ``(anchors, anchors from the keys, children)``."""
     keys = jax.random.split(key, 4000)
     k_anchor = jax.vmap(lambda k: jax.random.split(k)[0])(keys)  # column_child's split
-    anchors = jax.vmap(X.column_anchors, in_axes=(0,) + (None,) * 5)
-    kids = jax.vmap(X.column_child, in_axes=(0,) + (None,) * 5)(keys, grid, c1, l1, c2, l2)
+    anchors = jax.vmap(XC.column_anchors, in_axes=(0,) + (None,) * 5)
+    kids = jax.vmap(XC.column_child, in_axes=(0,) + (None,) * 5)(keys, grid, c1, l1, c2, l2)
     return (anchors(k_anchor, grid, c1, l1, c2, l2), anchors(keys, grid, c1, l1, c2, l2),
             kids)
 
@@ -496,7 +498,7 @@ def _roulette(key, grid, pop):
     outs = {d: over_pairs(functools.partial(X.column, fitness_fn=_sharp_fitness,
                                             distinct=d))(key, grid, pop)
             for d in (False, True)}
-    kids = jax.vmap(X.column_child, in_axes=(0, None, 0, 0, 0, 0))(
+    kids = jax.vmap(XC.column_child, in_axes=(0, None, 0, 0, 0, 0))(
         _child_keys(key, pop.size // 2), grid, *_pairs_of(pop))
     return outs, kids
 
@@ -737,14 +739,14 @@ def _same_key(grid, c1, l1, c2, l2):
 
     def ref(key):
         k_anchor, k_conn = jax.random.split(key)
-        anchors, n, ok_a = X.column_anchors(k_anchor, *args)
+        anchors, n, ok_a = XC.column_anchors(k_anchor, *args)
         c, m, ok = connect(k_conn, grid, anchors, n, 16, max_rounds=12, queue=10)
         c, m = remove_loops(c, m, 25)
         return c, m, ok & ok_a
 
     keys = jax.random.split(jax.random.PRNGKey(3), 64)
     want = jax.vmap(ref)(keys)
-    got = jax.vmap(lambda k: X.column_child(k, *args))(keys)
+    got = jax.vmap(lambda k: XC.column_child(k, *args))(keys)
     return alone, batch, want, got
 
 
@@ -835,7 +837,7 @@ def test_large_map_code_paths():
 
 KTH_LENGTHS = (1, 32, 33, 160, 400)
 KTH_DENSITIES = (0.0, 0.03, 0.4, 1.0)
-_KTH = jax.jit(lambda masks, r: {n: jax.vmap(X._kth_true)(masks[n], r[n]) for n in masks})
+_KTH = jax.jit(lambda masks, r: {n: jax.vmap(J.kth_true)(masks[n], r[n]) for n in masks})
 
 
 def _kth_cases(n):
@@ -864,15 +866,15 @@ def test_kth_true_is_the_rth_true_index_or_zero(n):
 
 
 _JOINS = jax.jit(jax.vmap(lambda c1, l1, c2, l2, cut, start: (
-    X._join(c2, cut, X._position_lookup(c1, l1, None)(c2), c1, l1, start),
-    X._join_reverse(c2, cut, c1, l1, start, X._position_lookup(c2, l2, None)(c1)))))
+    J.join(c2, cut, X._position_lookup(c1, l1, None)(c2), c1, l1, start),
+    J.join_reverse(c2, cut, c1, l1, start, X._position_lookup(c2, l2, None)(c1)))))
 
 
 @settings(max_examples=30)
 @given(grids_and_parents(n=8), st.integers(0, 2**30))
 def test_second_child_from_one_lookup_equals_the_two_lookup_join(gp, seed):
     """common_point's second child comes from the lookup of parent 1's cells in parent 2
-    (``_join_reverse``): for loop-free parents it equals ``_join`` with the lookup of
+    (``join_reverse``): for loop-free parents it equals ``join`` with the lookup of
     parent 2's cells in parent 1 that it replaces (cells, length, fit and junction), at
     a common cell of the two parents (as common_point calls it) and at any head cut below
     parent 2's length and any tail start."""

@@ -266,7 +266,7 @@ def test_the_automatic_capacity_fits_the_problem():
 
 # ------------------------------------------------------------------ field repairs
 from jaxga.core.objectives import sga as sga_fitness  # noqa: E402
-from jaxga.operators import crossover as CX  # noqa: E402
+from jaxga.operators import column_crossover as CX  # noqa: E402
 from jaxga.operators import mutation as MU  # noqa: E402
 from tests.plain_lifts import initialise  # noqa: E402
 from tests.strategies import CAP, grids_and_parents  # noqa: E402
