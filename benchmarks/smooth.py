@@ -27,11 +27,12 @@ from _results import markdown_table, record
 
 from jaxga.core.grid import Grid
 from jaxga.core.paths import from_coords
+from jaxga.curve_clearance import distance_field
 from jaxga.maps import load_map
 from jaxga.maps.generators import random_map
 from jaxga.reference.any_angle import any_angle_shortest_path
 from jaxga.reference.optima import shortest_path
-from jaxga.smooth import SmoothConfig, distance_field, smooth, smooth_population
+from jaxga.smooth import SmoothConfig, smooth, smooth_population
 
 P = 100
 

@@ -25,21 +25,14 @@ from scipy.interpolate import BSpline
 from jaxga import Grid, ParameterError
 from jaxga.cli.run import smooth_summary
 from jaxga.core.paths import from_coords
+from jaxga.curve_clearance import distance_field, verify_curve
 from jaxga.maps import load_map
 from jaxga.maps.frame import MapFrame
 from jaxga.maps.scenarios import read_scen
+from jaxga.polyline import polyline_points, turning_curvature_bound
 from jaxga.reference.any_angle import any_angle_shortest_path
 from jaxga.reference.optima import clear_np, shortest_path
-from jaxga.smooth import (
-    SmoothConfig,
-    distance_field,
-    polyline_points,
-    resample_curve,
-    smooth,
-    smooth_population,
-    turning_curvature_bound,
-    verify_curve,
-)
+from jaxga.smooth import SmoothConfig, resample_curve, smooth, smooth_population
 
 pytestmark = pytest.mark.slow  # smoothing on real paths (programs of their own)
 
