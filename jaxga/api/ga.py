@@ -30,18 +30,9 @@ from jaxga.api.programs import warn_platform
 from jaxga.config.schema import Config
 from jaxga.core.errors import ParameterError
 from jaxga.core.grid import Grid
-from jaxga.engine import (
-    GAState,
-    RunOutputs,
-    build,
-    default_capacity,
-    default_params,
-    generation,
-    uses_guide,
-)
-from jaxga.engine import finish as finish_run
+from jaxga.engine import build, default_capacity, default_params, uses_guide
 from jaxga.engine.maptables import with_tables
-from jaxga.engine.run import run_evolve, run_init
+from jaxga.engine.run import PureGA
 from jaxga.maps import MapInfo
 from jaxga.maps.frame import MapFrame, endpoint_cells
 from jaxga.operators.guide import with_guide
@@ -49,8 +40,10 @@ from jaxga.operators.guide import with_guide
 __all__ = ["GA"]
 
 
-class GA:
-    """One preset on one map: host work in the constructor, pure functions after it.
+class GA(PureGA):
+    """One preset on one map: host work in the constructor, pure functions after it (those
+    of :class:`jaxga.engine.run.PureGA`, which the batch drivers trace too:
+    :meth:`~jaxga.engine.run.PureGA.init`, ``step``, ``evolve``, ``finish``, ``run``).
 
     Args:
         preset: a preset name (``jaxga presets``), a TOML file, or a
@@ -88,15 +81,15 @@ class GA:
                  problem: Grid | MapInfo | str | None = None, *,
                  corner_rule: str | None = None, variant: str | None = None,
                  sets: Any = (), generations: int | None = None, **overrides: Any) -> None:
-        config, grid, map_name, frame = load_problem(
+        config, grid, map_name, frame, _ = load_problem(
             preset, problem, corner_rule, variant, sets, overrides, generations)
         self.map_name: str = map_name
         self.frame: MapFrame | None = frame
         if uses_guide(config):
             grid = with_guide(grid)
         self.config = config
-        self.algorithm, _ = build(config, grid)
-        self.grid = with_tables(grid)
+        algorithm, _ = build(config, grid)
+        super().__init__(algorithm, with_tables(grid))
         self.default_params: dict[str, jax.Array] = default_params(
             config, self.algorithm.islands)
         warn_platform(jax.default_backend())  # where jit puts the user's calls
@@ -131,55 +124,3 @@ class GA:
         if self.grid.guide is not None:
             grid = with_guide(grid)
         return dataclasses.replace(grid, tables=self.grid.tables, outside=self.grid.outside)
-
-    def init(self, key: jax.Array, params: dict, grid: Grid | None = None) -> GAState:
-        """The initial population of every island, evaluated (pure; the initialisers of
-        the preset: ``init.method`` and its fallback). ``grid``: another pair of
-        endpoints on this map (:meth:`grid_for`), default :attr:`grid`'s."""
-        state, _ = run_init(self.algorithm, key, self._grid(grid), params)
-        return state
-
-    def step(self, key: jax.Array, state: GAState, params: dict,
-             grid: Grid | None = None) -> GAState:
-        """One generation (selection, crossover, mutation, simplification, evaluation,
-        migration; the stagnation rule); pure. ``key``: this generation's key."""
-        return generation(self.algorithm, key, self._grid(grid), state, params)
-
-    def _grid(self, grid: Grid | None) -> Grid:
-        if grid is not None and not isinstance(grid, Grid):
-            raise TypeError(f"the grid argument is a Grid (GA.grid_for), got "
-                            f"{type(grid).__name__}: give generations= by keyword")
-        return self.grid if grid is None else grid
-
-    def evolve(self, key: jax.Array, state: GAState, params: dict,
-               generations: int | None = None, grid: Grid | None = None
-               ) -> tuple[GAState, dict]:
-        """``generations`` (default: the configuration's) generations as one
-        ``lax.scan``; returns the final state and the history (best-so-far fitness, mean
-        and sd of the population's fitness, per generation). Generation ``t`` uses
-        ``fold_in(fold_in(key, 1), t)``, as :func:`jaxga.run` does."""
-        return run_evolve(self.algorithm, key, self._grid(grid), state, params, generations)
-
-    def finish(self, state: GAState, params: dict, history: dict | None = None,
-               initial_best: jax.Array | None = None,
-               grid: Grid | None = None) -> RunOutputs:
-        """The best path post-optimised (the preset's ``post.method``) and the reported
-        metrics as arrays (:class:`jaxga.engine.RunOutputs`, also read by name:
-        ``out["fitness"]``): ``success``, ``raw_cells`` / ``raw_n_cells`` (the GA's own
-        best and its node count), ``cells`` / ``n_cells`` (post-optimised), ``length`` /
-        ``raw_length`` (Euclidean, as :class:`jaxga.api.result.Result`), ``fitness``,
-        ``metrics``, ...; with ``history``, also the
-        convergence generation (0 for a best the initial population already held, given
-        its ``initial_best`` fitness)."""
-        return finish_run(self.algorithm, self._grid(grid), state, history, params,
-                          initial_best)
-
-    def run(self, key: jax.Array, params: dict, grid: Grid | None = None,
-            generations: int | None = None) -> RunOutputs:
-        """:meth:`init`, :meth:`evolve` and :meth:`finish` of one run: seed ``s`` of
-        :func:`jaxga.run` is ``run(jax.random.PRNGKey(s), ga.default_params)``;
-        ``grid``: another pair of endpoints on this map (:meth:`grid_for`)."""
-        state = self.init(key, params, grid)
-        initial_best = state.best_fitness  # a best found at initialisation converges at 0
-        state, history = self.evolve(key, state, params, generations, grid)
-        return self.finish(state, params, history, initial_best, grid)

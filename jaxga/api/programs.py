@@ -38,10 +38,9 @@ from jaxga.core.errors import ParameterError, PlatformWarning
 from jaxga.engine import (
     Algorithm,
     chosen_operators,
-    finish,
 )
 from jaxga.engine.maptables import compute_tables
-from jaxga.engine.run import run_evolve, run_init
+from jaxga.engine.run import PureGA
 
 
 def shape_spec(tree: Any) -> Any:
@@ -74,8 +73,10 @@ def program_view(algo: Algorithm, name: str) -> Algorithm:
     else:
         def reads(key: str) -> bool:
             return key.startswith(PROGRAM_SECTIONS[name])
+    # stages=None: resolved again from the view, so a stage of a family outside it is None
     return dataclasses.replace(
-        algo, config=Config(tuple((k, v) for k, v in algo.config.items if reads(k))))
+        algo, config=Config(tuple((k, v) for k, v in algo.config.items if reads(k))),
+        stages=None)
 
 
 _SHARED_PROGRAMS: collections.OrderedDict[Any, Any] = collections.OrderedDict()
@@ -524,16 +525,18 @@ def compiled_programs(algo: Algorithm, grid_spec: Any, params_spec: Any, n_runs:
     sh, rep = seed_sharding()
 
     views = {name: program_view(algo, name) for name in Programs.NAMES}
+    # each program traces the methods of a GA of its view (the pure core's own methods)
+    ga = {name: PureGA(view) for name, view in views.items()}
 
     def do_init(k, grid, params):
-        state, stats = run_init(views["init"], k, grid, params)
+        state, stats = ga["init"].init_with_stats(k, params, grid)
         return state, stats.success_rate, stats.n_failed, stats.from_fallback
 
     def do_evolve(k, grid, params, state, count):
-        return run_evolve(views["evolve"], k, grid, state, params, GENERATION_CHUNK, count)
+        return ga["evolve"].evolve(k, state, params, GENERATION_CHUNK, grid, count=count)
 
     def do_finish(grid, params, state):
-        return finish(views["finish"], grid, state, None, params)
+        return ga["finish"].finish(state, params, grid=grid)
 
     # Every per-run input and output has the run axis first: one sharding for all of
     # them, so each device runs its share and the result does not depend on the device

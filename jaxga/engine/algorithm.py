@@ -32,6 +32,8 @@ from jaxga.engine.checks import (
 from jaxga.operators import registry
 from jaxga.operators.fitness import objective_default, objective_keywords
 from jaxga.operators.guide import longest_optimal_path_cells, problem_facts
+from jaxga.operators.rates import RateRule, rate_rule
+from jaxga.operators.registry import NEVER_FAILS, Operator
 
 FITNESS_PARAMS: dict[str, tuple[str, ...]] = {
     op.name: tuple(key.split(".", 1)[1] for key in objective_keywords(op))
@@ -52,8 +54,65 @@ what a parameter the configuration leaves out is."""
 
 
 @dataclasses.dataclass(frozen=True)
+class Stages:
+    """The operators and rate rules a configuration chose, resolved from the registry once,
+    when its :class:`Algorithm` is made: the values the engine's stages call, in the
+    order of a generation (as ``optax.chain`` composes its transformations), instead of
+    looking an operator up by name wherever a stage is traced.
+
+    A family the configuration leaves out (a program's view of it holds only the keys
+    that program reads: :func:`jaxga.api.programs.program_view`) is None, so a stage
+    that would call it fails while tracing rather than reading a key it was not keyed
+    on."""
+
+    init: Operator | None = None
+    """``init.method``."""
+    fallback: Operator | None = None
+    """The initialiser compiled in as ``init.fallback`` (None where ``init.method``
+    cannot fail or none is compiled: :func:`jaxga.engine.checks.compiled_fallback`)."""
+    fitness: Operator | None = None
+    """``fitness.method``: the objective."""
+    selection: Operator | None = None
+    crossover: Operator | None = None
+    mutation: Operator | None = None
+    simplify: Operator | None = None
+    """The per-generation simplification (``simplify.method``)."""
+    post: Operator | None = None
+    """The post-optimisation of the best path (``post.method``)."""
+    crossover_rate: RateRule | None = None
+    """The crossover probability's rule (fixed, or AGACD eq. 26-27)."""
+    mutation_rate: RateRule | None = None
+    """The mutation probability's rule (fixed, or AGACD eq. 28-29)."""
+    field_repair: bool = False
+    """``repair.fallback = "field"``: the repairs fall back to a field walk."""
+
+
+def resolve_stages(config: Config) -> Stages:
+    """The :class:`Stages` of ``config`` (a configuration or a program's view of one),
+    looked up in the registry (:mod:`jaxga.operators.registry`) by their names."""
+
+    def chosen(family: str) -> Operator | None:
+        name = config.get(f"{family}.method")
+        return None if name is None else registry.operator(family, name)
+
+    ops = {family: chosen(family) for family in registry.FAMILIES}
+    init, compiled = ops["init"], config.get("init.fallback", "none")
+    fallback = None
+    if init is not None and compiled != "none" and NEVER_FAILS not in init.traits:
+        fallback = registry.operator("init", compiled)
+    rates = {f"{stage}_rate": rate_rule(config, stage) if ops[stage] is not None else None
+             for stage in ("crossover", "mutation")}
+    return Stages(**ops, fallback=fallback, **rates,
+                  field_repair=config.get("repair.fallback") == "field")
+
+
+@dataclasses.dataclass(frozen=True)
 class Algorithm:
-    """The static part of a GA: which operators, which sizes (a hashable jit argument)."""
+    """The static part of a GA: which operators, which sizes (a hashable jit argument).
+
+    ``stages`` are its operators resolved once (:func:`resolve_stages`; left out of its
+    equality and hash, which its configuration decides: the caches of compiled programs
+    add the operators' functions to their keys)."""
 
     config: Config
     population: int
@@ -61,6 +120,11 @@ class Algorithm:
     generations: int
     islands: int
     waypoints: bool
+    stages: Stages | None = dataclasses.field(default=None, compare=False, repr=False)
+
+    def __post_init__(self) -> None:
+        if self.stages is None:
+            object.__setattr__(self, "stages", resolve_stages(self.config))
 
     def get(self, key: str, default: Any = None) -> Any:
         return self.config.get(key, default)

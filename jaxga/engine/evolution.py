@@ -43,19 +43,16 @@ from jaxga.core.paths import (
     remove_loops,
 )
 from jaxga.engine.algorithm import F32, I32, Algorithm
-from jaxga.operators import registry
 from jaxga.operators.init import initialise_population
 from jaxga.operators.islands import migrate
 from jaxga.operators.lift import gated_map, windowed_map
-from jaxga.operators.rates import rate_rule
-from jaxga.operators.registry import NEVER_FAILS, Binding
+from jaxga.operators.registry import Binding
 
 
 # ----------------------------------------------------------------------------- stages
 def fitness_function(algo: Algorithm, params: dict) -> Callable:
     """``f(grid, cells, length, feasible) -> f32`` with the configured combiner and weights."""
-    op = registry.operator("fitness", algo.get("fitness.method"))
-    return op.bind(Binding(algo, params))
+    return algo.stages.fitness.bind(Binding(algo, params))
 
 
 SHORT_SPAN = 4
@@ -135,7 +132,7 @@ def binding(algo: Algorithm, params: dict, t: jax.Array | None = None,
     algorithm, the dynamic parameters, generation ``t``, the fitness function and
     whether ``repair.fallback = "field"``."""
     return Binding(algo, params, generation=t, generations=run_generations(algo, params),
-                   fitness_fn=fit_fn, field_repair=_field_repair(algo))
+                   fitness_fn=fit_fn, field_repair=algo.stages.field_repair)
 
 
 def run_generations(algo: Algorithm, params: dict) -> jax.Array | int:
@@ -146,32 +143,32 @@ def run_generations(algo: Algorithm, params: dict) -> jax.Array | int:
 
 
 def _select(algo: Algorithm, key, fitness, active) -> jax.Array:
-    op = registry.operator("selection", algo.get("selection.method"))
+    op = algo.stages.selection
     if op.fn is None:
         return jnp.arange(fitness.shape[0], dtype=I32)
     return op.bind(Binding(algo, {}))(key, fitness, active)
 
 
 def _crossover(algo: Algorithm, key, grid, pop, fitness, active, t, params, fit_fn):
-    op = registry.operator("crossover", algo.get("crossover.method"))
+    op = algo.stages.crossover
     if op.fn is None and op.population is None:
         return pop, jnp.int32(0)
-    pc = rate_rule(algo, "crossover")(params, fitness, active, t,
+    pc = algo.stages.crossover_rate(params, fitness, active, t,
                                       run_generations(algo, params))
     return op.lift(binding(algo, params, t, fit_fn))(key, grid, pop, pc)
 
 
 def _mutation(algo: Algorithm, key, grid, pop, fitness, active, t, params, fit_fn):
-    op = registry.operator("mutation", algo.get("mutation.method"))
+    op = algo.stages.mutation
     if op.fn is None and op.population is None:
         return pop, jnp.int32(0)
-    pm = rate_rule(algo, "mutation")(params, fitness, active, t,
+    pm = algo.stages.mutation_rate(params, fitness, active, t,
                                      run_generations(algo, params))
     return op.lift(binding(algo, params, t, fit_fn))(key, grid, pop, pm)
 
 
 def _simplify(algo: Algorithm, key, grid, pop, params):
-    op = registry.operator("simplify", algo.get("simplify.method"))
+    op = algo.stages.simplify
     if op.fn is None:
         return pop, jnp.int32(0)
     ps = jnp.broadcast_to(params["simplify.probability"], (pop.size,))
@@ -216,10 +213,6 @@ def _best_of(state_islands: IslandState) -> tuple:
     return cells, state_islands.length.reshape(-1)[k], f[k]
 
 
-def _field_repair(algo: Algorithm) -> bool:
-    return algo.get("repair.fallback") == "field"
-
-
 def init_state(algo: Algorithm, key: jax.Array, grid: Grid, params: dict) -> tuple:
     """Initial population of every island and its evaluation.
 
@@ -234,12 +227,10 @@ def init_state(algo: Algorithm, key: jax.Array, grid: Grid, params: dict) -> tup
     ``(GAState, InitStats)`` (one entry per island).
     """
     ctx = binding(algo, params)
-    method = registry.operator("init", algo.get("init.method"))
-    init_fn = method.bind(ctx)
+    init_fn = algo.stages.init.bind(ctx)
     fallback, fallback_on = None, True
-    compiled = algo.get("init.fallback", "none")
-    if compiled != "none" and NEVER_FAILS not in method.traits:
-        fallback = registry.operator("init", compiled).bind(ctx)
+    if algo.stages.fallback is not None:
+        fallback = algo.stages.fallback.bind(ctx)
         fallback_on = params["init.fallback"]
     keys = jax.random.split(key, algo.islands)
     active = _active(algo, params)
@@ -281,7 +272,7 @@ def island_generation(algo: Algorithm, key, grid: Grid, isl: IslandState, t, par
         pop, f_si = _simplify(algo, k_si, grid, pop, params)
         return pop, jnp.stack([f_mu, f_si]).astype(I32)
 
-    if not rate_rule(algo, "mutation").reads_offspring_fitness:
+    if not algo.stages.mutation_rate.reads_offspring_fitness:
         pop, fails = vary(pop, fitness)
         new_fitness, feas = evaluate(algo, grid, params, pop.cells, pop.length, active)
     else:
@@ -505,7 +496,7 @@ def finish(algo: Algorithm, grid: Grid, state: GAState, history: dict | None, pa
     """
     raw_c, raw_n = state.best_cells, state.best_length
     success = state.best_fitness > 0
-    post_op = registry.operator("post", algo.get("post.method"))
+    post_op = algo.stages.post
     if post_op.fn is None:
         opt_c, opt_n = remove_loops(raw_c, raw_n, grid.n_cells)
     else:

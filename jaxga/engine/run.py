@@ -1,23 +1,26 @@
-"""One run: the key streams that tie a run's initialisation and generations to its key.
+"""One run: the pure methods of a GA (:class:`PureGA`) and the key streams that tie a run's
+initialisation and generations to its key.
 
 A run's key is split by ``fold_in`` into an initialisation stream (``fold_in(key, 0)``)
 and an evolution stream (``fold_in(key, 1)``; generation ``t`` uses
-``fold_in(evolution key, t)``). Every path to the engine goes through these two
-functions: :class:`jaxga.GA` (the pure core) and the compiled programs of
-:func:`jaxga.run`, :func:`jaxga.sweep`, :func:`jaxga.compare`, the DOE and
-:func:`jaxga.replan` (:mod:`jaxga.api.programs`), so seed ``s`` of a driver is
-``GA.run(PRNGKey(s))``.
+``fold_in(evolution key, t)``). :class:`PureGA` is the one door to the engine:
+:class:`jaxga.GA` is a :class:`PureGA` built from a preset and a map, and the compiled
+programs of :func:`jaxga.run`, :func:`jaxga.sweep`, :func:`jaxga.compare`, the DOE and
+:func:`jaxga.replan` (:mod:`jaxga.api.programs`) trace the methods of a :class:`PureGA`
+of the same algorithm, so seed ``s`` of a driver is ``GA.run(PRNGKey(s))``.
 """
 
 from __future__ import annotations
 
 import jax
 
+from jaxga.core.errors import ParameterError
 from jaxga.core.grid import Grid
 from jaxga.engine.algorithm import Algorithm
-from jaxga.engine.evolution import GAState, evolve, init_state
+from jaxga.engine.evolution import GAState, RunOutputs, evolve, finish, generation, init_state
+from jaxga.operators.init import InitStats
 
-__all__ = ["EVOLVE_STREAM", "INIT_STREAM", "run_evolve", "run_init"]
+__all__ = ["EVOLVE_STREAM", "INIT_STREAM", "PureGA", "run_evolve", "run_init"]
 
 INIT_STREAM, EVOLVE_STREAM = 0, 1
 """The ``fold_in`` data of a run's initialisation and evolution streams."""
@@ -37,3 +40,83 @@ def run_evolve(algo: Algorithm, key: jax.Array, grid: Grid, state: GAState, para
     or in chunks."""
     return evolve(algo, jax.random.fold_in(key, EVOLVE_STREAM), grid, state, params,
                   generations, count)
+
+
+class PureGA:
+    """A GA's pure functions over a built :class:`~jaxga.engine.Algorithm`: what a run is,
+    defined once. :class:`jaxga.GA` adds the host work of its constructor (the preset and
+    the map loaded and checked); the batch drivers' compiled programs
+    (:mod:`jaxga.api.programs`) trace these same methods, vmapped or sharded over runs,
+    with the map as an argument.
+
+    Args:
+        algorithm: the static algorithm (:func:`jaxga.engine.build`).
+        grid: the map the methods use where a call gives none (its move tables attached:
+            :func:`jaxga.engine.maptables.with_tables`); None: every call gives one.
+    """
+
+    def __init__(self, algorithm: Algorithm, grid: Grid | None = None) -> None:
+        self.algorithm = algorithm
+        self.grid = grid
+
+    def _grid(self, grid: Grid | None) -> Grid:
+        if grid is not None and not isinstance(grid, Grid):
+            raise TypeError(f"the grid argument is a Grid (GA.grid_for), got "
+                            f"{type(grid).__name__}: give generations= by keyword")
+        if grid is None and self.grid is None:
+            raise ParameterError("this GA has no map of its own: pass the grid")
+        return self.grid if grid is None else grid
+
+    def init_with_stats(self, key: jax.Array, params: dict,
+                        grid: Grid | None = None) -> tuple[GAState, InitStats]:
+        """:meth:`init` and what the initialisers did (per island: attempts' success
+        rate, slots left empty, slots the fallback filled), as :func:`jaxga.run`
+        reports them."""
+        return run_init(self.algorithm, key, self._grid(grid), params)
+
+    def init(self, key: jax.Array, params: dict, grid: Grid | None = None) -> GAState:
+        """The initial population of every island, evaluated (pure; the initialisers of
+        the preset: ``init.method`` and its fallback). ``grid``: another pair of
+        endpoints on this map (:meth:`jaxga.GA.grid_for`), default :attr:`grid`."""
+        return self.init_with_stats(key, params, grid)[0]
+
+    def step(self, key: jax.Array, state: GAState, params: dict,
+             grid: Grid | None = None) -> GAState:
+        """One generation (selection, crossover, mutation, simplification, evaluation,
+        migration; the stagnation rule); pure. ``key``: this generation's key."""
+        return generation(self.algorithm, key, self._grid(grid), state, params)
+
+    def evolve(self, key: jax.Array, state: GAState, params: dict,
+               generations: int | None = None, grid: Grid | None = None, *,
+               count: jax.Array | None = None) -> tuple[GAState, dict]:
+        """``generations`` (default: the configuration's) generations as one
+        ``lax.scan``; returns the final state and the history (best-so-far fitness, mean
+        and sd of the population's fitness, per generation). Generation ``t`` uses
+        ``fold_in(fold_in(key, 1), t)``, as :func:`jaxga.run` does, so a run evolved in
+        chunks equals one evolved at once. ``count`` (a traced, unbatched integer): only
+        the first ``count`` of the ``generations`` run (one compiled chunk serves every
+        generation count: :func:`jaxga.engine.evolve`)."""
+        return run_evolve(self.algorithm, key, self._grid(grid), state, params, generations,
+                          count)
+
+    def finish(self, state: GAState, params: dict, history: dict | None = None,
+               initial_best: jax.Array | None = None,
+               grid: Grid | None = None) -> RunOutputs:
+        """The best path post-optimised (the preset's ``post.method``) and the reported
+        metrics as arrays (:class:`jaxga.engine.RunOutputs`, also read by name:
+        ``out["fitness"]``): ``success``, ``raw_cells`` / ``raw_n_cells`` (the GA's own
+        best and its node count), ``cells`` / ``n_cells`` (post-optimised), ``length`` /
+        ``raw_length`` (Euclidean, as :class:`jaxga.api.result.Result`), ``fitness``,
+        ``metrics``, ...; with ``history``, also the convergence generation (0 for a best
+        the initial population already held, given its ``initial_best`` fitness)."""
+        return finish(self.algorithm, self._grid(grid), state, history, params, initial_best)
+
+    def run(self, key: jax.Array, params: dict, grid: Grid | None = None,
+            generations: int | None = None) -> RunOutputs:
+        """:meth:`init`, :meth:`evolve` and :meth:`finish` of one run: seed ``s`` of
+        :func:`jaxga.run` is ``run(jax.random.PRNGKey(s), ga.default_params)``;
+        ``grid``: another pair of endpoints on this map (:meth:`jaxga.GA.grid_for`)."""
+        state = self.init(key, params, grid)
+        initial_best = state.best_fitness  # a best found at initialisation converges at 0
+        state, history = self.evolve(key, state, params, generations, grid)
+        return self.finish(state, params, history, initial_best, grid)

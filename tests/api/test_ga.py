@@ -132,3 +132,37 @@ def test_a_users_own_scan_over_step_is_jaxga_run_seed_for_seed(ga, reference):
 
     keys = jax.vmap(jax.random.PRNGKey)(jnp.asarray(SEEDS, jnp.uint32))
     assert_seed_for_seed(jax.jit(jax.vmap(users_run))(keys), reference)
+
+
+def test_the_drivers_trace_the_pure_cores_own_methods(monkeypatch):
+    """One door to the engine: :class:`jaxga.GA` is a :class:`~jaxga.engine.run.PureGA`, and
+    the programs of :func:`jaxga.run` are traced from the methods of a ``PureGA`` of each
+    program's view of the algorithm (init with its statistics, the evolve chunk, finish),
+    the functions the pure core runs."""
+    from jaxga.api import programs
+    from jaxga.api.programs import compiled_programs, shape_spec, stack_params
+    from jaxga.engine.run import PureGA
+
+    assert issubclass(jaxga.GA, PureGA)
+    called = []
+
+    def spy(name):
+        real = getattr(PureGA, name)
+
+        def method(self, *args, **kwargs):
+            called.append((name, self.algorithm))
+            return real(self, *args, **kwargs)
+        return method
+
+    for name in ("init_with_stats", "evolve", "finish"):
+        monkeypatch.setattr(PureGA, name, spy(name))
+    ga = jaxga.GA("sga", MAP, population__size=6)
+    algo = programs.program_algorithm(ga.algorithm)
+    params = stack_params([ga.default_params], 2)
+    progs = compiled_programs.__wrapped__(
+        algo, shape_spec(ga.grid), tuple(sorted(shape_spec(params).items())), 2, 1)
+    traced = progs._trace()  # traced only: nothing compiled
+    assert sorted(traced) == ["evolve", "finish", "init"]
+    assert [name for name, _ in called] == ["init_with_stats", "evolve", "finish"]
+    for (_, seen), view in zip(called, ("init", "evolve", "finish")):
+        assert seen == programs.program_view(algo, view)

@@ -15,10 +15,11 @@ import numpy as np
 import pytest
 
 from jaxga import testing
-from jaxga.config.presets import load_preset
+from jaxga.config.presets import load_preset, preset_names
 from jaxga.config.schema import COMMON_FIELDS, SCHEMA
 from jaxga.core.errors import ParameterError
 from jaxga.core.paths import Population
+from jaxga.maps import load_map
 from jaxga.operators import registry
 from jaxga.operators.postprocess import compact
 
@@ -170,3 +171,35 @@ def test_operators_command_lists_the_registry():
         for key in op.params:
             assert key in out
     assert "replace_point (formerly one_point)" in out
+
+
+@pytest.mark.parametrize("preset", preset_names())
+def test_a_presets_stages_are_its_operators_resolved_once(preset):
+    """An :class:`~jaxga.engine.Algorithm` carries its operators and rate rules resolved
+    from the registry (:class:`~jaxga.engine.algorithm.Stages`), the ones the
+    configuration names; a program's view holds only its own families' (the others
+    None, so a stage outside the view fails while tracing); equality and hash are the
+    configuration's."""
+    import dataclasses
+
+    from jaxga.api.programs import program_view
+    from jaxga.engine import build, chosen_operators
+    from jaxga.engine.algorithm import Stages
+    from jaxga.operators.rates import rate_rule
+
+    algo, _ = build(load_preset(preset), load_map("classic_ga_gapp3_20x20"))
+    chosen = chosen_operators(algo.config)
+    for family in registry.FAMILIES:
+        assert getattr(algo.stages, family) is chosen[f"{family}.method"], family
+    never_fails = registry.NEVER_FAILS in algo.stages.init.traits
+    assert algo.stages.fallback is (None if never_fails else chosen.get("init.fallback"))
+    for stage in ("crossover", "mutation"):
+        assert getattr(algo.stages, f"{stage}_rate") is rate_rule(algo.config, stage)
+    assert algo.stages.field_repair == (algo.get("repair.fallback") == "field")
+    init = program_view(algo, "init").stages
+    assert init.init is algo.stages.init and init.fitness is algo.stages.fitness
+    assert init.crossover is None and init.mutation is None and init.post is None
+    finish = program_view(algo, "finish").stages
+    assert finish.post is algo.stages.post and finish.selection is None
+    other = dataclasses.replace(algo, stages=Stages())
+    assert other == algo and hash(other) == hash(algo)
