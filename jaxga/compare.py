@@ -489,7 +489,7 @@ def _options_per_preset(specs, grid, common: Mapping[str, Any]
                   if k in option_names or k.replace("__", ".") not in own}
         merged.update({k: v for k, v in ov.items() if k != "sets"})
         merged_sets = tuple(t for t in sets if parse_set(t)[0] not in own) + own_sets
-        config, loaded, _, _ = load_problem(preset, grid, merged.get("corner_rule"),
+        config, loaded, *_ = load_problem(preset, grid, merged.get("corner_rule"),
                                          merged.get("variant"), merged_sets,
                                          {k: v for k, v in merged.items() if k not in RUN_OPTIONS},
                                          merged.get("generations"), check_read=False)

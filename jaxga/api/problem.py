@@ -6,7 +6,8 @@ user's own operator functions registered under their names (:func:`own_operators
 from __future__ import annotations
 
 import contextlib
-from collections.abc import Sequence
+from collections.abc import Mapping, Sequence
+from os import PathLike
 from typing import Any, NamedTuple
 
 import numpy as np
@@ -39,6 +40,8 @@ class Problem(NamedTuple):
     """The map's name (``"grid"`` for a bare :class:`Grid`)."""
     frame: MapFrame | None
     """The map's world frame (resolution, origin, coarsening), None for a bare grid."""
+    info: MapInfo | None = None
+    """The loaded map (its file, format, layers for plots), None for a bare grid."""
 
 
 def _normalised(key: str, value: Any) -> Any:
@@ -97,12 +100,20 @@ def _registered_fn(family: str, fn: Any) -> registry.Operator | None:
 def problem(preset: str | Config, grid: Grid | MapInfo | str, *,
             corner_rule: str | None = None, variant: str | None = None,
             sets: Sequence[str] = (), generations: int | None = None,
-            **overrides: Any) -> Problem:
+            map_options: Mapping[str, Any] | None = None, **overrides: Any) -> Problem:
     """A preset on a map, loaded and checked once, as :func:`jaxga.run` checks them (the
     same arguments; a key the preset never reads is refused): pass the
     :class:`Problem` to :class:`jaxga.GA`, :func:`jaxga.run` or :func:`jaxga.sweep` in
-    place of the preset and the map."""
-    return load_problem(preset, grid, corner_rule, variant, sets, overrides, generations)
+    place of the preset and the map.
+
+    ``map_options``: for a map file or a built-in map's name, the options of
+    :func:`jaxga.maps.load_map` (``start``, ``goal``, ``start_world``, ``goal_world``,
+    ``robot_radius``, ``inflate``, ``coarsen``, ``threshold``, ``unknown``, ``fmt``; None
+    values are left out), applied under the corner rule the call names (its
+    ``corner_rule``, else the preset's ``map.corner_rule``, else the map's own), so the
+    preset is read once, as the command line does."""
+    return load_problem(preset, grid, corner_rule, variant, sets, overrides, generations,
+                        map_options=map_options)
 
 
 def _given_problem(given: Problem, grid, corner_rule, variant, sets, overrides,
@@ -122,25 +133,31 @@ def _given_problem(given: Problem, grid, corner_rule, variant, sets, overrides,
 
 
 def load_problem(preset, grid, corner_rule, variant, sets, overrides, generations, *,
-                 check_read: bool = True, check_endpoints: bool = True) -> Problem:
+                 check_read: bool = True, check_endpoints: bool = True,
+                 map_options: Mapping[str, Any] | None = None) -> Problem:
     """The :class:`Problem` of a call, checked (the frame of a map file or
     :class:`~jaxga.maps.MapInfo`: :mod:`jaxga.maps.frame`; None for a bare Grid); a
     :class:`Problem` given as ``preset`` is taken as it is; ``check_read=False`` leaves
     overrides that nothing reads to the caller (:func:`jaxga.compare.compare`),
     ``check_endpoints=False`` the endpoints (a :class:`~jaxga.api.planner.Planner`'s map,
-    whose endpoints each plan gives)."""
+    whose endpoints each plan gives); ``map_options`` as for :func:`problem`."""
 
     check_environment()  # a bad $JAXGA_THREEFRY, which `import jaxga` does not refuse
     check_jax_settings()  # 64-bit mode, jit disabled
     check_platform()
+    map_options = {k: v for k, v in (map_options or {}).items() if v is not None}
+    if map_options and (isinstance(preset, Problem) or not isinstance(grid, (str, PathLike))):
+        raise ParameterError("map_options apply to a map file or a built-in map's name, "
+                             "not to a loaded map or a Problem: load it with them instead")
     if isinstance(preset, Problem):
         return _given_problem(preset, grid, corner_rule, variant, sets, overrides,
                               generations)
     if grid is None:
         raise ParameterError("a map is needed: give a Grid, a map file or a built-in map "
                              "name (or a jaxga.problem(...) in place of the preset)")
-    map_name, frame = "grid", None
+    map_name, frame, info = "grid", None, None
     if isinstance(grid, MapInfo):  # a loaded map that keeps its name (and its endpoints)
+        info = grid
         grid, map_name, frame = grid.grid, grid.name, grid.frame
     sets = as_sets(sets)
     ov: dict[str, Any] = {k.replace("__", "."): v
@@ -181,14 +198,15 @@ def load_problem(preset, grid, corner_rule, variant, sets, overrides, generation
         if corner_rule is not None:
             grid = grid.replace(corner_rule=corner_rule)
     else:
-        info = load_map_info(grid, corner_rule=configured_rule(corner_rule, config))
+        info = load_map_info(grid, corner_rule=configured_rule(corner_rule, config),
+                             **map_options)
         grid, map_name, frame = info.grid, info.name, info.frame
     try:
         if check_endpoints:
             grid.check_endpoints()
     except EndpointError as e:
         raise EndpointError(f"{e}{_on_the_map(frame, grid)}") from None
-    return Problem(config, grid, map_name, frame)
+    return Problem(config, grid, map_name, frame, info)
 
 
 def _on_the_map(frame: MapFrame | None, grid: Grid) -> str:

@@ -290,7 +290,7 @@ def _plan_sweep(preset, grid, points, seeds, generations, corner_rule, variant, 
     the algorithm at the sweep's capacity, each point's parameters and the exact optimum
     of its own fitness (``references``), and the seeds (memory checked)."""
     with timeline.phase("load"):
-        config, map_grid, map_name, frame = load_problem(
+        config, map_grid, map_name, frame, _ = load_problem(
             preset, grid, corner_rule, variant, sets, overrides, generations)
     configs = _point_configs(config, points)
     capacity = checked_capacity(configs, population_capacity)
@@ -701,7 +701,7 @@ def check_run(preset: str | Config, grid: Grid | str, **options: Any) -> Config:
     named = {k: overrides.pop(k) for k in RUN_OPTIONS if k in overrides}
     _check_call_options(named.get("progress"), named.get("chunks", 1),
                         named.get("size_class"), named.get("any_angle_budget", "auto"))
-    config, grid, _, _ = load_problem(preset, grid, named.get("corner_rule"),
+    config, grid, *_ = load_problem(preset, grid, named.get("corner_rule"),
                                       named.get("variant"), named.get("sets", ()), overrides,
                                       named.get("generations"))
     (config,) = _point_configs(config, [{}])

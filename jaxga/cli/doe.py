@@ -6,7 +6,7 @@ import argparse
 import sys
 
 from jaxga.api.parallel import add_parallel_arguments
-from jaxga.cli.options import add_preset_arguments, map_for_run, not_lead, write_json
+from jaxga.cli.options import add_preset_arguments, not_lead, problem_for_run, write_json
 from jaxga.core.errors import JaxgaError
 from jaxga.doe import AGACD_TABLE3, DESIGNS, RESPONSE_ALIASES, RESPONSES, Factor, run_doe
 from jaxga.plot import (
@@ -31,10 +31,9 @@ def cmd_doe(args: argparse.Namespace) -> int:
             print(f"design points done: {done}/{total}", file=sys.stderr, flush=True)
 
     result = run_doe(
-        args.preset, map_for_run(args), factors, design=args.design, seeds=args.seeds,
-        response=args.response, direction=args.direction, generations=args.generations,
-        corner_rule=args.corner_rule, variant=args.variant, sets=args.set or (),
-        checkpoint=args.checkpoint, block=args.block, progress=progress,
+        problem_for_run(args), None, factors, design=args.design, seeds=args.seeds,
+        response=args.response, direction=args.direction, checkpoint=args.checkpoint,
+        block=args.block, progress=progress,
     )
     if not_lead(f"{len(result.coded)} design points x {len(result.seeds)} seeds",
                  result.timing["total_s"]):

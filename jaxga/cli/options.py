@@ -13,6 +13,7 @@ import numpy as np
 
 from jaxga import export
 from jaxga.api import configured_rule, parallel
+from jaxga.api.problem import Problem, problem
 from jaxga.config.presets import load_preset
 from jaxga.core.errors import JaxgaError, ParameterError
 from jaxga.core.grid import CORNER_RULES, check_corner_rule
@@ -263,12 +264,16 @@ def not_lead(what: str, seconds: float) -> bool:
     return True
 
 
-def map_for_run(args: argparse.Namespace):
-    """The map of the command line loaded with its options (endpoints, inflation,
-    coarsening) under the run's corner rule (the preset's unless --corner-rule), as a
-    MapInfo: the results keep the map's name and frame (cells, metres)."""
+def problem_for_run(args: argparse.Namespace) -> Problem:
+    """The problem of the command line, loaded and checked once (:func:`jaxga.problem`):
+    the preset with its variant, ``--set`` values and ``--generations``; the map with its
+    options (endpoints, inflation, coarsening) under the run's corner rule (the preset's
+    unless --corner-rule). Its ``info`` keeps the map's name, frame (cells, metres) and
+    layers."""
 
-    return load_info(args, args.corner_rule or preset_rule(args))
+    return problem(args.preset, args.map, corner_rule=args.corner_rule,
+                   variant=args.variant, sets=args.set or (),
+                   generations=args.generations, map_options=map_options(args))
 
 
 def metres_text(length: float, frame) -> str:

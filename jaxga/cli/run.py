@@ -22,8 +22,8 @@ from jaxga.cli.options import (
     EXIT_NO_PATH,
     SIZE_CLASS_HELP,
     add_preset_arguments,
-    map_for_run,
     not_lead,
+    problem_for_run,
     snap_notes,
     write_json,
 )
@@ -132,15 +132,15 @@ def run_and_report(args: argparse.Namespace, timeline: Timeline,
         return timeline.phase(name)
 
     with phase("load"):
-        info = map_for_run(args)
+        problem = problem_for_run(args)
+    info = problem.info
     if args.path_out and (info.frame is None or not info.frame.has_metres):
         raise JaxgaError(f"cannot write --path-out {args.path_out}: the map has no resolution "
                          "and origin (a ROS map_server .yaml has them); --json has the path "
                          "in cells")
     result = api.run(
-        args.preset, info, seeds=args.seeds, generations=args.generations,
-        corner_rule=args.corner_rule, variant=args.variant, sets=args.set or (),
-        progress=progress, population_capacity=args.population_capacity,
+        problem, seeds=args.seeds, progress=progress,
+        population_capacity=args.population_capacity,
         size_class=args.size_class,
         any_angle_budget=0.0 if args.no_reference else None if args.exact_optimum else "auto",
     )

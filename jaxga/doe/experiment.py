@@ -70,7 +70,7 @@ def run_doe(
     response, direction = checked_response(response, direction)
     plan = plan_doe(preset, grid, factors, design, seeds, generations, corner_rule, variant,
                  sets, checkpoint, block, progress, overrides)
-    results, reasons, sweep_s, compile_s = _run_points(plan, preset, grid, progress)
+    results, reasons, sweep_s, compile_s = _run_points(plan, progress)
     all_responses = {k: np.stack([r[k] for r in results]) for k in results[0]}
     if not np.any(all_responses["success"]):  # nothing to fit: say why
         raise NoPathError("no seed of any design point found a path"
@@ -78,7 +78,7 @@ def run_doe(
     coef = fit_linear(plan.coded, point_means(all_responses[response]))
     best, predicted = predicted_best(coef, direction)
     t0 = time.perf_counter()
-    confirm, confirm_compile_s = run_confirmation(plan, preset, grid, best)
+    confirm, confirm_compile_s = run_confirmation(plan, best)
     confirm_s = time.perf_counter() - t0
     return DoeResult(
         preset=plan.config["name"], map_name=plan.map_name, design=design,
@@ -93,7 +93,7 @@ def run_doe(
     )
 
 
-def _run_points(plan: DoePlan, preset, grid, progress) -> tuple:
+def _run_points(plan: DoePlan, progress) -> tuple:
     """Every design point's per-seed responses, ``block`` points per compiled call, the
     points a checkpoint holds read instead of run: ``(responses per point, reasons the
     seeds found no path, sweep seconds, compile seconds)``."""
@@ -116,8 +116,8 @@ def _run_points(plan: DoePlan, preset, grid, progress) -> tuple:
             continue
         padded = idx + [idx[-1]] * (plan.block - len(idx))  # same run count in every call
         t0 = time.perf_counter()
-        out = api.sweep(preset, grid, [plan.points[q] for q in padded], plan.seeds,
-                        **plan.common)
+        out = api.sweep(plan.problem, None, [plan.points[q] for q in padded], plan.seeds,
+                        population_capacity=plan.capacity)
         sweep_s += time.perf_counter() - t0
         compile_s += out[0].timing["compile_s"]
         for q, res in zip(idx, out):

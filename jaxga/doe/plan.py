@@ -15,6 +15,7 @@ import numpy as np
 import jaxga
 from jaxga import api
 from jaxga.api import checked_capacity, load_problem, seed_list
+from jaxga.api.problem import Problem
 from jaxga.config.presets import as_sets, overridden_keys
 from jaxga.config.schema import Config
 from jaxga.core.errors import ParameterError
@@ -42,7 +43,8 @@ def checked_response(response: Any, direction: str | None) -> tuple[str, str]:
 class DoePlan:
     """A designed experiment, checked before any point runs: its configuration and map,
     the design (coded levels and the points' settings), the seeds, the points per
-    compiled call, the options every call shares and the checkpoint."""
+    compiled call, the checked problem every call runs (:func:`jaxga.problem`: the preset,
+    its overrides and the map, loaded once) and the checkpoint."""
 
     config: Config
     loaded: Grid
@@ -53,7 +55,7 @@ class DoePlan:
     capacity: int
     block: int
     seeds: np.ndarray
-    common: dict
+    problem: Problem
     checkpoint: Checkpoint | None
 
 
@@ -77,8 +79,8 @@ def plan_doe(preset, grid, factors, design, seeds, generations, corner_rule, var
             block = as_integer(block)
         except TypeError:
             raise ParameterError(f"block must be an integer >= 1, got {block!r}") from None
-    config, loaded, map_name, _ = load_problem(preset, grid, corner_rule, variant, sets,
-                                               overrides, generations)
+    problem = load_problem(preset, grid, corner_rule, variant, sets, overrides, generations)
+    config, loaded, map_name = problem.config, problem.grid, problem.map_name
     check_factors(config, factors)
     overridden = overridden_keys(overrides, sets)
     both = [f.name for f in factors if f.name in overridden]
@@ -100,8 +102,6 @@ def plan_doe(preset, grid, factors, design, seeds, generations, corner_rule, var
     largest, _ = build(config.override({"population.size": capacity}), loaded)
     seed_arr = seed_list(seeds, lambda n: api.check_result_memory(n * block, largest))
     shortest_path(loaded).raise_if_missing()  # nothing to fit: say why (NoPathError)
-    common = dict(generations=generations, corner_rule=corner_rule, variant=variant,
-                  sets=tuple(sets), population_capacity=capacity, **overrides)
     ckpt = None
     if checkpoint is not None:
         ckpt = Checkpoint(checkpoint, {
@@ -118,4 +118,4 @@ def plan_doe(preset, grid, factors, design, seeds, generations, corner_rule, var
             "capacity": capacity,
         })
     return DoePlan(config, loaded, map_name, factors, coded, points, capacity, block,
-                    seed_arr, common, ckpt)
+                    seed_arr, problem, ckpt)

@@ -609,9 +609,10 @@ def test_jaxga_warnings_are_one_line_like_its_errors(capsys, monkeypatch):
 
 
 def test_scenario_reaches_run_after_the_devices_are_configured(monkeypatch, capsys):
-    """`jaxga run --scenario N`: the map reaches jaxga.run as the named map with the
-    problem's endpoints, loaded only after the devices and processes are configured
-    (loading a map starts JAX, after which neither can change)."""
+    """`jaxga run --scenario N`: the map reaches jaxga.run in the problem the command line
+    checked once (:func:`jaxga.problem`), as the named map with the scenario's endpoints,
+    loaded only after the devices and processes are configured (loading a map starts JAX,
+    after which neither can change)."""
     import jaxga.api
     import jaxga.cli.entry as cli
     from jaxga.maps import MapInfo, builtin_scenarios
@@ -621,8 +622,8 @@ def test_scenario_reaches_run_after_the_devices_are_configured(monkeypatch, caps
     class Stop(Exception):
         pass
 
-    def fake_run(preset, grid, **kwargs):
-        seen["grid"] = grid
+    def fake_run(problem, grid=None, **kwargs):
+        seen["problem"], seen["grid"] = problem, grid
         raise Stop
 
     real_apply = cli.apply_scenario
@@ -635,11 +636,48 @@ def test_scenario_reaches_run_after_the_devices_are_configured(monkeypatch, caps
               "--quiet"])
     assert calls == ["devices", "scenario"]
     problem = builtin_scenarios("maze-32-32-2")[4]
-    info = seen["grid"]
+    assert isinstance(seen["problem"], jaxga.Problem) and seen["grid"] is None
+    info = seen["problem"].info
     assert isinstance(info, MapInfo) and info.name == "maze-32-32-2"
+    assert seen["problem"].grid is info.grid and seen["problem"].map_name == info.name
     assert (info.grid.start_xy, info.grid.goal_xy) == (problem.start, problem.goal)
     assert info.grid.corner_rule == "strict"  # the map's own rule, as without --scenario
     capsys.readouterr()
+
+
+def test_run_reads_the_preset_once_and_hands_jaxga_run_the_checked_problem(monkeypatch):
+    """`jaxga run` builds the problem once (:func:`jaxga.problem`, the map loaded under the
+    preset's corner rule): the preset is read and checked one time, and jaxga.run gets
+    that value (it loads nothing again)."""
+    import jaxga.api
+    import jaxga.api.problem as problem_module
+    import jaxga.cli.options as options_module
+
+    reads, seen = [], {}
+    real_load = problem_module.load_preset
+
+    def counted(*args, **kwargs):
+        reads.append(args)
+        return real_load(*args, **kwargs)
+
+    class Stop(Exception):
+        pass
+
+    def fake_run(problem, grid=None, **kwargs):
+        seen.update(problem=problem, grid=grid, options=kwargs)
+        raise Stop
+
+    monkeypatch.setattr(problem_module, "load_preset", counted)
+    monkeypatch.setattr(options_module, "load_preset", counted)
+    monkeypatch.setattr(jaxga.api, "run", fake_run)
+    with pytest.raises(Stop):
+        main(["run", "--preset", "sga", "--map", "classic_ga_gapp3_20x20", "--seeds", "2",
+              "--generations", "3", "--set", "map.corner_rule=strict", "--quiet"])
+    assert len(reads) == 1
+    problem = seen["problem"]
+    assert seen["grid"] is None and "preset" not in seen["options"]
+    assert problem.config["generations"] == 3
+    assert problem.grid.corner_rule == "strict" == problem.info.grid.corner_rule
 
 
 def test_a_map_over_the_size_limit_is_one_line_and_coarsen_plans_on_it(tmp_path, capsys,

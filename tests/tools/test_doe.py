@@ -650,18 +650,20 @@ def test_table_headers_tell_the_factors_apart():
 
 
 def test_one_set_string_is_one_set(monkeypatch):
-    """``sets="mutation.probability=0.5"`` is one override (it was split into letters)."""
+    """``sets="mutation.probability=0.5"`` is one override (it was split into letters), in
+    the problem every design point's sweep runs (checked once, :func:`jaxga.problem`)."""
     seen = {}
 
     def fake_sweep(preset, grid, points, seeds, **options):
-        seen.update(options)
+        seen.update(problem=preset, grid=grid)
         raise KeyboardInterrupt
 
     monkeypatch.setattr(jaxga.api, "sweep", fake_sweep)
     with pytest.raises(KeyboardInterrupt):
         run_doe("sga", MAP, [Factor("crossover.probability", (0.5, 0.6, 0.7))], "L9",
                 seeds=1, generations=2, sets="mutation.probability=0.5")
-    assert seen["sets"] == ("mutation.probability=0.5",)
+    assert isinstance(seen["problem"], jaxga.Problem) and seen["grid"] is None
+    assert seen["problem"].config["mutation.probability"] == 0.5
 
 
 def test_a_checkpoint_that_is_a_file_is_named(monkeypatch, tmp_path):
