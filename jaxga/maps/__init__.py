@@ -20,19 +20,16 @@ from jaxga.maps.builtin import (
     default_corner_rule,
     scenario_path,
 )
-from jaxga.maps.generators import maze_map, random_map, rectangles_map, rooms_map
-from jaxga.maps.loaders import (
+from jaxga.maps.formats import (
     FORMATS,
-    MapInfo,
     detect_format,
-    load_map,
-    load_map_info,
-    map_name,
     parse_01,
     parse_ascii,
     parse_movingai,
     save_map,
 )
+from jaxga.maps.generators import maze_map, random_map, rectangles_map, rooms_map
+from jaxga.maps.loaders import MapInfo, load_map, load_map_info, map_name
 from jaxga.maps.preprocess import (
     coarsen,
     coarsen_blocked,

@@ -1,29 +1,13 @@
-"""Read and write grid maps: 0/1 text, Moving AI ``.map``, ASCII art, PNG images and ROS
-``map_server`` maps (YAML + image).
+"""Load a grid map, a file or a built-in map, as a :class:`jaxga.Grid`, with the options
+that change it on the way: endpoints (in cells or, on a ROS map, in metres), the corner
+rule, coarsening, inflation by cells or by a robot's radius, and a ROS map's unknown cells.
 
 Every loader returns a :class:`jaxga.Grid` in the library's convention (docs/maps.md):
-``blocked[y, x]`` with ``y = 0`` the **bottom** row. The file formats differ in which
-row comes first:
-
-* ``"01"`` - ``0``/``1`` per cell (``1`` = obstacle), separated by spaces, tabs or
-  commas or by nothing (``0 1 0`` or ``010``). **File line 1 is row y = 0, the
-  bottom**, as in the classic GA maps and the papers' matrices.
-* ``"movingai"`` - header ``type octile`` / ``height H`` / ``width W`` / ``map``, then H
-  rows of W characters; ``.`` ``G`` ``S`` passable, ``@`` ``O`` ``T`` ``W`` blocked.
-  **The first map row is the top** (Moving AI convention); it is flipped.
-* ``"ascii"`` - ASCII art: ``.`` free, ``#`` or ``@`` blocked, at most one ``S``
-  (start) and one ``G`` (goal), both free cells. **The first text line is the top
-  row**, as a human draws it; it is flipped.
-* ``"png"`` - an image: a pixel whose luminance (ITU-R BT.601 luma, 0 black to 1 white)
-  is below ``threshold`` (default 0.5, ``load_map(..., threshold=)``, ``--threshold``)
-  is blocked; transparent pixels count as white (free). **The image's top row is the
-  top of the map**; it is flipped. A robot's map with unknown (grey) areas is better
-  loaded as a ROS map, which keeps unknown apart from free.
-* ``"ros"`` - a ROS ``map_server`` YAML file (``.yaml``/``.yml``) and the image it names
-  (:mod:`jaxga.maps.ros`: ``resolution``, ``origin``, ``negate``, ``occupied_thresh``,
-  ``free_thresh``, ``mode``). Occupied cells are blocked, unknown ones too unless
-  ``unknown="free"``. :attr:`MapInfo.ros` keeps the metadata: metres per cell and the
-  origin, for world coordinates (``start_world=``, ``goal_world=``).
+``blocked[y, x]`` with ``y = 0`` the **bottom** row. The files are read by the readers of
+:mod:`jaxga.maps.formats` (0/1 text, Moving AI ``.map``, ASCII art, images and ROS
+``map_server`` maps), which flip the formats whose first row is the top.
+:attr:`MapInfo.ros` keeps a ROS map's metadata: metres per cell and the origin, for world
+coordinates (``start_world=``, ``goal_world=``).
 
 The format is chosen from the file's content and extension (see :func:`detect_format`)
 unless ``fmt=`` names it. Anything malformed - a missing or empty file, ragged rows, an
@@ -46,7 +30,6 @@ from __future__ import annotations
 
 import dataclasses
 import inspect
-import io
 import math
 import os
 import types
@@ -57,19 +40,22 @@ import numpy as np
 
 from jaxga.core.errors import EndpointError, MapFormatError
 from jaxga.core.grid import Grid, check_corner_rule, too_large
-from jaxga.core.matplotlib_env import matplotlib_ready
 from jaxga.maps import builtin
 from jaxga.maps.builtin import default_corner_rule
-from jaxga.maps.frame import MapFrame
-from jaxga.maps.inputs import (
-    MAX_READ_COARSEN,
-    YAML_CAP,
-    check_image_data,
-    image_size,
-    map_file_cap,
-    map_file_cap_note,
-    read_input,
+from jaxga.maps.formats import (
+    FORMATS,
+    XY,
+    Source,
+    declared_size,
+    decode_text,
+    detect_format,
+    parse_01,
+    parse_ascii,
+    parse_movingai,
+    parse_png,
+    read_map_bytes,
 )
+from jaxga.maps.frame import MapFrame
 from jaxga.maps.preprocess import check_coarse_endpoints, coarsen_blocked, inflate_blocked
 from jaxga.maps.ros import (
     RosMap,
@@ -82,36 +68,12 @@ from jaxga.maps.ros import (
 )
 
 __all__ = [
-    "FORMATS",
     "MapInfo",
     "MapLayers",
-    "detect_format",
     "load_map",
     "load_map_info",
     "map_name",
-    "parse_01",
-    "parse_ascii",
-    "parse_movingai",
-    "save_map",
 ]
-
-FORMATS: tuple[str, ...] = ("01", "movingai", "ascii", "png", "ros")
-"""The map formats :func:`load_map` reads and :func:`save_map` writes."""
-
-MOVINGAI_PASSABLE = frozenset(".GS")
-MOVINGAI_BLOCKED = frozenset("@OTW")
-ASCII_FREE = frozenset(".SG")
-ASCII_BLOCKED = frozenset("#@")
-
-_PNG_MAGIC = b"\x89PNG\r\n\x1a\n"
-IMAGE_SUFFIXES = (".png", ".pgm", ".ppm", ".pbm", ".bmp", ".gif", ".jpg", ".jpeg", ".tif",
-                  ".tiff")
-"""Image files read as ``"png"`` maps (thresholded luminance; Pillow reads the others)."""
-_ZERO_ONE = frozenset("01")
-_SEPARATORS = frozenset(" \t,")
-
-Source = str | os.PathLike
-XY = tuple[int, int]
 
 
 @dataclasses.dataclass(frozen=True)
@@ -298,13 +260,13 @@ def load_map_info(source: Source, **options: Any) -> MapInfo:
     bare_name = isinstance(source, str) and not is_builtin and Path(source).name == source
     factor = 1 if o.coarsen is None else _coarsen_factor(o.coarsen)
     is_yaml = o.fmt == "ros" or (o.fmt is None and path.suffix.lower() in (".yaml", ".yml"))
-    raw = _read_bytes(path, label, builtin_hint=bare_name and not Path(source).suffix,
+    raw = read_map_bytes(path, label, builtin_hint=bare_name and not Path(source).suffix,
                       yaml=is_yaml, coarsen=factor)
     kind = o.fmt or detect_format(path, raw)
     _check_options_apply(kind, label, threshold=o.threshold, unknown=o.unknown,
                          robot_radius=o.robot_radius, start_world=o.start_world,
                          goal_world=o.goal_world)
-    size = _declared_size(raw, kind)
+    size = declared_size(raw, kind)
     if size is not None:  # refuse a map too large from its header (decision 021)
         w0, h0 = size
         message = too_large(-(-w0 // factor), -(-h0 // factor))
@@ -313,7 +275,7 @@ def load_map_info(source: Source, **options: Any) -> MapInfo:
     ros = None
     unknown_cells = None
     if kind == "png":
-        blocked = _parse_png(path, label, 0.5 if o.threshold is None else o.threshold, raw)
+        blocked = parse_png(path, label, 0.5 if o.threshold is None else o.threshold, raw)
         file_start = file_goal = None
     elif kind == "ros":
         ros = read_ros_yaml(path, label, data=raw)
@@ -322,7 +284,7 @@ def load_map_info(source: Source, **options: Any) -> MapInfo:
         unknown_cells = np.ascontiguousarray((occ == -1)[::-1])
         file_start = file_goal = None
     else:
-        text = _decode(raw, label)
+        text = decode_text(raw, label)
         if kind == "movingai":
             blocked = parse_movingai(text, label)
             file_start = file_goal = None
@@ -424,304 +386,7 @@ def _inflated(blocked: np.ndarray, ros: RosMap | None, cells: float | None,
     return out
 
 
-def detect_format(path: Source, raw: bytes | None = None) -> str:
-    """Guess a map file's format from its content and extension.
-
-    PNG signature or an image extension (:data:`IMAGE_SUFFIXES`: ``.png``, ``.pgm``,
-    ...) -> ``"png"``; ``.yaml``/``.yml`` -> ``"ros"``;
-    ``.map`` extension or a first
-    non-blank line starting with ``type`` -> ``"movingai"``; a first non-blank line
-    starting with ``0`` or ``1`` -> ``"01"``; anything else -> ``"ascii"``
-    (whose parser then reports any unknown character). ``raw`` is the file content if
-    already read.
-    """
-    p = Path(os.fspath(path))
-    if raw is None:
-        raw = _read_bytes(p, str(p), coarsen=MAX_READ_COARSEN)
-    suffix = p.suffix.lower()
-    if raw.startswith(_PNG_MAGIC) or suffix in IMAGE_SUFFIXES:
-        return "png"
-    if suffix in (".yaml", ".yml"):
-        return "ros"
-    if suffix == ".map":
-        return "movingai"
-    first = ""
-    for line in raw.decode("utf-8-sig", errors="replace").splitlines():  # BOM too
-        if line.strip():
-            first = line.strip()
-            break
-    if first.split(maxsplit=1)[:1] == ["type"]:
-        return "movingai"
-    if first[:1] in _ZERO_ONE:  # the 0/1 parser reports any other character
-        return "01"
-    return "ascii"
-
-
-# -------------------------------------------------------------------------- parsers
-def parse_01(text: str, label: str = "<text>") -> np.ndarray:
-    """Parse 0/1 text (file line 1 = row y = 0, the bottom); return ``bool[H, W]``.
-
-    Cells are ``0`` (free) or ``1`` (obstacle), separated by spaces, tabs or commas, or
-    written without separators (``0101``). Leading and trailing blank lines are ignored.
-    ``label`` names the file in error messages.
-    """
-    rows: list[list[bool]] = []
-    for lineno, line in _body_lines(text, label):
-        if any(c in _SEPARATORS for c in line):
-            tokens = line.replace(",", " ").split()
-            for col, tok in enumerate(tokens, 1):
-                if tok not in ("0", "1"):
-                    raise MapFormatError(
-                        f"{label}: line {lineno}, cell {col}: expected 0 or 1, got {tok!r}"
-                    )
-        else:
-            tokens = list(line)
-            for col, tok in enumerate(tokens, 1):
-                if tok not in _ZERO_ONE:
-                    raise MapFormatError(
-                        f"{label}: line {lineno}, column {col}: expected 0 or 1, got {tok!r}"
-                    )
-        rows.append([t == "1" for t in tokens])
-        _check_ragged(rows, lineno, label)
-    return np.array(rows, dtype=bool)
-
-
-def parse_movingai(text: str, label: str = "<text>") -> np.ndarray:
-    """Parse a Moving AI ``.map`` (row 0 = top) and return ``bool[H, W]`` with row 0 = bottom.
-
-    ``.``, ``G`` and ``S`` (swamp) are passable; ``@``, ``O``, ``T`` (trees) and ``W``
-    (water) are blocked (https://movingai.com/benchmarks/formats.html). The header must be
-    ``type octile``, ``height H``, ``width W`` (in any order) and then the line ``map``.
-    """
-    lines = text.splitlines()
-    header: dict[str, int | str] = {}
-    i = 0
-    while True:
-        while i < len(lines) and not lines[i].strip():
-            i += 1
-        if i == len(lines):
-            missing = [k for k in ("type", "height", "width") if k not in header]
-            what = f"header line(s) {', '.join(missing)} and " if missing else ""
-            raise MapFormatError(f"{label}: missing {what}the 'map' line of a Moving AI map")
-        words = lines[i].split()
-        lineno = i + 1
-        i += 1
-        key = words[0].lower()
-        if key == "map" and len(words) == 1:
-            break
-        if key not in ("type", "height", "width") or len(words) != 2:
-            raise MapFormatError(
-                f"{label}: line {lineno}: unexpected header line {lines[i - 1].strip()!r} "
-                "(a Moving AI map starts with 'type octile', 'height H', 'width W', 'map')"
-            )
-        if key in header:
-            raise MapFormatError(f"{label}: line {lineno}: duplicate header line {key!r}")
-        if key == "type":
-            if words[1] != "octile":
-                raise MapFormatError(
-                    f"{label}: line {lineno}: unsupported map type {words[1]!r} (expected 'octile')"
-                )
-            header[key] = words[1]
-        else:
-            try:
-                value = int(words[1])
-            except ValueError:
-                value = 0
-            if value < 1:
-                raise MapFormatError(
-                    f"{label}: line {lineno}: {key} must be a positive integer, got {words[1]!r}"
-                )
-            header[key] = value
-    missing = [k for k in ("type", "height", "width") if k not in header]
-    if missing:
-        raise MapFormatError(
-            f"{label}: Moving AI header is missing {', '.join(missing)} before the 'map' line"
-        )
-    h, w = int(header["height"]), int(header["width"])
-    body = lines[i:]
-    while body and not body[-1].strip():
-        body.pop()
-    if len(body) < h:
-        raise MapFormatError(f"{label}: header says height {h} but the file has {len(body)} rows")
-    if len(body) > h:
-        raise MapFormatError(
-            f"{label}: line {i + h + 1}: header says height {h} but the file has {len(body)} rows"
-        )
-    out = np.zeros((h, w), dtype=bool)
-    allowed = MOVINGAI_PASSABLE | MOVINGAI_BLOCKED
-    for r, line in enumerate(body):
-        lineno = i + r + 1
-        row = line.rstrip()
-        if len(row) != w:
-            raise MapFormatError(
-                f"{label}: line {lineno}: row has {len(row)} cells but the header says width {w}"
-            )
-        for col, c in enumerate(row, 1):
-            if c not in allowed:
-                raise MapFormatError(
-                    f"{label}: line {lineno}, column {col}: unknown map character {c!r} "
-                    "(expected one of . G S @ O T W)"
-                )
-        out[h - 1 - r] = [c in MOVINGAI_BLOCKED for c in row]
-    return out
-
-
-def parse_ascii(text: str, label: str = "<text>") -> tuple[np.ndarray, XY | None, XY | None]:
-    """Parse ASCII art; return ``(blocked[H, W], start, goal)`` in the bottom-up convention.
-
-    The **first text line is the top row** of the map, as a human draws it. ``.`` is
-    free, ``#`` and ``@`` are blocked, ``S`` and ``G`` mark the start and the goal (free
-    cells; at most one of each; ``None`` when absent). Trailing whitespace on a line and
-    leading/trailing blank lines are ignored; a space inside a row is an error.
-    """
-    rows: list[list[bool]] = []
-    marks: dict[str, tuple[int, int, int]] = {}  # marker -> (lineno, column, row from top)
-    for lineno, line in _body_lines(text, label):
-        cells = []
-        for col, c in enumerate(line, 1):
-            if c in ("S", "G"):
-                if c in marks:
-                    raise MapFormatError(
-                        f"{label}: line {lineno}, column {col}: a second {c!r} marker "
-                        f"(the first is on line {marks[c][0]})"
-                    )
-                marks[c] = (lineno, col, len(rows))
-            elif c not in ASCII_FREE and c not in ASCII_BLOCKED:
-                raise MapFormatError(
-                    f"{label}: line {lineno}, column {col}: unknown map character {c!r} "
-                    "(expected . # @ S G)"
-                )
-            cells.append(c in ASCII_BLOCKED)
-        rows.append(cells)
-        _check_ragged(rows, lineno, label)
-    h = len(rows)
-    blocked = np.array(rows[::-1], dtype=bool)
-    found = {k: (col - 1, h - 1 - r) for k, (_, col, r) in marks.items()}
-    return blocked, found.get("S"), found.get("G")
-
-
-# -------------------------------------------------------------------------- writers
-def save_map(grid: Grid | np.ndarray, path: Source, *, fmt: str | None = None,
-             resolution: float = 1.0,
-             origin: tuple[float, float, float] = (0.0, 0.0, 0.0)) -> Path:
-    """Write a grid (or a ``bool[H, W]`` array, row 0 = bottom) as a map file.
-
-    ``fmt`` is one of :data:`FORMATS`; by default it follows the extension (``.map`` ->
-    Moving AI, ``.png`` -> PNG, ``.ascii``/``.asc`` -> ASCII art, anything else -> 0/1
-    text). Each format is written in the orientation its loader expects, so
-    ``load_map(save_map(g, p))`` gives back the same ``blocked`` array. ASCII art marks
-    the grid's start ``S`` and goal ``G`` when they are free and distinct, so those
-    round-trip too; the other formats do not store endpoints. ``.yaml``/``.yml`` writes a
-    ROS map as ``map_saver`` does: the YAML (``resolution``, ``origin``, trinary
-    thresholds) and a binary PGM beside it (free 254, occupied 0). Returns the path.
-    """
-    p = Path(os.fspath(path))
-    if fmt is None:
-        fmt = {".map": "movingai", ".png": "png", ".ascii": "ascii", ".asc": "ascii",
-               ".yaml": "ros", ".yml": "ros"}.get(p.suffix.lower(), "01")
-    if fmt not in FORMATS:
-        raise MapFormatError(f"unknown map format {fmt!r}: expected one of {', '.join(FORMATS)}")
-    if isinstance(grid, Grid):
-        blocked = grid.blocked_np()
-        endpoints = (grid.start_xy, grid.goal_xy)
-    else:
-        blocked = np.asarray(grid, dtype=bool)
-        endpoints = None
-    if blocked.ndim != 2 or blocked.size == 0:
-        raise MapFormatError(f"cannot save a map of shape {blocked.shape}: need a 2-D array")
-    h, w = blocked.shape
-    if fmt == "png":
-        matplotlib_ready()
-        import matplotlib.image as mpimg
-
-        mpimg.imsave(p, (~blocked).astype(float), cmap="gray", vmin=0.0, vmax=1.0, origin="lower")
-        return p
-    if fmt == "ros":
-        image = p.with_suffix(".pgm")
-        pixels = np.where(blocked[::-1], 0, 254).astype(np.uint8)
-        image.write_bytes(f"P5\n# CREATOR: jaxga {resolution:.3f} m/pix\n{w} {h}\n255\n"
-                          .encode("ascii") + pixels.tobytes())
-        x0, y0, yaw = (float(v) for v in origin)
-        p.write_text(f"image: {image.name}\nmode: trinary\nresolution: {resolution:.6f}\n"
-                     f"origin: [{x0:.6f}, {y0:.6f}, {yaw:.6f}]\nnegate: 0\n"
-                     "occupied_thresh: 0.65\nfree_thresh: 0.196\n", encoding="utf-8")
-        return p
-    if fmt == "01":
-        lines = [" ".join("1" if b else "0" for b in row) for row in blocked]
-    elif fmt == "movingai":
-        rows = ["".join("@" if b else "." for b in row) for row in blocked[::-1]]
-        lines = ["type octile", f"height {h}", f"width {w}", "map", *rows]
-    else:
-        chars = np.where(blocked, "#", ".").astype("<U1")
-        if endpoints is not None and endpoints[0] != endpoints[1]:
-            for mark, (x, y) in zip("SG", endpoints, strict=True):
-                if not blocked[y, x]:
-                    chars[y, x] = mark
-        lines = ["".join(row) for row in chars[::-1]]
-    p.write_text("\n".join(lines) + "\n", encoding="utf-8")
-    return p
-
-
 # -------------------------------------------------------------------------- helpers
-def _read_bytes(path: Path, label: str, builtin_hint: bool = False, *, yaml: bool = False,
-                coarsen: int = 1) -> bytes:
-    """A map file's bytes (:func:`jaxga.maps.inputs.read_input`: a regular file of at most
-    :data:`~jaxga.maps.inputs.YAML_CAP` bytes for a ROS map's YAML, else
-    :func:`~jaxga.maps.inputs.map_file_cap` for a map coarsened ``coarsen x coarsen``);
-    every failure one line naming the file."""
-    if yaml:
-        cap, note = YAML_CAP, "a map_server YAML holds a few lines of metadata"
-    else:
-        cap, note = map_file_cap(coarsen), map_file_cap_note(coarsen)
-    try:
-        raw = read_input(path, cap, what="map file", label=label, note=note)
-    except FileNotFoundError:
-        hint = ""
-        if builtin_hint:
-
-            hint = f" and it is not a built-in map ({', '.join(builtin.builtin_names())})"
-        raise MapFormatError(f"{label}: map file not found{hint}") from None
-    except IsADirectoryError:
-        raise MapFormatError(f"{label}: is a directory, not a map file") from None
-    except OSError as e:
-        raise MapFormatError(f"{label}: cannot read map file ({e.strerror or e})") from None
-    if not raw.strip():
-        raise MapFormatError(f"{label}: map file is empty")
-    return raw
-
-
-def _decode(raw: bytes, label: str) -> str:
-    if raw.startswith(_PNG_MAGIC):
-        raise MapFormatError(f"{label}: is a PNG image, not a text map")
-    try:
-        text = raw.decode("utf-8-sig")
-    except UnicodeDecodeError as e:
-        raise MapFormatError(
-            f"{label}: not a text map file (byte {e.start} is not valid UTF-8)"
-        ) from None
-    if "\x00" in text:
-        raise MapFormatError(f"{label}: not a text map file (contains NUL bytes)")
-    first = next((ln.strip() for ln in text.splitlines() if ln.strip()), "")
-    if first.split(maxsplit=1)[:1] == ["version"]:
-        raise MapFormatError(
-            f"{label}: is a Moving AI scenario file, not a map (read it with read_scen)"
-        )
-    return text
-
-
-def _body_lines(text: str, label: str) -> list[tuple[int, str]]:
-    """Non-blank lines (1-based line number, right-stripped), no blank line in between."""
-    lines = [ln.rstrip() for ln in text.splitlines()]
-    numbered = [(n, ln) for n, ln in enumerate(lines, 1) if ln]
-    if not numbered:
-        raise MapFormatError(f"{label}: map file is empty")
-    first, last = numbered[0][0], numbered[-1][0]
-    if len(numbered) != last - first + 1:
-        gap = next(n for n in range(first, last + 1) if not lines[n - 1])
-        raise MapFormatError(f"{label}: line {gap}: blank line inside the map")
-    return numbered
-
-
 def _coarsen_factor(value) -> int:
     if isinstance(value, bool) or not isinstance(value, (int, np.integer)) or value < 1:
         raise MapFormatError(f"coarsen must be a positive integer, got {value!r}")
@@ -762,83 +427,3 @@ def _check_options_apply(kind: str, label: str, *, threshold: float | None,
             raise EndpointError(f"{label}: a {name} in metres needs a map with a resolution "
                                 f"and an origin (a ROS map_server .yaml), and {what} has "
                                 "neither; give it in cells")
-
-
-def _declared_size(raw: bytes, kind: str) -> tuple[int, int] | None:
-    """``(width, height)`` of a map file from its header (an image's, Moving AI) or its
-    first line and line count (0/1 text, ASCII art), without parsing it; None if it cannot
-    be told (the parser then reports what is wrong)."""
-    if kind == "png":
-        return image_size(raw)
-    if kind == "ros":  # the image's size is checked once it is read
-        return None
-    head = raw[:4096].decode("utf-8", errors="replace")
-    if kind == "movingai":
-        dims = {}
-        for line in head.splitlines()[:8]:
-            words = line.split()
-            if len(words) == 2 and words[0].lower() in ("height", "width") \
-                    and words[1].isdigit():
-                dims[words[0].lower()] = int(words[1])
-        return (dims["width"], dims["height"]) if len(dims) == 2 else None
-    lines = [line for line in raw.splitlines() if line.strip()]
-    if not lines:
-        return None
-    first = lines[0].decode("utf-8-sig", errors="replace").strip()
-    width = len(first.replace(",", " ").split()) if any(c in _SEPARATORS for c in first) \
-        else len(first)
-    return width, len(lines)
-
-
-def _check_ragged(rows: list[list[bool]], lineno: int, label: str) -> None:
-    if len(rows) > 1 and len(rows[-1]) != len(rows[0]):
-        raise MapFormatError(
-            f"{label}: line {lineno}: row has {len(rows[-1])} cells but the first row "
-            f"has {len(rows[0])} (ragged rows)"
-        )
-
-
-def _parse_png(path: Path, label: str, threshold: float = 0.5,
-               raw: bytes | None = None) -> np.ndarray:
-    """Threshold an image's luminance (blocked below ``threshold``); image top row -> top
-    of the map (row H-1). ``raw``: the file's bytes, already read (else read here); an
-    image whose pixel data does not match its header is refused first."""
-    matplotlib_ready()
-    import matplotlib.image as mpimg
-
-    if isinstance(threshold, bool) or not isinstance(threshold, (int, float)) or not (
-            0.0 < threshold <= 1.0):
-        raise MapFormatError(f"{label}: the image threshold must be a luminance in (0, 1], "
-                             f"got {threshold!r}")
-    if raw is None:
-        raw = _read_bytes(path, label, coarsen=MAX_READ_COARSEN)
-    check_image_data(raw, label)
-    # matplotlib reads a .png (or a PNG by content) as PNG, anything else through Pillow
-    as_png = path.suffix.lower() == ".png" or raw.startswith(_PNG_MAGIC)
-    try:
-        img = np.asarray(mpimg.imread(io.BytesIO(raw), format="png" if as_png else "pil"))
-    except Exception as e:  # Pillow/matplotlib raise many types for bad images
-        msg = str(e).splitlines()[0] if str(e) else type(e).__name__
-        raise MapFormatError(f"{label}: unreadable image ({msg})") from None
-    if (
-        img.ndim not in (2, 3)
-        or img.size == 0
-        or (img.ndim == 3 and img.shape[2] not in (1, 2, 3, 4))
-    ):
-        raise MapFormatError(f"{label}: unsupported image shape {img.shape}")
-    if np.issubdtype(img.dtype, np.integer):
-        img = img.astype(np.float64) / np.iinfo(img.dtype).max
-    img = img.astype(np.float64)
-    if img.ndim == 2:
-        lum = img
-    else:
-        c = img.shape[2]
-        alpha = img[..., c - 1] if c in (2, 4) else None
-        color = img[..., : (1 if c in (1, 2) else 3)]
-        if color.shape[2] == 3:
-            lum = color @ np.array([0.299, 0.587, 0.114])  # ITU-R BT.601 luma
-        else:
-            lum = color[..., 0]
-        if alpha is not None:  # composite over white: transparent = free
-            lum = lum * alpha + (1.0 - alpha)
-    return np.ascontiguousarray((lum < threshold)[::-1])

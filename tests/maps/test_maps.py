@@ -848,7 +848,7 @@ def test_a_map_over_the_size_limit_is_refused_from_its_header(tmp_path, monkeypa
     for ext in ("png", "txt"):
         path = save_map(b, tmp_path / f"big.{ext}")
         with monkeypatch.context() as m:  # refused before any parser runs
-            m.setattr(loaders, "_parse_png", never)
+            m.setattr(loaders, "parse_png", never)
             m.setattr(loaders, "parse_01", never)
             with pytest.raises(MapFormatError, match=f"map {side} x {side} has 360,000 cells"):
                 load_map(path)
