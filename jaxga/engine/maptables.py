@@ -21,7 +21,8 @@ import jax
 import jax.numpy as jnp
 
 from jaxga.core.grid import Grid
-from jaxga.operators.crossover import compute_free_prefix, step_masks
+from jaxga.operators.column_crossover import compute_free_prefix
+from jaxga.operators.crossover import step_masks
 from jaxga.operators.init import compute_move_tables
 from jaxga.operators.repair import compute_neighbour_masks
 
@@ -42,7 +43,7 @@ class MapTables:
         step_masks: ``int32[H W]``, legal steps as bits
             (:func:`jaxga.operators.crossover.step_masks`).
         free_prefix: free-cell prefix counts of columns and rows
-            (:func:`jaxga.operators.crossover._free_prefix`).
+            (:func:`jaxga.operators.column_crossover.compute_free_prefix`).
     """
 
     nbr: jax.Array

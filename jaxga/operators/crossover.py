@@ -58,10 +58,7 @@ from jaxga.core.geometry import clear, linear_trial
 from jaxga.core.grid import Grid, move_legal
 from jaxga.core.paths import TABLE_MAX_CELLS
 from jaxga.core.paths import position_lookup as _position_lookup
-from jaxga.operators.column_crossover import (
-    column,
-    compute_free_prefix,  # noqa: F401 - jaxga.engine.maptables imports it from here
-)
+from jaxga.operators.column_crossover import column
 from jaxga.operators.joins import (
     accept_children,
     join,

@@ -3,6 +3,8 @@ the user's own ``jit``, ``vmap`` (over keys and over parameters) and ``scan``.""
 
 from __future__ import annotations
 
+from pathlib import Path
+
 import jax
 import jax.numpy as jnp
 import numpy as np
@@ -14,6 +16,7 @@ from jaxga.core.paths import is_continuous
 from tests import canonical
 
 MAP = canonical.MAP
+REPO = Path(__file__).resolve().parents[2]
 SEEDS = [0, 1, 2, 3]
 GENERATIONS = 25
 
@@ -166,3 +169,28 @@ def test_the_drivers_trace_the_pure_cores_own_methods(monkeypatch):
     assert [name for name, _ in called] == ["init_with_stats", "evolve", "finish"]
     for (_, seen), view in zip(called, ("init", "evolve", "finish")):
         assert seen == programs.program_view(algo, view)
+
+
+@pytest.mark.slow
+@pytest.mark.parametrize(("source", "ends"), [
+    ("den312d", None),
+    ("docs/examples/office.yaml", dict(start_world=(-0.55, -0.55), goal_world=(1.85, 1.85),
+                                       robot_radius=0.1)),
+], ids=["65x81", "ros"])
+def test_a_run_of_the_pure_core_is_jaxga_run_on_a_large_map_and_a_ros_map(source, ends):
+    """``GA.run(PRNGKey(s))`` under the user's own ``jit`` and ``vmap`` is seed ``s`` of
+    :func:`jaxga.run` on a map over 64 cells a side (Moving AI's den312d, 65 x 81, a
+    scenario's endpoints) and on a ROS map_server map (docs/examples/office.yaml, a
+    0.1 m robot): one definition of a run, from one checked problem."""
+    if ends is None:
+        scenario = jaxga.maps.builtin_scenarios(source)[40]
+        ends = dict(start=scenario.start, goal=scenario.goal)
+    path = REPO / source if source.endswith(".yaml") else source
+    problem = jaxga.problem("hybrid", path, map_options=ends, population__size=8,
+                            generations=4)
+    ga = jaxga.GA(problem)
+    ref = jaxga.run(problem, seeds=[0, 3])
+    keys = jnp.stack([jax.random.PRNGKey(s) for s in (0, 3)])
+    out = jax.jit(jax.vmap(ga.run, (0, None)))(keys, ga.default_params)
+    assert ref.success.all()
+    assert_seed_for_seed(out, ref)
