@@ -34,11 +34,12 @@ that "before" and "after" are drawn by one tool with one rule:
    traced generation that asks the configuration layer how to call its operators). The
    same for the Python API, ``jaxga.run(preset, map, seeds=2, generations=5)``, in
    another fresh process.
-3. **Drawing** (``--out``): layers as horizontal bands, bottom to top, each module a
-   box labelled with its name and lines; imports as thin grey lines; the main job's
-   hops on top as arrows, thicker for more calls, labelled with their counts (orange:
-   mostly while tracing; blue: outside tracing; red: engine and configuration while
-   tracing). The numbers are in ``--json``.
+3. **Drawing** (``--out``, a 1400-pixel-wide PNG in 256 colours, or SVG): layers as
+   horizontal bands, bottom to top, each module a box labelled with its name and lines;
+   imports as thin grey lines; the command line's hops on top as arrows, thicker for
+   more calls, the busiest labelled with their counts (orange: mostly while tracing;
+   blue: outside tracing; red: engine and configuration while tracing, labelled
+   ``traced/all``). Every number, the API's hops included, is in ``--json``.
 
 The job's modules are imported from the analysed checkout (``PYTHONPATH``), this script
 is not: it needs only the standard library and Matplotlib.
