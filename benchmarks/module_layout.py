@@ -12,17 +12,20 @@ that "before" and "after" are drawn by one tool with one rule:
    ``import jaxga.a.b`` and ``from jaxga.a import b`` point to the module ``jaxga.a.b``
    where it exists, else to the longest enclosing module (``from jaxga.api import run``:
    ``jaxga.api``); relative imports are resolved against the importing module, as
-   tests/repository/test_layers.py does. Modules are grouped into the layers of
-   docs/architecture.md, bottom to top: ``_batching``, ``core``, ``maps``, ``operators``,
-   ``config``, ``engine``, ``reference``, ``api``, then ``tools`` (the modules directly in
-   ``jaxga/``, the package itself, ``cli/`` and ``doe/``). Reported: modules, edges (one
-   per importing and imported module, self-imports left out; ``if TYPE_CHECKING:``
-   imports counted apart), import cycles (strongly connected groups of more than one
-   module over the edges that run when imported or called; must be none), edges per
-   layer pair, and the largest modules in lines.
+   tests/repository/test_layers.py does. Modules are grouped into the layers that the
+   analysed checkout's own test_layers.py names (``LAYERS``, bottom to top; at 547c6ec
+   ``_batching``, ``core``, ``maps``, ``operators``, ``config``, ``engine``,
+   ``reference``, ``api``, ``tools``): a module's layer is its first folder, and the
+   tools are the other modules (the package itself, its own ``*.py`` files, ``cli/``
+   and ``doe/``). Reported: modules, edges (one per importing and imported module,
+   self-imports left out; ``if TYPE_CHECKING:`` imports counted apart), import cycles
+   (strongly connected groups of more than one module over the edges that run when
+   imported or called; must be none), edges per layer pair, and the largest modules in
+   lines.
 2. **Hops of the main job.** The README's main job (``jaxga run --preset iga_zhu --map
-   classic_ga_gapp3_20x20``, here 2 seeds and 5 generations: its calls do not depend on
-   the sizes) runs in a child process under :func:`sys.setprofile`, compiling cold (a
+   classic_ga_gapp3_20x20``, here 2 seeds and 5 generations: every program it needs is
+   traced, compiled and run once; more seeds or generations call the same programs
+   more often) runs in a child process under :func:`sys.setprofile`, compiling cold (a
    fresh ``$JAXGA_CACHE_DIR``). Every call of a jaxga function whose nearest jaxga caller
    on the stack (frames of JAX, NumPy or the standard library in between are skipped:
    a program traced by ``jax.jit`` is called by the module that handed it to JAX) is in
@@ -63,7 +66,12 @@ ROOT = Path(__file__).resolve().parents[1]
 
 LAYERS = ("_batching", "core", "maps", "operators", "config", "engine", "reference", "api",
           "tools")
-"""Bottom to top, as in docs/architecture.md and tests/repository/test_layers.py."""
+"""Bottom to top, as in docs/architecture.md: the layers of a checkout whose
+tests/repository/test_layers.py cannot be read (:func:`read_layers`)."""
+
+LAYERS_FILE = Path("tests") / "repository" / "test_layers.py"
+"""Where a checkout names its own layers (``LAYERS``), so that each revision is drawn in
+the layers it had."""
 
 MAP = "classic_ga_gapp3_20x20"
 """The README main job's map."""
@@ -81,11 +89,25 @@ def module_name(path: Path, package: Path) -> str:
     return ".".join(parts[:-1] if parts[-1] == "__init__" else parts)
 
 
-def layer(module: str) -> str:
+def read_layers(checkout: Path) -> tuple[str, ...]:
+    """The ``LAYERS`` tuple of the checkout's tests/repository/test_layers.py, read with
+    :mod:`ast`; :data:`LAYERS` where the file or the name is missing."""
+    try:
+        tree = ast.parse((checkout / LAYERS_FILE).read_text())
+    except (OSError, SyntaxError):
+        return LAYERS
+    for node in tree.body:
+        if isinstance(node, ast.Assign) and any(
+                isinstance(t, ast.Name) and t.id == "LAYERS" for t in node.targets):
+            return tuple(ast.literal_eval(node.value))
+    return LAYERS
+
+
+def layer(module: str, layers: tuple[str, ...] = LAYERS) -> str:
     """The layer of a ``jaxga`` module: its first folder when that is a layer, else the
     tools (the package itself, its own ``*.py`` files, ``cli`` and ``doe``)."""
     parts = module.split(".")
-    return parts[1] if len(parts) > 1 and parts[1] in LAYERS else "tools"
+    return parts[1] if len(parts) > 1 and parts[1] in layers else "tools"
 
 
 def _type_checking_nodes(tree: ast.AST) -> set[int]:
@@ -138,11 +160,11 @@ def imported_modules(source: str, module: str, is_package: bool, modules: set[st
                     yield found, kind
 
 
-def import_graph(package: Path) -> dict:
+def import_graph(package: Path, layers: tuple[str, ...] = LAYERS) -> dict:
     """The import graph of the package in folder ``package`` (its ``__init__.py``'s
-    folder): ``modules`` (name -> layer, lines, path), ``edges`` (sorted ``[importer,
-    imported, kind]``, one per pair, the kind that runs first: top before function before
-    typing), and what :func:`summary` reports."""
+    folder) in ``layers`` (bottom to top): ``layers``, ``modules`` (name -> layer, lines,
+    path) and ``edges`` (sorted ``[importer, imported, kind]``, one per pair, the kind
+    that runs first: top before function before typing)."""
     files = sorted(package.rglob("*.py"))
     modules = {module_name(p, package): p for p in files}
     names = set(modules)
@@ -156,10 +178,10 @@ def import_graph(package: Path) -> dict:
             old = edges.get((name, target))
             if old is None or rank[kind] < rank[old]:
                 edges[(name, target)] = kind
-    info = {name: {"layer": layer(name), "lines": len(path.read_text().splitlines()),
+    info = {name: {"layer": layer(name, layers), "lines": len(path.read_text().splitlines()),
                    "path": str(path.relative_to(package.parent))}
             for name, path in modules.items()}
-    return {"modules": info,
+    return {"layers": list(layers), "modules": info,
             "edges": sorted([a, b, k] for (a, b), k in edges.items())}
 
 
@@ -212,16 +234,16 @@ def summary(graph: dict, largest: int = 10) -> dict:
     """The numbers of an :func:`import_graph`: modules, modules per layer, edges (and how
     many run only inside a function or only for type checkers), cycles, edges per layer
     pair (``"from -> to"``) and the ``largest`` modules by lines."""
-    modules, edges = graph["modules"], graph["edges"]
+    modules, edges, layers = graph["modules"], graph["edges"], graph["layers"]
     runtime = [(a, b) for a, b, k in edges if k != "typing"]
     pairs = collections.Counter(f"{modules[a]['layer']} -> {modules[b]['layer']}"
                                 for a, b, _ in edges)
-    order = {name: i for i, name in enumerate(LAYERS)}
+    order = {name: i for i, name in enumerate(layers)}
     found = cycles(modules, runtime)
     return {
         "modules": len(modules),
         "modules_per_layer": {name: sum(m["layer"] == name for m in modules.values())
-                              for name in LAYERS},
+                              for name in layers},
         "lines": sum(m["lines"] for m in modules.values()),
         "edges": len(edges),
         "edges_in_functions": sum(k == "function" for _, _, k in edges),
@@ -377,23 +399,23 @@ def run_child(checkout: Path, kind: str, args) -> dict:
 
 # ------------------------------------------------------------------------------ drawing
 
-def _short(module: str) -> str:
+def _short(module: str, layer_name: str) -> str:
     """A box's label: the name inside its layer (``jaxga.api.runs`` -> ``runs``)."""
     parts = module.split(".")
     if module == "jaxga":
         return "jaxga/__init__"
-    if parts[1] in LAYERS:
+    if parts[1] == layer_name:
         return ".".join(parts[2:]) or f"{parts[1]}/__init__"
     return ".".join(parts[1:])
 
 
-def layout(modules: dict, per_row: int = 11) -> tuple[dict, dict]:
+def layout(modules: dict, layers, per_row: int = 11) -> tuple[dict, dict]:
     """Box centres ``(x, y)`` in a unit-wide frame, and each layer's band ``(y0, y1)``:
     layers bottom to top, a layer's modules in rows of at most ``per_row`` (sorted by
     name, so a subpackage's modules sit together)."""
     pos, bands, y = {}, {}, 0.0
     row_h, gap = 1.0, 0.35
-    for name in LAYERS:
+    for name in layers:
         members = sorted(m for m, info in modules.items() if info["layer"] == name)
         rows = [members[i:i + per_row] for i in range(0, len(members), per_row)] or [[]]
         y0 = y
@@ -420,9 +442,11 @@ def draw(report: dict, out: Path, labelled: int = 24) -> None:
     from matplotlib.patches import FancyArrowPatch, FancyBboxPatch
 
     modules = report["graph"]["modules"]
-    pos, bands = layout(modules)
+    layers = report["graph"]["layers"]
+    pos, bands = layout(modules, layers)
     top = max(y1 for _, y1 in bands.values())
-    inch_per_unit, head, foot = 0.62, 1.0, 0.45  # inches: a band row, title, legend
+    hops = report.get("hops", {}).get("cli")
+    inch_per_unit, head, foot = 0.62, 1.0 if hops else 0.4, 0.45  # a row, title, legend
     fig = plt.figure(figsize=(14.0, head + foot + inch_per_unit * (top + 0.4)), dpi=100)
     height = fig.get_figheight()
     ax = fig.add_axes((0.005, foot / height, 0.99, 1 - (head + foot) / height))
@@ -431,7 +455,7 @@ def draw(report: dict, out: Path, labelled: int = 24) -> None:
     ax.axis("off")
     box_w, box_h = 0.082, 0.56
     shades = ("#f4f4f4", "#e8eef6")
-    for i, name in enumerate(LAYERS):
+    for i, name in enumerate(layers):
         y0, y1 = bands[name]
         ax.add_patch(plt.Rectangle((-0.09, y0 - 0.1), 1.09, y1 - y0 + 0.2,
                                    color=shades[i % 2], zorder=0, lw=0))
@@ -448,7 +472,7 @@ def draw(report: dict, out: Path, labelled: int = 24) -> None:
         ax.add_patch(FancyBboxPatch((x - box_w / 2, y - box_h / 2), box_w, box_h,
                                     boxstyle="round,pad=0.002,rounding_size=0.01",
                                     fc=(shade, shade, 1.0), ec="#445", lw=0.6, zorder=3))
-        label = _short(module)
+        label = _short(module, modules[module]["layer"])
         size = 8 if len(label) <= 15 else 7 if len(label) <= 18 else 6
         behind = {"boxstyle": "square,pad=0.05", "fc": (shade, shade, 1.0), "ec": "none",
                   "alpha": 0.8}  # names stay legible over the arrows
@@ -457,7 +481,6 @@ def draw(report: dict, out: Path, labelled: int = 24) -> None:
         ax.text(x, y - 0.15, f"{lines} lines", ha="center", va="center", fontsize=6.5,
                 color="#555", zorder=8, bbox=behind)
 
-    hops = report.get("hops", {}).get("cli")
     rad = 0.2
     if hops:
         rows = [r for r in hops["pairs"] if r[0] in pos and r[1] in pos]
@@ -506,8 +529,9 @@ def draw(report: dict, out: Path, labelled: int = 24) -> None:
                           label="engine <-> config/registry while tracing (traced/all)")]
     fig.legend(handles=legend, loc="lower left", bbox_to_anchor=(0.01, 0.0), ncol=4,
                fontsize=9, frameon=False,
-               title=f"box: a module, its lines as its shade; arrow: thicker = more calls, "
-                     f"the {labelled} busiest labelled", title_fontsize=9,
+               title="box: a module, its lines as its shade" + (
+                   f"; arrow: thicker = more calls, the {labelled} busiest labelled"
+                   if hops else ""), title_fontsize=9,
                alignment="left")
     out.parent.mkdir(parents=True, exist_ok=True)
     if out.suffix.lower() != ".png":
@@ -526,7 +550,7 @@ def draw(report: dict, out: Path, labelled: int = 24) -> None:
 
 def analyse(checkout: Path, revision: str, args) -> dict:
     """The graph, its summary and (unless ``--no-run``) the hops of the checkout."""
-    graph = import_graph(checkout / "jaxga")
+    graph = import_graph(checkout / "jaxga", read_layers(checkout))
     report = {"revision": revision, "graph": graph, "summary": summary(graph), "hops": {}}
     if not args.no_run:
         report["hops"]["cli"] = run_child(checkout, "cli", args)

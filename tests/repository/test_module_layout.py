@@ -1,5 +1,6 @@
-"""benchmarks/module_layout.py's import graph: right on a package counted by hand, and, on
-jaxga itself, every module in a layer and no import cycle.
+"""benchmarks/module_layout.py's import graph: right on a package counted by hand, in the
+layers the checkout's tests/repository/test_layers.py names, and, on jaxga itself, every
+module in a layer and no import cycle.
 
 Only the :mod:`ast` part is tested (the sources are read, nothing imported); the main
 job's hops and the drawing are the benchmark's own run, not the suite's.
@@ -95,14 +96,28 @@ def test_a_cycle_is_found_and_a_type_checkers_import_makes_none(layout, tmp_path
     assert layout.cycles("abc", [("a", "b"), ("b", "c"), ("a", "c")]) == []
 
 
+def test_the_layers_are_the_checkouts_own(layout, tmp_path):
+    assert layout.read_layers(tmp_path) == layout.LAYERS  # no test_layers.py: the default
+    (tmp_path / layout.LAYERS_FILE).parent.mkdir(parents=True)
+    (tmp_path / layout.LAYERS_FILE).write_text(
+        'import ast\n\nLAYERS = ("core", "engine",\n          "tools")\n"""Bottom to top."""\n')
+    assert layout.read_layers(tmp_path) == ("core", "engine", "tools")
+    graph = layout.import_graph(_write(tmp_path, HAND_MADE), ("core", "engine", "tools"))
+    assert {m: info["layer"] for m, info in graph["modules"].items()
+            if info["layer"] != "tools"} == {
+        "jaxga.core": "core", "jaxga.core.grid": "core", "jaxga.core.paths": "core",
+        "jaxga.engine": "engine", "jaxga.engine.evolution": "engine"}
+
+
 def test_jaxga_has_every_module_in_a_layer_and_no_import_cycle(layout):
     package = ROOT / "jaxga"
-    graph = layout.import_graph(package)
+    layers = layout.read_layers(ROOT)
+    graph = layout.import_graph(package, layers)
     modules = graph["modules"]
     assert len(modules) == len(list(package.rglob("*.py")))
     for name, info in modules.items():
         folder = Path(info["path"]).parts[1]  # jaxga/<folder>/... or jaxga/<file>.py
-        expected = folder if folder in layout.LAYERS else "tools"
+        expected = folder if folder in layers else "tools"
         assert info["layer"] == expected, name
         if expected == "tools":
             assert folder in ("cli", "doe") or folder.endswith(".py"), name
