@@ -117,7 +117,7 @@ PRESETS = ("sga", "imga", "agacd", "iga_zhang", "mpmga", "iga_zhu")
 (``jaxga.config.presets.preset_names()`` lists them alphabetically)."""
 
 PROGRAMS = ("init", "finish", "evolve")
-"""The programs of a program set (``jaxga.api.programs.Programs``), in the order of
+"""The programs of a program set (``jaxga._runtime.programs.Programs``), in the order of
 :func:`xla_seconds_by_program`'s entries."""
 
 
@@ -163,7 +163,7 @@ def cli_run(preset: str, seeds: int):
     import io
 
     from jaxga import api, cli
-    from jaxga.api.compilation_cache import ENV_VAR
+    from jaxga._runtime.compilation_cache import ENV_VAR
 
     os.environ[ENV_VAR] = ""
     got = []

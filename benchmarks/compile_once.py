@@ -73,7 +73,7 @@ def grid_of(spec: str):
 def child(spec: str) -> None:
     import jax
 
-    from jaxga.api.parallel import set_local_devices
+    from jaxga._runtime.parallel import set_local_devices
 
     set_local_devices(int(os.environ["JAXGA_DEVICES"]))  # as the CLI: before JAX starts
 
@@ -81,6 +81,7 @@ def child(spec: str) -> None:
     jax.monitoring.register_event_duration_secs_listener(
         lambda event, secs, **kw: (compiled if event == COMPILE_EVENT else loaded
                                    if event == CACHE_EVENT else []).append(secs))
+    import jaxga._runtime as runtime
     from jaxga import api
     from jaxga.maps import load_map
 
@@ -88,14 +89,14 @@ def child(spec: str) -> None:
     if job["kind"] == "case":
         import gc
 
-        from jaxga.api.size_classes import class_capacity, class_shape
+        from jaxga._runtime.size_classes import class_capacity, class_shape
         from jaxga.api.warmup import open_map
         from jaxga.engine import default_capacity
 
         grid = grid_of(job["map"])
         r = api.run(job["preset"], grid, seeds=job["seeds"], generations=job["generations"],
                     size_class=job["size_class"])
-        stored = sum(p.read for p in gc.get_objects() if isinstance(p, api.programs.Programs))
+        stored = sum(p.read for p in gc.get_objects() if isinstance(p, runtime.programs.Programs))
         size = int(job["map"].split(":")[1])
         if job["size_class"]:  # the open map of the class's size, as warmed
             size = max(class_shape(size, size))

@@ -19,7 +19,7 @@ persistent cache are off. The phases, in order:
    mean lengths. Second, so that a device lent for minutes still says whether it agrees.
 3. **Sweep**: ``jaxga.sweep("sga", ...)`` over 16 values of ``mutation.probability`` x
    1000 seeds (50 generations), through jaxga's own programs and devices
-   (``jaxga.api.programs``: calls of the platform's sizes, ``run_layout``).
+   (``jaxga._runtime.programs``: calls of the platform's sizes, ``run_layout``).
 4. **Throughput** (:func:`throughput`): individual-generations per second of ``sga``
    and ``hybrid`` on 20 x 20, 64 x 64 and 256 x 256 maps, 1k, 10k and 100k runs in ONE
    ``jax.vmap`` call on one device, with each call's compile time and XLA memory. A
@@ -152,10 +152,10 @@ def grid_for(name: str) -> Any:
 
 
 def describe_devices() -> dict:
-    """The devices the runs go over (:func:`jaxga.api.parallel.run_devices`)."""
+    """The devices the runs go over (:func:`jaxga._runtime.parallel.run_devices`)."""
     import jax
 
-    from jaxga.api.parallel import run_devices
+    from jaxga._runtime.parallel import run_devices
 
     devices = run_devices()
     kind = devices[0].device_kind
@@ -176,7 +176,7 @@ def free_device_memory(device: Any) -> tuple[int | None, str]:
         with open("/proc/meminfo", encoding="ascii") as f:
             line = next(x for x in f if x.startswith("MemAvailable:"))
         return int(0.8 * int(line.split()[1]) * 1024), "host"
-    from jaxga.api.memory import physical_memory
+    from jaxga._runtime.memory import physical_memory
 
     total = physical_memory()
     return (None if total is None else total // 2), "host"
@@ -203,7 +203,7 @@ def main_job(settings: dict) -> dict:
     import numpy as np
 
     import jaxga
-    from jaxga.api.timeline import time_line
+    from jaxga._runtime.timeline import time_line
 
     t0 = time.perf_counter()
     kw = {} if settings["main_generations"] is None else {
@@ -224,7 +224,7 @@ def sweep(settings: dict) -> dict:
     import numpy as np
 
     import jaxga
-    from jaxga.api import run_layout
+    from jaxga._runtime.programs import run_layout
 
     t0 = time.perf_counter()
     results = jaxga.sweep(SWEEP_PRESET, MAIN_MAP, [{SWEEP_KEY: p} for p in SWEEP_POINTS],
@@ -762,7 +762,7 @@ def main(argv: list[str] | None = None) -> int:
     # Cold compiles: neither jaxga's program store nor JAX's persistent cache.
     os.environ["JAXGA_CACHE_DIR"] = ""
     os.environ.pop("JAX_COMPILATION_CACHE_DIR", None)
-    import jaxga.api.parallel as par
+    import jaxga._runtime.parallel as par
 
     par.use_all_cores()  # as `jaxga run` does; on a GPU it sizes only the CPU backend
     import jax

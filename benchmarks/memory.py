@@ -4,9 +4,9 @@ For each preset on the papers' 20 x 20 map (paths of 160 cells), with large popu
 (2,000 and 8,000 individuals a run) and 1 or 5 seeds (one call of 4 runs, or one padded
 call of 32 on the CPU), a fresh process runs ``jaxga.run`` and reports its peak resident
 memory (``ru_maxrss``, the compilation included), beside the estimate the run was
-checked against before compiling (:func:`jaxga.api.memory.call_memory`, with the
+checked against before compiling (:func:`jaxga._runtime.memory.call_memory`, with the
 layout the run used) and XLA's own account of the compiled programs, checked before they
-run (:func:`jaxga.api.memory.compiled_peak`). The larger of the two must hold the peak
+run (:func:`jaxga._runtime.memory.compiled_peak`). The larger of the two must hold the peak
 (ratio >= 1) without refusing what fits by far.
 
     python benchmarks/memory.py [--presets sga,imga] [--no-write]
@@ -31,7 +31,8 @@ GENERATIONS = 3
 CHILD = """
 import json, resource, sys
 import jaxga
-from jaxga.api import calls, memory, runs
+from jaxga.api import runs
+from jaxga._runtime import calls, memory
 preset, pop, seeds = sys.argv[1], int(sys.argv[2]), int(sys.argv[3])
 seen, accounts = [], []
 real = calls.fitting_layout
@@ -86,9 +87,9 @@ def main() -> None:
     body = (f"Map {MAP} (paths of 160 cells), {GENERATIONS} generations, a fresh process "
             "per row. runs = runs computed (the call's padding included); peak = the "
             "process's peak resident memory (ru_maxrss, its compilation included); "
-            "model = jaxga.api.memory.call_memory for that layout, checked before "
+            "model = jaxga._runtime.memory.call_memory for that layout, checked before "
             "anything compiles; XLA = XLA's own account of the compiled programs "
-            "(jaxga.api.memory.compiled_peak of Compiled.memory_analysis), checked before "
+            "(jaxga._runtime.memory.compiled_peak of Compiled.memory_analysis), checked before "
             "they run; each must be within half the memory the process may use. ratio = "
             "the larger of the two / peak, which must be at least 1.\n\n"
             + markdown_table(["preset", "population x islands", "seeds", "runs",

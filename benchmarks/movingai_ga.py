@@ -54,9 +54,9 @@ def scenarios(name: str):
 
 def child(spec: str) -> None:
 
-    import jaxga.api.parallel
+    import jaxga._runtime.parallel
 
-    jaxga.api.parallel.use_all_cores()
+    jaxga._runtime.parallel.use_all_cores()
     from jaxga.api import run
     from jaxga.maps import load_map_info
 

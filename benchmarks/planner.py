@@ -93,7 +93,7 @@ def far_pairs(grid, count: int, seed: int = 0) -> list[tuple[tuple[int, int], tu
 
 def exact_any_angle(grid) -> float:
     """The exact any-angle optimum of ``grid``'s problem, without a budget."""
-    from jaxga.api.references import any_angle_references, octile_optimum
+    from jaxga._runtime.references import any_angle_references, octile_optimum
 
     return any_angle_references(grid, octile_optimum(grid), None).optimum
 

@@ -38,7 +38,7 @@ import jax.numpy as jnp
 import numpy as np
 from _results import markdown_table, record
 
-from jaxga.api.programs import FINISH_COMPILER_OPTIONS
+from jaxga._runtime.programs import FINISH_COMPILER_OPTIONS
 from jaxga.config.presets import load_preset
 from jaxga.core.grid import Grid
 from jaxga.core.objectives import path_length

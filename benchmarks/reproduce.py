@@ -52,7 +52,7 @@ row's data (map not the paper's, fitness scale, ...). The map column says which 
 the paper's own map is never available as such; ``classic_ga_gapp3_20x20``,
 ``routeplanning_yangbo_20x20`` and ``acoga_skolayat_G_20x20`` are identified with Zhu's
 Maps 3 and 4 and IMGA's environment 4 only by equal optimal lengths ("inferred"), the
-others are stand-ins. Runs use every core (``jaxga.api.parallel.use_all_cores``; results
+others are stand-ins. Runs use every core (``jaxga._runtime.parallel.use_all_cores``; results
 do not depend on the device count). Prints every table and records them in one
 RESULTS.md section ("Paper reproduction: the five papers' tables beside jaxga") unless
 ``--no-write``.
@@ -77,7 +77,7 @@ import paper_tables as P
 from _results import markdown_table, record
 from zhu_table4 import smoothness as zhu_smoothness
 
-import jaxga.api.parallel
+import jaxga._runtime.parallel
 from jaxga.api import Result, clear_compiled, run
 from jaxga.core.errors import InitialisationWarning
 from jaxga.core.objectives import mpmga_penalty, path_length
@@ -1000,7 +1000,7 @@ def main() -> None:
         ap.error(f"unknown table(s) {', '.join(unknown)}: choose from {', '.join(TABLES)}")
     if args.seeds is not None and args.seeds < 2:
         ap.error("--seeds must be at least 2 (an sd needs two runs)")
-    jaxga.api.parallel.use_all_cores()
+    jaxga._runtime.parallel.use_all_cores()
     load0 = os.getloadavg()
     ctx = Context(seeds=args.seeds)
     t_all = time.perf_counter()

@@ -8,7 +8,7 @@ this runs what a robot user runs, each time in a fresh process, from an EMPTY ca
     jaxga run --preset hybrid --seeds 8 --robot-radius 0.2 --start-world X,Y --goal-world X,Y
 
 * **first run** of each map: the first map compiles everything (cold cache); a later map
-  of a size class already compiled (``jaxga.api.size_classes``) compiles nothing;
+  of a size class already compiled (``jaxga._runtime.size_classes``) compiles nothing;
 * **warm run**: the same command again (fresh process, warm cache);
 * **quality**: success of 8 seeds, median gap of the post-optimised lengths over the
   exact any-angle optimum (computed here without a budget; its time is reported);
@@ -97,7 +97,7 @@ def xy(p: tuple[float, float]) -> str:
 
 def exact_optimum(path: Path, coarsen: int, start, goal) -> tuple[float, float, float]:
     """(exact any-angle optimum, its Euclidean lower bound, seconds) without a budget."""
-    from jaxga.api.references import any_angle_references, octile_optimum
+    from jaxga._runtime.references import any_angle_references, octile_optimum
     from jaxga.maps import load_map_info
 
     grid = load_map_info(path, robot_radius=RADIUS, coarsen=coarsen, start_world=start,
@@ -175,7 +175,7 @@ def main() -> None:
             warm, proc = cli(cmd, cache)
             doc = json.loads(out.read_text())
             shape = doc["frame"]["map_shape"]
-            from jaxga.api.size_classes import class_shape
+            from jaxga._runtime.size_classes import class_shape
 
             cells = (-(-shape[0] // k), -(-shape[1] // k))
             cls = class_shape(*cells)

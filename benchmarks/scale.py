@@ -8,9 +8,9 @@ For each preset on ``classic_ga_gapp3_20x20`` (corner rule free) at the papers' 
 200 generations; ``--generations`` overrides both) and each layout
 
 * ``1 device``: one process, ``--devices 1`` (XLA's default on a CPU);
-* ``1 device per core``: one process, ``jaxga.api.parallel.set_local_devices()`` (the CLI's
+* ``1 device per core``: one process, ``jaxga._runtime.parallel.set_local_devices()`` (the CLI's
   default);
-* ``2 processes``: two processes on loopback (``jaxga.api.parallel.initialize``), one device
+* ``2 processes``: two processes on loopback (``jaxga._runtime.parallel.initialize``), one device
   each, every process computing half of the seeds, gathered on all;
 
 fresh worker processes run the seeds twice: once to compile (or load compiled programs
@@ -43,7 +43,7 @@ PAPER = {"sga": dict(population__size=60, generations=300),
 def worker(preset: str, seeds: int, generations: int | None, devices: int | None,
            coordinator: str | None, process_id: int) -> dict:
     """One layout's measurement in this (fresh) process."""
-    import jaxga.api.parallel as par
+    import jaxga._runtime.parallel as par
 
     par.set_local_devices(devices)
     if coordinator:

@@ -5,7 +5,7 @@
 For every preset and map (the papers' ``classic_ga_gapp3_20x20``, random 25 x 25 and
 50 x 50 maps with 20 % obstacles from corner to corner), the same seeds with the preset's
 own generations, once on the map (``jaxga.run``) and once padded to its size class
-(``size_class=True``, :mod:`jaxga.api.size_classes`), all in one process. Reported:
+(``size_class=True``, :mod:`jaxga._runtime.size_classes`), all in one process. Reported:
 whether every seed gave the same result bit for bit, success rates, mean post-optimised
 lengths and the two-sided Mann-Whitney p-value of the lengths (what the padding may
 change: which paths the seeds find; what it must not: feasibility and the lengths'

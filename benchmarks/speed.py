@@ -51,7 +51,7 @@ from pathlib import Path
 import numpy as np
 from _results import markdown_table, parse_args, peak_rss_bytes, record
 
-from jaxga.api.parallel import cores
+from jaxga._runtime.parallel import cores
 
 SETTINGS = {"20x20": (60, 300), "50x50": (80, 500)}
 HERE = Path(__file__).resolve().parent
@@ -159,7 +159,7 @@ def main() -> None:
     ap.add_argument("--settings", default="20x20,50x50")
     ap.add_argument("--seeds", default="1,100,1000")
     ap.add_argument("--max-generations-many", type=int, default=0)
-    # Default: one XLA host device per core, as jaxga itself runs (jaxga.api.parallel).
+    # Default: one XLA host device per core, as jaxga itself runs (jaxga._runtime.parallel).
     ap.add_argument("--devices", type=int, default=cores())
     ap.add_argument("--baseline-seeds", type=int, default=3)
     ap.add_argument("--no-write", action="store_true")

@@ -4,8 +4,8 @@ from jaxga import interrupts
 
 interrupts.install_in_console_script()  # first: a Ctrl-C during the imports exits cleanly
 
+from jaxga._runtime.compilation_cache import configure, use_compilation_cache
 from jaxga.api import GA, Result, run, sweep
-from jaxga.api.compilation_cache import configure, use_compilation_cache
 from jaxga.api.doctor import doctor
 from jaxga.api.planner import Planner
 from jaxga.api.problem import Problem, problem

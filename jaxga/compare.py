@@ -553,7 +553,7 @@ def split_presets(text: str) -> list[str]:
 
 def same_references(results: Mapping[str, Result]) -> dict[str, Result]:
     """``results`` measured against one reference: each preset's run computes the any-angle
-    optimum within its own budget (:mod:`jaxga.api.references`), so where one run got it
+    optimum within its own budget (:mod:`jaxga._runtime.references`), so where one run got it
     and another only its lower bound, every result gets the exact value, so that their
     gaps compare."""
     exact = [r for r in results.values() if math.isfinite(r.any_angle_optimum)]

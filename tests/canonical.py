@@ -10,7 +10,8 @@ another one:
   corner rule), the map of the docs' examples and of the notebooks' quick mode;
 * every preset at its own defaults (population, operators, capacity), so that a test
   run and an example of the docs are one program;
-* at most :data:`SEEDS` seeds: one call of the 4-run program (``jaxga.api.RUN_BUCKETS``);
+* at most :data:`SEEDS` seeds: one call of the 4-run program
+  (``jaxga._runtime.programs.RUN_BUCKETS``);
   more seeds use the 32-run program;
 * few generations: the generation count is a run-time value, any count is the same program.
 
@@ -20,7 +21,7 @@ limit, ...) never make another program: vary them freely.
 :func:`run` is ``jaxga.run`` on these problems. The pytest-xdist workers, the notebooks'
 kernels and the other processes of the suite share jaxga's program store (under the
 suite's cache directory), which compiles a program once across processes
-(:mod:`jaxga.api.executables`): a worker that needs a program another one is compiling
+(:mod:`jaxga._runtime.executables`): a worker that needs a program another one is compiling
 waits for it and reads it.
 """
 

@@ -17,7 +17,7 @@ CACHE_DIR = Path(os.environ.get("JAXGA_TEST_JAX_CACHE", Path(__file__).parent / 
 jax.config.update("jax_compilation_cache_dir", str(CACHE_DIR))
 os.environ["JAXGA_CACHE_DIR"] = str(CACHE_DIR)  # the CLI's own cache, when run in-process
 # `jaxga run` in-process would otherwise give the whole test session one device per core
-# (jaxga.api.parallel) if it were the first JAX computation: keep the session's one device.
+# (jaxga._runtime.parallel) if it were the first JAX computation: keep the session's one device.
 os.environ.setdefault("JAXGA_DEVICES", "1")
 jax.config.update("jax_persistent_cache_min_compile_time_secs", 0.5)
 

@@ -3,7 +3,7 @@
 Runs on JAX's default backend, against the CPU in the same process
 (docs/devices.md, "Exactness"):
 
-- the exact probes of :mod:`jaxga.api.device_probe`: random bits, and one round of the
+- the exact probes of :mod:`jaxga._runtime.device_probe`: random bits, and one round of the
   walks of sga's initialiser and of the field walk for 2048 runs in one call, bit for bit;
 - a few whole runs of every preset (``GA.run``): bit for bit on the CPU (in another order
   of the runs in the call); on another backend, where a one-ulp difference of a division,
@@ -29,10 +29,10 @@ import jax
 import jax.numpy as jnp
 import numpy as np
 
-from jaxga.api import device_probe, executables
-from jaxga.api.device_probe import ProbeRow
+from jaxga._runtime import device_probe, executables
+from jaxga._runtime.device_probe import ProbeRow
+from jaxga._runtime.programs import shape_spec
 from jaxga.api.ga import GA
-from jaxga.api.programs import shape_spec
 from jaxga.config.presets import preset_names
 from jaxga.core.geometry import segments_clear
 from jaxga.core.objectives import path_length
@@ -56,7 +56,7 @@ evaluation of the same path (an ulp of each square root of a path's segments).""
 @dataclasses.dataclass(frozen=True)
 class DoctorReport:
     """What :func:`doctor` found: ``agrees`` (every probe passed), the ``verdict`` line,
-    one :class:`~jaxga.api.device_probe.ProbeRow` per probe, the throughput in
+    one :class:`~jaxga._runtime.device_probe.ProbeRow` per probe, the throughput in
     individual-generations per second, the time taken."""
 
     device: str
@@ -162,7 +162,7 @@ def doctor(device: jax.Device | None = None, *, presets: Sequence[str] | None = 
         presets: the presets of the whole runs (default: every built-in preset; none:
             the exact probes alone, as the gate of runs off the CPU runs them).
         runs: runs per call of the exact probes (default
-            :data:`~jaxga.api.device_probe.RUNS`).
+            :data:`~jaxga._runtime.device_probe.RUNS`).
         report: told one line per phase as it finishes (the command line prints them).
 
     Returns:

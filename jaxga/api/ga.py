@@ -25,8 +25,8 @@ from typing import Any
 
 import jax
 
+from jaxga._runtime.programs import warn_platform
 from jaxga.api.problem import Problem, load_problem
-from jaxga.api.programs import warn_platform
 from jaxga.config.schema import Config
 from jaxga.core.errors import ParameterError
 from jaxga.core.grid import Grid

@@ -12,8 +12,8 @@ from typing import Any, NamedTuple
 
 import numpy as np
 
-from jaxga.api.jax_settings import check_jax_settings, check_platform
-from jaxga.api.lowering import check_environment
+from jaxga._runtime.jax_settings import check_jax_settings, check_platform
+from jaxga._runtime.lowering import check_environment
 from jaxga.config.presets import as_sets, load_preset, parse_set
 from jaxga.config.schema import MAP_RULE, SCHEMA, Config, flatten, freeze
 from jaxga.core.errors import EndpointError, ParameterError

@@ -13,7 +13,7 @@ from typing import Any
 
 import numpy as np
 
-from jaxga.api.timeline import time_line
+from jaxga._runtime.timeline import time_line
 from jaxga.config.schema import Config
 from jaxga.engine import (
     uses_waypoints,
@@ -124,7 +124,7 @@ class Result:
     :func:`jaxga.engine.default_capacity`)."""
     size_class: bool = False
     """Whether the runs went on the map padded to its size class
-    (:mod:`jaxga.api.size_classes`): ``run(..., size_class=True)`` repeats them."""
+    (:mod:`jaxga._runtime.size_classes`): ``run(..., size_class=True)`` repeats them."""
     lower_bound: float = math.nan
     """A proven lower bound of :attr:`any_angle_optimum`: the Euclidean shortest path
     around the blocked cells (:func:`jaxga.reference.lower_bound.euclidean_lower_bound_np`);

@@ -21,9 +21,26 @@ import jax
 import numpy as np
 from jax.errors import JaxRuntimeError
 
-from jaxga.api import executables, parallel
-from jaxga.api.calls import RunCalls, evolve_in_chunks, this_process_runs
-from jaxga.api.device_probe import check_backend, needs_probe
+from jaxga._runtime import executables, parallel
+from jaxga._runtime.calls import RunCalls, evolve_in_chunks, this_process_runs
+from jaxga._runtime.device_probe import check_backend, needs_probe
+from jaxga._runtime.memory import (
+    NO_PATH_BYTES_PER_RUN,
+    check_compiled_memory,
+    check_memory,
+    check_result_memory,
+)
+from jaxga._runtime.programs import (
+    GENERATION_CHUNK,
+    Programs,
+    clear_compiled,
+    programs_for,
+    tables_for,
+)
+from jaxga._runtime.references import AnyAngleBounds, any_angle_references, octile_optimum
+from jaxga._runtime.seeds import seed_list
+from jaxga._runtime.size_classes import auto_size_class, class_capacity, map_cells, pad_to_class
+from jaxga._runtime.timeline import Timeline
 from jaxga.api.failures import (
     failure_causes,
     failure_reason,
@@ -31,25 +48,8 @@ from jaxga.api.failures import (
     unstarted_results,
     warn_unfilled,
 )
-from jaxga.api.memory import (
-    NO_PATH_BYTES_PER_RUN,
-    check_compiled_memory,
-    check_memory,
-    check_result_memory,
-)
 from jaxga.api.problem import Problem, load_problem
-from jaxga.api.programs import (
-    GENERATION_CHUNK,
-    Programs,
-    clear_compiled,
-    programs_for,
-    tables_for,
-)
-from jaxga.api.references import AnyAngleBounds, any_angle_references, octile_optimum
 from jaxga.api.result import Result
-from jaxga.api.seeds import seed_list
-from jaxga.api.size_classes import auto_size_class, class_capacity, map_cells, pad_to_class
-from jaxga.api.timeline import Timeline
 from jaxga.config.schema import Config, flatten
 from jaxga.core.errors import ParameterError
 from jaxga.core.grid import Grid, as_integer
@@ -165,9 +165,9 @@ def sweep(
     same results as one call. It must be at least every point's ``population.size``.
     ``size_class`` and ``any_angle_budget`` as in :func:`run`.
     The runs are split over this process's devices and, after
-    :func:`jaxga.api.parallel.initialize`, over several processes: each computes its share and
-    every process returns the whole, identical result (:mod:`jaxga.api.parallel`; a lost
-    process raises :class:`jaxga.api.parallel.ProcessLostError`).
+    :func:`jaxga._runtime.parallel.initialize`, over several processes: each computes its share and
+    every process returns the whole, identical result (:mod:`jaxga._runtime.parallel`; a lost
+    process raises :class:`jaxga._runtime.parallel.ProcessLostError`).
     """
 
     args = (preset, grid, points, seeds)
@@ -176,7 +176,7 @@ def sweep(
         try:
             return _sweep(*args, **options)
         except JaxRuntimeError as err:
-            # a stored program that does not run (jaxga.api.executables: "NOT_FOUND:
+            # a stored program that does not run (jaxga._runtime.executables: "NOT_FOUND:
             # Function ... not found", or "INTERNAL: Error dispatching computation:
             # Function ... not found"): forget the stored programs this process read
             # (deleted: never read again) and run again
@@ -192,7 +192,7 @@ def _sweep(preset, grid, points, seeds, *, generations, corner_rule, variant, se
            progress, chunks, population_capacity, size_class, any_angle_budget,
            **overrides) -> list[Result]:
     """:func:`sweep`'s work as phases over a :class:`_SweepPlan` (each timed by the
-    :class:`~jaxga.api.timeline.Timeline`): the plan (map, configurations, references,
+    :class:`~jaxga._runtime.timeline.Timeline`): the plan (map, configurations, references,
     the programs' map and parameters), the compiled programs, the initial populations,
     the evolution, the finish, the any-angle references, the results."""
     timeline = Timeline()
@@ -377,7 +377,7 @@ def _compile_init(plan: _SweepPlan, timeline: Timeline,
     its per-map tables (attached once per run rather than computed every generation),
     and the program set with its init program compiled (phase ``compile``). Off the CPU,
     the device probe first, when this device kind has no verdict yet (phase
-    ``device_probe``; :func:`jaxga.api.device_probe.check_backend`)."""
+    ``device_probe``; :func:`jaxga._runtime.device_probe.check_backend`)."""
     if needs_probe():
         report("device-probe", 0.0)
         with timeline.phase("device_probe"):
@@ -630,11 +630,11 @@ def run(
             and as it advances: ``("references", 0.0)``; ``("compile", 0.0)``, the
             compilation's progress (after the tracing and after each compiled program,
             when the programs are not compiled yet), ``("compile", 1.0)``; ``("evolve",
-            f)`` after each chunk of :data:`jaxga.api.programs.GENERATION_CHUNK`
+            f)`` after each chunk of :data:`jaxga._runtime.programs.GENERATION_CHUNK`
             generations; ``("post", 0.0)``; ``("any-angle", f)`` (the fraction of its
             budget used).
         chunks: ignored (deprecated): the generations always run in compiled chunks of
-            :data:`jaxga.api.programs.GENERATION_CHUNK`, whatever their number.
+            :data:`jaxga._runtime.programs.GENERATION_CHUNK`, whatever their number.
         population_capacity: individuals per island that the compiled program holds
             (default ``population.size``; not the configuration key
             ``population.capacity``, the cells a path can hold); the random numbers of a
@@ -643,7 +643,7 @@ def run(
             size swept as its capacity (``Result.population_capacity``): pass that to
             repeat its runs bit for bit.
         size_class: run on the map padded with blocked cells to its size class
-            (:mod:`jaxga.api.size_classes`: each side 32, 64, 128, 256, 384, 512, 768
+            (:mod:`jaxga._runtime.size_classes`: each side 32, 64, 128, 256, 384, 512, 768
             or 1024 cells, and the class's path capacity), so that all maps of a class
             share compiled programs: a 20 x 20 and a 25 x 25 map compile once, and so
             do two 384 x 384 robot maps. None (default): True for maps with a side
@@ -653,7 +653,7 @@ def run(
             the capacity differs, they differ seed by seed from the unpadded runs but
             not in what they are: feasible paths on the map, of the same distribution.
         any_angle_budget: seconds the any-angle reference may take after the runs
-            (:mod:`jaxga.api.references`): ``"auto"`` (default) the runs' own time
+            (:mod:`jaxga._runtime.references`): ``"auto"`` (default) the runs' own time
             (initialisation, evolution and post-optimisation), so that the references
             never take longer than the GA, but at least :data:`MIN_ANY_ANGLE_BUDGET`
             (a small map's exact search takes milliseconds); None: no limit (the exact
@@ -671,7 +671,7 @@ def run(
 
     The compiled programs are cached per algorithm and map shape and serve any number
     of generations and of seeds (runs padded to 4, or 32 per device, more as several
-    calls: :mod:`jaxga.api.programs`): calling again with other seeds, another number
+    calls: :mod:`jaxga._runtime.programs`): calling again with other seeds, another number
     of generations, another map of the same size (with ``size_class``, of the same
     size class) or other dynamic values
     (``crossover__probability=...``) does not compile again. For many hyper-parameter

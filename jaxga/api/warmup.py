@@ -1,11 +1,11 @@
 """``jaxga warmup``: compile a day's programs ahead, into the persistent cache.
 
-A program set (:mod:`jaxga.api.programs`) depends on the preset, the map's shape and
+A program set (:mod:`jaxga._runtime.programs`) depends on the preset, the map's shape and
 corner rule, the path capacity and the runs per call (4, or 32 per device); not on
 the seeds, the number of generations or the dynamic parameter values. :func:`warmup`
 compiles, for each preset and map, the set of every run size (one generation of each),
 so that a later process finds them in the persistent compilation cache
-(:mod:`jaxga.api.compilation_cache`) and only traces and loads. A map given as a size
+(:mod:`jaxga._runtime.compilation_cache`) and only traces and loads. A map given as a size
 ``N`` is an open ``N x N`` map from corner to corner (a user's map: corner rule strict);
 a map of that size with obstacles holds the same programs when its path capacity is the
 same (it is on maps whose optimal path is short enough, :func:`jaxga.engine.default_capacity`).
@@ -20,8 +20,8 @@ from typing import Any
 import jax
 import numpy as np
 
-from jaxga.api.compilation_cache import store_directory
-from jaxga.api.programs import SMALL_CALL_RUNS, platform_layout
+from jaxga._runtime.compilation_cache import store_directory
+from jaxga._runtime.programs import SMALL_CALL_RUNS, platform_layout
 from jaxga.api.runs import run
 from jaxga.config.presets import preset_names
 from jaxga.core.errors import ParameterError
@@ -48,7 +48,7 @@ def warmup(
     report: Callable[[dict[str, Any]], None] | None = None,
 ) -> list[dict[str, Any]]:
     """Compile every program set ``presets`` x ``maps`` x ``runs`` needs (one generation
-    of each), into the program store (:func:`jaxga.api.compilation_cache.store_directory`).
+    of each), into the program store (:func:`jaxga._runtime.compilation_cache.store_directory`).
 
     Args:
         presets: preset names or TOML files (default: every built-in preset).
@@ -57,17 +57,17 @@ def warmup(
         seeds: seed counts to compile for (default: 4, and the platform's program sizes
             per device: 32 on the CPU, powers of two from 32 to 2048 on a GPU; together
             they serve every seed count on maps up to 64 x 64,
-            :func:`jaxga.api.programs.run_layout`), compiled smallest first.
+            :func:`jaxga._runtime.programs.run_layout`), compiled smallest first.
         corner_rule: the corner rule of every map (default: sizes strict, named maps
             their own, :func:`jaxga.maps.default_corner_rule`).
         size_class: compile the programs of runs with ``size_class=True``
-            (:mod:`jaxga.api.size_classes`): the maps' size classes, so that sizes 32 and
+            (:mod:`jaxga._runtime.size_classes`): the maps' size classes, so that sizes 32 and
             64 serve every map up to 64 x 64 whose problem fits its class's path
             capacity; None (the default) as :func:`jaxga.run`'s default: the classes of
             maps with a side over 64 (sizes 128, 256, 384 and 512 serve every user map).
         report: called with each row as it is done.
 
-    The programs are stored whole (:mod:`jaxga.api.executables`) when XLA compiles them;
+    The programs are stored whole (:mod:`jaxga._runtime.executables`) when XLA compiles them;
     one that JAX reads from its own cache is not (it would not serialise whole), so a
     warm-up stores every program only in a process that has not used JAX's cache, as
     ``jaxga warmup`` (which turns JAX's cache off before compiling anything).

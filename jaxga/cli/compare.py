@@ -5,7 +5,7 @@ from __future__ import annotations
 import argparse
 import sys
 
-from jaxga.api.parallel import add_parallel_arguments
+from jaxga._runtime.parallel import add_parallel_arguments
 from jaxga.cli.options import (
     EXACT_HELP,
     EXIT_NO_PATH,

@@ -5,7 +5,7 @@ from __future__ import annotations
 import argparse
 import sys
 
-from jaxga.api.parallel import add_parallel_arguments
+from jaxga._runtime.parallel import add_parallel_arguments
 from jaxga.cli.options import add_preset_arguments, not_lead, problem_for_run, write_json
 from jaxga.core.errors import JaxgaError
 from jaxga.doe import AGACD_TABLE3, DESIGNS, RESPONSE_ALIASES, RESPONSES, Factor, run_doe

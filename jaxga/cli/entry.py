@@ -12,12 +12,12 @@ from collections.abc import Callable, Sequence
 import jax
 
 from jaxga import interrupts
-from jaxga.api.compilation_cache import ENV_VAR as CACHE_ENV_VAR
-from jaxga.api.compilation_cache import configure
-from jaxga.api.device_probe import DeviceDisagrees
-from jaxga.api.jax_settings import check_jax_settings, check_platform, check_xla_flags
-from jaxga.api.lowering import check_environment
-from jaxga.api.parallel import (
+from jaxga._runtime.compilation_cache import ENV_VAR as CACHE_ENV_VAR
+from jaxga._runtime.compilation_cache import configure
+from jaxga._runtime.device_probe import DeviceDisagrees
+from jaxga._runtime.jax_settings import check_jax_settings, check_platform, check_xla_flags
+from jaxga._runtime.lowering import check_environment
+from jaxga._runtime.parallel import (
     EXIT_PROCESS_LOST,
     ProcessLostError,
     configure_from_args,

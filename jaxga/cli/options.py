@@ -12,7 +12,8 @@ from pathlib import Path
 import numpy as np
 
 from jaxga import export
-from jaxga.api import configured_rule, parallel
+from jaxga._runtime import parallel
+from jaxga.api import configured_rule
 from jaxga.api.problem import Problem, problem
 from jaxga.config.presets import load_preset
 from jaxga.core.errors import JaxgaError, ParameterError

@@ -8,7 +8,7 @@ import io
 from pathlib import Path
 
 from jaxga import export
-from jaxga.api.parallel import (
+from jaxga._runtime.parallel import (
     ENV_PROCESS_ID,
     env_int,
 )

@@ -11,8 +11,8 @@ from typing import Any
 import numpy as np
 
 from jaxga import export
-from jaxga.api.compilation_cache import configure
-from jaxga.api.timeline import time_line
+from jaxga._runtime.compilation_cache import configure
+from jaxga._runtime.timeline import time_line
 from jaxga.cli.options import (
     EXIT_NO_PATH,
     MAP_HELP,

@@ -14,9 +14,9 @@ import jax.numpy as jnp
 import numpy as np
 
 from jaxga import api, export
-from jaxga.api import parallel
-from jaxga.api.parallel import add_parallel_arguments
-from jaxga.api.timeline import Timeline, process_age, time_line
+from jaxga._runtime import parallel
+from jaxga._runtime.parallel import add_parallel_arguments
+from jaxga._runtime.timeline import Timeline, process_age, time_line
 from jaxga.cli.options import (
     EXACT_HELP,
     EXIT_NO_PATH,
@@ -110,7 +110,7 @@ class Progress:
 def cmd_run(args: argparse.Namespace) -> int:
     """``jaxga run``: many seeds of a preset on a map; summary table, JSON, path, plot.
     Every phase is timed, from the process's start to the last file written
-    (:mod:`jaxga.api.timeline`); the time line is printed last."""
+    (:mod:`jaxga._runtime.timeline`); the time line is printed last."""
 
     timeline = process_timeline()
     lead = parallel.process_index() == 0

@@ -7,8 +7,8 @@ import time
 
 import jax
 
-from jaxga.api import parallel
-from jaxga.api.parallel import add_parallel_arguments
+from jaxga._runtime import parallel
+from jaxga._runtime.parallel import add_parallel_arguments
 from jaxga.api.warmup import warmup
 from jaxga.cli.options import parse_int_list
 from jaxga.compare import split_presets
@@ -19,7 +19,7 @@ from jaxga.core.grid import CORNER_RULES
 def cmd_warmup(args: argparse.Namespace) -> int:
     """``jaxga warmup``: compile the presets' programs ahead into the persistent cache."""
     # XLA compiles every program afresh (no read from JAX's own cache), so that each is
-    # stored whole (jaxga.api.executables); before this process compiles anything
+    # stored whole (jaxga._runtime.executables); before this process compiles anything
     jax.config.update("jax_enable_compilation_cache", False)
     presets = split_presets(args.presets) if args.presets else None
     maps: list = [*parse_int_list(args.sizes)] if args.sizes else []

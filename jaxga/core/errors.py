@@ -39,12 +39,12 @@ class InitialisationWarning(UserWarning):
 
 class DeviceWarning(RuntimeWarning):
     """A device count asked for cannot take effect (JAX already runs with another):
-    the results are the same, only the speed differs (:mod:`jaxga.api.parallel`)."""
+    the results are the same, only the speed differs (:mod:`jaxga._runtime.parallel`)."""
 
 
 class CacheWarning(RuntimeWarning):
     """The compilation cache (``$JAXGA_CACHE_DIR``) cannot be used or read: programs are
-    compiled without it, so only the speed differs (:mod:`jaxga.api.compilation_cache`)."""
+    compiled without it, so only the speed differs (:mod:`jaxga._runtime.compilation_cache`)."""
 
 
 class PlatformWarning(RuntimeWarning):

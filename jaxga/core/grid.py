@@ -162,7 +162,7 @@ class Grid:
 
     outside: Any = None
     """``bool[H, W]`` or None: cells that are not part of the map but padding around it
-    (:func:`jaxga.api.size_classes.pad_to_class`: a map padded to its size class so that
+    (:func:`jaxga._runtime.size_classes.pad_to_class`: a map padded to its size class so that
     maps of one class share compiled programs). They are blocked, so no path enters
     them, and they count as off the map where that differs from an obstacle: the safety
     and clearance measures of :mod:`jaxga.core.objectives` (:func:`proximity_obstacles`)."""

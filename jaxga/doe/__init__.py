@@ -27,7 +27,7 @@ the float32 lengths and angle sums of the post-optimised paths may differ in the
 ``block`` is therefore part of the checkpoint's fingerprint.
 ``DIR/manifest.json`` records what was run (preset configuration, map, factors, design,
 seeds, block, versions); a checkpoint written by another configuration is refused.
-With several processes (``jaxga doe --coordinator ...``, :mod:`jaxga.api.parallel`) every
+With several processes (``jaxga doe --coordinator ...``, :mod:`jaxga._runtime.parallel`) every
 block is split over the processes; process 0 alone reads and writes ``DIR`` and tells
 the others which points are finished, so ``DIR`` need only be on process 0's disk. A lost
 process loses the block being computed, never a finished point: the restarted command

@@ -14,7 +14,7 @@ from typing import Any
 
 import numpy as np
 
-from jaxga.api import parallel
+from jaxga._runtime import parallel
 from jaxga.core.errors import ParameterError
 from jaxga.core.files import atomic_write
 from jaxga.core.grid import Grid
@@ -53,7 +53,7 @@ class Checkpoint:
         self.dir = Path(directory)
         config = manifest.get("config")
         self.generations = config.get("generations") if isinstance(config, dict) else None
-        # Several processes (jaxga.api.parallel): process 0 alone reads and writes the
+        # Several processes (jaxga._runtime.parallel): process 0 alone reads and writes the
         # checkpoint; the others receive what it read (and its refusal) by broadcast, so
         # every process agrees on which points remain even without a shared filesystem.
         self.lead = parallel.process_index() == 0

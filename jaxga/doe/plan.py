@@ -13,8 +13,9 @@ import jax
 import numpy as np
 
 import jaxga
-from jaxga import api
-from jaxga.api import checked_capacity, load_problem, seed_list
+from jaxga._runtime.memory import check_result_memory
+from jaxga._runtime.seeds import seed_list
+from jaxga.api import checked_capacity, load_problem
 from jaxga.api.problem import Problem
 from jaxga.config.presets import as_sets, overridden_keys
 from jaxga.config.schema import Config
@@ -100,7 +101,7 @@ def plan_doe(preset, grid, factors, design, seeds, generations, corner_rule, var
     block = min(int(block), len(points))
     # only a block of points is in memory at a time (between blocks, a few floats per seed)
     largest, _ = build(config.override({"population.size": capacity}), loaded)
-    seed_arr = seed_list(seeds, lambda n: api.check_result_memory(n * block, largest))
+    seed_arr = seed_list(seeds, lambda n: check_result_memory(n * block, largest))
     shortest_path(loaded).raise_if_missing()  # nothing to fit: say why (NoPathError)
     ckpt = None
     if checkpoint is not None:

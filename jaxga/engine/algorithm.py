@@ -61,7 +61,7 @@ class Stages:
     looking an operator up by name wherever a stage is traced.
 
     A family the configuration leaves out (a program's view of it holds only the keys
-    that program reads: :func:`jaxga.api.programs.program_view`) is None, so a stage
+    that program reads: :func:`jaxga._runtime.programs.program_view`) is None, so a stage
     that would call it fails while tracing rather than reading a key it was not keyed
     on."""
 

@@ -367,7 +367,7 @@ def evolve(algo: Algorithm, key, grid: Grid, state: GAState, params: dict,
     ``count`` (optional, a traced integer): only the first ``count`` of the
     ``generations`` steps run (a loop with a run-time trip count); the history rows after
     them are zeros, to be dropped. One compiled chunk of ``generations`` steps then serves
-    every generation count (:mod:`jaxga.api.programs`); ``count`` must not be batched (a
+    every generation count (:mod:`jaxga._runtime.programs`); ``count`` must not be batched (a
     ``vmap``'s ``in_axes`` None). That loop also ends once the run is frozen by the
     stagnation rule (under ``vmap``: once every run of the batch is): a frozen run's
     generations change nothing, so its remaining rows are its final row and the result

@@ -6,7 +6,7 @@ and an evolution stream (``fold_in(key, 1)``; generation ``t`` uses
 ``fold_in(evolution key, t)``). :class:`PureGA` is the one door to the engine:
 :class:`jaxga.GA` is a :class:`PureGA` built from a preset and a map, and the compiled
 programs of :func:`jaxga.run`, :func:`jaxga.sweep`, :func:`jaxga.compare`, the DOE and
-:func:`jaxga.replan` (:mod:`jaxga.api.programs`) trace the methods of a :class:`PureGA`
+:func:`jaxga.replan` (:mod:`jaxga._runtime.programs`) trace the methods of a :class:`PureGA`
 of the same algorithm, so seed ``s`` of a driver is ``GA.run(PRNGKey(s))``.
 """
 
@@ -46,7 +46,7 @@ class PureGA:
     """A GA's pure functions over a built :class:`~jaxga.engine.Algorithm`: what a run is,
     defined once. :class:`jaxga.GA` adds the host work of its constructor (the preset and
     the map loaded and checked); the batch drivers' compiled programs
-    (:mod:`jaxga.api.programs`) trace these same methods, vmapped or sharded over runs,
+    (:mod:`jaxga._runtime.programs`) trace these same methods, vmapped or sharded over runs,
     with the map as an argument.
 
     Args:

@@ -79,7 +79,7 @@ __all__ = [
 ]
 
 _U32 = jnp.uint32
-# NumPy, not jnp: importing jaxga must not start JAX's backend (jaxga.api.parallel sets the
+# NumPy, not jnp: importing jaxga must not start JAX's backend (jaxga._runtime.parallel sets the
 # device count first).
 _OFF8 = np.asarray(DIRECTIONS, np.int32)
 

@@ -32,7 +32,7 @@ from jaxga.core.paths import position_lookup, remove_loops
 
 __all__ = ["concat", "connect", "pad_cells", "random_free_neighbour", "splice_loop_free"]
 
-# NumPy, not jnp: importing jaxga must not start JAX's backend (see jaxga.api.parallel).
+# NumPy, not jnp: importing jaxga must not start JAX's backend (see jaxga._runtime.parallel).
 _OFFSETS = np.array(
     [[1, 0], [1, 1], [0, 1], [-1, 1], [-1, 0], [-1, -1], [0, -1], [1, -1]], dtype=np.int32
 )

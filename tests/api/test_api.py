@@ -12,6 +12,7 @@ import warnings
 import numpy as np
 import pytest
 
+import jaxga._runtime as runtime
 from jaxga import api, engine
 from jaxga.compare import compare as jaxga_compare
 from jaxga.config.presets import preset_names
@@ -116,9 +117,9 @@ def test_every_preset_is_deterministic(preset_run, grid):
     # the program set back in the process's table (a worker's other tests may have pushed
     # it out since the fixture ran), then the same seeds in another order: no new set
     api.run(name, grid, seeds=[0, 1, 2], **overrides)
-    before = api.programs.compiled_programs.cache_info().misses
+    before = runtime.programs.compiled_programs.cache_info().misses
     again = api.run(name, grid, seeds=[2, 0, 1], **overrides)  # other order, same program
-    assert api.programs.compiled_programs.cache_info().misses == before
+    assert runtime.programs.compiled_programs.cache_info().misses == before
     for i, j in ((0, 2), (1, 0), (2, 1)):
         assert again.success[i] == r.success[j]
         assert np.array_equal(again.cells[i], r.cells[j])
@@ -358,7 +359,8 @@ def test_an_override_that_nothing_reads_is_refused(grid, monkeypatch, preset, ov
                                                    message):
     """As keyword overrides, as ``sets`` (the same values as TOML) and as sweep points,
     before anything compiles."""
-    monkeypatch.setattr(api.programs, "compiled_programs", lambda *a, **k: pytest.fail("compiled"))
+    monkeypatch.setattr(runtime.programs, "compiled_programs",
+                        lambda *a, **k: pytest.fail("compiled"))
     with pytest.raises(ParameterError, match=re.escape(message)):
         api.run(preset, grid, seeds=1, **SMALL, **overrides)
     sets = [f"{k.replace('__', '.')}={json.dumps(v)}" for k, v in overrides.items()]
@@ -530,10 +532,10 @@ def test_a_sweep_point_too_small_for_its_migrants_is_refused(grid):
 
 def test_compiled_programs_are_reused_across_maps_seeds_and_values(grid):
     api.run("sga", grid, seeds=[5, 6, 7], **SMALL)
-    before = api.programs.compiled_programs.cache_info()
+    before = runtime.programs.compiled_programs.cache_info()
     other = random_map(20, 20, 0.25, 11, corner_rule="free")  # the canonical map's shape
     r = api.run("sga", other, seeds=[7, 8, 9], crossover__probability=0.5, **SMALL)
-    after = api.programs.compiled_programs.cache_info()
+    after = runtime.programs.compiled_programs.cache_info()
     assert after.misses == before.misses and after.hits == before.hits + 1
     assert r.timing["compile_s"] < 1.0
 
@@ -765,7 +767,7 @@ def test_clear_compiled_releases_the_programs_memory_mappings(grid):
 
 
 def test_run_blocks_divide_each_device_share_into_blocks_of_at_most_the_block():
-    from jaxga.api import run_blocks
+    from jaxga._runtime.programs import run_blocks
 
     assert run_blocks(100, 1, 128) == 1  # fits one block
     assert run_blocks(1000, 1, 128) == 8  # 8 blocks of 125
@@ -785,7 +787,7 @@ def test_map_runs_in_blocks_equals_one_vmap():
     import jax
     import jax.numpy as jnp
 
-    from jaxga.api import map_runs
+    from jaxga._runtime.programs import map_runs
 
     def fn(key, shared, state, n):
         x = jax.random.uniform(key, (3,)) * shared["scale"] + state["a"]
@@ -834,7 +836,8 @@ def test_inconsistent_parameters_are_refused_before_tracing(grid, monkeypatch, p
                                                             overrides, words):
     """Combinations of keys that an operator cannot use (each key valid on its own) give
     a ParameterError naming them, not an error from inside the traced program."""
-    monkeypatch.setattr(api.programs, "compiled_programs", lambda *a, **k: pytest.fail("compiled"))
+    monkeypatch.setattr(runtime.programs, "compiled_programs",
+                        lambda *a, **k: pytest.fail("compiled"))
     with pytest.raises(ParameterError) as err:
         api.run(preset, grid, seeds=1, **{**SMALL, **overrides})
     assert all(w in str(err.value) for w in words), str(err.value)
@@ -857,7 +860,8 @@ def test_inconsistent_parameters_are_refused_before_tracing(grid, monkeypatch, p
 def test_wrong_python_types_are_refused_with_a_jaxga_error(grid, monkeypatch, call, words):
     """Options of the wrong type are named (ParameterError), not a TypeError from deep
     inside, and before anything compiles."""
-    monkeypatch.setattr(api.programs, "compiled_programs", lambda *a, **k: pytest.fail("compiled"))
+    monkeypatch.setattr(runtime.programs, "compiled_programs",
+                        lambda *a, **k: pytest.fail("compiled"))
     with pytest.raises(ParameterError, match=re.escape(words)):
         call(grid)
 
@@ -885,7 +889,7 @@ def test_a_request_whose_runs_cannot_fit_in_memory_is_refused(grid, monkeypatch)
     """A clear error before anything is allocated, instead of the process being killed,
     naming the size and what to change: where the outputs of every run beside one run
     computed at a time exceed the machine, or where not one run fits."""
-    monkeypatch.setattr(api.memory, "physical_memory", lambda: int(2.25 * 2**30))
+    monkeypatch.setattr(runtime.memory, "physical_memory", lambda: int(2.25 * 2**30))
     # one run at a time: 1 GiB base, its state 8 x 60 x 160 int32 population cells
     # (307,200 bytes) and its init temporaries 12 x 38,400; every run's outputs 3 x 3
     # float32 history values, 2 int32 paths of 160 cells and 256 bytes (1,572 bytes):
@@ -908,7 +912,7 @@ def test_runs_that_do_not_fit_together_run_in_groups_with_the_same_results(grid,
     another (each initialised, evolved and finished before the next): every seed's result
     is the one it has in a call of its own. 8 runs of sga's canonical problem where only
     4 fit at a time: two calls of 4 (the canonical program), against two requests of 4."""
-    from jaxga.api import calls
+    from jaxga._runtime import calls
 
     seeds = [11, 12, 13, 14, 15, 16, 17, 18]
     halves = [api.run("sga", grid, seeds=seeds[:4], **SMALL),
@@ -916,7 +920,7 @@ def test_runs_that_do_not_fit_together_run_in_groups_with_the_same_results(grid,
     # 4 runs held among 8 need 1 GiB + 4 x 307,200 + 8 x 1,572 + 4 x 460,800 bytes; 5 need
     # 768,000 more
     budget = 2**30 + 4 * 307_200 + 8 * 1_572 + 4 * 460_800 + 300_000
-    monkeypatch.setattr(api.memory, "physical_memory", lambda: 2 * budget)
+    monkeypatch.setattr(runtime.memory, "physical_memory", lambda: 2 * budget)
     layouts, stages = [], []
     real = calls.fitting_layout
     monkeypatch.setattr(calls, "fitting_layout",
@@ -944,19 +948,20 @@ def test_padded_calls_that_would_not_fit_run_without_their_padding(monkeypatch):
     of as many as fit, one at a time; where not one fits, one line."""
     from types import SimpleNamespace
 
-    from jaxga.api.calls import fitting_layout, grouped_layout
+    from jaxga._runtime.calls import fitting_layout, grouped_layout
 
-    monkeypatch.setattr(api.memory, "physical_memory", lambda: 24 * 2**30)  # CI's machine
+    monkeypatch.setattr(runtime.memory, "physical_memory", lambda: 24 * 2**30)  # CI's machine
     big = SimpleNamespace(population=100_000, islands=1, capacity=160, generations=300)
     assert fitting_layout(big, 5, 1, (32, 1)) == (5, 1, 1)
-    assert api.memory.call_memory(big, 5, 5) < 12 * 2**30 < api.memory.call_memory(big, 32, 32)
+    call_memory = runtime.memory.call_memory
+    assert call_memory(big, 5, 5) < 12 * 2**30 < call_memory(big, 32, 32)
     small = SimpleNamespace(population=60, islands=1, capacity=160, generations=300)
     assert fitting_layout(small, 5, 1, (32, 1)) == (32, 1, 1)
     assert fitting_layout(small, 100, 1, (32, 4)) == (32, 4, 4)
     assert fitting_layout(small, 5, 1, (32, 1), padded=False) == (5, 1, 1)
     # 12 GiB - 1 GiB base = 9 runs of 100,000 x 160 cells (8 x 64 MB state, 12 x 64 MB
     # init temporaries each): 40 runs as 5 calls of 8, one at a time
-    assert api.memory.runs_that_fit(big, 12 * 2**30) == 9
+    assert runtime.memory.runs_that_fit(big, 12 * 2**30) == 9
     assert fitting_layout(big, 40, 1, (64, 1)) == (8, 5, 1)
     assert grouped_layout(big, 41, 1) == (9, 5, 1)  # 5 calls of 9, the last with 4 padded
     assert grouped_layout(big, 41, 2) == (4, 6, 1)  # 6 calls of 2 x 4 devices: 8 at most
@@ -1002,7 +1007,7 @@ def test_sweep_capacity_must_be_an_integer_and_no_path_sweeps_check_memory(grid,
     blocked[max(gy - 1, 0):gy + 2, max(gx - 1, 0):gx + 2] = True
     blocked[gy, gx] = False
     walled = grid.replace(blocked=blocked)
-    monkeypatch.setattr(api.memory, "physical_memory", lambda: 2**30)
+    monkeypatch.setattr(runtime.memory, "physical_memory", lambda: 2**30)
     with pytest.raises(ParameterError, match="GiB for their results"):  # 256 bytes a run
         api.run("sga", walled, seeds=10**7, **SMALL)
     assert api.run("sga", walled, seeds=10**6, **SMALL).seeds.size == 10**6  # 0.24 GiB
@@ -1044,7 +1049,8 @@ def test_a_grid_made_with_the_plain_constructor_is_checked(monkeypatch):
     from jaxga import Grid
     from jaxga.core.errors import EndpointError
 
-    monkeypatch.setattr(api.programs, "compiled_programs", lambda *a, **k: pytest.fail("compiled"))
+    monkeypatch.setattr(runtime.programs, "compiled_programs",
+                        lambda *a, **k: pytest.fail("compiled"))
     cases = [
         (Grid(blocked=jnp.zeros((5, 5), bool), start=jnp.int32(0), goal=jnp.int32(25)),
          EndpointError, "goal cell index 25 is off the 5 x 5 map"),
@@ -1119,17 +1125,17 @@ def test_xlas_account_of_a_programs_buffers_is_checked_before_it_runs(monkeypatc
     the machine: one line naming the program, before anything of it is allocated."""
     from types import SimpleNamespace
 
-    monkeypatch.setattr(api.memory, "physical_memory", lambda: 8 * 2**30)
+    monkeypatch.setattr(runtime.memory, "physical_memory", lambda: 8 * 2**30)
 
     def program(temp_gib: float):
         return SimpleNamespace(output_size_in_bytes=2**28, argument_size_in_bytes=2**20,
                                temp_size_in_bytes=int(temp_gib * 2**30))
 
     # 1 GiB base, 4 calls' outputs of 0.25 GiB, one call's temporaries
-    api.memory.check_compiled_memory({"init": program(1.0), "evolve": program(1.5)}, 4, 20)
+    runtime.memory.check_compiled_memory({"init": program(1.0), "evolve": program(1.5)}, 4, 20)
     with pytest.raises(ParameterError, match=r"20 runs in 4 call\(s\) would need about "
                        r"5\.0 GiB in their evolve program .* 8\.0 GiB this process") as e:
-        api.memory.check_compiled_memory({"init": program(1.0), "evolve": program(3.0)},
+        runtime.memory.check_compiled_memory({"init": program(1.0), "evolve": program(3.0)},
                                          4, 20)
     assert "\n" not in str(e.value)
 

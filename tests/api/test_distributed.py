@@ -168,7 +168,7 @@ _SWEEP_SCRIPT = """
 import json, os, sys
 import jax
 jax.config.update("jax_compilation_cache_dir", os.environ["JAXGA_CACHE_DIR"])
-import jaxga.api.parallel as par
+import jaxga._runtime.parallel as par
 par.set_local_devices(1)
 if len(sys.argv) > 1:
     par.initialize(sys.argv[1], 2, int(sys.argv[2]), timeout=60)
@@ -210,7 +210,7 @@ def test_a_sweep_in_two_processes_gives_the_single_process_result(tmp_path):
 
 _JOIN_AND_WAIT = """
 import sys, time
-import jaxga.api.parallel as par
+import jaxga._runtime.parallel as par
 par.initialize(sys.argv[1], 2, int(sys.argv[2]), timeout=float(sys.argv[3]))
 print("joined", flush=True)
 time.sleep(600)
@@ -282,9 +282,9 @@ def test_a_lost_coordinator_ends_the_other_process(tmp_path):
 
 
 def test_importing_jaxga_does_not_start_the_jax_backend():
-    """``import jaxga.api.parallel; jaxga.api.parallel.use_all_cores()`` only works if importing
-    jaxga creates no JAX array; afterwards JAX has one CPU device per core."""
-    code = ("import os, jax, pkgutil, importlib, jaxga, jaxga.api.parallel as par\n"
+    """``import jaxga.api.devices; jaxga.api.devices.use_all_cores()`` only works if
+    importing jaxga creates no JAX array; afterwards JAX has one CPU device per core."""
+    code = ("import os, jax, pkgutil, importlib, jaxga, jaxga._runtime.parallel as par\n"
             "from jax._src import xla_bridge\n"
             "for m in pkgutil.iter_modules(jaxga.__path__):\n"
             "    importlib.import_module('jaxga.' + m.name)\n"
@@ -299,7 +299,7 @@ def test_importing_jaxga_does_not_start_the_jax_backend():
 
 
 def test_a_late_device_request_warns_and_an_explicit_xla_flag_is_kept():
-    code = ("import warnings, jax, jax.numpy as jnp, jaxga.api.parallel as par\n"
+    code = ("import warnings, jax, jax.numpy as jnp, jaxga._runtime.parallel as par\n"
             "assert par.use_all_cores() is None  # the user's XLA_FLAGS is kept\n"
             "jnp.zeros(1)\n"
             "with warnings.catch_warnings(record=True) as w:\n"
@@ -334,7 +334,7 @@ def test_incomplete_or_malformed_process_options_are_one_line_errors(capsys, mon
 @pytest.mark.parametrize("timeout", [0.0, -1.0, float("nan"), float("inf"), 1e10])
 def test_a_process_timeout_that_jax_cannot_take_is_refused(timeout):
     """Before anything starts: JAX's coordination service takes 32-bit seconds."""
-    from jaxga.api import parallel
+    from jaxga._runtime import parallel
     from jaxga.core.errors import JaxgaError
 
     with pytest.raises(JaxgaError, match="process timeout must be > 0 s and at most"):

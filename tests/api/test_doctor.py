@@ -14,8 +14,9 @@ import numpy as np
 import pytest
 
 import jaxga
-from jaxga.api import device_probe, programs, runs
-from jaxga.api.device_probe import DeviceDisagrees, ProbeRow, check_backend
+from jaxga._runtime import device_probe, programs
+from jaxga._runtime.device_probe import DeviceDisagrees, ProbeRow, check_backend
+from jaxga.api import runs
 from jaxga.cli.entry import main
 from jaxga.cli.options import EXIT_DEVICE_DISAGREES
 from jaxga.core.errors import PlatformWarning

@@ -142,8 +142,8 @@ def test_the_drivers_trace_the_pure_cores_own_methods(monkeypatch):
     the programs of :func:`jaxga.run` are traced from the methods of a ``PureGA`` of each
     program's view of the algorithm (init with its statistics, the evolve chunk, finish),
     the functions the pure core runs."""
-    from jaxga.api import programs
-    from jaxga.api.programs import compiled_programs, shape_spec, stack_params
+    from jaxga._runtime import programs
+    from jaxga._runtime.programs import compiled_programs, shape_spec, stack_params
     from jaxga.engine.run import PureGA
 
     assert issubclass(jaxga.GA, PureGA)

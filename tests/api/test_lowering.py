@@ -1,4 +1,4 @@
-"""The unrolled CPU lowering of Threefry (jaxga/api/lowering.py): same bits, no loop."""
+"""The unrolled CPU lowering of Threefry (jaxga/_runtime/lowering.py): same bits, no loop."""
 
 from __future__ import annotations
 
@@ -9,7 +9,7 @@ import jax.numpy as jnp
 import numpy as np
 import pytest
 
-from jaxga.api import lowering
+from jaxga._runtime import lowering
 from jaxga.core.errors import ParameterError
 
 pytestmark = pytest.mark.skipif(lowering._rules() is None,
@@ -85,7 +85,7 @@ def test_the_scope_restores_jaxs_rule_nests_and_obeys_the_environment(monkeypatc
 def test_jaxgas_own_programs_are_lowered_in_its_scope(monkeypatch):
     """Every program jaxga compiles goes through ``executables.load_or_compile``, which
     lowers it in jaxga's scope: no Threefry loop in it, and JAX's rule back afterwards."""
-    from jaxga.api import executables
+    from jaxga._runtime import executables
 
     monkeypatch.delenv(lowering.ENV_VAR, raising=False)
     keys = jax.vmap(jax.random.PRNGKey)(jnp.arange(2, dtype=jnp.uint32))

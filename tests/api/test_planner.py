@@ -15,7 +15,7 @@ import numpy as np
 import pytest
 
 import jaxga
-from jaxga.api import programs
+from jaxga._runtime import programs
 from jaxga.core.errors import EndpointError, ParameterError
 from jaxga.engine.algorithm import map_capacity
 from jaxga.maps import load_map_info

@@ -22,8 +22,9 @@ import numpy as np
 import optax
 import pytest
 
+import jaxga._runtime as runtime
 from jaxga import api, engine
-from jaxga.api import executables, programs
+from jaxga._runtime import executables, programs
 from jaxga.core.errors import CacheWarning, ParameterError
 from jaxga.core.paths import is_feasible
 from jaxga.engine.maptables import with_tables
@@ -132,7 +133,7 @@ def test_more_runs_than_the_largest_program_are_several_calls_of_it(grid, compil
     the results of the unpadded runs; 7 generations are one call of the 25-generation
     chunk that runs 7 of them."""
     n_dev = jax.local_device_count()
-    assert api.run_layout(70, n_dev) == (32, math.ceil(70 / n_dev / 32))
+    assert runtime.programs.run_layout(70, n_dev) == (32, math.ceil(70 / n_dev / 32))
     r = api.run("sga", grid, seeds=70, generations=50, **OPTIONS)
     assert compiled.count("evolve") <= 1  # the 32-run programs (of the test above)
     assert_same_runs(r, slice(0, 70), *reference)
@@ -222,7 +223,7 @@ def test_run_layout(n_runs, n_devices, cells, have, want):
     """Runs per device and calls: up to 4 runs one call of 4 over the devices, more runs
     calls of 32 per device (10, 20 and 30 seeds one program on one or two devices), a
     larger program already compiled reused, powers of two on maps over 64 x 64."""
-    assert api.run_layout(n_runs, n_devices, cells, have, platform="cpu") == want
+    assert runtime.programs.run_layout(n_runs, n_devices, cells, have, platform="cpu") == want
 
 
 @pytest.mark.parametrize("n_runs, n_devices, cells, have, want", [
@@ -241,29 +242,29 @@ def test_run_layout_on_a_gpu(n_runs, n_devices, cells, have, want):
     64 x 64 and the small call keep the CPU's rule; a compiled size is reused only up to
     twice the share or the smallest bucket (a re-plan of 3 runs after a sweep of 2048
     compiles its own 4-run program)."""
-    assert api.run_layout(n_runs, n_devices, cells, have, platform="gpu") == want
+    assert runtime.programs.run_layout(n_runs, n_devices, cells, have, platform="gpu") == want
 
 
 def test_platform_layouts():
     """The CPU computes blocks that fit its caches; a GPU evolves one vmap per call and
     initialises in the CPU's blocks."""
-    from jaxga.api import programs
+    from jaxga._runtime import programs
 
-    cpu = api.platform_layout("cpu")
+    cpu = runtime.programs.platform_layout("cpu")
     assert cpu == programs.PlatformLayout((programs.RUNS_PER_DEVICE,), programs.RUN_BLOCK,
                                           programs.INIT_RUN_BLOCK)
-    assert api.platform_layout() == cpu  # the suite runs on the CPU
+    assert runtime.programs.platform_layout() == cpu  # the suite runs on the CPU
     for platform in ("gpu", "tpu"):
-        lay = api.platform_layout(platform)
-        assert lay.buckets == api.ACCELERATOR_BUCKETS == tuple(sorted(lay.buckets))
+        lay = runtime.programs.platform_layout(platform)
+        assert lay.buckets == runtime.programs.ACCELERATOR_BUCKETS == tuple(sorted(lay.buckets))
         assert lay.run_block == lay.buckets[-1]
         assert lay.init_run_block == programs.INIT_RUN_BLOCK  # decision 037
-        assert api.run_blocks(lay.buckets[-1], 1, lay.run_block) == 1
+        assert runtime.programs.run_blocks(lay.buckets[-1], 1, lay.run_block) == 1
 
 
 def test_run_layout_refuses_no_runs():
     with pytest.raises(ParameterError, match="at least one run"):
-        api.run_layout(0)
+        runtime.programs.run_layout(0)
 
 
 @pytest.mark.parametrize("generations", [1, 7, 45, 300])
@@ -510,8 +511,8 @@ def test_a_stored_program_that_fails_to_run_is_forgotten_and_compiled_again(
 def test_a_program_sets_compile_progress_only_goes_forward(monkeypatch, stored, expected):
     """A fresh program set reports 1/4 (the tracing's share), 2/4 after init and 3/4
     after evolve, wherever its programs come from; a compiled set reports nothing."""
-    from jaxga.api import executables
-    from jaxga.api.programs import Programs
+    from jaxga._runtime import executables
+    from jaxga._runtime.programs import Programs
 
     class Traced:
         def lower(self):
@@ -536,7 +537,7 @@ def test_a_program_sets_compile_progress_only_goes_forward(monkeypatch, stored, 
 
 def test_runs_off_the_cpu_are_warned_about_once(monkeypatch):
     """A GPU's results are not the CPU's bits: said once per process and platform."""
-    from jaxga.api import programs
+    from jaxga._runtime import programs
     from jaxga.core.errors import PlatformWarning
 
     monkeypatch.setattr(programs, "_WARNED_PLATFORMS", set())

@@ -1,4 +1,4 @@
-"""A run's references within their budget (jaxga.api.references): the exact any-angle
+"""A run's references within their budget (jaxga._runtime.references): the exact any-angle
 optimum, or its proven lower bound and a gap to it that says so."""
 
 from __future__ import annotations
@@ -8,7 +8,7 @@ import math
 import numpy as np
 import pytest
 
-from jaxga.api import references
+from jaxga._runtime import references
 from jaxga.api.result import Result
 from jaxga.core.grid import Grid
 from jaxga.reference.any_angle import any_angle_shortest_path_np

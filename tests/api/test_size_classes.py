@@ -7,7 +7,7 @@ import jax.numpy as jnp
 import numpy as np
 import pytest
 
-from jaxga.api.size_classes import class_capacity, class_shape, map_cells, pad_to_class
+from jaxga._runtime.size_classes import class_capacity, class_shape, map_cells, pad_to_class
 from jaxga.core import objectives
 from jaxga.core.grid import Grid
 from jaxga.engine.algorithm import default_capacity
@@ -89,7 +89,7 @@ def test_the_padding_counts_as_off_the_map_for_safety_and_clearance():
 
 
 def test_by_default_maps_over_64_a_side_are_padded_and_the_papers_maps_are_not():
-    from jaxga.api.size_classes import auto_size_class
+    from jaxga._runtime.size_classes import auto_size_class
     from jaxga.maps import load_map
 
     assert not auto_size_class(load_map("classic_ga_gapp3_20x20"))

@@ -20,7 +20,7 @@ import numpy as np
 import pytest
 
 import jaxga
-from jaxga.api.programs import Programs, compiled_programs, program_algorithm, program_view
+from jaxga._runtime.programs import Programs, compiled_programs, program_algorithm, program_view
 from jaxga.config.presets import load_preset, preset_names
 from jaxga.config.schema import SCHEMA, Config, sweepable
 from jaxga.core.errors import InitialisationWarning, ParameterError
@@ -151,12 +151,12 @@ def test_integer_keys_are_factors_of_a_designed_experiment():
 
 def test_a_key_only_the_finish_reads_compiles_the_finish_alone():
     """Each program is keyed on the configuration sections it reads
-    (:func:`jaxga.api.programs.program_view`): ``sga`` with another ``post.method``
+    (:func:`jaxga._runtime.programs.program_view`): ``sga`` with another ``post.method``
     takes the init and evolve programs of the ``sga`` cases above and compiles only its
     finish program, also when the shared programs of that program set were pushed out
     by others (as after eight other program sets): a program set used again shares its
     programs anew."""
-    from jaxga.api import programs
+    from jaxga._runtime import programs
 
     jaxga.run("sga", MAP, **SMALL)  # the programs of the sga cases
     programs._SHARED_PROGRAMS.clear()
@@ -200,7 +200,7 @@ class _ReadsRecorded(Config):
 @pytest.mark.parametrize("preset", sorted(preset_names()))
 def test_each_program_reads_only_its_own_view_of_the_configuration(preset):
     """Every preset's init, evolve and finish programs traced (``jax.eval_shape``: nothing
-    compiles) from their views (:func:`jaxga.api.programs.program_view`) read no key
+    compiles) from their views (:func:`jaxga._runtime.programs.program_view`) read no key
     outside them: a program shared by configurations that differ only outside its view
     computes the same thing for all of them."""
     ga = jaxga.GA(preset, MAP)

@@ -182,7 +182,7 @@ def test_a_presets_stages_are_its_operators_resolved_once(preset):
     configuration's."""
     import dataclasses
 
-    from jaxga.api.programs import program_view
+    from jaxga._runtime.programs import program_view
     from jaxga.engine import build, chosen_operators
     from jaxga.engine.algorithm import Stages
     from jaxga.operators.rates import rate_rule

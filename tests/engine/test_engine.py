@@ -6,7 +6,7 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from jaxga import api
+import jaxga._runtime as runtime
 from jaxga.maps import load_map, random_map
 from jaxga.operators.guide import with_guide
 from jaxga.reference.any_angle import any_angle_shortest_path
@@ -55,7 +55,7 @@ def test_a_seed_gives_the_same_run_whichever_runs_share_its_batch(tiny_runs):
 
 def test_finish_program_equals_its_functions_compiled_with_xla_defaults():
     """The finish program is compiled with other XLA options
-    (``api.programs.FINISH_COMPILER_OPTIONS``, the older fusion emitters): its post-optimised
+    (``runtime.programs.FINISH_COMPILER_OPTIONS``, the older fusion emitters): its post-optimised
     paths and every reported length and metric are bit for bit those of the same
     functions compiled with XLA's defaults, on agacd's greedy shortcut post-optimisation."""
     import jax
@@ -64,7 +64,7 @@ def test_finish_program_equals_its_functions_compiled_with_xla_defaults():
     from jaxga.core import objectives
     from jaxga.operators import postprocess as post
 
-    assert api.programs.FINISH_COMPILER_OPTIONS == {"xla_cpu_use_fusion_emitters": False}
+    assert runtime.programs.FINISH_COMPILER_OPTIONS == {"xla_cpu_use_fusion_emitters": False}
     grid = load_map(canonical.MAP)
     r = canonical.run("agacd", 3, generations=3)  # the canonical agacd program
     assert r.success.any()
@@ -90,14 +90,16 @@ def test_finish_program_equals_its_functions_compiled_with_xla_defaults():
 _DEVICE_SCRIPT = """
 import json, jax
 from jaxga import api
+import jaxga._runtime as runtime
 from jaxga.maps import random_map
 if jax.device_count() > 1:  # and each device computes its runs one block at a time
-    api.programs.RUN_BLOCK = api.programs.INIT_RUN_BLOCK = 1
+    runtime.programs.RUN_BLOCK = runtime.programs.INIT_RUN_BLOCK = 1
 g = random_map(10, 10, 0.2, 3, corner_rule="free")
 r = api.run("sga", g, seeds=21, population__size=8, generations=3, init__max_tries=50)
 n = 21 if jax.device_count() == 1 else 24
-print(json.dumps({"devices": jax.device_count(), "blocks": api.run_blocks(n, jax.device_count()),
-                  "init_blocks": api.run_blocks(n, jax.device_count(), api.programs.INIT_RUN_BLOCK),
+blocks = runtime.programs.run_blocks
+print(json.dumps({"devices": jax.device_count(), "blocks": blocks(n, jax.device_count()),
+                  "init_blocks": blocks(n, jax.device_count(), runtime.programs.INIT_RUN_BLOCK),
                   "cells": r.cells.tolist(), "raw": r.raw_cells.tolist(),
                   "fitness": r.fitness.tolist(), "length": r.length.tolist(),
                   **{h: r.history[h].tolist() for h in ("best", "mean", "std")}}))
@@ -106,8 +108,8 @@ print(json.dumps({"devices": jax.device_count(), "blocks": api.run_blocks(n, jax
 
 def test_results_do_not_depend_on_the_device_count():
     """Seeds sharded over 4 forced host devices (21 seeds padded to 24), each device
-    computing its runs one at a time (``api.map_runs``), == one device, one ``vmap`` of
-    21 (initialised in 3 blocks of 7, ``api.programs.INIT_RUN_BLOCK``): the same paths and the
+    computing its runs one at a time (``runtime.programs.map_runs``), == one device, one ``vmap`` of
+    21 (initialised in 3 blocks of 7, ``runtime.programs.INIT_RUN_BLOCK``): the same paths and the
     same float bits for every reported value (sums in a fixed order,
     ``jaxga._batching.numerics``)."""
     import json

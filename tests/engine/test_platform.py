@@ -14,7 +14,7 @@ from jax.experimental import io_callback
 from jax.extend.core import Jaxpr
 
 import jaxga
-from jaxga.api import lowering, parallel, programs
+from jaxga._runtime import lowering, parallel, programs
 from jaxga.config.presets import preset_names
 from tests.jaxprs import sub_jaxprs
 
@@ -128,7 +128,7 @@ def test_xla_cpu_options_go_to_the_cpu_finish_program_only():
 def test_the_runs_go_over_the_default_backends_devices():
     """The runs are split over ``jax.local_devices()`` of the default backend (here the
     CPU's devices; on a GPU machine its GPUs), the devices seeds are sharded over."""
-    from jaxga.api.seeds import seed_sharding
+    from jaxga._runtime.seeds import seed_sharding
 
     devices = parallel.run_devices()
     assert devices == jax.local_devices()

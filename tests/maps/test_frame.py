@@ -10,7 +10,7 @@ import numpy as np
 import pytest
 import yaml
 
-from jaxga.api.timeline import Timeline, time_line
+from jaxga._runtime.timeline import Timeline, time_line
 from jaxga.core.errors import EndpointError, JaxgaError
 from jaxga.core.grid import DIRECTIONS
 from jaxga.export import atomic_write_text, path_format, path_text, path_yaws, write_path

@@ -340,7 +340,7 @@ def test_the_command_line_compilation_cache_directory(tmp_path, monkeypatch):
     import jax
 
     import jaxga
-    from jaxga.api import compilation_cache as cc
+    from jaxga._runtime import compilation_cache as cc
     from jaxga.cli import entry as cli
     from jaxga.core.errors import ParameterError
 
@@ -802,7 +802,7 @@ def test_the_python_api_keeps_its_programs_without_touching_jaxs_settings(tmp_pa
     import jax
 
     from jaxga import api
-    from jaxga.api import compilation_cache as cc
+    from jaxga._runtime import compilation_cache as cc
 
     updates = []
     monkeypatch.setattr(jax.config, "update", lambda k, v: updates.append((k, v)))

@@ -324,7 +324,7 @@ def test_the_confirmation_runs_the_designs_program(one_call, monkeypatch):
     second experiment in the process compiles nothing."""
     import jax
 
-    from jaxga.api import programs
+    from jaxga._runtime import programs
 
     real = programs.compiled_programs
     runs_per_call = []
@@ -525,8 +525,10 @@ def test_a_checkpointed_doe_checks_the_memory_of_one_block(blocked, tmp_path, mo
     ckpt = tmp_path / "ckpt"
     shutil.copytree(ckpt0, ckpt)
     checked = []
-    real = jaxga.api.check_result_memory
-    monkeypatch.setattr(jaxga.api, "check_result_memory",
+    import jaxga.doe.plan as plan_module
+
+    real = plan_module.check_result_memory
+    monkeypatch.setattr(plan_module, "check_result_memory",
                         lambda n, algo: checked.append(n) or real(n, algo))
     monkeypatch.setattr(jaxga.api, "sweep", lambda *a, **k: pytest.fail("a sweep ran"))
     run_doe("agacd", MAP, SMALL, "agacd-table4", seeds=3, checkpoint=ckpt, **KW)

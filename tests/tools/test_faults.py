@@ -192,7 +192,7 @@ def test_an_unusable_cache_folder_is_one_warning_line_and_the_command_goes_on(
         tmp_path, capsys, monkeypatch):
     """$JAXGA_CACHE_DIR naming a file: one jaxga line naming it, and the command goes on
     (the run itself replaced by a stand-in: only the cache set-up before it is checked)."""
-    from jaxga.api import compilation_cache
+    from jaxga._runtime import compilation_cache
 
     blocker = tmp_path / "not-a-folder"
     blocker.write_text("")
@@ -455,7 +455,7 @@ def test_jaxs_own_switches_are_one_line_naming_the_variable(tmp_path, variable, 
 def test_xla_flags_xla_accepts_are_probed_once_and_remembered(tmp_path, monkeypatch):
     """A flag XLA knows passes; the verdict is remembered per flags, platforms and jaxlib,
     so a later command does not start a probe process again."""
-    from jaxga.api import jax_settings
+    from jaxga._runtime import jax_settings
 
     monkeypatch.setenv("HOME", str(tmp_path))
     monkeypatch.setenv("XLA_FLAGS", "--xla_force_host_platform_device_count=1")

@@ -72,7 +72,7 @@ def seed_sharding() -> tuple[jax.sharding.NamedSharding | None, Any]:
     """(runs axis split over all local devices, replicated); (None, None) with one device.
 
     Local devices only: with several processes each computes its own share of the runs
-    (``jaxga.api.parallel``), so no program spans processes."""
+    (``jaxga._runtime.parallel``), so no program spans processes."""
     n = jax.local_device_count()
     if n == 1:
         return None, None

@@ -2,7 +2,7 @@
 
 jaxga's programs are 32-bit (``int32`` cells and counters, ``float32`` fitness: the same
 bits on every backend, :mod:`jaxga.core.dtypes`) and compiled ahead and stored
-(:mod:`jaxga.api.executables`). JAX's 64-bit mode changes the types of Python numbers and
+(:mod:`jaxga._runtime.executables`). JAX's 64-bit mode changes the types of Python numbers and
 index arithmetic inside them, and with ``jit`` disabled JAX cannot run a compiled
 program at all; a platform JAX cannot start fails deep in JAX; a flag XLA does not know
 in ``XLA_FLAGS`` ends the process from XLA's C++ when the backend starts, with no Python

@@ -1,6 +1,6 @@
 """Memory checked before it is allocated: a model of what a call of runs holds
 (:func:`call_memory`, measured by ``benchmarks/memory.py``), calls laid out to fit
-(:func:`jaxga.api.calls.fitting_layout` drops the padding of its calls where the padded runs
+(:func:`jaxga._runtime.calls.fitting_layout` drops the padding of its calls where the padded runs
 would not fit, and computes the runs in groups of calls, one group after another, where
 even those would not fit), and one line naming the size and what to change where not one
 run fits."""
@@ -128,7 +128,7 @@ def check_result_memory(n_runs: int, algo: Algorithm) -> None:
     """A clear error instead of the operating system killing the process, before
     anything compiles: ``n_runs`` runs computed one at a time, every run's outputs kept
     (:func:`call_memory`; the layout of the calls, checked again once known, computes as
-    many at a time as fit: :func:`jaxga.api.calls.fitting_layout`)."""
+    many at a time as fit: :func:`jaxga._runtime.calls.fitting_layout`)."""
     why = too_much_memory(algo, 1, 1, total=n_runs)
     if why:
         raise ParameterError(why)
@@ -153,7 +153,7 @@ def check_compiled_memory(stats: Mapping[str, Any], calls: int, runs: int) -> No
     :func:`compiled_peak` over half the memory the process may use): the accurate check,
     once the programs of a call are known, of what :func:`call_memory` estimated before.
     ``stats``: XLA's account of each program by name
-    (:meth:`jaxga.api.programs.Programs.memory_stats`; None: not checked)."""
+    (:meth:`jaxga._runtime.programs.Programs.memory_stats`; None: not checked)."""
     budget = memory_budget()
     if budget is None:
         return

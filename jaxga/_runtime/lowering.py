@@ -9,7 +9,7 @@ gates, operator draws), and each rolled call is a loop of its own that XLA compi
 separate kernels and cannot fuse with its neighbours.
 
 :func:`jaxga_lowering` makes the CPU use JAX's unrolled lowering while jaxga lowers its own
-programs (:func:`jaxga.api.executables.load_or_compile`, :meth:`jaxga.GA.plan`), and puts
+programs (:func:`jaxga._runtime.executables.load_or_compile`, :meth:`jaxga.GA.plan`), and puts
 JAX's own rule back afterwards. The hash is the same function, so every random bit, and so
 every result of jaxga, is identical (tested bit for bit in ``tests/api/test_lowering.py``);
 only the compiled program changes, which XLA compiles faster (decision 013). Importing

@@ -30,7 +30,7 @@ import jax.numpy as jnp
 import jaxlib
 import numpy as np
 
-from jaxga.api.lowering import jaxga_lowering
+from jaxga._runtime.lowering import jaxga_lowering
 from jaxga.core.errors import JaxgaError, PlatformWarning
 from jaxga.core.files import atomic_write_text
 from jaxga.core.grid import Grid

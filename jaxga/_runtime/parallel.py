@@ -157,8 +157,8 @@ def set_local_devices(n: int | None = None, *, warn: bool = True) -> int | None:
         have = len(jax.local_devices(backend="cpu"))
         if have != n and warn:
             warnings.warn(
-                f"jaxga.api.parallel: JAX is already running with {have} CPU device(s); asking "
-                f"for {n} has no effect. Call jaxga.api.parallel.use_all_cores() (or "
+                f"jaxga.api.devices: JAX is already running with {have} CPU device(s); "
+                f"asking for {n} has no effect. Call jaxga.api.devices.use_all_cores() (or "
                 "set_local_devices) right after `import jax`, before any JAX computation. "
                 "Results are the same, only slower.", DeviceWarning, stacklevel=2)
     return n
@@ -169,7 +169,7 @@ def use_all_cores() -> int | None:
 
     The documented one-liner for Python users, before any JAX computation::
 
-        import jaxga.api.parallel; jaxga.api.parallel.use_all_cores()
+        import jaxga._runtime.parallel; jaxga._runtime.parallel.use_all_cores()
 
     Same as :func:`set_local_devices` with no argument.
     """
@@ -298,12 +298,12 @@ def initialize(coordinator: str, num_processes: int, process_id: int, *,
         raise JaxgaError(f"the process timeout must be > 0 s and at most "
                          f"{MAX_PROCESS_TIMEOUT:,} s, got {timeout}")
     if _session is not None:
-        raise JaxgaError("jaxga.api.parallel.initialize was already called in this process")
+        raise JaxgaError("jaxga._runtime.parallel.initialize was already called in this process")
     if num_processes == 1:
         return
     if jax.distributed.is_initialized():
         raise JaxgaError("jax.distributed is already initialised; call "
-                         "jaxga.api.parallel.initialize instead of jax.distributed.initialize")
+                         "jaxga._runtime.parallel.initialize instead of jax.distributed.initialize")
     jax.config.update("jax_enable_preemption_service", False)  # unused; slows exit
     jax.config.update("jax_cpu_collectives_implementation", "gloo")
     who = ("not every process joined" if process_id == 0 else

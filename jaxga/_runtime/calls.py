@@ -2,10 +2,10 @@
 as calls of the evolve chunk.
 
 Run ``q * S + s`` is point ``q`` with seed ``s``; each process computes its contiguous
-share (:mod:`jaxga.api.parallel`) as calls of a few sizes
-(:func:`jaxga.api.programs.run_layout`) that fit the machine's memory
+share (:mod:`jaxga._runtime.parallel`) as calls of a few sizes
+(:func:`jaxga._runtime.programs.run_layout`) that fit the machine's memory
 (:func:`fitting_layout`: padded calls held together, one unpadded call, or calls of as many
-runs as fit, one group after another; :mod:`jaxga.api.memory`). A run's result depends
+runs as fit, one group after another; :mod:`jaxga._runtime.memory`). A run's result depends
 only on its own key and parameters, so no layout changes any result.
 """
 
@@ -19,16 +19,16 @@ import jax
 import jax.numpy as jnp
 import numpy as np
 
-from jaxga.api import parallel
-from jaxga.api.memory import memory_budget, runs_that_fit, too_much_memory
-from jaxga.api.programs import (
+from jaxga._runtime import parallel
+from jaxga._runtime.memory import memory_budget, runs_that_fit, too_much_memory
+from jaxga._runtime.programs import (
     GENERATION_CHUNK,
     compiled_buckets,
     platform_layout,
     run_layout,
     stack_params,
 )
-from jaxga.api.seeds import seed_sharding
+from jaxga._runtime.seeds import seed_sharding
 from jaxga.core.errors import ParameterError
 from jaxga.core.grid import Grid
 from jaxga.engine import Algorithm
@@ -71,8 +71,8 @@ def this_process_runs(seed_arr: np.ndarray, per_point: Sequence[dict], grid: Gri
 
     Run ``q * S + s`` is point ``q`` with seed ``s``; the runs are padded (copies of the
     last run) to a multiple of processes x local devices; this process computes its
-    contiguous share (:func:`jaxga.api.parallel.allgather_runs` joins the shares), as
-    calls of a few sizes (:func:`jaxga.api.programs.run_layout`), the last run copied to
+    contiguous share (:func:`jaxga._runtime.parallel.allgather_runs` joins the shares), as
+    calls of a few sizes (:func:`jaxga._runtime.programs.run_layout`), the last run copied to
     fill them, held together or in groups as the memory allows (:func:`fitting_layout`;
     ``padded=False``: without the padding of :func:`run_layout`). A run's result depends
     only on its own key and parameters, so neither padding nor grouping changes any
@@ -112,7 +112,7 @@ def fitting_layout(algo: Algorithm, n_local: int, n_dev: int, layout: tuple[int,
                    padded: bool = True) -> tuple[int, int, int]:
     """``(runs per device, calls, calls held at once)`` for this process's ``n_local``
     runs on ``n_dev`` devices that fits the machine's memory
-    (:func:`jaxga.api.memory.too_much_memory`): the padded ``layout`` (runs per device,
+    (:func:`jaxga._runtime.memory.too_much_memory`): the padded ``layout`` (runs per device,
     calls), all its calls held together, where it fits; else one call of exactly these
     runs (a program of that size is compiled); else calls of as many runs as fit, one
     call at a time (:func:`grouped_layout`). ``padded=False`` skips the padded layout."""

@@ -3,7 +3,7 @@ asked, JAX's persistent compilation cache.
 
 A cold ``jaxga.run`` spends seconds compiling its programs, most of a short run's time
 (README, performance). jaxga keeps its own programs whole on disk
-(:mod:`jaxga.api.executables`), so that a later process that needs the same program
+(:mod:`jaxga._runtime.executables`), so that a later process that needs the same program
 (same preset, map size and run count) reads it instead of tracing, lowering and
 compiling it (decision 014). That store is jaxga's own folder: the Python API uses it by
 default and changes no JAX setting (:func:`store_directory`).
@@ -120,7 +120,7 @@ def use_compilation_cache(directory: str | os.PathLike | None = None) -> str | N
 
 
 def store_directory() -> str | None:
-    """The folder of jaxga's program store (:mod:`jaxga.api.executables`): JAX's own
+    """The folder of jaxga's program store (:mod:`jaxga._runtime.executables`): JAX's own
     cache folder where one is configured (a local one; a remote one: none), else the
     folder :func:`configure` named, else ``$JAXGA_CACHE_DIR`` or
     :func:`default_directory` (made on first use; ``None`` with one

@@ -30,9 +30,9 @@ import jax
 import jax.numpy as jnp
 import numpy as np
 
-from jaxga.api import executables
-from jaxga.api.device_probe import check_backend
-from jaxga.api.seeds import seed_sharding
+from jaxga._runtime import executables
+from jaxga._runtime.device_probe import check_backend
+from jaxga._runtime.seeds import seed_sharding
 from jaxga.config.schema import Config
 from jaxga.core.errors import ParameterError, PlatformWarning
 from jaxga.engine import (
@@ -97,7 +97,7 @@ class Programs:
     when first needed, so that a batch whose initialisation found no path at all compiles
     nothing more (:func:`sweep`). Each is taken from another program set of this process
     that shares it (``shared``: its key per program, :func:`program_view`), else read
-    from :mod:`jaxga.api.executables` when stored there; the functions are traced
+    from :mod:`jaxga._runtime.executables` when stored there; the functions are traced
     (``trace()``) only when one is neither."""
 
     NAMES = ("init", "evolve", "finish")
@@ -192,7 +192,7 @@ _TABLE_PROGRAMS: dict[str, Any] = {}
 
 def tables_for(grid: Any) -> Any:
     """``grid`` with its map tables (:func:`jaxga.engine.maptables.with_tables`), computed
-    by a program kept in the store like the run's own (:mod:`jaxga.api.executables`), so
+    by a program kept in the store like the run's own (:mod:`jaxga._runtime.executables`), so
     that a later process on a map of the same shape compiles nothing for them."""
     if grid.tables is not None:
         return grid

@@ -1,7 +1,7 @@
 """Compiled programs kept on disk whole, so that a later process neither traces, lowers
 nor compiles them (decision 028).
 
-JAX's persistent compilation cache (:mod:`jaxga.api.compilation_cache`) saves XLA's
+JAX's persistent compilation cache (:mod:`jaxga._runtime.compilation_cache`) saves XLA's
 compilation only: a later process still traces the Python functions and lowers them to
 StableHLO to find the entry (decisions 014 and 028).
 This store keeps each compiled program (``jax.experimental.serialize_executable``)
@@ -9,7 +9,7 @@ under a key made of everything the tracing depends on: the program's name, the
 algorithm (operators, sizes, static settings), the shapes and static parts of the map and
 of the parameters, the runs per call, the devices, the JAX, jaxlib and jaxga versions
 (jaxga's by a digest of its source files, so an edited checkout never reads a stale
-program), the lowering choice (:mod:`jaxga.api.lowering`) and ``XLA_FLAGS``. A program is
+program), the lowering choice (:mod:`jaxga._runtime.lowering`) and ``XLA_FLAGS``. A program is
 stored only when every operator it uses is one of jaxga's own: a user's operator
 (registered in a notebook) can change without any of these, so its programs go through
 JAX's cache alone, which keys on the lowered program.
@@ -47,8 +47,8 @@ import jax
 import jaxlib
 from jax.experimental.serialize_executable import deserialize_and_load, serialize
 
-from jaxga.api.compilation_cache import store_directory
-from jaxga.api.lowering import jaxga_lowering, threefry_unrolled
+from jaxga._runtime.compilation_cache import store_directory
+from jaxga._runtime.lowering import jaxga_lowering, threefry_unrolled
 from jaxga.core.errors import CacheWarning
 from jaxga.core.files import atomic_write
 from jaxga.engine import chosen_operators
@@ -74,7 +74,7 @@ def source_digest() -> str:
 
 def directory() -> Path | None:
     """Where the programs are kept: under the cache folder
-    (:func:`jaxga.api.compilation_cache.store_directory`); None without one."""
+    (:func:`jaxga._runtime.compilation_cache.store_directory`); None without one."""
     base = store_directory()
     return None if base is None else Path(base) / SUBDIRECTORY
 
@@ -295,7 +295,7 @@ def _compiling(key: str | None) -> Iterator[None]:
 def load_or_compile(key: str | None, devices: Any, lower: Callable[[], Any],
                     options: dict | None = None) -> tuple[Any, bool]:
     """The program stored under ``key``, else ``lower()`` (in jaxga's lowering scope:
-    :func:`jaxga.api.lowering.jaxga_lowering`) compiled and stored; and whether it was
+    :func:`jaxga._runtime.lowering.jaxga_lowering`) compiled and stored; and whether it was
     read. The compilation holds the key's lock, so that processes sharing the store
     compile it once (module docstring): one that waited reads what the other stored."""
     program = load(key, devices)
