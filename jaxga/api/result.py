@@ -47,6 +47,126 @@ def relative_gap(length: np.ndarray, optimum: float, success: np.ndarray) -> np.
     return np.where(success, gap, np.nan)
 
 
+@dataclasses.dataclass(frozen=True)
+class RunSetup:
+    """What was run (:attr:`Result.setup`): the preset, the map and the sizes."""
+
+    preset: str
+    """The preset's name."""
+    map_name: str
+    """The map's name."""
+    corner_rule: str
+    """The corner rule the paths obey."""
+    seeds: np.ndarray
+    """The seeds, one per run."""
+    config: Config | None
+    """The checked configuration."""
+    point: dict[str, Any]
+    """A sweep point's settings ({} for :func:`jaxga.run`)."""
+    population: int
+    """Individuals per island."""
+    population_capacity: int
+    """Individuals per island the compiled program holds."""
+    generations: int
+    """Generations per run."""
+    path_capacity: int
+    """The cells a path can hold."""
+    size_class: bool
+    """Whether the runs went on the map padded to its size class."""
+    width: int
+    """The map's width in cells (a cell index is ``y * width + x``)."""
+    start: tuple[int, int] | None
+    """The start cell ``(x, y)``."""
+    goal: tuple[int, int] | None
+    """The goal cell ``(x, y)``."""
+    frame: MapFrame | None
+    """Planning cells against the map file's cells and metres (None for a bare grid)."""
+
+
+@dataclasses.dataclass(frozen=True)
+class RunPaths:
+    """The best paths, per seed (:attr:`Result.paths`; :meth:`Result.path` reads one as
+    ``(x, y)`` cells, :meth:`Result.world_path` in metres)."""
+
+    cells: np.ndarray
+    """int32[S, L]: post-optimised best paths, cell indices, padded with the last cell."""
+    n_cells: np.ndarray
+    """int32[S]: their numbers of cells."""
+    raw_cells: np.ndarray
+    """int32[S, L]: the GA's own best paths, before the post-optimisation."""
+    raw_n_cells: np.ndarray
+    """int32[S]: their numbers of cells."""
+
+
+@dataclasses.dataclass(frozen=True)
+class RunOutcome:
+    """What each seed found (:attr:`Result.outcome`): success and its causes, lengths,
+    fitness, the paths' metrics, the convergence and what the initialisation did. A seed
+    without a path has NaN lengths, fitness and metrics."""
+
+    success: np.ndarray
+    """bool[S]: a feasible path was found."""
+    reason: str
+    """Why seeds found no path, summed up ("" when all did)."""
+    causes: np.ndarray | None
+    """str[S]: why each seed found no path ("" for a successful one)."""
+    length: np.ndarray
+    """float[S]: the post-optimised path's Euclidean length in cells."""
+    raw_length: np.ndarray
+    """float[S]: the raw path's length."""
+    fitness: np.ndarray
+    """float[S]: the best fitness."""
+    initial_fitness: np.ndarray | None
+    """float[S]: the initial population's best fitness."""
+    convergence_generation: np.ndarray
+    """int[S]: the generation the best was found (-1 without a path)."""
+    generations_run: np.ndarray | None
+    """int[S]: the generations each seed ran (fewer when the stagnation rule stopped it)."""
+    history: dict[str, np.ndarray]
+    """``best`` / ``mean`` / ``std`` of the fitness per generation, ``[S, G]``."""
+    metrics: dict[str, np.ndarray]
+    """The post-optimised paths' metrics by name (``angle_sum``, ``turns``, ...)."""
+    raw_metrics: dict[str, np.ndarray]
+    """The raw paths' metrics by name."""
+    failures: np.ndarray
+    """int[S, 3]: failed crossovers, mutations and simplifications."""
+    init_success_rate: np.ndarray
+    """float[S]: the share of the initialiser's attempts that made a path."""
+    init_unfilled: np.ndarray
+    """int[S]: initial slots left empty."""
+    init_fallback: np.ndarray | None
+    """int[S]: initial individuals the fallback initialiser made."""
+
+
+@dataclasses.dataclass(frozen=True)
+class References:
+    """The exact references a result is measured against (:attr:`Result.references`; the
+    gaps are :attr:`Result.gap`, :attr:`Result.raw_gap` and :attr:`Result.fitness_gap`)."""
+
+    optimum: float
+    """The exact 8-connected optimum."""
+    any_angle_optimum: float
+    """The exact any-angle optimum (NaN where not computed: :attr:`any_angle_note`)."""
+    lower_bound: float
+    """A proven lower bound of the any-angle optimum (NaN where not computed)."""
+    any_angle_note: str
+    """Why :attr:`any_angle_optimum` is NaN ("" when it is computed)."""
+    fitness_optimum: float
+    """The exact optimum of the preset's fitness over 8-connected paths (NaN where not
+    computed: :attr:`fitness_optimum_reason`)."""
+    fitness_optimum_length: float
+    """The length of the path that reaches it."""
+    fitness_optimum_loop_free: bool
+    """False when that path visits a cell twice (the optimum is then an upper bound)."""
+    fitness_optimum_reason: str
+    """Why :attr:`fitness_optimum` is NaN ("" when it is computed)."""
+
+
+RESULT_RECORDS = (RunSetup, RunPaths, RunOutcome, References)
+"""The sub-records of a :class:`Result`, which with its ``timing`` hold each of its
+fields once."""
+
+
 @dataclasses.dataclass
 class Result:
     """Per-seed results of :func:`run` (NumPy arrays, leading axis = seeds).
@@ -54,6 +174,11 @@ class Result:
     A seed that found no path has no length, fitness or metrics: they are NaN (never 0),
     :meth:`path` returns None, its convergence generation is -1 and :attr:`causes` says
     why. ``np.nanmean(r.length)`` or ``r.length[r.success]`` averages the paths found.
+
+    The fields read by name (``r.length``) or grouped as typed sub-records:
+    :attr:`setup` (what was run), :attr:`paths` (the best paths), :attr:`outcome` (what
+    each seed found), :attr:`references` (the exact optima) and ``timing`` (seconds per
+    phase).
     """
 
     preset: str
@@ -136,6 +261,30 @@ class Result:
     frame: MapFrame | None = None
     """How the planning cells relate to the map file's cells and to metres
     (:mod:`jaxga.maps.frame`); None for a map given as a bare :class:`~jaxga.Grid`."""
+
+    def _record(self, record: type) -> Any:
+        return record(**{f.name: getattr(self, f.name) for f in dataclasses.fields(record)})
+
+    @property
+    def setup(self) -> RunSetup:
+        """What was run: preset, map, seeds, configuration, sizes (:class:`RunSetup`)."""
+        return self._record(RunSetup)
+
+    @property
+    def paths(self) -> RunPaths:
+        """The best paths, raw and post-optimised (:class:`RunPaths`)."""
+        return self._record(RunPaths)
+
+    @property
+    def outcome(self) -> RunOutcome:
+        """What each seed found: success, lengths, fitness, metrics, convergence
+        (:class:`RunOutcome`)."""
+        return self._record(RunOutcome)
+
+    @property
+    def references(self) -> References:
+        """The exact optima and bounds it is measured against (:class:`References`)."""
+        return self._record(References)
 
     def path(self, i: int, raw: bool = False) -> list[tuple[int, int]] | None:
         """Seed ``i``'s best path as ``(x, y)`` cells (post-optimised unless ``raw``); None

@@ -202,6 +202,24 @@ def test_summary_rows_are_the_statistics_of_the_successful_seeds(preset_run):
     assert "success 2/3" in failed.summary()
 
 
+def test_a_result_is_its_sub_records(preset_run):
+    """Every field of a :class:`~jaxga.api.result.Result` is in exactly one of its typed
+    sub-records (setup, paths, outcome, references) or is its timing, and each
+    sub-record holds the very values read by name."""
+    from jaxga.api.result import RESULT_RECORDS
+
+    _, r, _ = preset_run
+    fields = [f.name for f in dataclasses.fields(r)]
+    grouped = [f.name for rec in RESULT_RECORDS for f in dataclasses.fields(rec)]
+    assert sorted(grouped + ["timing"]) == sorted(fields)
+    for view in (r.setup, r.paths, r.outcome, r.references):
+        for f in dataclasses.fields(view):
+            assert getattr(view, f.name) is getattr(r, f.name), f.name
+    assert r.paths.cells.shape[0] == len(r.setup.seeds) == r.outcome.success.shape[0]
+    with pytest.raises(dataclasses.FrozenInstanceError):
+        r.references.optimum = 0.0
+
+
 def test_stagnation_freezes_a_run_after_k_generations_without_improvement(grid):
     """IMGA 4.4's stopping rule (``termination.stagnation``): with K = 1 a run freezes
     after its first generation without improvement; until then it is the run without
