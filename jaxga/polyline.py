@@ -18,8 +18,8 @@ distance 1/2 of the corner's cell centre, so the rounded corner stays inside the
 corner's own cell, which is free: the fillet rounding is always realisable without
 touching a new obstacle. The uncapped fillet ``2 tan(theta/2) / min(a, b)`` is not: on
 any-angle paths, whose segments are long and graze obstacle corners, it asks for radii
-of 10+ cells that cut deep into the obstacles the path wraps around (e.g. 0.076 on
-``routeplanning_zhangzheng_paper_20x20``, where no clear curve comes close). Since every
+of 10+ cells that cut deep into the obstacles the path wraps around: a curvature no
+clear curve comes close to (decision 044). Since every
 segment between distinct cell centres is at least 1 long, the bound of a jaxga path is
 simply ``2 tan(theta_max / 2)``: 0.83 for a 45 degree turn, 2 for 90 degrees, 4.83 for
 135 degrees. A curve whose maximum curvature is below it turns no more sharply than the

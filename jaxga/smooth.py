@@ -123,10 +123,10 @@ class SmoothConfig:
             (the default) for ``H + W`` of the map, clipped to ``[16, 512]``: about one
             control point per cell of a typical path (a path across an ``H x W`` map is
             ``max(H, W)`` to ``H + W`` long). Too few stiffen the curve: more fallbacks
-            and tighter clearances (e.g. 40 on a 50 x 50 map, or H + W = 40 for the
-            100+ cell paths of a 20 x 20 maze with 1-cell corridors, where about 35 %
-            fall back; 160 smooths them all). Set it to ~1.2 x the longest path length
-            for winding paths. Cost is linear in it.
+            and tighter clearances (e.g. 40 on a 50 x 50 map, or ``H + W`` for the
+            winding paths of a maze, which are much longer than ``H + W`` cells;
+            decision 044). Set it to ~1.2 x the longest path length for winding paths.
+            Cost is linear in it.
         steps: optimisation steps (``optax.adam`` in ``lax.scan``).
         learning_rate: initial Adam step size in cells (cosine-decayed to 0).
         adam_eps: Adam's ``eps``. Large compared with optax's 1e-8 on purpose: Adam

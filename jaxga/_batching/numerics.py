@@ -2,8 +2,8 @@
 
 XLA's CPU backend vectorises a reduction such as ``jnp.sum(x, axis=-1)`` differently
 depending on the whole array's shape: under ``vmap``, the same row summed in a batch of
-1 and in a batch of 64 can differ in the last bit (measured on this machine: 122 of 256
-rows of 161 float32 values; ``tests/batching/test_numerics.py``). jaxga computes runs in
+1 and in a batch of 64 can differ in the last bit, for many rows, not a rare few
+(decision 044; ``tests/batching/test_numerics.py``). jaxga computes runs in
 blocks whose size depends on the number of runs and of devices
 (``jaxga._runtime.programs.map_runs``), so a path
 length, a fitness or a population mean summed that way would depend on how many seeds

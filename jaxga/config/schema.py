@@ -83,8 +83,8 @@ COMMON_FIELDS: dict[str, Field] = {
                              "failure)", choices=REPAIR_FALLBACKS),
     "fitness.method": MethodField("fitness", "fitness combiner (see jaxga operators)"),
     "fitness.window": Field(bool, "evaluate grid paths on a narrow window when all fit "
-                            "(same results; faster where paths stay short, 1-2 s more "
-                            "compile)"),
+                            "(same results; faster where paths stay short, one more "
+                            "program to compile; decision 005)"),
     "selection.method": MethodField("selection", "selection (see jaxga operators)"),
     "crossover.method": MethodField("crossover", "crossover (see jaxga operators)"),
     "crossover.probability": Field(**P, doc="crossover probability pc per pair"),

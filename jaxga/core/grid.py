@@ -52,13 +52,13 @@ and 041)."""
 
 PLAN_BASE_BYTES = 1 << 30
 """Memory of a plan that does not grow with the map: the process, JAX, the compiled
-programs and the runs (1 GiB; a 500 x 500 map's plan peaks at 0.56 GB)."""
+programs and the runs (1 GiB, above the whole peak of a plan on a 500 x 500 map;
+decision 041)."""
 
 PLAN_BYTES_PER_CELL = 512
 """Memory of a plan per map cell (the map, its distance fields and move tables, the
-references' searches, the clearance's distance transform): about 285 bytes measured
-between a 500 x 500 and a 2330 x 1890 map (0.56 and 1.74 GB peak, decision 041), with room
-to spare."""
+references' searches, the clearance's distance transform): above the growth per cell
+measured between a 500 x 500 and a 2330 x 1890 map (decision 041), with room to spare."""
 
 
 def plan_memory(cells: int) -> int:

@@ -390,10 +390,9 @@ def over_pairs_gated(
 
 WINDOW_FRACTION = 0.4
 """:func:`windowed_map`'s narrow width is the smallest power of two at least this share
-of the capacity (decision 005). Measured longest path of a whole batch of evolving SGA
-runs (speed.py's maps): 20 x 20, capacity 160, 50 runs: 88 at generation 10, 46-57 from
-generation 20 on (window 64); 50 x 50, capacity 400, 20 runs: 260 at generation 50,
-164-220 from generation 100 on (window 256)."""
+of the capacity: wide enough to hold the longest path of a whole batch of evolving runs
+once their first generations have shortened it, so that the narrow program is the one
+that runs (the longest paths measured: decision 005)."""
 
 
 def window_width(capacity: int) -> int:

@@ -319,10 +319,9 @@ def segment_sa(
         max_rounds, queue: static bounds of ``connect`` (rounds of median insertion, gaps
             open at once). ``queue`` defaults to ``max(H, W) // 2 + 8`` (a gap of
             Chebyshev length D has about D / 2 sub-gaps open at its widest round).
-            ``max_rounds = 32``: on the 20 x 20 classic map, 16 rounds closed 77 % of the
-            reconnections, 32 rounds 82 % and 64 rounds no more, while under ``vmap``
-            every lane pays for the slowest (about 3.4 us per round per individual
-            there), so the default is the smallest bound that lost nothing measurable.
+            ``max_rounds = 32``: fewer rounds lose reconnections and more close no
+            more, while under ``vmap`` every lane pays for the slowest, so the default
+            is the smallest bound that lost nothing measurable (decision 044).
 
     Decisions: the deleted segment is the open stretch between positions ``i < j`` drawn
     uniformly among the pairs with ``j - i >= 2`` (at least one node deleted; the

@@ -173,7 +173,7 @@ walk's capacity (up to 101 x 101 cells, 40 kB per walk, for a capacity of 160; a
 is probed faster than the hash set of 32-64 bytes per node);
 on larger maps as a hash set of the walk's own cells (:func:`_hash_add`) and a sorted
 list of the excluded ones, so that its memory and time grow with the capacity, not with
-the map (a range mutation on a 256 x 256 map held 64 kB per walk; decision 008)."""
+the map (decision 008)."""
 
 
 _HASH_PROBES = 16
@@ -427,10 +427,11 @@ def greedy_walk(
     * ``max_steps`` (static, default ``4 * capacity``) caps the moves of the raw walk,
       loops included (the cost is one scan step per move); a walk that has not reached
       ``target`` by then fails, and so does one whose loop-free path exceeds
-      ``capacity``. The cap matters on maps with traps: on ``acoga_skolayat_G_20x20``
-      (capacity 160) the success rate is 34 % with 159 moves, 80 % with 640 (the
-      default) and 96 % with 1280; on the other classic 20 x 20 maps it is >= 99 % with
-      640.
+      ``capacity``. The cap matters on maps with traps, where a walk that revisits cells
+      needs many more moves than its loop-free path has cells: on
+      ``acoga_skolayat_G_20x20`` ``4 * capacity`` completes most of the walks that twice
+      the cap (at twice the cost) would, where ``capacity`` moves lose most of them; on
+      the other classic 20 x 20 maps it loses almost none (decision 044).
 
     Returns ``(cells int32[capacity], length int32, ok bool)`` after loop removal.
     """
