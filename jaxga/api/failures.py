@@ -10,35 +10,37 @@ import warnings
 
 import numpy as np
 
+from jaxga._runtime.sweep_plan import InitOutcome, SweepPlan
 from jaxga.api.result import Result
 from jaxga.core.errors import InitialisationWarning
 from jaxga.core.objectives import Metrics
 
 
-def unstarted_results(*, config, configs, points, map_name, grid, seed_arr, algo, octile,
-                      point_opt, rate, unfilled, from_fallback, initial, timing, size_class,
-                      frame) -> list[Result]:
+def unstarted_results(plan: SweepPlan, start: InitOutcome, timing: dict) -> list[Result]:
     """The results of a sweep whose initialisation gave no run a path: every seed failed,
     each with its cause; nothing evolved."""
-    n_seeds = len(seed_arr)
+    algo, point_opt = plan.algo, plan.point_opt
+    n_seeds = len(plan.seed_arr)
     results = []
-    for q, cfg in enumerate(configs):
+    for q, cfg in enumerate(plan.configs):
         sl = slice(q * n_seeds, (q + 1) * n_seeds)
         success = np.zeros(n_seeds, bool)
-        causes = failure_causes(success, success, rate[sl], from_fallback[sl], cfg,
-                                algo.capacity, len(octile.path))
-        r = no_path_result(cfg, map_name, grid, seed_arr, algo, failure_reason(causes),
-                           timing, algo.population, frame)
+        causes = failure_causes(success, success, start.rate[sl], start.from_fallback[sl],
+                                cfg, algo.capacity, len(plan.octile.path))
+        r = no_path_result(cfg, plan.map_name, plan.grid, plan.seed_arr, algo,
+                           failure_reason(causes), timing, algo.population, plan.frame)
         results.append(dataclasses.replace(
-            r, preset=config["name"], init_success_rate=rate[sl], init_unfilled=unfilled[sl],
-            optimum=float(octile.length),
+            r, preset=plan.config["name"], init_success_rate=start.rate[sl],
+            init_unfilled=start.unfilled[sl], optimum=float(plan.octile.length),
             any_angle_note="not computed: no seed got an initial path",
-            timing=dict(timing), point={k.replace("__", "."): v for k, v in points[q].items()},
+            timing=dict(timing),
+            point={k.replace("__", "."): v for k, v in plan.points[q].items()},
             fitness_optimum=point_opt[q].fitness, fitness_optimum_length=point_opt[q].length,
             fitness_optimum_loop_free=point_opt[q].loop_free,
             fitness_optimum_reason="" if point_opt[q].found else point_opt[q].reason,
-            init_fallback=from_fallback[sl], causes=causes, path_capacity=algo.capacity,
-            initial_fitness=initial[sl].astype(float), size_class=size_class))
+            init_fallback=start.from_fallback[sl], causes=causes,
+            path_capacity=algo.capacity, initial_fitness=start.initial[sl].astype(float),
+            size_class=plan.size_class))
     return results
 
 

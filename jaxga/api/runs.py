@@ -40,6 +40,7 @@ from jaxga._runtime.programs import (
 from jaxga._runtime.references import AnyAngleBounds, any_angle_references, octile_optimum
 from jaxga._runtime.seeds import seed_list
 from jaxga._runtime.size_classes import auto_size_class, class_capacity, map_cells, pad_to_class
+from jaxga._runtime.sweep_plan import InitOutcome, SweepPlan
 from jaxga._runtime.timeline import Timeline
 from jaxga.api.failures import (
     failure_causes,
@@ -79,6 +80,18 @@ run's reported gaps should not depend on how fast the machine happened to be."""
 WAYPOINT_FITNESS = ("this configuration evolves waypoint paths; the exact fitness optimum "
                     "covers 8-connected paths only, so it bounds nothing here")
 """Why a run of waypoint paths (AGACD, Zhang's eq. 5 deletions) has no fitness gap."""
+
+
+@dataclasses.dataclass(frozen=True)
+class CallOptions:
+    """How a request of :func:`run` or :func:`sweep` runs, beside what it runs (the
+    problem, the points and the seeds): its progress callback, population capacity,
+    size class and any-angle budget, as those functions document them."""
+
+    progress: Callable[[str, float], None] | None = None
+    population_capacity: int | None = None
+    size_class: bool | None = None
+    any_angle_budget: float | str | None = "auto"
 
 
 def _check_call_options(progress, chunks, size_class=None, any_angle_budget="auto") -> None:
@@ -170,11 +183,20 @@ def sweep(
     process raises :class:`jaxga._runtime.parallel.ProcessLostError`).
     """
 
-    args = (preset, grid, points, seeds)
-    options = {**_run_options(locals()), **overrides}
+    _check_points(points)
+    _check_call_options(progress, chunks, size_class, any_angle_budget)
+    if chunks != 1:
+        warnings.warn("chunks is ignored: the generations run in compiled chunks of "
+                      f"{GENERATION_CHUNK} and progress is reported after each",
+                      DeprecationWarning, stacklevel=2)
+    options = CallOptions(progress, population_capacity, size_class, any_angle_budget)
     while True:
+        timeline = Timeline()
         try:
-            return _sweep(*args, **options)
+            with timeline.phase("load"):
+                problem = load_problem(preset, grid, corner_rule, variant, sets, overrides,
+                                       generations)
+            return _sweep(problem, points, seeds, options, timeline)
         except JaxRuntimeError as err:
             # a stored program that does not run (jaxga._runtime.executables: "NOT_FOUND:
             # Function ... not found", or "INTERNAL: Error dispatching computation:
@@ -188,23 +210,15 @@ def sweep(
 _MISSING_FUNCTION = re.compile(r"NOT_FOUND|Function \S+ not found")
 
 
-def _sweep(preset, grid, points, seeds, *, generations, corner_rule, variant, sets,
-           progress, chunks, population_capacity, size_class, any_angle_budget,
-           **overrides) -> list[Result]:
-    """:func:`sweep`'s work as phases over a :class:`_SweepPlan` (each timed by the
-    :class:`~jaxga._runtime.timeline.Timeline`): the plan (map, configurations, references,
-    the programs' map and parameters), the compiled programs, the initial populations,
-    the evolution, the finish, the any-angle references, the results."""
-    timeline = Timeline()
-    report = _reporter(progress)
-    _check_points(points)
-    _check_call_options(progress, chunks, size_class, any_angle_budget)
-    if chunks != 1:
-        warnings.warn("chunks is ignored: the generations run in compiled chunks of "
-                      f"{GENERATION_CHUNK} and progress is reported after each",
-                      DeprecationWarning, stacklevel=3)
-    plan = _plan_sweep(preset, grid, points, seeds, generations, corner_rule, variant, sets,
-                       population_capacity, size_class, overrides, timeline, report)
+def _sweep(problem: Problem, points: Sequence[Mapping[str, Any]], seeds: Any,
+           options: CallOptions, timeline: Timeline) -> list[Result]:
+    """:func:`sweep`'s work as phases over a :class:`~jaxga._runtime.sweep_plan.SweepPlan`
+    (each timed by the :class:`~jaxga._runtime.timeline.Timeline`, which has timed the
+    problem's loading): the plan (configurations, references, the programs' map and
+    parameters), the compiled programs, the initial populations, the evolution, the
+    finish, the any-angle references, the results."""
+    report = _reporter(options.progress)
+    plan = _plan_sweep(problem, points, seeds, options, timeline, report)
     if not plan.octile.found:  # no path: nothing to compile
         return _no_path_results(plan, timeline)
     runs, progs = _compile_init(plan, timeline, report)
@@ -218,9 +232,9 @@ def _sweep(preset, grid, points, seeds, *, generations, corner_rule, variant, se
         # nothing can succeed: no evolution, no post-optimisation
         start = _gathered_start(plan, [first])
         report("compile", 1.0)
-        return unstarted_results(timing={"compile_s": 0.0, "init_s": 0.0, "evolve_s": 0.0,
-                                         "post_s": 0.0, **timeline.as_dict()},
-                                 **plan.result_context(), **start.result_context())
+        return unstarted_results(plan, start, {"compile_s": 0.0, "init_s": 0.0,
+                                                "evolve_s": 0.0, "post_s": 0.0,
+                                                **timeline.as_dict()})
     with timeline.phase("compile"):
         progs.compile_rest(lambda frac: report("compile", frac))
     check_compiled_memory(progs.memory_stats(), len(groups[0].calls), runs.n_local)
@@ -238,10 +252,8 @@ def _sweep(preset, grid, points, seeds, *, generations, corner_rule, variant, se
     with timeline.phase("post"):
         host, hist = parallel.allgather_runs(jax.tree_util.tree_map(
             lambda *parts: np.concatenate(parts), *outs))
-    bounds = _any_angle_bounds(plan, host, any_angle_budget, timeline, report)
-    context = dict(plan.result_context(), **start.result_context())
-    return _point_results(host, hist, started=start.started, timing=timeline.as_dict(),
-                          bounds=bounds, **context)
+    bounds = _any_angle_bounds(plan, host, options.any_angle_budget, timeline, report)
+    return _point_results(host, hist, plan, start, timeline.as_dict(), bounds)
 
 
 def _reporter(progress: Callable[[str, float], None] | None) -> Callable[[str, float], None]:
@@ -249,61 +261,28 @@ def _reporter(progress: Callable[[str, float], None] | None) -> Callable[[str, f
     return progress if progress is not None else (lambda stage, frac: None)
 
 
-@dataclasses.dataclass(frozen=True)
-class _SweepPlan:
-    """A sweep checked and prepared before anything compiles.
-
-    ``grid`` is the user's map: the results, the references and the paths are on it.
-    ``program_grid`` is the map the programs run on: with the exact distance fields when
-    an operator steers by them, padded to its size class when asked (decision 029).
-    Without a path (``octile.found`` false) nothing runs: no ``algo``, programs' map or
-    parameters."""
-
-    config: Config
-    configs: list[Config]
-    points: Sequence[Mapping[str, Any]]
-    map_name: str
-    frame: Any
-    grid: Grid
-    capacity: int
-    octile: Any
-    seed_arr: np.ndarray
-    size_class: bool = False
-    algo: Algorithm | None = None
-    program_grid: Grid | None = None
-    per_point: list[dict] = dataclasses.field(default_factory=list)
-    point_opt: list[Any] = dataclasses.field(default_factory=list)
-
-    def result_context(self) -> dict[str, Any]:
-        """What every result of the sweep is built with, from the plan."""
-        return dict(config=self.config, configs=self.configs, points=self.points,
-                    map_name=self.map_name, grid=self.grid, seed_arr=self.seed_arr,
-                    algo=self.algo, octile=self.octile, point_opt=self.point_opt,
-                    size_class=self.size_class, frame=self.frame)
-
-
-def _plan_sweep(preset, grid, points, seeds, generations, corner_rule, variant, sets,
-                population_capacity, size_class, overrides, timeline: Timeline,
-                report: Callable[[str, float], None]) -> _SweepPlan:
-    """The map and every point's configuration loaded and checked (phase ``load``), the
-    exact 8-connected optimum (``references``); where a path exists, the programs' map,
-    the algorithm at the sweep's capacity, each point's parameters and the exact optimum
-    of its own fitness (``references``), and the seeds (memory checked)."""
-    with timeline.phase("load"):
-        config, map_grid, map_name, frame, _ = load_problem(
-            preset, grid, corner_rule, variant, sets, overrides, generations)
+def _plan_sweep(problem: Problem, points: Sequence[Mapping[str, Any]], seeds: Any,
+                options: CallOptions, timeline: Timeline,
+                report: Callable[[str, float], None]) -> SweepPlan:
+    """Every point's configuration checked, the exact 8-connected optimum
+    (phase ``references``); where a path exists, the programs' map, the algorithm at the
+    sweep's capacity, each point's parameters and the exact optimum of its own fitness
+    (``references``), and the seeds (memory checked)."""
+    config, map_grid, map_name, frame = problem.config, problem.grid, problem.map_name, \
+        problem.frame
     configs = _point_configs(config, points)
-    capacity = checked_capacity(configs, population_capacity)
+    capacity = checked_capacity(configs, options.population_capacity)
     report("references", 0.0)
     with timeline.phase("references"):
         octile = octile_optimum(map_grid, guided=uses_guide(config))
     problem = dict(config=config, configs=configs, points=points, map_name=map_name,
                    frame=frame, grid=map_grid, capacity=capacity, octile=octile)
     if not octile.found:
-        return _SweepPlan(**problem, seed_arr=seed_list(seeds, lambda n: check_memory(
+        return SweepPlan(**problem, seed_arr=seed_list(seeds, lambda n: check_memory(
             n * len(configs), NO_PATH_BYTES_PER_RUN, "for their results")))
     # the programs run on the map padded to its size class (decision 029), if asked
-    size_class = auto_size_class(map_grid) if size_class is None else bool(size_class)
+    size_class = auto_size_class(map_grid) if options.size_class is None \
+        else bool(options.size_class)
     with timeline.phase("references"):
         program_grid, build_config = _program_map(config, map_grid, capacity, size_class)
         # the capacity is the largest size swept, also when it is below the preset's size
@@ -312,7 +291,7 @@ def _plan_sweep(preset, grid, points, seeds, generations, corner_rule, variant, 
         _check_param_shapes(per_point, points)
         point_opt = _fitness_optima(configs, map_grid, algo)
     seed_arr = seed_list(seeds, lambda n: check_result_memory(n * len(configs), algo))
-    return _SweepPlan(**problem, seed_arr=seed_arr, size_class=size_class, algo=algo,
+    return SweepPlan(**problem, seed_arr=seed_arr, size_class=size_class, algo=algo,
                       program_grid=program_grid, per_point=per_point, point_opt=point_opt)
 
 
@@ -364,14 +343,14 @@ def _fitness_optima(configs: Sequence[Config], grid: Grid, algo: Algorithm) -> l
     return [fit_opts[k] for k in fit_keys]
 
 
-def _no_path_results(plan: _SweepPlan, timeline: Timeline) -> list[Result]:
+def _no_path_results(plan: SweepPlan, timeline: Timeline) -> list[Result]:
     """One "no path" result per point, naming the cause (nothing ran)."""
     return [no_path_result(c, plan.map_name, plan.grid, plan.seed_arr,
                            build(c, plan.grid)[0], plan.octile.reason, timeline.as_dict(),
                            plan.capacity, plan.frame) for c in plan.configs]
 
 
-def _compile_init(plan: _SweepPlan, timeline: Timeline,
+def _compile_init(plan: SweepPlan, timeline: Timeline,
                   report: Callable[[str, float], None]) -> tuple[RunCalls, Programs]:
     """This process's runs as calls of the compiled programs, on the programs' map with
     its per-map tables (attached once per run rather than computed every generation),
@@ -401,27 +380,6 @@ def _compile_init(plan: _SweepPlan, timeline: Timeline,
     return runs, progs
 
 
-@dataclasses.dataclass(frozen=True)
-class _Start:
-    """What the initialisation did, for every run of every process (gathered, so that
-    all of them decide alike whether to evolve)."""
-
-    initial: np.ndarray
-    rate: np.ndarray
-    unfilled: np.ndarray
-    from_fallback: np.ndarray
-
-    @property
-    def started(self) -> np.ndarray:
-        """The runs whose initial population holds a path."""
-        return self.initial > 0
-
-    def result_context(self) -> dict[str, Any]:
-        """What every result of the sweep is built with, from the initialisation."""
-        return dict(rate=self.rate, unfilled=self.unfilled, from_fallback=self.from_fallback,
-                    initial=self.initial)
-
-
 def _initialise(runs: RunCalls, progs: Programs, timeline: Timeline) -> tuple[list, tuple]:
     """The initial population of every call of ``runs`` (phase ``init``), and this
     process's best initial fitness, initialisation success rate, unfilled slots and
@@ -433,13 +391,13 @@ def _initialise(runs: RunCalls, progs: Programs, timeline: Timeline) -> tuple[li
                     *(runs.joined([i[j] for i in inits]) for j in (1, 2, 3)))
 
 
-def _gathered_start(plan: _SweepPlan, parts: Sequence[tuple]) -> _Start:
+def _gathered_start(plan: SweepPlan, parts: Sequence[tuple]) -> InitOutcome:
     """The initialisation's outputs of this process's groups of calls, gathered over the
     processes; a warning when slots stayed empty."""
     joined = [np.concatenate(column) for column in zip(*parts)]
     initial, init_rate, unfilled, fallback = parallel.allgather_runs(joined)
     n_total = len(initial)
-    start = _Start(initial, init_rate.reshape(n_total, -1).mean(axis=1),
+    start = InitOutcome(initial, init_rate.reshape(n_total, -1).mean(axis=1),
                    unfilled.reshape(n_total, -1).sum(axis=1),
                    fallback.reshape(n_total, -1).sum(axis=1))
     max_tries = np.repeat([int(c["init.max_tries"]) for c in plan.configs], len(plan.seed_arr))
@@ -448,7 +406,7 @@ def _gathered_start(plan: _SweepPlan, parts: Sequence[tuple]) -> _Start:
     return start
 
 
-def _evolve_and_finish(plan: _SweepPlan, runs: RunCalls, progs: Programs, states: list,
+def _evolve_and_finish(plan: SweepPlan, runs: RunCalls, progs: Programs, states: list,
                        timeline: Timeline, report: Callable[[str, float], None]) -> tuple:
     """The generations (phase ``evolve``) and the finish program (``post``) of the calls
     of ``runs``: this process's outputs and per-generation history of each of its runs
@@ -477,7 +435,7 @@ def _grouped_progress(report: Callable[[str, float], None], group: int,
                                       else frac)
 
 
-def _any_angle_bounds(plan: _SweepPlan, host: dict, budget: float | str | None,
+def _any_angle_bounds(plan: SweepPlan, host: dict, budget: float | str | None,
                       timeline: Timeline,
                       report: Callable[[str, float], None]) -> AnyAngleBounds:
     """The any-angle references of the map (phase ``any_angle``), within ``budget``
@@ -515,16 +473,15 @@ def _check_points(points: Any) -> None:
         raise ParameterError("a sweep needs at least one point")
 
 
-def _point_results(host: dict, hist: dict, *, config: Config, configs: Sequence[Config],
-                   points: Sequence[Mapping[str, Any]], map_name: str, grid: Grid,
-                   seed_arr: np.ndarray, algo: Algorithm, octile: Any,
-                   bounds: AnyAngleBounds, point_opt: Sequence[Any], rate: np.ndarray,
-                   unfilled: np.ndarray, from_fallback: np.ndarray, initial: np.ndarray,
-                   started: np.ndarray, timing: dict, size_class: bool,
-                   frame: Any) -> list[Result]:
+def _point_results(host: dict, hist: dict, plan: SweepPlan, start: InitOutcome,
+                   timing: dict, bounds: AnyAngleBounds) -> list[Result]:
     """One :class:`Result` per point from the gathered outputs of all runs (run
     ``q * S + s`` is point ``q``, seed ``s``)."""
-    n_seeds = len(seed_arr)
+    config, configs, points, grid, algo, octile = (plan.config, plan.configs, plan.points,
+                                                   plan.grid, plan.algo, plan.octile)
+    rate, unfilled, from_fallback, initial = (start.rate, start.unfilled, start.from_fallback,
+                                              start.initial)
+    n_seeds = len(plan.seed_arr)
     conv = convergence_generation(hist["best"], host["fitness"], initial)
     results = []
     for q, cfg in enumerate(configs):
@@ -536,11 +493,11 @@ def _point_results(host: dict, hist: dict, *, config: Config, configs: Sequence[
             v = np.asarray(v, float)
             return np.where(success.reshape((-1,) + (1,) * (v.ndim - 1)), v, np.nan)
 
-        causes = failure_causes(success, started[sl], rate[sl], from_fallback[sl], cfg,
-                                algo.capacity, len(octile.path))
+        causes = failure_causes(success, start.started[sl], rate[sl], from_fallback[sl],
+                                cfg, algo.capacity, len(octile.path))
         results.append(Result(
-            preset=config["name"], map_name=map_name, corner_rule=grid.corner_rule,
-            seeds=seed_arr, success=success, reason=failure_reason(causes),
+            preset=config["name"], map_name=plan.map_name, corner_rule=grid.corner_rule,
+            seeds=plan.seed_arr, success=success, reason=failure_reason(causes),
             cells=h["cells"], n_cells=h["n_cells"],
             raw_cells=h["raw_cells"], raw_n_cells=h["raw_n_cells"],
             length=found(h["length"]), raw_length=found(h["raw_length"]),
@@ -554,17 +511,18 @@ def _point_results(host: dict, hist: dict, *, config: Config, configs: Sequence[
             init_success_rate=rate[sl], init_unfilled=unfilled[sl],
             initial_fitness=initial[sl].astype(float),
             optimum=float(octile.length), any_angle_optimum=bounds.optimum,
-            lower_bound=bounds.lower_bound, any_angle_note=bounds.note, frame=frame,
+            lower_bound=bounds.lower_bound, any_angle_note=bounds.note, frame=plan.frame,
             timing=dict(timing), population=int(cfg["population.size"]) * algo.islands,
             generations=algo.generations, width=grid.width, config=cfg,
             point={k.replace("__", "."): v for k, v in points[q].items()},
-            fitness_optimum=point_opt[q].fitness,
-            fitness_optimum_length=point_opt[q].length,
-            fitness_optimum_loop_free=point_opt[q].loop_free,
-            fitness_optimum_reason="" if point_opt[q].found else point_opt[q].reason,
+            fitness_optimum=plan.point_opt[q].fitness,
+            fitness_optimum_length=plan.point_opt[q].length,
+            fitness_optimum_loop_free=plan.point_opt[q].loop_free,
+            fitness_optimum_reason=("" if plan.point_opt[q].found
+                                    else plan.point_opt[q].reason),
             start=grid.start_xy, goal=grid.goal_xy, population_capacity=algo.population,
             init_fallback=from_fallback[sl], causes=causes, path_capacity=algo.capacity,
-            size_class=size_class,
+            size_class=plan.size_class,
         ))
     return results
 
