@@ -45,8 +45,8 @@ __all__ = ["DeviceDisagrees", "ProbeRow", "check_backend", "differing", "needs_p
            "probe_grid", "rolled_on_cpu", "verdict_line", "verdicts_path"]
 
 PROBE_MAP = "classic_ga_gapp3_20x20"
-"""The map of the walk probes: the plain GA's map of the literature (a 2.6 % success
-rate of sga's random walks on the CPU, so both outcomes of a walk are frequent)."""
+"""The map of the walk probes: the plain GA's map of the literature, where sga's random
+walks both succeed and fail often, so a probe sees both outcomes (decision 040)."""
 
 CAPACITY = 160
 """Path capacity of the walk probes (sga's on :data:`PROBE_MAP`)."""

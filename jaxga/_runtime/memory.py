@@ -24,18 +24,17 @@ memory (:func:`call_memory`)."""
 STATE_FACTOR = 8
 """A run's memory while it evolves, in units of its population's cells
 (``population x islands x capacity`` int32): the population, its next generation and
-each operator's working arrays. Measured (``benchmarks/memory.py``: peak resident memory
-over the runs of a call, seven presets, 2,000 and 8,000 individuals) at 5-7."""
+each operator's working arrays; above what ``benchmarks/memory.py`` measures (decision
+042)."""
 
 INIT_FACTOR = 12
 """The initialisation's temporaries of one run (its walks' buffers and attempts), in the
 same units, held for the runs one device initialises together (an init block, at most
-10 runs): measured at 6-11."""
+10 runs); above what ``benchmarks/memory.py`` measures (decision 042)."""
 
 BASE_BYTES = 1 << 30
-"""What a process holds beside its runs: JAX (0.17 GB after its import), the compiled
-programs, the map and its tables, and the compilation's own peak (0.6-0.9 GB more on the
-CPU, measured by ``benchmarks/memory.py``)."""
+"""What a process holds beside its runs: JAX, the compiled programs, the map and its
+tables, and the compilation's own peak (decision 042)."""
 
 
 def population_bytes(algo: Algorithm) -> int:

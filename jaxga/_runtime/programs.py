@@ -217,8 +217,8 @@ loop runs only its ``count`` steps)."""
 
 SMALL_CALL_RUNS = 4
 """Runs of the small program: a call of up to 4 runs (all devices together) is one
-program of 4 runs, so a re-plan's 4 seeds compute no padding (with 8 its median latency
-rose from 40 to 60 ms: ``benchmarks/replan.py``)."""
+program of 4 runs, so a re-plan's 4 seeds compute no padding (a larger small program
+slows every re-plan: decision 028)."""
 
 
 RUNS_PER_DEVICE = 32
@@ -233,8 +233,8 @@ above runs the 32-per-device program as often as needed, on any number of device
 20 and 30 seeds: one program). So two program sets per preset and map serve every seed
 count. On maps up to 64 x 64 a run computes in milliseconds, so padding a few runs to a
 call of 32 per device costs far less than compiling a program for them; blocks of 20-50
-runs per device compute fastest (decision 011), and 1000 seeds as calls of 32 per device
-keep the throughput within 7 % (``benchmarks/ab/throughput_ab.py``)."""
+runs per device compute fastest, and many seeds as calls of 32 per device lose little
+throughput to that layout (decision 011)."""
 
 
 LARGE_MAP_BUCKETS = (1, 2, 4, 8, 16, 32)
