@@ -47,8 +47,9 @@ from typing import Any
 
 import numpy as np
 
-from jaxga.api import GAPS, RUN_OPTIONS, Result, check_run, load_problem, run
+from jaxga.api import GAPS, RUN_OPTIONS, Result, load_problem, run
 from jaxga.api import json_number as _num
+from jaxga.api.runs import checked_call
 from jaxga.config.presets import as_sets, overridden_keys, parse_set
 from jaxga.config.schema import Config
 from jaxga.core.errors import ParameterError
@@ -617,13 +618,14 @@ def compare(
     if len(specs) < 2:
         raise ParameterError(f"a comparison needs at least two presets, got {len(specs)}")
     options, left_out = _options_per_preset(specs, grid, common_options)
-    for label, (preset, _) in specs.items():  # bad input fails before anything runs
-        check_run(preset, grid, **options[label])
+    # each preset's problem loaded and checked once: bad input fails before anything runs
+    calls = {label: checked_call(preset, grid, **options[label])
+             for label, (preset, _) in specs.items()}
     results = {}
-    for label, (preset, _) in specs.items():
+    for label, (problem, call) in calls.items():
         if progress is not None:
             progress(label)
-        results[label] = run(preset, grid, seeds, **options[label])
+        results[label] = run(problem, seeds=seeds, **call)
     comparison = compare_results(same_references(results), metric=metric, metrics=metrics,
                                  test=test, alpha=alpha)
     return dataclasses.replace(comparison, left_out=left_out)

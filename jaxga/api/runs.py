@@ -649,22 +649,36 @@ def _run_options(arguments: Mapping[str, Any]) -> dict[str, Any]:
     return {name: arguments[name] for name in RUN_OPTIONS}
 
 
-def check_run(preset: str | Config, grid: Grid | str, **options: Any) -> Config:
-    """The configuration :func:`run` would use with these keyword ``options`` (all of
-    :func:`run`'s but ``seeds``), checked as :func:`run` checks it before compiling
-    (preset, map, endpoints, overrides that nothing reads, key combinations, migrants);
-    raises what :func:`run` would raise. Compiles and runs nothing: :func:`jaxga.compare`
-    checks every preset with it before the first one runs."""
+PROBLEM_OPTIONS = ("generations", "corner_rule", "variant", "sets")
+"""The keyword arguments of :func:`run` that make its problem (:func:`jaxga.problem`); the
+other :data:`RUN_OPTIONS` say how the problem is run."""
+
+
+def checked_call(preset: str | Config | Problem, grid: Grid | MapInfo | str | None,
+                 **options: Any) -> tuple[Problem, dict[str, Any]]:
+    """The :class:`Problem` :func:`run` would run with these keyword ``options`` (all of
+    :func:`run`'s but ``seeds``, and configuration overrides), checked as :func:`run`
+    checks it before compiling (preset, map, endpoints, overrides that nothing reads,
+    key combinations, migrants), and the options that say how it is run: ``run(problem,
+    seeds=..., **call)`` then runs it without loading anything again. Raises what
+    :func:`run` would raise; compiles and runs nothing (:func:`jaxga.compare` checks
+    every preset so before the first one runs)."""
     overrides = dict(options)
     named = {k: overrides.pop(k) for k in RUN_OPTIONS if k in overrides}
     _check_call_options(named.get("progress"), named.get("chunks", 1),
                         named.get("size_class"), named.get("any_angle_budget", "auto"))
-    config, grid, *_ = load_problem(preset, grid, named.get("corner_rule"),
-                                      named.get("variant"), named.get("sets", ()), overrides,
-                                      named.get("generations"))
-    (config,) = _point_configs(config, [{}])
+    problem = load_problem(preset, grid, named.get("corner_rule"), named.get("variant"),
+                           named.get("sets", ()), overrides, named.get("generations"))
+    (config,) = _point_configs(problem.config, [{}])
     checked_capacity([config], named.get("population_capacity"))
-    build(config, grid)  # check_migration and check_combination
+    build(config, problem.grid)  # check_migration and check_combination
+    return problem, {k: v for k, v in named.items() if k not in PROBLEM_OPTIONS}
+
+
+def check_run(preset: str | Config, grid: Grid | str, **options: Any) -> Config:
+    """The configuration :func:`run` would use with these keyword ``options``
+    (:func:`checked_call`'s problem's), checked as :func:`run` checks it before
+    compiling; raises what :func:`run` would raise."""
+    problem, _ = checked_call(preset, grid, **options)
+    (config,) = _point_configs(problem.config, [{}])
     return config
-
-

@@ -403,12 +403,16 @@ def test_a_common_key_is_left_out_of_the_presets_that_do_not_read_it(monkeypatch
     class Recorded(Exception):
         pass
 
-    def fake_run(preset, grid, seeds, **options):
+    real = module.checked_call
+
+    def fake_checked_call(preset, grid, **options):  # each preset's problem, checked once
+        checked = real(preset, grid, **options)
         calls[preset] = options
         if len(calls) == 2:
             raise Recorded
+        return checked
 
-    monkeypatch.setattr(module, "run", fake_run)
+    monkeypatch.setattr(module, "checked_call", fake_checked_call)
     both = ("crossover.probability=0.7", "generations=4")
     for kw, sga, agacd in (
             ({"crossover__probability": 0.7}, {"crossover__probability": 0.7}, {}),
@@ -441,6 +445,7 @@ def test_a_common_key_is_left_out_of_the_presets_that_do_not_read_it(monkeypatch
     with pytest.raises(ParameterError, match="fitness.omega has no effect in any of the "
                                              "presets compared"):
         compare(["sga", "agacd"], "classic_ga_gapp3_20x20", seeds=1, fitness__omega=0.5)
+    calls.clear()
     with pytest.raises(ParameterError, match="crossover.probability has no effect in 'agacd'"):
         compare({"sga": "sga", "agacd": ("agacd", {"crossover__probability": 0.7})},
                 "classic_ga_gapp3_20x20", seeds=1)
@@ -474,3 +479,32 @@ def test_cli_compare_with_no_path_names_the_cause(tmp_path, capsys):
     assert main(args) == EXIT_NO_PATH
     err = capsys.readouterr().err.strip()
     assert "no preset found a path" in err and "unreachable" in err
+
+
+def test_each_preset_runs_the_problem_checked_before_any_run(monkeypatch):
+    """``compare`` checks every preset's problem before the first run and runs that
+    value (:func:`jaxga.problem`), loading nothing again: ``run`` gets a Problem with the
+    common options applied, and only the options that say how to run it."""
+    import importlib
+
+    import jaxga
+
+    module = importlib.import_module("jaxga.compare")
+    seen = []
+
+    class Stop(Exception):
+        pass
+
+    def fake_run(problem, grid=None, *, seeds, **call):
+        seen.append((problem, grid, seeds, call))
+        raise Stop
+
+    monkeypatch.setattr(module, "run", fake_run)
+    with pytest.raises(Stop):
+        compare(["sga", "imga"], "classic_ga_gapp3_20x20", seeds=3, generations=7,
+                mutation__probability=0.3, size_class=False)
+    (problem, grid, seeds, call), = seen
+    assert isinstance(problem, jaxga.Problem) and grid is None and seeds == 3
+    assert problem.config["name"] == "sga" and problem.config["generations"] == 7
+    assert problem.config["mutation.probability"] == 0.3
+    assert call == {"size_class": False}
