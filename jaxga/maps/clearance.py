@@ -27,7 +27,7 @@ import math
 
 import numpy as np
 
-__all__ = ["ObstacleClearance", "segment_square_distance"]
+__all__ = ["ObstacleClearance", "cell_clearance", "segment_square_distance"]
 
 
 def segment_square_distance(a: np.ndarray, b: np.ndarray, centres: np.ndarray) -> np.ndarray:
@@ -58,6 +58,54 @@ def segment_square_distance(a: np.ndarray, b: np.ndarray, centres: np.ndarray) -
     side = np.abs(d[0] * (c[:, 1] - a[1]) - d[1] * (c[:, 0] - a[0]))
     touch = over & (side <= 0.5 * (abs(d[0]) + abs(d[1])) + 1e-12)
     return np.where(touch, 0.0, best)
+
+
+def _square_term(d: np.ndarray) -> np.ndarray:
+    """One axis's share of the squared distance from a cell centre to a unit square
+    ``d`` cells away along that axis."""
+    return np.maximum(np.abs(d) - 0.5, 0.0) ** 2
+
+
+def _row_distances(blocked: np.ndarray) -> np.ndarray:
+    """``float64[H, W]``: along each row, the distance in cells from each cell to the
+    nearest blocked cell of that row (``inf`` for a row without one)."""
+    h, w = blocked.shape
+    x = np.broadcast_to(np.arange(w, dtype=np.float64), (h, w))
+    left = np.where(blocked, x, -np.inf)
+    left = np.maximum.accumulate(left, axis=1)
+    right = np.where(blocked, x, np.inf)
+    right = np.minimum.accumulate(right[:, ::-1], axis=1)[:, ::-1]
+    return np.minimum(x - left, right - x)
+
+
+def cell_clearance(blocked: np.ndarray, border_blocked: bool = False) -> np.ndarray:
+    """``float64[H, W]``: the exact Euclidean distance from each cell's centre to the
+    nearest blocked cell's square (``blocked[y, x]``; 0 on a blocked cell, ``inf`` on a
+    map without blocked cells), with the squares just outside the map blocked too when
+    ``border_blocked``.
+
+    Exact: the squared distance to a unit square is a sum of one term per axis,
+    ``max(|dx| - 1/2, 0)**2 + max(|dy| - 1/2, 0)**2``, so one pass along the rows (the
+    nearest blocked cell of each row, the term being monotone in ``|dx|``) and one pass
+    of row offsets give every cell's minimum; the offsets stop once no further row can
+    be nearer. The widest path (:mod:`jaxga.reference.maximin`) and the robot
+    objectives (:mod:`jaxga.core.robot_objectives`) read it."""
+    b = np.asarray(blocked, dtype=bool)
+    if b.ndim != 2:
+        raise ValueError(f"blocked must be a 2-D array, got shape {b.shape}")
+    if border_blocked:
+        b = np.pad(b, 1, constant_values=True)
+    h, w = b.shape
+    across = _square_term(_row_distances(b))  # each row's share, per source row
+    best = across.copy()
+    for dy in range(1, h):
+        step = _square_term(np.float64(dy))
+        if step >= best.max():
+            break  # every cell already has a nearer square than any further row offers
+        best[dy:] = np.minimum(best[dy:], across[:-dy] + step)
+        best[:-dy] = np.minimum(best[:-dy], across[dy:] + step)
+    out = np.sqrt(best)
+    return out[1:-1, 1:-1] if border_blocked else out
 
 
 class ObstacleClearance:

@@ -6,16 +6,14 @@ clearance, the widest end of a front of length against clearance:
 
 * a cell's clearance is the Euclidean distance from its centre to the nearest blocked
   cell, each blocked cell the closed unit square around its centre (0 for a blocked
-  cell; with ``border_blocked``, the squares just outside the map count as blocked);
+  cell; with ``border_blocked``, the squares just outside the map count as blocked):
+  :func:`jaxga.maps.clearance.cell_clearance`;
 * a path's clearance is the least clearance of its cells;
 * the maximin clearance of a start and goal is the largest clearance of an 8-connected
   path between them under the map's corner rule (the moves of
   :func:`jaxga.maps.preprocess.move_edges`).
 
-The clearances are exact: the squared distance to a union of unit squares is a sum of
-one term per axis, ``max(|dx| - 1/2, 0)**2 + max(|dy| - 1/2, 0)**2``, so one pass along
-the rows (the nearest blocked cell of each row, the term being monotone in ``|dx|``)
-and one pass of offsets along the columns give every cell's minimum. The bottleneck is
+The bottleneck is
 the largest clearance value at which the start and the goal are in one component of the
 moves between cells of at least that clearance (a binary search over the distinct
 values, :func:`scipy.sparse.csgraph.connected_components`); the path returned is the
@@ -31,6 +29,7 @@ import math
 import numpy as np
 
 from jaxga.core.grid import Grid
+from jaxga.maps.clearance import cell_clearance
 from jaxga.maps.preprocess import move_edges
 from jaxga.reference.optima import (
     XY,
@@ -42,46 +41,7 @@ from jaxga.reference.optima import (
     unreachable_message,
 )
 
-__all__ = ["MaximinPath", "cell_clearance", "maximin_path", "maximin_path_np"]
-
-
-def _square_term(d: np.ndarray) -> np.ndarray:
-    """One axis's share of the squared distance from a cell centre to a unit square
-    ``d`` cells away along that axis."""
-    return np.maximum(np.abs(d) - 0.5, 0.0) ** 2
-
-
-def _row_distances(blocked: np.ndarray) -> np.ndarray:
-    """``float64[H, W]``: along each row, the distance in cells from each cell to the
-    nearest blocked cell of that row (``inf`` for a row without one)."""
-    h, w = blocked.shape
-    x = np.broadcast_to(np.arange(w, dtype=np.float64), (h, w))
-    left = np.where(blocked, x, -np.inf)
-    left = np.maximum.accumulate(left, axis=1)
-    right = np.where(blocked, x, np.inf)
-    right = np.minimum.accumulate(right[:, ::-1], axis=1)[:, ::-1]
-    return np.minimum(x - left, right - x)
-
-
-def cell_clearance(blocked: np.ndarray, border_blocked: bool = False) -> np.ndarray:
-    """``float64[H, W]``: the exact Euclidean distance from each cell's centre to the
-    nearest blocked cell's square (``blocked[y, x]``; 0 on a blocked cell, ``inf`` on a
-    map without blocked cells), with the squares just outside the map blocked too when
-    ``border_blocked``."""
-    b = as_blocked(blocked)
-    if border_blocked:
-        b = np.pad(b, 1, constant_values=True)
-    h, w = b.shape
-    across = _square_term(_row_distances(b))  # each row's share, per source row
-    best = across.copy()
-    for dy in range(1, h):
-        step = _square_term(np.float64(dy))
-        if step >= best.max():
-            break  # every cell already has a nearer square than any further row offers
-        best[dy:] = np.minimum(best[dy:], across[:-dy] + step)
-        best[:-dy] = np.minimum(best[:-dy], across[dy:] + step)
-    out = np.sqrt(best)
-    return out[1:-1, 1:-1] if border_blocked else out
+__all__ = ["MaximinPath", "maximin_path", "maximin_path_np"]
 
 
 @dataclasses.dataclass(frozen=True, eq=False)

@@ -12,7 +12,8 @@ import numpy as np
 import pytest
 
 from jaxga.core.grid import Grid
-from jaxga.reference.maximin import cell_clearance, maximin_path, maximin_path_np
+from jaxga.maps.clearance import cell_clearance
+from jaxga.reference.maximin import maximin_path, maximin_path_np
 
 
 def brute_clearance(blocked: np.ndarray, border: bool) -> np.ndarray:

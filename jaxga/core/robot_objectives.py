@@ -1,0 +1,91 @@
+"""What a robot asks of a path, in metres and radians: its length, how far it keeps from the
+obstacles, how deep it goes into a band around them, and how much it turns.
+
+These are the objectives of a front (decision 045) rather than one weighted fitness: the
+papers weigh length, safety and smoothness into one number (IMGA's Delphi weights,
+AGACD eq. 18-25, Zhu & Pan eq. 7-9); kept apart, they show the trade-off itself.
+
+The clearance is read from a per-map field: each cell's exact distance, in cells, from
+its centre to the nearest blocked cell's square (:func:`jaxga.maps.clearance.cell_clearance`,
+computed once on the host), as ``float32[H * W]`` or ``[H, W]``. On a continuous path
+(8-adjacent steps, what the GA evolves) the least over its cells is the path's clearance
+as :mod:`jaxga.reference.maximin` defines it, so the front's widest end compares with
+the exact maximin clearance. On a waypoint path the nodes alone are read: an upper
+bound of the polyline's clearance, which :class:`jaxga.maps.clearance.ObstacleClearance`
+measures exactly for reports.
+
+Written for ONE path ``(grid, cells, length)`` like :mod:`jaxga.core.objectives` (padding
+normalised, repeated nodes skipped); pure, float32, jit and vmap.
+"""
+
+from __future__ import annotations
+
+from typing import NamedTuple
+
+import jax
+import jax.numpy as jnp
+
+from jaxga._batching.numerics import ordered_sum
+from jaxga.core.dtypes import F32
+from jaxga.core.grid import Grid
+from jaxga.core.objectives import angle_sum, path_length, turn_angles
+from jaxga.core.path_geometry import geometry
+
+__all__ = ["ROBOT_OBJECTIVES", "RobotObjectives", "minimised", "robot_objectives"]
+
+
+class RobotObjectives(NamedTuple):
+    """One path's robot objectives (float32 scalars)."""
+
+    length: jax.Array
+    """Euclidean length through the cell centres, in metres."""
+    clearance: jax.Array
+    """The least clearance of its cells, in metres (module docstring)."""
+    intrusion: jax.Array
+    """How deep and how long it runs within ``band`` of the obstacles, in square
+    metres: the integral along the path of ``max(0, band - clearance)`` (trapezoids
+    between its nodes). 0 for a path that keeps at least ``band`` everywhere; it
+    falls as a path moves out of the band, so a GA can climb it where the least
+    clearance alone changes only at one cell."""
+    turning: jax.Array
+    """The sum of its turn angles, in radians (AGACD eq. 10-17's smoothness)."""
+    max_turn: jax.Array
+    """Its largest turn, in radians."""
+
+
+ROBOT_OBJECTIVES = ("length", "clearance", "intrusion", "turning", "max_turn")
+"""The objectives by name, in :class:`RobotObjectives`' order."""
+
+_MAXIMISED = frozenset({"clearance"})
+
+
+def robot_objectives(grid: Grid, cells: jax.Array, length: jax.Array, field: jax.Array, *,
+                     cell_size: float | jax.Array = 1.0,
+                     band: float | jax.Array = 1.0) -> RobotObjectives:
+    """The :class:`RobotObjectives` of one path on ``grid``, with ``field`` the map's cell
+    clearances in cells, ``cell_size`` metres per planning cell and ``band`` (metres)
+    the distance from the obstacles within which :attr:`RobotObjectives.intrusion`
+    counts."""
+    g = geometry(grid, cells, length)
+    scale = jnp.asarray(cell_size, F32)
+    clear = jnp.asarray(field, F32).reshape(-1)[g.cells] * scale  # per node, metres
+    # a padding or repeated node repeats a real node's cell: it changes no minimum
+    least = jnp.min(clear)
+    steps = jnp.sqrt((g.dx * g.dx + g.dy * g.dy).astype(F32)) * scale
+    depth = jnp.maximum(jnp.asarray(band, F32) - clear, 0.0)
+    intrusion = ordered_sum(steps * 0.5 * (depth[:-1] + depth[1:]), dtype=F32)
+    return RobotObjectives(
+        length=path_length(grid, cells, length) * scale,
+        clearance=least.astype(F32),
+        intrusion=intrusion,
+        turning=angle_sum(grid, cells, length),
+        max_turn=jnp.max(turn_angles(grid, cells, length)).astype(F32),
+    )
+
+
+def minimised(objectives: RobotObjectives, names: tuple[str, ...]) -> jax.Array:
+    """``float32[len(names)]``: the named objectives as a front minimises them
+    (:mod:`jaxga.operators.pareto`): each as it is, the clearance negated."""
+    values = objectives._asdict()
+    return jnp.stack([-values[n] if n in _MAXIMISED else values[n] for n in names]
+                     ).astype(F32)
