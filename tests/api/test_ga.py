@@ -3,8 +3,6 @@ the user's own ``jit``, ``vmap`` (over keys and over parameters) and ``scan``.""
 
 from __future__ import annotations
 
-from pathlib import Path
-
 import jax
 import jax.numpy as jnp
 import numpy as np
@@ -16,7 +14,6 @@ from jaxga.core.paths import is_continuous
 from tests import canonical
 
 MAP = canonical.MAP
-REPO = Path(__file__).resolve().parents[2]
 SEEDS = [0, 1, 2, 3]
 GENERATIONS = 25
 
@@ -172,22 +169,22 @@ def test_the_drivers_trace_the_pure_cores_own_methods(monkeypatch):
 
 
 @pytest.mark.slow
-@pytest.mark.parametrize(("source", "ends"), [
-    ("den312d", None),
-    ("docs/examples/office.yaml", dict(start_world=(-0.55, -0.55), goal_world=(1.85, 1.85),
-                                       robot_radius=0.1)),
-], ids=["65x81", "ros"])
-def test_a_run_of_the_pure_core_is_jaxga_run_on_a_large_map_and_a_ros_map(source, ends):
+def test_a_run_of_the_pure_core_is_jaxga_run_on_a_large_ros_map(tmp_path):
     """``GA.run(PRNGKey(s))`` under the user's own ``jit`` and ``vmap`` is seed ``s`` of
-    :func:`jaxga.run` on a map over 64 cells a side (Moving AI's den312d, 65 x 81, a
-    scenario's endpoints) and on a ROS map_server map (docs/examples/office.yaml, a
-    0.1 m robot): one definition of a run, from one checked problem."""
-    if ends is None:
-        scenario = jaxga.maps.builtin_scenarios(source)[40]
-        ends = dict(start=scenario.start, goal=scenario.goal)
-    path = REPO / source if source.endswith(".yaml") else source
-    problem = jaxga.problem("hybrid", path, map_options=ends, population__size=8,
-                            generations=4)
+    :func:`jaxga.run` on a ROS map_server map over 64 cells a side (an 80 x 72 map_saver
+    image with two walls, 0.05 m cells), from one checked problem: one definition of a
+    run."""
+    pixels = np.full((72, 80), 254, np.uint8)  # free
+    pixels[10:50, 25:28] = 0  # two occupied walls (image rows count from the top)
+    pixels[30:72, 52:55] = 0
+    (tmp_path / "large.pgm").write_bytes(b"P5\n80 72\n255\n" + pixels.tobytes())
+    (tmp_path / "large.yaml").write_text(
+        "image: large.pgm\nresolution: 0.05\norigin: [0.0, 0.0, 0.0]\nnegate: 0\n"
+        "occupied_thresh: 0.65\nfree_thresh: 0.196\n")
+    problem = jaxga.problem("hybrid", tmp_path / "large.yaml",
+                            map_options=dict(start=(2, 2), goal=(77, 69)),
+                            population__size=8, generations=4)
+    assert problem.frame.has_metres and min(problem.grid.width, problem.grid.height) > 64
     ga = jaxga.GA(problem)
     ref = jaxga.run(problem, seeds=[0, 3])
     keys = jnp.stack([jax.random.PRNGKey(s) for s in (0, 3)])
