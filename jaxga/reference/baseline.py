@@ -89,13 +89,15 @@ def widest_shortcut(blocked: np.ndarray, corner_rule: str, path: np.ndarray,
     return np.array(out, np.int32)
 
 
-def baseline(grid: Grid) -> list[BaselinePoint]:
+def baseline(grid: Grid, obstacles: np.ndarray | None = None) -> list[BaselinePoint]:
     """The shortest and the widest ends (module docstring) of ``grid``'s problem, each
-    measured; an empty list where the goal is unreachable or an endpoint blocked."""
+    measured; an empty list where the goal is unreachable or an endpoint blocked. The
+    clearances are to ``obstacles`` (``bool[H, W]`` in the grid's cells: a map's own
+    obstacles before inflation), by default the grid's blocked cells."""
     blocked = grid.blocked_np()
-    clearance = ObstacleClearance(blocked)
+    clearance = ObstacleClearance(blocked if obstacles is None else obstacles)
     shortest = any_angle_shortest_path(grid)
-    widest = maximin_path(grid)
+    widest = maximin_path(grid, obstacles=obstacles)
     if not (shortest.found and widest.found):
         return []
     short_cut = widest_shortcut(blocked, grid.corner_rule, widest.path, clearance)

@@ -78,9 +78,13 @@ def _connected(n: int, src: np.ndarray, dst: np.ndarray, keep: np.ndarray,
 
 
 def maximin_path_np(blocked: np.ndarray, start_xy: XY, goal_xy: XY,
-                    corner_rule: str = "strict", border_blocked: bool = False
-                    ) -> MaximinPath:
-    """:func:`maximin_path` on a raw ``bool[H, W]`` array (row 0 = bottom)."""
+                    corner_rule: str = "strict", border_blocked: bool = False, *,
+                    clearance: np.ndarray | None = None) -> MaximinPath:
+    """:func:`maximin_path` on a raw ``bool[H, W]`` array (row 0 = bottom): the paths
+    avoid ``blocked``; ``clearance`` (``float[H, W]``, cells) is each cell's clearance
+    (default: :func:`jaxga.maps.clearance.cell_clearance` of ``blocked``; for instance the
+    distances to a map's own obstacles where ``blocked`` is the map inflated by a robot's
+    radius)."""
     from scipy.sparse import coo_matrix
     from scipy.sparse.csgraph import dijkstra
 
@@ -94,7 +98,9 @@ def maximin_path_np(blocked: np.ndarray, start_xy: XY, goal_xy: XY,
     h, w = b.shape
     n = h * w
     s, g = start[1] * w + start[0], goal[1] * w + goal[0]
-    clear = cell_clearance(b, border_blocked).reshape(-1)
+    if clearance is None:
+        clearance = cell_clearance(b, border_blocked)
+    clear = np.asarray(clearance, np.float64).reshape(-1)
     src, dst, cost = move_edges(b, rule)
     edge = np.minimum(clear[src], clear[dst])
     if s == g:
@@ -122,10 +128,14 @@ def maximin_path_np(blocked: np.ndarray, start_xy: XY, goal_xy: XY,
     return MaximinPath(True, best, path, path_length(path))
 
 
-def maximin_path(grid: Grid, border_blocked: bool = False) -> MaximinPath:
+def maximin_path(grid: Grid, border_blocked: bool = False, *,
+                 obstacles: np.ndarray | None = None) -> MaximinPath:
     """The widest path of ``grid`` from its start to its goal under its corner rule: the
     largest clearance (module docstring) an 8-connected path can keep, and the shortest
-    path that keeps it. A blocked endpoint or an unreachable goal gives ``found=False``
-    with a ``reason``."""
+    path that keeps it. The clearance is to ``obstacles`` (``bool[H, W]`` in the grid's
+    cells, e.g. a map's own obstacles before inflation, ``MapFrame.obstacles`` of an
+    uncoarsened map), by default the grid's blocked cells. A blocked endpoint or an
+    unreachable goal gives ``found=False`` with a ``reason``."""
+    field = None if obstacles is None else cell_clearance(obstacles, border_blocked)
     return maximin_path_np(grid.blocked_np(), grid.start_xy, grid.goal_xy, grid.corner_rule,
-                           border_blocked)
+                           border_blocked, clearance=field)

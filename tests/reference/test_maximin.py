@@ -123,3 +123,18 @@ def test_blocked_endpoints_are_a_reason_not_an_exception():
     blocked[0, 0] = True
     result = maximin_path_np(blocked, (0, 0), (2, 2))
     assert not result.found and "blocked" in result.reason and result.path.shape == (0, 2)
+
+
+def test_the_clearance_to_a_maps_own_obstacles_on_its_inflated_grid():
+    """Planned on the map inflated by one cell around its block (cells 4-6 x 2-4 blocked),
+    measured to the block itself: the widest cells, rows 0 and 6, are 2.5 from the block
+    and 1.5 from the inflated margin."""
+    own = np.zeros((7, 11), bool)
+    own[3, 5] = True
+    inflated = np.zeros_like(own)
+    inflated[2:5, 4:7] = True
+    grid = Grid.create(inflated, start=(1, 3), goal=(9, 3), corner_rule="strict")
+    assert maximin_path(grid, obstacles=own).clearance == 2.5
+    assert maximin_path(grid).clearance == 1.5
+    path = maximin_path(grid, obstacles=own).path
+    assert not inflated[path[:, 1], path[:, 0]].any()  # the path avoids the inflated map
