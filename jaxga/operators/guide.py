@@ -36,8 +36,8 @@ from jaxga.core.dtypes import on_device
 from jaxga.core.grid import Grid
 from jaxga.maps.preprocess import move_edges, region_labels
 
-__all__ = ["Guide", "ProblemFacts", "distance_fields", "field_path",
-           "longest_optimal_path_cells", "problem_facts", "with_guide"]
+__all__ = ["Guide", "ProblemFacts", "clearance_weighted_field", "distance_fields",
+           "field_path", "longest_optimal_path_cells", "problem_facts", "with_guide"]
 
 @jax.tree_util.register_dataclass
 @dataclasses.dataclass(frozen=True)
@@ -214,3 +214,33 @@ def longest_optimal_path_cells(grid: Grid) -> int:
     ecc_c, _, _ = sweep(path[len(path) // 2])
     bound = int(math.floor(2 * min(ecc_a, ecc_b, ecc_c) + 1e-9)) + 1
     return int(max(min(bound, sizes[main]), others.max(initial=0)))
+
+
+def clearance_weighted_field(grid: Grid, clearance: np.ndarray, weight: float,
+                             band: float) -> np.ndarray:
+    """``float64[H * W]``: the cost to the goal of every cell when a move costs its length
+    times ``1 + weight * d``, ``d`` the mean over its two cells of how deep they lie in a
+    band of ``band`` cells around the obstacles (``max(0, band - c) / band`` for a cell of
+    clearance ``c``, ``clearance`` in cells: :func:`jaxga.maps.clearance.cell_clearance`);
+    ``inf`` where the goal is out of reach.
+
+    With ``weight`` 0 it is the goal's exact distance field (:func:`distance_fields`).
+    A walk down a field of a larger weight trades length for clearance, so fields of
+    several weights start a population spread along a front of length against
+    clearance (decision 045). The cost stays positive and symmetric (a move and its
+    reverse cost the same), so every reachable cell has a move that lowers it."""
+    from scipy.sparse import csr_matrix
+    from scipy.sparse.csgraph import dijkstra
+
+    if weight < 0 or band <= 0:
+        raise ValueError(f"weight must be >= 0 and band > 0, got {weight} and {band}")
+    blocked = np.ascontiguousarray(grid.blocked_np())
+    depth = np.maximum(band - np.asarray(clearance, np.float64).reshape(-1), 0.0) / band
+    rows, cols, steps = move_edges(blocked, grid.corner_rule)
+    costs = steps * (1.0 + weight * 0.5 * (depth[rows] + depth[cols]))
+    graph = csr_matrix((costs, (rows, cols)), shape=(blocked.size, blocked.size))
+    goal = int(grid.goal)
+    field = dijkstra(graph, directed=True, indices=goal)
+    if blocked.reshape(-1)[goal]:
+        field[:] = np.inf
+    return field

@@ -352,3 +352,42 @@ def test_map_tables_give_the_same_generations(preset):
     plain, tabled = whole(grid), whole(with_tables(grid))
     for a, b in zip(jax.tree_util.tree_leaves(plain), jax.tree_util.tree_leaves(tabled)):
         np.testing.assert_array_equal(np.asarray(a), np.asarray(b))
+
+
+def test_clearance_weighted_fields_trade_length_for_clearance():
+    """Weight 0 is the goal's exact distance field; on a map whose short route squeezes
+    past a wall and whose long route is open, the descent of a heavier field takes the
+    open route: longer, and farther from the obstacles."""
+    from jaxga.maps.clearance import cell_clearance
+    from jaxga.operators.guide import clearance_weighted_field, distance_fields
+
+    blocked = np.zeros((11, 15), bool)
+    blocked[0:8, 7] = True  # a wall up to row 7, open above it (rows 8-10)
+    blocked[4, 7] = False  # the short route squeezes through a gap at (7, 4)
+    grid = Grid.create(blocked, start=(1, 4), goal=(13, 4), corner_rule="strict")
+    clearance = cell_clearance(blocked)
+    np.testing.assert_allclose(clearance_weighted_field(grid, clearance, 0.0, 2.0),
+                               distance_fields(grid)[0])
+
+    def descent(field):
+        h, w = blocked.shape
+        cell, path = int(grid.start), [int(grid.start)]
+        while cell != int(grid.goal):
+            x, y = cell % w, cell // w
+            moves = [(x + dx, y + dy) for dx in (-1, 0, 1) for dy in (-1, 0, 1)
+                     if (dx or dy) and 0 <= x + dx < w and 0 <= y + dy < h
+                     and not blocked[y + dy, x + dx]
+                     and not (dx and dy and (blocked[y, x + dx] or blocked[y + dy, x]))]
+            cell = min(((my * w + mx) for mx, my in moves), key=lambda c: field[c])
+            path.append(cell)
+        return np.array([(c % w, c // w) for c in path])
+
+    plain = descent(clearance_weighted_field(grid, clearance, 0.0, 2.0))
+    wide = descent(clearance_weighted_field(grid, clearance, 50.0, 2.0))
+    least = [min(clearance[y, x] for x, y in p) for p in (plain, wide)]
+    lengths = [np.hypot(*np.diff(p, axis=0).T).sum() for p in (plain, wide)]
+    assert least[0] == 0.5 and lengths[0] == 12.0  # straight through the gap
+    assert (7, 4) not in map(tuple, wide)  # over the wall instead
+    assert least[1] > 1.0 and lengths[1] > lengths[0]
+    with pytest.raises(ValueError, match="weight"):
+        clearance_weighted_field(grid, clearance, -1.0, 2.0)
