@@ -28,7 +28,7 @@ import jax.numpy as jnp
 from jaxga._batching.numerics import ordered_sum
 from jaxga.core.dtypes import F32
 from jaxga.core.grid import Grid
-from jaxga.core.objectives import angle_sum, path_length, turn_angles
+from jaxga.core.objectives import turn_angles
 from jaxga.core.path_geometry import geometry
 
 __all__ = ["ROBOT_OBJECTIVES", "RobotObjectives", "minimised", "robot_objectives"]
@@ -71,15 +71,17 @@ def robot_objectives(grid: Grid, cells: jax.Array, length: jax.Array, field: jax
     clear = jnp.asarray(field, F32).reshape(-1)[g.cells] * scale  # per node, metres
     # a padding or repeated node repeats a real node's cell: it changes no minimum
     least = jnp.min(clear)
-    steps = jnp.sqrt((g.dx * g.dx + g.dy * g.dy).astype(F32)) * scale
+    cell_steps = jnp.sqrt((g.dx * g.dx + g.dy * g.dy).astype(F32))  # as path_length sums
+    steps = cell_steps * scale
     depth = jnp.maximum(jnp.asarray(band, F32) - clear, 0.0)
     intrusion = ordered_sum(steps * 0.5 * (depth[:-1] + depth[1:]), dtype=F32)
+    turns = turn_angles(grid, cells, length)  # angle_sum is their ordered sum
     return RobotObjectives(
-        length=path_length(grid, cells, length) * scale,
+        length=ordered_sum(cell_steps) * scale,
         clearance=least.astype(F32),
         intrusion=intrusion,
-        turning=angle_sum(grid, cells, length),
-        max_turn=jnp.max(turn_angles(grid, cells, length)).astype(F32),
+        turning=ordered_sum(turns, dtype=F32),
+        max_turn=jnp.max(turns).astype(F32),
     )
 
 

@@ -73,3 +73,15 @@ def test_minimised_negates_the_clearance_and_a_population_is_one_vmap():
             assert float(getattr(batch, name)[i]) == float(getattr(one, name)), name
     vec = minimised(objectives(GRID, cells[1], lengths[1], FIELD), ("length", "clearance"))
     assert vec.tolist() == [10.0, -0.5]  # (5, 2) is right below the block
+
+
+def test_length_and_turning_are_the_papers_objectives_bit_for_bit():
+    """The length and the turning are :func:`jaxga.core.objectives.path_length` and
+    :func:`jaxga.core.objectives.angle_sum` (AGACD eq. 9 and 10-17), the same bits."""
+    from jaxga.core.objectives import angle_sum, path_length
+
+    path = [(1, 3), (2, 4), (3, 5)] + [(x, 5) for x in range(4, 10)] + [(9, 4), (8, 3)]
+    cells, n = cells_of(path)
+    r = objectives(GRID, cells, n, FIELD)
+    assert float(r.length) == float(jax.jit(path_length)(GRID, cells, n))
+    assert float(r.turning) == float(jax.jit(angle_sum)(GRID, cells, n))
