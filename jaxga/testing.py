@@ -30,6 +30,7 @@ import jax
 import jax.numpy as jnp
 import numpy as np
 
+from jaxga._runtime.fields import program_fields
 from jaxga.config.presets import load_preset
 from jaxga.core.grid import Grid
 from jaxga.core.objectives import path_length
@@ -70,6 +71,8 @@ def bound(op: registry.Operator, grid: Grid, capacity: int, field_repair: bool =
                "population.capacity": capacity,
                "repair.fallback": "field" if field_repair else "none"}
     changes.update({k: some_value(op.params[k]) for k in op.required})
+    if registry.NEEDS_FRONT_FIELDS in op.traits:  # it reads a front's fields
+        changes["survival.method"] = "nsga2"
     config = load_preset("sga").override(changes)
     algo, params = build(config, grid)
     fit_fn = fitness_function(algo, params)
@@ -137,6 +140,8 @@ def check_init(op: registry.Operator, grid: Grid, capacity: int, key) -> None:
     """``init_fn(key, grid, capacity) -> (cells, length, ok)``: a successful draw is a
     feasible, loop-free path from start to goal."""
     fn, _, _ = bound(op, grid, capacity)
+    if registry.NEEDS_FRONT_FIELDS in op.traits:
+        grid = program_fields(grid, load_preset("pareto"))
     keys = jax.random.split(key, P)
     run = jax.jit(jax.vmap(lambda k: fn(k, grid, capacity)))
     cells, length, ok = out = run(keys)

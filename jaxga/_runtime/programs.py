@@ -48,15 +48,17 @@ def shape_spec(tree: Any) -> Any:
 
 
 PROGRAM_SECTIONS: dict[str, tuple[str, ...]] = {
-    "init": ("init.", "fitness.", "repair."),
-    "finish": ("post.", "repair."),
+    "init": ("init.", "fitness.", "repair.", "survival."),
+    "finish": ("post.", "repair.", "survival."),
 }
 """The configuration sections each program reads (:func:`program_view`): the init
-program draws and evaluates the initial populations (its initialisers, the fitness, the
-repairs of median insertion), the finish program post-optimises the best path (its
-operator is bound with the repair setting, like every operator); the evolve program
-reads every section but ``init.`` and ``post.``. ``tests/api/test_swept_keys.py`` traces
-every preset from these views and fails on a read outside them."""
+program draws and evaluates the initial populations (its initialisers, the fitness, a
+front's objectives, the repairs of median insertion), the finish program post-optimises
+the best path (its operator is bound with the repair setting, like every operator; a
+front's shapes follow ``survival.``); the
+evolve program reads every section but ``init.`` and ``post.``.
+``tests/api/test_swept_keys.py`` traces every preset from these views and fails on a read
+outside them."""
 
 
 def program_view(algo: Algorithm, name: str) -> Algorithm:

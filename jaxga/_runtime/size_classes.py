@@ -32,12 +32,12 @@ from __future__ import annotations
 import dataclasses
 import math
 
-import jax
 import numpy as np
 
 from jaxga.core.dtypes import on_device
 from jaxga.core.grid import Grid
 from jaxga.engine.algorithm import CAPACITY_FACTOR, capacity_class, default_capacity
+from jaxga.operators.guide import padded_guide
 
 CLASS_SIDES: tuple[int, ...] = (32, 64, 128, 256, 384, 512, 768, 1024, 1536, 2048)
 """A padded side is the smallest of these holding the map's side (each side on its own:
@@ -103,11 +103,7 @@ def pad_to_class(grid: Grid) -> Grid:
     blocked = np.pad(grid.blocked_np(), pad, constant_values=True)
     outside = np.pad(np.zeros(grid.shape, bool), pad, constant_values=True)
     (sx, sy), (gx, gy) = grid.start_xy, grid.goal_xy
-    guide = None
-    if grid.guide is not None:  # padding cells are blocked: unreachable, at infinity
-        guide = jax.tree_util.tree_map(
-            lambda f: on_device(np.pad(np.asarray(f).reshape(grid.shape), pad,
-                                       constant_values=np.inf).reshape(-1)), grid.guide)
+    guide = None if grid.guide is None else padded_guide(grid.guide, grid.shape, pad)
     return dataclasses.replace(
         grid, blocked=on_device(blocked), outside=on_device(outside),
         start=on_device(sy * shape[1] + sx, np.int32),

@@ -25,17 +25,17 @@ from typing import Any
 
 import jax
 
+from jaxga._runtime.fields import program_fields
 from jaxga._runtime.programs import warn_platform
 from jaxga.api.problem import Problem, load_problem
 from jaxga.config.schema import Config
 from jaxga.core.errors import ParameterError
 from jaxga.core.grid import Grid
-from jaxga.engine import build, default_capacity, default_params, uses_guide
+from jaxga.engine import build, default_capacity, default_params
 from jaxga.engine.maptables import with_tables
 from jaxga.engine.run import PureGA
 from jaxga.maps import MapInfo
 from jaxga.maps.frame import MapFrame, endpoint_cells
-from jaxga.operators.guide import with_guide
 
 __all__ = ["GA"]
 
@@ -85,8 +85,7 @@ class GA(PureGA):
             preset, problem, corner_rule, variant, sets, overrides, generations)
         self.map_name: str = map_name
         self.frame: MapFrame | None = frame
-        if uses_guide(config):
-            grid = with_guide(grid)
+        grid = program_fields(grid, config)
         self.config = config
         algorithm, _ = build(config, grid)
         super().__init__(algorithm, with_tables(grid))
@@ -121,6 +120,5 @@ class GA(PureGA):
                 f"the paths from {ends[0]} to {ends[1]} need a capacity of {need} cells, "
                 f"this GA holds {self.algorithm.capacity}: build it with "
                 f"population__capacity={need} (or more) to plan any pair")
-        if self.grid.guide is not None:
-            grid = with_guide(grid)
+        grid = program_fields(grid, self.config)
         return dataclasses.replace(grid, tables=self.grid.tables, outside=self.grid.outside)

@@ -84,6 +84,35 @@ class RunSetup:
 
 
 @dataclasses.dataclass(frozen=True)
+class Fronts:
+    """The fronts of a multi-objective preset's seeds (decision 045): every distinct
+    non-dominated path of each seed's final population, in its slots (``mask``)."""
+
+    names: tuple[str, ...]
+    """The objectives (``survival.objectives``: :mod:`jaxga.core.robot_objectives`)."""
+    mask: np.ndarray
+    """bool[S, P]: the slot holds a point of the seed's front."""
+    cells: np.ndarray
+    """int32[S, P, L]: the paths, cell indices (8-connected, as evolved)."""
+    n_cells: np.ndarray
+    """int32[S, P]: their numbers of cells."""
+    objectives: np.ndarray
+    """float[S, P, M]: their objectives in cells and radians, as named (the clearance
+    positive: the least clearance of the path's cells, the measure of the exact maximin
+    clearance, :mod:`jaxga.reference.maximin`)."""
+
+    def points(self, i: int, width: int) -> list[dict[str, Any]]:
+        """Seed ``i``'s front, shortest first: each point's objectives by name and its
+        path as ``(x, y)`` cells."""
+        slots = np.flatnonzero(self.mask[i])
+        slots = slots[np.lexsort((slots, self.objectives[i, slots, 0]))]
+        return [{**{n: float(self.objectives[i, k, j]) for j, n in enumerate(self.names)},
+                 "path": [(int(c) % width, int(c) // width)
+                          for c in self.cells[i, k, :int(self.n_cells[i, k])]]}
+                for k in slots]
+
+
+@dataclasses.dataclass(frozen=True)
 class RunPaths:
     """The best paths, per seed (:attr:`Result.paths`; :meth:`Result.path` reads one as
     ``(x, y)`` cells, :meth:`Result.world_path` in metres)."""
@@ -96,6 +125,9 @@ class RunPaths:
     """int32[S, L]: the GA's own best paths, before the post-optimisation."""
     raw_n_cells: np.ndarray
     """int32[S]: their numbers of cells."""
+    front: Fronts | None
+    """Each seed's front of length against clearance (``survival.method``), None for a
+    scalar GA."""
 
 
 @dataclasses.dataclass(frozen=True)
@@ -160,6 +192,9 @@ class References:
     """False when that path visits a cell twice (the optimum is then an upper bound)."""
     fitness_optimum_reason: str
     """Why :attr:`fitness_optimum` is NaN ("" when it is computed)."""
+    maximin_clearance: float
+    """The exact maximin clearance in cells (:func:`jaxga.reference.maximin.maximin_path`),
+    what a front's widest end is measured against; NaN without a front."""
 
 
 RESULT_RECORDS = (RunSetup, RunPaths, RunOutcome, References)
@@ -254,6 +289,12 @@ class Result:
     """A proven lower bound of :attr:`any_angle_optimum`: the Euclidean shortest path
     around the blocked cells (:func:`jaxga.reference.lower_bound.euclidean_lower_bound_np`);
     NaN where it is not computed."""
+    front: Fronts | None = None
+    """Each seed's front (:class:`Fronts`; a preset with ``survival.method``), else None."""
+    maximin_clearance: float = math.nan
+    """The exact maximin clearance in cells (:func:`jaxga.reference.maximin.maximin_path`),
+    what the front's widest end is measured against (:meth:`front_ends`); NaN without a
+    front."""
     any_angle_note: str = ""
     """Why :attr:`any_angle_optimum` is NaN ("" when it is computed), e.g.
     "any-angle optimum not computed (budget 0.52 s)": :attr:`gap` then measures against
@@ -542,6 +583,56 @@ class Result:
             return None
         return clearance * f.resolution - f.robot_radius
 
+    def front_points(self, i: int) -> list[dict[str, Any]]:
+        """Seed ``i``'s front, shortest first (decision 045): each point's objectives in
+        cells and radians (:attr:`Fronts.names`; the clearance positive), the length and
+        clearance also in metres (``length_m``, ``clearance_m``) on a map with a
+        resolution, and its ``path`` as ``(x, y)`` cells. Empty for a failed seed or a
+        preset without a front."""
+        if self.front is None or not self.success[i]:
+            return []
+        cell = None if self.frame is None else self.frame.cell_size
+        points = self.front.points(i, self.width)
+        if cell:
+            for p in points:
+                p.update({f"{k}_m": p[k] * cell for k in ("length", "clearance") if k in p})
+        return points
+
+    def front_ends(self, i: int) -> dict[str, float | None]:
+        """Seed ``i``'s front measured against the exact ends (decision 045):
+        ``shortest_gap``, its shortest end post-optimised (the seed's best path) over
+        the any-angle optimum (:attr:`gap`); ``widest_clearance`` and its share of the
+        exact maximin clearance (``widest_ratio``, 1 where it keeps the widest path's
+        clearance); ``points``. Nones without a front."""
+        points = self.front_points(i)
+        widest = max((p.get("clearance", math.nan) for p in points), default=math.nan)
+        ratio = widest / self.maximin_clearance if self.maximin_clearance > 0 else math.nan
+        return {"points": len(points), "shortest_gap": json_number(float(self.gap[i])),
+                "widest_clearance": json_number(widest), "widest_ratio": json_number(ratio)}
+
+    def front_choice(self, i: int, min_clearance: float | None = None
+                     ) -> dict[str, Any] | None:
+        """One point of seed ``i``'s front: the shortest that keeps at least
+        ``min_clearance`` cells from the obstacles (None when no point does), or by
+        default the knee: the point farthest from the line between the two ends, each
+        objective scaled to the front's range (the shortest end when the front has fewer
+        than three points)."""
+        points = self.front_points(i)
+        if not points:
+            return None
+        if min_clearance is not None:
+            return next((p for p in points if p.get("clearance", 0.0) >= min_clearance),
+                        None)
+        names = self.front.names[:2]
+        xy = np.array([[p[n] for n in names] for p in points], float)
+        if len(points) < 3:
+            return points[0]
+        span = np.ptp(xy, axis=0)
+        xy = (xy - xy.min(axis=0)) / np.where(span > 0, span, 1.0)
+        a, b = xy[0], xy[-1]
+        d = np.abs((b[0] - a[0]) * (a[1] - xy[:, 1]) - (a[0] - xy[:, 0]) * (b[1] - a[1]))
+        return points[int(np.argmax(d))]
+
     def _endpoints_world(self) -> dict[str, Any]:
         """The endpoints in metres (and in map cells when coarsened), where known."""
         f, out = self.frame, {}
@@ -553,6 +644,15 @@ class Result:
         if f.has_metres:
             out["start_world"], out["goal_world"] = f.to_world(ends).round(4).tolist()
         return out
+
+    def _front_json(self, i: int) -> dict[str, Any]:
+        """Seed ``i``'s ``front`` (every point, paths as ``[x, y]`` lists) and
+        ``front_ends``, for a preset with a front."""
+        if self.front is None:
+            return {}
+        points = [{**{k: json_number(v) for k, v in p.items() if k != "path"},
+                   "path": [list(c) for c in p["path"]]} for p in self.front_points(i)]
+        return {"front": points, "front_ends": self.front_ends(i)}
 
     def to_json(self) -> dict[str, Any]:
         """The ``--json`` layout of ``jaxga run``."""
@@ -582,6 +682,7 @@ class Result:
                                   else int(self.init_fallback[i])),
                 "cause": "" if self.causes is None else str(self.causes[i]),
                 **self._frame_json(i),
+                **self._front_json(i),
             })
         return {
             "preset": self.preset, "map": self.map_name, "corner_rule": self.corner_rule,
@@ -599,6 +700,7 @@ class Result:
             "fitness_optimum_loop_free": (self.fitness_optimum_loop_free
                                           if np.isfinite(self.fitness_optimum) else None),
             "fitness_optimum_reason": self.fitness_optimum_reason,
+            "maximin_clearance": json_number(self.maximin_clearance),
             "timing": dict(self.timing), "population": self.population,
             "population_capacity": self.population_capacity,
             "path_capacity": self.path_capacity, "size_class": self.size_class,

@@ -24,6 +24,7 @@ from jax.errors import JaxRuntimeError
 from jaxga._runtime import executables, parallel
 from jaxga._runtime.calls import RunCalls, evolve_in_chunks, this_process_runs
 from jaxga._runtime.device_probe import check_backend, needs_probe
+from jaxga._runtime.fields import program_fields
 from jaxga._runtime.memory import (
     NO_PATH_BYTES_PER_RUN,
     check_compiled_memory,
@@ -50,7 +51,7 @@ from jaxga.api.failures import (
     warn_unfilled,
 )
 from jaxga.api.problem import Problem, load_problem
-from jaxga.api.result import Result
+from jaxga.api.result import Fronts, Result
 from jaxga.config.schema import Config, flatten
 from jaxga.core.errors import ParameterError
 from jaxga.core.grid import Grid, as_integer
@@ -64,12 +65,13 @@ from jaxga.engine import (
     static_config,
     uses_guide,
 )
+from jaxga.engine.evolution import Front
 from jaxga.maps import MapInfo
-from jaxga.operators.guide import with_guide
 from jaxga.reference.fitness import FitnessOptimum, fitness_optimum, fitness_weights
+from jaxga.reference.maximin import maximin_path
 
 if TYPE_CHECKING:
-    from jaxga.maps import MapInfo
+    from jaxga.engine.evolution import Front
 
 
 MIN_ANY_ANGLE_BUDGET = 0.5
@@ -323,7 +325,7 @@ def _program_map(config: Config, grid: Grid, capacity: int,
     when asked) and the configuration they are built from (the sweep's capacity; the
     class's path capacity unless the configuration sets one)."""
     build_config = config.override({"population.size": capacity})
-    guided = with_guide(grid) if uses_guide(config) else grid
+    guided = program_fields(grid, config)
     if not size_class:
         return guided, build_config
     if not int(config["population.capacity"]):
@@ -421,7 +423,10 @@ def _evolve_and_finish(plan: SweepPlan, runs: RunCalls, progs: Programs, states:
         out = jax.tree_util.tree_map(lambda *parts: runs.joined(parts), *outs)
         out = dataclasses.replace(  # the paths on the user's map
             out, cells=map_cells(out.cells, runs.grid.width, plan.grid.width),
-            raw_cells=map_cells(out.raw_cells, runs.grid.width, plan.grid.width))
+            raw_cells=map_cells(out.raw_cells, runs.grid.width, plan.grid.width),
+            front=None if out.front is None else dataclasses.replace(
+                out.front, cells=map_cells(out.front.cells, runs.grid.width,
+                                           plan.grid.width)))
     return out, history
 
 
@@ -483,6 +488,10 @@ def _point_results(host: dict, hist: dict, plan: SweepPlan, start: InitOutcome,
                                               start.initial)
     n_seeds = len(plan.seed_arr)
     conv = convergence_generation(hist["best"], host["fitness"], initial)
+    maximin = math.nan
+    if host.front is not None:
+        widest = maximin_path(grid)
+        maximin = widest.clearance if widest.found else math.nan
     results = []
     for q, cfg in enumerate(configs):
         sl = slice(q * n_seeds, (q + 1) * n_seeds)
@@ -520,11 +529,26 @@ def _point_results(host: dict, hist: dict, plan: SweepPlan, start: InitOutcome,
             fitness_optimum_loop_free=plan.point_opt[q].loop_free,
             fitness_optimum_reason=("" if plan.point_opt[q].found
                                     else plan.point_opt[q].reason),
+            front=_fronts(h.front, algo), maximin_clearance=maximin,
             start=grid.start_xy, goal=grid.goal_xy, population_capacity=algo.population,
             init_fallback=from_fallback[sl], causes=causes, path_capacity=algo.capacity,
             size_class=plan.size_class,
         ))
     return results
+
+
+def _fronts(front: Front | None, algo: Algorithm) -> Fronts | None:
+    """A front's outputs (:class:`jaxga.engine.evolution.Front`) as the result keeps
+    them: the clearance positive, in cells."""
+    if front is None:
+        return None
+    names = algo.stages.objectives
+    objectives = np.asarray(front.objectives, float).copy()
+    for j, n in enumerate(names):
+        if n == "clearance":
+            objectives[..., j] *= -1
+    return Fronts(names=names, mask=np.asarray(front.mask), cells=np.asarray(front.cells),
+                  n_cells=np.asarray(front.n_cells), objectives=objectives)
 
 
 def checked_capacity(configs: Sequence[Config], requested: Any) -> int:

@@ -28,6 +28,7 @@ from typing import Any
 from jaxga.core.errors import ParameterError
 from jaxga.core.fields import Field, P, python_scalar
 from jaxga.core.grid import CORNER_RULES
+from jaxga.core.robot_objectives import ROBOT_OBJECTIVES
 from jaxga.operators import registry
 from jaxga.operators.registry import MethodField
 
@@ -47,6 +48,8 @@ TOPOLOGIES = ("none", "ring", "star", "full", "mpmga")
 MAP_RULE = "map"
 """``map.corner_rule = "map"``: the map's own corner rule (the default)."""
 MIGRATION_TIMINGS = ("after_variation", "before_variation")
+SURVIVALS = ("nsga2",)
+"""``survival.method``: the multi-objective survival stages."""
 
 COMMON_FIELDS: dict[str, Field] = {
     "name": Field(str, "preset name"),
@@ -102,6 +105,16 @@ COMMON_FIELDS: dict[str, Field] = {
     "termination.stagnation": Field(int, "IMGA 4.4: stop after K generations without "
                                     "improvement; 0 = never", low=0, high=1_000_000,
                                     dynamic=True),
+    "survival.method": Field(str, "who survives a generation: 'nsga2' keeps a front of "
+                             "survival.objectives of parents and offspring together (Deb et "
+                             "al. 2002; decision 045); left out: the offspring replace their "
+                             "parents (the papers' GAs)", choices=SURVIVALS),
+    "survival.objectives": Field(list, "the robot objectives a front minimises (2 or 3 of "
+                                 + ", ".join(ROBOT_OBJECTIVES) + "; clearance maximised); "
+                                 "default length and clearance"),
+    "survival.band": Field(float, "the band around the obstacles, in cells, that the "
+                           "clearance-weighted fields and the intrusion objective count; "
+                           "0 = the problem's exact maximin clearance", low=0.0, high=1e6),
     "islands.count": Field(int, "number of islands (1 = single population)", low=1, high=1024),
     "islands.topology": Field(str, "migration topology (mpmga: MPMGA 4.4)", choices=TOPOLOGIES),
     "islands.interval": Field(int, "generations between migrations", low=1, high=1_000_000,

@@ -37,6 +37,7 @@ from jaxga.engine.checks import (
     field_repairs,
     has_trait,
     unread_keys,
+    uses_front_fields,
     uses_guide,
     uses_waypoints,
 )
@@ -98,6 +99,7 @@ __all__ = [
     "island_generation",
     "static_config",
     "unread_keys",
+    "uses_front_fields",
     "uses_guide",
     "uses_waypoints",
     "waypoints_feasible",

@@ -85,6 +85,12 @@ class Stages:
     """The mutation probability's rule (fixed, or AGACD eq. 28-29)."""
     field_repair: bool = False
     """``repair.fallback = "field"``: the repairs fall back to a field walk."""
+    survival: str | None = None
+    """``survival.method``: ``"nsga2"`` keeps a front of the objectives
+    ``survival.objectives`` (decision 045); None (the key left out) is the papers' scalar
+    GA, whose offspring replace their parents."""
+    objectives: tuple[str, ...] = ()
+    """The robot objectives a front minimises (``survival.objectives``), () without one."""
 
 
 def resolve_stages(config: Config) -> Stages:
@@ -102,8 +108,22 @@ def resolve_stages(config: Config) -> Stages:
         fallback = registry.operator("init", compiled)
     rates = {f"{stage}_rate": rate_rule(config, stage) if ops[stage] is not None else None
              for stage in ("crossover", "mutation")}
+    survival = config.get("survival.method")
     return Stages(**ops, fallback=fallback, **rates,
-                  field_repair=config.get("repair.fallback") == "field")
+                  field_repair=config.get("repair.fallback") == "field",
+                  survival=survival,
+                  objectives=front_objectives(config) if survival is not None else ())
+
+
+FRONT_OBJECTIVES = ("length", "clearance")
+"""The objectives of a front when ``survival.objectives`` is left out."""
+
+
+def front_objectives(config: Config) -> tuple[str, ...]:
+    """The robot objectives (:data:`jaxga.core.robot_objectives.ROBOT_OBJECTIVES`) a
+    configuration's front minimises: ``survival.objectives``, by default
+    :data:`FRONT_OBJECTIVES`."""
+    return tuple(config.get("survival.objectives", FRONT_OBJECTIVES))
 
 
 @dataclasses.dataclass(frozen=True)

@@ -15,6 +15,7 @@ from typing import Any
 from jaxga.config.presets import file_overrides
 from jaxga.config.schema import DEFAULTS, Config
 from jaxga.core.errors import ParameterError
+from jaxga.core.robot_objectives import ROBOT_OBJECTIVES
 from jaxga.operators import registry
 from jaxga.operators.islands import migrates
 from jaxga.operators.registry import FIELD_REPAIR, NEVER_FAILS, WAYPOINTS
@@ -98,6 +99,8 @@ def unread_keys(config: Config) -> dict[str, str]:
     """
     out: dict[str, str] = {}
     chosen = chosen_operators(config)
+    if NEVER_FAILS in chosen["init.method"].traits:  # nothing for the fallback to fill
+        chosen.pop("init.fallback", None)
     read = {key for op in chosen.values() for key in op.params}
     for key in registry.schema_fields():
         if key in read:
@@ -136,6 +139,9 @@ def unread_keys(config: Config) -> dict[str, str]:
                 out[f"{stage}.probability"] = f"{island_key} sets each island's rate"
     if config["simplify.method"] == "none":
         out["simplify.probability"] = "simplify.method = 'none'"
+    if config.get("survival.method") is None:
+        for k in ("survival.objectives", "survival.band"):
+            out[k] = "survival.method is not set: there is no front"
     if int(config["islands.count"]) == 1:
         for k in ("islands.topology", "islands.interval", "islands.migrants"):
             out[k] = "islands.count = 1: there is no migration"
@@ -214,6 +220,29 @@ def check_combination(config: Config) -> None:
     for op in chosen.values():
         if op.check is not None:
             op.check(config)
+    check_front(config)
+
+
+def check_front(config: Config) -> None:
+    """A front's keys (decision 045): 2 or 3 distinct objectives of
+    :data:`jaxga.core.robot_objectives.ROBOT_OBJECTIVES`, one island (migration does not
+    carry a front), and an initialiser that needs a front's fields only with a front."""
+    needs_front = has_trait(chosen_operators(config), registry.NEEDS_FRONT_FIELDS)
+    if config.get("survival.method") is None:
+        if needs_front:
+            raise ParameterError(
+                f"init.method = {config['init.method']!r} walks the clearance-weighted "
+                "fields of a front: set survival.method = 'nsga2'")
+        return
+    names = config.get("survival.objectives", ("length", "clearance"))
+    unknown = [n for n in names if n not in ROBOT_OBJECTIVES]
+    if unknown or len(set(names)) != len(names) or not 2 <= len(names) <= 3:
+        raise ParameterError(
+            f"survival.objectives must be 2 or 3 distinct names of "
+            f"{', '.join(ROBOT_OBJECTIVES)}, got {list(names)}")
+    if int(config["islands.count"]) != 1:
+        raise ParameterError("survival.method = 'nsga2' keeps one front: islands.count must "
+                             "be 1")
 
 
 def check_migration(config: Config, population: int) -> None:
@@ -243,10 +272,17 @@ def uses_guide(config: Config) -> bool:
     ``init.fallback = "none"`` switches it off), and the field repairs
     (``repair.fallback``)."""
     fallback = compiled_fallback(config) if config.get("init.method") else "none"
-    return has_trait(chosen_operators(config), registry.NEEDS_GUIDE) or (
+    return uses_front_fields(config) or has_trait(chosen_operators(config),
+                                                  registry.NEEDS_GUIDE) or (
         fallback != "none"
         and registry.NEEDS_GUIDE in registry.operator("init", fallback).traits) or (
         config["repair.fallback"] != "none" and field_repairs(config))
+
+
+def uses_front_fields(config: Config) -> bool:
+    """Whether a run of ``config`` keeps a front (``survival.method``): its grid carries
+    the clearance fields of :func:`jaxga.operators.guide.with_front_fields`."""
+    return config.get("survival.method") is not None
 
 
 def field_repairs(config: Config) -> bool:

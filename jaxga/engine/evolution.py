@@ -42,10 +42,18 @@ from jaxga.core.paths import (
     is_feasible,
     remove_loops,
 )
+from jaxga.core.robot_objectives import minimised, robot_objectives
 from jaxga.engine.algorithm import F32, I32, Algorithm
 from jaxga.operators.init import initialise_population
 from jaxga.operators.islands import migrate
 from jaxga.operators.lift import gated_map, windowed_map
+from jaxga.operators.pareto import (
+    crowded_order,
+    crowded_tournament,
+    crowding_distance,
+    hypervolume,
+    nondominated_rank,
+)
 from jaxga.operators.registry import Binding
 
 
@@ -185,6 +193,9 @@ class IslandState:
     length: jax.Array  # int32[P]
     fitness: jax.Array  # float32[P]
     feasible: jax.Array  # bool[P]
+    objectives: jax.Array | None = None
+    """``float32[P, M]``: the minimised robot objectives of a front (``survival.method``;
+    :func:`objective_vectors`); None for a scalar GA."""
 
 
 @jax.tree_util.register_dataclass
@@ -200,6 +211,9 @@ class GAState:
     stall: jax.Array  # int32: generations without improvement
     frozen: jax.Array  # bool: stagnation rule fired
     failures: jax.Array  # int32[3]: crossover, mutation, simplification failures
+    reference: jax.Array | None = None
+    """``float32[M]``: the reference point of a front's hypervolume
+    (:func:`hypervolume_reference`), fixed at initialisation; None for a scalar GA."""
 
 
 def _active(algo: Algorithm, params: dict) -> jax.Array:
@@ -245,14 +259,20 @@ def init_state(algo: Algorithm, key: jax.Array, grid: Grid, params: dict) -> tup
         # Once per run: at full width (the window pays off in the generations' loop).
         fitness, feas = evaluate(algo, grid, params, pop.cells, pop.length, active,
                                  window=False)
-        return IslandState(pop.cells, pop.length, fitness, feas), stats
+        return IslandState(pop.cells, pop.length, fitness, feas,
+                           objective_vectors(algo, grid, pop.cells, pop.length)), stats
 
     islands, stats = jax.vmap(one)(keys)
     best_c, best_n, best_f = _best_of(islands)
+    reference = None
+    if islands.objectives is not None:
+        m = len(algo.stages.objectives)
+        reference = hypervolume_reference(islands.objectives.reshape(-1, m),
+                                          islands.feasible.reshape(-1))
     state = GAState(
         islands=islands, best_cells=best_c, best_length=best_n, best_fitness=best_f,
         generation=jnp.int32(0), stall=jnp.int32(0), frozen=jnp.bool_(False),
-        failures=jnp.zeros(3, I32),
+        failures=jnp.zeros(3, I32), reference=reference,
     )
     return state, stats
 
@@ -262,7 +282,12 @@ def island_generation(algo: Algorithm, key, grid: Grid, isl: IslandState, t, par
     active = _active(algo, params)
     fit_fn = fitness_function(algo, params)
     k_sel, k_cx, k_mu, k_si = jax.random.split(key, 4)
-    idx = _select(algo, k_sel, isl.fitness, active)
+    if algo.stages.survival is None:
+        idx = _select(algo, k_sel, isl.fitness, active)
+    else:  # NSGA-II's mating selection (Deb et al. 2002, III-B) on the parents' front
+        rank = nondominated_rank(isl.objectives, isl.feasible)
+        idx = crowded_tournament(k_sel, rank, crowding_distance(isl.objectives, rank),
+                                 active, algo.population)
     pop = Population(isl.cells[idx], isl.length[idx])
     fitness = isl.fitness[idx]
     pop, f_cx = _crossover(algo, k_cx, grid, pop, fitness, active, t, params, fit_fn)
@@ -291,8 +316,73 @@ def island_generation(algo: Algorithm, key, grid: Grid, isl: IslandState, t, par
         zero = (jnp.zeros((algo.population,), F32), jnp.zeros((algo.population,), bool),
                 jnp.zeros((2,), I32))
         pop, new_fitness, feas, fails = jax.lax.fori_loop(0, 2, step, (pop, *zero))
-    return IslandState(pop.cells, pop.length, new_fitness, feas), jnp.concatenate(
-        [jnp.reshape(f_cx, (1,)).astype(I32), fails])
+    offspring = IslandState(pop.cells, pop.length, new_fitness, feas,
+                            objective_vectors(algo, grid, pop.cells, pop.length))
+    if algo.stages.survival is not None:
+        offspring = survive(isl, offspring, active)
+    return offspring, jnp.concatenate([jnp.reshape(f_cx, (1,)).astype(I32), fails])
+
+
+def objective_vectors(algo: Algorithm, grid: Grid, cells: jax.Array,
+                      length: jax.Array) -> jax.Array | None:
+    """``float32[P, M]``: the robot objectives a front minimises
+    (:func:`jaxga.core.robot_objectives.robot_objectives`, in cells, the clearance
+    negated, :func:`jaxga.core.robot_objectives.minimised`) of a population, read from
+    the grid's clearance field and band (:func:`jaxga.operators.guide.with_front_fields`);
+    None without a front (``survival.method``)."""
+    names = algo.stages.objectives
+    if not names:
+        return None
+    guide = grid.guide
+
+    def one(c, n):
+        return minimised(robot_objectives(grid, c, n, guide.clearance, band=guide.band),
+                         names)
+
+    return jax.vmap(one)(cells, length)
+
+
+def distinct(objectives: jax.Array, valid: jax.Array) -> jax.Array:
+    """``bool[P]``: valid individuals whose objective vector no earlier valid individual
+    has (the first of each set of equal vectors): copies never take a place on a front."""
+    same = jnp.all(objectives[:, None, :] == objectives[None, :, :], axis=-1)
+    n = objectives.shape[0]
+    earlier = jnp.arange(n)[None, :] < jnp.arange(n)[:, None]
+    return valid & ~jnp.any(same & earlier & valid[None, :], axis=1)
+
+
+def survive(parents: IslandState, offspring: IslandState, active: jax.Array) -> IslandState:
+    """NSGA-II's elitist survival (Deb et al. 2002, section III-C) of parents and offspring
+    together: whole fronts while they fit, then the least crowded of the next, among
+    distinct objective vectors (:func:`distinct`); then copies, then paths that are not
+    feasible. The survivors are in crowded order; slots past ``active`` are inactive."""
+    both = jax.tree_util.tree_map(lambda a, b: jnp.concatenate([a, b]), parents, offspring)
+    n = both.fitness.shape[0]
+    unique = distinct(both.objectives, both.feasible)
+    rank = nondominated_rank(both.objectives, unique)
+    crowding = crowding_distance(both.objectives, rank)
+    rank = jnp.where(unique, rank, jnp.where(both.feasible, n, n + 1))
+    keep = crowded_order(rank, crowding)[:n // 2]
+    kept = jax.tree_util.tree_map(lambda a: a[keep], both)
+    return dataclasses.replace(kept, fitness=jnp.where(active, kept.fitness, 0.0),
+                               feasible=kept.feasible & active)
+
+
+HYPERVOLUME_MARGIN = 0.1
+"""The reference point of a front's hypervolume lies this share of the initial
+population's range beyond its worst value of each objective."""
+
+
+def hypervolume_reference(objectives: jax.Array, valid: jax.Array) -> jax.Array:
+    """``float32[M]``: the reference point of a run's hypervolume, fixed at initialisation
+    (decision 045): each objective's worst value over the valid initial individuals,
+    moved :data:`HYPERVOLUME_MARGIN` of their range (and a little more, so that a
+    population of one value has a volume) further; zeros without a valid individual."""
+    valid = valid[:, None]
+    worst = jnp.max(jnp.where(valid, objectives, -jnp.inf), axis=0)
+    best = jnp.min(jnp.where(valid, objectives, jnp.inf), axis=0)
+    ref = worst + HYPERVOLUME_MARGIN * (worst - best) + 1e-3 * (1.0 + jnp.abs(worst))
+    return jnp.where(jnp.isfinite(ref), ref, 0.0).astype(F32)
 
 
 def _island_params(params: dict, islands: int) -> tuple[dict, dict]:
@@ -336,6 +426,7 @@ def generation(algo: Algorithm, key, grid: Grid, state: GAState, params: dict):
         stall=jnp.where(better, 0, state.stall + 1),
         frozen=state.frozen,
         failures=state.failures + jnp.sum(fails, axis=0),
+        reference=state.reference,
     )
     # IMGA 4.4: stop after K generations without improvement (K traced; 0 = never). A
     # frozen run keeps its old state below, so only an unfrozen one can freeze here.
@@ -353,7 +444,12 @@ def history_row(algo: Algorithm, state: GAState, params: dict) -> dict:
     active, f = active.reshape(-1), f.reshape(-1)
     mean = ordered_mean(f, active)
     var = ordered_mean((f - mean) ** 2, active)
-    return {"best": state.best_fitness, "mean": mean, "std": jnp.sqrt(var)}
+    row = {"best": state.best_fitness, "mean": mean, "std": jnp.sqrt(var)}
+    if state.reference is not None:  # a front: the volume it dominates (decision 045)
+        isl = state.islands
+        row["hypervolume"] = hypervolume(isl.objectives.reshape(-1, state.reference.shape[0]),
+                                         isl.feasible.reshape(-1), state.reference)
+    return row
 
 
 def evolve(algo: Algorithm, key, grid: Grid, state: GAState, params: dict,
@@ -433,6 +529,32 @@ def convergence_generation(best: jax.Array, final_best: jax.Array,
 
 @jax.tree_util.register_dataclass
 @dataclasses.dataclass(frozen=True)
+class Front:
+    """The first front of a run's final population (decision 045): every distinct
+    non-dominated feasible path, in the population's slots (``mask`` says which)."""
+
+    mask: jax.Array
+    """bool[P]: the slot holds a point of the front."""
+    cells: jax.Array
+    """int32[P, L]: the paths (padded with their last cell)."""
+    n_cells: jax.Array
+    """int32[P]: their numbers of cells."""
+    objectives: jax.Array
+    """float32[P, M]: their minimised objectives in cells (``survival.objectives``, the
+    clearance negated)."""
+
+
+def final_front(state: GAState) -> Front:
+    """The :class:`Front` of ``state``'s population (one island)."""
+    isl = jax.tree_util.tree_map(lambda a: a[0], state.islands)
+    unique = distinct(isl.objectives, isl.feasible)
+    rank = nondominated_rank(isl.objectives, unique)
+    return Front(mask=unique & (rank == 0), cells=isl.cells, n_cells=isl.length,
+                 objectives=isl.objectives)
+
+
+@jax.tree_util.register_dataclass
+@dataclasses.dataclass(frozen=True)
 class RunOutputs:
     """What :func:`finish` reports of one run (arrays with a leading runs axis once
     mapped over runs). Also read as a mapping by field name (``out["fitness"]``,
@@ -445,7 +567,8 @@ class RunOutputs:
     raw_n_cells: jax.Array
     """int32: its number of cells."""
     cells: jax.Array
-    """int32[L]: the best path post-optimised (``post.method``)."""
+    """int32[L]: the best path post-optimised (``post.method``); with a front, the
+    shortest of its population's paths post-optimised (decision 045)."""
     n_cells: jax.Array
     """int32: its number of cells."""
     fitness: jax.Array
@@ -466,6 +589,8 @@ class RunOutputs:
     """bool: the post-optimised path is feasible and joins the endpoints."""
     convergence_generation: jax.Array | None = None
     """int32: :func:`convergence_generation`, None where the history stayed on the host."""
+    front: Front | None = None
+    """A front's non-dominated paths (``survival.method``), None for a scalar GA."""
 
     def __getitem__(self, key: str) -> Any:
         if key not in self.keys():
@@ -485,6 +610,22 @@ class RunOutputs:
         return [(k, getattr(self, k)) for k in self.keys()]
 
 
+def _shortest_after_post(grid: Grid, state: GAState, post: Callable) -> tuple:
+    """``(cells, length)``: of the best path and the final population's feasible paths
+    each post-optimised, the shortest. A front's shortest end (decision 045): the path of
+    least raw length need not shortcut to the shortest curve, and a front keeps one path
+    per objective vector, so the whole population is the better pool. Never longer than
+    the best path's own post-optimisation."""
+    isl = jax.tree_util.tree_map(lambda a: a[0], state.islands)
+    cells = jnp.concatenate([state.best_cells[None], isl.cells])
+    length = jnp.concatenate([state.best_length[None], isl.length])
+    ok = jnp.concatenate([(state.best_fitness > 0)[None], isl.feasible])
+    opt_c, opt_n = jax.vmap(lambda c, n: post(grid, c, n))(cells, length)
+    opt_len = jax.vmap(lambda c, n: objectives.path_length(grid, c, n))(opt_c, opt_n)
+    k = jnp.argmin(jnp.where(ok, opt_len, jnp.inf))
+    return opt_c[k], opt_n[k]
+
+
 def finish(algo: Algorithm, grid: Grid, state: GAState, history: dict | None, params: dict,
            initial_best: jax.Array | None = None) -> RunOutputs:
     """Post-optimise the best path and compute the reported metrics
@@ -498,9 +639,14 @@ def finish(algo: Algorithm, grid: Grid, state: GAState, history: dict | None, pa
     success = state.best_fitness > 0
     post_op = algo.stages.post
     if post_op.fn is None:
-        opt_c, opt_n = remove_loops(raw_c, raw_n, grid.n_cells)
+        def post(g, c, n):
+            return remove_loops(c, n, g.n_cells)
     else:
-        opt_c, opt_n = post_op.bind(binding(algo, params))(grid, raw_c, raw_n)
+        post = post_op.bind(binding(algo, params))
+    if state.islands.objectives is None:
+        opt_c, opt_n = post(grid, raw_c, raw_n)
+    else:
+        opt_c, opt_n = _shortest_after_post(grid, state, post)
     # Raw and post-optimised paths measured as one batch of two: one copy of the metric
     # code in the compiled program instead of two.
     both_len, both_metrics = jax.vmap(
@@ -520,4 +666,5 @@ def finish(algo: Algorithm, grid: Grid, state: GAState, history: dict | None, pa
         feasible_post=is_feasible(grid, opt_c, opt_n) & has_endpoints(grid, opt_c, opt_n),
         convergence_generation=None if history is None else convergence_generation(
             history["best"], state.best_fitness, initial_best),
+        front=None if state.islands.objectives is None else final_front(state),
     )

@@ -34,10 +34,12 @@ import numpy as np
 
 from jaxga.core.dtypes import on_device
 from jaxga.core.grid import Grid
+from jaxga.maps.clearance import cell_clearance
 from jaxga.maps.preprocess import move_edges, region_labels
 
 __all__ = ["Guide", "ProblemFacts", "clearance_weighted_field", "distance_fields",
-           "field_path", "longest_optimal_path_cells", "problem_facts", "with_guide"]
+           "field_path", "longest_optimal_path_cells", "padded_guide", "problem_facts",
+           "with_front_fields", "with_guide"]
 
 @jax.tree_util.register_dataclass
 @dataclasses.dataclass(frozen=True)
@@ -53,6 +55,16 @@ class Guide:
 
     to_goal: jax.Array
     from_start: jax.Array
+    clearance: jax.Array | None = None
+    """``float32[H * W]`` or None: each cell's clearance in cells
+    (:func:`jaxga.maps.clearance.cell_clearance` of the grid's blocked cells, capped at
+    ``H + W``), for the robot objectives of a front (:func:`with_front_fields`)."""
+    weighted: jax.Array | None = None
+    """``float32[K * H * W]`` or None: the goal's :func:`clearance_weighted_field` for each
+    of ``K`` weights, one after another in one flat table (the clearance walk's fields)."""
+    band: jax.Array | None = None
+    """``float32`` or None: the band of the weighted fields and of the intrusion
+    objective, in cells."""
 
 
 @dataclasses.dataclass(frozen=True)
@@ -244,3 +256,43 @@ def clearance_weighted_field(grid: Grid, clearance: np.ndarray, weight: float,
     if blocked.reshape(-1)[goal]:
         field[:] = np.inf
     return field
+
+
+def with_front_fields(grid: Grid, weights: tuple[float, ...], band: float) -> Grid:
+    """``grid`` with its :class:`Guide` (:func:`with_guide`) and the fields a front of
+    length against clearance reads (decision 045): each cell's clearance from the grid's
+    blocked cells (:func:`jaxga.maps.clearance.cell_clearance`, the map's edge not
+    counted as an obstacle, capped at ``H + W`` so that a map without obstacles has
+    finite values), the goal's :func:`clearance_weighted_field` for each of ``weights``
+    and ``band`` (cells, > 0). Computed on the host once per problem; a grid that has
+    them keeps them."""
+    grid = with_guide(grid)
+    if grid.guide.weighted is not None:
+        return grid
+    if not weights or band <= 0:
+        raise ValueError(f"a front's fields need weights and a band > 0, got {weights} "
+                         f"and {band}")
+    clearance = np.minimum(cell_clearance(grid.blocked_np()), grid.height + grid.width)
+    fields = [clearance_weighted_field(grid, clearance, float(w), float(band))
+              for w in weights]
+    guide = dataclasses.replace(
+        grid.guide, clearance=on_device(clearance.reshape(-1), np.float32),
+        weighted=on_device(np.concatenate(fields), np.float32),
+        band=on_device(np.float32(band), np.float32))
+    return dataclasses.replace(grid, guide=guide)
+
+
+def padded_guide(guide: Guide, shape: tuple[int, int], pad: tuple) -> Guide:
+    """``guide``, of a map of ``shape``, for the map padded by ``pad`` (``np.pad`` widths
+    of its rows and columns) with blocked cells: the distance fields padded with
+    infinity (no padding cell is reachable), the clearances with 0 (a blocked cell's)."""
+    def padded(field, fill):
+        if field is None:
+            return None
+        planes = np.asarray(field).reshape((-1, *shape))
+        return on_device(np.pad(planes, ((0, 0), *pad), constant_values=fill).reshape(-1))
+
+    return Guide(to_goal=padded(guide.to_goal, np.inf),
+                 from_start=padded(guide.from_start, np.inf),
+                 clearance=padded(guide.clearance, 0.0),
+                 weighted=padded(guide.weighted, np.inf), band=guide.band)

@@ -82,8 +82,10 @@ def crowding_distance(objectives: jax.Array, rank: jax.Array) -> jax.Array:
         edge = r[1:] != r[:-1]
         first = jnp.concatenate([jnp.ones((1,), bool), edge])
         last = jnp.concatenate([edge, jnp.ones((1,), bool)])
-        lo = jax.ops.segment_min(v, r, num_segments=n + 1)[r]
-        hi = jax.ops.segment_max(v, r, num_segments=n + 1)[r]
+        # sorted by front, then value: a front's least and greatest values are its first
+        # and last entries (gathers, no scatter whose order could matter)
+        lo = v[jnp.searchsorted(r, r, side="left")]
+        hi = v[jnp.searchsorted(r, r, side="right") - 1]
         span = hi - lo
         gap = jnp.roll(v, -1) - jnp.roll(v, 1)
         inner = jnp.where(span > 0, gap / jnp.where(span > 0, span, 1.0), 0.0)

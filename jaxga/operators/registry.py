@@ -55,6 +55,7 @@ __all__ = [
     "FAMILIES",
     "FIELD_REPAIR",
     "NEEDS_FITNESS",
+    "NEEDS_FRONT_FIELDS",
     "NEEDS_GUIDE",
     "NEVER_FAILS",
     "SHRINKING",
@@ -101,8 +102,12 @@ NEEDS_GUIDE = "needs_guide"
 """It steers by the problem's exact distance fields: the grid of a run that uses it
 carries them (:func:`jaxga.operators.guide.with_guide`)."""
 
+NEEDS_FRONT_FIELDS = "needs_front_fields"
+"""It walks the clearance-weighted fields of a front
+(:func:`jaxga.operators.guide.with_front_fields`): only with ``survival.method``."""
+
 TRAITS = (NEEDS_FITNESS, FIELD_REPAIR, WAYPOINTS, SPLICING, NEVER_FAILS, SHRINKING,
-          CONTINUOUS_ONLY, NEEDS_GUIDE)
+          CONTINUOUS_ONLY, NEEDS_GUIDE, NEEDS_FRONT_FIELDS)
 """Every trait an operator may declare."""
 
 

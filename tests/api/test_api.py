@@ -20,7 +20,6 @@ from jaxga.config.schema import SCHEMA
 from jaxga.core.errors import InitialisationWarning, JaxgaError, ParameterError
 from jaxga.maps import load_map, random_map
 from jaxga.operators import schedules
-from jaxga.operators.guide import with_guide
 from jaxga.reference.any_angle import any_angle_shortest_path
 from jaxga.reference.fitness import fitness_optimum, fitness_weights, path_fitness_np
 from jaxga.reference.optima import clear_np, path_length, shortest_path
@@ -313,6 +312,7 @@ def test_unread_dynamic_keys_are_exactly_those_the_program_does_not_use(preset, 
     pe = pytest.importorskip("jax._src.interpreters.partial_eval")
     if not hasattr(pe, "dce_jaxpr"):
         pytest.skip("this JAX has no dce_jaxpr")
+    from jaxga._runtime.fields import program_fields
     from jaxga.config.presets import load_preset
     from jaxga.config.schema import SCHEMA
 
@@ -326,10 +326,12 @@ def test_unread_dynamic_keys_are_exactly_those_the_program_does_not_use(preset, 
     algo, params = engine.build(config, grid)
     key = jax.random.PRNGKey(0)
 
+    guided = program_fields(grid, config)  # the fields jaxga.run attaches
+
     def whole_run(params):
-        state, _ = engine.init_state(algo, key, with_guide(grid), params)
-        state, history = engine.evolve(algo, key, grid, state, params, 1)
-        return engine.finish(algo, grid, state, history, params, state.best_fitness), history
+        state, _ = engine.init_state(algo, key, guided, params)
+        state, history = engine.evolve(algo, key, guided, state, params, 1)
+        return engine.finish(algo, guided, state, history, params, state.best_fitness), history
 
     closed = jax.make_jaxpr(whole_run)(params)
     _, used = pe.dce_jaxpr(closed.jaxpr, [True] * len(closed.jaxpr.outvars))

@@ -67,6 +67,11 @@ def engine_chain(preset: str) -> dict:
             entry["probability"] = rate
     chain["islands"] = {key.split(".", 1)[1]: config[key] for key in COMMON_FIELDS
                         if key.startswith("islands.") and config.get(key) is not None}
+    survival = {key.split(".", 1)[1]: config[key] for key in COMMON_FIELDS
+                if key.startswith("survival.") and config.get(key) is not None}
+    if survival:  # a front (decision 045): the stages it replaces and its objectives
+        survival["objectives"] = list(algo.stages.objectives)
+        chain["survival"] = survival
     return _lists(chain)
 
 
@@ -99,6 +104,11 @@ def differences(card: dict, chain: dict) -> list[str]:
     want, got = card.get("islands", {"count": 1}), chain["islands"]
     out += [f"islands.{key}: card {value!r}, engine {got.get(key)!r}"
             for key, value in want.items() if got.get(key) != value]
+    want, got = card.get("survival", {}), chain.get("survival", {})
+    if bool(want) != bool(got):
+        out.append(f"survival: card {want!r}, engine {got!r}")
+    out += [f"survival.{key}: card {value!r}, engine {got.get(key)!r}"
+            for key, value in want.items() if got and got.get(key) != value]
     return out
 
 

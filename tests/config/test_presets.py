@@ -29,6 +29,7 @@ PRESETS = tuple(preset_names())
 card, docs/cards, with no list to extend here)."""
 VARIANTS = {
     "hybrid": [],
+    "pareto": [],
     "agacd": ["50x50"],
     "iga_zhang": ["env2", "env3"],
     "iga_zhu": [],

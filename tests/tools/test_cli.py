@@ -381,10 +381,11 @@ def test_presets_and_maps_list_what_the_package_ships(capsys):
     assert main(["presets"]) == 0
     out = capsys.readouterr().out
     names = sorted(preset_names())
-    assert names == ["agacd", "hybrid", "iga_zhang", "iga_zhu", "imga", "mpmga", "sga"]
+    assert names == ["agacd", "hybrid", "iga_zhang", "iga_zhu", "imga", "mpmga", "pareto",
+                     "sga"]
     for name, paper in zip(names, ("Hao et al. 2021", "jaxga's own preset", "Zhang Ke-qi",
                                    "Zhu & Pan 2024", "Li, Hu, Liu 2021", "Hao et al. 2020",
-                                   "AGACD")):
+                                   "jaxga's own preset", "AGACD")):
         line = next(x for x in out.splitlines() if x.startswith(name + " "))
         assert paper in line, (name, line)
     assert main(["maps"]) == 0

@@ -78,8 +78,10 @@ from jaxga.operators.init.connect import (  # noqa: F401 - the family's public n
     median_insertion,
 )
 from jaxga.operators.init.field import (  # noqa: F401 - the family's public names
+    CLEARANCE_WEIGHTS,
     FIELD_SLACK,
     FIELD_TEMPERATURE,
+    clearance_walk,
     field_descent,
     field_path,
     field_reconnect,
@@ -102,6 +104,7 @@ from jaxga.operators.init.walks import (  # noqa: F401 - the family's public nam
 )
 from jaxga.operators.registry import (
     FIELD_REPAIR,
+    NEEDS_FRONT_FIELDS,
     NEEDS_GUIDE,
     NEVER_FAILS,
     Operator,
@@ -121,6 +124,7 @@ __all__ = [
     "field_descent",
     "field_path",
     "field_reconnect",
+    "clearance_walk",
     "field_walk",
     "intermittent_anchors",
     "intermittent_connect",
@@ -159,4 +163,16 @@ register(Operator(
     traits=frozenset({NEVER_FAILS, NEEDS_GUIDE}),
     options=lambda ctx: {"slack": ctx.params["init.slack"],
                          "temperature": ctx.params["init.temperature"]},
+))
+register(Operator(
+    "init", "clearance_walk", clearance_walk,
+    "walk down a clearance-weighted distance field of a random weight; spreads a front of "
+    "length against clearance; cannot fail where a path exists (jaxga; decision 045)",
+    params={
+        "init.clearance_weights": Field(
+            list, dynamic=False, default=CLEARANCE_WEIGHTS,
+            doc="clearance_walk: the weights of the clearance-weighted fields, >= 0 (0: the "
+                "exact distance field)"),
+    },
+    traits=frozenset({NEVER_FAILS, NEEDS_GUIDE, NEEDS_FRONT_FIELDS}),
 ))

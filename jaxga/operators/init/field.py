@@ -293,3 +293,39 @@ def field_walk(
     via = jnp.searchsorted(count, r, side="right").astype(I32) - 1
     cells, length, ok = field_path(k_path, grid, via, capacity, budget, temperature)
     return cells, length, ok & (total > 0)
+
+
+CLEARANCE_WEIGHTS = (0.0, 0.25, 0.5, 1.0, 2.0, 4.0, 8.0, 16.0)
+"""Default ``init.clearance_weights`` of :func:`clearance_walk`: from the shortest paths
+(weight 0) to paths that keep as far from the obstacles as the band allows."""
+
+
+def clearance_walk(key: jax.Array, grid: Grid, capacity: int) -> tuple[jax.Array, jax.Array,
+                                                                      jax.Array]:
+    """jaxga's initialiser of a front of length against clearance (decision 045): a walk
+    from the start down the goal's clearance-weighted field
+    (:func:`jaxga.operators.guide.clearance_weighted_field`) of a weight drawn uniformly
+    from those attached to the grid (:func:`jaxga.operators.guide.with_front_fields`), so
+    a population spreads from the shortest paths (weight 0, the exact distance field) to
+    the widest.
+
+    Each step draws uniformly among the legal moves that lower the weighted field by at
+    least their own length (:func:`field_descent`'s rule with no budget for detours).
+    It cannot fail where a path exists: a move costs its length times at least 1, so the
+    next move of a cheapest path lowers the field by its cost, at least its length; the
+    field decreases strictly, so the walk has no loop and ends at the goal. Only an
+    unreachable goal and a capacity below the path's cells fail.
+    """
+    capacity = check_capacity(capacity)
+    guide = _require_guide(grid, "clearance_walk")
+    if guide.weighted is None:
+        raise ParameterError(
+            "clearance_walk walks the clearance-weighted fields: attach them with "
+            "jaxga.operators.guide.with_front_fields(grid, weights, band) (jaxga.run does "
+            "this for a configuration with survival.method)")
+    n = grid.n_cells
+    fields = guide.weighted.shape[0] // n
+    k_field, k_walk = jax.random.split(key)
+    offset = jax.random.randint(k_field, (), 0, fields, dtype=I32) * n
+    return _descent(k_walk, grid, guide.weighted, offset, grid.start, capacity,
+                    jnp.float32(0.0), jnp.float32(0.0))

@@ -1,0 +1,162 @@
+"""The `pareto` preset on real robot maps: fronts of length against clearance and turning,
+their exact ends, the hypervolume the generations gain, and the wall time a warm second
+process takes (decision 045).
+
+On the four public ROS ``map_server`` maps of ``benchmarks/robot_maps.py`` (a 0.2 m robot,
+the endpoints of ``benchmarks/pareto_baseline.py``: the far ends of each map, moved to
+the freest cell within a metre), 8 seeds each, every map in a fresh process twice with
+one cache of its own (the first compiles; the second is what a user waits for once the
+cache is warm). Per map:
+
+* **front**: points per run (the distinct non-dominated paths of its final population),
+  and whether every front path is feasible on the inflated grid (8-connected steps
+  through free cells under the map's corner rule, from the start to the goal);
+* **exact ends**: the shortest end post-optimised against the exact any-angle optimum
+  (median and worst gap over runs); the widest end's least clearance against the exact
+  maximin clearance (the least share over runs);
+* **the generations' worth**: the hypervolume of the last generation over generation
+  0's (median over runs; the reference point fixed at initialisation);
+* **wall**: the second process, start to exit (load, fields, references, init, evolve,
+  post).
+
+Targets: >= 5 points per run and every path feasible; shortest end <= 2 % over the
+any-angle optimum; widest end >= 95 % of the maximin clearance; median hypervolume ratio
+>= 1.05; second process <= 10 s per map.
+
+    python benchmarks/pareto_front.py [--map NAME] [--seeds 8] [--no-write]
+"""
+
+from __future__ import annotations
+
+import argparse
+import json
+import os
+import statistics
+import subprocess
+import sys
+import tempfile
+import time
+from pathlib import Path
+
+import numpy as np
+from _results import markdown_table, record
+from pareto_baseline import OPEN_RADIUS_M, freest_near
+from robot_maps import MAPS, RADIUS, far_endpoints
+
+TITLE = "pareto: fronts of length, clearance and turning on ROS maps"
+ROOT = Path(__file__).resolve().parents[1]
+
+
+def problem(name: str):
+    """The map's inflated grid with the benchmark's endpoints, and its frame."""
+    from jaxga.maps import load_map_info
+    from jaxga.maps.clearance import cell_clearance
+
+    path, coarsen = MAPS[name]
+    start, goal = far_endpoints(path, coarsen)
+    info = load_map_info(path, robot_radius=RADIUS, coarsen=coarsen, start_world=start,
+                         goal_world=goal)
+    grid, frame = info.grid, info.frame
+    field = cell_clearance(frame.obstacles)
+    reach = OPEN_RADIUS_M / frame.cell_size
+    ends = [freest_near(grid.blocked_np(), field, xy, reach)
+            for xy in (grid.start_xy, grid.goal_xy)]
+    return grid.replace(start=ends[0], goal=ends[1]), frame
+
+
+def feasible(grid, path: list) -> bool:
+    """``path`` (``(x, y)`` cells) joins the start to the goal by legal 8-connected moves
+    through free cells."""
+    from jaxga.reference.optima import clear_np
+
+    blocked = grid.blocked_np()
+    p = np.asarray(path)
+    if tuple(p[0]) != grid.start_xy or tuple(p[-1]) != grid.goal_xy:
+        return False
+    steps = np.abs(np.diff(p, axis=0))
+    return bool(np.all(steps.max(axis=1) == 1) and all(
+        clear_np(blocked, grid.corner_rule, a, b) for a, b in zip(p[:-1], p[1:])))
+
+
+def one(name: str, seeds: int) -> dict:
+    """Run the preset on map ``name`` in this process; its measures as a dict."""
+    t0 = time.perf_counter()
+    import jaxga
+
+    grid, frame = problem(name)
+    result = jaxga.run("pareto", grid, seeds=seeds, any_angle_budget=None)
+    wall = time.perf_counter() - t0
+    points, ok, gaps, ratios = [], True, [], []
+    for i in range(seeds):
+        front = result.front_points(i)
+        ends = result.front_ends(i)
+        points.append(len(front))
+        ok &= bool(result.success[i]) and all(feasible(grid, p["path"]) for p in front)
+        gaps.append(ends["shortest_gap"])
+        ratios.append(ends["widest_ratio"])
+    hv = result.history["hypervolume"]
+    return {"points": points, "feasible": ok, "gaps": gaps, "ratios": ratios,
+            "hv_ratio": (hv[:, -1] / hv[:, 0]).tolist(), "wall": wall,
+            "maximin_m": result.maximin_clearance * frame.cell_size,
+            "any_angle_m": result.any_angle_optimum * frame.cell_size,
+            "cells": f"{grid.width} x {grid.height}"}
+
+
+def measure_map(name: str, seeds: int) -> list:
+    """One table row: the map run twice in fresh processes sharing one new cache."""
+    with tempfile.TemporaryDirectory() as cache:
+        env = dict(os.environ, JAXGA_CACHE_DIR=cache, PYTHONPATH=str(ROOT))
+        env.pop("JAX_COMPILATION_CACHE_DIR", None)
+        runs = []
+        for _ in range(2):
+            t0 = time.perf_counter()
+            out = subprocess.run([sys.executable, __file__, "--one", name, "--seeds",
+                                  str(seeds)], env=env, capture_output=True, text=True,
+                                 check=True, cwd=Path(__file__).parent)
+            m = json.loads(out.stdout.strip().splitlines()[-1])
+            m["process"] = time.perf_counter() - t0
+            runs.append(m)
+    m = runs[1]
+    return [
+        name, m["cells"], f"{min(m['points'])} / {statistics.median(m['points']):g}",
+        "yes" if m["feasible"] else "NO",
+        f"{m['any_angle_m']:.2f}",
+        f"{100 * statistics.median(m['gaps']):.2f} / {100 * max(m['gaps']):.2f}",
+        f"{m['maximin_m']:.3f}", f"{min(m['ratios']):.3f}",
+        f"{statistics.median(m['hv_ratio']):.3f} ({min(m['hv_ratio']):.3f}-"
+        f"{max(m['hv_ratio']):.3f})",
+        f"{runs[0]['process']:.1f}", f"{m['process']:.1f}",
+    ]
+
+
+def main() -> None:
+    ap = argparse.ArgumentParser(description=__doc__.split("\n")[0])
+    ap.add_argument("--map", action="append", choices=sorted(MAPS),
+                    help="measure only this map (repeatable); default all four")
+    ap.add_argument("--seeds", type=int, default=8)
+    ap.add_argument("--one", choices=sorted(MAPS), help=argparse.SUPPRESS)
+    ap.add_argument("--no-write", action="store_true")
+    args = ap.parse_args()
+    if args.one:
+        print(json.dumps(one(args.one, args.seeds)))
+        return
+    rows = [measure_map(name, args.seeds) for name in (args.map or list(MAPS))]
+    headers = ["map", "cells", "front points min / median", "all feasible",
+               "any-angle optimum m", "shortest end gap % median / worst",
+               "maximin clearance m", "widest end / maximin (least)",
+               "hypervolume last / first median (range)", "first process s",
+               "second process s"]
+    body = (f"`pareto` preset, {args.seeds} seeds per map, a {RADIUS} m robot, the endpoints "
+            "of `benchmarks/pareto_baseline.py`. Clearances are each path's least cell "
+            "clearance on the inflated grid, the measure of the exact maximin clearance "
+            "(`jaxga.reference.maximin`); the shortest end is the post-optimised best "
+            "path. Processes are wall times from start to exit, the first compiling into "
+            "an empty cache, the second reading it. Targets: >= 5 points, every path "
+            "feasible, shortest end <= 2 %, widest end >= 0.95 of the maximin clearance, "
+            "median hypervolume ratio >= 1.05, second process <= 10 s.\n\n"
+            + markdown_table(headers, rows))
+    record(TITLE, body, write=not args.no_write)
+
+
+if __name__ == "__main__":
+    main()

@@ -1,0 +1,43 @@
+"""The host-side fields a configuration's programs read with the grid: the exact distance
+fields of the operators that steer by them, and a front's clearance fields (decision 045).
+"""
+
+from __future__ import annotations
+
+import math
+
+from jaxga.config.schema import Config
+from jaxga.core.grid import Grid
+from jaxga.engine.checks import uses_front_fields, uses_guide
+from jaxga.operators.guide import with_front_fields, with_guide
+from jaxga.operators.init import CLEARANCE_WEIGHTS
+from jaxga.reference.maximin import maximin_path
+
+__all__ = ["front_band", "program_fields"]
+
+
+def front_band(grid: Grid, config: Config) -> float:
+    """The band (cells) of a front's clearance-weighted fields and intrusion objective:
+    ``survival.band``, or where it is 0 or left out the problem's exact maximin clearance
+    (:func:`jaxga.reference.maximin.maximin_path`: the widest any path can keep, so the
+    heaviest field's walks approach the widest path); 1 where the goal is unreachable,
+    ``H + W`` on a map without obstacles."""
+    band = float(config.get("survival.band", 0.0))
+    if band > 0:
+        return band
+    widest = maximin_path(grid)
+    if not widest.found or widest.clearance <= 0:
+        return 1.0
+    return widest.clearance if math.isfinite(widest.clearance) else float(grid.height
+                                                                           + grid.width)
+
+
+def program_fields(grid: Grid, config: Config) -> Grid:
+    """``grid`` with what ``config``'s programs read attached: a front's fields
+    (:func:`jaxga.operators.guide.with_front_fields`, ``init.clearance_weights`` and
+    :func:`front_band`), else the exact distance fields where an operator steers by
+    them (:func:`jaxga.operators.guide.with_guide`), else ``grid`` itself."""
+    if uses_front_fields(config):
+        weights = tuple(config.get("init.clearance_weights", CLEARANCE_WEIGHTS))
+        return with_front_fields(grid, weights, front_band(grid, config))
+    return with_guide(grid) if uses_guide(config) else grid

@@ -1,0 +1,209 @@
+"""A front of length against clearance as a stage of the one engine (decision 045): the
+survival stage's pieces on hand-made populations, the clearance walk, the fields a front
+reads, the checks on its keys, and the invariants of a whole run of the ``pareto``
+preset (every front point feasible and non-dominated, the ends against the exact
+references, the JSON)."""
+
+from __future__ import annotations
+
+import json
+
+import jax
+import jax.numpy as jnp
+import numpy as np
+import pytest
+
+import jaxga
+from jaxga.config.presets import load_preset
+from jaxga.core.errors import ParameterError
+from jaxga.core.grid import Grid
+from jaxga.engine import build, unread_keys
+from jaxga.engine.evolution import (
+    IslandState,
+    distinct,
+    hypervolume_reference,
+    survive,
+)
+from jaxga.maps.clearance import cell_clearance
+from jaxga.operators.guide import (
+    clearance_weighted_field,
+    distance_fields,
+    padded_guide,
+    with_front_fields,
+)
+from jaxga.operators.init import clearance_walk
+from jaxga.operators.pareto import domination_matrix
+from jaxga.reference.maximin import maximin_path
+from jaxga.reference.optima import clear_np
+
+# A 16 x 14 room with a pillar: the short way passes it close, wide ways go round.
+BLOCKED = np.zeros((14, 16), bool)
+BLOCKED[5:9, 6:9] = True
+BLOCKED[0, :] = BLOCKED[-1, :] = True
+GRID = Grid.create(BLOCKED, start=(1, 7), goal=(14, 6), corner_rule="strict")
+
+
+def test_distinct_keeps_the_first_of_equal_valid_vectors():
+    obj = jnp.array([[1.0, 2.0], [1.0, 2.0], [0.0, 3.0], [1.0, 2.0], [0.0, 3.0]])
+    valid = jnp.array([False, True, True, True, True])
+    # slot 0 is invalid, so slot 1 is the first valid (1, 2); slot 3 copies it
+    assert distinct(obj, valid).tolist() == [False, True, True, False, False]
+
+
+def test_survival_keeps_the_front_then_crowding_then_copies_then_infeasible():
+    """Parents and offspring of 3 each: 6 candidates, 3 survive."""
+    cells = jnp.arange(6 * 4, dtype=jnp.int32).reshape(6, 4)
+    obj = jnp.array([[5.0, -1.0],   # parent 0: dominated by offspring 0
+                     [3.0, -3.0],   # parent 1: on the front
+                     [9.0, -9.0],   # parent 2: infeasible
+                     [4.0, -2.0],   # offspring 0: on the front
+                     [3.0, -3.0],   # offspring 1: a copy of parent 1
+                     [2.0, -1.0]])  # offspring 2: on the front
+    feas = jnp.array([True, True, False, True, True, True])
+    fit = 1.0 / obj[:, 0]
+
+    def state(sl):
+        return IslandState(cells[sl], jnp.full((3,), 4, jnp.int32), fit[sl], feas[sl], obj[sl])
+
+    out = survive(state(slice(0, 3)), state(slice(3, 6)), jnp.ones(3, bool))
+    # the front {1, 3, 5}: its extremes (1 and 5) have infinite crowding, then 3
+    assert sorted(out.cells[:, 0].tolist()) == [4, 12, 20]
+    assert out.feasible.all()
+    # with two active slots the third is kept but inactive
+    out2 = survive(state(slice(0, 3)), state(slice(3, 6)), jnp.array([True, True, False]))
+    assert out2.feasible.tolist() == [True, True, False]
+    assert float(out2.fitness[2]) == 0.0
+
+
+def test_hypervolume_reference_lies_beyond_the_worst_valid_values():
+    obj = jnp.array([[1.0, -4.0], [3.0, -2.0], [100.0, 100.0]])
+    ref = hypervolume_reference(obj, jnp.array([True, True, False]))
+    # worst 3 and -2, ranges 2 and 2: +0.2 each, + 1e-3 (1 + |worst|)
+    np.testing.assert_allclose(ref, [3.0 + 0.2 + 0.004, -2.0 + 0.2 + 0.003], rtol=1e-6)
+    assert hypervolume_reference(obj, jnp.zeros(3, bool)).tolist() == [0.0, 0.0]
+
+
+def test_front_fields_and_their_padding():
+    grid = with_front_fields(GRID, (0.0, 4.0), band=3.0)
+    g = grid.guide
+    n = GRID.n_cells
+    np.testing.assert_allclose(np.asarray(g.clearance),
+                               cell_clearance(BLOCKED).reshape(-1).astype(np.float32))
+    to_goal, _, _ = distance_fields(GRID)
+    np.testing.assert_allclose(np.asarray(g.weighted[:n]), to_goal.astype(np.float32))
+    np.testing.assert_allclose(
+        np.asarray(g.weighted[n:]),
+        clearance_weighted_field(GRID, cell_clearance(BLOCKED), 4.0, 3.0).astype(np.float32))
+    assert float(g.band) == 3.0
+    assert with_front_fields(grid, (1.0,), 9.0) is grid  # a grid keeps its fields
+    padded = padded_guide(g, GRID.shape, ((0, 2), (0, 3)))
+    planes = np.asarray(padded.weighted).reshape(2, 16, 19)
+    assert np.isinf(planes[:, 14:, :]).all() and np.isinf(planes[:, :, 16:]).all()
+    np.testing.assert_array_equal(planes[:, :14, :16].reshape(2, -1),
+                                  np.asarray(g.weighted).reshape(2, -1))
+    assert (np.asarray(padded.clearance).reshape(16, 19)[14:, :] == 0).all()
+
+
+def test_clearance_walk_cannot_fail_and_weight_zero_is_a_shortest_path():
+    grid = with_front_fields(GRID, (0.0,), band=3.0)
+    walk = jax.jit(jax.vmap(lambda k: clearance_walk(k, grid, 64)))
+    cells, length, ok = walk(jax.random.split(jax.random.key(0), 64))
+    assert bool(ok.all())
+    optimum = distance_fields(GRID)[0][int(GRID.start)]
+    for c, n in zip(np.asarray(cells), np.asarray(length)):
+        xy = np.stack([c[:n] % 16, c[:n] // 16], axis=1)
+        assert tuple(xy[0]) == GRID.start_xy and tuple(xy[-1]) == GRID.goal_xy
+        assert all(clear_np(BLOCKED, "strict", a, b) and np.abs(a - b).max() == 1
+                   for a, b in zip(xy[:-1], xy[1:]))
+        assert np.linalg.norm(np.diff(xy, axis=0), axis=1).sum() == pytest.approx(optimum,
+                                                                                  rel=1e-6)
+
+
+def test_clearance_walks_of_heavy_weights_keep_away_from_the_pillar():
+    grid = with_front_fields(GRID, (0.0, 64.0), band=3.0)
+    cells, length, ok = jax.jit(jax.vmap(lambda k: clearance_walk(k, grid, 64)))(
+        jax.random.split(jax.random.key(1), 128))
+    field = cell_clearance(BLOCKED).reshape(-1)
+    least = [field[np.asarray(c)[:n]].min() for c, n in zip(cells, np.asarray(length))]
+    assert bool(ok.all())
+    assert min(least) < 1.0 < max(least)  # both fields were drawn, and they differ
+
+
+@pytest.mark.parametrize(("sets", "message"), [
+    ({"islands.count": 2}, "islands.count must be 1"),
+    ({"survival.objectives": ["length", "speed"]}, "2 or 3 distinct names"),
+    ({"survival.objectives": ["length"]}, "2 or 3 distinct names"),
+    ({"survival.objectives": ["length", "length"]}, "2 or 3 distinct names"),
+])
+def test_a_front_s_keys_are_checked(sets, message):
+    config = load_preset("pareto").override(sets)
+    with pytest.raises(ParameterError, match=message):
+        build(config, GRID)
+
+
+def test_the_clearance_walk_needs_a_front_and_a_front_s_keys_need_survival():
+    hybrid = load_preset("hybrid")
+    with pytest.raises(ParameterError, match="survival.method = 'nsga2'"):
+        build(hybrid.override({"init.method": "clearance_walk"}), GRID)
+    assert "survival.band" in unread_keys(hybrid)
+    assert "survival.band" not in unread_keys(load_preset("pareto"))
+
+
+@pytest.fixture(scope="module")
+def front_run():
+    return jaxga.run("pareto", GRID, seeds=3, generations=6)
+
+
+def test_every_front_point_is_feasible_and_none_dominates_another(front_run):
+    r = front_run
+    widest = maximin_path(GRID)
+    assert r.maximin_clearance == pytest.approx(widest.clearance)
+    for i in range(3):
+        points = r.front_points(i)
+        assert len(points) >= 2
+        names = r.front.names
+        obj = np.array([[p[n] for n in names] for p in points])
+        minimised = obj * np.where(np.array(names) == "clearance", -1.0, 1.0)
+        dom = domination_matrix(jnp.asarray(minimised), jnp.ones(len(points), bool))
+        assert not bool(dom.any())
+        assert len({tuple(v) for v in minimised.tolist()}) == len(points)
+        assert obj[:, 0].tolist() == sorted(obj[:, 0].tolist())
+        field = cell_clearance(BLOCKED)
+        for p in points:
+            xy = np.asarray(p["path"])
+            assert tuple(xy[0]) == GRID.start_xy and tuple(xy[-1]) == GRID.goal_xy
+            assert all(clear_np(BLOCKED, "strict", a, b) and np.abs(a - b).max() == 1
+                       for a, b in zip(xy[:-1], xy[1:]))
+            assert p["clearance"] == pytest.approx(field[xy[:, 1], xy[:, 0]].min(), rel=1e-6)
+            length = np.linalg.norm(np.diff(xy, axis=0), axis=1).sum()
+            assert p["length"] == pytest.approx(length, rel=1e-5)
+        # no front path is wider than the exact widest path; the widest end reaches it here
+        assert max(p["clearance"] for p in points) <= widest.clearance + 1e-6
+        ends = r.front_ends(i)
+        assert ends["widest_ratio"] == pytest.approx(1.0)
+        assert ends["shortest_gap"] == pytest.approx(float(r.gap[i]))
+        assert r.length[i] <= min(p["length"] for p in points) + 1e-4
+
+
+def test_the_history_holds_the_hypervolume_and_the_json_the_front(front_run):
+    r = front_run
+    hv = r.history["hypervolume"]
+    assert hv.shape == (3, 6) and (hv > 0).all()
+    doc = json.loads(json.dumps(r.to_json()))
+    assert doc["maximin_clearance"] == pytest.approx(r.maximin_clearance)
+    run0 = doc["runs"][0]
+    assert [p["length"] for p in run0["front"]] == pytest.approx(
+        [p["length"] for p in r.front_points(0)])
+    assert run0["front"][0]["path"][0] == list(GRID.start_xy)
+    assert run0["front_ends"]["points"] == len(run0["front"])
+
+
+def test_front_choice_knee_and_least_clearance(front_run):
+    r = front_run
+    points = r.front_points(0)
+    assert r.front_choice(0) in points
+    wide = max(p["clearance"] for p in points)
+    assert r.front_choice(0, min_clearance=wide)["clearance"] == wide
+    assert r.front_choice(0, min_clearance=wide + 1) is None
+    chosen = r.front_choice(0, min_clearance=0.0)
+    assert chosen is points[0] or chosen == points[0]
