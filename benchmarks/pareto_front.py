@@ -14,8 +14,8 @@ cache is warm). Per map:
 * **exact ends**: the shortest end post-optimised against the exact any-angle optimum
   (median and worst gap over runs); the widest end's least clearance against the exact
   maximin clearance (the least share over runs);
-* **the generations' worth**: the hypervolume of the last generation over generation
-  0's (median over runs; the reference point fixed at initialisation);
+* **the generations' worth**: the hypervolume of the last generation over the initial
+  population's (median over runs; the reference point fixed at initialisation);
 * **wall**: the second process, start to exit (load, fields, references, init, evolve,
   post).
 
@@ -24,6 +24,11 @@ any-angle optimum; widest end >= 95 % of the maximin clearance; median hypervolu
 >= 1.05; second process <= 10 s per map.
 
     python benchmarks/pareto_front.py [--map NAME] [--seeds 8] [--no-write]
+    python benchmarks/pareto_front.py --figure docs/figures/pareto_small_house.png
+
+``--figure`` draws one run of the first map given (default ``small_house``) with
+:func:`jaxga.plot.plot_result` instead: its front's paths, the trade-off against the
+exact ends, and the hypervolume over the generations (the docs' figure).
 """
 
 from __future__ import annotations
@@ -48,7 +53,10 @@ ROOT = Path(__file__).resolve().parents[1]
 
 
 def problem(name: str):
-    """The map's inflated grid with the benchmark's endpoints, and its frame."""
+    """The map's inflated grid with the benchmark's endpoints, its frame and the map as
+    loaded with that grid (its layers and name, for a plot)."""
+    import dataclasses
+
     from jaxga.maps import load_map_info
     from jaxga.maps.clearance import cell_clearance
 
@@ -61,7 +69,8 @@ def problem(name: str):
     reach = OPEN_RADIUS_M / frame.cell_size
     ends = [freest_near(grid.blocked_np(), field, xy, reach)
             for xy in (grid.start_xy, grid.goal_xy)]
-    return grid.replace(start=ends[0], goal=ends[1]), frame
+    grid = grid.replace(start=ends[0], goal=ends[1])
+    return grid, frame, dataclasses.replace(info, grid=grid)
 
 
 def feasible(grid, path: list) -> bool:
@@ -83,7 +92,7 @@ def one(name: str, seeds: int) -> dict:
     t0 = time.perf_counter()
     import jaxga
 
-    grid, frame = problem(name)
+    grid, frame, _ = problem(name)
     result = jaxga.run("pareto", grid, seeds=seeds, any_angle_budget=None)
     wall = time.perf_counter() - t0
     points, ok, gaps, ratios = [], True, [], []
@@ -94,9 +103,8 @@ def one(name: str, seeds: int) -> dict:
         ok &= bool(result.success[i]) and all(feasible(grid, p["path"]) for p in front)
         gaps.append(ends["shortest_gap"])
         ratios.append(ends["widest_ratio"])
-    hv = result.history["hypervolume"]
     return {"points": points, "feasible": ok, "gaps": gaps, "ratios": ratios,
-            "hv_ratio": (hv[:, -1] / hv[:, 0]).tolist(), "wall": wall,
+            "hv_ratio": result.front.gain(result.history).tolist(), "wall": wall,
             "maximin_m": result.maximin_clearance * frame.cell_size,
             "any_angle_m": result.any_angle_optimum * frame.cell_size,
             "cells": f"{grid.width} x {grid.height}"}
@@ -135,10 +143,21 @@ def main() -> None:
                     help="measure only this map (repeatable); default all four")
     ap.add_argument("--seeds", type=int, default=8)
     ap.add_argument("--one", choices=sorted(MAPS), help=argparse.SUPPRESS)
+    ap.add_argument("--figure", metavar="OUT.png", help="draw one run instead")
     ap.add_argument("--no-write", action="store_true")
     args = ap.parse_args()
     if args.one:
         print(json.dumps(one(args.one, args.seeds)))
+        return
+    if args.figure:
+        import jaxga
+        from jaxga.plot import plot_result
+
+        name = (args.map or ["small_house"])[0]
+        grid, frame, info = problem(name)
+        result = jaxga.run("pareto", grid, seeds=args.seeds, any_angle_budget=None)
+        plot_result(result, grid, args.figure, info=info)
+        print(f"wrote {args.figure}")
         return
     rows = [measure_map(name, args.seeds) for name in (args.map or list(MAPS))]
     headers = ["map", "cells", "front points min / median", "all feasible",

@@ -29,7 +29,8 @@ from jaxga.maps.frame import MapFrame
 from jaxga.maps.loaders import MapLayers
 
 __all__ = ["CELL_CLASSES", "MapView", "cell_classes", "plot_box", "plot_comparison",
-           "plot_convergence", "plot_diversity", "plot_main_effects", "plot_map", "plot_paths",
+           "plot_convergence", "plot_diversity", "plot_front", "plot_main_effects", "plot_map",
+           "plot_paths",
            "plot_replan", "plot_result", "plot_seed_scatter", "save_figure"]
 
 
@@ -695,6 +696,60 @@ def plot_replan(replanned: Any, grid: Grid, old_path: Sequence[tuple[int, int]],
     return _finish(fig, out)
 
 
+def plot_front(result, grid: Grid | str, seed: int | None = None, axes=None,
+               info: Any = None):
+    """One seed's front (decision 045) in two panels: the map with every path of the front
+    coloured by its clearance (the shortest end blue, the widest yellow), and the front
+    itself, length against clearance (metres on a map with a resolution), with the
+    exact ends: the any-angle optimum's length and the maximin clearance as lines, the
+    post-optimised shortest end as a star. ``seed`` is an index into ``result.seeds``
+    (default: the first seed with a path); ``axes`` a pair of axes (default: a new
+    figure). Returns the axes."""
+    plt = _pyplot()
+    if getattr(result, "front", None) is None:
+        raise ParameterError(f"{result.preset} keeps no front: plot_front needs a preset "
+                             "with survival.method (pareto)")
+    grid, info = _map_of(grid, result.corner_rule, info)
+    if seed is None:
+        ok = np.flatnonzero(result.success)
+        seed = int(ok[0]) if ok.size else 0
+    if axes is None:
+        _, axes = plt.subplots(1, 2, figsize=(12, 5), width_ratios=(1.4, 1))
+    a_map, a_front = axes
+    frame = _frame_of(result, info)
+    view = MapView(frame)
+    points = result.front_points(seed)
+    plot_map(grid, [], ax=a_map, layers=None if info is None else info.layers, frame=frame,
+             include=[c for p in points for c in p["path"]])
+    unit = frame.cell_size if view.metres else 1.0
+    clear = np.array([p["clearance"] for p in points]) * unit
+    colours = plt.get_cmap("viridis")(np.linspace(0, 1, max(len(points), 1)))
+    order = np.argsort(clear, kind="stable")
+    for rank, k in enumerate(order):
+        xy = view.xy(points[k]["path"])
+        a_map.plot(xy[:, 0], xy[:, 1], color=colours[rank], lw=1.2, zorder=3)
+    a_map.set_title(f"{result.preset}: the {len(points)} paths of seed "
+                    f"{int(result.seeds[seed])}'s front, by clearance", fontsize=9)
+    length = np.array([p["length"] for p in points]) * unit
+    a_front.scatter(length, clear, c=[colours[r] for r in np.argsort(order)], zorder=3,
+                    label="front (as evolved)")
+    what = "m" if view.metres else "cells"
+    if np.isfinite(result.any_angle_optimum):
+        a_front.axvline(result.any_angle_optimum * unit, color="0.4", ls="--",
+                        label="any-angle optimum")
+    if np.isfinite(result.maximin_clearance):
+        a_front.axhline(result.maximin_clearance * unit, color="0.4", ls=":",
+                        label="maximin clearance")
+    if result.success[seed]:
+        a_front.plot([result.length[seed] * unit], [clear.min()], "r*", ms=11,
+                     label="shortest end post-optimised")
+    a_front.set_xlabel(f"length ({what})")
+    a_front.set_ylabel(f"least clearance ({what})")
+    a_front.legend(fontsize=8)
+    a_front.set_title("front: length against clearance", fontsize=9)
+    return axes
+
+
 def plot_result(result, grid: Grid | str, out: str | Path | None = None,
                 curve: np.ndarray | None = None, info: Any = None):
     """Map with the best seed's raw and post-optimised paths (and ``curve``, the smooth
@@ -705,6 +760,20 @@ def plot_result(result, grid: Grid | str, out: str | Path | None = None,
     gets a larger figure, so that a one-cell wall stays visible.
     """
     plt = _pyplot()
+    if getattr(result, "front", None) is not None and result.success.any():
+        # a front: its paths and its trade-off, then the hypervolume over the generations
+        fig, axes = plt.subplots(1, 3, figsize=(17, 5.2), width_ratios=(1.4, 1, 1))
+        seed = int(np.flatnonzero(result.success)[0])
+        plot_front(result, grid, seed, axes=axes[:2], info=info)
+        hv = result.history["hypervolume"]
+        start = result.front.initial_hypervolume
+        for i in np.flatnonzero(result.success):
+            axes[2].plot(np.arange(hv.shape[1] + 1), np.concatenate([[1.0], hv[i] / start[i]]),
+                         lw=1)
+        axes[2].set_xlabel("generation")
+        axes[2].set_ylabel("hypervolume / the initial population's")
+        axes[2].set_title("what the generations gain, per seed", fontsize=9)
+        return _finish(fig, out)
     shape = grid.shape if isinstance(grid, Grid) else (0, 0)
     large = max(shape) > 100 or (info is not None and max(info.grid.shape) > 100)
     fig, (a1, a2) = plt.subplots(1, 2, figsize=(14, 6.2) if large else (11, 4.6),

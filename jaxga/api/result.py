@@ -100,6 +100,14 @@ class Fronts:
     """float[S, P, M]: their objectives in cells and radians, as named (the clearance
     positive: the least clearance of the path's cells, the measure of the exact maximin
     clearance, :mod:`jaxga.reference.maximin`)."""
+    initial_hypervolume: np.ndarray
+    """float[S]: each seed's initial population's hypervolume, against the reference
+    point of its history's ``hypervolume`` (fixed at initialisation)."""
+
+    def gain(self, history: Mapping[str, np.ndarray]) -> np.ndarray:
+        """float[S]: each seed's last hypervolume over its initial population's: what the
+        generations added to the front (1: nothing)."""
+        return history["hypervolume"][:, -1] / self.initial_hypervolume
 
     def points(self, i: int, width: int) -> list[dict[str, Any]]:
         """Seed ``i``'s front, shortest first: each point's objectives by name and its
@@ -603,12 +611,15 @@ class Result:
         ``shortest_gap``, its shortest end post-optimised (the seed's best path) over
         the any-angle optimum (:attr:`gap`); ``widest_clearance`` and its share of the
         exact maximin clearance (``widest_ratio``, 1 where it keeps the widest path's
-        clearance); ``points``. Nones without a front."""
+        clearance); ``points``; ``hypervolume_gain`` (:meth:`Fronts.gain`). Nones
+        without a front."""
         points = self.front_points(i)
         widest = max((p.get("clearance", math.nan) for p in points), default=math.nan)
         ratio = widest / self.maximin_clearance if self.maximin_clearance > 0 else math.nan
+        gain = math.nan if self.front is None else float(self.front.gain(self.history)[i])
         return {"points": len(points), "shortest_gap": json_number(float(self.gap[i])),
-                "widest_clearance": json_number(widest), "widest_ratio": json_number(ratio)}
+                "widest_clearance": json_number(widest), "widest_ratio": json_number(ratio),
+                "hypervolume_gain": json_number(gain)}
 
     def front_choice(self, i: int, min_clearance: float | None = None
                      ) -> dict[str, Any] | None:
@@ -632,6 +643,47 @@ class Result:
         a, b = xy[0], xy[-1]
         d = np.abs((b[0] - a[0]) * (a[1] - xy[:, 1]) - (a[0] - xy[:, 0]) * (b[1] - a[1]))
         return points[int(np.argmax(d))]
+
+    def front_point(self, i: int, which: str | float = "knee") -> dict[str, Any] | None:
+        """One point of seed ``i``'s front by name: ``"knee"`` (:meth:`front_choice`),
+        ``"shortest"``, ``"widest"``, or a number: the shortest point that keeps at least
+        that clearance, in metres on a map with a resolution, else in cells; None where
+        the seed has no front or no point keeps it."""
+        points = self.front_points(i)
+        if not points:
+            return None
+        if which == "knee":
+            return self.front_choice(i)
+        if which == "shortest":
+            return points[0]
+        if which == "widest":
+            return max(points, key=lambda p: (p["clearance"], -p["length"]))
+        least = float(which)
+        cell = None if self.frame is None else self.frame.cell_size
+        return self.front_choice(i, min_clearance=least / cell if cell else least)
+
+    def front_text(self) -> str:
+        """The fronts in one line ("" without one): points per seed, the shortest end's
+        gap, the widest end's share of the exact maximin clearance and what the
+        generations added to the hypervolume (medians over the seeds that found a
+        path)."""
+        ok = np.flatnonzero(self.success)
+        if self.front is None or ok.size == 0:
+            return ""
+        ends = [self.front_ends(int(i)) for i in ok]
+
+        def median(key: str) -> float:
+            values = [e[key] for e in ends if e[key] is not None]
+            return float(np.median(values)) if values else math.nan
+
+        cell = None if self.frame is None else self.frame.cell_size
+        wide = median("widest_clearance")
+        wide_text = f"{wide * cell:.3f} m" if cell else f"{wide:.2f} cells"
+        return (f"front ({', '.join(self.front.names)}; medians over {ok.size} seeds): "
+                f"{median('points'):g} points; shortest end {100 * median('shortest_gap'):.2f} "
+                f"% over the any-angle optimum; widest end clearance {wide_text}, "
+                f"{median('widest_ratio'):.3f} of the exact maximin clearance; hypervolume "
+                f"x{median('hypervolume_gain'):.3f} over the initial population's")
 
     def _endpoints_world(self) -> dict[str, Any]:
         """The endpoints in metres (and in map cells when coarsened), where known."""

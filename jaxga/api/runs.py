@@ -548,7 +548,8 @@ def _fronts(front: Front | None, algo: Algorithm) -> Fronts | None:
         if n == "clearance":
             objectives[..., j] *= -1
     return Fronts(names=names, mask=np.asarray(front.mask), cells=np.asarray(front.cells),
-                  n_cells=np.asarray(front.n_cells), objectives=objectives)
+                  n_cells=np.asarray(front.n_cells), objectives=objectives,
+                  initial_hypervolume=np.asarray(front.initial_hypervolume, float))
 
 
 def checked_capacity(configs: Sequence[Config], requested: Any) -> int:

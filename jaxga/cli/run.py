@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import argparse
+import math
 import sys
 import threading
 import time
@@ -28,9 +29,12 @@ from jaxga.cli.options import (
     write_json,
 )
 from jaxga.core.errors import JaxgaError
+from jaxga.maps.clearance import ObstacleClearance
 from jaxga.plot import (
     plot_result,
 )
+from jaxga.reference.baseline import widest_shortcut
+from jaxga.reference.optima import path_length
 from jaxga.smooth import resample_curve, smooth_population
 
 
@@ -150,6 +154,8 @@ def run_and_report(args: argparse.Namespace, timeline: Timeline,
     if not_lead(f"{len(result.seeds)} seeds", timeline.elapsed()):
         return 0
     print(result.summary(time=False))
+    if result.front is not None:
+        print(result.front_text())
     for note in snap_notes(args, info):
         print(note)
     curves = None
@@ -165,7 +171,19 @@ def run_and_report(args: argparse.Namespace, timeline: Timeline,
                 curve = np.asarray(curves[best]["points"])
             plot_result(result, info.grid, args.plot, curve=curve, info=info)
         print(f"wrote {args.plot}")
-    if args.path_out and best is not None:
+    if args.path_out and best is not None and result.front is not None:
+        point = result.front_point(best, front_point_choice(args.front_point))
+        if point is None:
+            raise JaxgaError(f"no point of seed {int(result.seeds[best])}'s front keeps a "
+                             f"clearance of {args.front_point} m (--front-point)")
+        with phase("write"):
+            line = front_polyline(info.grid, point["path"])
+            export.write_path(args.path_out, result.frame.to_world(line.astype(float)))
+        print(f"wrote {args.path_out} (seed {int(result.seeds[best])}, front point "
+              f"{args.front_point}: {point['length_m']:.3f} m long as evolved, "
+              f"{path_length(line) * result.frame.cell_size:.3f} m shortcut without "
+              f"narrowing it, clearance {point['clearance_m']:.3f} m; metres)")
+    elif args.path_out and best is not None:
         with phase("write"):
             export.write_path(args.path_out, robot_path(result, best, curves))
         print(f"wrote {args.path_out} (seed {int(result.seeds[best])}, "
@@ -183,6 +201,42 @@ def run_and_report(args: argparse.Namespace, timeline: Timeline,
         print(f"jaxga: no path: {result.reason}", file=sys.stderr)
         return EXIT_NO_PATH
     return 0
+
+
+def front_polyline(grid, path) -> np.ndarray:
+    """A front point's path (``(x, y)`` cells, 8-connected as evolved) as a robot follows
+    it: shortcut greedily without coming closer to the grid's blocked cells than the
+    path itself does (:func:`jaxga.reference.baseline.widest_shortcut`), so it is no
+    longer and no narrower."""
+    blocked = grid.blocked_np()
+    return widest_shortcut(blocked, grid.corner_rule, np.asarray(path),
+                           ObstacleClearance(blocked))
+
+
+FRONT_POINTS = ("knee", "shortest", "widest")
+"""The named points of a front ``--front-point`` takes (or a clearance in metres)."""
+
+
+def front_point_choice(value: str) -> str | float:
+    """``--front-point``: a name of :data:`FRONT_POINTS`, or a least clearance in metres
+    (a number >= 0)."""
+    if value in FRONT_POINTS:
+        return value
+    try:
+        least = float(value)
+    except ValueError:
+        least = math.nan
+    if not least >= 0 or not math.isfinite(least):
+        raise argparse.ArgumentTypeError(
+            f"--front-point takes {', '.join(FRONT_POINTS)} or a clearance in metres >= 0, "
+            f"got {value!r}")
+    return least
+
+
+def front_point_arg(value: str) -> str:
+    """``--front-point`` as given, once :func:`front_point_choice` accepts it."""
+    front_point_choice(value)
+    return value
 
 
 def process_timeline() -> Timeline:
@@ -295,7 +349,13 @@ def add_parser(commands: argparse._SubParsersAction) -> None:
                    help="write the best seed's path in metres (a map with a resolution): "
                    "x,y rows (.csv) or a nav_msgs/Path in YAML (.yaml), frame 'map', "
                    "yaw along the path; the smooth curve with --smooth")
-    p.add_argument("--plot", metavar="OUT.png", help="plot the map, best paths and convergence")
+    p.add_argument("--front-point", default="knee", metavar="knee|shortest|widest|METRES",
+                   type=front_point_arg,
+                   help="with a preset that keeps a front (pareto): which of the best "
+                   "seed's front points --path-out writes: the knee (default), an end, or "
+                   "the shortest that keeps at least METRES from the obstacles")
+    p.add_argument("--plot", metavar="OUT.png", help="plot the map, best paths and "
+                   "convergence (a front: its paths, the trade-off and the hypervolume)")
     p.add_argument("--smooth", action="store_true",
                    help="smooth every path found into a certified-clear cubic B-spline "
                    "(jaxga.smooth): a summary line, each run's curve in the JSON, the best "

@@ -214,6 +214,9 @@ class GAState:
     reference: jax.Array | None = None
     """``float32[M]``: the reference point of a front's hypervolume
     (:func:`hypervolume_reference`), fixed at initialisation; None for a scalar GA."""
+    initial_hypervolume: jax.Array | None = None
+    """``float32``: the initial population's hypervolume (the history's rows start after
+    the first generation); None for a scalar GA."""
 
 
 def _active(algo: Algorithm, params: dict) -> jax.Array:
@@ -264,15 +267,16 @@ def init_state(algo: Algorithm, key: jax.Array, grid: Grid, params: dict) -> tup
 
     islands, stats = jax.vmap(one)(keys)
     best_c, best_n, best_f = _best_of(islands)
-    reference = None
+    reference = volume = None
     if islands.objectives is not None:
         m = len(algo.stages.objectives)
-        reference = hypervolume_reference(islands.objectives.reshape(-1, m),
-                                          islands.feasible.reshape(-1))
+        points, valid = islands.objectives.reshape(-1, m), islands.feasible.reshape(-1)
+        reference = hypervolume_reference(points, valid)
+        volume = hypervolume(points, valid, reference)
     state = GAState(
         islands=islands, best_cells=best_c, best_length=best_n, best_fitness=best_f,
         generation=jnp.int32(0), stall=jnp.int32(0), frozen=jnp.bool_(False),
-        failures=jnp.zeros(3, I32), reference=reference,
+        failures=jnp.zeros(3, I32), reference=reference, initial_hypervolume=volume,
     )
     return state, stats
 
@@ -427,6 +431,7 @@ def generation(algo: Algorithm, key, grid: Grid, state: GAState, params: dict):
         frozen=state.frozen,
         failures=state.failures + jnp.sum(fails, axis=0),
         reference=state.reference,
+        initial_hypervolume=state.initial_hypervolume,
     )
     # IMGA 4.4: stop after K generations without improvement (K traced; 0 = never). A
     # frozen run keeps its old state below, so only an unfrozen one can freeze here.
@@ -542,6 +547,9 @@ class Front:
     objectives: jax.Array
     """float32[P, M]: their minimised objectives in cells (``survival.objectives``, the
     clearance negated)."""
+    initial_hypervolume: jax.Array
+    """float32: the initial population's hypervolume (the history's ``hypervolume``
+    holds each generation's, against the same reference point)."""
 
 
 def final_front(state: GAState) -> Front:
@@ -550,7 +558,7 @@ def final_front(state: GAState) -> Front:
     unique = distinct(isl.objectives, isl.feasible)
     rank = nondominated_rank(isl.objectives, unique)
     return Front(mask=unique & (rank == 0), cells=isl.cells, n_cells=isl.length,
-                 objectives=isl.objectives)
+                 objectives=isl.objectives, initial_hypervolume=state.initial_hypervolume)
 
 
 @jax.tree_util.register_dataclass

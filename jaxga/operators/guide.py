@@ -39,7 +39,7 @@ from jaxga.maps.preprocess import move_edges, region_labels
 
 __all__ = ["Guide", "ProblemFacts", "clearance_weighted_field", "distance_fields",
            "field_path", "longest_optimal_path_cells", "padded_guide", "problem_facts",
-           "with_front_fields", "with_guide"]
+           "widest_field", "with_front_fields", "with_guide"]
 
 @jax.tree_util.register_dataclass
 @dataclasses.dataclass(frozen=True)
@@ -60,8 +60,9 @@ class Guide:
     (:func:`jaxga.maps.clearance.cell_clearance` of the grid's blocked cells, capped at
     ``H + W``), for the robot objectives of a front (:func:`with_front_fields`)."""
     weighted: jax.Array | None = None
-    """``float32[K * H * W]`` or None: the goal's :func:`clearance_weighted_field` for each
-    of ``K`` weights, one after another in one flat table (the clearance walk's fields)."""
+    """``float32[(K + 1) * H * W]`` or None: the clearance walk's fields one after another
+    in one flat table: the :func:`widest_field` of the band, then the goal's
+    :func:`clearance_weighted_field` for each of ``K`` weights."""
     band: jax.Array | None = None
     """``float32`` or None: the band of the weighted fields and of the intrusion
     objective, in cells."""
@@ -258,23 +259,46 @@ def clearance_weighted_field(grid: Grid, clearance: np.ndarray, weight: float,
     return field
 
 
+def widest_field(grid: Grid, clearance: np.ndarray, least: float) -> np.ndarray:
+    """``float64[H * W]``: the goal's exact distance field over the cells of clearance at
+    least ``least`` (cells; ``clearance`` as for :func:`clearance_weighted_field`): a walk
+    down it keeps that clearance all the way, so with ``least`` the maximin clearance
+    (:mod:`jaxga.reference.maximin`) it follows a widest path. ``inf`` at every cell
+    that cannot reach the goal so; where the start cannot, the goal's exact distance
+    field itself (:func:`distance_fields`), so that a walk down it cannot fail."""
+    from scipy.sparse import csr_matrix
+    from scipy.sparse.csgraph import dijkstra
+
+    blocked = np.ascontiguousarray(grid.blocked_np())
+    wide = np.asarray(clearance, np.float64).reshape(-1) >= least
+    rows, cols, steps = move_edges(blocked, grid.corner_rule)
+    keep = wide[rows] & wide[cols]
+    graph = csr_matrix((steps[keep], (rows[keep], cols[keep])),
+                       shape=(blocked.size, blocked.size))
+    field = dijkstra(graph, directed=True, indices=int(grid.goal))
+    if not math.isfinite(field[int(grid.start)]) or not wide[int(grid.goal)]:
+        return distance_fields(grid)[0]
+    return field
+
+
 def with_front_fields(grid: Grid, weights: tuple[float, ...], band: float) -> Grid:
     """``grid`` with its :class:`Guide` (:func:`with_guide`) and the fields a front of
     length against clearance reads (decision 045): each cell's clearance from the grid's
     blocked cells (:func:`jaxga.maps.clearance.cell_clearance`, the map's edge not
     counted as an obstacle, capped at ``H + W`` so that a map without obstacles has
-    finite values), the goal's :func:`clearance_weighted_field` for each of ``weights``
-    and ``band`` (cells, > 0). Computed on the host once per problem; a grid that has
-    them keeps them."""
+    finite values), then in :attr:`Guide.weighted` the :func:`widest_field` that keeps
+    ``band`` (cells, > 0) and the goal's :func:`clearance_weighted_field` of ``band`` for
+    each of ``weights``. Computed on the host once per problem; a grid that has them
+    keeps them."""
     grid = with_guide(grid)
     if grid.guide.weighted is not None:
         return grid
-    if not weights or band <= 0:
-        raise ValueError(f"a front's fields need weights and a band > 0, got {weights} "
-                         f"and {band}")
+    if band <= 0:
+        raise ValueError(f"a front's fields need a band > 0, got {band}")
     clearance = np.minimum(cell_clearance(grid.blocked_np()), grid.height + grid.width)
-    fields = [clearance_weighted_field(grid, clearance, float(w), float(band))
-              for w in weights]
+    fields = [widest_field(grid, clearance, float(band))]
+    fields += [clearance_weighted_field(grid, clearance, float(w), float(band))
+               for w in weights]
     guide = dataclasses.replace(
         grid.guide, clearance=on_device(clearance.reshape(-1), np.float32),
         weighted=on_device(np.concatenate(fields), np.float32),

@@ -29,9 +29,10 @@ from jaxga.operators.guide import (
     clearance_weighted_field,
     distance_fields,
     padded_guide,
+    widest_field,
     with_front_fields,
 )
-from jaxga.operators.init import clearance_walk
+from jaxga.operators.init import clearance_walk, field_descent
 from jaxga.operators.pareto import domination_matrix
 from jaxga.reference.maximin import maximin_path
 from jaxga.reference.optima import clear_np
@@ -87,46 +88,77 @@ def test_front_fields_and_their_padding():
     grid = with_front_fields(GRID, (0.0, 4.0), band=3.0)
     g = grid.guide
     n = GRID.n_cells
-    np.testing.assert_allclose(np.asarray(g.clearance),
-                               cell_clearance(BLOCKED).reshape(-1).astype(np.float32))
+    field = cell_clearance(BLOCKED)
+    np.testing.assert_allclose(np.asarray(g.clearance), field.reshape(-1).astype(np.float32))
+    np.testing.assert_allclose(np.asarray(g.weighted[:n]),
+                               widest_field(GRID, field, 3.0).astype(np.float32))
     to_goal, _, _ = distance_fields(GRID)
-    np.testing.assert_allclose(np.asarray(g.weighted[:n]), to_goal.astype(np.float32))
+    np.testing.assert_allclose(np.asarray(g.weighted[n:2 * n]), to_goal.astype(np.float32))
     np.testing.assert_allclose(
-        np.asarray(g.weighted[n:]),
-        clearance_weighted_field(GRID, cell_clearance(BLOCKED), 4.0, 3.0).astype(np.float32))
+        np.asarray(g.weighted[2 * n:]),
+        clearance_weighted_field(GRID, field, 4.0, 3.0).astype(np.float32))
     assert float(g.band) == 3.0
     assert with_front_fields(grid, (1.0,), 9.0) is grid  # a grid keeps its fields
     padded = padded_guide(g, GRID.shape, ((0, 2), (0, 3)))
-    planes = np.asarray(padded.weighted).reshape(2, 16, 19)
+    planes = np.asarray(padded.weighted).reshape(3, 16, 19)
     assert np.isinf(planes[:, 14:, :]).all() and np.isinf(planes[:, :, 16:]).all()
-    np.testing.assert_array_equal(planes[:, :14, :16].reshape(2, -1),
-                                  np.asarray(g.weighted).reshape(2, -1))
+    np.testing.assert_array_equal(planes[:, :14, :16].reshape(3, -1),
+                                  np.asarray(g.weighted).reshape(3, -1))
     assert (np.asarray(padded.clearance).reshape(16, 19)[14:, :] == 0).all()
 
 
-def test_clearance_walk_cannot_fail_and_weight_zero_is_a_shortest_path():
-    grid = with_front_fields(GRID, (0.0,), band=3.0)
-    walk = jax.jit(jax.vmap(lambda k: clearance_walk(k, grid, 64)))
-    cells, length, ok = walk(jax.random.split(jax.random.key(0), 64))
-    assert bool(ok.all())
+def _walks(grid, field, n=32):
+    """``n`` walks from the start down ``field`` with no budget for detours."""
+    walk = jax.jit(jax.vmap(lambda k: field_descent(k, grid, field, grid.start, 64, 0.0,
+                                                    0.0)))
+    return walk(jax.random.split(jax.random.key(0), n))
+
+
+def _xy(cells, n):
+    c = np.asarray(cells)[:int(n)]
+    return np.stack([c % 16, c // 16], axis=1)
+
+
+def test_the_weight_zero_field_gives_shortest_paths_and_the_widest_the_maximin():
+    widest = maximin_path(GRID)
+    grid = with_front_fields(GRID, (0.0,), band=widest.clearance)
+    n = GRID.n_cells
     optimum = distance_fields(GRID)[0][int(GRID.start)]
-    for c, n in zip(np.asarray(cells), np.asarray(length)):
-        xy = np.stack([c[:n] % 16, c[:n] // 16], axis=1)
+    field = cell_clearance(BLOCKED)
+    cells, length, ok = _walks(grid, grid.guide.weighted[n:])
+    assert bool(ok.all())
+    for c, k in zip(cells, length):
+        xy = _xy(c, k)
+        assert np.linalg.norm(np.diff(xy, axis=0), axis=1).sum() == pytest.approx(optimum,
+                                                                                  rel=1e-6)
+    cells, length, ok = _walks(grid, grid.guide.weighted[:n])
+    assert bool(ok.all())
+    for c, k in zip(cells, length):
+        xy = _xy(c, k)
+        assert field[xy[:, 1], xy[:, 0]].min() == pytest.approx(widest.clearance)
+        assert np.linalg.norm(np.diff(xy, axis=0), axis=1).sum() == pytest.approx(
+            widest.length, rel=1e-6)
+
+
+def test_the_widest_field_of_an_unreachable_band_is_the_distance_field():
+    field = cell_clearance(BLOCKED)
+    np.testing.assert_array_equal(widest_field(GRID, field, 100.0), distance_fields(GRID)[0])
+
+
+def test_the_clearance_walk_cannot_fail_and_draws_every_kind_of_walk():
+    grid = with_front_fields(GRID, (64.0,), band=3.0)
+    walk = jax.jit(jax.vmap(lambda k: clearance_walk(k, grid, 64, 0.5, 1.0)))
+    cells, length, ok = walk(jax.random.split(jax.random.key(1), 128))
+    assert bool(ok.all())
+    field = cell_clearance(BLOCKED)
+    least = []
+    for c, k in zip(np.asarray(cells), np.asarray(length)):
+        xy = _xy(c, k)
         assert tuple(xy[0]) == GRID.start_xy and tuple(xy[-1]) == GRID.goal_xy
         assert all(clear_np(BLOCKED, "strict", a, b) and np.abs(a - b).max() == 1
                    for a, b in zip(xy[:-1], xy[1:]))
-        assert np.linalg.norm(np.diff(xy, axis=0), axis=1).sum() == pytest.approx(optimum,
-                                                                                  rel=1e-6)
-
-
-def test_clearance_walks_of_heavy_weights_keep_away_from_the_pillar():
-    grid = with_front_fields(GRID, (0.0, 64.0), band=3.0)
-    cells, length, ok = jax.jit(jax.vmap(lambda k: clearance_walk(k, grid, 64)))(
-        jax.random.split(jax.random.key(1), 128))
-    field = cell_clearance(BLOCKED).reshape(-1)
-    least = [field[np.asarray(c)[:n]].min() for c, n in zip(cells, np.asarray(length))]
-    assert bool(ok.all())
-    assert min(least) < 1.0 < max(least)  # both fields were drawn, and they differ
+        least.append(field[xy[:, 1], xy[:, 0]].min())
+    assert min(least) < 1.0 < max(least)  # walks near the pillar and walks away from it
 
 
 @pytest.mark.parametrize(("sets", "message"), [
@@ -189,6 +221,9 @@ def test_the_history_holds_the_hypervolume_and_the_json_the_front(front_run):
     r = front_run
     hv = r.history["hypervolume"]
     assert hv.shape == (3, 6) and (hv > 0).all()
+    assert (r.front.initial_hypervolume > 0).all()
+    np.testing.assert_allclose(r.front.gain(r.history), hv[:, -1] / r.front.initial_hypervolume)
+    assert r.front_ends(0)["hypervolume_gain"] == pytest.approx(r.front.gain(r.history)[0])
     doc = json.loads(json.dumps(r.to_json()))
     assert doc["maximin_clearance"] == pytest.approx(r.maximin_clearance)
     run0 = doc["runs"][0]

@@ -998,3 +998,57 @@ def test_a_device_or_a_fifo_as_an_input_is_refused_at_once(tmp_path, capsys):
         err = capsys.readouterr().err.strip()
         assert "\n" not in err and "not a regular file" in err and "bytes)" in err, err
         assert ("/dev/zero" if "/dev/zero" in argv else str(fifo)) in err
+
+
+@pytest.mark.slow
+def test_a_front_s_summary_json_and_chosen_point(tmp_path, capsys):
+    """pareto on a ROS map with a pillar: one summary line on the fronts; the JSON holds
+    every point of each seed's front with its path and the comparison with the exact
+    ends; --path-out writes the chosen point (the widest end here) shortcut without
+    narrowing it: the file's polyline starts and ends at the endpoints in metres and
+    keeps the widest point's clearance from the inflated obstacles."""
+    from jaxga.maps import load_map_info
+    from jaxga.maps.clearance import ObstacleClearance
+
+    ros = _open_ros_map(tmp_path / "room", 24, 0.1, (0.0, 0.0))
+    image = np.full((24, 24), 254, np.uint8)
+    image[9:15, 10:14] = 0  # a pillar in the middle of the room (map rows 9-14)
+    ros.with_name("map.pgm").write_bytes(b"P5\n24 24\n255\n" + image.tobytes())
+    out, csv = tmp_path / "run.json", tmp_path / "front.csv"
+    assert main(["run", "--preset", "pareto", "--map", str(ros), "--start-world",
+                 "0.25,1.25", "--goal-world", "2.25,1.15", "--seeds", "2", "--generations",
+                 "4", "--quiet", "--json", str(out), "--path-out", str(csv),
+                 "--front-point", "widest"]) == 0
+    text = capsys.readouterr().out
+    assert "front (length, clearance, turning; medians over 2 seeds)" in text
+    assert "front point widest" in text
+    doc = json.loads(out.read_text())
+    run = doc["runs"][0]
+    widest = max(p["clearance"] for p in run["front"])
+    assert run["front_ends"]["widest_clearance"] == pytest.approx(widest)
+    assert run["front_ends"]["widest_ratio"] == pytest.approx(widest
+                                                              / doc["maximin_clearance"])
+    for p in run["front"]:
+        assert p["length_m"] == pytest.approx(0.1 * p["length"])
+        assert p["path"][0] == doc["start"] and p["path"][-1] == doc["goal"]
+    best = min((r for r in doc["runs"] if r["success"]), key=lambda r: r["length"])
+    chosen = max(best["front"], key=lambda p: (p["clearance"], -p["length"]))
+    rows = np.loadtxt(csv, delimiter=",", skiprows=1)
+    np.testing.assert_allclose(rows[[0, -1]], [doc["start_world"], doc["goal_world"]],
+                               atol=1e-4)
+    cells = np.rint(rows / 0.1 - 0.5).astype(int)
+    assert len(rows) <= len(chosen["path"])
+    # the polyline keeps the point's clearance (cells) from the planning grid's obstacles
+    blocked = load_map_info(str(ros)).grid.blocked_np()
+    assert blocked[9:15, 10:14].all()
+    assert ObstacleClearance(blocked).of_path(cells) >= chosen["clearance"] - 1e-9
+
+
+def test_front_point_must_be_a_name_or_a_clearance(capsys):
+    """--front-point takes knee, shortest, widest or metres >= 0: anything else is refused
+    by the parser in one line, before any work."""
+    for bad in ("middle", "-0.1", "nan"):
+        with pytest.raises(SystemExit):
+            main(["run", "--preset", "pareto", "--map", "classic_ga_gapp3_20x20",
+                  "--front-point", bad])
+        assert "--front-point takes knee, shortest, widest" in capsys.readouterr().err

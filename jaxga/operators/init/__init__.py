@@ -134,6 +134,15 @@ __all__ = [
 ]
 
 
+FIELD_WALK_PARAMS = {
+    "init.slack": Field(float, low=0.0, high=100.0, dynamic=True, default=0.5,
+                        doc="field_walk: paths up to (1 + slack) x the optimal length"),
+    "init.temperature": Field(float, low=0.0, high=1000.0, dynamic=True, default=1.0,
+                              doc="field_walk: preference for short detours, "
+                                  "exp(-excess / temperature); 0 = optimal moves only"),
+}
+"""The field walk's keys, which the clearance walk reads too."""
+
 # the family's operators (jaxga.operators.registry)
 register(Operator("init", "random_walk", random_walk,
                   "uniformly random self-avoiding walk from start to goal (Zhu & Pan 4.1; "
@@ -153,26 +162,23 @@ register(Operator(
     "init", "field_walk", field_walk,
     "random detour down the exact distance fields; cannot fail where a path exists "
     "(jaxga; decision notes)",
-    params={
-        "init.slack": Field(float, low=0.0, high=100.0, dynamic=True, default=0.5,
-                            doc="field_walk: paths up to (1 + slack) x the optimal length"),
-        "init.temperature": Field(float, low=0.0, high=1000.0, dynamic=True, default=1.0,
-                                  doc="field_walk: preference for short detours, "
-                                      "exp(-excess / temperature); 0 = optimal moves only"),
-    },
+    params=FIELD_WALK_PARAMS,
     traits=frozenset({NEVER_FAILS, NEEDS_GUIDE}),
     options=lambda ctx: {"slack": ctx.params["init.slack"],
                          "temperature": ctx.params["init.temperature"]},
 ))
 register(Operator(
     "init", "clearance_walk", clearance_walk,
-    "walk down a clearance-weighted distance field of a random weight; spreads a front of "
-    "length against clearance; cannot fail where a path exists (jaxga; decision 045)",
+    "the field walk, or a walk down the widest field or a clearance-weighted field of a "
+    "random weight; spreads a front of length against clearance; cannot fail where a path "
+    "exists (jaxga; decision 045)",
     params={
         "init.clearance_weights": Field(
             list, dynamic=False, default=CLEARANCE_WEIGHTS,
-            doc="clearance_walk: the weights of the clearance-weighted fields, >= 0 (0: the "
-                "exact distance field)"),
+            doc="clearance_walk: the weights of the clearance-weighted fields, >= 0"),
+        **FIELD_WALK_PARAMS,
     },
     traits=frozenset({NEVER_FAILS, NEEDS_GUIDE, NEEDS_FRONT_FIELDS}),
+    options=lambda ctx: {"slack": ctx.params["init.slack"],
+                         "temperature": ctx.params["init.temperature"]},
 ))

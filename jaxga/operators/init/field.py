@@ -295,26 +295,34 @@ def field_walk(
     return cells, length, ok & (total > 0)
 
 
-CLEARANCE_WEIGHTS = (0.0, 0.25, 0.5, 1.0, 2.0, 4.0, 8.0, 16.0)
-"""Default ``init.clearance_weights`` of :func:`clearance_walk`: from the shortest paths
-(weight 0) to paths that keep as far from the obstacles as the band allows."""
+CLEARANCE_WEIGHTS = (0.25, 0.5, 1.0, 2.0, 4.0, 8.0, 16.0)
+"""Default ``init.clearance_weights`` of :func:`clearance_walk`: from paths that leave the
+obstacles a little room to paths that keep as far from them as the band allows."""
 
 
-def clearance_walk(key: jax.Array, grid: Grid, capacity: int) -> tuple[jax.Array, jax.Array,
-                                                                      jax.Array]:
-    """jaxga's initialiser of a front of length against clearance (decision 045): a walk
-    from the start down the goal's clearance-weighted field
-    (:func:`jaxga.operators.guide.clearance_weighted_field`) of a weight drawn uniformly
-    from those attached to the grid (:func:`jaxga.operators.guide.with_front_fields`), so
-    a population spreads from the shortest paths (weight 0, the exact distance field) to
-    the widest.
+def clearance_walk(key: jax.Array, grid: Grid, capacity: int,
+                   slack: float | jax.Array = FIELD_SLACK,
+                   temperature: float | jax.Array = FIELD_TEMPERATURE,
+                   ) -> tuple[jax.Array, jax.Array, jax.Array]:
+    """jaxga's initialiser of a front of length against clearance (decision 045): one of
+    ``K + 2`` walks drawn uniformly, so a population spreads from the shortest paths to
+    the widest:
 
-    Each step draws uniformly among the legal moves that lower the weighted field by at
-    least their own length (:func:`field_descent`'s rule with no budget for detours).
-    It cannot fail where a path exists: a move costs its length times at least 1, so the
-    next move of a cheapest path lowers the field by its cost, at least its length; the
-    field decreases strictly, so the walk has no loop and ends at the goal. Only an
-    unreachable goal and a capacity below the path's cells fail.
+    * :func:`field_walk` (``slack``, ``temperature``): the shortest routes, over every
+      way round the obstacles a via cell opens;
+    * a walk from the start down the :func:`jaxga.operators.guide.widest_field` (cells of
+      at least the band's clearance: a widest path when the band is the maximin
+      clearance) or down one of the ``K`` goal's clearance-weighted fields
+      (:func:`jaxga.operators.guide.clearance_weighted_field`), all attached to the grid
+      by :func:`jaxga.operators.guide.with_front_fields`. Each step draws uniformly
+      among the legal moves that lower the field by at least their own length
+      (:func:`field_descent`'s rule with no budget for detours).
+
+    It cannot fail where a path exists: on the widest field every move costs its length;
+    on a weighted one its length times at least 1, so the next move of a cheapest path
+    lowers the field by at least its length; the field decreases strictly, so the walk
+    has no loop and ends at the goal. Only an unreachable goal and a capacity below the
+    path's cells fail.
     """
     capacity = check_capacity(capacity)
     guide = _require_guide(grid, "clearance_walk")
@@ -326,6 +334,8 @@ def clearance_walk(key: jax.Array, grid: Grid, capacity: int) -> tuple[jax.Array
     n = grid.n_cells
     fields = guide.weighted.shape[0] // n
     k_field, k_walk = jax.random.split(key)
-    offset = jax.random.randint(k_field, (), 0, fields, dtype=I32) * n
-    return _descent(k_walk, grid, guide.weighted, offset, grid.start, capacity,
-                    jnp.float32(0.0), jnp.float32(0.0))
+    k = jax.random.randint(k_field, (), 0, fields + 1, dtype=I32)  # 0: the field walk
+    walk = field_walk(k_walk, grid, capacity, slack, temperature)
+    down = _descent(k_walk, grid, guide.weighted, jnp.maximum(k - 1, 0) * n, grid.start,
+                    capacity, jnp.float32(0.0), jnp.float32(0.0))
+    return jax.tree_util.tree_map(lambda a, b: jnp.where(k == 0, a, b), walk, down)
