@@ -576,7 +576,7 @@ class RunOutputs:
     """int32: its number of cells."""
     cells: jax.Array
     """int32[L]: the best path post-optimised (``post.method``); with a front, the
-    shortest of its population's paths post-optimised (decision 045)."""
+    shortest of a few of its fittest paths post-optimised (decision 045)."""
     n_cells: jax.Array
     """int32: its number of cells."""
     fitness: jax.Array
@@ -618,16 +618,24 @@ class RunOutputs:
         return [(k, getattr(self, k)) for k in self.keys()]
 
 
+POST_POOL = 8
+"""How many paths a front's shortest end is chosen from after post-optimisation: the
+best path and the final population's fittest others (:func:`_shortest_after_post`)."""
+
+
 def _shortest_after_post(grid: Grid, state: GAState, post: Callable) -> tuple:
-    """``(cells, length)``: of the best path and the final population's feasible paths
-    each post-optimised, the shortest. A front's shortest end (decision 045): the path of
-    least raw length need not shortcut to the shortest curve, and a front keeps one path
-    per objective vector, so the whole population is the better pool. Never longer than
-    the best path's own post-optimisation."""
+    """``(cells, length)``: of the best path and the final population's
+    :data:`POST_POOL` - 1 fittest feasible paths (ties by slot), each post-optimised, the
+    shortest. A front's shortest end (decision 045): the path of least raw length need
+    not shortcut to the shortest curve, so a few candidates are post-optimised instead of
+    one. Never longer than the best path's own post-optimisation."""
     isl = jax.tree_util.tree_map(lambda a: a[0], state.islands)
-    cells = jnp.concatenate([state.best_cells[None], isl.cells])
-    length = jnp.concatenate([state.best_length[None], isl.length])
-    ok = jnp.concatenate([(state.best_fitness > 0)[None], isl.feasible])
+    p = isl.fitness.shape[0]
+    fit = jnp.where(isl.feasible, isl.fitness, -jnp.inf)
+    pick = jnp.lexsort((jnp.arange(p), -fit))[:min(POST_POOL - 1, p)]
+    cells = jnp.concatenate([state.best_cells[None], isl.cells[pick]])
+    length = jnp.concatenate([state.best_length[None], isl.length[pick]])
+    ok = jnp.concatenate([(state.best_fitness > 0)[None], isl.feasible[pick]])
     opt_c, opt_n = jax.vmap(lambda c, n: post(grid, c, n))(cells, length)
     opt_len = jax.vmap(lambda c, n: objectives.path_length(grid, c, n))(opt_c, opt_n)
     k = jnp.argmin(jnp.where(ok, opt_len, jnp.inf))
