@@ -47,13 +47,13 @@ def freest_near(blocked: np.ndarray, clearance: np.ndarray, xy: tuple[int, int],
     return int(xs[ok][order[0]]), int(ys[ok][order[0]])
 
 
-def measure_map(name: str) -> list:
-    """One table row for map ``name``."""
+def problem(name: str):
+    """Map ``name``'s inflated grid with the benchmark's endpoints (module docstring), its
+    frame, and the map as loaded with that grid (its layers and name, for a plot)."""
+    import dataclasses
+
     from jaxga.maps import load_map_info
     from jaxga.maps.clearance import cell_clearance
-    from jaxga.reference.any_angle import any_angle_shortest_path
-    from jaxga.reference.baseline import baseline
-    from jaxga.reference.maximin import maximin_path
 
     path, coarsen = MAPS[name]
     start, goal = far_endpoints(path, coarsen)
@@ -65,6 +65,16 @@ def measure_map(name: str) -> list:
     ends = [freest_near(grid.blocked_np(), field, xy, reach)
             for xy in (grid.start_xy, grid.goal_xy)]
     grid = grid.replace(start=ends[0], goal=ends[1])
+    return grid, frame, dataclasses.replace(info, grid=grid)
+
+
+def measure_map(name: str) -> list:
+    """One table row for map ``name``."""
+    from jaxga.reference.any_angle import any_angle_shortest_path
+    from jaxga.reference.baseline import baseline
+    from jaxga.reference.maximin import maximin_path
+
+    grid, frame, _ = problem(name)
     if frame.coarsen != 1:
         raise SystemExit(f"{name}: coarsened maps are not measured (clearances in map cells)")
     m = frame.cell_size
@@ -76,7 +86,7 @@ def measure_map(name: str) -> list:
     shortest_end, widest_end = baseline(grid, obstacles=frame.obstacles)
     t3 = time.perf_counter()
     return [
-        name, f"{grid.width} x {grid.height}", f"{ends[0]} -> {ends[1]}",
+        name, f"{grid.width} x {grid.height}", f"{grid.start_xy} -> {grid.goal_xy}",
         f"{optimum.length * m:.3f}", f"{widest.clearance * m:.3f}",
         f"{shortest_end.length * m:.3f}", f"{shortest_end.clearance * m:.3f}",
         f"{shortest_end.turning:.2f}",

@@ -49,32 +49,11 @@ from pathlib import Path
 
 import numpy as np
 from _results import markdown_table, record
-from pareto_baseline import OPEN_RADIUS_M, freest_near
-from robot_maps import MAPS, RADIUS, far_endpoints
+from pareto_baseline import problem
+from robot_maps import MAPS, RADIUS
 
 TITLE = "pareto: fronts of length, clearance and turning on ROS maps"
 ROOT = Path(__file__).resolve().parents[1]
-
-
-def problem(name: str):
-    """The map's inflated grid with the benchmark's endpoints, its frame and the map as
-    loaded with that grid (its layers and name, for a plot)."""
-    import dataclasses
-
-    from jaxga.maps import load_map_info
-    from jaxga.maps.clearance import cell_clearance
-
-    path, coarsen = MAPS[name]
-    start, goal = far_endpoints(path, coarsen)
-    info = load_map_info(path, robot_radius=RADIUS, coarsen=coarsen, start_world=start,
-                         goal_world=goal)
-    grid, frame = info.grid, info.frame
-    field = cell_clearance(frame.obstacles)
-    reach = OPEN_RADIUS_M / frame.cell_size
-    ends = [freest_near(grid.blocked_np(), field, xy, reach)
-            for xy in (grid.start_xy, grid.goal_xy)]
-    grid = grid.replace(start=ends[0], goal=ends[1])
-    return grid, frame, dataclasses.replace(info, grid=grid)
 
 
 def feasible(grid, path: list) -> bool:
