@@ -187,7 +187,8 @@ def main() -> None:
                "second process s"]
     body = (f"`pareto` preset, {args.seeds} seeds per map, a {RADIUS} m robot, the endpoints "
             "of `benchmarks/pareto_baseline.py`. Clearances are each path's least cell "
-            "clearance on the inflated grid, the measure of the exact maximin clearance "
+            "clearance from the map's own obstacles (before inflation), the measure of the "
+            "exact maximin clearance over the paths of the inflated grid "
             "(`jaxga.reference.maximin`); the shortest end is the post-optimised best "
             "path. Processes are wall times from start to exit, the first compiling into "
             "an empty cache, the second reading it. Targets: >= 5 points, every path "

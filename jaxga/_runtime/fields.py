@@ -6,17 +6,31 @@ from __future__ import annotations
 
 import math
 
+import numpy as np
+
 from jaxga.config.schema import Config
 from jaxga.core.grid import Grid
 from jaxga.engine.checks import uses_front_fields, uses_guide
+from jaxga.maps.frame import MapFrame
 from jaxga.operators.guide import with_front_fields, with_guide
 from jaxga.operators.init import CLEARANCE_WEIGHTS
 from jaxga.reference.maximin import maximin_path
 
-__all__ = ["front_band", "program_fields"]
+__all__ = ["front_band", "front_obstacles", "program_fields"]
 
 
-def front_band(grid: Grid, config: Config) -> float:
+def front_obstacles(frame: MapFrame | None, grid: Grid) -> np.ndarray | None:
+    """What a front's clearance is measured from: the map's own obstacles before
+    inflation (``frame.obstacles``, what :meth:`jaxga.api.Result.obstacle_clearance`
+    and the baseline measure to) where they lie in the grid's cells (a map loaded
+    without coarsening), else None: the grid's blocked cells."""
+    if frame is None or frame.obstacles is None or frame.coarsen != 1 \
+            or frame.obstacles.shape != grid.shape:
+        return None
+    return frame.obstacles
+
+
+def front_band(grid: Grid, config: Config, obstacles: np.ndarray | None = None) -> float:
     """The band (cells) of a front's clearance-weighted fields and intrusion objective:
     ``survival.band``, or where it is 0 or left out the problem's exact maximin clearance
     (:func:`jaxga.reference.maximin.maximin_path`: the widest any path can keep, so the
@@ -25,19 +39,21 @@ def front_band(grid: Grid, config: Config) -> float:
     band = float(config.get("survival.band", 0.0))
     if band > 0:
         return band
-    widest = maximin_path(grid)
+    widest = maximin_path(grid, obstacles=obstacles)
     if not widest.found or widest.clearance <= 0:
         return 1.0
     return widest.clearance if math.isfinite(widest.clearance) else float(grid.height
                                                                            + grid.width)
 
 
-def program_fields(grid: Grid, config: Config) -> Grid:
+def program_fields(grid: Grid, config: Config, obstacles: np.ndarray | None = None) -> Grid:
     """``grid`` with what ``config``'s programs read attached: a front's fields
     (:func:`jaxga.operators.guide.with_front_fields`, ``init.clearance_weights`` and
-    :func:`front_band`), else the exact distance fields where an operator steers by
-    them (:func:`jaxga.operators.guide.with_guide`), else ``grid`` itself."""
+    :func:`front_band`, the clearance from ``obstacles``: :func:`front_obstacles`), else
+    the exact distance fields where an operator steers by them
+    (:func:`jaxga.operators.guide.with_guide`), else ``grid`` itself."""
     if uses_front_fields(config):
         weights = tuple(config.get("init.clearance_weights", CLEARANCE_WEIGHTS))
-        return with_front_fields(grid, weights, front_band(grid, config))
+        return with_front_fields(grid, weights, front_band(grid, config, obstacles),
+                                 obstacles)
     return with_guide(grid) if uses_guide(config) else grid

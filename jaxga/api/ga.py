@@ -25,7 +25,7 @@ from typing import Any
 
 import jax
 
-from jaxga._runtime.fields import program_fields
+from jaxga._runtime.fields import front_obstacles, program_fields
 from jaxga._runtime.programs import warn_platform
 from jaxga.api.problem import Problem, load_problem
 from jaxga.config.schema import Config
@@ -85,7 +85,7 @@ class GA(PureGA):
             preset, problem, corner_rule, variant, sets, overrides, generations)
         self.map_name: str = map_name
         self.frame: MapFrame | None = frame
-        grid = program_fields(grid, config)
+        grid = program_fields(grid, config, front_obstacles(frame, grid))
         self.config = config
         algorithm, _ = build(config, grid)
         super().__init__(algorithm, with_tables(grid))
@@ -120,5 +120,5 @@ class GA(PureGA):
                 f"the paths from {ends[0]} to {ends[1]} need a capacity of {need} cells, "
                 f"this GA holds {self.algorithm.capacity}: build it with "
                 f"population__capacity={need} (or more) to plan any pair")
-        grid = program_fields(grid, self.config)
+        grid = program_fields(grid, self.config, front_obstacles(self.frame, grid))
         return dataclasses.replace(grid, tables=self.grid.tables, outside=self.grid.outside)

@@ -24,7 +24,7 @@ from jax.errors import JaxRuntimeError
 from jaxga._runtime import executables, parallel
 from jaxga._runtime.calls import RunCalls, evolve_in_chunks, this_process_runs
 from jaxga._runtime.device_probe import check_backend, needs_probe
-from jaxga._runtime.fields import program_fields
+from jaxga._runtime.fields import front_obstacles, program_fields
 from jaxga._runtime.memory import (
     NO_PATH_BYTES_PER_RUN,
     check_compiled_memory,
@@ -286,7 +286,8 @@ def _plan_sweep(problem: Problem, points: Sequence[Mapping[str, Any]], seeds: An
     size_class = auto_size_class(map_grid) if options.size_class is None \
         else bool(options.size_class)
     with timeline.phase("references"):
-        program_grid, build_config = _program_map(config, map_grid, capacity, size_class)
+        program_grid, build_config = _program_map(config, map_grid, capacity, size_class,
+                                                  front_obstacles(frame, map_grid))
         # the capacity is the largest size swept, also when it is below the preset's size
         algo, _ = build(build_config, program_grid)
         per_point = [default_params(c, algo.islands) for c in configs]
@@ -318,14 +319,14 @@ def _check_param_shapes(per_point: Sequence[dict], points: Sequence[Mapping[str,
                 "one shape; run these points separately")
 
 
-def _program_map(config: Config, grid: Grid, capacity: int,
-                 size_class: bool) -> tuple[Grid, Config]:
+def _program_map(config: Config, grid: Grid, capacity: int, size_class: bool,
+                 obstacles: np.ndarray | None = None) -> tuple[Grid, Config]:
     """The map the programs run on (the exact distance fields attached when an operator
     steers by them, computed on the map and padded with it; padded to its size class
     when asked) and the configuration they are built from (the sweep's capacity; the
     class's path capacity unless the configuration sets one)."""
     build_config = config.override({"population.size": capacity})
-    guided = program_fields(grid, config)
+    guided = program_fields(grid, config, obstacles)
     if not size_class:
         return guided, build_config
     if not int(config["population.capacity"]):
@@ -490,7 +491,7 @@ def _point_results(host: dict, hist: dict, plan: SweepPlan, start: InitOutcome,
     conv = convergence_generation(hist["best"], host["fitness"], initial)
     maximin = math.nan
     if host.front is not None:
-        widest = maximin_path(grid)
+        widest = maximin_path(grid, obstacles=front_obstacles(plan.frame, grid))
         maximin = widest.clearance if widest.found else math.nan
     results = []
     for q, cfg in enumerate(configs):

@@ -16,6 +16,7 @@ import numpy as np
 
 from jaxga import api, export
 from jaxga._runtime import parallel
+from jaxga._runtime.fields import front_obstacles
 from jaxga._runtime.parallel import add_parallel_arguments
 from jaxga._runtime.timeline import Timeline, process_age, time_line
 from jaxga.cli.options import (
@@ -177,7 +178,8 @@ def run_and_report(args: argparse.Namespace, timeline: Timeline,
             raise JaxgaError(f"no point of seed {int(result.seeds[best])}'s front keeps a "
                              f"clearance of {args.front_point} m (--front-point)")
         with phase("write"):
-            line = front_polyline(info.grid, point["path"])
+            line = front_polyline(info.grid, point["path"],
+                                  front_obstacles(result.frame, info.grid))
             export.write_path(args.path_out, result.frame.to_world(line.astype(float)))
         print(f"wrote {args.path_out} (seed {int(result.seeds[best])}, front point "
               f"{args.front_point}: {point['length_m']:.3f} m long as evolved, "
@@ -203,14 +205,16 @@ def run_and_report(args: argparse.Namespace, timeline: Timeline,
     return 0
 
 
-def front_polyline(grid, path) -> np.ndarray:
+def front_polyline(grid, path, obstacles: np.ndarray | None = None) -> np.ndarray:
     """A front point's path (``(x, y)`` cells, 8-connected as evolved) as a robot follows
-    it: shortcut greedily without coming closer to the grid's blocked cells than the
-    path itself does (:func:`jaxga.reference.baseline.widest_shortcut`), so it is no
-    longer and no narrower."""
+    it: shortcut greedily through the grid's free cells without coming closer to
+    ``obstacles`` (those its clearance is measured from:
+    :func:`jaxga._runtime.fields.front_obstacles`; the grid's blocked cells by default)
+    than the path itself does (:func:`jaxga.reference.baseline.widest_shortcut`), so it
+    is no longer and no narrower."""
     blocked = grid.blocked_np()
     return widest_shortcut(blocked, grid.corner_rule, np.asarray(path),
-                           ObstacleClearance(blocked))
+                           ObstacleClearance(blocked if obstacles is None else obstacles))
 
 
 FRONT_POINTS = ("knee", "shortest", "widest")

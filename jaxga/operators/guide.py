@@ -281,21 +281,26 @@ def widest_field(grid: Grid, clearance: np.ndarray, least: float) -> np.ndarray:
     return field
 
 
-def with_front_fields(grid: Grid, weights: tuple[float, ...], band: float) -> Grid:
+def with_front_fields(grid: Grid, weights: tuple[float, ...], band: float,
+                      obstacles: np.ndarray | None = None) -> Grid:
     """``grid`` with its :class:`Guide` (:func:`with_guide`) and the fields a front of
-    length against clearance reads (decision 045): each cell's clearance from the grid's
-    blocked cells (:func:`jaxga.maps.clearance.cell_clearance`, the map's edge not
-    counted as an obstacle, capped at ``H + W`` so that a map without obstacles has
-    finite values), then in :attr:`Guide.weighted` the :func:`widest_field` that keeps
-    ``band`` (cells, > 0) and the goal's :func:`clearance_weighted_field` of ``band`` for
-    each of ``weights``. Computed on the host once per problem; a grid that has them
-    keeps them."""
+    length against clearance reads (decision 045): each cell's clearance
+    (:func:`jaxga.maps.clearance.cell_clearance`, the map's edge not counted as an
+    obstacle, capped at ``H + W`` so that a map without obstacles has finite values)
+    from ``obstacles`` (``bool[H, W]``: a map's own obstacles before inflation), by
+    default from the grid's blocked cells; then in :attr:`Guide.weighted` the
+    :func:`widest_field` that keeps ``band`` (cells, > 0) and the goal's
+    :func:`clearance_weighted_field` of ``band`` for each of ``weights``. Computed on the
+    host once per problem; a grid that has them keeps them."""
     grid = with_guide(grid)
     if grid.guide.weighted is not None:
         return grid
     if band <= 0:
         raise ValueError(f"a front's fields need a band > 0, got {band}")
-    clearance = np.minimum(cell_clearance(grid.blocked_np()), grid.height + grid.width)
+    source = grid.blocked_np() if obstacles is None else np.asarray(obstacles, bool)
+    if source.shape != grid.shape:
+        raise ValueError(f"obstacles of shape {source.shape} for a grid of {grid.shape}")
+    clearance = np.minimum(cell_clearance(source), grid.height + grid.width)
     fields = [widest_field(grid, clearance, float(band))]
     fields += [clearance_weighted_field(grid, clearance, float(w), float(band))
                for w in weights]

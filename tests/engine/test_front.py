@@ -242,3 +242,27 @@ def test_front_choice_knee_and_least_clearance(front_run):
     assert r.front_choice(0, min_clearance=wide + 1) is None
     chosen = r.front_choice(0, min_clearance=0.0)
     assert chosen is points[0] or chosen == points[0]
+
+
+def test_a_front_measures_clearance_from_the_map_s_own_obstacles():
+    """On a map inflated by a robot's radius the clearance field is the distance to the
+    obstacles as loaded (the frame's), not to the inflated cells; a coarsened map, whose
+    obstacles are in other cells, measures to the grid's blocked cells."""
+    from jaxga._runtime.fields import front_obstacles, program_fields
+    from jaxga.maps.frame import MapFrame
+
+    own = np.zeros_like(BLOCKED)
+    own[6:8, 7] = True  # a thin pillar, inflated into BLOCKED's block
+    frame = MapFrame(map_shape=own.shape, resolution=0.05, origin=(0.0, 0.0, 0.0),
+                     obstacles=own)
+    assert front_obstacles(frame, GRID) is own
+    assert front_obstacles(MapFrame(map_shape=(28, 32), coarsen=2, obstacles=np.zeros(
+        (28, 32), bool)), GRID) is None
+    assert front_obstacles(None, GRID) is None
+    pareto = load_preset("pareto")
+    grid = program_fields(GRID, pareto, own)
+    np.testing.assert_allclose(np.asarray(grid.guide.clearance),
+                               np.minimum(cell_clearance(own), 30).reshape(-1), rtol=1e-6)
+    assert float(grid.guide.band) == pytest.approx(maximin_path(GRID, obstacles=own).clearance)
+    assert float(program_fields(GRID, pareto).guide.band) == pytest.approx(
+        maximin_path(GRID).clearance)
