@@ -75,8 +75,8 @@ def one(name: str, seeds: int) -> dict:
     t0 = time.perf_counter()
     import jaxga
 
-    grid, frame, _ = problem(name)
-    result = jaxga.run("pareto", grid, seeds=seeds, any_angle_budget=None)
+    grid, frame, info = problem(name)  # the map as loaded: its frame, its own obstacles
+    result = jaxga.run("pareto", info, seeds=seeds, any_angle_budget=None)
     wall = time.perf_counter() - t0
     points, ok, gaps, ratios = [], True, [], []
     for i in range(seeds):
@@ -173,7 +173,7 @@ def main() -> None:
 
         name = (args.map or ["small_house"])[0]
         grid, frame, info = problem(name)
-        result = jaxga.run("pareto", grid, seeds=args.seeds, any_angle_budget=None)
+        result = jaxga.run("pareto", info, seeds=args.seeds, any_angle_budget=None)
         plot_result(result, grid, args.figure, info=info)
         print(f"wrote {args.figure}")
         return
