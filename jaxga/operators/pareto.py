@@ -9,7 +9,9 @@ an individual that is not valid (no feasible path, an inactive slot) never domin
 is dominated by every valid one and ranks last. Each function is pure and shape-static
 (``P`` and ``M`` fixed), so it works under ``jax.jit`` and ``jax.vmap`` (over runs), and
 its result is fully determined by its inputs: ties are broken by the individual's index,
-never by the sorting algorithm.
+never by the sorting algorithm, and sums are taken in a fixed order
+(:func:`jaxga._batching.numerics.ordered_sum`), so a run's values do not depend on the
+runs computed beside it.
 """
 
 from __future__ import annotations
@@ -17,6 +19,7 @@ from __future__ import annotations
 import jax
 import jax.numpy as jnp
 
+from jaxga._batching.numerics import ordered_sum
 from jaxga.core.dtypes import F32, I32
 
 __all__ = [
@@ -92,7 +95,7 @@ def crowding_distance(objectives: jax.Array, rank: jax.Array) -> jax.Array:
         sorted_d = jnp.where(first | last, jnp.inf, inner)
         return sorted_d[jnp.argsort(order)]  # back to the individuals' order (a gather)
 
-    d = jnp.sum(jax.vmap(along, in_axes=1, out_axes=1)(f), axis=1)
+    d = ordered_sum(jax.vmap(along, in_axes=1, out_axes=1)(f), axis=1)
     return jnp.where(rank >= n, 0.0, d).astype(F32)
 
 
@@ -143,7 +146,7 @@ def hypervolume_2d(points: jax.Array, valid: jax.Array, reference: jax.Array) ->
     xs, ys = x[order], y[order]
     lowest = jax.lax.cummin(ys)
     widths = jnp.concatenate([xs[1:], ref[:1]]) - xs
-    return jnp.sum(widths * (ref[1] - lowest))
+    return ordered_sum(widths * (ref[1] - lowest))
 
 
 def hypervolume_3d(points: jax.Array, valid: jax.Array, reference: jax.Array) -> jax.Array:
@@ -164,7 +167,7 @@ def hypervolume_3d(points: jax.Array, valid: jax.Array, reference: jax.Array) ->
 
     areas = jax.vmap(area_at)(jnp.arange(n))
     heights = jnp.concatenate([zs[1:], ref[2:]]) - zs
-    return jnp.sum(heights * areas)
+    return ordered_sum(heights * areas)
 
 
 def hypervolume(points: jax.Array, valid: jax.Array, reference: jax.Array) -> jax.Array:
