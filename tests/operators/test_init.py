@@ -28,12 +28,19 @@ from jaxga import Grid, NoPathError, ParameterError
 from jaxga.maps import legal_moves, random_map
 from jaxga.operators import init as I
 from jaxga.operators import registry
-from jaxga.operators.guide import with_guide
+from jaxga.operators.guide import with_front_fields
+from jaxga.operators.init import CLEARANCE_WEIGHTS
 from jaxga.operators.init import walks as init_walks
 from tests.plain_lifts import initialise
 from tests.strategies import CAP, SIZE, check_paths, grids
 
 # the initialisers' properties and references in depth (contracts: test_registry)
+
+
+def fielded(grid):
+    """``grid`` with every field an initialiser may read: the exact distance fields and a
+    front's (the clearance walk's; a band of one cell)."""
+    return with_front_fields(grid, CLEARANCE_WEIGHTS, 1.0)
 pytestmark = pytest.mark.slow
 
 NAMES = registry.names("init")
@@ -315,8 +322,9 @@ def _all_initialisers_guided(keys, grid):
 
 
 def _all_initialisers(keys, grid):
-    """Every initialiser of the registry (field_walk reads the grid's distance fields)."""
-    return _all_initialisers_guided(keys, with_guide(grid))
+    """Every initialiser of the registry (field_walk reads the grid's distance fields, the
+    clearance walk a front's fields too)."""
+    return _all_initialisers_guided(keys, fielded(grid))
 
 
 @settings(max_examples=15)
@@ -471,7 +479,7 @@ def test_capacity_too_small_fails():
     for every initialiser (a failure, not an error: MPMGA's intermittent path, which has
     one anchor per row, too)."""
     grid = Grid.create(np.zeros((SIZE, SIZE), bool), corner_rule="free")
-    assert not np.asarray(_small_capacity(jax.random.PRNGKey(0), with_guide(grid))).any()
+    assert not np.asarray(_small_capacity(jax.random.PRNGKey(0), fielded(grid))).any()
     with pytest.raises(ParameterError):
         registry.initialiser("nope")
 
