@@ -186,6 +186,7 @@ def front_run():
     return jaxga.run("pareto", GRID, seeds=3, generations=6)
 
 
+@pytest.mark.slow  # a whole run of the pareto preset
 def test_every_front_point_is_feasible_and_none_dominates_another(front_run):
     r = front_run
     widest = maximin_path(GRID)
@@ -217,6 +218,7 @@ def test_every_front_point_is_feasible_and_none_dominates_another(front_run):
         assert r.length[i] <= min(p["length"] for p in points) + 1e-4
 
 
+@pytest.mark.slow  # a whole run of the pareto preset
 def test_the_history_holds_the_hypervolume_and_the_json_the_front(front_run):
     r = front_run
     hv = r.history["hypervolume"]
@@ -233,6 +235,7 @@ def test_the_history_holds_the_hypervolume_and_the_json_the_front(front_run):
     assert run0["front_ends"]["points"] == len(run0["front"])
 
 
+@pytest.mark.slow  # a whole run of the pareto preset
 def test_front_choice_knee_and_least_clearance(front_run):
     r = front_run
     points = r.front_points(0)
