@@ -110,10 +110,11 @@ class Fronts:
         return history["hypervolume"][:, -1] / self.initial_hypervolume
 
     def points(self, i: int, width: int) -> list[dict[str, Any]]:
-        """Seed ``i``'s front, shortest first: each point's objectives by name and its
-        path as ``(x, y)`` cells."""
+        """Seed ``i``'s front, shortest first (by its first objective where ``length`` is
+        not one): each point's objectives by name and its path as ``(x, y)`` cells."""
         slots = np.flatnonzero(self.mask[i])
-        slots = slots[np.lexsort((slots, self.objectives[i, slots, 0]))]
+        first = self.names.index("length") if "length" in self.names else 0
+        slots = slots[np.lexsort((slots, self.objectives[i, slots, first]))]
         return [{**{n: float(self.objectives[i, k, j]) for j, n in enumerate(self.names)},
                  "path": [(int(c) % width, int(c) // width)
                           for c in self.cells[i, k, :int(self.n_cells[i, k])]]}
