@@ -15,6 +15,7 @@ import numpy as np
 
 from jaxga._runtime.timeline import time_line
 from jaxga.config.schema import Config
+from jaxga.core.errors import ParameterError
 from jaxga.engine import (
     uses_waypoints,
 )
@@ -81,6 +82,23 @@ class RunSetup:
     """The goal cell ``(x, y)``."""
     frame: MapFrame | None
     """Planning cells against the map file's cells and metres (None for a bare grid)."""
+
+
+FRONT_POINT_OBJECTIVE = {"shortest": "length", "widest": "clearance"}
+"""The objective each named point of a front is chosen by (a number: a least clearance,
+so ``clearance``); the knee is taken on any two objectives."""
+
+
+def check_front_point(names: tuple[str, ...], which: str | float) -> None:
+    """:class:`ParameterError`, in one line, where the point ``which`` of a front
+    (:meth:`Result.front_point`, ``--front-point``) is chosen by an objective that the
+    front's ``names`` (``survival.objectives``) do not hold."""
+    need = "clearance" if not isinstance(which, str) else FRONT_POINT_OBJECTIVE.get(which)
+    if need is not None and need not in names:
+        raise ParameterError(
+            f"the front point {which!r} is chosen by its {need}, which the front does not "
+            f"minimise (survival.objectives = {list(names)}): add {need!r} to them or take "
+            f"the knee")
 
 
 @dataclasses.dataclass(frozen=True)
@@ -628,7 +646,10 @@ class Result:
         ``min_clearance`` cells from the obstacles (None when no point does), or by
         default the knee: the point farthest from the line between the two ends, each
         objective scaled to the front's range (the shortest end when the front has fewer
-        than three points)."""
+        than three points). :class:`ParameterError` for ``min_clearance`` where the
+        front does not minimise the clearance."""
+        if self.front is not None and min_clearance is not None:
+            check_front_point(self.front.names, float(min_clearance))
         points = self.front_points(i)
         if not points:
             return None
@@ -649,7 +670,11 @@ class Result:
         """One point of seed ``i``'s front by name: ``"knee"`` (:meth:`front_choice`),
         ``"shortest"``, ``"widest"``, or a number: the shortest point that keeps at least
         that clearance, in metres on a map with a resolution, else in cells; None where
-        the seed has no front or no point keeps it."""
+        the seed has no front or no point keeps it. :class:`ParameterError` where the
+        front does not minimise the objective the point is chosen by
+        (:func:`check_front_point`)."""
+        if self.front is not None:
+            check_front_point(self.front.names, which)
         points = self.front_points(i)
         if not points:
             return None

@@ -19,6 +19,7 @@ from jaxga._runtime import parallel
 from jaxga._runtime.fields import front_obstacles
 from jaxga._runtime.parallel import add_parallel_arguments
 from jaxga._runtime.timeline import Timeline, process_age, time_line
+from jaxga.api.result import check_front_point
 from jaxga.cli.options import (
     EXACT_HELP,
     EXIT_NO_PATH,
@@ -30,6 +31,7 @@ from jaxga.cli.options import (
     write_json,
 )
 from jaxga.core.errors import JaxgaError
+from jaxga.engine.algorithm import front_objectives
 from jaxga.maps.clearance import ObstacleClearance
 from jaxga.plot import (
     plot_result,
@@ -143,6 +145,8 @@ def run_and_report(args: argparse.Namespace, timeline: Timeline,
         raise JaxgaError(f"cannot write --path-out {args.path_out}: the map has no resolution "
                          "and origin (a ROS map_server .yaml has them); --json has the path "
                          "in cells")
+    if args.path_out and problem.config.get("survival.method") is not None:
+        check_front_point(front_objectives(problem.config), front_point_choice(args.front_point))
     result = api.run(
         problem, seeds=args.seeds, progress=progress,
         population_capacity=args.population_capacity,
@@ -181,10 +185,14 @@ def run_and_report(args: argparse.Namespace, timeline: Timeline,
             line = front_polyline(info.grid, point["path"],
                                   front_obstacles(result.frame, info.grid))
             export.write_path(args.path_out, result.frame.to_world(line.astype(float)))
+        evolved = (f"{point['length_m']:.3f} m long as evolved, " if "length_m" in point
+                   else "")
+        clear = (f", clearance {point['clearance_m']:.3f} m" if "clearance_m" in point
+                 else "")
         print(f"wrote {args.path_out} (seed {int(result.seeds[best])}, front point "
-              f"{args.front_point}: {point['length_m']:.3f} m long as evolved, "
+              f"{args.front_point}: {evolved}"
               f"{path_length(line) * result.frame.cell_size:.3f} m shortcut without "
-              f"narrowing it, clearance {point['clearance_m']:.3f} m; metres)")
+              f"narrowing it{clear}; metres)")
     elif args.path_out and best is not None:
         with phase("write"):
             export.write_path(args.path_out, robot_path(result, best, curves))

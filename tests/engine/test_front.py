@@ -6,6 +6,7 @@ references, the JSON)."""
 
 from __future__ import annotations
 
+import dataclasses
 import json
 
 import jax
@@ -245,6 +246,17 @@ def test_front_choice_knee_and_least_clearance(front_run):
     assert r.front_choice(0, min_clearance=wide + 1) is None
     chosen = r.front_choice(0, min_clearance=0.0)
     assert chosen is points[0] or chosen == points[0]
+    assert r.front_point(0, "widest")["clearance"] == wide
+    assert r.front_point(0, "shortest") == points[0]
+    # a front of other objectives: the points chosen by the clearance are refused by name
+    other = dataclasses.replace(r, front=dataclasses.replace(r.front,
+                                                             names=("length", "turning")))
+    for which in ("widest", 0.5):
+        with pytest.raises(ParameterError, match="chosen by its clearance"):
+            other.front_point(0, which)
+    with pytest.raises(ParameterError, match="chosen by its clearance"):
+        other.front_choice(0, min_clearance=0.5)
+    assert other.front_point(0, "knee") in other.front_points(0)
 
 
 def test_a_front_measures_clearance_from_the_map_s_own_obstacles():

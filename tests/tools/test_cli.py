@@ -1052,3 +1052,26 @@ def test_front_point_must_be_a_name_or_a_clearance(capsys):
             main(["run", "--preset", "pareto", "--map", "classic_ga_gapp3_20x20",
                   "--front-point", bad])
         assert "--front-point takes knee, shortest, widest" in capsys.readouterr().err
+
+
+def test_a_front_point_chosen_by_an_objective_the_front_lacks_is_refused_first(tmp_path, capsys):
+    """--front-point widest (or a least clearance) on a front that does not minimise the
+    clearance, or shortest on one without the length, is refused in one line before the
+    run: no program compiled, no file written."""
+    import time
+
+    ros = _open_ros_map(tmp_path / "room", 24, 0.1, (0.0, 0.0))
+    csv = tmp_path / "front.csv"
+    for objectives, point, need in ((["length", "turning"], "widest", "clearance"),
+                                    (["length", "turning"], "0.2", "clearance"),
+                                    (["clearance", "turning"], "shortest", "length")):
+        t0 = time.perf_counter()
+        code = main(["run", "--preset", "pareto", "--map", str(ros), "--start-world",
+                     "0.25,1.25", "--goal-world", "2.25,1.15", "--seeds", "2", "--quiet",
+                     "--set", f"survival.objectives={json.dumps(objectives)}",
+                     "--path-out", str(csv), "--front-point", point])
+        err = capsys.readouterr().err.strip()
+        assert code == EXIT_BAD_INPUT and "\n" not in err, err
+        assert f"chosen by its {need}, which the front does not minimise" in err, err
+        assert str(objectives) in err
+        assert time.perf_counter() - t0 < 10.0 and not csv.exists()
