@@ -8,13 +8,13 @@ import math
 
 import numpy as np
 
+from jaxga._runtime.references import maximin_reference
 from jaxga.config.schema import Config
 from jaxga.core.grid import Grid
 from jaxga.engine.checks import uses_front_fields, uses_guide
 from jaxga.maps.frame import MapFrame
 from jaxga.operators.guide import with_front_fields, with_guide
 from jaxga.operators.init import CLEARANCE_WEIGHTS
-from jaxga.reference.maximin import maximin_path
 
 __all__ = ["front_band", "front_obstacles", "program_fields"]
 
@@ -39,7 +39,7 @@ def front_band(grid: Grid, config: Config, obstacles: np.ndarray | None = None) 
     band = float(config.get("survival.band", 0.0))
     if band > 0:
         return band
-    widest = maximin_path(grid, obstacles=obstacles)
+    widest = maximin_reference(grid, obstacles)
     if not widest.found or widest.clearance <= 0:
         return 1.0
     return widest.clearance if math.isfinite(widest.clearance) else float(grid.height

@@ -33,13 +33,15 @@ from collections.abc import Callable
 import numpy as np
 
 from jaxga.core.grid import Grid
+from jaxga.maps.clearance import cell_clearance
 from jaxga.operators.guide import field_path
 from jaxga.reference.any_angle import any_angle_shortest_path_np
 from jaxga.reference.lower_bound import euclidean_lower_bound_np
+from jaxga.reference.maximin import MaximinPath, maximin_path, maximin_path_np
 from jaxga.reference.optima import ReferencePath, octile_length, shortest_path_np
 
 __all__ = ["SKIPPED_NOTE", "AnyAngleBounds", "any_angle_references", "budget_note",
-           "octile_optimum"]
+           "maximin_reference", "octile_optimum"]
 
 
 def _problem_key(grid: Grid) -> tuple:
@@ -74,6 +76,31 @@ def octile_optimum(grid: Grid, guided: bool = False) -> ReferencePath:
         if path is not None:
             return ReferencePath(True, octile_length(path), path, kind="octile")
     return _octile_cached(*_problem_key(grid))
+
+
+@functools.lru_cache(maxsize=8)
+def _maximin_cached(digest: bytes, shape: tuple[int, int], blocked: bytes, start: tuple,
+                    goal: tuple, corner_rule: str, obstacles: bytes | None) -> MaximinPath:
+    del digest  # the cache key; the arguments are the data
+    b = np.frombuffer(blocked, dtype=bool).reshape(shape)
+    own = None if obstacles is None else np.frombuffer(obstacles, dtype=bool).reshape(shape)
+    field = None if own is None else cell_clearance(own)
+    found = maximin_path_np(b, start, goal, corner_rule, clearance=field)
+    found.path.setflags(write=False)  # shared by every caller of the same problem
+    return found
+
+
+def maximin_reference(grid: Grid, obstacles: np.ndarray | None = None) -> MaximinPath:
+    """The exact widest path of ``grid``'s problem (:func:`jaxga.reference.maximin.maximin_path`,
+    the clearance to ``obstacles``, ``bool[H, W]`` in the grid's cells, by default its
+    blocked cells), cached for the last 8 problems: a run of a front preset asks for it
+    twice (its fields' band before the run, the result's ``maximin_clearance`` after it),
+    and the search takes a fraction of a second on a 500 x 500 map. The result is
+    shared: its path is read-only."""
+    own = None if obstacles is None else np.ascontiguousarray(obstacles, dtype=bool)
+    if own is not None and own.shape != grid.shape:
+        return maximin_path(grid, obstacles=own)  # refused there, with its message
+    return _maximin_cached(*_problem_key(grid), None if own is None else own.tobytes())
 
 
 def _field_path(grid: Grid) -> np.ndarray | None:

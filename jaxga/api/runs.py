@@ -38,7 +38,12 @@ from jaxga._runtime.programs import (
     programs_for,
     tables_for,
 )
-from jaxga._runtime.references import AnyAngleBounds, any_angle_references, octile_optimum
+from jaxga._runtime.references import (
+    AnyAngleBounds,
+    any_angle_references,
+    maximin_reference,
+    octile_optimum,
+)
 from jaxga._runtime.seeds import seed_list
 from jaxga._runtime.size_classes import auto_size_class, class_capacity, map_cells, pad_to_class
 from jaxga._runtime.sweep_plan import InitOutcome, SweepPlan
@@ -68,7 +73,6 @@ from jaxga.engine import (
 from jaxga.engine.evolution import Front
 from jaxga.maps import MapInfo
 from jaxga.reference.fitness import FitnessOptimum, fitness_optimum, fitness_weights
-from jaxga.reference.maximin import maximin_path
 
 if TYPE_CHECKING:
     from jaxga.engine.evolution import Front
@@ -491,7 +495,7 @@ def _point_results(host: dict, hist: dict, plan: SweepPlan, start: InitOutcome,
     conv = convergence_generation(hist["best"], host["fitness"], initial)
     maximin = math.nan
     if host.front is not None:
-        widest = maximin_path(grid, obstacles=front_obstacles(plan.frame, grid))
+        widest = maximin_reference(grid, front_obstacles(plan.frame, grid))
         maximin = widest.clearance if widest.found else math.nan
     results = []
     for q, cfg in enumerate(configs):

@@ -23,11 +23,8 @@ side, like the other references.
 
 from __future__ import annotations
 
-import collections
 import dataclasses
-import hashlib
 import math
-import threading
 
 import numpy as np
 
@@ -131,22 +128,6 @@ def maximin_path_np(blocked: np.ndarray, start_xy: XY, goal_xy: XY,
     return MaximinPath(True, best, path, path_length(path))
 
 
-MEMO_SIZE = 4
-"""How many problems :func:`maximin_path` remembers (by content): one run of a front
-preset asks for the same problem twice (the band of its fields before the run, the
-result's ``maximin_clearance`` after it), and the exact search takes a fraction of a
-second on a 500 x 500 map."""
-
-_memo: collections.OrderedDict[tuple, MaximinPath] = collections.OrderedDict()
-_memo_lock = threading.Lock()
-
-
-def _digest(a: np.ndarray) -> tuple:
-    """A content key of an array: shape, dtype and a hash of its bytes."""
-    a = np.ascontiguousarray(a)
-    return a.shape, a.dtype.str, hashlib.blake2b(a.tobytes(), digest_size=16).digest()
-
-
 def maximin_path(grid: Grid, border_blocked: bool = False, *,
                  obstacles: np.ndarray | None = None) -> MaximinPath:
     """The widest path of ``grid`` from its start to its goal under its corner rule: the
@@ -154,24 +135,7 @@ def maximin_path(grid: Grid, border_blocked: bool = False, *,
     path that keeps it. The clearance is to ``obstacles`` (``bool[H, W]`` in the grid's
     cells, e.g. a map's own obstacles before inflation, ``MapFrame.obstacles`` of an
     uncoarsened map), by default the grid's blocked cells. A blocked endpoint or an
-    unreachable goal gives ``found=False`` with a ``reason``.
-
-    The last :data:`MEMO_SIZE` problems are remembered by their content (the blocked
-    cells, the obstacles, the endpoints, the corner rule): asking again returns the same
-    (read-only) result without searching."""
-    blocked = grid.blocked_np()
-    key = (_digest(blocked), None if obstacles is None else _digest(np.asarray(obstacles)),
-           tuple(grid.start_xy), tuple(grid.goal_xy), grid.corner_rule, bool(border_blocked))
-    with _memo_lock:
-        if key in _memo:
-            _memo.move_to_end(key)
-            return _memo[key]
+    unreachable goal gives ``found=False`` with a ``reason``."""
     field = None if obstacles is None else cell_clearance(obstacles, border_blocked)
-    found = maximin_path_np(blocked, grid.start_xy, grid.goal_xy, grid.corner_rule,
-                            border_blocked, clearance=field)
-    found.path.setflags(write=False)
-    with _memo_lock:
-        _memo[key] = found
-        while len(_memo) > MEMO_SIZE:
-            _memo.popitem(last=False)
-    return found
+    return maximin_path_np(grid.blocked_np(), grid.start_xy, grid.goal_xy, grid.corner_rule,
+                           border_blocked, clearance=field)

@@ -140,45 +140,43 @@ def test_the_clearance_to_a_maps_own_obstacles_on_its_inflated_grid():
     assert not inflated[path[:, 1], path[:, 0]].any()  # the path avoids the inflated map
 
 
+
 def test_the_same_problem_is_searched_once_and_another_one_again(monkeypatch):
     """A front run asks for one problem twice (its fields' band, then the result's
     maximin clearance): the second ask returns the remembered, read-only result; another
     map, other obstacles or other endpoints are searched afresh."""
-    from jaxga.reference import maximin
+    from jaxga._runtime import references
 
     searched = []
-    real = maximin.maximin_path_np
+    real = maximin_path_np
 
     def counting(*args, **kwargs):
         searched.append(1)
         return real(*args, **kwargs)
 
-    monkeypatch.setattr(maximin, "maximin_path_np", counting)
-    monkeypatch.setattr(maximin, "_memo", type(maximin._memo)())
+    monkeypatch.setattr(references, "maximin_path_np", counting)
+    references._maximin_cached.cache_clear()
     b = np.zeros((9, 11), bool)
     b[2:7, 5] = True
     grid = Grid.create(b, start=(0, 4), goal=(10, 4), corner_rule="strict")
-    first = maximin_path(grid)
-    again = maximin_path(Grid.create(b.copy(), start=(0, 4), goal=(10, 4),
-                                     corner_rule="strict"))
+    first = references.maximin_reference(grid)
+    again = references.maximin_reference(Grid.create(b.copy(), start=(0, 4), goal=(10, 4),
+                                                     corner_rule="strict"))
     assert again is first and len(searched) == 1
     with pytest.raises(ValueError):
         first.path[0, 0] = 3  # shared by both callers: read-only
-    moved = maximin_path(Grid.create(b, start=(0, 3), goal=(10, 4), corner_rule="strict"))
+    moved_grid = Grid.create(b, start=(0, 3), goal=(10, 4), corner_rule="strict")
+    moved = references.maximin_reference(moved_grid)
     own = np.zeros_like(b)
     own[4, 5] = True
-    narrower = maximin_path(grid, obstacles=own)
+    narrower = references.maximin_reference(grid, own)
     b2 = b.copy()
     b2[7, 5] = True
-    walled = maximin_path(Grid.create(b2, start=(0, 4), goal=(10, 4), corner_rule="strict"))
+    walled_grid = Grid.create(b2, start=(0, 4), goal=(10, 4), corner_rule="strict")
+    walled = references.maximin_reference(walled_grid)
     assert len(searched) == 4
-    for got, grid_, obstacles in ((moved, Grid.create(b, start=(0, 3), goal=(10, 4),
-                                                      corner_rule="strict"), None),
-                                  (narrower, grid, own),
-                                  (walled, Grid.create(b2, start=(0, 4), goal=(10, 4),
-                                                       corner_rule="strict"), None)):
-        field = None if obstacles is None else cell_clearance(obstacles)
-        want = real(grid_.blocked_np(), grid_.start_xy, grid_.goal_xy, "strict",
-                    clearance=field)
+    for got, grid_, obstacles in ((moved, moved_grid, None), (narrower, grid, own),
+                                  (walled, walled_grid, None)):
+        want = maximin_path(grid_, obstacles=obstacles)
         assert got.clearance == want.clearance and (got.path == want.path).all()
     assert not np.array_equal(walled.path, first.path)  # not the remembered answer
