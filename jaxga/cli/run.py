@@ -145,8 +145,9 @@ def run_and_report(args: argparse.Namespace, timeline: Timeline,
         raise JaxgaError(f"cannot write --path-out {args.path_out}: the map has no resolution "
                          "and origin (a ROS map_server .yaml has them); --json has the path "
                          "in cells")
+    choice = front_point_choice(args.front_point)
     if args.path_out and problem.config.get("survival.method") is not None:
-        check_front_point(front_objectives(problem.config), front_point_choice(args.front_point))
+        check_front_point(front_objectives(problem.config), choice)
     result = api.run(
         problem, seeds=args.seeds, progress=progress,
         population_capacity=args.population_capacity,
@@ -177,7 +178,7 @@ def run_and_report(args: argparse.Namespace, timeline: Timeline,
             plot_result(result, info.grid, args.plot, curve=curve, info=info)
         print(f"wrote {args.plot}")
     if args.path_out and best is not None and result.front is not None:
-        point = result.front_point(best, front_point_choice(args.front_point))
+        point = result.front_point(best, choice)
         if point is None:
             raise JaxgaError(f"no point of seed {int(result.seeds[best])}'s front keeps a "
                              f"clearance of {args.front_point} m (--front-point)")
