@@ -4,10 +4,14 @@ Loaded with ``pytest -p _compile_listener`` (``benchmarks/`` on ``PYTHONPATH``).
 listens to ``jax.monitoring``'s duration events (tracing, lowering to MLIR, XLA's
 backend compile, persistent-cache hits) and records, for every test of this process, the
 seconds and the number of each event between the test's start and its end (setup, call
-and teardown; counts under ``"n:<event>"``), with the test's own wall time. Each pytest
+and teardown; counts under ``"n:<event>"``), with the test's own wall time and CPU time
+(``"cpu"``: this process's user + system seconds over all its threads, plus those of the
+child processes the test started and waited for). Wall time grows when other work shares
+the cores; CPU time hardly does, so it is what a file costs. Each pytest
 process that runs tests (every xdist worker; not the xdist controller) writes
 ``<$JAXGA_SUITE_PROFILE>/<worker>.json``. Work done in child processes that a test
-starts (notebook kernels, ``jax.distributed`` processes) is not seen: only its wall time.
+starts (notebook kernels, ``jax.distributed`` processes) is not seen: only its wall time,
+and its CPU time once the test has waited for it.
 """
 
 from __future__ import annotations
@@ -15,6 +19,7 @@ from __future__ import annotations
 import collections
 import json
 import os
+import resource
 import time
 from pathlib import Path
 
@@ -24,6 +29,12 @@ _totals: collections.defaultdict[str, float] = collections.defaultdict(float)
 _counts: collections.defaultdict[str, int] = collections.defaultdict(int)
 _rows: list[tuple[str, dict[str, float]]] = []
 _start: dict[str, float] = {}
+
+
+def _cpu_seconds() -> float:
+    """User + system seconds of this process (every thread) and of its waited-for children."""
+    children = resource.getrusage(resource.RUSAGE_CHILDREN)
+    return time.process_time() + children.ru_utime + children.ru_stime
 
 
 def _listen(event: str, duration: float, **_kwargs) -> None:
@@ -39,12 +50,14 @@ def pytest_runtest_logstart(nodeid: str, location) -> None:
     _start.update(_totals)
     _start.update({"n:" + k: v for k, v in _counts.items()})
     _start["wall"] = time.perf_counter()
+    _start["cpu"] = _cpu_seconds()
 
 
 def pytest_runtest_logfinish(nodeid: str, location) -> None:
     now = {**_totals, **{"n:" + k: v for k, v in _counts.items()}}
     row = {k: v - _start.get(k, 0) for k, v in now.items() if v > _start.get(k, 0)}
     row["wall"] = time.perf_counter() - _start.get("wall", time.perf_counter())
+    row["cpu"] = _cpu_seconds() - _start.get("cpu", _cpu_seconds())
     _rows.append((nodeid, row))
 
 

@@ -116,15 +116,25 @@ PRESETS = ("sga", "imga", "agacd", "iga_zhang", "mpmga", "iga_zhu")
 """The six presets in the papers' order, the benchmarks' default and table order
 (``jaxga.config.presets.preset_names()`` lists them alphabetically)."""
 
-PROGRAMS = ("init", "finish", "evolve")
-"""The programs of a program set (``jaxga._runtime.programs.Programs``), in the order of
-:func:`xla_seconds_by_program`'s entries."""
+PROGRAMS = ("tables", "init", "evolve", "finish")
+"""The programs a run compiles: the map's tables (``jaxga.engine.maptables``), then the
+program set's (``jaxga._runtime.programs.Programs``), in compile order."""
+
+
+def program_name(module: str) -> str:
+    """The :data:`PROGRAMS` name of a lowered module's name (``jit_do_evolve`` ->
+    ``evolve``, ``jit_compute_tables`` -> ``tables``), else the module's name."""
+    return next((p for p in PROGRAMS if module.endswith(p)), module)
 
 
 def xla_seconds_by_program(xla: list) -> dict[str, float]:
     """:func:`instrumented_run`'s ``parts["xla"]`` as XLA seconds per program of
-    :data:`PROGRAMS` (the evolve programs summed)."""
-    return {"init": xla[0][0], "finish": xla[1][0], "evolve": sum(s for s, _ in xla[2:])}
+    :data:`PROGRAMS` (several compiles of one program summed; 0.0 for one not compiled)."""
+    out = dict.fromkeys(PROGRAMS, 0.0)
+    for seconds, _, module in xla:
+        name = program_name(module)
+        out[name] = out.get(name, 0.0) + seconds
+    return out
 
 
 STANDARD_POPULATION, STANDARD_GENERATIONS = 60, 300
@@ -190,7 +200,8 @@ def instrumented_run(preset: str, seeds: int, run=standard_run):
 
     Returns ``(result, parts)``: ``parts["trace_s"]`` (JAX's ``jaxpr_trace_duration``
     events), ``parts["lower_s"]`` (``Traced.lower``), ``parts["xla"]`` (one
-    ``(seconds, compiled program)`` per ``Lowered.compile``, in compile order) and
+    ``(seconds, compiled program, program name)`` per ``Lowered.compile``, in compile
+    order; the name is the lowered module's, e.g. ``jit_init``) and
     ``parts["cpu_s"]`` (the process's user + system CPU seconds over the call). Used by
     ``compile_anatomy.py`` and ``compile_ab.py``, in a fresh process (:func:`cold_child`).
     """
@@ -218,7 +229,9 @@ def instrumented_run(preset: str, seeds: int, run=standard_run):
     def timed_compile(self, *a, **k):
         t = time.perf_counter()
         out = compile_(self, *a, **k)
-        parts["xla"].append((time.perf_counter() - t, out))
+        seconds = time.perf_counter() - t
+        name = str(self.compiler_ir().operation.attributes["sym_name"]).strip('"')
+        parts["xla"].append((seconds, out, name))
         return out
 
     jax.stages.Traced.lower, jax.stages.Lowered.compile = timed_lower, timed_compile

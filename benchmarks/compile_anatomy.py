@@ -11,8 +11,9 @@ runs ``jaxga.run`` on ``classic_ga_gapp3_20x20`` (population 60, mpmga 3 islands
   (``Lowered.compile``), and the process's CPU seconds over the same call (user +
   system, every thread): with 2 cores, a CPU time near twice the wall time means the
   compilation is already limited by the CPU, not by waiting;
-* per program (init, evolve, finish): XLA seconds and the number of kernels XLA emitted
-  (``fusion`` instructions of the optimised HLO, each compiled on its own), and the jaxga
+* per program (the map's tables, init, evolve, finish): XLA seconds and the number of
+  kernels XLA emitted (``fusion`` instructions of the optimised HLO, each compiled on its
+  own), and the jaxga
   modules whose code the most kernels come from (the innermost jaxga stack frame of each
   fusion's metadata; the code a folded call (:mod:`jaxga._batching.folding`) emits around the
   operator it folds, such as the pooled gated operators' block loop or a compacted
@@ -32,12 +33,12 @@ import re
 
 from _results import (
     PRESETS,
-    PROGRAMS,
     STANDARD_SETTING,
     cold_child,
     instrumented_run,
     markdown_table,
     parse_args,
+    program_name,
     record,
 )
 
@@ -94,14 +95,15 @@ def child(preset: str, seeds: int) -> dict:
     """One cold ``jaxga.run`` in this process, instrumented."""
     r, parts = instrumented_run(preset, seeds)
     xla = parts["xla"]
-    if len(xla) != len(PROGRAMS):
-        raise RuntimeError(f"expected {len(PROGRAMS)} compiled programs, got {len(xla)}")
     programs = {}
-    for name, (seconds, compiled) in zip(PROGRAMS, xla):
+    for seconds, compiled, module in xla:
+        name = program_name(module)
+        if name in programs:
+            raise RuntimeError(f"{name} compiled twice in one run")
         n, by = kernels_by_module(compiled.as_text())
         programs[name] = {"xla_s": seconds, "kernels": n, "by_module": by.most_common(4)}
     return {"compile_s": r.timing["compile_s"], "trace_s": parts["trace_s"],
-            "lower_s": parts["lower_s"], "xla_s": sum(s for s, _ in xla),
+            "lower_s": parts["lower_s"], "xla_s": sum(s for s, *_ in xla),
             "run_wall_s": r.timing["total_s"], "run_cpu_s": parts["cpu_s"],
             "programs": programs}
 
@@ -123,8 +125,7 @@ def main() -> None:
         print(preset, json.dumps(m), flush=True)
         whole.append([preset, m["compile_s"], m["trace_s"], m["lower_s"], m["xla_s"],
                       m["run_wall_s"], m["run_cpu_s"]])
-        for name in ("init", "evolve", "finish"):
-            p = m["programs"][name]
+        for name, p in m["programs"].items():
             programs.append([preset, name, p["xla_s"], p["kernels"],
                              ", ".join(f"{mod} {n}" for mod, n in p["by_module"])])
     body = (

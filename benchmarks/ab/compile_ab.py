@@ -67,7 +67,7 @@ def child(preset: str, seeds: int, warm: int, cli: int = 0) -> dict:
     by_program = xla_seconds_by_program(parts["xla"])
     return {"jaxga": jaxga.__file__, "compile_s": r.timing["compile_s"],
             "trace_s": parts["trace_s"], "lower_s": parts["lower_s"],
-            "xla_s": sum(s for s, _ in parts["xla"]), "hash": result_hash(r),
+            "xla_s": sum(s for s, *_ in parts["xla"]), "hash": result_hash(r),
             **{f"xla_{name}_s": s for name, s in by_program.items()},
             "init_s": best and best["init_s"], "evolve_s": best and best["evolve_s"],
             "post_s": post}
