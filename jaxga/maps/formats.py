@@ -49,6 +49,7 @@ from jaxga.maps.inputs import (
     MAX_READ_COARSEN,
     YAML_CAP,
     check_image_data,
+    decode_image,
     image_size,
     map_file_cap,
     map_file_cap_note,
@@ -440,21 +441,24 @@ def parse_png(path: Path, label: str, threshold: float = 0.5,
     if raw is None:
         raw = read_map_bytes(path, label, coarsen=MAX_READ_COARSEN)
     check_image_data(raw, label)
-    # matplotlib reads a .png (or a PNG by content) as PNG, anything else through Pillow
-    as_png = path.suffix.lower() == ".png" or raw.startswith(_PNG_MAGIC)
-    try:
-        img = np.asarray(mpimg.imread(io.BytesIO(raw), format="png" if as_png else "pil"))
-    except Exception as e:  # Pillow/matplotlib raise many types for bad images
-        msg = str(e).splitlines()[0] if str(e) else type(e).__name__
-        raise MapFormatError(f"{label}: unreadable image ({msg})") from None
-    if (
-        img.ndim not in (2, 3)
-        or img.size == 0
-        or (img.ndim == 3 and img.shape[2] not in (1, 2, 3, 4))
-    ):
-        raise MapFormatError(f"{label}: unsupported image shape {img.shape}")
-    if np.issubdtype(img.dtype, np.integer):
-        img = img.astype(np.float64) / np.iinfo(img.dtype).max
+    if path.suffix.lower() == ".png" or raw.startswith(_PNG_MAGIC):
+        try:  # matplotlib's PNG reading: values in [0, 1] at 8 and 16 bits
+            img = np.asarray(mpimg.imread(io.BytesIO(raw), format="png"))
+        except Exception as e:  # Pillow/matplotlib raise many types for bad images
+            msg = str(e).splitlines()[0] if str(e) else type(e).__name__
+            raise MapFormatError(f"{label}: unreadable image ({msg})") from None
+        if (
+            img.ndim not in (2, 3)
+            or img.size == 0
+            or (img.ndim == 3 and img.shape[2] not in (1, 2, 3, 4))
+        ):
+            raise MapFormatError(f"{label}: unsupported image shape {img.shape}")
+        if np.issubdtype(img.dtype, np.integer):
+            img = img.astype(np.float64) / np.iinfo(img.dtype).max
+    else:  # PGM, BMP, TIFF, ...: scaled by their own bit depth (a 16-bit PGM's maxval)
+        pixels, scale = decode_image(raw, label)
+        img = pixels[..., 0] if pixels.shape[2] == 1 else pixels
+        img = img.astype(np.float64) / scale
     img = img.astype(np.float64)
     if img.ndim == 2:
         lum = img

@@ -29,6 +29,8 @@ import re
 import stat
 import zlib
 
+import numpy as np
+
 from jaxga.core.errors import JaxgaError, MapFormatError
 from jaxga.core.grid import MAX_MAP_CELLS
 
@@ -40,6 +42,7 @@ __all__ = [
     "SCENARIO_CAP",
     "YAML_CAP",
     "check_image_data",
+    "decode_image",
     "image_size",
     "map_file_cap",
     "map_file_cap_note",
@@ -303,3 +306,57 @@ def check_image_data(raw: bytes, label: str) -> None:
         amount = f"more than {limit:,}" if held > limit else f"{held:,}"
         raise _mismatch(label, "PNG", width, height, expected,
                         f"{amount} bytes of pixel data once inflated")
+
+
+_SIXTEEN_BIT = ("I;16", "I;16B", "I;16L", "I;16N")
+_EIGHT_BIT = ("L", "LA", "RGB", "RGBA")
+
+
+def decode_image(raw: bytes, label: str) -> tuple[np.ndarray, int]:
+    """``(pixels, full_scale)`` of an image file's bytes, decoded by Pillow: ``pixels`` is
+    ``[H, W, C]`` (C = 1-4: grey, grey + alpha, RGB, RGBA; top row first) and
+    ``full_scale`` the value of white, 255 for 8-bit images or 65535 for 16-bit ones
+    (PNG, TIFF, and Netpbm images with a ``maxval`` over 255, which Pillow scales to 16
+    bits); palette, bilevel and other colour modes are converted to RGBA.
+
+    Refused in one line naming ``label``: an image Pillow cannot read, a floating-point
+    image (its values have no scale a map could be read against), and a 32-bit integer
+    image holding values over 16 bits. Callers check the data against the header first
+    (:func:`check_image_data`)."""
+    from PIL import Image, UnidentifiedImageError  # here: Pillow's import is a tenth of a second
+
+    try:
+        with Image.open(io.BytesIO(raw)) as img:
+            img.load()
+            mode = img.mode
+            if mode in _EIGHT_BIT:
+                pixels, scale = np.asarray(img, np.uint8), 255
+            elif mode in _SIXTEEN_BIT or mode == "I":
+                pixels = np.asarray(img, np.int64)
+                # Pillow scales a Netpbm maxval over 255 to 16 bits ("I"); another
+                # 32-bit image is read as 16-bit when its values fit, as 8-bit when they
+                # fit 8 bits (the one scale its values tell)
+                pnm = _pnm_header(raw)
+                scale = 65535 if mode != "I" or pnm is not None or \
+                    pixels.max(initial=0) > 255 else 255
+                if pixels.min(initial=0) < 0 or pixels.max(initial=0) > 65535:
+                    raise MapFormatError(
+                        f"{label}: a 32-bit image with values from {pixels.min()} to "
+                        f"{pixels.max()}: save the map as an 8- or 16-bit image")
+            elif mode == "F" or mode.startswith("F;"):
+                raise MapFormatError(
+                    f"{label}: a floating-point image (Pillow mode {mode}) has no scale "
+                    "to read free and blocked against: save the map as an 8- or 16-bit "
+                    "image")
+            else:  # bilevel, palette, CMYK, ...: their colours as RGBA
+                pixels, scale = np.asarray(img.convert("RGBA"), np.uint8), 255
+    except MapFormatError:
+        raise
+    except (OSError, UnidentifiedImageError, ValueError, SyntaxError) as e:
+        first = str(e).splitlines()[0] if str(e) else type(e).__name__
+        raise MapFormatError(f"{label}: unreadable image ({first})") from None
+    if pixels.ndim == 2:
+        pixels = pixels[..., None]
+    if pixels.ndim != 3 or pixels.size == 0 or pixels.shape[2] not in (1, 2, 3, 4):
+        raise MapFormatError(f"{label}: unsupported image shape {pixels.shape}")
+    return pixels, scale

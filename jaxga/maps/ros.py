@@ -33,7 +33,6 @@ corner is at ``origin + R(yaw) (x resolution, y resolution)``; :func:`world_to_c
 from __future__ import annotations
 
 import dataclasses
-import io
 import math
 import reprlib
 from pathlib import Path
@@ -48,6 +47,7 @@ from jaxga.maps.frame import MapFrame
 from jaxga.maps.inputs import (
     YAML_CAP,
     check_image_data,
+    decode_image,
     image_size,
     map_file_cap,
     map_file_cap_note,
@@ -187,9 +187,9 @@ def read_ros_image(meta: RosMap, label: str | None = None, *, coarsen: int = 1) 
     than :func:`jaxga.maps.inputs.map_file_cap` bytes for a map to be coarsened
     ``coarsen x coarsen``; an image over :data:`jaxga.core.grid.MAX_MAP_CELLS` cells once
     coarsened, from its header before its pixels are decoded; a PNG or PGM whose pixel
-    data does not match its header (:func:`jaxga.maps.inputs.check_image_data`)."""
-    from PIL import Image, UnidentifiedImageError  # here: Pillow's import is a tenth of a second
-
+    data does not match its header (:func:`jaxga.maps.inputs.check_image_data`); an image
+    that cannot be decoded or has no 8- or 16-bit scale
+    (:func:`jaxga.maps.inputs.decode_image`)."""
     label = label or str(meta.image)
     where = f"{label}: the map image {str(meta.image)!r}"
     factor = max(int(coarsen), 1)
@@ -209,26 +209,10 @@ def read_ros_image(meta: RosMap, label: str | None = None, *, coarsen: int = 1) 
         if message:
             raise MapFormatError(f"{where}: {message}")
     check_image_data(raw, where)
-    try:
-        with Image.open(io.BytesIO(raw)) as img:
-            img.load()
-            if img.mode in ("I;16", "I;16B", "I"):
-                arr = np.asarray(img, np.float64)
-                top = 65535.0 if arr.max(initial=0) > 255 else 255.0
-                arr = np.round(arr / top * 255.0).astype(np.uint8)
-            elif img.mode in ("L", "LA", "RGB", "RGBA"):
-                arr = np.asarray(img, np.uint8)
-            else:
-                arr = np.asarray(img.convert("RGBA"), np.uint8)
-    except (OSError, UnidentifiedImageError, ValueError) as e:
-        first = str(e).splitlines()[0] if str(e) else type(e).__name__
-        raise MapFormatError(f"{label}: unreadable map image {str(meta.image)!r} ({first})") \
-            from None
-    if arr.ndim == 2:
-        arr = arr[..., None]
-    if arr.size == 0:
-        raise MapFormatError(f"{label}: the map image {str(meta.image)!r} is empty")
-    return arr
+    pixels, scale = decode_image(raw, f"{label}: map image {str(meta.image)!r}")
+    if scale == 255:
+        return pixels.astype(np.uint8)
+    return np.round(pixels / scale * 255.0).astype(np.uint8)  # map_server reads 8 bits
 
 
 def occupancy(pixels: np.ndarray, meta: RosMap) -> np.ndarray:

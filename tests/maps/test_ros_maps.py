@@ -148,6 +148,43 @@ def test_a_pgm_alone_and_a_png_threshold(tmp_path):
         load_map(pgm, threshold=0.0)
 
 
+@pytest.mark.parametrize("maxval", [65535, 1000, 300])
+def test_a_pgm_of_more_than_8_bits_reads_its_values_against_its_maxval(tmp_path, maxval):
+    """A PGM whose maxval is over 255 (two bytes a value) is the same map as its 8-bit
+    copy, alone and through its YAML: each value is read against the maxval, not clipped
+    to 8 bits (which made every non-black pixel free)."""
+    wide = np.round(IMAGE.astype(np.float64) / 255 * maxval).astype(">u2")
+    path = tmp_path / "wide.pgm"
+    path.write_bytes(f"P5\n{IMAGE.shape[1]} {IMAGE.shape[0]}\n{maxval}\n".encode()
+                     + wide.tobytes())
+    narrow = write_pgm(tmp_path / "narrow.pgm", IMAGE)
+    for threshold in (0.5, 0.85):
+        np.testing.assert_array_equal(load_map(path, threshold=threshold).blocked_np(),
+                                      load_map(narrow, threshold=threshold).blocked_np())
+    (tmp_path / "wide.yaml").write_text(ROS1_YAML.format(image="wide.pgm"))
+    (tmp_path / "narrow.yaml").write_text(ROS1_YAML.format(image="narrow.pgm"))
+    np.testing.assert_array_equal(load_map(tmp_path / "wide.yaml").blocked_np(),
+                                  load_map(tmp_path / "narrow.yaml").blocked_np())
+
+
+@pytest.mark.parametrize("pixels, words", [
+    (np.where(IMAGE == 0, 0.0, 1.0).astype(np.float32), "a floating-point image"),
+    (np.where(IMAGE == 0, 0, 70_000).astype(np.int32), "a 32-bit image with values"),
+], ids=["float", "int32-over-16-bits"])
+def test_an_image_without_an_8_or_16_bit_scale_is_refused(tmp_path, pixels, words):
+    """A floating-point TIFF, or a 32-bit one whose values pass 16 bits, has no white
+    value to read it against: refused in one line, alone and through a YAML (it was read
+    clipped to 8 bits: every cell blocked, or every non-black one free)."""
+    from PIL import Image
+
+    Image.fromarray(pixels).save(tmp_path / "m.tif")
+    (tmp_path / "m.yaml").write_text(ROS1_YAML.format(image="m.tif"))
+    for path in (tmp_path / "m.tif", tmp_path / "m.yaml"):
+        with pytest.raises(MapFormatError, match=words) as info:
+            load_map(path)
+        assert "\n" not in str(info.value)
+
+
 def test_inflation_by_cells_or_by_the_robots_radius_in_metres(office):
     """0.05 m cells: a 0.1 m robot radius is 2 cells; the inflated map equals
     jaxga.maps.inflate of the loaded one, and an endpoint the growth covers is named."""
