@@ -37,6 +37,7 @@ import functools
 import hashlib
 import os
 import pickle
+import stat
 import time
 import warnings
 from collections.abc import Callable, Iterator
@@ -268,7 +269,14 @@ def _compiling(key: str | None) -> Iterator[None]:
     try:
         folder = directory() / "locks"
         folder.mkdir(parents=True, exist_ok=True)
-        handle = open(folder / f"{key}.lock", "a")  # noqa: SIM115 - closed below
+        # without blocking: a FIFO put in the lock file's place would block open() for
+        # good; anything but a regular file is not used as a lock
+        fd = os.open(folder / f"{key}.lock", os.O_WRONLY | os.O_CREAT | os.O_APPEND
+                     | getattr(os, "O_NONBLOCK", 0), 0o644)
+        if not stat.S_ISREG(os.fstat(fd).st_mode):
+            os.close(fd)
+            raise OSError(f"{key}.lock is not a regular file")
+        handle = os.fdopen(fd, "a")
     except OSError:
         yield
         return

@@ -80,8 +80,8 @@ def check_xla_flags() -> None:
     key = f"{flags}|{os.environ.get('JAX_PLATFORMS', '')}|jaxlib {jaxlib.__version__}"
     path = xla_flags_verdicts()
     try:
-        known = json.loads(path.read_text())
-    except (OSError, ValueError):
+        known = json.loads(path.read_text()) if path.is_file() else {}
+    except (OSError, ValueError, RecursionError):  # a damaged file of verdicts: none known
         known = {}
     if isinstance(known, dict) and key in known:
         return

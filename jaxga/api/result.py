@@ -630,11 +630,13 @@ class Result:
         ``shortest_gap``, its shortest end post-optimised (the seed's best path) over
         the any-angle optimum (:attr:`gap`); ``widest_clearance`` and its share of the
         exact maximin clearance (``widest_ratio``, 1 where it keeps the widest path's
-        clearance); ``points``; ``hypervolume_gain`` (:meth:`Fronts.gain`). Nones
+        clearance; None where no obstacle bounds that clearance, on a map without
+        obstacles); ``points``; ``hypervolume_gain`` (:meth:`Fronts.gain`). Nones
         without a front."""
         points = self.front_points(i)
         widest = max((p.get("clearance", math.nan) for p in points), default=math.nan)
-        ratio = widest / self.maximin_clearance if self.maximin_clearance > 0 else math.nan
+        bound = self.maximin_clearance  # inf on a map without obstacles: no share of it
+        ratio = widest / bound if 0 < bound < math.inf else math.nan
         gain = math.nan if self.front is None else float(self.front.gain(self.history)[i])
         return {"points": len(points), "shortest_gap": json_number(float(self.gap[i])),
                 "widest_clearance": json_number(widest), "widest_ratio": json_number(ratio),
@@ -705,10 +707,13 @@ class Result:
         cell = None if self.frame is None else self.frame.cell_size
         wide = median("widest_clearance")
         wide_text = f"{wide * cell:.3f} m" if cell else f"{wide:.2f} cells"
+        ratio = median("widest_ratio")
+        share = ("no obstacle bounds the exact maximin clearance" if math.isnan(ratio)
+                 else f"{ratio:.3f} of the exact maximin clearance")
         return (f"front ({', '.join(self.front.names)}; medians over {ok.size} seeds): "
                 f"{median('points'):g} points; shortest end {100 * median('shortest_gap'):.2f} "
                 f"% over the any-angle optimum; widest end clearance {wide_text}, "
-                f"{median('widest_ratio'):.3f} of the exact maximin clearance; hypervolume "
+                f"{share}; hypervolume "
                 f"x{median('hypervolume_gain'):.3f} over the initial population's")
 
     def _endpoints_world(self) -> dict[str, Any]:

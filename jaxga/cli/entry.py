@@ -23,7 +23,7 @@ from jaxga._runtime.parallel import (
     configure_from_args,
 )
 from jaxga.cli.options import EXIT_BAD_INPUT, EXIT_DEVICE_DISAGREES, EXIT_NO_PATH, apply_scenario
-from jaxga.cli.outputs import check_outputs
+from jaxga.cli.outputs import check_outputs, write_empty_path
 from jaxga.cli.parser import build_parser
 from jaxga.core.errors import EndpointError, JaxgaError, NoPathError
 from jaxga.core.files import remove_temporaries
@@ -105,6 +105,7 @@ def main(argv: Sequence[str] | None = None) -> int:
         sys.stdout.flush()
         os._exit(EXIT_PROCESS_LOST)
     except NoPathError as e:
+        write_empty_path(args)  # found before the run: no stale path left to follow
         print(f"jaxga: no path: {e}", file=sys.stderr)
         return EXIT_NO_PATH
     except DeviceDisagrees as e:

@@ -5,7 +5,10 @@ from __future__ import annotations
 import argparse
 import contextlib
 import io
+import os
 from pathlib import Path
+
+import numpy as np
 
 from jaxga import export
 from jaxga._runtime.parallel import (
@@ -20,6 +23,7 @@ from jaxga.core.matplotlib_env import matplotlib_ready
 from jaxga.maps import (
     scenario_path,
 )
+from jaxga.maps.builtin import builtin_names, builtin_path
 from jaxga.maps.ros import read_ros_yaml
 
 OUTPUT_OPTIONS = ("json", "plot", "path_out", "checkpoint")
@@ -31,6 +35,8 @@ def input_files(args: argparse.Namespace) -> list[tuple[str, str | None]]:
     out: list[tuple[str, str | None]] = []
     maps = getattr(args, "map", None)
     for m in (maps if isinstance(maps, list) else [maps]):
+        if m and not Path(m).is_file() and m in builtin_names():  # a built-in map's file
+            out.append(("built-in map", str(builtin_path(m))))
         if m and Path(m).is_file():
             out.append(("map", m))
             if Path(m).suffix.lower() in (".yaml", ".yml"):
@@ -70,13 +76,18 @@ def check_outputs(args: argparse.Namespace) -> None:
     if getattr(args, "path_out", None):
         export.path_format(args.path_out)  # .csv or .yaml, refused in one line otherwise
     plot = getattr(args, "plot", None)
-    if plot and not Path(plot).suffix:
-        args.plot = plot + ".png"
+    if plot and not Path(plot).suffix and not os.path.lexists(plot):
+        args.plot = plot + ".png"  # an existing name is checked as given (a device, ...)
     if pid not in (None, 0):  # only process 0 writes the outputs
         return
     outputs = {f"--{o.replace('_', '-')}": getattr(args, o, None) for o in OUTPUT_OPTIONS
                if o != "checkpoint"}
     inputs = input_files(args)
+    package = Path(__file__).resolve().parents[1]
+    for option, path in outputs.items():
+        if path and (_inside(path, package) or Path(path).resolve() == package):
+            raise JaxgaError(f"cannot write {option} {path}: it is inside jaxga's own "
+                             f"folder {package} (its code, built-in maps and presets)")
     check_output_files(outputs, inputs)
     folder = getattr(args, "checkpoint", None)
     if folder:
@@ -106,3 +117,17 @@ def check_outputs(args: argparse.Namespace) -> None:
             except Exception as err:  # noqa: BLE001 - any backend failure, named
                 raise JaxgaError(f"cannot write --plot {plot}: matplotlib cannot write "
                                  f"{suffix!r} here ({err})") from None
+
+
+def write_empty_path(args: argparse.Namespace) -> None:
+    """Where there is no path, ``--path-out`` holds an empty path (a CSV header alone, or
+    a ``nav_msgs/Path`` without poses), so that a robot reading the file cannot follow
+    the path of an earlier request still there; and says so. Only process 0 writes."""
+    out = getattr(args, "path_out", None)
+    pid = getattr(args, "process_id", None)
+    if pid is None:
+        pid = env_int(ENV_PROCESS_ID)
+    if not out or pid not in (None, 0):
+        return
+    export.write_path(out, np.zeros((0, 2)))
+    print(f"wrote {out} (an empty path: no path)")

@@ -27,6 +27,7 @@ from jaxga.cli.options import (
     preset_rule,
     write_json,
 )
+from jaxga.cli.outputs import write_empty_path
 from jaxga.cli.run import process_timeline
 from jaxga.core.errors import JaxgaError, ParameterError
 from jaxga.core.grid import CORNER_RULES, as_integer, check_corner_rule
@@ -194,6 +195,8 @@ def cmd_replan(args: argparse.Namespace) -> int:
         with timeline.phase("write"):
             export.write_path(args.path_out, info.frame.to_world(np.asarray(result.path, float)))
         print(f"wrote {args.path_out} (metres)")
+    elif args.path_out:
+        write_empty_path(args)
     if args.json:
         with timeline.phase("write"):
             write_json(args.json, result.to_json(info.frame))

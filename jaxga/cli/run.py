@@ -30,6 +30,7 @@ from jaxga.cli.options import (
     snap_notes,
     write_json,
 )
+from jaxga.cli.outputs import write_empty_path
 from jaxga.core.errors import JaxgaError
 from jaxga.engine.algorithm import front_objectives
 from jaxga.maps.clearance import ObstacleClearance
@@ -199,6 +200,8 @@ def run_and_report(args: argparse.Namespace, timeline: Timeline,
             export.write_path(args.path_out, robot_path(result, best, curves))
         print(f"wrote {args.path_out} (seed {int(result.seeds[best])}, "
               f"{'smooth curve' if use_curve(curves, best) else 'waypoints'}, metres)")
+    elif args.path_out:
+        write_empty_path(args)
     if args.json:
         with phase("write"):
             doc = result.to_json()

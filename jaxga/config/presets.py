@@ -87,8 +87,8 @@ def _preset_file(name: str) -> Any:
 def _parse(text: str, label: str) -> dict[str, Any]:
     try:
         return tomllib.loads(text)
-    except tomllib.TOMLDecodeError as e:
-        raise ParameterError(f"{label}: malformed TOML: {e}") from None
+    except ValueError as e:  # TOMLDecodeError, or an integer past Python's 4300 digits
+        raise ParameterError(f"{label}: malformed TOML: {str(e).splitlines()[0]}") from None
 
 
 def _read_builtin(name: str) -> dict[str, Any]:

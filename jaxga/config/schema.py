@@ -229,7 +229,7 @@ def parse_value(text: str) -> Any:
     decimal number TOML refuses (``.5``, ``5.``), or a bare word taken as a string."""
     try:
         return tomllib.loads(f"v = {text}")["v"]
-    except tomllib.TOMLDecodeError:
+    except ValueError:  # TOMLDecodeError, or an integer past Python's 4300 digits
         return float(text) if _LOOSE_NUMBER.fullmatch(text.strip()) else text
 
 
@@ -307,5 +307,5 @@ def load_toml(path: str | Path) -> dict[str, Any]:
             return flatten(tomllib.load(f))
     except FileNotFoundError:
         raise ParameterError(f"configuration file not found: {p}") from None
-    except tomllib.TOMLDecodeError as e:
-        raise ParameterError(f"{p}: malformed TOML: {e}") from None
+    except ValueError as e:  # TOMLDecodeError, or an integer past Python's 4300 digits
+        raise ParameterError(f"{p}: malformed TOML: {str(e).splitlines()[0]}") from None

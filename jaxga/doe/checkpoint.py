@@ -68,11 +68,17 @@ class Checkpoint:
             return f"checkpoint {self.dir} is a file, not a directory"
         self.dir.mkdir(parents=True, exist_ok=True)
         path = self.dir / "manifest.json"
-        if path.exists():
+        if path.exists() or path.is_symlink():
+            if not path.is_file():  # a FIFO would block the read for good
+                return (f"checkpoint {self.dir}: its manifest {path.name} is not a regular "
+                        "file; use another directory or delete it")
             try:
                 old = json.loads(path.read_text(encoding="utf-8"))
             except (OSError, ValueError, RecursionError) as e:
                 return f"checkpoint {self.dir}: unreadable manifest: {e}"
+            if not isinstance(old, dict):
+                return (f"checkpoint {self.dir}: unreadable manifest: not a JSON object; use "
+                        "another directory or delete it")
             if old != manifest:
                 keys = sorted(k for k in old.keys() | manifest.keys()
                               if old.get(k) != manifest.get(k))
@@ -90,6 +96,9 @@ class Checkpoint:
     def _read(self, path: Path, n_seeds: int) -> dict[str, list]:
         """The responses saved in ``path``, checked: every response, one value (a number
         or null) per seed; ``ParameterError`` naming the file otherwise."""
+        if not path.is_file():  # a FIFO would block the read for good
+            raise ParameterError(f"checkpoint file {path} is not a regular file: delete it "
+                                 "and run again to recompute it")
         try:
             data = json.loads(path.read_text(encoding="utf-8"))
         except (OSError, ValueError, RecursionError) as e:

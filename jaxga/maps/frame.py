@@ -29,6 +29,7 @@ from typing import Any
 import numpy as np
 
 from jaxga.core.errors import EndpointError
+from jaxga.core.grid import check_xy
 from jaxga.maps.clearance import ObstacleClearance
 
 __all__ = ["MapFrame", "endpoint_cells"]
@@ -179,7 +180,27 @@ def endpoint_cells(frame: MapFrame | None, grid: Any, start: Any = None, goal: A
             if frame is None or not frame.has_metres:
                 raise EndpointError(f"the {name} in metres needs a map with a resolution "
                                     "and an origin (a ROS map_server .yaml)")
-            cell = frame.cell_of(world, grid.blocked.shape, f"the {name}")
+            cell = frame.cell_of(_world_point(name, world), grid.blocked.shape,
+                                 f"the {name}")
+        h, w = grid.blocked.shape
         ends.append(getattr(grid, f"{name}_xy") if cell is None
-                    else tuple(int(v) for v in cell))
+                    else check_xy(name, cell, w, h))
     return ends[0], ends[1]
+
+
+def _world_point(name: str, point: Any) -> tuple[float, float]:
+    """``point`` as two finite floats (metres), or a one-line :class:`EndpointError`:
+    strings, bools and NaN are refused, not converted."""
+    try:
+        if isinstance(point, (str, bytes)):
+            raise TypeError
+        x, y = tuple(point)
+        if any(isinstance(v, (bool, np.bool_, str, bytes)) for v in (x, y)):
+            raise TypeError
+        x, y = float(x), float(y)
+    except (TypeError, ValueError):
+        raise EndpointError(f"the {name} in metres must be a pair of numbers (x, y), got "
+                            f"{point!r}") from None
+    if not (math.isfinite(x) and math.isfinite(y)):
+        raise EndpointError(f"the {name} in metres must be finite, got ({x}, {y})")
+    return x, y

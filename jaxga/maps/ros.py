@@ -108,6 +108,14 @@ def _short(value: Any) -> str:
     return _SHORT.repr(value)
 
 
+MAX_RESOLUTION = 1e6
+"""The most metres a map cell may span, and :data:`MAX_ORIGIN` the farthest an origin may
+lie (metres): far beyond any robot's map, and small enough that every coordinate of a
+map of :data:`jaxga.core.grid.MAX_MAP_CELLS` cells, and every length on it, is a finite
+number (a resolution of 1e308 made path lengths and written points inf and NaN)."""
+MAX_ORIGIN = 1e12
+
+
 def _number(value: Any, key: str, label: str) -> float:
     """A finite number; YAML 1.1 reads ``5e-2`` (no dot) as a string, ROS's map_server
     (yaml-cpp) as a number: such strings are read as numbers too."""
@@ -116,10 +124,15 @@ def _number(value: Any, key: str, label: str) -> float:
             value = float(value)
         except ValueError:
             pass
-    if isinstance(value, bool) or not isinstance(value, (int, float)) or not math.isfinite(
-            value):
+    if isinstance(value, int) and not isinstance(value, bool):
+        try:
+            value = float(value)
+        except OverflowError:  # an integer of hundreds of digits
+            raise MapFormatError(f"{label}: {key} must be a finite number, got an integer "
+                                 f"of {value.bit_length()} bits") from None
+    if isinstance(value, bool) or not isinstance(value, float) or not math.isfinite(value):
         raise MapFormatError(f"{label}: {key} must be a finite number, got {_short(value)}")
-    return float(value)
+    return value
 
 
 def read_ros_yaml(path: str | Path, label: str | None = None, *,
@@ -143,7 +156,8 @@ def read_ros_yaml(path: str | Path, label: str | None = None, *,
         data = yaml.safe_load(data.decode("utf-8"))
     except FileNotFoundError:
         raise MapFormatError(f"{label}: no such file") from None
-    except (OSError, UnicodeDecodeError, yaml.YAMLError) as e:
+    except (OSError, UnicodeDecodeError, yaml.YAMLError, ValueError) as e:
+        # ValueError: an integer past Python's digit limit for str -> int (4300 digits)
         first = str(e).splitlines()[0] if str(e) else type(e).__name__
         raise MapFormatError(f"{label}: not a readable YAML file ({first})") from None
     if not isinstance(data, dict):
@@ -151,15 +165,19 @@ def read_ros_yaml(path: str | Path, label: str | None = None, *,
     for key in ("image", "resolution", "origin"):
         if key not in data:
             raise MapFormatError(f"{label}: the map_server key {key!r} is missing")
-    if not isinstance(data["image"], str) or not data["image"]:
+    if not isinstance(data["image"], str) or not data["image"] or "\0" in data["image"]:
         raise MapFormatError(f"{label}: image must be a file name, got {_short(data['image'])}")
     resolution = _number(data["resolution"], "resolution", label)
-    if resolution <= 0:
-        raise MapFormatError(f"{label}: resolution must be > 0 metres per cell, got {resolution}")
+    if not 0 < resolution <= MAX_RESOLUTION:
+        raise MapFormatError(f"{label}: resolution must be > 0 and at most "
+                             f"{MAX_RESOLUTION:g} metres per cell, got {resolution}")
     origin = data["origin"]
     if not isinstance(origin, (list, tuple)) or len(origin) != 3:
         raise MapFormatError(f"{label}: origin must be [x, y, yaw], got {_short(origin)}")
     origin = tuple(_number(v, "origin", label) for v in origin)
+    if max(abs(origin[0]), abs(origin[1])) > MAX_ORIGIN:
+        raise MapFormatError(f"{label}: origin must lie within {MAX_ORIGIN:g} metres of 0, "
+                             f"got {_short(list(origin[:2]))}")
     negate = data.get("negate", 0)
     if negate not in (0, 1) or isinstance(negate, float):
         raise MapFormatError(f"{label}: negate must be 0 or 1, got {_short(negate)}")

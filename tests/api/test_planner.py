@@ -82,7 +82,18 @@ def test_the_planner_refuses_endpoints_in_one_line(office):
             (lambda: planner.plan((1, 1), (5, 10)), "blocked"),
             (lambda: planner.plan((1, 1)), "give the goal once"),
             (lambda: planner.plan((1, 1), (2, 2), goal_world=(0.0, 0.0)), "give the goal once"),
-            (lambda: planner.plan(start_world=(5.0, 0.0), goal_world=(0.0, 0.0)), "off the map")):
+            (lambda: planner.plan(start_world=(5.0, 0.0), goal_world=(0.0, 0.0)), "off the map"),
+            # cells are integers on the map: not truncated, not read from bools or text
+            (lambda: planner.plan((-0.9, 0), (2, 2)), "must be a pair of integers"),
+            (lambda: planner.plan((1.5, 1), (2, 2)), "must be a pair of integers"),
+            (lambda: planner.plan((True, False), (2, 2)), "must be a pair of integers"),
+            (lambda: planner.plan(("1", "1"), (2, 2)), "must be a pair of integers"),
+            (lambda: planner.plan((math.nan, 1), (2, 2)), "must be a pair of integers"),
+            (lambda: planner.plan((1, 1), (20, 2)), "off the 20 x 20 map"),
+            (lambda: planner.plan(start_world=("0.1", "0.1"), goal_world=(0.0, 0.0)),
+             "must be a pair of numbers"),
+            (lambda: planner.plan(start_world=(math.nan, 0.1), goal_world=(0.0, 0.0)),
+             "must be finite")):
         with pytest.raises(EndpointError, match=words) as e:
             call()
         assert "\n" not in str(e.value)

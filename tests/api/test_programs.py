@@ -557,3 +557,23 @@ def test_the_pure_core_warns_off_the_cpu(monkeypatch):
     monkeypatch.setattr(jax, "default_backend", lambda: "gpu")
     with pytest.warns(PlatformWarning, match="on the gpu"):
         api.GA("sga", "classic_ga_gapp3_20x20", generations=2)
+
+
+@pytest.mark.skipif(not hasattr(os, "mkfifo"), reason="needs FIFOs")
+def test_a_lock_file_that_is_not_a_regular_file_does_not_block_the_compile(tmp_path,
+                                                                            monkeypatch):
+    """A FIFO in a lock file's place (a damaged or hostile cache) would block opening it
+    for good: the compile goes on without the lock instead."""
+    monkeypatch.setattr(executables, "directory", lambda: tmp_path)
+    (tmp_path / "locks").mkdir()
+    os.mkfifo(tmp_path / "locks" / "k.lock")
+    entered = threading.Event()
+
+    def hold():
+        with executables._compiling("k"):
+            entered.set()
+
+    worker = threading.Thread(target=hold, daemon=True)
+    worker.start()
+    assert entered.wait(10), "the lock's open blocked on the FIFO"
+    worker.join(10)

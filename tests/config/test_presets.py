@@ -339,6 +339,9 @@ def test_user_file_errors_name_file_and_key(tmp_path):
     with pytest.raises(ParameterError, match=r"broken\.toml.*malformed TOML") as info:
         load_preset(broken)
     assert "\n" not in str(info.value)
+    huge = _write(tmp_path / "huge.toml", 'base = "imga"\ngenerations = ' + "9" * 5000 + "\n")
+    with pytest.raises(ParameterError, match=r"huge\.toml.*malformed TOML.*4300 digits"):
+        load_preset(huge)  # Python's limit on int(str): a ValueError TOML does not wrap
     incomplete = _write(tmp_path / "incomplete.toml", "generations = 5\n")
     with pytest.raises(ParameterError, match=r"incomplete\.toml.*missing"):
         load_preset(incomplete)

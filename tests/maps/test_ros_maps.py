@@ -115,6 +115,17 @@ def test_world_coordinates_name_the_cell_that_holds_the_point(office):
      "mode must be one of trinary, scale, raw"),
     ("image: missing.pgm\nresolution: 0.05\norigin: [0, 0, 0]\n", "does not exist"),
     ("image: [office.pgm\n", "not a readable YAML file"),
+    # numbers no map has: inf and NaN lengths and points otherwise, or a traceback
+    ("image: office.pgm\nresolution: 1.0e+308\norigin: [0, 0, 0]\n",
+     "resolution must be > 0 and at most 1e+06"),
+    ("image: office.pgm\nresolution: 0.05\norigin: [1.0e+200, 0, 0]\n",
+     "origin must lie within 1e+12 metres"),
+    ("image: office.pgm\nresolution: 1" + "0" * 400 + "\norigin: [0, 0, 0]\n",
+     "resolution must be a finite number, got an integer of 1329 bits"),
+    ("image: office.pgm\nresolution: 0.05\norigin: [" + "9" * 5000 + ", 0, 0]\n",
+     "not a readable YAML file (Exceeds the limit"),
+    ('image: "office\\0.pgm"\nresolution: 0.05\norigin: [0, 0, 0]\n',
+     "image must be a file name"),
 ])
 def test_malformed_ros_maps_give_one_line(office, yaml_text, message):
     bad = office.with_name("bad.yaml")

@@ -313,6 +313,58 @@ def test_output_paths_are_checked_before_the_run(tmp_path, capsys, monkeypatch, 
     assert not (tmp_path / name).exists()
 
 
+def test_an_output_inside_jaxgas_own_folder_is_refused(capsys, monkeypatch):
+    """``--json`` onto a built-in map's own file (or anywhere in the package) would
+    destroy the map every later run reads: refused before the run, the file unchanged."""
+    import jaxga.api
+    from jaxga.maps.builtin import builtin_path
+
+    monkeypatch.setattr(jaxga.api, "run", lambda *a, **k: pytest.fail("the run started"))
+    data = builtin_path("classic_ga_gapp3_20x20")
+    before = data.read_bytes()
+    rc = main(["run", "--preset", "sga", "--map", "classic_ga_gapp3_20x20", "--seeds", "2",
+               "--quiet", "--json", str(data)])
+    err = capsys.readouterr().err.strip()
+    assert rc == EXIT_BAD_INPUT and "inside jaxga's own folder" in err and "\n" not in err
+    assert data.read_bytes() == before
+
+
+@pytest.mark.skipif(not __import__("os").path.exists("/dev/full"), reason="needs /dev/full")
+def test_a_plot_onto_a_device_is_refused_not_renamed(capsys):
+    """``--plot /dev/full`` (no extension) is checked as given, not as a new file
+    ``/dev/full.png`` beside the device."""
+    rc = main(["run", "--preset", "sga", "--map", "classic_ga_gapp3_20x20", "--quiet",
+               "--plot", "/dev/full"])
+    assert rc == EXIT_BAD_INPUT and "not a regular file" in capsys.readouterr().err
+    assert not __import__("os").path.exists("/dev/full.png")
+
+
+def test_no_path_leaves_an_empty_path_file_not_the_last_one(tmp_path, capsys):
+    """Where there is no path, ``--path-out`` holds an empty path (a CSV header alone, a
+    YAML without poses) instead of the path an earlier request wrote there, which a
+    robot would follow; the output says so and the exit status is 3."""
+    import yaml
+
+    import jaxga.export
+
+    (tmp_path / "w.pgm").write_bytes(b"P5\n4 4\n255\n" + bytes([254, 254, 0, 254] * 4))
+    (tmp_path / "w.yaml").write_text("image: w.pgm\nresolution: 0.1\n"
+                                     "origin: [0.0, 0.0, 0.0]\n")
+    for name in ("old.csv", "old.yaml"):
+        out = tmp_path / name
+        jaxga.export.write_path(out, np.array([[0.05, 0.05], [0.35, 0.35]]))
+        rc = main(["run", "--preset", "sga", "--seeds", "2", "--generations", "2", "--quiet",
+                   "--map", str(tmp_path / "w.yaml"), "--start-world", "0.05,0.05",
+                   "--goal-world", "0.35,0.35", "--path-out", str(out)])
+        captured = capsys.readouterr()
+        assert rc == EXIT_NO_PATH and "jaxga: no path:" in captured.err
+        assert f"wrote {out} (an empty path: no path)" in captured.out
+        if name.endswith(".csv"):
+            assert out.read_text() == "x,y\n"
+        else:
+            assert yaml.safe_load(out.read_text())["poses"] == []
+
+
 def test_a_plot_without_extension_is_written_as_png_and_reported_so(tmp_path):
     args = argparse.Namespace(plot=str(tmp_path / "figure"), json=None)
     check_outputs(args)
@@ -1075,3 +1127,22 @@ def test_a_front_point_chosen_by_an_objective_the_front_lacks_is_refused_first(t
         assert f"chosen by its {need}, which the front does not minimise" in err, err
         assert str(objectives) in err
         assert time.perf_counter() - t0 < 10.0 and not csv.exists()
+
+
+def test_more_cpu_devices_than_four_per_core_are_refused(capsys):
+    """``--devices 1000`` made a CPU run that never finished (64 took two minutes where
+    one device took four seconds): refused in one line naming the bound."""
+    from jaxga._runtime.parallel import max_cpu_devices
+
+    rc = main(["run", "--preset", "sga", "--map", "classic_ga_gapp3_20x20", "--quiet",
+               "--devices", str(max_cpu_devices() + 1)])
+    err = capsys.readouterr().err.strip()
+    assert rc == EXIT_BAD_INPUT and f"at most {max_cpu_devices()}" in err and "\n" not in err
+
+
+@pytest.mark.slow  # a process of its own
+def test_python_dash_m_jaxga_is_the_command():
+    """``python -m jaxga`` runs the ``jaxga`` command, as ``python -m jaxga.cli`` does."""
+    proc = subprocess.run([sys.executable, "-m", "jaxga", "--help"], capture_output=True,
+                          text=True, timeout=120)
+    assert proc.returncode == 0 and proc.stdout.startswith("usage: jaxga")

@@ -568,6 +568,25 @@ def test_cli_refuses_checkpoint_of_another_configuration(tmp_path, capsys):
     assert "different configuration" in err and "\n" not in err
 
 
+@pytest.mark.parametrize("damage", ["list", "null", "fifo"])
+def test_a_manifest_that_is_not_a_json_object_or_not_a_file_is_one_line(tmp_path, capsys,
+                                                                        damage):
+    """A manifest holding JSON of another kind, or a FIFO in its place (whose read would
+    block for good), is refused in one line before anything runs."""
+    ckpt = tmp_path / "ckpt"
+    ckpt.mkdir()
+    manifest = ckpt / "manifest.json"
+    if damage == "fifo":
+        if not hasattr(os, "mkfifo"):
+            pytest.skip("needs FIFOs")
+        os.mkfifo(manifest)
+    else:
+        manifest.write_text(damage if damage == "null" else "[1, 2]")
+    assert main(CLI_ARGS + ["--checkpoint", str(ckpt)]) == EXIT_BAD_INPUT
+    err = capsys.readouterr().err.strip()
+    assert "manifest" in err and "\n" not in err and "Traceback" not in err
+
+
 @pytest.mark.slow
 def test_killed_checkpointed_doe_resumes_to_the_same_result(blocked, tmp_path):
     """Kill a checkpointed ``jaxga doe`` subprocess midway, rerun
