@@ -137,6 +137,8 @@ _CACHE: dict[bytes, AnyAngleBounds] = {}
 _CACHE_SIZE = 32
 
 
+MEMORY_NOTE = "any-angle optimum not computed (its search ran out of memory: try --coarsen)"
+"""The note of an any-angle search that ran out of memory."""
 SKIPPED_NOTE = "any-angle optimum not computed (skipped: budget 0)"
 """The note of references skipped on purpose (a budget of 0: ``--no-reference``)."""
 
@@ -181,13 +183,19 @@ def _references(grid: Grid, octile: ReferencePath, budget_s: float | None,
     def left() -> float | None:
         return None if budget_s is None else max(budget_s - (time.perf_counter() - t0), 0.0)
 
-    bound = euclidean_lower_bound_np(b, start, goal, rule, upper=octile.length,
-                                     budget_s=left())
-    lower = bound.length if bound.found else math.nan
+    try:
+        bound = euclidean_lower_bound_np(b, start, goal, rule, upper=octile.length,
+                                         budget_s=left())
+        lower = bound.length if bound.found else math.nan
+    except MemoryError:  # a reference is a measure, not the plan: say so and go on
+        lower = math.nan
     if progress is not None and budget_s:
         progress(min((time.perf_counter() - t0) / budget_s, 1.0))
-    exact = any_angle_shortest_path_np(b, start, goal, rule, budget_s=left(),
-                                       known_path=known_path)
+    try:
+        exact = any_angle_shortest_path_np(b, start, goal, rule, budget_s=left(),
+                                           known_path=known_path)
+    except MemoryError:
+        return AnyAngleBounds(math.nan, lower, MEMORY_NOTE, budget_s)  # not cached
     if exact.found:
         out = AnyAngleBounds(exact.length, lower, "", budget_s, np.asarray(exact.path))
     else:

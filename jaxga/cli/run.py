@@ -19,7 +19,7 @@ from jaxga._runtime import parallel
 from jaxga._runtime.fields import front_obstacles
 from jaxga._runtime.parallel import add_parallel_arguments
 from jaxga._runtime.timeline import Timeline, process_age, time_line
-from jaxga.api.result import check_front_point
+from jaxga.api.result import check_front_point, json_number
 from jaxga.cli.options import (
     EXACT_HELP,
     EXIT_NO_PATH,
@@ -285,17 +285,23 @@ def curve_json(curve: dict | None, frame) -> dict | None:
     """A smooth curve's JSON, with its points, length and clearance in metres too."""
     if curve is None or frame is None or not frame.has_metres:
         return curve
+    obstacles = curve.get("obstacle_clearance")
     return {**curve,
             "points_world": frame.to_world(np.asarray(curve["points"], float)).round(4).tolist(),
             "length_m": curve["length"] * frame.cell_size,
-            "min_clearance_m": curve["min_clearance"] * frame.cell_size}
+            # as a path's min_clearance_m: to the map's own obstacles, before inflation
+            "min_clearance_m": (json_number(obstacles * frame.resolution)
+                                if obstacles is not None else None)}
 
 
 def smooth_runs(result, grid) -> list[dict | None]:
     """``jaxga run --smooth``: every successful seed's post-optimised path smoothed into
     a certified-clear cubic B-spline (:func:`jaxga.smooth.smooth_population`, one
     vectorised call), as JSON-ready dicts (None for a seed without a path): the dense
-    ``points`` ``[[x, y], ...]``, ``length``, ``max_curvature``, ``min_clearance`` (cells),
+    ``points`` ``[[x, y], ...]``, ``length``, ``max_curvature``, ``min_clearance`` (planning
+    cells, to the grid planned on: inflated by the robot), ``obstacle_clearance`` (map
+    cells, to the map's own obstacles before inflation, as a path's
+    :meth:`~jaxga.api.result.Result.obstacle_clearance`; None without a loaded map),
     ``clear`` and ``used_fallback`` (the polyline returned where no clear curve was
     found)."""
     ok = np.flatnonzero(result.success)
@@ -313,6 +319,10 @@ def smooth_runs(result, grid) -> list[dict | None]:
             "min_clearance": float(res.min_clearance[k]), "clear": bool(res.clear[k]),
             "used_fallback": bool(res.used_fallback[k]),
         }
+        f = result.frame
+        out[int(i)]["obstacle_clearance"] = (
+            None if f is None or f.clearance is None
+            else f.clearance.of_path(np.asarray(res.points[k], np.float64)))
     return out
 
 
@@ -329,10 +339,14 @@ def smooth_summary(result, curves: list[dict | None]) -> str:
         curvature = max(c["max_curvature"] for c in curved)
         clearance = min(c["min_clearance"] for c in curved)
         size = None if result.frame is None else result.frame.cell_size
-        if size:  # a map with a resolution: metres
+        if size:  # a map with a resolution: metres, to the map's own obstacles like a path's
+            obstacles = [c["obstacle_clearance"] for c in curved
+                         if c.get("obstacle_clearance") is not None]
+            own = (f"{min(obstacles) * result.frame.resolution:.3f} m from the map's "
+                   "obstacles" if obstacles else f"{clearance * size:.3f} m")
             line += (f" (mean length {length * size:.3f} m, {100 * (ratio - 1):+.2f} % against "
                      f"the polylines; max curvature {curvature / size:.3f} 1/m, min clearance "
-                     f"{clearance * size:.3f} m)")
+                     f"{own})")
         else:
             line += (f" (mean length {length:.4f}, {100 * (ratio - 1):+.2f} % against the "
                      f"polylines; max curvature {curvature:.3f}, min clearance "

@@ -57,6 +57,7 @@ from jaxga.reference.optima import (
     concat_ranges,
     endpoint_problem,
     missing_path,
+    span_chunks,
     unreachable_message,
 )
 
@@ -174,6 +175,10 @@ def segments_free_np(
     p = np.asarray(p, np.int64).reshape(-1, 2)
     q = np.asarray(q, np.int64).reshape(-1, 2)
     p, q = np.broadcast_arrays(p, q)
+    span = np.abs(q - p).max(axis=1) // 2 + 2  # unit columns a segment spans, at most
+    chunks = span_chunks(span if ends <= 0 else np.minimum(span, 2 * ends + 2))
+    if len(chunks) > 1:  # bounded memory: the segments in batches (SPAN_CHUNK)
+        return np.concatenate([segments_free_np(space, p[c], q[c], ends) for c in chunks])
     n = p.shape[0]
     out = np.ones(n, bool)
     if n == 0:

@@ -470,6 +470,27 @@ def line_walk(a_xy: XY, b_xy: XY) -> Iterator[tuple[XY, tuple[XY, XY] | None]]:
         yield (x, y), sides
 
 
+SPAN_CHUNK = 1 << 21
+"""The most unit steps (summed over segments) one flat NumPy pass of the segment tests
+(:func:`clear_pairs_np`, :func:`jaxga.reference.lower_bound.segments_free_np`) handles
+at once: each step takes about a dozen 8-byte temporaries, so a pass stays near 200 MB
+(on a 500 x 500 map a single pass asked for tens of GB and the process was killed)."""
+
+
+def span_chunks(spans: np.ndarray, cap: int | None = None) -> list[slice]:
+    """Consecutive slices of items whose ``spans`` sum to at most ``cap`` (default
+    :data:`SPAN_CHUNK`) each, an item over ``cap`` alone in its slice: the batches of a
+    segment test that bound its memory. One slice when everything fits."""
+    cap = SPAN_CHUNK if cap is None else cap
+    ends = np.cumsum(np.asarray(spans, np.int64))
+    out, start, before = [], 0, 0
+    while start < ends.size:
+        stop = max(int(np.searchsorted(ends, before + cap, side="right")), start + 1)
+        out.append(slice(start, stop))
+        before, start = int(ends[stop - 1]), stop
+    return out
+
+
 def concat_ranges(counts: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     """Row ids and within-row offsets ``0..counts[r]-1`` for every row, flattened."""
     counts = np.asarray(counts, dtype=np.int64)
@@ -503,6 +524,9 @@ def clear_pairs_np(
     a = np.asarray(a_xy, dtype=np.int64).reshape(-1, 2)
     t = np.asarray(b_xy, dtype=np.int64).reshape(-1, 2)
     a, t = np.broadcast_arrays(a, t)
+    chunks = span_chunks(np.abs(t - a).max(axis=1) + 1)
+    if len(chunks) > 1:  # bounded memory: the pairs in batches (module constant)
+        return np.concatenate([clear_pairs_np(bl, corner_rule, a[c], t[c]) for c in chunks])
     n = t.shape[0]
     out = np.zeros(n, bool)
     if n == 0:

@@ -50,6 +50,28 @@ def test_no_budget_gives_the_exact_optimum_and_a_tiny_budget_only_the_bound(monk
     assert again is full
 
 
+def test_a_search_out_of_memory_is_a_note_not_a_crash(monkeypatch):
+    """A reference search that runs out of memory (a large map without a budget) gives
+    the note that says so, the run and the other reference going on; not cached, so a
+    later call may compute it."""
+    grid = _grid()
+    octile = references.octile_optimum(grid)
+
+    def out_of_memory(*_a, **_k):
+        raise MemoryError("Unable to allocate 1.80 GiB")
+
+    references._CACHE.clear()
+    with monkeypatch.context() as m:
+        m.setattr(references, "any_angle_shortest_path_np", out_of_memory)
+        short = references.any_angle_references(grid, octile, None)
+    assert short.note == references.MEMORY_NOTE and math.isnan(short.optimum)
+    assert math.isfinite(short.lower_bound)  # the bound's search had memory enough
+    with monkeypatch.context() as m:
+        m.setattr(references, "euclidean_lower_bound_np", out_of_memory)
+        full = references.any_angle_references(grid, octile, None)
+    assert full.note == "" and math.isfinite(full.optimum) and math.isnan(full.lower_bound)
+
+
 def test_a_result_measures_its_gap_against_what_was_computed():
     """gap_reference: the exact optimum, else the lower bound (the gap then bounds the true
     gap from above), else the straight line; the summary and JSON say which."""

@@ -339,3 +339,28 @@ def test_budget() -> None:
     timed = euclidean_lower_bound_np(small, (0, 1), (39, 33), "strict", budget_s=60.0)
     assert timed.found
     assert timed.length == euclidean_lower_bound_np(small, (0, 1), (39, 33), "strict").length
+
+
+@pytest.mark.parametrize("rule", CORNER_RULES)
+def test_segment_tests_in_memory_bounded_batches_give_the_same_answers(rule, monkeypatch):
+    """The segment tests split a call whose segments span more unit steps than
+    ``SPAN_CHUNK`` into batches (a 500 x 500 map in one pass asked for tens of GB): with
+    a tiny chunk, every answer is the one-pass answer."""
+    import jaxga.reference.optima as optima
+    from jaxga.reference.optima import clear_pairs_np, span_chunks
+
+    rng = np.random.default_rng(3)
+    blocked = rng.random((24, 30)) < 0.2
+    a = rng.integers(0, [30, 24], size=(400, 2))
+    b = rng.integers(0, [30, 24], size=(400, 2))
+    space = free_space(blocked, rule)
+    p, q = 2 * a + 1, 2 * b + 1  # doubled coordinates: cell centres
+    whole = (clear_pairs_np(blocked, rule, a, b), segments_free_np(space, p, q),
+             segments_free_np(space, p, q, ends=3))
+    monkeypatch.setattr(optima, "SPAN_CHUNK", 37)
+    assert len(span_chunks(np.abs(b - a).max(axis=1) + 1)) > 100
+    batched = (clear_pairs_np(blocked, rule, a, b), segments_free_np(space, p, q),
+               segments_free_np(space, p, q, ends=3))
+    for one, many in zip(whole, batched):
+        np.testing.assert_array_equal(one, many)
+    assert 0 < whole[0].sum() < whole[0].size  # both answers occur

@@ -793,15 +793,23 @@ def test_a_ros_map_is_planned_on_in_world_coordinates_with_inflation(tmp_path, c
     assert f"({doc['length'] * 0.25:.3f} m)" in capsys.readouterr().out
     out = tmp_path / "run.json"
     rc = main(["run", "--preset", "sga", *where, "--seeds", "3", "--generations", "3",
-               "--set", "population.size=8", "--quiet", "--json", str(out)])
+               "--set", "population.size=8", "--quiet", "--json", str(out), "--smooth"])
     captured = capsys.readouterr()
     assert rc == 0, captured.err
     doc = json.loads(out.read_text())
     assert doc["resolution"] == 0.25 and doc["start"] == [0, 0] and doc["goal"] == [6, 5]
     assert "0.25 m per planning cell" in captured.out
+    assert "m from the map's obstacles" in captured.out  # --smooth's clearance, like a path's
     assert any(r["success"] for r in doc["runs"])
+    centres = np.argwhere(blocked)[:, ::-1]  # (x, y) of the map's own obstacle cells
     for r in (r for r in doc["runs"] if r["success"]):
         assert not any(grown[y, x] for x, y in r["raw_path"])
+        # the curve's clearance is to the map's own obstacles (before inflation), as the
+        # path's: at least its distance to the inflated grid, at most to a cell centre
+        curve, smooth = np.asarray(r["smooth"]["points"]), r["smooth"]
+        to_centres = np.hypot(*(curve[:, None, :] - centres[None]).transpose(2, 0, 1)).min()
+        assert smooth["min_clearance"] * 0.25 - 1e-9 <= smooth["min_clearance_m"]
+        assert smooth["min_clearance_m"] <= to_centres * 0.25 + 1e-9
 
 
 def test_presets_show_prints_every_setting_with_its_source(capsys):
