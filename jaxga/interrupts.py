@@ -31,9 +31,13 @@ from pathlib import Path
 __all__ = ["EXIT_CODES", "install", "install_in_console_script", "stop"]
 
 EXIT_CODES: dict[int, int] = {signal.SIGINT: 130, signal.SIGTERM: 143}
-"""The exit status for each handled signal: 128 + its number, as a shell reports it."""
+"""The exit status for each handled signal: 128 + its number, as a shell reports it
+(SIGHUP too where it exists: a closed terminal or a stopped session)."""
 
 _WORDS = {signal.SIGINT: "interrupted", signal.SIGTERM: "terminated"}
+if hasattr(signal, "SIGHUP"):  # not on Windows
+    EXIT_CODES[signal.SIGHUP] = 129
+    _WORDS[signal.SIGHUP] = "hung up"
 _ONCE = threading.Lock()
 _WAKEUP: list[socket.socket] = []  # the socket pair of install(), kept open with the process
 _CLEANUP: list[Callable[[], None]] = []
@@ -77,7 +81,7 @@ def _watch(reader: socket.socket) -> None:
 
 
 def install(cleanup: Callable[[], None] | None = None) -> None:
-    """Make SIGINT and SIGTERM end the process promptly (:func:`stop`), even while the
+    """Make SIGINT, SIGTERM and SIGHUP end the process promptly (:func:`stop`), even while the
     main thread is inside a long native call; ``cleanup`` (if given) runs first on such an
     exit. Installs once (a later call only sets ``cleanup``); from the main thread only."""
     if cleanup is not None:

@@ -205,8 +205,25 @@ def load_problem(preset, grid, corner_rule, variant, sets, overrides, generation
         if check_endpoints:
             grid.check_endpoints()
     except EndpointError as e:
-        raise EndpointError(f"{e}{_on_the_map(frame, grid)}") from None
+        layers = None if info is None else info.layers
+        raise EndpointError(f"{e}{_on_the_map(frame, grid)}{_unknown_hint(layers, grid)}") \
+            from None
     return Problem(config, grid, map_name, frame, info)
+
+
+def _unknown_hint(layers: Any, grid: Grid) -> str:
+    """Why a blocked endpoint on one of a ROS map's unknown cells is blocked, and the way
+    out; "" elsewhere."""
+    if layers is None or not layers.unknown_blocked:
+        return ""
+    for xy in (grid.start_xy, grid.goal_xy):  # the first blocked one, as check_endpoints
+        if grid.blocked_np()[xy[1], xy[0]]:
+            if layers.unknown.shape == grid.blocked.shape and layers.unknown[xy[1], xy[0]]:
+                return ("; the cell is unknown in the map (neither free nor occupied) and "
+                        "unknown cells are blocked: --unknown free (unknown='free') plans "
+                        "through them")
+            return ""
+    return ""
 
 
 def _on_the_map(frame: MapFrame | None, grid: Grid) -> str:

@@ -241,6 +241,9 @@ def _sweep(problem: Problem, points: Sequence[Mapping[str, Any]], seeds: Any,
         return unstarted_results(plan, start, {"compile_s": 0.0, "init_s": 0.0,
                                                 "evolve_s": 0.0, "post_s": 0.0,
                                                 **timeline.as_dict()})
+    # the stage is "compile" again while evolve and finish compile (the progress line
+    # said "init" until the evolve program was done): the tracing and init are done
+    report("compile", 2 / (1 + len(Programs.NAMES)))
     with timeline.phase("compile"):
         progs.compile_rest(lambda frac: report("compile", frac))
     check_compiled_memory(progs.memory_stats(), len(groups[0].calls), runs.n_local)

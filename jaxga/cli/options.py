@@ -13,6 +13,7 @@ import numpy as np
 
 from jaxga import export
 from jaxga._runtime import parallel
+from jaxga._runtime.size_classes import CLASS_SIDES
 from jaxga.api import configured_rule
 from jaxga.api.problem import Problem, problem
 from jaxga.config.presets import load_preset
@@ -354,8 +355,9 @@ def parse_int_list(text: str) -> list[int]:
         raise JaxgaError(f"expected integers separated by commas, got {text!r}") from None
 
 
-SIZE_CLASS_HELP = ("pad the map with blocked cells to its size class (each side 32, 64, 128, "
-                   "256, 384 or 512 cells) so that maps of one class share compiled "
+SIZE_CLASS_HELP = ("pad the map with blocked cells to its size class (each side "
+                   f"{', '.join(map(str, CLASS_SIDES[:-1]))} or {CLASS_SIDES[-1]} cells) so "
+                   "that maps of one class share compiled "
                    "programs; default: on for maps with a side over 64, off for smaller ones "
                    "(the papers' maps keep their shapes); results are the map's (decision "
                    "030)")

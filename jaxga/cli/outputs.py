@@ -85,6 +85,9 @@ def check_outputs(args: argparse.Namespace) -> None:
     inputs = input_files(args)
     package = Path(__file__).resolve().parents[1]
     for option, path in outputs.items():
+        if path and str(path).endswith(("/", os.sep)):  # POSIX: a folder's name
+            raise JaxgaError(f"cannot write {option} {path}: a name ending in '/' names a "
+                             "folder, not a file")
         if path and (_inside(path, package) or Path(path).resolve() == package):
             raise JaxgaError(f"cannot write {option} {path}: it is inside jaxga's own "
                              f"folder {package} (its code, built-in maps and presets)")

@@ -297,4 +297,6 @@ def add_parser(commands: argparse._SubParsersAction) -> None:
     p.add_argument("--json", metavar="OUT", help="write the result as JSON")
     p.add_argument("--plot", metavar="OUT.png", help="draw the old path, the new obstacles "
                    "and the re-planned path")
+    p.add_argument("--quiet", action="store_true",
+                   help="accepted as by run: a re-plan shows no progress bar")
     p.set_defaults(func=cmd_replan)

@@ -104,6 +104,12 @@ class Checkpoint:
         except (OSError, ValueError, RecursionError) as e:
             raise ParameterError(f"checkpoint file {path} is unreadable ({e}): delete it "
                                  f"and run again to recompute it") from None
+        stem = path.stem
+        if isinstance(data, dict) and stem.startswith("point-") and "point" in data \
+                and data["point"] != int(stem.removeprefix("point-")):
+            raise ParameterError(f"checkpoint file {path} holds point {data['point']!r}, not "
+                                 f"{int(stem.removeprefix('point-'))}: delete it and run "
+                                 "again to recompute it")
         responses = data.get("responses") if isinstance(data, dict) else None
         ok = (isinstance(responses, dict) and set(responses) == set(RESPONSES)
               and all(isinstance(v, list) and len(v) == n_seeds

@@ -78,9 +78,19 @@ ASCII_FREE = frozenset(".SG")
 ASCII_BLOCKED = frozenset("#@")
 
 _PNG_MAGIC = b"\x89PNG\r\n\x1a\n"
-IMAGE_SUFFIXES = (".png", ".pgm", ".ppm", ".pbm", ".bmp", ".gif", ".jpg", ".jpeg", ".tif",
-                  ".tiff")
+IMAGE_SUFFIXES = (".png", ".pgm", ".ppm", ".pbm", ".pnm", ".bmp", ".gif", ".jpg", ".jpeg",
+                  ".tif", ".tiff", ".webp")
 """Image files read as ``"png"`` maps (thresholded luminance; Pillow reads the others)."""
+
+
+def _is_image(raw: bytes) -> bool:
+    """Whether ``raw`` starts with the signature of an image format Pillow reads (PNG,
+    GIF, BMP, JPEG, TIFF, WebP, Netpbm): none is a text map's first bytes."""
+    return (raw.startswith((_PNG_MAGIC, b"GIF87a", b"GIF89a", b"BM", b"\xff\xd8\xff",
+                            b"II*\x00", b"MM\x00*"))
+            or (raw[:4] == b"RIFF" and raw[8:12] == b"WEBP")
+            or (len(raw) > 2 and raw[:1] == b"P" and raw[1:2] in b"123456"
+                and raw[2:3] in b" \t\r\n#"))
 _ZERO_ONE = frozenset("01")
 _SEPARATORS = frozenset(" \t,")
 
@@ -93,8 +103,8 @@ XY = tuple[int, int]
 def detect_format(path: Source, raw: bytes | None = None) -> str:
     """Guess a map file's format from its content and extension.
 
-    PNG signature or an image extension (:data:`IMAGE_SUFFIXES`: ``.png``, ``.pgm``,
-    ...) -> ``"png"``; ``.yaml``/``.yml`` -> ``"ros"``;
+    An image's signature (PNG, GIF, BMP, JPEG, TIFF, WebP, Netpbm) or an image extension
+    (:data:`IMAGE_SUFFIXES`: ``.png``, ``.pgm``, ...) -> ``"png"``; ``.yaml``/``.yml`` -> ``"ros"``;
     ``.map`` extension or a first
     non-blank line starting with ``type`` -> ``"movingai"``; a first non-blank line
     starting with ``0`` or ``1`` -> ``"01"``; anything else -> ``"ascii"``
@@ -105,7 +115,7 @@ def detect_format(path: Source, raw: bytes | None = None) -> str:
     if raw is None:
         raw = read_map_bytes(p, str(p), coarsen=MAX_READ_COARSEN)
     suffix = p.suffix.lower()
-    if raw.startswith(_PNG_MAGIC) or suffix in IMAGE_SUFFIXES:
+    if _is_image(raw) or suffix in IMAGE_SUFFIXES:
         return "png"
     if suffix in (".yaml", ".yml"):
         return "ros"

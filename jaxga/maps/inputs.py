@@ -354,6 +354,8 @@ def decode_image(raw: bytes, label: str) -> tuple[np.ndarray, int]:
         raise
     except (OSError, UnidentifiedImageError, ValueError, SyntaxError) as e:
         first = str(e).splitlines()[0] if str(e) else type(e).__name__
+        first = re.sub(r"cannot identify image file <_io\.BytesIO object at 0x[0-9a-f]+>",
+                       "not an image format Pillow reads", first)
         raise MapFormatError(f"{label}: unreadable image ({first})") from None
     if pixels.ndim == 2:
         pixels = pixels[..., None]

@@ -222,6 +222,21 @@ def test_png_detected_by_content(tmp_path):
     np.testing.assert_array_equal(load_map(q).blocked_np(), np.eye(3, dtype=bool))
 
 
+@pytest.mark.parametrize("name, fmt", [("m.webp", "WEBP"), ("no_extension", "BMP"),
+                                       ("no_extension", "GIF"), ("m.pnm", "PPM")])
+def test_an_image_is_known_by_its_extension_or_its_signature(tmp_path, name, fmt):
+    """A WebP map, and a BMP or GIF without an extension, load as images (they were read
+    as text maps and refused: "not a text map file")."""
+    from PIL import Image
+
+    blocked = np.eye(5, dtype=bool)
+    pixels = np.where(blocked[::-1], 0, 255).astype(np.uint8)
+    image = Image.fromarray(pixels)
+    image = image.convert("RGB") if fmt == "PPM" else image
+    image.save(tmp_path / name, format=fmt, **({"lossless": True} if fmt == "WEBP" else {}))
+    np.testing.assert_array_equal(load_map(tmp_path / name).blocked_np(), blocked)
+
+
 # -------------------------------------------------------------------------- malformed
 MALFORMED = [
     ("ragged.txt", "0 1 0\n0 1\n", "line 2: row has 2 cells"),

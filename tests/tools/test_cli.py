@@ -313,6 +313,14 @@ def test_output_paths_are_checked_before_the_run(tmp_path, capsys, monkeypatch, 
     assert not (tmp_path / name).exists()
 
 
+def test_an_output_named_like_a_folder_is_refused(tmp_path, capsys):
+    """``--json out.json/`` names a folder (POSIX): refused, not written as out.json."""
+    rc = main(["run", "--preset", "sga", "--map", "classic_ga_gapp3_20x20", "--quiet",
+               "--json", f"{tmp_path}/out.json/"])
+    assert rc == EXIT_BAD_INPUT and "names a folder" in capsys.readouterr().err
+    assert not (tmp_path / "out.json").exists()
+
+
 def test_an_output_inside_jaxgas_own_folder_is_refused(capsys, monkeypatch):
     """``--json`` onto a built-in map's own file (or anywhere in the package) would
     destroy the map every later run reads: refused before the run, the file unchanged."""

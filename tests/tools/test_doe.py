@@ -517,6 +517,16 @@ def test_a_point_file_round_trips_an_overflowing_fitness_and_the_reason(tmp_path
     point.write_text(json.dumps(data))
     with pytest.raises(ParameterError, match="length of seed 0 is 'inf'"):
         ckpt.load_points(1, 2)
+    ckpt.save_point(0, responses)  # a point file that says it holds another point
+    data = json.loads(point.read_text())
+    point.write_text(json.dumps({**data, "point": 7}))
+    with pytest.raises(ParameterError, match="holds point 7, not 0"):
+        ckpt.load_points(1, 2)
+    if hasattr(os, "mkfifo"):  # a FIFO in a point file's place: refused, not read forever
+        point.unlink()
+        os.mkfifo(point)
+        with pytest.raises(ParameterError, match="not a regular file"):
+            ckpt.load_points(1, 2)
 
 
 def test_a_checkpointed_doe_checks_the_memory_of_one_block(blocked, tmp_path, monkeypatch):

@@ -59,7 +59,8 @@ def _wait_for(proc: subprocess.Popen, words: str, timeout: float = 120.0) -> lis
 
 
 @pytest.mark.parametrize("signum, code, word", [(signal.SIGINT, 130, "interrupted"),
-                                                 (signal.SIGTERM, 143, "terminated")])
+                                                 (signal.SIGTERM, 143, "terminated"),
+                                                 (signal.SIGHUP, 129, "hung up")])
 def test_a_signal_during_compilation_ends_the_run_at_once(tmp_path, signum, code, word):
     """Ctrl-C or kill while XLA compiles: exit 130 / 143 within seconds, one line, no core
     dump, the previous results file whole and no temporary file beside it."""
@@ -248,6 +249,7 @@ def test_only_the_console_script_handles_signals():
 
     assert _is_console_script(["/venv/bin/jaxga", "run"], ["python", "/venv/bin/jaxga", "run"])
     assert _is_console_script(["-m"], ["python3", "-m", "jaxga.cli", "run"])
+    assert _is_console_script(["-m"], ["python3", "-m", "jaxga", "run"])
     assert not _is_console_script(["-m"], ["python3", "-m", "ipykernel_launcher", "-f", "x"])
     assert not _is_console_script(["script.py"], ["python", "script.py", "-m"])
     assert not _is_console_script([], [])
