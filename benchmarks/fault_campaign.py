@@ -20,8 +20,9 @@ case declares what it expects; the outcome is classed automatically:
 * ``handled``: exit 0, nothing on stderr but jaxga's one-line warnings and progress, and
   the case's own check of the result passed (an output written and readable, a warning
   said, ...);
-* ``interrupted``: exit 130 / 143 after the signal the case sent, within 10 s, with
-  ``jaxga: interrupted`` / ``jaxga: terminated`` last and no warning or error before it
+* ``interrupted``: exit 130 / 143 / 129 after the signal the case sent (SIGINT, SIGTERM,
+  SIGHUP), within 10 s, with ``jaxga: interrupted`` / ``terminated`` / ``hung up`` last
+  and no warning or error before it
   (progress and status lines are allowed);
 
 and the defects: ``traceback`` (a Python traceback on stderr), ``crash`` (killed by
@@ -320,10 +321,11 @@ def classify(case: Case, out: Outcome, damage: list[str]) -> tuple[str, str]:
     if damage:
         return "damaged file", "; ".join(damage)[:300]
     others = [ln for ln in err if not _jaxga_line(ln)]
-    if out.rc in (130, 143):
+    if out.rc in (130, 143, 129):
         if not out.signalled:
             return "other exit", f"exit {out.rc} without a signal"
-        words = "jaxga: interrupted" if out.rc == 130 else "jaxga: terminated"
+        words = {130: "jaxga: interrupted", 143: "jaxga: terminated",
+                 129: "jaxga: hung up"}[out.rc]
         if not err or err[-1].strip() != words:
             return "multi-line error", f"last line is not {words!r}"
         noisy = [ln for ln in others[:-1] if WARNING_LIKE.search(ln)]
@@ -367,7 +369,7 @@ def classify(case: Case, out: Outcome, damage: list[str]) -> tuple[str, str]:
 def damage_of(case: Case, before: dict, after: dict, cls_hint: int | None) -> list[str]:
     """What changed under the files folder that the case had no right to change."""
     allowed = {str(p) for p in case.outputs}
-    may_write = cls_hint in (0, 130, 143)  # a refusal writes nothing
+    may_write = cls_hint in (0, 130, 143, 129)  # a refusal writes nothing
 
     def permitted(p: str) -> bool:
         if is_temporary(os.path.basename(p)):
@@ -1026,6 +1028,71 @@ def build(t: Path) -> list[Case]:
                               "2", "--generations", "5", "--checkpoint", checkpoint,
                               "--json", previous],
         signal.SIGINT, None, 7.0, outputs=(checkpoint,), note="7 s after start")
+    sig("sighup-during-compile", prev_run, signal.SIGHUP, "progress: compile",
+        note="a closed terminal")
+
+    # --- round three (decision 047) -----------------------------------------------------
+    from PIL import Image
+
+    import jaxga
+
+    wide = np.where(blocked[::-1], 5000, 60000).astype(">u2")
+    grey16 = write("grey16.pgm", b"P5\n%d %d\n65535\n" % (w, h) + wide.tobytes())
+    out16 = f / "grey16.json"
+    add("pgm-16-bit", "round three", run(grey16, *FREE, "--json", out16), "handled",
+        outputs=(out16,), check=all_of(wrote_json(out16), free_path(out16, blocked)),
+        note="was read clipped to 8 bits: every non-black pixel free")
+    Image.fromarray(np.where(blocked[::-1], 0.0, 1.0).astype(np.float32)).save(f / "f.tif")
+    add("tiff-floating-point", "round three", run(f / "f.tif", *FREE))
+    Image.fromarray(np.where(blocked[::-1], 0, 255).astype(np.uint8)).save(f / "m.webp",
+                                                                          lossless=True)
+    add("webp-map", "round three", run(f / "m.webp", *FREE), "handled", check=said("success"))
+    Image.fromarray(np.where(blocked[::-1], 0, 255).astype(np.uint8)).save(f / "bmp-no-ext",
+                                                                          format="BMP")
+    add("bmp-without-extension", "round three", run(f / "bmp-no-ext", *FREE), "handled",
+        check=said("success"))
+    for name, text in (("resolution-1e308", "resolution: 1.0e+308\norigin: [0, 0, 0]\n"),
+                       ("resolution-400-digits",
+                        "resolution: 1" + "0" * 400 + "\norigin: [0, 0, 0]\n"),
+                       ("origin-5000-digits",
+                        "resolution: 0.05\norigin: [" + "9" * 5000 + ", 0, 0]\n"),
+                       ("image-name-nul", "resolution: 0.05\norigin: [0, 0, 0]\n")):
+        image = ('image: "classic\\0.png"\n' if name == "image-name-nul"
+                 else "image: classic.png\n")
+        add(f"ros-{name}", "round three", run(write(f"ros-{name}.yaml", image + text)))
+    digits = "9" * 5000
+    digits_toml = write("digits.toml", f'base = "sga"\ngenerations = {digits}\n')
+    add("preset-5000-digit-integer", "round three",
+        ["run", "--map", CLASSIC, "--preset", digits_toml, "--seeds", "2", "--quiet"])
+    add("set-5000-digit-integer", "round three",
+        run(CLASSIC, "--set", f"crossover.probability={digits}"))
+    builtin_file = Path(jaxga.__file__).parent / "maps" / "data" / f"{CLASSIC}.txt"
+    add("json-onto-the-builtin-map", "round three", run(CLASSIC, "--json", builtin_file),
+        quick=True, note="would destroy the built-in map for every later run")
+    add("plot-onto-dev-full", "round three", run(CLASSIC, "--plot", "/dev/full"),
+        note="was written as a new file /dev/full.png")
+    add("json-trailing-slash", "round three", run(CLASSIC, "--json", f"{f}/slash.json/"))
+    add("devices-1000", "round three", run(CLASSIC, "--devices", "1000"), max_s=15,
+        note="never finished")
+    doe_list = f / "doe-list"
+    write("doe-list/manifest.json", "[1, 2]\n")
+    add("doe-manifest-a-list", "round three",
+        ["doe", "--preset", "sga", "--map", CLASSIC, "--design", "full", "--factor",
+         "crossover.probability=0.6,0.7", "--seeds", "2", "--generations", "5",
+         "--checkpoint", doe_list])
+    unknown_yaml = write("unknown.yaml", "image: unknown.pgm\nresolution: 0.1\n"
+                                         "origin: [0.0, 0.0, 0.0]\n")
+    write("unknown.pgm", b"P5\n4 4\n255\n" + bytes([254, 254, 254, 205] * 4))
+    add("endpoint-on-an-unknown-cell", "round three",
+        run(unknown_yaml, "--start", "0,0", "--goal", "3,3"), note="names --unknown free")
+    stale_path = write("stale-path.csv", "x,y\n0.05,0.05\n0.35,0.35\n")
+    walled_yaml = write("walled.yaml", "image: walled.pgm\nresolution: 0.1\n"
+                                       "origin: [0.0, 0.0, 0.0]\n")
+    write("walled.pgm", b"P5\n4 4\n255\n" + bytes([254, 254, 0, 254] * 4))
+    add("no-path-with-a-stale-path-out", "round three",
+        run(walled_yaml, "--start", "0,0", "--goal", "3,3", "--path-out", stale_path),
+        "no path", outputs=(stale_path,),
+        note="the file holds an empty path afterwards, not the earlier one")
     return cases
 
 
