@@ -312,8 +312,10 @@ def test_hostile_yaml_json_and_preset_chains_are_one_line(tmp_path):
 
 def test_ros_numbers_with_exponents_and_a_far_origin(tmp_path):
     """``resolution: 5e-2`` is a number to ROS (YAML 1.1 reads a string); an origin so far
-    away that the cell overflows puts a world endpoint off the map, in one line."""
-    from jaxga.core.errors import EndpointError
+    away that coordinates overflow is refused in one line naming it (decision 047: it
+    made inf and NaN points where the endpoints were given in cells), and one far but
+    finite puts a world endpoint off the map, in one line."""
+    from jaxga.core.errors import EndpointError, MapFormatError
     from jaxga.maps import load_map_info
 
     (tmp_path / "m.pgm").write_bytes(b"P5\n4 4\n255\n" + bytes([254] * 16))
@@ -321,6 +323,10 @@ def test_ros_numbers_with_exponents_and_a_far_origin(tmp_path):
     assert load_map_info(tmp_path / "m.yaml").frame.cell_size == pytest.approx(0.05)
     (tmp_path / "far.yaml").write_text(
         "image: m.pgm\nresolution: 0.05\norigin: [1.0e+308, 1.0e+308, 0.0]\n")
+    with pytest.raises(MapFormatError, match="origin must lie within 1e[+]12 metres"):
+        load_map_info(tmp_path / "far.yaml", start_world=(0.0, 0.0), goal_world=(0.1, 0.1))
+    (tmp_path / "far.yaml").write_text(
+        "image: m.pgm\nresolution: 0.05\norigin: [1.0e+11, 1.0e+11, 0.0]\n")
     with pytest.raises(EndpointError, match="off the map"):
         load_map_info(tmp_path / "far.yaml", start_world=(0.0, 0.0), goal_world=(0.1, 0.1))
 
