@@ -343,6 +343,9 @@ def classify(case: Case, out: Outcome, damage: list[str]) -> tuple[str, str]:
         if len(others) != 1 or not others[0].startswith(prefixes):
             return "multi-line error", f"{len(others)} lines besides warnings and progress"
         cls = "no path" if out.rc == 3 else "refused"
+        problem = case.check(out) if cls == "no path" and case.check else None
+        if problem:  # what a no-path run leaves (its outputs) is checked too
+            return case.check_fails_as, problem
         if cls == "refused" and case.max_s is not None and out.seconds > case.max_s:
             return "slow", f"refused after {out.seconds:.1f} s (> {case.max_s:.0f} s)"
     elif out.rc == 0:
@@ -369,7 +372,7 @@ def classify(case: Case, out: Outcome, damage: list[str]) -> tuple[str, str]:
 def damage_of(case: Case, before: dict, after: dict, cls_hint: int | None) -> list[str]:
     """What changed under the files folder that the case had no right to change."""
     allowed = {str(p) for p in case.outputs}
-    may_write = cls_hint in (0, 130, 143, 129)  # a refusal writes nothing
+    may_write = cls_hint in (0, 3, 130, 143, 129)  # a refusal writes nothing; no path does
 
     def permitted(p: str) -> bool:
         if is_temporary(os.path.basename(p)):
@@ -447,6 +450,30 @@ def free_path(path: Path, blocked) -> Check:
             return f"{path.name} not written or without a path ({type(e).__name__})"
         bad = [c for c in cells if blocked[c[1], c[0]]]
         return f"the new path crosses blocked cells {bad[:3]}" if bad else None
+    return check
+
+
+def runs_free(path: Path, blocked) -> Check:
+    """``path`` holds a run's JSON whose every successful seed's path crosses only free
+    cells of ``blocked[y, x]``, and at least one seed succeeded."""
+    def check(out: Outcome) -> str | None:
+        try:
+            runs = json.loads(path.read_text())["runs"]
+        except (OSError, ValueError, KeyError) as e:
+            return f"{path.name} not written or without runs ({type(e).__name__})"
+        paths = [r["path"] for r in runs if r.get("success")]
+        bad = [c for p in paths for c in p if blocked[c[1], c[0]]]
+        if not paths:
+            return "no seed found a path"
+        return f"a path crosses blocked cells {bad[:3]}" if bad else None
+    return check
+
+
+def empty_path_file(path: Path) -> Check:
+    """``path`` is a CSV path file holding its header alone (no path)."""
+    def check(out: Outcome) -> str | None:
+        text = path.read_text() if path.exists() else None
+        return None if text == "x,y\n" else f"{path.name} holds {text!r}, not an empty path"
     return check
 
 
@@ -1040,7 +1067,7 @@ def build(t: Path) -> list[Case]:
     grey16 = write("grey16.pgm", b"P5\n%d %d\n65535\n" % (w, h) + wide.tobytes())
     out16 = f / "grey16.json"
     add("pgm-16-bit", "round three", run(grey16, *FREE, "--json", out16), "handled",
-        outputs=(out16,), check=all_of(wrote_json(out16), free_path(out16, blocked)),
+        outputs=(out16,), check=all_of(wrote_json(out16), runs_free(out16, blocked)),
         note="was read clipped to 8 bits: every non-black pixel free")
     Image.fromarray(np.where(blocked[::-1], 0.0, 1.0).astype(np.float32)).save(f / "f.tif")
     add("tiff-floating-point", "round three", run(f / "f.tif", *FREE))
@@ -1091,7 +1118,7 @@ def build(t: Path) -> list[Case]:
     write("walled.pgm", b"P5\n4 4\n255\n" + bytes([254, 254, 0, 254] * 4))
     add("no-path-with-a-stale-path-out", "round three",
         run(walled_yaml, "--start", "0,0", "--goal", "3,3", "--path-out", stale_path),
-        "no path", outputs=(stale_path,),
+        "no path", outputs=(stale_path,), check=empty_path_file(stale_path),
         note="the file holds an empty path afterwards, not the earlier one")
     return cases
 
@@ -1249,7 +1276,7 @@ def main() -> None:
         "shared compilation cache (compiled by `baseline`) except where a case names its "
         "own. refused = exit 2 and one `jaxga: error:` / `jaxga: bad start or goal:` line; "
         "no path = exit 3 and one `jaxga: no path:` line; handled = exit 0, the case's "
-        "check passed (output written, warning said); interrupted = exit 130 / 143 within "
+        "check passed (output written, warning said); interrupted = exit 130 / 143 / 129 within "
         f"{INTERRUPT_S:.0f} s of the signal. A defect is any other class (the script's "
         "docstring defines them); the files under `$T` are compared before and after each "
         "case (inputs and previous outputs unchanged, nothing left behind).\n\n"
