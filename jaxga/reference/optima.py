@@ -164,16 +164,14 @@ def checked_in_chunks(
     that one huge call cannot overrun a time budget. In one call without a budget."""
     p, q = np.broadcast_arrays(np.asarray(p).reshape(-1, 2), np.asarray(q).reshape(-1, 2))
     if deadline is None or deadline.budget_s is None:
+        return check(p, q)  # the checks bound their own memory (span_chunks)
+    chunks = span_chunks(np.max(np.abs(q - p), axis=1) + 1, steps)
+    if len(chunks) <= 1:
         return check(p, q)
-    total = np.cumsum(np.max(np.abs(q - p), axis=1) + 1)
-    if total.size == 0 or total[-1] <= steps:
-        return check(p, q)
-    cuts = np.searchsorted(total, np.arange(steps, total[-1], steps)).tolist() + [p.shape[0]]
-    parts, lo = [], 0
-    for hi in cuts:
+    parts = []
+    for c in chunks:
         deadline.check()
-        parts.append(check(p[lo:hi], q[lo:hi]))
-        lo = hi
+        parts.append(check(p[c], q[c]))
     return np.concatenate(parts)
 
 
