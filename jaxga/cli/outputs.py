@@ -70,9 +70,7 @@ def check_outputs(args: argparse.Namespace) -> None:
     input of the command nor another output; the plot's extension must be an image format
     matplotlib writes (no extension: ``.png`` is added, as matplotlib would, and
     reported)."""
-    pid = getattr(args, "process_id", None)
-    if pid is None:
-        pid = env_int(ENV_PROCESS_ID)
+    pid = _process_id(args)
     if getattr(args, "path_out", None):
         export.path_format(args.path_out)  # .csv or .yaml, refused in one line otherwise
     plot = getattr(args, "plot", None)
@@ -127,10 +125,14 @@ def write_empty_path(args: argparse.Namespace) -> None:
     a ``nav_msgs/Path`` without poses), so that a robot reading the file cannot follow
     the path of an earlier request still there; and says so. Only process 0 writes."""
     out = getattr(args, "path_out", None)
-    pid = getattr(args, "process_id", None)
-    if pid is None:
-        pid = env_int(ENV_PROCESS_ID)
-    if not out or pid not in (None, 0):
+    if not out or _process_id(args) not in (None, 0):
         return
     export.write_path(out, np.zeros((0, 2)))
     print(f"wrote {out} (an empty path: no path)")
+
+
+def _process_id(args: argparse.Namespace) -> int | None:
+    """This process's id in a multi-process command (``--process-id`` or its variable);
+    None for a single process. Only process 0 writes the outputs."""
+    pid = getattr(args, "process_id", None)
+    return env_int(ENV_PROCESS_ID) if pid is None else pid
