@@ -1,7 +1,7 @@
 """One device check: what matters of jaxga's speed and results, on whatever JAX runs on.
 
     PYTHONPATH=. python benchmarks/device_check.py [--small] [--json PATH] [--no-write]
-        [--budget-s S]
+        [--budget-s S] [--skip PHASE,...] [--maps 20x20,...] [--init-block N]
     python benchmarks/device_check.py --from-json PATH   # record a run made elsewhere
 
 Runs on JAX's default backend (a GPU where a CUDA build of JAX finds one, else the CPU)
@@ -27,6 +27,8 @@ persistent cache are off. The phases, in order:
    error is caught: both are recorded as "did not fit". What the time budget
    (``--budget-s``, default 300 s; 240 s with ``--small``) leaves no room for is
    recorded as "skipped (time budget)".
+   Each row also counts the compiled program's while loops and fusions (XLA's kernels,
+   about), what a generation launches whatever the number of runs.
 5. **Peak memory**: ``device.memory_stats()["peak_bytes_in_use"]`` where the backend
    keeps it (GPUs), else the process's peak resident memory (the CPU), named as such.
 
@@ -40,6 +42,12 @@ the RESULTS.md section "device check on ..." that names the device. A GPU machin
 without a way back for files other than its own output folder runs ``--no-write --json
 OUT/device_check.json``; ``--from-json`` then records that file's section here, with
 the machine, commit and date it measured.
+
+For a device lent for minutes: ``--skip main_job,agreement`` leaves phases out (shown as
+skipped), ``--maps 20x20,64x64`` narrows the throughput maps, and ``--init-block N``
+initialises jaxga's runs N at a time on that device instead of the platform's
+``INIT_RUN_BLOCK`` (``jaxga._runtime.programs``), to measure the layout a device that
+agrees with the CPU could use.
 """
 
 from __future__ import annotations
@@ -95,6 +103,10 @@ TITLE = "device check on {device}"
 
 NOT_MEASURED = {"error": "not measured (the run ended before this phase)"}
 """What a partial report (a run cut short) shows for the phases it did not reach."""
+
+PHASES = ("main_job", "agreement", "sweep", "throughput")
+SKIPPED = "not measured (skipped: --skip)"
+MAP_NAMES = ("20x20", "64x64", "256x256")
 
 
 class _Parser(argparse.ArgumentParser):
@@ -496,6 +508,19 @@ class _Setting:
         return self.initial
 
 
+def program_shape(compiled: Any) -> dict:
+    """The compiled program's ``while`` loops and fusions, counted in its optimised HLO
+    text: a generation's kernel launches and the loops whose trip counts the slowest run
+    sets, whatever the number of runs (empty when the backend gives no text)."""
+    try:
+        text = compiled.as_text()
+    except Exception:  # noqa: BLE001 - a backend without HLO text
+        return {}
+    ops = [line.split("=", 1)[1] for line in text.splitlines() if " = " in line]
+    return {"hlo_while": sum(" while(" in op for op in ops),
+            "hlo_fusions": sum(" fusion(" in op for op in ops)}
+
+
 def _measure(setting: _Setting, n: int, generations: int, device: Any) -> dict:
     """One throughput call of ``n`` runs: compiled, checked against the device's free
     memory, then run (:func:`_timed_call`)."""
@@ -511,7 +536,7 @@ def _measure(setting: _Setting, n: int, generations: int, device: Any) -> dict:
             + memory.temp_size_in_bytes)
     free, where = free_device_memory(device)
     row = {"compile_s": compile_s, "init_compile_s": setting.init_compile_s,
-           "program_bytes": int(need)}
+           "program_bytes": int(need), **program_shape(compiled)}
     if free is not None and need > free:
         row["status"] = (f"did not fit ({need / 2**30:.1f} GiB needed, "
                          f"{free / 2**30:.1f} GiB free on the {where})")
@@ -618,11 +643,14 @@ def _throughput_part(report: dict) -> list[str]:
     if isinstance(rows, dict):
         return [f"{head}: {rows['error']}"]
     return [f"{head}.", "", _results.markdown_table(
-        ["preset", "map", "runs per call", "population", "compile", "run", "ind-gen/s",
-         "MiB", "status"],
+        ["preset", "map", "runs per call", "population", "compile", "run", "ms/gen",
+         "ind-gen/s", "MiB", "loops", "fusions", "status"],
         [[r["preset"], r["map"], f"{r['seeds']:,}", r.get("population", ""),
-          _fmt(r.get("compile_s")), _fmt(r.get("run_s"), 3), _fmt(r.get("ind_gen_per_s"), 0),
+          _fmt(r.get("compile_s")), _fmt(r.get("run_s"), 3),
+          _fmt(1e3 * r["run_s"] / r["generations"], 1) if r.get("run_s") else "",
+          _fmt(r.get("ind_gen_per_s"), 0),
           _fmt(r["program_bytes"] / 2**20, 0) if r.get("program_bytes") else "",
+          r.get("hlo_while", ""), r.get("hlo_fusions", ""),
           r["status"]] for r in rows])]
 
 
@@ -643,7 +671,7 @@ def _sweep_part(report: dict) -> list[str]:
 
 def _agreement_part(report: dict) -> list[str]:
     ag = report.get("agreement", NOT_MEASURED)
-    if ag is NOT_MEASURED:
+    if ag is NOT_MEASURED or ag.get("error") == SKIPPED:
         return [f"**Agreement with the CPU**: {ag['error']}: **unknown**."]
     if "error" in ag:
         return [f"**Agreement with the CPU**: {ag['error']}: **DO NOT AGREE**."]
@@ -674,8 +702,10 @@ def body(report: dict) -> str:
     lines = [
         f"Device: {device['name']} (JAX's default backend `{device['backend']}`, jax "
         f"{device['jax']}); {'`--small`' if s['small'] else 'full size'}; every compile "
-        "cold (no persistent cache). Seconds unless named; ind-gen/s = runs x population "
-        "x generations / seconds.",
+        "cold (no persistent cache); jaxga's runs initialised "
+        f"{s.get('init_block', 'the platform layout')} at a time. Seconds unless named; "
+        "ind-gen/s = runs x population x generations / seconds; ms/gen = run / generations; "
+        "loops, fusions: `while` loops and fusions in the compiled program.",
         "", *_main_part(report), "", *_throughput_part(report), "", *_sweep_part(report),
         "", *_agreement_part(report), "",
         (f"**Peak memory**: {report['peak_memory']['bytes'] / 2**20:,.0f} MiB "
@@ -709,6 +739,12 @@ def measured_command(args: argparse.Namespace) -> str:
         words.append("--small")
     if args.budget_s is not None:
         words += ["--budget-s", f"{args.budget_s:g}"]
+    if args.skip:
+        words += ["--skip", args.skip]
+    if args.maps:
+        words += ["--maps", args.maps]
+    if args.init_block is not None:
+        words += ["--init-block", str(args.init_block)]
     return " ".join(words)
 
 
@@ -747,11 +783,31 @@ def main(argv: list[str] | None = None) -> int:
                     "leaves no room for are skipped (default 300, --small 180)")
     ap.add_argument("--from-json", metavar="PATH",
                     help="record the RESULTS.md section of a report written elsewhere")
+    ap.add_argument("--skip", default="", metavar="PHASE,...",
+                    help=f"phases left out, of {', '.join(PHASES)}")
+    ap.add_argument("--maps", default="", metavar="MAP,...",
+                    help=f"the throughput maps, of {', '.join(MAP_NAMES)} (default: all; "
+                    "--small: 20x20)")
+    ap.add_argument("--init-block", type=int, default=None, metavar="N",
+                    help="runs initialised together on this device (default: the "
+                    "platform's INIT_RUN_BLOCK)")
     args = ap.parse_args(argv)
     if args.from_json:
         record(_read_report(args.from_json), write=not args.no_write)
         return 0
     settings = dict(SMALL if args.small else FULL, small=args.small)
+    skip = [p for p in args.skip.split(",") if p]
+    if bad := [p for p in skip if p not in PHASES]:
+        ap.error(f"--skip {bad[0]!r}: the phases are {', '.join(PHASES)}")
+    if args.maps:
+        maps = tuple(m for m in args.maps.split(",") if m)
+        if bad := [m for m in maps if m not in MAP_NAMES]:
+            ap.error(f"--maps {bad[0]!r}: the maps are {', '.join(MAP_NAMES)}")
+        settings["maps"] = maps
+    if args.init_block is not None:
+        if not 1 <= args.init_block <= 1 << 20:
+            ap.error(f"--init-block must be between 1 and {1 << 20}, got {args.init_block}")
+        settings["init_block"] = args.init_block
     if args.budget_s is not None:
         if not 0 < args.budget_s < 1e6:
             ap.error(f"--budget-s must be a positive number of seconds, got {args.budget_s:g}")
@@ -767,6 +823,11 @@ def main(argv: list[str] | None = None) -> int:
     par.use_all_cores()  # as `jaxga run` does; on a GPU it sizes only the CPU backend
     import jax
 
+    import jaxga._runtime.programs as programs
+
+    settings["init_block"] = settings.get("init_block", programs.INIT_RUN_BLOCK)
+    programs.INIT_RUN_BLOCK = settings["init_block"]  # read by platform_layout per call
+
     device = describe_devices()
     report: dict[str, Any] = {
         "command": measured_command(args), "commit": _results.commit(),
@@ -776,20 +837,26 @@ def main(argv: list[str] | None = None) -> int:
     say(f"{device['name']} (backend {device['backend']}, jax {device['jax']}); "
         f"{'--small' if args.small else 'full size'}, budget {settings['budget_s']:.0f} s; "
         f"report in {json_path}")
-    with phase(report, "main job", "main_job", json_path):
-        report["main_job"] = main_job(settings)
-    with phase(report, "agreement", "agreement", json_path):
-        report["agreement"] = agreement(settings, device)
-    with phase(report, "sweep", "sweep", json_path):
-        report["sweep"] = sweep(settings)
-    with phase(report, "throughput", "throughput", json_path):
-        report["throughput"] = throughput(settings, t_start + settings["budget_s"])
+    for key in skip:
+        report[key] = {"error": SKIPPED}
+    if "main_job" not in skip:
+        with phase(report, "main job", "main_job", json_path):
+            report["main_job"] = main_job(settings)
+    if "agreement" not in skip:
+        with phase(report, "agreement", "agreement", json_path):
+            report["agreement"] = agreement(settings, device)
+    if "sweep" not in skip:
+        with phase(report, "sweep", "sweep", json_path):
+            report["sweep"] = sweep(settings)
+    if "throughput" not in skip:
+        with phase(report, "throughput", "throughput", json_path):
+            report["throughput"] = throughput(settings, t_start + settings["budget_s"])
     report["peak_memory"] = peak_memory(jax.devices()[0])
     report["wall_s"] = time.perf_counter() - t_start
     write_json(report, json_path)
-    failed = [k for k in ("main_job", "sweep", "agreement", "throughput")
-              if isinstance(report[k], dict) and "error" in report[k]]
-    agree = report["agreement"].get("agree", False)
+    failed = [k for k in PHASES if k not in skip
+              and isinstance(report[k], dict) and "error" in report[k]]
+    agree = "agreement" in skip or report["agreement"].get("agree", False)
     say(f"done in {report['wall_s']:.0f} s; agreement {'holds' if agree else 'FAILS'}"
         + (f"; failed: {', '.join(failed)}" if failed else "") + f"; report in {json_path}")
     record(report, write=not args.no_write)

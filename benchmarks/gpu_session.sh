@@ -1,41 +1,74 @@
 #!/usr/bin/env bash
-# The device checks of a session lent a GPU, as ONE prepared command (the `device` tool's
-# `run`, timeout_s 590; the machine has JAX with CUDA and jaxga's dependencies):
+# The device checks of a session lent a GPU, as prepared commands (the `device` tool's
+# `run`; the machine has JAX with CUDA and jaxga's dependencies). Prepare here, once:
 #
-#   mkdir -p .carry && cp ../shared/tools/gpu_bisect.py .carry/   # here, once; .carry is
-#   echo /.carry/ >> .git/info/exclude                             # ignored by git
-#   run: bash benchmarks/gpu_session.sh          carry: [".carry"]
-#   (tried on a CPU: DEVICE_CHECK_ARGS=--small OUT=/tmp/o bash benchmarks/gpu_session.sh)
+#   mkdir -p .carry/old && cp ../shared/tools/gpu_bisect.py .carry/
+#   git archive b365ff4 jaxga presets | tar -x -C .carry/old   # the code before decision 040
+#   echo /.carry/ >> .git/info/exclude                         # .carry is ignored by git
 #
-# In order, each bounded so that the later phases still run:
-#   1. jaxga doctor --json: the exact probes (random bits; sga's and the field walk's walks,
-#      2048 runs in one call) and whole runs of every preset against the CPU (docs/devices.md);
-#   2. the bisection (gpu_bisect.py, when carried): each walk against the CPU's at 10, 256
-#      and 2048 runs per call, one suspect switched off at a time;
-#   3. the device check (benchmarks/device_check.py): the README's job, the agreement, the
-#      sweep and the throughput table.
-# Everything lands in $OUT (doctor.json, bisect.json, device_check.json, session.log); record
-# them here with `python benchmarks/doctor.py`-style sections or
+# then   run: bash benchmarks/gpu_session.sh diagnose   carry: [".carry"]   (about 230 s)
+# and    run: bash benchmarks/gpu_session.sh speed      carry: [".carry"]   (SPEED_BUDGET_S)
+# (tried on a CPU: BISECT_RUNS="4 16" DOCTOR_PRESETS=sga SPEED_ARGS=--small OUT=/tmp/o ...)
+#
+# diagnose, three processes at once (the GPU's memory is not preallocated; they compile
+# on the host's cores side by side; no timing of theirs is reported):
+#   1. the bisection (gpu_bisect.py) against the code before decision 040 (.carry/old):
+#      each walk against the CPU's at 10, 256 and 2048 runs per call, one suspect
+#      switched off at a time: which construct the GPU mis-executed;
+#   2. the same bisection against the code as it is: the walks at 256 and 2048 runs per
+#      call and the whole initialisation of 256 runs in one call, against the CPU;
+#   3. jaxga doctor --quick (the exact probes: the gate's verdict), then jaxga doctor
+#      with whole runs of a few presets.
+# speed, alone on the machine: benchmarks/device_check.py without the main job, on the
+#   20 x 20 and 64 x 64 maps, with jaxga's runs initialised INIT_BLOCK at a time (the
+#   sweep of 16 x 1000 sga runs, the agreement, the throughput table).
+# Everything lands in $OUT; record the device check with
 # `python benchmarks/device_check.py --from-json device_check.json`.
 set -uo pipefail
-export PYTHONPATH="$PWD${PYTHONPATH:+:$PYTHONPATH}" PYTHONUNBUFFERED=1
+export PYTHONUNBUFFERED=1 XLA_PYTHON_CLIENT_PREALLOCATE=false
 OUT="${OUT:-$(mktemp -d)}"
 PY="${PYTHON:-python3}"
-exec > >(tee "$OUT/session.log") 2>&1
+HERE="$PWD"
+exec > >(tee "$OUT/session_${1:-diagnose}.log") 2>&1
 phase() { echo "=== $1 ($(date -u +%H:%M:%S))"; }
 phase "devices"
-"$PY" -c "import jax, jaxlib; print(jax.__version__, jaxlib.__version__, jax.devices())"
-phase "jaxga doctor"
-JAXGA_CACHE_DIR=/tmp/jaxga-cache timeout 200 "$PY" -m jaxga.cli doctor \
-    --json "$OUT/doctor.json"
-echo "doctor exit status $?"
-if [ -f .carry/gpu_bisect.py ]; then
-    phase "bisection"
-    timeout 170 "$PY" .carry/gpu_bisect.py --runs 10 256 2048 --json "$OUT/bisect.json"
-    echo "bisection exit status $?"
-fi
-phase "device check"
-timeout 200 "$PY" benchmarks/device_check.py --json "$OUT/device_check.json" --no-write \
-    --budget-s 180 ${DEVICE_CHECK_ARGS:-}
-echo "device check exit status $?"
+nvidia-smi --query-gpu=name,driver_version,memory.total --format=csv,noheader 2>/dev/null
+PYTHONPATH="$HERE" "$PY" -c "import jax, jaxlib; print(jax.__version__, jaxlib.__version__, jax.devices())"
+case "${1:-diagnose}" in
+diagnose)
+    phase "diagnose: three processes"
+    LOGS=$(mktemp -d)  # the logs join session_diagnose.log (at most 8 files come back)
+    ( PYTHONPATH="$HERE/.carry/old" timeout "${BISECT_S:-220}" "$PY" .carry/gpu_bisect.py \
+        --runs ${BISECT_RUNS:-2048 256 10} --json "$OUT/bisect_old.json"
+      echo "bisection (old code) exit status $?" ) > "$LOGS/bisect_old.log" 2>&1 &
+    pids=($!)
+    ( export PYTHONPATH="$HERE"
+      timeout "$(( ${BISECT_S:-220} / 2 ))" "$PY" .carry/gpu_bisect.py \
+        --runs ${BISECT_NEW_RUNS:-2048 256} --variants as_is field no_compaction full_init \
+        --json "$OUT/bisect_new.json"
+      echo "bisection (code as it is) exit status $?"
+      timeout "$(( ${BISECT_S:-220} / 2 ))" "$PY" .carry/gpu_bisect.py \
+        --runs ${BISECT_INIT_RUNS:-2048} --variants full_init --json "$OUT/bisect_init.json"
+      echo "bisection (code as it is, whole initialisation) exit status $?" \
+    ) > "$LOGS/bisect_new.log" 2>&1 &
+    pids+=($!)
+    ( export PYTHONPATH="$HERE" JAXGA_CACHE_DIR=/tmp/jaxga-cache
+      timeout 70 "$PY" -m jaxga.cli doctor --quick --json "$OUT/doctor_quick.json"
+      echo "doctor --quick exit status $?"
+      timeout 150 "$PY" -m jaxga.cli doctor --presets "${DOCTOR_PRESETS:-sga,hybrid,iga_zhu}" \
+          --json "$OUT/doctor.json"
+      echo "doctor exit status $?" ) > "$LOGS/doctor.log" 2>&1 &
+    pids+=($!)
+    wait "${pids[@]}"  # not a bare wait: that waits for the tee above too, for ever
+    for f in doctor bisect_old bisect_new; do echo "--- $f"; cat "$LOGS/$f.log"; done
+    ;;
+speed)
+    phase "device check"
+    PYTHONPATH="$HERE" JAXGA_TRUST_DEVICE=1 timeout "$(( ${SPEED_BUDGET_S:-330} + 30 ))" \
+        "$PY" benchmarks/device_check.py --json "$OUT/device_check.json" --no-write \
+        --budget-s "${SPEED_BUDGET_S:-330}" --skip "${SPEED_SKIP:-main_job}" \
+        --maps 20x20,64x64 --init-block "${INIT_BLOCK:-2048}" ${SPEED_ARGS:-}
+    echo "device check exit status $?"
+    ;;
+esac
 phase "done"
