@@ -6,8 +6,9 @@
 #   git archive b365ff4 jaxga presets | tar -x -C .carry/old   # the code before decision 040
 #   echo /.carry/ >> .git/info/exclude                         # .carry is ignored by git
 #
-# then   run: bash benchmarks/gpu_session.sh diagnose   carry: [".carry"]   (about 230 s)
-# and    run: bash benchmarks/gpu_session.sh speed      carry: [".carry"]   (SPEED_BUDGET_S)
+# then   run: bash benchmarks/gpu_session.sh diagnose     carry: [".carry"]   (about 230 s)
+# and    run: bash benchmarks/gpu_session.sh verify speed carry: [".carry"]   (about 130 s +
+#                                                           SPEED_BUDGET_S + 30)
 # (tried on a CPU: BISECT_RUNS="4 16" DOCTOR_PRESETS=sga SPEED_ARGS=--small OUT=/tmp/o ...)
 #
 # diagnose, three processes at once (the GPU's memory is not preallocated; they compile
@@ -19,9 +20,13 @@
 #      call and the whole initialisation of 256 runs in one call, against the CPU;
 #   3. jaxga doctor --quick (the exact probes: the gate's verdict), then jaxga doctor
 #      with whole runs of a few presets.
+# verify, three processes at once: jaxga doctor --quick, jaxga doctor with whole runs of a
+#   few presets, and the whole initialisation of 2048 runs in one call against the CPU's.
 # speed, alone on the machine: benchmarks/device_check.py without the main job, on the
-#   20 x 20 and 64 x 64 maps, with jaxga's runs initialised INIT_BLOCK at a time (the
-#   sweep of 16 x 1000 sga runs, the agreement, the throughput table).
+#   20 x 20 and 64 x 64 maps, with jaxga's runs initialised INIT_BLOCK at a time (default:
+#   2048 when this session's doctor --quick agreed, else the platform's 10): the sweep of
+#   16 x 1000 sga runs and the throughput table (the agreement too unless SPEED_SKIP
+#   names it).
 # Everything lands in $OUT; record the device check with
 # `python benchmarks/device_check.py --from-json device_check.json`.
 set -uo pipefail
@@ -30,14 +35,15 @@ OUT="${OUT:-$(mktemp -d)}"
 PY="${PYTHON:-python3}"
 HERE="$PWD"
 exec > >(tee "$OUT/session_${1:-diagnose}.log") 2>&1
+LOGS=$(mktemp -d)  # the logs join the session log (at most 8 files come back)
 phase() { echo "=== $1 ($(date -u +%H:%M:%S))"; }
 phase "devices"
 nvidia-smi --query-gpu=name,driver_version,memory.total --format=csv,noheader 2>/dev/null
 PYTHONPATH="$HERE" "$PY" -c "import jax, jaxlib; print(jax.__version__, jaxlib.__version__, jax.devices())"
-case "${1:-diagnose}" in
+for mode in "${@:-diagnose}"; do
+case "$mode" in
 diagnose)
     phase "diagnose: three processes"
-    LOGS=$(mktemp -d)  # the logs join session_diagnose.log (at most 8 files come back)
     ( PYTHONPATH="$HERE/.carry/old" timeout "${BISECT_S:-220}" "$PY" .carry/gpu_bisect.py \
         --runs ${BISECT_RUNS:-2048 256 10} --json "$OUT/bisect_old.json"
       echo "bisection (old code) exit status $?" ) > "$LOGS/bisect_old.log" 2>&1 &
@@ -62,13 +68,41 @@ diagnose)
     wait "${pids[@]}"  # not a bare wait: that waits for the tee above too, for ever
     for f in doctor bisect_old bisect_new; do echo "--- $f"; cat "$LOGS/$f.log"; done
     ;;
+verify)
+    phase "verify: three processes"
+    ( export PYTHONPATH="$HERE" JAXGA_CACHE_DIR=/tmp/jaxga-cache
+      timeout 40 "$PY" -m jaxga.cli doctor --quick --json "$OUT/doctor_quick.json"
+      echo "doctor --quick exit status $?" ) > "$LOGS/doctor_quick.log" 2>&1 &
+    pids=($!)
+    ( export PYTHONPATH="$HERE" JAXGA_CACHE_DIR=/tmp/jaxga-cache-2
+      timeout 120 "$PY" -m jaxga.cli doctor --presets "${DOCTOR_PRESETS:-sga,hybrid,iga_zhu}" \
+          --json "$OUT/doctor.json"
+      echo "doctor exit status $?" ) > "$LOGS/doctor.log" 2>&1 &
+    pids+=($!)
+    ( PYTHONPATH="$HERE" timeout 120 "$PY" .carry/gpu_bisect.py --runs ${BISECT_INIT_RUNS:-2048} \
+        --variants as_is field full_init --json "$OUT/bisect_init.json"
+      echo "whole initialisation exit status $?" ) > "$LOGS/bisect_init.log" 2>&1 &
+    pids+=($!)
+    wait "${pids[@]}"
+    for f in doctor_quick doctor bisect_init; do echo "--- $f"; cat "$LOGS/$f.log"; done
+    ;;
 speed)
     phase "device check"
+    if [ -z "${INIT_BLOCK:-}" ]; then
+        INIT_BLOCK=$("$PY" -c "import json, sys; print(2048 if json.load(open(sys.argv[1]))['agrees'] else 10)" \
+            "$OUT/doctor_quick.json" 2>/dev/null || echo 10)
+    fi
+    INIT_BLOCK=${INIT_BLOCK:-10}
+    echo "runs initialised $INIT_BLOCK at a time"
     PYTHONPATH="$HERE" JAXGA_TRUST_DEVICE=1 timeout "$(( ${SPEED_BUDGET_S:-330} + 30 ))" \
         "$PY" benchmarks/device_check.py --json "$OUT/device_check.json" --no-write \
         --budget-s "${SPEED_BUDGET_S:-330}" --skip "${SPEED_SKIP:-main_job}" \
-        --maps 20x20,64x64 --init-block "${INIT_BLOCK:-2048}" ${SPEED_ARGS:-}
+        --maps 20x20,64x64 --init-block "$INIT_BLOCK" ${SPEED_ARGS:-}
     echo "device check exit status $?"
     ;;
+*)
+    echo "unknown mode $mode (diagnose, verify, speed)"
+    ;;
 esac
+done
 phase "done"

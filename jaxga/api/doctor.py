@@ -35,9 +35,10 @@ from jaxga._runtime.programs import shape_spec
 from jaxga.api.ga import GA
 from jaxga.config.presets import preset_names
 from jaxga.core.geometry import segments_clear
+from jaxga.core.grid import Grid
 from jaxga.core.objectives import path_length
 
-__all__ = ["DoctorReport", "doctor"]
+__all__ = ["DoctorReport", "doctor", "runs_off_tolerance"]
 
 RUN_SEEDS = 4
 """Seeds of each preset's whole runs (sga's: :data:`THROUGHPUT_SEEDS`)."""
@@ -105,6 +106,23 @@ def _compiled(ga: GA, seeds: int, device: jax.Device):
     return program
 
 
+def runs_off_tolerance(grid: Grid, here: dict, there: dict) -> np.ndarray:
+    """``bool[runs]``: the device's runs ``here`` that break the contract for results
+    that may round differently (docs/devices.md, "Exactness"), against the CPU's runs
+    ``there`` of the same keys: another success, or a successful path that is blocked
+    or whose reported length is not its length re-evaluated on the CPU (within
+    :data:`LENGTH_TOLERANCE`)."""
+    cpu = jax.devices("cpu")[0]
+    grid = jax.device_put(grid, cpu)
+    cells, n_cells = jax.device_put((np.asarray(here["cells"]), np.asarray(here["n_cells"])),
+                                    cpu)
+    clear = jax.jit(jax.vmap(lambda c, n: jnp.all(segments_clear(grid, c, n))))(cells, n_cells)
+    length = np.asarray(jax.jit(jax.vmap(lambda c, n: path_length(grid, c, n)))(cells, n_cells))
+    ok = np.asarray(here["success"]).astype(bool)
+    close = np.abs(length - np.asarray(here["length"])) <= LENGTH_TOLERANCE * np.abs(length)
+    return (ok != np.asarray(there["success"]).astype(bool)) | (ok & ~(np.asarray(clear) & close))
+
+
 def _runner(program, ga: GA) -> Callable:
     """``keys -> results`` of a compiled whole-run program, the parameters on the keys'
     device."""
@@ -121,7 +139,6 @@ def _whole_runs(preset: str, ga: GA, programs: tuple, device: jax.Device, seeds:
     second call)."""
     t0 = time.perf_counter()
     here_prog, cpu_prog = programs
-    cpu = jax.devices("cpu")[0]
     keys = np.asarray(jax.vmap(jax.random.PRNGKey)(jnp.arange(seeds, dtype=jnp.uint32)))
     here, there = device_probe.rolled_on_cpu(_runner(here_prog, ga), _runner(cpu_prog, ga),
                                              keys, device)
@@ -135,14 +152,7 @@ def _whole_runs(preset: str, ga: GA, programs: tuple, device: jax.Device, seeds:
     if exact:
         agrees = not differ.any()
     else:  # the device's paths checked on the CPU
-        grid = jax.device_put(ga.grid, cpu)
-        cells, n_cells = jax.device_put((here["cells"], here["n_cells"]), cpu)
-        clear = jax.jit(jax.vmap(lambda c, n: segments_clear(grid, c, n)))(cells, n_cells)
-        length = jax.jit(jax.vmap(lambda c, n: path_length(grid, c, n)))(cells, n_cells)
-        ok = here["success"]
-        close = np.abs(np.asarray(length) - here["length"]) <= (
-            LENGTH_TOLERANCE * np.abs(np.asarray(length)))
-        bad = (ok != there["success"]) | (ok & ~(np.asarray(clear) & close))
+        bad = runs_off_tolerance(ga.grid, here, there)
         agrees = not bad.any()
         detail += f"; {int(bad.sum())} with another success, a blocked path or a wrong length"
     row = ProbeRow(f"{preset} runs ({GENERATIONS} generations)", seeds,

@@ -15,7 +15,7 @@ import numpy as np
 
 from jaxga.core.dtypes import F32
 from jaxga.core.errors import ParameterError
-from jaxga.core.grid import Grid
+from jaxga.core.grid import Grid, step_ends
 
 __all__ = ["MAX_SIDE", "Geometry", "Scalar", "as_f32", "atan2_nonneg", "check_grid",
            "fill_forward", "geometry", "path_nodes"]
@@ -145,8 +145,9 @@ def path_nodes(
 def geometry(grid: Grid, cells: jax.Array, length: jax.Array) -> Geometry:
     cells, x, y, node, n = path_nodes(grid, cells, length)
     j = jnp.arange(cells.shape[0], dtype=jnp.int32)
-    dx = x[1:] - x[:-1]
-    dy = y[1:] - y[:-1]
+    (xa, ya), (xb, yb) = step_ends(cells, grid.width)  # not x[1:] - x[:-1]: decision 048
+    dx = xb - xa
+    dy = yb - ya
     moving = (dx != 0) | (dy != 0)
     # Direction of the last non-zero segment at or before j. Tail padding (j >= n-1) is
     # marked as "has a value" too: it lies after every real segment, so it never feeds

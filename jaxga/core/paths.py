@@ -25,7 +25,7 @@ import numpy as np
 from jaxga._batching.scatter import position_table, table_lookup
 from jaxga.core.errors import ParameterError
 from jaxga.core.geometry import segments_clear
-from jaxga.core.grid import Grid, blocked_at, diagonal_legal
+from jaxga.core.grid import Grid, blocked_at, diagonal_legal, step_ends
 
 __all__ = [
     "Population",
@@ -178,22 +178,23 @@ def cell_steps(grid: Grid, cells: jax.Array) -> tuple[jax.Array, ...]:
     and free, the Chebyshev length of each step, and whether both ends of the step are
     free and, for a diagonal, its side cells satisfy the corner rule. A step with
     ``span == 1`` is a legal move exactly when ``step_ok`` (``move_legal``); a span-0
-    step (a repeated node) is clear exactly when ``step_ok``. Each cell is looked up and
-    divided once, not once per end of each step: the fitness evaluation runs this on
-    every individual every generation.
+    step (a repeated node) is clear exactly when ``step_ok``. Each cell is looked up
+    once; the coordinates of a step's ends come from the cells sliced first
+    (:func:`step_ends`), not from sliced coordinates, which an H200 computed wrongly
+    (decision 048).
     """
-    n, w = grid.n_cells, grid.width
+    n = grid.n_cells
     inside = (cells >= 0) & (cells < n)
     cc = jnp.clip(cells, 0, n - 1)
     free = inside & ~grid.blocked.reshape(-1)[cc]
-    x, y = cc % w, cc // w
-    dx, dy = x[..., 1:] - x[..., :-1], y[..., 1:] - y[..., :-1]
+    (xa, ya), (xb, yb) = step_ends(cc, grid.width)
+    dx, dy = xb - xa, yb - ya
     span = jnp.maximum(jnp.abs(dx), jnp.abs(dy))
     step_ok = free[..., :-1] & free[..., 1:]
     if grid.corner_rule != "free":
         corner_ok = diagonal_legal(
-            blocked_at(grid.blocked, x[..., 1:], y[..., :-1]),
-            blocked_at(grid.blocked, x[..., :-1], y[..., 1:]), grid.corner_rule,
+            blocked_at(grid.blocked, xb, ya), blocked_at(grid.blocked, xa, yb),
+            grid.corner_rule,
         )
         step_ok &= (dx == 0) | (dy == 0) | corner_ok
     return inside, free, span, step_ok

@@ -17,6 +17,7 @@ import jaxga
 from jaxga._runtime import device_probe, programs
 from jaxga._runtime.device_probe import DeviceDisagrees, ProbeRow, check_backend
 from jaxga.api import runs
+from jaxga.api.doctor import runs_off_tolerance
 from jaxga.cli.entry import main
 from jaxga.cli.options import EXIT_DEVICE_DISAGREES
 from jaxga.core.errors import PlatformWarning
@@ -180,3 +181,19 @@ def test_whole_runs_agree_on_the_cpu_with_a_throughput_figure():
     assert row.exact and row.compared == 4 and row.detail == "identical 4/4"
     assert report.throughput == 0.0  # sga's runs give it; not asked for here
     assert json.loads(json.dumps(report.as_dict()))["probes"][-1]["name"] == row.name
+
+
+def test_off_the_cpu_a_run_must_have_the_cpus_success_a_clear_path_and_its_length():
+    """The rule for whole runs that may round differently (docs/devices.md): hand-made
+    runs on a 3 x 3 map with its centre blocked, checked as the doctor checks a GPU's."""
+    grid = jaxga.Grid.create(np.array([[0, 0, 0], [0, 1, 0], [0, 0, 0]], bool),
+                             start=(0, 0), goal=(2, 2))
+    cells = np.array([[0, 1, 2, 5, 8], [0, 1, 2, 5, 8], [0, 1, 2, 5, 8], [0, 4, 8, 8, 8],
+                      [0, 0, 0, 0, 0]], np.int32)
+    here = {"cells": cells, "n_cells": np.array([5, 5, 5, 3, 1], np.int32),
+            "success": np.array([1, 1, 1, 1, 0], np.int32),
+            "length": np.array([4.0, 4.0, 4.04, 2 * np.sqrt(2), 0.0], np.float32)}
+    there = {"success": np.array([1, 0, 1, 1, 0], np.int32)}
+    # 0: agrees; 1: the CPU's run failed; 2: its length is 1 % off; 3: through the
+    # blocked centre; 4: failed on both (its cells are not looked at)
+    assert list(runs_off_tolerance(grid, here, there)) == [False, True, True, True, False]
