@@ -45,9 +45,8 @@ the machine, commit and date it measured.
 
 For a device lent for minutes: ``--skip main_job,agreement`` leaves phases out (shown as
 skipped), ``--maps 20x20,64x64`` narrows the throughput maps, and ``--init-block N``
-initialises jaxga's runs N at a time on that device instead of the platform's
-``INIT_RUN_BLOCK`` (``jaxga._runtime.programs``), to measure the layout a device that
-agrees with the CPU could use.
+initialises jaxga's runs N at a time on that device instead of the platform's layout
+(``jaxga._runtime.programs.platform_layout``: 10 on the CPU, a whole call on a GPU).
 """
 
 from __future__ import annotations
@@ -666,7 +665,9 @@ def _sweep_part(report: dict) -> list[str]:
             f"{t['init_s']:.2f}, evolve {t['evolve_s']:.2f}), {sw['runs_per_s']:,.1f} "
             f"runs/s, {sw['evolve_ind_gen_per_s']:,.0f} ind-gen/s in the evolution "
             f"(jaxga's programs: {sw.get('calls', '?')} call(s) of "
-            f"{sw.get('runs_per_call', '?')} runs)."]
+            f"{sw.get('runs_per_call', '?')} runs); success {sw['success']:.3f}, mean length "
+            f"{_fmt(sw['mean_length'][0])} at `{SWEEP_KEY}` {SWEEP_POINTS[0]:g} and "
+            f"{_fmt(sw['mean_length'][-1])} at {SWEEP_POINTS[-1]:g}."]
 
 
 def _agreement_part(report: dict) -> list[str]:
@@ -790,7 +791,7 @@ def main(argv: list[str] | None = None) -> int:
                     "--small: 20x20)")
     ap.add_argument("--init-block", type=int, default=None, metavar="N",
                     help="runs initialised together on this device (default: the "
-                    "platform's INIT_RUN_BLOCK)")
+                    "platform's layout)")
     args = ap.parse_args(argv)
     if args.from_json:
         record(_read_report(args.from_json), write=not args.no_write)
@@ -825,8 +826,10 @@ def main(argv: list[str] | None = None) -> int:
 
     import jaxga._runtime.programs as programs
 
-    settings["init_block"] = settings.get("init_block", programs.INIT_RUN_BLOCK)
-    programs.INIT_RUN_BLOCK = settings["init_block"]  # read by platform_layout per call
+    default_block = programs.platform_layout().init_run_block
+    settings["init_block"] = settings.get("init_block", default_block)
+    # read by platform_layout at every call, on the CPU and off it
+    programs.INIT_RUN_BLOCK = programs.ACCELERATOR_INIT_BLOCK = settings["init_block"]
 
     device = describe_devices()
     report: dict[str, Any] = {

@@ -218,7 +218,8 @@ def _remembered() -> dict:
 def _remember(key: str, line: str, agrees: bool) -> None:
     data = _remembered()
     data[key] = {"agrees": agrees, "verdict": line}
-    try:
+    try:  # a first run on a fresh machine: ~/.cache/jaxga does not exist yet
+        verdicts_path().parent.mkdir(parents=True, exist_ok=True)
         atomic_write_text(verdicts_path(), json.dumps(data, indent=1) + "\n")
     except (OSError, JaxgaError) as err:  # not remembered: the next process probes again
         warnings.warn(f"the device verdict could not be saved ({err})", PlatformWarning,

@@ -284,16 +284,23 @@ def platform_layout(platform: str | None = None) -> PlatformLayout:
     :data:`RUN_BLOCK` and initialised in blocks of :data:`INIT_RUN_BLOCK` (decision 011:
     batches that fit the caches, loops that wait for fewer runs). On a GPU or TPU:
     calls of :data:`ACCELERATOR_BUCKETS` runs per device, each evolved and finished as
-    one ``vmap`` (a run costs less the more runs share its call), initialised in blocks
-    of :data:`INIT_RUN_BLOCK` as on the CPU, the one layout whose initialisation was
-    seen to fill the populations on a GPU (decision 037). On the CPU a run's result does
-    not depend on its call or block, so the layout changes no result there.
+    one ``vmap`` (a run costs less the more runs share its call), and initialised as one
+    ``vmap`` of up to :data:`ACCELERATOR_INIT_BLOCK` runs (decision 048). On the CPU a
+    run's result does not depend on its call or block, so the layout changes no result
+    there.
     """
     platform = jax.default_backend() if platform is None else platform
     if platform == "cpu":
         return PlatformLayout((RUNS_PER_DEVICE,), RUN_BLOCK, INIT_RUN_BLOCK)
-    return PlatformLayout(ACCELERATOR_BUCKETS, ACCELERATOR_BUCKETS[-1], INIT_RUN_BLOCK,
+    return PlatformLayout(ACCELERATOR_BUCKETS, ACCELERATOR_BUCKETS[-1], ACCELERATOR_INIT_BLOCK,
                           reuse_factor=2)
+
+
+ACCELERATOR_INIT_BLOCK = ACCELERATOR_BUCKETS[-1]
+"""The most runs a GPU or TPU initialises in one ``vmap``: a whole call. On an H200 the
+initial populations of 2048 runs in one call are the CPU's bit for bit, and blocks of 10
+(decision 037's workaround while the path check was computed wrongly there) kept the
+device waiting on a loop of small blocks (decision 048)."""
 
 
 _WARNED_PLATFORMS: set[str] = set()

@@ -132,6 +132,13 @@ def test_a_backend_that_passed_is_not_probed_again(verdicts, monkeypatch):
         check_backend(StandIn(device_kind="Other GPU"), probes=failing)
 
 
+def test_the_first_verdict_on_a_fresh_machine_creates_its_folder(verdicts, monkeypatch):
+    fresh = verdicts.parent / "home" / ".cache" / "jaxga" / "device_verdicts.json"
+    monkeypatch.setenv(device_probe.VERDICTS_ENV, str(fresh))
+    check_backend(StandIn(device_kind="Good GPU"), probes=lambda d: failing(d)[:1])
+    assert [v["agrees"] for v in json.loads(fresh.read_text()).values()] == [True]
+
+
 def test_a_run_on_a_failed_backend_is_refused_in_one_line(verdicts, monkeypatch, capsys):
     monkeypatch.setattr(programs, "check_backend",
                         lambda: check_backend(StandIn(), probes=failing))

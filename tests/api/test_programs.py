@@ -246,8 +246,8 @@ def test_run_layout_on_a_gpu(n_runs, n_devices, cells, have, want):
 
 
 def test_platform_layouts():
-    """The CPU computes blocks that fit its caches; a GPU evolves one vmap per call and
-    initialises in the CPU's blocks."""
+    """The CPU computes blocks that fit its caches; a GPU evolves and initialises one
+    vmap per call."""
     from jaxga._runtime import programs
 
     cpu = runtime.programs.platform_layout("cpu")
@@ -258,7 +258,7 @@ def test_platform_layouts():
         lay = runtime.programs.platform_layout(platform)
         assert lay.buckets == runtime.programs.ACCELERATOR_BUCKETS == tuple(sorted(lay.buckets))
         assert lay.run_block == lay.buckets[-1]
-        assert lay.init_run_block == programs.INIT_RUN_BLOCK  # decision 037
+        assert lay.init_run_block == lay.buckets[-1] == programs.ACCELERATOR_INIT_BLOCK
         assert runtime.programs.run_blocks(lay.buckets[-1], 1, lay.run_block) == 1
 
 
