@@ -826,10 +826,12 @@ def main(argv: list[str] | None = None) -> int:
 
     import jaxga._runtime.programs as programs
 
-    default_block = programs.platform_layout().init_run_block
-    settings["init_block"] = settings.get("init_block", default_block)
-    # read by platform_layout at every call, on the CPU and off it
-    programs.INIT_RUN_BLOCK = programs.ACCELERATOR_INIT_BLOCK = settings["init_block"]
+    settings["init_block"] = settings.get("init_block", programs.platform_layout().init_run_block)
+    # read by platform_layout at every call: the default backend's own block only
+    if jax.default_backend() == "cpu":
+        programs.INIT_RUN_BLOCK = settings["init_block"]
+    else:
+        programs.ACCELERATOR_INIT_BLOCK = settings["init_block"]
 
     device = describe_devices()
     report: dict[str, Any] = {
@@ -860,7 +862,8 @@ def main(argv: list[str] | None = None) -> int:
     failed = [k for k in PHASES if k not in skip
               and isinstance(report[k], dict) and "error" in report[k]]
     agree = "agreement" in skip or report["agreement"].get("agree", False)
-    say(f"done in {report['wall_s']:.0f} s; agreement {'holds' if agree else 'FAILS'}"
+    verdict = "skipped" if "agreement" in skip else "holds" if agree else "FAILS"
+    say(f"done in {report['wall_s']:.0f} s; agreement {verdict}"
         + (f"; failed: {', '.join(failed)}" if failed else "") + f"; report in {json_path}")
     record(report, write=not args.no_write)
     return 0 if agree and not failed else 1

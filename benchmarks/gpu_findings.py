@@ -1,13 +1,15 @@
 """Record a GPU session's diagnosis in RESULTS.md: the bisection before the fix, the
 smallest wrong program, and the agreement after the fix (decision 048).
 
-    python benchmarks/gpu_findings.py --before DIR --reproducer FILE --after DIR \\
-        --machine-from DIR/device_check.json --commit REV [--no-write]
+    python benchmarks/gpu_findings.py --before DIR --parts FILE FILE --reproducer FILE \\
+        --after DIR --machine-from DIR/device_check.json --commit REV [--no-write]
 
 The files are what ``benchmarks/gpu_session.sh`` (``diagnose``, ``verify``) and
 ``benchmarks/gpu_step_span.py --json`` write on the device machine: ``--before`` holds
 ``bisect_old.json`` (the code before decision 040) and ``bisect_new.json`` (the code as it
-was, before decision 048), ``--after`` holds ``doctor.json`` and ``bisect_init.json``.
+was, before decision 048), ``--parts`` names the reports of
+``benchmarks/gpu_path_check_parts.py`` and ``benchmarks/gpu_continuity_parts.py``, and
+``--after`` holds ``doctor.json`` and ``bisect_init.json``.
 ``--commit`` is the revision the after-fix files were measured at, and the machine and
 date come from the device check's report of the same session.
 """
@@ -53,7 +55,16 @@ def bisection_table(rows: list[dict]) -> str:
                            "walks the check refuses", "success device / CPU"], out)
 
 
-def body(before: Path, reproducer: Path, after: Path) -> str:
+def parts_table(report: dict) -> str:
+    """A parts probe's rows: walks whose part differs from the CPU's, per part."""
+    names = [k for k in report["rows"][0] if k not in ("runs", "walks", "s", "walk_ok_cpu",
+                                                        "valid_ok_cpu_dev")]
+    return markdown_table(["runs per call", *names],
+                          [[f"{r['runs']:,}", *[r.get(n, "") for n in names]]
+                           for r in report["rows"]])
+
+
+def body(before: Path, parts: list[Path], reproducer: Path, after: Path) -> str:
     old, new = _load(before / "bisect_old.json"), _load(before / "bisect_new.json")
     same = [{k: v for k, v in r.items() if k != "s"} for r in new["rows"]]
     also = sum(1 for r in same if {k: v for k, v in r.items()} in
@@ -72,6 +83,10 @@ def body(before: Path, reproducer: Path, after: Path) -> str:
         f"off per row. The code as it was before decision 048 gave the same numbers "
         f"({also} of its {len(same)} rows identical):",
         "", bisection_table(old["rows"]), "",
+        "**The check's parts** at b4ddb0d (`benchmarks/gpu_path_check_parts.py`, then "
+        "`benchmarks/gpu_continuity_parts.py`): walks whose part differs from the CPU's "
+        "(`cell_steps`: inside, free, span, step_ok):", "",
+        *[line for f in parts for line in (parts_table(_load(f)), "")],
         "**The smallest wrong program** (`benchmarks/gpu_step_span.py`): rows of the step "
         "span `max(|x[1:] - x[:-1]|, |y[1:] - y[:-1]|)`, `x = c % 20`, `y = c // 20`, "
         "that differ from the CPU's, and variants of it:", "",
@@ -91,6 +106,7 @@ def body(before: Path, reproducer: Path, after: Path) -> str:
 def main() -> None:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--before", type=Path, required=True)
+    ap.add_argument("--parts", type=Path, nargs=2, required=True)
     ap.add_argument("--reproducer", type=Path, required=True)
     ap.add_argument("--after", type=Path, required=True)
     ap.add_argument("--machine-from", type=Path, required=True)
@@ -101,7 +117,7 @@ def main() -> None:
     sec = {"title": TITLE.format(device=check["device"]["name"]),
            "command": "python benchmarks/gpu_findings.py", "commit": args.commit,
            "date": check["date"], "machine": check["machine"],
-           "body": body(args.before, args.reproducer, args.after)}
+           "body": body(args.before, args.parts, args.reproducer, args.after)}
     print(render("", [sec]))
     if not args.no_write:
         append_record(sec)

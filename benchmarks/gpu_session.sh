@@ -2,18 +2,18 @@
 # The device checks of a session lent a GPU, as prepared commands (the `device` tool's
 # `run`; the machine has JAX with CUDA and jaxga's dependencies). Prepare here, once:
 #
-#   mkdir -p .carry/old && cp ../shared/tools/gpu_bisect.py .carry/
+#   mkdir -p .carry/old
 #   git archive b365ff4 jaxga presets | tar -x -C .carry/old   # the code before decision 040
 #   echo /.carry/ >> .git/info/exclude                         # .carry is ignored by git
 #
-# then   run: bash benchmarks/gpu_session.sh diagnose     carry: [".carry"]   (about 230 s)
-# and    run: bash benchmarks/gpu_session.sh verify speed carry: [".carry"]   (about 130 s +
-#                                                           SPEED_BUDGET_S + 30)
+# then   run: bash benchmarks/gpu_session.sh diagnose     carry: [".carry"]
+# and    run: bash benchmarks/gpu_session.sh verify speed
+# (each phase's time limit is below; decision 048 says what one H200 session took)
 # (tried on a CPU: BISECT_RUNS="4 16" DOCTOR_PRESETS=sga SPEED_ARGS=--small OUT=/tmp/o ...)
 #
 # diagnose, three processes at once (the GPU's memory is not preallocated; they compile
 # on the host's cores side by side; no timing of theirs is reported):
-#   1. the bisection (gpu_bisect.py) against the code before decision 040 (.carry/old):
+#   1. the bisection (benchmarks/gpu_bisect.py) against the code before decision 040 (.carry/old):
 #      each walk against the CPU's at 10, 256 and 2048 runs per call, one suspect
 #      switched off at a time: which construct the GPU mis-executed;
 #   2. the same bisection against the code as it is: the walks at 256 and 2048 runs per
@@ -44,16 +44,16 @@ for mode in "${@:-diagnose}"; do
 case "$mode" in
 diagnose)
     phase "diagnose: three processes"
-    ( PYTHONPATH="$HERE/.carry/old" timeout "${BISECT_S:-220}" "$PY" .carry/gpu_bisect.py \
+    ( PYTHONPATH="$HERE/.carry/old" timeout "${BISECT_S:-220}" "$PY" benchmarks/gpu_bisect.py \
         --runs ${BISECT_RUNS:-2048 256 10} --json "$OUT/bisect_old.json"
       echo "bisection (old code) exit status $?" ) > "$LOGS/bisect_old.log" 2>&1 &
     pids=($!)
     ( export PYTHONPATH="$HERE"
-      timeout "$(( ${BISECT_S:-220} / 2 ))" "$PY" .carry/gpu_bisect.py \
+      timeout "$(( ${BISECT_S:-220} / 2 ))" "$PY" benchmarks/gpu_bisect.py \
         --runs ${BISECT_NEW_RUNS:-2048 256} --variants as_is field no_compaction full_init \
         --json "$OUT/bisect_new.json"
       echo "bisection (code as it is) exit status $?"
-      timeout "$(( ${BISECT_S:-220} / 2 ))" "$PY" .carry/gpu_bisect.py \
+      timeout "$(( ${BISECT_S:-220} / 2 ))" "$PY" benchmarks/gpu_bisect.py \
         --runs ${BISECT_INIT_RUNS:-2048} --variants full_init --json "$OUT/bisect_init.json"
       echo "bisection (code as it is, whole initialisation) exit status $?" \
     ) > "$LOGS/bisect_new.log" 2>&1 &
@@ -79,7 +79,7 @@ verify)
           --json "$OUT/doctor.json"
       echo "doctor exit status $?" ) > "$LOGS/doctor.log" 2>&1 &
     pids+=($!)
-    ( PYTHONPATH="$HERE" timeout 120 "$PY" .carry/gpu_bisect.py --runs ${BISECT_INIT_RUNS:-2048} \
+    ( PYTHONPATH="$HERE" timeout 120 "$PY" benchmarks/gpu_bisect.py --runs ${BISECT_INIT_RUNS:-2048} \
         --variants as_is field full_init --json "$OUT/bisect_init.json"
       echo "whole initialisation exit status $?" ) > "$LOGS/bisect_init.log" 2>&1 &
     pids+=($!)

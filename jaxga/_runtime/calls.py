@@ -116,7 +116,7 @@ def fitting_layout(algo: Algorithm, n_local: int, n_dev: int, layout: tuple[int,
     calls), all its calls held together, where it fits; else one call of exactly these
     runs (a program of that size is compiled); else calls of as many runs as fit, one
     call at a time (:func:`grouped_layout`). ``padded=False`` skips the padded layout."""
-    block = platform_layout().init_run_block
+    block = platform_layout().init_run_block * n_dev  # every device initialises at once
     per_device, n_calls = layout
     if padded and not too_much_memory(algo, per_device * n_dev * n_calls,
                                       per_device * n_dev, block, n_local):
@@ -134,7 +134,7 @@ def grouped_layout(algo: Algorithm, n_local: int, n_dev: int) -> tuple[int, int,
     results are those of one call): ``(runs per device, calls, 1)``, the calls as even as
     the devices allow. :class:`ParameterError` naming the size and what to change where
     not one call of a run per device fits."""
-    block = platform_layout().init_run_block
+    block = platform_layout().init_run_block * n_dev  # every device initialises at once
     budget = memory_budget()
     if budget is None:
         return *unpadded_layout(n_local, n_dev), 1

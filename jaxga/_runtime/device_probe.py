@@ -34,6 +34,7 @@ from jaxga._runtime.lowering import jaxga_lowering
 from jaxga.core.errors import JaxgaError, PlatformWarning
 from jaxga.core.files import atomic_write_text
 from jaxga.core.grid import Grid
+from jaxga.core.path_geometry import geometry
 from jaxga.core.paths import has_endpoints, is_continuous, is_loop_free
 from jaxga.engine.maptables import with_tables
 from jaxga.maps import load_map_info
@@ -149,8 +150,10 @@ def walks(kind: str, device: jax.Device, runs: int = RUNS,
           per_run: int = WALKS_PER_RUN, grid: Grid | None = None) -> ProbeRow:
     """``per_run`` walks of each of ``runs`` runs, one nested ``vmap``: ``kind`` is
     ``"sga walks"`` (the plain GA's random walks, Zhu & Pan 4.1) or ``"field walks"``
-    (jaxga's initialiser that cannot fail). Each walk's cells, node count, success flag
-    and the path check of its path: bit for bit."""
+    (jaxga's initialiser that cannot fail). Each walk's cells, node count, success flag,
+    the path check of its path and the integer geometry every fitness reads (steps,
+    turns, nodes: :func:`jaxga.core.path_geometry.geometry`): bit for bit. An H200 once
+    computed the check's step spans wrongly at this batch (decision 048)."""
     t0 = time.perf_counter()
     grid = probe_grid() if grid is None else grid
     walk = {"sga walks": random_walk, "field walks": field_walk}[kind]
@@ -159,7 +162,8 @@ def walks(kind: str, device: jax.Device, runs: int = RUNS,
         cells, n, ok = walk(key, grid, CAPACITY)
         valid = (has_endpoints(grid, cells, n) & is_continuous(grid, cells, n)
                  & is_loop_free(cells, n, grid.n_cells))
-        return cells, n, ok, ok & valid
+        g = geometry(grid, cells, n)
+        return cells, n, ok, ok & valid, (g.node, g.dx, g.dy, g.cross, g.dot, g.turning)
 
     keys = np.asarray(jax.vmap(lambda k: jax.random.split(k, per_run))(_keys(runs, 1)))
     here, there = _compare(jax.vmap(jax.vmap(one)), keys, device)

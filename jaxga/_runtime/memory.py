@@ -29,8 +29,9 @@ each operator's working arrays; above what ``benchmarks/memory.py`` measures (de
 
 INIT_FACTOR = 12
 """The initialisation's temporaries of one run (its walks' buffers and attempts), in the
-same units, held for the runs one device initialises together (an init block, at most
-10 runs); above what ``benchmarks/memory.py`` measures (decision 042)."""
+same units, held for the runs a call initialises together (its devices' init blocks: 10
+runs per device on the CPU, a whole call on a GPU, decision 048); above what
+``benchmarks/memory.py`` measures on the CPU (decision 042; not measured on a GPU)."""
 
 BASE_BYTES = 1 << 30
 """What a process holds beside its runs: JAX, the compiled programs, the map and its
@@ -61,8 +62,9 @@ def run_bytes(algo: Algorithm) -> int:
 def call_memory(algo: Algorithm, runs: int, per_call: int, init_block: int = 10,
                 total: int | None = None) -> int:
     """The peak memory of ``runs`` runs held together in calls of ``per_call`` (padding
-    included: a padded run costs as much as a real one), initialised ``init_block`` at a
-    time, among ``total`` runs (default ``runs``) whose outputs are kept:
+    included: a padded run costs as much as a real one), ``init_block`` of each call's runs
+    initialised at once (every device's block together), among ``total`` runs (default
+    ``runs``) whose outputs are kept:
     :data:`BASE_BYTES`, the state of every run held (the states of a group of calls live
     until its finish), every run's outputs, and one init block's temporaries."""
     total = runs if total is None else max(total, runs)

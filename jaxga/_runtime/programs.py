@@ -298,9 +298,9 @@ def platform_layout(platform: str | None = None) -> PlatformLayout:
 
 ACCELERATOR_INIT_BLOCK = ACCELERATOR_BUCKETS[-1]
 """The most runs a GPU or TPU initialises in one ``vmap``: a whole call. On an H200 the
-initial populations of 2048 runs in one call are the CPU's bit for bit, and blocks of 10
-(decision 037's workaround while the path check was computed wrongly there) kept the
-device waiting on a loop of small blocks (decision 048)."""
+initial populations of 2048 runs in one call are the CPU's bit for bit (decision 048), so
+decision 037's blocks of 10 there, a workaround while the path check was computed wrongly,
+ended: they make a call's initialisation a loop of small blocks one after another."""
 
 
 _WARNED_PLATFORMS: set[str] = set()
@@ -314,8 +314,8 @@ def warn_platform(platform: str) -> None:
         return
     _WARNED_PLATFORMS.add(platform)
     warnings.warn(
-        f"the runs compute on the {platform}: there a seed's result is not the CPU's and "
-        "changes with the number of runs in its call (measured on a GPU, docs/devices.md); "
+        f"the runs compute on the {platform}: there a seed's result may differ from the "
+        "CPU's and with the number of runs in its call (measured on a GPU, decision 048); "
         "for reproducible results, JAX_PLATFORMS=cpu runs them on the CPU",
         PlatformWarning, stacklevel=3)
 

@@ -108,9 +108,9 @@ def _compiled(ga: GA, seeds: int, device: jax.Device):
 
 def runs_off_tolerance(grid: Grid, here: dict, there: dict) -> np.ndarray:
     """``bool[runs]``: the device's runs ``here`` that break the contract for results
-    that may round differently (docs/devices.md, "Exactness"), against the CPU's runs
-    ``there`` of the same keys: another success, or a successful path that is blocked
-    or whose reported length is not its length re-evaluated on the CPU (within
+    that may round differently (decision 040; docs/devices.md, "Exactness"), against the
+    CPU's runs ``there`` of the same keys: another success, or a successful path that is
+    blocked or whose reported length is not its length re-evaluated on the CPU (within
     :data:`LENGTH_TOLERANCE`)."""
     cpu = jax.devices("cpu")[0]
     grid = jax.device_put(grid, cpu)

@@ -49,5 +49,5 @@ class CacheWarning(RuntimeWarning):
 
 class PlatformWarning(RuntimeWarning):
     """The runs compute on a platform other than the CPU, where jaxga's results are not
-    reproducible bit for bit: on a GPU a seed's result is not the CPU's and depends on the
-    number of runs that share its call (decision 037, docs/devices.md)."""
+    reproducible bit for bit: on a GPU a seed's result may differ from the CPU's and with
+    the number of runs that share its call (decisions 037 and 048, docs/devices.md)."""

@@ -357,14 +357,16 @@ def blocked_at(blocked: jax.Array, x: jax.Array, y: jax.Array) -> jax.Array:
     return jnp.where(inside, flat[idx], True)
 
 
-def step_ends(cells: jax.Array, width: int) -> tuple[tuple[jax.Array, jax.Array], ...]:
+def step_ends(cells: jax.Array, width: int
+              ) -> tuple[tuple[jax.Array, jax.Array], tuple[jax.Array, jax.Array]]:
     """``((x_a, y_a), (x_b, y_b))``, each ``int32[..., L-1]``: the coordinates of the two
     ends of every step ``cells[..., i] -> cells[..., i+1]`` of cells on a map ``width``
     cells wide.
 
-    The cells are sliced before they are divided: one XLA loop fusion reading two
-    buffers at offsets one apart (``x[1:] - x[:-1]`` beside a ``y`` already in memory)
-    computed wrong steps on an H200 at 256 runs per call and more, while slicing the
+    The cells are sliced before they are divided: on an H200, XLA loop fusions reading
+    coordinates sliced one cell apart beside coordinates already in memory
+    (``x[1:] - x[:-1]`` beside ``y[1:] - y[:-1]``) computed wrong steps, at 256 runs per
+    call and more, and at 10 when both coordinates were in memory, while slicing the
     cells first computed the CPU's bits there (decision 048). Same values everywhere.
     """
     a, b = cells[..., :-1], cells[..., 1:]

@@ -269,8 +269,8 @@ def heterologous_pairs(
     cond1 = (jnp.right_shift(m1[:, None], o) & 1) == 1
     # Condition (2): the step p1[i+1] -> p2[j]; coordinates of p2 packed in one word.
     m1n = jnp.concatenate([m1[1:], m1[-1:]])
-    x1n = jnp.concatenate([x1[1:], x1[-1:]])
-    y1n = jnp.concatenate([y1[1:], y1[-1:]])
+    c1n = jnp.concatenate([c1[1:], c1[-1:]])  # sliced before dividing: decision 048
+    x1n, y1n = c1n % w, c1n // w
     xy2 = jnp.left_shift(c2 // w, 16) | (c2 % w)
     b = xy2[jnp.clip(j, 0, n - 1)]
     dx = (b & 0xFFFF) - x1n[:, None]

@@ -16,7 +16,7 @@ from hypothesis import given
 from hypothesis import strategies as st
 
 from jaxga import Grid, ParameterError
-from jaxga.core.grid import DIRECTIONS
+from jaxga.core.grid import DIRECTIONS, step_ends
 from jaxga.core.paths import (
     Population,
     cells_to_xy,
@@ -261,3 +261,20 @@ def test_is_loop_free_refuses_a_node_off_the_map_whatever_the_width():
         assert not bool(_loop_free_400(cells, np.int32(3)))
         cells[1] = 1
         assert bool(_loop_free_400(cells, np.int32(3)))
+
+
+def test_step_ends_are_the_coordinates_of_each_steps_two_cells():
+    (xa, ya), (xb, yb) = step_ends(jnp.array([0, 21, 41, 3], jnp.int32), 20)
+    assert [list(map(int, v)) for v in (xa, ya, xb, yb)] == [
+        [0, 1, 1], [0, 1, 2], [1, 1, 3], [1, 2, 0]]
+
+
+@given(st.integers(1, 64), st.lists(st.integers(-5000, 5000), min_size=1, max_size=40))
+def test_step_ends_equal_the_sliced_coordinates_they_replace(width, cells):
+    """Decision 048 moved the slice before the division; the values must not move:
+    floor division and modulo of any int32 cell, a batch of rows too."""
+    c = jnp.asarray(np.array([cells, cells[::-1]], np.int32))
+    (xa, ya), (xb, yb) = step_ends(c, width)
+    x, y = np.asarray(c) % width, np.asarray(c) // width
+    for got, want in ((xa, x[..., :-1]), (ya, y[..., :-1]), (xb, x[..., 1:]), (yb, y[..., 1:])):
+        np.testing.assert_array_equal(np.asarray(got), want)
