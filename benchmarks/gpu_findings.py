@@ -66,9 +66,11 @@ def parts_table(report: dict) -> str:
 
 def body(before: Path, parts: list[Path], reproducer: Path, after: Path) -> str:
     old, new = _load(before / "bisect_old.json"), _load(before / "bisect_new.json")
-    same = [{k: v for k, v in r.items() if k != "s"} for r in new["rows"]]
-    also = sum(1 for r in same if {k: v for k, v in r.items()} in
-               [{k: v for k, v in o.items() if k != "s"} for o in old["rows"]])
+    def timeless(rows: list[dict]) -> list[dict]:
+        return [{k: v for k, v in r.items() if k != "s"} for r in rows]
+
+    same, old_rows = timeless(new["rows"]), timeless(old["rows"])
+    also = sum(r in old_rows for r in same)
     repro = _load(reproducer)
     names = [k for k in repro["rows"][0] if k not in ("runs", "rows", "s")]
     doctor, init = _load(after / "doctor.json"), _load(after / "bisect_init.json")

@@ -9,7 +9,7 @@ import jax
 import jax.numpy as jnp
 
 from jaxga.core.dtypes import F32
-from jaxga.core.grid import Grid, proximity_obstacles, step_ends
+from jaxga.core.grid import Grid, proximity_obstacles
 from jaxga.core.path_geometry import Geometry, check_grid, geometry
 
 __all__ = ["CLEARANCE_CHUNK", "CLEARANCE_PIECE", "CLEARANCE_RADIUS", "clearance_band",
@@ -158,7 +158,7 @@ def clearance_band(grid: Grid, g: Geometry,
     if g.cells.shape[0] == 1:
         a = b = (g.x, g.y)
     else:  # from the cells sliced first, not from sliced coordinates: decision 048
-        a, b = step_ends(g.cells, w)
+        a, b = g.ends
     segs = (a[0], a[1], b[0], b[1])
     n_seg = a[0].shape[0]
     span = jnp.maximum(jnp.abs(b[0] - a[0]), jnp.abs(b[1] - a[1]))

@@ -73,7 +73,7 @@ from jaxga.core.clearance import (
 )
 from jaxga.core.dtypes import F32
 from jaxga.core.errors import ParameterError
-from jaxga.core.grid import Grid, proximity_obstacles, step_ends
+from jaxga.core.grid import Grid, proximity_obstacles
 from jaxga.core.path_geometry import (
     MAX_SIDE,
     Geometry,
@@ -278,7 +278,7 @@ def imga_energy(grid: Grid, cells: jax.Array, length: jax.Array) -> jax.Array:
 def _imga_energy(grid: Grid, g: Geometry) -> jax.Array:
     _, w = check_grid(grid)
     goal = jnp.asarray(grid.goal, dtype=jnp.int32)
-    (xa, ya), _ = step_ends(g.cells, w)  # not g.x[:-1] beside g.dx: decision 048
+    (xa, ya), _ = g.ends  # not g.x[:-1] beside g.dx: decision 048
     sx = jnp.sign(goal % jnp.int32(w) - xa)
     sy = jnp.sign(goal // jnp.int32(w) - ya)
     hx = sx * g.dx

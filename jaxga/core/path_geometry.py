@@ -124,6 +124,8 @@ class Geometry(NamedTuple):
     cross: jax.Array  # int32[L-1]: incoming x segment j (0 where no incoming)
     dot: jax.Array  # int32[L-1]
     turning: jax.Array  # bool[L-1]: the path turns where segment j starts
+    ends: tuple  # ((x_a, y_a), (x_b, y_b)), int32[L-1] each: segment j's two ends
+    #              (jaxga.core.grid.step_ends: from the cells sliced first, decision 048)
 
 
 def path_nodes(
@@ -145,7 +147,7 @@ def path_nodes(
 def geometry(grid: Grid, cells: jax.Array, length: jax.Array) -> Geometry:
     cells, x, y, node, n = path_nodes(grid, cells, length)
     j = jnp.arange(cells.shape[0], dtype=jnp.int32)
-    (xa, ya), (xb, yb) = step_ends(cells, grid.width)  # not x[1:] - x[:-1]: decision 048
+    ends = (xa, ya), (xb, yb) = step_ends(cells, grid.width)  # not x[1:] - x[:-1]: 048
     dx = xb - xa
     dy = yb - ya
     moving = (dx != 0) | (dy != 0)
@@ -162,4 +164,4 @@ def geometry(grid: Grid, cells: jax.Array, length: jax.Array) -> Geometry:
     dot = in_x * dx + in_y * dy
     has_in = (in_x != 0) | (in_y != 0)
     turning = moving & has_in & ((cross != 0) | (dot < 0))
-    return Geometry(cells, x, y, node, dx, dy, moving, cross, dot, turning)
+    return Geometry(cells, x, y, node, dx, dy, moving, cross, dot, turning, ends)
