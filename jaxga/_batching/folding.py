@@ -14,11 +14,20 @@ computation receives the lane arrays with all levels flattened into one leading
 dimension, and is traced only then, once. Values the computation closes over are
 hoisted into explicit operands first (:func:`hoist`); an operand batched at no level
 (the map) stays one copy, one batched at some levels only is broadcast.
+
+A client may shape its computation for the platform it is lowered for
+(:func:`on_accelerator`): on the CPU a loop over small blocks of lanes is fastest (the
+blocks fit the caches and the work skipped is real time); on a GPU or TPU every
+iteration of a loop costs a chain of kernel launches whatever its width, so one wide
+block is fastest. Whatever the platform, each lane computes what it computes alone, so
+the layout changes no result (docs/devices.md, "Exactness").
 """
 
 from __future__ import annotations
 
-from collections.abc import Callable, Sequence
+import contextlib
+import contextvars
+from collections.abc import Callable, Iterator, Sequence
 from typing import Any
 
 import jax
@@ -27,7 +36,7 @@ import jax.numpy as jnp
 import numpy as np
 from jax.interpreters import batching, mlir
 
-__all__ = ["FlatCall", "fold_call", "hoist"]
+__all__ = ["FlatCall", "fold_call", "hoist", "layout_as", "on_accelerator"]
 
 FlatCall = Callable[[tuple, list, list, list], list]
 """``client(lead, lanes, operands, axes) -> outputs``: ``lead`` is the tuple of folded
@@ -35,6 +44,54 @@ FlatCall = Callable[[tuple, list, list, list], list]
 flattened into ONE leading dimension of ``prod(lead)`` (no extra dimension without
 ``vmap``); ``operands[j]`` either shared (``axes[j] is None``) or with the same
 flattened leading dimension (``axes[j] == 0``). The outputs have the lanes' layout."""
+
+
+_PLATFORMS: contextvars.ContextVar[tuple[str, ...] | None] = contextvars.ContextVar(
+    "jaxga_fold_platforms", default=None)
+"""The platforms the folded call whose client is being traced is lowered for (None
+outside a client)."""
+
+_FORCED: contextvars.ContextVar[str | None] = contextvars.ContextVar(
+    "jaxga_fold_layout", default=None)
+
+
+def on_accelerator() -> bool:
+    """Whether the client being traced (:func:`fold_call`) lays its lanes out for an
+    accelerator: True when the program is lowered for platforms none of which is the
+    CPU (a GPU or TPU), or eagerly run where JAX's default backend is not the CPU; False
+    outside a client and in a program lowered for several platforms one of which is the
+    CPU. :func:`layout_as` overrides it."""
+    forced = _FORCED.get()
+    if forced is not None:
+        return forced != "cpu"
+    platforms = _PLATFORMS.get()
+    return bool(platforms) and "cpu" not in platforms
+
+
+@contextlib.contextmanager
+def layout_as(platform: str) -> Iterator[None]:
+    """Clients lowered inside this scope lay their lanes out as on ``platform`` (``"cpu"``
+    or an accelerator's name, ``"cuda"``), whatever they are lowered for.
+
+    For tests and benchmarks that run the accelerators' layout on the CPU: the results
+    must be the same bits. Only programs traced and lowered inside the scope are
+    affected, and ``jax.jit`` keeps compiled programs by function and argument shapes,
+    not by this scope: use a function object of its own inside it.
+    """
+    token = _FORCED.set(str(platform))
+    try:
+        yield
+    finally:
+        _FORCED.reset(token)
+
+
+@contextlib.contextmanager
+def _platforms(platforms: tuple[str, ...]) -> Iterator[None]:
+    token = _PLATFORMS.set(tuple(platforms))
+    try:
+        yield
+    finally:
+        _PLATFORMS.reset(token)
 
 
 def hoist(fn: Callable, *example: Any) -> tuple[Callable, list]:
@@ -167,7 +224,23 @@ def _batch_rule(args: Sequence[jax.Array], dims: Sequence[Any], *, client: FlatC
     return out, [0] * len(out)
 
 
-fold_p.def_impl(_folded_call)
+def _eager(*args: jax.Array, **params: Any) -> list:
+    """The folded call run eagerly: laid out for JAX's default backend, where it runs."""
+    with _platforms((jax.default_backend(),)):
+        return _folded_call(*args, **params)
+
+
+_LOWER = mlir.lower_fun(_folded_call, multiple_results=True)
+
+
+def _lowering(ctx: Any, *args: Any, **params: Any) -> Any:
+    """The folded call lowered with the client traced for the platforms of the program
+    (:func:`on_accelerator`)."""
+    with _platforms(tuple(ctx.platforms or ctx.module_context.platforms)):
+        return _LOWER(ctx, *args, **params)
+
+
+fold_p.def_impl(_eager)
 fold_p.def_abstract_eval(_abstract_eval)
 batching.primitive_batchers[fold_p] = _batch_rule
-mlir.register_lowering(fold_p, mlir.lower_fun(_folded_call, multiple_results=True))
+mlir.register_lowering(fold_p, _lowering)

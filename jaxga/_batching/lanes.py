@@ -22,6 +22,11 @@ run's 60 initial walks or its 5-15 connections of a generation) the loop is one 
 ``while_loop`` over all lanes. At that width an iteration costs mostly its fixed
 overhead whatever the number of lanes, so compaction saves little, and the two-phase
 form compiles the body twice (decision 001).
+
+On a GPU or TPU (:func:`jaxga._batching.folding.on_accelerator`) the loop is always one
+plain ``while_loop`` over all lanes: there an iteration costs a chain of kernel launches
+whatever its width, so the fewest iterations (the slowest lane's count) are fastest, and
+compaction only adds iterations and kernels (decision 049).
 """
 
 from __future__ import annotations
@@ -33,7 +38,7 @@ import jax
 import jax.numpy as jnp
 import numpy as np
 
-from jaxga._batching.folding import fold_call, hoist
+from jaxga._batching.folding import fold_call, hoist, on_accelerator
 from jaxga._batching.scatter import true_first_order, true_first_positions
 
 __all__ = ["lane_while_loop"]
@@ -85,7 +90,8 @@ def lane_while_loop(
             loop runs every lane to the end, as ``vmap`` of a ``while_loop`` does, and
             the body is compiled once. A narrow batch (one run's population) gains
             little from compaction: its iterations cost mostly their fixed overhead
-            whatever the width.
+            whatever the width. On an accelerator every loop is plain (module
+            docstring).
 
     Returns:
         The final carry, equal bit for bit to the plain ``while_loop``'s.
@@ -150,7 +156,7 @@ def _run(cond_fun, body_fun, carry_tree, lead, flat_c, flat_o, axes, shrink, mas
         return c
 
     m = n // shrink
-    if m < 1 or n < min_lanes:
+    if m < 1 or n < min_lanes or on_accelerator():
         flat_c = loop(jnp.any, flat_c, flat_o)
     elif narrow:
         # One loop at width m: each iteration advances the first m unfinished lanes and

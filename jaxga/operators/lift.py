@@ -26,7 +26,7 @@ import jax
 import jax.numpy as jnp
 import numpy as np
 
-from jaxga._batching.folding import fold_call, hoist
+from jaxga._batching.folding import fold_call, hoist, on_accelerator
 from jaxga._batching.scatter import true_first_order
 from jaxga.core.grid import Grid
 from jaxga.core.paths import Population
@@ -38,6 +38,7 @@ __all__ = [
     "over_individuals_gated",
     "over_pairs",
     "over_pairs_gated",
+    "pool_width",
     "spliced_pairs_map",
     "windowed_map",
 ]
@@ -124,6 +125,15 @@ wider): about the best width both for 100 runs in one ``vmap`` and for the block
 runs that ``jaxga.api`` runs per device, where :data:`POOL_SHRINK` 4 gives it
 (decision 004). The results do not depend on the width."""
 
+ACCELERATOR_POOL_MAX = 1 << 17
+"""Largest block of :func:`gated_map` on a GPU or TPU
+(:func:`jaxga._batching.folding.on_accelerator`), where a block is all the entries of
+the folded batch up to this many: 2048 runs of 60 individuals are one block. There an
+iteration of the block loop costs a chain of kernel launches whatever its width, so one
+wide block is faster than many small ones, although it computes the operator for the
+entries the gate skips as well (decision 049). The results do not depend on the
+width."""
+
 
 def gated_map(
     fn: Callable,
@@ -150,7 +160,8 @@ def gated_map(
     Under ``vmap`` (runs, islands) the applied entries of ALL the batch's calls are
     pooled (:func:`jaxga._batching.folding.fold_call`): blocks of ``block * R / POOL_SHRINK``
     (at most :data:`POOL_MAX`, at least ``block``)
-    entries for ``R`` calls, as many as the batch's applied entries need. Without
+    entries for ``R`` calls, as many as the batch's applied entries need (on a GPU or
+    TPU: one block of all ``R * N`` entries, at most :data:`ACCELERATOR_POOL_MAX`). Without
     pooling every run paid the block count of its busiest run (for SGA's mutation of
     100 runs: 1,500 to 2,250 operator evaluations for about 1,800 mutants; pooled,
     about 1,900). Each entry computes exactly what it computes alone.
@@ -194,13 +205,24 @@ def gated_map(
     def client(lead, lanes, operands, axes):
         r = int(np.prod(lead, dtype=np.int64)) if lead else 1
         flat = [x.reshape((r * n,) + x.shape[1 + bool(lead):]) for x in lanes]
-        width = b if not lead else max(b, min(-(-b * r // POOL_SHRINK), POOL_MAX))
+        width = pool_width(b, r, n)
         out = _blocks(fn_op, flat[0], flat[1:1 + n_args], flat[1 + n_args:], operands,
                       axes, n, width, narrow)
         return [x.reshape(((r, n) if lead else (n,)) + x.shape[1:]) for x in out]
 
     out = fold_call(client, [apply, *args, *defaults], consts, defaults)
     return tuple(out)
+
+
+def pool_width(block: int, calls: int, per_call: int) -> int:
+    """The block width of :func:`gated_map` over ``calls`` folded calls (1 without
+    ``vmap``) of ``per_call`` entries each, with a per-call block of ``block``: on a GPU
+    or TPU (:func:`jaxga._batching.folding.on_accelerator`) all the entries, at most
+    :data:`ACCELERATOR_POOL_MAX`; on the CPU ``block * calls / POOL_SHRINK``, at most
+    :data:`POOL_MAX`; never less than ``block``."""
+    if on_accelerator():
+        return max(block, min(calls * per_call, ACCELERATOR_POOL_MAX))
+    return max(block, min(-(-block * calls // POOL_SHRINK), POOL_MAX))
 
 
 def _blocks(fn_op, apply, args, defaults, consts, axes, n, b, narrow=None):

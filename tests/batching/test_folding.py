@@ -12,7 +12,7 @@ import jax.numpy as jnp
 import numpy as np
 import pytest
 
-from jaxga._batching.folding import fold_call, hoist
+from jaxga._batching.folding import fold_call, hoist, layout_as, on_accelerator
 
 
 def _i32(x):
@@ -131,3 +131,55 @@ def test_declared_outputs_keep_weak_types_and_take_numpy_values():
     assert _times_bf16_jit(np.float32(1.5)).dtype == jnp.float32
     (out,) = fold_call(_ident, [np.zeros(3)], [], [np.zeros(3)])  # float64 -> float32
     assert out.dtype == jnp.float32
+
+
+def _platform_probe(seen):
+    """A client that records :func:`on_accelerator` as it is traced."""
+
+    def client(lead, lanes, operands, axes):
+        seen.append(on_accelerator())
+        return lanes
+
+    return client
+
+
+@pytest.mark.parametrize("platforms, accelerator", [
+    (("cpu",), False), (("cuda",), True), (("rocm",), True), (("tpu",), True),
+    (("cpu", "cuda"), False)])
+def test_a_client_knows_whether_its_program_is_lowered_for_an_accelerator(platforms,
+                                                                          accelerator):
+    """Lowered for a GPU or TPU (here only lowered, never run), the client lays its lanes
+    out for an accelerator; for the CPU, or for several platforms one of which is the
+    CPU, as on the CPU."""
+    seen = []
+    x = np.zeros((2, 3), np.int32)
+    jax.jit(jax.vmap(lambda v: fold_call(_platform_probe(seen), [v], [], [v])[0])).trace(
+        x).lower(lowering_platforms=platforms)
+    assert seen == [accelerator]
+
+
+def test_layout_as_overrides_the_platform_and_ends_with_its_scope():
+    """Outside a client the layout is the CPU's; ``layout_as`` forces one for programs
+    lowered inside it (either way), and the platform's own again after it."""
+    assert not on_accelerator()
+    x = np.zeros((2, 3), np.int32)
+    seen = []
+
+    def lower(platform):
+        fn = jax.vmap(lambda v: fold_call(_platform_probe(seen), [v], [], [v])[0])
+        jax.jit(fn).trace(x).lower(lowering_platforms=(platform,))
+
+    with layout_as("cuda"):
+        assert on_accelerator()
+        lower("cpu")
+    with layout_as("cpu"):
+        lower("cuda")
+    lower("cuda")
+    assert seen == [True, False, True]
+    assert not on_accelerator()
+
+
+def test_an_eager_call_is_laid_out_for_the_default_backend():
+    seen = []
+    fold_call(_platform_probe(seen), [_i32(np.arange(3))], [], [_i32(np.arange(3))])
+    assert seen == [jax.default_backend() != "cpu"]

@@ -16,6 +16,7 @@ import jax.numpy as jnp
 import numpy as np
 import pytest
 
+from jaxga._batching.folding import layout_as
 from jaxga._batching.lanes import lane_while_loop
 
 _PLAIN = jax.lax.while_loop
@@ -189,3 +190,41 @@ def test_fewer_lanes_than_min_lanes_run_as_one_plain_loop(narrow):
         assert text[40] != text[41]
     else:
         assert text[40].count("stablehlo.while") == 2
+
+
+def _collatz_all(xs, bounds, table):
+    """``_collatz_nested``'s three carries, for a program of its own (:func:`layout_as`)."""
+    return _collatz_nested.__wrapped__(xs, bounds, table)
+
+
+@pytest.mark.parametrize("narrow", [False, True])
+def test_on_an_accelerator_every_lane_loop_is_one_plain_loop(narrow):
+    """Laid out for an accelerator (lowered for ``cuda``, or forced on the CPU), the lane
+    loop is the plain ``while_loop`` over all lanes whatever its form (on the CPU the
+    two-phase form has two loops, the narrow one picks lanes), with its carries."""
+    target = np.random.default_rng(3).integers(0, 50, 40).astype(np.int32)
+
+    def lowered(min_lanes, platform):
+        lanes = functools.partial(lane_while_loop, narrow=narrow, min_lanes=min_lanes)
+        fn = jax.vmap(functools.partial(_count_by_7, lanes))
+        return fn, jax.jit(fn).trace(target).lower(lowering_platforms=(platform,)).as_text()
+
+    fn, cuda = lowered(1, "cuda")
+    assert lowered(1, "cpu")[1].count("stablehlo.while") == (1 if narrow else 2)
+    assert cuda == lowered(10**9, "cpu")[1]  # the plain loop's program, to the letter
+    with layout_as("cuda"):
+        got = jax.jit(lambda t: fn(t))(target)
+    for g, w in zip(got, _BY_7_PLAIN(target)):
+        assert np.array_equal(np.asarray(g), np.asarray(w))
+
+
+def test_the_accelerators_layout_equals_the_while_loop_under_nested_vmaps():
+    rng = np.random.default_rng(0)
+    xs = rng.integers(1, 3000, (5, 9)).astype(np.int32)
+    bounds = rng.integers(5, 200, (5, 9)).astype(np.int32)
+    table = rng.normal(size=37).astype(np.float32)
+    with layout_as("cuda"):
+        want, wide, narrowed = jax.jit(_collatz_all)(xs, bounds, table)
+    for got in (wide, narrowed):
+        for g, w in zip(got, want):
+            assert np.array_equal(np.asarray(g), np.asarray(w))

@@ -10,8 +10,9 @@ floating-point accumulation whose order XLA chooses.
   ``order_sites.toml`` (with the reason its result is defined), and the lowered program
   calls no custom kernel;
 * every preset's run compiled with every ``set`` scatter's updates in reverse order and
-  the ties of unstable sorts flipped (:mod:`tests.lowering_variants`) gives
-  ``jaxga.run``'s result bit for bit;
+  the ties of unstable sorts flipped (:mod:`tests.lowering_variants`), in the layout of
+  an accelerator's program (``jaxga._batching.folding.layout_as``), gives ``jaxga.run``'s
+  result bit for bit;
 * the variants themselves change a program that does rely on those orders (the check is
   not vacuous);
 * a run's initial population is the same alone, in a call of 10 and in one of 256.
@@ -30,6 +31,7 @@ import pytest
 from jax.extend.core import Jaxpr
 
 import jaxga
+from jaxga._batching.folding import layout_as
 from jaxga.config.presets import preset_names
 from tests import canonical
 from tests.api.test_ga import assert_seed_for_seed
@@ -168,14 +170,16 @@ def test_the_variants_change_programs_that_rely_on_those_orders():
 
 @pytest.mark.slow  # a whole GA compiled again for each preset
 @pytest.mark.parametrize("preset", preset_names())
-def test_a_run_is_the_same_with_scatters_reversed_and_sort_ties_flipped(preset):
-    """``GA.run`` compiled under :func:`altered_lowering` gives the canonical
-    ``jaxga.run``'s seeds bit for bit: no preset relies on the order of a scatter's
-    updates or on how an unstable sort orders ties."""
+def test_a_run_laid_out_for_a_gpu_with_scatters_reversed_and_sort_ties_flipped(preset):
+    """``GA.run`` compiled as a GPU's program would be, under :func:`altered_lowering`
+    and in the accelerators' layout (``layout_as``: one block for all gated entries,
+    plain lane loops; decision 049), gives the canonical ``jaxga.run``'s seeds bit for
+    bit: no preset relies on the order of a scatter's updates, on how an unstable sort
+    orders ties, or on how its batch of runs is laid out."""
     ref = canonical.run(preset, SEEDS)
     ga = jaxga.GA(preset, canonical.MAP, generations=canonical.GENERATIONS)
     keys = jax.vmap(jax.random.PRNGKey)(jnp.asarray(SEEDS, jnp.uint32))
-    with altered_lowering():
+    with altered_lowering(), layout_as("cuda"):
         out = jax.jit(jax.vmap(lambda k, p: ga.run(k, p), (0, None)))(keys,
                                                                        ga.default_params)
     assert_seed_for_seed(out, ref)
