@@ -7,7 +7,7 @@
 #   echo /.carry/ >> .git/info/exclude                         # .carry is ignored by git
 #
 # then   run: bash benchmarks/gpu_session.sh diagnose     carry: [".carry"]
-# and    run: bash benchmarks/gpu_session.sh verify speed
+# and    run: bash benchmarks/gpu_session.sh verify launches speed
 # (each phase's time limit is below; decision 048 says what one H200 session took)
 # (tried on a CPU: BISECT_RUNS="4 16" DOCTOR_PRESETS=sga SPEED_ARGS=--small OUT=/tmp/o ...)
 #
@@ -22,13 +22,17 @@
 #      with whole runs of a few presets.
 # verify, three processes at once: jaxga doctor --quick, jaxga doctor with whole runs of a
 #   few presets, and the whole initialisation of 2048 runs in one call against the CPU's.
+# launches, alone on the machine: benchmarks/launches.py for 1000 sga runs on the 20 x 20
+#   map: the kernels a generation runs on the GPU and its time, in the CPU's layout of the
+#   folded loops and in the accelerators' (decision 049).
 # speed, alone on the machine: benchmarks/device_check.py without the main job, on the
 #   20 x 20 and 64 x 64 maps, with jaxga's runs initialised INIT_BLOCK at a time (default:
 #   2048 when this session's doctor --quick agreed, else the platform's 10): the sweep of
 #   16 x 1000 sga runs and the throughput table (the agreement too unless SPEED_SKIP
 #   names it).
 # Everything lands in $OUT; record the device check with
-# `python benchmarks/device_check.py --from-json device_check.json`.
+# `python benchmarks/device_check.py --from-json device_check.json`, the launches with
+# `python benchmarks/launches.py --from-json launches.json`.
 set -uo pipefail
 export PYTHONUNBUFFERED=1 XLA_PYTHON_CLIENT_PREALLOCATE=false
 OUT="${OUT:-$(mktemp -d)}"
@@ -86,6 +90,13 @@ verify)
     wait "${pids[@]}"
     for f in doctor_quick doctor bisect_init; do echo "--- $f"; cat "$LOGS/$f.log"; done
     ;;
+launches)
+    phase "kernels per generation in both layouts"
+    PYTHONPATH="$HERE" JAXGA_TRUST_DEVICE=1 timeout "${LAUNCHES_S:-150}" \
+        "$PY" benchmarks/launches.py --presets sga --maps 20x20 --runs "${LAUNCHES_RUNS:-1000}" \
+        --json "$OUT/launches.json" --no-write
+    echo "launches exit status $?"
+    ;;
 speed)
     phase "device check"
     if [ -z "${INIT_BLOCK:-}" ]; then
@@ -101,7 +112,7 @@ speed)
     echo "device check exit status $?"
     ;;
 *)
-    echo "unknown mode $mode (diagnose, verify, speed)"
+    echo "unknown mode $mode (diagnose, verify, launches, speed)"
     ;;
 esac
 done
