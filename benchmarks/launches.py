@@ -34,6 +34,8 @@ from __future__ import annotations
 import argparse
 import collections
 import json
+import re
+import shlex
 import shutil
 import sys
 import tempfile
@@ -51,23 +53,37 @@ NOT_KERNELS = ("end: ", "ThunkExecutor", "ThreadpoolListener")
 ``end:`` marker)."""
 
 
-def kernel_counts(trace_dir: Path) -> collections.Counter:
+def kernel_counts(trace_dir: Path, backend: str) -> tuple[collections.Counter, list]:
     """Executions of each kernel in the profile under ``trace_dir`` (its XSpace, read with
     ``jax.profiler.ProfileData``, which keeps every event; the Perfetto trace keeps at
-    most a million): the events of the device's planes (``/device:GPU:0``: kernels and
-    copies on its streams) where the profile has one, else XLA:CPU's thunks on the host."""
+    most a million), and the timelines counted. On a GPU: the events of its streams (the
+    lines ``Stream ...`` of the planes ``/device:GPU:N``: kernels and copies); a GPU
+    profile without them (no CUPTI) is refused. On the CPU: XLA:CPU's thunks on the
+    host's threads (with the few Python and runtime events of the call)."""
     from jax.profiler import ProfileData
 
     (path,) = list(trace_dir.rglob("*.xplane.pb"))
     planes = list(ProfileData.from_file(str(path)).planes)
-    devices = [p for p in planes if p.name.startswith("/device:")]
     counts: collections.Counter = collections.Counter()
-    for plane in devices or [p for p in planes if p.name == "/host:CPU"]:
-        for line in plane.lines:
-            for event in line.events:
-                if devices or not event.name.startswith(NOT_KERNELS):
-                    counts[event.name] += 1
-    return counts
+    lines = []
+    if backend == "cpu":
+        for plane in planes:
+            if plane.name == "/host:CPU":
+                for line in plane.lines:
+                    lines.append(line.name)
+                    counts.update(e.name for e in line.events
+                                  if not e.name.startswith(NOT_KERNELS))
+        return counts, lines
+    for plane in planes:
+        if re.fullmatch(r"/device:GPU:\d+", plane.name):
+            for line in plane.lines:
+                if line.name.startswith("Stream"):
+                    lines.append(f"{plane.name} {line.name}")
+                    counts.update(e.name for e in line.events)
+    if not lines:
+        raise SystemExit("launches.py: the profile has no GPU stream (is CUPTI there?): "
+                         f"its planes are {', '.join(p.name for p in planes)}")
+    return counts, lines
 
 
 def measure(preset: str, map_name: str, runs: int, generations: int) -> dict:
@@ -98,7 +114,8 @@ def measure(preset: str, map_name: str, runs: int, generations: int) -> dict:
         try:
             with jax.profiler.trace(str(trace_dir)):
                 jax.block_until_ready(compiled(*args))
-            counts = kernel_counts(trace_dir)
+            counts, row[f"{layout}_timelines"] = kernel_counts(trace_dir,
+                                                               jax.default_backend())
         finally:
             shutil.rmtree(trace_dir, ignore_errors=True)
         row[f"{layout}_kernels_per_gen"] = sum(counts.values()) / generations
@@ -158,7 +175,7 @@ TITLE = "kernels per generation, CPU and accelerators' layouts, on {device}"
 
 
 def main() -> int:
-    ap = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
+    ap = argparse.ArgumentParser(description=__doc__.split("\n\n")[0], allow_abbrev=False)
     ap.add_argument("--runs", type=int, default=1000, help="runs in one vmap (default 1000)")
     ap.add_argument("--generations", type=int, default=2,
                     help="generations of each call (default 2)")
@@ -181,11 +198,11 @@ def main() -> int:
     backend = jax.default_backend()
     device = ("the CPU" if backend == "cpu"
               else f"{jax.device_count()} x {jax.devices()[0].device_kind}")
-    words, kept = _results.command().split(), []
-    for i, w in enumerate(words):  # what is measured: not where the report goes
-        if w != "--no-write" and not w.startswith("--json") and words[i - 1] != "--json":
+    argv, kept = sys.argv, []
+    for i, w in enumerate(argv):  # what is measured: not where the report goes
+        if not (w == "--no-write" or w.startswith("--json") or argv[i - 1] == "--json"):
             kept.append(w)
-    command = " ".join(kept)
+    command = "python " + " ".join(shlex.quote(w) for w in kept)
     report = {"command": command, "commit": _results.commit(), "date": _results._now(),
               "machine": _results.machine(), "backend": backend, "device": device,
               "runs": a.runs, "generations": a.generations, "rows": []}

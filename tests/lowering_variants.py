@@ -85,3 +85,31 @@ def altered_lowering(scatters: bool = True, sorts: bool = True) -> Iterator[None
                 _CPU.pop(p, None)
             else:
                 _CPU[p] = entry
+
+
+@contextlib.contextmanager
+def accelerators_layout() -> Iterator[list]:
+    """Within: programs lowered for the CPU lay their folded loops out as a GPU's
+    (``jaxga._batching.folding.layout_as("cuda")``: one block per gated operator, plain
+    lane loops; decision 049). Yields the list of what each gated operator and lane loop
+    traced inside saw (``on_accelerator()``), so that a test can tell that the layout
+    was in force: empty when no client was traced (a program lowered before was
+    reused), False where it was not."""
+    import jaxga._batching.lanes as lanes
+    import jaxga.operators.lift as lift
+    from jaxga._batching import folding
+
+    seen: list = []
+
+    def spy() -> bool:
+        answer = folding.on_accelerator()
+        seen.append(answer)
+        return answer
+
+    saved = (lanes.on_accelerator, lift.on_accelerator)
+    lanes.on_accelerator = lift.on_accelerator = spy
+    try:
+        with folding.layout_as("cuda"):
+            yield seen
+    finally:
+        lanes.on_accelerator, lift.on_accelerator = saved

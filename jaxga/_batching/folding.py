@@ -54,13 +54,18 @@ outside a client)."""
 _FORCED: contextvars.ContextVar[str | None] = contextvars.ContextVar(
     "jaxga_fold_layout", default=None)
 
+LAYOUT_PLATFORMS = ("cpu", "cuda", "rocm", "tpu")
+"""The platforms :func:`layout_as` takes: the CPU, and JAX's names of the accelerators."""
+
 
 def on_accelerator() -> bool:
     """Whether the client being traced (:func:`fold_call`) lays its lanes out for an
     accelerator: True when the program is lowered for platforms none of which is the
-    CPU (a GPU or TPU), or eagerly run where JAX's default backend is not the CPU; False
-    outside a client and in a program lowered for several platforms one of which is the
-    CPU. :func:`layout_as` overrides it."""
+    CPU (a GPU or TPU), or run eagerly where JAX's default backend is not the CPU (an
+    eager call does not see ``jax.default_device``: on a GPU machine an eager call on
+    the CPU gets the GPU's layout, with the same results); False outside a client and in
+    a program lowered for several platforms one of which is the CPU. :func:`layout_as`
+    overrides it."""
     forced = _FORCED.get()
     if forced is not None:
         return forced != "cpu"
@@ -78,7 +83,11 @@ def layout_as(platform: str) -> Iterator[None]:
     affected, and ``jax.jit`` keeps compiled programs by function and argument shapes,
     not by this scope: use a function object of its own inside it.
     """
-    token = _FORCED.set(str(platform))
+    name = str(platform).lower()
+    if name not in LAYOUT_PLATFORMS:
+        raise ValueError(f"layout_as: unknown platform {platform!r} "
+                         f"(one of {', '.join(LAYOUT_PLATFORMS)})")
+    token = _FORCED.set(name)
     try:
         yield
     finally:

@@ -125,14 +125,19 @@ wider): about the best width both for 100 runs in one ``vmap`` and for the block
 runs that ``jaxga.api`` runs per device, where :data:`POOL_SHRINK` 4 gives it
 (decision 004). The results do not depend on the width."""
 
-ACCELERATOR_POOL_MAX = 1 << 17
+ACCELERATOR_POOL_MAX = 1 << 18
 """Largest block of :func:`gated_map` on a GPU or TPU
 (:func:`jaxga._batching.folding.on_accelerator`), where a block is all the entries of
-the folded batch up to this many: 2048 runs of 60 individuals are one block. There an
-iteration of the block loop costs a chain of kernel launches whatever its width, so one
-wide block is faster than many small ones, although it computes the operator for the
-entries the gate skips as well (decision 049). The results do not depend on the
-width."""
+the folded batch up to this many (and :data:`ACCELERATOR_POOL_BYTES`): 2048 runs of up
+to 128 individuals are one block. There an iteration of the block loop costs a chain of
+kernel launches whatever its width, so one wide block is faster than many small ones,
+although it computes the operator for the entries the gate skips as well (decision 049).
+The results do not depend on the width."""
+
+ACCELERATOR_POOL_BYTES = 1 << 29
+"""Most bytes of entries (the gate, the operator's arguments and its defaults) in one
+block of :func:`gated_map` on a GPU or TPU: on large maps an entry's path is long, and
+the operator's working arrays grow with the block (decision 049)."""
 
 
 def gated_map(
@@ -161,7 +166,8 @@ def gated_map(
     pooled (:func:`jaxga._batching.folding.fold_call`): blocks of ``block * R / POOL_SHRINK``
     (at most :data:`POOL_MAX`, at least ``block``)
     entries for ``R`` calls, as many as the batch's applied entries need (on a GPU or
-    TPU: one block of all ``R * N`` entries, at most :data:`ACCELERATOR_POOL_MAX`). Without
+    TPU: one block of all ``R * N`` entries, at most :data:`ACCELERATOR_POOL_MAX`
+    and :data:`ACCELERATOR_POOL_BYTES`). Without
     pooling every run paid the block count of its busiest run (for SGA's mutation of
     100 runs: 1,500 to 2,250 operator evaluations for about 1,800 mutants; pooled,
     about 1,900). Each entry computes exactly what it computes alone.
@@ -205,7 +211,8 @@ def gated_map(
     def client(lead, lanes, operands, axes):
         r = int(np.prod(lead, dtype=np.int64)) if lead else 1
         flat = [x.reshape((r * n,) + x.shape[1 + bool(lead):]) for x in lanes]
-        width = pool_width(b, r, n)
+        entry_bytes = sum(x.dtype.itemsize * math.prod(x.shape[1:]) for x in flat)
+        width = pool_width(b, r, n, entry_bytes)
         out = _blocks(fn_op, flat[0], flat[1:1 + n_args], flat[1 + n_args:], operands,
                       axes, n, width, narrow)
         return [x.reshape(((r, n) if lead else (n,)) + x.shape[1:]) for x in out]
@@ -214,14 +221,18 @@ def gated_map(
     return tuple(out)
 
 
-def pool_width(block: int, calls: int, per_call: int) -> int:
+def pool_width(block: int, calls: int, per_call: int, entry_bytes: int = 0) -> int:
     """The block width of :func:`gated_map` over ``calls`` folded calls (1 without
     ``vmap``) of ``per_call`` entries each, with a per-call block of ``block``: on a GPU
     or TPU (:func:`jaxga._batching.folding.on_accelerator`) all the entries, at most
-    :data:`ACCELERATOR_POOL_MAX`; on the CPU ``block * calls / POOL_SHRINK``, at most
+    :data:`ACCELERATOR_POOL_MAX` and :data:`ACCELERATOR_POOL_BYTES` of entries of
+    ``entry_bytes`` each; on the CPU ``block * calls / POOL_SHRINK``, at most
     :data:`POOL_MAX`; never less than ``block``."""
     if on_accelerator():
-        return max(block, min(calls * per_call, ACCELERATOR_POOL_MAX))
+        most = ACCELERATOR_POOL_MAX
+        if entry_bytes > 0:
+            most = min(most, max(1, ACCELERATOR_POOL_BYTES // entry_bytes))
+        return max(block, min(calls * per_call, most))
     return max(block, min(-(-block * calls // POOL_SHRINK), POOL_MAX))
 
 

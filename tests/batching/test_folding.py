@@ -179,7 +179,27 @@ def test_layout_as_overrides_the_platform_and_ends_with_its_scope():
     assert not on_accelerator()
 
 
-def test_an_eager_call_is_laid_out_for_the_default_backend():
+def test_an_eager_call_is_laid_out_for_the_default_backend(monkeypatch):
+    """Run eagerly (no lowering), the client is laid out for JAX's default backend."""
     seen = []
-    fold_call(_platform_probe(seen), [_i32(np.arange(3))], [], [_i32(np.arange(3))])
-    assert seen == [jax.default_backend() != "cpu"]
+    x = _i32(np.arange(3))
+    fold_call(_platform_probe(seen), [x], [], [x])
+    monkeypatch.setattr(jax, "default_backend", lambda: "cuda")
+    fold_call(_platform_probe(seen), [x], [], [x])
+    assert seen == [False, True]
+
+
+@pytest.mark.parametrize("name", ["CUDA", "Tpu"])
+def test_layout_as_takes_a_platform_in_any_case(name):
+    with layout_as(name):
+        assert on_accelerator()
+    with layout_as("CPU"):
+        assert not on_accelerator()
+
+
+@pytest.mark.parametrize("name", ["gpu0", "host", ""])
+def test_layout_as_refuses_an_unknown_platform_in_one_line(name):
+    with pytest.raises(ValueError, match="unknown platform") as err:
+        with layout_as(name):
+            pass
+    assert "\n" not in str(err.value)

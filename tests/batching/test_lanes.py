@@ -16,8 +16,8 @@ import jax.numpy as jnp
 import numpy as np
 import pytest
 
-from jaxga._batching.folding import layout_as
 from jaxga._batching.lanes import lane_while_loop
+from tests.lowering_variants import accelerators_layout
 
 _PLAIN = jax.lax.while_loop
 _WIDE = functools.partial(lane_while_loop, narrow=False, min_lanes=1)
@@ -212,8 +212,9 @@ def test_on_an_accelerator_every_lane_loop_is_one_plain_loop(narrow):
     fn, cuda = lowered(1, "cuda")
     assert lowered(1, "cpu")[1].count("stablehlo.while") == (1 if narrow else 2)
     assert cuda == lowered(10**9, "cpu")[1]  # the plain loop's program, to the letter
-    with layout_as("cuda"):
+    with accelerators_layout() as seen:
         got = jax.jit(lambda t: fn(t))(target)
+    assert seen == [True]
     for g, w in zip(got, _BY_7_PLAIN(target)):
         assert np.array_equal(np.asarray(g), np.asarray(w))
 
@@ -223,8 +224,9 @@ def test_the_accelerators_layout_equals_the_while_loop_under_nested_vmaps():
     xs = rng.integers(1, 3000, (5, 9)).astype(np.int32)
     bounds = rng.integers(5, 200, (5, 9)).astype(np.int32)
     table = rng.normal(size=37).astype(np.float32)
-    with layout_as("cuda"):
+    with accelerators_layout() as seen:
         want, wide, narrowed = jax.jit(_collatz_all)(xs, bounds, table)
+    assert seen == [True, True]  # the two lane loops (the plain one has no client)
     for got in (wide, narrowed):
         for g, w in zip(got, want):
             assert np.array_equal(np.asarray(g), np.asarray(w))

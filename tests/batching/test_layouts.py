@@ -3,8 +3,9 @@ GPU or TPU, a gated operator computes all the entries of its folded batch in one
 (``jaxga.operators.lift.pool_width``), with the same results as the CPU's small blocks.
 
 Programs are only lowered for ``cuda`` (no GPU is needed); results come from the CPU with
-the accelerators' layout forced (``jaxga._batching.folding.layout_as``), each in a
-function object of its own so that no program compiled before is reused.
+the accelerators' layout forced (``tests.lowering_variants.accelerators_layout``), each
+in a function object of its own so that no program compiled before is reused (the
+layout's spy says so).
 """
 
 from __future__ import annotations
@@ -15,12 +16,14 @@ import pytest
 
 from jaxga._batching.folding import layout_as
 from jaxga.operators.lift import (
+    ACCELERATOR_POOL_BYTES,
     ACCELERATOR_POOL_MAX,
     POOL_MAX,
     POOL_SHRINK,
     gated_map,
     pool_width,
 )
+from tests.lowering_variants import accelerators_layout
 
 CALLS, ENTRIES = 4, 10
 
@@ -59,8 +62,9 @@ def test_lowered_for_a_gpu_a_gated_map_is_one_block_of_all_its_entries():
 def test_the_accelerators_blocks_give_the_cpus_results():
     apply, x, offset = _inputs()
     want = np.where(apply, x * 3 + offset[:, None], -x)
-    with layout_as("cuda"):
+    with accelerators_layout() as seen:
         wide = jax.jit(lambda *a: _gated()(*a))(apply, x, offset)
+    assert seen == [True]  # traced here, laid out for a GPU
     small = jax.jit(lambda *a: _gated()(*a))(apply, x, offset)
     np.testing.assert_array_equal(wide, want)
     np.testing.assert_array_equal(small, want)
@@ -78,3 +82,14 @@ def test_pool_width_on_the_cpu_and_on_an_accelerator(block, calls, per_call):
     assert accelerator >= cpu
     # every entry in one block whenever they fit the largest
     assert accelerator >= min(calls * per_call, ACCELERATOR_POOL_MAX)
+
+
+def test_on_an_accelerator_a_block_holds_at_most_its_bytes_of_entries():
+    """Entries of long paths make narrower blocks: at most ``ACCELERATOR_POOL_BYTES``
+    of them, never fewer than the per-call block; the CPU ignores their size."""
+    many, big = 2048 * 60, ACCELERATOR_POOL_BYTES // 1000
+    with layout_as("cuda"):
+        assert pool_width(15, 2048, 60, entry_bytes=1300) == min(many, ACCELERATOR_POOL_MAX)
+        assert pool_width(15, 2048, 60, entry_bytes=big) == 1000
+        assert pool_width(15, 2048, 60, entry_bytes=ACCELERATOR_POOL_BYTES * 2) == 15
+    assert pool_width(15, 2048, 60, entry_bytes=big) == pool_width(15, 2048, 60)

@@ -11,7 +11,7 @@ floating-point accumulation whose order XLA chooses.
   calls no custom kernel;
 * every preset's run compiled with every ``set`` scatter's updates in reverse order and
   the ties of unstable sorts flipped (:mod:`tests.lowering_variants`), in the layout of
-  an accelerator's program (``jaxga._batching.folding.layout_as``), gives ``jaxga.run``'s
+  an accelerator's program (and a few presets in the CPU's), gives ``jaxga.run``'s
   result bit for bit;
 * the variants themselves change a program that does rely on those orders (the check is
   not vacuous);
@@ -20,6 +20,7 @@ floating-point accumulation whose order XLA chooses.
 
 from __future__ import annotations
 
+import contextlib
 import re
 import sys
 from pathlib import Path
@@ -31,12 +32,11 @@ import pytest
 from jax.extend.core import Jaxpr
 
 import jaxga
-from jaxga._batching.folding import layout_as
 from jaxga.config.presets import preset_names
 from tests import canonical
 from tests.api.test_ga import assert_seed_for_seed
 from tests.jaxprs import sub_jaxprs
-from tests.lowering_variants import altered_lowering
+from tests.lowering_variants import accelerators_layout, altered_lowering
 
 if sys.version_info >= (3, 11):
     import tomllib
@@ -168,20 +168,33 @@ def test_the_variants_change_programs_that_rely_on_those_orders():
     np.testing.assert_array_equal(plain[3], varied[3])  # a stable sort: one order
 
 
+CPU_LAYOUT_PRESETS = ("sga", "iga_zhu", "mpmga")
+"""Presets whose run is also checked with the CPU's layout of the folded loops: it has
+scatters of its own (the compacted lanes, the gated blocks' write-back), and a program
+lowered for several platforms, one of them the CPU, runs it on a GPU too (decision 049).
+Every preset is checked in the accelerators' layout."""
+
+
 @pytest.mark.slow  # a whole GA compiled again for each preset
-@pytest.mark.parametrize("preset", preset_names())
-def test_a_run_laid_out_for_a_gpu_with_scatters_reversed_and_sort_ties_flipped(preset):
-    """``GA.run`` compiled as a GPU's program would be, under :func:`altered_lowering`
-    and in the accelerators' layout (``layout_as``: one block for all gated entries,
-    plain lane loops; decision 049), gives the canonical ``jaxga.run``'s seeds bit for
-    bit: no preset relies on the order of a scatter's updates, on how an unstable sort
-    orders ties, or on how its batch of runs is laid out."""
+@pytest.mark.parametrize("preset, layout", [(p, "accelerator") for p in preset_names()]
+                         + [(p, "cpu") for p in CPU_LAYOUT_PRESETS])
+def test_a_run_is_the_same_with_scatters_reversed_and_sort_ties_flipped(preset, layout):
+    """``GA.run`` compiled under :func:`altered_lowering` gives the canonical
+    ``jaxga.run``'s seeds bit for bit: no preset relies on the order of a scatter's
+    updates or on how an unstable sort orders ties. Laid out as a GPU's program
+    (:func:`accelerators_layout`: one block for all gated entries, plain lane loops;
+    decision 049) as well, where no preset relies on how its batch is laid out either."""
     ref = canonical.run(preset, SEEDS)
     ga = jaxga.GA(preset, canonical.MAP, generations=canonical.GENERATIONS)
     keys = jax.vmap(jax.random.PRNGKey)(jnp.asarray(SEEDS, jnp.uint32))
-    with altered_lowering(), layout_as("cuda"):
+    with contextlib.ExitStack() as scope:
+        scope.enter_context(altered_lowering())
+        seen = (scope.enter_context(accelerators_layout()) if layout == "accelerator"
+                else None)
         out = jax.jit(jax.vmap(lambda k, p: ga.run(k, p), (0, None)))(keys,
                                                                        ga.default_params)
+    if seen is not None:
+        assert seen and all(seen)  # the folded loops were traced, laid out for a GPU
     assert_seed_for_seed(out, ref)
 
 
