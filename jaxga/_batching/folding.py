@@ -87,20 +87,18 @@ def layout_as(platform: str) -> Iterator[None]:
     if name not in LAYOUT_PLATFORMS:
         raise ValueError(f"layout_as: unknown platform {platform!r} "
                          f"(one of {', '.join(LAYOUT_PLATFORMS)})")
-    token = _FORCED.set(name)
-    try:
+    with _holding(_FORCED, name):
         yield
-    finally:
-        _FORCED.reset(token)
 
 
 @contextlib.contextmanager
-def _platforms(platforms: tuple[str, ...]) -> Iterator[None]:
-    token = _PLATFORMS.set(tuple(platforms))
+def _holding(var: contextvars.ContextVar, value: Any) -> Iterator[None]:
+    """``var`` set to ``value`` within the scope, and back to what it was after."""
+    token = var.set(value)
     try:
         yield
     finally:
-        _PLATFORMS.reset(token)
+        var.reset(token)
 
 
 def hoist(fn: Callable, *example: Any) -> tuple[Callable, list]:
@@ -235,7 +233,7 @@ def _batch_rule(args: Sequence[jax.Array], dims: Sequence[Any], *, client: FlatC
 
 def _eager(*args: jax.Array, **params: Any) -> list:
     """The folded call run eagerly: laid out for JAX's default backend, where it runs."""
-    with _platforms((jax.default_backend(),)):
+    with _holding(_PLATFORMS, (jax.default_backend(),)):
         return _folded_call(*args, **params)
 
 
@@ -245,7 +243,7 @@ _LOWER = mlir.lower_fun(_folded_call, multiple_results=True)
 def _lowering(ctx: Any, *args: Any, **params: Any) -> Any:
     """The folded call lowered with the client traced for the platforms of the program
     (:func:`on_accelerator`)."""
-    with _platforms(tuple(ctx.platforms or ctx.module_context.platforms)):
+    with _holding(_PLATFORMS, tuple(ctx.platforms or ctx.module_context.platforms)):
         return _LOWER(ctx, *args, **params)
 
 
