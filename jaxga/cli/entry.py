@@ -24,7 +24,7 @@ from jaxga._runtime.parallel import (
 )
 from jaxga.cli.options import EXIT_BAD_INPUT, EXIT_DEVICE_DISAGREES, EXIT_NO_PATH, apply_scenario
 from jaxga.cli.outputs import check_outputs, write_empty_path
-from jaxga.cli.parser import build_parser
+from jaxga.cli.parser import build_parser, shortened
 from jaxga.core.errors import EndpointError, JaxgaError, NoPathError
 from jaxga.core.files import remove_temporaries
 
@@ -64,7 +64,7 @@ def one_line_warnings(show: Callable[..., None]) -> Callable[..., None]:
         out = sys.stderr if file is None else file
         text = str(message)
         if category.__module__.split(".")[0] == "jaxga":
-            print(f"jaxga: warning: {text}", file=out)
+            print(f"jaxga: warning: {shortened(text)}", file=out)
         elif "compilation cache" in text and "jax" in str(filename):
             # JAX's multi-line warning for each cache entry it cannot read or write: one
             # line per process, naming the folder; the program is compiled instead
@@ -101,24 +101,24 @@ def main(argv: Sequence[str] | None = None) -> int:
     except ProcessLostError as e:
         # Exit at once: a normal exit would wait in jax.distributed's shutdown barrier
         # for the lost process (up to --process-timeout).
-        print(f"jaxga: error: {e}", file=sys.stderr, flush=True)
+        print(f"jaxga: error: {shortened(str(e))}", file=sys.stderr, flush=True)
         sys.stdout.flush()
         os._exit(EXIT_PROCESS_LOST)
     except NoPathError as e:
         write_empty_path(args)  # found before the run: no stale path left to follow
-        print(f"jaxga: no path: {e}", file=sys.stderr)
+        print(f"jaxga: no path: {shortened(str(e))}", file=sys.stderr)
         return EXIT_NO_PATH
     except DeviceDisagrees as e:
-        print(f"jaxga: error: {e}", file=sys.stderr)
+        print(f"jaxga: error: {shortened(str(e))}", file=sys.stderr)
         return EXIT_DEVICE_DISAGREES
     except EndpointError as e:
-        print(f"jaxga: bad start or goal: {e}", file=sys.stderr)
+        print(f"jaxga: bad start or goal: {shortened(str(e))}", file=sys.stderr)
         return EXIT_BAD_INPUT
     except JaxgaError as e:
-        print(f"jaxga: error: {e}", file=sys.stderr)
+        print(f"jaxga: error: {shortened(str(e))}", file=sys.stderr)
         return EXIT_BAD_INPUT
     except OSError as e:
-        print(f"jaxga: error: {e.strerror or e}: {e.filename or ''}".rstrip(": "),
+        print(shortened(f"jaxga: error: {e.strerror or e}: {e.filename or ''}".rstrip(": ")),
               file=sys.stderr)
         return EXIT_BAD_INPUT
     except KeyboardInterrupt:

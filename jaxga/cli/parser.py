@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import argparse
+import re
 
 from jaxga.cli import compare, doctor, doe, listings, optimum, replan, run, warmup
 from jaxga.cli.options import EXIT_BAD_INPUT
@@ -11,12 +12,34 @@ COMMANDS = (optimum, run, replan, doe, compare, listings, warmup, doctor)
 """The modules that add the subcommands, in the order ``jaxga --help`` lists them."""
 
 
+LONGEST_WORD = 240
+"""The most characters of one word (a run without spaces) that a one-line message shows
+whole (a deep file path fits): a value of thousands of characters given on the command
+line is shortened in the line that refuses it (:func:`shortened`)."""
+
+_LONG_WORD = re.compile(rf"\S{{{LONGEST_WORD + 1},}}")
+
+
+def shortened(message: str) -> str:
+    """``message`` with every word longer than :data:`LONGEST_WORD` characters cut to its
+    first 150 and last 60, the number left out named between them: a refusal echoes what
+    it refuses, and a hostile value (``--set key=<10,000 digits>``) would otherwise make
+    that one line as long as the value."""
+
+    def cut(m: re.Match) -> str:
+        word = m.group(0)
+        return f"{word[:150]}...[{len(word) - 210:,} characters]...{word[-60:]}"
+
+    return _LONG_WORD.sub(cut, message)
+
+
 class Parser(argparse.ArgumentParser):
     """argparse, reporting a bad command line in the one-line form of every other jaxga
     error (``jaxga: error: ...``, exit 2) instead of a usage block."""
 
     def error(self, message: str):  # type: ignore[override]
-        self.exit(EXIT_BAD_INPUT, f"jaxga: error: {message} (see: {self.prog} --help)\n")
+        self.exit(EXIT_BAD_INPUT,
+                  f"jaxga: error: {shortened(message)} (see: {self.prog} --help)\n")
 
 
 def build_parser() -> argparse.ArgumentParser:

@@ -15,7 +15,7 @@ import numpy as np
 
 from jaxga.core.errors import ParameterError
 
-__all__ = ["P", "POS", "Field", "python_scalar"]
+__all__ = ["P", "POS", "Field", "python_scalar", "shown_value"]
 
 
 @dataclasses.dataclass(frozen=True)
@@ -38,25 +38,53 @@ class Field:
         kinds = self.kind if isinstance(self.kind, tuple) else (self.kind,)
         value = python_scalar(value)
         if float in kinds and isinstance(value, int) and not isinstance(value, bool):
-            value = float(value)
+            try:
+                value = float(value)
+            except OverflowError:  # an integer beyond the largest float
+                raise ParameterError(
+                    f"{key} must be finite, got {shown_value(value)}") from None
         if list in kinds and isinstance(value, tuple):  # (1.2, 1.4) from Python
             value = list(value)
         if isinstance(value, bool) and bool not in kinds:
             raise ParameterError(f"{key} must be {_kind_name(kinds)}, got {value!r}")
         if not isinstance(value, kinds):
-            raise ParameterError(f"{key} must be {_kind_name(kinds)}, got {value!r}")
+            raise ParameterError(
+                f"{key} must be {_kind_name(kinds)}, got {shown_value(value)}")
         if self.choices is not None and value not in self.choices:
             raise ParameterError(
-                f"{key} = {value!r} is not one of {', '.join(map(str, self.choices))}"
+                f"{key} = {shown_value(value)} is not one of {', '.join(map(str, self.choices))}"
             )
         if isinstance(value, (int, float)) and not isinstance(value, bool):
             if isinstance(value, float) and not math.isfinite(value):
                 raise ParameterError(f"{key} must be finite, got {value!r}")
             if self.low is not None and value < self.low:
-                raise ParameterError(f"{key} = {value!r} is below its minimum {self.low}")
+                raise ParameterError(
+                    f"{key} = {shown_value(value)} is below its minimum {self.low}")
             if self.high is not None and value > self.high:
-                raise ParameterError(f"{key} = {value!r} is above its maximum {self.high}")
+                raise ParameterError(
+                    f"{key} = {shown_value(value)} is above its maximum {self.high}")
         return value
+
+
+LONGEST_SHOWN = 80
+"""The most characters of a refused value that its message shows."""
+
+
+def shown_value(value: Any) -> str:
+    """``repr(value)`` for a message (a refusal echoes the value it refuses), at most
+    :data:`LONGEST_SHOWN` characters: an integer of more digits is named by its size
+    (Python will not even print one of more than 4,300 digits), anything longer is cut,
+    the number of characters left out named."""
+    if isinstance(value, int) and not isinstance(value, bool) \
+            and abs(value).bit_length() > 3.33 * LONGEST_SHOWN:
+        return f"an integer of about {int(abs(value).bit_length() * math.log10(2)) + 1:,} digits"
+    try:
+        text = repr(value)
+    except ValueError:  # a list holding such an integer
+        return f"a {type(value).__name__} too long to show"
+    if len(text) <= LONGEST_SHOWN:
+        return text
+    return f"{text[:LONGEST_SHOWN - 20]}...[{len(text) - LONGEST_SHOWN + 20:,} characters]"
 
 
 def python_scalar(value: Any) -> Any:

@@ -48,7 +48,7 @@ from collections.abc import Callable, Mapping
 from typing import Any
 
 from jaxga.core.errors import ParameterError
-from jaxga.core.fields import Field
+from jaxga.core.fields import Field, shown_value
 from jaxga.operators.lift import over_individuals_gated, over_pairs_gated
 
 __all__ = [
@@ -222,7 +222,7 @@ class MethodField(Field):
         naming ``key`` and the family's names otherwise."""
         value = super().check(key, value)
         if canonical(self.family, value) is None:
-            raise ParameterError(f"{key} = {value!r} is not one of "
+            raise ParameterError(f"{key} = {shown_value(value)} is not one of "
                                  f"{', '.join(names(self.family))}")
         return canonical(self.family, value)
 

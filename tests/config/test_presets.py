@@ -297,6 +297,27 @@ def test_bad_set_names_the_key(text, key):
     assert "\n" not in str(info.value)
 
 
+@pytest.mark.parametrize("value, key, words", [
+    (10**5000, "fitness.omega", "fitness.omega must be finite, got an integer of about "
+     "5,001 digits"),  # beyond the largest float, and Python's 4,300-digit repr
+    (10**5000, "population.size", "population.size = an integer of about 5,001 digits is "
+     "above its maximum"),
+    (-(10**400), "crossover.probability", "crossover.probability must be finite, got an "
+     "integer of about 401 digits"),
+    ("z" * 5000, "selection.method", "selection.method = 'zzz"),
+    (["x" * 5000], "fitness.omega", "fitness.omega must be a number, got ['xxx"),
+    ([10**5000], "fitness.omega", "fitness.omega must be a number, got a list too long"),
+], ids=["float-key", "int-key", "negative", "long-string", "long-list", "huge-in-list"])
+def test_a_huge_value_is_refused_in_a_short_line(value, key, words):
+    """A value of thousands of digits or characters: a ParameterError naming the key, the
+    value shown in at most 80 characters (not an OverflowError, not a line as long as the
+    value)."""
+    with pytest.raises(ParameterError) as info:
+        load_preset("iga_zhu", overrides={key: value})
+    text = str(info.value)
+    assert words in text and "\n" not in text and len(text) < 250, text
+
+
 def test_bad_overrides_name_the_key():
     with pytest.raises(ParameterError, match="mutation.rate"):
         load_preset("imga", overrides={"mutation.rate": 0.1})

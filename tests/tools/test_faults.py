@@ -208,6 +208,35 @@ def test_an_unusable_cache_folder_is_one_warning_line_and_the_command_goes_on(
         f"({os.strerror(errno.EEXIST)}): compiling without it"], err
 
 
+def test_a_value_of_thousands_of_characters_is_shortened_in_its_one_line_refusal(capsys):
+    """A hostile --set value or option argument: still one line, a few hundred characters,
+    naming the key and how much was left out (the value, not a traceback or a 10 kB line)."""
+    huge = "9" * 3000
+    assert main(["optimum", "--map", "classic_ga_gapp3_20x20", "--preset", "iga_zhu",
+                 "--set", f"fitness.omega={huge}"]) == EXIT_BAD_INPUT
+    err = capsys.readouterr().err
+    assert err.count("\n") == 1 and len(err) < 600, err
+    assert err.startswith("jaxga: error: --set 'fitness.omega=999")
+    left_out = len(f"'fitness.omega={huge}':") - 210  # the word: first 150, last 60 kept
+    assert f"...[{left_out:,} characters]..." in err
+    assert err.endswith("fitness.omega must be finite, got an integer of about 3,001 digits\n")
+    with pytest.raises(SystemExit) as info:  # argparse's own refusal
+        main(["run", "--preset", "sga", "--map", "classic_ga_gapp3_20x20", "--seeds",
+              "q" * 3000])
+    err = capsys.readouterr().err
+    assert info.value.code == EXIT_BAD_INPUT and err.count("\n") == 1 and len(err) < 600, err
+    assert "invalid int value" in err and "...[2,792 characters]..." in err  # 'q...q' cut
+
+
+def test_shortened_keeps_words_up_to_the_limit_and_cuts_longer_ones():
+    from jaxga.cli.parser import LONGEST_WORD, shortened
+
+    kept = "a " + "x" * LONGEST_WORD + " b"
+    assert shortened(kept) == kept
+    word = "y" * 150 + "z" * 91 + "w" * 60
+    assert shortened(f"a {word} b") == f"a {'y' * 150}...[91 characters]...{'w' * 60} b"
+
+
 def test_jax_cache_warnings_become_one_jaxga_line(capsys):
     """JAX warns once per cache entry it cannot read, over several lines: the command line
     shows one line per process naming the folder."""
