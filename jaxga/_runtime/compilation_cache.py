@@ -26,7 +26,7 @@ from jaxga.core.errors import CacheWarning, ParameterError
 from jaxga.core.files import folder_problem
 
 __all__ = ["ENV_VAR", "MIN_COMPILE_SECONDS", "cache_problem", "configure", "default_directory",
-           "store_directory", "use_compilation_cache", "warn_unusable"]
+           "is_read_only", "store_directory", "use_compilation_cache", "warn_unusable"]
 
 ENV_VAR = "JAXGA_CACHE_DIR"
 """Environment variable naming the cache directory; an empty value leaves the cache off."""
@@ -49,6 +49,34 @@ def cache_problem(path: str | os.PathLike) -> str | None:
     except OSError as e:
         return e.strerror or str(e)
     return folder_problem(path)
+
+
+def _readable_folder(path: str | os.PathLike) -> bool:
+    """Whether ``path`` is a folder whose files can be listed and read."""
+    return Path(path).is_dir() and os.access(path, os.R_OK | os.X_OK)
+
+
+_READ_ONLY: set[str] = set()
+"""The cache folders in use that take no new file: their stored programs are read, and
+new ones are compiled without being kept."""
+
+
+def is_read_only(path: str | os.PathLike) -> bool:
+    """Whether ``path`` is a cache folder this process reads but cannot add to (it has
+    said so in one warning: a program that cannot be kept there needs no other)."""
+    return str(Path(path)) in _READ_ONLY
+
+
+def _use_read_only(path: str, why: str) -> None:
+    """Read a folder that takes no new file (a shared cache on a read-only mount, a
+    folder of another user's): one :class:`~jaxga.core.errors.CacheWarning` per process."""
+    _READ_ONLY.add(str(Path(path)))
+    if _WARNED:
+        return
+    _WARNED.append(path)
+    warnings.warn(f"the compilation cache {path} ({ENV_VAR}) takes no new files ({why}): "
+                  "programs stored in it are read, new ones are compiled and not kept",
+                  CacheWarning, stacklevel=4)
 
 
 _WARNED: list[str] = []
@@ -84,8 +112,11 @@ def configure(cache_dir: str | os.PathLike | None | object = _UNSET, *,
 
     Returns:
         The folder in use, or ``None`` when there is none, also when the folder cannot
-        be made or written (then one :class:`~jaxga.core.errors.CacheWarning` says so:
-        the programs are compiled without it).
+        be made or read (then one :class:`~jaxga.core.errors.CacheWarning` says so: the
+        programs are compiled without it). A folder that can be read but takes no new
+        file (a read-only mount) is used for reading: jaxga's stored programs are read
+        from it, new ones are compiled and not kept, and JAX's cache is not turned on
+        (it would warn at every program it cannot write); one warning says so.
 
     Without a call, jaxga keeps its programs in the default folder and touches no JAX
     setting (:func:`store_directory`). Not part of any paper: an engineering aid
@@ -99,13 +130,17 @@ def configure(cache_dir: str | os.PathLike | None | object = _UNSET, *,
         path = os.fspath(cache_dir)
         if not path:
             raise ParameterError("configure: cache_dir must not be empty (None: no folder)")
+    read_only = False
     if path:
         why = cache_problem(path)
-        if why is not None:
+        if why is not None and _readable_folder(path):
+            _use_read_only(path, why)
+            read_only = True
+        elif why is not None:
             warn_unusable(path, why)
             path = ""
     _configured["dir"] = path or None
-    if path and jax_cache:
+    if path and jax_cache and not read_only:
         jax.config.update("jax_compilation_cache_dir", path)
         jax.config.update("jax_persistent_cache_min_compile_time_secs", MIN_COMPILE_SECONDS)
     return path or None
@@ -124,7 +159,8 @@ def store_directory() -> str | None:
     cache folder where one is configured (a local one; a remote one: none), else the
     folder :func:`configure` named, else ``$JAXGA_CACHE_DIR`` or
     :func:`default_directory` (made on first use; ``None`` with one
-    :class:`~jaxga.core.errors.CacheWarning` where it cannot be)."""
+    :class:`~jaxga.core.errors.CacheWarning` where it cannot be; one that takes no new
+    file is read, with one warning)."""
     base = jax.config.jax_compilation_cache_dir
     if base:
         return None if "://" in str(base) else str(base)
@@ -134,7 +170,11 @@ def store_directory() -> str | None:
     if not path:
         return None
     if path not in _checked:
-        _checked[path] = cache_problem(path)
-        if _checked[path] is not None:
-            warn_unusable(path, _checked[path])
+        why = cache_problem(path)
+        if why is not None and _readable_folder(path):
+            _use_read_only(path, why)
+            why = None
+        elif why is not None:
+            warn_unusable(path, why)
+        _checked[path] = why
     return None if _checked[path] is not None else path

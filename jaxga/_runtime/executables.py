@@ -48,9 +48,9 @@ import jax
 import jaxlib
 from jax.experimental.serialize_executable import deserialize_and_load, serialize
 
-from jaxga._runtime.compilation_cache import store_directory
+from jaxga._runtime.compilation_cache import is_read_only, store_directory
 from jaxga._runtime.lowering import jaxga_lowering, threefry_unrolled
-from jaxga.core.errors import CacheWarning
+from jaxga.core.errors import CacheWarning, JaxgaError
 from jaxga.core.files import atomic_write
 from jaxga.engine import chosen_operators
 
@@ -212,12 +212,15 @@ _FORGOTTEN: set[tuple[str, str]] = set()
 def _forget(path: Path, why: str) -> None:
     """Remove a stored program that cannot be used, saying so in one line per store and
     reason (a store whose files were all swapped says it once)."""
-    with contextlib.suppress(OSError):
+    try:
         path.unlink()
+        done = "removed"
+    except OSError:  # a read-only store
+        done = "left in place (the store takes no changes)"
     if (str(path.parent), why) in _FORGOTTEN:
         return
     _FORGOTTEN.add((str(path.parent), why))
-    warnings.warn(f"the stored program {path.name} in {path.parent} {why}: removed, "
+    warnings.warn(f"the stored program {path.name} in {path.parent} {why}: {done}, "
                   "compiling it again (so is any other entry of the store like it)",
                   CacheWarning, stacklevel=4)
 
@@ -319,18 +322,37 @@ def load_or_compile(key: str | None, devices: Any, lower: Callable[[], Any],
 
 
 def save(key: str | None, compiled: Any, devices: Any) -> None:
-    """Store a program compiled for ``devices`` under ``key`` (atomically; nothing when it
-    cannot), with its key, devices and digest (:data:`STORE_FORMAT`)."""
+    """Store a program compiled for ``devices`` under ``key`` (atomically), with its key,
+    devices and digest (:data:`STORE_FORMAT`). Nothing when the program cannot be
+    serialised; when the store cannot take the file (an entry replaced by a folder, a
+    full disk), one :class:`~jaxga.core.errors.CacheWarning` per store names the file
+    and the cause: every process compiles that program again until it is mended."""
     if key is None:
         return
     try:
         program = pickle.dumps(serialize(compiled))
-        blob = pickle.dumps({
-            "format": STORE_FORMAT, "key": key, "devices": _device_names(devices),
-            "digest": hashlib.blake2b(program, digest_size=20).hexdigest(),
-            "program": program})
-        folder = directory()
+    except Exception:  # noqa: BLE001 - a program that cannot be serialised is only compiled
+        return
+    blob = pickle.dumps({
+        "format": STORE_FORMAT, "key": key, "devices": _device_names(devices),
+        "digest": hashlib.blake2b(program, digest_size=20).hexdigest(),
+        "program": program})
+    folder = directory()
+    try:
         folder.mkdir(parents=True, exist_ok=True)
         atomic_write(folder / f"{key}.pkl", lambda f: f.write(blob), binary=True)
-    except Exception:  # noqa: BLE001 - a program that cannot be stored is only compiled
-        return
+    except (OSError, JaxgaError) as e:
+        _cannot_keep(folder, e)
+
+
+_CANNOT_KEEP: set[str] = set()
+"""The stores this process has said it cannot write to."""
+
+
+def _cannot_keep(folder: Path, error: Exception) -> None:
+    if str(folder) in _CANNOT_KEEP or is_read_only(folder.parent):
+        return  # said once (a read-only cache folder: when it was chosen)
+    _CANNOT_KEEP.add(str(folder))
+    why = str(error) if isinstance(error, JaxgaError) else f"{folder}: {error.strerror or error}"
+    warnings.warn(f"a compiled program could not be kept in the program store ({why}): "
+                  "each process compiles it again", CacheWarning, stacklevel=4)

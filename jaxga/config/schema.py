@@ -18,7 +18,6 @@ compiled in. :data:`SWEPT_STATIC` names the one static key a sweep may still var
 from __future__ import annotations
 
 import dataclasses
-import math
 import re
 import sys
 from collections.abc import Iterable, Iterator, Mapping
@@ -26,7 +25,7 @@ from pathlib import Path
 from typing import Any
 
 from jaxga.core.errors import ParameterError
-from jaxga.core.fields import Field, P, python_scalar
+from jaxga.core.fields import Field, P, finite_number, python_scalar, shown_value
 from jaxga.core.grid import CORNER_RULES
 from jaxga.core.robot_objectives import ROBOT_OBJECTIVES
 from jaxga.operators import registry
@@ -291,10 +290,11 @@ def freeze(v: Any) -> Any:
 
 def _check_number_list(key: str, value: Iterable, positive: bool) -> None:
     for x in value:
-        if isinstance(x, bool) or not isinstance(x, (int, float)) or not math.isfinite(x):
-            raise ParameterError(f"{key} must be a list of numbers, got {list(value)!r}")
+        if not finite_number(x):
+            raise ParameterError(f"{key} must be a list of numbers, got "
+                                 f"{shown_value(list(value))}")
         if positive and x <= 0:
-            raise ParameterError(f"{key} entries must be > 0, got {list(value)!r}")
+            raise ParameterError(f"{key} entries must be > 0, got {shown_value(list(value))}")
         if not positive and not 0 <= x <= 1:
             raise ParameterError(f"{key} entries must be probabilities in [0, 1]")
 

@@ -15,7 +15,7 @@ import numpy as np
 
 from jaxga.core.errors import ParameterError
 
-__all__ = ["P", "POS", "Field", "python_scalar", "shown_value"]
+__all__ = ["P", "POS", "Field", "finite_number", "python_scalar", "shown_value"]
 
 
 @dataclasses.dataclass(frozen=True)
@@ -64,6 +64,16 @@ class Field:
                 raise ParameterError(
                     f"{key} = {shown_value(value)} is above its maximum {self.high}")
         return value
+
+
+def finite_number(value: Any) -> bool:
+    """Whether ``value`` is an int or float (not a bool) that a float holds finitely: an
+    integer beyond the largest float is not (converting it raises ``OverflowError``)."""
+    if isinstance(value, bool) or not isinstance(value, (int, float)):
+        return False
+    if isinstance(value, int):
+        return abs(value).bit_length() <= 1024
+    return math.isfinite(value)
 
 
 LONGEST_SHOWN = 80

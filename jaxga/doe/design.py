@@ -7,7 +7,6 @@ from __future__ import annotations
 
 import dataclasses
 import itertools
-import math
 from collections.abc import Sequence
 from typing import Any
 
@@ -15,6 +14,7 @@ import numpy as np
 
 from jaxga.config.schema import SCHEMA, Config, parse_value, python_scalar, sweepable
 from jaxga.core.errors import ParameterError
+from jaxga.core.fields import finite_number, shown_value
 from jaxga.engine import unread_keys
 
 # ----------------------------------------------------------------------------- factors
@@ -44,9 +44,9 @@ class Factor:
             raise ParameterError(
                 f"factor {self.name} needs three levels low,mid,high, got {list(self.levels)}")
         for v in self.levels:
-            if isinstance(v, bool) or not isinstance(v, (int, float)) or not math.isfinite(v):
-                raise ParameterError(
-                    f"factor {self.name}: levels must be finite numbers, got {list(self.levels)}")
+            if not finite_number(v):
+                raise ParameterError(f"factor {self.name}: levels must be finite numbers, got "
+                                     f"{shown_value(list(self.levels))}")
         lo, mid, hi = self.levels
         if not lo < mid < hi:
             raise ParameterError(

@@ -318,6 +318,14 @@ def test_a_huge_value_is_refused_in_a_short_line(value, key, words):
     assert words in text and "\n" not in text and len(text) < 250, text
 
 
+def test_a_list_holding_an_integer_beyond_a_float_is_refused():
+    with pytest.raises(ParameterError, match="islands.mutation_probabilities must be a list "
+                       "of numbers, got a list too long to show"):
+        load_preset("mpmga", overrides={"islands.mutation_probabilities": [0.1, 10**5000]})
+    with pytest.raises(ParameterError, match=r"got \[0.1, 9999.*\[\d+ characters\]$"):
+        load_preset("mpmga", overrides={"islands.mutation_probabilities": [0.1, 10**400 - 1]})
+
+
 def test_bad_overrides_name_the_key():
     with pytest.raises(ParameterError, match="mutation.rate"):
         load_preset("imga", overrides={"mutation.rate": 0.1})

@@ -264,6 +264,16 @@ def test_factor_validation_against_the_preset(preset, factor, words):
         check_factors(config, [factor])
 
 
+@pytest.mark.parametrize("level", [10**400, 10**5000, float("inf")],
+                         ids=["beyond-a-float", "beyond-pythons-repr", "inf"])
+def test_a_level_no_float_holds_is_refused_in_a_short_line(level):
+    """An integer level beyond the largest float was an OverflowError traceback; one of
+    more than 4,300 digits cannot even be printed: a ParameterError of a short line."""
+    with pytest.raises(ParameterError, match="levels must be finite numbers") as info:
+        Factor("crossover.probability", (0.1, 0.5, level))
+    assert len(str(info.value)) < 200
+
+
 def test_design_errors():
     with pytest.raises(ParameterError, match="4 columns, too few for 5 factors"):
         design_array("L9", 5)
