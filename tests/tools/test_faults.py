@@ -237,6 +237,129 @@ def test_shortened_keeps_words_up_to_the_limit_and_cuts_longer_ones():
     assert shortened(f"a {word} b") == f"a {'y' * 150}...[91 characters]...{'w' * 60} b"
 
 
+def _store_in(tmp_path, monkeypatch) -> Path:
+    """The program store under ``tmp_path`` as JAX's cache folder (this process's own one
+    is the test session's)."""
+    import jax
+
+    from jaxga._runtime import executables
+
+    monkeypatch.setattr(type(jax.config), "jax_compilation_cache_dir",
+                        property(lambda self: str(tmp_path)), raising=False)
+    monkeypatch.setattr(executables, "_CANNOT_KEEP", set())
+    return executables.directory()
+
+
+def _tiny_program(offset: int):
+    import jax
+    import numpy as np
+
+    return jax.jit(lambda x: x + offset).lower(np.int32(1))
+
+
+def test_a_store_entry_replaced_by_a_folder_is_one_warning_naming_it(tmp_path, monkeypatch):
+    """The file of a stored program replaced by a folder: the program is compiled (the
+    result is right), one warning per store names the file and the cause, and the folder
+    is left alone (it may be the user's)."""
+    import jax
+    import numpy as np
+
+    from jaxga._runtime import executables
+    from jaxga.core.errors import CacheWarning
+
+    store = _store_in(tmp_path, monkeypatch)
+    (store / "k1.pkl").mkdir(parents=True)
+    (store / "k1.pkl" / "theirs.txt").write_text("kept")
+    devices = jax.devices()[:1]
+    with pytest.warns(CacheWarning) as said:
+        program, read = executables.load_or_compile("k1", devices, lambda: _tiny_program(1))
+    assert not read and int(program(np.int32(4))) == 5
+    assert len(said) == 1, [str(w.message) for w in said]
+    text = str(said[0].message)
+    assert f"cannot write {store / 'k1.pkl'}" in text and "each process compiles it again" \
+        in text and "\n" not in text
+    assert (store / "k1.pkl" / "theirs.txt").read_text() == "kept"
+    import warnings
+    with warnings.catch_warnings():
+        warnings.simplefilter("error")  # said once per store
+        program, read = executables.load_or_compile("k1", devices, lambda: _tiny_program(1))
+    assert not read and int(program(np.int32(6))) == 7
+
+
+def test_a_read_only_cache_folder_is_read_and_said_once(tmp_path, monkeypatch):
+    """A cache folder that takes no new file (a shared cache on a read-only mount; here
+    the write probe made to fail, since root writes anywhere): one warning saying its
+    programs are read and new ones not kept; a program stored in it before is read; JAX's
+    own cache is not turned on there; a program that cannot be kept says nothing more."""
+    import jax
+    import numpy as np
+
+    from jaxga._runtime import compilation_cache, executables
+    from jaxga.core.errors import CacheWarning
+
+    devices = jax.devices()[:1]
+    store = _store_in(tmp_path, monkeypatch)  # writable: store one program first
+    executables.save("k2", _tiny_program(2).compile(), devices)
+    assert (store / "k2.pkl").is_file()
+
+    monkeypatch.setattr(type(jax.config), "jax_compilation_cache_dir",
+                        property(lambda self: ""), raising=False)
+    for name, fresh in (("_WARNED", []), ("_READ_ONLY", set()), ("_configured", {}),
+                        ("_checked", {})):
+        monkeypatch.setattr(compilation_cache, name, fresh)
+    monkeypatch.setattr(compilation_cache, "folder_problem",
+                        lambda folder: f"folder {str(folder)!r} is not writable "
+                                       "(Read-only file system)")
+    updates = []
+    monkeypatch.setattr(jax.config, "update", lambda *a: updates.append(a))
+    with pytest.warns(CacheWarning) as said:
+        assert compilation_cache.configure(str(tmp_path)) == str(tmp_path)
+    assert len(said) == 1 and "takes no new files" in str(said[0].message)
+    assert "programs stored in it are read, new ones are compiled and not kept" \
+        in str(said[0].message)
+    assert updates == []  # JAX's cache left off: it would warn at every write
+    assert executables.directory() == store
+    program, read = executables.load_or_compile("k2", devices, lambda: pytest.fail("compiled"))
+    assert read and int(program(np.int32(1))) == 3
+
+    def no_room(*args, **kwargs):
+        raise JaxgaError("cannot write the store: Read-only file system")
+
+    monkeypatch.setattr(executables, "atomic_write", no_room)
+    import warnings
+    with warnings.catch_warnings():
+        warnings.simplefilter("error")  # the folder's warning said it already
+        program, read = executables.load_or_compile("k3", devices, lambda: _tiny_program(3))
+    assert not read and int(program(np.int32(1))) == 4
+
+
+def test_store_directory_reads_a_read_only_default_folder(tmp_path, monkeypatch):
+    """Without configure (the Python API's default): $JAXGA_CACHE_DIR naming a folder that
+    takes no new file is still the store's folder, with one warning; one that cannot be
+    read at all is not (the existing one-line warning)."""
+    import jax
+
+    from jaxga._runtime import compilation_cache
+    from jaxga.core.errors import CacheWarning
+
+    monkeypatch.setattr(type(jax.config), "jax_compilation_cache_dir",
+                        property(lambda self: ""), raising=False)
+    for name, fresh in (("_WARNED", []), ("_READ_ONLY", set()), ("_configured", {}),
+                        ("_checked", {})):
+        monkeypatch.setattr(compilation_cache, name, fresh)
+    monkeypatch.setattr(compilation_cache, "folder_problem",
+                        lambda folder: "folder is not writable (Permission denied)")
+    monkeypatch.setenv("JAXGA_CACHE_DIR", str(tmp_path))
+    with pytest.warns(CacheWarning, match="takes no new files"):
+        assert compilation_cache.store_directory() == str(tmp_path)
+    assert compilation_cache.is_read_only(tmp_path)
+    assert compilation_cache.store_directory() == str(tmp_path)  # no second warning
+    gone = tmp_path / "missing" / "deeper"
+    monkeypatch.setattr(compilation_cache, "cache_problem", lambda path: "No such file")
+    monkeypatch.setenv("JAXGA_CACHE_DIR", str(gone))
+    assert compilation_cache.store_directory() is None
+
+
 def test_jax_cache_warnings_become_one_jaxga_line(capsys):
     """JAX warns once per cache entry it cannot read, over several lines: the command line
     shows one line per process naming the folder."""
