@@ -30,7 +30,24 @@ from jaxga.reference.fitness import fitness_optimum
 
 def cmd_optimum(args: argparse.Namespace) -> int:
     """``jaxga optimum``: exact 8-connected and any-angle optima of one map, and with
-    ``--preset`` the exact optimum of that preset's fitness."""
+    ``--preset`` the exact optimum of that preset's fitness. Each phase is shown on
+    stderr as it starts, and one that runs on (a search of minutes on a large map) says
+    every few seconds how long it has run (:class:`jaxga.cli.run.Progress`)."""
+    progress = None if args.quiet else Progress().start()
+    try:
+        return _optimum(args, progress)
+    finally:
+        if progress is not None:
+            progress.close()
+
+
+def _optimum(args: argparse.Namespace, progress: Progress | None) -> int:
+    """:func:`cmd_optimum`'s work, each phase shown on ``progress``."""
+
+    def phase(label: str, name: str):
+        if progress is not None:
+            progress(label, 0.0)
+        return timeline.phase(name)
 
     config = None
     if args.preset is None and (args.set or args.variant):
@@ -49,13 +66,12 @@ def cmd_optimum(args: argparse.Namespace) -> int:
         # the map's own rule
         args.corner_rule = configured_rule(args.corner_rule, config)
     timeline = process_timeline()
-    with timeline.phase("load"):
+    with phase("load", "load"):
         info, grid = load_grid(args)
     frame = info.frame
-    with timeline.phase("references"):
+    with phase("8-connected", "references"):
         octile = octile_optimum(grid).raise_if_missing()
-    progress = None if args.quiet else Progress()
-    with timeline.phase("any_angle"):
+    with phase("any-angle", "any_angle"):
         bounds = any_angle_references(grid, octile, args.budget,
                                       None if progress is None
                                       else (lambda frac: progress("any-angle", frac)))
@@ -77,6 +93,8 @@ def cmd_optimum(args: argparse.Namespace) -> int:
     t2 = time.perf_counter()
     fit = None
     if config is not None:
+        if progress is not None:
+            progress("fitness", 0.0)
         fit = fitness_optimum(grid, config)
         label = f"fitness of {config['name']} ({config['fitness.method']})"
         if fit.found:

@@ -59,6 +59,39 @@ def test_optimum_of_a_presets_fitness(tmp_path, capsys):
     assert "mutation.pm_high" in err and "\n" not in err
 
 
+def test_optimum_shows_each_phase_and_a_long_one_as_it_runs(monkeypatch, capsys):
+    """`jaxga optimum` names each phase on its progress as it starts (a search of minutes
+    on a large map printed nothing until it ended), with the ticking thread started and
+    stopped; --quiet shows none."""
+    from jaxga.cli import optimum as cli_optimum
+
+    seen = []
+
+    class Recorder:
+        def __init__(self):
+            seen.append("new")
+
+        def start(self):
+            seen.append("start")
+            return self
+
+        def __call__(self, stage, frac):
+            if not seen or seen[-1] != stage:
+                seen.append(stage)
+
+        def close(self):
+            seen.append("close")
+
+    monkeypatch.setattr(cli_optimum, "Progress", Recorder)
+    assert main(["optimum", "--map", "routeplanning_yangbo_20x20", "--preset",
+                 "iga_zhu"]) == 0
+    assert seen == ["new", "start", "load", "8-connected", "any-angle", "fitness", "close"]
+    seen.clear()
+    assert main(["optimum", "--map", "routeplanning_yangbo_20x20", "--quiet"]) == 0
+    assert seen == []
+    capsys.readouterr()
+
+
 def test_optimum_uses_file_endpoints_and_overrides(tmp_path):
     art = tmp_path / "m.txt"
     art.write_text("S..#\n.#..\n...G\n")  # top row first
