@@ -430,6 +430,14 @@ def warned(text: str) -> Check:
     return check
 
 
+def lines_under(width: int) -> Check:
+    """Every line on stderr shorter than ``width`` characters."""
+    def check(out: Outcome) -> str | None:
+        longest = max((len(ln) for ln in out.err_lines), default=0)
+        return None if longest < width else f"a stderr line of {longest} characters"
+    return check
+
+
 def at_most_one_warning(out: Outcome) -> str | None:
     n = sum(ln.startswith("jaxga: warning:") for ln in out.err_lines)
     return None if n <= 1 else f"{n} warning lines"
@@ -1120,6 +1128,25 @@ def build(t: Path) -> list[Case]:
         run(walled_yaml, "--start", "0,0", "--goal", "3,3", "--path-out", stale_path),
         "no path", outputs=(stale_path,), check=empty_path_file(stale_path),
         note="the file holds an empty path afterwards, not the earlier one")
+    # --- round four ---------------------------------------------------------------------
+    add("set-400-digit-integer", "round four",
+        run(CLASSIC, "--set", "crossover.probability=" + "9" * 400),
+        note="was an OverflowError traceback (an integer beyond the largest float)")
+    add("factor-400-digit-level", "round four",
+        ["doe", "--preset", "sga", "--map", CLASSIC, "--design", "full", "--factor",
+         "crossover.probability=0.1,0.5," + "9" * 400, "--seeds", "2"],
+        note="was an OverflowError traceback")
+    add("set-3000-character-value", "round four",
+        run(CLASSIC, "--set", "mutation.method=" + "z" * 3000), check=lines_under(600),
+        note="was echoed whole, twice: a line of 6 kB")
+    add("seeds-3000-character-value", "round four", run(CLASSIC, "--seeds", "q" * 3000),
+        check=lines_under(600), note="argparse's refusal, echoed whole")
+    folders_cache = caches / "programs-folders"
+    add("cache-entries-folders", "round four", ["run", "--map", CLASSIC, *QUIET],
+        "handled", env={"JAXGA_CACHE_DIR": str(folders_cache)}, caches=(folders_cache,),
+        check=warned("could not be kept"),
+        note="every stored program's file replaced by a folder: was compiled in every "
+             "process without a word")
     return cases
 
 
@@ -1154,6 +1181,10 @@ def prepare(case: Case, t: Path) -> None:
                 for k in range(len(b) // 2, len(b) // 2 + 64):
                     b[k] ^= 0xFF
                 p.write_bytes(bytes(b))
+        elif target.name == "programs-folders":  # each entry's file now a folder
+            for p in programs.glob("*.pkl"):
+                p.unlink()
+                (p / "theirs").mkdir(parents=True)
         elif target.name == "xla-garbage":
             for p in target.iterdir():
                 if p.is_file():
