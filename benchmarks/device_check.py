@@ -2,6 +2,7 @@
 
     PYTHONPATH=. python benchmarks/device_check.py [--small] [--json PATH] [--no-write]
         [--budget-s S] [--skip PHASE,...] [--maps 20x20,...] [--init-block N]
+        [--max-runs-per-call N]
     python benchmarks/device_check.py --from-json PATH   # record a run made elsewhere
 
 Runs on JAX's default backend (a GPU where a CUDA build of JAX finds one, else the CPU)
@@ -47,6 +48,11 @@ For a device lent for minutes: ``--skip main_job,agreement`` leaves phases out (
 skipped), ``--maps 20x20,64x64`` narrows the throughput maps, and ``--init-block N``
 initialises jaxga's runs N at a time on that device instead of the platform's layout
 (``jaxga._runtime.programs.platform_layout``: 10 on the CPU, a whole call on a GPU).
+``--max-runs-per-call N`` (a power of two) lets jaxga's calls on a GPU or TPU hold up to
+N runs per device instead of ``ACCELERATOR_BUCKETS``' 2048, so that a sweep of 16 x 1000
+runs is one call: the layout the throughput table's larger calls suggest, measured
+through jaxga's own programs (``--skip main_job,agreement,throughput`` measures the sweep
+alone). The CPU's layout does not use those buckets: there it changes nothing.
 """
 
 from __future__ import annotations
@@ -704,7 +710,10 @@ def body(report: dict) -> str:
         f"Device: {device['name']} (JAX's default backend `{device['backend']}`, jax "
         f"{device['jax']}); {'`--small`' if s['small'] else 'full size'}; every compile "
         "cold (no persistent cache); jaxga's runs initialised "
-        f"{s.get('init_block', 'the platform layout')} at a time. Seconds unless named; "
+        f"{s.get('init_block', 'the platform layout')} at a time"
+        + (f", in calls of up to {s['max_runs_per_call']:,} runs per device on an "
+           "accelerator" if s.get("max_runs_per_call") else "")
+        + ". Seconds unless named; "
         "ind-gen/s = runs x population x generations / seconds; ms/gen = run / generations; "
         "loops, fusions: `while` loops and fusions in the compiled program.",
         "", *_main_part(report), "", *_throughput_part(report), "", *_sweep_part(report),
@@ -746,6 +755,8 @@ def measured_command(args: argparse.Namespace) -> str:
         words += ["--maps", args.maps]
     if args.init_block is not None:
         words += ["--init-block", str(args.init_block)]
+    if args.max_runs_per_call is not None:
+        words += ["--max-runs-per-call", str(args.max_runs_per_call)]
     return " ".join(words)
 
 
@@ -792,6 +803,9 @@ def main(argv: list[str] | None = None) -> int:
     ap.add_argument("--init-block", type=int, default=None, metavar="N",
                     help="runs initialised together on this device (default: the "
                     "platform's layout)")
+    ap.add_argument("--max-runs-per-call", type=int, default=None, metavar="N",
+                    help="the most runs per device of jaxga's calls on a GPU or TPU, a "
+                    "power of two from 2048 (default: the platform's layout, 2048)")
     args = ap.parse_args(argv)
     if args.from_json:
         record(_read_report(args.from_json), write=not args.no_write)
@@ -809,6 +823,12 @@ def main(argv: list[str] | None = None) -> int:
         if not 1 <= args.init_block <= 1 << 20:
             ap.error(f"--init-block must be between 1 and {1 << 20}, got {args.init_block}")
         settings["init_block"] = args.init_block
+    if args.max_runs_per_call is not None:
+        n = args.max_runs_per_call
+        if not 2048 <= n <= 1 << 20 or n & (n - 1):
+            ap.error(f"--max-runs-per-call must be a power of two from 2048 to {1 << 20}, "
+                     f"got {n}")
+        settings["max_runs_per_call"] = n
     if args.budget_s is not None:
         if not 0 < args.budget_s < 1e6:
             ap.error(f"--budget-s must be a positive number of seconds, got {args.budget_s:g}")
@@ -832,6 +852,11 @@ def main(argv: list[str] | None = None) -> int:
         programs.INIT_RUN_BLOCK = settings["init_block"]
     else:
         programs.ACCELERATOR_INIT_BLOCK = settings["init_block"]
+    if "max_runs_per_call" in settings:  # read by platform_layout and run_layout
+        sizes = programs.ACCELERATOR_BUCKETS
+        while sizes[-1] < settings["max_runs_per_call"]:
+            sizes = (*sizes, 2 * sizes[-1])
+        programs.ACCELERATOR_BUCKETS = sizes
 
     device = describe_devices()
     report: dict[str, Any] = {

@@ -7,9 +7,10 @@
 #   echo /.carry/ >> .git/info/exclude                         # .carry is ignored by git
 #
 # then   run: bash benchmarks/gpu_session.sh diagnose     carry: [".carry"]
-# and    run: bash benchmarks/gpu_session.sh verify launches speed
+# and    run: bash benchmarks/gpu_session.sh verify launches speed   (then: calls)
 # (each phase's time limit is below; decision 048 says what one H200 session took)
-# (tried on a CPU: BISECT_RUNS="4 16" DOCTOR_PRESETS=sga SPEED_ARGS=--small OUT=/tmp/o ...)
+# (tried on a CPU: BISECT_RUNS="4 16" DOCTOR_PRESETS=sga SPEED_ARGS=--small CALLS_ARGS=--small
+#  OUT=/tmp/o ...)
 #
 # diagnose, three processes at once (the GPU's memory is not preallocated; they compile
 # on the host's cores side by side; no timing of theirs is reported):
@@ -30,6 +31,10 @@
 #   2048 when this session's doctor --quick agreed, else the platform's 10): the sweep of
 #   16 x 1000 sga runs and the throughput table (the agreement too unless SPEED_SKIP
 #   names it).
+# calls, alone on the machine, after speed: the same sweep with jaxga's calls holding up
+#   to MAX_RUNS (default 16384) runs, so 16 x 1000 runs are one call instead of 8 of 2048
+#   (device_check.py --max-runs-per-call): whether larger calls than ACCELERATOR_BUCKETS'
+#   reach the throughput the table's 10k-run calls show. Record it as the device check.
 # Everything lands in $OUT; record the device check with
 # `python benchmarks/device_check.py --from-json device_check.json`, the launches with
 # `python benchmarks/launches.py --from-json launches.json`.
@@ -111,8 +116,16 @@ speed)
         --maps 20x20,64x64 --init-block "$INIT_BLOCK" ${SPEED_ARGS:-}
     echo "device check exit status $?"
     ;;
+calls)
+    phase "the sweep in calls of up to ${MAX_RUNS:-16384} runs"
+    PYTHONPATH="$HERE" JAXGA_TRUST_DEVICE=1 timeout "${CALLS_S:-200}" \
+        "$PY" benchmarks/device_check.py --json "$OUT/device_check_calls.json" --no-write \
+        --skip main_job,agreement,throughput --max-runs-per-call "${MAX_RUNS:-16384}" \
+        --init-block "${INIT_BLOCK:-2048}" ${CALLS_ARGS:-}
+    echo "device check (calls) exit status $?"
+    ;;
 *)
-    echo "unknown mode $mode (diagnose, verify, launches, speed)"
+    echo "unknown mode $mode (diagnose, verify, launches, speed, calls)"
     ;;
 esac
 done
