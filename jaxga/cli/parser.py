@@ -35,11 +35,32 @@ def shortened(message: str) -> str:
 
 class Parser(argparse.ArgumentParser):
     """argparse, reporting a bad command line in the one-line form of every other jaxga
-    error (``jaxga: error: ...``, exit 2) instead of a usage block."""
+    error (``jaxga: error: ...``, exit 2) instead of a usage block.
+
+    Options are never abbreviated: argparse would read ``--seed 42`` as ``--seeds 42``
+    (42 runs of seeds 0-41, not one run of seed 42) without a word; here it is refused,
+    naming the options it could stand for."""
+
+    def __init__(self, *args, **kwargs) -> None:
+        kwargs.setdefault("allow_abbrev", False)  # the subcommands' parsers too
+        super().__init__(*args, **kwargs)
 
     def error(self, message: str):  # type: ignore[override]
-        self.exit(EXIT_BAD_INPUT,
-                  f"jaxga: error: {shortened(message)} (see: {self.prog} --help)\n")
+        self.exit(EXIT_BAD_INPUT, f"jaxga: error: {shortened(message)}{self._hint(message)} "
+                                  f"(see: {self.prog} --help)\n")
+
+    def _hint(self, message: str) -> str:
+        """``; did you mean --seeds?`` for an unknown option that begins a known one."""
+        if not message.startswith("unrecognized arguments:"):
+            return ""
+        parsers = [self, *(sp for a in self._actions
+                           if isinstance(a, argparse._SubParsersAction)
+                           for sp in a.choices.values())]  # argparse reports them here
+        known = {o for p in parsers for a in p._actions for o in a.option_strings
+                 if o.startswith("--")}
+        words = [w for w in message.split(":", 1)[1].split() if w.startswith("--")]
+        meant = sorted({o for w in words for o in known if o.startswith(w.split("=")[0])})
+        return f"; did you mean {' or '.join(meant)}?" if meant else ""
 
 
 def build_parser() -> argparse.ArgumentParser:

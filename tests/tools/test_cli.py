@@ -92,6 +92,22 @@ def test_optimum_shows_each_phase_and_a_long_one_as_it_runs(monkeypatch, capsys)
     capsys.readouterr()
 
 
+@pytest.mark.parametrize("argv, meant", [
+    (["run", "--preset", "sga", "--map", "classic_ga_gapp3_20x20", "--seed", "42"],
+     "--seeds"),  # argparse alone ran 42 runs of seeds 0-41 for this
+    (["run", "--preset", "sga", "--map", "classic_ga_gapp3_20x20", "--gen=4"],
+     "--generations"),
+    (["optimum", "--map", "classic_ga_gapp3_20x20", "--bud", "3"], "--budget"),
+])
+def test_an_abbreviated_option_is_refused_naming_the_whole_one(argv, meant, capsys):
+    with pytest.raises(SystemExit) as info:
+        main(argv)
+    err = capsys.readouterr().err
+    assert info.value.code == EXIT_BAD_INPUT and err.count("\n") == 1
+    assert err.startswith("jaxga: error: unrecognized arguments: ")
+    assert f"; did you mean {meant}?" in err
+
+
 def test_optimum_uses_file_endpoints_and_overrides(tmp_path):
     art = tmp_path / "m.txt"
     art.write_text("S..#\n.#..\n...G\n")  # top row first
