@@ -1141,6 +1141,8 @@ def build(t: Path) -> list[Case]:
         note="was echoed whole, twice: a line of 6 kB")
     add("seeds-3000-character-value", "round four", run(CLASSIC, "--seeds", "q" * 3000),
         check=lines_under(600), note="argparse's refusal, echoed whole")
+    add("abbreviated-seed-option", "round four", run(CLASSIC, "--seed", "42"),
+        note="argparse took it for --seeds 42: 42 runs instead of seed 42")
     folders_cache = caches / "programs-folders"
     add("cache-entries-folders", "round four", ["run", "--map", CLASSIC, *QUIET],
         "handled", env={"JAXGA_CACHE_DIR": str(folders_cache)}, caches=(folders_cache,),
