@@ -10,6 +10,8 @@ from __future__ import annotations
 from collections.abc import Mapping
 from typing import Any
 
+import jax
+
 from jaxga.core.errors import ParameterError
 from jaxga.core.grid import physical_memory
 from jaxga.engine import (
@@ -72,11 +74,52 @@ def call_memory(algo: Algorithm, runs: int, per_call: int, init_block: int = 10,
             + INIT_FACTOR * min(per_call, init_block) * population_bytes(algo))
 
 
-def memory_budget() -> int | None:
-    """The memory a call may use: :data:`RESULT_MEMORY_FRACTION` of the machine's
-    physical memory (None where it is unknown)."""
+DEVICE_MEMORY_FRACTION = 0.8
+"""Off the CPU, a call may also use at most this fraction of each device's own memory (the
+``bytes_limit`` of its allocator, ``Device.memory_stats()``), whichever bound is lower:
+a GPU may have less memory than its host. A margin for the allocator's fragmentation; the
+model (:data:`STATE_FACTOR`) is not measured on a GPU (decision 049)."""
+
+
+def device_memory() -> tuple[int, str] | None:
+    """``(bytes, name)`` of the memory of one of the default backend's devices, where the
+    runs compute, when that is not the CPU (whose runs use the host's memory) and the
+    device says; else None."""
+    if jax.default_backend() == "cpu":
+        return None
+    try:
+        device = jax.local_devices()[0]
+        limit = (device.memory_stats() or {}).get("bytes_limit")
+    except Exception:  # noqa: BLE001 - a backend without memory statistics
+        return None
+    if not isinstance(limit, int) or limit <= 0:
+        return None
+    return limit * jax.local_device_count(), f"{jax.local_device_count()} x {device.device_kind}"
+
+
+def budget() -> tuple[int, str] | None:
+    """``(bytes, words)``: the memory a call may use and how to name it in a refusal:
+    :data:`RESULT_MEMORY_FRACTION` of the memory this process may use, or, lower,
+    :data:`DEVICE_MEMORY_FRACTION` of the devices' own memory; None where neither is
+    known."""
+    bounds = []
     total = physical_memory()
-    return None if total is None else int(RESULT_MEMORY_FRACTION * total)
+    if total is not None:
+        bounds.append((int(RESULT_MEMORY_FRACTION * total),
+                       f"more than half of the {total / 2**30:.2f} GiB this process may use"))
+    device = device_memory()
+    if device is not None:
+        have, name = device
+        bounds.append((int(DEVICE_MEMORY_FRACTION * have),
+                       f"more than {DEVICE_MEMORY_FRACTION:.0%} of the {have / 2**30:.2f} GiB "
+                       f"of the devices' own memory ({name})"))
+    return min(bounds) if bounds else None
+
+
+def memory_budget() -> int | None:
+    """The memory a call may use (:func:`budget`; None where it is unknown)."""
+    known = budget()
+    return None if known is None else known[0]
 
 
 def runs_that_fit(algo: Algorithm, budget: int, init_block: int = 10,
@@ -107,22 +150,22 @@ def too_much_memory(algo: Algorithm, runs: int, per_call: int, init_block: int =
     """One line saying why ``runs`` runs held together in calls of ``per_call``, among
     ``total`` runs (default ``runs``), do not fit the machine and what to change, or
     ``""`` when they fit (:func:`call_memory`)."""
-    budget = memory_budget()
+    known = budget()
     total = runs if total is None else max(total, runs)
     need = call_memory(algo, runs, per_call, init_block, total)
-    if budget is None or need <= budget:
+    if known is None or need <= known[0]:
         return ""
-    if runs_that_fit(algo, budget, init_block) < 1:
+    room, words = known
+    if runs_that_fit(algo, room, init_block) < 1:
         hint = "not one run fits: a smaller population.size (or population.capacity)"
-    elif total > (most := most_runs(algo, budget, init_block)):
+    elif total > (most := most_runs(algo, room, init_block)):
         hint = f"at most {most} fit: run fewer seeds (or sweep points) at a time"
     else:
-        hint = f"at most {runs_that_fit(algo, budget, init_block, total)} at a time fit"
+        hint = f"at most {runs_that_fit(algo, room, init_block, total)} at a time fit"
     held = "" if runs == total else f", {runs} at a time,"
     return (f"{total} run{'s' * (total != 1)} of a population of "
             f"{algo.population * algo.islands} on paths of {algo.capacity} cells{held} "
-            f"would need about {need / 2**30:.2f} GiB, more than half of the "
-            f"{physical_memory() / 2**30:.2f} GiB this process may use: {hint}")
+            f"would need about {need / 2**30:.2f} GiB, {words}: {hint}")
 
 
 def check_result_memory(n_runs: int, algo: Algorithm) -> None:
@@ -155,16 +198,16 @@ def check_compiled_memory(stats: Mapping[str, Any], calls: int, runs: int) -> No
     once the programs of a call are known, of what :func:`call_memory` estimated before.
     ``stats``: XLA's account of each program by name
     (:meth:`jaxga._runtime.programs.Programs.memory_stats`; None: not checked)."""
-    budget = memory_budget()
-    if budget is None:
+    known = budget()
+    if known is None:
         return
+    room, words = known
     for name, account in stats.items():
         need = None if account is None else compiled_peak(account, calls)
-        if need is not None and need > budget:
+        if need is not None and need > room:
             raise ParameterError(
                 f"{runs} runs in {calls} call(s) would need about {need / 2**30:.1f} GiB "
-                f"in their {name} program (XLA's account of its buffers), more than half "
-                f"of the {physical_memory() / 2**30:.1f} GiB this process may use: run "
+                f"in their {name} program (XLA's account of its buffers), {words}: run "
                 "fewer seeds (or sweep points) at a time, or a smaller population.size")
 
 

@@ -58,7 +58,7 @@ from jaxga.api.failures import (
 from jaxga.api.problem import Problem, load_problem
 from jaxga.api.result import Fronts, Result
 from jaxga.config.schema import Config, flatten
-from jaxga.core.errors import ParameterError
+from jaxga.core.errors import DeviceMemoryError, ParameterError
 from jaxga.core.grid import Grid, as_integer
 from jaxga.engine import (
     Algorithm,
@@ -204,6 +204,8 @@ def sweep(
                                        generations)
             return _sweep(problem, points, seeds, options, timeline)
         except JaxRuntimeError as err:
+            if "RESOURCE_EXHAUSTED" in str(err):
+                raise DeviceMemoryError(out_of_memory(err)) from None
             # a stored program that does not run (jaxga._runtime.executables: "NOT_FOUND:
             # Function ... not found", or "INTERNAL: Error dispatching computation:
             # Function ... not found"): forget the stored programs this process read
@@ -214,6 +216,21 @@ def sweep(
 
 
 _MISSING_FUNCTION = re.compile(r"NOT_FOUND|Function \S+ not found")
+
+
+def out_of_memory(err: Exception) -> str:
+    """The one line of a :class:`~jaxga.core.errors.DeviceMemoryError`: the device, XLA's
+    first line (cut to 200 characters) and what to make smaller. The memory estimate
+    (:mod:`jaxga._runtime.memory`) lays calls out to fit before anything runs; XLA's
+    allocator can still run out where the estimate is low for a device (a GPU: it is
+    not measured there)."""
+    devices = jax.local_devices()
+    first = (str(err).strip().splitlines() or [""])[0]
+    if len(first) > 200:
+        first = first[:200] + "..."
+    return (f"the {devices[0].platform} device ({devices[0].device_kind}) ran out of memory "
+            f"({first}): run fewer seeds (or sweep points) at a time, a smaller "
+            "population.size, or a coarser map (--coarsen)")
 
 
 def _sweep(problem: Problem, points: Sequence[Mapping[str, Any]], seeds: Any,

@@ -29,6 +29,12 @@ class ParameterError(JaxgaError):
     """A parameter is unknown, of the wrong type or out of range."""
 
 
+class DeviceMemoryError(JaxgaError):
+    """The device ran out of memory while the runs computed (XLA's ``RESOURCE_EXHAUSTED``,
+    most likely on a GPU with less memory than jaxga's estimate allowed for): the message
+    names the device and what to make smaller."""
+
+
 class InitialisationWarning(UserWarning):
     """The initialiser filled only part of a population within its budget of attempts.
 

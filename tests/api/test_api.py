@@ -1156,10 +1156,78 @@ def test_xlas_account_of_a_programs_buffers_is_checked_before_it_runs(monkeypatc
     # 1 GiB base, 4 calls' outputs of 0.25 GiB, one call's temporaries
     runtime.memory.check_compiled_memory({"init": program(1.0), "evolve": program(1.5)}, 4, 20)
     with pytest.raises(ParameterError, match=r"20 runs in 4 call\(s\) would need about "
-                       r"5\.0 GiB in their evolve program .* 8\.0 GiB this process") as e:
+                       r"5\.0 GiB in their evolve program .* 8\.00 GiB this process") as e:
         runtime.memory.check_compiled_memory({"init": program(1.0), "evolve": program(3.0)},
                                          4, 20)
     assert "\n" not in str(e.value)
+
+
+def test_a_device_with_less_memory_than_its_host_bounds_the_calls(monkeypatch):
+    """Off the CPU the runs live in the device's own memory: a GPU of 4 GiB on a host of
+    64 GiB bounds a call by 80 % of the GPU's (the lower bound), and a refusal names it."""
+    from types import SimpleNamespace
+
+    monkeypatch.setattr(runtime.memory, "physical_memory", lambda: 64 * 2**30)
+    monkeypatch.setattr(runtime.memory, "device_memory", lambda: (4 * 2**30, "1 x Tesla T4"))
+    room, words = runtime.memory.budget()
+    assert room == int(0.8 * 4 * 2**30)
+    assert words == "more than 80% of the 4.00 GiB of the devices' own memory (1 x Tesla T4)"
+    account = SimpleNamespace(output_size_in_bytes=2**28, argument_size_in_bytes=0,
+                              temp_size_in_bytes=2**30)
+    runtime.memory.check_compiled_memory({"evolve": account}, 4, 20)  # 3 GiB: fits 3.2
+    with pytest.raises(ParameterError, match=r"about 3\.5 GiB in their evolve program .*"
+                       r"devices' own memory \(1 x Tesla T4\): run fewer seeds"):
+        runtime.memory.check_compiled_memory({"evolve": account}, 6, 30)
+    monkeypatch.setattr(runtime.memory, "device_memory", lambda: (256 * 2**30, "1 x H200"))
+    assert runtime.memory.budget()[0] == 32 * 2**30  # the host's half is lower here
+
+
+def test_device_memory_reads_the_default_devices_allocator_limit(monkeypatch):
+    """None on the CPU (its runs use the host's memory, physical_memory); elsewhere the
+    devices' ``bytes_limit`` (all local devices), None where a device gives none."""
+    from types import SimpleNamespace
+
+    import jax
+
+    assert runtime.memory.device_memory() is None  # the suite runs on the CPU
+    gpu = SimpleNamespace(device_kind="FakeGPU",
+                          memory_stats=lambda: {"bytes_limit": 12 * 2**30, "bytes_in_use": 5})
+    monkeypatch.setattr(jax, "default_backend", lambda: "gpu")
+    monkeypatch.setattr(jax, "local_devices", lambda: [gpu, gpu])
+    monkeypatch.setattr(jax, "local_device_count", lambda: 2)
+    assert runtime.memory.device_memory() == (24 * 2**30, "2 x FakeGPU")
+    for stats in (lambda: None, lambda: {}, lambda: {"bytes_limit": 0}, lambda: 1 / 0):
+        gpu.memory_stats = stats
+        assert runtime.memory.device_memory() is None
+
+
+def test_a_device_out_of_memory_is_one_line_naming_it(grid, monkeypatch, capsys):
+    """XLA's RESOURCE_EXHAUSTED while the runs compute (a GPU whose memory the estimate
+    overrated): a DeviceMemoryError of one line naming the device and what to make
+    smaller, in Python and on the command line (exit 2), not XLA's many-line traceback."""
+    import jax
+
+    from jaxga.api import runs as runs_module
+    from jaxga.cli import main
+    from jaxga.core.errors import DeviceMemoryError
+
+    def exhausted(*args, **kwargs):
+        raise jax.errors.JaxRuntimeError(
+            "RESOURCE_EXHAUSTED: Out of memory while trying to allocate 17179869184 bytes."
+            "\nBufferAssignment OOM Debugging.\nBufferAssignment stats: ...")
+
+    monkeypatch.setattr(runs_module, "_sweep", exhausted)
+    with pytest.raises(DeviceMemoryError) as e:
+        api.run("sga", grid, seeds=2, **SMALL)
+    text = str(e.value)
+    assert text.startswith("the cpu device (cpu) ran out of memory (RESOURCE_EXHAUSTED: "
+                           "Out of memory while trying to allocate 17179869184 bytes.)")
+    assert "run fewer seeds" in text and "\n" not in text
+    assert main(["run", "--preset", "sga", "--map", canonical.MAP, "--seeds", "2",
+                 "--quiet"]) == 2
+    err = capsys.readouterr().err
+    assert err.startswith("jaxga: error: the cpu device (cpu) ran out of memory")
+    assert err.count("\n") == 1
 
 
 @pytest.mark.slow  # compiles a program of 5 runs
