@@ -79,6 +79,18 @@ def _use_read_only(path: str, why: str) -> None:
                   CacheWarning, stacklevel=4)
 
 
+def _judged(path: str) -> str | None:
+    """None when ``path`` can hold the cache, or be read as one that takes no new file
+    (:func:`_use_read_only`); else why not, said in one warning (:func:`warn_unusable`)."""
+    why = cache_problem(path)
+    if why is not None and _readable_folder(path):
+        _use_read_only(path, why)
+        return None
+    if why is not None:
+        warn_unusable(path, why)
+    return why
+
+
 _WARNED: list[str] = []
 
 
@@ -130,17 +142,10 @@ def configure(cache_dir: str | os.PathLike | None | object = _UNSET, *,
         path = os.fspath(cache_dir)
         if not path:
             raise ParameterError("configure: cache_dir must not be empty (None: no folder)")
-    read_only = False
-    if path:
-        why = cache_problem(path)
-        if why is not None and _readable_folder(path):
-            _use_read_only(path, why)
-            read_only = True
-        elif why is not None:
-            warn_unusable(path, why)
-            path = ""
+    if path and _judged(path) is not None:
+        path = ""
     _configured["dir"] = path or None
-    if path and jax_cache and not read_only:
+    if path and jax_cache and not is_read_only(path):
         jax.config.update("jax_compilation_cache_dir", path)
         jax.config.update("jax_persistent_cache_min_compile_time_secs", MIN_COMPILE_SECONDS)
     return path or None
@@ -170,11 +175,5 @@ def store_directory() -> str | None:
     if not path:
         return None
     if path not in _checked:
-        why = cache_problem(path)
-        if why is not None and _readable_folder(path):
-            _use_read_only(path, why)
-            why = None
-        elif why is not None:
-            warn_unusable(path, why)
-        _checked[path] = why
+        _checked[path] = _judged(path)
     return None if _checked[path] is not None else path

@@ -250,6 +250,19 @@ def _store_in(tmp_path, monkeypatch) -> Path:
     return executables.directory()
 
 
+def _fresh_cache_settings(monkeypatch) -> None:
+    """No cache folder chosen or judged yet in this process, and JAX's own cache off."""
+    import jax
+
+    from jaxga._runtime import compilation_cache
+
+    monkeypatch.setattr(type(jax.config), "jax_compilation_cache_dir",
+                        property(lambda self: ""), raising=False)
+    for name, fresh in (("_WARNED", []), ("_READ_ONLY", set()), ("_configured", {}),
+                        ("_checked", {})):
+        monkeypatch.setattr(compilation_cache, name, fresh)
+
+
 def _tiny_program(offset: int):
     import jax
     import numpy as np
@@ -302,11 +315,7 @@ def test_a_read_only_cache_folder_is_read_and_said_once(tmp_path, monkeypatch):
     executables.save("k2", _tiny_program(2).compile(), devices)
     assert (store / "k2.pkl").is_file()
 
-    monkeypatch.setattr(type(jax.config), "jax_compilation_cache_dir",
-                        property(lambda self: ""), raising=False)
-    for name, fresh in (("_WARNED", []), ("_READ_ONLY", set()), ("_configured", {}),
-                        ("_checked", {})):
-        monkeypatch.setattr(compilation_cache, name, fresh)
+    _fresh_cache_settings(monkeypatch)
     monkeypatch.setattr(compilation_cache, "folder_problem",
                         lambda folder: f"folder {str(folder)!r} is not writable "
                                        "(Read-only file system)")
@@ -337,16 +346,11 @@ def test_store_directory_reads_a_read_only_default_folder(tmp_path, monkeypatch)
     """Without configure (the Python API's default): $JAXGA_CACHE_DIR naming a folder that
     takes no new file is still the store's folder, with one warning; one that cannot be
     read at all is not (the existing one-line warning)."""
-    import jax
 
     from jaxga._runtime import compilation_cache
     from jaxga.core.errors import CacheWarning
 
-    monkeypatch.setattr(type(jax.config), "jax_compilation_cache_dir",
-                        property(lambda self: ""), raising=False)
-    for name, fresh in (("_WARNED", []), ("_READ_ONLY", set()), ("_configured", {}),
-                        ("_checked", {})):
-        monkeypatch.setattr(compilation_cache, name, fresh)
+    _fresh_cache_settings(monkeypatch)
     monkeypatch.setattr(compilation_cache, "folder_problem",
                         lambda folder: "folder is not writable (Permission denied)")
     monkeypatch.setenv("JAXGA_CACHE_DIR", str(tmp_path))
