@@ -97,9 +97,18 @@ def too_large(width: int, height: int) -> str:
     cells = width * height
     if fits(cells):
         return ""
-    k = 2
-    while not fits(-(-width // k) * -(-height // k)):
-        k += 1
+    def coarse_fits(k: int) -> bool:  # the coarse cells never grow with k
+        return fits(-(-width // k) * -(-height // k))
+
+    # the smallest factor that fits: doubled until it fits, then halved in on (a map of
+    # 10**20 x 1 cells takes some 140 tries, where counting up from 2 never ended)
+    low, high = 1, 2
+    while not coarse_fits(high):
+        low, high = high, 2 * high
+    while high - low > 1:
+        mid = (low + high) // 2
+        low, high = (low, mid) if coarse_fits(mid) else (mid, high)
+    k = high
     if cells > MAX_MAP_CELLS:
         why = f"more than jaxga plans on ({MAX_MAP_CELLS:,}, e.g. 2048 x 2048)"
     else:

@@ -896,6 +896,33 @@ def test_a_map_the_memory_does_not_hold_is_refused_naming_the_memory(monkeypatch
     assert grid_module.plan_memory(1165 * 945) < 4 * 10**9  # the 1165 x 945 map's target
 
 
+@pytest.mark.parametrize("width, height, k", [
+    (8000, 8000, 4), (2049, 2048, 2), (123_457, 98_765, 54), (10**7, 3, 3),
+    (10**9, 10**9, 488_282), (99_999_999_999_999_999_999, 1, 23_841_857_910_157),
+])
+def test_the_coarsening_named_is_the_smallest_that_fits(width, height, k, monkeypatch):
+    """The factor a refusal names is the smallest that brings the map under the limit
+    (exactly: k - 1 does not), found at once for any header: a Moving AI header of
+    10**20 x 1 cells counted up from 2 for hours (the load hung)."""
+    from jaxga.core import grid as grid_module
+
+    monkeypatch.setattr(grid_module, "physical_memory", lambda: 24 * 2**30)  # CI's
+
+    def cells(factor: int) -> int:
+        return -(-width // factor) * -(-height // factor)
+
+    text = grid_module.too_large(width, height)
+    assert f"--coarsen {k} " in text and "\n" not in text
+    assert cells(k) <= grid_module.MAX_MAP_CELLS < cells(k - 1)
+
+
+def test_a_moving_ai_header_of_a_huge_thin_map_is_refused_at_once(tmp_path):
+    header = tmp_path / "thin.map"
+    header.write_text("type octile\nheight 1\nwidth 99999999999999999999\nmap\n.\n")
+    with pytest.raises(MapFormatError, match="has 99,999,999,999,999,999,999 cells"):
+        load_map(header)
+
+
 @settings(max_examples=40, deadline=None)
 @given(hnp.arrays(bool, st.tuples(st.integers(1, 13), st.integers(1, 13))),
        st.integers(1, 5))
