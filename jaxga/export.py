@@ -123,7 +123,7 @@ def read_path(path: str | os.PathLike) -> np.ndarray:
             points = [[float(pose["pose"]["position"][k]) for k in ("x", "y")]
                       for pose in doc["poses"]]
         out = np.asarray(points, float).reshape(-1, 2)
-    except (ValueError, TypeError, KeyError, IndexError, yaml.YAMLError) as e:
+    except (ValueError, TypeError, KeyError, IndexError, yaml.YAMLError, RecursionError) as e:
         what = "x,y rows" if fmt == "csv" else "a nav_msgs/Path (poses[].pose.position)"
         why = str(e).splitlines()[0] if str(e) else type(e).__name__
         raise ParameterError(f"{label}: not a path file of {what} ({why})") from None

@@ -214,7 +214,7 @@ def _verdict_key(device: jax.Device) -> str:
 def _remembered() -> dict:
     try:
         data = json.loads(verdicts_path().read_text())
-    except (OSError, ValueError):
+    except (OSError, ValueError, RecursionError):
         return {}  # none yet, or unreadable: probe again
     return data if isinstance(data, dict) else {}
 

@@ -89,6 +89,8 @@ def _parse(text: str, label: str) -> dict[str, Any]:
         return tomllib.loads(text)
     except ValueError as e:  # TOMLDecodeError, or an integer past Python's 4300 digits
         raise ParameterError(f"{label}: malformed TOML: {str(e).splitlines()[0]}") from None
+    except RecursionError:  # arrays or tables nested thousands deep
+        raise ParameterError(f"{label}: malformed TOML: nested too deeply") from None
 
 
 def _read_builtin(name: str) -> dict[str, Any]:
@@ -279,7 +281,10 @@ def parse_set(text: str) -> tuple[str, Any]:
         near = near or difflib.get_close_matches(key, list(SCHEMA), n=3)
         hint = f" (did you mean {', '.join(near)}?)" if near else ""
         raise ParameterError(f"--set {text!r}: unknown configuration key {key!r}{hint}")
-    return key, parse_value(value)
+    try:
+        return key, parse_value(value)
+    except ParameterError as e:  # a value nested too deeply to read
+        raise ParameterError(f"--set {key}: {e}") from None
 
 
 def _validated(values: Mapping[str, Any], where: str) -> Config:

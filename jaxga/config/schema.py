@@ -208,14 +208,21 @@ def sweepable(key: str) -> bool:
 
 
 def flatten(table: Mapping[str, Any], prefix: str = "") -> dict[str, Any]:
-    """``{"a": {"b": 1}} -> {"a.b": 1}`` (TOML tables to dotted keys)."""
+    """``{"a": {"b": 1}} -> {"a.b": 1}`` (TOML tables to dotted keys), in the tables'
+    order; without recursion, so that a dotted key of thousands of parts is a key (which
+    the schema then refuses), not a RecursionError."""
     out: dict[str, Any] = {}
-    for k, v in table.items():
-        key = f"{prefix}{k}"
-        if isinstance(v, Mapping):
-            out.update(flatten(v, key + "."))
-        else:
+    stack = [(prefix, iter(table.items()))]
+    while stack:
+        base, items = stack[-1]
+        for k, v in items:
+            key = f"{base}{k}"
+            if isinstance(v, Mapping):
+                stack.append((key + ".", iter(v.items())))
+                break
             out[key] = v
+        else:
+            stack.pop()
     return out
 
 
@@ -230,6 +237,9 @@ def parse_value(text: str) -> Any:
         return tomllib.loads(f"v = {text}")["v"]
     except ValueError:  # TOMLDecodeError, or an integer past Python's 4300 digits
         return float(text) if _LOOSE_NUMBER.fullmatch(text.strip()) else text
+    except RecursionError:  # arrays or tables nested thousands deep
+        raise ParameterError("a value nested too deeply to read (arrays or tables inside "
+                             "one another thousands deep)") from None
 
 
 @dataclasses.dataclass(frozen=True)
@@ -309,3 +319,5 @@ def load_toml(path: str | Path) -> dict[str, Any]:
         raise ParameterError(f"configuration file not found: {p}") from None
     except ValueError as e:  # TOMLDecodeError, or an integer past Python's 4300 digits
         raise ParameterError(f"{p}: malformed TOML: {str(e).splitlines()[0]}") from None
+    except RecursionError:  # arrays or tables nested thousands deep
+        raise ParameterError(f"{p}: malformed TOML: nested too deeply") from None

@@ -90,7 +90,7 @@ def shown_value(value: Any) -> str:
         return f"an integer of about {int(abs(value).bit_length() * math.log10(2)) + 1:,} digits"
     try:
         text = repr(value)
-    except ValueError:  # a list holding such an integer
+    except (ValueError, RecursionError):  # a list holding such an integer, or nested deep
         return f"a {type(value).__name__} too long to show"
     if len(text) <= LONGEST_SHOWN:
         return text

@@ -65,7 +65,10 @@ class Factor:
         name, sep, rest = text.partition("=")
         if not sep or not name.strip():
             raise ParameterError(f"expected NAME=LOW,MID,HIGH for a factor, got {text!r}")
-        values = [parse_value(v.strip()) for v in rest.split(",")]
+        try:
+            values = [parse_value(v.strip()) for v in rest.split(",")]
+        except ParameterError as e:  # a level nested too deeply to read
+            raise ParameterError(f"factor {name.strip()}: {e}") from None
         return cls(name.strip(), tuple(values))
 
 

@@ -156,9 +156,11 @@ def read_ros_yaml(path: str | Path, label: str | None = None, *,
         data = yaml.safe_load(data.decode("utf-8"))
     except FileNotFoundError:
         raise MapFormatError(f"{label}: no such file") from None
-    except (OSError, UnicodeDecodeError, yaml.YAMLError, ValueError) as e:
-        # ValueError: an integer past Python's digit limit for str -> int (4300 digits)
-        first = str(e).splitlines()[0] if str(e) else type(e).__name__
+    except (OSError, UnicodeDecodeError, yaml.YAMLError, ValueError, RecursionError) as e:
+        # ValueError: an integer past Python's digit limit for str -> int (4300 digits);
+        # RecursionError: lists or mappings nested thousands deep
+        first = ("nested too deeply" if isinstance(e, RecursionError)
+                 else str(e).splitlines()[0] if str(e) else type(e).__name__)
         raise MapFormatError(f"{label}: not a readable YAML file ({first})") from None
     if not isinstance(data, dict):
         raise MapFormatError(f"{label}: not a map_server YAML file (no 'key: value' pairs)")

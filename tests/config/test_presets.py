@@ -318,6 +318,32 @@ def test_a_huge_value_is_refused_in_a_short_line(value, key, words):
     assert words in text and "\n" not in text and len(text) < 250, text
 
 
+@pytest.mark.parametrize("body, words", [
+    ("x = " + "[" * 3000 + "]" * 3000, "malformed TOML: nested too deeply"),
+    ("x = " + "{a=" * 3000 + "1" + "}" * 3000, "malformed TOML: nested too deeply"),
+    (".".join(["a"] * 3000) + " = 1", "unknown configuration key 'a.a.a"),
+], ids=["arrays", "inline-tables", "dotted-key"])
+def test_a_preset_file_nested_thousands_deep_is_refused_in_one_line(tmp_path, body, words):
+    """Arrays, tables or a dotted key thousands deep: a RecursionError traceback before
+    (from tomllib, or from jaxga's own flatten); a ParameterError naming the file."""
+    path = tmp_path / "deep.toml"
+    path.write_text(f'base = "sga"\n{body}\n')
+    with pytest.raises(ParameterError) as info:
+        load_preset(str(path))
+    assert words in str(info.value) and "\n" not in str(info.value)
+    with pytest.raises(ParameterError, match="--set init.clearance_weights: a value nested "
+                       "too deeply"):
+        load_preset("sga", sets=["init.clearance_weights=" + "[" * 3000 + "]" * 3000])
+
+
+def test_flatten_keeps_the_tables_order_and_drops_empty_tables():
+    from jaxga.config.schema import flatten
+
+    table = {"a": {"b": 1, "c": {"d": 2}}, "e": 3, "f": {}, "g": [{"h": 4}]}
+    assert flatten(table, "p.") == {"p.a.b": 1, "p.a.c.d": 2, "p.e": 3, "p.g": [{"h": 4}]}
+    assert list(flatten(table)) == ["a.b", "a.c.d", "e", "g"]
+
+
 def test_a_list_holding_an_integer_beyond_a_float_is_refused():
     with pytest.raises(ParameterError, match="islands.mutation_probabilities must be a list "
                        "of numbers, got a list too long to show"):

@@ -126,7 +126,12 @@ def test_world_coordinates_name_the_cell_that_holds_the_point(office):
      "not a readable YAML file (Exceeds the limit"),
     ('image: "office\\0.pgm"\nresolution: 0.05\norigin: [0, 0, 0]\n',
      "image must be a file name"),
-])
+    # lists or mappings thousands deep: a RecursionError traceback before
+    ("image: office.pgm\nresolution: 0.05\norigin: " + "[" * 5000 + "]" * 5000 + "\n",
+     "not a readable YAML file (nested too deeply)"),
+    ("image: office.pgm\nresolution: 0.05\norigin: [0, 0, 0]\nextra: " + "{a: " * 3000 + "1"
+     + "}" * 3000 + "\n", "not a readable YAML file (nested too deeply)"),
+], ids=lambda v: v if len(v) < 60 else None)
 def test_malformed_ros_maps_give_one_line(office, yaml_text, message):
     bad = office.with_name("bad.yaml")
     bad.write_text(yaml_text)

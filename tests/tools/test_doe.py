@@ -274,6 +274,12 @@ def test_a_level_no_float_holds_is_refused_in_a_short_line(level):
     assert len(str(info.value)) < 200
 
 
+def test_a_level_nested_thousands_deep_names_its_factor():
+    with pytest.raises(ParameterError, match="factor crossover.probability: a value nested "
+                       "too deeply"):
+        Factor.parse("crossover.probability=0.1,0.5," + "[" * 3000 + "]" * 3000)
+
+
 def test_design_errors():
     with pytest.raises(ParameterError, match="4 columns, too few for 5 factors"):
         design_array("L9", 5)
