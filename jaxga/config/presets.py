@@ -43,6 +43,7 @@ from typing import Any
 
 from jaxga.config.schema import DEFAULTS, SCHEMA, Config, flatten, parse_value
 from jaxga.core.errors import ParameterError
+from jaxga.core.fields import shown_value
 from jaxga.maps.inputs import read_input
 
 if sys.version_info >= (3, 11):
@@ -78,7 +79,8 @@ def preset_names() -> list[str]:
 def _preset_file(name: str) -> Any:
     if name not in preset_names():
         raise ParameterError(
-            f"unknown preset {name!r} (built-in presets: {', '.join(preset_names())}; "
+            f"unknown preset {shown_value(name)} (built-in presets: "
+            f"{', '.join(preset_names())}; "
             "or give the path of a .toml file)"
         )
     return _preset_dir().joinpath(f"{name}.toml")
@@ -149,7 +151,16 @@ def _is_path(name_or_path: str | os.PathLike) -> bool:
     if s.endswith(".toml") or "/" in s or os.sep in s:
         return True
     # a bare word is a preset name, unless it is none and a file of that name exists
-    return s not in preset_names() and Path(s).is_file()
+    return s not in preset_names() and _is_file(Path(s))
+
+
+def _is_file(path: Path) -> bool:
+    """``path.is_file()``, False for a name no file can have (too long for the system, a
+    NUL character): such a name is an unknown preset, not an ``OSError``."""
+    try:
+        return path.is_file()
+    except (OSError, ValueError):
+        return False
 
 
 def _split(table: dict[str, Any], label: str) -> tuple[dict[str, Any], dict[str, dict]]:
@@ -215,7 +226,7 @@ def preset_files(name_or_path: str | os.PathLike) -> list[str]:
         path = Path(nxt).expanduser()
         if relative_to is not None and not path.is_absolute():
             path = relative_to / path
-        if str(path) in files or not path.is_file():
+        if str(path) in files or not _is_file(path):
             break
         files.append(str(path))
         try:

@@ -200,7 +200,11 @@ class Grid:
         if arr.ndim != 2 or arr.shape[0] < 1 or arr.shape[1] < 1:
             raise JaxgaError(f"a grid must be a non-empty 2-D array, got shape {arr.shape}")
         if arr.dtype != np.bool_:
-            if not np.all(np.isin(arr, (0, 1))):
+            try:
+                zero_one = bool(np.all(np.isin(arr, (0, 1))))
+            except TypeError:  # structured or void records: no comparison with numbers
+                zero_one = False
+            if not zero_one:
                 raise JaxgaError("a grid array must hold booleans or 0/1 values")
             arr = arr.astype(bool)
         h, w = arr.shape
@@ -286,6 +290,11 @@ class Grid:
         Returns the grid itself so that calls can be chained.
         """
         b = self.blocked_np()
+        for name in ("start", "goal"):  # a grid of the plain constructor is unchecked
+            index = int(getattr(self, name))
+            if not 0 <= index < self.n_cells:
+                raise EndpointError(f"{name} cell index {index} is off the "
+                                    f"{self.width} x {self.height} map")
         for name, (x, y) in (("start", self.start_xy), ("goal", self.goal_xy)):
             if b[y, x]:
                 raise EndpointError(f"{name} cell ({x}, {y}) is blocked")

@@ -126,6 +126,8 @@ def read_input(path: str | os.PathLike, cap: int, *, what: str = "file",
             the file in their own words.
     """
     label = str(path) if label is None else label
+    if "\0" in os.fspath(path):  # os.open's ValueError otherwise
+        raise error(f"{label!r}: a file name cannot hold a NUL character")
     flags = (os.O_RDONLY | getattr(os, "O_NONBLOCK", 0) | getattr(os, "O_CLOEXEC", 0)
              | getattr(os, "O_BINARY", 0))
     fd = os.open(os.fspath(path), flags)

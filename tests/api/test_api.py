@@ -18,6 +18,7 @@ from jaxga.compare import compare as jaxga_compare
 from jaxga.config.presets import preset_names
 from jaxga.config.schema import SCHEMA
 from jaxga.core.errors import InitialisationWarning, JaxgaError, ParameterError
+from jaxga.core.grid import Grid
 from jaxga.maps import load_map, random_map
 from jaxga.operators import schedules
 from jaxga.reference.any_angle import any_angle_shortest_path
@@ -905,6 +906,30 @@ def test_seeds_outside_32_bits_are_refused(grid, seeds, words):
     seed repeats its run exactly (a pseudo-replicate in every statistic): refused."""
     with pytest.raises(JaxgaError, match=re.escape(words)):
         api.run("sga", grid, seeds=seeds, **SMALL)
+
+
+def _plain_grid_off_the_map():
+    return Grid(blocked=np.zeros((2, 2), bool), start=np.int32(99), goal=3).check_endpoints()
+
+
+@pytest.mark.parametrize("call, error, words", [
+    (lambda: api.run("x" * 5000, canonical.MAP, seeds=2), ParameterError,
+     "unknown preset 'xxxx"),  # was OSError: File name too long
+    (lambda: load_map("a\0b"), JaxgaError, "a file name cannot hold a NUL character"),
+    (lambda: api.run("sga", "a\0b", seeds=2), JaxgaError, "cannot hold a NUL character"),
+    (lambda: Grid.create(np.zeros((2, 2), dtype=[("a", int)])), JaxgaError,
+     "must hold booleans or 0/1 values"),  # was TypeError from np.isin
+    (lambda: Grid.create(np.zeros((2, 2), dtype="V4")), JaxgaError,
+     "must hold booleans or 0/1 values"),
+    (_plain_grid_off_the_map, JaxgaError, "start cell index 99 is off the 2 x 2 map"),
+], ids=["long-preset-name", "nul-map", "nul-map-run", "structured", "void", "plain-grid"])
+def test_hostile_python_arguments_are_one_line_errors(call, error, words):
+    """Arguments of the Python API that raised OSError, ValueError, TypeError or
+    IndexError tracebacks: a JaxgaError of one short line."""
+    with pytest.raises(error) as info:
+        call()
+    text = str(info.value)
+    assert words in text and "\n" not in text and len(text) < 300, text
 
 
 def test_a_request_whose_runs_cannot_fit_in_memory_is_refused(grid, monkeypatch):
