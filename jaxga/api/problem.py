@@ -15,7 +15,7 @@ import numpy as np
 from jaxga._runtime.jax_settings import check_jax_settings, check_platform
 from jaxga._runtime.lowering import check_environment
 from jaxga.config.presets import as_sets, load_preset, parse_set
-from jaxga.config.schema import MAP_RULE, SCHEMA, Config, flatten, freeze
+from jaxga.config.schema import MAP_RULE, SCHEMA, Config, dotted, flatten, freeze
 from jaxga.core.errors import EndpointError, ParameterError
 from jaxga.core.grid import Grid, as_integer
 from jaxga.engine import check_file_keys_read, check_overrides_read
@@ -160,8 +160,7 @@ def load_problem(preset, grid, corner_rule, variant, sets, overrides, generation
         info = grid
         grid, map_name, frame = grid.grid, grid.name, grid.frame
     sets = as_sets(sets)
-    ov: dict[str, Any] = {k.replace("__", "."): v
-                          for k, v in own_operators(overrides).items()}
+    ov: dict[str, Any] = dotted(own_operators(overrides))
     if generations is not None:  # a non-integer is left for the configuration to refuse
         with contextlib.suppress(TypeError):
             generations = as_integer(generations)

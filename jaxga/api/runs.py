@@ -57,7 +57,7 @@ from jaxga.api.failures import (
 )
 from jaxga.api.problem import Problem, load_problem
 from jaxga.api.result import Fronts, Result
-from jaxga.config.schema import Config, flatten
+from jaxga.config.schema import Config, dotted, flatten
 from jaxga.core.errors import DeviceMemoryError, ParameterError
 from jaxga.core.grid import Grid, as_integer
 from jaxga.engine import (
@@ -128,7 +128,7 @@ def _point_configs(config: Config, points: Sequence[Mapping[str, Any]]) -> list[
     out = []
     base = static_config(config)
     for point in points:
-        changes = {k.replace("__", "."): v for k, v in point.items()}
+        changes = dotted(point)
         cfg = config.override(changes)
         check_overrides_read(cfg, flatten(changes))
         if static_config(cfg) != base:

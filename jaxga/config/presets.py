@@ -41,7 +41,7 @@ from importlib import resources
 from pathlib import Path
 from typing import Any
 
-from jaxga.config.schema import DEFAULTS, SCHEMA, Config, flatten, parse_value
+from jaxga.config.schema import DEFAULTS, SCHEMA, Config, dotted, flatten, parse_value
 from jaxga.core.errors import ParameterError
 from jaxga.core.fields import shown_value
 from jaxga.maps.inputs import read_input
@@ -275,7 +275,7 @@ def as_sets(sets: Any) -> tuple[str, ...]:
 def overridden_keys(overrides: Mapping[str, Any], sets: Sequence[str]) -> list[str]:
     """The dotted configuration keys that keyword ``overrides`` (``a__b=...`` or
     ``"a.b"``, nested mappings flattened) and ``sets`` give, in that order."""
-    keys = list(flatten({k.replace("__", "."): v for k, v in overrides.items()}))
+    keys = list(dotted(overrides))
     return keys + [parse_set(text)[0] for text in sets]
 
 
@@ -350,7 +350,7 @@ def load_preset(
     if overrides:
         if not isinstance(overrides, Mapping):
             raise ParameterError(f"overrides must be a mapping of dotted keys, got {overrides!r}")
-        config = _validated({**config.as_dict(), **flatten(overrides)}, "overrides")
+        config = _validated({**config.as_dict(), **dotted(overrides)}, "overrides")
     for text in sets:
         key, value = parse_set(text)
         config = _validated({**config.as_dict(), key: value}, f"--set {text!r}")

@@ -36,7 +36,7 @@ if sys.version_info >= (3, 11):
 else:  # pragma: no cover
     import tomli as tomllib
 
-__all__ = ["DEFAULTS", "REQUIRED", "SCHEMA", "SWEPT_STATIC", "Config", "Field", "flatten",
+__all__ = ["DEFAULTS", "REQUIRED", "SCHEMA", "SWEPT_STATIC", "Config", "Field", "dotted", "flatten",
            "load_toml", "parse_value", "python_scalar", "sweepable"]
 
 FALLBACKS = (*(op.name for op in registry.operators("init")
@@ -224,6 +224,28 @@ def flatten(table: Mapping[str, Any], prefix: str = "") -> dict[str, Any]:
         else:
             stack.pop()
     return out
+
+
+def dotted(overrides: Mapping[str, Any]) -> dict[str, Any]:
+    """Keyword overrides as dotted keys: ``a__b=...``, ``"a.b"`` and ``a={"b": ...}``
+    alike (:func:`flatten`). A key reached twice with different values (``a__b=0.5``
+    beside ``a={"b": 0.9}``) is refused: one of them would be dropped without a word."""
+    out: dict[str, Any] = {}
+    for name, value in overrides.items():
+        for key, v in flatten({str(name).replace("__", "."): value}).items():
+            if key in out and not _same(out[key], v):
+                raise ParameterError(f"{key} is given twice, as {shown_value(out[key])} and "
+                                     f"{shown_value(v)}")
+            out[key] = v
+    return out
+
+
+def _same(a: Any, b: Any) -> bool:
+    """Whether two values given for one key are the same (numpy scalars as Python ones)."""
+    try:
+        return bool(python_scalar(a) == python_scalar(b))
+    except Exception:  # noqa: BLE001 - arrays and the like: the same object only
+        return a is b
 
 
 _LOOSE_NUMBER = re.compile(r"[+-]?(\d+\.\d*|\.\d+)([eE][+-]?\d+)?")

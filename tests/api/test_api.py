@@ -922,7 +922,14 @@ def _plain_grid_off_the_map():
     (lambda: Grid.create(np.zeros((2, 2), dtype="V4")), JaxgaError,
      "must hold booleans or 0/1 values"),
     (_plain_grid_off_the_map, JaxgaError, "start cell index 99 is off the 2 x 2 map"),
-], ids=["long-preset-name", "nul-map", "nul-map-run", "structured", "void", "plain-grid"])
+    (lambda: api.run("sga", canonical.MAP, seeds=2, crossover__probability=0.5,
+                     crossover={"probability": 0.9}), ParameterError,
+     "crossover.probability is given twice, as 0.5 and 0.9"),  # 0.9 was used silently
+    (lambda: api.sweep("sga", canonical.MAP, [{"crossover__probability": 0.5,
+                                               "crossover.probability": 0.9}], seeds=2),
+     ParameterError, "crossover.probability is given twice, as 0.5 and 0.9"),
+], ids=["long-preset-name", "nul-map", "nul-map-run", "structured", "void", "plain-grid",
+        "two-spellings-run", "two-spellings-sweep"])
 def test_hostile_python_arguments_are_one_line_errors(call, error, words):
     """Arguments of the Python API that raised OSError, ValueError, TypeError or
     IndexError tracebacks: a JaxgaError of one short line."""

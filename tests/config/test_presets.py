@@ -11,6 +11,7 @@ import re
 import sys
 from pathlib import Path
 
+import numpy as np
 import pytest
 
 from jaxga.config.presets import load_preset, preset_info, preset_names, preset_variants
@@ -334,6 +335,19 @@ def test_a_preset_file_nested_thousands_deep_is_refused_in_one_line(tmp_path, bo
     with pytest.raises(ParameterError, match="--set init.clearance_weights: a value nested "
                        "too deeply"):
         load_preset("sga", sets=["init.clearance_weights=" + "[" * 3000 + "]" * 3000])
+
+
+def test_dotted_reads_every_spelling_of_a_key_and_refuses_two_values():
+    from jaxga.config.schema import dotted
+
+    assert dotted({"a__b": 1, "c": {"d": 2, "e": {"f": 3}}, "g.h": 4}) == {
+        "a.b": 1, "c.d": 2, "c.e.f": 3, "g.h": 4}
+    assert dotted({"a__b": 0.5, "a": {"b": np.float64(0.5)}}) == {"a.b": 0.5}  # the same
+    with pytest.raises(ParameterError, match=r"^a\.b is given twice, as 0\.5 and 0\.9$"):
+        dotted({"a__b": 0.5, "a": {"b": 0.9}})
+    with pytest.raises(ParameterError, match="given twice"):
+        load_preset("sga", overrides={"crossover__probability": 0.5,
+                                      "crossover.probability": 0.9})
 
 
 def test_flatten_keeps_the_tables_order_and_drops_empty_tables():
