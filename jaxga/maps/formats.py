@@ -37,6 +37,7 @@ from __future__ import annotations
 
 import io
 import os
+import re
 from pathlib import Path
 
 import numpy as np
@@ -134,6 +135,11 @@ def detect_format(path: Source, raw: bytes | None = None) -> str:
 
 
 # -------------------------------------------------------------------------- parsers
+_EMPTY_FIELD = re.compile(r"^\s*,|,\s*,")
+"""A comma-separated row with an empty field before another (a trailing comma is kept as
+the end of the row, as spreadsheets write it)."""
+
+
 def parse_01(text: str, label: str = "<text>") -> np.ndarray:
     """Parse 0/1 text (file line 1 = row y = 0, the bottom); return ``bool[H, W]``.
 
@@ -144,6 +150,9 @@ def parse_01(text: str, label: str = "<text>") -> np.ndarray:
     rows: list[list[bool]] = []
     for lineno, line in _body_lines(text, label):
         if any(c in _SEPARATORS for c in line):
+            if _EMPTY_FIELD.search(line):  # "0,,1": dropped, it would shift the columns
+                raise MapFormatError(f"{label}: line {lineno}: an empty cell between commas "
+                                     "(every cell is 0 or 1)")
             tokens = line.replace(",", " ").split()
             for col, tok in enumerate(tokens, 1):
                 if tok not in ("0", "1"):
@@ -436,6 +445,12 @@ def _check_ragged(rows: list[list[bool]], lineno: int, label: str) -> None:
         )
 
 
+def _transparent_colour(raw: bytes) -> bool:
+    """Whether a PNG's bytes hold a ``tRNS`` chunk before its image data."""
+    end = raw.find(b"IDAT")
+    return raw.find(b"tRNS", 8, end if end > 0 else len(raw)) > 0
+
+
 def parse_png(path: Path, label: str, threshold: float = 0.5,
               raw: bytes | None = None) -> np.ndarray:
     """Threshold an image's luminance (blocked below ``threshold``); image top row -> top
@@ -451,7 +466,10 @@ def parse_png(path: Path, label: str, threshold: float = 0.5,
     if raw is None:
         raw = read_map_bytes(path, label, coarsen=MAX_READ_COARSEN)
     check_image_data(raw, label)
-    if path.suffix.lower() == ".png" or raw.startswith(_PNG_MAGIC):
+    png = path.suffix.lower() == ".png" or raw.startswith(_PNG_MAGIC)
+    # a grey or colour PNG with a transparent colour (tRNS): matplotlib would drop the
+    # transparency that it keeps for a palette's; Pillow's reading keeps both
+    if png and not _transparent_colour(raw):
         try:  # matplotlib's PNG reading: values in [0, 1] at 8 and 16 bits
             img = np.asarray(mpimg.imread(io.BytesIO(raw), format="png"))
         except Exception as e:  # Pillow/matplotlib raise many types for bad images

@@ -330,6 +330,15 @@ def decode_image(raw: bytes, label: str) -> tuple[np.ndarray, int]:
     try:
         with Image.open(io.BytesIO(raw)) as img:
             img.load()
+            frames = getattr(img, "n_frames", 1)
+            if frames > 1:  # which frame is the map? none is read silently
+                raise MapFormatError(f"{label}: the image holds {frames} frames (an "
+                                     "animation or pages): a map is one image; save the "
+                                     "frame you mean alone")
+            if img.mode in ("L", "RGB") and "transparency" in img.info:
+                # a tRNS colour, as a palette's: transparent pixels then count as white
+                # (free) for grey and colour images as for palettes and alpha channels
+                img = img.convert("RGBA")
             mode = img.mode
             if mode in _EIGHT_BIT:
                 pixels, scale = np.asarray(img, np.uint8), 255

@@ -42,6 +42,7 @@ import numpy as np
 import yaml
 
 from jaxga.core.errors import MapFormatError
+from jaxga.core.fields import shown_value
 from jaxga.core.grid import too_large
 from jaxga.maps.frame import MapFrame
 from jaxga.maps.inputs import (
@@ -135,6 +136,27 @@ def _number(value: Any, key: str, label: str) -> float:
     return value
 
 
+class _UniqueKeyLoader(yaml.SafeLoader):
+    """``yaml.safe_load``'s loader refusing a mapping that names a key twice: YAML
+    forbids it, PyYAML keeps the last value silently, and a map server may keep the
+    first (``resolution: 0.05`` then ``resolution: 5.0``: which map is it?)."""
+
+    def construct_mapping(self, node: yaml.MappingNode, deep: bool = False) -> dict:
+        seen: set = set()
+        for key_node, _ in node.value:
+            key = self.construct_object(key_node, deep=deep)
+            try:
+                twice = key in seen
+                seen.add(key)
+            except TypeError:  # an unhashable key: SafeLoader's own error follows
+                continue
+            if twice:
+                raise yaml.constructor.ConstructorError(
+                    None, None, f"the key {shown_value(key)} is given twice",
+                    key_node.start_mark)
+        return super().construct_mapping(node, deep=deep)
+
+
 def read_ros_yaml(path: str | Path, label: str | None = None, *,
                   data: bytes | None = None) -> RosMap:
     """Read a ``map_server`` YAML file (``image``, ``resolution``, ``origin``, ``negate``,
@@ -153,7 +175,7 @@ def read_ros_yaml(path: str | Path, label: str | None = None, *,
             raise MapFormatError(f"{label}: the file holds {len(data):,} bytes, more than "
                                  f"the {YAML_CAP:,} bytes jaxga reads from a map_server "
                                  "YAML file")
-        data = yaml.safe_load(data.decode("utf-8"))
+        data = yaml.load(data.decode("utf-8"), Loader=_UniqueKeyLoader)  # noqa: S506
     except FileNotFoundError:
         raise MapFormatError(f"{label}: no such file") from None
     except (OSError, UnicodeDecodeError, yaml.YAMLError, ValueError, RecursionError) as e:

@@ -896,6 +896,47 @@ def test_a_map_the_memory_does_not_hold_is_refused_naming_the_memory(monkeypatch
     assert grid_module.plan_memory(1165 * 945) < 4 * 10**9  # the 1165 x 945 map's target
 
 
+def test_a_comma_separated_row_with_an_empty_cell_is_refused(tmp_path):
+    """``0,,0,1`` was read as three cells (every row alike: no ragged-row error), shifting
+    the map's columns; a trailing comma, as spreadsheets write, ends the row."""
+    empty = tmp_path / "empty.txt"
+    empty.write_text("0,,0,1\n0,,0,1\n")
+    with pytest.raises(MapFormatError, match=r"empty.txt: line 1: an empty cell between "
+                       "commas"):
+        load_map(empty)
+    leading = tmp_path / "leading.txt"
+    leading.write_text("0 ,0,1\n0, ,1\n")
+    with pytest.raises(MapFormatError, match="line 2: an empty cell"):
+        load_map(leading)
+    trailing = tmp_path / "trailing.txt"
+    trailing.write_text("0,0,0,\n0,1,0,\n")
+    np.testing.assert_array_equal(load_map(trailing).blocked_np(),
+                                  [[False, False, False], [False, True, False]])  # line 1: y 0
+
+
+def test_an_image_of_several_frames_is_refused_and_transparency_reads_alike(tmp_path):
+    """An animated GIF was read from its first frame alone; a grey PNG's transparent
+    colour (tRNS) was dropped where a palette's was kept: now refused, and both read
+    transparent pixels as white (free), as documented for alpha channels."""
+    from PIL import Image
+
+    b = np.full((6, 8), 255, np.uint8)
+    b[1:5, 3] = 0  # a wall
+    frames = [Image.fromarray(b), Image.fromarray(255 - b)]
+    frames[0].save(tmp_path / "anim.gif", save_all=True, append_images=frames[1:])
+    with pytest.raises(MapFormatError, match="the image holds 2 frames"):
+        load_map(tmp_path / "anim.gif")
+    Image.fromarray(b).save(tmp_path / "plain.png")
+    assert load_map(tmp_path / "plain.png").blocked_np().sum() == 4
+    Image.fromarray(b).save(tmp_path / "grey.png", transparency=0)
+    Image.fromarray(b).convert("P").save(tmp_path / "palette.png", transparency=0)
+    Image.fromarray(b).convert("RGB").save(tmp_path / "rgb.png", transparency=(0, 0, 0))
+    for name in ("grey", "palette", "rgb"):  # the wall's colour is the transparent one
+        assert load_map(tmp_path / f"{name}.png").blocked_np().sum() == 0, name
+    Image.fromarray(b).save(tmp_path / "grey_white.png", transparency=255)
+    assert load_map(tmp_path / "grey_white.png").blocked_np().sum() == 4  # white stays free
+
+
 @pytest.mark.parametrize("width, height, k", [
     (8000, 8000, 4), (2049, 2048, 2), (123_457, 98_765, 54), (10**7, 3, 3),
     (10**9, 10**9, 488_282), (99_999_999_999_999_999_999, 1, 23_841_857_910_157),

@@ -131,6 +131,9 @@ def test_world_coordinates_name_the_cell_that_holds_the_point(office):
      "not a readable YAML file (nested too deeply)"),
     ("image: office.pgm\nresolution: 0.05\norigin: [0, 0, 0]\nextra: " + "{a: " * 3000 + "1"
      + "}" * 3000 + "\n", "not a readable YAML file (nested too deeply)"),
+    # a key given twice: PyYAML kept the last value without a word
+    ("image: office.pgm\nresolution: 0.05\norigin: [0, 0, 0]\nresolution: 5.0\n",
+     "not a readable YAML file (the key 'resolution' is given twice)"),
 ], ids=lambda v: v if len(v) < 60 else None)
 def test_malformed_ros_maps_give_one_line(office, yaml_text, message):
     bad = office.with_name("bad.yaml")
