@@ -70,6 +70,7 @@ from jaxga import api
 from jaxga.config.presets import as_sets, overridden_keys
 from jaxga.config.schema import SCHEMA
 from jaxga.core.errors import EndpointError, JaxgaError, ParameterError
+from jaxga.core.fields import shown_value
 from jaxga.core.grid import Grid
 from jaxga.maps import rectangles_map
 from jaxga.maps.frame import MapFrame
@@ -444,7 +445,7 @@ def replan(
         ParameterError: the robot's cell is not on the path, or bad arguments.
     """
     t_start = time.perf_counter()
-    _check_arguments(grid, plan_from, window, population)
+    _check_arguments(grid, plan_from, window, population, post=post, fallback=fallback)
     problem = _problem(grid, path, new_obstacles, position, inflate)
     # The GA's configuration is checked now (overrides that nothing reads, key
     # combinations), not only when a blocked path needs a GA run; on the map with the
@@ -486,8 +487,13 @@ def replan(
                   spliced, segments, compile_s, ga_results)
 
 
-def _check_arguments(grid: Grid, plan_from: str, window: Any, population: int | None) -> None:
-    """Refuse bad arguments of :func:`replan` before any work."""
+def _check_arguments(grid: Grid, plan_from: str, window: Any, population: int | None,
+                     **switches: Any) -> None:
+    """Refuse bad arguments of :func:`replan` before any work; ``switches`` (post,
+    fallback) must be booleans: ``fallback="no"`` would be true."""
+    for name, value in switches.items():
+        if not isinstance(value, (bool, np.bool_)):
+            raise ParameterError(f"{name} must be True or False, got {shown_value(value)}")
     if not isinstance(grid, Grid):
         raise ParameterError(f"grid must be a jaxga.Grid, got {type(grid).__name__}")
     if plan_from not in ("robot", "blockage"):

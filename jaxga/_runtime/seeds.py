@@ -3,7 +3,8 @@
 
 from __future__ import annotations
 
-from collections.abc import Callable, Sequence
+from collections.abc import Callable, Mapping, Sequence
+from collections.abc import Set as AbstractSet
 from typing import Any
 
 import jax
@@ -38,6 +39,8 @@ def seed_list(seeds: int | Sequence[int],
         check_count(int(seeds))
         return np.arange(int(seeds))
     try:
+        if isinstance(seeds, (AbstractSet, Mapping)):  # no order: run i's seed is unknown
+            raise TypeError
         arr = seeds if isinstance(seeds, np.ndarray) else np.asarray(list(seeds))
     except TypeError:
         arr = None

@@ -146,8 +146,14 @@ def run_and_report(args: argparse.Namespace, timeline: Timeline,
         raise JaxgaError(f"cannot write --path-out {args.path_out}: the map has no resolution "
                          "and origin (a ROS map_server .yaml has them); --json has the path "
                          "in cells")
+    keeps_front = problem.config.get("survival.method") is not None
+    if args.front_point is not None and not keeps_front:  # never silently ignored
+        raise JaxgaError(f"--front-point chooses a point of a front, and preset "
+                         f"{problem.config['name']!r} keeps none (one best path a seed): "
+                         "leave it out, or use a preset that keeps a front (pareto)")
+    args.front_point = "knee" if args.front_point is None else args.front_point
     choice = front_point_choice(args.front_point)
-    if args.path_out and problem.config.get("survival.method") is not None:
+    if args.path_out and keeps_front:
         check_front_point(front_objectives(problem.config), choice)
     result = api.run(
         problem, seeds=args.seeds, progress=progress,
@@ -379,7 +385,7 @@ def add_parser(commands: argparse._SubParsersAction) -> None:
                    help="write the best seed's path in metres (a map with a resolution): "
                    "x,y rows (.csv) or a nav_msgs/Path in YAML (.yaml), frame 'map', "
                    "yaw along the path; the smooth curve with --smooth")
-    p.add_argument("--front-point", default="knee", metavar="knee|shortest|widest|METRES",
+    p.add_argument("--front-point", default=None, metavar="knee|shortest|widest|METRES",
                    type=front_point_arg,
                    help="with a preset that keeps a front (pareto): which of the best "
                    "seed's front points --path-out writes: the knee (default), an end, or "

@@ -26,7 +26,8 @@ import dataclasses
 import operator
 import os
 import resource
-from collections.abc import Sequence
+from collections.abc import Mapping, Sequence
+from collections.abc import Set as AbstractSet
 from pathlib import Path
 from typing import Any
 
@@ -332,8 +333,8 @@ def as_integer(value) -> int:
 def check_xy(name: str, xy, w: int, h: int) -> tuple[int, int]:
     """``xy`` as integer ``(x, y)`` on a ``w`` x ``h`` map, or a one-line
     :class:`EndpointError` naming ``name`` (start, goal) and the problem."""
-    try:  # integers only: 1.5 or "30" are refused, not truncated or split
-        if isinstance(xy, (str, bytes)):
+    try:  # integers only: 1.5 or "30" are refused, not truncated or split; in order
+        if isinstance(xy, (str, bytes, AbstractSet, Mapping)):  # {3, 1}: which is x?
             raise TypeError
         x, y = (as_integer(v) for v in tuple(xy))
     except (TypeError, ValueError):

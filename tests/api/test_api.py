@@ -24,6 +24,7 @@ from jaxga.operators import schedules
 from jaxga.reference.any_angle import any_angle_shortest_path
 from jaxga.reference.fitness import fitness_optimum, fitness_weights, path_fitness_np
 from jaxga.reference.optima import clear_np, path_length, shortest_path
+from jaxga.replan import replan as jaxga_replan
 from tests import canonical
 
 SMALL = dict(generations=canonical.GENERATIONS)
@@ -928,8 +929,23 @@ def _plain_grid_off_the_map():
     (lambda: api.sweep("sga", canonical.MAP, [{"crossover__probability": 0.5,
                                                "crossover.probability": 0.9}], seeds=2),
      ParameterError, "crossover.probability is given twice, as 0.5 and 0.9"),
+    (lambda: Grid.create(np.zeros((5, 5), bool), start={3, 1}), JaxgaError,
+     "start must be a pair of integers (x, y), got {1, 3}"),  # was read as (1, 3)
+    (lambda: Grid.create(np.zeros((5, 5), bool), goal={3: 0, 1: 0}), JaxgaError,
+     "goal must be a pair of integers"),  # its keys were the cell
+    (lambda: api.run("sga", canonical.MAP, seeds={5, 1}), JaxgaError,
+     "seeds must be a count or a list of integer seeds"),  # run i's seed: unknown
+    (lambda: api.run("sga", canonical.MAP, seeds={1: 2, 3: 4}), JaxgaError,
+     "seeds must be a count or a list"),
+    (lambda: jaxga_replan(Grid.create(np.zeros((5, 5), bool)), [(0, 0), (1, 1), (2, 2)],
+                          [(1, 1)], position=(0, 0), fallback="no"), ParameterError,
+     "fallback must be True or False, got 'no'"),  # "no" was true
+    (lambda: jaxga_replan(Grid.create(np.zeros((5, 5), bool)), [(0, 0), (1, 1), (2, 2)],
+                          [(1, 1)], position=(0, 0), post=1), ParameterError,
+     "post must be True or False, got 1"),
 ], ids=["long-preset-name", "nul-map", "nul-map-run", "structured", "void", "plain-grid",
-        "two-spellings-run", "two-spellings-sweep"])
+        "two-spellings-run", "two-spellings-sweep", "set-endpoint", "dict-endpoint",
+        "set-seeds", "dict-seeds", "replan-fallback-word", "replan-post-int"])
 def test_hostile_python_arguments_are_one_line_errors(call, error, words):
     """Arguments of the Python API that raised OSError, ValueError, TypeError or
     IndexError tracebacks: a JaxgaError of one short line."""

@@ -92,6 +92,16 @@ def test_optimum_shows_each_phase_and_a_long_one_as_it_runs(monkeypatch, capsys)
     capsys.readouterr()
 
 
+def test_front_point_with_a_preset_that_keeps_no_front_is_refused(capsys):
+    """--front-point chooses a point of a front: with sga (one best path a seed) it did
+    nothing, without a word."""
+    assert main(["run", "--preset", "sga", "--map", "classic_ga_gapp3_20x20",
+                 "--front-point", "knee", "--seeds", "2", "--quiet"]) == EXIT_BAD_INPUT
+    err = capsys.readouterr().err
+    assert err.count("\n") == 1 and "--front-point chooses a point of a front, and preset " \
+        "'sga' keeps none" in err
+
+
 @pytest.mark.parametrize("argv, meant", [
     (["run", "--preset", "sga", "--map", "classic_ga_gapp3_20x20", "--seed", "42"],
      "--seeds"),  # argparse alone ran 42 runs of seeds 0-41 for this
