@@ -106,7 +106,8 @@ def _check_call_options(progress, chunks, size_class=None, any_angle_budget="aut
         raise ParameterError(f"size_class must be True, False or None (automatic), got "
                              f"{size_class!r}")
     if not (any_angle_budget is None or any_angle_budget == "auto" or (
-            isinstance(any_angle_budget, (int, float)) and not isinstance(any_angle_budget, bool)
+            isinstance(any_angle_budget, (int, float, np.integer, np.floating))
+            and not isinstance(any_angle_budget, (bool, np.bool_))
             and math.isfinite(any_angle_budget) and any_angle_budget >= 0)):
         raise ParameterError(f"any_angle_budget must be 'auto', a number of seconds >= 0 or "
                              f"None (no limit), got {any_angle_budget!r}")

@@ -117,7 +117,7 @@ PRESET_FILE_CAP = 1 << 20
 def _read_file(path: Path) -> dict[str, Any]:
     try:
         text = read_input(path, PRESET_FILE_CAP, what="configuration file",
-                          error=ParameterError).decode("utf-8")
+                          error=ParameterError).decode("utf-8-sig")  # a BOM, as editors add
     except FileNotFoundError:
         raise ParameterError(f"configuration file not found: {path}") from None
     except UnicodeDecodeError:

@@ -335,8 +335,7 @@ def load_toml(path: str | Path) -> dict[str, Any]:
     """Read a TOML file into dotted keys; a clear error for a missing or malformed file."""
     p = Path(path)
     try:
-        with p.open("rb") as f:
-            return flatten(tomllib.load(f))
+        return flatten(tomllib.loads(p.read_bytes().decode("utf-8-sig")))  # a BOM, too
     except FileNotFoundError:
         raise ParameterError(f"configuration file not found: {p}") from None
     except ValueError as e:  # TOMLDecodeError, or an integer past Python's 4300 digits

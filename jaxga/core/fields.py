@@ -81,15 +81,17 @@ LONGEST_SHOWN = 80
 
 
 def shown_value(value: Any) -> str:
-    """``repr(value)`` for a message (a refusal echoes the value it refuses), at most
-    :data:`LONGEST_SHOWN` characters: an integer of more digits is named by its size
-    (Python will not even print one of more than 4,300 digits), anything longer is cut,
-    the number of characters left out named."""
+    """``repr(value)`` for a message (a refusal echoes the value it refuses), on one line
+    and at most :data:`LONGEST_SHOWN` characters: an integer of more digits is named by
+    its size (Python will not even print one of more than 4,300 digits), an array by its
+    type and shape, anything longer is cut, the number of characters left out named."""
     if isinstance(value, int) and not isinstance(value, bool) \
             and abs(value).bit_length() > 3.33 * LONGEST_SHOWN:
         return f"an integer of about {int(abs(value).bit_length() * math.log10(2)) + 1:,} digits"
+    if isinstance(value, np.ndarray) and value.ndim > 0:  # its repr spans lines
+        return f"a {value.dtype} array of shape {value.shape}"
     try:
-        text = repr(value)
+        text = " ".join(repr(value).splitlines())  # one line: a message is one line
     except (ValueError, RecursionError):  # a list holding such an integer, or nested deep
         return f"a {type(value).__name__} too long to show"
     if len(text) <= LONGEST_SHOWN:

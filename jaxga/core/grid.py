@@ -37,6 +37,7 @@ import numpy as np
 
 from jaxga.core.dtypes import on_device
 from jaxga.core.errors import EndpointError, JaxgaError
+from jaxga.core.fields import shown_value
 
 CORNER_RULES: tuple[str, ...] = ("free", "no_squeeze", "strict")
 """The corner rules (decision 027), in order of strictness."""
@@ -338,7 +339,8 @@ def check_xy(name: str, xy, w: int, h: int) -> tuple[int, int]:
             raise TypeError
         x, y = (as_integer(v) for v in tuple(xy))
     except (TypeError, ValueError):
-        raise EndpointError(f"{name} must be a pair of integers (x, y), got {xy!r}") from None
+        raise EndpointError(f"{name} must be a pair of integers (x, y), got "
+                            f"{shown_value(xy)}") from None
     if not (0 <= x < w and 0 <= y < h):
         raise EndpointError(f"{name} ({x}, {y}) is off the {w} x {h} map")
     return x, y

@@ -39,6 +39,7 @@ from typing import Any
 import numpy as np
 
 from jaxga.core.errors import EndpointError, MapFormatError
+from jaxga.core.fields import shown_value
 from jaxga.core.grid import Grid, check_corner_rule, too_large
 from jaxga.maps import builtin
 from jaxga.maps.builtin import default_corner_rule
@@ -251,9 +252,10 @@ def load_map_info(source: Source, **options: Any) -> MapInfo:
         path = builtin.builtin_path(source)  # type: ignore[arg-type]
     else:
         if not isinstance(source, (str, os.PathLike)):
-            raise MapFormatError(
-                f"a map source must be a file path or a built-in map name, got {source!r}"
-            )
+            hint = ("; an array becomes a map through jaxga.Grid.create(blocked)"
+                    if hasattr(source, "shape") else "")
+            raise MapFormatError(f"a map source must be a file path or a built-in map name, "
+                                 f"got {shown_value(source)}{hint}")
         path = Path(os.fspath(source))
     label = str(source) if is_builtin else str(path)
 

@@ -929,6 +929,11 @@ def _plain_grid_off_the_map():
     (lambda: api.sweep("sga", canonical.MAP, [{"crossover__probability": 0.5,
                                                "crossover.probability": 0.9}], seeds=2),
      ParameterError, "crossover.probability is given twice, as 0.5 and 0.9"),
+    (lambda: Grid.create(np.zeros((5, 5), bool), start=np.array([[1], [2]])), JaxgaError,
+     "start must be a pair of integers (x, y), got a int64 array of shape (2, 1)"),
+    (lambda: api.run("sga", np.zeros((20, 20)), seeds=2), JaxgaError,
+     "got a float64 array of shape (20, 20); an array becomes a map through "
+     "jaxga.Grid.create(blocked)"),  # its repr spanned 40 lines
     (lambda: Grid.create(np.zeros((5, 5), bool), start={3, 1}), JaxgaError,
      "start must be a pair of integers (x, y), got {1, 3}"),  # was read as (1, 3)
     (lambda: Grid.create(np.zeros((5, 5), bool), goal={3: 0, 1: 0}), JaxgaError,
@@ -944,7 +949,8 @@ def _plain_grid_off_the_map():
                           [(1, 1)], position=(0, 0), post=1), ParameterError,
      "post must be True or False, got 1"),
 ], ids=["long-preset-name", "nul-map", "nul-map-run", "structured", "void", "plain-grid",
-        "two-spellings-run", "two-spellings-sweep", "set-endpoint", "dict-endpoint",
+        "two-spellings-run", "two-spellings-sweep", "array-endpoint", "array-as-map",
+        "set-endpoint", "dict-endpoint",
         "set-seeds", "dict-seeds", "replan-fallback-word", "replan-post-int"])
 def test_hostile_python_arguments_are_one_line_errors(call, error, words):
     """Arguments of the Python API that raised OSError, ValueError, TypeError or
@@ -953,6 +959,17 @@ def test_hostile_python_arguments_are_one_line_errors(call, error, words):
         call()
     text = str(info.value)
     assert words in text and "\n" not in text and len(text) < 300, text
+
+
+def test_a_numpy_scalar_budget_is_a_number_of_seconds():
+    """np.float32(1) was refused where np.float64(1) was taken; a bool is not seconds."""
+    from jaxga.api.runs import _check_call_options
+
+    for budget in (np.float32(1), np.float64(2.5), np.int64(3), 0, 1.5, None, "auto"):
+        _check_call_options(None, 1, None, budget)
+    for bad in (np.bool_(True), True, np.float32("nan"), -1, "soon"):
+        with pytest.raises(ParameterError, match="any_angle_budget must be"):
+            _check_call_options(None, 1, None, bad)
 
 
 def test_a_request_whose_runs_cannot_fit_in_memory_is_refused(grid, monkeypatch):

@@ -350,6 +350,14 @@ def test_dotted_reads_every_spelling_of_a_key_and_refuses_two_values():
                                       "crossover.probability": 0.9})
 
 
+def test_a_preset_file_that_starts_with_a_byte_order_mark_loads(tmp_path):
+    """Editors on Windows write a UTF-8 BOM; maps and scenarios with one load, and so does
+    a preset file (tomllib refused it: "Invalid statement")."""
+    path = tmp_path / "bom.toml"
+    path.write_bytes(b"\xef\xbb\xbf" + b'base = "sga"\n[crossover]\nprobability = 0.55\n')
+    assert load_preset(str(path))["crossover.probability"] == 0.55
+
+
 def test_flatten_keeps_the_tables_order_and_drops_empty_tables():
     from jaxga.config.schema import flatten
 
