@@ -89,7 +89,7 @@ def shown_value(value: Any) -> str:
             and abs(value).bit_length() > 3.33 * LONGEST_SHOWN:
         return f"an integer of about {int(abs(value).bit_length() * math.log10(2)) + 1:,} digits"
     if isinstance(value, np.ndarray) and value.ndim > 0:  # its repr spans lines
-        return f"a {value.dtype} array of shape {value.shape}"
+        return f"an array of shape {value.shape} and dtype {value.dtype}"
     try:
         text = " ".join(repr(value).splitlines())  # one line: a message is one line
     except (ValueError, RecursionError):  # a list holding such an integer, or nested deep

@@ -930,9 +930,9 @@ def _plain_grid_off_the_map():
                                                "crossover.probability": 0.9}], seeds=2),
      ParameterError, "crossover.probability is given twice, as 0.5 and 0.9"),
     (lambda: Grid.create(np.zeros((5, 5), bool), start=np.array([[1], [2]])), JaxgaError,
-     "start must be a pair of integers (x, y), got a int64 array of shape (2, 1)"),
+     "start must be a pair of integers (x, y), got an array of shape (2, 1) and dtype int64"),
     (lambda: api.run("sga", np.zeros((20, 20)), seeds=2), JaxgaError,
-     "got a float64 array of shape (20, 20); an array becomes a map through "
+     "got an array of shape (20, 20) and dtype float64; an array becomes a map through "
      "jaxga.Grid.create(blocked)"),  # its repr spanned 40 lines
     (lambda: Grid.create(np.zeros((5, 5), bool), start={3, 1}), JaxgaError,
      "start must be a pair of integers (x, y), got {1, 3}"),  # was read as (1, 3)
