@@ -1143,6 +1143,40 @@ def build(t: Path) -> list[Case]:
         check=lines_under(600), note="argparse's refusal, echoed whole")
     add("abbreviated-seed-option", "round four", run(CLASSIC, "--seed", "42"),
         note="argparse took it for --seeds 42: 42 runs instead of seed 42")
+    thin = write("thin-header.map", "type octile\nheight 1\nwidth 99999999999999999999\nmap\n.\n")
+    add("movingai-header-10e20-by-1", "round four", run(thin), max_s=15,
+        note="hung: the coarsening factor was counted up from 2")
+    room = write("room.pgm", b"P5\n4 4\n255\n" + bytes([254] * 16))
+    deep = "[" * 5000 + "]" * 5000
+    add("ros-yaml-nested-5000-deep", "round four",
+        run(write("deep.yaml", f"image: {room.name}\nresolution: 0.1\norigin: {deep}\n")),
+        note="was a RecursionError traceback")
+    add("ros-yaml-key-twice", "round four",
+        run(write("twice.yaml", f"image: {room.name}\nresolution: 0.1\norigin: [0, 0, 0]\n"
+                                "resolution: 5.0\n")),
+        note="the last value was used without a word")
+    add("preset-nested-3000-deep", "round four",
+        ["run", "--map", CLASSIC, "--preset",
+         write("deep.toml", 'base = "sga"\nx = ' + "[" * 3000 + "]" * 3000 + "\n"), *BASE[2:],
+         "--quiet"], note="was a RecursionError traceback")
+    add("preset-dotted-key-3000-parts", "round four",
+        ["run", "--map", CLASSIC, "--preset",
+         write("dotted.toml", 'base = "sga"\n' + ".".join(["a"] * 3000) + " = 1\n"),
+         *BASE[2:], "--quiet"], check=lines_under(600), note="was a RecursionError traceback")
+    add("set-nested-3000-deep", "round four",
+        run(CLASSIC, "--set", "init.clearance_weights=" + "[" * 3000 + "]" * 3000),
+        note="was a RecursionError traceback")
+    add("csv-empty-cell", "round four", run(write("empty-cell.txt", "0,,0,1\n0,,0,1\n")),
+        note="read as 3 cells a row: the columns shifted")
+    from PIL import Image as _Image
+
+    frames = [_Image.fromarray(np.where(blocked[::-1], 0, 255).astype(np.uint8)),
+              _Image.fromarray(np.where(blocked[::-1], 255, 0).astype(np.uint8))]
+    frames[0].save(f / "anim.gif", save_all=True, append_images=frames[1:])
+    add("gif-two-frames", "round four", run(f / "anim.gif", *FREE),
+        note="the first frame was read, the second ignored")
+    add("front-point-without-a-front", "round four", run(CLASSIC, "--front-point", "knee"),
+        note="did nothing, without a word")
     folders_cache = caches / "programs-folders"
     add("cache-entries-folders", "round four", ["run", "--map", CLASSIC, *QUIET],
         "handled", env={"JAXGA_CACHE_DIR": str(folders_cache)}, caches=(folders_cache,),
