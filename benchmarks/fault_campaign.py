@@ -1282,6 +1282,9 @@ def main() -> None:
     ap.add_argument("--no-write", action="store_true", help="print only")
     ap.add_argument("--keep", action="store_true", help="keep the temporary folder")
     args = ap.parse_args()
+    # a campaign ended by SIGTERM (kill, a CI timeout) still runs its teardowns (the
+    # immutable folder's chattr -i) and removes its folder: Python's default would not
+    signal.signal(signal.SIGTERM, lambda signum, frame: sys.exit(128 + signum))
     t0 = time.monotonic()
     tmp = Path(tempfile.mkdtemp(prefix="jaxga-faults-"))
     env = dict(os.environ, PYTHONPATH=str(ROOT), JAXGA_CACHE_DIR=str(tmp / "cache"))
