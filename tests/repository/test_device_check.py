@@ -123,6 +123,8 @@ def test_a_report_cut_short_says_what_it_did_not_measure(small, tmp_path):
     (["--budget-s", "soon"], "invalid float value"),
     (["--json", "/no/such/folder/r.json"], "does not exist or is not writable"),
     (["--from-json", "/no/such/report.json"], "not a complete device check report"),
+    (["--max-runs-per-call", "3000"], "must be a power of two from 2048"),
+    (["--max-runs-per-call", "1024"], "must be a power of two from 2048"),
 ])
 def test_bad_input_is_one_line(args, message):
     proc = _run(*args, timeout=120)
