@@ -167,14 +167,22 @@ _READ: set[str] = set()
 """The keys of the programs this process has read from the store."""
 
 
+_NOT_READ: set[str] = set()
+"""Keys whose stored program failed to run and could not be deleted (a read-only store):
+this process never reads them again, so that a call run again compiles them."""
+
+
 def forget_read() -> bool:
-    """Delete every stored program this process has read (after one failed to run);
-    True if there were any."""
+    """Delete every stored program this process has read (after one failed to run), or,
+    where the store takes no change, never read it again in this process; True if there
+    were any (each key is read and forgotten at most once, so a retry ends)."""
     keys = list(_READ)
     _READ.clear()
     for key in keys:
-        with contextlib.suppress(OSError):
+        try:
             (directory() / f"{key}.pkl").unlink()
+        except OSError:
+            _NOT_READ.add(key)
     return bool(keys)
 
 
@@ -231,7 +239,7 @@ def load(key: str | None, devices: Any) -> Any | None:
     The entry's format, key, devices and digest are checked first
     (:func:`_entry_problem`); an entry that fails a check or does not load is removed
     with one warning line naming the store, and the program is compiled again."""
-    if key is None:
+    if key is None or key in _NOT_READ:
         return None
     path = directory() / f"{key}.pkl"
     if not path.is_file():

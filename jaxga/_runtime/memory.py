@@ -81,10 +81,10 @@ a GPU may have less memory than its host. A margin for the allocator's fragmenta
 model (:data:`STATE_FACTOR`) is not measured on a GPU (decision 049)."""
 
 
-def device_memory() -> tuple[int, str] | None:
-    """``(bytes, name)`` of the memory of one of the default backend's devices, where the
-    runs compute, when that is not the CPU (whose runs use the host's memory) and the
-    device says; else None."""
+def device_memory() -> tuple[int, int, str] | None:
+    """``(bytes of one device, devices, kind)`` of the default backend's local devices,
+    where the runs compute, when that is not the CPU (whose runs use the host's memory)
+    and the device says; else None."""
     if jax.default_backend() == "cpu":
         return None
     try:
@@ -94,14 +94,15 @@ def device_memory() -> tuple[int, str] | None:
         return None
     if not isinstance(limit, int) or limit <= 0:
         return None
-    return limit * jax.local_device_count(), f"{jax.local_device_count()} x {device.device_kind}"
+    return limit, jax.local_device_count(), device.device_kind
 
 
-def budget() -> tuple[int, str] | None:
+def budget(per_device: bool = False) -> tuple[int, str] | None:
     """``(bytes, words)``: the memory a call may use and how to name it in a refusal:
     :data:`RESULT_MEMORY_FRACTION` of the memory this process may use, or, lower,
-    :data:`DEVICE_MEMORY_FRACTION` of the devices' own memory; None where neither is
-    known."""
+    :data:`DEVICE_MEMORY_FRACTION` of the devices' own memory: all local devices' for a
+    whole call (:func:`call_memory`), one device's with ``per_device`` (XLA's account of
+    a program sharded over them is one device's share); None where neither is known."""
     bounds = []
     total = physical_memory()
     if total is not None:
@@ -109,10 +110,12 @@ def budget() -> tuple[int, str] | None:
                        f"more than half of the {total / 2**30:.2f} GiB this process may use"))
     device = device_memory()
     if device is not None:
-        have, name = device
-        bounds.append((int(DEVICE_MEMORY_FRACTION * have),
-                       f"more than {DEVICE_MEMORY_FRACTION:.0%} of the {have / 2**30:.2f} GiB "
-                       f"of the devices' own memory ({name})"))
+        one, count, kind = device
+        n = 1 if per_device else count
+        where = "a device's" if n == 1 else f"{count} devices'"
+        bounds.append((int(DEVICE_MEMORY_FRACTION * one * n),
+                       f"more than {DEVICE_MEMORY_FRACTION:.0%} of the {one * n / 2**30:.2f} "
+                       f"GiB of {where} own memory ({kind})"))
     return min(bounds) if bounds else None
 
 
@@ -198,7 +201,7 @@ def check_compiled_memory(stats: Mapping[str, Any], calls: int, runs: int) -> No
     once the programs of a call are known, of what :func:`call_memory` estimated before.
     ``stats``: XLA's account of each program by name
     (:meth:`jaxga._runtime.programs.Programs.memory_stats`; None: not checked)."""
-    known = budget()
+    known = budget(per_device=True)
     if known is None:
         return
     room, words = known

@@ -90,8 +90,12 @@ def physical_memory() -> int | None:
 def too_large(width: int, height: int) -> str:
     """The one-line refusal of a map over :data:`MAX_MAP_CELLS` cells or whose plan would
     need more than half of this machine's memory (:func:`plan_memory`), or "" if it
-    fits."""
+    fits. Where the memory would not hold a plan on a map of one cell (a process limited
+    to less than twice :data:`PLAN_BASE_BYTES`), no coarsening can help: the map is
+    judged by the cell limit alone."""
     have = physical_memory()
+    if have is not None and plan_memory(1) > have // 2:
+        have = None
 
     def fits(cells: int) -> bool:
         return cells <= MAX_MAP_CELLS and (have is None or plan_memory(cells) <= have // 2)
@@ -99,13 +103,15 @@ def too_large(width: int, height: int) -> str:
     cells = width * height
     if fits(cells):
         return ""
+
     def coarse_fits(k: int) -> bool:  # the coarse cells never grow with k
         return fits(-(-width // k) * -(-height // k))
 
-    # the smallest factor that fits: doubled until it fits, then halved in on (a map of
-    # 10**20 x 1 cells takes some 140 tries, where counting up from 2 never ended)
+    # the smallest factor that fits: doubled until it fits, then halved in on (about 90
+    # tries for a map of 10**20 x 1 cells, where counting up from 2 never ended); a
+    # factor of the longer side makes one cell, which fits
     low, high = 1, 2
-    while not coarse_fits(high):
+    while not coarse_fits(high) and high < max(width, height):
         low, high = high, 2 * high
     while high - low > 1:
         mid = (low + high) // 2

@@ -1233,23 +1233,31 @@ def test_a_device_with_less_memory_than_its_host_bounds_the_calls(monkeypatch):
     from types import SimpleNamespace
 
     monkeypatch.setattr(runtime.memory, "physical_memory", lambda: 64 * 2**30)
-    monkeypatch.setattr(runtime.memory, "device_memory", lambda: (4 * 2**30, "1 x Tesla T4"))
+    monkeypatch.setattr(runtime.memory, "device_memory", lambda: (4 * 2**30, 1, "Tesla T4"))
     room, words = runtime.memory.budget()
     assert room == int(0.8 * 4 * 2**30)
-    assert words == "more than 80% of the 4.00 GiB of the devices' own memory (1 x Tesla T4)"
+    assert words == "more than 80% of the 4.00 GiB of a device's own memory (Tesla T4)"
     account = SimpleNamespace(output_size_in_bytes=2**28, argument_size_in_bytes=0,
                               temp_size_in_bytes=2**30)
     runtime.memory.check_compiled_memory({"evolve": account}, 4, 20)  # 3 GiB: fits 3.2
     with pytest.raises(ParameterError, match=r"about 3\.5 GiB in their evolve program .*"
-                       r"devices' own memory \(1 x Tesla T4\): run fewer seeds"):
+                       r"a device's own memory \(Tesla T4\): run fewer seeds"):
         runtime.memory.check_compiled_memory({"evolve": account}, 6, 30)
-    monkeypatch.setattr(runtime.memory, "device_memory", lambda: (256 * 2**30, "1 x H200"))
+    # four such devices hold a call four times as large, but XLA's account of a program
+    # sharded over them is one device's: that is checked against one device
+    monkeypatch.setattr(runtime.memory, "device_memory", lambda: (4 * 2**30, 4, "Tesla T4"))
+    assert runtime.memory.budget()[0] == int(0.8 * 16 * 2**30)
+    assert runtime.memory.budget(per_device=True)[0] == int(0.8 * 4 * 2**30)
+    with pytest.raises(ParameterError, match="a device's own memory"):
+        runtime.memory.check_compiled_memory({"evolve": account}, 6, 30)
+    monkeypatch.setattr(runtime.memory, "device_memory", lambda: (256 * 2**30, 1, "H200"))
     assert runtime.memory.budget()[0] == 32 * 2**30  # the host's half is lower here
 
 
 def test_device_memory_reads_the_default_devices_allocator_limit(monkeypatch):
-    """None on the CPU (its runs use the host's memory, physical_memory); elsewhere the
-    devices' ``bytes_limit`` (all local devices), None where a device gives none."""
+    """None on the CPU (its runs use the host's memory, physical_memory); elsewhere one
+    device's ``bytes_limit`` and how many local devices there are, None where a device
+    gives none."""
     from types import SimpleNamespace
 
     import jax
@@ -1260,7 +1268,7 @@ def test_device_memory_reads_the_default_devices_allocator_limit(monkeypatch):
     monkeypatch.setattr(jax, "default_backend", lambda: "gpu")
     monkeypatch.setattr(jax, "local_devices", lambda: [gpu, gpu])
     monkeypatch.setattr(jax, "local_device_count", lambda: 2)
-    assert runtime.memory.device_memory() == (24 * 2**30, "2 x FakeGPU")
+    assert runtime.memory.device_memory() == (12 * 2**30, 2, "FakeGPU")
     for stats in (lambda: None, lambda: {}, lambda: {"bytes_limit": 0}, lambda: 1 / 0):
         gpu.memory_stats = stats
         assert runtime.memory.device_memory() is None

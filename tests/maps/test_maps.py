@@ -957,6 +957,18 @@ def test_the_coarsening_named_is_the_smallest_that_fits(width, height, k, monkey
     assert cells(k) <= grid_module.MAX_MAP_CELLS < cells(k - 1)
 
 
+def test_a_process_too_small_for_any_plan_judges_maps_by_the_cell_limit(monkeypatch):
+    """Under 2 GiB (``ulimit -v``, a container) not even a map of one cell fits the memory
+    model, so no coarsening helps: the search for a factor never ended (every map's load
+    hung); the cell limit alone now decides."""
+    from jaxga.core import grid as grid_module
+
+    monkeypatch.setattr(grid_module, "physical_memory", lambda: int(1.5 * 2**30))
+    assert grid_module.too_large(10, 10) == ""
+    text = grid_module.too_large(3000, 3000)
+    assert "more than jaxga plans on" in text and "--coarsen 2 " in text
+
+
 def test_a_moving_ai_header_of_a_huge_thin_map_is_refused_at_once(tmp_path):
     header = tmp_path / "thin.map"
     header.write_text("type octile\nheight 1\nwidth 99999999999999999999\nmap\n.\n")

@@ -143,6 +143,18 @@ def test_malformed_ros_maps_give_one_line(office, yaml_text, message):
     assert message in str(e.value) and "\n" not in str(e.value) and "bad.yaml" in str(e.value)
 
 
+def test_a_yaml_merge_key_is_not_a_key_given_twice(office):
+    """``<<: *defaults`` merges an anchored mapping whose keys the file's own override, as
+    YAML defines: the check for keys given twice leaves merges alone."""
+    plain = load_map_info(office)
+    merged = office.with_name("merged.yaml")
+    merged.write_text("defaults: &d {resolution: 0.5, negate: 0}\n<<: *d\n"
+                      + office.read_text())
+    info = load_map_info(merged)
+    assert info.resolution == plain.resolution == 0.05  # the file's own value
+    np.testing.assert_array_equal(info.grid.blocked_np(), plain.grid.blocked_np())
+
+
 def test_endpoints_in_metres_need_a_ros_map_and_must_lie_on_it(office, tmp_path):
     with pytest.raises(EndpointError, match=r"is off the map: it covers x -2\.\.-1\.75 m"):
         load_map(office, start_world=(0.0, 0.0))

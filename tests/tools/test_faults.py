@@ -341,6 +341,19 @@ def test_a_read_only_cache_folder_is_read_and_said_once(tmp_path, monkeypatch):
         program, read = executables.load_or_compile("k3", devices, lambda: _tiny_program(3))
     assert not read and int(program(np.int32(1))) == 4
 
+    # a stored program that then fails to run cannot be deleted here: it is not read again
+    # in this process, so the call run again compiles it (it looped for ever)
+    monkeypatch.setattr(executables, "_NOT_READ", set())
+    monkeypatch.setattr(executables, "_READ", {"k2"})
+
+    def read_only_unlink(self, *args, **kwargs):
+        raise PermissionError(13, "Read-only file system", str(self))
+
+    monkeypatch.setattr(Path, "unlink", read_only_unlink)
+    assert executables.forget_read() is True and (store / "k2.pkl").is_file()
+    assert executables.load("k2", devices) is None
+    assert executables.forget_read() is False  # nothing read since: no retry
+
 
 def test_store_directory_reads_a_read_only_default_folder(tmp_path, monkeypatch):
     """Without configure (the Python API's default): $JAXGA_CACHE_DIR naming a folder that
