@@ -70,10 +70,9 @@ def is_read_only(path: str | os.PathLike) -> bool:
 def _use_read_only(path: str, why: str) -> None:
     """Read a folder that takes no new file (a shared cache on a read-only mount, a
     folder of another user's): one :class:`~jaxga.core.errors.CacheWarning` per process."""
-    _READ_ONLY.add(str(Path(path)))
-    if _WARNED:
+    if is_read_only(path):  # said once per folder
         return
-    _WARNED.append(path)
+    _READ_ONLY.add(str(Path(path)))
     warnings.warn(f"the compilation cache {path} ({ENV_VAR}) takes no new files ({why}): "
                   "programs stored in it are read, new ones are compiled and not kept",
                   CacheWarning, stacklevel=4)

@@ -59,6 +59,7 @@ from jaxga.api.problem import Problem, load_problem
 from jaxga.api.result import Fronts, Result
 from jaxga.config.schema import Config, dotted, flatten
 from jaxga.core.errors import DeviceMemoryError, ParameterError
+from jaxga.core.fields import shown_value
 from jaxga.core.grid import Grid, as_integer
 from jaxga.engine import (
     Algorithm,
@@ -110,7 +111,7 @@ def _check_call_options(progress, chunks, size_class=None, any_angle_budget="aut
             and not isinstance(any_angle_budget, (bool, np.bool_))
             and math.isfinite(any_angle_budget) and any_angle_budget >= 0)):
         raise ParameterError(f"any_angle_budget must be 'auto', a number of seconds >= 0 or "
-                             f"None (no limit), got {any_angle_budget!r}")
+                             f"None (no limit), got {shown_value(any_angle_budget)}")
     if progress is not None and not callable(progress):
         raise ParameterError(f"progress must be a callable (stage, fraction), got "
                              f"{progress!r}")

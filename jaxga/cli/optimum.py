@@ -31,7 +31,7 @@ from jaxga.reference.fitness import fitness_optimum
 def cmd_optimum(args: argparse.Namespace) -> int:
     """``jaxga optimum``: exact 8-connected and any-angle optima of one map, and with
     ``--preset`` the exact optimum of that preset's fitness. Each phase is shown on
-    stderr as it starts, and one that runs on (a search of minutes on a large map) says
+    stderr as it starts, and one that runs on (an exact search on a large map) says
     every few seconds how long it has run (:class:`jaxga.cli.run.Progress`)."""
     progress = None if args.quiet else Progress().start()
     try:
@@ -75,6 +75,15 @@ def _optimum(args: argparse.Namespace, progress: Progress | None) -> int:
         bounds = any_angle_references(grid, octile, args.budget,
                                       None if progress is None
                                       else (lambda frac: progress("any-angle", frac)))
+    fit, t_fit = None, 0.0
+    if config is not None:  # before the results: the progress line ends first
+        if progress is not None:
+            progress("fitness", 0.0)
+        t2 = time.perf_counter()
+        fit = fitness_optimum(grid, config)
+        t_fit = time.perf_counter() - t2
+    if progress is not None:
+        progress.close()  # its bar's line ended, its ticks stopped: the results follow
     print(f"map          {info.name} ({grid.width} x {grid.height} cells, corner rule "
           f"{grid.corner_rule!r}{'; ' + frame.describe() if frame.describe() else ''})")
     print(f"start, goal  cells {grid.start_xy} -> {grid.goal_xy}" + world_ends(frame, grid))
@@ -90,17 +99,12 @@ def _optimum(args: argparse.Namespace, progress: Progress | None) -> int:
         print(f"lower bound  {bounds.lower_bound:.4f}{metres_text(bounds.lower_bound, frame)}  "
               "(Euclidean shortest path around the blocked cells, a proven bound of the "
               "any-angle optimum)")
-    t2 = time.perf_counter()
-    fit = None
-    if config is not None:
-        if progress is not None:
-            progress("fitness", 0.0)
-        fit = fitness_optimum(grid, config)
+    if fit is not None:
         label = f"fitness of {config['name']} ({config['fitness.method']})"
         if fit.found:
             print(f"{label}  {fit.fitness:.6g}  (a path of length {fit.length:.4f}, "
                   f"{len(fit.path)} cells{'' if fit.loop_free else ', not loop-free: a bound'}"
-                  f", {time.perf_counter() - t2:.3f} s)")
+                  f", {t_fit:.3f} s)")
         else:
             print(f"{label}  not computed: {fit.reason}")
     if args.json:

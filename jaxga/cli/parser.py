@@ -19,18 +19,27 @@ line is shortened in the line that refuses it (:func:`shortened`)."""
 
 _LONG_WORD = re.compile(rf"\S{{{LONGEST_WORD + 1},}}")
 
+LONGEST_LINE = 1000
+"""The most characters of a one-line message once its long words are cut: a value with
+spaces (``--set "key=[1, 1, 1, ...]"``) is many short words."""
+
 
 def shortened(message: str) -> str:
     """``message`` with every word longer than :data:`LONGEST_WORD` characters cut to its
-    first 150 and last 60, the number left out named between them: a refusal echoes what
-    it refuses, and a hostile value (``--set key=<10,000 digits>``) would otherwise make
-    that one line as long as the value."""
+    first 150 and last 60, the number left out named between them, and then the whole
+    line cut to its first 600 and last 300 characters where it is still longer than
+    :data:`LONGEST_LINE`: a refusal echoes what it refuses, and a hostile value
+    (``--set key=<10,000 digits>``) would otherwise make that one line as long as the
+    value."""
 
     def cut(m: re.Match) -> str:
         word = m.group(0)
         return f"{word[:150]}...[{len(word) - 210:,} characters]...{word[-60:]}"
 
-    return _LONG_WORD.sub(cut, message)
+    message = _LONG_WORD.sub(cut, message)
+    if len(message) > LONGEST_LINE:  # the line itself: its start and its end kept
+        message = f"{message[:600]}...[{len(message) - 900:,} characters]...{message[-300:]}"
+    return message
 
 
 class Parser(argparse.ArgumentParser):

@@ -108,11 +108,14 @@ class Progress:
         return self
 
     def close(self) -> None:
-        """Stop the background thread (and end a bar's line on a terminal)."""
+        """Stop the background thread (and end a bar's line on a terminal); a second call
+        does nothing."""
         if self._stop is not None:
             self._stop.set()
+            self._stop = None
         if self.tty and self.shown:
             print(file=self.stream, flush=True)
+            self.shown = False
 
 
 def cmd_run(args: argparse.Namespace) -> int:

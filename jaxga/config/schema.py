@@ -241,9 +241,13 @@ def dotted(overrides: Mapping[str, Any]) -> dict[str, Any]:
 
 
 def _same(a: Any, b: Any) -> bool:
-    """Whether two values given for one key are the same (numpy scalars as Python ones)."""
+    """Whether two values given for one key are the same (numpy scalars as Python ones; a
+    bool is not the number it equals: ``True`` and ``1`` are two values)."""
+    a, b = python_scalar(a), python_scalar(b)
+    if isinstance(a, bool) != isinstance(b, bool):
+        return False
     try:
-        return bool(python_scalar(a) == python_scalar(b))
+        return bool(a == b)
     except Exception:  # noqa: BLE001 - arrays and the like: the same object only
         return a is b
 

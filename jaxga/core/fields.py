@@ -71,9 +71,10 @@ def finite_number(value: Any) -> bool:
     integer beyond the largest float is not (converting it raises ``OverflowError``)."""
     if isinstance(value, bool) or not isinstance(value, (int, float)):
         return False
-    if isinstance(value, int):
-        return abs(value).bit_length() <= 1024
-    return math.isfinite(value)
+    try:
+        return math.isfinite(float(value))
+    except OverflowError:  # an integer of 309 digits or more
+        return False
 
 
 LONGEST_SHOWN = 80

@@ -337,6 +337,14 @@ def test_a_preset_file_nested_thousands_deep_is_refused_in_one_line(tmp_path, bo
         load_preset("sga", sets=["init.clearance_weights=" + "[" * 3000 + "]" * 3000])
 
 
+def test_a_finite_number_is_one_a_float_holds():
+    from jaxga.core.fields import finite_number
+
+    assert finite_number(10**308) and finite_number(1.5) and finite_number(-3)
+    for value in (2**1024 - 1, -(10**309), float("inf"), float("nan"), True, "1", None):
+        assert not finite_number(value), value
+
+
 def test_dotted_reads_every_spelling_of_a_key_and_refuses_two_values():
     from jaxga.config.schema import dotted
 
@@ -345,6 +353,8 @@ def test_dotted_reads_every_spelling_of_a_key_and_refuses_two_values():
     assert dotted({"a__b": 0.5, "a": {"b": np.float64(0.5)}}) == {"a.b": 0.5}  # the same
     with pytest.raises(ParameterError, match=r"^a\.b is given twice, as 0\.5 and 0\.9$"):
         dotted({"a__b": 0.5, "a": {"b": 0.9}})
+    with pytest.raises(ParameterError, match=r"given twice, as 1 and True"):  # not one
+        dotted({"a__b": 1, "a": {"b": True}})
     with pytest.raises(ParameterError, match="given twice"):
         load_preset("sga", overrides={"crossover__probability": 0.5,
                                       "crossover.probability": 0.9})

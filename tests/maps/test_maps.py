@@ -944,7 +944,7 @@ def test_an_image_of_several_frames_is_refused_and_transparency_reads_alike(tmp_
 def test_the_coarsening_named_is_the_smallest_that_fits(width, height, k, monkeypatch):
     """The factor a refusal names is the smallest that brings the map under the limit
     (exactly: k - 1 does not), found at once for any header: a Moving AI header of
-    10**20 x 1 cells counted up from 2 for hours (the load hung)."""
+    10**20 x 1 cells counted up from 2, some 10**13 steps (the load hung)."""
     from jaxga.core import grid as grid_module
 
     monkeypatch.setattr(grid_module, "physical_memory", lambda: 24 * 2**30)  # CI's

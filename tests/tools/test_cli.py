@@ -60,7 +60,7 @@ def test_optimum_of_a_presets_fitness(tmp_path, capsys):
 
 
 def test_optimum_shows_each_phase_and_a_long_one_as_it_runs(monkeypatch, capsys):
-    """`jaxga optimum` names each phase on its progress as it starts (a search of minutes
+    """`jaxga optimum` names each phase on its progress as it starts (a long search
     on a large map printed nothing until it ended), with the ticking thread started and
     stopped; --quiet shows none."""
     from jaxga.cli import optimum as cli_optimum
@@ -85,7 +85,10 @@ def test_optimum_shows_each_phase_and_a_long_one_as_it_runs(monkeypatch, capsys)
     monkeypatch.setattr(cli_optimum, "Progress", Recorder)
     assert main(["optimum", "--map", "routeplanning_yangbo_20x20", "--preset",
                  "iga_zhu"]) == 0
-    assert seen == ["new", "start", "load", "8-connected", "any-angle", "fitness", "close"]
+    # closed before the results are printed (a terminal's bar line ended), and again
+    # at the end (nothing more)
+    assert seen == ["new", "start", "load", "8-connected", "any-angle", "fitness", "close",
+                    "close"]
     seen.clear()
     assert main(["optimum", "--map", "routeplanning_yangbo_20x20", "--quiet"]) == 0
     assert seen == []
@@ -699,6 +702,12 @@ def test_progress_is_shown_after_two_seconds_as_a_bar_or_as_log_lines(tty):
     shown = [line.strip() for line in lines if "still running" in line]
     assert [line.split("progress: ")[-1] for line in shown] == [
         "any-angle still running (2 s)", "any-angle still running (4 s)"]
+    # closing ends a bar's line once, however often it is closed (jaxga optimum closes
+    # before its results and again at the end)
+    before = stream.getvalue()
+    slow.close()
+    slow.close()
+    assert stream.getvalue() == before + ("\n" if tty else "")
 
 
 def test_jaxga_warnings_are_one_line_like_its_errors(capsys, monkeypatch):

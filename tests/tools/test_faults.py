@@ -229,12 +229,18 @@ def test_a_value_of_thousands_of_characters_is_shortened_in_its_one_line_refusal
 
 
 def test_shortened_keeps_words_up_to_the_limit_and_cuts_longer_ones():
-    from jaxga.cli.parser import LONGEST_WORD, shortened
+    from jaxga.cli.parser import LONGEST_LINE, LONGEST_WORD, shortened
 
     kept = "a " + "x" * LONGEST_WORD + " b"
     assert shortened(kept) == kept
     word = "y" * 150 + "z" * 91 + "w" * 60
     assert shortened(f"a {word} b") == f"a {'y' * 150}...[91 characters]...{'w' * 60} b"
+    # many short words (a list with spaces): the line itself is cut, start and end kept
+    line = "--set 'key=[" + " 1," * 1000 + " 2]': not a number"
+    assert shortened(line) == \
+        f"{line[:600]}...[{len(line) - 900:,} characters]...{line[-300:]}"
+    assert len(shortened(line)) < LONGEST_LINE + 40
+    assert shortened(line[:LONGEST_LINE]) == line[:LONGEST_LINE]
 
 
 def _store_in(tmp_path, monkeypatch) -> Path:
@@ -370,11 +376,17 @@ def test_store_directory_reads_a_read_only_default_folder(tmp_path, monkeypatch)
     with pytest.warns(CacheWarning, match="takes no new files"):
         assert compilation_cache.store_directory() == str(tmp_path)
     assert compilation_cache.is_read_only(tmp_path)
-    assert compilation_cache.store_directory() == str(tmp_path)  # no second warning
+    import warnings
+    with warnings.catch_warnings():
+        warnings.simplefilter("error")  # no second warning
+        assert compilation_cache.store_directory() == str(tmp_path)
+        monkeypatch.setattr(compilation_cache, "_checked", {})  # judged afresh: still one
+        assert compilation_cache.store_directory() == str(tmp_path)
     gone = tmp_path / "missing" / "deeper"
     monkeypatch.setattr(compilation_cache, "cache_problem", lambda path: "No such file")
     monkeypatch.setenv("JAXGA_CACHE_DIR", str(gone))
-    assert compilation_cache.store_directory() is None
+    with pytest.warns(CacheWarning, match="cannot be used"):  # its own one warning
+        assert compilation_cache.store_directory() is None
 
 
 def test_jax_cache_warnings_become_one_jaxga_line(capsys):
