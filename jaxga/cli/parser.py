@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import argparse
 import re
+import sys
 
 from jaxga.cli import compare, doctor, doe, listings, optimum, replan, run, warmup
 from jaxga.cli.options import EXIT_BAD_INPUT
@@ -53,6 +54,11 @@ class Parser(argparse.ArgumentParser):
     def __init__(self, *args, **kwargs) -> None:
         kwargs.setdefault("allow_abbrev", False)  # the subcommands' parsers too
         super().__init__(*args, **kwargs)
+        self._words: list[str] = []
+
+    def parse_known_args(self, args=None, namespace=None):  # type: ignore[override]
+        self._words = [str(a) for a in (sys.argv[1:] if args is None else args)]
+        return super().parse_known_args(args, namespace)
 
     def error(self, message: str):  # type: ignore[override]
         self.exit(EXIT_BAD_INPUT, f"jaxga: error: {shortened(message)}{self._hint(message)} "
@@ -62,9 +68,11 @@ class Parser(argparse.ArgumentParser):
         """``; did you mean --seeds?`` for an unknown option that begins a known one."""
         if not message.startswith("unrecognized arguments:"):
             return ""
-        parsers = [self, *(sp for a in self._actions
-                           if isinstance(a, argparse._SubParsersAction)
-                           for sp in a.choices.values())]  # argparse reports them here
+        commands = {name: sp for a in self._actions
+                    if isinstance(a, argparse._SubParsersAction)
+                    for name, sp in a.choices.items()}  # argparse reports them here
+        named = [commands[w] for w in self._words if w in commands][:1]
+        parsers = [self, *(named or commands.values())]  # the command's own options
         known = {o for p in parsers for a in p._actions for o in a.option_strings
                  if o.startswith("--")}
         words = [w for w in message.split(":", 1)[1].split() if w.startswith("--")]
