@@ -54,7 +54,10 @@ from jaxga.maps.inputs import (
     image_size,
     map_file_cap,
     map_file_cap_note,
+    png_chunks,
+    png_frames,
     read_input,
+    several_frames,
 )
 
 __all__ = [
@@ -446,9 +449,13 @@ def _check_ragged(rows: list[list[bool]], lineno: int, label: str) -> None:
 
 
 def _transparent_colour(raw: bytes) -> bool:
-    """Whether a PNG's bytes hold a ``tRNS`` chunk before its image data."""
-    end = raw.find(b"IDAT")
-    return raw.find(b"tRNS", 8, end if end > 0 else len(raw)) > 0
+    """Whether a PNG holds a ``tRNS`` chunk (before its image data, where PNG puts it)."""
+    for kind, _ in png_chunks(raw):
+        if kind == b"tRNS":
+            return True
+        if kind == b"IDAT":
+            return False
+    return False
 
 
 def parse_png(path: Path, label: str, threshold: float = 0.5,
@@ -467,6 +474,8 @@ def parse_png(path: Path, label: str, threshold: float = 0.5,
         raw = read_map_bytes(path, label, coarsen=MAX_READ_COARSEN)
     check_image_data(raw, label)
     png = path.suffix.lower() == ".png" or raw.startswith(_PNG_MAGIC)
+    if png and (frames := png_frames(raw)) > 1:  # matplotlib reads the first alone
+        raise several_frames(label, frames)
     # a grey or colour PNG with a transparent colour (tRNS): matplotlib would drop the
     # transparency that it keeps for a palette's; Pillow's reading keeps both
     if png and not _transparent_colour(raw):

@@ -28,6 +28,7 @@ import os
 import re
 import stat
 import zlib
+from collections.abc import Iterator
 
 import numpy as np
 
@@ -217,6 +218,36 @@ def _png_header(raw: bytes) -> tuple[int, int, int, int, int] | None:
             ihdr[9], ihdr[12])
 
 
+def png_chunks(raw: bytes) -> Iterator[tuple[bytes, bytes]]:
+    """``(type, data)`` of each chunk of a PNG's bytes, in order, up to ``IEND`` (a chunk
+    cut short by the file's end gives the data there is)."""
+    pos = 8
+    while pos + 8 <= len(raw):
+        length = int.from_bytes(raw[pos:pos + 4], "big")
+        kind = raw[pos + 4:pos + 8]
+        yield kind, raw[pos + 8:pos + 8 + length]
+        if kind == b"IEND":
+            return
+        pos += 12 + length
+
+
+def several_frames(label: str, frames: int) -> MapFormatError:
+    """The refusal of an image of several frames (an animated GIF or PNG, a multi-page
+    TIFF): which frame would be the map?"""
+    return MapFormatError(f"{label}: the image holds {frames} frames (an animation or "
+                          "pages): a map is one image; save the frame you mean alone")
+
+
+def png_frames(raw: bytes) -> int:
+    """The frames of a PNG: an animated PNG's ``acTL`` count, else 1."""
+    for kind, data in png_chunks(raw):
+        if kind == b"acTL" and len(data) >= 4:
+            return int.from_bytes(data[:4], "big")
+        if kind == b"IDAT":  # acTL comes before the image data
+            break
+    return 1
+
+
 def image_size(raw: bytes) -> tuple[int, int] | None:
     """``(width, height)`` an image's header declares, without decoding its pixels: read
     from a PNG's ``IHDR`` or a Netpbm header, else from Pillow's reading of the header
@@ -288,16 +319,7 @@ def check_image_data(raw: bytes, label: str) -> None:
         pw, ph = -(-(width - x0) // dx), -(-(height - y0) // dy)
         if pw > 0 and ph > 0:
             expected += ph * (1 + -(-pw * bits // 8))  # a filter byte per row
-    idat = []
-    pos = 8
-    while pos + 8 <= len(raw):
-        length = int.from_bytes(raw[pos:pos + 4], "big")
-        kind_ = raw[pos + 4:pos + 8]
-        if kind_ == b"IDAT":
-            idat.append(raw[pos + 8:pos + 8 + length])  # cut short if the file is
-        if kind_ == b"IEND":
-            break
-        pos += 12 + length
+    idat = [data for kind_, data in png_chunks(raw) if kind_ == b"IDAT"]
     limit = 16 * expected + (1 << 16)  # inflated only so far: a small file may hold a bomb
     inflater = zlib.decompressobj()
     try:
@@ -332,9 +354,7 @@ def decode_image(raw: bytes, label: str) -> tuple[np.ndarray, int]:
             img.load()
             frames = getattr(img, "n_frames", 1)
             if frames > 1:  # which frame is the map? none is read silently
-                raise MapFormatError(f"{label}: the image holds {frames} frames (an "
-                                     "animation or pages): a map is one image; save the "
-                                     "frame you mean alone")
+                raise several_frames(label, frames)
             if img.mode in ("L", "RGB") and "transparency" in img.info:
                 # a tRNS colour, as a palette's: transparent pixels then count as white
                 # (free) for grey and colour images as for palettes and alpha channels

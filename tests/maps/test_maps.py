@@ -935,6 +935,17 @@ def test_an_image_of_several_frames_is_refused_and_transparency_reads_alike(tmp_
         assert load_map(tmp_path / f"{name}.png").blocked_np().sum() == 0, name
     Image.fromarray(b).save(tmp_path / "grey_white.png", transparency=255)
     assert load_map(tmp_path / "grey_white.png").blocked_np().sum() == 4  # white stays free
+    from PIL.PngImagePlugin import PngInfo
+
+    words = PngInfo()
+    words.add_text("Comment", "IDAT tRNS")  # the chunks are walked, not searched as bytes
+    Image.fromarray(b).save(tmp_path / "worded.png", transparency=0, pnginfo=words)
+    assert load_map(tmp_path / "worded.png").blocked_np().sum() == 0
+    Image.fromarray(b).save(tmp_path / "worded_plain.png", pnginfo=words)
+    assert load_map(tmp_path / "worded_plain.png").blocked_np().sum() == 4
+    frames[0].save(tmp_path / "anim.png", save_all=True, append_images=frames[1:])
+    with pytest.raises(MapFormatError, match="the image holds 2 frames"):  # APNG too
+        load_map(tmp_path / "anim.png")
 
 
 @pytest.mark.parametrize("width, height, k", [
