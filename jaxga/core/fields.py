@@ -9,6 +9,7 @@ from __future__ import annotations
 
 import dataclasses
 import math
+import reprlib
 from typing import Any
 
 import numpy as np
@@ -80,6 +81,14 @@ def finite_number(value: Any) -> bool:
 LONGEST_SHOWN = 80
 """The most characters of a refused value that its message shows."""
 
+_BOUNDED = reprlib.Repr()
+"""A repr that looks at a bounded part of a value: a list of 10**8 entries, or a YAML
+file whose aliases hold billions of elements, is not printed whole to be cut."""
+_BOUNDED.maxlevel = 3
+_BOUNDED.maxlist = _BOUNDED.maxtuple = _BOUNDED.maxset = _BOUNDED.maxfrozenset = 8
+_BOUNDED.maxdict = 6
+_BOUNDED.maxstring = _BOUNDED.maxother = _BOUNDED.maxlong = LONGEST_SHOWN
+
 
 def shown_value(value: Any) -> str:
     """``repr(value)`` for a message (a refusal echoes the value it refuses), on one line
@@ -92,7 +101,7 @@ def shown_value(value: Any) -> str:
     if isinstance(value, np.ndarray) and value.ndim > 0:  # its repr spans lines
         return f"an array of shape {value.shape} and dtype {value.dtype}"
     try:
-        text = " ".join(repr(value).splitlines())  # one line: a message is one line
+        text = " ".join(_BOUNDED.repr(value).splitlines())  # one line: a message is one
     except (ValueError, RecursionError):  # a list holding such an integer, or nested deep
         return f"a {type(value).__name__} too long to show"
     if len(text) <= LONGEST_SHOWN:

@@ -34,7 +34,6 @@ from __future__ import annotations
 
 import dataclasses
 import math
-import reprlib
 from pathlib import Path
 from typing import Any
 
@@ -98,17 +97,6 @@ class RosMap:
     mode: str = "trinary"
 
 
-_SHORT = reprlib.Repr()
-_SHORT.maxlevel, _SHORT.maxlist, _SHORT.maxtuple, _SHORT.maxdict = 2, 4, 4, 4
-_SHORT.maxstring = _SHORT.maxother = 40
-
-
-def _short(value: Any) -> str:
-    """A bounded repr of a YAML value for a message (YAML aliases can make a small file
-    hold a value with billions of elements)."""
-    return _SHORT.repr(value)
-
-
 MAX_RESOLUTION = 1e6
 """The most metres a map cell may span, and :data:`MAX_ORIGIN` the farthest an origin may
 lie (metres): far beyond any robot's map, and small enough that every coordinate of a
@@ -132,7 +120,7 @@ def _number(value: Any, key: str, label: str) -> float:
             raise MapFormatError(f"{label}: {key} must be a finite number, got an integer "
                                  f"of {value.bit_length()} bits") from None
     if isinstance(value, bool) or not isinstance(value, float) or not math.isfinite(value):
-        raise MapFormatError(f"{label}: {key} must be a finite number, got {_short(value)}")
+        raise MapFormatError(f"{label}: {key} must be a finite number, got {shown_value(value)}")
     return value
 
 
@@ -192,21 +180,22 @@ def read_ros_yaml(path: str | Path, label: str | None = None, *,
         if key not in data:
             raise MapFormatError(f"{label}: the map_server key {key!r} is missing")
     if not isinstance(data["image"], str) or not data["image"] or "\0" in data["image"]:
-        raise MapFormatError(f"{label}: image must be a file name, got {_short(data['image'])}")
+        raise MapFormatError(f"{label}: image must be a file name, got "
+                             f"{shown_value(data['image'])}")
     resolution = _number(data["resolution"], "resolution", label)
     if not 0 < resolution <= MAX_RESOLUTION:
         raise MapFormatError(f"{label}: resolution must be > 0 and at most "
                              f"{MAX_RESOLUTION:g} metres per cell, got {resolution}")
     origin = data["origin"]
     if not isinstance(origin, (list, tuple)) or len(origin) != 3:
-        raise MapFormatError(f"{label}: origin must be [x, y, yaw], got {_short(origin)}")
+        raise MapFormatError(f"{label}: origin must be [x, y, yaw], got {shown_value(origin)}")
     origin = tuple(_number(v, "origin", label) for v in origin)
     if max(abs(origin[0]), abs(origin[1])) > MAX_ORIGIN:
         raise MapFormatError(f"{label}: origin must lie within {MAX_ORIGIN:g} metres of 0, "
-                             f"got {_short(list(origin[:2]))}")
+                             f"got {shown_value(list(origin[:2]))}")
     negate = data.get("negate", 0)
     if negate not in (0, 1) or isinstance(negate, float):
-        raise MapFormatError(f"{label}: negate must be 0 or 1, got {_short(negate)}")
+        raise MapFormatError(f"{label}: negate must be 0 or 1, got {shown_value(negate)}")
     occ = _number(data.get("occupied_thresh", 0.65), "occupied_thresh", label)
     free = _number(data.get("free_thresh", 0.196), "free_thresh", label)
     if not 0.0 <= free < occ <= 1.0:
@@ -215,7 +204,8 @@ def read_ros_yaml(path: str | Path, label: str | None = None, *,
                              f"occupied_thresh {occ}")
     mode = data.get("mode", "trinary")
     if mode not in MODES:
-        raise MapFormatError(f"{label}: mode must be one of {', '.join(MODES)}, got {_short(mode)}")
+        raise MapFormatError(f"{label}: mode must be one of {', '.join(MODES)}, got "
+                             f"{shown_value(mode)}")
     image = Path(data["image"])
     if not image.is_absolute():
         image = path.parent / image
