@@ -15,7 +15,7 @@ import numpy as np
 from jaxga._runtime.jax_settings import check_jax_settings, check_platform
 from jaxga._runtime.lowering import check_environment
 from jaxga.config.presets import as_sets, load_preset, parse_set
-from jaxga.config.schema import MAP_RULE, SCHEMA, Config, dotted, flatten, freeze
+from jaxga.config.schema import MAP_RULE, Config, dotted, flatten, normalised
 from jaxga.core.errors import EndpointError, ParameterError
 from jaxga.core.grid import Grid, as_integer
 from jaxga.engine import check_file_keys_read, check_overrides_read
@@ -42,16 +42,6 @@ class Problem(NamedTuple):
     """The map's world frame (resolution, origin, coarsening), None for a bare grid."""
     info: MapInfo | None = None
     """The loaded map (its file, format, layers for plots), None for a bare grid."""
-
-
-def _normalised(key: str, value: Any) -> Any:
-    """``value`` as the configuration stores it (a tuple and a list alike, numpy scalars
-    as Python ones), to compare two values given for ``key``; an invalid value is
-    refused with the key's own message."""
-
-    if key not in SCHEMA:  # refused by name when the preset loads
-        return repr(value)
-    return freeze(SCHEMA[key].check(key, value))
 
 
 def configured_rule(corner_rule: str | None, config: Config) -> str | None:
@@ -168,7 +158,7 @@ def load_problem(preset, grid, corner_rule, variant, sets, overrides, generation
     given = flatten(ov)
     set_values = [parse_set(text) for text in sets]
     for key, value in set_values:  # one value per key
-        if key in given and _normalised(key, given[key]) != _normalised(key, value):
+        if key in given and normalised(key, given[key]) != normalised(key, value):
             raise ParameterError(f"{key} is given twice, as {given[key]!r} and {value!r}")
         given[key] = value
     if isinstance(preset, Config):  # as load_preset: the overrides, then the sets

@@ -37,7 +37,7 @@ else:  # pragma: no cover
     import tomli as tomllib
 
 __all__ = ["DEFAULTS", "REQUIRED", "SCHEMA", "SWEPT_STATIC", "Config", "Field", "dotted", "flatten",
-           "load_toml", "parse_value", "python_scalar", "sweepable"]
+           "load_toml", "normalised", "parse_value", "python_scalar", "sweepable"]
 
 FALLBACKS = (*(op.name for op in registry.operators("init")
                if registry.NEVER_FAILS in op.traits), "none")
@@ -233,23 +233,22 @@ def dotted(overrides: Mapping[str, Any]) -> dict[str, Any]:
     out: dict[str, Any] = {}
     for name, value in overrides.items():
         for key, v in flatten({str(name).replace("__", "."): value}).items():
-            if key in out and not _same(out[key], v):
+            if key in out and normalised(key, out[key]) != normalised(key, v):
                 raise ParameterError(f"{key} is given twice, as {shown_value(out[key])} and "
                                      f"{shown_value(v)}")
             out[key] = v
     return out
 
 
-def _same(a: Any, b: Any) -> bool:
-    """Whether two values given for one key are the same (numpy scalars as Python ones; a
-    bool is not the number it equals: ``True`` and ``1`` are two values)."""
-    a, b = python_scalar(a), python_scalar(b)
-    if isinstance(a, bool) != isinstance(b, bool):
-        return False
-    try:
-        return bool(a == b)
-    except Exception:  # noqa: BLE001 - arrays and the like: the same object only
-        return a is b
+def normalised(key: str, value: Any) -> Any:
+    """``value`` as the configuration stores it (a tuple and a list alike, numpy scalars
+    as Python ones), to compare two values given for ``key`` (:func:`dotted`, keyword
+    overrides against ``--set``); an invalid value is refused with the key's own message.
+    A key the schema does not know (refused by name when the preset loads) compares by
+    its value's repr, so ``True`` and ``1`` are two values."""
+    if key not in SCHEMA:
+        return repr(python_scalar(value))
+    return freeze(SCHEMA[key].check(key, value))
 
 
 _LOOSE_NUMBER = re.compile(r"[+-]?(\d+\.\d*|\.\d+)([eE][+-]?\d+)?")
