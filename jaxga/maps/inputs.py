@@ -355,7 +355,15 @@ def decode_image(raw: bytes, label: str) -> tuple[np.ndarray, int]:
             frames = getattr(img, "n_frames", 1)
             if frames > 1:  # which frame is the map? none is read silently
                 raise several_frames(label, frames)
-            if img.mode in ("L", "RGB") and "transparency" in img.info:
+            key = img.info.get("transparency")
+            if img.mode in ("L", "RGB") and key is not None:
+                header = _png_header(raw)
+                if header is not None and header[2] == 16:
+                    # Pillow reads a 16-bit colour PNG as 8 bits but keeps its 16-bit
+                    # transparent colour: which pixels it names can no longer be told
+                    raise MapFormatError(
+                        f"{label}: a 16-bit colour PNG with a transparent colour (tRNS) "
+                        "is not read: save the map with an alpha channel, or at 8 bits")
                 # a tRNS colour, as a palette's: transparent pixels then count as white
                 # (free) for grey and colour images as for palettes and alpha channels
                 img = img.convert("RGBA")
@@ -374,6 +382,9 @@ def decode_image(raw: bytes, label: str) -> tuple[np.ndarray, int]:
                     raise MapFormatError(
                         f"{label}: a 32-bit image with values from {pixels.min()} to "
                         f"{pixels.max()}: save the map as an 8- or 16-bit image")
+                if isinstance(key, int) and not isinstance(key, bool) and pixels.ndim == 2:
+                    # a 16-bit grey PNG's tRNS colour: an alpha channel, as for 8 bits
+                    pixels = np.stack([pixels, np.where(pixels == key, 0, scale)], axis=-1)
             elif mode == "F" or mode.startswith("F;"):
                 raise MapFormatError(
                     f"{label}: a floating-point image (Pillow mode {mode}) has no scale "

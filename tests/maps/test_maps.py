@@ -948,6 +948,48 @@ def test_an_image_of_several_frames_is_refused_and_transparency_reads_alike(tmp_
         load_map(tmp_path / "anim.png")
 
 
+def _png(pixels: np.ndarray, colour_type: int, transparent: tuple[int, ...]) -> bytes:
+    """A 16-bit PNG (grey: colour type 0, ``[H, W]``; colour: 2, ``[H, W, 3]``) with a
+    transparent colour (``tRNS``), written chunk by chunk: Pillow writes neither."""
+    import struct
+    import zlib
+
+    def chunk(kind: bytes, data: bytes) -> bytes:
+        return (struct.pack(">I", len(data)) + kind + data
+                + struct.pack(">I", zlib.crc32(kind + data) & 0xFFFFFFFF))
+
+    h, w = pixels.shape[:2]
+    rows = b"".join(b"\0" + row.astype(">u2").tobytes() for row in pixels)
+    return (b"\x89PNG\r\n\x1a\n"
+            + chunk(b"IHDR", struct.pack(">IIBBBBB", w, h, 16, colour_type, 0, 0, 0))
+            + chunk(b"tRNS", struct.pack(f">{len(transparent)}H", *transparent))
+            + chunk(b"IDAT", zlib.compress(rows)) + chunk(b"IEND", b""))
+
+
+def test_a_16_bit_pngs_transparent_colour_is_read_or_refused(tmp_path):
+    """A 16-bit grey PNG's transparent colour was dropped (an 8-bit one's is kept): its
+    pixels of that value now read as transparent, so free, alone and through a ROS YAML
+    (where map_server's trinary mode reads the colour and ignores the alpha). Pillow
+    reads a 16-bit colour PNG at 8 bits but keeps its 16-bit transparent colour, so the
+    pixels it names cannot be told: refused in one line (it was read silently opaque)."""
+    grey = np.full((6, 8), 65535, np.int64)
+    grey[1:5, 3] = 1000  # a dark wall, the transparent colour
+    grey[0, 0] = 1001  # as dark, not transparent
+    (tmp_path / "wall.png").write_bytes(_png(grey, 0, (1000,)))
+    assert load_map(tmp_path / "wall.png").blocked_np().sum() == 1
+    (tmp_path / "white.png").write_bytes(_png(grey, 0, (65535,)))
+    assert load_map(tmp_path / "white.png").blocked_np().sum() == 5  # white stays free
+    (tmp_path / "wall.yaml").write_text(
+        "image: wall.png\nresolution: 0.05\norigin: [0.0, 0.0, 0.0]\nnegate: 0\n"
+        "occupied_thresh: 0.65\nfree_thresh: 0.196\n")
+    assert load_map(tmp_path / "wall.yaml").blocked_np().sum() == 5  # trinary: colour
+    (tmp_path / "colour.png").write_bytes(
+        _png(np.repeat(grey[..., None], 3, axis=2), 2, (1000, 1000, 1000)))
+    with pytest.raises(MapFormatError, match="a 16-bit colour PNG with a transparent") as e:
+        load_map(tmp_path / "colour.png")
+    assert "\n" not in str(e.value)
+
+
 @pytest.mark.parametrize("width, height, k", [
     (8000, 8000, 4), (2049, 2048, 2), (123_457, 98_765, 54), (10**7, 3, 3),
     (10**9, 10**9, 488_282), (99_999_999_999_999_999_999, 1, 23_841_857_910_157),
