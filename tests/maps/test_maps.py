@@ -948,22 +948,17 @@ def test_an_image_of_several_frames_is_refused_and_transparency_reads_alike(tmp_
         load_map(tmp_path / "anim.png")
 
 
-def _png(pixels: np.ndarray, colour_type: int, transparent: tuple[int, ...]) -> bytes:
+def _png16(pixels: np.ndarray, colour_type: int, transparent: tuple[int, ...]) -> bytes:
     """A 16-bit PNG (grey: colour type 0, ``[H, W]``; colour: 2, ``[H, W, 3]``) with a
     transparent colour (``tRNS``), written chunk by chunk: Pillow writes neither."""
     import struct
     import zlib
 
-    def chunk(kind: bytes, data: bytes) -> bytes:
-        return (struct.pack(">I", len(data)) + kind + data
-                + struct.pack(">I", zlib.crc32(kind + data) & 0xFFFFFFFF))
-
     h, w = pixels.shape[:2]
     rows = b"".join(b"\0" + row.astype(">u2").tobytes() for row in pixels)
-    return (b"\x89PNG\r\n\x1a\n"
-            + chunk(b"IHDR", struct.pack(">IIBBBBB", w, h, 16, colour_type, 0, 0, 0))
-            + chunk(b"tRNS", struct.pack(f">{len(transparent)}H", *transparent))
-            + chunk(b"IDAT", zlib.compress(rows)) + chunk(b"IEND", b""))
+    return _png([(b"IHDR", struct.pack(">IIBBBBB", w, h, 16, colour_type, 0, 0, 0)),
+                 (b"tRNS", struct.pack(f">{len(transparent)}H", *transparent)),
+                 (b"IDAT", zlib.compress(rows)), (b"IEND", b"")])
 
 
 def test_a_16_bit_pngs_transparent_colour_is_read_or_refused(tmp_path):
@@ -975,16 +970,16 @@ def test_a_16_bit_pngs_transparent_colour_is_read_or_refused(tmp_path):
     grey = np.full((6, 8), 65535, np.int64)
     grey[1:5, 3] = 1000  # a dark wall, the transparent colour
     grey[0, 0] = 1001  # as dark, not transparent
-    (tmp_path / "wall.png").write_bytes(_png(grey, 0, (1000,)))
+    (tmp_path / "wall.png").write_bytes(_png16(grey, 0, (1000,)))
     assert load_map(tmp_path / "wall.png").blocked_np().sum() == 1
-    (tmp_path / "white.png").write_bytes(_png(grey, 0, (65535,)))
+    (tmp_path / "white.png").write_bytes(_png16(grey, 0, (65535,)))
     assert load_map(tmp_path / "white.png").blocked_np().sum() == 5  # white stays free
     (tmp_path / "wall.yaml").write_text(
         "image: wall.png\nresolution: 0.05\norigin: [0.0, 0.0, 0.0]\nnegate: 0\n"
         "occupied_thresh: 0.65\nfree_thresh: 0.196\n")
     assert load_map(tmp_path / "wall.yaml").blocked_np().sum() == 5  # trinary: colour
     (tmp_path / "colour.png").write_bytes(
-        _png(np.repeat(grey[..., None], 3, axis=2), 2, (1000, 1000, 1000)))
+        _png16(np.repeat(grey[..., None], 3, axis=2), 2, (1000, 1000, 1000)))
     with pytest.raises(MapFormatError, match="a 16-bit colour PNG with a transparent") as e:
         load_map(tmp_path / "colour.png")
     assert "\n" not in str(e.value)
