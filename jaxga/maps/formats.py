@@ -448,13 +448,15 @@ def _check_ragged(rows: list[list[bool]], lineno: int, label: str) -> None:
         )
 
 
-def _transparent_colour(raw: bytes) -> bool:
-    """Whether a PNG holds a ``tRNS`` chunk (before its image data, where PNG puts it)."""
+def _read_by_pillow(raw: bytes) -> bool:
+    """Whether a PNG holds a transparent colour (a ``tRNS`` chunk, before its image data
+    where PNG puts it) or EXIF data (``eXIf``, before or after the image data), which
+    matplotlib's reading drops and Pillow's reads (:func:`decode_image`)."""
+    image_data = False
     for kind, _ in png_chunks(raw):
-        if kind == b"tRNS":
+        if kind == b"eXIf" or (kind == b"tRNS" and not image_data):
             return True
-        if kind == b"IDAT":
-            return False
+        image_data = image_data or kind == b"IDAT"
     return False
 
 
@@ -477,8 +479,9 @@ def parse_png(path: Path, label: str, threshold: float = 0.5,
     if png and (frames := png_frames(raw)) > 1:  # matplotlib reads the first alone
         raise several_frames(label, frames)
     # a grey or colour PNG with a transparent colour (tRNS): matplotlib would drop the
-    # transparency that it keeps for a palette's; Pillow's reading keeps both
-    if png and not _transparent_colour(raw):
+    # transparency that it keeps for a palette's; Pillow's reading keeps both (and reads
+    # an EXIF orientation, which matplotlib drops)
+    if png and not _read_by_pillow(raw):
         try:  # matplotlib's PNG reading: values in [0, 1] at 8 and 16 bits
             img = np.asarray(mpimg.imread(io.BytesIO(raw), format="png"))
         except Exception as e:  # Pillow/matplotlib raise many types for bad images

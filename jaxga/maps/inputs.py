@@ -29,6 +29,7 @@ import re
 import stat
 import zlib
 from collections.abc import Iterator
+from typing import Any
 
 import numpy as np
 
@@ -332,6 +333,16 @@ def check_image_data(raw: bytes, label: str) -> None:
                         f"{amount} bytes of pixel data once inflated")
 
 
+def exif_orientation(img: Any) -> int:
+    """The EXIF orientation tag (274) of an image opened by Pillow: 1 (or 0) upright,
+    2-8 turned or mirrored for display; 1 without a readable EXIF block."""
+    try:
+        value = img.getexif().get(274, 1)
+    except Exception:  # noqa: BLE001 - a damaged EXIF block: metadata, not the map
+        return 1
+    return value if isinstance(value, int) else 1
+
+
 _SIXTEEN_BIT = ("I;16", "I;16B", "I;16L", "I;16N")
 _EIGHT_BIT = ("L", "LA", "RGB", "RGBA")
 
@@ -351,10 +362,17 @@ def decode_image(raw: bytes, label: str) -> tuple[np.ndarray, int]:
 
     try:
         with Image.open(io.BytesIO(raw)) as img:
+            turned = exif_orientation(img)  # a TIFF's is read before its pixels only
             img.load()
             frames = getattr(img, "n_frames", 1)
             if frames > 1:  # which frame is the map? none is read silently
                 raise several_frames(label, frames)
+            if turned in (0, 1):  # a PNG's eXIf chunk may follow its image data
+                turned = exif_orientation(img)
+            if turned not in (0, 1):  # as drawn, or as a viewer shows it? neither silently
+                raise MapFormatError(
+                    f"{label}: the image asks to be shown turned or mirrored (EXIF "
+                    f"orientation {turned}): save it upright, without that tag")
             key = img.info.get("transparency")
             if img.mode in ("L", "RGB") and key is not None:
                 header = _png_header(raw)

@@ -1067,3 +1067,27 @@ def test_one_corner_rule_per_map_everywhere():
     assert load_map("maze-32-32-2").corner_rule == "strict"
     assert load_map("maze-32-32-2", corner_rule="free").corner_rule == "free"
     assert {load_preset(p)["map.corner_rule"] for p in ("sga", "hybrid", "iga_zhu")} == {"map"}
+
+
+@pytest.mark.parametrize("suffix", ["jpg", "png", "tif"])
+def test_an_image_that_asks_to_be_shown_turned_is_refused(tmp_path, suffix):
+    """An image with an EXIF orientation (a phone's photo of a floor plan, an editor's
+    save) was read as stored while every viewer shows it turned: which is the map? Now
+    refused in one line, alone and through a ROS YAML; the upright tag (1) loads."""
+    from PIL import Image
+
+    b = np.full((6, 8), 255, np.uint8)
+    b[1:5, 3] = 0
+    for orientation in (1, 6):
+        exif = Image.Exif()
+        exif[274] = orientation
+        Image.fromarray(b).save(tmp_path / f"m{orientation}.{suffix}", exif=exif.tobytes())
+    assert load_map(tmp_path / f"m1.{suffix}").blocked_np().sum() == 4
+    (tmp_path / "m6.yaml").write_text(
+        f"image: m6.{suffix}\nresolution: 0.05\norigin: [0.0, 0.0, 0.0]\nnegate: 0\n"
+        "occupied_thresh: 0.65\nfree_thresh: 0.196\n")
+    for path in (tmp_path / f"m6.{suffix}", tmp_path / "m6.yaml"):
+        with pytest.raises(MapFormatError, match=r"shown turned or mirrored \(EXIF "
+                                                 r"orientation 6\)") as e:
+            load_map(path)
+        assert "\n" not in str(e.value)
