@@ -56,6 +56,7 @@ from jaxga.maps.inputs import (
     map_file_cap_note,
     png_chunks,
     png_frames,
+    png_header,
     read_input,
     several_frames,
 )
@@ -449,9 +450,14 @@ def _check_ragged(rows: list[list[bool]], lineno: int, label: str) -> None:
 
 
 def _read_by_pillow(raw: bytes) -> bool:
-    """Whether a PNG holds a transparent colour (a ``tRNS`` chunk, before its image data
-    where PNG puts it) or EXIF data (``eXIf``, before or after the image data), which
-    matplotlib's reading drops and Pillow's reads (:func:`decode_image`)."""
+    """Whether a PNG is a grey one of 1, 2 or 4 bits (matplotlib scales Pillow's 8-bit
+    values of those again: a dark wall read as white), or holds a transparent colour (a
+    ``tRNS`` chunk, before its image data where PNG puts it) or EXIF data (``eXIf``,
+    before or after the image data), which matplotlib's reading drops and Pillow's reads
+    (:func:`decode_image`)."""
+    header = png_header(raw)
+    if header is not None and header[3] == 0 and header[2] < 8:
+        return True
     image_data = False
     for kind, _ in png_chunks(raw):
         if kind == b"eXIf" or (kind == b"tRNS" and not image_data):

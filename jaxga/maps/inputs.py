@@ -48,6 +48,7 @@ __all__ = [
     "image_size",
     "map_file_cap",
     "map_file_cap_note",
+    "png_header",
     "read_input",
 ]
 
@@ -210,7 +211,7 @@ def _pnm_header(raw: bytes) -> tuple[int, int, int, int, int] | None:
     return kind, width, height, maxval, min(i + 1, len(raw))
 
 
-def _png_header(raw: bytes) -> tuple[int, int, int, int, int] | None:
+def png_header(raw: bytes) -> tuple[int, int, int, int, int] | None:
     """``(width, height, bit depth, colour type, interlace)`` of a PNG, or None."""
     if not (raw.startswith(_PNG_MAGIC) and raw[12:16] == b"IHDR" and len(raw) >= 29):
         return None
@@ -254,7 +255,7 @@ def image_size(raw: bytes) -> tuple[int, int] | None:
     from a PNG's ``IHDR`` or a Netpbm header, else from Pillow's reading of the header
     (BMP, GIF, TIFF, JPEG, ...). None when it cannot be told (the image reader then says
     what is wrong)."""
-    png = _png_header(raw)
+    png = png_header(raw)
     if png is not None:
         return png[0], png[1]
     pnm = _pnm_header(raw)
@@ -307,7 +308,7 @@ def check_image_data(raw: bytes, label: str) -> None:
                     f"({expected:,} values) but the file holds {count:,} values: a "
                     "truncated or damaged image")
         return
-    png = _png_header(raw)
+    png = png_header(raw)
     if png is None:
         return
     width, height, depth, colour, interlace = png
@@ -375,7 +376,11 @@ def decode_image(raw: bytes, label: str) -> tuple[np.ndarray, int]:
                     f"orientation {turned}): save it upright, without that tag")
             key = img.info.get("transparency")
             if img.mode in ("L", "RGB") and key is not None:
-                header = _png_header(raw)
+                header = png_header(raw)
+                if header is not None and header[2] < 8 and isinstance(key, int):
+                    # Pillow scales a 1-, 2- or 4-bit grey PNG's values to 8 bits, not
+                    # its transparent value
+                    img.info["transparency"] = key * 255 // (2 ** header[2] - 1)
                 if header is not None and header[2] == 16:
                     # Pillow reads a 16-bit colour PNG as 8 bits but keeps its 16-bit
                     # transparent colour: which pixels it names can no longer be told

@@ -1091,3 +1091,19 @@ def test_an_image_that_asks_to_be_shown_turned_is_refused(tmp_path, suffix):
                                                  r"orientation 6\)") as e:
             load_map(path)
         assert "\n" not in str(e.value)
+
+
+@pytest.mark.parametrize("bits, wall", [(2, 85), (4, 17), (4, 119)])
+def test_a_grey_png_of_2_or_4_bits_reads_its_dark_walls(tmp_path, bits, wall):
+    """matplotlib divided Pillow's 8-bit values of a 2- or 4-bit grey PNG by 3 or 15
+    again: every wall but pure black read as white, and runs planned through it. Its
+    transparent value, given at the image's own depth, is scaled as the pixels are."""
+    from PIL import Image
+
+    a = np.full((5, 9), 255, np.uint8)
+    a[:, 4] = wall  # a level of the depth, darker than half
+    Image.fromarray(a).save(tmp_path / "wall.png", bits=bits)
+    assert load_map(tmp_path / "wall.png").blocked_np().sum() == 5
+    level = wall * (2 ** bits - 1) // 255
+    Image.fromarray(a).save(tmp_path / "clear.png", bits=bits, transparency=level)
+    assert load_map(tmp_path / "clear.png").blocked_np().sum() == 0
