@@ -13,8 +13,11 @@ files: ``office.yaml``::
 
 and the image, whose top row is the top of the map (it is flipped to the library's
 ``y = 0`` bottom row, docs/maps.md). Each pixel becomes an occupancy as ``map_server`` computes
-it: the pixel's shade ``s`` is the mean of its colour channels over 255 (alpha excluded),
-``p = 1 - s`` (``s`` when ``negate``) is its occupancy probability, and
+it: the pixel's shade ``s`` is the mean of its colour channels over 255 (a grey pixel
+counting as three equal ones; in ``trinary`` mode its alpha is averaged in as a fourth,
+as both ``map_server`` versions do, elsewhere left out; a 16-bit image is read at its
+full precision, as ``nav2_map_server`` reads it), ``p = 1 - s`` (``s`` when ``negate``) is
+its occupancy probability, and
 
 * ``trinary``: ``p > occupied_thresh`` occupied, ``p < free_thresh`` free, anything
   between unknown (``map_saver``'s grey 205 has ``p = 0.196``: unknown);
@@ -214,8 +217,10 @@ def read_ros_yaml(path: str | Path, label: str | None = None, *,
 
 
 def read_ros_image(meta: RosMap, label: str | None = None, *, coarsen: int = 1) -> np.ndarray:
-    """The image of a ``map_server`` map as ``uint8[H, W, C]`` (C = 1-4), top row first,
-    read with Pillow (PGM, PNG, BMP, ...). 16-bit images are scaled to 8 bits.
+    """The image of a ``map_server`` map as ``[H, W, C]`` values from 0 to 255 (C = 1-4),
+    top row first, read with Pillow (PGM, PNG, BMP, ...): ``uint8`` for an 8-bit image,
+    ``float64`` for a 16-bit one (its values over its own white, times 255: no precision
+    lost to a rounding before the thresholds).
 
     Refused in one line naming the image: a file that is not a regular file or holds more
     than :func:`jaxga.maps.inputs.map_file_cap` bytes for a map to be coarsened
@@ -246,14 +251,19 @@ def read_ros_image(meta: RosMap, label: str | None = None, *, coarsen: int = 1) 
     pixels, scale = decode_image(raw, f"{label}: map image {str(meta.image)!r}")
     if scale == 255:
         return pixels.astype(np.uint8)
-    return np.round(pixels / scale * 255.0).astype(np.uint8)  # map_server reads 8 bits
+    return pixels / scale * 255.0
 
 
 def occupancy(pixels: np.ndarray, meta: RosMap) -> np.ndarray:
     """``int8[H, W]`` occupancy as ``map_server`` publishes it: 0 free, 100 occupied, -1
     unknown, 1-99 graded (scale mode); rows as in the image (top first).
 
-    ``pixels``: ``uint8[H, W, C]``; with C = 2 or 4 the last channel is alpha.
+    ``pixels``: ``[H, W, C]`` values from 0 to 255 (:func:`read_ros_image`); with C = 2
+    or 4 the last channel is alpha. In ``trinary`` mode the alpha is averaged in with the
+    colour channels (ROS 2's ``map_io.cpp``: "To preserve existing behavior, average in
+    alpha with color channels in Trinary mode"; a grey pixel is three equal channels
+    there, where ROS 1 averages a grey and alpha image's two channels), so a transparent
+    white pixel is unknown, not free.
     """
     pixels = np.asarray(pixels)
     if pixels.ndim == 2:
@@ -262,6 +272,8 @@ def occupancy(pixels: np.ndarray, meta: RosMap) -> np.ndarray:
     has_alpha = c in (2, 4)
     colour = pixels[..., : c - 1] if has_alpha else pixels
     shade = colour.astype(np.float64).mean(axis=2)  # 0-255
+    if has_alpha and meta.mode == "trinary":  # three colour channels and the alpha
+        shade = (3.0 * shade + pixels[..., -1].astype(np.float64)) / 4.0
     if meta.negate:
         shade = 255.0 - shade
     if meta.mode == "raw":

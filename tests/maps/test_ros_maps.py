@@ -86,6 +86,29 @@ def test_thresholds_negate_and_modes_follow_map_server():
         [0, 37, 100, -1, -1]]
     rgb = np.repeat(shades[..., None], 3, -1)
     assert occupancy(rgb, meta).tolist() == occupancy(shades, meta).tolist()
+    # trinary averages the alpha in with three colour channels (ROS 2's map_io.cpp; ROS 1
+    # for colour images): s' = (3 s + alpha) / 4, so transparent white 191.25 (p = 0.25)
+    # is unknown (it was read as free), and an opaque 50 is 101.25 (p = 0.603): unknown,
+    # as map_server reads it; raw leaves the alpha out
+    rgba = np.concatenate([rgb, alpha[..., 1:]], -1)
+    assert occupancy(rgba, meta).tolist() == [[100, -1, -1, -1, 0, 0, 0, -1]]
+    assert occupancy(alpha, meta).tolist() == occupancy(rgba, meta).tolist()
+    assert occupancy(np.stack([np.array([[101, 37]], np.uint8)] * 2, -1), raw).tolist() \
+        == [[-1, 37]]
+
+
+def test_a_16_bit_image_is_thresholded_at_its_own_precision(tmp_path):
+    """29427 / 65535 gives p = 0.55097, above an occupied threshold of 0.55; rounded to
+    8 bits first (115 / 255: p = 0.5490) it was unknown, so free with unknown="free"."""
+    import struct
+
+    (tmp_path / "m.pgm").write_bytes(b"P5\n3 1\n65535\n"
+                                     + struct.pack(">3H", 65535, 29427, 65535))
+    (tmp_path / "m.yaml").write_text(
+        "image: m.pgm\nresolution: 0.05\norigin: [0.0, 0.0, 0.0]\nnegate: 0\n"
+        "occupied_thresh: 0.55\nfree_thresh: 0.2\n")
+    assert load_map(tmp_path / "m.yaml", unknown="free").blocked_np().tolist() == [
+        [False, True, False]]
 
 
 def test_world_coordinates_name_the_cell_that_holds_the_point(office):
