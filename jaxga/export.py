@@ -24,6 +24,7 @@ import yaml
 
 from jaxga.core.errors import JaxgaError, ParameterError
 from jaxga.core.files import atomic_write_text
+from jaxga.maps.frame import world_decimals
 from jaxga.maps.inputs import PATH_JSON_CAP, read_input
 
 __all__ = ["PATH_FORMATS", "atomic_write_text", "path_format", "path_text", "path_yaws",
@@ -69,17 +70,22 @@ def path_yaws(points: np.ndarray) -> np.ndarray:
 
 
 def path_text(points: np.ndarray, fmt: str, frame_id: str = "map") -> str:
-    """The text of a path file: ``fmt`` ``"csv"`` or ``"yaml"`` (see the module)."""
+    """The text of a path file: ``fmt`` ``"csv"`` or ``"yaml"`` (see the module).
+    Coordinates are written to a hundredth of the shortest step between two points or
+    finer (:func:`jaxga.maps.frame.world_decimals`: 4 decimals on maps of centimetre
+    cells and coarser), so that a path on a fine map does not collapse onto itself."""
     p = np.asarray(points, float).reshape(-1, 2)
+    steps = np.hypot(*np.diff(p, axis=0).T) if len(p) > 1 else np.zeros(0)
+    d = world_decimals(float(steps[steps > 0].min()) if (steps > 0).any() else None)
     if fmt == "csv":
-        return "x,y\n" + "".join(f"{x:.4f},{y:.4f}\n" for x, y in p)
+        return "x,y\n" + "".join(f"{x:.{d}f},{y:.{d}f}\n" for x, y in p)
     if fmt != "yaml":
         raise JaxgaError(f"unknown path format {fmt!r}: expected csv or yaml")
     poses = []
     for (x, y), yaw in zip(p, path_yaws(p), strict=True):
         poses.append({
             "header": {"frame_id": frame_id},
-            "pose": {"position": {"x": round(float(x), 4), "y": round(float(y), 4), "z": 0.0},
+            "pose": {"position": {"x": round(float(x), d), "y": round(float(y), d), "z": 0.0},
                      "orientation": {"x": 0.0, "y": 0.0,
                                      "z": round(math.sin(yaw / 2), 6),
                                      "w": round(math.cos(yaw / 2), 6)}},

@@ -195,7 +195,7 @@ class ReplanResult:
             if frame.coarsen > 1:
                 extra["map_path"] = frame.map_cell(cells.astype(np.int64)).tolist()
             if frame.has_metres:
-                extra["path_world"] = frame.to_world(cells).round(4).tolist()
+                extra["path_world"] = frame.world_list(cells)
                 extra["length_m"] = float(self.length * frame.cell_size)
         return {
             "success": self.success, "status": self.status, "reason": self.reason,

@@ -577,7 +577,7 @@ class Result:
                 out[key] = f.map_cell(np.asarray(self.path(i, raw=raw))).tolist() if ok else []
         if f.has_metres:
             for key, raw in (("path_world", False), ("raw_path_world", True)):
-                out[key] = self.world_path(i, raw=raw).round(4).tolist() if ok else []
+                out[key] = f.world_list(np.asarray(self.path(i, raw=raw), float)) if ok else []
             out["length_m"] = float(self.length[i] * f.cell_size) if ok else None
             out["raw_length_m"] = float(self.raw_length[i] * f.cell_size) if ok else None
             clearance = self.obstacle_clearance(i)
@@ -725,7 +725,7 @@ class Result:
         if f.coarsen > 1:
             out["map_start"], out["map_goal"] = f.map_cell(ends).tolist()
         if f.has_metres:
-            out["start_world"], out["goal_world"] = f.to_world(ends).round(4).tolist()
+            out["start_world"], out["goal_world"] = f.world_list(ends)
         return out
 
     def _front_json(self, i: int) -> dict[str, Any]:

@@ -123,11 +123,11 @@ def _optimum(args: argparse.Namespace, progress: Progress | None) -> int:
             "frame": None if frame is None else frame.to_json(),
         }
         if frame is not None and frame.has_metres:
-            out["start_world"], out["goal_world"] = frame.to_world(
-                np.array([grid.start_xy, grid.goal_xy], float)).round(4).tolist()
-            out["path_world"] = frame.to_world(np.asarray(octile.path, float)).round(4).tolist()
+            out["start_world"], out["goal_world"] = frame.world_list(
+                np.array([grid.start_xy, grid.goal_xy], float))
+            out["path_world"] = frame.world_list(np.asarray(octile.path, float))
             out["any_angle_path_world"] = (
-                frame.to_world(np.asarray(bounds.path, float)).round(4).tolist()
+                frame.world_list(np.asarray(bounds.path, float))
                 if len(bounds.path) else [])
         if fit is not None:
             out["fitness"] = {

@@ -296,7 +296,7 @@ def curve_json(curve: dict | None, frame) -> dict | None:
         return curve
     obstacles = curve.get("obstacle_clearance")
     return {**curve,
-            "points_world": frame.to_world(np.asarray(curve["points"], float)).round(4).tolist(),
+            "points_world": frame.world_list(np.asarray(curve["points"], float)),
             "length_m": curve["length"] * frame.cell_size,
             # as a path's min_clearance_m: to the map's own obstacles, before inflation
             "min_clearance_m": (json_number(obstacles * frame.resolution)

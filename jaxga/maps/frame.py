@@ -32,7 +32,17 @@ from jaxga.core.errors import EndpointError
 from jaxga.core.grid import check_xy
 from jaxga.maps.clearance import ObstacleClearance
 
-__all__ = ["MapFrame", "endpoint_cells"]
+__all__ = ["MapFrame", "endpoint_cells", "world_decimals"]
+
+
+def world_decimals(step: float | None) -> int:
+    """Decimals that write coordinates ``step`` metres apart to a hundredth of ``step`` or
+    finer: 4 for steps of a centimetre and more (a 0.05 m map's cell centres), more for
+    finer ones (a 10 um map's points, written to 4 decimals, collapsed onto each other),
+    at most 15 (float64's digits)."""
+    if step is None or not math.isfinite(step) or step <= 0:
+        return 4
+    return min(15, max(4, 2 - math.floor(math.log10(step))))
 
 
 @dataclasses.dataclass(frozen=True)
@@ -83,6 +93,17 @@ class MapFrame:
         if size is None:
             return None
         return np.asarray(length, float) * size if np.ndim(length) else float(length) * size
+
+    @property
+    def world_decimals(self) -> int:
+        """Decimals that write a point in metres to a hundredth of a planning cell or
+        finer (:func:`world_decimals`): 4 on maps of centimetre cells and coarser."""
+        return world_decimals(self.cell_size)
+
+    def world_list(self, points: np.ndarray) -> list:
+        """:meth:`to_world` as nested lists rounded to :attr:`world_decimals` (the JSON
+        outputs' ``path_world`` and endpoints)."""
+        return self.to_world(points).round(self.world_decimals).tolist()
 
     def to_world(self, points: np.ndarray) -> np.ndarray:
         """``float[..., 2]`` world coordinates (metres) of points in planning cells (cell

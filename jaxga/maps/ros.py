@@ -106,6 +106,9 @@ lie (metres): far beyond any robot's map, and small enough that every coordinate
 map of :data:`jaxga.core.grid.MAX_MAP_CELLS` cells, and every length on it, is a finite
 number (a resolution of 1e308 made path lengths and written points inf and NaN)."""
 MAX_ORIGIN = 1e12
+MIN_RESOLUTION = 1e-9
+"""The fewest metres a map cell may span (a nanometre): points on a finer map could not
+be written apart in metres (a resolution of 1e-300 wrote every point as 0)."""
 
 
 def _number(value: Any, key: str, label: str) -> float:
@@ -186,8 +189,8 @@ def read_ros_yaml(path: str | Path, label: str | None = None, *,
         raise MapFormatError(f"{label}: image must be a file name, got "
                              f"{shown_value(data['image'])}")
     resolution = _number(data["resolution"], "resolution", label)
-    if not 0 < resolution <= MAX_RESOLUTION:
-        raise MapFormatError(f"{label}: resolution must be > 0 and at most "
+    if not MIN_RESOLUTION <= resolution <= MAX_RESOLUTION:
+        raise MapFormatError(f"{label}: resolution must be from {MIN_RESOLUTION:g} to "
                              f"{MAX_RESOLUTION:g} metres per cell, got {resolution}")
     origin = data["origin"]
     if not isinstance(origin, (list, tuple)) or len(origin) != 3:

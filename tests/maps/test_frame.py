@@ -13,7 +13,14 @@ import yaml
 from jaxga._runtime.timeline import Timeline, time_line
 from jaxga.core.errors import EndpointError, JaxgaError
 from jaxga.core.grid import DIRECTIONS
-from jaxga.export import atomic_write_text, path_format, path_text, path_yaws, write_path
+from jaxga.export import (
+    atomic_write_text,
+    path_format,
+    path_text,
+    path_yaws,
+    read_path,
+    write_path,
+)
 from jaxga.maps import load_map_info, map_name
 from jaxga.maps.frame import MapFrame
 from jaxga.maps.preprocess import legal_moves, reachable_np
@@ -179,6 +186,26 @@ def test_path_files_in_metres_read_back(tmp_path):
     assert path_format("a.YAML") == "yaml" and path_text(pts, "csv").startswith("x,y\n")
     with pytest.raises(JaxgaError, match=r"must be \.csv .* got '\.json'"):
         path_format("a.json")
+
+
+def test_points_in_metres_are_written_apart_on_a_fine_map(tmp_path):
+    """Written to 4 decimals, a path on a map of 10 um cells collapsed onto 0.0000 and
+    0.0001 (and `replan` could not read the file back); the decimals follow the cells:
+    4 on centimetre cells and coarser, a hundredth of a cell or finer below."""
+    from jaxga.maps.frame import MapFrame, world_decimals
+
+    assert [world_decimals(s) for s in (None, 1.0, 0.05, 0.01, 0.005, 1e-5, 1e-9)] == [
+        4, 4, 4, 4, 5, 7, 11]
+    frame = MapFrame(map_shape=(5, 9), resolution=1e-5, origin=(0.0, 0.0, 0.0))
+    cells = np.array([[0, 2], [1, 2], [2, 2], [3, 3]], float)
+    pts = frame.to_world(cells)
+    assert frame.world_list(cells) == pts.round(7).tolist()
+    assert len({tuple(p) for p in frame.world_list(cells)}) == 4
+    for name in ("p.csv", "p.yaml"):
+        write_path(tmp_path / name, pts)
+        np.testing.assert_allclose(read_path(tmp_path / name), pts, rtol=0, atol=1e-8)
+    coarse = MapFrame(map_shape=(5, 9), resolution=0.05, origin=(-2.0, -1.5, 0.0))
+    assert path_text(coarse.to_world(cells), "csv").splitlines()[1] == "-1.9750,-1.3750"
 
 
 def test_a_failed_write_leaves_the_previous_file_whole(tmp_path, monkeypatch):

@@ -130,7 +130,7 @@ def test_world_coordinates_name_the_cell_that_holds_the_point(office):
 @pytest.mark.parametrize("yaml_text,message", [
     ("resolution: 0.05\norigin: [0, 0, 0]\n", "'image' is missing"),
     ("image: office.pgm\norigin: [0, 0, 0]\n", "'resolution' is missing"),
-    ("image: office.pgm\nresolution: -1\norigin: [0, 0, 0]\n", "resolution must be > 0"),
+    ("image: office.pgm\nresolution: -1\norigin: [0, 0, 0]\n", "resolution must be from 1e-09"),
     ("image: office.pgm\nresolution: 0.05\norigin: [0, 0]\n", "origin must be [x, y, yaw]"),
     ("image: office.pgm\nresolution: 0.05\norigin: [0, 0, 0]\nfree_thresh: 0.7\n",
      "0 <= free_thresh < occupied_thresh <= 1"),
@@ -140,7 +140,9 @@ def test_world_coordinates_name_the_cell_that_holds_the_point(office):
     ("image: [office.pgm\n", "not a readable YAML file"),
     # numbers no map has: inf and NaN lengths and points otherwise, or a traceback
     ("image: office.pgm\nresolution: 1.0e+308\norigin: [0, 0, 0]\n",
-     "resolution must be > 0 and at most 1e+06"),
+     "resolution must be from 1e-09 to 1e+06"),
+    ("image: office.pgm\nresolution: 1.0e-300\norigin: [0, 0, 0]\n",  # every point 0 m
+     "resolution must be from 1e-09 to 1e+06 metres per cell, got 1e-300"),
     ("image: office.pgm\nresolution: 0.05\norigin: [1.0e+200, 0, 0]\n",
      "origin must lie within 1e+12 metres"),
     ("image: office.pgm\nresolution: 1" + "0" * 400 + "\norigin: [0, 0, 0]\n",
