@@ -297,6 +297,13 @@ def check_image_data(raw: bytes, label: str) -> None:
             if len(data) != expected:
                 raise _mismatch(label, name, width, height, expected,
                                 f"{len(data):,} bytes of pixel data")
+            if kind in (5, 6) and maxval not in (255, 65535):
+                # a sample above maxval has no shade (Pillow scaled it past white)
+                samples = np.frombuffer(data, ">u2" if maxval > 255 else np.uint8)
+                if samples.size and int(samples.max()) > maxval:
+                    raise MapFormatError(
+                        f"{label}: a {name} sample of {int(samples.max())} is above the "
+                        f"header's maxval {maxval}: a damaged image")
         else:  # plain (ASCII) values
             text = _COMMENT.sub(b" ", raw[offset - 1:])
             count = (text.count(b"0") + text.count(b"1") if kind == 1

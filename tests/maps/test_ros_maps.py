@@ -361,3 +361,22 @@ def test_endpoints_given_in_metres_say_where_the_plan_snaps_them(office):
         "(-1.975, -1.475) m, 0.016 m away"]
     assert snap_notes(argparse.Namespace(start_world=None, goal_world=None), info) == []
 
+
+
+@pytest.mark.parametrize("maxval, samples, bad", [
+    (100, b"\x00\x32\x64\xc8", 200), (1000, b"\x00\x00\x01\xf4\x03\xe8\xea\x60", 60000),
+    (100, b"\x00\x32\x64\x64", None),
+], ids=["8-bit", "16-bit", "at-maxval"])
+def test_a_pgm_sample_above_its_maxval_is_refused(tmp_path, maxval, samples, bad):
+    """A binary PGM sample above the header's maxval was read past white (free); the
+    plain form was already refused by Pillow. Samples up to maxval load."""
+    (tmp_path / "m.pgm").write_bytes(f"P5\n4 1\n{maxval}\n".encode() + samples)
+    (tmp_path / "m.yaml").write_text(ROS1_YAML.format(image="m.pgm"))
+    # 50 of 100: free as an image (luminance 0.5 is not below 0.5), unknown in ROS
+    for path, half in ((tmp_path / "m.pgm", False), (tmp_path / "m.yaml", True)):
+        if bad is None:
+            assert load_map(path).blocked_np().tolist() == [[True, half, False, False]]
+            continue
+        with pytest.raises(MapFormatError, match=f"a PGM sample of {bad} is above the "
+                                                 f"header's maxval {maxval}"):
+            load_map(path)
