@@ -22,6 +22,7 @@ is refused naming both sizes instead of being read from its header alone.
 
 from __future__ import annotations
 
+import contextlib
 import errno
 import io
 import os
@@ -264,10 +265,24 @@ def image_size(raw: bytes) -> tuple[int, int] | None:
     from PIL import Image  # here: Pillow's import is a tenth of a second
 
     try:
-        with Image.open(io.BytesIO(raw)) as img:  # reads the header only
+        with _no_bomb_warning(), Image.open(io.BytesIO(raw)) as img:  # the header only
             return int(img.size[0]), int(img.size[1])
     except Exception:  # noqa: BLE001 - any unreadable header: the decoder reports it
         return None
+
+
+@contextlib.contextmanager
+def _no_bomb_warning() -> Iterator[None]:
+    """A context in which Pillow's ``DecompressionBombWarning`` is not shown: jaxga bounds
+    a map's cells from its header before decoding (:func:`too_large`), so the warning
+    would only repeat in two lines of its own what the refusal or the coarsening says."""
+    import warnings
+
+    from PIL import Image
+
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore", Image.DecompressionBombWarning)
+        yield
 
 
 def _mismatch(label: str, name: str, width: int, height: int, expected: int,
@@ -369,7 +384,7 @@ def decode_image(raw: bytes, label: str) -> tuple[np.ndarray, int]:
     from PIL import Image, UnidentifiedImageError  # here: Pillow's import is a tenth of a second
 
     try:
-        with Image.open(io.BytesIO(raw)) as img:
+        with _no_bomb_warning(), Image.open(io.BytesIO(raw)) as img:
             turned = exif_orientation(img)  # a TIFF's is read before its pixels only
             img.load()
             frames = getattr(img, "n_frames", 1)
@@ -424,6 +439,12 @@ def decode_image(raw: bytes, label: str) -> tuple[np.ndarray, int]:
                 pixels, scale = np.asarray(img.convert("RGBA"), np.uint8), 255
     except MapFormatError:
         raise
+    except Image.DecompressionBombError as e:  # over twice Pillow's MAX_IMAGE_PIXELS
+        held = re.search(r"\((\d+) pixels\)", str(e))
+        held = f"{int(held[1]):,} pixels" if held else "too many pixels"
+        raise MapFormatError(f"{label}: the image holds {held}, more than Pillow decodes "
+                             "(its guard against decompression bombs): save the map as a "
+                             "smaller image") from None
     except (OSError, UnidentifiedImageError, ValueError, SyntaxError) as e:
         first = str(e).splitlines()[0] if str(e) else type(e).__name__
         first = re.sub(r"cannot identify image file <_io\.BytesIO object at 0x[0-9a-f]+>",

@@ -1107,3 +1107,21 @@ def test_a_grey_png_of_2_or_4_bits_reads_its_dark_walls(tmp_path, bits, wall):
     level = wall * (2 ** bits - 1) // 255
     Image.fromarray(a).save(tmp_path / "clear.png", bits=bits, transparency=level)
     assert load_map(tmp_path / "clear.png").blocked_np().sum() == 0
+
+
+def test_pillows_decompression_bomb_guard_is_one_line(tmp_path, monkeypatch, recwarn):
+    """An image over twice Pillow's MAX_IMAGE_PIXELS (a 20000 x 20000 1-bit BMP of 50 MB)
+    was a DecompressionBombError traceback; one over it printed Pillow's warning in two
+    lines before jaxga's own size check. Pillow's limit is lowered here to keep the
+    images small."""
+    from PIL import Image
+
+    monkeypatch.setattr(Image, "MAX_IMAGE_PIXELS", 100)
+    Image.fromarray(np.full((20, 20), 255, np.uint8)).save(tmp_path / "big.bmp")
+    with pytest.raises(MapFormatError, match="the image holds 400 pixels, more than "
+                                             "Pillow decodes") as e:
+        load_map(tmp_path / "big.bmp")
+    assert "\n" not in str(e.value)
+    Image.fromarray(np.full((12, 12), 255, np.uint8)).save(tmp_path / "mid.bmp")
+    assert load_map(tmp_path / "mid.bmp").blocked_np().shape == (12, 12)
+    assert not [w for w in recwarn if issubclass(w.category, Image.DecompressionBombWarning)]
