@@ -153,6 +153,16 @@ class _UniqueKeyLoader(yaml.SafeLoader):
         return super().construct_mapping(node, deep=deep)
 
 
+def _yaml_problem(e: Any) -> str:
+    """PyYAML's problem and where it is (``line 1, column 7: found character '\\t' that
+    cannot start any token``), not its context alone ("while scanning for the next
+    token"), which named no line."""
+    mark = e.problem_mark or e.context_mark
+    where = f"line {mark.line + 1}, column {mark.column + 1}: " if mark is not None else ""
+    what = e.problem or e.context or type(e).__name__
+    return where + " ".join(str(what).split())
+
+
 def read_ros_yaml(path: str | Path, label: str | None = None, *,
                   data: bytes | None = None) -> RosMap:
     """Read a ``map_server`` YAML file (``image``, ``resolution``, ``origin``, ``negate``,
@@ -178,6 +188,7 @@ def read_ros_yaml(path: str | Path, label: str | None = None, *,
         # ValueError: an integer past Python's digit limit for str -> int (4300 digits);
         # RecursionError: lists or mappings nested thousands deep
         first = ("nested too deeply" if isinstance(e, RecursionError)
+                 else _yaml_problem(e) if isinstance(e, yaml.MarkedYAMLError)
                  else str(e).splitlines()[0] if str(e) else type(e).__name__)
         raise MapFormatError(f"{label}: not a readable YAML file ({first})") from None
     if not isinstance(data, dict):

@@ -138,6 +138,11 @@ def test_world_coordinates_name_the_cell_that_holds_the_point(office):
      "mode must be one of trinary, scale, raw"),
     ("image: missing.pgm\nresolution: 0.05\norigin: [0, 0, 0]\n", "does not exist"),
     ("image: [office.pgm\n", "not a readable YAML file"),
+    # PyYAML's problem and its line, not its context alone ("while scanning ...")
+    ("image:\toffice.pgm\n", "YAML file (line 1, column 7: found character '\\t' that "
+                             "cannot start any token"),
+    ("image: office.pgm\n resolution: 0.05\n", "line 2, column 12: mapping values are not "
+                                              "allowed here"),
     # numbers no map has: inf and NaN lengths and points otherwise, or a traceback
     ("image: office.pgm\nresolution: 1.0e+308\norigin: [0, 0, 0]\n",
      "resolution must be from 1e-09 to 1e+06"),
@@ -158,7 +163,7 @@ def test_world_coordinates_name_the_cell_that_holds_the_point(office):
      + "}" * 3000 + "\n", "not a readable YAML file (nested too deeply)"),
     # a key given twice: PyYAML kept the last value without a word
     ("image: office.pgm\nresolution: 0.05\norigin: [0, 0, 0]\nresolution: 5.0\n",
-     "not a readable YAML file (the key 'resolution' is given twice)"),
+     "not a readable YAML file (line 4, column 1: the key 'resolution' is given twice)"),
 ], ids=lambda v: v if len(v) < 60 else None)
 def test_malformed_ros_maps_give_one_line(office, yaml_text, message):
     bad = office.with_name("bad.yaml")
