@@ -52,6 +52,7 @@ from jaxga.maps.inputs import (
     check_image_data,
     decode_image,
     image_size,
+    lines_of,
     map_file_cap,
     map_file_cap_note,
     png_chunks,
@@ -127,7 +128,7 @@ def detect_format(path: Source, raw: bytes | None = None) -> str:
     if suffix == ".map":
         return "movingai"
     first = ""
-    for line in raw.decode("utf-8-sig", errors="replace").splitlines():  # BOM too
+    for line in lines_of(raw.decode("utf-8-sig", errors="replace")):  # BOM too
         if line.strip():
             first = line.strip()
             break
@@ -182,7 +183,7 @@ def parse_movingai(text: str, label: str = "<text>") -> np.ndarray:
     (water) are blocked (https://movingai.com/benchmarks/formats.html). The header must be
     ``type octile``, ``height H``, ``width W`` (in any order) and then the line ``map``.
     """
-    lines = text.splitlines()
+    lines = lines_of(text)
     header: dict[str, int | str] = {}
     i = 0
     while True:
@@ -393,7 +394,7 @@ def decode_text(raw: bytes, label: str) -> str:
         ) from None
     if "\x00" in text:
         raise MapFormatError(f"{label}: not a text map file (contains NUL bytes)")
-    first = next((ln.strip() for ln in text.splitlines() if ln.strip()), "")
+    first = next((ln.strip() for ln in lines_of(text) if ln.strip()), "")
     if first.split(maxsplit=1)[:1] == ["version"]:
         raise MapFormatError(
             f"{label}: is a Moving AI scenario file, not a map (read it with read_scen)"
@@ -403,7 +404,7 @@ def decode_text(raw: bytes, label: str) -> str:
 
 def _body_lines(text: str, label: str) -> list[tuple[int, str]]:
     """Non-blank lines (1-based line number, right-stripped), no blank line in between."""
-    lines = [ln.rstrip() for ln in text.splitlines()]
+    lines = [ln.rstrip() for ln in lines_of(text)]
     numbered = [(n, ln) for n, ln in enumerate(lines, 1) if ln]
     if not numbered:
         raise MapFormatError(f"{label}: map file is empty")
@@ -426,13 +427,13 @@ def declared_size(raw: bytes, kind: str) -> tuple[int, int] | None:
     head = raw[:4096].decode("utf-8", errors="replace")
     if kind == "movingai":
         dims = {}
-        for line in head.splitlines()[:8]:
+        for line in lines_of(head)[:8]:
             words = line.split()
             if len(words) == 2 and words[0].lower() in ("height", "width") \
                     and words[1].isdigit():
                 dims[words[0].lower()] = int(words[1])
         return (dims["width"], dims["height"]) if len(dims) == 2 else None
-    lines = [line for line in raw.splitlines() if line.strip()]
+    lines = [line for line in lines_of(raw) if line.strip()]
     if not lines:
         return None
     first = lines[0].decode("utf-8-sig", errors="replace").strip()

@@ -47,6 +47,7 @@ __all__ = [
     "check_image_data",
     "decode_image",
     "image_size",
+    "lines_of",
     "map_file_cap",
     "map_file_cap_note",
     "png_header",
@@ -210,6 +211,22 @@ def _pnm_header(raw: bytes) -> tuple[int, int, int, int, int] | None:
         return None
     # one whitespace byte ends the header (none left: the data is missing)
     return kind, width, height, maxval, min(i + 1, len(raw))
+
+
+_LINE_END = re.compile(r"\r\n|\r|\n")
+_LINE_END_BYTES = re.compile(rb"\r\n|\r|\n")
+
+
+def lines_of(text: Any) -> list:
+    """The lines of a text file (``str`` or ``bytes``), ended by ``\\n``, ``\\r\\n`` or
+    ``\\r`` only. ``str.splitlines`` also ends a line at a vertical tab, a form feed,
+    ``\\x1c``-``\\x1e``, ``\\x85`` and the Unicode line and paragraph separators,
+    which split one row of a map into two (a 2-line file read as 3 rows) where a row
+    holding them is refused, naming the character."""
+    lines = (_LINE_END_BYTES if isinstance(text, bytes) else _LINE_END).split(text)
+    if lines and not lines[-1]:
+        lines.pop()
+    return lines
 
 
 def png_header(raw: bytes) -> tuple[int, int, int, int, int] | None:

@@ -23,7 +23,7 @@ from pathlib import Path
 
 from jaxga.core.errors import MapFormatError
 from jaxga.core.grid import Grid
-from jaxga.maps.inputs import SCENARIO_CAP, read_input
+from jaxga.maps.inputs import SCENARIO_CAP, lines_of, read_input
 
 __all__ = ["Scenario", "parse_scen", "read_scen"]
 
@@ -108,7 +108,7 @@ def read_scen(path: str | os.PathLike) -> list[Scenario]:
 
 def parse_scen(text: str, label: str = "<scen>") -> list[Scenario]:
     """Parse the text of a ``.scen`` file (see :func:`read_scen`); ``label`` names it."""
-    lines = text.splitlines()
+    lines = lines_of(text)
     numbered = [(n, ln.strip("\r\n")) for n, ln in enumerate(lines, 1) if ln.strip()]
     if not numbered:
         raise MapFormatError(f"{label}: scenario file is empty")

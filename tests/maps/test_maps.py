@@ -1125,3 +1125,18 @@ def test_pillows_decompression_bomb_guard_is_one_line(tmp_path, monkeypatch, rec
     Image.fromarray(np.full((12, 12), 255, np.uint8)).save(tmp_path / "mid.bmp")
     assert load_map(tmp_path / "mid.bmp").blocked_np().shape == (12, 12)
     assert not [w for w in recwarn if issubclass(w.category, Image.DecompressionBombWarning)]
+
+
+@pytest.mark.parametrize("name, text, words", [
+    ("lab.txt", "S..\u2028...\n..G\n", r"line 1, column 4: unknown map character '\\u2028'"),
+    ("room.map", "type octile\nheight 2\nwidth 3\nmap\n.\x0c.\n...\n",
+     r"line 5, column 2: unknown map character '\\x0c'"),
+    ("grid.txt", "0 1 0\x850 0 0\n0 0 0\n", "ragged rows"),
+])
+def test_a_line_ends_only_at_a_line_break(tmp_path, name, text, words):
+    """str.splitlines also split a row at a vertical tab, a form feed, \\x85 or U+2028: a
+    2-line file was read as a 3-row map. Such a character in a row is now what is wrong
+    with it."""
+    (tmp_path / name).write_text(text, encoding="utf-8")
+    with pytest.raises(MapFormatError, match=words):
+        load_map(tmp_path / name)
