@@ -371,6 +371,9 @@ def _inflated(blocked: np.ndarray, ros: RosMap | None, cells: float | None,
             raise MapFormatError(f"{label}: the robot radius must be >= 0 metres, got "
                                  f"{metres!r}")
         cells = metres / ros.resolution
+        if not math.isfinite(cells):  # 1e308 m on 0.05 m cells
+            raise MapFormatError(f"{label}: the robot radius must be a finite number of "
+                                 f"the map's {ros.resolution:g} m cells, got {metres:g} m")
     if cells is None:
         return blocked
     out = inflate_blocked(blocked, cells)

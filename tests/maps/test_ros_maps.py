@@ -264,6 +264,10 @@ def test_inflation_by_cells_or_by_the_robots_radius_in_metres(office):
     assert load_map_info(office, robot_radius=0.1).grid.shape == plain.shape
     with pytest.raises(MapFormatError, match="not both"):
         load_map(office, inflate=1, robot_radius=0.05)
+    # finite in metres, not in cells: it named an "inflate radius" of inf, never given
+    with pytest.raises(MapFormatError, match="the robot radius must be a finite number of "
+                                             "the map's 0.05 m cells, got 1e[+]308 m"):
+        load_map(office, robot_radius=1e308)
 
 
 def test_a_pgm_whose_data_does_not_match_its_header_is_refused(tmp_path, office):
