@@ -27,7 +27,7 @@ import jax
 
 from jaxga._runtime.fields import front_obstacles, program_fields
 from jaxga._runtime.programs import warn_platform
-from jaxga.api.problem import Problem, load_problem
+from jaxga.api.problem import Problem, checked_endpoints, load_problem
 from jaxga.config.schema import Config
 from jaxga.core.errors import ParameterError
 from jaxga.core.grid import Grid
@@ -81,10 +81,11 @@ class GA(PureGA):
                  problem: Grid | MapInfo | str | None = None, *,
                  corner_rule: str | None = None, variant: str | None = None,
                  sets: Any = (), generations: int | None = None, **overrides: Any) -> None:
-        config, grid, map_name, frame, _ = load_problem(
+        config, grid, map_name, frame, info = load_problem(
             preset, problem, corner_rule, variant, sets, overrides, generations)
         self.map_name: str = map_name
         self.frame: MapFrame | None = frame
+        self._layers = None if info is None else info.layers
         grid = program_fields(grid, config, front_obstacles(frame, grid))
         self.config = config
         algorithm, _ = build(config, grid)
@@ -112,8 +113,8 @@ class GA(PureGA):
         ``population__capacity``)."""
         ends = endpoint_cells(self.frame, self.grid, start, goal, start_world, goal_world,
                               required=False)
-        grid = self.grid.replace(start=ends[0], goal=ends[1])
-        grid.check_endpoints()
+        grid = checked_endpoints(self.grid.replace(start=ends[0], goal=ends[1]), self.frame,
+                                 self._layers)
         need = default_capacity(grid, float(self.config["population.capacity_factor"]))
         if need > self.algorithm.capacity:
             raise ParameterError(

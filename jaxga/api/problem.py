@@ -190,14 +190,20 @@ def load_problem(preset, grid, corner_rule, variant, sets, overrides, generation
         info = load_map_info(grid, corner_rule=configured_rule(corner_rule, config),
                              **map_options)
         grid, map_name, frame = info.grid, info.name, info.frame
+    if check_endpoints:
+        checked_endpoints(grid, frame, None if info is None else info.layers)
+    return Problem(config, grid, map_name, frame, info)
+
+
+def checked_endpoints(grid: Grid, frame: MapFrame | None = None, layers: Any = None) -> Grid:
+    """``grid.check_endpoints()``, a blocked endpoint named in the map's own terms (its map
+    cells, its centre in metres) and, on a ROS map's unknown cell, with the way out
+    (``--unknown free``): the words of ``jaxga run``, ``optimum`` and the Python API."""
     try:
-        if check_endpoints:
-            grid.check_endpoints()
+        return grid.check_endpoints()
     except EndpointError as e:
-        layers = None if info is None else info.layers
         raise EndpointError(f"{e}{_on_the_map(frame, grid)}{_unknown_hint(layers, grid)}") \
             from None
-    return Problem(config, grid, map_name, frame, info)
 
 
 def _unknown_hint(layers: Any, grid: Grid) -> str:

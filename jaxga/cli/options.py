@@ -15,7 +15,7 @@ from jaxga import export
 from jaxga._runtime import parallel
 from jaxga._runtime.size_classes import CLASS_SIDES
 from jaxga.api import configured_rule
-from jaxga.api.problem import Problem, problem
+from jaxga.api.problem import Problem, checked_endpoints, problem
 from jaxga.config.presets import load_preset
 from jaxga.core.errors import JaxgaError, ParameterError
 from jaxga.core.grid import CORNER_RULES, check_corner_rule
@@ -241,7 +241,7 @@ def load_grid(args: argparse.Namespace):
     if args.corner_rule is not None:
         check_corner_rule(args.corner_rule)
     info = load_info(args, args.corner_rule)
-    return info, info.grid.check_endpoints()
+    return info, checked_endpoints(info.grid, info.frame, info.layers)
 
 
 def write_json(path: str, obj) -> None:

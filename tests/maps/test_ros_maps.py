@@ -358,6 +358,22 @@ def test_a_blocked_endpoint_is_reported_in_the_maps_own_terms(office):
                                        goal_world=(-1.86, -1.36), corner_rule="strict"),
                   seeds=1)
     assert str(err.value) == "goal cell (2, 2) is blocked (centre (-1.875, -1.375) m)"
+    # the pure core's pairs and `jaxga optimum` say the same (optimum said "is blocked"
+    # alone); neither compiles anything to refuse
+    ga = jaxga.GA("sga", load_map_info(office, start_world=(-1.98, -1.49),
+                                       goal_world=(-1.825, -1.475), corner_rule="strict"))
+    with pytest.raises(EndpointError) as err:
+        ga.grid_for((0, 0), (4, 3))
+    assert str(err.value) == "goal cell (4, 3) is blocked (centre (-1.775, -1.325) m)" + unknown
+    from jaxga.cli.options import load_grid
+    from jaxga.cli.parser import build_parser
+
+    args = build_parser().parse_args(
+        ["optimum", "--map", str(office), "--start-world=-1.98,-1.49",
+         "--goal-world=-1.76,-1.31", "--corner-rule", "strict"])
+    with pytest.raises(EndpointError) as err:
+        load_grid(args)
+    assert str(err.value) == "goal cell (4, 3) is blocked (centre (-1.775, -1.325) m)" + unknown
 
 
 def test_endpoints_given_in_metres_say_where_the_plan_snaps_them(office):
