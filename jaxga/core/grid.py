@@ -200,6 +200,9 @@ class Grid:
         :class:`~jaxga.core.errors.JaxgaError` for a bad array or corner rule, or a map of more
         than :data:`MAX_MAP_CELLS` cells (:func:`too_large`).
         """
+        if isinstance(blocked, np.ma.MaskedArray):  # np.asarray drops the mask
+            raise JaxgaError("a grid cannot be a masked array: which are its masked cells, "
+                             "free or blocked? Fill them first (np.ma.filled(a, 1): blocked)")
         try:
             arr = np.asarray(blocked)
         except ValueError:  # ragged rows

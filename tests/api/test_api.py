@@ -922,6 +922,8 @@ def _plain_grid_off_the_map():
      "must hold booleans or 0/1 values"),  # was TypeError from np.isin
     (lambda: Grid.create(np.zeros((2, 2), dtype="V4")), JaxgaError,
      "must hold booleans or 0/1 values"),
+    (lambda: Grid.create(np.ma.masked_array(np.zeros((2, 2)), [[0, 1], [0, 0]])),
+     JaxgaError, "a grid cannot be a masked array"),  # its mask was dropped
     (_plain_grid_off_the_map, JaxgaError, "start cell index 99 is off the 2 x 2 map"),
     (lambda: api.run("sga", canonical.MAP, seeds=2, crossover__probability=0.5,
                      crossover={"probability": 0.9}), ParameterError,
@@ -948,7 +950,7 @@ def _plain_grid_off_the_map():
     (lambda: jaxga_replan(Grid.create(np.zeros((5, 5), bool)), [(0, 0), (1, 1), (2, 2)],
                           [(1, 1)], position=(0, 0), post=1), ParameterError,
      "post must be True or False, got 1"),
-], ids=["long-preset-name", "nul-map", "nul-map-run", "structured", "void", "plain-grid",
+], ids=["long-preset-name", "nul-map", "nul-map-run", "structured", "void", "masked", "plain-grid",
         "two-spellings-run", "two-spellings-sweep", "array-endpoint", "array-as-map",
         "set-endpoint", "dict-endpoint",
         "set-seeds", "dict-seeds", "replan-fallback-word", "replan-post-int"])
