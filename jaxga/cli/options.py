@@ -6,6 +6,7 @@ from __future__ import annotations
 import argparse
 import json
 import math
+import re
 import sys
 from pathlib import Path
 
@@ -37,9 +38,19 @@ EXIT_DEVICE_DISAGREES = 5
 from the CPU (``jaxga doctor``, or a run refused by the device probe)."""
 
 
+_INTEGER = re.compile(r"\s*[+-]?[0-9]+\s*")
+_DECIMAL = re.compile(r"\s*[+-]?(([0-9]+(\.[0-9]*)?|\.[0-9]+)([eE][+-]?[0-9]+)?|nan|inf"
+                      r"|infinity)\s*", re.IGNORECASE)
+"""A coordinate as written in ASCII: Python's int() and float() also take ``1_0`` (10)
+and other scripts' digits, which no one types as a cell by intent."""
+
+
 def parse_xy(text: str) -> tuple[int, int]:
     try:
-        x, y = (int(v) for v in text.split(","))
+        parts = text.split(",")
+        if not all(_INTEGER.fullmatch(v) for v in parts):
+            raise ValueError(text)
+        x, y = (int(v) for v in parts)
     except ValueError:
         raise argparse.ArgumentTypeError(
             f"expected X,Y (two integers separated by a comma), got {text!r}"
@@ -61,7 +72,10 @@ def parse_budget(text: str) -> float | None:
 
 def parse_point(text: str) -> tuple[float, float]:
     try:
-        x, y = (float(v) for v in text.split(","))
+        parts = text.split(",")
+        if not all(_DECIMAL.fullmatch(v) for v in parts):
+            raise ValueError(text)
+        x, y = (float(v) for v in parts)
     except ValueError:
         raise argparse.ArgumentTypeError(
             f"expected X,Y (two numbers in metres separated by a comma), got {text!r}"

@@ -1236,3 +1236,21 @@ def test_python_dash_m_jaxga_is_the_command():
     proc = subprocess.run([sys.executable, "-m", "jaxga", "--help"], capture_output=True,
                           text=True, timeout=120)
     assert proc.returncode == 0 and proc.stdout.startswith("usage: jaxga")
+
+
+def test_coordinates_are_read_as_written_in_ascii():
+    """Python's int() and float() took '1_0' as 10 and other scripts' digits ('\\u0663' as
+    3): a cell no one typed by intent. Signs, spaces and exponents are kept."""
+    import argparse
+
+    from jaxga.cli.options import parse_point, parse_xy
+
+    assert parse_xy(" 3 , -4") == (3, -4) and parse_point(".5,-1e3") == (0.5, -1000.0)
+    for text in ("1_0,2", "\u0663,1", "1.5,2", "1,2,3"):
+        with pytest.raises(argparse.ArgumentTypeError, match="two integers"):
+            parse_xy(text)
+    for text in ("1_0.5,2", "\u0663,1", "1,2,3"):
+        with pytest.raises(argparse.ArgumentTypeError, match="two numbers in metres"):
+            parse_point(text)
+    with pytest.raises(argparse.ArgumentTypeError, match="expected finite coordinates"):
+        parse_point("nan,1")
