@@ -142,14 +142,16 @@ class Outcome:
 # --- files --------------------------------------------------------------------------
 
 
+def chunk(kind: bytes, data: bytes) -> bytes:
+    """One PNG chunk: length, type, data, CRC."""
+    return (struct.pack(">I", len(data)) + kind + data
+            + struct.pack(">I", zlib.crc32(kind + data) & 0xFFFFFFFF))
+
+
 def png(width: int, height: int, gray: bytes, *, header: tuple[int, int] | None = None,
         truncate: int | None = None) -> bytes:
     """An 8-bit grayscale PNG of ``gray`` (rows top first); ``header`` = the size the IHDR
     claims instead, ``truncate`` = keep only this many bytes."""
-    def chunk(kind: bytes, data: bytes) -> bytes:
-        return (struct.pack(">I", len(data)) + kind + data
-                + struct.pack(">I", zlib.crc32(kind + data) & 0xFFFFFFFF))
-
     w, h = header or (width, height)
     raw = b"".join(b"\0" + gray[y * width:(y + 1) * width] for y in range(height))
     out = (b"\x89PNG\r\n\x1a\n" + chunk(b"IHDR", struct.pack(">IIBBBBB", w, h, 8, 0, 0, 0, 0))
@@ -427,6 +429,26 @@ def warned(text: str) -> Check:
         if len(lines) != 1 or text not in lines[0]:
             return f"expected one warning naming {text!r}, got {len(lines)}"
         return None
+    return check
+
+
+def refused_saying(text: str) -> Check:
+    """Its one ``jaxga:`` line on stderr names ``text``."""
+    def check(out: Outcome) -> str | None:
+        lines = [ln for ln in out.err_lines if ln.startswith("jaxga:")]
+        return None if lines and text in lines[-1] else f"the refusal does not name {text!r}"
+    return check
+
+
+def distinct_rows(path: Path) -> Check:
+    """``path`` (a CSV path file) holds no two equal consecutive points."""
+    def check(out: Outcome) -> str | None:
+        try:
+            rows = path.read_text().splitlines()[1:]
+        except OSError as e:
+            return f"{path.name} not written ({type(e).__name__})"
+        same = sum(a == b for a, b in zip(rows, rows[1:]))
+        return f"{same} consecutive points written alike" if same or not rows else None
     return check
 
 
@@ -1183,7 +1205,75 @@ def build(t: Path) -> list[Case]:
         check=warned("could not be kept"),
         note="every stored program's file replaced by a folder: was compiled in every "
              "process without a word")
+    # --- round five ---------------------------------------------------------------------
+    level = np.where(blocked[::-1], 17, 255).astype(np.uint8)  # walls at a 4-bit level
+    _Image.fromarray(level).save(f / "four-bit.png", bits=4)
+    out = f / "four-bit.json"
+    add("png-4-bit-grey-walls", "round five", run(f / "four-bit.png", *FREE, "--json", out),
+        "handled", outputs=(out,), check=runs_free(out, blocked),
+        note="every wall but pure black read as free: paths went through walls")
+    gap = np.full((5, 9, 4), 255, np.uint8)
+    gap[:, 4, :3] = 0
+    gap[2, 4] = (255, 255, 255, 0)  # a transparent white gap in the wall
+    _Image.fromarray(gap).save(f / "gap.png")
+    add("ros-trinary-transparent-gap", "round five",
+        run(write("gap.yaml", "image: gap.png\nresolution: 0.1\norigin: [0.0, 0.0, 0.0]\n"
+                              "mode: trinary\n"), "--start", "0,2", "--goal", "8,2"),
+        "no path", note="the transparent gap was free; map_server averages the alpha in: "
+                        "unknown, blocked")
+    fine = write("fine.yaml", good.replace("0.05", "0.00001"))
+    fine_csv = f / "fine.csv"
+    add("path-out-10-micrometre-cells", "round five",
+        run(fine, *FREE, "--path-out", fine_csv), "handled", outputs=(fine_csv,),
+        check=distinct_rows(fine_csv), note="points written to 4 decimals: 0.0000 and 0.0001")
+    add("pgm-sample-over-maxval", "round five",
+        run(write("over.pgm", b"P5\n4 1\n100\n\x00\x32\x64\xc8"), "--start", "0,0",
+            "--goal", "3,0"), note="the sample 200 of maxval 100 was read as white")
+    add("ros-yaml-tab", "round five",
+        run(write("tab.yaml", good.replace("image: ", "image:\t"))),
+        check=refused_saying("line 1, column 7"),
+        note="said 'while scanning for the next token', without the line")
+    unknown = write("unknown.pgm", b"P5\n4 4\n255\n" + bytes([205] * 16))
+    add("optimum-on-unknown-cells", "round five",
+        ["optimum", "--map", write("unknown.yaml", good.replace(room.name, unknown.name))],
+        check=refused_saying("--unknown free"), note="said 'is blocked' without why")
+    add("robot-radius-1e308", "round five",
+        run(write("radius.yaml", good), "--robot-radius", "1e308"),
+        check=refused_saying("robot radius"), note="named an 'inflate radius' of inf")
+    add("ascii-line-separator", "round five",
+        run(write("separator.txt", "S..\u2028...\n..G\n")),
+        note="U+2028 split a row: a 2-line file read as 3 rows")
+    add("start-underscore-digits", "round five", run(CLASSIC, "--start", "1_0,0"),
+        note="int() read it as cell 10")
+    exif = _Image.Exif()
+    exif[274] = 6
+    _Image.fromarray(np.where(blocked[::-1], 0, 255).astype(np.uint8)).save(
+        f / "turned.jpg", exif=exif.tobytes())
+    add("jpeg-exif-turned", "round five", run(f / "turned.jpg", *FREE),
+        note="read as stored while viewers show it turned")
+    add("png-16-bit-colour-transparent", "round five",
+        run(write("colour16.png", png16_rgb_with_key())),
+        note="Pillow reads it at 8 bits with a 16-bit key: read silently opaque")
+    bomb = f / "bomb.bmp"
+    with bomb.open("wb") as fh:  # a 20000 x 20000 1-bit BMP, sparse on disk
+        row = 20000 // 32 * 4
+        fh.write(b"BM" + struct.pack("<IHHI", 62 + row * 20000, 0, 0, 62)
+                 + struct.pack("<IiiHHIIiiII", 40, 20000, 20000, 1, 1, 0, row * 20000,
+                               2835, 2835, 2, 0) + b"\0\0\0\0\xff\xff\xff\0")
+        fh.seek(row * 20000 - 1, 1)
+        fh.write(b"\xff")
+    add("bmp-over-pillows-bomb-limit", "round five", ["optimum", "--map", bomb], max_s=15,
+        note="a DecompressionBombError traceback")
     return cases
+
+
+def png16_rgb_with_key() -> bytes:
+    """A 2 x 1 16-bit colour PNG whose transparent colour (tRNS) is its first pixel."""
+    rows = b"\0" + struct.pack(">6H", 1000, 1000, 1000, 65535, 65535, 65535)
+    return (b"\x89PNG\r\n\x1a\n"
+            + chunk(b"IHDR", struct.pack(">IIBBBBB", 2, 1, 16, 2, 0, 0, 0))
+            + chunk(b"tRNS", struct.pack(">3H", 1000, 1000, 1000))
+            + chunk(b"IDAT", zlib.compress(rows)) + chunk(b"IEND", b""))
 
 
 def prepare(case: Case, t: Path) -> None:
