@@ -28,6 +28,7 @@ import io
 import os
 import re
 import stat
+import warnings
 import zlib
 from collections.abc import Iterator
 from typing import Any
@@ -293,8 +294,6 @@ def _no_bomb_warning() -> Iterator[None]:
     """A context in which Pillow's ``DecompressionBombWarning`` is not shown: jaxga bounds
     a map's cells from its header before decoding (:func:`too_large`), so the warning
     would only repeat in two lines of its own what the refusal or the coarsening says."""
-    import warnings
-
     from PIL import Image
 
     with warnings.catch_warnings():
