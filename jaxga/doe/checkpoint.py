@@ -51,6 +51,10 @@ class Checkpoint:
     def __init__(self, directory: str | Path, manifest: dict[str, Any]) -> None:
 
         self.dir = Path(directory)
+        # every point file carries its experiment's mark: a file copied in from another
+        # experiment's checkpoint (same index, other configuration) is refused, not read
+        self.mark = hashlib.blake2b(json.dumps(manifest, sort_keys=True, default=str)
+                                    .encode(), digest_size=8).hexdigest()
         config = manifest.get("config")
         self.generations = config.get("generations") if isinstance(config, dict) else None
         # Several processes (jaxga._runtime.parallel): process 0 alone reads and writes the
@@ -110,6 +114,10 @@ class Checkpoint:
             raise ParameterError(f"checkpoint file {path} holds point {data['point']!r}, not "
                                  f"{int(stem.removeprefix('point-'))}: delete it and run "
                                  "again to recompute it")
+        if isinstance(data, dict) and data.get("experiment") != self.mark:
+            raise ParameterError(f"checkpoint file {path} was written by another experiment "
+                                 "(not this checkpoint's configuration): delete it and run "
+                                 "again to recompute it")
         responses = data.get("responses") if isinstance(data, dict) else None
         ok = (isinstance(responses, dict) and set(responses) == set(RESPONSES)
               and all(isinstance(v, list) and len(v) == n_seeds
@@ -154,7 +162,8 @@ class Checkpoint:
     def save_point(self, q: int, responses: dict[str, np.ndarray], reason: str = "") -> None:
         """Write point ``q``'s responses and, if some seeds found no path, why."""
         if self.lead:
-            _atomic_write_json(self._point(q), {"point": q, "responses": _encode(responses),
+            _atomic_write_json(self._point(q), {"point": q, "experiment": self.mark,
+                                                "responses": _encode(responses),
                                                 "reason": reason})
 
     def _confirm(self, coded: np.ndarray) -> Path:
@@ -166,6 +175,7 @@ class Checkpoint:
     def save_confirmation(self, coded: np.ndarray, responses: dict[str, np.ndarray]) -> None:
         if self.lead:
             _atomic_write_json(self._confirm(coded), {"coded": [int(c) for c in coded],
+                                                      "experiment": self.mark,
                                                       "responses": _encode(responses)})
 
 

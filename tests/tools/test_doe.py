@@ -538,6 +538,11 @@ def test_a_point_file_round_trips_an_overflowing_fitness_and_the_reason(tmp_path
     point.write_text(json.dumps({**data, "point": 7}))
     with pytest.raises(ParameterError, match="holds point 7, not 0"):
         ckpt.load_points(1, 2)
+    other = Checkpoint(tmp_path / "other", {"format": 1, "factors": "others"})
+    other.save_point(0, responses)  # another experiment's point 0, copied in: its
+    point.write_bytes((tmp_path / "other" / point.name).read_bytes())  # values were read
+    with pytest.raises(ParameterError, match="was written by another experiment"):
+        ckpt.load_points(1, 2)
     if hasattr(os, "mkfifo"):  # a FIFO in a point file's place: refused, not read forever
         point.unlink()
         os.mkfifo(point)
