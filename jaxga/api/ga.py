@@ -81,7 +81,7 @@ class GA(PureGA):
                  problem: Grid | MapInfo | str | None = None, *,
                  corner_rule: str | None = None, variant: str | None = None,
                  sets: Any = (), generations: int | None = None, **overrides: Any) -> None:
-        config, grid, map_name, frame, info = load_problem(
+        config, grid, map_name, frame, info, _ = load_problem(
             preset, problem, corner_rule, variant, sets, overrides, generations)
         self.map_name: str = map_name
         self.frame: MapFrame | None = frame

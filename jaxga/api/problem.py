@@ -42,6 +42,9 @@ class Problem(NamedTuple):
     """The map's world frame (resolution, origin, coarsening), None for a bare grid."""
     info: MapInfo | None = None
     """The loaded map (its file, format, layers for plots), None for a bare grid."""
+    given: tuple[str, ...] = ()
+    """The configuration keys the call set (keyword overrides and ``--set`` values): a
+    sweep's points and a DOE's factors may not set them again (which value would hold?)."""
 
 
 def configured_rule(corner_rule: str | None, config: Config) -> str | None:
@@ -192,7 +195,7 @@ def load_problem(preset, grid, corner_rule, variant, sets, overrides, generation
         grid, map_name, frame = info.grid, info.name, info.frame
     if check_endpoints:
         checked_endpoints(grid, frame, None if info is None else info.layers)
-    return Problem(config, grid, map_name, frame, info)
+    return Problem(config, grid, map_name, frame, info, tuple(given))
 
 
 def checked_endpoints(grid: Grid, frame: MapFrame | None = None, layers: Any = None) -> Grid:

@@ -298,6 +298,13 @@ def _plan_sweep(problem: Problem, points: Sequence[Mapping[str, Any]], seeds: An
     (``references``), and the seeds (memory checked)."""
     config, map_grid, map_name, frame = problem.config, problem.grid, problem.map_name, \
         problem.frame
+    for point in points:  # the points' value or the call's? neither silently
+        both = [k for k in flatten(dotted(point)) if k in problem.given]
+        if both:
+            raise ParameterError(
+                f"{', '.join(both)} is set by a sweep point and by the call (a keyword "
+                "override or --set): the point's value would replace the call's; give it "
+                "in the points alone")
     configs = _point_configs(config, points)
     capacity = checked_capacity(configs, options.population_capacity)
     report("references", 0.0)

@@ -83,7 +83,7 @@ def plan_doe(preset, grid, factors, design, seeds, generations, corner_rule, var
     problem = load_problem(preset, grid, corner_rule, variant, sets, overrides, generations)
     config, loaded, map_name = problem.config, problem.grid, problem.map_name
     check_factors(config, factors)
-    overridden = overridden_keys(overrides, sets)
+    overridden = [*problem.given, *overridden_keys(overrides, sets)]  # a Problem's too
     both = [f.name for f in factors if f.name in overridden]
     if both:
         raise ParameterError(f"{', '.join(both)} is both a factor and an override: the "

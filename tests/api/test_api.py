@@ -931,6 +931,9 @@ def _plain_grid_off_the_map():
     (lambda: api.sweep("sga", canonical.MAP, [{"crossover__probability": 0.5,
                                                "crossover.probability": 0.9}], seeds=2),
      ParameterError, "crossover.probability is given twice, as 0.5 and 0.9"),
+    (lambda: api.sweep("sga", canonical.MAP, [{"crossover.probability": 0.5}], seeds=2,
+                       crossover__probability=0.9), ParameterError,
+     "crossover.probability is set by a sweep point and by the call"),  # 0.9 was dropped
     (lambda: Grid.create(np.zeros((5, 5), bool), start=np.array([[1], [2]])), JaxgaError,
      "start must be a pair of integers (x, y), got an array of shape (2, 1) and dtype int64"),
     (lambda: api.run("sga", np.zeros((20, 20)), seeds=2), JaxgaError,
@@ -950,9 +953,9 @@ def _plain_grid_off_the_map():
     (lambda: jaxga_replan(Grid.create(np.zeros((5, 5), bool)), [(0, 0), (1, 1), (2, 2)],
                           [(1, 1)], position=(0, 0), post=1), ParameterError,
      "post must be True or False, got 1"),
-], ids=["long-preset-name", "nul-map", "nul-map-run", "structured", "void", "masked", "plain-grid",
-        "two-spellings-run", "two-spellings-sweep", "array-endpoint", "array-as-map",
-        "set-endpoint", "dict-endpoint",
+], ids=["long-preset-name", "nul-map", "nul-map-run", "structured", "void", "masked",
+        "plain-grid", "two-spellings-run", "two-spellings-sweep", "point-and-override",
+        "array-endpoint", "array-as-map", "set-endpoint", "dict-endpoint",
         "set-seeds", "dict-seeds", "replan-fallback-word", "replan-post-int"])
 def test_hostile_python_arguments_are_one_line_errors(call, error, words):
     """Arguments of the Python API that raised OSError, ValueError, TypeError or

@@ -735,6 +735,10 @@ def test_a_factor_that_is_also_an_override_is_refused(monkeypatch):
         with pytest.raises(ParameterError, match="mutation.probability is both a factor "
                                                  "and an override"):
             run_doe("sga", MAP, factor, "L9", seeds=1, generations=2, **kw)
+        # in a loaded Problem (what `jaxga doe --set` gives): it ran, the --set ignored
+        with pytest.raises(ParameterError, match="mutation.probability is both a factor "
+                                                 "and an override"):
+            run_doe(jaxga.problem("sga", MAP, **kw), None, factor, "L9", seeds=1)
 
 
 def test_every_design_point_is_checked_before_the_first_runs(monkeypatch):
