@@ -27,6 +27,8 @@ from jaxga.api.problem import load_problem
 from jaxga.api.result import Result
 from jaxga.api.runs import run
 from jaxga.config.schema import Config
+from jaxga.core.errors import ParameterError
+from jaxga.core.grid import check_corner_rule
 from jaxga.engine.algorithm import map_capacity
 from jaxga.maps import MapInfo, load_map_info
 from jaxga.maps.frame import endpoint_cells
@@ -46,12 +48,13 @@ class Planner:
             any-angle optimum), a TOML file or a :class:`Config`.
         seeds: runs per plan (the best of them is :meth:`Result.best_seed`).
         robot_radius: the robot's radius in metres, by which the obstacles grow (as
-            :func:`jaxga.maps.load_map`; the following four too, each ignored for a
-            loaded MapInfo).
+            :func:`jaxga.maps.load_map`; the following three too). A loaded MapInfo is
+            loaded with these already: given with one, they are refused in one line.
         inflate: or the growth in cells.
         coarsen: K x K map cells into one planning cell.
         unknown: how a ROS map's unknown cells are planned on.
-        corner_rule: the corner rule (default: the map's own).
+        corner_rule: the corner rule (default: the map's own; applied to a loaded MapInfo
+            too, as :func:`jaxga.run` applies it).
         any_angle_budget: as :func:`jaxga.run`: seconds the any-angle reference may
             take after each plan's runs (``"auto"``: at most their own time); 0 skips it.
         **overrides: configuration keys, as :func:`jaxga.run` takes them.
@@ -71,7 +74,16 @@ class Planner:
                  corner_rule: str | None = None, any_angle_budget: float | str | None = "auto",
                  **overrides: Any) -> None:
         if isinstance(map, MapInfo):
-            self.map = map
+            loading = [name for name, value in (
+                ("robot_radius", robot_radius), ("inflate", inflate), ("coarsen", coarsen),
+                ("unknown", unknown)) if value is not None]
+            if loading:  # they were ignored without a word
+                raise ParameterError(
+                    f"{', '.join(loading)} given with a loaded map (a MapInfo), which they "
+                    f"no longer change: load the map with them (jaxga.maps.load_map_info("
+                    f"path, {loading[0]}=...)) or give the Planner the map's path")
+            self.map = map if corner_rule is None else dataclasses.replace(
+                map, grid=map.grid.replace(corner_rule=check_corner_rule(corner_rule)))
         else:
             self.map = load_map_info(map, robot_radius=robot_radius, inflate=inflate,
                                      coarsen=coarsen, unknown=unknown,

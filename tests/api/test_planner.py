@@ -193,3 +193,23 @@ def test_the_planners_capacity_is_the_maps(office):
     assert planner.capacity == map_capacity(planner.map.grid, factor)
     assert jaxga.Planner(office, robot_radius=0.1, corner_rule="free",
                          population__capacity=96).capacity is None
+
+
+def test_map_options_with_a_loaded_map_are_refused_or_applied():
+    """Given a loaded MapInfo, the Planner ignored robot_radius, inflate, coarsen and
+    unknown without a word, and corner_rule too (jaxga.run applies it): the loading
+    options are refused in one line, the corner rule applied. Nothing is compiled."""
+    from jaxga.maps import load_map_info
+
+    info = load_map_info("classic_ga_gapp3_20x20")
+    assert info.grid.corner_rule == "free"
+    for option in ({"robot_radius": 0.1}, {"inflate": 1}, {"coarsen": 2},
+                   {"unknown": "free"}):
+        with pytest.raises(ParameterError, match=f"{next(iter(option))} given with a "
+                                                 "loaded map") as e:
+            jaxga.Planner(info, "sga", **option)
+        assert "\n" not in str(e.value)
+    strict = jaxga.Planner(info, "sga", corner_rule="strict")
+    assert strict.map.grid.corner_rule == "strict" and info.grid.corner_rule == "free"
+    with pytest.raises(jaxga.JaxgaError, match="unknown corner rule 'diagonal'"):
+        jaxga.Planner(info, "sga", corner_rule="diagonal")
