@@ -28,10 +28,12 @@ import jax
 from jaxga._runtime.fields import front_obstacles, program_fields
 from jaxga._runtime.programs import warn_platform
 from jaxga.api.problem import Problem, checked_endpoints, load_problem
-from jaxga.config.schema import Config
+from jaxga.config.schema import Config, dotted, flatten, sweepable
 from jaxga.core.errors import ParameterError
 from jaxga.core.grid import Grid
 from jaxga.engine import build, default_capacity, default_params
+from jaxga.engine.algorithm import static_config
+from jaxga.engine.checks import check_overrides_read
 from jaxga.engine.maptables import with_tables
 from jaxga.engine.run import PureGA
 from jaxga.maps import MapInfo
@@ -93,6 +95,40 @@ class GA(PureGA):
         self.default_params: dict[str, jax.Array] = default_params(
             config, self.algorithm.islands)
         warn_platform(jax.default_backend())  # where jit puts the user's calls
+
+    def params(self, **values: Any) -> dict[str, jax.Array]:
+        """:attr:`default_params` with dynamic keys set (``crossover__probability=0.5``,
+        ``"mutation.probability"`` as a dict key, nested mappings), each checked as
+        :func:`jaxga.run` checks it: its range (a NaN rate, a negative probability), its
+        combination with the other keys, a population size within the GA's; refused in
+        one line, as is a key the compiled program depends on (build another GA) and
+        ``generations``. A value changed in :attr:`default_params` by hand is not checked
+        (inside ``jit`` it cannot be): this is the checked way.
+
+        ``params["generations"]`` is the run length ``T`` the rate schedules read (AGACD
+        eq. 27, 29), not a loop count: :meth:`evolve` and :meth:`run` step the GA's own
+        ``generations`` (``jaxga.GA(..., generations=N)``), and ``T`` equals it here."""
+        changes = dotted(values)
+        keys = list(flatten(changes))
+        if "generations" in keys:
+            raise ParameterError(
+                "generations is not a parameter of the pure core's calls: evolve and run "
+                "step the GA's own count; build jaxga.GA(..., generations=N) (its "
+                "default_params' generations, the schedules' T, follow it)")
+        config = self.config.override(changes)
+        check_overrides_read(config, keys)
+        if static_config(config) != static_config(self.config):
+            changed = sorted(k for k in keys if not sweepable(k))
+            raise ParameterError(
+                f"{', '.join(changed) or 'these values'} "
+                f"{'changes' if len(changed) == 1 else 'change'} the compiled program, not a "
+                "parameter: build another jaxga.GA with them")
+        size = int(config["population.size"])
+        if size > self.algorithm.population:
+            raise ParameterError(
+                f"population.size {size} is more than the GA's {self.algorithm.population} "
+                "individuals: build the GA with the largest size, then set smaller ones here")
+        return default_params(config, self.algorithm.islands)
 
     def grid_for(self, start: tuple[int, int] | None = None,
                  goal: tuple[int, int] | None = None, *, start_world: Any = None,

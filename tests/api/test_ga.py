@@ -93,6 +93,27 @@ def test_the_constructor_checks_what_jaxga_run_checks():
             np.ones((4, 4), bool), start=(0, 0), goal=(3, 3)))
 
 
+@pytest.mark.parametrize("values, words", [
+    ({"mutation.probability": float("nan")}, "mutation.probability must be finite"),
+    ({"crossover__probability": -1.0}, "crossover.probability = -1.0 is below its minimum"),
+    ({"population__size": 1000}, "population.size 1000 is more than the GA's 60"),
+    ({"population__size": 0}, "population.size = 0 is below its minimum 2"),
+    ({"generations": 6}, "generations is not a parameter of the pure core's calls"),
+    ({"mutation__method": "replace_point"}, "mutation.method changes the compiled program"),
+])
+def test_params_are_checked_as_jaxga_run_checks_them(values, words):
+    """A value set in default_params by hand ran unchecked (a NaN rate, 1000 active
+    individuals of 60 run as 60, a generations of 6 changed nothing): ga.params() sets
+    dynamic keys checked, and refuses the rest in one line. Nothing is compiled."""
+    ga = jaxga.GA("sga", MAP, generations=5)
+    p = ga.params(crossover__probability=0.5, population__size=30)
+    assert float(p["crossover.probability"]) == 0.5 and int(p["population.active"]) == 30
+    assert set(p) == set(ga.default_params) and int(p["generations"]) == 5
+    with pytest.raises(ParameterError, match=words) as e:
+        ga.params(**values)
+    assert "\n" not in str(e.value)
+
+
 @pytest.mark.slow
 def test_vmap_over_three_mutation_rates_equals_three_separate_runs(ga):
     """One ``jit(vmap)`` of ``GA.run`` over three values of ``mutation.probability`` (seed
