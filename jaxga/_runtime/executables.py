@@ -137,9 +137,11 @@ jax.monitoring.register_event_listener(_count_cache_hits)
 
 STORE_OPTION = "xla_debug_buffer_assignment_show_max"
 """An XLA debug option that only bounds the length of a debugging printout. A program
-that JAX read from its own cache is compiled again with this option set to a value drawn
-from the program's key (:func:`compile_and_store`): JAX's cache key includes the compile
-options, so XLA compiles it afresh, and what it compiles can be stored."""
+that JAX read from its own cache is compiled again with this option set to a random
+value (:func:`compile_and_store`): JAX's cache key includes the compile options, so XLA
+compiles it afresh, and what it compiles can be stored. A value drawn from the
+program's key instead was itself in JAX's cache the second time the store lost that
+program, which was then never stored again."""
 
 
 def compile_and_store(key: str | None, lowered: Any, options: dict | None,
@@ -157,7 +159,8 @@ def compile_and_store(key: str | None, lowered: Any, options: dict | None,
     program = lowered.compile(options)
     if key is not None and _CACHE_HITS[0] != hits:
         hits = _CACHE_HITS[0]
-        program = lowered.compile({**(options or {}), STORE_OPTION: int(key[:12], 16)})
+        fresh = int.from_bytes(os.urandom(6), "big")  # a key JAX's cache has never seen
+        program = lowered.compile({**(options or {}), STORE_OPTION: fresh})
     if _CACHE_HITS[0] == hits:
         save(key, program, devices)
     return program

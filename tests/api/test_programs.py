@@ -343,6 +343,27 @@ def test_a_program_in_jaxs_cache_but_not_in_the_store_is_stored(tmp_path):
     assert out[2]["best"] == out[0]["best"]
 
 
+def test_a_program_the_store_lost_twice_is_stored_again(monkeypatch):
+    """The afresh compile of a program JAX's cache holds (compile_and_store) drew its
+    option's value from the program's key: the second time the store lost the program,
+    that compile was in JAX's cache too, so it was never stored again (every process
+    traced and compiled it). JAX's cache is played here by a set of option values seen."""
+    seen, saved = set(), []
+
+    class Lowered:
+        def compile(self, options=None):
+            value = (options or {}).get(executables.STORE_OPTION)
+            if value in seen:  # a cache hit, as JAX's monitoring event reports it
+                executables._CACHE_HITS[0] += 1
+            seen.add(value)
+            return object()
+
+    monkeypatch.setattr(executables, "save", lambda key, program, devices: saved.append(key))
+    for _ in range(4):  # the store loses the program before each process
+        executables.compile_and_store("0123456789abcdef", Lowered(), None, [])
+    assert saved == ["0123456789abcdef"] * 4
+
+
 def test_a_stored_program_that_is_not_its_keys_is_removed_with_one_warning(
         tmp_path, monkeypatch):
     """Nothing in the store reaches XLA unless it is the program asked for: an unreadable
