@@ -27,7 +27,10 @@ system when a process ends, however it ends) while it compiles, and a process th
 the same program meanwhile waits for it and then reads it (a DOE over several processes,
 a notebook beside a command, a test suite's workers). The wait is bounded
 (:data:`LOCK_WAIT_S`): after it, or where files cannot be locked, a process compiles the
-program itself, as without the store.
+program itself, as without the store. The process that holds a lock writes its host and
+process id into the lock file: one waiting on the same host does not wait for a holder
+that is stopped (Ctrl-Z, a paused notebook, a debugger) or gone, and after
+:data:`LOCK_NOTE_S` it says, once, which process it waits for.
 """
 
 from __future__ import annotations
@@ -37,6 +40,7 @@ import functools
 import hashlib
 import os
 import pickle
+import socket
 import stat
 import time
 import warnings
@@ -268,9 +272,37 @@ def load(key: str | None, devices: Any) -> Any | None:
     return program
 
 
-LOCK_WAIT_S = 900.0
+LOCK_WAIT_S = 300.0
 """The longest a process waits for another one compiling the same program (a whole GA
 compiles in well under a minute; a process stuck for longer is not waited for)."""
+
+LOCK_NOTE_S = 10.0
+"""After this long waiting for another process's compile, a waiting process says which
+process it waits for (one :class:`~jaxga.core.errors.CacheWarning`): the wait is not a
+compile of its own."""
+
+
+def _holder(lock: Path) -> tuple[str, int] | None:
+    """``(host, process id)`` written in a lock file by the process holding it, or None
+    (not written yet, or unreadable)."""
+    try:
+        words = lock.read_text(encoding="ascii", errors="replace").split()
+        return words[0], int(words[1])
+    except (OSError, IndexError, ValueError):
+        return None
+
+
+def _stopped_or_gone(pid: int) -> bool:
+    """Whether process ``pid`` of this host is stopped (``T``: Ctrl-Z, SIGSTOP; ``t``: a
+    debugger), a zombie, or gone: it compiles nothing (Linux's ``/proc``; False where it
+    cannot be told)."""
+    try:
+        state = Path(f"/proc/{pid}/stat").read_text().rsplit(")", 1)[1].split()[0]
+    except FileNotFoundError:
+        return Path("/proc/self").exists()  # gone, where /proc is there to tell
+    except (OSError, IndexError):
+        return False
+    return state in ("T", "t", "Z", "X")
 
 
 @contextlib.contextmanager
@@ -285,7 +317,8 @@ def _compiling(key: str | None) -> Iterator[None]:
         folder.mkdir(parents=True, exist_ok=True)
         # without blocking: a FIFO put in the lock file's place would block open() for
         # good; anything but a regular file is not used as a lock
-        fd = os.open(folder / f"{key}.lock", os.O_WRONLY | os.O_CREAT | os.O_APPEND
+        lock = folder / f"{key}.lock"
+        fd = os.open(lock, os.O_WRONLY | os.O_CREAT | os.O_APPEND
                      | getattr(os, "O_NONBLOCK", 0), 0o644)
         if not stat.S_ISREG(os.fstat(fd).st_mode):
             os.close(fd)
@@ -295,15 +328,35 @@ def _compiling(key: str | None) -> Iterator[None]:
         yield
         return
     with handle:
-        locked, deadline = False, time.monotonic() + LOCK_WAIT_S
+        locked, start, looked, noted = False, time.monotonic(), 0.0, False
+        here = socket.gethostname()
         while True:
             try:
                 fcntl.flock(handle, fcntl.LOCK_EX | fcntl.LOCK_NB)
                 locked = True
+                with contextlib.suppress(OSError):  # who holds it, for those who wait
+                    handle.truncate(0)
+                    handle.write(f"{here} {os.getpid()}\n")
+                    handle.flush()
                 break
             except BlockingIOError:  # another process compiles it: wait (interruptibly)
-                if time.monotonic() > deadline:
+                waited = time.monotonic() - start
+                if waited > LOCK_WAIT_S:
                     break
+                if waited - looked >= 1.0:  # is the holder compiling at all?
+                    looked = waited
+                    holder = _holder(lock)
+                    if holder is not None and holder[0] == here and \
+                            _stopped_or_gone(holder[1]):
+                        break  # stopped (Ctrl-Z) or gone: compile it here
+                    if waited >= LOCK_NOTE_S and not noted:
+                        noted = True
+                        who = "another process" if holder is None else \
+                            f"process {holder[1]} on {holder[0]}"
+                        warnings.warn(
+                            f"waiting for {who}, which compiles the same program (jaxga's "
+                            f"program store; at most {LOCK_WAIT_S:.0f} s, then this process "
+                            "compiles it itself)", CacheWarning, stacklevel=4)
                 time.sleep(0.05)
             except OSError:  # a file system without locks
                 break

@@ -598,3 +598,54 @@ def test_a_lock_file_that_is_not_a_regular_file_does_not_block_the_compile(tmp_p
     worker.start()
     assert entered.wait(10), "the lock's open blocked on the FIFO"
     worker.join(10)
+
+
+HOLD_LOCK = """
+import sys, time
+from jaxga._runtime import executables
+with executables._compiling(sys.argv[1]):
+    print("holding", flush=True)
+    time.sleep(600)
+"""
+
+
+@pytest.mark.slow  # starts a process
+@pytest.mark.skipif(not Path("/proc/self").exists() or sys.platform != "linux",
+                    reason="reads a process's state from Linux's /proc")
+def test_a_stopped_compile_is_not_waited_for(tmp_path, monkeypatch):
+    """A process holding a program's lock and then stopped (Ctrl-Z, a paused notebook)
+    kept every other process waiting for it in silence for 15 minutes: the lock file
+    names its holder, and a holder that is stopped is not waited for; one that runs is
+    waited for, and named after LOCK_NOTE_S."""
+    import signal
+
+    from jaxga.core.errors import CacheWarning
+
+    monkeypatch.setattr(type(jax.config), "jax_compilation_cache_dir",
+                        property(lambda self: str(tmp_path)), raising=False)
+    env = dict(os.environ, JAXGA_CACHE_DIR=str(tmp_path))
+    holder = subprocess.Popen([sys.executable, "-c", HOLD_LOCK, "somekey"], env=env,
+                              stdout=subprocess.PIPE, text=True, cwd=ROOT)
+    try:
+        assert holder.stdout.readline().strip() == "holding"
+        assert f" {holder.pid}" in (executables.directory() / "locks" / "somekey.lock"
+                                    ).read_text()
+        monkeypatch.setattr(executables, "LOCK_NOTE_S", 0.5)
+        monkeypatch.setattr(executables, "LOCK_WAIT_S", 3.0)
+        t0 = time.monotonic()
+        with pytest.warns(CacheWarning, match=f"waiting for process {holder.pid} on "):
+            with executables._compiling("somekey"):  # a running holder: waited for
+                pass
+        assert time.monotonic() - t0 >= 3.0
+        holder.send_signal(signal.SIGSTOP)
+        t0 = time.monotonic()
+        with warnings.catch_warnings():
+            warnings.simplefilter("error", CacheWarning)
+            monkeypatch.setattr(executables, "LOCK_NOTE_S", 30.0)
+            monkeypatch.setattr(executables, "LOCK_WAIT_S", 60.0)
+            with executables._compiling("somekey"):  # stopped: not waited for
+                pass
+        assert time.monotonic() - t0 < 5.0
+    finally:
+        holder.kill()
+        holder.wait()
