@@ -23,6 +23,7 @@ from pathlib import Path
 import jax
 
 from jaxga.core.errors import CacheWarning, ParameterError
+from jaxga.core.fields import shown_value
 from jaxga.core.files import folder_problem
 
 __all__ = ["ENV_VAR", "MIN_COMPILE_SECONDS", "cache_problem", "configure", "default_directory",
@@ -48,12 +49,17 @@ def cache_problem(path: str | os.PathLike) -> str | None:
         Path(path).mkdir(parents=True, exist_ok=True)
     except OSError as e:
         return e.strerror or str(e)
+    except ValueError:  # os.mkdir of a name holding a NUL
+        return "a folder's name cannot hold a NUL character"
     return folder_problem(path)
 
 
 def _readable_folder(path: str | os.PathLike) -> bool:
     """Whether ``path`` is a folder whose files can be listed and read."""
-    return Path(path).is_dir() and os.access(path, os.R_OK | os.X_OK)
+    try:
+        return Path(path).is_dir() and os.access(path, os.R_OK | os.X_OK)
+    except (OSError, ValueError):  # a name too long, a NUL: no folder of that name
+        return False
 
 
 _READ_ONLY: set[str] = set()
@@ -67,39 +73,39 @@ def is_read_only(path: str | os.PathLike) -> bool:
     return str(Path(path)) in _READ_ONLY
 
 
-def _use_read_only(path: str, why: str) -> None:
+def _use_read_only(path: str, why: str, source: str = ENV_VAR) -> None:
     """Read a folder that takes no new file (a shared cache on a read-only mount, a
     folder of another user's): one :class:`~jaxga.core.errors.CacheWarning` per process."""
     if is_read_only(path):  # said once per folder
         return
     _READ_ONLY.add(str(Path(path)))
-    warnings.warn(f"the compilation cache {path} ({ENV_VAR}) takes no new files ({why}): "
+    warnings.warn(f"the compilation cache {path} ({source}) takes no new files ({why}): "
                   "programs stored in it are read, new ones are compiled and not kept",
                   CacheWarning, stacklevel=4)
 
 
-def _judged(path: str) -> str | None:
+def _judged(path: str, source: str = ENV_VAR) -> str | None:
     """None when ``path`` can hold the cache, or be read as one that takes no new file
     (:func:`_use_read_only`); else why not, said in one warning (:func:`warn_unusable`)."""
     why = cache_problem(path)
     if why is not None and _readable_folder(path):
-        _use_read_only(path, why)
+        _use_read_only(path, why, source)
         return None
     if why is not None:
-        warn_unusable(path, why)
+        warn_unusable(path, why, source)
     return why
 
 
 _WARNED: list[str] = []
 
 
-def warn_unusable(path: str, why: str) -> None:
+def warn_unusable(path: str, why: str, source: str = ENV_VAR) -> None:
     """One :class:`~jaxga.core.errors.CacheWarning` per process naming the cache folder
     and what follows: programs are compiled without it."""
     if _WARNED:
         return
     _WARNED.append(path)
-    warnings.warn(f"the compilation cache {path} ({ENV_VAR}) cannot be used ({why}): "
+    warnings.warn(f"the compilation cache {path} ({source}) cannot be used ({why}): "
                   "compiling without it", CacheWarning, stacklevel=3)
 
 
@@ -138,10 +144,17 @@ def configure(cache_dir: str | os.PathLike | None | object = _UNSET, *,
     elif cache_dir is None:
         path = ""
     else:
+        if not isinstance(cache_dir, (str, os.PathLike)):
+            raise ParameterError(f"configure: cache_dir must be a folder's path (a str or a "
+                                 f"Path) or None, got {shown_value(cache_dir)}")
         path = os.fspath(cache_dir)
+        if isinstance(path, bytes):
+            raise ParameterError("configure: cache_dir must be a folder's path as a str or a "
+                                 "Path, not bytes")
         if not path:
             raise ParameterError("configure: cache_dir must not be empty (None: no folder)")
-    if path and _judged(path) is not None:
+    source = ENV_VAR if cache_dir is _UNSET else "jaxga.configure"
+    if path and _judged(path, source) is not None:
         path = ""
     _configured["dir"] = path or None
     if path and jax_cache and not is_read_only(path):

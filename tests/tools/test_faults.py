@@ -722,3 +722,26 @@ def test_a_scenario_length_that_contradicts_the_exact_optimum_is_reported(tmp_pa
             assert "optimal length 1.0000" in note[0] and words in note[0], note
         else:
             assert "but" not in note[0], note
+
+
+def test_a_cache_folder_that_cannot_be_named_is_one_warning(tmp_path, monkeypatch):
+    """configure() with a name too long for the file system raised OSError (from
+    Path.is_dir), one holding a NUL ValueError, and a number or bytes TypeError: the
+    unusable names are one warning naming their source and the programs compile without
+    a cache; a value that is no path at all is refused in one line."""
+    import jax
+
+    from jaxga._runtime import compilation_cache
+    from jaxga.core.errors import CacheWarning, ParameterError
+
+    _fresh_cache_settings(monkeypatch)
+    monkeypatch.setattr(jax.config, "update", lambda *a: pytest.fail("JAX's cache turned on"))
+    for name, why in ((str(tmp_path / ("a" * 300)), "File name too long"),
+                      (str(tmp_path / "a\0b"), "a folder.s name cannot hold a NUL")):
+        monkeypatch.setattr(compilation_cache, "_WARNED", [])
+        with pytest.warns(CacheWarning, match=f"\\(jaxga.configure\\) cannot be used "
+                                              f"\\({why}"):
+            assert compilation_cache.configure(name) is None
+    for value in (123, b"/x"):
+        with pytest.raises(ParameterError, match="cache_dir must be a folder's path"):
+            compilation_cache.configure(value)
