@@ -33,7 +33,9 @@ from jaxga._runtime import device_probe, executables
 from jaxga._runtime.device_probe import ProbeRow
 from jaxga._runtime.programs import shape_spec
 from jaxga.api.ga import GA
-from jaxga.config.presets import preset_names
+from jaxga.config.presets import load_preset, preset_names
+from jaxga.core.errors import ParameterError
+from jaxga.core.fields import shown_value
 from jaxga.core.geometry import segments_clear
 from jaxga.core.grid import Grid
 from jaxga.core.objectives import path_length
@@ -179,13 +181,19 @@ def doctor(device: jax.Device | None = None, *, presets: Sequence[str] | None = 
         A :class:`DoctorReport`; its ``verdict`` is the one line to show.
     """
     t0 = time.perf_counter()
+    if presets is not None and (isinstance(presets, str) or not all(
+            isinstance(p, str) for p in presets)):
+        raise ParameterError(f"presets must be a list of preset names, got "
+                             f"{shown_value(presets)}")
+    names = list(preset_names() if presets is None else presets)
+    for name in names:  # an unknown name refused before the probes, not after them
+        load_preset(name)
     device = jax.devices()[0] if device is None else device
     cpu = jax.devices("cpu")[0]
     rows = []
     for row in device_probe.probe(device, device_probe.RUNS if runs is None else runs):
         rows.append(row)
         report(f"{row.name}: {'ok' if row.agrees else 'FAIL'} ({row.seconds:.1f} s)")
-    names = list(preset_names() if presets is None else presets)
     if not names:
         verdict = device_probe.verdict_line(rows, device)
         return DoctorReport(device_probe.describe(device), all(r.agrees for r in rows),

@@ -9,11 +9,18 @@ import jax
 from jaxga.api.doctor import doctor
 from jaxga.cli.options import EXIT_DEVICE_DISAGREES, write_json
 from jaxga.compare import split_presets
+from jaxga.core.errors import JaxgaError
 
 
 def cmd_doctor(args: argparse.Namespace) -> int:
     """``jaxga doctor``: the probes of :func:`jaxga.api.doctor.doctor`, a table, the
     verdict line last; exit status :data:`EXIT_DEVICE_DISAGREES` when it disagrees."""
+    if args.quick and args.presets is not None:
+        raise JaxgaError("--presets names the whole runs, which --quick leaves out: give "
+                         "one or the other")
+    if args.presets is not None and not split_presets(args.presets):
+        raise JaxgaError(f"--presets names no preset (got {args.presets!r}): leave it out "
+                         "for every built-in preset")
     device = jax.devices()[0]
     print(f"checking {device.platform} ({device.device_kind}) against the CPU", flush=True)
     presets = () if args.quick else split_presets(args.presets) if args.presets else None

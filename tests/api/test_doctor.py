@@ -204,3 +204,22 @@ def test_off_the_cpu_a_run_must_have_the_cpus_success_a_clear_path_and_its_lengt
     # 0: agrees; 1: the CPU's run failed; 2: its length is 1 % off; 3: through the
     # blocked centre; 4: failed on both (its cells are not looked at)
     assert list(runs_off_tolerance(grid, here, there)) == [False, True, True, True, False]
+
+
+def test_presets_are_checked_before_any_probe(monkeypatch, capsys):
+    """An unknown preset was refused only after the probes had run; with --quick it was
+    not looked at (exit 0), and an empty --presets meant every preset."""
+    from jaxga._runtime import device_probe
+    from jaxga.cli import EXIT_BAD_INPUT, main
+    from jaxga.core.errors import ParameterError
+
+    monkeypatch.setattr(device_probe, "probe", lambda *a, **k: pytest.fail("a probe ran"))
+    with pytest.raises(ParameterError, match="unknown preset 'nonexist'"):
+        jaxga.doctor(presets=["sga", "nonexist"])
+    with pytest.raises(ParameterError, match="presets must be a list of preset names"):
+        jaxga.doctor(presets="sga")
+    for argv, words in ((["--presets", "nonexist", "--quick"], "which --quick leaves out"),
+                        (["--presets", ","], "--presets names no preset"),
+                        (["--presets", "nonexist"], "unknown preset 'nonexist'")):
+        assert main(["doctor", *argv]) == EXIT_BAD_INPUT
+        assert words in capsys.readouterr().err
