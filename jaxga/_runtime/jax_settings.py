@@ -20,6 +20,7 @@ from pathlib import Path
 import jax
 import jaxlib
 
+from jaxga._runtime.parallel import user_device_setting
 from jaxga.core.errors import ParameterError
 from jaxga.core.files import atomic_write_text
 
@@ -57,8 +58,10 @@ def check_platform() -> None:
     except Exception as e:  # noqa: BLE001 - JAX raises RuntimeError, or fails an assert
         platforms = os.environ.get("JAX_PLATFORMS")
         why = (str(e).strip().splitlines() or [type(e).__name__])[0][:200]
+        devices = user_device_setting()
         hint = (f": $JAX_PLATFORMS={platforms!r} names a platform JAX cannot start here; "
-                "unset it or name one this machine has (cpu)" if platforms else "")
+                "unset it or name one this machine has (cpu)" if platforms
+                else f": check the CPU device count {devices}" if devices else "")
         raise ParameterError(f"JAX could not start its backend ({why}){hint}") from None
 
 

@@ -154,7 +154,15 @@ def set_local_devices(n: int | None = None, *, warn: bool = True) -> int | None:
     backend is a GPU, the runs go over the GPUs (:func:`run_devices`) whatever this sets.
     """
     if n is None:
-        if user_device_setting() is not None:
+        setting = user_device_setting()
+        if setting is not None:
+            count = int(setting.rsplit("=", 1)[1]) if setting[-1].isdigit() else 0
+            if count > max_cpu_devices() and warn:  # kept (the user's JAX), but said
+                warnings.warn(
+                    f"{setting} gives JAX {count} CPU devices on {cores()} core(s): "
+                    f"jaxga splits its runs over all of them, which is slower, not faster "
+                    f"(at most {max_cpu_devices()} pay here; --devices N, $JAXGA_DEVICES)",
+                    DeviceWarning, stacklevel=2)
             return None
         n = cores()
     n = int(n)
@@ -487,7 +495,9 @@ def configure_from_args(args: argparse.Namespace) -> None:
     the device count first, then :func:`initialize` when a coordinator and more than one
     process are given. Call it before the command's first JAX computation."""
     devices = args.devices if args.devices is not None else env_int(ENV_DEVICES)
-    set_local_devices(devices, warn=devices is not None)  # quiet if only the default
+    # quiet about a backend already started if only the default was asked for; a user's
+    # own device count past the bound is said either way
+    set_local_devices(devices, warn=devices is not None or user_device_setting() is not None)
     coordinator = args.coordinator or os.environ.get(ENV_COORDINATOR) or None
     n = args.num_processes if args.num_processes is not None else env_int(ENV_NUM_PROCESSES)
     pid = args.process_id if args.process_id is not None else env_int(ENV_PROCESS_ID)

@@ -314,6 +314,28 @@ def test_a_late_device_request_warns_and_an_explicit_xla_flag_is_kept():
     assert "already running with 3 CPU device(s)" in proc.stdout
 
 
+def test_a_users_device_count_past_the_bound_is_kept_and_said(monkeypatch):
+    """XLA_FLAGS or JAX_NUM_CPU_DEVICES asking for 1000 CPU devices on a few cores was
+    kept in silence (a run took 54 s instead of 2): it is still kept (the user's JAX), and
+    one warning says what it costs. Nothing starts JAX's backend here."""
+    from jaxga._runtime import parallel as par
+    from jaxga.core.errors import DeviceWarning
+
+    monkeypatch.delenv("JAX_NUM_CPU_DEVICES", raising=False)
+    for name, value in (("XLA_FLAGS", "--xla_force_host_platform_device_count=1000"),
+                        ("JAX_NUM_CPU_DEVICES", "1000")):
+        monkeypatch.delenv("XLA_FLAGS", raising=False)
+        monkeypatch.setenv(name, value)
+        with pytest.warns(DeviceWarning, match="1000 CPU devices on .* slower, not faster"):
+            assert par.set_local_devices(None) is None
+    monkeypatch.setenv("JAX_NUM_CPU_DEVICES", str(par.max_cpu_devices()))
+    import warnings
+
+    with warnings.catch_warnings():
+        warnings.simplefilter("error", DeviceWarning)
+        assert par.set_local_devices(None) is None  # within the bound: nothing said
+
+
 def test_incomplete_or_malformed_process_options_are_one_line_errors(capsys, monkeypatch):
     from jaxga.cli import main
 
