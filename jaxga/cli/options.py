@@ -38,8 +38,8 @@ EXIT_DEVICE_DISAGREES = 5
 from the CPU (``jaxga doctor``, or a run refused by the device probe)."""
 
 
-_INTEGER = re.compile(r"\s*[+-]?[0-9]+\s*")
-_DECIMAL = re.compile(r"\s*[+-]?(([0-9]+(\.[0-9]*)?|\.[0-9]+)([eE][+-]?[0-9]+)?|nan|inf"
+ASCII_INTEGER = re.compile(r"\s*[+-]?[0-9]+\s*")
+ASCII_DECIMAL = re.compile(r"\s*[+-]?(([0-9]+(\.[0-9]*)?|\.[0-9]+)([eE][+-]?[0-9]+)?|nan|inf"
                       r"|infinity)\s*", re.IGNORECASE)
 """A coordinate as written in ASCII: Python's int() and float() also take ``1_0`` (10)
 and other scripts' digits, which no one types as a cell by intent."""
@@ -48,7 +48,7 @@ and other scripts' digits, which no one types as a cell by intent."""
 def parse_xy(text: str) -> tuple[int, int]:
     try:
         parts = text.split(",")
-        if not all(_INTEGER.fullmatch(v) for v in parts):
+        if not all(ASCII_INTEGER.fullmatch(v) for v in parts):
             raise ValueError(text)
         x, y = (int(v) for v in parts)
     except ValueError:
@@ -73,7 +73,7 @@ def parse_budget(text: str) -> float | None:
 def parse_point(text: str) -> tuple[float, float]:
     try:
         parts = text.split(",")
-        if not all(_DECIMAL.fullmatch(v) for v in parts):
+        if not all(ASCII_DECIMAL.fullmatch(v) for v in parts):
             raise ValueError(text)
         x, y = (float(v) for v in parts)
     except ValueError:

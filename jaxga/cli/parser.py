@@ -7,7 +7,7 @@ import re
 import sys
 
 from jaxga.cli import compare, doctor, doe, listings, optimum, replan, run, warmup
-from jaxga.cli.options import EXIT_BAD_INPUT
+from jaxga.cli.options import ASCII_DECIMAL, ASCII_INTEGER, EXIT_BAD_INPUT
 
 COMMANDS = (optimum, run, replan, doe, compare, listings, warmup, doctor)
 """The modules that add the subcommands, in the order ``jaxga --help`` lists them."""
@@ -58,7 +58,36 @@ class Parser(argparse.ArgumentParser):
 
     def parse_known_args(self, args=None, namespace=None):  # type: ignore[override]
         self._words = [str(a) for a in (sys.argv[1:] if args is None else args)]
-        return super().parse_known_args(args, namespace)
+        out = super().parse_known_args(args, namespace)
+        self._refuse_repeats()
+        return out
+
+    def _refuse_repeats(self) -> None:
+        """An option that takes one value, given twice (``--generations 5 --generations
+        6``): argparse keeps the last without a word; refused, as ``--generations 5 --set
+        generations=6`` is. Options that collect (``--set``, ``--factor``) may repeat."""
+        once = {o: a for a in self._actions if isinstance(a, argparse._StoreAction)
+                for o in a.option_strings}
+        given: dict[str, list[str]] = {}
+        for word in self._words:
+            if word == "--":
+                break
+            name = word.split("=", 1)[0]
+            if name in once:
+                given.setdefault(once[name].dest, []).append(name)
+        for names in given.values():
+            if len(names) > 1:
+                self.error(f"{names[0]} is given {len(names)} times: which one? Give it once")
+
+    def _get_value(self, action: argparse.Action, arg_string: str):  # type: ignore[override]
+        """argparse's conversion, with ``int`` and ``float`` values read as written in
+        ASCII: Python's own take ``2_0`` (20) and other scripts' digits, which no one
+        types as a number of seeds by intent."""
+        pattern = {int: ASCII_INTEGER, float: ASCII_DECIMAL}.get(action.type)
+        if pattern is not None and not pattern.fullmatch(arg_string):
+            raise argparse.ArgumentError(
+                action, f"invalid {action.type.__name__} value: {arg_string!r}")
+        return super()._get_value(action, arg_string)
 
     def error(self, message: str):  # type: ignore[override]
         self.exit(EXIT_BAD_INPUT, f"jaxga: error: {shortened(message)}{self._hint(message)} "

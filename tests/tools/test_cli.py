@@ -1254,3 +1254,19 @@ def test_coordinates_are_read_as_written_in_ascii():
             parse_point(text)
     with pytest.raises(argparse.ArgumentTypeError, match="expected finite coordinates"):
         parse_point("nan,1")
+
+
+@pytest.mark.parametrize("argv, words", [
+    (["--seeds", "2_0"], "argument --seeds: invalid int value: '2_0'"),  # ran 20 seeds
+    (["--seeds", "\u0663"], "argument --seeds: invalid int value"),
+    (["--threshold", "0_5"], "argument --threshold: invalid float value: '0_5'"),
+    (["--generations", "5", "--generations=6"], "--generations is given 2 times"),  # 6
+])
+def test_numbers_are_ascii_and_a_one_value_option_is_given_once(argv, words, capsys):
+    """Options read through int() and float() took '2_0' as 20 and other scripts'
+    digits; an option given twice kept its last value without a word (--set of the same
+    key twice is refused). Both refused in one line before anything loads."""
+    with pytest.raises(SystemExit) as info:
+        main(["run", "--preset", "sga", "--map", "classic_ga_gapp3_20x20", *argv])
+    err = capsys.readouterr().err
+    assert info.value.code == EXIT_BAD_INPUT and err.count("\n") == 1 and words in err
