@@ -13,6 +13,7 @@ same (it is on maps whose optimal path is short enough, :func:`jaxga.engine.defa
 
 from __future__ import annotations
 
+import os
 import time
 from collections.abc import Callable, Sequence
 from typing import Any
@@ -20,7 +21,7 @@ from typing import Any
 import jax
 import numpy as np
 
-from jaxga._runtime.compilation_cache import store_directory
+from jaxga._runtime.compilation_cache import ENV_VAR, store_directory
 from jaxga._runtime.programs import SMALL_CALL_RUNS, platform_layout
 from jaxga.api.runs import run
 from jaxga.config.presets import preset_names
@@ -78,8 +79,10 @@ def warmup(
         ``total_s``.
     """
     if store_directory() is None:
-        raise ParameterError("the persistent compilation cache is off ($JAXGA_CACHE_DIR is "
-                             "empty): a warm-up would compile for this process only")
+        why = ("$JAXGA_CACHE_DIR is empty" if os.environ.get(ENV_VAR) == ""
+               else "its folder cannot be used: see the warning above")
+        raise ParameterError(f"the persistent compilation cache is off ({why}): a warm-up "
+                             "would compile for this process only")
     presets = list(preset_names()) if presets is None else list(presets)
     n_dev = jax.local_device_count()
     sizes = (SMALL_CALL_RUNS, *(b * n_dev for b in platform_layout().buckets))

@@ -24,6 +24,7 @@ def cmd_warmup(args: argparse.Namespace) -> int:
     presets = split_presets(args.presets) if args.presets else None
     maps: list = [*parse_int_list(args.sizes)] if args.sizes else []
     maps += list(args.map or ())
+    maps = list(dict.fromkeys(maps))  # --sizes 20,20: one program set, not two
     if not maps:
         raise JaxgaError("nothing to warm up: give --sizes or --map")
     lead = parallel.process_index() == 0

@@ -110,12 +110,20 @@ def shown_value(value: Any) -> str:
 
 
 def python_scalar(value: Any) -> Any:
-    """A numpy scalar (``np.int64(8)``, ``np.float32(0.5)``, ``np.bool_(True)``) as the
-    Python value it holds; anything else unchanged. Sweeps and designs built with numpy
-    give numpy scalars, which are the same values as far as a configuration goes."""
+    """A numpy scalar (``np.int64(8)``, ``np.float32(0.5)``, ``np.bool_(True)``), or a
+    0-d NumPy or JAX array of one (``jnp.float32(0.5)``), as the Python value it holds;
+    anything else unchanged (a traced value too). Sweeps and designs built with numpy or
+    jax.numpy give these, which are the same values as far as a configuration goes."""
 
     if isinstance(value, np.generic) and value.dtype.kind in "biuf":
         return value.item()
+    dtype = getattr(value, "dtype", None)
+    if getattr(value, "shape", None) == () and getattr(dtype, "kind", "") in "biuf" \
+            and dtype is not None and not isinstance(value, (int, float)):
+        try:
+            return value.item()
+        except Exception:  # noqa: BLE001 - a traced value has no Python value
+            return value
     return value
 
 

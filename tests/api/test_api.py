@@ -486,6 +486,10 @@ def test_a_key_given_twice_with_two_values_is_refused(grid):
                   sets=["fitness.importance_ratios=[1.2, 1.5]"])
     api.check_run("sga", grid, crossover__probability=np.float32(0.5),
                   sets=["crossover.probability=0.5"])
+    import jax.numpy as jnp  # a 0-d JAX array is that value too (it was "not a number")
+
+    api.check_run("sga", grid, crossover__probability=jnp.float32(0.5),
+                  mutation__probability=np.array(0.25), sets=["crossover.probability=0.5"])
 
 
 def test_keys_a_user_file_sets_are_checked_like_overrides(grid, tmp_path):
