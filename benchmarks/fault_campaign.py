@@ -1264,6 +1264,21 @@ def build(t: Path) -> list[Case]:
         fh.write(b"\xff")
     add("bmp-over-pillows-bomb-limit", "round five", ["optimum", "--map", bomb], max_s=15,
         note="a DecompressionBombError traceback")
+    add("doe-set-of-a-factor", "round five",
+        ["doe", "--preset", "sga", "--map", CLASSIC, "--design", "L9", "--factor",
+         "crossover.probability=0.6,0.7,0.8", "--set", "crossover.probability=0.5",
+         "--seeds", "2", "--generations", "5", "--quiet"],
+        note="the --set was ignored (exit 0): the factor's levels replaced it")
+    add("doctor-presets-with-quick", "round five",
+        ["doctor", "--quick", "--presets", "nonexist"], note="ignored, exit 0")
+    add("generations-given-twice", "round five", run(CLASSIC, "--generations", "6"),
+        note="(--generations 5 is among the common options) the last was kept in silence")
+    add("seeds-underscore-digits", "round five", run(CLASSIC, "--seeds", "2_0"),
+        note="int() read it as 20 seeds")
+    env_case("cache-dir-name-too-long", {"JAXGA_CACHE_DIR": str(t / ("a" * 300))},
+             argv=["run", "--map", CLASSIC, *BASE], expect="interrupted",
+             signal=stop_at_compile, check=warned("File name too long"),
+             check_fails_as="silent", note="refused the run; the Python API raised OSError")
     return cases
 
 
