@@ -142,6 +142,28 @@ class Outcome:
 # --- files --------------------------------------------------------------------------
 
 
+ONE_VALUE = ("--preset", "--seeds", "--generations")
+"""The common options (:data:`BASE`) a case may give again with its own value."""
+
+
+def last_given(argv: list[str]) -> list[str]:
+    """``argv`` with each of :data:`ONE_VALUE` kept at its last place only: a case's own
+    value replaces the common one, as argparse let it, but the command line now refuses
+    an option of one value given twice."""
+    out, seen, i = [], set(), len(argv) - 1
+    while i >= 0:
+        word, before = argv[i], argv[i - 1] if i > 0 else ""
+        if before in ONE_VALUE:  # the value of an option: keep or drop the pair
+            if before not in seen:
+                seen.add(before)
+                out[:0] = [before, word]
+            i -= 2
+            continue
+        out.insert(0, word)
+        i -= 1
+    return out
+
+
 def chunk(kind: bytes, data: bytes) -> bytes:
     """One PNG chunk: length, type, data, CRC."""
     return (struct.pack(">I", len(data)) + kind + data
@@ -537,9 +559,12 @@ def build(t: Path) -> list[Case]:
     caches.mkdir()
     cases: list[Case] = []
 
-    def add(name, group, argv, expect="refused", **kw) -> Case:
+    def add(name, group, argv, expect="refused", *, repeats=False, **kw) -> Case:
         kw.setdefault("timeout", 120.0 if "handled" in expect or "signal" in kw else 60.0)
-        c = Case(name, group, [str(a) for a in argv],
+        argv = [str(a) for a in argv]
+        if not repeats:  # a case's own --seeds, ... replaces the common one (given once)
+            argv = last_given(argv)
+        c = Case(name, group, argv,
                  (expect,) if isinstance(expect, str) else tuple(expect), **kw)
         cases.append(c)
         return c
@@ -1272,7 +1297,8 @@ def build(t: Path) -> list[Case]:
     add("doctor-presets-with-quick", "round five",
         ["doctor", "--quick", "--presets", "nonexist"], note="ignored, exit 0")
     add("generations-given-twice", "round five", run(CLASSIC, "--generations", "6"),
-        note="(--generations 5 is among the common options) the last was kept in silence")
+        repeats=True, note="(--generations 5 is among the common options) the last was "
+                           "kept in silence")
     add("seeds-underscore-digits", "round five", run(CLASSIC, "--seeds", "2_0"),
         note="int() read it as 20 seeds")
     env_case("cache-dir-name-too-long", {"JAXGA_CACHE_DIR": str(t / ("a" * 300))},
