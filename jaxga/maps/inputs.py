@@ -401,7 +401,9 @@ def decode_image(raw: bytes, label: str) -> tuple[np.ndarray, int]:
 
     try:
         with _no_bomb_warning(), Image.open(io.BytesIO(raw)) as img:
-            turned = exif_orientation(img)  # a TIFF's is read before its pixels only
+            # a TIFF's orientation is read before its pixels only; a PNG's getexif()
+            # would decode the pixels itself and hide a decoding error from load()
+            turned = exif_orientation(img) if img.format == "TIFF" else 1
             img.load()
             frames = getattr(img, "n_frames", 1)
             if frames > 1:  # which frame is the map? none is read silently
@@ -416,8 +418,8 @@ def decode_image(raw: bytes, label: str) -> tuple[np.ndarray, int]:
             if img.mode in ("L", "RGB") and key is not None:
                 header = png_header(raw)
                 if header is not None and header[2] < 8 and isinstance(key, int):
-                    # Pillow scales a 1-, 2- or 4-bit grey PNG's values to 8 bits, not
-                    # its transparent value
+                    # Pillow scales a 2- or 4-bit grey PNG's values to 8 bits (mode L),
+                    # not its transparent value (a 1-bit one is mode 1: Pillow maps it)
                     img.info["transparency"] = key * 255 // (2 ** header[2] - 1)
                 if header is not None and header[2] == 16:
                     # Pillow reads a 16-bit colour PNG as 8 bits but keeps its 16-bit
@@ -451,8 +453,12 @@ def decode_image(raw: bytes, label: str) -> tuple[np.ndarray, int]:
                     f"{label}: a floating-point image (Pillow mode {mode}) has no scale "
                     "to read free and blocked against: save the map as an 8- or 16-bit "
                     "image")
-            else:  # bilevel, palette, CMYK, ...: their colours as RGBA
-                pixels, scale = np.asarray(img.convert("RGBA"), np.uint8), 255
+            else:  # bilevel, palette, CMYK, ...: their colours, with an alpha channel
+                # only where the image has transparency (an alpha made up here would be
+                # averaged into a ROS map's trinary shade)
+                clear = "transparency" in img.info or mode in ("PA", "LA", "La", "RGBa")
+                pixels = np.asarray(img.convert("RGBA" if clear else "RGB"), np.uint8)
+                scale = 255
     except MapFormatError:
         raise
     except Image.DecompressionBombError as e:  # over twice Pillow's MAX_IMAGE_PIXELS

@@ -13,7 +13,14 @@ import jaxga
 from jaxga import EndpointError, MapFormatError
 from jaxga.cli.options import snap_notes
 from jaxga.maps import load_map, load_map_info
-from jaxga.maps.ros import RosMap, cell_to_world, occupancy, world_to_cell
+from jaxga.maps.ros import (
+    RosMap,
+    cell_to_world,
+    occupancy,
+    read_ros_image,
+    read_ros_yaml,
+    world_to_cell,
+)
 
 # A 5 x 4 image, top row first, as map_saver writes it: 254 free, 0 occupied, 205 unknown.
 IMAGE = np.array([
@@ -405,3 +412,31 @@ def test_a_pgm_sample_above_its_maxval_is_refused(tmp_path, maxval, samples, bad
         with pytest.raises(MapFormatError, match=f"a PGM sample of {bad} is above the "
                                                  f"header's maxval {maxval}"):
             load_map(path)
+
+
+def test_a_damaged_or_palette_png_as_a_ros_image(tmp_path):
+    """Reading a PNG's EXIF before its pixels decoded them inside a swallowed error: a
+    broken stream then loaded as zero rows (transparent: free). And a palette or 1-bit
+    image was given an alpha channel of its own, averaged into the trinary shade:
+    map_saver's unknown 205 read as free. Now the first is refused and the second reads
+    as map_server reads it."""
+    import io
+
+    from PIL import Image
+
+    buf = io.BytesIO()
+    Image.fromarray(np.full((64, 64, 4), 255, np.uint8)).save(buf, format="png")
+    raw = bytearray(buf.getvalue())
+    start = raw.index(b"IDAT") + 24
+    raw[start:start + 8] = bytes(b ^ 0xFF for b in raw[start:start + 8])
+    (tmp_path / "bad.png").write_bytes(bytes(raw))
+    (tmp_path / "bad.yaml").write_text(ROS1_YAML.format(image="bad.png"))
+    with pytest.raises(MapFormatError, match="unreadable image"):
+        load_map(tmp_path / "bad.yaml")
+    grey = np.full((4, 4), 205, np.uint8)
+    grey[0, 0] = 254
+    Image.fromarray(grey).convert("P").save(tmp_path / "palette.png")
+    (tmp_path / "palette.yaml").write_text(ROS1_YAML.format(image="palette.png"))
+    assert occupancy(read_ros_image(read_ros_yaml(tmp_path / "palette.yaml")),
+                     read_ros_yaml(tmp_path / "palette.yaml")).tolist() == \
+        [[0, -1, -1, -1]] + [[-1] * 4] * 3
