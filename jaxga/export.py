@@ -69,14 +69,17 @@ def path_yaws(points: np.ndarray) -> np.ndarray:
     return yaw
 
 
-def path_text(points: np.ndarray, fmt: str, frame_id: str = "map") -> str:
+def path_text(points: np.ndarray, fmt: str, frame_id: str = "map",
+              decimals: int | None = None) -> str:
     """The text of a path file: ``fmt`` ``"csv"`` or ``"yaml"`` (see the module).
-    Coordinates are written to a hundredth of the shortest step between two points or
-    finer (:func:`jaxga.maps.frame.world_decimals`: 4 decimals on maps of centimetre
-    cells and coarser), so that a path on a fine map does not collapse onto itself."""
+    Coordinates are written to ``decimals`` (a map's :attr:`MapFrame.world_decimals
+    <jaxga.maps.frame.MapFrame.world_decimals>`: a hundredth of its cell), or more where
+    the points lie closer (a hundredth of the shortest step: a curve's points), so that
+    a path on a fine map is read back in the cells it crosses."""
     p = np.asarray(points, float).reshape(-1, 2)
     steps = np.hypot(*np.diff(p, axis=0).T) if len(p) > 1 else np.zeros(0)
     d = world_decimals(float(steps[steps > 0].min()) if (steps > 0).any() else None)
+    d = max(d, 4 if decimals is None else int(decimals))
     if fmt == "csv":
         return "x,y\n" + "".join(f"{x:.{d}f},{y:.{d}f}\n" for x, y in p)
     if fmt != "yaml":
@@ -94,9 +97,11 @@ def path_text(points: np.ndarray, fmt: str, frame_id: str = "map") -> str:
                           sort_keys=False)
 
 
-def write_path(path: str | os.PathLike, points_world: np.ndarray, frame_id: str = "map") -> None:
-    """Write a path in metres to ``path`` as CSV or YAML (by its extension), atomically."""
-    atomic_write_text(path, path_text(points_world, path_format(path), frame_id))
+def write_path(path: str | os.PathLike, points_world: np.ndarray, frame_id: str = "map",
+               decimals: int | None = None) -> None:
+    """Write a path in metres to ``path`` as CSV or YAML (by its extension), atomically;
+    ``decimals`` as :func:`path_text` (pass the map's ``frame.world_decimals``)."""
+    atomic_write_text(path, path_text(points_world, path_format(path), frame_id, decimals))
 
 
 def read_path(path: str | os.PathLike) -> np.ndarray:

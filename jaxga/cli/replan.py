@@ -193,7 +193,8 @@ def cmd_replan(args: argparse.Namespace) -> int:
         print(metres)
     if args.path_out and result.success:
         with timeline.phase("write"):
-            export.write_path(args.path_out, info.frame.to_world(np.asarray(result.path, float)))
+            export.write_path(args.path_out, info.frame.to_world(np.asarray(result.path, float)),
+                              decimals=info.frame.world_decimals)
         print(f"wrote {args.path_out} (metres)")
     elif args.path_out:
         write_empty_path(args)

@@ -195,7 +195,8 @@ def run_and_report(args: argparse.Namespace, timeline: Timeline,
         with phase("write"):
             line = front_polyline(info.grid, point["path"],
                                   front_obstacles(result.frame, info.grid))
-            export.write_path(args.path_out, result.frame.to_world(line.astype(float)))
+            export.write_path(args.path_out, result.frame.to_world(line.astype(float)),
+                              decimals=result.frame.world_decimals)
         evolved = (f"{point['length_m']:.3f} m long as evolved, " if "length_m" in point
                    else "")
         clear = (f", clearance {point['clearance_m']:.3f} m" if "clearance_m" in point
@@ -206,7 +207,8 @@ def run_and_report(args: argparse.Namespace, timeline: Timeline,
               f"narrowing it{clear}; metres)")
     elif args.path_out and best is not None:
         with phase("write"):
-            export.write_path(args.path_out, robot_path(result, best, curves))
+            export.write_path(args.path_out, robot_path(result, best, curves),
+                              decimals=result.frame.world_decimals)
         print(f"wrote {args.path_out} (seed {int(result.seeds[best])}, "
               f"{'smooth curve' if use_curve(curves, best) else 'waypoints'}, metres)")
     elif args.path_out:

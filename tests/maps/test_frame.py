@@ -204,6 +204,11 @@ def test_points_in_metres_are_written_apart_on_a_fine_map(tmp_path):
     for name in ("p.csv", "p.yaml"):
         write_path(tmp_path / name, pts)
         np.testing.assert_allclose(read_path(tmp_path / name), pts, rtol=0, atol=1e-8)
+    # a waypoint path's long steps chose 4 decimals (10 cells here): the map's own
+    # decimals are the least a path file is written to
+    waypoints = frame.to_world(np.array([[0, 0], [900, 0]], float))
+    write_path(tmp_path / "w.csv", waypoints, decimals=frame.world_decimals)
+    np.testing.assert_allclose(read_path(tmp_path / "w.csv"), waypoints, rtol=0, atol=1e-8)
     coarse = MapFrame(map_shape=(5, 9), resolution=0.05, origin=(-2.0, -1.5, 0.0))
     assert path_text(coarse.to_world(cells), "csv").splitlines()[1] == "-1.9750,-1.3750"
 
