@@ -181,11 +181,14 @@ def doctor(device: jax.Device | None = None, *, presets: Sequence[str] | None = 
         A :class:`DoctorReport`; its ``verdict`` is the one line to show.
     """
     t0 = time.perf_counter()
-    if presets is not None and (isinstance(presets, str) or not all(
-            isinstance(p, str) for p in presets)):
+    try:  # a generator is read once, here
+        names = list(preset_names() if presets is None or isinstance(presets, str)
+                     else presets)
+    except TypeError:
+        names = None
+    if names is None or isinstance(presets, str) or not all(isinstance(p, str) for p in names):
         raise ParameterError(f"presets must be a list of preset names, got "
                              f"{shown_value(presets)}")
-    names = list(preset_names() if presets is None else presets)
     for name in names:  # an unknown name refused before the probes, not after them
         load_preset(name)
     device = jax.devices()[0] if device is None else device

@@ -122,7 +122,8 @@ def _given_problem(given: Problem, grid, corner_rule, variant, sets, overrides,
     if generations is None:
         return given
     config = given.config.override({"generations": as_integer(generations)})
-    return given._replace(config=config)
+    return given._replace(config=config, given=tuple(dict.fromkeys((*given.given,
+                                                                    "generations"))))
 
 
 def load_problem(preset, grid, corner_rule, variant, sets, overrides, generations, *,

@@ -106,7 +106,7 @@ def plan_doe(preset, grid, factors, design, seeds, generations, corner_rule, var
     ckpt = None
     if checkpoint is not None:
         ckpt = Checkpoint(checkpoint, {
-            "format": 1,
+            "format": 2,  # 2: point files carry the experiment's mark
             "jaxga": jaxga.__version__,
             "jax": jax.__version__,
             "config": config.as_dict(),

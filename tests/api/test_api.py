@@ -14,6 +14,7 @@ import pytest
 
 import jaxga._runtime as runtime
 from jaxga import api, engine
+from jaxga import problem as make_problem
 from jaxga.compare import compare as jaxga_compare
 from jaxga.config.presets import preset_names
 from jaxga.config.schema import SCHEMA
@@ -938,6 +939,9 @@ def _plain_grid_off_the_map():
     (lambda: api.sweep("sga", canonical.MAP, [{"crossover.probability": 0.5}], seeds=2,
                        crossover__probability=0.9), ParameterError,
      "crossover.probability is set by a sweep point and by the call"),  # 0.9 was dropped
+    (lambda: api.sweep(make_problem("sga", canonical.MAP), None, [{"generations": 10}],
+                       seeds=2, generations=50), ParameterError,
+     "generations is set by a sweep point and by the call"),  # 50 was dropped
     (lambda: Grid.create(np.zeros((5, 5), bool), start=np.array([[1], [2]])), JaxgaError,
      "start must be a pair of integers (x, y), got an array of shape (2, 1) and dtype int64"),
     (lambda: api.run("sga", np.zeros((20, 20)), seeds=2), JaxgaError,
@@ -959,6 +963,7 @@ def _plain_grid_off_the_map():
      "post must be True or False, got 1"),
 ], ids=["long-preset-name", "nul-map", "nul-map-run", "structured", "void", "masked",
         "plain-grid", "two-spellings-run", "two-spellings-sweep", "point-and-override",
+        "point-and-problem-generations",
         "array-endpoint", "array-as-map", "set-endpoint", "dict-endpoint",
         "set-seeds", "dict-seeds", "replan-fallback-word", "replan-post-int"])
 def test_hostile_python_arguments_are_one_line_errors(call, error, words):
