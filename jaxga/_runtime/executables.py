@@ -285,8 +285,14 @@ compile of its own."""
 def _holder(lock: Path) -> tuple[str, int] | None:
     """``(host, process id)`` written in a lock file by the process holding it, or None
     (not written yet, or unreadable)."""
-    try:
-        words = lock.read_text(encoding="ascii", errors="replace").split()
+    try:  # without blocking, a regular file only: a FIFO there would block for good
+        fd = os.open(lock, os.O_RDONLY | getattr(os, "O_NONBLOCK", 0))
+        try:
+            if not stat.S_ISREG(os.fstat(fd).st_mode):
+                return None
+            words = os.read(fd, 256).decode("ascii", errors="replace").split()
+        finally:
+            os.close(fd)
         return words[0], int(words[1])
     except (OSError, IndexError, ValueError):
         return None

@@ -28,7 +28,7 @@ import jax
 from jaxga._runtime.fields import front_obstacles, program_fields
 from jaxga._runtime.programs import warn_platform
 from jaxga.api.problem import Problem, checked_endpoints, load_problem
-from jaxga.config.schema import Config, dotted, flatten, sweepable
+from jaxga.config.schema import SCHEMA, Config, dotted, flatten, sweepable
 from jaxga.core.errors import ParameterError
 from jaxga.core.grid import Grid
 from jaxga.engine import build, default_capacity, default_params
@@ -117,12 +117,14 @@ class GA(PureGA):
                 "default_params' generations, the schedules' T, follow it)")
         config = self.config.override(changes)
         check_overrides_read(config, keys)
-        if static_config(config) != static_config(self.config):
-            changed = sorted(k for k in keys if not sweepable(k))
+        held = [k for k in keys if k == "population.size" or SCHEMA[k].dynamic]
+        if static_config(config) != static_config(self.config) or len(held) < len(keys):
+            changed = sorted(k for k in keys if k not in held or not sweepable(k))
             raise ParameterError(
                 f"{', '.join(changed) or 'these values'} "
-                f"{'changes' if len(changed) == 1 else 'change'} the compiled program, not a "
-                "parameter: build another jaxga.GA with them")
+                f"{'is' if len(changed) == 1 else 'are'} not a parameter of the pure core's "
+                "calls (the compiled program depends on it, or nothing does once the GA is "
+                "built): build another jaxga.GA with it")
         size = int(config["population.size"])
         if size > self.algorithm.population:
             raise ParameterError(

@@ -80,7 +80,7 @@ def warmup(
     """
     if store_directory() is None:
         why = ("$JAXGA_CACHE_DIR is empty" if os.environ.get(ENV_VAR) == ""
-               else "its folder cannot be used: see the warning above")
+               else "no folder is configured, or it cannot be used")
         raise ParameterError(f"the persistent compilation cache is off ({why}): a warm-up "
                              "would compile for this process only")
     presets = list(preset_names()) if presets is None else list(presets)

@@ -45,12 +45,17 @@ ASCII_DECIMAL = re.compile(r"\s*[+-]?(([0-9]+(\.[0-9]*)?|\.[0-9]+)([eE][+-]?[0-9
 and other scripts' digits, which no one types as a cell by intent."""
 
 
+def ascii_int(text: str) -> int:
+    """``int(text)`` of an integer written in ASCII digits (:data:`ASCII_INTEGER`);
+    ``ValueError`` otherwise (``1_0``, other scripts' digits)."""
+    if not ASCII_INTEGER.fullmatch(text):
+        raise ValueError(text)
+    return int(text)
+
+
 def parse_xy(text: str) -> tuple[int, int]:
     try:
-        parts = text.split(",")
-        if not all(ASCII_INTEGER.fullmatch(v) for v in parts):
-            raise ValueError(text)
-        x, y = (int(v) for v in parts)
+        x, y = (ascii_int(v) for v in text.split(","))
     except ValueError:
         raise argparse.ArgumentTypeError(
             f"expected X,Y (two integers separated by a comma), got {text!r}"
@@ -356,7 +361,7 @@ def parse_window(text: str) -> int | str | None:
     if text in ("auto", "none"):
         return None if text == "none" else "auto"
     try:
-        return int(text)
+        return ascii_int(text)
     except ValueError:
         raise JaxgaError(f"--window must be auto, none or a side in cells, got {text!r}") \
             from None
@@ -364,7 +369,7 @@ def parse_window(text: str) -> int | str | None:
 
 def parse_int_list(text: str) -> list[int]:
     try:
-        return [int(v) for v in text.split(",") if v.strip()]
+        return [ascii_int(v) for v in text.split(",") if v.strip()]
     except ValueError:
         raise JaxgaError(f"expected integers separated by commas, got {text!r}") from None
 

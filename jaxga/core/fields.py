@@ -116,10 +116,10 @@ def python_scalar(value: Any) -> Any:
     jax.numpy give these, which are the same values as far as a configuration goes."""
 
     if isinstance(value, np.generic) and value.dtype.kind in "biuf":
-        return value.item()
+        return value.item()  # np.float64 is a float too: its Python value all the same
     dtype = getattr(value, "dtype", None)
-    if getattr(value, "shape", None) == () and getattr(dtype, "kind", "") in "biuf" \
-            and dtype is not None and not isinstance(value, (int, float)):
+    if getattr(dtype, "kind", None) in ("b", "i", "u", "f") and \
+            getattr(value, "shape", None) == () and not isinstance(value, (int, float)):
         try:
             return value.item()
         except Exception:  # noqa: BLE001 - a traced value has no Python value

@@ -200,7 +200,8 @@ class Grid:
         :class:`~jaxga.core.errors.JaxgaError` for a bad array or corner rule, or a map of more
         than :data:`MAX_MAP_CELLS` cells (:func:`too_large`).
         """
-        if isinstance(blocked, np.ma.MaskedArray):  # np.asarray drops the mask
+        if isinstance(blocked, np.ma.MaskedArray) and np.ma.getmaskarray(blocked).any():
+            # np.asarray drops the mask (one with nothing masked is its data)
             raise JaxgaError("a grid cannot be a masked array: which are its masked cells, "
                              "free or blocked? Fill them first (np.ma.filled(a, 1): blocked)")
         try:
@@ -282,7 +283,9 @@ class Grid:
         known corner rule. Raises :class:`~jaxga.core.errors.JaxgaError` (or
         :class:`~jaxga.core.errors.EndpointError`) naming the problem."""
         # the array and the corner rule exactly as create checks them
-        base = Grid.create(np.asarray(self.blocked), corner_rule=self.corner_rule)
+        blocked = self.blocked if isinstance(self.blocked, np.ma.MaskedArray) \
+            else np.asarray(self.blocked)  # a mask is refused by create, not dropped
+        base = Grid.create(blocked, corner_rule=self.corner_rule)
         cells = {}
         for name in ("start", "goal"):
             value = np.asarray(getattr(self, name))

@@ -99,7 +99,8 @@ def test_the_constructor_checks_what_jaxga_run_checks():
     ({"population__size": 1000}, "population.size 1000 is more than the GA's 60"),
     ({"population__size": 0}, "population.size = 0 is below its minimum 2"),
     ({"generations": 6}, "generations is not a parameter of the pure core's calls"),
-    ({"mutation__method": "replace_point"}, "mutation.method changes the compiled program"),
+    ({"mutation__method": "replace_point"}, "mutation.method is not a parameter"),
+    ({"population__capacity_factor": 2.0}, "population.capacity_factor is not a parameter"),
 ])
 def test_params_are_checked_as_jaxga_run_checks_them(values, words):
     """A value set in default_params by hand ran unchecked (a NaN rate, 1000 active

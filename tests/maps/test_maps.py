@@ -1140,3 +1140,18 @@ def test_a_line_ends_only_at_a_line_break(tmp_path, name, text, words):
     (tmp_path / name).write_text(text, encoding="utf-8")
     with pytest.raises(MapFormatError, match=words):
         load_map(tmp_path / name)
+
+
+def test_a_masked_array_is_refused_only_where_something_is_masked():
+    """A grid given as a masked array lost its mask (the masked cells took their stored
+    values), through Grid.create and through a plain Grid(...) checked by a run; one with
+    nothing masked (netCDF4's default) is its data."""
+    from jaxga.core.errors import JaxgaError
+
+    data = np.zeros((3, 3))
+    assert Grid.create(np.ma.masked_array(data, np.zeros((3, 3), bool))).blocked_np().sum() == 0
+    masked = np.ma.masked_array(data, np.eye(3, dtype=bool))
+    with pytest.raises(JaxgaError, match="a grid cannot be a masked array"):
+        Grid.create(masked)
+    with pytest.raises(JaxgaError, match="a grid cannot be a masked array"):
+        Grid(blocked=masked, start=np.int32(0), goal=np.int32(8)).validated()
