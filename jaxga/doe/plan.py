@@ -17,7 +17,7 @@ from jaxga._runtime.memory import check_result_memory
 from jaxga._runtime.seeds import seed_list
 from jaxga.api import checked_capacity, load_problem
 from jaxga.api.problem import Problem
-from jaxga.config.presets import as_sets, overridden_keys
+from jaxga.config.presets import as_sets
 from jaxga.config.schema import Config
 from jaxga.core.errors import ParameterError
 from jaxga.core.grid import Grid, as_integer
@@ -83,7 +83,7 @@ def plan_doe(preset, grid, factors, design, seeds, generations, corner_rule, var
     problem = load_problem(preset, grid, corner_rule, variant, sets, overrides, generations)
     config, loaded, map_name = problem.config, problem.grid, problem.map_name
     check_factors(config, factors)
-    overridden = [*problem.given, *overridden_keys(overrides, sets)]  # a Problem's too
+    overridden = problem.given  # the call's overrides and --set, or a given Problem's
     both = [f.name for f in factors if f.name in overridden]
     if both:
         raise ParameterError(f"{', '.join(both)} is both a factor and an override: the "
