@@ -32,6 +32,7 @@ import numpy as np
 
 from jaxga._runtime.fields import program_fields
 from jaxga.config.presets import load_preset
+from jaxga.core import prng
 from jaxga.core.grid import Grid
 from jaxga.core.objectives import path_length
 from jaxga.core.paths import (
@@ -142,7 +143,7 @@ def check_init(op: registry.Operator, grid: Grid, capacity: int, key) -> None:
     fn, _, _ = bound(op, grid, capacity)
     if registry.NEEDS_FRONT_FIELDS in op.traits:
         grid = program_fields(grid, load_preset("pareto"))
-    keys = jax.random.split(key, P)
+    keys = prng.split(key, P)
     run = jax.jit(jax.vmap(lambda k: fn(k, grid, capacity)))
     cells, length, ok = out = run(keys)
     _check(np.asarray(ok).dtype == bool, op, "ok must be bool")
@@ -175,7 +176,7 @@ def check_selection(op: registry.Operator, grid: Grid, key) -> None:
     fn, _, _ = bound(op, grid, 32)
     fitness = jnp.asarray([0.5, 0.0, 0.9, 0.2, 0.7, 0.3], jnp.float32)
     active = jnp.arange(P) < P - 2
-    keys = jax.random.split(key, P)
+    keys = prng.split(key, P)
     run = jax.jit(jax.vmap(lambda k: fn(k, fitness, active)))
     idx = run(keys)
     idx = np.asarray(idx)
@@ -193,7 +194,7 @@ def check_variation(op: registry.Operator, grid: Grid, pop: Population, key,
     waypoints = registry.WAYPOINTS in op.traits
     if fn is None:  # a composition of registered operators: the population lift only
         return check_lift(op, grid, pop, key, ctx, waypoints)
-    keys = jax.random.split(key, P)
+    keys = prng.split(key, P)
     if op.family == "crossover":
         c1, l1 = pop.cells[0::2], pop.length[0::2]
         c2, l2 = pop.cells[1::2], pop.length[1::2]
@@ -301,7 +302,7 @@ def random_parents(grid: Grid, n: int, seed: int, capacity: int = CAPACITY) -> P
         mids = rng.choice(free, 4 * n)
         anchors = np.stack([np.full(4 * n, int(grid.start)), mids,
                             np.full(4 * n, int(grid.goal))], 1).astype(np.int32)
-        keys = jax.random.split(jax.random.PRNGKey(seed * 1000 + attempt), 4 * n)
+        keys = prng.split(prng.seed_key(seed * 1000 + attempt), 4 * n)
         cells, length, ok = _connected(keys, grid, jnp.asarray(anchors), capacity)
         ok = np.asarray(ok)
         got_c += list(np.asarray(cells)[ok])
@@ -357,7 +358,7 @@ def check_operator(op: registry.Operator | str, fn: Callable | None = None, *,
         parents = default_pop if parents is None else parents
     if parents.cells.shape[0] != P:
         raise ValueError(f"check_operator needs {P} parents, got {parents.cells.shape[0]}")
-    key = jax.random.PRNGKey(0) if key is None else key
+    key = prng.seed_key(0) if key is None else key
     registered = registry.canonical(op.family, op.name) is not None
     if registered:  # check the registered operator (its options, traits), same function
         current = registry.operator(op.family, op.name)

@@ -29,6 +29,7 @@ from jaxga._runtime.programs import (
     stack_params,
 )
 from jaxga._runtime.seeds import seed_sharding
+from jaxga.core import prng
 from jaxga.core.errors import ParameterError
 from jaxga.core.grid import Grid
 from jaxga.engine import Algorithm
@@ -96,7 +97,7 @@ def this_process_runs(seed_arr: np.ndarray, per_point: Sequence[dict], grid: Gri
     run_seeds = np.concatenate([run_seeds, np.repeat(run_seeds[-1:], fill)])
     params = {k: np.concatenate([v, np.repeat(v[-1:], fill, axis=0)])
               for k, v in params.items()}
-    keys = jax.vmap(jax.random.PRNGKey)(jnp.asarray(run_seeds, jnp.uint32))
+    keys = prng.seed_keys(jnp.asarray(run_seeds, jnp.uint32))
     sh, rep = seed_sharding()
     if sh is not None:
         grid = jax.device_put(grid, rep)

@@ -31,6 +31,7 @@ import jaxlib
 import numpy as np
 
 from jaxga._runtime.lowering import jaxga_lowering
+from jaxga.core import prng
 from jaxga.core.errors import JaxgaError, PlatformWarning
 from jaxga.core.files import atomic_write_text
 from jaxga.core.grid import Grid
@@ -97,7 +98,7 @@ def probe_grid() -> Grid:
 
 
 def _keys(n: int, salt: int) -> jax.Array:
-    return jax.vmap(lambda i: jax.random.fold_in(jax.random.PRNGKey(salt), i))(
+    return jax.vmap(lambda i: prng.fold_in(prng.seed_key(salt), i))(
         jnp.arange(n, dtype=jnp.uint32))
 
 
@@ -136,9 +137,9 @@ def random_bits(device: jax.Device, runs: int = RUNS) -> ProbeRow:
     t0 = time.perf_counter()
 
     def one(key):
-        a, b = jax.random.split(key)
-        return (jax.random.bits(a, (16,), jnp.uint32),
-                jax.random.uniform(jax.random.fold_in(b, 7), (8,), jnp.float32))
+        a, b = prng.split(key)
+        return (prng.bits(a, (16,), jnp.uint32),
+                prng.uniform(prng.fold_in(b, 7), (8,), jnp.float32))
 
     here, there = _compare(jax.vmap(one), np.asarray(_keys(runs, 0)), device)
     bad = differing(here, there)
@@ -165,7 +166,7 @@ def walks(kind: str, device: jax.Device, runs: int = RUNS,
         g = geometry(grid, cells, n)
         return cells, n, ok, ok & valid, (g.node, g.dx, g.dy, g.cross, g.dot, g.turning)
 
-    keys = np.asarray(jax.vmap(lambda k: jax.random.split(k, per_run))(_keys(runs, 1)))
+    keys = np.asarray(jax.vmap(lambda k: prng.split(k, per_run))(_keys(runs, 1)))
     here, there = _compare(jax.vmap(jax.vmap(one)), keys, device)
     bad = differing(here, there)
     rate_here, rate_there = float(here[3].mean()), float(there[3].mean())

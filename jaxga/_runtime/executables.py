@@ -119,8 +119,9 @@ def program_key(name: str, algo: Any, grid_spec: Any, params_spec: Any, n_runs: 
         jax.process_count(), jax.process_index(),
         jax.__version__, jaxlib.__version__, source_digest(),
         threefry_unrolled(), os.environ.get("XLA_FLAGS", ""),
-        jax.config.jax_enable_x64, jax.config.jax_default_prng_impl,
-        jax.config.jax_threefry_partitionable,
+        # JAX's PRNG settings are not here: every draw of jaxga is pinned to JAX's
+        # defaults (jaxga.core.prng), so they change no program
+        jax.config.jax_enable_x64,
         # JAX's options that change what XLA compiles (jax.config.read: they may be
         # missing as attributes): a program compiled under one is not another's
         [(name, _config_value(name)) for name in COMPILE_OPTIONS],

@@ -34,11 +34,13 @@ from jaxga._runtime.device_probe import ProbeRow
 from jaxga._runtime.programs import shape_spec
 from jaxga.api.ga import GA
 from jaxga.config.presets import load_preset, preset_names
+from jaxga.core import prng
 from jaxga.core.errors import ParameterError
 from jaxga.core.fields import shown_value
 from jaxga.core.geometry import segments_clear
 from jaxga.core.grid import Grid
 from jaxga.core.objectives import path_length
+from jaxga.core.transfers import own_transfers
 
 __all__ = ["DoctorReport", "doctor", "runs_off_tolerance"]
 
@@ -141,7 +143,7 @@ def _whole_runs(preset: str, ga: GA, programs: tuple, device: jax.Device, seeds:
     second call)."""
     t0 = time.perf_counter()
     here_prog, cpu_prog = programs
-    keys = np.asarray(jax.vmap(jax.random.PRNGKey)(jnp.arange(seeds, dtype=jnp.uint32)))
+    keys = np.asarray(prng.seed_keys(jnp.arange(seeds, dtype=jnp.uint32)))
     here, there = device_probe.rolled_on_cpu(_runner(here_prog, ga), _runner(cpu_prog, ga),
                                              keys, device)
     t1 = time.perf_counter()
@@ -163,6 +165,7 @@ def _whole_runs(preset: str, ga: GA, programs: tuple, device: jax.Device, seeds:
     return row, speed
 
 
+@own_transfers
 def doctor(device: jax.Device | None = None, *, presets: Sequence[str] | None = None,
            runs: int | None = None,
            report: Callable[[str], None] = lambda line: None) -> DoctorReport:

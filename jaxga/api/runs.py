@@ -61,6 +61,7 @@ from jaxga.config.schema import Config, dotted, flatten
 from jaxga.core.errors import DeviceMemoryError, ParameterError
 from jaxga.core.fields import shown_value
 from jaxga.core.grid import Grid, as_integer
+from jaxga.core.transfers import own_transfers
 from jaxga.engine import (
     Algorithm,
     build,
@@ -151,6 +152,7 @@ def _point_configs(config: Config, points: Sequence[Mapping[str, Any]]) -> list[
     return out
 
 
+@own_transfers
 def sweep(
     preset: str | Config | Problem,
     grid: Grid | MapInfo | str | None,
@@ -603,6 +605,7 @@ def checked_capacity(configs: Sequence[Config], requested: Any) -> int:
     return requested
 
 
+@own_transfers
 def run(
     preset: str | Config | Problem,
     grid: Grid | MapInfo | str | None = None,

@@ -31,7 +31,7 @@ import jax.numpy as jnp
 import numpy as np
 
 from jaxga._batching.numerics import ordered_mean
-from jaxga.core import objectives
+from jaxga.core import objectives, prng
 from jaxga.core.geometry import clear
 from jaxga.core.grid import Grid
 from jaxga.core.paths import (
@@ -249,7 +249,7 @@ def init_state(algo: Algorithm, key: jax.Array, grid: Grid, params: dict) -> tup
     if algo.stages.fallback is not None:
         fallback = algo.stages.fallback.bind(ctx)
         fallback_on = params["init.fallback"]
-    keys = jax.random.split(key, algo.islands)
+    keys = prng.split(key, algo.islands)
     active = _active(algo, params)
     max_tries = params["init.max_tries"]
 
@@ -285,7 +285,7 @@ def island_generation(algo: Algorithm, key, grid: Grid, isl: IslandState, t, par
     """One generation of one island: selection -> crossover -> mutation -> simplify -> eval."""
     active = _active(algo, params)
     fit_fn = fitness_function(algo, params)
-    k_sel, k_cx, k_mu, k_si = jax.random.split(key, 4)
+    k_sel, k_cx, k_mu, k_si = prng.split(key, 4)
     if algo.stages.survival is None:
         idx = _select(algo, k_sel, isl.fitness, active)
     else:  # NSGA-II's mating selection (Deb et al. 2002, III-B) on the parents' front
@@ -406,7 +406,7 @@ def generation(algo: Algorithm, key, grid: Grid, state: GAState, params: dict):
 
     t = state.generation
     per, shared = _island_params(params, algo.islands)
-    keys = jax.random.split(key, algo.islands + 1)
+    keys = prng.split(key, algo.islands + 1)
 
     def one(k, isl, p_isl):
         return island_generation(algo, k, grid, isl, t, {**shared, **p_isl})
@@ -478,7 +478,7 @@ def evolve(algo: Algorithm, key, grid: Grid, state: GAState, params: dict,
     ts = state.generation + jnp.arange(n, dtype=I32)
 
     def step(st, t):
-        return generation(algo, jax.random.fold_in(key, t), grid, st, params)
+        return generation(algo, prng.fold_in(key, t), grid, st, params)
 
     if count is None:
         def body(st, t):

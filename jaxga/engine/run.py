@@ -14,8 +14,10 @@ from __future__ import annotations
 
 import jax
 
+from jaxga.core import prng
 from jaxga.core.errors import ParameterError
 from jaxga.core.grid import Grid
+from jaxga.core.transfers import own_transfers
 from jaxga.engine.algorithm import Algorithm
 from jaxga.engine.evolution import GAState, RunOutputs, evolve, finish, generation, init_state
 from jaxga.operators.init import InitStats
@@ -29,7 +31,7 @@ INIT_STREAM, EVOLVE_STREAM = 0, 1
 def run_init(algo: Algorithm, key: jax.Array, grid: Grid, params: dict) -> tuple:
     """``(GAState, InitStats)``: the run's initial populations
     (:func:`jaxga.engine.evolution.init_state`) on its initialisation stream."""
-    return init_state(algo, jax.random.fold_in(key, INIT_STREAM), grid, params)
+    return init_state(algo, prng.fold_in(key, INIT_STREAM), grid, params)
 
 
 def run_evolve(algo: Algorithm, key: jax.Array, grid: Grid, state: GAState, params: dict,
@@ -38,7 +40,7 @@ def run_evolve(algo: Algorithm, key: jax.Array, grid: Grid, state: GAState, para
     (:func:`jaxga.engine.evolution.evolve`, ``generations`` and ``count`` as there) on its
     evolution stream; generation ``t`` is the same whether the run is evolved in one call
     or in chunks."""
-    return evolve(algo, jax.random.fold_in(key, EVOLVE_STREAM), grid, state, params,
+    return evolve(algo, prng.fold_in(key, EVOLVE_STREAM), grid, state, params,
                   generations, count)
 
 
@@ -67,6 +69,7 @@ class PureGA:
             raise ParameterError("this GA has no map of its own: pass the grid")
         return self.grid if grid is None else grid
 
+    @own_transfers
     def init_with_stats(self, key: jax.Array, params: dict,
                         grid: Grid | None = None) -> tuple[GAState, InitStats]:
         """:meth:`init` and what the initialisers did (per island: attempts' success
@@ -74,18 +77,21 @@ class PureGA:
         reports them."""
         return run_init(self.algorithm, key, self._grid(grid), params)
 
+    @own_transfers
     def init(self, key: jax.Array, params: dict, grid: Grid | None = None) -> GAState:
         """The initial population of every island, evaluated (pure; the initialisers of
         the preset: ``init.method`` and its fallback). ``grid``: another pair of
         endpoints on this map (:meth:`jaxga.GA.grid_for`), default :attr:`grid`."""
         return self.init_with_stats(key, params, grid)[0]
 
+    @own_transfers
     def step(self, key: jax.Array, state: GAState, params: dict,
              grid: Grid | None = None) -> GAState:
         """One generation (selection, crossover, mutation, simplification, evaluation,
         migration; the stagnation rule); pure. ``key``: this generation's key."""
         return generation(self.algorithm, key, self._grid(grid), state, params)
 
+    @own_transfers
     def evolve(self, key: jax.Array, state: GAState, params: dict,
                generations: int | None = None, grid: Grid | None = None, *,
                count: jax.Array | None = None) -> tuple[GAState, dict]:
@@ -99,6 +105,7 @@ class PureGA:
         return run_evolve(self.algorithm, key, self._grid(grid), state, params, generations,
                           count)
 
+    @own_transfers
     def finish(self, state: GAState, params: dict, history: dict | None = None,
                initial_best: jax.Array | None = None,
                grid: Grid | None = None) -> RunOutputs:
@@ -111,6 +118,7 @@ class PureGA:
         the initial population already held, given its ``initial_best`` fitness)."""
         return finish(self.algorithm, self._grid(grid), state, history, params, initial_best)
 
+    @own_transfers
     def run(self, key: jax.Array, params: dict, grid: Grid | None = None,
             generations: int | None = None) -> RunOutputs:
         """:meth:`init`, :meth:`evolve` and :meth:`finish` of one run: seed ``s`` of

@@ -17,6 +17,7 @@ import jax
 import jax.numpy as jnp
 import numpy as np
 
+from jaxga.core import prng
 from jaxga.core.dtypes import F32, I32
 from jaxga.core.grid import Grid
 from jaxga.core.paths import remove_loops
@@ -174,7 +175,7 @@ def column_anchors(
     h, w = grid.shape
     a = max(h, w)
     cr = column_ranges(grid, c1, l1, c2, l2)
-    bits = jax.random.bits(key, (a,), _U32)
+    bits = prng.bits(key, (a,), _U32)
     r = uniform_index(bits, cr.n_free)
     table = _free_prefix(grid)
     mc = jnp.clip(cr.major, 0, a - 1)
@@ -232,7 +233,7 @@ def column_child(
     n = jnp.asarray(c1).shape[0]
     h, w = grid.shape
     a = max(h, w)
-    k_anchor, k_conn = jax.random.split(key)
+    k_anchor, k_conn = prng.split(key)
     anchors, n_anchors, cols_ok = column_anchors(k_anchor, grid, c1, l1, c2, l2)
     if a > n:  # a big map and a small capacity: a child spanning more columns cannot fit
         cols_ok &= n_anchors <= n
@@ -247,7 +248,7 @@ def column_child(
     cells, length = remove_loops(cells, length, grid.n_cells)
     ok &= cols_ok
     if field_repair:
-        f_c, f_n, f_ok = field_path(jax.random.fold_in(k_conn, 7), grid,
+        f_c, f_n, f_ok = field_path(prng.fold_in(k_conn, 7), grid,
                                     anchors[n_anchors // 2], n, 0.0, 0.0)
         cells, length = jnp.where(ok, cells, f_c), jnp.where(ok, length, f_n)
         ok = ok | (cols_ok & f_ok)
@@ -285,7 +286,7 @@ def column(
     """
     c1, c2 = jnp.asarray(c1, I32), jnp.asarray(c2, I32)
     l1, l2 = jnp.asarray(l1, I32), jnp.asarray(l2, I32)
-    k_child, k_spin = jax.random.split(key)
+    k_child, k_spin = prng.split(key)
     cc, cl, ok = column_child(
         k_child, grid, c1, l1, c2, l2, max_rounds=max_rounds, queue=queue,
         field_repair=field_repair,
@@ -294,7 +295,7 @@ def column(
     lens = jnp.stack([l1, l2, cl])
     f = jax.vmap(lambda c, ln: jnp.asarray(fitness_fn(grid, c, ln), F32))(paths, lens)
     wts = jnp.where(jnp.isnan(f), F32(0), jnp.maximum(f, F32(0)))
-    u = jax.random.uniform(k_spin, (2,), F32)
+    u = prng.uniform(k_spin, (2,), F32)
     s1 = _spin(wts, u[0])
     if distinct:
         s2 = _spin(wts.at[s1].set(0.0), u[1], jnp.arange(3) != s1)

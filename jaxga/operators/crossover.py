@@ -52,6 +52,7 @@ import jax.numpy as jnp
 import numpy as np
 
 from jaxga._batching.numerics import ordered_mean
+from jaxga.core import prng
 from jaxga.core.dtypes import F32, I32
 from jaxga.core.errors import ParameterError
 from jaxga.core.geometry import clear, linear_trial
@@ -133,7 +134,7 @@ def common_point(
         & (c1 != grid.start) & (c1 != grid.goal)
     )
     count = jnp.sum(cand, dtype=I32)
-    r = uniform_index(jax.random.bits(key, (), _U32), count)
+    r = uniform_index(prng.bits(key, (), _U32), count)
     ci = kth_true(cand, r)
     cj = pos2[ci]
     k1 = join(c1, ci, pos2, c2, l2, cj)
@@ -182,7 +183,7 @@ def cut_and_check(
         raise ParameterError(f"unknown check {check!r}: expected 'clear' or 'linear_trial'")
     c1, c2 = jnp.asarray(c1, I32), jnp.asarray(c2, I32)
     l1, l2 = jnp.asarray(l1, I32), jnp.asarray(l2, I32)
-    bits = jax.random.bits(key, (2,), _U32)
+    bits = prng.bits(key, (2,), _U32)
     i = uniform_index(bits[0], l1 - 1)
     j = uniform_index(bits[1], l2 - 1)
     pos2 = _position_lookup(c2, l2, grid.n_cells)(c1)
@@ -314,7 +315,7 @@ def heterologous(
     l1, l2 = jnp.asarray(l1, I32), jnp.asarray(l2, I32)
     jtab, valid = heterologous_pairs(grid, c1, l1, c2, l2)
     count = jnp.sum(valid, dtype=I32)
-    r = uniform_index(jax.random.bits(key, (), _U32), count)
+    r = uniform_index(prng.bits(key, (), _U32), count)
     i, o = kth_true_rows(valid, r)
     j = jnp.maximum(jtab[i, o], 0)
     pos2 = _position_lookup(c2, l2, grid.n_cells)(c1)
@@ -432,7 +433,7 @@ def _half_common_point_half_column(ctx: Binding) -> Callable:
                               alternative=operator("crossover", "column").bind(ctx))
 
     def run(key, grid, pop, pc):
-        k_half, key = jax.random.split(key)
+        k_half, key = prng.split(key)
         return lifted(key, grid, pop, pc, split_half(k_half, pop.size // 2))
 
     return run

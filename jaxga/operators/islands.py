@@ -25,6 +25,8 @@ from __future__ import annotations
 import jax
 import jax.numpy as jnp
 
+from jaxga.core import prng
+
 __all__ = ["migrate"]
 
 
@@ -101,7 +103,7 @@ def migrate(algo, key: jax.Array, islands, t: jax.Array, active: jax.Array,
         new = _replace(new, 1, best[1, :k], 0, a_worst_b, old)   # A's worst sink into B
         new = _replace(new, 2, best[2, :k], 0, a_worst_c, old)   # ... and into C
         # B and C swap k random active individuals (other than the ones that just moved).
-        u = jax.random.uniform(key, (2, algo.population))
+        u = prng.uniform(key, (2, algo.population))
         moved = jnp.zeros((2, algo.population), bool).at[0, best[1, :k]].set(True)
         moved = moved.at[1, best[2, :k]].set(True)
         u = jnp.where(active[None, :] & ~moved, u, jnp.inf)

@@ -28,6 +28,7 @@ import numpy as np
 
 from jaxga._batching.folding import fold_call, hoist, on_accelerator
 from jaxga._batching.scatter import true_first_order
+from jaxga.core import prng
 from jaxga.core.grid import Grid
 from jaxga.core.paths import Population
 
@@ -63,7 +64,7 @@ def over_individuals(op: Callable, *, in_axes_extra: tuple = ()) -> Callable:
     """
 
     def lifted(key: jax.Array, grid: Grid, pop: Population, *extra):
-        keys = jax.random.split(key, pop.size)
+        keys = prng.split(key, pop.size)
         axes = (0, None, 0, 0) + (in_axes_extra or (0,) * len(extra))
         cells, length, failed = jax.vmap(op, in_axes=axes)(
             keys, grid, pop.cells, pop.length, *extra
@@ -100,7 +101,7 @@ def over_pairs(op: Callable, *, in_axes_extra: tuple = ()) -> Callable:
 
     def lifted(key: jax.Array, grid: Grid, pop: Population, *extra):
         n_pairs = pop.size // 2
-        keys = jax.random.split(key, max(n_pairs, 1))[:n_pairs]
+        keys = prng.split(key, max(n_pairs, 1))[:n_pairs]
         c, ln = pop.cells, pop.length
         axes = (0, None, 0, 0, 0, 0) + (in_axes_extra or (0,) * len(extra))
         c1, l1, c2, l2, failed = jax.vmap(op, in_axes=axes)(
@@ -300,8 +301,8 @@ class _Gates:
             use_op, extra = jnp.asarray(extra[0], bool), extra[1:]
             use_op = use_op[:keys.shape[0]] if use_op.ndim else use_op  # pairs: P // 2
         prob = jnp.broadcast_to(jnp.asarray(prob, jnp.float32), (keys.shape[0],))
-        k_gate, k_op = jax.vmap(lambda k: tuple(jax.random.split(k)))(keys)
-        applied = jax.vmap(lambda k: jax.random.uniform(k, (), jnp.float32))(k_gate) < prob
+        k_gate, k_op = jax.vmap(lambda k: tuple(prng.split(k)))(keys)
+        applied = jax.vmap(lambda k: prng.uniform(k, (), jnp.float32))(k_gate) < prob
         axes = in_axes_extra or (0,) * len(extra)
         mapped = [e for e, ax in zip(extra, axes) if ax == 0]
         return cls(applied, k_op, use_op, tuple(extra), tuple(axes), mapped)
@@ -356,7 +357,7 @@ def over_individuals_gated(
 
     def lifted(key: jax.Array, grid: Grid, pop: Population, prob, *extra):
         n = pop.size
-        gates = _Gates.draw(jax.random.split(key, n), prob, extra, alternative is not None,
+        gates = _Gates.draw(prng.split(key, n), prob, extra, alternative is not None,
                             in_axes_extra)
         args = (gates.op_keys, pop.cells, pop.length, *gates.mapped)
         out = (pop.cells, pop.length, jnp.zeros((n,), bool))
@@ -395,7 +396,7 @@ def over_pairs_gated(
 
     def lifted(key: jax.Array, grid: Grid, pop: Population, prob, *extra):
         n_pairs = pop.size // 2
-        gates = _Gates.draw(jax.random.split(key, max(n_pairs, 1))[:n_pairs], prob, extra,
+        gates = _Gates.draw(prng.split(key, max(n_pairs, 1))[:n_pairs], prob, extra,
                             alternative is not None, in_axes_extra)
         c, ln = pop.cells, pop.length
         c1, l1 = c[0 : 2 * n_pairs : 2], ln[0 : 2 * n_pairs : 2]

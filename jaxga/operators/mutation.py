@@ -45,6 +45,7 @@ import jax
 import jax.numpy as jnp
 import numpy as np
 
+from jaxga.core import prng
 from jaxga.core.dtypes import I32
 from jaxga.core.errors import ParameterError
 from jaxga.core.fields import POS, Field
@@ -172,8 +173,8 @@ def neighbour_point(
     cells = jnp.asarray(cells, I32)
     length = jnp.asarray(length, I32)
     cap = cells.shape[0]
-    k_conn, k_bits = jax.random.split(key)
-    bits = jax.random.bits(k_bits, (2,), _U32)
+    k_conn, k_bits = prng.split(key)
+    bits = prng.bits(k_bits, (2,), _U32)
     i, has_node = _interior(bits[0], length)
     prev, node, nxt = cells[i - 1], cells[i], cells[jnp.minimum(i + 1, cap - 1)]
     cand, free = _neighbours(grid, node, _OFF8)
@@ -205,7 +206,7 @@ def replace_point(
     cells = jnp.asarray(cells, I32)
     length = jnp.asarray(length, I32)
     cap = cells.shape[0]
-    bits = jax.random.bits(key, (2,), _U32)
+    bits = prng.bits(key, (2,), _U32)
     m, has_node = _interior(bits[0], length)
     prev, nxt = cells[m - 1], cells[jnp.minimum(m + 1, cap - 1)]
     cand, free = _neighbours(grid, prev, _OFF8)
@@ -252,8 +253,8 @@ def regrow_segment(
     length = jnp.asarray(length, I32)
     cap = cells.shape[0]
     idx = jnp.arange(cap, dtype=I32)
-    k_walk, k_bits = jax.random.split(key)
-    bits = jax.random.bits(k_bits, (2,), _U32)
+    k_walk, k_bits = prng.split(key)
+    bits = prng.bits(k_bits, (2,), _U32)
     i, j, has_seg = _segment(bits[0], bits[1], length)
     exclude = jnp.where((idx < i) | ((idx > j) & (idx < length)), cells, -1)
     seg, seg_len, reached = directional_walk(
@@ -271,7 +272,7 @@ def _field_repaired(key, grid, cells, length, i, j, has_seg, result):
     """``result`` where ok, else the path reconnected down the goal's field from
     position ``i`` (:func:`jaxga.operators.init.field_reconnect`)."""
     new, new_len, ok = result
-    f_c, f_n, f_ok = field_reconnect(jax.random.fold_in(key, 7), grid, cells, length, i, j)
+    f_c, f_n, f_ok = field_reconnect(prng.fold_in(key, 7), grid, cells, length, i, j)
     return (jnp.where(ok, new, f_c), jnp.where(ok, new_len, f_n), ok | (has_seg & f_ok))
 
 
@@ -339,8 +340,8 @@ def segment_sa(
     cells = jnp.asarray(cells, I32)
     length = jnp.asarray(length, I32)
     cap = cells.shape[0]
-    k_conn, k_bits = jax.random.split(key)
-    bits = jax.random.bits(k_bits, (3,), _U32)
+    k_conn, k_bits = prng.split(key)
+    bits = prng.bits(k_bits, (3,), _U32)
     i, j, has_seg = _segment(bits[0], bits[1], length)
     seg, seg_len, closed = connect(
         k_conn, grid, jnp.stack([cells[i], cells[j]]), 2, seg_capacity or cap, max_rounds,
@@ -399,7 +400,7 @@ def point_checked(
     r = np.arange(-radius, radius + 1)
     off = np.stack(np.meshgrid(r, r, indexing="ij"), -1).reshape(-1, 2)
     off = jnp.asarray(off[np.any(off != 0, axis=1)], jnp.int32)
-    bits = jax.random.bits(key, (2,), _U32)
+    bits = prng.bits(key, (2,), _U32)
     i, has_node = _interior(bits[0], length)
     prev, node, nxt = cells[i - 1], cells[i], cells[jnp.minimum(i + 1, cap - 1)]
     cand, free = _neighbours(grid, node, off)
@@ -519,7 +520,7 @@ def delete_corner(
     cap = cells.shape[0]
     if cap < 3:
         return cells, length, jnp.ones((), bool)
-    i, has_node = _interior(jax.random.bits(key, (), _U32), length)
+    i, has_node = _interior(prng.bits(key, (), _U32), length)
     prev, nxt = cells[i - 1], cells[jnp.minimum(i + 1, cap - 1)]
     corner = move_legal(grid, prev, nxt)
     if knight:
@@ -588,7 +589,7 @@ def adaptive_mutation_probability(
 
 def split_half(key: jax.Array, n: int) -> jax.Array:
     """``bool[n]`` with exactly ``n // 2`` True entries at uniformly random positions."""
-    return jax.random.permutation(key, n) < n // 2
+    return prng.permutation(key, n) < n // 2
 
 
 # the family's operators (jaxga.operators.registry)
@@ -599,7 +600,7 @@ def _half_replace_point_half_regrow(ctx: Binding) -> Callable:
                                     alternative=operator("mutation", "regrow_segment").bind(ctx))
 
     def run(key, grid, pop, pm):
-        k_half, key = jax.random.split(key)
+        k_half, key = prng.split(key)
         return lifted(key, grid, pop, pm, split_half(k_half, pop.size))
 
     return run

@@ -20,6 +20,7 @@ import jax
 import jax.numpy as jnp
 
 from jaxga._batching.numerics import ordered_sum
+from jaxga.core import prng
 from jaxga.core.dtypes import F32, I32
 
 __all__ = [
@@ -126,7 +127,7 @@ def crowded_tournament(key: jax.Array, rank: jax.Array, crowding: jax.Array,
     active = jnp.asarray(active, bool)
     n_active = jnp.maximum(jnp.sum(active.astype(I32)), 1)
     pool = jnp.argsort(~active, stable=True).astype(I32)  # the active individuals first
-    draws = jax.random.randint(key, (n, 2), 0, n_active)
+    draws = prng.randint(key, (n, 2), 0, n_active)
     a, b = pool[draws[:, 0]], pool[draws[:, 1]]
     a_wins = (rank[a] < rank[b]) | ((rank[a] == rank[b]) & (crowding[a] >= crowding[b]))
     return jnp.where(a_wins, a, b)

@@ -29,6 +29,7 @@ import jax
 import jax.numpy as jnp
 
 from jaxga._batching.numerics import ordered_sum
+from jaxga.core import prng
 from jaxga.core.errors import ParameterError
 from jaxga.core.geometry import clear, floor_div, linear_trial
 from jaxga.core.grid import Grid, diagonal_legal, move_legal
@@ -408,7 +409,7 @@ def simplify_adjacent(
     length = jnp.asarray(length, jnp.int32)
     n_cap = cells.shape[0]
     k = jnp.arange(n_cap, dtype=jnp.int32)
-    bits = jax.random.bits(key, (), jnp.uint32)
+    bits = prng.bits(key, (), jnp.uint32)
     t = (bits % jnp.maximum(length - 1, 1).astype(jnp.uint32)).astype(jnp.int32)
     near = (k >= t + 2) & (k < length) & move_legal(grid, cells[t], cells)
     s = jnp.max(jnp.where(near, k, -1))

@@ -27,6 +27,7 @@ import jax.numpy as jnp
 import numpy as np
 
 from jaxga._batching.lanes import lane_while_loop
+from jaxga.core import prng
 from jaxga.core.grid import Grid, blocked_at, diagonal_legal
 from jaxga.core.paths import position_lookup, remove_loops
 
@@ -42,7 +43,7 @@ def random_free_neighbour(
     key: jax.Array, grid: Grid, cell: jax.Array
 ) -> tuple[jax.Array, jax.Array]:
     """A uniformly random free 8-neighbour of ``cell`` and whether one exists (IMGA 4.1)."""
-    return _pick_free_neighbour(jax.random.bits(key, (), jnp.uint32), grid, cell)
+    return _pick_free_neighbour(prng.bits(key, (), jnp.uint32), grid, cell)
 
 
 def neighbour_masks(grid: Grid) -> jax.Array:
@@ -188,7 +189,7 @@ def connect(
         return (qlen > 0) & (r < max_rounds) & ok
 
     # All random words up front: one generator call instead of one per round.
-    bits_all = jax.random.bits(key, (max_rounds, queue), jnp.uint32)
+    bits_all = prng.bits(key, (max_rounds, queue), jnp.uint32)
 
     def body(c):
         node, nxt, q, qlen, count, r, ok = c

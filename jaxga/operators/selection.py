@@ -39,6 +39,7 @@ from __future__ import annotations
 import jax
 import jax.numpy as jnp
 
+from jaxga.core import prng
 from jaxga.core.dtypes import F32, I32
 from jaxga.core.errors import ParameterError
 from jaxga.core.fields import Field
@@ -87,7 +88,7 @@ def _roulette_draw(key: jax.Array, weights: jax.Array, eligible: jax.Array, n: i
     w = jnp.where(total > 0, weights, eligible.astype(F32))
     # associative_scan: jnp.cumsum is an O(P^2) reduce_window on CPU.
     cdf = jax.lax.associative_scan(jnp.add, w)
-    u = jax.random.uniform(key, (n,), F32) * cdf[-1]
+    u = prng.uniform(key, (n,), F32) * cdf[-1]
     idx = jnp.searchsorted(cdf, u, side="right").astype(I32)
     # u * total can round up to total: fall back on the last index with positive weight.
     last = jnp.max(jnp.where(w > 0, jnp.arange(w.shape[0], dtype=I32), 0))
@@ -109,7 +110,7 @@ def _place_on_active(key: jax.Array, seq: jax.Array, active: jax.Array) -> jax.A
     """Write ``seq[:M]`` (M = number of active slots) onto the active slots in a uniformly
     random order and ``seq[M:]`` onto the inactive slots."""
     p = seq.shape[0]
-    bits = jax.random.bits(key, (p,), jnp.uint32)
+    bits = prng.bits(key, (p,), jnp.uint32)
     iota = jnp.arange(p, dtype=I32)
     _, _, slots = jax.lax.sort(((~active).astype(I32), bits, iota), num_keys=2)
     return jnp.zeros((p,), I32).at[slots].set(seq, unique_indices=True)
@@ -226,7 +227,7 @@ def stratified(
     k = jnp.arange(p, dtype=I32)
     kept_by_rank = k < n_keep
     kept = jnp.zeros((p,), bool).at[order].set(kept_by_rank, unique_indices=True)
-    k_fill, k_place = jax.random.split(key)
+    k_fill, k_place = prng.split(key)
     refill = _roulette_draw(k_fill, _weights(fitness, kept), kept, p)
     seq = jnp.where(k < n_keep, order, jnp.where(k < m, refill, order[0]))
     return _place_on_active(k_place, seq, active)
@@ -266,7 +267,7 @@ def tournament(
     iota = jnp.arange(p, dtype=I32)
     _, active_idx = jax.lax.sort(((~active).astype(I32), iota), num_keys=1)
     m = jnp.maximum(jnp.sum(active, dtype=I32), 1)
-    bits = jax.random.bits(key, (p, k), jnp.uint32)
+    bits = prng.bits(key, (p, k), jnp.uint32)
     cand = active_idx[(bits % m.astype(jnp.uint32)).astype(I32)]
     f = jnp.where(jnp.isnan(fitness), -jnp.inf, fitness)
     win = jnp.argmax(f[cand], axis=1)

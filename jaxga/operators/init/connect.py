@@ -6,6 +6,7 @@ from __future__ import annotations
 import jax
 import jax.numpy as jnp
 
+from jaxga.core import prng
 from jaxga.core.dtypes import I32
 from jaxga.core.errors import ParameterError
 from jaxga.core.grid import Grid
@@ -61,8 +62,8 @@ def median_insertion(
     n = grid.n_cells
     idx = jnp.arange(n, dtype=I32)
     free, count = free_cells(grid, (idx != grid.start) & (idx != grid.goal))
-    k_mid, k_conn = jax.random.split(key)
-    mid = jnp.where(count > 0, pick_cell(jax.random.bits(k_mid, (), jnp.uint32), free, count),
+    k_mid, k_conn = prng.split(key)
+    mid = jnp.where(count > 0, pick_cell(prng.bits(k_mid, (), jnp.uint32), free, count),
                     grid.start)
     anchors = jnp.stack([grid.start, mid, grid.goal]).astype(I32)
     if capacity < 3:
@@ -83,7 +84,7 @@ def median_insertion(
 def _repaired(key, grid, via, capacity, result):
     """``result`` if ok, else the optimal path through ``via`` down the fields."""
     cells, length, ok = result
-    f_cells, f_len, f_ok = field_path(jax.random.fold_in(key, 7), grid, via, capacity,
+    f_cells, f_len, f_ok = field_path(prng.fold_in(key, 7), grid, via, capacity,
                                       0.0, 0.0)
     return (jnp.where(ok, cells, f_cells), jnp.where(ok, length, f_len), ok | f_ok)
 
@@ -122,7 +123,7 @@ def intermittent_anchors(
     col_count = jnp.sum(~blocked, axis=0, dtype=I32)
 
     j = jnp.arange(1, k_max - 1, dtype=I32)  # 1 .. k_max - 2
-    bits = jax.random.bits(key, (max(k_max - 2, 1),), jnp.uint32)[: k_max - 2]
+    bits = prng.bits(key, (max(k_max - 2, 1),), jnp.uint32)[: k_max - 2]
     # Rows: y = sy + sign * j for j < span.
     ry = jnp.clip(sy + jnp.sign(gy - sy) * j, 0, h - 1)
     r_cnt = row_count[ry]
@@ -192,13 +193,13 @@ def intermittent_connect(
     work = 2 * capacity if work_capacity is None else max(int(work_capacity), capacity)
     if queue is None:
         queue = min(work, 4 * max(h, w))
-    anchors, n_anchors = intermittent_anchors(jax.random.fold_in(key, 1), grid, axis)
+    anchors, n_anchors = intermittent_anchors(prng.fold_in(key, 1), grid, axis)
     fits = jnp.bool_(True)
     if anchors.shape[0] > work:  # a big map and a small capacity: more lines than cells
         fits = n_anchors <= work
         anchors, n_anchors = anchors[:work], jnp.minimum(n_anchors, work)
     cells, length, ok = connect(
-        jax.random.fold_in(key, 2), grid, anchors, n_anchors, work,
+        prng.fold_in(key, 2), grid, anchors, n_anchors, work,
         max_rounds=max_rounds, queue=queue,
     )
     ok &= fits

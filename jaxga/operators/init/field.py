@@ -8,6 +8,7 @@ import jax.numpy as jnp
 import numpy as np
 
 from jaxga._batching.lanes import lane_while_loop
+from jaxga.core import prng
 from jaxga.core.dtypes import F32, I32
 from jaxga.core.errors import ParameterError
 from jaxga.core.grid import DIRECTIONS, Grid
@@ -108,7 +109,7 @@ def _descent(key, grid, table, offset, source, capacity, budget, temperature):
     nbr_t, legal_t = move_tables(grid)
     cost = jnp.asarray(_STEP_COST)
     steps = capacity - 1
-    u = jax.random.uniform(key, (max(steps, 1),), F32)
+    u = prng.uniform(key, (max(steps, 1),), F32)
     lanes = jnp.arange(8, dtype=I32)
     temp = jnp.maximum(jnp.asarray(temperature, F32), jnp.float32(1e-30))
     budget = jnp.maximum(jnp.asarray(budget, F32), 0.0)
@@ -184,7 +185,7 @@ def field_path(
     detour = guide.from_start[via] + guide.to_goal[via] - optimum
     half = jnp.maximum(jnp.asarray(budget, F32) - detour, 0.0) / 2
     table = jnp.concatenate([guide.from_start, guide.to_goal])
-    keys = jax.random.split(key, 2)
+    keys = prng.split(key, 2)
     cells, length, ok = jax.vmap(
         lambda k, off: _descent(k, grid, table, off, via, capacity, half, temperature)
     )(keys, jnp.asarray([0, n], I32))
@@ -287,8 +288,8 @@ def field_walk(
     budget = jnp.maximum(jnp.asarray(slack, F32), 0.0) * jnp.where(
         jnp.isfinite(optimum), optimum, 0.0)
     count, total = _via_candidates(grid, budget)
-    k_via, k_path = jax.random.split(key)
-    r = (jax.random.bits(k_via, (), jnp.uint32)
+    k_via, k_path = prng.split(key)
+    r = (prng.bits(k_via, (), jnp.uint32)
          % jnp.maximum(total, 1).astype(jnp.uint32)).astype(I32)
     via = jnp.searchsorted(count, r, side="right").astype(I32) - 1
     cells, length, ok = field_path(k_path, grid, via, capacity, budget, temperature)
@@ -333,8 +334,8 @@ def clearance_walk(key: jax.Array, grid: Grid, capacity: int,
             "this for a configuration with survival.method)")
     n = grid.n_cells
     fields = guide.weighted.shape[0] // n
-    k_field, k_walk = jax.random.split(key)
-    k = jax.random.randint(k_field, (), 0, fields + 1, dtype=I32)  # 0: the field walk
+    k_field, k_walk = prng.split(key)
+    k = prng.randint(k_field, (), 0, fields + 1, dtype=I32)  # 0: the field walk
     walk = field_walk(k_walk, grid, capacity, slack, temperature)
     down = _descent(k_walk, grid, guide.weighted, jnp.maximum(k - 1, 0) * n, grid.start,
                     capacity, jnp.float32(0.0), jnp.float32(0.0))

@@ -11,6 +11,7 @@ import jax
 import jax.numpy as jnp
 import numpy as np
 
+from jaxga.core import prng
 from jaxga.core.dtypes import F32, I32
 from jaxga.core.errors import NoPathError, ParameterError
 from jaxga.core.grid import Grid
@@ -199,7 +200,7 @@ def initialise_population(
         max_rounds = max(1, math.ceil(size * max_tries / chunk))
 
     def candidates(r):
-        keys = jax.random.split(jax.random.fold_in(key, r), chunk)
+        keys = prng.split(prng.fold_in(key, r), chunk)
         c, ln, ok = jax.vmap(lambda k: fn(k, grid, capacity))(keys)
         c = c.astype(I32)
         ln = ln.astype(I32)
@@ -256,7 +257,7 @@ def initialise_population(
     if fallback is not None:
         def fill(args):
             cells, length, filled = args
-            keys = jax.random.split(jax.random.fold_in(key, FALLBACK_STREAM), size)
+            keys = prng.split(prng.fold_in(key, FALLBACK_STREAM), size)
             c, ln, ok = jax.vmap(lambda k: fallback(k, grid, capacity))(keys)
             c, ln = c.astype(I32), ln.astype(I32)
             if verify:

@@ -11,6 +11,7 @@ import jax.numpy as jnp
 import numpy as np
 
 from jaxga._batching.lanes import lane_while_loop
+from jaxga.core import prng
 from jaxga.core.dtypes import F32, I32
 from jaxga.core.errors import ParameterError
 from jaxga.core.grid import Grid
@@ -92,7 +93,7 @@ def _self_avoiding_walk(
     done0 = (source == target) | ~on_map | ~source_free
     ok0 = (source == target) & on_map & source_free
     steps = capacity - 1
-    u = jax.random.uniform(key, (max(steps, 1),), F32)
+    u = prng.uniform(key, (max(steps, 1),), F32)
     lanes = jnp.arange(8, dtype=I32)
 
     def cond(carry):
@@ -444,7 +445,7 @@ def greedy_walk(
     target = jnp.asarray(target, I32)
     nbr_t, legal_t = move_tables(grid)
     free, n_free = free_cells(grid)
-    bits = jax.random.bits(key, (max(steps, 1), 3), jnp.uint32)[:steps]
+    bits = prng.bits(key, (max(steps, 1), 3), jnp.uint32)[:steps]
     p_goal = float(goal_probability)
     if not 0.0 <= p_goal <= 1.0:
         raise ParameterError(f"goal_probability must be in [0, 1], got {goal_probability}")
