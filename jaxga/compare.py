@@ -54,7 +54,7 @@ from jaxga.config.presets import as_sets, overridden_keys, parse_set
 from jaxga.config.schema import Config
 from jaxga.core.errors import ParameterError
 from jaxga.core.grid import Grid
-from jaxga.core.transfers import own_transfers
+from jaxga.core.own_settings import own_settings
 from jaxga.engine import OFF_VALUES, unread_keys
 from jaxga.stats import TwoSampleTest, fisher_success, holm, mann_whitney, wilcoxon_paired
 
@@ -567,7 +567,7 @@ def same_references(results: Mapping[str, Result]) -> dict[str, Result]:
             for k, r in results.items()}
 
 
-@own_transfers
+@own_settings
 def compare(
     presets: Sequence[PresetSpec] | Mapping[str, PresetSpec] | str,
     grid: Grid | str,

@@ -72,7 +72,7 @@ from jaxga.config.schema import SCHEMA
 from jaxga.core.errors import EndpointError, JaxgaError, ParameterError
 from jaxga.core.fields import shown_value
 from jaxga.core.grid import Grid
-from jaxga.core.transfers import own_transfers
+from jaxga.core.own_settings import own_settings
 from jaxga.maps import rectangles_map
 from jaxga.maps.frame import MapFrame
 from jaxga.maps.preprocess import inflate_blocked, reachable, reachable_np
@@ -378,7 +378,7 @@ def _run_options(overrides: Mapping[str, Any], generations: int | None,
     return kw
 
 
-@own_transfers
+@own_settings
 def replan(
     grid: Grid,
     path: Sequence[XY] | np.ndarray,

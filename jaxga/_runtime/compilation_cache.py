@@ -21,6 +21,7 @@ import warnings
 from pathlib import Path
 
 import jax
+import numpy as np
 
 from jaxga.core.errors import CacheWarning, ParameterError
 from jaxga.core.fields import shown_value
@@ -153,6 +154,14 @@ def configure(cache_dir: str | os.PathLike | None | object = _UNSET, *,
                                  "Path, not bytes")
         if not path:
             raise ParameterError("configure: cache_dir must not be empty (None: no folder)")
+        if "://" in path:
+            raise ParameterError(
+                f"configure: cache_dir must be a local folder, got the URL {shown_value(path)} "
+                "(JAX's own cache may be remote: jax.config.update("
+                "'jax_compilation_cache_dir', URL))")
+    if not isinstance(jax_cache, (bool, np.bool_)):
+        raise ParameterError(f"configure: jax_cache must be True or False, got "
+                             f"{shown_value(jax_cache)}")
     source = ENV_VAR if cache_dir is _UNSET else "jaxga.configure"
     if path and _judged(path, source) is not None:
         path = ""
@@ -172,17 +181,17 @@ def use_compilation_cache(directory: str | os.PathLike | None = None) -> str | N
 
 
 def store_directory() -> str | None:
-    """The folder of jaxga's program store (:mod:`jaxga._runtime.executables`): JAX's own
-    cache folder where one is configured (a local one; a remote one: none), else the
-    folder :func:`configure` named, else ``$JAXGA_CACHE_DIR`` or
+    """The folder of jaxga's program store (:mod:`jaxga._runtime.executables`): the folder
+    the last :func:`configure` named (None: none), else JAX's own cache folder where the
+    user set one (a local one; a remote one: none), else ``$JAXGA_CACHE_DIR`` or
     :func:`default_directory` (made on first use; ``None`` with one
     :class:`~jaxga.core.errors.CacheWarning` where it cannot be; one that takes no new
     file is read, with one warning)."""
+    if "dir" in _configured:
+        return _configured["dir"]
     base = jax.config.jax_compilation_cache_dir
     if base:
         return None if "://" in str(base) else str(base)
-    if "dir" in _configured:
-        return _configured["dir"]
     path = os.environ.get(ENV_VAR, default_directory())
     if not path:
         return None

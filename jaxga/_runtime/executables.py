@@ -42,6 +42,7 @@ import os
 import pickle
 import socket
 import stat
+import threading
 import time
 import warnings
 from collections.abc import Callable, Iterator
@@ -312,11 +313,35 @@ def _stopped_or_gone(pid: int) -> bool:
     return state in ("T", "t", "Z", "X")
 
 
+_THREAD_LOCKS: dict[str, threading.Lock] = {}
+_THREAD_LOCKS_GUARD = threading.Lock()
+
+
 @contextlib.contextmanager
 def _compiling(key: str | None) -> Iterator[None]:
-    """Hold the store's lock on ``key`` (module docstring); nothing when there is no key,
-    no ``fcntl`` (not POSIX) or the lock file cannot be made."""
-    if key is None or fcntl is None:
+    """Hold this process's lock on ``key``, then the store's (:func:`_compiling_here`):
+    threads of one process that need the same program wait for each other on the first,
+    without a word (a file lock would have one thread wait for "another process", its
+    own); at most :data:`LOCK_WAIT_S`, as for another process."""
+    if key is None:
+        yield
+        return
+    with _THREAD_LOCKS_GUARD:
+        lock = _THREAD_LOCKS.setdefault(key, threading.Lock())
+    got = lock.acquire(timeout=LOCK_WAIT_S)
+    try:
+        with _compiling_here(key):
+            yield
+    finally:
+        if got:
+            lock.release()
+
+
+@contextlib.contextmanager
+def _compiling_here(key: str) -> Iterator[None]:
+    """Hold the store's lock on ``key`` (module docstring); nothing when there is no
+    ``fcntl`` (not POSIX) or the lock file cannot be made."""
+    if fcntl is None:
         yield
         return
     try:
@@ -356,7 +381,8 @@ def _compiling(key: str | None) -> Iterator[None]:
                     if holder is not None and holder[0] == here and \
                             _stopped_or_gone(holder[1]):
                         break  # stopped (Ctrl-Z) or gone: compile it here
-                    if waited >= LOCK_NOTE_S and not noted:
+                    if waited >= LOCK_NOTE_S and not noted \
+                            and holder != (here, os.getpid()):
                         noted = True
                         who = "another process" if holder is None else \
                             f"process {holder[1]} on {holder[0]}"

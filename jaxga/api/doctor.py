@@ -38,9 +38,9 @@ from jaxga.core import prng
 from jaxga.core.errors import ParameterError
 from jaxga.core.fields import shown_value
 from jaxga.core.geometry import segments_clear
-from jaxga.core.grid import Grid
+from jaxga.core.grid import Grid, as_integer
 from jaxga.core.objectives import path_length
-from jaxga.core.transfers import own_transfers
+from jaxga.core.own_settings import own_settings
 
 __all__ = ["DoctorReport", "doctor", "runs_off_tolerance"]
 
@@ -165,7 +165,7 @@ def _whole_runs(preset: str, ga: GA, programs: tuple, device: jax.Device, seeds:
     return row, speed
 
 
-@own_transfers
+@own_settings
 def doctor(device: jax.Device | None = None, *, presets: Sequence[str] | None = None,
            runs: int | None = None,
            report: Callable[[str], None] = lambda line: None) -> DoctorReport:
@@ -194,6 +194,20 @@ def doctor(device: jax.Device | None = None, *, presets: Sequence[str] | None = 
                              f"{shown_value(presets)}")
     for name in names:  # an unknown name refused before the probes, not after them
         load_preset(name)
+    if device is not None and not isinstance(device, jax.Device):
+        raise ParameterError(f"device must be one JAX device (jax.devices()[0], "
+                             f"jax.devices('gpu')[1], ...) or None, got {shown_value(device)}")
+    if runs is not None:
+        given = runs
+        try:
+            runs = as_integer(runs)
+        except TypeError:
+            runs = 0
+        if runs < 1:
+            raise ParameterError(f"runs must be an integer >= 1, got {shown_value(given)}")
+    if not callable(report):
+        raise ParameterError(f"report must be a function taking one line, got "
+                             f"{shown_value(report)}")
     device = jax.devices()[0] if device is None else device
     cpu = jax.devices("cpu")[0]
     rows = []

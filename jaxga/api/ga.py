@@ -31,7 +31,7 @@ from jaxga.api.problem import Problem, checked_endpoints, load_problem
 from jaxga.config.schema import SCHEMA, Config, dotted, flatten, sweepable
 from jaxga.core.errors import ParameterError
 from jaxga.core.grid import Grid
-from jaxga.core.transfers import own_transfers
+from jaxga.core.own_settings import own_settings
 from jaxga.engine import build, default_capacity, default_params
 from jaxga.engine.algorithm import static_config
 from jaxga.engine.checks import check_overrides_read
@@ -80,7 +80,7 @@ class GA(PureGA):
             origin, coarsening), None for a bare grid.
     """
 
-    @own_transfers
+    @own_settings
     def __init__(self, preset: str | Config | Problem,
                  problem: Grid | MapInfo | str | None = None, *,
                  corner_rule: str | None = None, variant: str | None = None,
@@ -98,7 +98,7 @@ class GA(PureGA):
             config, self.algorithm.islands)
         warn_platform(jax.default_backend())  # where jit puts the user's calls
 
-    @own_transfers
+    @own_settings
     def params(self, **values: Any) -> dict[str, jax.Array]:
         """:attr:`default_params` with dynamic keys set (``crossover__probability=0.5``,
         ``"mutation.probability"`` as a dict key, nested mappings), each checked as
@@ -135,7 +135,7 @@ class GA(PureGA):
                 "individuals: build the GA with the largest size, then set smaller ones here")
         return default_params(config, self.algorithm.islands)
 
-    @own_transfers
+    @own_settings
     def grid_for(self, start: tuple[int, int] | None = None,
                  goal: tuple[int, int] | None = None, *, start_world: Any = None,
                  goal_world: Any = None) -> Grid:

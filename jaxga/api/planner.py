@@ -29,7 +29,7 @@ from jaxga.api.runs import run
 from jaxga.config.schema import Config
 from jaxga.core.errors import ParameterError
 from jaxga.core.grid import check_corner_rule
-from jaxga.core.transfers import own_transfers
+from jaxga.core.own_settings import own_settings
 from jaxga.engine.algorithm import map_capacity
 from jaxga.maps import MapInfo, load_map_info
 from jaxga.maps.frame import endpoint_cells
@@ -69,7 +69,7 @@ class Planner:
             same pair with ``population.capacity`` set to it.
     """
 
-    @own_transfers
+    @own_settings
     def __init__(self, map: str | Any, preset: str | Config = "hybrid", *, seeds: int = 8,
                  robot_radius: float | None = None, inflate: float | None = None,
                  coarsen: int | None = None, unknown: str | None = None,
@@ -107,7 +107,7 @@ class Planner:
         if frame is not None:
             _ = frame.clearance  # the distance transform: once per map, not per plan
 
-    @own_transfers
+    @own_settings
     def plan(self, start: tuple[int, int] | None = None, goal: tuple[int, int] | None = None,
              *, start_world: Point | None = None, goal_world: Point | None = None,
              seeds: int | None = None, progress: Callable[[str, float], None] | None = None,

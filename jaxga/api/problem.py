@@ -18,7 +18,7 @@ from jaxga.config.presets import as_sets, load_preset, parse_set
 from jaxga.config.schema import MAP_RULE, Config, dotted, flatten, normalised
 from jaxga.core.errors import EndpointError, ParameterError
 from jaxga.core.grid import Grid, as_integer
-from jaxga.core.transfers import own_transfers
+from jaxga.core.own_settings import own_settings
 from jaxga.engine import check_file_keys_read, check_overrides_read
 from jaxga.maps import MapInfo, load_map_info
 from jaxga.maps.frame import MapFrame
@@ -91,7 +91,7 @@ def _registered_fn(family: str, fn: Any) -> registry.Operator | None:
     return next((op for op in registry.operators(family) if op.fn is fn), None)
 
 
-@own_transfers
+@own_settings
 def problem(preset: str | Config, grid: Grid | MapInfo | str, *,
             corner_rule: str | None = None, variant: str | None = None,
             sets: Sequence[str] = (), generations: int | None = None,

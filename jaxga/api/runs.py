@@ -61,7 +61,7 @@ from jaxga.config.schema import Config, dotted, flatten
 from jaxga.core.errors import DeviceMemoryError, ParameterError
 from jaxga.core.fields import shown_value
 from jaxga.core.grid import Grid, as_integer
-from jaxga.core.transfers import own_transfers
+from jaxga.core.own_settings import own_settings
 from jaxga.engine import (
     Algorithm,
     build,
@@ -152,7 +152,7 @@ def _point_configs(config: Config, points: Sequence[Mapping[str, Any]]) -> list[
     return out
 
 
-@own_transfers
+@own_settings
 def sweep(
     preset: str | Config | Problem,
     grid: Grid | MapInfo | str | None,
@@ -605,7 +605,7 @@ def checked_capacity(configs: Sequence[Config], requested: Any) -> int:
     return requested
 
 
-@own_transfers
+@own_settings
 def run(
     preset: str | Config | Problem,
     grid: Grid | MapInfo | str | None = None,

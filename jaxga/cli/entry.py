@@ -27,7 +27,7 @@ from jaxga.cli.outputs import check_outputs, write_empty_path
 from jaxga.cli.parser import build_parser, shortened
 from jaxga.core.errors import EndpointError, JaxgaError, NoPathError
 from jaxga.core.files import remove_temporaries
-from jaxga.core.transfers import own_transfers
+from jaxga.core.own_settings import own_settings
 
 NEGATIVE_XY = re.compile(r"-[\d.]")
 
@@ -81,7 +81,7 @@ def one_line_warnings(show: Callable[..., None]) -> Callable[..., None]:
     return show_warning
 
 
-@own_transfers
+@own_settings
 def main(argv: Sequence[str] | None = None) -> int:
     """Entry point of the ``jaxga`` console script; returns the exit status."""
     parser = build_parser()

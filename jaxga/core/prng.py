@@ -34,7 +34,9 @@ import jax
 import jax.numpy as jnp
 import numpy as np
 
-__all__ = ["IMPL", "bits", "fold_in", "permutation", "pinned", "randint", "seed_key",
+from jaxga.core.errors import ParameterError
+
+__all__ = ["IMPL", "bits", "checked_key", "fold_in", "permutation", "pinned", "randint", "seed_key",
            "seed_keys", "split", "uniform"]
 
 IMPL = "threefry2x32"
@@ -84,3 +86,31 @@ def seed_keys(seeds: Any) -> jax.Array:
 def seed_key(seed: int) -> jax.Array:
     """The key ``uint32[2]`` of one 32-bit seed (:func:`seed_keys`)."""
     return seed_keys(seed)
+
+
+def checked_key(key: Any) -> Any:
+    """``key`` if it is one run's Threefry-2x32 key: a raw ``uint32[2]``
+    (``jax.random.PRNGKey(s)``) or a typed key of that generator (``jax.random.key(s)``);
+    anything else refused in one :class:`ParameterError` line. A key of another
+    generator (``jax.random.key(s, impl="rbg")``) would run, but its bits depend on the
+    keys that share its batch, so one seed's run would change with the others."""
+    dtype, shape = getattr(key, "dtype", None), getattr(key, "shape", None)
+    if dtype is not None and jnp.issubdtype(dtype, jax.dtypes.prng_key):
+        impl = str(jax.random.key_impl(key))
+        if impl != IMPL:
+            raise ParameterError(
+                f"a key of the {impl!r} generator: jaxga's runs take Threefry keys "
+                f"(jax.random.PRNGKey(seed) or jax.random.key(seed)), whose bits do not "
+                f"depend on the other runs of a batch")
+        if shape != ():
+            raise ParameterError(f"one run takes one key, got keys of shape {shape}: "
+                                 "jax.vmap the function over them")
+        return key
+    if dtype == jnp.uint32 and shape == (2,):
+        return key
+    what = (f"{np.dtype(dtype).name}{list(shape)}" if dtype is not None and shape is not None
+            else type(key).__name__)
+    hint = (": jax.vmap the function over them" if dtype == jnp.uint32 and shape
+            and shape[-1] == 2 else "")
+    raise ParameterError(f"a run's key must be a Threefry key (jax.random.PRNGKey(seed), a "
+                         f"uint32[2], or jax.random.key(seed)), got {what}{hint}")

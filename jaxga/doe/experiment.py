@@ -15,7 +15,7 @@ from jaxga import api
 from jaxga.config.schema import Config
 from jaxga.core.errors import NoPathError
 from jaxga.core.grid import Grid
-from jaxga.core.transfers import own_transfers
+from jaxga.core.own_settings import own_settings
 from jaxga.doe.checkpoint import decode
 from jaxga.doe.confirmation import run_confirmation
 from jaxga.doe.design import Factor
@@ -24,7 +24,7 @@ from jaxga.doe.plan import DoePlan, checked_response, plan_doe
 from jaxga.doe.result import DoeResult
 
 
-@own_transfers
+@own_settings
 def run_doe(
     preset: str | Config,
     grid: Grid | str,

@@ -16,8 +16,8 @@ import jax
 
 from jaxga.core import prng
 from jaxga.core.errors import ParameterError
-from jaxga.core.grid import Grid
-from jaxga.core.transfers import own_transfers
+from jaxga.core.grid import Grid, as_integer
+from jaxga.core.own_settings import own_settings
 from jaxga.engine.algorithm import Algorithm
 from jaxga.engine.evolution import GAState, RunOutputs, evolve, finish, generation, init_state
 from jaxga.operators.init import InitStats
@@ -69,29 +69,30 @@ class PureGA:
             raise ParameterError("this GA has no map of its own: pass the grid")
         return self.grid if grid is None else grid
 
-    @own_transfers
+    @own_settings
     def init_with_stats(self, key: jax.Array, params: dict,
                         grid: Grid | None = None) -> tuple[GAState, InitStats]:
         """:meth:`init` and what the initialisers did (per island: attempts' success
         rate, slots left empty, slots the fallback filled), as :func:`jaxga.run`
         reports them."""
-        return run_init(self.algorithm, key, self._grid(grid), params)
+        return run_init(self.algorithm, prng.checked_key(key), self._grid(grid), params)
 
-    @own_transfers
+    @own_settings
     def init(self, key: jax.Array, params: dict, grid: Grid | None = None) -> GAState:
         """The initial population of every island, evaluated (pure; the initialisers of
         the preset: ``init.method`` and its fallback). ``grid``: another pair of
         endpoints on this map (:meth:`jaxga.GA.grid_for`), default :attr:`grid`."""
         return self.init_with_stats(key, params, grid)[0]
 
-    @own_transfers
+    @own_settings
     def step(self, key: jax.Array, state: GAState, params: dict,
              grid: Grid | None = None) -> GAState:
         """One generation (selection, crossover, mutation, simplification, evaluation,
         migration; the stagnation rule); pure. ``key``: this generation's key."""
-        return generation(self.algorithm, key, self._grid(grid), state, params)
+        return generation(self.algorithm, prng.checked_key(key), self._grid(grid), state,
+                          params)
 
-    @own_transfers
+    @own_settings
     def evolve(self, key: jax.Array, state: GAState, params: dict,
                generations: int | None = None, grid: Grid | None = None, *,
                count: jax.Array | None = None) -> tuple[GAState, dict]:
@@ -102,10 +103,18 @@ class PureGA:
         chunks equals one evolved at once. ``count`` (a traced, unbatched integer): only
         the first ``count`` of the ``generations`` run (one compiled chunk serves every
         generation count: :func:`jaxga.engine.evolve`)."""
-        return run_evolve(self.algorithm, key, self._grid(grid), state, params, generations,
-                          count)
+        if generations is not None:
+            given = generations
+            try:
+                generations = as_integer(generations)
+            except TypeError:
+                generations = -1
+            if generations < 0:
+                raise ParameterError(f"generations must be an integer >= 0, got {given!r}")
+        return run_evolve(self.algorithm, prng.checked_key(key), self._grid(grid), state,
+                          params, generations, count)
 
-    @own_transfers
+    @own_settings
     def finish(self, state: GAState, params: dict, history: dict | None = None,
                initial_best: jax.Array | None = None,
                grid: Grid | None = None) -> RunOutputs:
@@ -118,7 +127,7 @@ class PureGA:
         the initial population already held, given its ``initial_best`` fitness)."""
         return finish(self.algorithm, self._grid(grid), state, history, params, initial_best)
 
-    @own_transfers
+    @own_settings
     def run(self, key: jax.Array, params: dict, grid: Grid | None = None,
             generations: int | None = None) -> RunOutputs:
         """:meth:`init`, :meth:`evolve` and :meth:`finish` of one run: seed ``s`` of

@@ -600,6 +600,34 @@ def test_a_lock_file_that_is_not_a_regular_file_does_not_block_the_compile(tmp_p
     worker.join(10)
 
 
+def test_threads_of_one_process_wait_for_each_other_without_a_word(tmp_path, monkeypatch):
+    """Two threads that need the same program: the second waits for the first's compile
+    on this process's own lock (a file lock had it wait for "process <its own pid>",
+    warned, and failed under warnings as errors), then goes on."""
+    monkeypatch.setattr(executables, "directory", lambda: tmp_path)
+    monkeypatch.setattr(executables, "LOCK_NOTE_S", 0.0)
+    inside, order = threading.Event(), []
+
+    def first():
+        with executables._compiling("k"):
+            inside.set()
+            time.sleep(1.5)
+            order.append("first")
+
+    def second():
+        with executables._compiling("k"):
+            order.append("second")
+
+    one = threading.Thread(target=first, daemon=True)
+    one.start()
+    assert inside.wait(10)
+    with warnings.catch_warnings():
+        warnings.simplefilter("error")
+        second()
+    one.join(10)
+    assert order == ["first", "second"]
+
+
 HOLD_LOCK = """
 import sys, time
 from jaxga._runtime import executables

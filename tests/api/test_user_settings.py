@@ -59,18 +59,19 @@ def _lowered_text(ga: jaxga.GA) -> str:
     return re.sub(r"loc\(.*?\)", "", text)
 
 
-def test_the_pure_core_lowers_to_the_same_program_under_the_users_prng_settings():
+def test_the_pure_core_lowers_to_the_same_program_under_the_users_settings():
     """The whole pure-core run of a preset, under the user's own ``jax.jit``: the same
-    StableHLO, so the same bits, with every PRNG setting changed."""
+    StableHLO, so the same bits, with every PRNG setting changed and rank promotion
+    refused (jaxga's operators broadcast ranks as NumPy does)."""
     ga = jaxga.GA("sga", canonical.MAP, generations=2)
     default = _lowered_text(ga)
-    with user_prng():
+    with user_prng(), jax.numpy_rank_promotion("raise"):
         assert _lowered_text(ga) == default
 
 
-def test_jaxgas_host_work_runs_under_a_refusing_transfer_guard():
+def test_jaxgas_host_work_runs_under_a_refusing_transfer_guard_and_rank_promotion():
     alone = canonical.run("sga")
-    with jax.transfer_guard("disallow"):
+    with jax.transfer_guard("disallow"), jax.numpy_rank_promotion("raise"):
         ga = jaxga.GA("sga", canonical.MAP, generations=canonical.GENERATIONS)
         params = ga.params(**{"crossover.probability": 0.5})
         grid = ga.grid_for((0, 0), (19, 19))
@@ -99,3 +100,84 @@ def test_the_command_line_is_the_same_under_jaxs_variables(tmp_path):
     alone = canonical.run("sga")
     assert [r["length"] for r in runs] == pytest.approx(alone.length.tolist(), abs=5e-5)
     assert [r["path"] for r in runs] == [[list(p) for p in alone.path(i)] for i in range(3)]
+
+
+@pytest.mark.parametrize("key, words", [
+    (lambda: jax.random.key(1, impl="rbg"), "a key of the 'rbg' generator"),
+    (lambda: jnp.zeros(3, jnp.uint32), "got uint32[3]"),
+    (lambda: jnp.zeros(2, jnp.float32), "got float32[2]"),
+    (lambda: 5, "got int"),
+    (lambda: jnp.zeros((4, 2), jnp.uint32), "got uint32[4, 2]: jax.vmap the function"),
+    (lambda: jax.random.split(jax.random.key(0), 3), "got keys of shape (3,): jax.vmap"),
+])
+def test_a_key_that_is_not_one_threefry_key_is_refused_in_one_line(key, words):
+    """A key of another generator ran, and its bits depended on the keys sharing its
+    batch (one seed's run changed with the others); a key of a wrong shape failed deep
+    in JAX. Both are refused before any work (``jax.eval_shape``: nothing compiles)."""
+    ga = _small_ga()
+    with pytest.raises(jaxga.ParameterError) as refused:
+        jax.eval_shape(ga.init, key(), ga.default_params)
+    assert words in str(refused.value) and "\n" not in str(refused.value)
+    with pytest.raises(jaxga.ParameterError, match="generations must be an integer >= 0, "
+                                                   "got -3"):
+        ga.evolve(jax.random.PRNGKey(0), None, ga.default_params, -3)
+
+
+def test_a_typed_threefry_key_is_taken():
+    ga = _small_ga()
+    typed = jax.eval_shape(ga.init, jax.random.key(4), ga.default_params)
+    raw = jax.eval_shape(ga.init, jax.random.PRNGKey(4), ga.default_params)
+    assert jax.tree_util.tree_structure(typed) == jax.tree_util.tree_structure(raw)
+
+
+_GA: list = []
+
+
+def _small_ga() -> jaxga.GA:
+    if not _GA:
+        _GA.append(jaxga.GA("sga", canonical.MAP, generations=2))
+    return _GA[0]
+
+
+@pytest.mark.skipif(not hasattr(os, "fork"), reason="needs fork")
+@pytest.mark.filterwarnings("ignore:os.fork:RuntimeWarning")  # JAX's own, which says the same
+def test_a_process_forked_after_jax_started_is_refused_in_one_line():
+    """JAX's backend does not survive a fork: a run in the child waited forever. Forked
+    before JAX started, the child is not refused."""
+    from jaxga._runtime import jax_settings
+
+    jax.devices()  # the backend has started in this process
+    read, write = os.pipe()
+    pid = os.fork()
+    if pid == 0:  # the child: report what the check says, and leave at once
+        try:
+            jax_settings.check_jax_settings()
+            said = "not refused"
+        except jaxga.ParameterError as e:
+            said = str(e)
+        except BaseException as e:  # noqa: BLE001 - anything, reported to the parent
+            said = f"{type(e).__name__}: {e}"
+        os.write(write, said.encode()[:4000])
+        os._exit(0)
+    os.close(write)
+    with os.fdopen(read) as pipe:
+        said = pipe.read()
+    os.waitpid(pid, 0)
+    assert said.startswith("this process was forked from one that had started JAX")
+    assert "'spawn'" in said and "\n" not in said
+
+
+@pytest.mark.parametrize("kwargs, words", [
+    ({"device": "cpu"}, "device must be one JAX device"),
+    ({"device": [0]}, "device must be one JAX device"),
+    ({"runs": 0}, "runs must be an integer >= 1, got 0"),
+    ({"runs": True}, "runs must be an integer >= 1, got True"),
+    ({"runs": "64"}, "runs must be an integer >= 1, got '64'"),
+    ({"report": None}, "report must be a function taking one line, got None"),
+])
+def test_doctors_arguments_are_checked_before_any_probe(kwargs, words, monkeypatch):
+    from jaxga._runtime import device_probe
+
+    monkeypatch.setattr(device_probe, "probe", lambda *a: pytest.fail("probed"))
+    with pytest.raises(jaxga.ParameterError, match=re.escape(words)):
+        jaxga.doctor(presets=[], **kwargs)

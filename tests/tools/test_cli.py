@@ -495,8 +495,19 @@ def test_the_command_line_compilation_cache_directory(tmp_path, monkeypatch):
     assert jaxga.configure(tmp_path / "own", jax_cache=False) == str(tmp_path / "own")
     assert updates == [] and cc._configured["dir"] == str(tmp_path / "own")
     assert jaxga.configure(None) is None and cc._configured["dir"] is None
+    # what configure returns is the store in use, whatever JAX's own cache folder is
+    monkeypatch.setattr(type(jax.config), "jax_compilation_cache_dir", str(tmp_path / "B"),
+                        raising=False)
+    assert cc.store_directory() is None
+    assert jaxga.configure(tmp_path / "C", jax_cache=False) == cc.store_directory() \
+        == str(tmp_path / "C")
     with pytest.raises(ParameterError, match="must not be empty"):
         jaxga.configure("")
+    with pytest.raises(ParameterError, match="jax_cache must be True or False, got 'no'"):
+        jaxga.configure(tmp_path / "D", jax_cache="no")
+    with pytest.raises(ParameterError, match="must be a local folder, got the URL"):
+        jaxga.configure("gs://bucket/x")
+    assert not (tmp_path / "D").exists() and cc.store_directory() == str(tmp_path / "C")
     with pytest.warns(DeprecationWarning, match="jaxga.configure"):
         assert jaxga.use_compilation_cache(tmp_path / "old") == str(tmp_path / "old")
     assert ("jax_compilation_cache_dir", str(tmp_path / "old")) in updates
@@ -948,7 +959,11 @@ def test_the_python_api_keeps_its_programs_without_touching_jaxs_settings(tmp_pa
     from jaxga._runtime import compilation_cache as cc
 
     updates = []
-    monkeypatch.setattr(jax.config, "update", lambda k, v: updates.append((k, v)))
+    def update(k, v):  # jaxga's own updates (JAX's cache sets its own when it starts)
+        if sys._getframe(1).f_globals.get("__name__", "").startswith("jaxga"):
+            updates.append((k, v))
+
+    monkeypatch.setattr(jax.config, "update", update)
     monkeypatch.setattr(cc, "_configured", {})
     monkeypatch.setattr(cc, "_checked", {})
     monkeypatch.setenv("JAXGA_CACHE_DIR", str(tmp_path / "c"))
