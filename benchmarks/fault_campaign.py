@@ -1305,7 +1305,46 @@ def build(t: Path) -> list[Case]:
              argv=["run", "--map", CLASSIC, *BASE], expect="interrupted",
              signal=stop_at_compile, check=warned("File name too long"),
              check_fails_as="silent", note="refused the run; the Python API raised OSError")
+    # --- round six: the user's own JAX settings ------------------------------------------
+    plain = f / "plain-settings.json"
+    add("jax-default-settings", "round six", run(CLASSIC, "--json", plain), "handled",
+        outputs=(plain,), check=wrote_json(plain),
+        note="the reference for the next cases: the same run under JAX's defaults")
+    for name, env, note in (
+            ("jax-transfer-guard-disallow", {"JAX_TRANSFER_GUARD": "disallow"},
+             "failed deep in XLA ('Disallowed host-to-device transfer')"),
+            ("jax-threefry-not-partitionable", {"JAX_THREEFRY_PARTITIONABLE": "0"},
+             "other runs from the same seeds, in silence"),
+            ("jax-seed-offset", {"JAX_RANDOM_SEED_OFFSET": "7"},
+             "seed s ran as seed s + 7, in silence"),
+            ("jax-prng-rbg", {"JAX_DEFAULT_PRNG_IMPL": "rbg"},
+             "'invalid PRNG key data' deep in JAX"),
+            # without the program store: these two fail while a program is traced
+            ("jax-legacy-keys-refused", {"JAX_LEGACY_PRNG_KEY": "error", "JAXGA_CACHE_DIR": ""},
+             "every draw from a raw key refused by JAX (compiled without the store)"),
+            ("jax-rank-promotion-raise",
+             {"JAX_NUMPY_RANK_PROMOTION": "raise", "JAXGA_CACHE_DIR": ""},
+             "tracing failed (compiled without the store)")):
+        out = f / f"{name}.json"
+        add(name, "round six", run(CLASSIC, "--json", out), "handled", env=env,
+            outputs=(out,), check=same_runs_as(out, plain), note=note)
     return cases
+
+
+def same_runs_as(path: Path, reference: Path) -> Check:
+    """``path`` holds a run's JSON whose runs (success, length, path) are those of the
+    JSON at ``reference``."""
+    def runs(p: Path) -> list:
+        return [(r.get("success"), r.get("length"), r.get("path"))
+                for r in json.loads(p.read_text())["runs"]]
+
+    def check(out: Outcome) -> str | None:
+        try:
+            got, want = runs(path), runs(reference)
+        except (OSError, ValueError, KeyError) as e:
+            return f"{path.name} or {reference.name} not written ({type(e).__name__})"
+        return None if got == want else "other runs than under JAX's defaults"
+    return check
 
 
 def png16_rgb_with_key() -> bytes:
