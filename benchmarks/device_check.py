@@ -297,14 +297,14 @@ def init_agreement(preset: str, n_runs: int) -> dict:
     device against the same on the CPU: how many runs are identical, and each side's
     mean initialiser success rate (the share of attempts that made a path)."""
     import jax
-    import jax.numpy as jnp
     import numpy as np
 
     import jaxga
+    from jaxga.core import prng
     from jaxga.engine.run import run_init
 
     ga = jaxga.GA(preset, MAIN_MAP)
-    keys = jax.vmap(jax.random.PRNGKey)(jnp.arange(n_runs, dtype=jnp.uint32))
+    keys = prng.seed_keys(np.arange(n_runs))
 
     def init(key, grid, params):
         state, stats = run_init(ga.algorithm, key, grid, params)
@@ -361,7 +361,7 @@ def agreement(settings: dict, device: dict) -> dict:
     import numpy as np
 
     import jaxga
-    from jaxga.core import objectives
+    from jaxga.core import objectives, prng
 
     cpu = jax.devices("cpu")[0]
     same = device["platform"] == "cpu"
@@ -399,7 +399,7 @@ def agreement(settings: dict, device: dict) -> dict:
         eval_identical = bool(np.array_equal(lengths, reported[found]))
         eval_ok = eval_identical if same else bool(np.all(diff <= LENGTH_RTOL))
 
-        keys = jax.vmap(jax.random.PRNGKey)(jnp.asarray(seeds * len(chosen), jnp.uint32))
+        keys = prng.seed_keys(np.asarray(seeds * len(chosen)))  # jaxga.run's seeds' keys
         probs = np.repeat(np.asarray(chosen, np.float32), len(seeds))
         params = {k: jnp.broadcast_to(v, (len(probs), *jnp.shape(v)))
                   for k, v in ga.default_params.items()}

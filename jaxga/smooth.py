@@ -87,6 +87,7 @@ from jaxga.core.dtypes import F32
 from jaxga.core.errors import ParameterError
 from jaxga.core.geometry import segments_clear
 from jaxga.core.grid import Grid, blocked_at
+from jaxga.core.own_settings import own_settings
 from jaxga.curve_clearance import (
     DistanceField,
     distance_field,
@@ -394,6 +395,7 @@ def _smooth_one(grid: Grid, cells: jax.Array, length: jax.Array, field: Distance
 
 
 @functools.partial(jax.jit, static_argnames=("config",))
+@own_settings
 def smooth(
     grid: Grid,
     cells: jax.Array,
@@ -431,6 +433,7 @@ def smooth(
 
 
 @functools.partial(jax.jit, static_argnames=("config",))
+@own_settings
 def smooth_population(
     grid: Grid,
     cells: jax.Array,

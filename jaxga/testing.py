@@ -35,6 +35,7 @@ from jaxga.config.presets import load_preset
 from jaxga.core import prng
 from jaxga.core.grid import Grid
 from jaxga.core.objectives import path_length
+from jaxga.core.own_settings import own_settings
 from jaxga.core.paths import (
     Population,
     has_endpoints,
@@ -324,6 +325,7 @@ def default_setting() -> tuple[Grid, Population]:
     return grid, random_parents(grid, P, seed=5)
 
 
+@own_settings
 def check_operator(op: registry.Operator | str, fn: Callable | None = None, *,
                    grid: Grid | None = None, parents: Population | None = None,
                    key: jax.Array | None = None, field_repair: bool = False,

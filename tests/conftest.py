@@ -56,6 +56,16 @@ def pytest_configure(config: pytest.Config) -> None:
 
 
 @pytest.fixture(autouse=True)
+def _store_as_configured_here(monkeypatch):
+    """Each test starts with the store of the suite's settings (JAX's cache folder,
+    ``$JAXGA_CACHE_DIR``): a command an earlier test ran in this process called
+    ``jaxga.configure``, whose folder would otherwise win over a test's own."""
+    from jaxga._runtime import compilation_cache
+
+    monkeypatch.setattr(compilation_cache, "_configured", {})
+
+
+@pytest.fixture(autouse=True)
 def _bounded_compiled_programs():
     yield
     n = mapped_regions()

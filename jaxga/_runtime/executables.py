@@ -322,7 +322,7 @@ def _compiling(key: str | None) -> Iterator[None]:
     """Hold this process's lock on ``key``, then the store's (:func:`_compiling_here`):
     threads of one process that need the same program wait for each other on the first,
     without a word (a file lock would have one thread wait for "another process", its
-    own); at most :data:`LOCK_WAIT_S`, as for another process."""
+    own); each of the two waits lasts at most :data:`LOCK_WAIT_S`."""
     if key is None:
         yield
         return
@@ -389,7 +389,7 @@ def _compiling_here(key: str) -> Iterator[None]:
                         warnings.warn(
                             f"waiting for {who}, which compiles the same program (jaxga's "
                             f"program store; at most {LOCK_WAIT_S:.0f} s, then this process "
-                            "compiles it itself)", CacheWarning, stacklevel=4)
+                            "compiles it itself)", CacheWarning, stacklevel=6)
                 time.sleep(0.05)
             except OSError:  # a file system without locks
                 break

@@ -24,6 +24,7 @@ import jaxlib
 from jaxga._runtime.parallel import user_device_setting
 from jaxga.core.errors import ParameterError
 from jaxga.core.files import atomic_write_text
+from jaxga.core.own_settings import check_not_forked
 
 __all__ = ["check_jax_settings", "check_platform", "check_xla_flags", "xla_flags_verdicts"]
 
@@ -36,38 +37,13 @@ def _given(variable: str) -> str:
     return f" (${variable}={value})" if value is not None else ""
 
 
-_FORKED_AFTER_JAX = [False]
-"""Whether this process was forked from one whose JAX backend had started."""
-
-
-def _backend_started() -> bool:
-    try:
-        from jax._src import xla_bridge  # JAX's own record; no public equivalent
-
-        return bool(xla_bridge.backends_are_initialized())
-    except (ImportError, AttributeError):  # another JAX: nothing known, nothing refused
-        return False
-
-
-def _after_fork_in_child() -> None:
-    _FORKED_AFTER_JAX[0] = _FORKED_AFTER_JAX[0] or _backend_started()
-
-
-os.register_at_fork(after_in_child=_after_fork_in_child)
-
-
 def check_jax_settings() -> None:
     """Refuse JAX's 64-bit mode and a disabled ``jit`` (set by their environment variables
     or by ``jax.config.update``) in one :class:`ParameterError` line each; and a process
     forked from one whose JAX backend had started (``multiprocessing``'s default start
-    method on Linux, after a run, a Planner or a GA in the parent): JAX's backend does not
-    survive a fork, and its first computation in the child waits forever."""
-    if _FORKED_AFTER_JAX[0]:
-        raise ParameterError(
-            "this process was forked from one that had started JAX, whose backend does not "
-            "work after a fork (a run would wait forever): start the processes with "
-            "multiprocessing.get_context('spawn') or 'forkserver', or fork before the "
-            "first run")
+    method on Linux, after a run, a Planner or a GA in the parent:
+    :func:`jaxga.core.own_settings.check_not_forked`)."""
+    check_not_forked()
     if jax.config.jax_enable_x64:
         raise ParameterError(
             f"JAX's 64-bit mode is on{_given('JAX_ENABLE_X64')}: jaxga computes in 32 bits "

@@ -737,6 +737,7 @@ def checked_call(preset: str | Config | Problem, grid: Grid | MapInfo | str | No
     return problem, {k: v for k, v in named.items() if k not in PROBLEM_OPTIONS}
 
 
+@own_settings
 def check_run(preset: str | Config, grid: Grid | str, **options: Any) -> Config:
     """The configuration :func:`run` would use with these keyword ``options``
     (:func:`checked_call`'s problem's), checked as :func:`run` checks it before

@@ -1,4 +1,5 @@
-"""The JAX settings jaxga's own work runs under, whatever the user's process has.
+"""The JAX settings jaxga's own work runs under, whatever the user's process has; and the
+one process it cannot work in.
 
 A user sets JAX's switches for their own code; jaxga's public functions are written for
 JAX's defaults in two of them, and :func:`own_settings` gives them those while they run
@@ -15,6 +16,15 @@ JAX's defaults in two of them, and :func:`own_settings` gives them those while t
   (or warned) wherever a program was not already stored. Inside jaxga's functions it is
   allowed.
 
+- numeric dtype promotion (``jax_numpy_dtype_promotion``): under ``"strict"`` the
+  smoothing's mixed float and integer arithmetic failed; inside jaxga's functions it is
+  JAX's ``"standard"``.
+
+A process forked after JAX's backend started cannot compute: its first computation waits
+forever (JAX's backend does not survive a fork; ``multiprocessing``'s default start
+method on Linux forks). :func:`own_settings` refuses to start in such a process, in one
+line (:func:`check_not_forked`).
+
 The pure core's methods (:class:`jaxga.engine.run.PureGA`) carry it too, so a user's own
 ``jax.jit`` of ``GA.run`` traces them under it; the settings change no program (a
 traced function transfers nothing, and promotion is the same broadcast either way). An
@@ -24,24 +34,64 @@ operator called on its own, outside those methods, follows the user's settings.
 from __future__ import annotations
 
 import functools
+import os
 from collections.abc import Callable
 from typing import Any, TypeVar
 
 import jax
 
-__all__ = ["own_settings"]
+from jaxga.core.errors import ParameterError
+
+__all__ = ["check_not_forked", "own_settings"]
 
 F = TypeVar("F", bound=Callable[..., Any])
 
 
+_FORKED_AFTER_JAX = [False]
+"""Whether this process was forked from one whose JAX backend had started."""
+
+
+def _backend_started() -> bool:
+    """JAX's own record of its started backends, read without JAX's lock (in a forked
+    child a lock another thread of the parent held stays locked for good)."""
+    try:
+        from jax._src import xla_bridge  # JAX's own record; no public equivalent
+
+        return bool(getattr(xla_bridge, "_backends", None))
+    except ImportError:  # another JAX: nothing known, nothing refused
+        return False
+
+
+def _after_fork_in_child() -> None:
+    _FORKED_AFTER_JAX[0] = _FORKED_AFTER_JAX[0] or _backend_started()
+
+
+os.register_at_fork(after_in_child=_after_fork_in_child)
+
+
+def check_not_forked() -> None:
+    """Refuse, in one :class:`ParameterError` line, to work in a process forked from one
+    whose JAX backend had started (module docstring)."""
+    if _FORKED_AFTER_JAX[0]:
+        raise ParameterError(
+            "this process was forked from one that had started JAX, whose backend does not "
+            "work after a fork (a run would wait forever): start the processes with "
+            "multiprocessing.get_context('spawn') or 'forkserver', or fork before the "
+            "parent starts JAX (a map loaded, a GA built or a run)")
+
+
 def own_settings(fn: F) -> F:
     """``fn`` under jaxga's own JAX settings while it runs: JAX's transfers allowed
-    (``jax.transfer_guard("allow")``) and implicit rank promotion allowed
-    (``jax.numpy_rank_promotion("allow")``), thread-locally."""
+    (``jax.transfer_guard("allow")``), implicit rank promotion allowed
+    (``jax.numpy_rank_promotion("allow")``) and JAX's standard dtype promotion,
+    thread-locally; refused in a process forked after JAX started
+    (:func:`check_not_forked`)."""
 
     @functools.wraps(fn)
     def under_own_settings(*args: Any, **kwargs: Any) -> Any:
-        with jax.transfer_guard("allow"), jax.numpy_rank_promotion("allow"):
+        check_not_forked()
+        with jax.transfer_guard("allow"), jax.numpy_rank_promotion("allow"), \
+                jax.numpy_dtype_promotion("standard"):
             return fn(*args, **kwargs)
 
     return under_own_settings  # type: ignore[return-value]

@@ -100,8 +100,9 @@ def checked_key(key: Any) -> Any:
         if impl != IMPL:
             raise ParameterError(
                 f"a key of the {impl!r} generator: jaxga's runs take Threefry keys "
-                f"(jax.random.PRNGKey(seed) or jax.random.key(seed)), whose bits do not "
-                f"depend on the other runs of a batch")
+                f"(jaxga.core.prng.seed_key(seed), or jax.random.key(seed, "
+                f"impl='threefry2x32')), whose bits do not depend on the other runs of a "
+                f"batch")
         if shape != ():
             raise ParameterError(f"one run takes one key, got keys of shape {shape}: "
                                  "jax.vmap the function over them")
@@ -112,5 +113,6 @@ def checked_key(key: Any) -> Any:
             else type(key).__name__)
     hint = (": jax.vmap the function over them" if dtype == jnp.uint32 and shape
             and shape[-1] == 2 else "")
-    raise ParameterError(f"a run's key must be a Threefry key (jax.random.PRNGKey(seed), a "
-                         f"uint32[2], or jax.random.key(seed)), got {what}{hint}")
+    raise ParameterError(f"a run's key must be one Threefry key (jaxga.core.prng.seed_key("
+                         f"seed), a uint32[2], or jax.random.key(seed, "
+                         f"impl='threefry2x32')), got {what}{hint}")

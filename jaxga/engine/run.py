@@ -16,6 +16,7 @@ import jax
 
 from jaxga.core import prng
 from jaxga.core.errors import ParameterError
+from jaxga.core.fields import shown_value
 from jaxga.core.grid import Grid, as_integer
 from jaxga.core.own_settings import own_settings
 from jaxga.engine.algorithm import Algorithm
@@ -110,7 +111,8 @@ class PureGA:
             except TypeError:
                 generations = -1
             if generations < 0:
-                raise ParameterError(f"generations must be an integer >= 0, got {given!r}")
+                raise ParameterError(f"generations must be an integer >= 0, got "
+                                     f"{shown_value(given)}")
         return run_evolve(self.algorithm, prng.checked_key(key), self._grid(grid), state,
                           params, generations, count)
 
@@ -131,7 +133,8 @@ class PureGA:
     def run(self, key: jax.Array, params: dict, grid: Grid | None = None,
             generations: int | None = None) -> RunOutputs:
         """:meth:`init`, :meth:`evolve` and :meth:`finish` of one run: seed ``s`` of
-        :func:`jaxga.run` is ``run(jax.random.PRNGKey(s), ga.default_params)``;
+        :func:`jaxga.run` is ``run(jaxga.core.prng.seed_key(s), ga.default_params)``
+        (``jax.random.PRNGKey(s)`` under JAX's default PRNG settings);
         ``grid``: another pair of endpoints on this map (:meth:`jaxga.GA.grid_for`)."""
         state = self.init(key, params, grid)
         initial_best = state.best_fitness  # a best found at initialisation converges at 0

@@ -46,6 +46,9 @@ def _same_runs(a: jaxga.Result, b: jaxga.Result) -> None:
 
 
 def test_a_run_is_the_same_under_the_users_prng_settings():
+    """The drivers' own part: the seeds' keys (no seed offset) and their host work. The
+    programs are the stored ones (the store's key leaves the PRNG settings out, since the
+    programs do not depend on them: the pure core's lowering below shows it)."""
     alone = canonical.run("sga")
     with user_prng():
         under = canonical.run("sga")
@@ -146,15 +149,20 @@ def test_a_process_forked_after_jax_started_is_refused_in_one_line():
     before JAX started, the child is not refused."""
     from jaxga._runtime import jax_settings
 
-    jax.devices()  # the backend has started in this process
+    ga = _small_ga()  # the backend has started in this process
     read, write = os.pipe()
     pid = os.fork()
-    if pid == 0:  # the child: report what the check says, and leave at once
+    if pid == 0:  # the child: report what the checks say, and leave at once
         try:
-            jax_settings.check_jax_settings()
+            jax_settings.check_jax_settings()  # as every driver and command does
             said = "not refused"
         except jaxga.ParameterError as e:
             said = str(e)
+        try:  # a method of the pure core, of a GA built before the fork
+            ga.init(jax.random.PRNGKey(0), ga.default_params)
+            said += "|not refused"
+        except jaxga.ParameterError as e:
+            said += "|" + str(e)
         except BaseException as e:  # noqa: BLE001 - anything, reported to the parent
             said = f"{type(e).__name__}: {e}"
         os.write(write, said.encode()[:4000])
@@ -163,8 +171,10 @@ def test_a_process_forked_after_jax_started_is_refused_in_one_line():
     with os.fdopen(read) as pipe:
         said = pipe.read()
     os.waitpid(pid, 0)
-    assert said.startswith("this process was forked from one that had started JAX")
-    assert "'spawn'" in said and "\n" not in said
+    checked, method = said.split("|")
+    assert checked == method and "\n" not in said
+    assert checked.startswith("this process was forked from one that had started JAX")
+    assert "'spawn'" in checked
 
 
 @pytest.mark.parametrize("kwargs, words", [
@@ -181,3 +191,18 @@ def test_doctors_arguments_are_checked_before_any_probe(kwargs, words, monkeypat
     monkeypatch.setattr(device_probe, "probe", lambda *a: pytest.fail("probed"))
     with pytest.raises(jaxga.ParameterError, match=re.escape(words)):
         jaxga.doctor(presets=[], **kwargs)
+
+
+def test_the_smoothing_traces_under_the_users_promotion_settings():
+    """``jaxga.smooth.smooth`` mixes ranks and float with integer arithmetic: under
+    ``"raise"`` and ``"strict"`` its tracing failed ("subtract on shapes (40, 2) (2,)").
+    Traced only (``jax.eval_shape``): the failure was in tracing."""
+    from jaxga.smooth import smooth
+
+    r = canonical.run("sga", seeds=1)
+    cells = jnp.asarray(r.paths.cells[0])
+    n = jnp.asarray(r.paths.n_cells[0])
+    grid = jaxga.GA("sga", canonical.MAP).grid
+    with jax.numpy_rank_promotion("raise"), jax.numpy_dtype_promotion("strict"):
+        out = jax.eval_shape(smooth, grid, cells, n)
+    assert out == jax.eval_shape(smooth, grid, cells, n)
