@@ -54,10 +54,11 @@ LINT_RUNS = 256  # a batch wide enough for the compacted loops (jaxga._batching.
 def _site(eqn, parent: str) -> str:
     """``module:function`` of the innermost jaxga frame that made ``eqn``, or
     ``parent``'s (an equation inside a jitted JAX function, such as ``jnp.argsort``,
-    records only the frames inside it)."""
+    records only the frames inside it). jaxga's draws (:mod:`jaxga.core.prng`) are JAX's
+    own functions: their caller is the site."""
     frames = eqn.source_info.traceback.frames if eqn.source_info.traceback else []
     for f in frames:
-        if f.file_name.startswith(PACKAGE):
+        if f.file_name.startswith(PACKAGE) and not f.file_name.endswith("core/prng.py"):
             return f"{f.file_name[len(PACKAGE):]}:{f.function_name}"
     return parent
 
