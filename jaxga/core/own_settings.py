@@ -2,7 +2,7 @@
 one process it cannot work in.
 
 A user sets JAX's switches for their own code; jaxga's public functions are written for
-JAX's defaults in two of them, and :func:`own_settings` gives them those while they run
+JAX's defaults in three of them, and :func:`own_settings` gives them those while they run
 (thread-local; the user's settings are back on return, for their code around them):
 
 - the transfer guard (``jax_transfer_guard``, ``JAX_TRANSFER_GUARD``, the
@@ -15,7 +15,6 @@ JAX's defaults in two of them, and :func:`own_settings` gives them those while t
   different ranks as NumPy does; under ``"raise"`` (or ``"warn"``) their tracing failed
   (or warned) wherever a program was not already stored. Inside jaxga's functions it is
   allowed.
-
 - numeric dtype promotion (``jax_numpy_dtype_promotion``): under ``"strict"`` the
   smoothing's mixed float and integer arithmetic failed; inside jaxga's functions it is
   JAX's ``"standard"``.
