@@ -143,7 +143,7 @@ def _stats(v: np.ndarray) -> tuple[float, float, float, float]:
     v = v[np.isfinite(v)]
     if v.size == 0:
         return (math.nan,) * 4
-    return (float(v.mean()), float(v.std(ddof=1)) if v.size > 1 else 0.0,
+    return (float(v.mean()), float(v.std(ddof=1)) if v.size > 1 else math.nan,
             float(v.min()), float(v.max()))
 
 
@@ -420,10 +420,15 @@ def compare_results(
     if metric not in metrics:
         metrics = (metric,) + metrics
     rs = list(results.values())
-    keys = {(r.map_name, r.corner_rule, r.optimum) for r in rs}
+    # a map given as a bare Grid is named "grid" whatever it holds: its size, endpoints
+    # and optimum tell such maps apart
+    keys = {(r.map_name, r.corner_rule, None if np.isnan(r.optimum) else float(r.optimum),
+             r.width, r.start, r.goal) for r in rs}
     if len(keys) > 1:
-        raise ParameterError("the results to compare are on different maps or corner rules: "
-                             + "; ".join(f"{k[0]} ({k[1]})" for k in sorted(keys, key=str)))
+        raise ParameterError(
+            "the results to compare are on different maps, endpoints or corner rules: "
+            + "; ".join(f"{k[0]} ({k[1]}, width {k[3]}, start {k[4]}, goal {k[5]}, optimum "
+                        f"{k[2]})" for k in sorted(keys, key=str)))
     if test == "wilcoxon" and any(not np.array_equal(r.seeds, rs[0].seeds) for r in rs):
         raise ParameterError("the Wilcoxon signed-rank test pairs runs by seed: every "
                              "preset must have run the same seeds")

@@ -21,6 +21,7 @@ import numpy as np
 
 from jaxga.compare import metric_values
 from jaxga.core.errors import ParameterError
+from jaxga.core.fields import shown_value
 from jaxga.core.files import atomic_write
 from jaxga.core.grid import Grid, as_integer
 from jaxga.core.matplotlib_env import matplotlib_ready
@@ -182,6 +183,11 @@ def plot_map(grid: Grid, paths: Sequence[tuple[Sequence[tuple[int, int]], str]] 
     the cells that are not unknown, the paths, the endpoints and the ``include`` cells,
     with a small margin (the image still holds the whole map; :func:`_view_box`).
     """
+    paths = list(paths)
+    for item in paths:
+        if not (isinstance(item, (tuple, list)) and len(item) == 2 and isinstance(item[1], str)):
+            raise ParameterError(f"plot_map: paths must be (path, label) pairs, got "
+                                 f"{shown_value(item)} (one path: paths=[(path, 'best')])")
     plt = _pyplot()
     if ax is None:
         size = (6.2, 5) if max(grid.shape) <= 100 else (7.6, 6.2)
@@ -288,10 +294,16 @@ def plot_convergence(histories: dict[str, np.ndarray], ax=None, label: str = "",
     best path already) instead of drawing a line at an arbitrary height; otherwise the
     legend gives the first and last values and the relative change.
     """
+    best = np.asarray(histories["best"], float) if hasattr(histories, "keys") and \
+        "best" in histories else None
+    if best is None or best.ndim != 2 or best.shape[0] < 1:
+        raise ParameterError(
+            "plot_convergence: histories must be a mapping whose 'best' is float[seeds, "
+            "generations] with at least one seed (a Result's history), got "
+            + (shown_value(histories) if best is None else f"'best' of shape {best.shape}"))
     plt = _pyplot()
     if ax is None:
         _, ax = plt.subplots(figsize=(5, 3.5))
-    best = np.asarray(histories["best"], float)
     ax.set_xlabel("generation")
     ax.set_ylabel("best fitness (higher is better)")
     which = "seeds"
@@ -505,6 +517,12 @@ def plot_box(data, metric: str | None = None, ax=None, reference: dict | None = 
     post-optimised lengths, 0 for gaps) or a mapping label -> per-seed values (NaN =
     failed) with optional ``reference`` lines ``{label: value}``.
     """
+    if hasattr(data, "history") and hasattr(data, "preset"):  # one Result: one box
+        data = {data.preset: metric_values(data, metric or "length")}
+        metric = metric or "length"
+    elif not (hasattr(data, "results") or hasattr(data, "items")):
+        raise ParameterError(f"plot_box: data must be a Comparison, a Result or a mapping "
+                             f"label -> per-seed values, got {shown_value(data)}")
     plt = _pyplot()
     if ax is None:
         n = len(data.results) if hasattr(data, "results") else len(data)
@@ -597,6 +615,11 @@ def save_figure(fig, out: str | Path) -> None:
     without one) atomically (:func:`jaxga.core.files.atomic_write`: a failed save leaves a
     previous file whole), and close it."""
     fmt = Path(out).suffix.lower().lstrip(".") or "png"
+    known = fig.canvas.get_supported_filetypes()
+    if fmt not in known:
+        _pyplot().close(fig)
+        raise ParameterError(f"cannot save a figure as {out}: the format follows the "
+                             f"extension, one of .{', .'.join(sorted(known))}")
     try:
         atomic_write(out, lambda f: fig.savefig(f, format=fmt, dpi=110, bbox_inches="tight"),
                      binary=True)

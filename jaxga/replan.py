@@ -260,6 +260,10 @@ def _obstacle_mask(new_obstacles: Any, h: int, w: int) -> np.ndarray:
             raise ParameterError(f"new_obstacles mask has shape {arr.shape}, the map is "
                                  f"{(h, w)} (H, W)")
         return arr.copy()
+    if arr.ndim == 2 and arr.shape == (h, w) and w != 2:  # (H, 2) could be pairs
+        raise ParameterError(f"new_obstacles of the map's shape {(h, w)} but of type "
+                             f"{arr.dtype}: a mask must be bool (mask.astype(bool)), a list "
+                             "of cells (x, y) pairs")
     mask = np.zeros((h, w), bool)
     for x, y in _as_xy_list(new_obstacles, "new_obstacles"):
         if not _on_map((x, y), w, h):

@@ -85,6 +85,7 @@ import optax
 from jaxga.bspline import norm, quadrature_matrices, span_coefficients
 from jaxga.core.dtypes import F32
 from jaxga.core.errors import ParameterError
+from jaxga.core.fields import shown_value
 from jaxga.core.geometry import segments_clear
 from jaxga.core.grid import Grid, blocked_at
 from jaxga.core.own_settings import own_settings
@@ -423,6 +424,7 @@ def smooth(
     Returns:
         A :class:`SmoothResult`.
     """
+    cells, length = _checked_path_arrays(cells, length, batched=False)
     if field is None:
         field = distance_field(grid, config.upsample)
     # A batch of one, so that a path gets the same curve alone as in a population: the
@@ -446,10 +448,36 @@ def smooth_population(
     The distance field is computed once (when not given) and shared; the paths are
     ``jax.vmap``-ed, so every field of the result gains a leading ``[P]`` axis.
     """
+    cells, length = _checked_path_arrays(cells, length, batched=True)
     if field is None:
         field = distance_field(grid, config.upsample)
-    return _smooth_batch(grid, jnp.asarray(cells, jnp.int32), jnp.asarray(length, jnp.int32),
-                         field, config)
+    return _smooth_batch(grid, cells, length, field, config)
+
+
+def _checked_path_arrays(cells: Any, length: Any, *, batched: bool) -> tuple[jax.Array, ...]:
+    """``(cells, length)`` as int32 arrays of :func:`smooth`'s (``batched``:
+    :func:`smooth_population`'s) shapes, else one :class:`ParameterError` line. Checked
+    from their types alone, under ``jax.jit`` too: cell indices given as floats (NaN would
+    become a cell) or as ``(x, y)`` pairs are refused, not converted."""
+    name = "smooth_population" if batched else "smooth"
+    want = "int32[P, L] cell indices y * W + x" if batched else "int32[L] cell indices y * W + x"
+    try:
+        c, n = jnp.asarray(cells), jnp.asarray(length)
+    except (TypeError, ValueError) as e:
+        raise ParameterError(f"{name}: cells must be {want} and length their number of "
+                             f"nodes, got {shown_value(cells)} ({e})") from None
+    rank = 2 if batched else 1
+    if c.ndim != rank or c.shape[-1] < 1 or not jnp.issubdtype(c.dtype, jnp.integer):
+        hint = ("; a Result's path(i) is (x, y) pairs: pass r.cells[i] and r.n_cells[i]"
+                if c.ndim == rank + 1 and c.shape[-1] == 2 else "")
+        raise ParameterError(f"{name}: cells must be {want}, got {c.dtype}{list(c.shape)}"
+                             f"{hint}")
+    if n.ndim != rank - 1 or not jnp.issubdtype(n.dtype, jnp.integer) or (
+            batched and n.shape[0] != c.shape[0]):
+        raise ParameterError(f"{name}: length must be an integer "
+                             f"{'array of one per path' if batched else 'scalar'}, got "
+                             f"{n.dtype}{list(n.shape)}")
+    return c.astype(jnp.int32), n.astype(jnp.int32)
 
 
 def _smooth_batch(grid: Grid, cells: jax.Array, length: jax.Array, field: DistanceField,

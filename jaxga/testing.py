@@ -33,6 +33,8 @@ import numpy as np
 from jaxga._runtime.fields import program_fields
 from jaxga.config.presets import load_preset
 from jaxga.core import prng
+from jaxga.core.errors import ParameterError
+from jaxga.core.fields import shown_value
 from jaxga.core.grid import Grid
 from jaxga.core.objectives import path_length
 from jaxga.core.own_settings import own_settings
@@ -349,8 +351,14 @@ def check_operator(op: registry.Operator | str, fn: Callable | None = None, *,
         AssertionError: naming the operator and the rule it broke.
     """
     if isinstance(op, str):
+        if op not in registry.FAMILIES:
+            raise ValueError(f"check_operator: unknown operator family {shown_value(op)} "
+                             f"(one of {', '.join(registry.FAMILIES)})")
         if fn is None:
             raise TypeError("check_operator(family, fn): give the operator's function")
+        if not callable(fn):
+            raise TypeError(f"check_operator({op!r}, fn): fn must be a function, got "
+                            f"{shown_value(fn)}")
         declaration.setdefault("name", getattr(fn, "__name__", "operator"))
         declaration.setdefault("summary", "an operator under test")
         op = registry.Operator(family=op, fn=fn, **declaration)
@@ -371,6 +379,8 @@ def check_operator(op: registry.Operator | str, fn: Callable | None = None, *,
         registry.register(op)
     try:
         check_family(op, grid, parents, key, field_repair)
+    except ParameterError as e:  # outputs of another shape than the family's contract
+        raise AssertionError(str(e)) from None
     finally:
         if not registered:
             registry.unregister(op.family, op.name)

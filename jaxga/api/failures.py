@@ -14,6 +14,7 @@ from jaxga._runtime.sweep_plan import InitOutcome, SweepPlan
 from jaxga.api.result import Result
 from jaxga.core.errors import InitialisationWarning
 from jaxga.core.objectives import Metrics
+from jaxga.operators import registry
 
 
 def unstarted_results(plan: SweepPlan, start: InitOutcome, timing: dict) -> list[Result]:
@@ -89,13 +90,20 @@ def failure_causes(success: np.ndarray, started: np.ndarray, init_rate: np.ndarr
                    shortest_cells: int) -> np.ndarray:
     """Per seed, why it returned no path ("" for a successful seed): its initialisation
     gave it no path (the initialiser never succeeded on this map, with or without the
-    fallback; or the path capacity is below the shortest path's cell count), or its best
-    path did not survive the final feasibility check."""
+    fallback; or the path capacity is below the shortest path's cell count; or the
+    objective gave none of the paths it made a finite fitness > 0, as a user's objective
+    may), or its best path did not survive the final feasibility check."""
     out = np.full(len(success), "", dtype=object)
     method, fallback = config.get("init.method"), config.get("init.fallback", "none")
+    own = _own_objective(config)
     for i in np.flatnonzero(~np.asarray(success)):
         if started[i]:
             out[i] = "lost its best path in the final feasibility check"
+        elif own is not None and (init_rate[i] > 0 or from_fallback[i] > 0):
+            out[i] = (f"got no initial path of fitness > 0: its initialisers made paths, "
+                      f"but the objective {own!r} gave none of them a finite fitness > 0 "
+                      "(an objective gives a feasible path a finite value > 0, an "
+                      "infeasible one 0)")
         elif capacity < shortest_cells:
             out[i] = (f"got no initial path: population.capacity = {capacity} is probably "
                       f"too small: the shortest 8-connected path has {shortest_cells} cells "
@@ -108,6 +116,18 @@ def failure_causes(success: np.ndarray, started: np.ndarray, init_rate: np.ndarr
             out[i] = (f"got no initial path: the initialiser {method!r} succeeded in none of "
                       f"its attempts and the fallback {fallback!r} made none either")
     return out
+
+
+def _own_objective(config) -> str | None:
+    """The name of the configuration's objective when it is a user's own (registered from
+    outside jaxga, whose values jaxga cannot vouch for), else None."""
+    name = config.get("fitness.method")
+    try:
+        fn = registry.operator("fitness", name).fn
+    except (KeyError, ValueError, TypeError):
+        return None
+    module = getattr(fn, "__module__", "") or ""
+    return None if module == "jaxga" or module.startswith("jaxga.") else str(name)
 
 
 def failure_reason(causes: np.ndarray) -> str:

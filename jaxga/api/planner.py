@@ -21,14 +21,16 @@ from __future__ import annotations
 
 import dataclasses
 from collections.abc import Callable
+from pathlib import Path
 from typing import Any
 
+from jaxga._runtime.seeds import seed_list
 from jaxga.api.problem import load_problem
 from jaxga.api.result import Result
 from jaxga.api.runs import run
 from jaxga.config.schema import Config
 from jaxga.core.errors import ParameterError
-from jaxga.core.grid import check_corner_rule
+from jaxga.core.grid import Grid, check_corner_rule
 from jaxga.core.own_settings import own_settings
 from jaxga.engine.algorithm import map_capacity
 from jaxga.maps import MapInfo, load_map_info
@@ -44,7 +46,8 @@ class Planner:
 
     Args:
         map: a map file (a ROS ``map_server`` YAML, an image, a Moving AI map, ...), a
-            built-in map's name, or a :class:`jaxga.maps.MapInfo` already loaded.
+            built-in map's name, a :class:`jaxga.maps.MapInfo` already loaded, or a
+            :class:`jaxga.Grid` (cells only: no metres, its own endpoints unused).
         preset: the preset (default ``"hybrid"``: a path on any map, close to the exact
             any-angle optimum), a TOML file or a :class:`Config`.
         seeds: runs per plan (the best of them is :meth:`Result.best_seed`).
@@ -86,12 +89,26 @@ class Planner:
                     f"path, {loading[0]}=...)) or give the Planner the map's path")
             self.map = map if corner_rule is None else dataclasses.replace(
                 map, grid=map.grid.replace(corner_rule=check_corner_rule(corner_rule)))
+        elif isinstance(map, Grid):  # a map of the user's own, in cells
+            loading = [name for name, value in (
+                ("robot_radius", robot_radius), ("inflate", inflate), ("coarsen", coarsen),
+                ("unknown", unknown)) if value is not None]
+            if loading:
+                raise ParameterError(
+                    f"{', '.join(loading)} given with a Grid, which has no metres nor "
+                    "unknown cells: inflate or coarsen its array first, or give the "
+                    "Planner a map file")
+            grid = map.validated()
+            if corner_rule is not None:
+                grid = grid.replace(corner_rule=check_corner_rule(corner_rule))
+            self.map = MapInfo(name="grid", path=Path("grid"), format="grid", builtin=False,
+                               grid=grid)
         else:
             self.map = load_map_info(map, robot_radius=robot_radius, inflate=inflate,
                                      coarsen=coarsen, unknown=unknown,
                                      corner_rule=corner_rule)
         self.preset = preset
-        self.seeds = seeds
+        self.seeds = _checked_seeds(seeds)
         self.any_angle_budget = any_angle_budget
         config = load_problem(preset, self.map, None, None, (), overrides, None,
                               check_endpoints=False)[0]
@@ -125,3 +142,21 @@ class Planner:
         budget = self.any_angle_budget if any_angle_budget is None else any_angle_budget
         return run(self.preset, problem, self.seeds if seeds is None else seeds,
                    progress=progress, any_angle_budget=budget, **self.overrides)
+
+
+class _Counted(Exception):
+    """Raised by :func:`_checked_seeds`'s count check: the seeds were read, and nothing of
+    their number need be allocated."""
+
+
+def _checked_seeds(seeds: Any) -> Any:
+    """``seeds`` as given, once :func:`jaxga._runtime.seeds.seed_list` accepts them: a bad
+    value is refused when the planner is made, not at its first plan."""
+    def counted(n: int) -> None:
+        raise _Counted
+
+    try:
+        seed_list(seeds, counted)
+    except _Counted:
+        pass
+    return seeds

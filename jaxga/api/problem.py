@@ -6,6 +6,7 @@ user's own operator functions registered under their names (:func:`own_operators
 from __future__ import annotations
 
 import contextlib
+import inspect
 from collections.abc import Mapping, Sequence
 from os import PathLike
 from typing import Any, NamedTuple
@@ -20,7 +21,7 @@ from jaxga.core.errors import EndpointError, ParameterError
 from jaxga.core.grid import Grid, as_integer
 from jaxga.core.own_settings import own_settings
 from jaxga.engine import check_file_keys_read, check_overrides_read
-from jaxga.maps import MapInfo, load_map_info
+from jaxga.maps import MapInfo, load_map, load_map_info
 from jaxga.maps.frame import MapFrame
 from jaxga.operators import registry
 
@@ -142,6 +143,13 @@ def load_problem(preset, grid, corner_rule, variant, sets, overrides, generation
     check_jax_settings()  # 64-bit mode, jit disabled
     check_platform()
     map_options = {k: v for k, v in (map_options or {}).items() if v is not None}
+    known = [k for k in inspect.signature(load_map).parameters if k not in
+             ("source", "corner_rule")]
+    unknown = sorted(str(k) for k in map_options if k not in known)
+    if unknown:
+        raise ParameterError(f"unknown map option(s) {', '.join(map(repr, unknown))}: "
+                             f"map_options takes {', '.join(known)} (the corner rule is "
+                             "the call's corner_rule)")
     if map_options and (isinstance(preset, Problem) or not isinstance(grid, (str, PathLike))):
         raise ParameterError("map_options apply to a map file or a built-in map's name, "
                              "not to a loaded map or a Problem: load it with them instead")

@@ -16,6 +16,7 @@ import numpy as np
 from jaxga._runtime.timeline import time_line
 from jaxga.config.schema import Config
 from jaxga.core.errors import ParameterError
+from jaxga.core.fields import shown_value
 from jaxga.engine import (
     uses_waypoints,
 )
@@ -354,9 +355,21 @@ class Result:
         """The exact optima and bounds it is measured against (:class:`References`)."""
         return self._record(References)
 
+    def seed_index(self, i: Any) -> int:
+        """``i`` as a position in :attr:`seeds` (``-n <= i < n``), or one
+        :class:`~jaxga.core.errors.ParameterError` line: what every per-seed method takes."""
+        n, seeds = len(self.seeds), [int(s) for s in self.seeds]
+        if isinstance(i, (bool, np.bool_)) or not isinstance(i, (int, np.integer)) \
+                or not -n <= int(i) < n:
+            raise ParameterError(f"a seed's position must be an integer from 0 to {n - 1} "
+                                 f"(its place in r.seeds = {shown_value(seeds)}, "
+                                 f"not the seed itself), got {shown_value(i)}")
+        return int(i) % n
+
     def path(self, i: int, raw: bool = False) -> list[tuple[int, int]] | None:
         """Seed ``i``'s best path as ``(x, y)`` cells (post-optimised unless ``raw``); None
         for a seed that found no path (:attr:`causes` says why)."""
+        i = self.seed_index(i)
         if not self.success[i]:
             return None
         c = self.raw_cells[i] if raw else self.cells[i]
@@ -432,7 +445,8 @@ class Result:
         return np.asarray(getattr(self, name), float)
 
     def summary_rows(self) -> list[tuple[str, float, float, float, float]]:
-        """``(metric, mean, sd, min, max)`` over successful seeds (AGACD Tables 8-9)."""
+        """``(metric, mean, sd, min, max)`` over successful seeds (AGACD Tables 8-9); the
+        sd (the sample's, ``ddof=1``) is NaN where one seed succeeded."""
         ok = self.success
         rows = []
         names = list(SUMMARY_METRICS) + list(GAPS)
@@ -441,8 +455,9 @@ class Result:
             if v.size == 0:
                 rows.append((name, math.nan, math.nan, math.nan, math.nan))
             else:
+                # the sample sd of one value is undefined: NaN, not 0 (no spread seen)
                 rows.append((name, float(v.mean()), float(v.std(ddof=1)) if v.size > 1
-                             else 0.0, float(v.min()), float(v.max())))
+                             else math.nan, float(v.min()), float(v.max())))
         return rows
 
     def _fitness_optimum_text(self) -> str:
@@ -456,6 +471,8 @@ class Result:
 
     def _initial_population_text(self) -> str:
         method = self.config.get("init.method") if self.config is not None else "?"
+        if math.isinf(self.optimum) and not self.success.any():  # no path: nothing was run
+            return f"initial population: not made ({method} was not run: no path exists)"
         text = (f"initial population: {method}, {100 * float(np.mean(self.init_success_rate)):.3g}"
                 f" % of its attempts succeeded; paths of up to {self.path_capacity} cells")
         made = np.zeros(len(self.seeds), int) if self.init_fallback is None \
@@ -528,7 +545,8 @@ class Result:
             lines[-1] = "no metrics: no seed found a path"
         else:
             for name, mean, sd, lo, hi in self.summary_rows():
-                lines.append(f"{name:24s} {mean:10.4f} {sd:10.4f} {lo:10.4f} {hi:10.4f}")
+                sd_text = f"{'-':>10s}" if math.isnan(sd) else f"{sd:10.4f}"  # one seed
+                lines.append(f"{name:24s} {mean:10.4f} {sd_text} {lo:10.4f} {hi:10.4f}")
         raw_basis = self.gap_basis if self._raw_waypoints() else "8-connected optimum"
         bound = {"lower bound": " (a lower bound of the any-angle optimum: at least the "
                                 "gap to that optimum)",
@@ -594,6 +612,7 @@ class Result:
         centres against the obstacle cells' squares, exact); None for a failed seed or a
         grid without a loaded map. ``metrics["min_clearance"]`` is the distance to the
         grid planned on (inflated), in planning cells."""
+        i = self.seed_index(i)
         f = self.frame
         path = self.path(i)
         if path is None or f is None or f.clearance is None:
@@ -604,6 +623,7 @@ class Result:
         """Metres between seed ``i``'s path's :meth:`obstacle_clearance` and the robot's
         radius the map was inflated by (``robot_radius``): what is left beyond the robot's
         body; None without a radius, a resolution or a path."""
+        i = self.seed_index(i)
         f = self.frame
         clearance = self.obstacle_clearance(i)
         if clearance is None or f.robot_radius is None or f.resolution is None:
@@ -616,6 +636,7 @@ class Result:
         clearance also in metres (``length_m``, ``clearance_m``) on a map with a
         resolution, and its ``path`` as ``(x, y)`` cells. Empty for a failed seed or a
         preset without a front."""
+        i = self.seed_index(i)
         if self.front is None or not self.success[i]:
             return []
         cell = None if self.frame is None else self.frame.cell_size
@@ -633,6 +654,7 @@ class Result:
         clearance; None where no obstacle bounds that clearance, on a map without
         obstacles); ``points``; ``hypervolume_gain`` (:meth:`Fronts.gain`). Nones
         without a front."""
+        i = self.seed_index(i)
         points = self.front_points(i)
         widest = max((p.get("clearance", math.nan) for p in points), default=math.nan)
         bound = self.maximin_clearance  # inf on a map without obstacles: no share of it
@@ -650,6 +672,7 @@ class Result:
         objective scaled to the front's range (the shortest end when the front has fewer
         than three points). :class:`ParameterError` for ``min_clearance`` where the
         front does not minimise the clearance."""
+        i = self.seed_index(i)
         if self.front is not None and min_clearance is not None:
             check_front_point(self.front.names, float(min_clearance))
         points = self.front_points(i)
@@ -675,6 +698,7 @@ class Result:
         the seed has no front or no point keeps it. :class:`ParameterError` where the
         front does not minimise the objective the point is chosen by
         (:func:`check_front_point`)."""
+        i = self.seed_index(i)
         if self.front is not None:
             check_front_point(self.front.names, which)
         points = self.front_points(i)

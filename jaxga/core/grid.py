@@ -200,25 +200,7 @@ class Grid:
         :class:`~jaxga.core.errors.JaxgaError` for a bad array or corner rule, or a map of more
         than :data:`MAX_MAP_CELLS` cells (:func:`too_large`).
         """
-        if isinstance(blocked, np.ma.MaskedArray) and np.ma.getmaskarray(blocked).any():
-            # np.asarray drops the mask (one with nothing masked is its data)
-            raise JaxgaError("a grid cannot be a masked array: which are its masked cells, "
-                             "free or blocked? Fill them first (np.ma.filled(a, 1): blocked)")
-        try:
-            arr = np.asarray(blocked)
-        except ValueError:  # ragged rows
-            raise JaxgaError("a grid must be a non-empty 2-D array with rows of equal "
-                             "length") from None
-        if arr.ndim != 2 or arr.shape[0] < 1 or arr.shape[1] < 1:
-            raise JaxgaError(f"a grid must be a non-empty 2-D array, got shape {arr.shape}")
-        if arr.dtype != np.bool_:
-            try:
-                zero_one = bool(np.all(np.isin(arr, (0, 1))))
-            except TypeError:  # structured or void records: no comparison with numbers
-                zero_one = False
-            if not zero_one:
-                raise JaxgaError("a grid array must hold booleans or 0/1 values")
-            arr = arr.astype(bool)
+        arr = blocked_array(blocked)
         h, w = arr.shape
         if too_large(w, h):
             raise JaxgaError(too_large(w, h))
@@ -341,6 +323,33 @@ def as_integer(value) -> int:
     if isinstance(value, (bool, np.bool_)):
         raise TypeError(f"{value!r} is a bool, not an integer")
     return int(operator.index(value))
+
+
+def blocked_array(blocked: Any) -> np.ndarray:
+    """``blocked`` as a ``bool[H, W]`` NumPy array, or one :class:`JaxgaError` line: a
+    non-empty 2-D array of booleans or 0/1 values (no NaN, 0.5, 2 or -1), not a masked
+    array with masked cells, rows of equal length. What :meth:`Grid.create` and
+    :func:`jaxga.maps.save_map` take; the size limit is :meth:`Grid.create`'s alone."""
+    if isinstance(blocked, np.ma.MaskedArray) and np.ma.getmaskarray(blocked).any():
+        # np.asarray drops the mask (one with nothing masked is its data)
+        raise JaxgaError("a grid cannot be a masked array: which are its masked cells, "
+                         "free or blocked? Fill them first (np.ma.filled(a, 1): blocked)")
+    try:
+        arr = np.asarray(blocked)
+    except ValueError:  # ragged rows
+        raise JaxgaError("a grid must be a non-empty 2-D array with rows of equal "
+                         "length") from None
+    if arr.ndim != 2 or arr.shape[0] < 1 or arr.shape[1] < 1:
+        raise JaxgaError(f"a grid must be a non-empty 2-D array, got shape {arr.shape}")
+    if arr.dtype != np.bool_:
+        try:
+            zero_one = bool(np.all(np.isin(arr, (0, 1))))
+        except TypeError:  # structured or void records: no comparison with numbers
+            zero_one = False
+        if not zero_one:
+            raise JaxgaError("a grid array must hold booleans or 0/1 values")
+        arr = arr.astype(bool)
+    return arr
 
 
 def check_xy(name: str, xy, w: int, h: int) -> tuple[int, int]:

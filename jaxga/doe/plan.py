@@ -106,14 +106,16 @@ def plan_doe(preset, grid, factors, design, seeds, generations, corner_rule, var
     ckpt = None
     if checkpoint is not None:
         ckpt = Checkpoint(checkpoint, {
-            "format": 2,  # 2: point files carry the experiment's mark
+            # 2: point files carry the experiment's mark; 3: the factors in their order (the
+            # coded design's columns follow it, so another order is another experiment)
+            "format": 3,
             "jaxga": jaxga.__version__,
             "jax": jax.__version__,
             "config": config.as_dict(),
             "map": map_fingerprint(loaded, map_name),
             "design": design,
             "coded": coded.tolist(),
-            "factors": {f.name: list(f.levels) for f in factors},
+            "factors": [[f.name, list(f.levels)] for f in factors],
             "seeds": [int(s) for s in seed_arr],
             "block": block,
             "capacity": capacity,

@@ -12,7 +12,10 @@ of the same algorithm, so seed ``s`` of a driver is ``GA.run(PRNGKey(s))``.
 
 from __future__ import annotations
 
+import dataclasses
+
 import jax
+import jax.numpy as jnp
 
 from jaxga.core import prng
 from jaxga.core.errors import ParameterError
@@ -126,8 +129,14 @@ class PureGA:
         best and its node count), ``cells`` / ``n_cells`` (post-optimised), ``length`` /
         ``raw_length`` (Euclidean, as :class:`jaxga.api.result.Result`), ``fitness``,
         ``metrics``, ...; with ``history``, also the convergence generation (0 for a best
-        the initial population already held, given its ``initial_best`` fitness)."""
-        return finish(self.algorithm, self._grid(grid), state, history, params, initial_best)
+        the initial population already held, given its ``initial_best`` fitness).
+
+        A run that found no path (``success`` False) has, as in ``jaxga.run``'s
+        ``Result``, NaN lengths and floating-point metrics (never 0, which a mean would
+        take for a path's), -1 integer metrics (turns, tangencies) and fitness 0;
+        :func:`jaxga.reference.shortest_path` says whether a path exists."""
+        out = finish(self.algorithm, self._grid(grid), state, history, params, initial_best)
+        return no_path_as_nan(out)
 
     @own_settings
     def run(self, key: jax.Array, params: dict, grid: Grid | None = None,
@@ -140,3 +149,16 @@ class PureGA:
         initial_best = state.best_fitness  # a best found at initialisation converges at 0
         state, history = self.evolve(key, state, params, generations, grid)
         return self.finish(state, params, history, initial_best, grid)
+
+
+def no_path_as_nan(out: RunOutputs) -> RunOutputs:
+    """``out`` with the lengths and metrics of a run without a path set to NaN (-1 for
+    the integer metrics)."""
+    def nan_unless(v: jax.Array) -> jax.Array:
+        missing = jnp.nan if jnp.issubdtype(v.dtype, jnp.floating) else -1
+        return jnp.where(out.success, v, missing).astype(v.dtype)
+
+    return dataclasses.replace(
+        out, length=nan_unless(out.length), raw_length=nan_unless(out.raw_length),
+        metrics={k: nan_unless(v) for k, v in out.metrics.items()},
+        raw_metrics={k: nan_unless(v) for k, v in out.raw_metrics.items()})

@@ -39,11 +39,14 @@ import io
 import os
 import re
 from pathlib import Path
+from typing import Any
 
 import numpy as np
 
-from jaxga.core.errors import MapFormatError
-from jaxga.core.grid import Grid
+from jaxga.core.errors import JaxgaError, MapFormatError
+from jaxga.core.fields import shown_value
+from jaxga.core.files import atomic_write, atomic_write_text
+from jaxga.core.grid import Grid, blocked_array
 from jaxga.core.matplotlib_env import matplotlib_ready
 from jaxga.maps import builtin
 from jaxga.maps.inputs import (
@@ -61,6 +64,7 @@ from jaxga.maps.inputs import (
     read_input,
     several_frames,
 )
+from jaxga.maps.ros import MAX_ORIGIN, MAX_RESOLUTION, MIN_RESOLUTION
 
 __all__ = [
     "FORMATS",
@@ -304,37 +308,55 @@ def save_map(grid: Grid | np.ndarray, path: Source, *, fmt: str | None = None,
     round-trip too; the other formats do not store endpoints. ``.yaml``/``.yml`` writes a
     ROS map as ``map_saver`` does: the YAML (``resolution``, ``origin``, trinary
     thresholds) and a binary PGM beside it (free 254, occupied 0). Returns the path.
+
+    Refused before anything is written (:class:`~jaxga.core.errors.MapFormatError`, one
+    line): an array :meth:`Grid.create` would refuse; a name whose extension
+    :func:`load_map` would read as another format than ``fmt`` (an image extension other
+    than ``.png``, ``.map`` for a non-Moving AI file, a ROS map not named ``.yaml``); a
+    resolution or origin a ROS map cannot have (:data:`jaxga.maps.ros.MIN_RESOLUTION` to
+    :data:`~jaxga.maps.ros.MAX_RESOLUTION` m, origins within
+    :data:`~jaxga.maps.ros.MAX_ORIGIN` m). Each file is written whole or not at all
+    (:func:`jaxga.core.files.atomic_write`).
     """
     p = Path(os.fspath(path))
+    suffix = p.suffix.lower()
     if fmt is None:
         fmt = {".map": "movingai", ".png": "png", ".ascii": "ascii", ".asc": "ascii",
-               ".yaml": "ros", ".yml": "ros"}.get(p.suffix.lower(), "01")
+               ".yaml": "ros", ".yml": "ros"}.get(suffix, "01")
     if fmt not in FORMATS:
-        raise MapFormatError(f"unknown map format {fmt!r}: expected one of {', '.join(FORMATS)}")
+        raise MapFormatError(f"unknown map format {shown_value(fmt)}: expected one of "
+                             f"{', '.join(FORMATS)}")
+    _check_name_reads_back(p, suffix, fmt)
     if isinstance(grid, Grid):
         blocked = grid.blocked_np()
         endpoints = (grid.start_xy, grid.goal_xy)
     else:
-        blocked = np.asarray(grid, dtype=bool)
+        try:  # the arrays a grid may be made of, and no other (of any size)
+            blocked = blocked_array(grid)
+        except JaxgaError as e:
+            raise MapFormatError(f"cannot save {p}: {e}") from None
         endpoints = None
-    if blocked.ndim != 2 or blocked.size == 0:
-        raise MapFormatError(f"cannot save a map of shape {blocked.shape}: need a 2-D array")
     h, w = blocked.shape
     if fmt == "png":
         matplotlib_ready()
         import matplotlib.image as mpimg
 
-        mpimg.imsave(p, (~blocked).astype(float), cmap="gray", vmin=0.0, vmax=1.0, origin="lower")
+        buf = io.BytesIO()
+        mpimg.imsave(buf, (~blocked).astype(float), cmap="gray", vmin=0.0, vmax=1.0,
+                     origin="lower", format="png")
+        atomic_write(p, lambda f: f.write(buf.getvalue()), binary=True)
         return p
     if fmt == "ros":
+        res, (x0, y0, yaw) = _checked_frame(p, resolution, origin)
         image = p.with_suffix(".pgm")
         pixels = np.where(blocked[::-1], 0, 254).astype(np.uint8)
-        image.write_bytes(f"P5\n# CREATOR: jaxga {resolution:.3f} m/pix\n{w} {h}\n255\n"
-                          .encode("ascii") + pixels.tobytes())
-        x0, y0, yaw = (float(v) for v in origin)
-        p.write_text(f"image: {image.name}\nmode: trinary\nresolution: {resolution:.6f}\n"
-                     f"origin: [{x0:.6f}, {y0:.6f}, {yaw:.6f}]\nnegate: 0\n"
-                     "occupied_thresh: 0.65\nfree_thresh: 0.196\n", encoding="utf-8")
+        header = f"P5\n# CREATOR: jaxga {res!r} m/pix\n{w} {h}\n255\n".encode("ascii")
+        atomic_write(image, lambda f: f.write(header + pixels.tobytes()), binary=True)
+        atomic_write_text(p, f"image: {image.name}\nmode: trinary\n"
+                             f"resolution: {_yaml_float(res)}\n"
+                             f"origin: [{_yaml_float(x0)}, {_yaml_float(y0)}, "
+                             f"{_yaml_float(yaw)}]\nnegate: 0\n"
+                             "occupied_thresh: 0.65\nfree_thresh: 0.196\n")
         return p
     if fmt == "01":
         lines = [" ".join("1" if b else "0" for b in row) for row in blocked]
@@ -348,8 +370,55 @@ def save_map(grid: Grid | np.ndarray, path: Source, *, fmt: str | None = None,
                 if not blocked[y, x]:
                     chars[y, x] = mark
         lines = ["".join(row) for row in chars[::-1]]
-    p.write_text("\n".join(lines) + "\n", encoding="utf-8")
+    atomic_write_text(p, "\n".join(lines) + "\n")
     return p
+
+
+def _check_name_reads_back(p: Path, suffix: str, fmt: str) -> None:
+    """Refuse a file name that :func:`load_map` would read as another format than
+    ``fmt`` (its extension decides before its content: :func:`detect_format`)."""
+    read_as = ("png" if suffix in IMAGE_SUFFIXES else "ros" if suffix in (".yaml", ".yml")
+               else "movingai" if suffix == ".map" else None)
+    if fmt == "png" and suffix != ".png":
+        raise MapFormatError(f"cannot save {p} as a PNG image: name it .png")
+    if fmt == "ros" and read_as != "ros":
+        raise MapFormatError(f"cannot save {p} as a ROS map: name its YAML file .yaml "
+                             "(the image goes beside it, as .pgm)")
+    if read_as is not None and read_as != fmt:
+        raise MapFormatError(f"cannot save {p} in the {fmt!r} format: load_map would read a "
+                             f"{suffix} file as {read_as!r}; use another extension")
+
+
+def _checked_frame(p: Path, resolution: Any, origin: Any) -> tuple[float, tuple]:
+    """``(resolution, (x, y, yaw))`` as finite floats a ROS map may have, else one line."""
+    try:
+        res = float(resolution)
+        x0, y0, yaw = (float(v) for v in origin)
+    except (TypeError, ValueError):
+        raise MapFormatError(f"cannot save {p}: resolution must be a number and origin three "
+                             f"numbers (x, y, yaw), got {shown_value(resolution)} and "
+                             f"{shown_value(origin)}") from None
+    if isinstance(resolution, bool) or not MIN_RESOLUTION <= res <= MAX_RESOLUTION:
+        raise MapFormatError(f"cannot save {p}: resolution must be {MIN_RESOLUTION:g} to "
+                             f"{MAX_RESOLUTION:g} m a cell, got {shown_value(resolution)}")
+    if not all(np.isfinite(v) and abs(v) <= MAX_ORIGIN for v in (x0, y0, yaw)):
+        raise MapFormatError(f"cannot save {p}: the origin must be finite, within "
+                             f"{MAX_ORIGIN:g} m, got {shown_value(origin)}")
+    return res, (x0, y0, yaw)
+
+
+def _yaml_float(x: float) -> str:
+    """``x`` written so that it reads back as the same float, as a float in YAML 1.1 too
+    (whose floats need a dot and a signed exponent: ``1e-09`` would be a string)."""
+    text = repr(float(x))
+    if "e" in text:
+        mantissa, exponent = text.split("e")
+        if "." not in mantissa:
+            mantissa += ".0"
+        if exponent[0] not in "+-":
+            exponent = "+" + exponent
+        text = f"{mantissa}e{exponent}"
+    return text
 
 
 # -------------------------------------------------------------------------- reading

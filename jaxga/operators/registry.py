@@ -47,6 +47,9 @@ import functools
 from collections.abc import Callable, Mapping
 from typing import Any
 
+import jax.numpy as jnp
+import numpy as np
+
 from jaxga.core.errors import ParameterError
 from jaxga.core.fields import Field, shown_value
 from jaxga.operators.lift import over_individuals_gated, over_pairs_gated
@@ -182,7 +185,8 @@ class Operator:
             kwargs["field_repair"] = True
         if self.options is not None:
             kwargs.update(self.options(ctx))
-        return functools.partial(self.fn, **kwargs) if kwargs else self.fn
+        bound = functools.partial(self.fn, **kwargs) if kwargs else self.fn
+        return bound if is_jaxgas(self.fn) else _checking_returns(self, bound)
 
     def lift(self, ctx: Binding) -> Callable:
         """The operator on a whole population, ``lifted(key, grid, pop, probability) ->
@@ -286,12 +290,71 @@ def register_operator(family: str, fn: Callable, name: str | None = None, *,
     current = canonical(family, name) if family in FAMILIES else None
     if current is not None and replace:
         old = _REGISTRY[family][current]
-        if old.fn is None or (getattr(old.fn, "__module__", None) or "").startswith("jaxga."):
+        if old.fn is None or is_jaxgas(old.fn):
             raise ValueError(f"{family} operator {name!r} is jaxga's own: choose another name")
         unregister(family, current)
     traits = frozenset(declaration.pop("traits", ()))
     return register(Operator(family, name, fn, summary or (fn.__doc__ or name).strip()
                              .split("\n")[0], traits=traits, **declaration))
+
+
+def is_jaxgas(fn: Callable | None) -> bool:
+    """Whether ``fn`` is one of jaxga's own functions (not a user's operator)."""
+    module = getattr(fn, "__module__", None) or ""
+    return module == "jaxga" or module.startswith("jaxga.")
+
+
+def _returns(family: str, args: tuple) -> tuple[str, list[tuple[tuple, str]]]:
+    """A family's contract for what an operator returns on ``args`` (one individual or
+    pair, as :meth:`Operator.bind` calls it): its words, and per output the shape and the
+    kind of dtype (``"i"`` integer, ``"f"`` floating, ``"b"`` bool)."""
+    def shape(x: Any) -> tuple:
+        return tuple(getattr(x, "shape", ()))
+
+    if family == "init":
+        cap = int(args[2])
+        return (f"(cells int32[{cap}], length int32, ok bool)",
+                [((cap,), "i"), ((), "i"), ((), "b")])
+    if family == "fitness":
+        return "one float32 per path", [((), "fi")]
+    if family == "selection":
+        n = shape(args[1])[:1]
+        return f"int32{list(n)}: one parent index per individual", [(n, "i")]
+    if family == "crossover":
+        c1, c2 = shape(args[2]), shape(args[4])
+        return (f"(cells int32{list(c1)}, length int32, cells int32{list(c2)}, length int32, "
+                "n_failed int32)", [(c1, "i"), ((), "i"), (c2, "i"), ((), "i"), ((), "ib")])
+    c = shape(args[1] if family == "post" else args[2])  # (key, grid, cells, length, *extra)
+    if family == "post":
+        return f"(cells int32{list(c)}, length int32)", [(c, "i"), ((), "i")]
+    return (f"(cells int32{list(c)}, length int32, failed bool or int32)",
+            [(c, "i"), ((), "i"), ((), "ib")])
+
+
+def _checking_returns(op: Operator, bound: Callable) -> Callable:
+    """``bound`` refusing, in one :class:`ParameterError` line when it is traced, outputs
+    of another structure, shape or kind of dtype than its family's contract (module
+    docstring): a user's operator of the wrong shape fails there, naming itself, not
+    deep in the engine with JAX's broadcasting error."""
+    def checked(*args: Any) -> Any:
+        out = bound(*args)
+        words, want = _returns(op.family, args)
+        got = list(out) if isinstance(out, (tuple, list)) else [out]
+        try:
+            arrays = [jnp.asarray(x) for x in got]
+        except TypeError:  # not an array, nor a number: refused below
+            arrays = [np.empty((0,), object) for _ in got]
+        kinds = [a.dtype.kind.replace("u", "i") for a in arrays]
+        shapes = [tuple(a.shape) for a in arrays]
+        if len(got) != len(want) or any(s != ws or k not in wk for s, k, (ws, wk)
+                                        in zip(shapes, kinds, want)):
+            shown = ", ".join(f"{getattr(x, 'dtype', type(x).__name__)}{list(s)}"
+                              for x, s in zip(got, shapes))
+            raise ParameterError(f"{op.family} operator {op.name!r} must return {words}, "
+                                 f"got ({shown})")
+        return out
+
+    return functools.wraps(bound)(checked) if hasattr(bound, "__name__") else checked
 
 
 def unregister(family: str, name: str) -> None:

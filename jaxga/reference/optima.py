@@ -35,12 +35,14 @@ import dataclasses
 import heapq
 import math
 import time
-from collections.abc import Callable, Iterator, Sequence
+from collections.abc import Callable, Iterator, Mapping, Sequence
+from collections.abc import Set as AbstractSet
 
 import numpy as np
 
 from jaxga.core.errors import EndpointError, JaxgaError, NoPathError
-from jaxga.core.grid import CORNER_RULES, Grid
+from jaxga.core.fields import shown_value
+from jaxga.core.grid import CORNER_RULES, Grid, as_integer
 from jaxga.maps.preprocess import legal_moves, move_edges
 
 __all__ = [
@@ -211,7 +213,23 @@ def check_rule(rule: str) -> str:
 
 
 def as_xy(xy: XY) -> tuple[int, int]:
-    x, y = (int(v) for v in np.asarray(xy).reshape(-1)[:2])
+    """``xy`` as a pair of Python integers ``(x, y)``, or one
+    :class:`~jaxga.core.errors.EndpointError` line: as :meth:`Grid.create`, ``1.5`` or a
+    triple is refused, not truncated."""
+    if type(xy) is tuple and len(xy) == 2 and all(
+            isinstance(v, (int, np.integer)) and not isinstance(v, bool) for v in xy):
+        return int(xy[0]), int(xy[1])  # the common case, in the searches' inner loops
+    try:
+        if isinstance(xy, (str, bytes, AbstractSet, Mapping)):  # {3, 1}: which is x?
+            raise TypeError
+        arr = np.asarray(xy)
+        if arr.shape != (2,) or arr.dtype == bool or (isinstance(xy, (tuple, list)) and any(
+                isinstance(v, (bool, np.bool_)) for v in xy)):
+            raise TypeError
+        x, y = (as_integer(v) for v in arr.tolist())
+    except (TypeError, ValueError):
+        raise EndpointError(f"a cell must be a pair of integers (x, y), got "
+                            f"{shown_value(xy)}") from None
     return x, y
 
 

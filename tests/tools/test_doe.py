@@ -457,6 +457,9 @@ def test_checkpointed_blocks_equal_one_call_and_resume(one_call, blocked, tmp_pa
     with pytest.raises(ParameterError, match="different configuration.*factors"):
         run_doe("agacd", MAP, (Factor("population.size", (10, 16, 20)),) + SMALL[1:],
                 "agacd-table4", seeds=3, checkpoint=ckpt, **KW)
+    # the same factors in another order: the design's columns mean other factors
+    with pytest.raises(ParameterError, match="different configuration.*factors"):
+        run_doe("agacd", MAP, SMALL[::-1], "agacd-table4", seeds=3, checkpoint=ckpt, **KW)
     with pytest.raises(ParameterError, match="different configuration.*block"):
         run_doe("agacd", MAP, SMALL, "agacd-table4", seeds=3, checkpoint=ckpt, block=2,
                 **KW)
