@@ -36,8 +36,11 @@ contract per family, i.e. what :meth:`Operator.bind` returns:
 ``crossover``, ``mutation`` and ``simplify`` operators reach a population through
 :meth:`Operator.lift` (``lifted(key, grid, pop, probability) -> (pop, n_failed)``); an
 operator that is itself a population-level composition (Zhu & Pan's half-and-half
-operators) gives its own ``population`` lift. ``"none"`` is registered in every family
-but ``init`` and ``fitness`` with ``fn=None``: the stage does nothing.
+operators) gives its own ``population`` lift. An operator of a user's own (a function
+from outside jaxga) is bound with a check of what it returns against this contract, made
+when it is traced: one line naming it, not a broadcasting error deep in the engine.
+``"none"`` is registered in every family but ``init`` and ``fitness`` with ``fn=None``: the
+stage does nothing.
 """
 
 from __future__ import annotations
@@ -312,8 +315,11 @@ def _returns(family: str, args: tuple) -> tuple[str, list[tuple[tuple, str]]]:
         return tuple(getattr(x, "shape", ()))
 
     if family == "init":
-        cap = int(args[2])
-        return (f"(cells int32[{cap}], length int32, ok bool)",
+        try:
+            cap = int(args[2])
+        except TypeError:  # a traced capacity: the outputs' own length
+            cap = None
+        return (f"(cells int32[{'capacity' if cap is None else cap}], length int32, ok bool)",
                 [((cap,), "i"), ((), "i"), ((), "b")])
     if family == "fitness":
         return "one float32 per path", [((), "fi")]
@@ -346,8 +352,9 @@ def _checking_returns(op: Operator, bound: Callable) -> Callable:
             arrays = [np.empty((0,), object) for _ in got]
         kinds = [a.dtype.kind.replace("u", "i") for a in arrays]
         shapes = [tuple(a.shape) for a in arrays]
-        if len(got) != len(want) or any(s != ws or k not in wk for s, k, (ws, wk)
-                                        in zip(shapes, kinds, want)):
+        if len(got) != len(want) or any(
+                len(s) != len(ws) or any(w is not None and a != w for a, w in zip(s, ws))
+                or k not in wk for s, k, (ws, wk) in zip(shapes, kinds, want)):
             shown = ", ".join(f"{getattr(x, 'dtype', type(x).__name__)}{list(s)}"
                               for x, s in zip(got, shapes))
             raise ParameterError(f"{op.family} operator {op.name!r} must return {words}, "
