@@ -514,7 +514,8 @@ def plot_box(data, metric: str | None = None, ax=None, reference: dict | None = 
     ``data`` is a :class:`~jaxga.compare.Comparison` (``metric`` defaults to its main
     metric, and the optima are drawn as horizontal reference lines: the any-angle
     optimum for post-optimised lengths, the exact 8-connected optimum for raw and
-    post-optimised lengths, 0 for gaps) or a mapping label -> per-seed values (NaN =
+    post-optimised lengths, 0 for gaps), one :class:`~jaxga.api.result.Result` (one box
+    of ``metric``, default its lengths) or a mapping label -> per-seed values (NaN =
     failed) with optional ``reference`` lines ``{label: value}``.
     """
     if hasattr(data, "history") and hasattr(data, "preset"):  # one Result: one box

@@ -262,8 +262,8 @@ def _obstacle_mask(new_obstacles: Any, h: int, w: int) -> np.ndarray:
         return arr.copy()
     if arr.ndim == 2 and arr.shape == (h, w) and w != 2:  # (H, 2) could be pairs
         raise ParameterError(f"new_obstacles of the map's shape {(h, w)} but of type "
-                             f"{arr.dtype}: a mask must be bool (mask.astype(bool)), a list "
-                             "of cells (x, y) pairs")
+                             f"{arr.dtype}: a mask must be bool (mask.astype(bool)), or give "
+                             "a list of (x, y) cells")
     mask = np.zeros((h, w), bool)
     for x, y in _as_xy_list(new_obstacles, "new_obstacles"):
         if not _on_map((x, y), w, h):

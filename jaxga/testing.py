@@ -33,7 +33,6 @@ import numpy as np
 from jaxga._runtime.fields import program_fields
 from jaxga.config.presets import load_preset
 from jaxga.core import prng
-from jaxga.core.errors import ParameterError
 from jaxga.core.fields import shown_value
 from jaxga.core.grid import Grid
 from jaxga.core.objectives import path_length
@@ -379,7 +378,7 @@ def check_operator(op: registry.Operator | str, fn: Callable | None = None, *,
         registry.register(op)
     try:
         check_family(op, grid, parents, key, field_repair)
-    except ParameterError as e:  # outputs of another shape than the family's contract
+    except registry.ContractError as e:  # outputs of another shape than the contract's
         raise AssertionError(str(e)) from None
     finally:
         if not registered:

@@ -58,6 +58,7 @@ from jaxga._runtime.lowering import jaxga_lowering, threefry_unrolled
 from jaxga.core.errors import CacheWarning, JaxgaError
 from jaxga.core.files import atomic_write
 from jaxga.engine import chosen_operators
+from jaxga.operators import registry
 
 try:
     import fcntl
@@ -86,7 +87,7 @@ def directory() -> Path | None:
 
 
 def _only_builtin_operators(algo: Any) -> bool:
-    return all(op.fn is None or (getattr(op.fn, "__module__", "") or "").startswith("jaxga.")
+    return all(op.fn is None or registry.is_jaxgas(op.fn)
                for op in chosen_operators(algo.config).values())
 
 

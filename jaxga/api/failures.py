@@ -126,8 +126,7 @@ def _own_objective(config) -> str | None:
         fn = registry.operator("fitness", name).fn
     except (KeyError, ValueError, TypeError):
         return None
-    module = getattr(fn, "__module__", "") or ""
-    return None if module == "jaxga" or module.startswith("jaxga.") else str(name)
+    return None if registry.is_jaxgas(fn) else str(name)
 
 
 def failure_reason(causes: np.ndarray) -> str:

@@ -20,7 +20,7 @@ Each plan is a :class:`jaxga.api.result.Result`, the same as :func:`jaxga.run` r
 from __future__ import annotations
 
 import dataclasses
-from collections.abc import Callable
+from collections.abc import Callable, Iterator
 from pathlib import Path
 from typing import Any
 
@@ -155,6 +155,8 @@ def _checked_seeds(seeds: Any) -> Any:
     def counted(n: int) -> None:
         raise _Counted
 
+    if isinstance(seeds, Iterator):  # read once here: kept as the list it gave
+        seeds = list(seeds)
     try:
         seed_list(seeds, counted)
     except _Counted:

@@ -17,6 +17,7 @@ from jaxga._runtime.timeline import time_line
 from jaxga.config.schema import Config
 from jaxga.core.errors import ParameterError
 from jaxga.core.fields import shown_value
+from jaxga.core.grid import as_integer
 from jaxga.engine import (
     uses_waypoints,
 )
@@ -358,13 +359,17 @@ class Result:
     def seed_index(self, i: Any) -> int:
         """``i`` as a position in :attr:`seeds` (``-n <= i < n``), or one
         :class:`~jaxga.core.errors.ParameterError` line: what every per-seed method takes."""
-        n, seeds = len(self.seeds), [int(s) for s in self.seeds]
-        if isinstance(i, (bool, np.bool_)) or not isinstance(i, (int, np.integer)) \
-                or not -n <= int(i) < n:
-            raise ParameterError(f"a seed's position must be an integer from 0 to {n - 1} "
+        n = len(self.seeds)
+        try:  # an integer of any kind (a 0-d array from an argmin too), not a bool
+            k = as_integer(i)
+        except TypeError:
+            k = None
+        if k is None or not -n <= k < n:
+            seeds = [int(s) for s in self.seeds]
+            raise ParameterError(f"a seed's position must be an integer from {-n} to {n - 1} "
                                  f"(its place in r.seeds = {shown_value(seeds)}, "
                                  f"not the seed itself), got {shown_value(i)}")
-        return int(i) % n
+        return k % n
 
     def path(self, i: int, raw: bool = False) -> list[tuple[int, int]] | None:
         """Seed ``i``'s best path as ``(x, y)`` cells (post-optimised unless ``raw``); None

@@ -131,10 +131,11 @@ class PureGA:
         ``metrics``, ...; with ``history``, also the convergence generation (0 for a best
         the initial population already held, given its ``initial_best`` fitness).
 
-        A run that found no path (``success`` False) has, as in ``jaxga.run``'s
-        ``Result``, NaN lengths and floating-point metrics (never 0, which a mean would
-        take for a path's), -1 integer metrics (turns, tangencies) and fitness 0;
-        :func:`jaxga.reference.shortest_path` says whether a path exists."""
+        A run that found no path (``success`` False) has NaN lengths and floating-point
+        metrics (never 0, which a mean would take for a path's), -1 integer metrics
+        (turns, tangencies; their dtype is kept) and fitness 0 (``jaxga.run``'s
+        ``Result`` shows NaN for all of them); :func:`jaxga.reference.shortest_path`
+        says whether a path exists."""
         out = finish(self.algorithm, self._grid(grid), state, history, params, initial_best)
         return no_path_as_nan(out)
 

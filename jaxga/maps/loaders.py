@@ -112,7 +112,7 @@ class MapInfo:
         name: short name for display: the built-in name, or the file name without its
             extension (see :func:`map_name`).
         path: the file that was read.
-        format: one of :data:`FORMATS`.
+        format: one of :data:`FORMATS`; "grid" for a bare Grid given to the Planner.
         builtin: True when ``source`` was the name of a built-in map.
         grid: the loaded :class:`~jaxga.Grid`.
         ros: a ROS map's metadata (resolution in metres per map cell, origin), else None.

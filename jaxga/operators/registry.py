@@ -51,7 +51,6 @@ from collections.abc import Callable, Mapping
 from typing import Any
 
 import jax.numpy as jnp
-import numpy as np
 
 from jaxga.core.errors import ParameterError
 from jaxga.core.fields import Field, shown_value
@@ -301,6 +300,12 @@ def register_operator(family: str, fn: Callable, name: str | None = None, *,
                              .split("\n")[0], traits=traits, **declaration))
 
 
+class ContractError(ParameterError):
+    """A user's operator returned what its family's contract does not allow (raised when
+    the operator is traced; :func:`jaxga.testing.check_operator` raises it as an
+    ``AssertionError``)."""
+
+
 def is_jaxgas(fn: Callable | None) -> bool:
     """Whether ``fn`` is one of jaxga's own functions (not a user's operator)."""
     module = getattr(fn, "__module__", None) or ""
@@ -338,7 +343,7 @@ def _returns(family: str, args: tuple) -> tuple[str, list[tuple[tuple, str]]]:
 
 
 def _checking_returns(op: Operator, bound: Callable) -> Callable:
-    """``bound`` refusing, in one :class:`ParameterError` line when it is traced, outputs
+    """``bound`` refusing, in one :class:`ContractError` line when it is traced, outputs
     of another structure, shape or kind of dtype than its family's contract (module
     docstring): a user's operator of the wrong shape fails there, naming itself, not
     deep in the engine with JAX's broadcasting error."""
@@ -346,19 +351,25 @@ def _checking_returns(op: Operator, bound: Callable) -> Callable:
         out = bound(*args)
         words, want = _returns(op.family, args)
         got = list(out) if isinstance(out, (tuple, list)) else [out]
-        try:
-            arrays = [jnp.asarray(x) for x in got]
-        except TypeError:  # not an array, nor a number: refused below
-            arrays = [np.empty((0,), object) for _ in got]
+        arrays = []
+        for x in got:
+            try:
+                arrays.append(jnp.asarray(x))
+            except (TypeError, ValueError):  # None, a string: not an array nor a number
+                arrays.append(None)
+        if any(a is None for a in arrays):
+            shown = ", ".join(type(x).__name__ if a is None else f"{a.dtype}{list(a.shape)}"
+                              for x, a in zip(got, arrays))
+            raise ContractError(f"{op.family} operator {op.name!r} must return {words}, "
+                                f"got ({shown})")
         kinds = [a.dtype.kind.replace("u", "i") for a in arrays]
         shapes = [tuple(a.shape) for a in arrays]
         if len(got) != len(want) or any(
                 len(s) != len(ws) or any(w is not None and a != w for a, w in zip(s, ws))
                 or k not in wk for s, k, (ws, wk) in zip(shapes, kinds, want)):
-            shown = ", ".join(f"{getattr(x, 'dtype', type(x).__name__)}{list(s)}"
-                              for x, s in zip(got, shapes))
-            raise ParameterError(f"{op.family} operator {op.name!r} must return {words}, "
-                                 f"got ({shown})")
+            shown = ", ".join(f"{a.dtype}{list(a.shape)}" for a in arrays)
+            raise ContractError(f"{op.family} operator {op.name!r} must return {words}, "
+                                f"got ({shown})")
         return out
 
     return functools.wraps(bound)(checked) if hasattr(bound, "__name__") else checked

@@ -9,6 +9,7 @@ from __future__ import annotations
 import dataclasses
 import math
 
+import jax
 import jax.numpy as jnp
 import numpy as np
 import pytest
@@ -129,6 +130,10 @@ def three_values(grid, cells, length, feasible):
     return jnp.zeros(3, jnp.float32)
 
 
+def no_failed_flag(key, grid, cells, length):
+    return cells, length, None
+
+
 def no_value(grid, cells, length, feasible):
     return jnp.where(feasible, jnp.nan, 0.0).astype(jnp.float32)
 
@@ -136,6 +141,7 @@ def no_value(grid, cells, length, feasible):
 @pytest.mark.parametrize("family, fn, words", [
     ("mutation", drop_last_cell, "must return (cells int32[64], length int32, failed"),
     ("fitness", three_values, "must return one float32 per path, got (float32[3])"),
+    ("mutation", no_failed_flag, "got (int32[64], int32[], NoneType)"),
 ])
 def test_a_user_operator_of_another_shape_is_named(family, fn, words):
     """The family's contract is checked where the operator is traced: its name and what it
@@ -181,11 +187,14 @@ def test_an_objective_that_gives_no_path_a_positive_value_is_named():
 # ------------------------------------------------------------- results and their use
 def test_a_seed_position_is_checked(result):
     assert result.path(-1) == result.path(1) and result.path(np.int64(0)) == result.path(0)
+    # an argmin's 0-d array, NumPy's or JAX's, is a position too
+    assert result.path(np.array(1)) == result.path(jnp.int32(1)) == result.path(1)
     for bad in (2, -3, True, 1.0, "0"):
         for method in (result.path, result.world_path, result.obstacle_clearance):
             with pytest.raises(ParameterError) as e:
                 method(bad)
-            assert "r.seeds = [3, 1], not the seed itself" in _one_line(e)
+            assert "from -2 to 1 (its place in r.seeds = [3, 1], not the seed itself)" \
+                in _one_line(e)
 
 
 def test_one_seed_has_no_sd(result):
@@ -225,6 +234,19 @@ def test_a_run_without_a_path_in_the_pure_core_has_no_length():
     np.testing.assert_array_equal(nan.raw_metrics["angle_sum"], np.array([0.7, np.nan],
                                                                          np.float32))
     assert nan.metrics["turns"].dtype == jnp.int32 and nan.fitness is out.fitness
+
+
+@pytest.mark.slow  # the pure core's own program
+def test_the_pure_core_gives_a_run_without_a_path_no_length():
+    from jaxga.core import prng
+
+    b = np.zeros((20, 20), bool)
+    b[:, 10] = True  # a wall across the map: no path
+    ga = jaxga.GA("sga", jaxga.Grid.create(b, corner_rule="free"), generations=2)
+    out = jax.jit(ga.run)(prng.seed_key(0), ga.default_params)
+    assert not bool(out["success"]) and float(out["fitness"]) == 0.0
+    assert np.isnan(out["length"]) and np.isnan(out["raw_length"])
+    assert np.isnan(out["metrics"]["angle_sum"]) and int(out["metrics"]["turns"]) == -1
 
 
 def test_a_run_that_cannot_start_says_nothing_was_run():
@@ -268,7 +290,9 @@ def test_problem_refuses_an_unknown_map_option():
 
 def test_a_planner_takes_a_grid_and_checks_its_seeds_when_made(grid):
     planner = jaxga.Planner(grid, "sga", seeds=2)
-    assert planner.map.grid is not grid and planner.map.name == "grid"
+    assert planner.map.name == "grid" and planner.map.frame is None
+    np.testing.assert_array_equal(planner.map.grid.blocked_np(), grid.blocked_np())
+    assert jaxga.Planner(grid, "sga", seeds=iter([5, 7])).seeds == [5, 7]  # read once
     with pytest.raises(JaxgaError, match="seeds must be >= 1"):
         jaxga.Planner(grid, "sga", seeds=0)
     with pytest.raises(ParameterError) as e:
