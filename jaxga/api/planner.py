@@ -78,10 +78,10 @@ class Planner:
                  coarsen: int | None = None, unknown: str | None = None,
                  corner_rule: str | None = None, any_angle_budget: float | str | None = "auto",
                  **overrides: Any) -> None:
+        loading = [name for name, value in (
+            ("robot_radius", robot_radius), ("inflate", inflate), ("coarsen", coarsen),
+            ("unknown", unknown)) if value is not None]
         if isinstance(map, MapInfo):
-            loading = [name for name, value in (
-                ("robot_radius", robot_radius), ("inflate", inflate), ("coarsen", coarsen),
-                ("unknown", unknown)) if value is not None]
             if loading:  # they were ignored without a word
                 raise ParameterError(
                     f"{', '.join(loading)} given with a loaded map (a MapInfo), which they "
@@ -90,9 +90,6 @@ class Planner:
             self.map = map if corner_rule is None else dataclasses.replace(
                 map, grid=map.grid.replace(corner_rule=check_corner_rule(corner_rule)))
         elif isinstance(map, Grid):  # a map of the user's own, in cells
-            loading = [name for name, value in (
-                ("robot_radius", robot_radius), ("inflate", inflate), ("coarsen", coarsen),
-                ("unknown", unknown)) if value is not None]
             if loading:
                 raise ParameterError(
                     f"{', '.join(loading)} given with a Grid, which has no metres nor "
