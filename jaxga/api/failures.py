@@ -76,13 +76,9 @@ def caller_stacklevel() -> int:
     the first frame outside the jaxga package (the user's line, whichever of ``run``,
     ``sweep``, ``replan`` or the CLI they called)."""
     frame, level = sys._getframe(1), 1
-    while frame.f_back is not None and in_jaxga(frame.f_globals.get("__name__", "")):
+    while frame.f_back is not None and registry.in_jaxga(frame.f_globals.get("__name__", "")):
         frame, level = frame.f_back, level + 1
     return level
-
-
-def in_jaxga(module: str) -> bool:
-    return module == "jaxga" or module.startswith("jaxga.")
 
 
 def failure_causes(success: np.ndarray, started: np.ndarray, init_rate: np.ndarray,

@@ -306,10 +306,14 @@ class ContractError(ParameterError):
     ``AssertionError``)."""
 
 
+def in_jaxga(module: str) -> bool:
+    """Whether the module named ``module`` is jaxga or one of its modules."""
+    return module == "jaxga" or module.startswith("jaxga.")
+
+
 def is_jaxgas(fn: Callable | None) -> bool:
     """Whether ``fn`` is one of jaxga's own functions (not a user's operator)."""
-    module = getattr(fn, "__module__", None) or ""
-    return module == "jaxga" or module.startswith("jaxga.")
+    return in_jaxga(getattr(fn, "__module__", None) or "")
 
 
 def _returns(family: str, args: tuple) -> tuple[str, list[tuple[tuple, str]]]:
