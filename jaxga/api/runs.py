@@ -56,7 +56,8 @@ from jaxga.api.failures import (
     warn_unfilled,
 )
 from jaxga.api.problem import Problem, load_problem
-from jaxga.api.result import Fronts, Result
+from jaxga.api.result import Result
+from jaxga.api.result_fronts import Fronts
 from jaxga.config.schema import Config, dotted, flatten
 from jaxga.core.errors import DeviceMemoryError, ParameterError
 from jaxga.core.fields import shown_value

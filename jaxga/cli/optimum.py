@@ -10,7 +10,7 @@ import numpy as np
 
 from jaxga._runtime.references import any_angle_references, octile_optimum
 from jaxga.api import check_one_corner_rule, configured_rule
-from jaxga.api.result import json_number
+from jaxga.api.result_fronts import json_number
 from jaxga.cli.options import (
     RULE_DEFAULT,
     add_map_arguments,

@@ -19,7 +19,7 @@ from jaxga._runtime import parallel
 from jaxga._runtime.fields import front_obstacles
 from jaxga._runtime.parallel import add_parallel_arguments
 from jaxga._runtime.timeline import Timeline, process_age, time_line
-from jaxga.api.result import check_front_point, json_number
+from jaxga.api.result_fronts import check_front_point, json_number
 from jaxga.cli.options import (
     EXACT_HELP,
     EXIT_NO_PATH,

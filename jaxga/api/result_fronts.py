@@ -1,0 +1,202 @@
+"""A multi-objective result's fronts (decision 045): the :class:`Fronts` record and the
+methods of :class:`~jaxga.api.result.Result` that read them (its points, its exact ends,
+a chosen point)."""
+
+from __future__ import annotations
+
+import dataclasses
+import math
+from collections.abc import Mapping
+from typing import Any
+
+import numpy as np
+
+from jaxga.core.errors import ParameterError
+
+
+def json_number(x: float | None) -> float | None:
+    """``x`` as a JSON number, or ``None`` (null) for None, NaN and infinities."""
+    return None if x is None or not math.isfinite(x) else float(x)
+
+
+
+FRONT_POINT_OBJECTIVE = {"shortest": "length", "widest": "clearance"}
+"""The objective each named point of a front is chosen by (a number: a least clearance,
+so ``clearance``); the knee is taken on any two objectives."""
+
+
+def check_front_point(names: tuple[str, ...], which: str | float) -> None:
+    """:class:`ParameterError`, in one line, where the point ``which`` of a front
+    (:meth:`Result.front_point`, ``--front-point``) is chosen by an objective that the
+    front's ``names`` (``survival.objectives``) do not hold."""
+    need = "clearance" if not isinstance(which, str) else FRONT_POINT_OBJECTIVE.get(which)
+    if need is not None and need not in names:
+        raise ParameterError(
+            f"the front point {which!r} is chosen by its {need}, which the front does not "
+            f"minimise (survival.objectives = {list(names)}): add {need!r} to them or take "
+            f"the knee")
+
+
+@dataclasses.dataclass(frozen=True)
+class Fronts:
+    """The fronts of a multi-objective preset's seeds (decision 045): every distinct
+    non-dominated path of each seed's final population, in its slots (``mask``)."""
+
+    names: tuple[str, ...]
+    """The objectives (``survival.objectives``: :mod:`jaxga.core.robot_objectives`)."""
+    mask: np.ndarray
+    """bool[S, P]: the slot holds a point of the seed's front."""
+    cells: np.ndarray
+    """int32[S, P, L]: the paths, cell indices (8-connected, as evolved)."""
+    n_cells: np.ndarray
+    """int32[S, P]: their numbers of cells."""
+    objectives: np.ndarray
+    """float[S, P, M]: their objectives in cells and radians, as named (the clearance
+    positive: the least clearance of the path's cells, the measure of the exact maximin
+    clearance, :mod:`jaxga.reference.maximin`)."""
+    initial_hypervolume: np.ndarray
+    """float[S]: each seed's initial population's hypervolume, against the reference
+    point of its history's ``hypervolume`` (fixed at initialisation)."""
+
+    def gain(self, history: Mapping[str, np.ndarray]) -> np.ndarray:
+        """float[S]: each seed's last hypervolume over its initial population's: what the
+        generations added to the front (1: nothing)."""
+        return history["hypervolume"][:, -1] / self.initial_hypervolume
+
+    def points(self, i: int, width: int) -> list[dict[str, Any]]:
+        """Seed ``i``'s front, shortest first (by its first objective where ``length`` is
+        not one): each point's objectives by name and its path as ``(x, y)`` cells."""
+        slots = np.flatnonzero(self.mask[i])
+        first = self.names.index("length") if "length" in self.names else 0
+        slots = slots[np.lexsort((slots, self.objectives[i, slots, first]))]
+        return [{**{n: float(self.objectives[i, k, j]) for j, n in enumerate(self.names)},
+                 "path": [(int(c) % width, int(c) // width)
+                          for c in self.cells[i, k, :int(self.n_cells[i, k])]]}
+                for k in slots]
+
+
+class FrontsOfResult:
+    """The front methods of :class:`~jaxga.api.result.Result` (its fields ``front``,
+    ``frame``, ``success``, ``width``, ``gap``, ``history`` and ``maximin_clearance``, its
+    :meth:`~jaxga.api.result.Result.seed_index`): every point of a seed's front, its
+    ends against the exact ones, and one point chosen by name or clearance."""
+
+    def front_points(self, i: int) -> list[dict[str, Any]]:
+        """Seed ``i``'s front, shortest first (decision 045): each point's objectives in
+        cells and radians (:attr:`Fronts.names`; the clearance positive), the length and
+        clearance also in metres (``length_m``, ``clearance_m``) on a map with a
+        resolution, and its ``path`` as ``(x, y)`` cells. Empty for a failed seed or a
+        preset without a front."""
+        i = self.seed_index(i)
+        if self.front is None or not self.success[i]:
+            return []
+        cell = None if self.frame is None else self.frame.cell_size
+        points = self.front.points(i, self.width)
+        if cell:
+            for p in points:
+                p.update({f"{k}_m": p[k] * cell for k in ("length", "clearance") if k in p})
+        return points
+
+    def front_ends(self, i: int) -> dict[str, float | None]:
+        """Seed ``i``'s front measured against the exact ends (decision 045):
+        ``shortest_gap``, its shortest end post-optimised (the seed's best path) over
+        the any-angle optimum (:attr:`gap`); ``widest_clearance`` and its share of the
+        exact maximin clearance (``widest_ratio``, 1 where it keeps the widest path's
+        clearance; None where no obstacle bounds that clearance, on a map without
+        obstacles); ``points``; ``hypervolume_gain`` (:meth:`Fronts.gain`). Nones
+        without a front."""
+        i = self.seed_index(i)
+        points = self.front_points(i)
+        widest = max((p.get("clearance", math.nan) for p in points), default=math.nan)
+        bound = self.maximin_clearance  # inf on a map without obstacles: no share of it
+        ratio = widest / bound if 0 < bound < math.inf else math.nan
+        gain = math.nan if self.front is None else float(self.front.gain(self.history)[i])
+        return {"points": len(points), "shortest_gap": json_number(float(self.gap[i])),
+                "widest_clearance": json_number(widest), "widest_ratio": json_number(ratio),
+                "hypervolume_gain": json_number(gain)}
+
+    def front_choice(self, i: int, min_clearance: float | None = None
+                     ) -> dict[str, Any] | None:
+        """One point of seed ``i``'s front: the shortest that keeps at least
+        ``min_clearance`` cells from the obstacles (None when no point does), or by
+        default the knee: the point farthest from the line between the two ends, each
+        objective scaled to the front's range (the shortest end when the front has fewer
+        than three points). :class:`ParameterError` for ``min_clearance`` where the
+        front does not minimise the clearance."""
+        i = self.seed_index(i)
+        if self.front is not None and min_clearance is not None:
+            check_front_point(self.front.names, float(min_clearance))
+        points = self.front_points(i)
+        if not points:
+            return None
+        if min_clearance is not None:
+            return next((p for p in points if p.get("clearance", 0.0) >= min_clearance),
+                        None)
+        names = self.front.names[:2]
+        xy = np.array([[p[n] for n in names] for p in points], float)
+        if len(points) < 3:
+            return points[0]
+        span = np.ptp(xy, axis=0)
+        xy = (xy - xy.min(axis=0)) / np.where(span > 0, span, 1.0)
+        a, b = xy[0], xy[-1]
+        d = np.abs((b[0] - a[0]) * (a[1] - xy[:, 1]) - (a[0] - xy[:, 0]) * (b[1] - a[1]))
+        return points[int(np.argmax(d))]
+
+    def front_point(self, i: int, which: str | float = "knee") -> dict[str, Any] | None:
+        """One point of seed ``i``'s front by name: ``"knee"`` (:meth:`front_choice`),
+        ``"shortest"``, ``"widest"``, or a number: the shortest point that keeps at least
+        that clearance, in metres on a map with a resolution, else in cells; None where
+        the seed has no front or no point keeps it. :class:`ParameterError` where the
+        front does not minimise the objective the point is chosen by
+        (:func:`check_front_point`)."""
+        i = self.seed_index(i)
+        if self.front is not None:
+            check_front_point(self.front.names, which)
+        points = self.front_points(i)
+        if not points:
+            return None
+        if which == "knee":
+            return self.front_choice(i)
+        if which == "shortest":
+            return points[0]
+        if which == "widest":
+            return max(points, key=lambda p: (p["clearance"], -p["length"]))
+        least = float(which)
+        cell = None if self.frame is None else self.frame.cell_size
+        return self.front_choice(i, min_clearance=least / cell if cell else least)
+
+    def front_text(self) -> str:
+        """The fronts in one line ("" without one): points per seed, the shortest end's
+        gap, the widest end's share of the exact maximin clearance and what the
+        generations added to the hypervolume (medians over the seeds that found a
+        path)."""
+        ok = np.flatnonzero(self.success)
+        if self.front is None or ok.size == 0:
+            return ""
+        ends = [self.front_ends(int(i)) for i in ok]
+
+        def median(key: str) -> float:
+            values = [e[key] for e in ends if e[key] is not None]
+            return float(np.median(values)) if values else math.nan
+
+        cell = None if self.frame is None else self.frame.cell_size
+        wide = median("widest_clearance")
+        wide_text = f"{wide * cell:.3f} m" if cell else f"{wide:.2f} cells"
+        ratio = median("widest_ratio")
+        share = ("no obstacle bounds the exact maximin clearance" if math.isnan(ratio)
+                 else f"{ratio:.3f} of the exact maximin clearance")
+        return (f"front ({', '.join(self.front.names)}; medians over {ok.size} seeds): "
+                f"{median('points'):g} points; shortest end {100 * median('shortest_gap'):.2f} "
+                f"% over the any-angle optimum; widest end clearance {wide_text}, "
+                f"{share}; hypervolume "
+                f"x{median('hypervolume_gain'):.3f} over the initial population's")
+
+    def _front_json(self, i: int) -> dict[str, Any]:
+        """Seed ``i``'s ``front`` (every point, paths as ``[x, y]`` lists) and
+        ``front_ends``, for a preset with a front."""
+        if self.front is None:
+            return {}
+        points = [{**{k: json_number(v) for k, v in p.items() if k != "path"},
+                   "path": [list(c) for c in p["path"]]} for p in self.front_points(i)]
+        return {"front": points, "front_ends": self.front_ends(i)}
+
