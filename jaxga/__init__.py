@@ -4,6 +4,7 @@ from jaxga import interrupts
 
 interrupts.install_in_console_script()  # first: a Ctrl-C during the imports exits cleanly
 
+from jaxga import jax_environment  # noqa: F401  (JAX first: a refused JAX_* variable is named)
 from jaxga._runtime.compilation_cache import configure, use_compilation_cache
 from jaxga.api import GA, Result, run, sweep
 from jaxga.api.doctor import doctor

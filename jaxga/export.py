@@ -23,9 +23,12 @@ import numpy as np
 import yaml
 
 from jaxga.core.errors import JaxgaError, ParameterError
+from jaxga.core.fields import shown_value
 from jaxga.core.files import atomic_write_text
+from jaxga.core.numerals import ASCII_SPACES, ascii_float
 from jaxga.maps.frame import world_decimals
-from jaxga.maps.inputs import PATH_JSON_CAP, read_input
+from jaxga.maps.inputs import PATH_JSON_CAP, lines_of, read_input
+from jaxga.maps.ros import UniqueKeyLoader
 
 __all__ = ["PATH_FORMATS", "atomic_write_text", "path_format", "path_text", "path_yaws",
            "read_path", "write_path"]
@@ -104,11 +107,46 @@ def write_path(path: str | os.PathLike, points_world: np.ndarray, frame_id: str 
     atomic_write_text(path, path_text(points_world, path_format(path), frame_id, decimals))
 
 
+MAP_FRAME = "map"
+"""The frame of every path jaxga writes and reads: the map's (``map_server``'s default
+``frame_id``), in which a path's metres are the map's own."""
+
+
+class PathFrameError(ValueError):
+    """A ``nav_msgs/Path`` whose poses are in a frame other than :data:`MAP_FRAME`."""
+
+
+def _check_path_frame(doc: object) -> None:
+    """Refuse a ``nav_msgs/Path`` in another frame than the map's (its header's or a
+    pose's ``frame_id``): its metres are not the map's, and no transform is known here."""
+    if not isinstance(doc, dict):
+        return  # not a path: read_path says so
+    headers = [("the path", doc.get("header"))]
+    headers += [(f"pose {i}", pose.get("header")) for i, pose in
+                enumerate(doc.get("poses") or []) if isinstance(pose, dict)]
+    for what, header in headers:
+        frame = header.get("frame_id") if isinstance(header, dict) else None
+        if frame not in (None, "", MAP_FRAME):
+            raise PathFrameError(
+                f"{what} is in the frame {shown_value(frame)}, not the map's "
+                f"{MAP_FRAME!r}: transform it to the map frame first (jaxga reads and "
+                "writes paths in the map's metres)")
+
+
+def _coordinate(value: object) -> float:
+    """A pose's coordinate: a YAML number (not a bool, not a string)."""
+    if isinstance(value, bool) or not isinstance(value, (int, float)):
+        raise TypeError(f"a position's x and y are numbers, got {shown_value(value)}")
+    return float(value)
+
+
 def read_path(path: str | os.PathLike) -> np.ndarray:
     """``float[k, 2]``: the points in metres of a path file as :func:`write_path` writes
     it (``.csv`` with an ``x,y`` header, or a ``nav_msgs/Path`` YAML: its poses'
-    positions), so that the path a robot was given can be checked again
-    (``jaxga replan --path``). A one-line :class:`ParameterError` for anything else."""
+    positions, in the map's frame: :data:`MAP_FRAME`), so that the path a robot was given
+    can be checked again (``jaxga replan --path``). A one-line :class:`ParameterError` for
+    anything else: another frame, a key given twice, a coordinate that is not a number
+    written in ASCII (``1_0``, ``true``)."""
     label = os.fspath(path)
     fmt = PATH_FORMATS.get(Path(path).suffix.lower())
     if fmt is None:
@@ -123,17 +161,20 @@ def read_path(path: str | os.PathLike) -> np.ndarray:
         raise ParameterError(f"{label}: cannot read the path file ({e})") from None
     try:
         if fmt == "csv":
-            lines = [ln.strip() for ln in text.splitlines() if ln.strip()]
+            lines = [ln.strip(ASCII_SPACES) for ln in lines_of(text) if ln.strip(ASCII_SPACES)]
             if not lines or lines[0].replace(" ", "").lower() != "x,y":
                 raise ValueError("the first line must be the header x,y")
-            points = [[float(v) for v in ln.split(",")] for ln in lines[1:]]
+            points = [[ascii_float(v) for v in ln.split(",")] for ln in lines[1:]]
             if any(len(p) != 2 for p in points):
                 raise ValueError("every row holds two values, x,y")
         else:
-            doc = yaml.safe_load(text)
-            points = [[float(pose["pose"]["position"][k]) for k in ("x", "y")]
+            doc = yaml.load(text, Loader=UniqueKeyLoader)  # noqa: S506 - a SafeLoader
+            _check_path_frame(doc)
+            points = [[_coordinate(pose["pose"]["position"][k]) for k in ("x", "y")]
                       for pose in doc["poses"]]
         out = np.asarray(points, float).reshape(-1, 2)
+    except PathFrameError as e:
+        raise ParameterError(f"{label}: {e}") from None
     except (ValueError, TypeError, KeyError, IndexError, yaml.YAMLError, RecursionError) as e:
         what = "x,y rows" if fmt == "csv" else "a nav_msgs/Path (poses[].pose.position)"
         why = str(e).splitlines()[0] if str(e) else type(e).__name__

@@ -28,7 +28,7 @@ import threading
 from collections.abc import Callable
 from pathlib import Path
 
-__all__ = ["EXIT_CODES", "install", "install_in_console_script", "stop"]
+__all__ = ["EXIT_CODES", "in_console_script", "install", "install_in_console_script", "stop"]
 
 EXIT_CODES: dict[int, int] = {signal.SIGINT: 130, signal.SIGTERM: 143}
 """The exit status for each handled signal: 128 + its number, as a shell reports it
@@ -101,8 +101,14 @@ def install_in_console_script() -> None:
     """:func:`install` when this process is the ``jaxga`` console script (``sys.argv[0]``
     names it), so that a signal during the imports already exits cleanly; nothing in any
     other program."""
-    if _is_console_script(sys.argv, getattr(sys, "orig_argv", [])):
+    if in_console_script():
         install()
+
+
+def in_console_script() -> bool:
+    """Whether this process is the ``jaxga`` command (its script, ``python -m jaxga`` or
+    ``python -m jaxga.cli``), also while ``import jaxga`` runs."""
+    return _is_console_script(sys.argv, getattr(sys, "orig_argv", []))
 
 
 def _is_console_script(argv: list[str], orig_argv: list[str]) -> bool:

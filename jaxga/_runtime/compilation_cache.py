@@ -17,6 +17,7 @@ everywhere: an empty ``$JAXGA_CACHE_DIR``.
 from __future__ import annotations
 
 import os
+import re
 import warnings
 from pathlib import Path
 
@@ -28,7 +29,8 @@ from jaxga.core.fields import shown_value
 from jaxga.core.files import folder_problem
 
 __all__ = ["ENV_VAR", "MIN_COMPILE_SECONDS", "cache_problem", "configure", "default_directory",
-           "is_read_only", "store_directory", "use_compilation_cache", "warn_unusable"]
+           "env_directory", "expanded", "is_read_only", "store_directory",
+           "use_compilation_cache", "warn_unusable"]
 
 ENV_VAR = "JAXGA_CACHE_DIR"
 """Environment variable naming the cache directory; an empty value leaves the cache off."""
@@ -43,9 +45,26 @@ def default_directory() -> str:
     return str(Path.home() / ".cache" / "jaxga" / "jax")
 
 
+def expanded(path: str) -> str:
+    """``path`` with ``~`` and ``$VARIABLE`` expanded as a shell would: a service file or a
+    ``.env`` file passes ``JAXGA_CACHE_DIR=~/cache`` unexpanded. A variable that is not
+    set stays as written (:func:`cache_problem` refuses it)."""
+    return os.path.expandvars(os.path.expanduser(path)) if path else path
+
+
+_UNEXPANDED = re.compile(r"\$(\w+|\{[^}]*\})")
+
+
 def cache_problem(path: str | os.PathLike) -> str | None:
-    """Why ``path`` cannot hold the cache (it cannot be made a folder, or takes no new
+    """Why ``path`` cannot hold the cache (it names an environment variable that is not
+    set or a home folder that is not known, it cannot be made a folder, or takes no new
     file: :func:`jaxga.core.files.folder_problem`), or None when it can."""
+    text = os.fspath(path)
+    unset = _UNEXPANDED.search(text) if isinstance(text, str) else None
+    if unset is not None:
+        return f"it names the environment variable {unset.group(0)}, which is not set"
+    if isinstance(text, str) and text.startswith("~"):
+        return f"it names the home folder {text.split('/')[0]}, which is not known"
     try:
         Path(path).mkdir(parents=True, exist_ok=True)
     except OSError as e:
@@ -53,6 +72,13 @@ def cache_problem(path: str | os.PathLike) -> str | None:
     except ValueError:  # os.mkdir of a name holding a NUL
         return "a folder's name cannot hold a NUL character"
     return folder_problem(path)
+
+
+def env_directory() -> str:
+    """The folder ``$JAXGA_CACHE_DIR`` names (:func:`expanded`; "" when it is empty: no
+    folder), else :func:`default_directory`."""
+    value = os.environ.get(ENV_VAR)
+    return default_directory() if value is None else expanded(value)
 
 
 def _readable_folder(path: str | os.PathLike) -> bool:
@@ -141,7 +167,7 @@ def configure(cache_dir: str | os.PathLike | None | object = _UNSET, *,
     (jaxga's results never depend on it).
     """
     if cache_dir is _UNSET:
-        path = os.environ.get(ENV_VAR, default_directory())
+        path = env_directory()
     elif cache_dir is None:
         path = ""
     else:
@@ -154,6 +180,7 @@ def configure(cache_dir: str | os.PathLike | None | object = _UNSET, *,
                                  "Path, not bytes")
         if not path:
             raise ParameterError("configure: cache_dir must not be empty (None: no folder)")
+        path = expanded(path)
         if "://" in path:
             raise ParameterError(
                 f"configure: cache_dir must be a local folder, got the URL {shown_value(path)} "
@@ -192,7 +219,7 @@ def store_directory() -> str | None:
     base = jax.config.jax_compilation_cache_dir
     if base:
         return None if "://" in str(base) else str(base)
-    path = os.environ.get(ENV_VAR, default_directory())
+    path = env_directory()
     if not path:
         return None
     if path not in _checked:

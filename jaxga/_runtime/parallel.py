@@ -83,6 +83,7 @@ import numpy as np
 from jax.errors import JaxRuntimeError
 
 from jaxga.core.errors import DeviceWarning, JaxgaError
+from jaxga.core.numerals import ascii_int
 
 ENV_DEVICES = "JAXGA_DEVICES"
 ENV_COORDINATOR = "JAXGA_COORDINATOR"
@@ -461,9 +462,9 @@ def env_int(name: str) -> int | None:
     if v in (None, ""):
         return None
     try:
-        return int(v)
+        return ascii_int(v)
     except ValueError:
-        raise JaxgaError(f"{name} must be an integer, got {v!r}") from None
+        raise JaxgaError(f"{name} must be an integer in ASCII digits, got {v!r}") from None
 
 
 def add_parallel_arguments(parser: argparse.ArgumentParser) -> None:

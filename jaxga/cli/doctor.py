@@ -7,8 +7,7 @@ import argparse
 import jax
 
 from jaxga.api.doctor import doctor
-from jaxga.cli.options import EXIT_DEVICE_DISAGREES, write_json
-from jaxga.compare import split_presets
+from jaxga.cli.options import EXIT_DEVICE_DISAGREES, given_presets, write_json
 from jaxga.core.errors import JaxgaError
 
 
@@ -18,12 +17,10 @@ def cmd_doctor(args: argparse.Namespace) -> int:
     if args.quick and args.presets is not None:
         raise JaxgaError("--presets names the whole runs, which --quick leaves out: give "
                          "one or the other")
-    if args.presets is not None and not split_presets(args.presets):
-        raise JaxgaError(f"--presets names no preset (got {args.presets!r}): leave it out "
-                         "for every built-in preset")
+    named = given_presets(args.presets)
     device = jax.devices()[0]
     print(f"checking {device.platform} ({device.device_kind}) against the CPU", flush=True)
-    presets = () if args.quick else split_presets(args.presets) if args.presets else None
+    presets = () if args.quick else named
     report = doctor(device, presets=presets,
                     report=lambda line: print(f"  {line}", flush=True))
     print(report.table())

@@ -6,7 +6,6 @@ from __future__ import annotations
 import argparse
 import json
 import math
-import re
 import sys
 from pathlib import Path
 
@@ -17,9 +16,11 @@ from jaxga._runtime import parallel
 from jaxga._runtime.size_classes import CLASS_SIDES
 from jaxga.api import configured_rule
 from jaxga.api.problem import Problem, checked_endpoints, problem
+from jaxga.compare import split_presets
 from jaxga.config.presets import load_preset
 from jaxga.core.errors import JaxgaError, ParameterError
 from jaxga.core.grid import CORNER_RULES, check_corner_rule
+from jaxga.core.numerals import ASCII_DECIMAL, ascii_int
 from jaxga.maps import (
     load_map_info,
     read_scen,
@@ -38,19 +39,17 @@ EXIT_DEVICE_DISAGREES = 5
 from the CPU (``jaxga doctor``, or a run refused by the device probe)."""
 
 
-ASCII_INTEGER = re.compile(r"\s*[+-]?[0-9]+\s*")
-ASCII_DECIMAL = re.compile(r"\s*[+-]?(([0-9]+(\.[0-9]*)?|\.[0-9]+)([eE][+-]?[0-9]+)?|nan|inf"
-                      r"|infinity)\s*", re.IGNORECASE)
-"""A coordinate as written in ASCII: Python's int() and float() also take ``1_0`` (10)
-and other scripts' digits, which no one types as a cell by intent."""
-
-
-def ascii_int(text: str) -> int:
-    """``int(text)`` of an integer written in ASCII digits (:data:`ASCII_INTEGER`);
-    ``ValueError`` otherwise (``1_0``, other scripts' digits)."""
-    if not ASCII_INTEGER.fullmatch(text):
-        raise ValueError(text)
-    return int(text)
+def given_presets(text: str | None) -> list[str] | None:
+    """``--presets A,B,...`` as a list; None when the option is not given (every built-in
+    preset). A given list that names no preset (``''``, ``,``) is refused in one line,
+    not taken for every preset or for none."""
+    if text is None:
+        return None
+    names = split_presets(text)
+    if not names:
+        raise JaxgaError(f"--presets names no preset (got {text!r}): leave it out for every "
+                         "built-in preset")
+    return names
 
 
 def parse_xy(text: str) -> tuple[int, int]:

@@ -7,7 +7,8 @@ import re
 import sys
 
 from jaxga.cli import compare, doctor, doe, listings, optimum, replan, run, warmup
-from jaxga.cli.options import ASCII_DECIMAL, ASCII_INTEGER, EXIT_BAD_INPUT
+from jaxga.cli.options import EXIT_BAD_INPUT
+from jaxga.core.numerals import ASCII_DECIMAL, ASCII_INTEGER
 
 COMMANDS = (optimum, run, replan, doe, compare, listings, warmup, doctor)
 """The modules that add the subcommands, in the order ``jaxga --help`` lists them."""

@@ -10,8 +10,7 @@ import jax
 from jaxga._runtime import parallel
 from jaxga._runtime.parallel import add_parallel_arguments
 from jaxga.api.warmup import warmup
-from jaxga.cli.options import parse_int_list
-from jaxga.compare import split_presets
+from jaxga.cli.options import given_presets, parse_int_list
 from jaxga.core.errors import JaxgaError
 from jaxga.core.grid import CORNER_RULES
 
@@ -21,7 +20,7 @@ def cmd_warmup(args: argparse.Namespace) -> int:
     # XLA compiles every program afresh (no read from JAX's own cache), so that each is
     # stored whole (jaxga._runtime.executables); before this process compiles anything
     jax.config.update("jax_enable_compilation_cache", False)
-    presets = split_presets(args.presets) if args.presets else None
+    presets = given_presets(args.presets)
     maps: list = [*parse_int_list(args.sizes)] if args.sizes else []
     maps += list(args.map or ())
     maps = list(dict.fromkeys(maps))  # --sizes 20,20: one program set, not two

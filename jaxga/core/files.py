@@ -56,14 +56,12 @@ def atomic_write(path: str | os.PathLike, write: Callable[[IO], None], *,
     process ended by a signal removes it first (:func:`remove_temporaries`); one that a
     process killed outright left is removed by the next write of the same file
     (:func:`remove_stale_temporaries`)."""
-    target = Path(path)
-    if target.is_symlink():  # write the file the link names; the link stays a link
-        target = Path(os.path.realpath(target))
+    target = written_file(path)
     folder = target.parent if str(target.parent) else Path(".")
     remove_stale_temporaries(target)
     try:
-        fd, tmp = tempfile.mkstemp(prefix=f".{target.name}.{os.getpid()}.", suffix=".tmp",
-                                   dir=folder)
+        fd, tmp = tempfile.mkstemp(prefix=f"{_temporary_stem(target.name)}{os.getpid()}.",
+                                   suffix=".tmp", dir=folder)
     except OSError as e:
         raise JaxgaError(f"cannot write {path}: {_why(e)}") from None
     with _LOCK:
@@ -85,6 +83,26 @@ def atomic_write(path: str | os.PathLike, write: Callable[[IO], None], *,
     finally:
         with _LOCK:
             _TEMPORARIES.discard(tmp)
+
+
+NAME_MAX = 255
+"""The bytes a file's name can have on Linux's and macOS's file systems."""
+
+
+def _temporary_stem(name: str) -> str:
+    """``.NAME.``, the start of a write's temporary name (``.NAME.<pid>.<random>.tmp``),
+    with ``NAME`` cut short where the whole would pass :data:`NAME_MAX` bytes: a name of
+    up to 255 bytes can be written."""
+    room = NAME_MAX - len(".") - len(".") - 20 - len(".") - 8 - len(".tmp")  # pid <= 20
+    cut = os.fsencode(name)[:room]
+    return f".{os.fsdecode(cut) if cut == os.fsencode(name) else cut.decode('utf-8', 'ignore')}."
+
+
+def written_file(path: str | os.PathLike) -> Path:
+    """The file a write of ``path`` replaces: the file a symbolic link names (every link
+    followed; the link stays a link), else ``path`` itself."""
+    target = Path(path)
+    return Path(os.path.realpath(target)) if target.is_symlink() else target
 
 
 def _mode_of(target: Path) -> int:
@@ -133,7 +151,7 @@ def remove_stale_temporaries(path: str | os.PathLike) -> list[str]:
     follows names its own)."""
     target = Path(path)
     folder = target.parent if str(target.parent) else Path(".")
-    prefix = f".{target.name}."
+    prefix = _temporary_stem(target.name)
     removed: list[str] = []
     try:
         entries = [e for e in os.scandir(folder)
@@ -196,6 +214,35 @@ def same_file(a: str | os.PathLike, b: str | os.PathLike) -> bool:
         return Path(a).resolve() == Path(b).resolve()
 
 
+def _check_name_length(option: str, shown: object, path: Path) -> None:
+    """Refuse a file name (the last part of ``path``) longer than :data:`NAME_MAX` bytes."""
+    size = len(os.fsencode(path.name))
+    if size > NAME_MAX:
+        raise JaxgaError(f"cannot write {option} {shown}: its name has {size} bytes, more "
+                         f"than the {NAME_MAX} a file's name can have")
+
+
+def _stream_hop(path: Path) -> str | None:
+    """The first name that ``path`` is or leads to through its symbolic links which is a
+    process's stream or a device (an entry of ``/dev`` itself, such as ``/dev/stdout``, or
+    anything under ``/proc``, such as ``/proc/self/fd/1``), or None: a write through it
+    would replace the file the stream is redirected to. Files in ``/dev``'s folders
+    (``/dev/shm``) are files."""
+    hop, seen = Path(os.path.abspath(path)), set()
+    while hop not in seen:
+        seen.add(hop)
+        parent = os.path.realpath(hop.parent)
+        if parent == "/dev" or f"{parent}/".startswith("/proc/"):
+            return str(hop)
+        if not hop.is_symlink():
+            return None
+        try:
+            hop = Path(os.path.abspath(hop.parent / os.readlink(hop)))
+        except OSError:
+            return None
+    return None
+
+
 def folder_problem(folder: str | os.PathLike) -> str | None:
     """Why a new file cannot be made in ``folder``, or None when it can (a real try: mode
     bits lie for root, ``/proc`` and read-only mounts)."""
@@ -233,11 +280,17 @@ def check_outputs(outputs: Mapping[str, str | os.PathLike | None],
     given = [(option, Path(path)) for option, path in outputs.items() if path]
     sources = [(label, Path(path)) for label, path in inputs if path]
     for i, (option, path) in enumerate(given):
+        _check_name_length(option, path, path)
         if path.is_dir():
             raise JaxgaError(f"cannot write {option} {path}: it is a folder")
         if path.exists() and not path.is_file():
             raise JaxgaError(f"cannot write {option} {path}: it exists and is not a regular "
                              "file (a device, a FIFO or a socket)")
+        stream = _stream_hop(path) if path.exists() else None
+        if stream is not None:
+            raise JaxgaError(f"cannot write {option} {path}: it names {stream}, a stream or "
+                             "device, not a file (the file it is redirected to would be "
+                             "replaced, not appended to): give a file's name")
         for label, source in sources:
             if same_file(path, source):
                 raise JaxgaError(f"cannot write {option} {path}: it is the {label} this "
@@ -246,10 +299,13 @@ def check_outputs(outputs: Mapping[str, str | os.PathLike | None],
             if same_file(path, earlier):
                 raise JaxgaError(f"cannot write {option} {path}: {other} names the same "
                                  "file")
-        folder = path.parent if str(path.parent) else Path(".")
+        target = written_file(path)
+        shown = f"{path}" if target == path else f"{path} (a link to {target})"
+        folder = target.parent if str(target.parent) else Path(".")
         why = folder_problem(folder)
         if why is not None:
-            raise JaxgaError(f"cannot write {option} {path}: {why}")
+            raise JaxgaError(f"cannot write {option} {shown}: {why}")
+        _check_name_length(option, shown, target)
         if path.exists() and not os.access(path, os.W_OK):
             raise JaxgaError(f"cannot write {option} {path}: the existing file cannot be "
                              "replaced (read-only or immutable)")

@@ -48,6 +48,7 @@ from jaxga.core.fields import shown_value
 from jaxga.core.files import atomic_write, atomic_write_text
 from jaxga.core.grid import Grid, blocked_array
 from jaxga.core.matplotlib_env import matplotlib_ready
+from jaxga.core.numerals import ASCII_SPACES, ascii_int
 from jaxga.maps import builtin
 from jaxga.maps.inputs import (
     MAX_READ_COARSEN,
@@ -218,7 +219,7 @@ def parse_movingai(text: str, label: str = "<text>") -> np.ndarray:
             header[key] = words[1]
         else:
             try:
-                value = int(words[1])
+                value = ascii_int(words[1])
             except ValueError:
                 value = 0
             if value < 1:
@@ -245,7 +246,7 @@ def parse_movingai(text: str, label: str = "<text>") -> np.ndarray:
     allowed = MOVINGAI_PASSABLE | MOVINGAI_BLOCKED
     for r, line in enumerate(body):
         lineno = i + r + 1
-        row = line.rstrip()
+        row = line.rstrip(ASCII_SPACES)
         if len(row) != w:
             raise MapFormatError(
                 f"{label}: line {lineno}: row has {len(row)} cells but the header says width {w}"
@@ -473,7 +474,7 @@ def decode_text(raw: bytes, label: str) -> str:
 
 def _body_lines(text: str, label: str) -> list[tuple[int, str]]:
     """Non-blank lines (1-based line number, right-stripped), no blank line in between."""
-    lines = [ln.rstrip() for ln in lines_of(text)]
+    lines = [ln.rstrip(ASCII_SPACES) for ln in lines_of(text)]
     numbered = [(n, ln) for n, ln in enumerate(lines, 1) if ln]
     if not numbered:
         raise MapFormatError(f"{label}: map file is empty")
@@ -499,7 +500,7 @@ def declared_size(raw: bytes, kind: str) -> tuple[int, int] | None:
         for line in lines_of(head)[:8]:
             words = line.split()
             if len(words) == 2 and words[0].lower() in ("height", "width") \
-                    and words[1].isdigit():
+                    and words[1].isascii() and words[1].isdigit():
                 dims[words[0].lower()] = int(words[1])
         return (dims["width"], dims["height"]) if len(dims) == 2 else None
     lines = [line for line in lines_of(raw) if line.strip()]

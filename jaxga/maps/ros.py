@@ -23,7 +23,9 @@ its occupancy probability, and
   between unknown (``map_saver``'s grey 205 has ``p = 0.196``: unknown);
 * ``scale``: as trinary, except that the band between the thresholds is graded
   occupancy (1-99) and a transparent pixel (alpha < 255) is unknown;
-* ``raw``: the pixel value is the occupancy itself (0-100), anything above 100 unknown.
+* ``raw``: the pixel value is the occupancy itself (0-100), anything above 100 unknown;
+  ``negate`` does not apply (``nav2_map_server``; ROS 1's ``map_server`` negated the
+  value first, decision 054).
 
 Planning: occupied cells are blocked; unknown cells are blocked too unless
 ``unknown="free"``; scale mode's graded cells count as unknown (jaxga plans on free and
@@ -130,7 +132,7 @@ def _number(value: Any, key: str, label: str) -> float:
     return value
 
 
-class _UniqueKeyLoader(yaml.SafeLoader):
+class UniqueKeyLoader(yaml.SafeLoader):
     """``yaml.safe_load``'s loader refusing a mapping that names a key twice: YAML
     forbids it, PyYAML keeps the last value silently, and a map server may keep the
     first (``resolution: 0.05`` then ``resolution: 5.0``: which map is it?)."""
@@ -181,7 +183,7 @@ def read_ros_yaml(path: str | Path, label: str | None = None, *,
             raise MapFormatError(f"{label}: the file holds {len(data):,} bytes, more than "
                                  f"the {YAML_CAP:,} bytes jaxga reads from a map_server "
                                  "YAML file")
-        data = yaml.load(data.decode("utf-8"), Loader=_UniqueKeyLoader)  # noqa: S506
+        data = yaml.load(data.decode("utf-8"), Loader=UniqueKeyLoader)  # noqa: S506
     except FileNotFoundError:
         raise MapFormatError(f"{label}: no such file") from None
     except (OSError, UnicodeDecodeError, yaml.YAMLError, ValueError, RecursionError) as e:
@@ -288,11 +290,11 @@ def occupancy(pixels: np.ndarray, meta: RosMap) -> np.ndarray:
     shade = colour.astype(np.float64).mean(axis=2)  # 0-255
     if has_alpha and meta.mode == "trinary":  # three colour channels and the alpha
         shade = (3.0 * shade + pixels[..., -1].astype(np.float64)) / 4.0
-    if meta.negate:
-        shade = 255.0 - shade
-    if meta.mode == "raw":
+    if meta.mode == "raw":  # the pixel value itself, negate or not (nav2's map_io.cpp)
         value = np.round(shade)
         return np.where(value > 100, -1, value).astype(np.int8)
+    if meta.negate:
+        shade = 255.0 - shade
     p = (255.0 - shade) / 255.0
     out = np.full(p.shape, -1, np.int8)
     out[p > meta.occupied_thresh] = 100

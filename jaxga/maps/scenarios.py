@@ -23,6 +23,7 @@ from pathlib import Path
 
 from jaxga.core.errors import MapFormatError
 from jaxga.core.grid import Grid
+from jaxga.core.numerals import ascii_float, ascii_int
 from jaxga.maps.inputs import SCENARIO_CAP, lines_of, read_input
 
 __all__ = ["Scenario", "parse_scen", "read_scen"]
@@ -130,9 +131,9 @@ def parse_scen(text: str, label: str = "<scen>") -> list[Scenario]:
             )
         bucket_s, map_s, *nums, opt_s = fields
         try:
-            bucket = int(bucket_s)
-            w, h, sx, sy, gx, gy = (int(v) for v in nums)
-            opt = float(opt_s)
+            bucket = ascii_int(bucket_s)
+            w, h, sx, sy, gx, gy = (ascii_int(v) for v in nums)
+            opt = ascii_float(opt_s)
         except ValueError:
             raise MapFormatError(
                 f"{label}: line {lineno}: non-numeric field in {line.strip()!r}"
@@ -162,6 +163,6 @@ def parse_scen(text: str, label: str = "<scen>") -> list[Scenario]:
 
 def _is_version_1(s: str) -> bool:
     try:
-        return float(s) == 1.0
+        return ascii_float(s) == 1.0
     except ValueError:
         return False

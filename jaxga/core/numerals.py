@@ -1,0 +1,44 @@
+"""Numbers as people write them in files and options: ASCII digits only.
+
+Python's ``int()`` and ``float()`` also read ``1_0`` (10), other scripts' digits
+(``٣``: 3) and Unicode spaces around them, which no map, scenario, path file or option
+holds by intent: a value written so is refused, not read as another number (decisions
+051 and 054).
+"""
+
+from __future__ import annotations
+
+import re
+
+__all__ = ["ASCII_DECIMAL", "ASCII_INTEGER", "ASCII_SPACES", "ascii_float", "ascii_int"]
+
+ASCII_SPACES = " \t\r\n\f\v"
+"""The spaces a number or a map's row may have around it (``str.strip()`` also strips a
+no-break space and other Unicode spaces)."""
+
+_SPACE = "[ \t\r\n\f\v]*"
+
+ASCII_INTEGER = re.compile(f"{_SPACE}[+-]?[0-9]+{_SPACE}")
+"""An integer in ASCII digits, with ASCII spaces around it."""
+
+ASCII_DECIMAL = re.compile(
+    f"{_SPACE}[+-]?(([0-9]+(\\.[0-9]*)?|\\.[0-9]+)([eE][+-]?[0-9]+)?|nan|inf|infinity)"
+    f"{_SPACE}", re.IGNORECASE)
+"""A decimal number in ASCII (``nan`` and ``inf`` spelled out), with ASCII spaces around
+it; whether a non-finite value is allowed is the reader's to say."""
+
+
+def ascii_int(text: str) -> int:
+    """``int(text)`` of an integer written in ASCII digits (:data:`ASCII_INTEGER`);
+    ``ValueError`` otherwise (``1_0``, other scripts' digits, a no-break space)."""
+    if not isinstance(text, str) or not ASCII_INTEGER.fullmatch(text):
+        raise ValueError(f"not an integer in ASCII digits: {text!r}")
+    return int(text)
+
+
+def ascii_float(text: str) -> float:
+    """``float(text)`` of a number written in ASCII (:data:`ASCII_DECIMAL`);
+    ``ValueError`` otherwise."""
+    if not isinstance(text, str) or not ASCII_DECIMAL.fullmatch(text):
+        raise ValueError(f"not a number in ASCII digits: {text!r}")
+    return float(text)
