@@ -115,6 +115,7 @@ class Case:
     timeout: float = 60.0
     max_s: float | None = None  # a refusal later than this is 'slow'
     stdout: str = "pipe"  # "pipe", "closed" (a pipe whose reader is gone), "full" (/dev/full)
+    stdout_file: Path | None = None  # stdout appended to this file (`>> log`) instead
     closed_fds: tuple[int, ...] = ()  # descriptors closed in the child (`>&-`, `2>&-`)
     removes: tuple[Path, ...] = ()  # files the case must remove (a killed write's leftovers)
     caches: tuple[Path, ...] = ()  # this case's own caches, checked for temporaries after
@@ -250,6 +251,10 @@ def execute(case: Case, env: dict[str, str], cwd: Path) -> Outcome:
         to_close.append(w)
     elif case.stdout == "full":
         fh = open("/dev/full", "wb")  # noqa: SIM115 - closed below
+        stdout_arg = fh
+        to_close.append(fh)
+    if case.stdout_file is not None:
+        fh = open(case.stdout_file, "ab")  # noqa: SIM115 - closed below
         stdout_arg = fh
         to_close.append(fh)
     t0 = time.monotonic()
@@ -1328,7 +1333,47 @@ def build(t: Path) -> list[Case]:
         out = f / f"{name}.json"
         add(name, "round six", run(CLASSIC, "--json", out), "handled", env=env,
             outputs=(out,), check=same_runs_as(out, plain), note=note)
+
+    # --- round eight: JAX's environment, streams, links, long names, numbers as written --
+    for name, env in (("jax-truth-value-refused", {"JAX_ENABLE_X64": "maybe"}),
+                      ("jax-integer-refused", {"JAX_NUM_CPU_DEVICES": "many"})):
+        add(name, "round eight", run(CLASSIC), env=env, quick=True,
+            note="a traceback from `import jax`, for every command")
+    log = write("stdout.log", "earlier run\n")
+    add("json-to-redirected-stdout", "round eight", run(CLASSIC, "--json", "/dev/stdout"),
+        stdout_file=log, quick=True,
+        note="`>> stdout.log`: the rename replaced the log (as root)")
+    dangling = f / "dangling.json"
+    dangling.symlink_to(f / "missing" / "x.json")
+    add("json-through-a-dangling-link", "round eight", run(CLASSIC, "--json", dangling),
+        quick=True, note="refused after the whole run")
+    longest = f / ("a" * 245 + ".json")
+    add("json-of-250-bytes", "round eight", run(CLASSIC, "--json", longest), "handled",
+        outputs=(longest,), check=wrote_json(longest),
+        note="refused after the run: the temporary name passed 255 bytes")
+    add("json-of-256-bytes", "round eight", run(CLASSIC, "--json", f / ("b" * 251 + ".json")),
+        quick=True, note="refused after the run")
+    underscore = write("underscore.scen",
+                       "version 1\n0\tclassic.txt\t20\t20\t0\t1_9\t19\t0\t30.97056274\n")
+    add("scen-underscore-digits", "round eight",
+        run(classic, *FREE, "--scen", underscore, "--scenario", "0"), quick=True,
+        note="1_9 was read as 19")
+    add("warmup-presets-of-none", "round eight",
+        ["warmup", "--presets", ",", "--sizes", "20"], quick=True,
+        note="warmed nothing, exit 0")
+    home, tilde = t / "home", f / "tilde.json"
+    add("cache-dir-with-tilde", "round eight", run(CLASSIC, "--json", tilde), "handled",
+        env={"JAXGA_CACHE_DIR": "~/cache8", "HOME": str(home)}, outputs=(tilde, home),
+        check=all_of(wrote_json(tilde), no_folder_named(f / "~")), timeout=300,
+        note="made a folder named '~' in the working folder")
     return cases
+
+
+def no_folder_named(path: Path) -> Check:
+    """No file or folder ``path`` was made (a name a shell would have expanded)."""
+    def check(out: Outcome) -> str | None:
+        return f"made {path}" if os.path.lexists(path) else None
+    return check
 
 
 def same_runs_as(path: Path, reference: Path) -> Check:
