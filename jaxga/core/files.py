@@ -93,9 +93,11 @@ def _temporary_stem(name: str) -> str:
     """``.NAME.``, the start of a write's temporary name (``.NAME.<pid>.<random>.tmp``),
     with ``NAME`` cut short where the whole would pass :data:`NAME_MAX` bytes: a name of
     up to 255 bytes can be written."""
-    room = NAME_MAX - len(".") - len(".") - 20 - len(".") - 8 - len(".tmp")  # pid <= 20
-    cut = os.fsencode(name)[:room]
-    return f".{os.fsdecode(cut) if cut == os.fsencode(name) else cut.decode('utf-8', 'ignore')}."
+    room = NAME_MAX - len("..") - 20 - len(".") - 8 - len(".tmp")  # a pid of <= 20 digits
+    whole = os.fsencode(name)
+    if len(whole) <= room:
+        return f".{name}."
+    return f".{whole[:room].decode('utf-8', 'ignore')}."  # cut at a whole character
 
 
 def written_file(path: str | os.PathLike) -> Path:
