@@ -664,8 +664,8 @@ def run(
             size swept as its capacity (``Result.population_capacity``): pass that to
             repeat its runs bit for bit.
         size_class: run on the map padded with blocked cells to its size class
-            (:mod:`jaxga._runtime.size_classes`: each side 32, 64, 128, 256, 384, 512, 768
-            or 1024 cells, and the class's path capacity), so that all maps of a class
+            (:mod:`jaxga._runtime.size_classes`: each side 32, 64, 128, 256, 384, 512, 768,
+            1024, 1536 or 2048 cells, and the class's path capacity), so that all maps of a class
             share compiled programs: a 20 x 20 and a 25 x 25 map compile once, and so
             do two 384 x 384 robot maps. None (default): True for maps with a side
             over 64 (users' maps), False for smaller ones, so that the papers' maps keep

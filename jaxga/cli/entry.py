@@ -8,6 +8,7 @@ import re
 import sys
 import warnings
 from collections.abc import Callable, Sequence
+from typing import Any
 
 import jax
 
@@ -141,6 +142,43 @@ def standard_streams() -> None:
                 os.dup2(os.open(os.devnull, os.O_RDWR), fd)
             if getattr(sys, name) is None:  # Python found it closed when it started
                 setattr(sys, name, open(os.devnull, mode))  # noqa: SIM115
+    if sys.stdout is not None and not isinstance(sys.stdout, ReaderMayLeave):
+        sys.stdout = ReaderMayLeave(sys.stdout)
+
+
+class ReaderMayLeave:
+    """Standard output whose reader may leave before the end (``jaxga presets | head``):
+    at the first write or flush that finds the pipe broken, the descriptor is put on the
+    null device and the command goes on, its files written and its status its own; the
+    rest of the output is lost, as when stdout is closed (``>&-``). Python's own
+    ``BrokenPipeError`` would end the command as an error."""
+
+    def __init__(self, stream: Any) -> None:
+        self._stream = stream
+
+    def _lost(self) -> None:
+        with contextlib.suppress(OSError, ValueError):
+            null = os.open(os.devnull, os.O_WRONLY)
+            os.dup2(null, self._stream.fileno())
+            os.close(null)
+
+    def write(self, text: str) -> int:
+        try:
+            return self._stream.write(text)
+        except BrokenPipeError:
+            self._lost()
+            return len(text)
+
+    def flush(self) -> None:
+        try:
+            self._stream.flush()
+        except BrokenPipeError:
+            self._lost()
+            with contextlib.suppress(OSError, ValueError):
+                self._stream.flush()  # what the buffer held goes to the null device
+
+    def __getattr__(self, name: str) -> Any:
+        return getattr(self._stream, name)
 
 
 def console() -> None:

@@ -83,9 +83,12 @@ class Progress:
 
     def tick(self) -> None:
         """Say that the current phase is still running, when it has gone on for more than
-        ``delay`` seconds and nothing was shown for ``delay`` seconds."""
+        ``delay`` seconds and nothing was shown for ``delay`` seconds; in a log, for half
+        the phase's time so far (lines at about 2, 4, 8, 16 s: a few lines, not one
+        every 2 s of a long compile)."""
         now = self.clock()
-        if self.stage is None or now - self.last < self.delay \
+        quiet = self.delay if self.tty else max(self.delay, 0.5 * (now - self.stage_start))
+        if self.stage is None or now - self.last < quiet \
                 or now - self.stage_start < self.delay:
             return
         self.last = self.clock()

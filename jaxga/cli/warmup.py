@@ -63,7 +63,8 @@ def add_parser(commands: argparse._SubParsersAction) -> None:
                    "a named map's own)")
     p.add_argument("--size-class", action=argparse.BooleanOptionalAction, default=None,
                    help="compile the size classes' programs (default: as jaxga run, the "
-                   "classes of sizes over 64: --sizes 128,256,384,512 serve every map over "
-                   "64 x 64; --size-class also pads 32 and 64)")
+                   "classes of sides over 64; --sizes N compiles the N x N class, --map "
+                   "MAP a map's own class, each side padded on its own: a 604 x 307 map "
+                   "is in the 768 x 384 class; --size-class also pads 32 and 64)")
     add_parallel_arguments(p)
     p.set_defaults(func=cmd_warmup, compiles=True)

@@ -712,13 +712,28 @@ def test_progress_is_shown_after_two_seconds_as_a_bar_or_as_log_lines(tty):
     slow = _Progress(stream, clock)
     clock.now = 10.0
     slow("any-angle", 0.0)
-    for now in (10.5, 11.5, 12.2, 13.0, 14.0, 14.3):
+    for now in (10.5, 11.5, 12.2, 13.0, 14.0, 14.5):
         clock.now = now
         slow.tick()
     lines = stream.getvalue().replace("\r", "\n").split("\n")
     shown = [line.strip() for line in lines if "still running" in line]
     assert [line.split("progress: ")[-1] for line in shown] == [
         "any-angle still running (2 s)", "any-angle still running (4 s)"]
+    # a long phase: a bar redrawn every 2 s, a log's lines ever further apart
+    long_stream = _Stream(tty)
+    long = _Progress(long_stream, clock)
+    clock.now = 100.0
+    long("compile", 0.0)
+    for k in range(1, 121):  # a tick every half second for 60 s
+        clock.now = 100.0 + 0.5 * k
+        long.tick()
+    said = [line.strip() for line in long_stream.getvalue().replace("\r", "\n").split("\n")
+            if "still running" in line]
+    seconds = [int(line.split("(")[1].split(" ")[0]) for line in said]
+    if tty:
+        assert len(said) == 30 and seconds[:3] == [2, 4, 6]
+    else:
+        assert seconds == [2, 4, 8, 16, 32]
     # closing ends a bar's line once, however often it is closed (jaxga optimum closes
     # before its results and again at the end)
     before = stream.getvalue()

@@ -137,6 +137,21 @@ def test_a_name_of_255_bytes_is_written_and_one_of_256_refused_at_once(tmp_path)
         check_outputs({"--plot": wide})
 
 
+@pytest.mark.parametrize("argv", [["maps"], ["presets", "--show", "sga"]])
+def test_a_reader_that_leaves_is_no_error(argv):
+    """``jaxga maps | head -1``: stdout's reader is gone before the listing ends; the
+    command ends as it would have (exit 0), without a word on stderr."""
+    read, write = os.pipe()
+    os.close(read)  # the reader left at once: every write meets a broken pipe
+    try:
+        proc = subprocess.run([sys.executable, "-m", "jaxga", *argv], cwd=ROOT, stdout=write,
+                              stderr=subprocess.PIPE, text=True, timeout=120,
+                              env={**os.environ, "PYTHONPATH": str(ROOT)})
+    finally:
+        os.close(write)
+    assert (proc.returncode, proc.stderr) == (0, "")
+
+
 # --- ROS raw maps, path files ----------------------------------------------------------
 
 
