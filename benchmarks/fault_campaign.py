@@ -1121,7 +1121,6 @@ def build(t: Path) -> list[Case]:
     # --- round three (decision 047) -----------------------------------------------------
     from PIL import Image
 
-    import jaxga
 
     wide = np.where(blocked[::-1], 5000, 60000).astype(">u2")
     grey16 = write("grey16.pgm", b"P5\n%d %d\n65535\n" % (w, h) + wide.tobytes())
@@ -1153,7 +1152,9 @@ def build(t: Path) -> list[Case]:
         ["run", "--map", CLASSIC, "--preset", digits_toml, "--seeds", "2", "--quiet"])
     add("set-5000-digit-integer", "round three",
         run(CLASSIC, "--set", f"crossover.probability={digits}"))
-    builtin_file = Path(jaxga.__file__).parent / "maps" / "data" / f"{CLASSIC}.txt"
+    # the checkout under test (ROOT), not the jaxga this script imported: an editable
+    # install of another checkout would be written over
+    builtin_file = ROOT / "jaxga" / "maps" / "data" / f"{CLASSIC}.txt"
     add("json-onto-the-builtin-map", "round three", run(CLASSIC, "--json", builtin_file),
         quick=True, note="would destroy the built-in map for every later run")
     add("plot-onto-dev-full", "round three", run(CLASSIC, "--plot", "/dev/full"),

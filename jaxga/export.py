@@ -30,8 +30,8 @@ from jaxga.maps.frame import world_decimals
 from jaxga.maps.inputs import PATH_JSON_CAP, lines_of, read_input
 from jaxga.maps.ros import UniqueKeyLoader
 
-__all__ = ["PATH_FORMATS", "atomic_write_text", "path_format", "path_text", "path_yaws",
-           "read_path", "write_path"]
+__all__ = ["MAP_FRAME", "PATH_FORMATS", "PathFrameError", "atomic_write_text", "path_format",
+           "path_text", "path_yaws", "read_path", "write_path"]
 
 PATH_FORMATS: dict[str, str] = {".csv": "csv", ".yaml": "yaml", ".yml": "yaml"}
 """File extensions of ``--path-out`` and the format each one writes."""
@@ -126,7 +126,7 @@ def _check_path_frame(doc: object) -> None:
                 enumerate(doc.get("poses") or []) if isinstance(pose, dict)]
     for what, header in headers:
         frame = header.get("frame_id") if isinstance(header, dict) else None
-        if frame not in (None, "", MAP_FRAME):
+        if frame not in (None, "", MAP_FRAME, f"/{MAP_FRAME}"):  # ROS 1 wrote '/map'
             raise PathFrameError(
                 f"{what} is in the frame {shown_value(frame)}, not the map's "
                 f"{MAP_FRAME!r}: transform it to the map frame first (jaxga reads and "
@@ -134,7 +134,13 @@ def _check_path_frame(doc: object) -> None:
 
 
 def _coordinate(value: object) -> float:
-    """A pose's coordinate: a YAML number (not a bool, not a string)."""
+    """A pose's coordinate: a YAML number, or a string of one in ASCII (YAML 1.1 reads
+    ``1e-05``, as C++ tools write it, as a string); not a bool."""
+    if isinstance(value, str):
+        try:
+            return ascii_float(value)
+        except ValueError:
+            pass
     if isinstance(value, bool) or not isinstance(value, (int, float)):
         raise TypeError(f"a position's x and y are numbers, got {shown_value(value)}")
     return float(value)
@@ -146,7 +152,7 @@ def read_path(path: str | os.PathLike) -> np.ndarray:
     positions, in the map's frame: :data:`MAP_FRAME`), so that the path a robot was given
     can be checked again (``jaxga replan --path``). A one-line :class:`ParameterError` for
     anything else: another frame, a key given twice, a coordinate that is not a number
-    written in ASCII (``1_0``, ``true``)."""
+    (``true``), a CSV value not written in ASCII digits (``1_0``)."""
     label = os.fspath(path)
     fmt = PATH_FORMATS.get(Path(path).suffix.lower())
     if fmt is None:

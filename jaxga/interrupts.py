@@ -116,6 +116,7 @@ def _is_console_script(argv: list[str], orig_argv: list[str]) -> bool:
     ``-m`` while the package loads: the interpreter's own arguments say which module)."""
     if argv and Path(argv[0]).name in ("jaxga", "jaxga.exe"):
         return True
-    if "-m" in orig_argv[:-1]:
-        return orig_argv[orig_argv.index("-m") + 1] in ("jaxga.cli", "jaxga")
-    return False
+    # the interpreter's own arguments end with "-m MODULE"; the program's own follow
+    # (``python script.py -m jaxga`` is not the command)
+    head = orig_argv[:len(orig_argv) - len(argv) + 1] if argv else orig_argv
+    return len(head) >= 2 and head[-2] == "-m" and head[-1] in ("jaxga.cli", "jaxga")

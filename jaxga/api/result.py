@@ -87,7 +87,6 @@ class RunSetup:
     """Planning cells against the map file's cells and metres (None for a bare grid)."""
 
 
-
 @dataclasses.dataclass(frozen=True)
 class RunPaths:
     """The best paths, per seed (:attr:`Result.paths`; :meth:`Result.path` reads one as
@@ -652,7 +651,6 @@ class Result(FrontsOfResult):
             "config": None if self.config is None else self.config.as_dict(),
             "runs": runs,
         }
-
 
 
 def summarise(results: Mapping[str, Result]) -> str:

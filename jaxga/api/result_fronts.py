@@ -19,7 +19,6 @@ def json_number(x: float | None) -> float | None:
     return None if x is None or not math.isfinite(x) else float(x)
 
 
-
 FRONT_POINT_OBJECTIVE = {"shortest": "length", "widest": "clearance"}
 """The objective each named point of a front is chosen by (a number: a least clearance,
 so ``clearance``); the knee is taken on any two objectives."""

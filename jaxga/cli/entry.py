@@ -142,12 +142,15 @@ def standard_streams() -> None:
                 os.dup2(os.open(os.devnull, os.O_RDWR), fd)
             if getattr(sys, name) is None:  # Python found it closed when it started
                 setattr(sys, name, open(os.devnull, mode))  # noqa: SIM115
-    if sys.stdout is not None and not isinstance(sys.stdout, ReaderMayLeave):
-        sys.stdout = ReaderMayLeave(sys.stdout)
+    for name in ("stdout", "stderr"):  # `jaxga ... 2>&1 | head`: both meet the pipe
+        stream = getattr(sys, name)
+        if stream is not None and not isinstance(stream, ReaderMayLeave):
+            setattr(sys, name, ReaderMayLeave(stream))
 
 
 class ReaderMayLeave:
-    """Standard output whose reader may leave before the end (``jaxga presets | head``):
+    """Standard output or error whose reader may leave before the end (``jaxga presets |
+    head``):
     at the first write or flush that finds the pipe broken, the descriptor is put on the
     null device and the command goes on, its files written and its status its own; the
     rest of the output is lost, as when stdout is closed (``>&-``). Python's own
@@ -163,13 +166,20 @@ class ReaderMayLeave:
             os.close(null)
 
     def write(self, text: str) -> int:
+        """Write ``text``; where the reader has gone, to the null device."""
         try:
             return self._stream.write(text)
         except BrokenPipeError:
             self._lost()
             return len(text)
 
+    def writelines(self, lines: Any) -> None:
+        """Write each of ``lines`` (:meth:`write`)."""
+        for line in lines:
+            self.write(line)
+
     def flush(self) -> None:
+        """Flush; where the reader has gone, what the buffer held goes to the null device."""
         try:
             self._stream.flush()
         except BrokenPipeError:

@@ -29,9 +29,9 @@ from typing import IO
 
 from jaxga.core.errors import JaxgaError
 
-__all__ = ["atomic_write", "atomic_write_text", "check_outputs", "folder_problem",
+__all__ = ["NAME_MAX", "atomic_write", "atomic_write_text", "check_outputs", "folder_problem",
            "remove_stale_temporaries", "remove_temporaries", "same_file",
-           "temporary_folder"]
+           "temporary_folder", "written_file"]
 
 _TEMPORARIES: set[str] = set()
 _LOCK = threading.Lock()
@@ -51,11 +51,18 @@ def atomic_write(path: str | os.PathLike, write: Callable[[IO], None], *,
 
     A failure (an ``OSError`` such as a full disk, an exception from ``write``, an
     interrupt) removes the temporary file and leaves any previous ``path`` whole; an
-    ``OSError`` becomes a :class:`JaxgaError` naming ``path``. While the file is being
+    ``OSError`` becomes a :class:`JaxgaError` naming ``path``. A ``path`` that is, or
+    links to, a process's stream (``/dev/stdout``, ``/proc/self/fd/1``) is refused: the
+    rename would replace the file the stream is redirected to. While the file is being
     written its temporary name (``.NAME.<pid>.<random>.tmp``) is registered, so that a
     process ended by a signal removes it first (:func:`remove_temporaries`); one that a
     process killed outright left is removed by the next write of the same file
     (:func:`remove_stale_temporaries`)."""
+    stream = _stream_hop(Path(path)) if Path(path).exists() else None
+    if stream is not None:
+        raise JaxgaError(f"cannot write {path}: it names {stream}, a stream or device, not a "
+                         "file (the file it is redirected to would be replaced, not appended "
+                         "to): give a file's name")
     target = written_file(path)
     folder = target.parent if str(target.parent) else Path(".")
     remove_stale_temporaries(target)

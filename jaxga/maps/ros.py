@@ -63,6 +63,7 @@ __all__ = [
     "MODES",
     "UNKNOWN_AS",
     "RosMap",
+    "UniqueKeyLoader",
     "cell_to_world",
     "occupancy",
     "read_ros_image",
@@ -87,7 +88,8 @@ class RosMap:
         resolution: metres per cell (> 0).
         origin: ``(x, y, yaw)``: the lower-left cell's lower-left corner in metres and the
             map's rotation in radians.
-        negate: swap the meaning of black and white.
+        negate: swap the meaning of black and white (trinary and scale modes; raw mode
+            reads the pixel value as it is, as ``nav2_map_server`` does).
         occupied_thresh: occupancy probability above which a cell is occupied.
         free_thresh: occupancy probability below which a cell is free.
         mode: one of :data:`MODES`.

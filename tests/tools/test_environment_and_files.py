@@ -56,16 +56,17 @@ def test_a_jax_variable_jax_refuses_is_named_to_a_python_program():
     assert "JAX_ENABLE_X64='maybe'" in proc.stderr
 
 
-def test_the_refusal_names_the_variable_jax_names_else_every_one_set():
+def test_the_refusal_names_the_variable_jax_names_and_no_other():
     flag = ValueError('Invalid value "many" for JAX flag jax_num_cpu_devices')
     env = {"JAX_NUM_CPU_DEVICES": "many", "JAX_PLATFORMS": "cpu", "HOME": "/root"}
     assert jax_refusal(flag, env).endswith("JAX_NUM_CPU_DEVICES='many'; correct or unset it")
-    vague = ValueError("invalid truth value 'maybe'")
+    truth = ValueError("invalid truth value 'maybe' for environment 'JAX_ENABLE_X64'")
     env = {"JAX_ENABLE_X64": "maybe", "JAX_DISABLE_JIT": "0"}
-    assert "JAX_ENABLE_X64='maybe'" in jax_refusal(vague, env)
-    assert "JAX_DISABLE_JIT" not in jax_refusal(vague, env)
-    assert "JAX_DISABLE_JIT='0'" in jax_refusal(ValueError("something else"), env)
-    assert "no JAX_* variable is set" in jax_refusal(ValueError("x"), {})
+    assert "JAX_ENABLE_X64='maybe'" in jax_refusal(truth, env)
+    assert "JAX_DISABLE_JIT" not in jax_refusal(truth, env)
+    # an error that names no variable (numpy's ABI, a broken install) blames none
+    assert jax_refusal(ValueError("numpy.dtype size changed"), env) is None
+    assert jax_refusal(ValueError("x"), {}) is None
 
 
 # --- outputs: streams, links, long names -----------------------------------------------
@@ -88,14 +89,20 @@ def test_a_stream_redirected_to_a_file_is_refused_and_the_file_kept(tmp_path):
     which the write would have replaced, losing what it held."""
     log = tmp_path / "log.txt"
     log.write_text("earlier run\n")
-    code = ("import sys\nfrom jaxga.core.files import check_outputs\n"
-            "try:\n    check_outputs({'--json': '/dev/stdout'})\n"
-            "except Exception as e:\n    print(e, file=sys.stderr)\n")
+    (tmp_path / "out.csv").symlink_to("/dev/stdout")  # a path file's name, leading to it
+    code = ("import sys\nimport numpy as np\nfrom jaxga.core.files import check_outputs\n"
+            "from jaxga.export import write_path\n"
+            "for write in (lambda: check_outputs({'--json': '/dev/stdout'}),\n"
+            f"              lambda: write_path({str(tmp_path / 'out.csv')!r}, np.zeros((2, 2)))):\n"
+            "    try:\n        write()\n"
+            "    except Exception as e:\n        print(e, file=sys.stderr)\n")
     with open(log, "a") as out:
         proc = subprocess.run([sys.executable, "-c", code], stdout=out, text=True,
                               stderr=subprocess.PIPE, env={**os.environ, "PYTHONPATH": str(ROOT)},
                               timeout=120)
-    assert "names /dev/stdout, a stream or device, not a file" in proc.stderr
+    said = proc.stderr.strip().splitlines()
+    assert len(said) == 2, proc.stderr  # the command's check and the Python API's write
+    assert all("names /dev/stdout, a stream or device, not a file" in line for line in said)
     assert log.read_text() == "earlier run\n"
 
 
@@ -137,19 +144,24 @@ def test_a_name_of_255_bytes_is_written_and_one_of_256_refused_at_once(tmp_path)
         check_outputs({"--plot": wide})
 
 
-@pytest.mark.parametrize("argv", [["maps"], ["presets", "--show", "sga"]])
-def test_a_reader_that_leaves_is_no_error(argv):
-    """``jaxga maps | head -1``: stdout's reader is gone before the listing ends; the
-    command ends as it would have (exit 0), without a word on stderr."""
+@pytest.mark.parametrize("argv, status", [(["maps"], 0), (["presets", "--show", "sga"], 0),
+                                          (["presets", "--show", "no_such_preset"], 2)])
+@pytest.mark.parametrize("both", [False, True], ids=["stdout", "stdout-and-stderr"])
+def test_a_reader_that_leaves_is_no_error(argv, status, both):
+    """``jaxga maps | head -1`` (and ``2>&1 | head``): the reader is gone before the
+    output ends; the command ends with its own status, without a word about the pipe."""
     read, write = os.pipe()
     os.close(read)  # the reader left at once: every write meets a broken pipe
     try:
         proc = subprocess.run([sys.executable, "-m", "jaxga", *argv], cwd=ROOT, stdout=write,
-                              stderr=subprocess.PIPE, text=True, timeout=120,
-                              env={**os.environ, "PYTHONPATH": str(ROOT)})
+                              stderr=write if both else subprocess.PIPE, text=True,
+                              timeout=120, env={**os.environ, "PYTHONPATH": str(ROOT)})
     finally:
         os.close(write)
-    assert (proc.returncode, proc.stderr) == (0, "")
+    assert proc.returncode == status
+    if not both:
+        assert "pipe" not in proc.stderr.lower()
+        assert (proc.stderr == "") == (status == 0)
 
 
 # --- ROS raw maps, path files ----------------------------------------------------------
@@ -181,6 +193,10 @@ def path_yaml(tmp_path) -> str:
 
 def test_a_path_file_reads_back_what_was_written(tmp_path, path_yaml):
     assert read_path(tmp_path / "p.yaml").tolist() == [[0.0, 0.0], [1.0, 1.0]]
+    # ROS 1's '/map', and 1e-05 (a string in YAML 1.1, a number to yaml-cpp)
+    (tmp_path / "ros1.yaml").write_text(path_yaml.replace("frame_id: map", "frame_id: /map")
+                                        .replace("x: 1.0", "x: 1e-05"))
+    assert read_path(tmp_path / "ros1.yaml").tolist() == [[0.0, 0.0], [1e-05, 1.0]]
     (tmp_path / "p.csv").write_text("x,y\n1,2\n3.5,-4e-1\n")
     assert read_path(tmp_path / "p.csv").tolist() == [[1.0, 2.0], [3.5, -0.4]]
 
@@ -190,7 +206,7 @@ def test_a_path_file_reads_back_what_was_written(tmp_path, path_yaml):
     (("- header:\n    frame_id: map", "- header:\n    frame_id: base_link"),
      "pose 0 is in the frame 'base_link'"),
     (("x: 1.0", "x: true"), "x and y are numbers, got True"),
-    (("x: 1.0", "x: '1.0'"), "x and y are numbers, got '1.0'"),
+    (("x: 1.0", "x: 'one'"), "x and y are numbers, got 'one'"),
     (("x: 1.0", "x: 1.0\n      x: 2.0"), "the key 'x' is given twice"),
 ])
 def test_a_path_file_in_another_frame_or_with_loose_values_is_refused(tmp_path, path_yaml,
@@ -220,6 +236,11 @@ def test_the_cache_folder_expands_home_and_variables(monkeypatch, tmp_path):
     assert compilation_cache.env_directory() == str(tmp_path / "base" / "c")
     monkeypatch.setenv(compilation_cache.ENV_VAR, "")
     assert compilation_cache.env_directory() == ""  # empty: no folder
+    try:  # configure's own folder too
+        assert compilation_cache.configure("~/mine", jax_cache=False) == str(tmp_path / "mine")
+        assert (tmp_path / "mine").is_dir()
+    finally:
+        compilation_cache._configured.clear()  # back to the suite's folder
 
 
 def test_a_cache_folder_naming_an_unset_variable_is_refused(monkeypatch, tmp_path):

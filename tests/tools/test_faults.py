@@ -429,10 +429,18 @@ def test_only_the_console_script_handles_signals():
     from jaxga.interrupts import _is_console_script
 
     assert _is_console_script(["/venv/bin/jaxga", "run"], ["python", "/venv/bin/jaxga", "run"])
-    assert _is_console_script(["-m"], ["python3", "-m", "jaxga.cli", "run"])
-    assert _is_console_script(["-m"], ["python3", "-m", "jaxga", "run"])
-    assert not _is_console_script(["-m"], ["python3", "-m", "ipykernel_launcher", "-f", "x"])
-    assert not _is_console_script(["script.py"], ["python", "script.py", "-m"])
+    # while the package loads under -m, sys.argv[0] is "-m" and the rest the program's own
+    assert _is_console_script(["-m", "run"], ["python3", "-m", "jaxga.cli", "run"])
+    assert _is_console_script(["-m", "run"], ["python3", "-X", "dev", "-m", "jaxga", "run"])
+    assert _is_console_script(["/src/jaxga/__main__.py"], ["python3", "-m", "jaxga"])
+    assert not _is_console_script(["-m", "-f", "x"],
+                                  ["python3", "-m", "ipykernel_launcher", "-f", "x"])
+    assert not _is_console_script(["script.py", "-m"], ["python", "script.py", "-m"])
+    # a program's own arguments that happen to read "-m jaxga" (pytest -m jaxga)
+    assert not _is_console_script(["script.py", "-m", "jaxga"],
+                                  ["python", "script.py", "-m", "jaxga"])
+    assert not _is_console_script(["-m", "-m", "jaxga"],
+                                  ["python", "-m", "pytest", "-m", "jaxga"])
     assert not _is_console_script([], [])
 
 
