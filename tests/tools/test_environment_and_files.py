@@ -37,6 +37,7 @@ def _jaxga(code_or_args: list[str], **env: str) -> subprocess.CompletedProcess:
                           capture_output=True, text=True, timeout=120)
 
 
+@pytest.mark.slow  # starts processes (a second each: JAX's import)
 @pytest.mark.parametrize("variable, value", [("JAX_ENABLE_X64", "maybe"),
                                              ("JAX_NUM_CPU_DEVICES", "many")])
 def test_a_jax_variable_jax_refuses_is_one_line_from_the_command(variable, value):
@@ -48,6 +49,7 @@ def test_a_jax_variable_jax_refuses_is_one_line_from_the_command(variable, value
     assert f"{variable}={value!r}" in lines[0]
 
 
+@pytest.mark.slow  # starts processes (a second each: JAX's import)
 def test_a_jax_variable_jax_refuses_is_named_to_a_python_program():
     proc = _jaxga(["-c", "import jaxga"], JAX_ENABLE_X64="maybe")
     assert proc.returncode == 1
@@ -84,6 +86,7 @@ def test_an_output_that_is_a_stream_is_refused_before_the_work(name):
 STREAM = "(a stream or device, not a file|it exists and is not a regular file)"
 
 
+@pytest.mark.slow  # starts processes (a second each: JAX's import)
 def test_a_stream_redirected_to_a_file_is_refused_and_the_file_kept(tmp_path):
     """``--json /dev/stdout >> log.txt``: /dev/stdout leads to log.txt, a regular file,
     which the write would have replaced, losing what it held."""
@@ -144,6 +147,7 @@ def test_a_name_of_255_bytes_is_written_and_one_of_256_refused_at_once(tmp_path)
         check_outputs({"--plot": wide})
 
 
+@pytest.mark.slow  # starts processes (a second each: JAX's import)
 @pytest.mark.parametrize("argv, status", [(["maps"], 0), (["presets", "--show", "sga"], 0),
                                           (["presets", "--show", "no_such_preset"], 2)])
 @pytest.mark.parametrize("both", [False, True], ids=["stdout", "stdout-and-stderr"])
