@@ -473,8 +473,8 @@ class Result(FrontsOfResult):
                  if c is not None and math.isfinite(c)]
         if clear and f.resolution is not None:
             least = min(clear) * f.resolution
-            text += (f"; clearance from the map's obstacles (before inflation) at least "
-                     f"{least:.3f} m")
+            text += (f"; the best paths' clearance from the map's obstacles (before "
+                     f"inflation) at least {least:.3f} m")
             if f.robot_radius is not None:
                 text += f", {least - f.robot_radius:.3f} m beyond the robot's radius"
         return text

@@ -186,7 +186,8 @@ class FrontsOfResult:
                  else f"{ratio:.3f} of the exact maximin clearance")
         return (f"front ({', '.join(self.front.names)}; medians over {ok.size} seeds): "
                 f"{median('points'):g} points; shortest end {100 * median('shortest_gap'):.2f} "
-                f"% over the any-angle optimum; widest end clearance {wide_text}, "
+                f"% over the any-angle optimum; widest end: its cells {wide_text} from the "
+                f"walls planned on, "
                 f"{share}; hypervolume "
                 f"x{median('hypervolume_gain'):.3f} over the initial population's")
 
