@@ -346,7 +346,7 @@ def test_incomplete_or_malformed_process_options_are_one_line_errors(capsys, mon
     monkeypatch.setenv("JAXGA_NUM_PROCESSES", "two")
     assert main(RUN) == 2
     assert capsys.readouterr().err.strip() == (
-        "jaxga: error: JAXGA_NUM_PROCESSES must be an integer, got 'two'")
+        "jaxga: error: JAXGA_NUM_PROCESSES must be an integer in ASCII digits, got 'two'")
     monkeypatch.delenv("JAXGA_NUM_PROCESSES")
     assert main([*RUN, "--coordinator", "nohost", "--num-processes", "2",
                  "--process-id", "2"]) == 2
