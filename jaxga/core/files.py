@@ -58,11 +58,7 @@ def atomic_write(path: str | os.PathLike, write: Callable[[IO], None], *,
     process ended by a signal removes it first (:func:`remove_temporaries`); one that a
     process killed outright left is removed by the next write of the same file
     (:func:`remove_stale_temporaries`)."""
-    stream = _stream_hop(Path(path)) if Path(path).exists() else None
-    if stream is not None:
-        raise JaxgaError(f"cannot write {path}: it names {stream}, a stream or device, not a "
-                         "file (the file it is redirected to would be replaced, not appended "
-                         "to): give a file's name")
+    _refuse_stream(f"{path}", Path(path))
     target = written_file(path)
     folder = target.parent if str(target.parent) else Path(".")
     remove_stale_temporaries(target)
@@ -231,6 +227,16 @@ def _check_name_length(option: str, shown: object, path: Path) -> None:
                          f"than the {NAME_MAX} a file's name can have")
 
 
+def _refuse_stream(what: str, path: Path) -> None:
+    """Refuse to write ``what`` where ``path`` exists and is, or leads to, a process's
+    stream or a device (:func:`_stream_hop`)."""
+    stream = _stream_hop(path) if path.exists() else None
+    if stream is not None:
+        raise JaxgaError(f"cannot write {what}: it names {stream}, a stream or device, not a "
+                         "file (the file it is redirected to would be replaced, not appended "
+                         "to): give a file's name")
+
+
 def _stream_hop(path: Path) -> str | None:
     """The first name that ``path`` is or leads to through its symbolic links which is a
     process's stream or a device (an entry of ``/dev`` itself, such as ``/dev/stdout``, or
@@ -295,11 +301,7 @@ def check_outputs(outputs: Mapping[str, str | os.PathLike | None],
         if path.exists() and not path.is_file():
             raise JaxgaError(f"cannot write {option} {path}: it exists and is not a regular "
                              "file (a device, a FIFO or a socket)")
-        stream = _stream_hop(path) if path.exists() else None
-        if stream is not None:
-            raise JaxgaError(f"cannot write {option} {path}: it names {stream}, a stream or "
-                             "device, not a file (the file it is redirected to would be "
-                             "replaced, not appended to): give a file's name")
+        _refuse_stream(f"{option} {path}", path)
         for label, source in sources:
             if same_file(path, source):
                 raise JaxgaError(f"cannot write {option} {path}: it is the {label} this "
