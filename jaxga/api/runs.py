@@ -464,6 +464,7 @@ def _evolve_and_finish(plan: SweepPlan, runs: RunCalls, progs: Programs, states:
             front=None if out.front is None else dataclasses.replace(
                 out.front, cells=map_cells(out.front.cells, runs.grid.width,
                                            plan.grid.width)))
+    report("post", 1.0)
     return out, history
 
 
@@ -652,8 +653,8 @@ def run(
             compilation's progress (after the tracing and after each compiled program,
             when the programs are not compiled yet), ``("compile", 1.0)``; ``("evolve",
             f)`` after each chunk of :data:`jaxga._runtime.programs.GENERATION_CHUNK`
-            generations; ``("post", 0.0)``; ``("any-angle", f)`` (the fraction of its
-            budget used).
+            generations; ``("post", 0.0)`` and ``("post", 1.0)``; ``("any-angle", f)``
+            (the fraction of its budget used).
         chunks: ignored (deprecated): the generations always run in compiled chunks of
             :data:`jaxga._runtime.programs.GENERATION_CHUNK`, whatever their number.
         population_capacity: individuals per island that the compiled program holds

@@ -580,12 +580,12 @@ def test_progress_is_reported_after_every_chunk_and_chunks_is_deprecated(grid):
         again = api.run("iga_zhang", grid, seeds=3, chunks=3,
                         progress=lambda stage, frac: seen.append((stage, frac)), **kw)
     # the stage is "compile" again while evolve and finish compile after init
-    assert seen[:10] == [("references", 0.0), ("compile", 0.0), ("init", 0.0),
+    assert seen[:11] == [("references", 0.0), ("compile", 0.0), ("init", 0.0),
                          ("compile", 0.5), ("compile", 1.0), ("evolve", 0.0),
                          ("evolve", 25 / 60), ("evolve", 50 / 60), ("evolve", 1.0),
-                         ("post", 0.0)]
-    assert [stage for stage, _ in seen[10:]] == ["any-angle"] * len(seen[10:])
-    assert seen[10] == ("any-angle", 0.0) and seen[-1] == ("any-angle", 1.0)
+                         ("post", 0.0), ("post", 1.0)]
+    assert [stage for stage, _ in seen[11:]] == ["any-angle"] * len(seen[11:])
+    assert seen[11] == ("any-angle", 0.0) and seen[-1] == ("any-angle", 1.0)
     for field in ("cells", "length", "fitness", "convergence_generation"):
         np.testing.assert_array_equal(getattr(again, field), getattr(one, field))
     for h in ("best", "mean", "std"):
@@ -721,7 +721,9 @@ def test_the_fallback_fills_exactly_the_slots_the_initialiser_left_empty(grid):
     """The same runs with the fallback on (the default): no copies, no warning; the
     fallback made as many individuals as the initialiser left empty, and the result, its
     summary and its JSON say so."""
-    off = api.run("sga", grid, seeds=3, init__max_tries=1, init__fallback="none", **SMALL)
+    with pytest.warns(InitialisationWarning, match="init.max_tries = 1 did not fill"):
+        off = api.run("sga", grid, seeds=3, init__max_tries=1, init__fallback="none",
+                      **SMALL)
     with warnings.catch_warnings():
         warnings.simplefilter("error", InitialisationWarning)
         on = api.run("sga", grid, seeds=3, init__max_tries=1, **SMALL)
