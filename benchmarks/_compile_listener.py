@@ -6,8 +6,9 @@ backend compile, persistent-cache hits) and records, for every test of this proc
 seconds and the number of each event between the test's start and its end (setup, call
 and teardown; counts under ``"n:<event>"``), with the test's own wall time and CPU time
 (``"cpu"``: this process's user + system seconds over all its threads, plus those of the
-child processes the test started and waited for). Wall time grows when other work shares
-the cores; CPU time hardly does, so it is what a file costs. Each pytest
+child processes the test started and waited for), and the compilations that took XLA
+more than ``suite_time.LARGE_PROGRAM_S`` (``"large programs"``). Wall time grows when
+other work shares the cores; CPU time hardly does, so it is what a file costs. Each pytest
 process that runs tests (every xdist worker; not the xdist controller) writes
 ``<$JAXGA_SUITE_PROFILE>/<worker>.json``. Work done in child processes that a test
 starts (notebook kernels, ``jax.distributed`` processes) is not seen: only its wall time,
@@ -24,6 +25,7 @@ import time
 from pathlib import Path
 
 import jax.monitoring
+from suite_time import BACKEND, LARGE, LARGE_PROGRAM_S
 
 _totals: collections.defaultdict[str, float] = collections.defaultdict(float)
 _counts: collections.defaultdict[str, int] = collections.defaultdict(int)
@@ -40,6 +42,9 @@ def _cpu_seconds() -> float:
 def _listen(event: str, duration: float, **_kwargs) -> None:
     _totals[event] += duration
     _counts[event] += 1
+    if event == BACKEND and duration > LARGE_PROGRAM_S:
+        _totals[LARGE] += duration
+        _counts[LARGE] += 1
 
 
 jax.monitoring.register_event_duration_secs_listener(_listen)

@@ -44,6 +44,11 @@ BACKEND = "/jax/core/compile/backend_compile_duration"
 TRACE = "/jax/core/compile/jaxpr_trace_duration"
 LOWER = "/jax/core/compile/jaxpr_to_mlir_module_duration"
 SAVED = "/jax/compilation_cache/compile_time_saved_sec"
+LARGE = "large programs"
+LARGE_PROGRAM_S = 2.0
+"""XLA seconds above which ``_compile_listener`` counts a compilation under :data:`LARGE`
+as well: whole GAs and their init, evolve and finish programs, whole walks or repairs
+(decision 046), as against the many small programs of operator tests."""
 TIERS = {"all": [], "fast": ["-m", "not slow"]}
 """The pytest arguments of each tier (pyproject.toml's markers)."""
 TITLES = {"all": "test suite time per file, cold compilation cache",
@@ -125,7 +130,8 @@ def main() -> None:
 
     def row(name: str, worker: str, c: collections.Counter) -> list:
         return [name, worker, c["tests"], c["wall"], c["cpu"], c[BACKEND], compiled(c),
-                int(c["n:" + SAVED]), c[TRACE], c[LOWER], c[SAVED]]
+                int(c["n:" + SAVED]), c[TRACE], c[LOWER], c[SAVED], int(c["n:" + LARGE]),
+                c[LARGE]]
 
     listed = [f for f in order if files[f]["cpu"] >= a.min_cpu]
     rows = [row(f.removeprefix("tests/"), worker_of[f], files[f]) for f in listed]
@@ -138,9 +144,7 @@ def main() -> None:
     total = collections.Counter()
     for f in order:
         total.update(files[f])
-    rows.append(["all", "", total["tests"], total["wall"], total["cpu"], total[BACKEND],
-                 compiled(total),
-                 int(total["n:" + SAVED]), total[TRACE], total[LOWER], total[SAVED]])
+    rows.append(row("all", "", total))
     workers = collections.Counter()
     for f in order:
         workers[worker_of[f]] += files[f]["wall"]
@@ -160,7 +164,9 @@ def main() -> None:
         f"compiled = programs XLA "
         f"compiled; cache hits = programs loaded from the persistent cache; trace = "
         f"Python to jaxpr; lower = jaxpr to MLIR; cache saved = XLA "
-        f"seconds that persistent-cache hits saved. JAX's events are seen in the pytest "
+        f"seconds that persistent-cache hits saved; large = programs that took XLA more "
+        f"than {LARGE_PROGRAM_S:g} s each (whole GAs and their parts, decision 046), "
+        f"large s = their XLA seconds. JAX's events are seen in the pytest "
         f"workers only: tests that start processes (notebook kernels, `jax.distributed`, "
         f"device counts) count as wall and CPU time.\n\n"
         f"pytest: {last}; wall of the whole command {wall:.0f} s; CPU of the command "
@@ -174,7 +180,8 @@ def main() -> None:
         + "\n".join(f"- {w}: " + ", ".join(ran[w]) for w in sorted(ran))
         + "\n\n"
         + markdown_table(["file", "worker", "tests", "wall", "CPU", "XLA s", "compiled",
-                          "cache hits", "trace", "lower", "cache saved"], rows)
+                          "cache hits", "trace", "lower", "cache saved", "large",
+                          "large s"], rows)
         + f"\n\nSlowest {a.top} tests (by wall time):\n\n"
         + markdown_table(["test", "wall", "CPU", "XLA s"],
                          [[n, w, cpu_s, c] for w, cpu_s, c, n in tests[: a.top]])
