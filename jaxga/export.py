@@ -25,7 +25,7 @@ import yaml
 from jaxga.core.errors import JaxgaError, ParameterError
 from jaxga.core.fields import shown_value
 from jaxga.core.files import atomic_write_text
-from jaxga.core.numerals import ASCII_SPACES, ascii_float
+from jaxga.core.numerals import ASCII_SPACES, ascii_float, yaml_number
 from jaxga.maps.frame import world_decimals
 from jaxga.maps.inputs import PATH_JSON_CAP, lines_of, read_input
 from jaxga.maps.ros import UniqueKeyLoader
@@ -134,16 +134,12 @@ def _check_path_frame(doc: object) -> None:
 
 
 def _coordinate(value: object) -> float:
-    """A pose's coordinate: a YAML number, or a string of one in ASCII (YAML 1.1 reads
-    ``1e-05``, as C++ tools write it, as a string); not a bool."""
-    if isinstance(value, str):
-        try:
-            return ascii_float(value)
-        except ValueError:
-            pass
-    if isinstance(value, bool) or not isinstance(value, (int, float)):
-        raise TypeError(f"a position's x and y are numbers, got {shown_value(value)}")
-    return float(value)
+    """A pose's coordinate, as yaml-cpp reads a number
+    (:func:`jaxga.core.numerals.yaml_number`); not a bool."""
+    try:
+        return yaml_number(value)
+    except TypeError:
+        raise TypeError(f"a position's x and y are numbers, got {shown_value(value)}") from None
 
 
 def read_path(path: str | os.PathLike) -> np.ndarray:
@@ -181,7 +177,8 @@ def read_path(path: str | os.PathLike) -> np.ndarray:
         out = np.asarray(points, float).reshape(-1, 2)
     except PathFrameError as e:
         raise ParameterError(f"{label}: {e}") from None
-    except (ValueError, TypeError, KeyError, IndexError, yaml.YAMLError, RecursionError) as e:
+    except (ValueError, TypeError, OverflowError, KeyError, IndexError, yaml.YAMLError,
+            RecursionError) as e:
         what = "x,y rows" if fmt == "csv" else "a nav_msgs/Path (poses[].pose.position)"
         why = str(e).splitlines()[0] if str(e) else type(e).__name__
         raise ParameterError(f"{label}: not a path file of {what} ({why})") from None

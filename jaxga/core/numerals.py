@@ -10,7 +10,8 @@ from __future__ import annotations
 
 import re
 
-__all__ = ["ASCII_DECIMAL", "ASCII_INTEGER", "ASCII_SPACES", "ascii_float", "ascii_int"]
+__all__ = ["ASCII_DECIMAL", "ASCII_INTEGER", "ASCII_SPACES", "ascii_float", "ascii_int",
+           "yaml_number"]
 
 ASCII_SPACES = " \t\r\n\f\v"
 """The spaces a number or a map's row may have around it (``str.strip()`` also strips a
@@ -42,3 +43,20 @@ def ascii_float(text: str) -> float:
     if not isinstance(text, str) or not ASCII_DECIMAL.fullmatch(text):
         raise ValueError(f"not a number in ASCII digits: {text!r}")
     return float(text)
+
+
+def yaml_number(value: object) -> float:
+    """A YAML scalar read as a number, as yaml-cpp (ROS's map_server, nav2) reads one: an
+    integer or a float, not a bool; or a string holding a number in ASCII
+    (:data:`ASCII_DECIMAL`), since YAML 1.1 (PyYAML) reads ``5e-2`` and ``1e-05`` (no dot
+    in the mantissa), as C++ tools write them, as strings. ``TypeError`` for anything
+    else (``1_0`` or ``٣`` in quotes, ``true``, a list); ``OverflowError`` for an integer
+    beyond a float. Whether a non-finite value is allowed is the reader's to say."""
+    if isinstance(value, str):
+        try:
+            return ascii_float(value)
+        except ValueError:
+            pass
+    if isinstance(value, bool) or not isinstance(value, (int, float)):
+        raise TypeError(f"not a number: {value!r}")
+    return float(value)

@@ -48,6 +48,7 @@ import yaml
 from jaxga.core.errors import MapFormatError
 from jaxga.core.fields import shown_value
 from jaxga.core.grid import too_large
+from jaxga.core.numerals import yaml_number
 from jaxga.maps.frame import MapFrame
 from jaxga.maps.inputs import (
     YAML_CAP,
@@ -116,22 +117,18 @@ be written apart in metres (a resolution of 1e-300 wrote every point as 0)."""
 
 
 def _number(value: Any, key: str, label: str) -> float:
-    """A finite number; YAML 1.1 reads ``5e-2`` (no dot) as a string, ROS's map_server
-    (yaml-cpp) as a number: such strings are read as numbers too."""
-    if isinstance(value, str):
-        try:
-            value = float(value)
-        except ValueError:
-            pass
-    if isinstance(value, int) and not isinstance(value, bool):
-        try:
-            value = float(value)
-        except OverflowError:  # an integer of hundreds of digits
-            raise MapFormatError(f"{label}: {key} must be a finite number, got an integer "
-                                 f"of {value.bit_length()} bits") from None
-    if isinstance(value, bool) or not isinstance(value, float) or not math.isfinite(value):
+    """A finite number as yaml-cpp reads one (:func:`jaxga.core.numerals.yaml_number`):
+    ``5e-2``, a string to YAML 1.1, is a number; ``"1_0"`` is not."""
+    try:
+        number = yaml_number(value)
+    except OverflowError:  # an integer of hundreds of digits
+        raise MapFormatError(f"{label}: {key} must be a finite number, got an integer "
+                             f"of {value.bit_length()} bits") from None
+    except TypeError:
+        number = math.nan
+    if not math.isfinite(number):
         raise MapFormatError(f"{label}: {key} must be a finite number, got {shown_value(value)}")
-    return value
+    return number
 
 
 class UniqueKeyLoader(yaml.SafeLoader):

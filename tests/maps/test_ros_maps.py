@@ -159,6 +159,9 @@ def test_world_coordinates_name_the_cell_that_holds_the_point(office):
      "origin must lie within 1e+12 metres"),
     ("image: office.pgm\nresolution: 1" + "0" * 400 + "\norigin: [0, 0, 0]\n",
      "resolution must be a finite number, got an integer of 1329 bits"),
+    # a number yaml-cpp (nav2) refuses, in quotes: Python's float() read it as 5.0
+    ("image: office.pgm\nresolution: '0_05'\norigin: [0, 0, 0]\n",
+     "resolution must be a finite number, got '0_05'"),
     ("image: office.pgm\nresolution: 0.05\norigin: [" + "9" * 5000 + ", 0, 0]\n",
      "not a readable YAML file (Exceeds the limit"),
     ('image: "office\\0.pgm"\nresolution: 0.05\norigin: [0, 0, 0]\n',

@@ -18,7 +18,7 @@ from jaxga._runtime import compilation_cache, parallel
 from jaxga.cli import EXIT_BAD_INPUT, main
 from jaxga.core.errors import CacheWarning, JaxgaError, MapFormatError, ParameterError
 from jaxga.core.files import atomic_write_text, check_outputs, remove_stale_temporaries
-from jaxga.core.numerals import ascii_float, ascii_int
+from jaxga.core.numerals import ascii_float, ascii_int, yaml_number
 from jaxga.export import read_path, write_path
 from jaxga.jax_environment import jax_refusal
 from jaxga.maps.formats import parse_movingai
@@ -212,6 +212,9 @@ def test_a_path_file_reads_back_what_was_written(tmp_path, path_yaml):
     (("x: 1.0", "x: true"), "x and y are numbers, got True"),
     (("x: 1.0", "x: 'one'"), "x and y are numbers, got 'one'"),
     (("x: 1.0", "x: 1.0\n      x: 2.0"), "the key 'x' is given twice"),
+    # a number yaml-cpp would not read, in quotes; an integer beyond a float (a traceback)
+    (("x: 1.0", "x: '1_0'"), "x and y are numbers, got '1_0'"),
+    (("x: 1.0", "x: 1" + "0" * 400), "int too large to convert to float"),
 ])
 def test_a_path_file_in_another_frame_or_with_loose_values_is_refused(tmp_path, path_yaml,
                                                                       change, why):
@@ -290,6 +293,16 @@ def test_ascii_numbers_read_as_python_would():
     for text in ("7_0.5", "\u0663.5", "1.5\u00a0"):
         with pytest.raises(ValueError):
             ascii_float(text)
+
+
+def test_a_yaml_number_is_read_as_yaml_cpp_reads_one():
+    assert yaml_number(3) == 3.0 and yaml_number(0.5) == 0.5
+    assert yaml_number("5e-2") == 0.05 and yaml_number(" -1e-05 ") == -1e-05
+    for value in ("1_0", "\u0663", "0.05\u00a0", "five", True, None, [1.0]):
+        with pytest.raises(TypeError):
+            yaml_number(value)
+    with pytest.raises(OverflowError):
+        yaml_number(10 ** 400)
 
 
 @pytest.mark.parametrize("field", ["1_0", "\u0663"])
