@@ -216,18 +216,23 @@ def checked_endpoints(grid: Grid, frame: MapFrame | None = None, layers: Any = N
     try:
         return grid.check_endpoints()
     except EndpointError as e:
-        raise EndpointError(f"{e}{_on_the_map(frame, grid)}{_unknown_hint(layers, grid)}") \
+        raise EndpointError(f"{e}{_on_the_map(frame, grid)}{_blocked_hint(layers, grid)}") \
             from None
 
 
-def _unknown_hint(layers: Any, grid: Grid) -> str:
-    """Why a blocked endpoint on one of a ROS map's unknown cells is blocked, and the way
-    out; "" elsewhere."""
-    if layers is None or not layers.unknown_blocked:
+def _blocked_hint(layers: Any, grid: Grid) -> str:
+    """Why a blocked endpoint is blocked where the map alone does not block it, and the
+    way out: one of a ROS map's unknown cells, or a free cell the inflation covers (the
+    default corners too, which no one chose); "" elsewhere."""
+    if layers is None:
         return ""
     for xy in (grid.start_xy, grid.goal_xy):  # the first blocked one, as check_endpoints
         if grid.blocked_np()[xy[1], xy[0]]:
-            if layers.unknown.shape == grid.blocked.shape and layers.unknown[xy[1], xy[0]]:
+            if layers.margin.shape == grid.blocked.shape and layers.margin[xy[1], xy[0]]:
+                return ("; the cell is free on the map, within the inflation of an "
+                        "obstacle (--inflate or --robot-radius): the inflated map blocks it")
+            if layers.unknown_blocked and layers.unknown.shape == grid.blocked.shape \
+                    and layers.unknown[xy[1], xy[0]]:
                 return ("; the cell is unknown in the map (neither free nor occupied) and "
                         "unknown cells are blocked: --unknown free (unknown='free') plans "
                         "through them")

@@ -44,7 +44,7 @@ from typing import Any
 import numpy as np
 
 from jaxga.core.errors import JaxgaError, MapFormatError
-from jaxga.core.fields import shown_value
+from jaxga.core.fields import python_scalar, shown_value
 from jaxga.core.files import atomic_write, atomic_write_text
 from jaxga.core.grid import Grid, blocked_array
 from jaxga.core.matplotlib_env import matplotlib_ready
@@ -242,8 +242,8 @@ def parse_movingai(text: str, label: str = "<text>") -> np.ndarray:
         raise MapFormatError(
             f"{label}: line {i + h + 1}: header says height {h} but the file has {len(body)} rows"
         )
-    out = np.zeros((h, w), dtype=bool)
     allowed = MOVINGAI_PASSABLE | MOVINGAI_BLOCKED
+    rows = []
     for r, line in enumerate(body):
         lineno = i + r + 1
         row = line.rstrip(ASCII_SPACES)
@@ -257,6 +257,10 @@ def parse_movingai(text: str, label: str = "<text>") -> np.ndarray:
                     f"{label}: line {lineno}, column {col}: unknown map character {c!r} "
                     "(expected one of . G S @ O T W)"
                 )
+        rows.append(row)
+    # allocated once every row is checked: the header's size alone allocates nothing
+    out = np.zeros((h, w), dtype=bool)
+    for r, row in enumerate(rows):
         out[h - 1 - r] = [c in MOVINGAI_BLOCKED for c in row]
     return out
 
@@ -497,11 +501,15 @@ def declared_size(raw: bytes, kind: str) -> tuple[int, int] | None:
     head = raw[:4096].decode("utf-8", errors="replace")
     if kind == "movingai":
         dims = {}
-        for line in lines_of(head)[:8]:
+        for line in lines_of(head):  # the header, as the parser reads it (blank lines too)
             words = line.split()
-            if len(words) == 2 and words[0].lower() in ("height", "width") \
-                    and words[1].isascii() and words[1].isdigit():
-                dims[words[0].lower()] = int(words[1])
+            if words and words[0].lower() == "map":
+                break
+            if len(words) == 2 and words[0].lower() in ("height", "width"):
+                try:
+                    dims[words[0].lower()] = ascii_int(words[1])
+                except ValueError:
+                    pass  # the parser names the value
         return (dims["width"], dims["height"]) if len(dims) == 2 else None
     lines = [line for line in lines_of(raw) if line.strip()]
     if not lines:
@@ -545,6 +553,7 @@ def parse_png(path: Path, label: str, threshold: float = 0.5,
     matplotlib_ready()
     import matplotlib.image as mpimg
 
+    threshold = python_scalar(threshold)  # np.float32(0.5) is 0.5
     if isinstance(threshold, bool) or not isinstance(threshold, (int, float)) or not (
             0.0 < threshold <= 1.0):
         raise MapFormatError(f"{label}: the image threshold must be a luminance in (0, 1], "

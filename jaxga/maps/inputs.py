@@ -283,21 +283,22 @@ def image_size(raw: bytes) -> tuple[int, int] | None:
     from PIL import Image  # here: Pillow's import is a tenth of a second
 
     try:
-        with _no_bomb_warning(), Image.open(io.BytesIO(raw)) as img:  # the header only
+        with _quiet_pillow(), Image.open(io.BytesIO(raw)) as img:  # the header only
             return int(img.size[0]), int(img.size[1])
     except Exception:  # noqa: BLE001 - any unreadable header: the decoder reports it
         return None
 
 
 @contextlib.contextmanager
-def _no_bomb_warning() -> Iterator[None]:
-    """A context in which Pillow's ``DecompressionBombWarning`` is not shown: jaxga bounds
-    a map's cells from its header before decoding (:func:`too_large`), so the warning
-    would only repeat in two lines of its own what the refusal or the coarsening says."""
-    from PIL import Image
-
+def _quiet_pillow() -> Iterator[None]:
+    """A context in which Pillow's warnings are not shown: its
+    ``DecompressionBombWarning`` (jaxga bounds a map's cells from its header before
+    decoding, :func:`too_large`, so the warning would only repeat in two lines of its own
+    what the refusal or the coarsening says) and its complaints about damaged metadata
+    (``Corrupt EXIF data``), lines before jaxga's own one line about a damaged file, or
+    about data an image read as a map does not hold."""
     with warnings.catch_warnings():
-        warnings.simplefilter("ignore", Image.DecompressionBombWarning)
+        warnings.simplefilter("ignore")
         yield
 
 
@@ -400,7 +401,7 @@ def decode_image(raw: bytes, label: str) -> tuple[np.ndarray, int]:
     from PIL import Image, UnidentifiedImageError  # here: Pillow's import is a tenth of a second
 
     try:
-        with _no_bomb_warning(), Image.open(io.BytesIO(raw)) as img:
+        with _quiet_pillow(), Image.open(io.BytesIO(raw)) as img:
             # a TIFF's orientation is read before its pixels only; a PNG's getexif()
             # would decode the pixels itself and hide a decoding error from load()
             turned = exif_orientation(img) if img.format == "TIFF" else 1

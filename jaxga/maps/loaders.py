@@ -39,7 +39,7 @@ from typing import Any
 import numpy as np
 
 from jaxga.core.errors import EndpointError, MapFormatError
-from jaxga.core.fields import shown_value
+from jaxga.core.fields import python_scalar, shown_value
 from jaxga.core.grid import Grid, check_corner_rule, too_large
 from jaxga.maps import builtin
 from jaxga.maps.builtin import default_corner_rule
@@ -366,6 +366,7 @@ def _inflated(blocked: np.ndarray, ros: RosMap | None, cells: float | None,
             raise MapFormatError(f"{label}: a robot radius in metres needs a map with a "
                                  "resolution (a ROS map_server .yaml); inflate by cells "
                                  "instead")
+        metres = python_scalar(metres)  # np.float32(0.1) is 0.1
         if isinstance(metres, bool) or not isinstance(metres, (int, float)) or not (
                 math.isfinite(metres) and metres >= 0):
             raise MapFormatError(f"{label}: the robot radius must be >= 0 metres, got "
