@@ -477,7 +477,10 @@ def _checked_path_arrays(cells: Any, length: Any, *, batched: bool) -> tuple[jax
         raise ParameterError(f"{name}: length must be an integer "
                              f"{'array of one per path' if batched else 'scalar'}, got "
                              f"{n.dtype}{list(n.shape)}")
-    return c.astype(jnp.int32), n.astype(jnp.int32)
+    c = c.astype(jnp.int32)
+    if c.shape[-1] == 1:  # a one-cell path (start = goal): one padding cell, no segment
+        c = jnp.concatenate([c, c], axis=-1)
+    return c, n.astype(jnp.int32)
 
 
 def _smooth_batch(grid: Grid, cells: jax.Array, length: jax.Array, field: DistanceField,
