@@ -41,7 +41,7 @@ from importlib import resources
 from pathlib import Path
 from typing import Any
 
-from jaxga.config.schema import DEFAULTS, SCHEMA, Config, dotted, flatten, parse_value
+from jaxga.config.schema import DEFAULTS, SCHEMA, Config, dotted, parse_value
 from jaxga.core.errors import ParameterError
 from jaxga.core.fields import shown_value
 from jaxga.maps.inputs import read_input
@@ -170,8 +170,17 @@ def _split(table: dict[str, Any], label: str) -> tuple[dict[str, Any], dict[str,
         isinstance(v, Mapping) for v in variants_raw.values()
     ):
         raise ParameterError(f"{label}: 'variants' must hold tables [variants.NAME]")
-    body = flatten({k: v for k, v in table.items() if k not in _RESERVED})
-    variants = {str(k): flatten(v) for k, v in variants_raw.items()}
+
+    def keys(table: Mapping[str, Any], where: str = "") -> dict[str, Any]:
+        """Dotted keys; a key set twice (``"a.b" = 1`` beside ``[a] b = 2``) is refused,
+        not the last one kept."""
+        try:
+            return dotted(table, underscores=False)
+        except ParameterError as e:
+            raise ParameterError(f"{label}: {where}{e}") from None
+
+    body = keys({k: v for k, v in table.items() if k not in _RESERVED})
+    variants = {str(k): keys(v, f"[variants.{k}] ") for k, v in variants_raw.items()}
     for vname, keys in variants.items():
         for key in keys:
             if key in _RESERVED or key.split(".")[0] in _RESERVED:

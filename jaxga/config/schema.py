@@ -226,13 +226,15 @@ def flatten(table: Mapping[str, Any], prefix: str = "") -> dict[str, Any]:
     return out
 
 
-def dotted(overrides: Mapping[str, Any]) -> dict[str, Any]:
+def dotted(overrides: Mapping[str, Any], *, underscores: bool = True) -> dict[str, Any]:
     """Keyword overrides as dotted keys: ``a__b=...``, ``"a.b"`` and ``a={"b": ...}``
     alike (:func:`flatten`). A key reached twice with different values (``a__b=0.5``
-    beside ``a={"b": 0.9}``) is refused: one of them would be dropped without a word."""
+    beside ``a={"b": 0.9}``) is refused: one of them would be dropped without a word.
+    ``underscores=False`` (a preset file's tables) reads ``__`` as part of a name."""
     out: dict[str, Any] = {}
     for name, value in overrides.items():
-        for key, v in flatten({str(name).replace("__", "."): value}).items():
+        name = str(name).replace("__", ".") if underscores else str(name)
+        for key, v in flatten({name: value}).items():
             if key in out and normalised(key, out[key]) != normalised(key, v):
                 raise ParameterError(f"{key} is given twice, as {shown_value(out[key])} and "
                                      f"{shown_value(v)}")
