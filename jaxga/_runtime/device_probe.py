@@ -212,9 +212,16 @@ def _verdict_key(device: jax.Device) -> str:
     return f"{device.platform}|{device.device_kind}|jaxlib {jaxlib.__version__}"
 
 
+MAX_VERDICTS_BYTES = 1 << 20
+"""The largest verdicts file read: a few lines per device kind and jaxlib version."""
+
+
 def _remembered() -> dict:
-    try:
-        data = json.loads(verdicts_path().read_text())
+    path = verdicts_path()
+    try:  # a regular file only: a FIFO would block the run, /dev/zero never end
+        if not path.is_file() or path.stat().st_size > MAX_VERDICTS_BYTES:
+            return {}
+        data = json.loads(path.read_text())
     except (OSError, ValueError, RecursionError):
         return {}  # none yet, or unreadable: probe again
     return data if isinstance(data, dict) else {}

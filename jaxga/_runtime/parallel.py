@@ -71,6 +71,7 @@ import json
 import math
 import os
 import re
+import socket
 import sys
 import threading
 import time
@@ -83,7 +84,7 @@ import numpy as np
 from jax.errors import JaxRuntimeError
 
 from jaxga.core.errors import DeviceWarning, JaxgaError
-from jaxga.core.numerals import ascii_int
+from jaxga.core.numerals import ascii_float, ascii_int
 
 ENV_DEVICES = "JAXGA_DEVICES"
 ENV_COORDINATOR = "JAXGA_COORDINATOR"
@@ -314,8 +315,10 @@ def initialize(coordinator: str, num_processes: int, process_id: int, *,
     if num_processes < 1 or not 0 <= process_id < num_processes:
         raise JaxgaError(f"need 0 <= process id < number of processes, got process id "
                          f"{process_id} of {num_processes}")
-    if not re.fullmatch(r".+:\d+", coordinator or ""):
-        raise JaxgaError(f"the coordinator must be HOST:PORT, got {coordinator!r}")
+    if not re.fullmatch(r".+:\d+", coordinator or "") \
+            or not 0 < int(coordinator.rsplit(":", 1)[1]) < 65536:
+        raise JaxgaError(f"the coordinator must be HOST:PORT (a port from 1 to 65535), got "
+                         f"{coordinator!r}")
     if not 0 < timeout <= MAX_PROCESS_TIMEOUT:  # also refuses nan
         raise JaxgaError(f"the process timeout must be > 0 s and at most "
                          f"{MAX_PROCESS_TIMEOUT:,} s, got {timeout}")
@@ -326,6 +329,8 @@ def initialize(coordinator: str, num_processes: int, process_id: int, *,
     if jax.distributed.is_initialized():
         raise JaxgaError("jax.distributed is already initialised; call "
                          "jaxga._runtime.parallel.initialize instead of jax.distributed.initialize")
+    if process_id == 0:
+        _check_port_free(coordinator)
     jax.config.update("jax_enable_preemption_service", False)  # unused; slows exit
     jax.config.update("jax_cpu_collectives_implementation", "gloo")
     who = ("not every process joined" if process_id == 0 else
@@ -342,11 +347,30 @@ def initialize(coordinator: str, num_processes: int, process_id: int, *,
             # JAX's own heartbeat check is the backstop: ours (the monitor) fires first.
             heartbeat_timeout_seconds=2 * int(timeout) + 10)
         jax.devices()  # the backend exchanges device lists with every process here
+    except jax.errors.JaxRuntimeError as e:  # e.g. the coordinator's server did not start
+        first = (str(e).strip().splitlines() or [type(e).__name__])[0]
+        raise JaxgaError(f"process {process_id} could not start jax.distributed at "
+                         f"{coordinator}: {first}") from None
     finally:
         watchdog.cancel()
     from jax._src import distributed
 
     _session = _Session(distributed.global_state.client, process_id, num_processes, timeout)
+
+
+def _check_port_free(coordinator: str) -> None:
+    """One :class:`JaxgaError` line when process 0 cannot listen on the coordinator's port
+    (another program holds it), before JAX's coordinator service tries and fails with a
+    C++ log line and a traceback. The service listens on every address of the machine, so
+    the port is tried on all of them."""
+    port = int(coordinator.rsplit(":", 1)[1])
+    try:
+        with socket.create_server(("", port)):
+            pass
+    except OSError as e:
+        why = os.strerror(e.errno) if e.errno else str(e)
+        raise JaxgaError(f"process 0 cannot listen at {coordinator}: port {port} is "
+                         f"taken ({why}); choose another --coordinator port") from None
 
 
 def _give_up(message: str) -> None:
@@ -506,9 +530,10 @@ def configure_from_args(args: argparse.Namespace) -> None:
     if timeout is None:
         env = os.environ.get(ENV_PROCESS_TIMEOUT)
         try:
-            timeout = float(env) if env else DEFAULT_PROCESS_TIMEOUT
+            timeout = ascii_float(env) if env else DEFAULT_PROCESS_TIMEOUT
         except ValueError:
-            raise JaxgaError(f"{ENV_PROCESS_TIMEOUT} must be a number, got {env!r}") from None
+            raise JaxgaError(f"{ENV_PROCESS_TIMEOUT} must be a number in ASCII digits, got "
+                             f"{env!r}") from None
     given = {"--coordinator": coordinator, "--num-processes": n, "--process-id": pid}
     if all(v is None for v in given.values()):
         return

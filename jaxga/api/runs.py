@@ -58,7 +58,7 @@ from jaxga.api.failures import (
 from jaxga.api.problem import Problem, load_problem
 from jaxga.api.result import Result
 from jaxga.api.result_fronts import Fronts
-from jaxga.config.schema import Config, dotted, flatten
+from jaxga.config.schema import SCHEMA, Config, dotted, flatten
 from jaxga.core.errors import DeviceMemoryError, ParameterError
 from jaxga.core.fields import shown_value
 from jaxga.core.grid import Grid, as_integer
@@ -604,6 +604,10 @@ def checked_capacity(configs: Sequence[Config], requested: Any) -> int:
     if requested < capacity:
         raise ParameterError(f"population_capacity {requested} is below the largest "
                              f"population.size ({capacity})")
+    most = SCHEMA["population.size"].high  # the program is built with this many
+    if requested > most:
+        raise ParameterError(f"population_capacity {requested} is above the largest "
+                             f"population a program holds ({most:,} per island)")
     return requested
 
 

@@ -91,6 +91,9 @@ def check_outputs(args: argparse.Namespace) -> None:
                              f"folder {package} (its code, built-in maps and presets)")
     check_output_files(outputs, inputs)
     folder = getattr(args, "checkpoint", None)
+    if folder and (_inside(folder, package) or Path(folder).resolve() == package):
+        raise JaxgaError(f"cannot use --checkpoint {folder}: it is inside jaxga's own "
+                         f"folder {package} (its code, built-in maps and presets)")
     if folder:
         for label, path in [*inputs, *outputs.items()]:
             if path and Path(path).is_dir() and same_file(path, folder):

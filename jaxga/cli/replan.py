@@ -29,13 +29,16 @@ from jaxga.cli.options import (
 )
 from jaxga.cli.outputs import write_empty_path
 from jaxga.cli.run import process_timeline
+from jaxga.config.presets import parse_set
+from jaxga.config.schema import normalised
 from jaxga.core.errors import JaxgaError, ParameterError
+from jaxga.core.fields import shown_value
 from jaxga.core.grid import CORNER_RULES, as_integer, check_corner_rule
 from jaxga.maps.inputs import PATH_JSON_CAP, read_input
 from jaxga.plot import (
     plot_replan,
 )
-from jaxga.replan import replan
+from jaxga.replan import DEFAULT_GENERATIONS, DEFAULT_POPULATION, replan
 
 
 def number_or_inf(value: object) -> float:
@@ -108,6 +111,30 @@ def read_path_json(path: str, run_index: int | None, raw: bool = False,
     return recorded_cells(cells, recorded, frame, path)
 
 
+def given_budget(args: argparse.Namespace) -> dict[str, int]:
+    """``replan``'s ``generations`` and ``population``: replan's defaults where the
+    command line leaves them out (a ``--set`` of the key then wins), the values given
+    otherwise; a value given both as an option and by ``--set`` differently is refused
+    in one line (at its default, the option would otherwise give way without a word)."""
+    out = {"generations": DEFAULT_GENERATIONS, "population": DEFAULT_POPULATION}
+    for name, key in (("generations", "generations"), ("population", "population.size")):
+        given = getattr(args, name)
+        if given is None:
+            continue
+        for text in args.set or ():
+            set_key, value = parse_set(text)
+            if set_key == key and normalised(key, value) != normalised(key, given):
+                raise ParameterError(f"{key} is given twice, as {given!r} (--{name}) and "
+                                     f"{shown_value(value)} (--set)")
+        out[name] = given
+    return out
+
+
+MAX_COARSENING = 2 ** 20
+"""The largest coarsening a path file's frame may record: map cells a side per planning
+cell, beyond any map jaxga reads (its cells are converted with 64-bit integers)."""
+
+
 def recorded_cells(cells: list[tuple[int, int]], recorded: Any, frame: Any,
                    path: str) -> list[tuple[int, int]]:
     """``cells``, planning cells of the frame a JSON ``recorded`` (its ``"frame"``: the
@@ -117,21 +144,21 @@ def recorded_cells(cells: list[tuple[int, int]], recorded: Any, frame: Any,
     cells are taken as they are."""
     if not isinstance(recorded, dict):
         return cells
-    try:
-        was = int(recorded.get("coarsen", 1))
-        shape = tuple(int(v) for v in recorded["map_shape"]) if "map_shape" in recorded \
-            else None
+    try:  # integers as jaxga writes them: 2.9, "2" and true are not a coarsening
+        was = as_integer(recorded.get("coarsen", 1))
+        shape = tuple(as_integer(v) for v in recorded["map_shape"]) \
+            if "map_shape" in recorded else None
     except (TypeError, ValueError):
         raise ParameterError(f"{path}: its \"frame\" is not jaxga's (coarsen, "
-                             "map_shape)") from None
+                             "map_shape: integers)") from None
     now = 1 if frame is None else frame.coarsen
     if frame is not None and shape is not None and shape != tuple(frame.map_shape):
         raise ParameterError(
             f"{path} was planned on a map of {shape[1]} x {shape[0]} cells, --map has "
             f"{frame.map_shape[1]} x {frame.map_shape[0]}: give the map it was planned on")
-    if was < 1:
-        raise ParameterError(f"{path}: its frame's coarsening {was} is not a positive "
-                             "integer")
+    if not 1 <= was <= MAX_COARSENING:
+        raise ParameterError(f"{path}: its frame's coarsening {was} is not an integer "
+                             f"from 1 to {MAX_COARSENING}")
     if was == now:
         return cells
     c = np.asarray(cells, np.int64)
@@ -181,7 +208,7 @@ def cmd_replan(args: argparse.Namespace) -> int:
                          "--position-world X,Y (metres)")
     result = replan(
         grid, path, obstacles, position, args.preset, seeds=args.seeds,
-        generations=args.generations, population=args.population,
+        **given_budget(args),
         window=parse_window(args.window), plan_from=args.plan_from, post=args.post,
         fallback=args.fallback, variant=args.variant, sets=tuple(args.set or ()),
         inflate=inflation_cells(args, info),
@@ -280,9 +307,11 @@ def add_parser(commands: argparse._SubParsersAction) -> None:
                    "initialiser cannot fail where a detour exists; mpmga = the paper's)")
     p.add_argument("--variant", help="a preset variant")
     p.add_argument("--seeds", type=int, default=4, help="seeded GA runs (default 4)")
-    p.add_argument("--generations", type=int, default=20, help="GA generations (default 20)")
-    p.add_argument("--population", type=int, default=10,
-                   help="population size, per island for island presets (default 10)")
+    p.add_argument("--generations", type=int, default=None,
+                   help=f"GA generations (default {DEFAULT_GENERATIONS})")
+    p.add_argument("--population", type=int, default=None,
+                   help=f"population size, per island for island presets (default "
+                   f"{DEFAULT_POPULATION})")
     p.add_argument("--window", default="auto", metavar="S|auto|none",
                    help="run the GA on an S x S crop around the re-planned part (default "
                    "auto: the smallest of 32, 64, 128, 256 that holds it; none: the whole "

@@ -32,6 +32,7 @@ from jaxga.cli.options import (
 )
 from jaxga.cli.outputs import write_empty_path
 from jaxga.core.errors import JaxgaError
+from jaxga.core.numerals import ascii_float
 from jaxga.engine.algorithm import front_objectives
 from jaxga.maps.clearance import ObstacleClearance
 from jaxga.plot import (
@@ -190,11 +191,13 @@ def run_and_report(args: argparse.Namespace, timeline: Timeline,
                 curve = np.asarray(curves[best]["points"])
             plot_result(result, info.grid, args.plot, curve=curve, info=info)
         print(f"wrote {args.plot}")
+    point = unmet = None
     if args.path_out and best is not None and result.front is not None:
         point = result.front_point(best, choice)
-        if point is None:
-            raise JaxgaError(f"no point of seed {int(result.seeds[best])}'s front keeps a "
-                             f"clearance of {args.front_point} m (--front-point)")
+        if point is None:  # a request no path meets: no path, the JSON still written
+            unmet = (f"no point of seed {int(result.seeds[best])}'s front keeps a "
+                     f"clearance of {args.front_point} m (--front-point)")
+    if point is not None:
         with phase("write"):
             line = front_polyline(info.grid, point["path"],
                                   front_obstacles(result.frame, info.grid))
@@ -208,7 +211,7 @@ def run_and_report(args: argparse.Namespace, timeline: Timeline,
               f"{args.front_point}: {evolved}"
               f"{path_length(line) * result.frame.cell_size:.3f} m shortcut without "
               f"narrowing it{clear}; metres)")
-    elif args.path_out and best is not None:
+    elif args.path_out and best is not None and unmet is None:
         with phase("write"):
             export.write_path(args.path_out, robot_path(result, best, curves),
                               decimals=result.frame.world_decimals)
@@ -225,8 +228,8 @@ def run_and_report(args: argparse.Namespace, timeline: Timeline,
                     run["smooth"] = curve_json(curve, result.frame)
             write_json(args.json, doc)
     print(time_line(timeline.as_dict()))
-    if not result.success.any():
-        print(f"jaxga: no path: {result.reason}", file=sys.stderr)
+    if not result.success.any() or unmet is not None:
+        print(f"jaxga: no path: {unmet or result.reason}", file=sys.stderr)
         return EXIT_NO_PATH
     return 0
 
@@ -252,8 +255,8 @@ def front_point_choice(value: str) -> str | float:
     (a number >= 0)."""
     if value in FRONT_POINTS:
         return value
-    try:
-        least = float(value)
+    try:  # ASCII digits only: '1_0' is not 10 m
+        least = ascii_float(value)
     except ValueError:
         least = math.nan
     if not least >= 0 or not math.isfinite(least):

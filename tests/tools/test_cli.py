@@ -1214,6 +1214,17 @@ def test_a_front_s_summary_json_and_chosen_point(tmp_path, capsys):
     blocked = load_map_info(str(ros)).grid.blocked_np()
     assert blocked[9:15, 10:14].all()
     assert ObstacleClearance(blocked).of_path(cells) >= chosen["clearance"] - 1e-9
+    # a clearance no point keeps: no path, so the file holds an empty path (not the path
+    # of the request before), and the JSON is still written
+    out.unlink()
+    assert main(["run", "--preset", "pareto", "--map", str(ros), "--start-world",
+                 "0.25,1.25", "--goal-world", "2.25,1.15", "--seeds", "2", "--generations",
+                 "4", "--quiet", "--json", str(out), "--path-out", str(csv),
+                 "--front-point", "1000"]) == EXIT_NO_PATH
+    err = capsys.readouterr().err.strip().splitlines()
+    assert err[-1].startswith("jaxga: no path: no point of seed ") \
+        and err[-1].endswith("'s front keeps a clearance of 1000 m (--front-point)"), err
+    assert csv.read_text().strip() == "x,y" and json.loads(out.read_text())["runs"]
 
 
 def test_front_point_must_be_a_name_or_a_clearance(capsys):
