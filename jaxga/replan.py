@@ -419,9 +419,11 @@ def replan(
             exists, so the re-plan finds the detour whenever there is one (within the
             path capacity); ``"mpmga"`` is the paper's own re-planning GA.
         seeds: seeded GA runs in one compiled call; the best successful one is used.
-        generations: GA generations (small: this is a real-time re-plan).
+        generations: GA generations (small: this is a real-time re-plan). At its
+            default, a ``generations`` in the overrides (``sets``) wins.
         population: ``population.size`` override (per island for island presets); None
-            keeps the preset's.
+            keeps the preset's. At its default, a ``population.size`` in the overrides
+            wins.
         window: the GA runs on a ``window`` x ``window`` crop of the map around the
             planning start and the rejoin cell, so one compiled program serves every
             map size; when they do not fit in the window or the crop cuts them apart,
