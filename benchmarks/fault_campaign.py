@@ -64,6 +64,7 @@ import resource
 import shlex
 import shutil
 import signal
+import socket
 import stat
 import struct
 import subprocess
@@ -1367,7 +1368,57 @@ def build(t: Path) -> list[Case]:
         env={"JAXGA_CACHE_DIR": "~/cache8", "HOME": str(home)}, outputs=(tilde, home),
         check=all_of(wrote_json(tilde), no_folder_named(f / "~")), timeout=300,
         note="made a folder named '~' in the working folder")
+
+    # --- round nine: huge headers, one-cell paths, ports in use, keys set twice ----------
+    huge = write("huge.map", "type octile\nheight 1\nwidth +1000000000000\nmap\n.\n")
+    add("movingai-width-with-a-plus", "round nine", run(huge), quick=True,
+        note="the header's size allocated before any row was read: MemoryError (931 GiB)")
+    smooth_out = f / "smooth-one-cell.json"
+    add("smooth-start-is-goal", "round nine",
+        run(CLASSIC, "--smooth", "--start", "0,0", "--goal", "0,0", "--json", smooth_out),
+        "handled", outputs=(smooth_out,), check=wrote_json(smooth_out), timeout=300,
+        note="a gather out of range after the summary")
+    replan("path-json-frame-coarsen-1e400",
+           write("coarse.json", '{"frame": {"coarsen": 1e400}, "path": [[0, 0], [1, 0]]}'),
+           *obstacle, quick=True, note="OverflowError traceback")
+    replan("replan-generations-beside-set", base_json, *obstacle, "--generations", "20",
+           "--set", "generations=6", note="ran 6 generations without a word")
+    add("coordinator-port-past-65535", "round nine",
+        run(CLASSIC, "--coordinator", "127.0.0.1:99999", "--num-processes", "2",
+            "--process-id", "0"), quick=True, max_s=15,
+        note="waited out the timeout, then blamed the other processes")
+    held = socket.create_server(("127.0.0.1", 0))
+    HELD_PORTS.append(held)  # listening until this process ends
+    port = held.getsockname()[1]
+    add("coordinator-port-in-use", "round nine",
+        run(CLASSIC, "--coordinator", f"127.0.0.1:{port}", "--num-processes", "2",
+            "--process-id", "0"), quick=True,
+        note="a C++ log line and a JaxRuntimeError traceback")
+    env_case("process-timeout-underscore", {"JAXGA_PROCESS_TIMEOUT": "1_0"},
+             "--coordinator", "127.0.0.1:23999", "--num-processes", "2", "--process-id", "0",
+             note="read as 10 s")
+    twice = write("twice.toml", 'base = "sga"\n"mutation.probability" = 0.2\n'
+                  "[mutation]\nprobability = 0.3\n")
+    add("preset-key-set-twice", "round nine", run(CLASSIC, "--preset", twice),
+        note="ran 0.3 without a word")
+    add("damaged-tiff", "round nine", run(write("damaged.tif", b"II*\x00\x08\x00\x00\x00")),
+        note="Pillow's four warning lines before jaxga's")
+    corner = write("corner.txt", "000\n010\n000\n")
+    add("default-corner-inflated", "round nine", ["optimum", "--map", corner, "--inflate", "1.5"],
+        note="'start cell (0, 0) is blocked', no word of the inflation")
+    quoted = tb3 / "quoted.yaml"
+    quoted.write_text(re.sub(r"resolution:[^\n]*", "resolution: '0_05'", tb3_yaml.read_text()))
+    add("ros-resolution-quoted-underscore", "round nine", run(quoted), quick=True,
+        note="read as 5.0 m cells (yaml-cpp refuses it)")
+    add("population-capacity-past-a-program", "round nine",
+        run(CLASSIC, "--population-capacity", "1000000000"),
+        note="named population.size, a key not given")
     return cases
+
+
+HELD_PORTS: list[socket.socket] = []
+"""Ports this process listens on while the campaign runs: a coordinator's port another
+program holds (``coordinator-port-in-use``)."""
 
 
 def no_folder_named(path: Path) -> Check:
