@@ -1379,7 +1379,7 @@ def build(t: Path) -> list[Case]:
         "handled", outputs=(smooth_out,), check=wrote_json(smooth_out), timeout=300,
         note="a gather out of range after the summary")
     replan("path-json-frame-coarsen-1e400",
-           write("coarse.json", '{"frame": {"coarsen": 1e400}, "path": [[0, 0], [1, 0]]}'),
+           write("coarse-1e400.json", '{"frame": {"coarsen": 1e400}, "path": [[0, 0], [1, 0]]}'),
            *obstacle, quick=True, note="OverflowError traceback")
     replan("replan-generations-beside-set", base_json, *obstacle, "--generations", "20",
            "--set", "generations=6", note="ran 6 generations without a word")
