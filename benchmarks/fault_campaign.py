@@ -1370,7 +1370,7 @@ def build(t: Path) -> list[Case]:
         note="made a folder named '~' in the working folder")
 
     # --- round nine: huge headers, one-cell paths, ports in use, keys set twice ----------
-    huge = write("huge.map", "type octile\nheight 1\nwidth +1000000000000\nmap\n.\n")
+    huge = write("huge-plus.map", "type octile\nheight 1\nwidth +1000000000000\nmap\n.\n")
     add("movingai-width-with-a-plus", "round nine", run(huge), quick=True,
         note="the header's size allocated before any row was read: MemoryError (931 GiB)")
     smooth_out = f / "smooth-one-cell.json"
