@@ -580,11 +580,11 @@ def build(t: Path) -> list[Case]:
 
     def write(name: str, data: str | bytes) -> Path:
         p = f / name
+        raw = data.encode("utf-8") if isinstance(data, str) else data
+        if p.exists() and p.read_bytes() != raw:  # it would replace another case's input
+            raise ValueError(f"two cases write {name} differently: give each its own name")
         p.parent.mkdir(parents=True, exist_ok=True)
-        if isinstance(data, str):
-            p.write_text(data, encoding="utf-8")
-        else:
-            p.write_bytes(data)
+        p.write_bytes(raw)
         return p
 
     # the classic map, as text, image and PGM; a blocked cell of it
@@ -1200,13 +1200,13 @@ def build(t: Path) -> list[Case]:
     thin = write("thin-header.map", "type octile\nheight 1\nwidth 99999999999999999999\nmap\n.\n")
     add("movingai-header-10e20-by-1", "round four", run(thin), max_s=15,
         note="hung: the coarsening factor was counted up from 2")
-    room = write("room.pgm", b"P5\n4 4\n255\n" + bytes([254] * 16))
+    room4 = write("room4x4.pgm", b"P5\n4 4\n255\n" + bytes([254] * 16))
     deep = "[" * 5000 + "]" * 5000
     add("ros-yaml-nested-5000-deep", "round four",
-        run(write("deep.yaml", f"image: {room.name}\nresolution: 0.1\norigin: {deep}\n")),
+        run(write("deep.yaml", f"image: {room4.name}\nresolution: 0.1\norigin: {deep}\n")),
         note="was a RecursionError traceback")
     add("ros-yaml-key-twice", "round four",
-        run(write("twice.yaml", f"image: {room.name}\nresolution: 0.1\norigin: [0, 0, 0]\n"
+        run(write("twice.yaml", f"image: {room4.name}\nresolution: 0.1\norigin: [0, 0, 0]\n"
                                 "resolution: 5.0\n")),
         note="the last value was used without a word")
     add("preset-nested-3000-deep", "round four",
@@ -1265,9 +1265,9 @@ def build(t: Path) -> list[Case]:
         run(write("tab.yaml", good.replace("image: ", "image:\t"))),
         check=refused_saying("line 1, column 7"),
         note="said 'while scanning for the next token', without the line")
-    unknown = write("unknown.pgm", b"P5\n4 4\n255\n" + bytes([205] * 16))
+    unknown = write("unknown-all.pgm", b"P5\n4 4\n255\n" + bytes([205] * 16))
     add("optimum-on-unknown-cells", "round five",
-        ["optimum", "--map", write("unknown.yaml", good.replace(room.name, unknown.name))],
+        ["optimum", "--map", write("unknown-all.yaml", good.replace(room.name, unknown.name))],
         check=refused_saying("--unknown free"), note="said 'is blocked' without why")
     add("robot-radius-1e308", "round five",
         run(write("radius.yaml", good), "--robot-radius", "1e308"),
