@@ -315,8 +315,9 @@ def initialize(coordinator: str, num_processes: int, process_id: int, *,
     if num_processes < 1 or not 0 <= process_id < num_processes:
         raise JaxgaError(f"need 0 <= process id < number of processes, got process id "
                          f"{process_id} of {num_processes}")
-    if not re.fullmatch(r".+:\d+", coordinator or "") \
-            or not 0 < int(coordinator.rsplit(":", 1)[1]) < 65536:
+    port = int(coordinator.rsplit(":", 1)[1]) if re.fullmatch(r".+:\d+", coordinator or "") \
+        else 0
+    if not 0 < port < 65536:
         raise JaxgaError(f"the coordinator must be HOST:PORT (a port from 1 to 65535), got "
                          f"{coordinator!r}")
     if not 0 < timeout <= MAX_PROCESS_TIMEOUT:  # also refuses nan
@@ -330,7 +331,7 @@ def initialize(coordinator: str, num_processes: int, process_id: int, *,
         raise JaxgaError("jax.distributed is already initialised; call "
                          "jaxga._runtime.parallel.initialize instead of jax.distributed.initialize")
     if process_id == 0:
-        _check_port_free(coordinator)
+        _check_port_free(coordinator, port)
     jax.config.update("jax_enable_preemption_service", False)  # unused; slows exit
     jax.config.update("jax_cpu_collectives_implementation", "gloo")
     who = ("not every process joined" if process_id == 0 else
@@ -358,12 +359,12 @@ def initialize(coordinator: str, num_processes: int, process_id: int, *,
     _session = _Session(distributed.global_state.client, process_id, num_processes, timeout)
 
 
-def _check_port_free(coordinator: str) -> None:
-    """One :class:`JaxgaError` line when process 0 cannot listen on the coordinator's port
-    (another program holds it), before JAX's coordinator service tries and fails with a
-    C++ log line and a traceback. The service listens on every address of the machine, so
-    the port is tried on all of them."""
-    port = int(coordinator.rsplit(":", 1)[1])
+def _check_port_free(coordinator: str, port: int) -> None:
+    """One :class:`JaxgaError` line when process 0 cannot listen on the coordinator's
+    ``port`` (another program holds it), before JAX's coordinator service tries and fails
+    with a C++ log line and a traceback. The service listens on every address of the
+    machine, so the port is tried on every IPv4 address (a port held on any one of them
+    is refused)."""
     try:
         with socket.create_server(("", port)):
             pass
