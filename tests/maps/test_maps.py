@@ -39,6 +39,7 @@ from jaxga.maps import (
     rooms_map,
     save_map,
 )
+from jaxga.maps.preprocess import INFLATE_BAND_CELLS, inflate_blocked
 
 DATA = Path(__file__).parents[1] / "data"
 EXT = {"01": "txt", "movingai": "map", "ascii": "ascii", "png": "png", "ros": "yaml"}
@@ -769,8 +770,11 @@ def test_inflate_hand_made():
 
 
 @FAST
-@given(blocked=blocked_arrays, radius=st.floats(0, 4))
-def test_inflate_matches_brute_force(blocked, radius):
+@given(blocked=blocked_arrays, radius=st.floats(0, 12) | st.sampled_from([1 - 1e-10, 2**0.5]),
+       band=st.sampled_from([1, 7, 64, INFLATE_BAND_CELLS]))
+def test_inflate_matches_brute_force(blocked, radius, band):
+    """Every cell within the radius of a blocked cell's centre, whatever the bands the
+    distance transform is taken in (a band of 1 cell: one row and its halo)."""
     g = Grid.create(blocked)
     h, w = blocked.shape
     ys, xs = np.nonzero(blocked)
@@ -778,7 +782,19 @@ def test_inflate_matches_brute_force(blocked, radius):
     expected = np.zeros_like(blocked)
     for y, x in zip(ys, xs, strict=True):
         expected |= (yy - y) ** 2 + (xx - x) ** 2 <= radius**2 + 1e-9
-    np.testing.assert_array_equal(inflate(g, radius).blocked_np(), expected)
+    np.testing.assert_array_equal(inflate_blocked(blocked, radius, band_cells=band), expected)
+    if band == INFLATE_BAND_CELLS:
+        np.testing.assert_array_equal(inflate(g, radius).blocked_np(), expected)
+
+
+def test_inflate_by_a_large_radius_on_a_large_map():
+    """A radius of 300 cells on a 1000 x 1000 map: one obstacle grows into the disc of
+    cells within 300 of it (its pixel count), clipped by the map's edge."""
+    b = np.zeros((1000, 1000), bool)
+    b[100, 700] = True
+    out = inflate_blocked(b, 300)
+    yy, xx = np.mgrid[0:1000, 0:1000]
+    np.testing.assert_array_equal(out, (yy - 100) ** 2 + (xx - 700) ** 2 <= 300**2)
 
 
 def test_fill_enclosed_hand_made():
