@@ -153,13 +153,21 @@ class PureGA:
 
 
 def no_path_as_nan(out: RunOutputs) -> RunOutputs:
-    """``out`` with the lengths and metrics of a run without a path set to NaN (-1 for
-    the integer metrics)."""
+    """``out`` with a run without a path marked so: ``success`` False, lengths and
+    metrics NaN (-1 for the integer metrics), fitness 0 and convergence generation -1.
+    A run without a path found none, or its post-optimised path failed the final
+    feasibility check (``feasible_post``, as a user's own post step may make), as
+    :func:`jaxga.run` counts it."""
+    success = out.success & out.feasible_post
+
     def nan_unless(v: jax.Array) -> jax.Array:
         missing = jnp.nan if jnp.issubdtype(v.dtype, jnp.floating) else -1
-        return jnp.where(out.success, v, missing).astype(v.dtype)
+        return jnp.where(success, v, missing).astype(v.dtype)
 
+    conv = out.convergence_generation
     return dataclasses.replace(
-        out, length=nan_unless(out.length), raw_length=nan_unless(out.raw_length),
+        out, success=success, fitness=jnp.where(success, out.fitness, 0).astype(out.fitness.dtype),
+        length=nan_unless(out.length), raw_length=nan_unless(out.raw_length),
         metrics={k: nan_unless(v) for k, v in out.metrics.items()},
-        raw_metrics={k: nan_unless(v) for k, v in out.raw_metrics.items()})
+        raw_metrics={k: nan_unless(v) for k, v in out.raw_metrics.items()},
+        convergence_generation=None if conv is None else nan_unless(conv))

@@ -217,23 +217,34 @@ def test_compare_results_refuses_grids_with_other_endpoints(result):
 
 def test_a_run_without_a_path_in_the_pure_core_has_no_length():
     """The pure core's outputs of a run that found no path: NaN lengths and metrics as in
-    a Result (a 0 would be averaged as a path), -1 counts, the paths' values kept."""
+    a Result (a 0 would be averaged as a path), -1 counts, the paths' values kept. A run
+    whose post-optimised path failed the final feasibility check (run 2, as a user's own
+    post step may make) has no path either, as ``jaxga.run`` counts it: not a success,
+    fitness 0, convergence generation -1."""
     out = jaxga.engine.RunOutputs(
-        success=jnp.array([True, False]), raw_cells=jnp.zeros((2, 4), jnp.int32),
-        raw_n_cells=jnp.array([3, 1]), cells=jnp.zeros((2, 4), jnp.int32),
-        n_cells=jnp.array([3, 1]), fitness=jnp.array([0.5, 0.0]),
-        raw_length=jnp.array([2.5, 0.0]), length=jnp.array([2.0, 0.0]),
-        raw_metrics={"turns": jnp.array([1, 0]), "angle_sum": jnp.array([0.7, 0.0])},
-        metrics={"turns": jnp.array([1, 0]), "angle_sum": jnp.array([0.7, 0.0])},
-        generations_run=jnp.array([5, 5]), failures=jnp.zeros((2, 3), jnp.int32),
-        feasible_post=jnp.array([True, False]))
+        success=jnp.array([True, False, True]), raw_cells=jnp.zeros((3, 4), jnp.int32),
+        raw_n_cells=jnp.array([3, 1, 3]), cells=jnp.zeros((3, 4), jnp.int32),
+        n_cells=jnp.array([3, 1, 3]), fitness=jnp.array([0.5, 0.0, 0.25]),
+        raw_length=jnp.array([2.5, 0.0, 3.0]), length=jnp.array([2.0, 0.0, 1.5]),
+        raw_metrics={"turns": jnp.array([1, 0, 2]), "angle_sum": jnp.array([0.7, 0.0, 1.0])},
+        metrics={"turns": jnp.array([1, 0, 2]), "angle_sum": jnp.array([0.7, 0.0, 1.0])},
+        generations_run=jnp.array([5, 5, 5]), failures=jnp.zeros((3, 3), jnp.int32),
+        feasible_post=jnp.array([True, False, False]),
+        convergence_generation=jnp.array([3, -1, 4], jnp.int32))
     nan = no_path_as_nan(out)
-    np.testing.assert_array_equal(nan.length, [2.0, np.nan])
-    np.testing.assert_array_equal(nan.raw_length, [2.5, np.nan])
-    np.testing.assert_array_equal(nan.metrics["turns"], [1, -1])
-    np.testing.assert_array_equal(nan.raw_metrics["angle_sum"], np.array([0.7, np.nan],
-                                                                         np.float32))
-    assert nan.metrics["turns"].dtype == jnp.int32 and nan.fitness is out.fitness
+    np.testing.assert_array_equal(nan.success, [True, False, False])
+    np.testing.assert_array_equal(nan.length, [2.0, np.nan, np.nan])
+    np.testing.assert_array_equal(nan.raw_length, [2.5, np.nan, np.nan])
+    np.testing.assert_array_equal(nan.metrics["turns"], [1, -1, -1])
+    np.testing.assert_array_equal(nan.raw_metrics["angle_sum"],
+                                  np.array([0.7, np.nan, np.nan], np.float32))
+    np.testing.assert_array_equal(nan.fitness, np.array([0.5, 0.0, 0.0], np.float32))
+    np.testing.assert_array_equal(nan.convergence_generation, [3, -1, -1])
+    assert nan.metrics["turns"].dtype == jnp.int32 and nan.fitness.dtype == out.fitness.dtype
+    assert nan.convergence_generation.dtype == jnp.int32
+    np.testing.assert_array_equal(nan.cells, out.cells)  # the paths' values kept
+    no_history = no_path_as_nan(dataclasses.replace(out, convergence_generation=None))
+    assert no_history.convergence_generation is None
 
 
 @pytest.mark.slow  # the pure core's own program
