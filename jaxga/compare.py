@@ -420,15 +420,15 @@ def compare_results(
     if metric not in metrics:
         metrics = (metric,) + metrics
     rs = list(results.values())
-    # a map given as a bare Grid is named "grid" whatever it holds: its size, endpoints
-    # and optimum tell such maps apart
+    # a map given as a bare Grid is named "grid" whatever it holds: its cells' digest
+    # (and its size, endpoints and optimum) tell such maps apart
     keys = {(r.map_name, r.corner_rule, None if np.isnan(r.optimum) else float(r.optimum),
-             r.width, r.start, r.goal) for r in rs}
+             r.width, r.start, r.goal, r.map_digest) for r in rs}
     if len(keys) > 1:
         raise ParameterError(
             "the results to compare are on different maps, endpoints or corner rules: "
             + "; ".join(f"{k[0]} ({k[1]}, width {k[3]}, start {k[4]}, goal {k[5]}, optimum "
-                        f"{k[2]})" for k in sorted(keys, key=str)))
+                        f"{k[2]}, cells {k[6] or 'unknown'})" for k in sorted(keys, key=str)))
     if test == "wilcoxon" and any(not np.array_equal(r.seeds, rs[0].seeds) for r in rs):
         raise ParameterError("the Wilcoxon signed-rank test pairs runs by seed: every "
                              "preset must have run the same seeds")

@@ -162,5 +162,6 @@ def no_path_result(config, map_name, grid, seeds, algo, reason, timing,
         population_capacity=population_capacity, init_fallback=np.zeros(s, np.int32),
         initial_fitness=np.zeros(s),
         causes=np.full(s, reason, dtype=object), path_capacity=algo.capacity, frame=frame,
+        map_digest=grid.cells_digest(),
     )
 

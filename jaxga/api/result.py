@@ -85,6 +85,9 @@ class RunSetup:
     """The goal cell ``(x, y)``."""
     frame: MapFrame | None
     """Planning cells against the map file's cells and metres (None for a bare grid)."""
+    map_digest: str
+    """The planning map's :meth:`jaxga.Grid.cells_digest` ("" where not known): which
+    results :func:`jaxga.compare_results` may compare."""
 
 
 @dataclasses.dataclass(frozen=True)
@@ -277,6 +280,8 @@ class Result(FrontsOfResult):
     frame: MapFrame | None = None
     """How the planning cells relate to the map file's cells and to metres
     (:mod:`jaxga.maps.frame`); None for a map given as a bare :class:`~jaxga.Grid`."""
+    map_digest: str = ""
+    """The planning map's :meth:`jaxga.Grid.cells_digest` ("" where not known)."""
 
     def _record(self, record: type) -> Any:
         return record(**{f.name: getattr(self, f.name) for f in dataclasses.fields(record)})
@@ -625,7 +630,8 @@ class Result(FrontsOfResult):
                 **self._front_json(i),
             })
         return {
-            "preset": self.preset, "map": self.map_name, "corner_rule": self.corner_rule,
+            "preset": self.preset, "map": self.map_name, "map_digest": self.map_digest,
+            "corner_rule": self.corner_rule,
             "start": None if self.start is None else list(self.start),
             "goal": None if self.goal is None else list(self.goal),
             **self._endpoints_world(),

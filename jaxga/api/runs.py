@@ -525,6 +525,7 @@ def _point_results(host: dict, hist: dict, plan: SweepPlan, start: InitOutcome,
     rate, unfilled, from_fallback, initial = (start.rate, start.unfilled, start.from_fallback,
                                               start.initial)
     n_seeds = len(plan.seed_arr)
+    digest = grid.cells_digest()
     conv = convergence_generation(hist["best"], host["fitness"], initial)
     maximin = math.nan
     if host.front is not None:
@@ -559,6 +560,7 @@ def _point_results(host: dict, hist: dict, plan: SweepPlan, start: InitOutcome,
             initial_fitness=initial[sl].astype(float),
             optimum=float(octile.length), any_angle_optimum=bounds.optimum,
             lower_bound=bounds.lower_bound, any_angle_note=bounds.note, frame=plan.frame,
+            map_digest=digest,
             timing=dict(timing), population=int(cfg["population.size"]) * algo.islands,
             generations=algo.generations, width=grid.width, config=cfg,
             point={k.replace("__", "."): v for k, v in points[q].items()},

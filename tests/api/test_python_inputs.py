@@ -205,14 +205,34 @@ def test_one_seed_has_no_sd(result):
     assert line.split()[2] == "-"
 
 
-def test_compare_results_refuses_grids_with_other_endpoints(result):
-    """Every bare Grid is named "grid": its endpoints tell two such maps apart."""
+def test_compare_results_refuses_grids_with_other_endpoints_or_cells(result):
+    """Every bare Grid is named "grid": its endpoints, and its cells' digest where the
+    size, endpoints and optimum are the same, tell two such maps apart."""
     a = dataclasses.replace(result, map_name="grid")
     b = dataclasses.replace(a, start=result.goal, goal=result.start)
     compare_results({"a": a, "b": dataclasses.replace(a)})  # the same map: compared
     with pytest.raises(ParameterError) as e:
         compare_results({"a": a, "b": b})
     assert "different maps, endpoints or corner rules" in _one_line(e)
+    other_cells = dataclasses.replace(a, map_digest="0" * 24)
+    with pytest.raises(ParameterError) as e:
+        compare_results({"a": a, "b": other_cells})
+    assert f"cells {a.map_digest})" in _one_line(e) and f"cells {'0' * 24})" in _one_line(e)
+
+
+def test_a_maps_cells_digest_says_which_cells_are_blocked():
+    """The same cells give the same digest whatever the endpoints or corner rule; one
+    cell more, or the same cells in another shape, another digest."""
+    b = np.zeros((4, 6), bool)
+    b[1, 2] = True
+    g = jaxga.Grid.create(b, corner_rule="free")
+    assert len(g.cells_digest()) == 24
+    assert jaxga.Grid.create(b, start=(5, 0), goal=(0, 3), corner_rule="strict"
+                             ).cells_digest() == g.cells_digest()
+    c = b.copy()
+    c[3, 5] = True
+    assert jaxga.Grid.create(c, start=(0, 0), goal=(4, 3)).cells_digest() != g.cells_digest()
+    assert jaxga.Grid.create(b.reshape(6, 4)).cells_digest() != g.cells_digest()
 
 
 def test_a_run_without_a_path_in_the_pure_core_has_no_length():
