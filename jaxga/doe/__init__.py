@@ -26,7 +26,8 @@ the float32 lengths and angle sums of the post-optimised paths may differ in the
 (XLA rounds its vectorised reductions differently for another number of runs per call);
 ``block`` is therefore part of the checkpoint's fingerprint.
 ``DIR/manifest.json`` records what was run (preset configuration, map, factors, design,
-seeds, block, versions); a checkpoint written by another configuration is refused.
+seeds, block, versions, the device); a checkpoint written by another configuration, or
+computed on another kind of device, is refused.
 With several processes (``jaxga doe --coordinator ...``, :mod:`jaxga._runtime.parallel`) every
 block is split over the processes; process 0 alone reads and writes ``DIR`` and tells
 the others which points are finished, so ``DIR`` need only be on process 0's disk. A lost

@@ -86,6 +86,10 @@ class Checkpoint:
             if old != manifest:
                 keys = sorted(k for k in old.keys() | manifest.keys()
                               if old.get(k) != manifest.get(k))
+                if keys == ["device"]:
+                    return (f"checkpoint {self.dir} was computed on {old.get('device')}, this "
+                            f"run is on {manifest['device']}: resume it there, or use "
+                            "another directory (two devices' points are not mixed in one fit)")
                 return (f"checkpoint {self.dir} was written by a different configuration "
                         f"(differs in {', '.join(keys)}); use another directory or delete it")
         else:

@@ -13,6 +13,7 @@ import jax
 import numpy as np
 
 import jaxga
+from jaxga._runtime.device_probe import describe
 from jaxga._runtime.memory import check_result_memory
 from jaxga._runtime.seeds import seed_list
 from jaxga.api import checked_capacity, load_problem
@@ -111,6 +112,9 @@ def plan_doe(preset, grid, factors, design, seeds, generations, corner_rule, var
             "format": 3,
             "jaxga": jaxga.__version__,
             "jax": jax.__version__,
+            # the contract of exactness lets another backend differ in rounding and its
+            # runs per call (decision 040): points of two devices are not mixed in one fit
+            "device": describe(jax.devices()[0]),
             "config": config.as_dict(),
             "map": map_fingerprint(loaded, map_name),
             "design": design,

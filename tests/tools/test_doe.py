@@ -463,6 +463,15 @@ def test_checkpointed_blocks_equal_one_call_and_resume(one_call, blocked, tmp_pa
     with pytest.raises(ParameterError, match="different configuration.*block"):
         run_doe("agacd", MAP, SMALL, "agacd-table4", seeds=3, checkpoint=ckpt, block=2,
                 **KW)
+    # points computed on another device: not mixed into this one's fit
+    manifest = json.loads((ckpt / "manifest.json").read_text())
+    assert manifest["device"].startswith("cpu (cpu, jaxlib ")
+    manifest["device"] = "gpu (NVIDIA H200, jaxlib 0.11.2)"
+    (ckpt / "manifest.json").write_text(json.dumps(manifest))
+    with pytest.raises(ParameterError) as e:
+        run_doe("agacd", MAP, SMALL, "agacd-table4", seeds=3, checkpoint=ckpt, **KW)
+    assert "was computed on gpu (NVIDIA H200, jaxlib 0.11.2), this run is on cpu (" \
+        in str(e.value)
 
 
 @pytest.mark.parametrize("damage, where", [
