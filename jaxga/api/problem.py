@@ -129,7 +129,9 @@ def _given_problem(given: Problem, grid, corner_rule, variant, sets, overrides,
                                                                     "generations"))))
 
 
-def load_problem(preset, grid, corner_rule, variant, sets, overrides, generations, *,
+def load_problem(preset: str | Config | Problem, grid: Grid | MapInfo | str | None,
+                 corner_rule: str | None, variant: str | None, sets: Sequence[str],
+                 overrides: Mapping[str, Any], generations: int | None, *,
                  check_read: bool = True, check_endpoints: bool = True,
                  map_options: Mapping[str, Any] | None = None) -> Problem:
     """The :class:`Problem` of a call, checked (the frame of a map file or

@@ -42,6 +42,9 @@ turn costs and its reciprocal (errors of about 1e-6 relative), the reference flo
 
 
 def relative_gap(length: np.ndarray, optimum: float, success: np.ndarray) -> np.ndarray:
+    """Per seed, ``length / optimum - 1`` (:attr:`Result.gap`): 0 within
+    :data:`GAP_TOLERANCE` of the optimum (float32 lengths against a float64 reference),
+    0 or infinite for an optimum of 0 (start = goal), NaN for a seed without a path."""
     length = np.asarray(length, float)
     if optimum == 0.0:  # start == goal: the optimal path has length 0
         gap = np.where(length == 0.0, 0.0, np.inf)

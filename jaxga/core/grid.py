@@ -235,14 +235,17 @@ class Grid:
 
     @property
     def height(self) -> int:
+        """Rows of the map (``H``)."""
         return self.blocked.shape[0]
 
     @property
     def width(self) -> int:
+        """Columns of the map (``W``; a cell index is ``y * W + x``)."""
         return self.blocked.shape[1]
 
     @property
     def n_cells(self) -> int:
+        """Cells of the map, ``H * W``."""
         return self.blocked.shape[0] * self.blocked.shape[1]
 
     @property

@@ -6,7 +6,8 @@ from __future__ import annotations
 
 import dataclasses
 import os
-from collections.abc import Iterable, Mapping
+from collections.abc import Callable, Iterable, Mapping, Sequence
+from os import PathLike
 from typing import Any
 
 import jax
@@ -61,8 +62,11 @@ class DoePlan:
     checkpoint: Checkpoint | None
 
 
-def plan_doe(preset, grid, factors, design, seeds, generations, corner_rule, variant, sets,
-          checkpoint, block, progress, overrides) -> DoePlan:
+def plan_doe(preset: str | Config, grid: Grid | str, factors: Any, design: str,
+             seeds: int | Sequence[int], generations: int | None, corner_rule: str | None,
+             variant: str | None, sets: Sequence[str], checkpoint: str | PathLike | None,
+             block: int | None, progress: Callable[[int, int], None] | None,
+             overrides: Mapping[str, Any]) -> DoePlan:
     """Check every argument and every design point's key combination; the
     :class:`DoePlan` of :func:`run_doe`."""
     sets = as_sets(sets)  # one string is one set
