@@ -63,6 +63,7 @@ class Progress:
         self.shown = False
         self.stage: str | None = None
         self.stage_start = self.last = self.t0
+        self._line = ""
         self._stop: threading.Event | None = None
 
     def __call__(self, stage: str, frac: float) -> None:
@@ -74,7 +75,10 @@ class Progress:
             return
         self.shown = True
         if not self.tty:
-            print(f"progress: {stage} {100 * frac:.0f}%", file=self.stream, flush=True)
+            line = f"progress: {stage} {100 * frac:.0f}%"
+            if line != self._line:  # a log says each percentage once
+                print(line, file=self.stream, flush=True)
+            self._line = line
             return
         bar = "#" * int(30 * frac)
         print(f"\r{stage:8s} [{bar:30s}] {100 * frac:5.1f}%", end="", file=self.stream,
@@ -98,7 +102,8 @@ class Progress:
         if self.tty:
             print(f"\r{text:49s}", end="", file=self.stream, flush=True)
         else:
-            print(f"progress: {text}", file=self.stream, flush=True)
+            self._line = f"progress: {text}"
+            print(self._line, file=self.stream, flush=True)
 
     def start(self) -> Progress:
         """Call :meth:`tick` every half second in a background thread until :meth:`close`."""

@@ -684,7 +684,7 @@ class _Stream(io.StringIO):
 def test_progress_is_shown_after_two_seconds_as_a_bar_or_as_log_lines(tty):
     """A quick run shows nothing; a long one shows every update from the first one
     after 2 s: redrawn in place on a terminal, one plain line each on a pipe (a log
-    file gets no carriage returns)."""
+    file gets no carriage returns, and no line twice in a row)."""
     from jaxga.cli.run import Progress as _Progress
 
     clock, stream = _Clock(), _Stream(tty)
@@ -694,7 +694,8 @@ def test_progress_is_shown_after_two_seconds_as_a_bar_or_as_log_lines(tty):
     assert stream.getvalue() == ""
     show = _Progress(stream, clock)
     updates = [(0.0, "compile", 0.0), (1.0, "compile", 0.25), (2.5, "compile", 0.5),
-               (3.0, "compile", 1.0), (3.5, "evolve", 0.5), (4.0, "evolve", 1.0)]
+               (3.0, "compile", 1.0), (3.5, "evolve", 0.5), (3.6, "evolve", 0.501),
+               (4.0, "evolve", 1.0)]
     for now, stage, frac in updates:
         clock.now = now
         show(stage, frac)
@@ -703,6 +704,7 @@ def test_progress_is_shown_after_two_seconds_as_a_bar_or_as_log_lines(tty):
         assert text == ("\rcompile  [###############               ]  50.0%"
                         "\rcompile  [##############################] 100.0%"
                         "\revolve   [###############               ]  50.0%"
+                        "\revolve   [###############               ]  50.1%"
                         "\revolve   [##############################] 100.0%\n")
     else:
         assert text.splitlines() == ["progress: compile 50%", "progress: compile 100%",
