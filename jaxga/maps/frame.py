@@ -132,12 +132,18 @@ class MapFrame:
         # a point (or origin) so far away that the cell overflows is off the map too
         x, y = (int(math.floor(v)) if math.isfinite(v) else -1 for v in cells)
         if not (0 <= x < w and 0 <= y < h):
-            x0, y0 = self.origin[:2]
+            x0, y0, yaw = self.origin
+            wide, high = self.map_shape[1] * self.resolution, self.map_shape[0] * self.resolution
+            if not yaw:
+                raise EndpointError(
+                    f"{what} ({point[0]:g}, {point[1]:g}) m is off the map: it covers x "
+                    f"{x0:g}..{x0 + wide:g} m, y {y0:g}..{y0 + high:g} m")
+            # the map's rectangle is turned about its origin: its own axes show why
             raise EndpointError(
-                f"{what} ({point[0]:g}, {point[1]:g}) m is off the map: it covers x "
-                f"{x0:g}..{x0 + self.map_shape[1] * self.resolution:g} m, y "
-                f"{y0:g}..{y0 + self.map_shape[0] * self.resolution:g} m"
-                + (" (before its yaw rotation)" if self.origin[2] else ""))
+                f"{what} ({point[0]:g}, {point[1]:g}) m is off the map: along the map's own "
+                f"axes (turned by its yaw, {yaw:g} rad, about its origin ({x0:g}, {y0:g}) m) "
+                f"the point lies at ({local[0]:.4g}, {local[1]:.4g}) m from the origin, and "
+                f"the map covers 0..{wide:g} m by 0..{high:g} m")
         return x, y
 
     def map_cell(self, cells: np.ndarray) -> np.ndarray:

@@ -50,11 +50,20 @@ def test_planning_cells_map_cells_and_metres_by_hand():
 
 def test_a_turned_map_rotates_about_its_origin():
     """With yaw 90 degrees the map's x axis points along the world's y: cell (0, 0)'s
-    centre (0.5, 0.5) cells = (0.05, 0.05) m lies at origin + (-0.05, 0.05)."""
+    centre (0.5, 0.5) cells = (0.05, 0.05) m lies at origin + (-0.05, 0.05). A point off
+    the turned map is named along the map's own axes, where its extent is plain: the
+    world point (1.1, 2.1), inside the unturned rectangle x 1..1.4, y 2..2.4, lies at
+    (0.1, -0.1) m along them."""
     f = MapFrame(map_shape=(4, 4), resolution=0.1, origin=(1.0, 2.0, math.pi / 2))
     np.testing.assert_allclose(f.to_world(np.array([0, 0])), [0.95, 2.05])
     np.testing.assert_allclose(f.to_world(np.array([2, 0])), [0.95, 2.25])
     assert f.cell_of((0.95, 2.25), (4, 4)) == (2, 0)
+    with pytest.raises(EndpointError) as e:
+        f.cell_of((1.1, 2.1), (4, 4), "the start")
+    assert str(e.value) == (
+        "the start (1.1, 2.1) m is off the map: along the map's own axes (turned by its yaw, "
+        "1.5708 rad, about its origin (1, 2) m) the point lies at (0.1, -0.1) m from the "
+        "origin, and the map covers 0..0.4 m by 0..0.4 m")
 
 
 def _write_ros(folder, image_rows, resolution=0.1, origin=(0.0, 0.0)):
