@@ -207,19 +207,46 @@ def load_problem(preset: str | Config | Problem, grid: Grid | MapInfo | str | No
                              **map_options)
         grid, map_name, frame = info.grid, info.name, info.frame
     if check_endpoints:
-        checked_endpoints(grid, frame, None if info is None else info.layers)
+        checked_endpoints(grid, frame, None if info is None else info.layers,
+                          () if info is None else info.defaulted)
     return Problem(config, grid, map_name, frame, info, tuple(given))
 
 
-def checked_endpoints(grid: Grid, frame: MapFrame | None = None, layers: Any = None) -> Grid:
+def checked_endpoints(grid: Grid, frame: MapFrame | None = None, layers: Any = None,
+                      defaulted: Sequence[str] = ()) -> Grid:
     """``grid.check_endpoints()``, a blocked endpoint named in the map's own terms (its map
     cells, its centre in metres) and, on a ROS map's unknown cell, with the way out
-    (``--unknown free``): the words of ``jaxga run``, ``optimum`` and the Python API."""
+    (``--unknown free``); an endpoint in ``defaulted`` (given by no one: the map's
+    default corner) or a map blocked everywhere said so: the words of ``jaxga run``,
+    ``optimum`` and the Python API."""
     try:
         return grid.check_endpoints()
     except EndpointError as e:
-        raise EndpointError(f"{e}{_on_the_map(frame, grid)}{_blocked_hint(layers, grid)}") \
-            from None
+        raise EndpointError(f"{e}{_on_the_map(frame, grid)}{_blocked_hint(layers, grid)}"
+                            f"{_default_hint(grid, defaulted)}") from None
+
+
+DEFAULT_CORNERS = {"start": ("(0, 0)", "S", "--start X,Y", "start"),
+                   "goal": ("(W - 1, H - 1)", "G", "--goal X,Y", "goal")}
+"""Per endpoint: its default corner, its marker in an ASCII map, its option and its
+keyword (:func:`jaxga.maps.load_map`)."""
+
+
+def _default_hint(grid: Grid, defaulted: Sequence[str]) -> str:
+    """Why a blocked endpoint is where it is when no one chose it, or that the map has no
+    free cell at all; "" elsewhere."""
+    b = grid.blocked_np()
+    if b.all():
+        return "; every cell of the map is blocked"
+    for name, xy in (("start", grid.start_xy), ("goal", grid.goal_xy)):
+        if b[xy[1], xy[0]]:  # the first blocked one, as check_endpoints
+            if name not in defaulted:
+                return ""
+            corner, marker, option, keyword = DEFAULT_CORNERS[name]
+            return (f"; no {name} was given and the map marks none (an ASCII map's "
+                    f"{marker}): the default is the corner {corner}; give one with {option} "
+                    f"(in Python: load_map(..., {keyword}=(x, y)))")
+    return ""
 
 
 def _blocked_hint(layers: Any, grid: Grid) -> str:

@@ -259,7 +259,7 @@ def load_grid(args: argparse.Namespace):
     if args.corner_rule is not None:
         check_corner_rule(args.corner_rule)
     info = load_info(args, args.corner_rule)
-    return info, checked_endpoints(info.grid, info.frame, info.layers)
+    return info, checked_endpoints(info.grid, info.frame, info.layers, info.defaulted)
 
 
 def write_json(path: str, obj) -> None:

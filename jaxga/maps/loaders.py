@@ -119,6 +119,8 @@ class MapInfo:
         frame: planning cells against the file's cells and metres (:mod:`jaxga.maps.frame`:
             the coarsening factor, the resolution and origin of a ROS map).
         layers: walls, inflation margin and unknown cells of the planning grid, for plots.
+        defaulted: the endpoints (``"start"``, ``"goal"``) that were neither given nor
+            marked in the file, so took their default corners.
     """
 
     name: str
@@ -129,6 +131,7 @@ class MapInfo:
     ros: RosMap | None = None
     frame: MapFrame | None = None
     layers: MapLayers | None = None
+    defaulted: tuple[str, ...] = ()
 
     @property
     def resolution(self) -> float | None:
@@ -349,8 +352,9 @@ def load_map_info(source: Source, **options: Any) -> MapInfo:
     except EndpointError as e:
         raise EndpointError(f"{label}: {e}") from None
     name = map_name(source)
+    defaulted = tuple(n for n, xy in (("start", s), ("goal", g)) if xy is None)
     return MapInfo(name=name, path=path, format=kind, builtin=is_builtin, grid=grid, ros=ros,
-                   frame=frame, layers=layers)
+                   frame=frame, layers=layers, defaulted=defaulted)
 
 
 def _inflated(blocked: np.ndarray, ros: RosMap | None, cells: float | None,
