@@ -22,7 +22,10 @@ its occupancy probability, and
 * ``trinary``: ``p > occupied_thresh`` occupied, ``p < free_thresh`` free, anything
   between unknown (``map_saver``'s grey 205 has ``p = 0.196``: unknown);
 * ``scale``: as trinary, except that the band between the thresholds is graded
-  occupancy (1-99) and a transparent pixel (alpha < 255) is unknown;
+  occupancy, ``rint(100 (p - free_thresh) / (occupied_thresh - free_thresh))``
+  (``nav2_map_server``: the band's ends round to 0, free, and 100, occupied; ROS 1's
+  ``map_server`` gave ``1 + 98`` times the ratio), and a transparent pixel (alpha < 255)
+  is unknown;
 * ``raw``: the pixel value is the occupancy itself (0-100), anything above 100 unknown;
   ``negate`` does not apply (``nav2_map_server``; ROS 1's ``map_server`` negated the
   value first, decision 054).
@@ -271,7 +274,8 @@ def read_ros_image(meta: RosMap, label: str | None = None, *, coarsen: int = 1) 
 
 def occupancy(pixels: np.ndarray, meta: RosMap) -> np.ndarray:
     """``int8[H, W]`` occupancy as ``map_server`` publishes it: 0 free, 100 occupied, -1
-    unknown, 1-99 graded (scale mode); rows as in the image (top first).
+    unknown, 1-99 graded (scale mode, whose band rounds to 0-100 as nav2's does); rows as
+    in the image (top first).
 
     ``pixels``: ``[H, W, C]`` values from 0 to 255 (:func:`read_ros_image`); with C = 2
     or 4 the last channel is alpha. In ``trinary`` mode the alpha is averaged in with the
@@ -301,7 +305,7 @@ def occupancy(pixels: np.ndarray, meta: RosMap) -> np.ndarray:
     if meta.mode == "scale":
         band = (out == -1)
         ratio = (p - meta.free_thresh) / (meta.occupied_thresh - meta.free_thresh)
-        out[band] = np.clip(np.round(99.0 * ratio[band]), 1, 99).astype(np.int8)
+        out[band] = np.rint(100.0 * ratio[band]).astype(np.int8)  # nav2's std::rint
         if has_alpha:
             out[pixels[..., -1] < 255] = -1
     return out

@@ -84,8 +84,10 @@ def test_thresholds_negate_and_modes_follow_map_server():
     scale = RosMap(image=None, resolution=1.0, origin=(0.0, 0.0, 0.0), mode="scale")
     got = occupancy(shades, scale)[0]
     assert got[[0, 1, 2, 6, 7]].tolist() == [100, 100, 100, 0, 0]
+    # the band graded as nav2_map_server grades it, rint(100 * ratio): 90 is 0.647, 99 %;
+    # map_saver's grey 205 (0.19608, a hair above 0.196) rounds to 0: free, as nav2 has it
     p = (255 - 90) / 255
-    assert got[3] == round(99 * (p - 0.196) / (0.65 - 0.196)) and 1 <= got[5] <= 99
+    assert got[3] == round(100 * (p - 0.196) / (0.65 - 0.196)) == 99 and got[5] == 0
     alpha = np.stack([shades, np.array([[255] * 7 + [0]], np.uint8)], -1)
     assert occupancy(alpha, scale)[0, -1] == -1  # transparent: unknown in scale mode
     raw = RosMap(image=None, resolution=1.0, origin=(0.0, 0.0, 0.0), mode="raw")
