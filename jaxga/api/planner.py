@@ -135,7 +135,7 @@ class Planner:
         ends = endpoint_cells(self.map.frame, self.map.grid, start, goal, start_world,
                               goal_world)
         grid = self.map.grid.replace(start=ends[0], goal=ends[1])
-        problem = dataclasses.replace(self.map, grid=grid)
+        problem = dataclasses.replace(self.map, grid=grid, defaulted=())  # both given
         budget = self.any_angle_budget if any_angle_budget is None else any_angle_budget
         return run(self.preset, problem, self.seeds if seeds is None else seeds,
                    progress=progress, any_angle_budget=budget, **self.overrides)

@@ -57,3 +57,21 @@ def test_a_map_blocked_everywhere_says_so(tmp_path, capsys):
     with pytest.raises(EndpointError, match="; every cell of the map is blocked$"):
         checked_endpoints(Grid(blocked=np.ones((3, 4), bool), start=0, goal=11,
                                corner_rule="free"))
+
+
+def test_a_planners_given_endpoint_is_not_called_a_default(tmp_path):
+    """A Planner's map is loaded without endpoints; each plan gives both. A given start
+    the inflation blocks is named with the inflation, never as the default corner."""
+    import jaxga
+
+    image = np.full((8, 8), 254, np.uint8)
+    image[4, 4] = 0  # an obstacle; map cell (4, 3) (y from the bottom) is next to it
+    (tmp_path / "m.pgm").write_bytes(b"P5\n8 8\n255\n" + image.tobytes())
+    (tmp_path / "m.yaml").write_text("image: m.pgm\nresolution: 0.1\norigin: [0, 0, 0]\n"
+                                     "negate: 0\noccupied_thresh: 0.65\nfree_thresh: 0.196\n")
+    planner = jaxga.Planner(str(tmp_path / "m.yaml"), robot_radius=0.1, seeds=2)
+    with pytest.raises(EndpointError) as e:
+        planner.plan((3, 3), (7, 7))
+    message = str(e.value)
+    assert message.startswith("start cell (3, 3) is blocked") and "inflation" in message
+    assert "default" not in message, message
