@@ -112,8 +112,9 @@ def add_source_arguments(p: argparse.ArgumentParser) -> None:
     grow.add_argument("--inflate", type=float, metavar="CELLS",
                       help="grow the obstacles by this many cells (centre to centre)")
     grow.add_argument("--robot-radius", type=float, metavar="METRES",
-                      help="ROS maps: grow the obstacles by the robot's radius plus margin, "
-                      "in metres (divided by the map's resolution)")
+                      help="ROS maps: grow the obstacles by this many metres (the robot's "
+                      "radius, plus any safety distance you want: nothing is added), cell "
+                      "centre to cell centre (divided by the map's resolution)")
 
 
 def add_map_arguments(p: argparse.ArgumentParser, rule_default: str = "strict") -> None:

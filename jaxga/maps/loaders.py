@@ -211,8 +211,9 @@ def load_map(
         inflate: grow the obstacles by this many cells (:func:`jaxga.maps.inflate`: every
             cell whose centre lies within that distance of a blocked cell's centre),
             on the map's own cells, before ``coarsen``.
-        robot_radius: ROS maps: the robot's radius plus safety margin in metres; the
-            obstacles grow by ``robot_radius / resolution`` cells. Not with ``inflate``;
+        robot_radius: ROS maps: the robot's radius in metres, plus any safety distance
+            wanted (nothing is added to it); the obstacles grow by
+            ``robot_radius / resolution`` cells. Not with ``inflate``;
             refused on a map without a resolution.
 
     Options that would have no effect on the map's format are refused rather than
