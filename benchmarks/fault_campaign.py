@@ -1413,6 +1413,26 @@ def build(t: Path) -> list[Case]:
     add("population-capacity-past-a-program", "round nine",
         run(CLASSIC, "--population-capacity", "1000000000"),
         note="named population.size, a key not given")
+    # --- round ten: maps nobody tuned for (decision 056) ------------------------------
+    nosg = write("no-markers.txt", "..#\n.#.\n#..\n")
+    add("default-start-blocked", "round ten", ["optimum", "--map", nosg, "--goal", "2,0"],
+        check=refused_saying("no start was given"), quick=True,
+        note="named the default corner as if it had been chosen")
+    add("map-blocked-everywhere", "round ten",
+        ["optimum", "--map", write("all-walls.txt", "##\n##\n")],
+        check=refused_saying("every cell of the map is blocked"), quick=True,
+        note="said only that the start was blocked")
+    turned = tb3 / "turned.yaml"
+    turned.write_text(re.sub(r"origin:[^\n]*", "origin: [10.0, -5.0, 1.5707963267948966]",
+                             tb3_yaml.read_text()))
+    add("point-off-a-turned-map", "round ten",
+        ["optimum", "--map", turned, "--start-world", "10.1,-4.9", "--goal-world", "9,-4"],
+        check=refused_saying("along the map's own axes"), quick=True,
+        note="named an unturned extent that held the point")
+    add("robot-radius-of-20-m", "round ten", run(tb3_yaml, "--robot-radius", "20"),
+        check=refused_saying("every cell of the map is blocked (the inflation"), quick=True,
+        max_s=15,
+        note="the inflation shifted the map once per offset within 400 cells: minutes")
     return cases
 
 

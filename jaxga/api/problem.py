@@ -222,8 +222,8 @@ def checked_endpoints(grid: Grid, frame: MapFrame | None = None, layers: Any = N
     try:
         return grid.check_endpoints()
     except EndpointError as e:
-        raise EndpointError(f"{e}{_on_the_map(frame, grid)}{_blocked_hint(layers, grid)}"
-                            f"{_default_hint(grid, defaulted)}") from None
+        raise EndpointError(f"{e}{_on_the_map(frame, grid)}"
+                            f"{_why_blocked(grid, layers, defaulted)}") from None
 
 
 DEFAULT_CORNERS = {"start": ("(0, 0)", "S", "--start X,Y", "start"),
@@ -232,12 +232,21 @@ DEFAULT_CORNERS = {"start": ("(0, 0)", "S", "--start X,Y", "start"),
 keyword (:func:`jaxga.maps.load_map`)."""
 
 
+def _why_blocked(grid: Grid, layers: Any, defaulted: Sequence[str]) -> str:
+    """What a blocked endpoint's message adds: that the map has no free cell at all (and
+    whether the inflation made it so), else why the cell is blocked
+    (:func:`_blocked_hint`) and why the endpoint is there (:func:`_default_hint`)."""
+    if grid.blocked_np().all():
+        inflated = layers is not None and layers.margin.any()
+        return ("; every cell of the map is blocked"
+                + (" (the inflation, --inflate or --robot-radius, covers the free ones)"
+                   if inflated else ""))
+    return f"{_blocked_hint(layers, grid)}{_default_hint(grid, defaulted)}"
+
+
 def _default_hint(grid: Grid, defaulted: Sequence[str]) -> str:
-    """Why a blocked endpoint is where it is when no one chose it, or that the map has no
-    free cell at all; "" elsewhere."""
+    """Why a blocked endpoint is where it is when no one chose it; "" elsewhere."""
     b = grid.blocked_np()
-    if b.all():
-        return "; every cell of the map is blocked"
     for name, xy in (("start", grid.start_xy), ("goal", grid.goal_xy)):
         if b[xy[1], xy[0]]:  # the first blocked one, as check_endpoints
             if name not in defaulted:

@@ -75,3 +75,18 @@ def test_a_planners_given_endpoint_is_not_called_a_default(tmp_path):
     message = str(e.value)
     assert message.startswith("start cell (3, 3) is blocked") and "inflation" in message
     assert "default" not in message, message
+
+
+def test_a_map_the_inflation_blocks_everywhere_says_so(tmp_path, capsys):
+    """An inflation wider than the free space: the message says the whole map is
+    blocked, by the inflation, and nothing of the start cell's own reasons."""
+    image = np.full((6, 6), 254, np.uint8)
+    image[2, 2] = 0
+    (tmp_path / "m.pgm").write_bytes(b"P5\n6 6\n255\n" + image.tobytes())
+    (tmp_path / "m.yaml").write_text("image: m.pgm\nresolution: 0.1\norigin: [0, 0, 0]\n"
+                                     "negate: 0\noccupied_thresh: 0.65\nfree_thresh: 0.196\n")
+    err = _refusal(capsys, ["optimum", "--map", str(tmp_path / "m.yaml"),
+                            "--robot-radius", "2"])
+    assert err.endswith("; every cell of the map is blocked (the inflation, --inflate or "
+                        "--robot-radius, covers the free ones)"), err
+    assert "within the inflation" not in err and "default" not in err
