@@ -18,6 +18,7 @@ import contextlib
 import errno
 import os
 import re
+import secrets
 import shutil
 import stat
 import tempfile
@@ -34,7 +35,7 @@ __all__ = ["NAME_MAX", "atomic_write", "atomic_write_text", "check_outputs", "fo
            "temporary_folder", "written_file"]
 
 _TEMPORARIES: set[str] = set()
-_LOCK = threading.Lock()
+_LOCK = threading.RLock()  # reentrant: a signal's cleanup may run in the thread holding it
 
 
 def _why(err: OSError) -> str:
@@ -63,12 +64,9 @@ def atomic_write(path: str | os.PathLike, write: Callable[[IO], None], *,
     folder = target.parent if str(target.parent) else Path(".")
     remove_stale_temporaries(target)
     try:
-        fd, tmp = tempfile.mkstemp(prefix=f"{_temporary_stem(target.name)}{os.getpid()}.",
-                                   suffix=".tmp", dir=folder)
+        fd, tmp = _new_temporary(folder, f"{_temporary_stem(target.name)}{os.getpid()}.")
     except OSError as e:
         raise JaxgaError(f"cannot write {path}: {_why(e)}") from None
-    with _LOCK:
-        _TEMPORARIES.add(tmp)
     try:
         os.fchmod(fd, _mode_of(target))  # mkstemp's 0600 would make every output private
         with os.fdopen(fd, "wb" if binary else "w", **({} if binary else
@@ -86,6 +84,28 @@ def atomic_write(path: str | os.PathLike, write: Callable[[IO], None], *,
     finally:
         with _LOCK:
             _TEMPORARIES.discard(tmp)
+
+
+def _new_temporary(folder: Path, prefix: str) -> tuple[int, str]:
+    """Create ``folder/<prefix><8 random hex digits>.tmp`` (new, mode 0600) and register
+    it for :func:`remove_temporaries` BEFORE it exists, so that a signal at any moment
+    finds every temporary file it must remove (registering after ``mkstemp`` left one
+    behind when the signal came in between). The caller unregisters it."""
+    for _ in range(100):
+        tmp = os.path.join(folder, f"{prefix}{secrets.token_hex(4)}.tmp")
+        with _LOCK:
+            _TEMPORARIES.add(tmp)
+        try:
+            flags = os.O_WRONLY | os.O_CREAT | os.O_EXCL | getattr(os, "O_CLOEXEC", 0)
+            return os.open(tmp, flags, 0o600), tmp
+        except FileExistsError:  # another write's name: draw again
+            with _LOCK:
+                _TEMPORARIES.discard(tmp)
+        except BaseException:
+            with _LOCK:
+                _TEMPORARIES.discard(tmp)
+            raise
+    raise FileExistsError(errno.EEXIST, f"no free temporary name in {folder}")
 
 
 NAME_MAX = 255
@@ -128,7 +148,8 @@ def atomic_write_text(path: str | os.PathLike, text: str) -> None:
 
 _TEMPORARY = re.compile(r"(?:(\d+)\.)?[a-z0-9_]{8}")
 """The middle of a temporary file's name, ``.NAME.<pid>.<random>.tmp``: the writing
-process and :func:`tempfile.mkstemp`'s eight characters (no pid: an older version's)."""
+process and eight random characters (hexadecimal digits; an older version's were
+:func:`tempfile.mkstemp`'s, and had no pid)."""
 
 OLD_TEMPORARY_S = 3600.0
 """A temporary file without a process in its name is left by a killed write once it is
@@ -265,12 +286,14 @@ def folder_problem(folder: str | os.PathLike) -> str | None:
     if not folder.is_dir():
         return f"folder {str(folder)!r} does not exist"
     try:
-        fd, tmp = tempfile.mkstemp(prefix=".jaxga-probe.", suffix=".tmp", dir=folder)
+        fd, tmp = _new_temporary(folder, ".jaxga-probe.")
     except OSError as e:
         return f"folder {str(folder)!r} is not writable ({_why(e)})"
     os.close(fd)
     with contextlib.suppress(OSError):
         os.unlink(tmp)
+    with _LOCK:
+        _TEMPORARIES.discard(tmp)
     return None
 
 

@@ -5,6 +5,8 @@ maps (tests/maps/test_maps.py), a point off a turned ROS map with the frames
 
 from __future__ import annotations
 
+import os
+
 import numpy as np
 import pytest
 
@@ -90,3 +92,34 @@ def test_a_map_the_inflation_blocks_everywhere_says_so(tmp_path, capsys):
     assert err.endswith("; every cell of the map is blocked (the inflation, --inflate or "
                         "--robot-radius, covers the free ones)"), err
     assert "within the inflation" not in err and "default" not in err
+
+
+def test_a_signal_the_moment_a_temporary_file_is_made_removes_it(tmp_path, monkeypatch):
+    """The cleanup a signal runs (``remove_temporaries``) finds a write's temporary file
+    from the moment it exists: here it runs right after the file is created, as a
+    SIGTERM there would, and nothing is left; the write is interrupted, the old file
+    whole. (It was registered only after ``mkstemp`` returned, and a signal in between
+    left it in the output folder.)"""
+    from jaxga.core import files
+
+    target = tmp_path / "o.json"
+    target.write_text("old")
+    real_open = os.open
+
+    def open_then_signal(path, flags, mode=0o777, **kw):
+        fd = real_open(path, flags, mode, **kw)
+        if str(path).endswith(".tmp"):
+            os.close(fd)
+            files.remove_temporaries()  # what interrupts.stop runs before os._exit
+            raise KeyboardInterrupt
+        return fd
+
+    monkeypatch.setattr(files.os, "open", open_then_signal)
+    with pytest.raises(KeyboardInterrupt):
+        files.atomic_write_text(target, "new")
+    monkeypatch.undo()
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["o.json"]
+    assert target.read_text() == "old" and not files._TEMPORARIES
+    files.atomic_write_text(target, "new")  # and a write after it works as before
+    assert target.read_text() == "new"
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["o.json"]
