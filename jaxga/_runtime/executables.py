@@ -356,7 +356,9 @@ def _compiling_here(key: str) -> Iterator[None]:
         if not stat.S_ISREG(os.fstat(fd).st_mode):
             os.close(fd)
             raise OSError(f"{key}.lock is not a regular file")
-        handle = os.fdopen(fd, "a")
+        # unbuffered: a note that a full disk refuses fails where it is written (and is
+        # let go), never again when the file is closed
+        handle = os.fdopen(fd, "ab", buffering=0)
     except OSError:
         yield
         return
@@ -369,8 +371,7 @@ def _compiling_here(key: str) -> Iterator[None]:
                 locked = True
                 with contextlib.suppress(OSError):  # who holds it, for those who wait
                     handle.truncate(0)
-                    handle.write(f"{here} {os.getpid()}\n")
-                    handle.flush()
+                    handle.write(f"{here} {os.getpid()}\n".encode())
                 break
             except BlockingIOError:  # another process compiles it: wait (interruptibly)
                 waited = time.monotonic() - start

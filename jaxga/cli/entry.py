@@ -75,7 +75,8 @@ def one_line_warnings(show: Callable[..., None]) -> Callable[..., None]:
                 folder = jax.config.jax_compilation_cache_dir
                 why = text.split(": ", 1)[-1].splitlines()[0][:160]
                 print(f"jaxga: warning: the compilation cache {folder} ({CACHE_ENV_VAR}) "
-                      f"could not be used ({why}): compiling without it", file=out)
+                      f"could not read or keep a program ({why}): such programs are "
+                      "compiled and not kept", file=out)
         else:
             show(message, category, filename, lineno, file, line)
 

@@ -404,8 +404,9 @@ def test_jax_cache_warnings_become_one_jaxga_line(capsys):
              jax_file, 782)
     lines = capsys.readouterr().err.strip().splitlines()
     assert len(lines) == 1 and lines[0].startswith("jaxga: warning: the compilation cache ")
-    assert "(JAXGA_CACHE_DIR) could not be used (EOFError: Ran out of input)" in lines[0]
-    assert lines[0].endswith("compiling without it")
+    assert "(JAXGA_CACHE_DIR) could not read or keep a program (EOFError: Ran out of " \
+        "input)" in lines[0]
+    assert lines[0].endswith("such programs are compiled and not kept")
     with warnings.catch_warnings():
         other = []
         cli_main.one_line_warnings(lambda *a: other.append(a))(

@@ -123,3 +123,34 @@ def test_a_signal_the_moment_a_temporary_file_is_made_removes_it(tmp_path, monke
     files.atomic_write_text(target, "new")  # and a write after it works as before
     assert target.read_text() == "new"
     assert sorted(p.name for p in tmp_path.iterdir()) == ["o.json"]
+
+
+_FULL_DISK_LOCK = """
+import resource, signal, sys
+from pathlib import Path
+from jaxga._runtime import executables
+signal.signal(signal.SIGXFSZ, signal.SIG_IGN)  # a write past the limit fails with EFBIG
+folder = Path(sys.argv[1])
+executables.directory = lambda: folder
+resource.setrlimit(resource.RLIMIT_FSIZE, (0, resource.RLIM_INFINITY))
+with executables._compiling_here("k"):
+    pass
+print("held", (folder / "locks" / "k.lock").exists())
+"""
+
+
+def test_a_lock_file_a_full_disk_refuses_a_word_is_let_go(tmp_path):
+    """The store's lock file takes the holder's host and process id; on a disk that
+    takes no byte more (here a file size limit of 0) the note is let go and the program
+    is compiled as usual: the note's failed write raised again when the file was closed,
+    and the run ended with "No space left on device"."""
+    import subprocess
+    import sys
+    from pathlib import Path
+
+    root = Path(__file__).resolve().parents[2]
+    proc = subprocess.run([sys.executable, "-c", _FULL_DISK_LOCK, str(tmp_path / "store")],
+                          capture_output=True, text=True, timeout=120,
+                          env={**os.environ, "PYTHONPATH": str(root)})
+    assert proc.returncode == 0, proc.stderr[-2000:]
+    assert proc.stdout.strip() == "held True"
