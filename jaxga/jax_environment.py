@@ -6,7 +6,9 @@ read with a ``ValueError`` raised from deep in its flags' definitions. ``import 
 imports JAX here first, so that such a refusal is one line naming the variable and its
 value: the ``jaxga`` command says so and exits with status 2 (decision 054); a Python
 program gets a ``ValueError`` with that line. Any other error of JAX's import is
-raised as it is. The module reads nothing but
+raised as it is. Before it, the ``jaxga`` command refuses in one line a process that may
+map too little memory for any run (:func:`address_space_refusal`, decision 056); the
+Python API refuses it when a run is asked for. The module reads nothing but
 the environment and uses the standard library before JAX, which may not load.
 """
 
@@ -17,6 +19,7 @@ import sys
 from collections.abc import Mapping
 
 from jaxga import interrupts
+from jaxga.core.address_space import address_space_refusal
 
 __all__ = ["EXIT_BAD_ENVIRONMENT", "jax_refusal"]
 
@@ -38,6 +41,10 @@ def jax_refusal(error: BaseException, environ: Mapping[str, str]) -> str | None:
     where = ", ".join(f"{k}={v!r}" for k, v in sorted(named.items()))
     return f"JAX refuses its environment ({said}): {where}; correct or unset it"
 
+
+if interrupts.in_console_script() and address_space_refusal() is not None:
+    print(f"jaxga: error: {address_space_refusal()}", file=sys.stderr)
+    raise SystemExit(EXIT_BAD_ENVIRONMENT)
 
 try:
     import jax  # noqa: F401  (imported here so that a refused JAX_* variable is named)

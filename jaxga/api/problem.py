@@ -17,6 +17,7 @@ from jaxga._runtime.jax_settings import check_jax_settings, check_platform
 from jaxga._runtime.lowering import check_environment
 from jaxga.config.presets import as_sets, load_preset, parse_set
 from jaxga.config.schema import MAP_RULE, Config, dotted, flatten, normalised
+from jaxga.core.address_space import address_space_refusal
 from jaxga.core.errors import EndpointError, ParameterError
 from jaxga.core.grid import Grid, as_integer
 from jaxga.core.own_settings import own_settings
@@ -141,6 +142,9 @@ def load_problem(preset: str | Config | Problem, grid: Grid | MapInfo | str | No
     ``check_endpoints=False`` the endpoints (a :class:`~jaxga.api.planner.Planner`'s map,
     whose endpoints each plan gives); ``map_options`` as for :func:`problem`."""
 
+    low = address_space_refusal()  # before scipy's OpenBLAS, which hangs short of memory
+    if low is not None:
+        raise ParameterError(low)
     check_environment()  # a bad $JAXGA_THREEFRY, which `import jaxga` does not refuse
     check_jax_settings()  # 64-bit mode, jit disabled
     check_platform()

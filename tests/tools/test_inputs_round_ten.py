@@ -154,3 +154,38 @@ def test_a_lock_file_a_full_disk_refuses_a_word_is_let_go(tmp_path):
                           env={**os.environ, "PYTHONPATH": str(root)})
     assert proc.returncode == 0, proc.stderr[-2000:]
     assert proc.stdout.strip() == "held True"
+
+
+def test_a_process_that_may_map_too_little_is_refused_in_one_line(monkeypatch):
+    """Under ``ulimit -v`` below 2 GiB no run fits (a plan may take half of what the
+    process may map, and its base is 1 GiB), and JAX's libraries failed first, in their
+    own ways: OpenBLAS looped for ever in its start (SIGTERM could not end it), XLA
+    aborted, an ImportError. The command refuses before it imports JAX; the Python API
+    when a run is asked for."""
+    import resource
+    import subprocess
+    import sys
+
+    import jaxga
+    from jaxga.core.address_space import MIN_ADDRESS_SPACE, address_space_refusal
+    from jaxga.core.errors import ParameterError
+    from jaxga.core.grid import PLAN_BASE_BYTES
+
+    assert MIN_ADDRESS_SPACE == 2 * PLAN_BASE_BYTES
+    _, hard = resource.getrlimit(resource.RLIMIT_AS)
+
+    # the shell sets the limit (a preexec_fn would fork this multithreaded process)
+    proc = subprocess.run(["sh", "-c", 'ulimit -v 1500000 && exec "$0" -m jaxga presets',
+                           sys.executable], capture_output=True, text=True, timeout=120)
+    assert proc.returncode == 2 and proc.stdout == ""
+    assert proc.stderr == ("jaxga: error: this process may map only 1.43 GiB of memory "
+                           "(ulimit -v 1500000 KiB); jaxga needs at least 2 GiB (JAX, its "
+                           "libraries and a run at most half of it): raise the limit\n")
+    monkeypatch.setattr(resource, "getrlimit", lambda which: (MIN_ADDRESS_SPACE - 1, hard))
+    with pytest.raises(ParameterError, match="may map only 2.00 GiB"):
+        jaxga.run("sga", "classic_ga_gapp3_20x20", seeds=1, generations=1)
+    monkeypatch.setattr(resource, "getrlimit", lambda which: (MIN_ADDRESS_SPACE, hard))
+    assert address_space_refusal() is None
+    monkeypatch.setattr(resource, "getrlimit",
+                        lambda which: (resource.RLIM_INFINITY, resource.RLIM_INFINITY))
+    assert address_space_refusal() is None
