@@ -230,10 +230,9 @@ def checked_endpoints(grid: Grid, frame: MapFrame | None = None, layers: Any = N
                             f"{_why_blocked(grid, layers, defaulted)}") from None
 
 
-DEFAULT_CORNERS = {"start": ("(0, 0)", "S", "--start X,Y", "start"),
-                   "goal": ("(W - 1, H - 1)", "G", "--goal X,Y", "goal")}
-"""Per endpoint: its default corner, its marker in an ASCII map, its option and its
-keyword (:func:`jaxga.maps.load_map`)."""
+DEFAULT_CORNERS = {"start": ("(0, 0)", "S"), "goal": ("(W - 1, H - 1)", "G")}
+"""Per endpoint: its default corner and its marker in an ASCII map
+(:func:`jaxga.maps.load_map`)."""
 
 
 def _why_blocked(grid: Grid, layers: Any, defaulted: Sequence[str]) -> str:
@@ -255,10 +254,10 @@ def _default_hint(grid: Grid, defaulted: Sequence[str]) -> str:
         if b[xy[1], xy[0]]:  # the first blocked one, as check_endpoints
             if name not in defaulted:
                 return ""
-            corner, marker, option, keyword = DEFAULT_CORNERS[name]
+            corner, marker = DEFAULT_CORNERS[name]
             return (f"; no {name} was given and the map marks none (an ASCII map's "
-                    f"{marker}): the default is the corner {corner}; give one with {option} "
-                    f"(in Python: load_map(..., {keyword}=(x, y)))")
+                    f"{marker}): the default is the corner {corner}; give one with "
+                    f"--{name} X,Y (in Python: load_map(..., {name}=(x, y)))")
     return ""
 
 
