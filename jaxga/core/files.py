@@ -207,13 +207,25 @@ _FOLDERS: list[str] = []
 def temporary_folder(prefix: str) -> Path:
     """A new folder in the temporary directory, removed with everything in it by
     :func:`remove_temporaries` (the ``jaxga`` command's exit, a signal) or at the
-    interpreter's exit."""
-    folder = tempfile.mkdtemp(prefix=prefix)
+    interpreter's exit. Its name is registered before the folder is made (as
+    :func:`atomic_write`'s temporary files are), so a signal at any moment leaves none
+    behind."""
     with _LOCK:
         if not _FOLDERS:
             atexit.register(remove_temporaries)
-        _FOLDERS.append(folder)
-    return Path(folder)
+    for _ in range(100):
+        folder = os.path.join(tempfile.gettempdir(), f"{prefix}{secrets.token_hex(6)}")
+        with _LOCK:
+            _FOLDERS.append(folder)
+        try:
+            os.mkdir(folder, 0o700)
+            return Path(folder)
+        except BaseException as e:
+            with _LOCK, contextlib.suppress(ValueError):
+                _FOLDERS.remove(folder)
+            if not isinstance(e, FileExistsError):  # another folder's name: draw again
+                raise
+    raise FileExistsError(errno.EEXIST, f"no free folder name in {tempfile.gettempdir()}")
 
 
 def remove_temporaries() -> None:
