@@ -237,7 +237,8 @@ class Comparison:
             ka = int(self.results[t.a].success.sum())
             kb = int(self.results[t.b].success.sum())
             rows.append([t.a, t.b, f"{ka}/{t.result.n_a}", f"{kb}/{t.result.n_b}",
-                         f"{t.result.statistic:.3g}", _p(t.result.p_value), _p(t.p_holm)])
+                         _number(t.result.statistic, ".3g"), _p(t.result.p_value),
+                         _p(t.p_holm)])
         return head, rows
 
     def _header(self) -> str:
@@ -245,10 +246,17 @@ class Comparison:
         test = ("two-sided Mann-Whitney U (independent samples), A12 = P(a > b) + "
                 "P(a = b)/2" if self.test == "mannwhitneyu" else
                 "two-sided Wilcoxon signed-rank (paired by seed)")
+        tests = self.tests()
+        made = sum(math.isfinite(t.result.p_value) for t in tests)
+        pairs = f"{len(tests)} pair{'s' if len(tests) != 1 else ''}"
+        family = (f"Holm-corrected over the {pairs} of each metric"
+                  if made == len(tests) else
+                  f"Holm-corrected over the pairs of each metric that could be tested "
+                  f"({made} of {len(tests)} for {self.metric}; a pair with a preset "
+                  "without a path has no test)")
         return (f"map {r.map_name} (corner rule {r.corner_rule!r}), {len(r.seeds)} seeds; "
                 f"optimum: 8-connected {self.optimum:.4f}, {r.any_angle_text()}\ntests: "
-                f"{test}; failed seeds excluded; p "
-                f"Holm-corrected over the {len(self.tests())} pairs of each metric")
+                f"{test}; failed seeds excluded; p {family}")
 
     def summary(self, verbose: bool = False) -> str:
         """Text tables: per preset, then the pairwise tests of every metric.
@@ -436,7 +444,7 @@ def compare_results(
     pairs = _pairs(labels)
     pairwise: list[PairTest] = []
     for m in metrics:
-        vals = {k: metric_values(results[k], m) for k in labels}
+        vals = {k: _checked_values(results[k], k, m) for k in labels}
         raw = [mann_whitney(vals[a], vals[b]) if test == "mannwhitneyu"
                else wilcoxon_paired(vals[a], vals[b]) for a, b in pairs]
         adj = holm([t.p_value for t in raw])
@@ -451,6 +459,24 @@ def compare_results(
                      for (a, b), t, p in zip(pairs, fish, adj, strict=True)]
     return Comparison(results=dict(results), metric=metric, metrics=metrics, test=test,
                       alpha=alpha, pairwise=pairwise, success_tests=success_tests)
+
+
+def _checked_values(result: Result, label: str, metric: str) -> np.ndarray:
+    """:func:`metric_values`, refusing a value no run can have: an infinite one, or a
+    length that is not a number for a seed counted a success (the tests would leave it
+    out as a failed seed while the success rate counts it)."""
+    v = metric_values(result, metric)
+    wrong = np.isinf(v)
+    if metric in ("length", "raw_length"):
+        wrong |= np.isnan(v) & np.asarray(result.success, bool)
+    bad = np.flatnonzero(wrong)
+    if bad.size:
+        i = int(bad[0])
+        raise ParameterError(
+            f"{label}: seed {int(result.seeds[i])} is counted a success with a {metric} of "
+            f"{v[i]:g}; a result to compare has a finite {metric} for every seed that "
+            "found a path")
+    return v
 
 
 def _median(v: np.ndarray) -> float:

@@ -34,10 +34,12 @@ from jaxga.config.schema import normalised
 from jaxga.core.errors import JaxgaError, ParameterError
 from jaxga.core.fields import shown_value
 from jaxga.core.grid import CORNER_RULES, as_integer, check_corner_rule
+from jaxga.maps.frame import cells_crossed
 from jaxga.maps.inputs import PATH_JSON_CAP, read_input
 from jaxga.plot import (
     plot_replan,
 )
+from jaxga.reference.optima import clear_np
 from jaxga.replan import DEFAULT_GENERATIONS, DEFAULT_POPULATION, replan
 
 
@@ -191,7 +193,7 @@ def cmd_replan(args: argparse.Namespace) -> int:
             if info.frame is None or not info.frame.has_metres:
                 raise JaxgaError(f"cannot write --path-out {args.path_out}: the map has no "
                                  "resolution (metres)")
-        path = read_robot_path(args, info)
+        path = read_robot_path(args, info, rule)
     grid = info.grid
     obstacles = [xy for text in args.obstacles or () for xy in parse_obstacles(text)]
     for text in args.obstacles_world or ():
@@ -240,10 +242,13 @@ def cmd_replan(args: argparse.Namespace) -> int:
     return 0
 
 
-def read_robot_path(args: argparse.Namespace, info) -> list[tuple[int, int]]:
+def read_robot_path(args: argparse.Namespace, info, rule: str) -> list[tuple[int, int]]:
     """The path the robot drives, in planning cells: from ``--path-json`` (cells), or from
     ``--path`` (metres, as ``jaxga run --path-out`` wrote it: each point in the cell
-    holding it, repeats dropped)."""
+    holding it, repeats dropped; where the chord between two consecutive points' cells is
+    not clear under ``rule`` on the map, the cells the path's own segment crosses are put
+    between them, so a smoothed curve's corner the robot did not cut is not a blocked
+    step)."""
     if (args.path_json is None) == (args.path is None):
         raise JaxgaError("give the robot's path once: --path-json FILE (cells) or --path "
                          "FILE.csv|FILE.yaml (metres, as --path-out wrote it)")
@@ -255,11 +260,17 @@ def read_robot_path(args: argparse.Namespace, info) -> list[tuple[int, int]]:
     if info.frame is None or not info.frame.has_metres:
         raise JaxgaError(f"--path {args.path} is in metres: the map needs a resolution and "
                          "an origin (a ROS map_server .yaml)")
+    blocked = info.grid.blocked_np()
     cells: list[tuple[int, int]] = []
+    last = None
     for k, point in enumerate(export.read_path(args.path)):
         cell = info.frame.cell_of(tuple(point), info.grid.shape, f"--path point {k}")
+        here = info.frame.cell_coordinates(tuple(point))
+        if cells and cells[-1] != cell and not clear_np(blocked, rule, cells[-1], cell):
+            cells += [c for c in cells_crossed(last, here)[1:-1] if c != cells[-1]]
         if not cells or cells[-1] != cell:
             cells.append(cell)
+        last = here
     return cells
 
 

@@ -4,7 +4,9 @@ A :class:`Factor` is a configuration key with three levels coded -1, 0, 1 (low, 
 high; AGACD Table 3). A design is an integer array ``coded[N, k]`` of coded levels, one
 row per run ("point"): the orthogonal arrays L9 (3^4), L18 (the seven 3-level columns of
 the standard L18, 2^1 x 3^7), L27 (3^13), the full factorial 3^k, and AGACD's own 9-run,
-5-factor design (its Table 4). Factors take the first k columns of the array.
+5-factor design (its Table 4). Factors take the first k columns of the array (of the
+L27: its base columns 1, 2, 5 first, then 9, then the rest); an array that would repeat
+its points for k factors is refused.
 
 :func:`run_doe` runs every point x every seed in ONE compiled call of
 :func:`jaxga.api.sweep` (the population size through the engine's active mask below a

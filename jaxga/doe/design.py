@@ -189,14 +189,24 @@ DESIGNS = ("agacd-table4", "L9", "L18", "L27", "full")
 
 _ARRAYS = {"agacd-table4": AGACD_TABLE4, "L9": L9, "L18": L18, "L27": L27}
 
+_COLUMN_ORDER = {"L27": (0, 1, 4, 8, 2, 3, 5, 6, 7, 9, 10, 11, 12)}
+"""The columns factors take, in order, where it is not the array's own: the L27's base
+columns 1, 2, 5 first (up to three factors make the full 3^3, where the first three
+columns, A, B and A + B, repeated 9 points three times each), then column 9 (A + B + C: a
+fourth factor clear of the two-factor interactions of the other three), then the rest
+in order (Taguchi's assignment by the linear graph)."""
+
 
 MAX_FULL_FACTORIAL_POINTS = 3 ** 8
 
 
 def design_array(design: str, n_factors: int) -> np.ndarray:
-    """Coded levels ``int8[N, n_factors]`` of ``design``: the first ``n_factors`` columns
-    of an orthogonal array (or AGACD Table 4), or the full factorial 3^k (first factor
-    slowest)."""
+    """Coded levels ``int8[N, n_factors]`` of ``design``: ``n_factors`` columns of an
+    orthogonal array (or AGACD Table 4), the first ones except in the L27 (its base
+    columns 1, 2, 5 first, then 9, then the others: :data:`_COLUMN_ORDER`), or the full
+    factorial 3^k (first factor slowest). A design whose columns would repeat points
+    (every array for one factor, the L18 for two) is refused: a repeated point runs the
+    same seeds again and gives the same result, so it adds cost, not evidence."""
     if n_factors < 1:
         raise ParameterError("a designed experiment needs at least one factor")
     if design == "full":
@@ -212,7 +222,16 @@ def design_array(design: str, n_factors: int) -> np.ndarray:
         raise ParameterError(
             f"design {design} has {arr.shape[1]} columns, too few for {n_factors} factors; "
             "use a larger array (L18: 7, L27: 13) or the full factorial")
-    return arr[:, :n_factors].copy()
+    columns = _COLUMN_ORDER.get(design, range(arr.shape[1]))[:n_factors]
+    coded = arr[:, list(columns)].copy()
+    distinct = len(np.unique(coded, axis=0))
+    if distinct < len(coded):
+        raise ParameterError(
+            f"design {design} with {n_factors} factor{'s' if n_factors > 1 else ''} has "
+            f"only {distinct} distinct points among its {len(coded)} (each repeated, with "
+            f"the same seeds and the same result): use the full factorial (design "
+            f"'full'), its {3 ** n_factors} points once")
+    return coded
 
 
 def design_points(factors: Sequence[Factor], coded: np.ndarray) -> list[dict[str, Any]]:

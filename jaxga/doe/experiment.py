@@ -49,7 +49,8 @@ def run_doe(
     keyword overrides are those of :func:`jaxga.run`; the factors are applied on top.
 
     Args:
-        factors: the :class:`Factor` s, assigned to the first columns of ``design``.
+        factors: the :class:`Factor` s, assigned to the columns of ``design`` in
+            :func:`~jaxga.doe.design.design_array`'s order.
         design: one of :data:`DESIGNS`.
         seeds: a count or explicit seeds; every point and the confirmation run use them.
         response: one of :data:`RESPONSES` (``"angle_sum"`` is ``"smoothness"``);

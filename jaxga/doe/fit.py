@@ -87,9 +87,17 @@ def fit_linear(coded: np.ndarray, y: np.ndarray) -> np.ndarray:
 
 def contrast_coefficients(coded: np.ndarray, y: np.ndarray) -> np.ndarray:
     """AGACD's own estimate (its Table 5, last row): ``X0 = mean(y)``,
-    ``Xi = mean(F_i * y)``. Not least squares: see :mod:`jaxga.doe`."""
+    ``Xi = mean(F_i * y)``. Not least squares: see :mod:`jaxga.doe`. The contrasts
+    average over every point, so a point without a response (NaN: all its seeds failed)
+    is refused rather than turning every coefficient into NaN; :func:`fit_linear` leaves
+    such points out."""
     coded = np.asarray(coded, float)
     y = np.asarray(y, float)
+    missing = np.flatnonzero(~np.isfinite(y))
+    if missing.size:
+        raise ParameterError(
+            f"design point {int(missing[0])} has no response ({y[missing[0]]:g}): AGACD's "
+            "contrasts average over every point; fit_linear leaves such points out")
     return np.concatenate([[y.mean()], (coded * y[:, None]).mean(axis=0)])
 
 

@@ -36,6 +36,7 @@ readers return into a :class:`jaxga.Grid`.
 from __future__ import annotations
 
 import io
+import json
 import os
 import re
 from pathlib import Path
@@ -45,7 +46,7 @@ import numpy as np
 
 from jaxga.core.errors import JaxgaError, MapFormatError
 from jaxga.core.fields import python_scalar, shown_value
-from jaxga.core.files import atomic_write, atomic_write_text
+from jaxga.core.files import atomic_write, atomic_write_text, same_file
 from jaxga.core.grid import Grid, blocked_array
 from jaxga.core.matplotlib_env import matplotlib_ready
 from jaxga.core.numerals import ASCII_SPACES, ascii_int
@@ -300,6 +301,29 @@ def parse_ascii(text: str, label: str = "<text>") -> tuple[np.ndarray, XY | None
 
 
 # -------------------------------------------------------------------------- writers
+def _check_image_is_ours(yaml_path: Path, image: Path) -> None:
+    """Refuse to write a ROS map's image over a file that is not the image of the map
+    being replaced: ``save_map(g, "b.yml")`` beside another map's ``b.pgm`` (named by
+    ``b.yaml``) overwrote that map's image. An image the YAML being replaced names is
+    its own, and is rewritten."""
+    if not os.path.lexists(image):
+        return
+    import yaml
+
+    named = None
+    try:
+        with open(yaml_path, encoding="utf-8") as f:
+            doc = yaml.safe_load(f.read(1 << 20))
+        if isinstance(doc, dict) and isinstance(doc.get("image"), str):
+            named = yaml_path.parent / doc["image"]
+    except (OSError, UnicodeDecodeError, yaml.YAMLError, ValueError):
+        pass
+    if named is None or not same_file(named, image):
+        raise MapFormatError(
+            f"cannot save {yaml_path}: its image {image} exists and is not the image of "
+            f"the map being replaced (another map's?); save under another name or remove it")
+
+
 def save_map(grid: Grid | np.ndarray, path: Source, *, fmt: str | None = None,
              resolution: float = 1.0,
              origin: tuple[float, float, float] = (0.0, 0.0, 0.0)) -> Path:
@@ -312,7 +336,9 @@ def save_map(grid: Grid | np.ndarray, path: Source, *, fmt: str | None = None,
     the grid's start ``S`` and goal ``G`` when they are free and distinct, so those
     round-trip too; the other formats do not store endpoints. ``.yaml``/``.yml`` writes a
     ROS map as ``map_saver`` does: the YAML (``resolution``, ``origin``, trinary
-    thresholds) and a binary PGM beside it (free 254, occupied 0). Returns the path.
+    thresholds) and a binary PGM beside it (free 254, occupied 0), named as the YAML with
+    ``.pgm``; an existing PGM of that name is only replaced when the YAML being replaced
+    names it (it is that map's image), else refused. Returns the path.
 
     Refused before anything is written (:class:`~jaxga.core.errors.MapFormatError`, one
     line): an array :meth:`Grid.create` would refuse; a name whose extension
@@ -354,10 +380,13 @@ def save_map(grid: Grid | np.ndarray, path: Source, *, fmt: str | None = None,
     if fmt == "ros":
         res, (x0, y0, yaw) = _checked_frame(p, resolution, origin)
         image = p.with_suffix(".pgm")
+        _check_image_is_ours(p, image)
         pixels = np.where(blocked[::-1], 0, 254).astype(np.uint8)
         header = f"P5\n# CREATOR: jaxga {res!r} m/pix\n{w} {h}\n255\n".encode("ascii")
         atomic_write(image, lambda f: f.write(header + pixels.tobytes()), binary=True)
-        atomic_write_text(p, f"image: {image.name}\nmode: trinary\n"
+        # the name as a double-quoted scalar (JSON's escapes are YAML's): a name with a
+        # leading space, '#', ': ' or a YAML indicator is read back as written
+        atomic_write_text(p, f"image: {json.dumps(image.name)}\nmode: trinary\n"
                              f"resolution: {_yaml_float(res)}\n"
                              f"origin: [{_yaml_float(x0)}, {_yaml_float(y0)}, "
                              f"{_yaml_float(yaw)}]\nnegate: 0\n"

@@ -32,7 +32,7 @@ from jaxga.core.errors import EndpointError
 from jaxga.core.grid import check_xy
 from jaxga.maps.clearance import ObstacleClearance
 
-__all__ = ["MapFrame", "endpoint_cells", "world_decimals"]
+__all__ = ["MapFrame", "cells_crossed", "endpoint_cells", "world_decimals"]
 
 
 def world_decimals(step: float | None) -> int:
@@ -116,6 +116,19 @@ class MapFrame:
         y = self.origin[1] + s * p[..., 0] + c * p[..., 1]
         return np.stack([x, y], axis=-1)
 
+    def _local(self, point: tuple[float, float]) -> tuple[float, float]:
+        """``point`` (metres) along the map's own axes, from its origin (metres)."""
+        c, s = math.cos(self.origin[2]), math.sin(self.origin[2])
+        dx, dy = point[0] - self.origin[0], point[1] - self.origin[1]
+        return c * dx + s * dy, -s * dx + c * dy
+
+    def cell_coordinates(self, point: tuple[float, float]) -> tuple[float, float]:
+        """World point ``point`` (metres) in planning cells, not rounded: planning cell
+        ``(x, y)`` covers ``[x, x + 1) x [y, y + 1)`` (its centre at ``x + 0.5``), so
+        :meth:`cell_of` is the floor of this. A point within 1e-9 of a cell's edge counts
+        in the cell above it (the world coordinates of cell edges are rounded)."""
+        return tuple(v / self.cell_size + 1e-9 for v in self._local(point))
+
     def cell_of(self, point: tuple[float, float], shape: tuple[int, int],
                 what: str = "point") -> tuple[int, int]:
         """The planning cell ``(x, y)`` holding world point ``point`` (metres) on a
@@ -124,11 +137,9 @@ class MapFrame:
         if not self.has_metres:
             raise EndpointError(f"{what} in metres needs a map with a resolution and an "
                                 "origin (a ROS map_server .yaml)")
-        c, s = math.cos(self.origin[2]), math.sin(self.origin[2])
-        dx, dy = point[0] - self.origin[0], point[1] - self.origin[1]
-        local = (c * dx + s * dy, -s * dx + c * dy)
+        local = self._local(point)
         h, w = shape
-        cells = [v / self.cell_size + 1e-9 for v in local]
+        cells = self.cell_coordinates(point)
         # a point (or origin) so far away that the cell overflows is off the map too
         x, y = (int(math.floor(v)) if math.isfinite(v) else -1 for v in cells)
         if not (0 <= x < w and 0 <= y < h):
@@ -188,6 +199,41 @@ class MapFrame:
                 else None,
             },
         }
+
+
+def cells_crossed(p: tuple[float, float], q: tuple[float, float]) -> list[tuple[int, int]]:
+    """The cells ``(x, y)`` the segment from ``p`` to ``q`` (coordinates in cells: cell
+    ``(x, y)`` covers ``[x, x + 1) x [y, y + 1)``) passes through, in order, from the cell
+    holding ``p`` to the one holding ``q`` (Amanatides & Woo's walk). Consecutive cells
+    share a side, except where the segment passes exactly through a grid vertex: there
+    the step is diagonal. A robot's recorded path (metres) becomes the planning cells it
+    drove through this way, where the chords between the cells of its points would cut
+    corners it did not."""
+    x, y = math.floor(p[0]), math.floor(p[1])
+    end = (math.floor(q[0]), math.floor(q[1]))
+    dx, dy = q[0] - p[0], q[1] - p[1]
+    step_x, step_y = (1 if dx > 0 else -1), (1 if dy > 0 else -1)
+    # the segment's parameter at its next vertical and horizontal grid line
+    next_x = ((x + (dx > 0)) - p[0]) / dx if dx else math.inf
+    next_y = ((y + (dy > 0)) - p[1]) / dy if dy else math.inf
+    delta_x, delta_y = (abs(1 / dx) if dx else math.inf), (abs(1 / dy) if dy else math.inf)
+    out = [(x, y)]
+    for _ in range(abs(end[0] - x) + abs(end[1] - y)):
+        if (x, y) == end:
+            break
+        if abs(next_x - next_y) <= 1e-12:  # through a vertex: a diagonal step
+            x, y = x + step_x, y + step_y
+            next_x, next_y = next_x + delta_x, next_y + delta_y
+        elif next_x < next_y:
+            x += step_x
+            next_x += delta_x
+        else:
+            y += step_y
+            next_y += delta_y
+        out.append((x, y))
+    if out[-1] != end:  # rounding at the far end: the last cell is q's own
+        out.append(end)
+    return out
 
 
 def endpoint_cells(frame: MapFrame | None, grid: Any, start: Any = None, goal: Any = None,

@@ -648,7 +648,7 @@ def test_a_doe_where_no_seed_finds_a_path_names_the_cause(tmp_path, capsys, monk
     art = tmp_path / "m.txt"
     art.write_text("\n".join(["0000000"] * 7) + "\n")
     args = ["doe", "--preset", "sga", "--map", str(art), "--seeds", "1",
-            "--generations", "2", "--quiet", "--design", "L9",
+            "--generations", "2", "--quiet", "--design", "full",
             "--factor", "population.size=4,6,8", "--set", "population.capacity=3",
             "--checkpoint", str(tmp_path / "ckpt")]
     for again in (False, True):

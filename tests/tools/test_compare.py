@@ -81,7 +81,7 @@ def test_wilcoxon_paired_matches_scipy_and_matched_pairs_rank_biserial():
     assert s.rank_biserial == 1.0 and s.n_a == 3
     z = wilcoxon_paired([1.0, 2.0], [1.0, 2.0])
     assert z.p_value == 1.0 and z.rank_biserial == 0.0
-    with pytest.raises(ValueError):
+    with pytest.raises(ParameterError):
         wilcoxon_paired([1.0, 2.0], [1.0])
 
 
@@ -100,6 +100,36 @@ def test_fisher_success_matches_scipy():
     ref = scipy.stats.fisher_exact([[10, 0], [3, 7]])
     assert t.p_value == pytest.approx(ref.pvalue) and t.statistic == ref.statistic
     assert fisher_success(5, 5, 5, 5).p_value == 1.0
+
+
+@pytest.mark.parametrize("call, words", [
+    # an infinite value was dropped like a failed seed: U = 1, p = 0.4 on n = 2 where
+    # scipy, keeping it, gives U = 4, p = 1 on n = 3
+    (lambda: mann_whitney([1.0, 2.0, np.inf], [1.5, 2.5, 3.5]), "sample a holds inf at index 2"),
+    (lambda: mann_whitney([1.0], [-np.inf]), "sample b holds -inf at index 0"),
+    (lambda: wilcoxon_paired([1, 2, np.inf, 4], [2, 1, 3, 3]), "sample a holds inf"),
+    (lambda: wilcoxon_paired([1.0, 2.0], [1.0]), "the same length, got 2 and 1"),
+    (lambda: mann_whitney(["a", "b"], [1, 2]), "sample a must hold numbers"),
+    (lambda: mann_whitney([[1, 2], [3, 4]], [1, 2, 3]), r"one-dimensional .* shape \(2, 2\)"),
+    (lambda: holm([0.5, -0.1, 2.0]), r"a p-value must lie in \[0, 1\].* got -0.1"),
+    (lambda: holm([np.inf]), r"a p-value must lie in \[0, 1\]"),
+    (lambda: fisher_success(11, 10, 5, 10), "11 successes of 10 runs"),
+    (lambda: fisher_success(3, 10, -1, 10), "-1 successes of 10 runs"),
+    (lambda: fisher_success(2.5, 10, 1, 10), "whole numbers"),
+])
+def test_the_statistics_refuse_what_they_cannot_test(call, words):
+    """Values no test can take are refused in one line (a ParameterError), never dropped
+    in silence, never a negative p-value, never scipy's or numpy's own words."""
+    with pytest.raises(ParameterError, match=words):
+        call()
+
+
+def test_numpy_counts_and_nan_p_values_still_pass():
+    assert fisher_success(np.int64(3), 10, np.int32(5), 10).p_value == pytest.approx(
+        scipy.stats.fisher_exact([[3, 7], [5, 5]]).pvalue)
+    assert np.isnan(holm([np.nan])).all() and holm([]).shape == (0,)
+    t = mann_whitney(np.array([1.0, np.nan, 3.0]), (2.0, 4.0))
+    assert (t.n_a, t.n_b) == (2, 2)
 
 
 # ---------------------------------------------------------------- compare()
@@ -235,6 +265,49 @@ def test_a_preset_that_found_no_path_reads_0_of_n_without_nan(comparison):
     assert f"0/{SEEDS}" in text and "nan" not in text.lower() and "nan" not in md.lower()
     row = next(line for line in text.splitlines() if line.lstrip().startswith("sga "))
     assert row.count(" - ") >= 4  # mean, sd, min, max (and the gaps)
+
+
+def test_a_success_without_a_finite_length_is_refused(comparison):
+    """A seed counted a success must have a finite length: an infinite or missing one was
+    left out of the tests like a failed seed while the success rate counted it (6/6 with
+    a mean over 5)."""
+    sga, imga = comparison.results["sga"], comparison.results["imga"]
+    for bad in (np.inf, np.nan):
+        length = sga.length.astype(float).copy()
+        length[1] = bad
+        broken = dataclasses.replace(sga, length=length)
+        with pytest.raises(ParameterError, match=f"sga: seed {int(sga.seeds[1])} is counted "
+                                                 f"a success with a length of {bad:g}"):
+            compare_results({"sga": broken, "imga": imga})
+    # a failed seed's missing length is what failure means: accepted
+    failed = dataclasses.replace(sga, success=np.r_[False, sga.success[1:]],
+                                 length=np.r_[np.nan, sga.length[1:]])
+    compare_results({"sga": failed, "imga": imga})
+
+
+def test_tests_that_could_not_be_made_are_not_counted_or_printed_as_nan(comparison):
+    """Two presets without a path and one with: the length has one test of three pairs,
+    and the header says so (it said Holm was over 3 pairs where it was over 1); the
+    success table's odds ratio of 0/N against 0/N is '-', not 'nan'."""
+    sga, imga = comparison.results["sga"], comparison.results["imga"]
+    nan = np.full(SEEDS, np.nan)
+    none = dataclasses.replace(sga, success=np.zeros(SEEDS, bool), length=nan,
+                               raw_length=nan, fitness=nan, reason="no path")
+    c = compare_results({"a": none, "b": dataclasses.replace(none, preset="b"), "imga": imga})
+    made = [t for t in c.tests() if math.isfinite(t.result.p_value)]
+    assert len(made) == 0 and len(c.tests()) == 3
+    assert "that could be tested (0 of 3 for length" in c.summary()
+    c = compare_results({"a": none, "imga": imga, "imga2": dataclasses.replace(imga)})
+    assert "(1 of 3 for length" in c.summary()
+    made = [t for t in c.tests() if math.isfinite(t.result.p_value)]
+    assert len(made) == 1 and made[0].p_holm == made[0].result.p_value  # m = 1
+    text = compare_results({"a": none, "b": dataclasses.replace(none)}).summary()
+    assert "nan" not in text.lower()
+    row = next(line for line in text.splitlines() if line.startswith("a ") and "0/" in line
+               and line.count("0/") == 2)
+    assert " - " in row
+    full = compare_results({"sga": sga, "imga": imga}).summary()
+    assert "Holm-corrected over the 1 pair of each metric" in full
 
 
 def test_paired_wilcoxon_option(comparison):

@@ -96,7 +96,7 @@ def test_l9_is_the_textbook_array_and_designs_take_first_columns():
         book = {tuple(np.flatnonzero(text[:, j] == v)) for v in (-1, 0, 1)}
         assert ours == book
     np.testing.assert_array_equal(L9[:, :3], text[:, :3])
-    np.testing.assert_array_equal(design_array("L27", 3), L27[:, :3])
+    np.testing.assert_array_equal(design_array("L27", 3), L27[:, [0, 1, 4]])  # base A, B, C
     np.testing.assert_array_equal(design_array("L18", 7), L18)
 
 
@@ -701,7 +701,7 @@ def test_wrong_python_types_for_a_doe_are_named(monkeypatch, kw, words):
     monkeypatch.setattr(jaxga.api, "sweep", lambda *a, **k: pytest.fail("a sweep ran"))
     args = {"factors": [Factor("mutation.probability", (0.1, 0.2, 0.3))], **kw}
     with pytest.raises(ParameterError, match=words):
-        run_doe("sga", MAP, design="L9", seeds=1, generations=2, **args)
+        run_doe("sga", MAP, design="full", seeds=1, generations=2, **args)
     with pytest.raises(ParameterError, match="a factor's name is a configuration key"):
         Factor(3, (1, 2, 3))
 
@@ -725,7 +725,7 @@ def test_one_set_string_is_one_set(monkeypatch):
 
     monkeypatch.setattr(jaxga.api, "sweep", fake_sweep)
     with pytest.raises(KeyboardInterrupt):
-        run_doe("sga", MAP, [Factor("crossover.probability", (0.5, 0.6, 0.7))], "L9",
+        run_doe("sga", MAP, [Factor("crossover.probability", (0.5, 0.6, 0.7))], "full",
                 seeds=1, generations=2, sets="mutation.probability=0.5")
     assert isinstance(seen["problem"], jaxga.Problem) and seen["grid"] is None
     assert seen["problem"].config["mutation.probability"] == 0.5
@@ -736,7 +736,7 @@ def test_a_checkpoint_that_is_a_file_is_named(monkeypatch, tmp_path):
     existing = tmp_path / "m.txt"
     existing.write_text("x")
     with pytest.raises(ParameterError, match="m.txt is a file, not a directory"):
-        run_doe("sga", MAP, [Factor("mutation.probability", (0.1, 0.2, 0.3))], "L9",
+        run_doe("sga", MAP, [Factor("mutation.probability", (0.1, 0.2, 0.3))], "full",
                 seeds=1, generations=2, checkpoint=existing)
 
 
@@ -747,11 +747,11 @@ def test_a_factor_that_is_also_an_override_is_refused(monkeypatch):
     for kw in ({"mutation__probability": 0.9}, {"sets": ["mutation.probability=0.9"]}):
         with pytest.raises(ParameterError, match="mutation.probability is both a factor "
                                                  "and an override"):
-            run_doe("sga", MAP, factor, "L9", seeds=1, generations=2, **kw)
+            run_doe("sga", MAP, factor, "full", seeds=1, generations=2, **kw)
         # in a loaded Problem (what `jaxga doe --set` gives): it ran, the --set ignored
         with pytest.raises(ParameterError, match="mutation.probability is both a factor "
                                                  "and an override"):
-            run_doe(jaxga.problem("sga", MAP, **kw), None, factor, "L9", seeds=1)
+            run_doe(jaxga.problem("sga", MAP, **kw), None, factor, "full", seeds=1)
 
 
 def test_every_design_point_is_checked_before_the_first_runs(monkeypatch):
@@ -760,7 +760,7 @@ def test_every_design_point_is_checked_before_the_first_runs(monkeypatch):
     after the points before it (a checkpoint could not be resumed past it)."""
     monkeypatch.setattr(jaxga.api, "sweep", lambda *a, **k: pytest.fail("a sweep ran"))
     with pytest.raises(ParameterError, match="fitness.v_t = 0.5 is above fitness.v = 0.25"):
-        run_doe("iga_zhang", MAP, [Factor("fitness.v", (0.25, 0.5, 1.0))], "L9", seeds=1,
+        run_doe("iga_zhang", MAP, [Factor("fitness.v", (0.25, 0.5, 1.0))], "full", seeds=1,
                 generations=2, population__size=8)
 
 

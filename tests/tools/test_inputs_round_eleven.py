@@ -4,10 +4,20 @@ jaxga writes read back by another reader."""
 
 from __future__ import annotations
 
+import argparse
 import os
 import tempfile
 
+import numpy as np
 import pytest
+import yaml
+
+from jaxga.cli.replan import read_robot_path
+from jaxga.core import files
+from jaxga.core.errors import MapFormatError
+from jaxga.maps import load_map, load_map_info, save_map
+from jaxga.maps.frame import cells_crossed
+from jaxga.reference.optima import clear_np
 
 
 def test_a_signal_the_moment_a_temporary_folder_is_made_removes_it(tmp_path, monkeypatch):
@@ -15,8 +25,6 @@ def test_a_signal_the_moment_a_temporary_folder_is_made_removes_it(tmp_path, mon
     it runs right after the folder is made, as a SIGTERM there would, and nothing is left.
     (``mkdtemp`` made it before it was registered, and a signal in between left it.) A
     folder made without a signal is private and removed by the same cleanup."""
-    from jaxga.core import files
-
     monkeypatch.setattr(tempfile, "tempdir", str(tmp_path))
     real_mkdir = os.mkdir
 
@@ -38,3 +46,100 @@ def test_a_signal_the_moment_a_temporary_folder_is_made_removes_it(tmp_path, mon
     (folder / "inside").write_text("x")
     files.remove_temporaries()
     assert list(tmp_path.iterdir()) == [] and not files._FOLDERS
+
+
+@pytest.mark.parametrize("name", [" lead.yaml", "a #b.yaml", "#a.yaml", "- x.yaml",
+                                  "x: y.yaml", "t\tab.yaml", "&a.yaml", '"q.yaml', "'q.yaml",
+                                  "u\u2028v.yaml", "\u00e9.yaml", "[a].yml"])
+def test_a_ros_map_saved_under_any_name_reads_back(tmp_path, monkeypatch, name):
+    """The YAML names its image as a quoted scalar: unquoted, a leading space was lost (a
+    map read back another map's image), '#' began a comment and an indicator made the file
+    unreadable. PyYAML reads the name back as written, and jaxga the map."""
+    monkeypatch.chdir(tmp_path)
+    other = np.zeros((6, 7), bool)
+    save_map(other, name.strip().lstrip("#&-\"'[x: ") + "other.yaml")
+    ours = other.copy()
+    ours[1:, 3] = True
+    save_map(ours, name, resolution=0.05, origin=(1.0, -2.0, 0.0))
+    doc = yaml.safe_load((tmp_path / name).read_text(encoding="utf-8"))
+    assert doc["image"] == name[:-len(name.rsplit(".", 1)[1])] + "pgm"
+    np.testing.assert_array_equal(load_map(name).blocked_np(), ours)
+
+
+def test_a_ros_map_is_not_saved_over_another_maps_image(tmp_path):
+    """``b.yml`` beside ``b.yaml`` would write ``b.pgm``, b.yaml's image: refused, and the
+    other map untouched. Saving a map again over itself rewrites its own image."""
+    first = np.zeros((5, 5), bool)
+    first[2, 2] = True
+    save_map(first, tmp_path / "b.yaml")
+    before = (tmp_path / "b.pgm").read_bytes()
+    with pytest.raises(MapFormatError, match=r"b.yml: its image .*b.pgm exists and is not "
+                                             "the image of the map being replaced"):
+        save_map(np.zeros((3, 3), bool), tmp_path / "b.yml")
+    assert (tmp_path / "b.pgm").read_bytes() == before and not (tmp_path / "b.yml").exists()
+    (tmp_path / "c.pgm").write_bytes(b"not ours")  # an image no YAML names
+    with pytest.raises(MapFormatError, match="c.pgm exists"):
+        save_map(first, tmp_path / "c.yaml")
+    assert (tmp_path / "c.pgm").read_bytes() == b"not ours"
+    again = np.ones((5, 5), bool)
+    again[0, 0] = False
+    save_map(again, tmp_path / "b.yaml")  # b.yaml names b.pgm: its own image
+    np.testing.assert_array_equal(load_map(tmp_path / "b.yaml").blocked_np(), again)
+
+
+def _sampled_cells(p, q, n=20001):
+    """The cells of ``n`` points along the segment, in order, repeats dropped: the
+    reference for segments that pass no grid vertex."""
+    t = np.linspace(0.0, 1.0, n)[:, None]
+    xy = np.floor(np.asarray(p) + t * (np.asarray(q) - np.asarray(p))).astype(int)
+    keep = np.r_[True, np.any(xy[1:] != xy[:-1], axis=1)]
+    return [tuple(c) for c in xy[keep].tolist()]
+
+
+def test_the_cells_a_segment_crosses_are_those_along_it():
+    """Amanatides & Woo's walk against dense sampling on random segments (none near a
+    vertex), and the hand-made cases: straight, backwards, through vertices."""
+    rng = np.random.default_rng(11)
+    checked = 0
+    for _ in range(400):
+        p, q = rng.uniform(-3, 9, 2), rng.uniform(-3, 9, 2)
+        ref = _sampled_cells(p, q)
+        # a segment within a sample's step of a vertex may skip a corner cell in sampling
+        if any(abs(a[0] - b[0]) + abs(a[1] - b[1]) > 1 for a, b in zip(ref, ref[1:])):
+            continue
+        assert cells_crossed(tuple(p), tuple(q)) == ref
+        checked += 1
+    assert checked > 300
+    assert cells_crossed((0.5, 0.5), (2.5, 1.5)) == [(0, 0), (1, 0), (1, 1), (2, 1)]
+    assert cells_crossed((0.5, 0.5), (2.5, 2.5)) == [(0, 0), (1, 1), (2, 2)]  # vertices
+    assert cells_crossed((2.5, 2.5), (0.5, 0.5)) == [(2, 2), (1, 1), (0, 0)]
+    assert cells_crossed((0.5, 0.5), (0.5, 3.5)) == [(0, 0), (0, 1), (0, 2), (0, 3)]
+    assert cells_crossed((0.2, 0.7), (0.9, 0.1)) == [(0, 0)]
+
+
+def test_a_recorded_curve_that_cuts_no_corner_is_not_a_blocked_step(tmp_path):
+    """A path in metres (``jaxga replan --path``, as ``--smooth --path-out`` writes a
+    curve) whose consecutive points lie in diagonal cells (0, 0) and (1, 1): the curve
+    passes through (0, 1), but the chord between the cells' centres cuts the corner of
+    the blocked (1, 0), which the strict rule calls a blocked step. The cells the curve
+    crosses are taken instead; a path through a vertex keeps its diagonal step."""
+    image = np.full((4, 4), 254, np.uint8)
+    image[3, 1] = 0  # row 3 from the top: map cell (1, 0)
+    (tmp_path / "m.pgm").write_bytes(b"P5\n4 4\n255\n" + image.tobytes())
+    (tmp_path / "m.yaml").write_text("image: m.pgm\nresolution: 0.5\norigin: [0, 0, 0]\n"
+                                     "negate: 0\noccupied_thresh: 0.65\nfree_thresh: 0.196\n")
+    info = load_map_info(str(tmp_path / "m.yaml"), corner_rule="strict")
+    assert info.grid.blocked_np()[0, 1]
+
+    def cells(points):
+        path = tmp_path / "p.csv"
+        path.write_text("x,y\n" + "".join(f"{x},{y}\n" for x, y in points))
+        args = argparse.Namespace(path=str(path), path_json=None, run=None, raw=False)
+        return read_robot_path(args, info, "strict")
+
+    got = cells([(0.4, 0.3), (0.6, 0.8), (1.6, 1.6)])  # metres: cells (0, 0), (1, 1), (3, 3)
+    assert got == [(0, 0), (0, 1), (1, 1), (3, 3)]
+    blocked = info.grid.blocked_np()
+    assert all(clear_np(blocked, "strict", a, b) for a, b in zip(got, got[1:]))
+    # a chord that is clear stays as it was: no cells added
+    assert cells([(0.25, 1.25), (1.25, 1.75)]) == [(0, 2), (2, 3)]
