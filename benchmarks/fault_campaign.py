@@ -1433,6 +1433,13 @@ def build(t: Path) -> list[Case]:
         check=refused_saying("every cell of the map is blocked (the inflation"), quick=True,
         max_s=15,
         note="the inflation shifted the map once per offset within 400 cells: minutes")
+    # --- round eleven: statistics, designs, files read back (decision 057) -------------
+    add("l18-of-two-factors-repeating-points", "round eleven",
+        ["doe", "--preset", "sga", "--map", CLASSIC, "--design", "L18", "--factor",
+         "mutation.probability=0.05,0.2,0.5", "--factor", "crossover.probability=0.5,0.7,0.9",
+         "--seeds", "2", "--generations", "5", "--quiet"],
+        check=refused_saying("only 9 distinct points among its 18"), quick=True,
+        note="ran each of 9 points twice on the same seeds (the L27: three times)")
     return cases
 
 
