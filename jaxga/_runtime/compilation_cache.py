@@ -24,9 +24,10 @@ from pathlib import Path
 import jax
 import numpy as np
 
-from jaxga.core.errors import CacheWarning, ParameterError
+from jaxga.core.errors import CacheWarning, JaxgaError, ParameterError
 from jaxga.core.fields import shown_value
 from jaxga.core.files import folder_problem
+from jaxga.core.numerals import ascii_int
 
 __all__ = ["ENV_VAR", "MIN_COMPILE_SECONDS", "cache_problem", "configure", "default_directory",
            "env_directory", "expanded", "is_read_only", "store_directory",
@@ -141,6 +142,32 @@ _configured: dict[str, str | None] = {}
 _checked: dict[str, str | None] = {}
 
 
+STORE_MAX_BYTES = 4 << 30
+"""The most jaxga's program store, and JAX's cache where jaxga turns it on, take on disk
+by default (4 GiB: about 600 program sets of a whole GA on a small map)."""
+
+ENV_STORE_MAX_MB = "JAXGA_STORE_MAX_MB"
+"""The environment variable that sets another bound for the store, in MiB (whole, >= 1)."""
+
+
+def store_limit() -> int:
+    """The most jaxga's program store (and JAX's cache where :func:`configure` turns it
+    on) may take on disk, in bytes: ``$JAXGA_STORE_MAX_MB``
+    MiB, else :data:`STORE_MAX_BYTES`; a value that is not a whole number of at least 1
+    is refused in one line (:class:`~jaxga.core.errors.JaxgaError`)."""
+    text = os.environ.get(ENV_STORE_MAX_MB, "")
+    if text == "":
+        return STORE_MAX_BYTES
+    try:
+        mb = ascii_int(text)
+    except ValueError:
+        mb = 0
+    if mb < 1:
+        raise JaxgaError(f"{ENV_STORE_MAX_MB} must be a whole number of MiB of at least 1, "
+                         f"got {shown_value(text)}")
+    return min(mb, 1 << 40) << 20
+
+
 def configure(cache_dir: str | os.PathLike | None | object = _UNSET, *,
               jax_cache: bool = True) -> str | None:
     """Where jaxga keeps its compiled programs, and JAX's persistent compilation cache.
@@ -196,6 +223,8 @@ def configure(cache_dir: str | os.PathLike | None | object = _UNSET, *,
     if path and jax_cache and not is_read_only(path):
         jax.config.update("jax_compilation_cache_dir", path)
         jax.config.update("jax_persistent_cache_min_compile_time_secs", MIN_COMPILE_SECONDS)
+        # JAX keeps its cache within a bound too (it removes the entries used longest ago)
+        jax.config.update("jax_compilation_cache_max_size", store_limit())
     return path or None
 
 

@@ -30,7 +30,14 @@ a notebook beside a command, a test suite's workers). The wait is bounded
 program itself, as without the store. The process that holds a lock writes its host and
 process id into the lock file: one waiting on the same host does not wait for a holder
 that is stopped (Ctrl-Z, a paused notebook, a debugger) or gone, and after
-:data:`LOCK_NOTE_S` it says, once, which process it waits for.
+:data:`LOCK_NOTE_S` it says, once, which process it waits for. The holder removes the
+lock file when it is done (a process that was waiting for it finds the program stored).
+
+The store is bounded (:func:`store_limit`, 4 GiB unless ``JAXGA_STORE_MAX_MB`` says
+otherwise): when a program is saved past it, the programs used longest ago are removed
+(a program read from the store counts as used then), and lock files a killed process
+left behind are removed with them. Every new jaxga version or edited checkout keys its
+programs anew, so without a bound the store would only grow.
 """
 
 from __future__ import annotations
@@ -53,7 +60,12 @@ import jax
 import jaxlib
 from jax.experimental.serialize_executable import deserialize_and_load, serialize
 
-from jaxga._runtime.compilation_cache import is_read_only, store_directory
+from jaxga._runtime.compilation_cache import (
+    STORE_MAX_BYTES,  # noqa: F401 (the store's bound, with the store)
+    is_read_only,
+    store_directory,
+    store_limit,
+)
 from jaxga._runtime.lowering import jaxga_lowering, threefry_unrolled
 from jaxga.core.errors import CacheWarning, JaxgaError
 from jaxga.core.files import atomic_write
@@ -272,7 +284,46 @@ def load(key: str | None, devices: Any) -> Any | None:
         _forget(path, "does not load on these devices")
         return None
     _READ.add(key)
+    with contextlib.suppress(OSError):  # used now: the last the bound removes
+        os.utime(path)
     return program
+
+
+def _prune(folder: Path, kept: Path) -> None:
+    """Remove the programs used longest ago until the store is within
+    :func:`store_limit` (never ``kept``, the one just saved), and lock files older than
+    an hour that no process holds (left by a killed process)."""
+    limit = store_limit()
+    entries = []
+    with contextlib.suppress(OSError):
+        for p in folder.glob("*.pkl"):
+            with contextlib.suppress(OSError):
+                st = p.lstat()
+                if stat.S_ISREG(st.st_mode):
+                    entries.append((st.st_mtime, st.st_size, p))
+    total = sum(size for _, size, _ in entries)
+    for _, size, p in sorted(entries, key=lambda e: e[0]):
+        if total <= limit:
+            break
+        if p == kept:
+            continue
+        with contextlib.suppress(OSError):
+            p.unlink()
+            total -= size
+    if fcntl is None:
+        return
+    old = time.time() - 3600.0
+    with contextlib.suppress(OSError):
+        for lock in (folder / "locks").glob("*.lock"):
+            with contextlib.suppress(OSError):
+                if lock.lstat().st_mtime > old or not stat.S_ISREG(lock.lstat().st_mode):
+                    continue
+                fd = os.open(lock, os.O_RDONLY | getattr(os, "O_NONBLOCK", 0))
+                try:
+                    fcntl.flock(fd, fcntl.LOCK_EX | fcntl.LOCK_NB)  # no one holds it
+                    lock.unlink()
+                finally:
+                    os.close(fd)
 
 
 LOCK_WAIT_S = 300.0
@@ -399,6 +450,10 @@ def _compiling_here(key: str) -> Iterator[None]:
             yield
         finally:
             if locked:
+                # done: the program is stored (or this process failed, and a waiting one
+                # compiles it); the file goes first, so the store keeps no lock per program
+                with contextlib.suppress(OSError):
+                    lock.unlink()
                 fcntl.flock(handle, fcntl.LOCK_UN)
 
 
@@ -408,6 +463,8 @@ def load_or_compile(key: str | None, devices: Any, lower: Callable[[], Any],
     :func:`jaxga._runtime.lowering.jaxga_lowering`) compiled and stored; and whether it was
     read. The compilation holds the key's lock, so that processes sharing the store
     compile it once (module docstring): one that waited reads what the other stored."""
+    if key is not None:
+        store_limit()  # a bound that is not a number is refused before a compile
     program = load(key, devices)
     if program is not None:
         return program, True
@@ -442,6 +499,8 @@ def save(key: str | None, compiled: Any, devices: Any) -> None:
         atomic_write(folder / f"{key}.pkl", lambda f: f.write(blob), binary=True)
     except (OSError, JaxgaError) as e:
         _cannot_keep(folder, e)
+        return
+    _prune(folder, folder / f"{key}.pkl")
 
 
 _CANNOT_KEEP: set[str] = set()

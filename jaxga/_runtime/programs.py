@@ -87,11 +87,17 @@ operator functions), most recently used last, at most ``3 * PROGRAM_CACHE_SIZE``
 program sets of :func:`compiled_programs` take each program from here first."""
 
 
+def _keep_recent(cache: collections.OrderedDict, key: Any, value: Any, most: int) -> None:
+    """Put ``value`` in ``cache`` as its most recently used entry, and drop the entries
+    used longest ago past ``most``: no cache of a long session grows without bound."""
+    cache[key] = value
+    cache.move_to_end(key)
+    while len(cache) > most:
+        cache.popitem(last=False)
+
+
 def _share(key: Any, program: Any) -> None:
-    _SHARED_PROGRAMS[key] = program
-    _SHARED_PROGRAMS.move_to_end(key)
-    while len(_SHARED_PROGRAMS) > 3 * PROGRAM_CACHE_SIZE:
-        _SHARED_PROGRAMS.popitem(last=False)
+    _keep_recent(_SHARED_PROGRAMS, key, program, 3 * PROGRAM_CACHE_SIZE)
 
 
 class Programs:
@@ -189,7 +195,9 @@ class Programs:
         return self._compiled["finish"]
 
 
-_TABLE_PROGRAMS: dict[str, Any] = {}
+_TABLE_PROGRAMS: collections.OrderedDict[str, Any] = collections.OrderedDict()
+"""The map-table programs of this process by key, most recently used last, at most
+``3 * PROGRAM_CACHE_SIZE``."""
 
 
 def tables_for(grid: Any) -> Any:
@@ -206,7 +214,9 @@ def tables_for(grid: Any) -> Any:
         program, _ = executables.load_or_compile(key, devices,
                                                  lambda: compute_tables.lower(bare))
         if key is not None:
-            _TABLE_PROGRAMS[key] = program
+            _keep_recent(_TABLE_PROGRAMS, key, program, 3 * PROGRAM_CACHE_SIZE)
+    elif key is not None:
+        _TABLE_PROGRAMS.move_to_end(key)
     return dataclasses.replace(grid, tables=program(bare))
 
 
@@ -468,10 +478,11 @@ def program_algorithm(algo: Algorithm) -> Algorithm:
     return dataclasses.replace(algo, config=config, generations=0)
 
 
-_COMPILED_BUCKETS: dict[Any, set[int]] = {}
+_COMPILED_BUCKETS: collections.OrderedDict[Any, set[int]] = collections.OrderedDict()
 """Runs per device of the program sets compiled in this process, per (algorithm, map
 spec, per-run parameter spec, devices): :func:`run_layout` reuses a larger one rather
-than compile a new size."""
+than compile a new size. The families used most recently, at most
+``8 * PROGRAM_CACHE_SIZE`` (a family forgotten costs at most a program of another size)."""
 
 
 def compiled_buckets(algo: Algorithm, grid: Any, params: dict) -> set[int]:
@@ -500,7 +511,9 @@ def programs_for(algo: Algorithm, grid: Any, params: dict, n_runs: int,
     progs = compiled_programs(algo, grid_spec, tuple(sorted(shape_spec(params).items())),
                               n_runs, n_dev, operator_functions(algo))
     progs.compile_init(report)
-    _COMPILED_BUCKETS.setdefault(_family(algo, grid_spec, params), set()).add(n_runs // n_dev)
+    family = _family(algo, grid_spec, params)
+    sizes = _COMPILED_BUCKETS.get(family, set()) | {n_runs // n_dev}
+    _keep_recent(_COMPILED_BUCKETS, family, sizes, 8 * PROGRAM_CACHE_SIZE)
     return progs
 
 

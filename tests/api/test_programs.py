@@ -630,6 +630,97 @@ def test_threads_of_one_process_wait_for_each_other_without_a_word(tmp_path, mon
     assert order == ["first", "second"]
 
 
+def test_a_lock_file_goes_when_its_compile_is_done(tmp_path, monkeypatch):
+    """The holder removes its lock file: a lock file per program stayed in the store for
+    good (one more for each program ever compiled)."""
+    monkeypatch.setattr(executables, "directory", lambda: tmp_path)
+    with executables._compiling("k"):
+        assert (tmp_path / "locks" / "k.lock").is_file()
+    assert list((tmp_path / "locks").iterdir()) == []
+
+
+def _entry(folder: Path, name: str, size: int, age_s: float) -> Path:
+    p = folder / f"{name}.pkl"
+    p.write_bytes(b"x" * size)
+    t = time.time() - age_s
+    os.utime(p, (t, t))
+    return p
+
+
+def test_the_store_keeps_within_its_bound(tmp_path, monkeypatch):
+    """Saving a program past the bound removes the programs used longest ago, never the
+    one just saved; lock files a killed process left (older than an hour, held by no
+    one) go with them, a held one stays. The store grew without bound: every jaxga
+    version and edited checkout keys its programs anew."""
+    import fcntl
+
+    monkeypatch.setenv("JAXGA_STORE_MAX_MB", "1")
+    mib = 1 << 20
+    oldest = _entry(tmp_path, "oldest", mib // 2, 500)
+    old = _entry(tmp_path, "old", mib // 2, 400)
+    recent = _entry(tmp_path, "recent", mib // 4, 100)
+    kept = _entry(tmp_path, "kept", mib // 2, 900)  # just saved, with an old time
+    locks = tmp_path / "locks"
+    locks.mkdir()
+    left, fresh, held = (locks / f"{n}.lock" for n in ("left", "fresh", "held"))
+    for lock in (left, fresh, held):
+        lock.write_text("host 1\n")
+    for lock in (left, held):
+        os.utime(lock, (time.time() - 7200,) * 2)
+    with open(held, "rb") as holder:
+        fcntl.flock(holder, fcntl.LOCK_EX)
+        executables._prune(tmp_path, kept)
+    assert sorted(p.name for p in tmp_path.glob("*.pkl")) == ["kept.pkl", "recent.pkl"]
+    assert not oldest.exists() and not old.exists() and recent.exists()
+    assert sorted(p.name for p in locks.iterdir()) == ["fresh.lock", "held.lock"]
+    monkeypatch.delenv("JAXGA_STORE_MAX_MB")
+    executables._prune(tmp_path, kept)  # within the default bound: nothing goes
+    assert sorted(p.name for p in tmp_path.glob("*.pkl")) == ["kept.pkl", "recent.pkl"]
+
+
+@pytest.mark.parametrize("value", ["0", "-5", "1.5", "lots", "1e3"])
+def test_a_store_bound_that_is_not_a_size_is_refused(monkeypatch, value):
+    from jaxga.core.errors import JaxgaError
+
+    monkeypatch.setenv("JAXGA_STORE_MAX_MB", value)
+    with pytest.raises(JaxgaError, match="JAXGA_STORE_MAX_MB must be a whole number of MiB"):
+        executables.store_limit()
+    monkeypatch.setenv("JAXGA_STORE_MAX_MB", "")
+    assert executables.store_limit() == executables.STORE_MAX_BYTES == 4 << 30
+
+
+def test_a_program_read_from_the_store_counts_as_used(tmp_path, monkeypatch):
+    """Reading a program renews its time, so the bound removes programs used longest
+    ago, not those saved longest ago."""
+    monkeypatch.setattr(executables, "directory", lambda: tmp_path)
+    devices = jax.devices()[:1]
+    compiled = jax.jit(lambda x: x + 1).lower(jnp.float32(1)).compile()
+    executables.save("used", compiled, devices)
+    path = tmp_path / "used.pkl"
+    os.utime(path, (1e9, 1e9))
+    program = executables.load("used", devices)
+    assert program is not None and float(program(jnp.float32(2))) == 3.0
+    assert path.stat().st_mtime > time.time() - 60
+
+
+def test_a_long_sessions_map_table_programs_are_bounded(monkeypatch):
+    """A session over maps of many shapes kept every map-table program (and the record
+    of every family's compiled sizes) for good: each keeps only its most recent."""
+    import collections
+
+    monkeypatch.setattr(programs, "_TABLE_PROGRAMS", collections.OrderedDict())
+    monkeypatch.setattr(programs, "PROGRAM_CACHE_SIZE", 1)  # at most 3 table programs
+    for side in (5, 6, 7, 8, 6):
+        programs.tables_for(random_map(side, side, 0.1, seed=side))
+    assert len(programs._TABLE_PROGRAMS) == 3
+    cache = collections.OrderedDict()
+    for i in range(30):
+        programs._keep_recent(cache, i, str(i), 5)
+    programs._keep_recent(cache, 26, "again", 5)  # used again: the last to go
+    programs._keep_recent(cache, 30, "30", 5)
+    assert list(cache) == [27, 28, 29, 26, 30] and cache[26] == "again"
+
+
 HOLD_LOCK = """
 import sys, time
 from jaxga._runtime import executables
