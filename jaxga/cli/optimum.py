@@ -129,6 +129,9 @@ def _optimum(args: argparse.Namespace, progress: Progress | None) -> int:
             out["any_angle_path_world"] = (
                 frame.world_list(np.asarray(bounds.path, float))
                 if len(bounds.path) else [])
+            # the lengths in metres too, as run's and replan's JSON give them
+            out["length_m"] = json_number(float(octile.length) * frame.cell_size)
+            out["any_angle_length_m"] = json_number(bounds.optimum * frame.cell_size)
         if fit is not None:
             out["fitness"] = {
                 "preset": config["name"], "method": config["fitness.method"],

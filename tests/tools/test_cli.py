@@ -901,6 +901,8 @@ def test_a_ros_map_is_planned_on_in_world_coordinates_with_inflation(tmp_path, c
     grown = inflate(plain, 1).blocked_np()
     assert doc["length"] == pytest.approx(shortest_path(plain.replace(blocked=grown)).length)
     assert f"({doc['length'] * 0.25:.3f} m)" in capsys.readouterr().out
+    assert doc["length_m"] == pytest.approx(doc["length"] * 0.25)  # as run's JSON gives it
+    assert doc["any_angle_length_m"] == pytest.approx(doc["any_angle_length"] * 0.25)
     out = tmp_path / "run.json"
     rc = main(["run", "--preset", "sga", *where, "--seeds", "3", "--generations", "3",
                "--set", "population.size=8", "--quiet", "--json", str(out), "--smooth"])
