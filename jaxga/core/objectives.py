@@ -225,9 +225,13 @@ def zhu_penalty(
 ) -> jax.Array:
     """Zhu & Pan smoothness ``fit_2``: a cost per turn by angle bucket, float32 (eq. 8-9).
 
-    Eq. 9 gives ``Gamma = 0`` when consecutive segments are collinear (the angle at the
-    node is pi), ``c1`` for a 45-degree turn (node angle 3pi/4), ``c2`` for 90 degrees,
-    ``c3`` for 135 degrees; eq. 8 sums over the interior nodes. Other angles (waypoint
+    Eq. 9 as printed takes the angle between consecutive headings ``P_i P_{i+1}`` and
+    ``P_{i+1} P_{i+2}`` (0 when pi, c1 at 3pi/4, c2 at pi/2, c3 at pi/4): read literally,
+    a reversal costs 0 and a 45-degree turn c3. With ``0 < c1 < c2 < c3`` the angles can
+    only be the interior angle at the node, and jaxga reads them so (decision 057):
+    ``Gamma = 0`` when consecutive segments are collinear (the angle at the node is pi),
+    ``c1`` for a 45-degree turn (node angle 3pi/4), ``c2`` for 90 degrees, ``c3`` for 135
+    degrees; eq. 8 sums over the interior nodes. Other angles (waypoint
     paths) go to the nearest bucket rounding up: ``(0, 45] -> c1``, ``(45, 90] -> c2``,
     ``(90, 135] -> c3``, decided exactly from integer cross/dot products.
 
@@ -663,6 +667,11 @@ def iga_zhang(
     time lost per turn (speed ``v``, turning speed ``v_t``, turning radius ``r``), ``a``
     the penalty coefficient ("generally greater than 1"). Defaults a 2, v 1, v_t 0.5,
     r 0.5 (k = pi/4). 0 when ``feasible`` is False.
+
+    The form of ``k`` is reconstructed (decision 057): the paper's extracted text of eq. 2
+    ("F = n - li = 1d(pi, pi + 1) + am(v - vt)pi 2rvt") may also be read
+    ``(v - v_t) pi / (2 r v_t)`` (k = pi at the defaults). ``a``, ``v``, ``v_t`` and ``r``
+    are not in the paper, so only the weight of a turn is at stake.
     """
     v, v_t = as_f32(v), as_f32(v_t)
     k = (v - v_t) * np.float32(math.pi) * as_f32(r) / (2.0 * v * v_t)

@@ -294,10 +294,14 @@ def island_generation(algo: Algorithm, key, grid: Grid, isl: IslandState, t, par
                                  active, algo.population)
     pop = Population(isl.cells[idx], isl.length[idx])
     fitness = isl.fitness[idx]
-    pop, f_cx = _crossover(algo, k_cx, grid, pop, fitness, active, t, params, fit_fn)
+    # the papers' "current number of iterations" t (AGACD eq. 27 and 29, MPMGA eq. 17)
+    # is 1 in the first generation; jaxga's generation counter ``t`` starts at 0
+    iteration = t + 1
+    pop, f_cx = _crossover(algo, k_cx, grid, pop, fitness, active, iteration, params, fit_fn)
 
     def vary(pop, fitness):
-        pop, f_mu = _mutation(algo, k_mu, grid, pop, fitness, active, t, params, fit_fn)
+        pop, f_mu = _mutation(algo, k_mu, grid, pop, fitness, active, iteration, params,
+                              fit_fn)
         pop, f_si = _simplify(algo, k_si, grid, pop, params)
         return pop, jnp.stack([f_mu, f_si]).astype(I32)
 

@@ -113,9 +113,11 @@ def common_point(
     then randomly selects a point"); with ``p1[i] == p2[j]`` the children are
     ``p1[:i] + p2[j:]`` and ``p2[:j] + p1[i:]`` (IMGA's example: S-2-12-67-69-89-G x
     S-11-22-67-78-80-G at 67 -> S-2-12-67-78-80-G, S-11-22-67-69-89-G). Loops are then
-    removed (IMGA 4.3.2). No common cell -> no crossover: the parents are returned and
-    nothing is counted as failed. A child that would exceed the capacity even after loop
-    removal fails and keeps its parent (the other child is still accepted).
+    removed: jaxga's step (decision 057), not IMGA's, whose 4.3.2 shows the swap alone;
+    a child with a loop would otherwise revisit cells. No common cell -> no crossover:
+    the parents are returned and nothing is counted as failed. A child that would exceed
+    the capacity even after loop removal fails and keeps its parent (the other child is
+    still accepted).
 
     Continuous, loop-free parents give continuous, loop-free children. Cost: one cell
     lookup (where parent 1's cells are in parent 2; the second child's loop cut is read

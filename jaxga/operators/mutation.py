@@ -162,12 +162,13 @@ def neighbour_point(
     candidate exists, the connection does not close, or the result exceeds the capacity.
 
     Decisions: the candidate is uniform over the free 8-neighbours (IMGA says
-    "randomly"); it may be a cell already on the path (loop removal then shortens the
-    path, as in IMGA's own pipeline). The capacity is checked AFTER loop removal (the
-    splice is built in a work buffer of ``L + seg_capacity`` cells), so a mutant that
-    only temporarily exceeds ``L`` is not lost. Both gaps are at most 2 cells wide, so
-    the connection is run with a small node table ``seg_capacity`` (static; a connection
-    that needs more nodes fails), ``max_rounds`` and ``queue``; overflowing any of them
+    "randomly"); it may be a cell already on the path (loop removal, jaxga's step and
+    not the paper's, then shortens the path: decision 057). The capacity is checked
+    AFTER loop removal (the splice is built in a work buffer of ``L + seg_capacity``
+    cells), so a mutant that only temporarily exceeds ``L`` is not lost. Both gaps are
+    at most 2 cells wide, so the connection is run with a small node table
+    ``seg_capacity`` (static; a connection that needs more nodes fails), ``max_rounds``
+    and ``queue``; overflowing any of them
     is a failure, never a corruption.
     """
     cells = jnp.asarray(cells, I32)
@@ -419,8 +420,11 @@ def _knight_clear(grid: Grid, a: jax.Array, b: jax.Array) -> jax.Array:
     Such a segment meets no grid vertex and crosses exactly four cells: the two ends and
     the two cells between them (for ``dx = 2 sx, dy = sy``: ``(ax+sx, ay)`` and
     ``(ax+sx, ay+sy)``), so it is clear iff those four are free, whatever the corner
-    rule; this equals :func:`jaxga.core.geometry.clear` and is Zhang's condition "the upper
-    and lower grids of the mutation point are free". False for any other offset.
+    rule; this equals :func:`jaxga.core.geometry.clear`. It is jaxga's reading of Zhang's
+    condition "the upper and lower grids of the mutation point are free" (decision 057):
+    the cells the knight move's segment crosses, which for ``N_{i+1} - N_{i-1} = 12``
+    with ``N_i = N_{i-1} + 1`` are ``N_i`` and the cell above it, not the one below.
+    False for any other offset.
     """
     w = grid.width
     ax, ay, bx, by = a % w, a // w, b % w, b // w
@@ -445,7 +449,12 @@ def cut_corners(
     *,
     knight: bool = False,
 ) -> tuple[jax.Array, jax.Array, jax.Array]:
-    """Zhang's corner-removing mutation: one left-to-right pass (Zhang, eq. 3-5).
+    """A corner-removing pass after Zhang's eq. 3-5: every node of the path, left to right.
+
+    Not Zhang's mutation as such: the paper mutates ONE gene at a random position ("use
+    the random number method to determine the individual's mutation position"); this
+    pass applies its rules to every node (``hybrid`` and ``pareto`` use it as a
+    simplification; ``iga_zhang`` does not, see its preset).
 
     Zhang examines each node ``N_i`` with its neighbours ``N_{i-1}``, ``N_{i+1}`` on a
     10-wide grid and deletes ``N_i`` when ``N_{i+1} - N_{i-1}`` is 10 or 1 (the
@@ -461,8 +470,8 @@ def cut_corners(
       (eq. 5; the path becomes a feasible waypoint path, which is what Zhang's fitness of
       segment lengths and turns then scores).
 
-    The pass is sequential, as in the paper: after deleting ``N_i``, node ``N_{i+1}`` is
-    examined with the last *kept* node as its predecessor. Implemented as a fixed-length
+    The pass is sequential: after deleting ``N_i``, node ``N_{i+1}`` is examined with
+    the last *kept* node as its predecessor. Implemented as a fixed-length
     ``lax.scan`` over the capacity (scalar work per step) and one compaction. Zhang uses
     mutation probability 1. Deterministic (``key`` unused, kept for the common
     signature); never fails (``failed`` always False). A continuous loop-free input stays
@@ -613,7 +622,8 @@ def _check_annealing(config: Mapping) -> None:
 
 
 def _annealing_temperature(ctx: Binding) -> dict:
-    """MPMGA eq. 17: ``T = c1 * w**t`` at generation ``t`` (``c1`` and ``w`` traced)."""
+    """MPMGA eq. 17: ``T = c1 * w**t`` at iteration ``t`` (1 in the first generation;
+    ``c1`` and ``w`` traced)."""
     schedule = schedules.mpmga_temperature(ctx.params["mutation.temperature_c1"],
                                            ctx.params["mutation.temperature_w"])
     return {"temperature": schedule(ctx.generation)}

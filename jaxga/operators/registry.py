@@ -120,8 +120,9 @@ TRAITS = (NEEDS_FITNESS, FIELD_REPAIR, WAYPOINTS, SPLICING, NEVER_FAILS, SHRINKI
 class Binding:
     """What an operator may read when the engine binds it: the static configuration
     (anything with ``get(key, default)``: a :class:`~jaxga.config.schema.Config` or an
-    :class:`~jaxga.engine.Algorithm`), the dynamic parameters, the generation ``t``
-    (traced) and the number of generations, the configured fitness function and
+    :class:`~jaxga.engine.Algorithm`), the dynamic parameters, the papers' iteration
+    ``t`` (traced; 1 in the first generation, as AGACD eq. 27 and 29 and MPMGA eq. 17
+    count) and the number of generations, the configured fitness function and
     whether the field repairs are on (``repair.fallback``)."""
 
     config: Any

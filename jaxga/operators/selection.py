@@ -148,9 +148,14 @@ def roulette_elite(
     4. ``idx[s] = b``. The replacement is unconditional, as in Zhu & Pan (even when
        ``b`` was already drawn, so the best then occupies at least two slots).
 
-    So the best individual is always in the mating pool. Protecting it from the
-    following crossover and mutation (or re-inserting the pre-variation best after them)
-    is a separate, engine-level elitism step.
+    So the best individual is always in the mating pool. jaxga has no further elitism
+    step: the crossover and mutation that follow may change it (under ``iga_zhu``,
+    common-point children replace their parents at pc 0.8, and pm is 0.4), so a run's
+    best of a generation can be lost within it. This is one reading of Zhu & Pan's
+    "the best individual in the previous generation will replace the worst individual
+    in the constructed population after each iteration is completed": the constructed
+    population is the selected one (decision 057 records the reading). Under AGACD the
+    best is kept anyway: eq. 26 and 28 give it pc = pm = 0.
     """
     fitness, active = _prepare(fitness, active)
     idx = roulette(key, fitness, active)

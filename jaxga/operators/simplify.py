@@ -27,10 +27,12 @@ def simplify_adjacent_step(key: jax.Array, grid: Any, cells: jax.Array,
 
 
 register(Operator("simplify", "simplify_adjacent", simplify_adjacent_step,
-                  "replace two-step detours by direct moves (Zhu & Pan 4.6)",
+                  "skip to the farthest later node one move away, dropping the detour "
+                  "between (Zhu & Pan 4.6)",
                   traits=frozenset({SHRINKING, NEVER_FAILS})))
 register(Operator("simplify", "cut_corners", cut_corners,
-                  "delete the middle node of a corner whose ends are adjacent (Zhang "
-                  "eq. 3-4)", traits=frozenset({SHRINKING, NEVER_FAILS}),
+                  "delete the middle node of every corner whose ends are adjacent: a "
+                  "whole-path pass of Zhang's eq. 3-4 rules (not its one-gene mutation)",
+                  traits=frozenset({SHRINKING, NEVER_FAILS}),
                   aliases=("corner_cut",)))
 register_none("simplify", "no simplification")

@@ -199,6 +199,7 @@ def test_adaptive_generation_equals_its_straight_line_composition():
     def straight(key, isl, t):
         active = E._active(algo, params)
         fit_fn = E.fitness_function(algo, params)
+        t = t + 1  # the papers' iteration (AGACD eq. 27, 29): 1 in the first generation
         k_sel, k_cx, k_mu, k_si = jax.random.split(key, 4)
         idx = E._select(algo, k_sel, isl.fitness, active)
         pop = Population(isl.cells[idx], isl.length[idx])
@@ -225,6 +226,46 @@ def test_adaptive_generation_equals_its_straight_line_composition():
                 np.testing.assert_array_equal(np.asarray(g), np.asarray(w))
             isl = got[0]
         assert not np.array_equal(np.asarray(isl.cells), np.asarray(state.islands.cells[0]))
+
+
+@pytest.mark.parametrize("preset", ["agacd", "mpmga"])
+def test_the_rate_rules_and_operators_see_the_papers_iteration(monkeypatch, preset):
+    """AGACD eq. 27 and 29 and MPMGA eq. 17 take "the current number of iterations" t,
+    1 in the first generation; jaxga's generation counter starts at 0. The crossover
+    and mutation (their rates and bindings: MPMGA's temperature) see counter + 1."""
+    import jax
+    import jax.numpy as jnp
+
+    from jaxga.config.presets import load_preset
+    from jaxga.engine import build
+    from jaxga.engine import evolution as E
+    from jaxga.operators.guide import with_guide
+
+    grid = random_map(8, 8, 0.1, 3, corner_rule="free")
+    algo, params = build(load_preset(preset, overrides={
+        "population.size": 6, "generations": 3, "init.max_tries": 40}), grid)
+    seen = []  # the t each stage is given, while the generation is traced
+    for name in ("_crossover", "_mutation"):
+        real = getattr(E, name)
+
+        def spy(*args, _real=real):
+            seen.append(args[6])
+            return _real(*args)
+
+        monkeypatch.setattr(E, name, spy)
+    @jax.jit  # one program: the stages' t is read while the generation is traced
+    def given_t(t):
+        guided = with_guide(grid)
+        state = E.init_state(algo, jax.random.PRNGKey(0), guided, params)[0]
+        isl = jax.tree_util.tree_map(lambda x: x[0], state.islands)
+        per, shared = E._island_params(params, algo.islands)  # island 0's parameters
+        first = {**shared, **jax.tree_util.tree_map(lambda x: x[0], per)}
+        seen.clear()
+        E.island_generation(algo, jax.random.PRNGKey(1), guided, isl, t, first)
+        return jnp.stack(seen)
+
+    for t in (0, 2):
+        np.testing.assert_array_equal(np.asarray(given_t(jnp.int32(t))), [t + 1, t + 1])
 
 
 def test_history_row_counts_only_active_individuals_of_every_island():

@@ -148,7 +148,8 @@ register(Operator("init", "random_walk", random_walk,
                   "uniformly random self-avoiding walk from start to goal (Zhu & Pan 4.1; "
                   "the plain GA)"))
 register(Operator("init", "median_insertion", median_insertion,
-                  "random free cell per row, connected by median insertion (IMGA 4.1)",
+                  "one random free cell between start and goal, S - N_i - G connected by "
+                  "median insertion (IMGA 4.1(3))",
                   traits=frozenset({FIELD_REPAIR})))
 register(Operator("init", "intermittent_connect", intermittent_connect,
                   "barrier-free intermittent path + connection + deletion (MPMGA 4.2)",
