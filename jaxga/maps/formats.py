@@ -43,6 +43,7 @@ from pathlib import Path
 from typing import Any
 
 import numpy as np
+import yaml
 
 from jaxga.core.errors import JaxgaError, MapFormatError
 from jaxga.core.fields import python_scalar, shown_value
@@ -308,8 +309,6 @@ def _check_image_is_ours(yaml_path: Path, image: Path) -> None:
     its own, and is rewritten."""
     if not os.path.lexists(image):
         return
-    import yaml
-
     named = None
     try:
         with open(yaml_path, encoding="utf-8") as f:

@@ -28,6 +28,7 @@ import numpy as np
 
 from jaxga._batching.lanes import lane_while_loop
 from jaxga.core import prng
+from jaxga.core.errors import ParameterError
 from jaxga.core.grid import Grid, blocked_at, diagonal_legal
 from jaxga.core.paths import position_lookup, remove_loops
 
@@ -163,7 +164,11 @@ def connect(
     w = grid.width
     i32 = jnp.int32
     if k_max > capacity:
-        raise ValueError(f"{k_max} anchors cannot fit capacity {capacity}")
+        # a static size: refused in one line when the program is built, not a traceback
+        raise ParameterError(
+            f"a path capacity of {capacity} cells cannot hold the {k_max} cells this "
+            "operator joins (its anchors): give population.capacity >= "
+            f"{k_max}")
     used = jnp.arange(k_max, dtype=i32) < n_anchors
     ok0 = jnp.all(~blocked_at(grid.blocked, anchors % w, anchors // w) | ~used)
 

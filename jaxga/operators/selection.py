@@ -83,8 +83,16 @@ def _roulette_draw(key: jax.Array, weights: jax.Array, eligible: jax.Array, n: i
     If every weight is 0, uniform over ``eligible``; if nothing is eligible, all 0.
     Inverse-CDF sampling: one cumulative sum and a binary search per draw (O(P log P)).
     A zero-weight individual is never drawn (``side="right"`` on the cumulative sums).
+    Weights whose sum overflows float32 are divided by the largest first (an infinite
+    one: the infinite ones alone, evenly); the sum overflowed, and every draw took the
+    last eligible individual. Other weights are used as they are, bit for bit.
     """
     total = jnp.sum(weights)
+    big = ~jnp.isfinite(total)
+    top = jnp.max(weights)
+    scaled = jnp.where(jnp.isinf(top), (weights == top).astype(F32), weights / top)
+    weights = jnp.where(big, scaled, weights)
+    total = jnp.where(big, jnp.sum(weights), total)
     w = jnp.where(total > 0, weights, eligible.astype(F32))
     # associative_scan: jnp.cumsum is an O(P^2) reduce_window on CPU.
     cdf = jax.lax.associative_scan(jnp.add, w)

@@ -8,6 +8,7 @@ import argparse
 import os
 import tempfile
 
+import jax
 import numpy as np
 import pytest
 import yaml
@@ -15,9 +16,12 @@ import yaml
 from jaxga import export
 from jaxga.cli.replan import read_robot_path
 from jaxga.core import files
-from jaxga.core.errors import MapFormatError
+from jaxga.core.errors import MapFormatError, ParameterError
+from jaxga.core.grid import Grid
 from jaxga.maps import load_map, load_map_info, save_map
 from jaxga.maps.frame import cells_crossed
+from jaxga.operators.repair import connect
+from jaxga.operators.selection import roulette
 from jaxga.reference.optima import clear_np
 
 
@@ -166,3 +170,29 @@ def test_a_path_yaml_is_what_yaml_writes_in_a_fraction_of_its_time(n):
     text = export.path_text(p, "yaml", decimals=d)
     assert yaml.safe_load(text) == yaml.safe_load(reference)
     assert text == reference
+
+
+def test_a_roulette_over_weights_whose_sum_overflows_draws_evenly():
+    """Five equal weights of 3e38: their float32 sum overflowed, and every draw took the
+    last eligible individual. Scaled by the largest, they draw as five equal weights of
+    0.5 do; infinite weights share the draws evenly; ordinary weights are untouched."""
+    draw = jax.jit(roulette)  # one program for the three draws
+    key = jax.random.PRNGKey(3)
+    active = np.arange(6) < 5
+    huge = draw(key, np.full(6, 3e38, np.float32), active)
+    np.testing.assert_array_equal(huge, draw(key, np.full(6, 0.5, np.float32), active))
+    assert len(set(np.asarray(huge).tolist())) > 1
+    draws = np.asarray(draw(key, np.array([1.0, np.inf, 2.0, np.inf, 1.0, 1.0], np.float32),
+                            np.ones(6, bool)))
+    assert set(draws.tolist()) <= {1, 3} and len(set(draws.tolist())) == 2
+
+
+def test_a_capacity_too_small_for_an_operators_anchors_is_one_line():
+    """``segment_sa`` joins two anchor cells (``repair.connect``): at
+    ``population.capacity`` 1 (a start equal to its goal fits) it raised a bare
+    ValueError through a traceback; it is now a ParameterError naming the key, raised
+    when the program is traced, before any work."""
+    grid = Grid.create(np.zeros((4, 4), bool), start=(1, 1), goal=(1, 1))
+    with pytest.raises(ParameterError, match=r"cannot hold the 2 cells this operator joins "
+                                             r".* population.capacity >= 2"):
+        connect(jax.random.PRNGKey(0), grid, np.array([5, 5], np.int32), 2, capacity=1)
