@@ -30,8 +30,8 @@ from jaxga.core.files import folder_problem
 from jaxga.core.numerals import ascii_int
 
 __all__ = ["ENV_VAR", "MIN_COMPILE_SECONDS", "cache_problem", "configure", "default_directory",
-           "env_directory", "expanded", "is_read_only", "store_directory",
-           "use_compilation_cache", "warn_unusable"]
+           "env_directory", "expanded", "is_read_only", "jax_cache_folder",
+           "store_directory", "use_compilation_cache", "warn_unusable"]
 
 ENV_VAR = "JAXGA_CACHE_DIR"
 """Environment variable naming the cache directory; an empty value leaves the cache off."""
@@ -143,16 +143,16 @@ _checked: dict[str, str | None] = {}
 
 
 STORE_MAX_BYTES = 4 << 30
-"""The most jaxga's program store, and JAX's cache where jaxga turns it on, take on disk
-by default (4 GiB: about 600 program sets of a whole GA on a small map)."""
+"""The most jaxga's program store and JAX's cache where jaxga turns it on take on disk
+together by default (4 GiB: about 600 program sets of a whole GA on a small map)."""
 
 ENV_STORE_MAX_MB = "JAXGA_STORE_MAX_MB"
 """The environment variable that sets another bound for the store, in MiB (whole, >= 1)."""
 
 
 def store_limit() -> int:
-    """The most jaxga's program store (and JAX's cache where :func:`configure` turns it
-    on) may take on disk, in bytes: ``$JAXGA_STORE_MAX_MB``
+    """The most jaxga's program store and JAX's cache where :func:`configure` turns it on
+    (:func:`jax_cache_folder`) may take on disk together, in bytes: ``$JAXGA_STORE_MAX_MB``
     MiB, else :data:`STORE_MAX_BYTES`; a value that is not a whole number of at least 1
     is refused in one line (:class:`~jaxga.core.errors.JaxgaError`)."""
     text = os.environ.get(ENV_STORE_MAX_MB, "")
@@ -223,9 +223,23 @@ def configure(cache_dir: str | os.PathLike | None | object = _UNSET, *,
     if path and jax_cache and not is_read_only(path):
         jax.config.update("jax_compilation_cache_dir", path)
         jax.config.update("jax_persistent_cache_min_compile_time_secs", MIN_COMPILE_SECONDS)
-        # JAX keeps its cache within a bound too (it removes the entries used longest ago)
-        jax.config.update("jax_compilation_cache_max_size", store_limit())
+        # JAX's entries count against the store's bound (:func:`jax_cache_folder`); JAX's
+        # own bound (jax_compilation_cache_max_size) needs the filelock package, and
+        # without it JAX turns its cache off altogether
+        _configured["jax"] = path
+    else:
+        _configured.pop("jax", None)
     return path or None
+
+
+def jax_cache_folder() -> str | None:
+    """The folder in which :func:`configure` turned JAX's persistent cache on, while JAX
+    still uses it, or None. JAX's entries there (``*-cache`` files) count against
+    :func:`store_limit` together with jaxga's stored programs: the folder is jaxga's."""
+    path = _configured.get("jax")
+    if path and jax.config.jax_compilation_cache_dir == path:
+        return path
+    return None
 
 
 def use_compilation_cache(directory: str | os.PathLike | None = None) -> str | None:

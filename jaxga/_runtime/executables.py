@@ -34,10 +34,11 @@ that is stopped (Ctrl-Z, a paused notebook, a debugger) or gone, and after
 lock file when it is done (a process that was waiting for it finds the program stored).
 
 The store is bounded (:func:`store_limit`, 4 GiB unless ``JAXGA_STORE_MAX_MB`` says
-otherwise): when a program is saved past it, the programs used longest ago are removed
-(a program read from the store counts as used then), and lock files a killed process
-left behind are removed with them. Every new jaxga version or edited checkout keys its
-programs anew, so without a bound the store would only grow.
+otherwise), together with JAX's entries where :func:`~jaxga._runtime.compilation_cache.configure`
+turned JAX's cache on in the same folder: when a program is saved past it, the programs
+used longest ago are removed (a program read from the store counts as used then), and
+lock files a killed process left behind are removed with them. Every new jaxga version
+or edited checkout keys its programs anew, so without a bound the store would only grow.
 """
 
 from __future__ import annotations
@@ -63,6 +64,7 @@ from jax.experimental.serialize_executable import deserialize_and_load, serializ
 from jaxga._runtime.compilation_cache import (
     STORE_MAX_BYTES,  # noqa: F401 (the store's bound, with the store)
     is_read_only,
+    jax_cache_folder,
     store_directory,
     store_limit,
 )
@@ -290,17 +292,26 @@ def load(key: str | None, devices: Any) -> Any | None:
 
 
 def _prune(folder: Path, kept: Path) -> None:
-    """Remove the programs used longest ago until the store is within
-    :func:`store_limit` (never ``kept``, the one just saved), and lock files older than
-    an hour that no process holds (left by a killed process)."""
+    """Remove the programs used longest ago until the store, with JAX's entries where
+    jaxga turned JAX's cache on in the folder above it (:func:`jax_cache_folder`), is
+    within :func:`store_limit` (never ``kept``, the one just saved), and lock files older
+    than an hour that no process holds (left by a killed process). A stored program's
+    time is its last use (:func:`load` renews it); a JAX entry's is the later of its
+    access and modification times (JAX renews neither without its own bound)."""
     limit = store_limit()
     entries = []
-    with contextlib.suppress(OSError):
-        for p in folder.glob("*.pkl"):
-            with contextlib.suppress(OSError):
-                st = p.lstat()
-                if stat.S_ISREG(st.st_mode):
-                    entries.append((st.st_mtime, st.st_size, p))
+    kinds = [(folder, "*.pkl", False)]
+    jax_folder = jax_cache_folder()
+    if jax_folder is not None and Path(jax_folder) == folder.parent:
+        kinds.append((folder.parent, "*-cache", True))
+    for where, pattern, accessed in kinds:
+        with contextlib.suppress(OSError):
+            for p in where.glob(pattern):
+                with contextlib.suppress(OSError):
+                    st = p.lstat()
+                    if stat.S_ISREG(st.st_mode):
+                        used = max(st.st_mtime, st.st_atime) if accessed else st.st_mtime
+                        entries.append((used, st.st_size, p))
     total = sum(size for _, size, _ in entries)
     for _, size, p in sorted(entries, key=lambda e: e[0]):
         if total <= limit:

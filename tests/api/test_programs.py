@@ -678,6 +678,51 @@ def test_the_store_keeps_within_its_bound(tmp_path, monkeypatch):
     assert sorted(p.name for p in tmp_path.glob("*.pkl")) == ["kept.pkl", "recent.pkl"]
 
 
+def test_jaxs_entries_in_the_configured_folder_count_against_the_bound(tmp_path, monkeypatch):
+    """Where jaxga turned JAX's cache on in the store's folder, JAX's entries and jaxga's
+    programs share the bound, the ones used longest ago going first; JAX's entries in a
+    folder jaxga did not configure are left alone."""
+    monkeypatch.setenv("JAXGA_STORE_MAX_MB", "1")
+    mib = 1 << 20
+    store = tmp_path / executables.SUBDIRECTORY
+    store.mkdir()
+    jax_old = tmp_path / "jit_f-0123-cache"
+    jax_new = tmp_path / "jit_g-4567-cache"
+    for path, age in ((jax_old, 600), (jax_new, 50)):
+        path.write_bytes(b"x" * (mib // 4))
+        os.utime(path, (time.time() - age,) * 2)
+    program = _entry(store, "program", mib // 2, 300)
+    kept = _entry(store, "kept", mib // 2, 900)
+    monkeypatch.setattr(executables, "jax_cache_folder", lambda: None)
+    executables._prune(store, kept)  # JAX's entries are not jaxga's: the store alone
+    assert jax_old.exists() and jax_new.exists() and program.exists()
+    monkeypatch.setattr(executables, "jax_cache_folder", lambda: str(tmp_path))
+    executables._prune(store, kept)
+    assert not jax_old.exists() and not program.exists()
+    assert jax_new.exists() and kept.exists()
+
+
+def test_configure_leaves_jaxs_cache_writing_without_filelock(tmp_path):
+    """``configure`` turns JAX's cache on and JAX writes its entries there. JAX's own
+    bound (``jax_compilation_cache_max_size``) turns its cache off altogether where the
+    filelock package is missing, so jaxga leaves it as the user set it."""
+    code = (
+        "import jax, jaxga\n"
+        "before = jax.config.jax_compilation_cache_max_size\n"
+        f"jaxga.configure({str(tmp_path)!r})\n"
+        "jax.config.update('jax_persistent_cache_min_compile_time_secs', 0)\n"
+        "jax.jit(lambda x: x * 3 + 1)(jax.numpy.arange(5)).block_until_ready()\n"
+        "assert jax.config.jax_compilation_cache_max_size == before, 'bound changed'\n"
+    )
+    env = dict(os.environ)
+    env.pop("JAX_COMPILATION_CACHE_DIR", None)
+    env.pop("JAX_COMPILATION_CACHE_MAX_SIZE", None)
+    done = subprocess.run([sys.executable, "-c", code], env=env, capture_output=True,
+                          text=True, timeout=120)
+    assert done.returncode == 0, done.stderr[-2000:]
+    assert list(tmp_path.glob("*-cache")), sorted(p.name for p in tmp_path.iterdir())
+
+
 @pytest.mark.parametrize("value", ["0", "-5", "1.5", "lots", "1e3"])
 def test_a_store_bound_that_is_not_a_size_is_refused(monkeypatch, value):
     from jaxga.core.errors import JaxgaError
