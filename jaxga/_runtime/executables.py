@@ -48,6 +48,7 @@ import functools
 import hashlib
 import os
 import pickle
+import re
 import socket
 import stat
 import threading
@@ -291,6 +292,11 @@ def load(key: str | None, devices: Any) -> Any | None:
     return program
 
 
+_JAX_ENTRY = re.compile(r".+-[0-9a-f]{64}-cache")
+"""The name of an entry of JAX's persistent cache: the module's name, its key's SHA-256
+in hex, ``-cache`` (``jax._src.cache_key.get``, ``jax._src.lru_cache``)."""
+
+
 def _prune(folder: Path, kept: Path) -> None:
     """Remove the programs used longest ago until the store, with JAX's entries where
     jaxga turned JAX's cache on in the folder above it (:func:`jax_cache_folder`), is
@@ -307,6 +313,8 @@ def _prune(folder: Path, kept: Path) -> None:
     for where, pattern, accessed in kinds:
         with contextlib.suppress(OSError):
             for p in where.glob(pattern):
+                if accessed and not _JAX_ENTRY.fullmatch(p.name):
+                    continue  # not JAX's: a user's file in a folder they share with it
                 with contextlib.suppress(OSError):
                     st = p.lstat()
                     if stat.S_ISREG(st.st_mode):
@@ -321,6 +329,9 @@ def _prune(folder: Path, kept: Path) -> None:
         with contextlib.suppress(OSError):
             p.unlink()
             total -= size
+            if p.parent != folder:  # JAX's access-time note, where its own bound keeps one
+                with contextlib.suppress(OSError):
+                    p.with_name(p.name.removesuffix("-cache") + "-atime").unlink()
     if fcntl is None:
         return
     old = time.time() - 3600.0

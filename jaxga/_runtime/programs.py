@@ -18,6 +18,7 @@ no result.
 from __future__ import annotations
 
 import collections
+import contextlib
 import dataclasses
 import functools
 import gc
@@ -216,7 +217,8 @@ def tables_for(grid: Any) -> Any:
         if key is not None:
             _keep_recent(_TABLE_PROGRAMS, key, program, 3 * PROGRAM_CACHE_SIZE)
     elif key is not None:
-        _TABLE_PROGRAMS.move_to_end(key)
+        with contextlib.suppress(KeyError):  # another thread's entry may just have gone
+            _TABLE_PROGRAMS.move_to_end(key)
     return dataclasses.replace(grid, tables=program(bare))
 
 

@@ -59,6 +59,7 @@ def atomic_write(path: str | os.PathLike, write: Callable[[IO], None], *,
     process ended by a signal removes it first (:func:`remove_temporaries`); one that a
     process killed outright left is removed by the next write of the same file
     (:func:`remove_stale_temporaries`)."""
+    _refuse_unwritable_name(path)
     _refuse_stream(f"{path}", Path(path))
     target = written_file(path)
     folder = target.parent if str(target.parent) else Path(".")
@@ -252,6 +253,24 @@ def same_file(a: str | os.PathLike, b: str | os.PathLike) -> bool:
         return Path(a).resolve() == Path(b).resolve()
 
 
+def _refuse_unwritable_name(path: str | os.PathLike) -> None:
+    """Refuse, naming it, a path no file system can hold: a NUL character, or a lone
+    surrogate the file system encoding cannot write (``os``'s ValueError or
+    UnicodeEncodeError otherwise)."""
+    name = os.fspath(path)
+    if isinstance(name, bytes):
+        return
+    shown = name.encode("utf-8", "backslashreplace").decode("utf-8")
+    if "\0" in name:
+        raise JaxgaError(f"cannot write {shown!r}: a file name cannot hold a NUL character")
+    try:
+        os.fsencode(name)
+    except UnicodeEncodeError as e:
+        raise JaxgaError(f"cannot write {shown}: no file can have this name (it holds "
+                         f"{e.object[e.start:e.end]!r}, which no file system encoding "
+                         "writes)") from None
+
+
 def _check_name_length(option: str, shown: object, path: Path) -> None:
     """Refuse a file name (the last part of ``path``) longer than :data:`NAME_MAX` bytes."""
     size = len(os.fsencode(path.name))
@@ -330,6 +349,7 @@ def check_outputs(outputs: Mapping[str, str | os.PathLike | None],
     given = [(option, Path(path)) for option, path in outputs.items() if path]
     sources = [(label, Path(path)) for label, path in inputs if path]
     for i, (option, path) in enumerate(given):
+        _refuse_unwritable_name(path)
         _check_name_length(option, path, path)
         if path.is_dir():
             raise JaxgaError(f"cannot write {option} {path}: it is a folder")

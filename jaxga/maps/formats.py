@@ -36,7 +36,6 @@ readers return into a :class:`jaxga.Grid`.
 from __future__ import annotations
 
 import io
-import json
 import os
 import re
 from pathlib import Path
@@ -317,7 +316,11 @@ def _check_image_is_ours(yaml_path: Path, image: Path) -> None:
             named = yaml_path.parent / doc["image"]
     except (OSError, UnicodeDecodeError, yaml.YAMLError, ValueError):
         pass
-    if named is None or not same_file(named, image):
+    try:
+        ours = named is not None and same_file(named, image)
+    except (OSError, ValueError):  # a name no file can have (a lone surrogate, a NUL)
+        ours = False
+    if not ours:
         raise MapFormatError(
             f"cannot save {yaml_path}: its image {image} exists and is not the image of "
             f"the map being replaced (another map's?); save under another name or remove it")
@@ -383,9 +386,11 @@ def save_map(grid: Grid | np.ndarray, path: Source, *, fmt: str | None = None,
         pixels = np.where(blocked[::-1], 0, 254).astype(np.uint8)
         header = f"P5\n# CREATOR: jaxga {res!r} m/pix\n{w} {h}\n255\n".encode("ascii")
         atomic_write(image, lambda f: f.write(header + pixels.tobytes()), binary=True)
-        # the name as a double-quoted scalar (JSON's escapes are YAML's): a name with a
-        # leading space, '#', ': ' or a YAML indicator is read back as written
-        atomic_write_text(p, f"image: {json.dumps(image.name)}\nmode: trinary\n"
+        # the name as a double-quoted scalar in YAML's own escapes: a name with a leading
+        # space, '#', ': ', a YAML indicator or a character beyond the BMP (JSON writes
+        # those as surrogate pairs, two lone surrogates to YAML) is read back as written
+        name = yaml.safe_dump(image.name, default_style='"', width=float("inf")).strip()
+        atomic_write_text(p, f"image: {name}\nmode: trinary\n"
                              f"resolution: {_yaml_float(res)}\n"
                              f"origin: [{_yaml_float(x0)}, {_yaml_float(y0)}, "
                              f"{_yaml_float(yaw)}]\nnegate: 0\n"

@@ -219,7 +219,9 @@ def cells_crossed(p: tuple[float, float], q: tuple[float, float]) -> list[tuple[
     delta_x, delta_y = (abs(1 / dx) if dx else math.inf), (abs(1 / dy) if dy else math.inf)
     out = [(x, y)]
     for _ in range(abs(end[0] - x) + abs(end[1] - y)):
-        if (x, y) == end:
+        # the segment ends at or before its next grid line: q's cell follows below (a
+        # crossing at t = 1 would step past q where it lies on a line, going down or left)
+        if (x, y) == end or min(next_x, next_y) >= 1.0 - 1e-12:
             break
         if abs(next_x - next_y) <= 1e-12:  # through a vertex: a diagonal step
             x, y = x + step_x, y + step_y

@@ -167,8 +167,8 @@ def connect(
         # a static size: refused in one line when the program is built, not a traceback
         raise ParameterError(
             f"a path capacity of {capacity} cells cannot hold the {k_max} cells this "
-            "operator joins (its anchors): give population.capacity >= "
-            f"{k_max}")
+            "operator joins (its anchors): give population.capacity (or, calling an "
+            f"operator with a capacity of its own, that capacity) >= {k_max}")
     used = jnp.arange(k_max, dtype=i32) < n_anchors
     ok0 = jnp.all(~blocked_at(grid.blocked, anchors % w, anchors // w) | ~used)
 

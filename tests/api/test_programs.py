@@ -681,16 +681,20 @@ def test_the_store_keeps_within_its_bound(tmp_path, monkeypatch):
 def test_jaxs_entries_in_the_configured_folder_count_against_the_bound(tmp_path, monkeypatch):
     """Where jaxga turned JAX's cache on in the store's folder, JAX's entries and jaxga's
     programs share the bound, the ones used longest ago going first; JAX's entries in a
-    folder jaxga did not configure are left alone."""
+    folder jaxga did not configure are left alone, and so is every file there that is not
+    named as JAX names its entries (a user's own ``thumbnail-cache``, older than all)."""
     monkeypatch.setenv("JAXGA_STORE_MAX_MB", "1")
     mib = 1 << 20
     store = tmp_path / executables.SUBDIRECTORY
     store.mkdir()
-    jax_old = tmp_path / "jit_f-0123-cache"
-    jax_new = tmp_path / "jit_g-4567-cache"
-    for path, age in ((jax_old, 600), (jax_new, 50)):
+    jax_old = tmp_path / f"jit_f-{'0123' * 16}-cache"
+    jax_new = tmp_path / f"jit_g-{'4567' * 16}-cache"
+    atime = tmp_path / f"jit_f-{'0123' * 16}-atime"  # JAX's note where its bound is set
+    users = [tmp_path / "thumbnail-cache", tmp_path / "jit_h-0123-cache"]
+    for path, age in ((jax_old, 600), (jax_new, 50), *((u, 9000) for u in users)):
         path.write_bytes(b"x" * (mib // 4))
         os.utime(path, (time.time() - age,) * 2)
+    atime.write_bytes(b"1")
     program = _entry(store, "program", mib // 2, 300)
     kept = _entry(store, "kept", mib // 2, 900)
     monkeypatch.setattr(executables, "jax_cache_folder", lambda: None)
@@ -698,8 +702,8 @@ def test_jaxs_entries_in_the_configured_folder_count_against_the_bound(tmp_path,
     assert jax_old.exists() and jax_new.exists() and program.exists()
     monkeypatch.setattr(executables, "jax_cache_folder", lambda: str(tmp_path))
     executables._prune(store, kept)
-    assert not jax_old.exists() and not program.exists()
-    assert jax_new.exists() and kept.exists()
+    assert not jax_old.exists() and not atime.exists() and not program.exists()
+    assert jax_new.exists() and kept.exists() and all(u.exists() for u in users)
 
 
 def test_configure_leaves_jaxs_cache_writing_without_filelock(tmp_path):
@@ -720,7 +724,10 @@ def test_configure_leaves_jaxs_cache_writing_without_filelock(tmp_path):
     done = subprocess.run([sys.executable, "-c", code], env=env, capture_output=True,
                           text=True, timeout=120)
     assert done.returncode == 0, done.stderr[-2000:]
-    assert list(tmp_path.glob("*-cache")), sorted(p.name for p in tmp_path.iterdir())
+    entries = list(tmp_path.glob("*-cache"))
+    assert entries, sorted(p.name for p in tmp_path.iterdir())
+    # the store's bound counts JAX's entries by their names: JAX still names them so
+    assert all(executables._JAX_ENTRY.fullmatch(p.name) for p in entries), entries
 
 
 @pytest.mark.parametrize("value", ["0", "-5", "1.5", "lots", "1e3"])

@@ -16,7 +16,7 @@ import yaml
 from jaxga import export
 from jaxga.cli.replan import read_robot_path
 from jaxga.core import files
-from jaxga.core.errors import MapFormatError, ParameterError
+from jaxga.core.errors import JaxgaError, MapFormatError, ParameterError
 from jaxga.core.grid import Grid
 from jaxga.maps import load_map, load_map_info, save_map
 from jaxga.maps.frame import cells_crossed
@@ -55,11 +55,14 @@ def test_a_signal_the_moment_a_temporary_folder_is_made_removes_it(tmp_path, mon
 
 @pytest.mark.parametrize("name", [" lead.yaml", "a #b.yaml", "#a.yaml", "- x.yaml",
                                   "x: y.yaml", "t\tab.yaml", "&a.yaml", '"q.yaml', "'q.yaml",
-                                  "u\u2028v.yaml", "\u00e9.yaml", "[a].yml"])
+                                  "u\u2028v.yaml", "\u00e9.yaml", "[a].yml",
+                                  "\U0001F600.yaml", "a\udcffb.yaml"])
 def test_a_ros_map_saved_under_any_name_reads_back(tmp_path, monkeypatch, name):
     """The YAML names its image as a quoted scalar: unquoted, a leading space was lost (a
     map read back another map's image), '#' began a comment and an indicator made the file
-    unreadable. PyYAML reads the name back as written, and jaxga the map."""
+    unreadable; a character beyond the BMP, written as JSON's surrogate pair, read back
+    as two lone surrogates no file can be named by. PyYAML reads the name back as written,
+    jaxga the map, and the map saves again over itself."""
     monkeypatch.chdir(tmp_path)
     other = np.zeros((6, 7), bool)
     save_map(other, name.strip().lstrip("#&-\"'[x: ") + "other.yaml")
@@ -69,6 +72,27 @@ def test_a_ros_map_saved_under_any_name_reads_back(tmp_path, monkeypatch, name):
     doc = yaml.safe_load((tmp_path / name).read_text(encoding="utf-8"))
     assert doc["image"] == name[:-len(name.rsplit(".", 1)[1])] + "pgm"
     np.testing.assert_array_equal(load_map(name).blocked_np(), ours)
+    save_map(other, name, resolution=0.05)
+    np.testing.assert_array_equal(load_map(name).blocked_np(), other)
+
+
+@pytest.mark.parametrize("image", ["\\ud83d.pgm", "a\\0b.pgm"])
+def test_a_file_name_no_file_can_have_is_one_line(tmp_path, monkeypatch, image):
+    """A YAML naming its image with a lone surrogate (or a NUL) is refused in one line
+    naming the map, as is a map saved under such a name: ``os``'s UnicodeEncodeError
+    came through a traceback."""
+    monkeypatch.chdir(tmp_path)
+    (tmp_path / "m.yaml").write_text(f'image: "{image}"\nresolution: 0.1\n'
+                                     "origin: [0, 0, 0]\nnegate: 0\n"
+                                     "occupied_thresh: 0.65\nfree_thresh: 0.196\n")
+    with pytest.raises(MapFormatError, match=r"m.yaml: .*(no file can have this name|"
+                                             r"image must be a file name)"):
+        load_map("m.yaml")
+    name = yaml.safe_load(f'"{image}"')[:-4] + ".yaml"
+    with pytest.raises(JaxgaError, match=r"cannot write .*(no file can have this name|"
+                                         r"cannot hold a NUL)"):
+        save_map(np.zeros((3, 3), bool), name, resolution=0.1)
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["m.yaml"]
 
 
 def test_a_ros_map_is_not_saved_over_another_maps_image(tmp_path):
@@ -120,6 +144,34 @@ def test_the_cells_a_segment_crosses_are_those_along_it():
     assert cells_crossed((2.5, 2.5), (0.5, 0.5)) == [(2, 2), (1, 1), (0, 0)]
     assert cells_crossed((0.5, 0.5), (0.5, 3.5)) == [(0, 0), (0, 1), (0, 2), (0, 3)]
     assert cells_crossed((0.2, 0.7), (0.9, 0.1)) == [(0, 0)]
+
+
+def test_segments_between_grid_points_cross_the_cells_along_them():
+    """Endpoints on grid lines and vertices (quarter cells), in every direction: the walk
+    goes from p's cell to q's by side or vertex steps, visits no cell twice, and its cells
+    are exactly those of p, q and every stretch between two grid lines the segment meets
+    (its midpoint's cell). A segment ending on a line going down or left stepped past q,
+    off the map."""
+    rng = np.random.default_rng(12)
+    for _ in range(3000):
+        p, q = rng.integers(0, 25, 2) / 4, rng.integers(0, 25, 2) / 4
+        out = cells_crossed(tuple(p), tuple(q))
+        d = q - p
+        ts = {0.0, 1.0}
+        for k in range(2):
+            if d[k]:
+                ts |= {(g - p[k]) / d[k] for g in range(0, 8)}
+        ts = sorted(t for t in ts if 0.0 <= t <= 1.0)
+        want = {tuple(np.floor(p).astype(int)), tuple(np.floor(q).astype(int))}
+        want |= {tuple(np.floor(p + (a + b) / 2 * d).astype(int))
+                 for a, b in zip(ts, ts[1:]) if b > a}
+        assert out[0] == tuple(np.floor(p).astype(int))
+        assert out[-1] == tuple(np.floor(q).astype(int))
+        assert len(set(out)) == len(out) and set(out) == want, (p, q, out)
+        assert all(max(abs(a[0] - b[0]), abs(a[1] - b[1])) == 1 for a, b in zip(out, out[1:]))
+    assert cells_crossed((2.0, 0.0), (1.0, 1.0)) == [(2, 0), (1, 0), (1, 1)]
+    assert cells_crossed((0.0, 4.0), (1.0, 0.0))[-1] == (1, 0)
+    assert cells_crossed((0.5, 0.5), (1.0, 1.0)) == [(0, 0), (1, 1)]
 
 
 def test_a_recorded_curve_that_cuts_no_corner_is_not_a_blocked_step(tmp_path):
@@ -194,5 +246,5 @@ def test_a_capacity_too_small_for_an_operators_anchors_is_one_line():
     when the program is traced, before any work."""
     grid = Grid.create(np.zeros((4, 4), bool), start=(1, 1), goal=(1, 1))
     with pytest.raises(ParameterError, match=r"cannot hold the 2 cells this operator joins "
-                                             r".* population.capacity >= 2"):
+                                             r".* population.capacity .*>= 2"):
         connect(jax.random.PRNGKey(0), grid, np.array([5, 5], np.int32), 2, capacity=1)
