@@ -792,7 +792,7 @@ def main(argv: list[str] | None = None) -> int:
     ap.add_argument("--no-write", action="store_true", help="do not touch RESULTS.md")
     ap.add_argument("--budget-s", type=float, default=None, metavar="S",
                     help="seconds the whole check may take; the throughput settings it "
-                    "leaves no room for are skipped (default 300, --small 180)")
+                    "leaves no room for are skipped (default 300, --small 240)")
     ap.add_argument("--from-json", metavar="PATH",
                     help="record the RESULTS.md section of a report written elsewhere")
     ap.add_argument("--skip", default="", metavar="PHASE,...",
