@@ -77,8 +77,13 @@ def path_text(points: np.ndarray, fmt: str, frame_id: str = "map",
     Coordinates are written to ``decimals`` (a map's :attr:`MapFrame.world_decimals
     <jaxga.maps.frame.MapFrame.world_decimals>`: a hundredth of its cell), or more where
     the points lie closer (a hundredth of the shortest step: a curve's points), so that
-    a path on a fine map is read back in the cells it crosses."""
+    a path on a fine map is read back in the cells it crosses. A point that is not a
+    finite number is refused in one line: no reader takes it for a coordinate."""
     p = np.asarray(points, float).reshape(-1, 2)
+    if not np.isfinite(p).all():
+        bad = int(np.flatnonzero(~np.isfinite(p).all(axis=1))[0])
+        raise JaxgaError(f"cannot write a path whose point {bad} is {tuple(p[bad].tolist())}: "
+                         "a path's coordinates are finite numbers")
     steps = np.hypot(*np.diff(p, axis=0).T) if len(p) > 1 else np.zeros(0)
     d = world_decimals(float(steps[steps > 0].min()) if (steps > 0).any() else None)
     d = max(d, 4 if decimals is None else int(decimals))

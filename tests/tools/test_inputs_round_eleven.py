@@ -224,6 +224,18 @@ def test_a_path_yaml_is_what_yaml_writes_in_a_fraction_of_its_time(n):
     assert text == reference
 
 
+@pytest.mark.parametrize("fmt", ["yaml", "csv"])
+def test_a_path_with_a_point_that_is_not_a_number_is_refused(tmp_path, fmt):
+    """A NaN or infinite coordinate was written as ``nan`` / ``inf``, which YAML reads as
+    a string: refused in one line naming the point, and no file is written."""
+    points = np.array([[0.0, 0.0], [1.0, np.nan], [2.0, np.inf]])
+    with pytest.raises(JaxgaError, match=r"point 1 is \(1.0, nan\)"):
+        export.path_text(points, fmt)
+    with pytest.raises(JaxgaError, match="finite numbers"):
+        export.write_path(tmp_path / f"p.{fmt}", points)
+    assert list(tmp_path.iterdir()) == []
+
+
 def test_a_roulette_over_weights_whose_sum_overflows_draws_evenly():
     """Five equal weights of 3e38: their float32 sum overflowed, and every draw took the
     last eligible individual. Scaled by the largest, they draw as five equal weights of
