@@ -1440,6 +1440,14 @@ def build(t: Path) -> list[Case]:
          "--seeds", "2", "--generations", "5", "--quiet"],
         check=refused_saying("only 9 distinct points among its 18"), quick=True,
         note="ran each of 9 points twice on the same seeds (the L27: three times)")
+    # --- from the review of round eleven (decision 058) ---------------------------------
+    lone = tb3 / "lone-surrogate.yaml"
+    lone.write_text(re.sub(r"image:[^\n]*", lambda _: 'image: "\\ud83d.pgm"',
+                           tb3_yaml.read_text()))
+    add("ros-image-named-by-a-lone-surrogate", "review of round eleven", run(lone),
+        check=refused_saying("no file can have this name"), quick=True,
+        note="UnicodeEncodeError traceback (how JSON's escape of a character beyond the "
+             "BMP read back)")
     return cases
 
 
