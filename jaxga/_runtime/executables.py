@@ -272,6 +272,8 @@ def load(key: str | None, devices: Any) -> Any | None:
     try:
         with open(path, "rb") as f:
             entry = pickle.load(f)
+    except FileNotFoundError:  # gone since: another process's bound removed it
+        return None
     except Exception:  # noqa: BLE001 - any unreadable file is compiled again
         _forget(path, "cannot be read")
         return None

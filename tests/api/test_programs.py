@@ -370,7 +370,9 @@ def test_a_stored_program_that_is_not_its_keys_is_removed_with_one_warning(
     file, a program copied under another key, an older version's file, one compiled for
     other devices and a damaged one are each removed with one warning naming the store
     (XLA would abort the process on a program meant for other shapes or devices), and
-    the program is compiled again; a program stored here loads and runs."""
+    the program is compiled again; one another process's bound removes between the
+    check and the read is compiled again without a word (it warned that a writable store
+    "takes no changes"); a program stored here loads and runs."""
     monkeypatch.setattr(type(jax.config), "jax_compilation_cache_dir",
                         property(lambda self: str(tmp_path)), raising=False)
     store = executables.directory()
@@ -400,6 +402,17 @@ def test_a_stored_program_that_is_not_its_keys_is_removed_with_one_warning(
         assert "\n" not in str(said[0].message)
         assert not (store / "plus.pkl").exists(), what
     assert executables.load("missing", devices) is None
+    # a program another process's bound removes between the check and the read: no word
+    def vanishing_open(path, *args):
+        os.unlink(path)  # another process's bound removes it now
+        return open(path, *args)
+
+    (store / "plus.pkl").write_bytes(b"it is here when checked")
+    with monkeypatch.context() as gone, warnings.catch_warnings():
+        gone.setattr(executables, "open", vanishing_open, raising=False)
+        gone.setattr(executables, "_FORGOTTEN", set())  # no earlier warning stands in
+        warnings.simplefilter("error")
+        assert executables.load("plus", devices) is None
     program, read = executables.load_or_compile("plus", devices, lambda: jax.jit(
         lambda x: x + 1).lower(np.int32(1)))
     assert not read and int(program(np.int32(4))) == 5
