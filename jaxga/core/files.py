@@ -253,22 +253,34 @@ def same_file(a: str | os.PathLike, b: str | os.PathLike) -> bool:
         return Path(a).resolve() == Path(b).resolve()
 
 
-def _refuse_unwritable_name(path: str | os.PathLike) -> None:
-    """Refuse, naming it, a path no file system can hold: a NUL character, or a lone
-    surrogate the file system encoding cannot write (``os``'s ValueError or
-    UnicodeEncodeError otherwise)."""
+def impossible_name(path: str | os.PathLike) -> str | None:
+    """Why no file system can hold ``path``, or None: a NUL character, or a lone surrogate
+    the file system encoding cannot write (``os``'s ValueError or UnicodeEncodeError
+    otherwise). Readers and writers refuse such a path in one line with it."""
     name = os.fspath(path)
     if isinstance(name, bytes):
-        return
-    shown = name.encode("utf-8", "backslashreplace").decode("utf-8")
+        return None
     if "\0" in name:
-        raise JaxgaError(f"cannot write {shown!r}: a file name cannot hold a NUL character")
+        return "a file name cannot hold a NUL character"
     try:
         os.fsencode(name)
     except UnicodeEncodeError as e:
-        raise JaxgaError(f"cannot write {shown}: no file can have this name (it holds "
-                         f"{e.object[e.start:e.end]!r}, which no file system encoding "
-                         "writes)") from None
+        return (f"no file can have this name (it holds {e.object[e.start:e.end]!r}, which "
+                "no file system encoding writes)")
+    return None
+
+
+def shown_name(text: str) -> str:
+    """``text`` printable on one line whatever it holds: as it is, or with Python's
+    escapes where it holds a control character or a lone surrogate."""
+    return text if text.isprintable() else repr(text)[1:-1]
+
+
+def _refuse_unwritable_name(path: str | os.PathLike) -> None:
+    """Refuse, naming it, a path no file system can hold (:func:`impossible_name`)."""
+    why = impossible_name(path)
+    if why is not None:
+        raise JaxgaError(f"cannot write {shown_name(os.fspath(path))}: {why}")
 
 
 def _check_name_length(option: str, shown: object, path: Path) -> None:

@@ -36,6 +36,7 @@ from typing import Any
 import numpy as np
 
 from jaxga.core.errors import JaxgaError, MapFormatError
+from jaxga.core.files import impossible_name, shown_name
 from jaxga.core.grid import MAX_MAP_CELLS
 
 __all__ = [
@@ -132,15 +133,9 @@ def read_input(path: str | os.PathLike, cap: int, *, what: str = "file",
             the file in their own words.
     """
     label = str(path) if label is None else label
-    if "\0" in os.fspath(path):  # os.open's ValueError otherwise
-        raise error(f"{label!r}: a file name cannot hold a NUL character")
-    try:
-        os.fsencode(path)
-    except UnicodeEncodeError as e:  # a lone surrogate, as a YAML's "\ud83d" escape reads
-        shown = label.encode("utf-8", "backslashreplace").decode("utf-8")
-        raise error(f"{shown}: no file can have this name (it holds "
-                    f"{e.object[e.start:e.end]!r}, which no file system encoding "
-                    f"writes)") from None
+    why = impossible_name(path)  # os.open's ValueError or UnicodeEncodeError otherwise
+    if why is not None:
+        raise error(f"{shown_name(label)}: {why}")
     flags = (os.O_RDONLY | getattr(os, "O_NONBLOCK", 0) | getattr(os, "O_CLOEXEC", 0)
              | getattr(os, "O_BINARY", 0))
     fd = os.open(os.fspath(path), flags)
