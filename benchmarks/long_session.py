@@ -24,16 +24,10 @@ from pathlib import Path
 import jax.monitoring
 import numpy as np
 from _results import markdown_table, record
+from planner import COMPILES, _listen
+from planner import MAPS as ROBOT_MAPS
 
-HERE = Path(__file__).resolve().parent
-MAPS = {"tb3_world": HERE / "maps" / "tb3_world" / "map.yaml",
-        "bookstore": HERE / "maps" / "bookstore" / "map.yaml"}
-COMPILES: list[float] = []
-
-
-def _listen(event: str, duration: float, **_: object) -> None:
-    if event == "/jax/core/compile/backend_compile_duration":
-        COMPILES.append(duration)
+MAPS = {name: ROBOT_MAPS[name] for name in ("tb3_world", "bookstore")}
 
 
 def resident_mb() -> float:
@@ -97,6 +91,8 @@ def main() -> None:
     ap.add_argument("--plans", type=int, default=800)
     ap.add_argument("--no-write", action="store_true")
     args = ap.parse_args()
+    if args.plans < 100:
+        ap.error("--plans: at least 100 (growth is measured from plan 50 to the last sample)")
     maps = dict(m.split("=", 1) for m in args.map) if args.map else MAPS
     jax.monitoring.register_event_duration_secs_listener(_listen)
     rows, curves = [], []
