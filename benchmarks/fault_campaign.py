@@ -1448,6 +1448,19 @@ def build(t: Path) -> list[Case]:
         check=refused_saying("no file can have this name"), quick=True,
         note="UnicodeEncodeError traceback (how JSON's escape of a character beyond the "
              "BMP read back)")
+    # --- from the review of decision 058 ----------------------------------------------
+    add("lone-surrogate-image-beside-json", "review of decision 058",
+        run(lone, "--json", f / "lone.json"),
+        check=refused_saying("no file can have this name"), quick=True,
+        note="UnicodeEncodeError traceback (the outputs' check resolved the image's name)")
+    nul_base = write("nul-base.toml", 'base = "a\\u0000.toml"\n')
+    add("preset-base-with-a-nul", "review of decision 058",
+        run(CLASSIC, "--preset", nul_base),
+        check=refused_saying("cannot hold a NUL"), quick=True,
+        note="ValueError traceback (embedded null byte)")
+    add("json-name-of-300-bytes", "review of decision 058",
+        run(CLASSIC, "--json", f / ("j" * 295 + ".json")),
+        check=refused_saying("more than the 255"), quick=True)
     return cases
 
 

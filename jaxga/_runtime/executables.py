@@ -206,6 +206,8 @@ def forget_read() -> bool:
     for key in keys:
         try:
             (directory() / f"{key}.pkl").unlink()
+        except FileNotFoundError:  # already removed (another process, the store's bound)
+            pass
         except OSError:
             _NOT_READ.add(key)
     return bool(keys)
@@ -247,6 +249,8 @@ def _forget(path: Path, why: str) -> None:
     reason (a store whose files were all swapped says it once)."""
     try:
         path.unlink()
+        done = "removed"
+    except FileNotFoundError:  # another process removed it first (its own read, the bound)
         done = "removed"
     except OSError:  # a read-only store
         done = "left in place (the store takes no changes)"

@@ -44,6 +44,7 @@ from typing import Any
 from jaxga.config.schema import DEFAULTS, SCHEMA, Config, dotted, parse_value
 from jaxga.core.errors import ParameterError
 from jaxga.core.fields import shown_value
+from jaxga.core.files import impossible_name, shown_name
 from jaxga.maps.inputs import read_input
 
 if sys.version_info >= (3, 11):
@@ -196,7 +197,10 @@ def _chain(
         path = Path(name_or_path).expanduser()
         if relative_to is not None and not path.is_absolute():
             path = relative_to / path
-        label, ident = str(path), ("file", str(path.resolve()))
+        why = impossible_name(path)
+        if why is not None:  # a NUL or a lone surrogate, from argv or a file's 'base'
+            raise ParameterError(f"configuration file {shown_name(str(path))}: {why}")
+        label, ident = str(path), ("file", os.path.realpath(path))
         table = _read_file(path)
     else:
         path, label, ident = None, f"preset {name_or_path!r}", ("preset", str(name_or_path))

@@ -60,13 +60,15 @@ def atomic_write(path: str | os.PathLike, write: Callable[[IO], None], *,
     process killed outright left is removed by the next write of the same file
     (:func:`remove_stale_temporaries`)."""
     _refuse_unwritable_name(path)
-    _refuse_stream(f"{path}", Path(path))
-    target = written_file(path)
-    folder = target.parent if str(target.parent) else Path(".")
-    remove_stale_temporaries(target)
     try:
+        _refuse_long_name(f"{path}", Path(path))
+        _refuse_stream(f"{path}", Path(path))
+        target = written_file(path)
+        _refuse_long_name(f"{path}", target)
+        folder = target.parent if str(target.parent) else Path(".")
+        remove_stale_temporaries(target)
         fd, tmp = _new_temporary(folder, f"{_temporary_stem(target.name)}{os.getpid()}.")
-    except OSError as e:
+    except OSError as e:  # a folder in the path that is a file, a path too long, ...
         raise JaxgaError(f"cannot write {path}: {_why(e)}") from None
     try:
         os.fchmod(fd, _mode_of(target))  # mkstemp's 0600 would make every output private
@@ -249,8 +251,12 @@ def same_file(a: str | os.PathLike, b: str | os.PathLike) -> bool:
     links included), else the same absolute path once symbolic links are resolved."""
     try:
         return os.path.samefile(a, b)
-    except OSError:
+    except (OSError, ValueError):  # one is missing, or a name no file can have
+        pass
+    try:
         return Path(a).resolve() == Path(b).resolve()
+    except (OSError, ValueError):  # a NUL or a lone surrogate (impossible_name)
+        return os.path.abspath(a) == os.path.abspath(b)
 
 
 def impossible_name(path: str | os.PathLike) -> str | None:
@@ -271,24 +277,30 @@ def impossible_name(path: str | os.PathLike) -> str | None:
 
 
 def shown_name(text: str) -> str:
-    """``text`` printable on one line whatever it holds: as it is, or with Python's
-    escapes where it holds a control character or a lone surrogate."""
-    return text if text.isprintable() else repr(text)[1:-1]
+    """``text`` printable on one line whatever it holds: each control character or lone
+    surrogate written as Python escapes it (``\\x00``, ``\\ud83d``), every other
+    character, backslashes and quotes included, as it is."""
+    if text.isprintable():
+        return text
+    return "".join(c if c.isprintable() else ascii(c)[1:-1] for c in text)
 
 
-def _refuse_unwritable_name(path: str | os.PathLike) -> None:
-    """Refuse, naming it, a path no file system can hold (:func:`impossible_name`)."""
+def _refuse_unwritable_name(path: str | os.PathLike, option: str = "") -> None:
+    """Refuse, naming it (and the ``option`` that gave it), a path no file system can
+    hold (:func:`impossible_name`)."""
     why = impossible_name(path)
     if why is not None:
-        raise JaxgaError(f"cannot write {shown_name(os.fspath(path))}: {why}")
+        what = f"{option} " if option else ""
+        raise JaxgaError(f"cannot write {what}{shown_name(os.fspath(path))}: {why}")
 
 
-def _check_name_length(option: str, shown: object, path: Path) -> None:
-    """Refuse a file name (the last part of ``path``) longer than :data:`NAME_MAX` bytes."""
+def _refuse_long_name(what: str, path: Path) -> None:
+    """Refuse to write ``what`` where the file's name (the last part of ``path``) is
+    longer than :data:`NAME_MAX` bytes: no file system takes it (``ENAMETOOLONG``)."""
     size = len(os.fsencode(path.name))
     if size > NAME_MAX:
-        raise JaxgaError(f"cannot write {option} {shown}: its name has {size} bytes, more "
-                         f"than the {NAME_MAX} a file's name can have")
+        raise JaxgaError(f"cannot write {what}: its name has {size} bytes, more than the "
+                         f"{NAME_MAX} a file's name can have")
 
 
 def _refuse_stream(what: str, path: Path) -> None:
@@ -361,8 +373,8 @@ def check_outputs(outputs: Mapping[str, str | os.PathLike | None],
     given = [(option, Path(path)) for option, path in outputs.items() if path]
     sources = [(label, Path(path)) for label, path in inputs if path]
     for i, (option, path) in enumerate(given):
-        _refuse_unwritable_name(path)
-        _check_name_length(option, path, path)
+        _refuse_unwritable_name(path, option)
+        _refuse_long_name(f"{option} {path}", path)
         if path.is_dir():
             raise JaxgaError(f"cannot write {option} {path}: it is a folder")
         if path.exists() and not path.is_file():
@@ -383,7 +395,7 @@ def check_outputs(outputs: Mapping[str, str | os.PathLike | None],
         why = folder_problem(folder)
         if why is not None:
             raise JaxgaError(f"cannot write {option} {shown}: {why}")
-        _check_name_length(option, shown, target)
+        _refuse_long_name(f"{option} {shown}", target)
         if path.exists() and not os.access(path, os.W_OK):
             raise JaxgaError(f"cannot write {option} {path}: the existing file cannot be "
                              "replaced (read-only or immutable)")

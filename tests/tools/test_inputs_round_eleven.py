@@ -260,3 +260,89 @@ def test_a_capacity_too_small_for_an_operators_anchors_is_one_line():
     with pytest.raises(ParameterError, match=r"cannot hold the 2 cells this operator joins "
                                              r".* population.capacity .*>= 2"):
         connect(jax.random.PRNGKey(0), grid, np.array([5, 5], np.int32), 2, capacity=1)
+
+
+# ------------------------------------------------- a review of decision 058's changes
+def test_an_input_no_file_can_have_beside_an_output_is_one_line(tmp_path, monkeypatch,
+                                                                  capsys):
+    """The outputs are checked against every input before any work, the image a ROS YAML
+    names among them: an image named by a lone surrogate went through ``same_file``'s
+    ``Path.resolve`` (UnicodeEncodeError, a traceback) before the map's reader could
+    refuse it in one line."""
+    from jaxga.cli import EXIT_BAD_INPUT, main
+
+    monkeypatch.chdir(tmp_path)
+    (tmp_path / "m.yaml").write_text('image: "\\ud83d.pgm"\nresolution: 0.1\n'
+                                     "origin: [0, 0, 0]\nnegate: 0\n"
+                                     "occupied_thresh: 0.65\nfree_thresh: 0.196\n")
+    assert main(["run", "--preset", "sga", "--map", "m.yaml", "--json", "o.json",
+                 "--quiet"]) == EXIT_BAD_INPUT
+    err = capsys.readouterr().err.strip()
+    assert "no file can have this name" in err and "\n" not in err, err
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["m.yaml"]
+    for name in ("m\0.yaml", "\ud83d.pgm"):
+        assert not files.same_file("o.json", name)
+        files.check_outputs({"--json": "o.json"}, [("map", name)])  # nothing to refuse
+    assert files.same_file("\ud83d.pgm", "./\ud83d.pgm")
+    with pytest.raises(JaxgaError, match=r"^cannot write --json out\\ud83d.json: no file"):
+        files.check_outputs({"--json": "out\ud83d.json"})
+
+
+def test_a_name_too_long_for_any_file_system_is_one_line_when_written(tmp_path):
+    """Every writer, not only the command line's checks: a name over 255 bytes, or a
+    folder in the path that long, was ``OSError: [Errno 36] File name too long`` from the
+    Python API (``atomic_write``'s stream check ran before its error handling)."""
+    grid = np.zeros((3, 3), bool)
+    writes = {
+        "text": lambda p: files.atomic_write_text(p, "x"),
+        "path": lambda p: export.write_path(p.with_suffix(".csv"), np.zeros((2, 2))),
+        "map": lambda p: save_map(grid, p.with_suffix(".yaml"), resolution=0.1),
+    }
+    for what, write in writes.items():
+        for path, words in ((tmp_path / ("y" * 256 + ".json"), "its name has 2"),
+                            (tmp_path / ("x" * 300) / "a.json", "File name too long")):
+            with pytest.raises(JaxgaError, match=f"^cannot write .*{words}") as e:
+                write(path)
+            assert "\n" not in str(e.value), what
+    assert list(tmp_path.iterdir()) == []
+
+
+def test_a_stored_program_already_removed_is_said_removed(tmp_path, monkeypatch):
+    """Two processes that read one damaged program both remove it: the second's unlink
+    finds nothing, and its warning said the store "takes no changes"; a program this
+    process read that is gone when it is forgotten is not marked never to read again."""
+    from jaxga._runtime import executables
+    from jaxga.core.errors import CacheWarning
+
+    monkeypatch.setattr(executables, "_FORGOTTEN", set())
+    with pytest.warns(CacheWarning, match="is damaged .*: removed, compiling it again"):
+        executables._forget(tmp_path / "gone.pkl", "is damaged (its digest does not match)")
+    monkeypatch.setattr(type(jax.config), "jax_compilation_cache_dir",
+                        property(lambda self: str(tmp_path)), raising=False)
+    monkeypatch.setattr(executables, "_READ", {"gone"})
+    monkeypatch.setattr(executables, "_NOT_READ", set())
+    assert executables.forget_read() and executables._NOT_READ == set()
+
+
+@pytest.mark.parametrize("base, words", [("a\\u0000.toml", "cannot hold a NUL"),
+                                         ("a\\ud83d.toml", None)])
+def test_a_preset_base_no_file_can_have_is_one_line(tmp_path, base, words):
+    """A preset file's ``base`` is read from the file, where TOML writes a NUL as
+    ``\\u0000``: ``Path.resolve`` raised ValueError (a traceback). TOML has no lone
+    surrogates (tomllib refuses the file); a name given in Python can hold one."""
+    from jaxga.config.presets import load_preset
+
+    (tmp_path / "p.toml").write_text(f'base = "{base}"\n')
+    with pytest.raises(ParameterError, match=words or "p.toml: ") as e:
+        load_preset(tmp_path / "p.toml")
+    assert "\n" not in str(e.value)
+    with pytest.raises(ParameterError, match=r"^configuration file a\\ud83d.toml: no file"):
+        load_preset("a\ud83d.toml")
+
+
+def test_a_name_is_shown_with_escapes_for_its_unprintable_characters_only():
+    """Backslashes and quotes as they are (a Windows path stays readable), a NUL or a lone
+    surrogate escaped."""
+    assert files.shown_name("C:\\maps\\a\0.yaml") == "C:\\maps\\a\\x00.yaml"
+    assert files.shown_name("it's \"x\"\ud83d.yaml") == "it's \"x\"\\ud83d.yaml"
+    assert files.shown_name("plain é.yaml") == "plain é.yaml"
