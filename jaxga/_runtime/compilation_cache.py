@@ -174,8 +174,12 @@ def configure(cache_dir: str | os.PathLike | None | object = _UNSET, *,
 
     Args:
         cache_dir: the folder. Default: the folder ``$JAXGA_CACHE_DIR`` names, else
-            :func:`default_directory`; an empty ``$JAXGA_CACHE_DIR`` or ``None``: no
-            folder (every process compiles its programs).
+            JAX's own cache folder where the user set a local one
+            (``JAX_COMPILATION_CACHE_DIR``, ``jax_compilation_cache_dir``; JAX's cache is
+            then left as the user set it, and the store's bound counts jaxga's programs
+            only), else :func:`default_directory` (also where the user's JAX cache is
+            remote: jaxga's store is local); an empty ``$JAXGA_CACHE_DIR`` or ``None``:
+            no folder (every process compiles its programs).
         jax_cache: also turn on JAX's persistent compilation cache in that folder
             (JAX's ``jax_compilation_cache_dir`` and
             ``jax_persistent_cache_min_compile_time_secs``, :data:`MIN_COMPILE_SECONDS`):
@@ -193,8 +197,19 @@ def configure(cache_dir: str | os.PathLike | None | object = _UNSET, *,
     setting (:func:`store_directory`). Not part of any paper: an engineering aid
     (jaxga's results never depend on it).
     """
+    users_jax_cache, source = False, "jaxga.configure"
     if cache_dir is _UNSET:
-        path = env_directory()
+        own, source = jax.config.jax_compilation_cache_dir, ENV_VAR
+        if own and own == _configured.get("jax"):  # set by an earlier call, not the user
+            own = None
+        if ENV_VAR in os.environ or not own:
+            path = env_directory()
+        else:  # the user's own JAX cache: left as it is (settings, entries, bound)
+            users_jax_cache = True
+            if "://" in str(own):  # a remote one: jaxga's store stays local
+                path = default_directory()
+            else:
+                path, source = expanded(str(own)), "JAX's jax_compilation_cache_dir"
     elif cache_dir is None:
         path = ""
     else:
@@ -216,11 +231,10 @@ def configure(cache_dir: str | os.PathLike | None | object = _UNSET, *,
     if not isinstance(jax_cache, (bool, np.bool_)):
         raise ParameterError(f"configure: jax_cache must be True or False, got "
                              f"{shown_value(jax_cache)}")
-    source = ENV_VAR if cache_dir is _UNSET else "jaxga.configure"
     if path and _judged(path, source) is not None:
         path = ""
     _configured["dir"] = path or None
-    if path and jax_cache and not is_read_only(path):
+    if path and jax_cache and not users_jax_cache and not is_read_only(path):
         jax.config.update("jax_compilation_cache_dir", path)
         jax.config.update("jax_persistent_cache_min_compile_time_secs", MIN_COMPILE_SECONDS)
         # JAX's entries count against the store's bound (:func:`jax_cache_folder`); JAX's
@@ -252,13 +266,16 @@ def use_compilation_cache(directory: str | os.PathLike | None = None) -> str | N
 
 def store_directory() -> str | None:
     """The folder of jaxga's program store (:mod:`jaxga._runtime.executables`): the folder
-    the last :func:`configure` named (None: none), else JAX's own cache folder where the
-    user set one (a local one; a remote one: none), else ``$JAXGA_CACHE_DIR`` or
+    the last :func:`configure` named (None: none), else none where ``$JAXGA_CACHE_DIR`` is
+    set empty, else JAX's own cache folder where the user set one (a local one; a remote
+    one: none), else ``$JAXGA_CACHE_DIR`` or
     :func:`default_directory` (made on first use; ``None`` with one
     :class:`~jaxga.core.errors.CacheWarning` where it cannot be; one that takes no new
     file is read, with one warning)."""
     if "dir" in _configured:
         return _configured["dir"]
+    if ENV_VAR in os.environ and not env_directory():  # set empty: no store
+        return None
     base = jax.config.jax_compilation_cache_dir
     if base:
         return None if "://" in str(base) else str(base)

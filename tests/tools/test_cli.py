@@ -462,8 +462,9 @@ def test_console_script_never_prints_a_traceback(tmp_path):
 
 def test_the_command_line_compilation_cache_directory(tmp_path, monkeypatch):
     """`jaxga run` keeps compiled programs in $JAXGA_CACHE_DIR, by default
-    ~/.cache/jaxga/jax, JAX's persistent cache included (jaxga.configure); an empty value
-    turns it off (docs, "getting started"). A script or notebook calls the same function,
+    ~/.cache/jaxga/jax, JAX's persistent cache included (jaxga.configure); where it is not
+    set, in a local JAX cache folder the user set (JAX's settings left alone); an empty
+    value turns it off (docs/cli.md). A script or notebook calls the same function,
     optionally with its own directory, or without JAX's cache."""
     import jax
 
@@ -478,10 +479,29 @@ def test_the_command_line_compilation_cache_directory(tmp_path, monkeypatch):
     monkeypatch.setattr(jax.config, "update", lambda k, v: updates.append((k, v)))
     monkeypatch.setenv("HOME", str(tmp_path))
     monkeypatch.delenv("JAXGA_CACHE_DIR", raising=False)
+
+    def users_jax_folder(value):  # JAX_COMPILATION_CACHE_DIR, as JAX reads it
+        monkeypatch.setattr(type(jax.config), "jax_compilation_cache_dir", value,
+                            raising=False)
+
+    users_jax_folder("")
     default = str(tmp_path / ".cache" / "jaxga" / "jax")
     assert jaxga.configure() == default
     assert ("jax_compilation_cache_dir", default) in updates
     updates.clear()
+    # the user's own JAX cache folder, where $JAXGA_CACHE_DIR is not set: the store goes
+    # there and JAX's cache is left as the user set it (not counted in the store's bound);
+    # a remote one stays too, and the store takes the default folder
+    users_jax_folder(str(tmp_path / "users"))
+    assert jaxga.configure() == str(tmp_path / "users")
+    assert updates == [] and "jax" not in cc._configured
+    users_jax_folder("gs://bucket/jax")
+    assert jaxga.configure() == default and updates == []
+    users_jax_folder(default)  # set by jaxga's own earlier call: not the user's
+    cc._configured["jax"] = default
+    assert jaxga.configure() == default and cc._configured["jax"] == default
+    updates.clear()
+    users_jax_folder("")
     monkeypatch.setenv("JAXGA_CACHE_DIR", str(tmp_path / "mine"))
     assert jaxga.configure() == str(tmp_path / "mine")
     assert ("jax_compilation_cache_dir", str(tmp_path / "mine")) in updates
