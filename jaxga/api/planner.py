@@ -28,7 +28,7 @@ from jaxga._runtime.seeds import seed_list
 from jaxga.api.problem import load_problem
 from jaxga.api.result import Result
 from jaxga.api.runs import run
-from jaxga.config.schema import Config
+from jaxga.config.schema import SCHEMA, Config
 from jaxga.core.errors import ParameterError
 from jaxga.core.grid import Grid, check_corner_rule
 from jaxga.core.own_settings import own_settings
@@ -115,6 +115,13 @@ class Planner:
             # programs sized for the map's longest optimal path, not its size class's
             self.capacity = map_capacity(self.map.grid,
                                          float(config["population.capacity_factor"]))
+            most = SCHEMA["population.capacity"].high
+            if self.capacity > most:  # refused here, not at the first plan as an override
+                raise ParameterError(
+                    f"Planner: the longest optimal path of this {self.map.grid.width} x "
+                    f"{self.map.grid.height} map may need {self.capacity:,} path cells, more "
+                    f"than jaxga's {most:,}: load it coarser (coarsen=2) or give "
+                    "population__capacity")
             overrides = {**overrides, "population__capacity": self.capacity}
         self.overrides = overrides
         frame = self.map.frame

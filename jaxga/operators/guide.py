@@ -192,41 +192,55 @@ def longest_optimal_path_cells(grid: Grid) -> int:
     map that are connected under its corner rule (endpoints ignored): what a planner's
     programs must hold for every start and goal it may be given.
 
-    In the largest region, ``d(a, b) <= d(a, c) + d(c, b) <= 2 ecc(c)`` for any cell ``c``
+    Within a region, ``d(a, b) <= d(a, c) + d(c, b) <= 2 ecc(c)`` for any cell ``c``
     (``ecc``: the longest distance from ``c`` within its region), and an optimal path
     has at most its length + 1 cells (every step is at least 1 long): so ``2 ecc(c) + 1``
     bounds it, tightest for a central ``c``, here the least of three eccentricities: a
     cell's, the farthest cell from it, and the middle of the path between that cell and
-    its own farthest (the double sweep). A path in another region has at most that
-    region's cells."""
+    its own farthest (the double sweep). A path has at most its region's cells too, so
+    regions are bounded largest first, each by the lesser of the two, until the next
+    region has no more cells than the largest bound so far: a large region enclosed by
+    another (a race track's infield, a closed room) is bounded by its own distances, not
+    by its cells."""
     from scipy.sparse.csgraph import dijkstra
 
     blocked = np.ascontiguousarray(grid.blocked_np())
-    rule = grid.corner_rule
     if blocked.all():
         return 1
-    labels = region_labels(blocked, rule)
-    sizes = np.bincount(labels.reshape(-1))
-    sizes[0] = 0  # label 0: blocked cells
-    main = int(np.argmax(sizes))
-    others = np.delete(sizes, [0, main])
-    graph = _map_graph(blocked.tobytes(), blocked.shape, rule)
+    labels = region_labels(blocked, grid.corner_rule).reshape(-1)
+    counts = np.bincount(labels)
+    ends = np.cumsum(counts)
+    order = np.argsort(labels, kind="stable")  # each label's cells together, in its order
+    sizes = counts.copy()
+    sizes[0] = 0  # label 0: blocked cells, no region
+    graph = _map_graph(blocked.tobytes(), blocked.shape, grid.corner_rule)
 
-    def sweep(cell: int) -> tuple[float, int, np.ndarray]:
-        dist, pred = dijkstra(graph, directed=True, indices=cell, return_predecessors=True)
-        dist = np.where(np.isfinite(dist), dist, -1.0)
-        far = int(np.argmax(dist))
-        return float(dist[far]), far, pred
+    def region_bound(label: int) -> int:
+        cells = order[ends[label] - sizes[label]:ends[label]]
+        region = graph[cells][:, cells]  # its own moves: sweeps cost its cells only
 
-    first = int(np.flatnonzero(labels.reshape(-1) == main)[0])
-    ecc_a, b, _ = sweep(first)
-    ecc_b, e, pred = sweep(b)
-    path = [e]
-    while path[-1] != b:
-        path.append(int(pred[path[-1]]))
-    ecc_c, _, _ = sweep(path[len(path) // 2])
-    bound = int(math.floor(2 * min(ecc_a, ecc_b, ecc_c) + 1e-9)) + 1
-    return int(max(min(bound, sizes[main]), others.max(initial=0)))
+        def sweep(cell: int) -> tuple[float, int, np.ndarray]:
+            dist, pred = dijkstra(region, directed=True, indices=cell,
+                                  return_predecessors=True)
+            dist = np.where(np.isfinite(dist), dist, -1.0)  # (a region is connected)
+            far = int(np.argmax(dist))
+            return float(dist[far]), far, pred
+
+        ecc_a, b, _ = sweep(0)
+        ecc_b, e, pred = sweep(b)
+        path = [e]
+        while path[-1] != b:
+            path.append(int(pred[path[-1]]))
+        ecc_c, _, _ = sweep(path[len(path) // 2])
+        bound = int(math.floor(2 * min(ecc_a, ecc_b, ecc_c) + 1e-9)) + 1
+        return min(bound, int(sizes[label]))
+
+    best = 0
+    for label in np.argsort(-sizes, kind="stable"):
+        if sizes[label] <= best:  # this region's paths, and every smaller one's, fit
+            break
+        best = max(best, region_bound(int(label)))
+    return best
 
 
 def clearance_weighted_field(grid: Grid, clearance: np.ndarray, weight: float,

@@ -187,6 +187,40 @@ def test_the_maps_longest_optimal_path_bounds_every_pair(rule):
     assert map_capacity(grid, 1.5) >= math.ceil(1.5 * bound)
 
 
+@pytest.mark.parametrize("rule", ["free", "strict"])
+def test_a_large_region_enclosed_by_another_is_bounded_by_its_distances(rule):
+    """A race track's infield, a closed room: a region other than the largest was bounded
+    by its cell count, and a real track's infield of 723,543 cells asked the Planner for
+    a capacity above jaxga's maximum. Here a frame 8 cells wide (1,024 cells) encloses an
+    open square of 484 cells: the bound holds every optimal path of both regions (an
+    optimal path has at most its length + 1 cells) and is far below the square's cells."""
+    from scipy.sparse.csgraph import dijkstra
+
+    from jaxga.operators.guide import _map_graph
+
+    blocked = np.zeros((40, 40), bool)
+    blocked[8:32, 8:32] = True  # the frame's inner edge
+    blocked[9:31, 9:31] = False  # the square inside, 22 x 22 cells
+    grid = jaxga.Grid.create(blocked, corner_rule=rule, start=(0, 0), goal=(0, 0))
+    bound = longest_optimal_path_cells(grid)
+    dist = dijkstra(_map_graph(blocked.tobytes(), blocked.shape, rule), directed=True)
+    longest = dist[np.isfinite(dist)].max()
+    assert math.floor(longest + 1e-9) + 1 <= bound < 22 * 22
+
+
+def test_a_map_whose_paths_need_more_than_jaxgas_capacity_is_refused_when_loaded(
+        monkeypatch):
+    """Refused at construction in one line that says what to do, not at the first plan as
+    an override of ``population.capacity`` the user never gave."""
+    from jaxga.api import planner
+
+    monkeypatch.setattr(planner, "map_capacity", lambda grid, factor: 1_310_720)
+    with pytest.raises(ParameterError, match=r"may need 1,310,720 path cells, more than "
+                                              r"jaxga's 1,000,000: load it coarser") as e:
+        jaxga.Planner("classic_ga_gapp3_20x20")
+    assert "\n" not in str(e.value)
+
+
 def test_the_planners_capacity_is_the_maps(office):
     planner = jaxga.Planner(office, robot_radius=0.1, corner_rule="free")
     factor = 1.5  # hybrid's population.capacity_factor
