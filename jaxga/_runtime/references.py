@@ -32,8 +32,10 @@ from collections.abc import Callable
 
 import numpy as np
 
+from jaxga.core.errors import JaxgaError
 from jaxga.core.grid import Grid
 from jaxga.maps.clearance import cell_clearance
+from jaxga.maps.preprocess import endpoints_connected
 from jaxga.operators.guide import field_path
 from jaxga.reference.any_angle import any_angle_shortest_path_np
 from jaxga.reference.lower_bound import euclidean_lower_bound_np
@@ -71,11 +73,20 @@ def octile_optimum(grid: Grid, guided: bool = False) -> ReferencePath:
     :func:`jaxga.reference.optima.shortest_path_np`, cached for the last 32 problems.
     Both report the length as :func:`jaxga.reference.optima.octile_length`, so both give
     the same optimum bit for bit."""
-    if guided:
+    if guided and _connected(grid):  # else no field to compute: the search says why
         path = _field_path(grid)
         if path is not None:
             return ReferencePath(True, octile_length(path), path, kind="octile")
     return _octile_cached(*_problem_key(grid))
+
+
+def _connected(grid: Grid) -> bool:
+    """Whether the start reaches the goal (free, on the map, one region): a labelling of
+    the map's regions, far cheaper than the distance fields of a problem with no path."""
+    try:
+        return endpoints_connected(grid)
+    except JaxgaError:  # an endpoint off the map: the search names it
+        return False
 
 
 @functools.lru_cache(maxsize=8)

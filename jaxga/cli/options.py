@@ -325,8 +325,11 @@ def snap_notes(args: argparse.Namespace, info) -> list[str]:
         x, y = info.frame.to_world(np.asarray(xy, float))
         away = math.hypot(x - world[0], y - world[1])
         if away > 5e-4:
+            d = 3  # decimals enough to tell the centre from the point given
+            while d < 6 and f"{x:.{d}f},{y:.{d}f}" == f"{world[0]:.{d}f},{world[1]:.{d}f}":
+                d += 1
             notes.append(f"note: the {name} ({world[0]:g}, {world[1]:g}) m is planned at the "
-                         f"centre of its cell, ({x:.3f}, {y:.3f}) m, {away:.3f} m away")
+                         f"centre of its cell, ({x:.{d}f}, {y:.{d}f}) m, {away:.{d}f} m away")
     return notes
 
 

@@ -234,9 +234,21 @@ def run_and_report(args: argparse.Namespace, timeline: Timeline,
             write_json(args.json, doc)
     print(time_line(timeline.as_dict()))
     if not result.success.any() or unmet is not None:
-        print(f"jaxga: no path: {unmet or result.reason}", file=sys.stderr)
+        print(f"jaxga: no path: {unmet or result.reason}{ends_in_metres(result)}",
+              file=sys.stderr)
         return EXIT_NO_PATH
     return 0
+
+
+def ends_in_metres(result) -> str:
+    """`` (start (x, y) m, goal (x, y) m)``, the cell centres a reason naming cells
+    stands for, on a map with metres; else ``""``."""
+    frame = result.frame
+    if frame is None or not frame.has_metres or result.start is None or result.goal is None \
+            or "cell (" not in str(result.reason):
+        return ""
+    (sx, sy), (gx, gy) = frame.to_world(np.array([result.start, result.goal], float))
+    return f" (start ({sx:.3f}, {sy:.3f}) m, goal ({gx:.3f}, {gy:.3f}) m)"
 
 
 def front_polyline(grid, path, obstacles: np.ndarray | None = None) -> np.ndarray:

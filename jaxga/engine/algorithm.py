@@ -29,6 +29,7 @@ from jaxga.engine.checks import (
     compiled_fallback,
     uses_waypoints,
 )
+from jaxga.maps.preprocess import endpoints_connected
 from jaxga.operators import registry
 from jaxga.operators.fitness import objective_default, objective_keywords
 from jaxga.operators.guide import longest_optimal_path_cells, problem_facts
@@ -185,6 +186,8 @@ def default_capacity(grid: Grid, factor: float = CAPACITY_FACTOR) -> int:
     """
 
     floor = min(4 * (grid.height + grid.width), SMALL_MAP_CAPACITY)
+    if not endpoints_connected(grid):  # known from the regions, without the fields
+        return floor
     facts = problem_facts(grid)
     if not facts.reachable:
         return floor

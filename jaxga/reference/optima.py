@@ -43,7 +43,7 @@ import numpy as np
 from jaxga.core.errors import EndpointError, JaxgaError, NoPathError
 from jaxga.core.fields import shown_value
 from jaxga.core.grid import CORNER_RULES, Grid, as_integer
-from jaxga.maps.preprocess import legal_moves, move_edges
+from jaxga.maps.preprocess import legal_moves, move_edges, region_labels
 
 __all__ = [
     "ReferencePath",
@@ -289,6 +289,13 @@ class OctileGraph:
         self._ys = np.repeat(np.arange(h, dtype=np.float64), w)
 
     # ----------------------------------------------------------------------- queries
+    def _regions(self) -> np.ndarray:
+        """``int[H * W]``: each cell's connected region under the corner rule
+        (:func:`jaxga.maps.preprocess.region_labels`), labelled once per graph."""
+        if getattr(self, "_labels", None) is None:
+            self._labels = region_labels(self.blocked, self.corner_rule).reshape(-1)
+        return self._labels
+
     def _octile_to(self, goal: int) -> list[float]:
         w = self.shape[1]
         ddx = np.abs(self._xs - goal % w)
@@ -317,6 +324,10 @@ class OctileGraph:
         g = goal[1] * w + goal[0]
         if s == g:
             return ReferencePath(True, 0.0, np.array([start], np.int32), kind="octile")
+        labels = self._regions()
+        if labels[s] != labels[g]:  # known at once: A* would search all of start's region
+            return missing_path(unreachable_message(start, goal, self.corner_rule),
+                                "unreachable", "octile")
         hh = self._octile_to(g)
         n = len(hh)
         inf = math.inf
@@ -384,10 +395,15 @@ def shortest_path_np(
     Same as :func:`shortest_path` without building a :class:`~jaxga.core.grid.Grid`.
     """
     b = as_blocked(blocked)
-    problem = endpoint_problem(b, as_xy(start_xy), as_xy(goal_xy))
+    start, goal = as_xy(start_xy), as_xy(goal_xy)
+    problem = endpoint_problem(b, start, goal)
     if problem:
         check_rule(corner_rule)
         return missing_path(problem, "endpoint_blocked", "octile")
+    labels = region_labels(b, check_rule(corner_rule))
+    if labels[start[1], start[0]] != labels[goal[1], goal[0]]:  # no graph to build
+        return missing_path(unreachable_message(start, goal, corner_rule), "unreachable",
+                            "octile")
     return OctileGraph(b, corner_rule).search(start_xy, goal_xy)
 
 

@@ -397,6 +397,13 @@ def test_endpoints_given_in_metres_say_where_the_plan_snaps_them(office):
         "note: the start (-1.98, -1.49) m is planned at the centre of its cell, "
         "(-1.975, -1.475) m, 0.016 m away"]
     assert snap_notes(argparse.Namespace(start_world=None, goal_world=None), info) == []
+    # a point under a millimetre from its centre: the centre shown with the decimals that
+    # tell it from the point (it was "(-1.975, -1.475) m ... (-1.975, -1.475) m")
+    near = argparse.Namespace(start_world=(-1.9754, -1.4754), goal_world=None)
+    info = load_map_info(office, start_world=near.start_world, goal_world=(-1.825, -1.475))
+    assert snap_notes(near, info) == [
+        "note: the start (-1.9754, -1.4754) m is planned at the centre of its cell, "
+        "(-1.9750, -1.4750) m, 0.0006 m away"]
 
 
 

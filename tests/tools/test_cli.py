@@ -1335,3 +1335,34 @@ def test_numbers_are_ascii_and_a_one_value_option_is_given_once(argv, words, cap
         main(["run", "--preset", "sga", "--map", "classic_ga_gapp3_20x20", *argv])
     err = capsys.readouterr().err
     assert info.value.code == EXIT_BAD_INPUT and err.count("\n") == 1 and words in err
+
+
+def test_a_goal_out_of_reach_is_known_from_the_regions_and_named_in_metres(
+        tmp_path, capsys, monkeypatch):
+    """With no path, nothing searches the start's whole region: the A* search of the
+    8-connected optimum (43 s on a 2000 x 2000 race track, the start outside it), the
+    distance fields of the capacity and of the guided reference are all skipped (made to
+    fail here); the reason is the search's own, and on a map with metres the line gives
+    the endpoints' cell centres in metres too."""
+    from jaxga.maps import save_map
+    from jaxga.operators import guide
+    from jaxga.reference import optima
+
+    def never(*_a, **_k):
+        raise AssertionError("computed for a problem with no path")
+
+    blocked = np.zeros((12, 16), bool)
+    blocked[:, 7] = True  # two rooms
+    save_map(blocked, tmp_path / "rooms.yaml", resolution=0.5, origin=(-2.0, 1.0, 0.0))
+    monkeypatch.setattr(optima, "OctileGraph", never)
+    monkeypatch.setattr(guide, "_fields_cached", never)
+    rc = main(["run", "--preset", "hybrid", "--map", str(tmp_path / "rooms.yaml"),
+               "--start-world", "-1.5,1.5", "--goal-world", "5.5,6.5", "--seeds", "2",
+               "--quiet"])
+    err = capsys.readouterr().err.strip()
+    assert rc == EXIT_NO_PATH and "\n" not in err
+    assert err == ("jaxga: no path: goal cell (15, 11) unreachable from start cell (1, 1) "
+                   "under corner rule 'strict' (start (-1.250, 1.750) m, goal (5.750, "
+                   "6.750) m)")
+    found = optima.shortest_path_np(blocked[::-1], (1, 1), (15, 11), "strict")
+    assert not found.found and found.status == "unreachable"
