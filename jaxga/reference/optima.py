@@ -285,6 +285,7 @@ class OctileGraph:
         self.indptr = np.searchsorted(src_a[order], np.arange(n + 1)).astype(np.int64)
         self.indices = dst_a[order]
         self.costs = cost_a[order]
+        self._labels: np.ndarray | None = None  # the regions, labelled when first asked
         self._xs = np.tile(np.arange(w, dtype=np.float64), h)
         self._ys = np.repeat(np.arange(h, dtype=np.float64), w)
 
@@ -292,7 +293,7 @@ class OctileGraph:
     def _regions(self) -> np.ndarray:
         """``int[H * W]``: each cell's connected region under the corner rule
         (:func:`jaxga.maps.preprocess.region_labels`), labelled once per graph."""
-        if getattr(self, "_labels", None) is None:
+        if self._labels is None:
             self._labels = region_labels(self.blocked, self.corner_rule).reshape(-1)
         return self._labels
 
@@ -404,7 +405,9 @@ def shortest_path_np(
     if labels[start[1], start[0]] != labels[goal[1], goal[0]]:  # no graph to build
         return missing_path(unreachable_message(start, goal, corner_rule), "unreachable",
                             "octile")
-    return OctileGraph(b, corner_rule).search(start_xy, goal_xy)
+    graph = OctileGraph(b, corner_rule)
+    graph._labels = labels.reshape(-1)  # labelled once
+    return graph.search(start_xy, goal_xy)
 
 
 def shortest_path(grid: Grid) -> ReferencePath:
