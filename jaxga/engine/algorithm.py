@@ -188,9 +188,7 @@ def default_capacity(grid: Grid, factor: float = CAPACITY_FACTOR) -> int:
     floor = min(4 * (grid.height + grid.width), SMALL_MAP_CAPACITY)
     if not endpoints_connected(grid):  # known from the regions, without the fields
         return floor
-    facts = problem_facts(grid)
-    if not facts.reachable:
-        return floor
+    facts = problem_facts(grid)  # reachable: the regions said so
     need = min(math.ceil(factor * facts.optimal_cells), facts.reachable_cells)
     return max(floor, capacity_class(need))
 
