@@ -23,7 +23,7 @@ import yaml
 
 from jaxga.core.errors import JaxgaError, ParameterError
 from jaxga.core.fields import shown_value
-from jaxga.core.files import atomic_write_text
+from jaxga.core.files import atomic_write_text, file_path
 from jaxga.core.numerals import ASCII_SPACES, ascii_float, yaml_number
 from jaxga.maps.frame import world_decimals
 from jaxga.maps.inputs import PATH_JSON_CAP, lines_of, read_input
@@ -46,12 +46,34 @@ def path_format(path: str | os.PathLike) -> str:
     return PATH_FORMATS[suffix]
 
 
+def _path_points(points: np.ndarray) -> np.ndarray:
+    """``points`` as ``float[k, 2]`` rows ``(x, y)`` (an empty sequence: no points), or a
+    one-line :class:`~jaxga.core.errors.JaxgaError`: a ``[2, k]`` array, a flat one or
+    ``None`` (``world_path`` of a map without metres) is refused, not reshaped into other
+    points."""
+    if points is None:
+        raise JaxgaError("cannot write a path: the points are None (a map without metres "
+                         "has no path in metres: Result.world_path is None there; write "
+                         "the cells of Result.path, or load a ROS map)")
+    try:
+        p = np.asarray(points, float)
+    except (TypeError, ValueError):
+        raise JaxgaError(f"cannot write a path: the points must be numbers, float[k, 2] "
+                         f"rows (x, y), got {shown_value(points)}") from None
+    if p.size == 0:
+        return p.reshape(0, 2)
+    if p.ndim != 2 or p.shape[1] != 2:
+        raise JaxgaError(f"cannot write a path: the points must be float[k, 2] rows (x, y), "
+                         f"got an array of shape {p.shape}")
+    return p
+
+
 def path_yaws(points: np.ndarray) -> np.ndarray:
     """``float[k]``: the heading (radians, counter-clockwise from +x) at each point of a
-    polyline: the direction of the segment leaving it; the last point keeps the direction
-    it arrives in; a single point faces +x. Repeated points take the next distinct
-    direction."""
-    p = np.asarray(points, float).reshape(-1, 2)
+    polyline ``float[k, 2]``: the direction of the segment leaving it; the last point
+    keeps the direction it arrives in; a single point faces +x. Repeated points take the
+    next distinct direction."""
+    p = _path_points(points)
     k = len(p)
     yaw = np.zeros(k)
     if k < 2:
@@ -78,8 +100,9 @@ def path_text(points: np.ndarray, fmt: str, frame_id: str = "map",
     <jaxga.maps.frame.MapFrame.world_decimals>`: a hundredth of its cell), or more where
     the points lie closer (a hundredth of the shortest step: a curve's points), so that
     a path on a fine map is read back in the cells it crosses. A point that is not a
-    finite number is refused in one line: no reader takes it for a coordinate."""
-    p = np.asarray(points, float).reshape(-1, 2)
+    finite number, or points not shaped ``float[k, 2]`` (a ``[2, k]`` array, a flat one,
+    ``None``), are refused in one line."""
+    p = _path_points(points)
     if not np.isfinite(p).all():
         bad = int(np.flatnonzero(~np.isfinite(p).all(axis=1))[0])
         raise JaxgaError(f"cannot write a path whose point {bad} is {tuple(p[bad].tolist())}: "
@@ -116,6 +139,7 @@ def write_path(path: str | os.PathLike, points_world: np.ndarray, frame_id: str 
                decimals: int | None = None) -> None:
     """Write a path in metres to ``path`` as CSV or YAML (by its extension), atomically;
     ``decimals`` as :func:`path_text` (pass the map's ``frame.world_decimals``)."""
+    path = file_path(path, "a path file")
     atomic_write_text(path, path_text(points_world, path_format(path), frame_id, decimals))
 
 
@@ -161,8 +185,9 @@ def read_path(path: str | os.PathLike) -> np.ndarray:
     can be checked again (``jaxga replan --path``). A one-line :class:`ParameterError` for
     anything else: another frame, a key given twice, a coordinate that is not a number
     (``true``), a CSV value not written in ASCII digits (``1_0``)."""
+    path = file_path(path, "a path file")
     label = os.fspath(path)
-    fmt = PATH_FORMATS.get(Path(path).suffix.lower())
+    fmt = PATH_FORMATS.get(path.suffix.lower())
     if fmt is None:
         raise ParameterError(f"{label}: a path file is .csv (x,y in metres) or .yaml / .yml "
                              "(a nav_msgs/Path)")

@@ -17,8 +17,8 @@ from jaxga._runtime.parallel import (
 )
 from jaxga.config.presets import preset_files
 from jaxga.core.errors import JaxgaError
+from jaxga.core.files import PACKAGE, same_file
 from jaxga.core.files import check_outputs as check_output_files
-from jaxga.core.files import same_file
 from jaxga.core.matplotlib_env import matplotlib_ready
 from jaxga.maps import (
     scenario_path,
@@ -81,7 +81,7 @@ def check_outputs(args: argparse.Namespace) -> None:
     outputs = {f"--{o.replace('_', '-')}": getattr(args, o, None) for o in OUTPUT_OPTIONS
                if o != "checkpoint"}
     inputs = input_files(args)
-    package = Path(__file__).resolve().parents[1]
+    package = PACKAGE
     for option, path in outputs.items():
         if path and str(path).endswith(("/", os.sep)):  # POSIX: a folder's name
             raise JaxgaError(f"cannot write {option} {path}: a name ending in '/' names a "

@@ -26,13 +26,17 @@ import threading
 import time
 from collections.abc import Callable, Iterable, Mapping
 from pathlib import Path
-from typing import IO
+from typing import IO, Any
 
 from jaxga.core.errors import JaxgaError
+from jaxga.core.fields import shown_value
 
-__all__ = ["NAME_MAX", "atomic_write", "atomic_write_text", "check_outputs", "folder_problem",
-           "remove_stale_temporaries", "remove_temporaries", "same_file",
+__all__ = ["NAME_MAX", "atomic_write", "atomic_write_text", "check_outputs", "file_path",
+           "folder_problem", "remove_stale_temporaries", "remove_temporaries", "same_file",
            "temporary_folder", "written_file"]
+
+PACKAGE = Path(__file__).resolve().parents[1]
+"""jaxga's own folder: no writer replaces a file in it (a built-in map, a module)."""
 
 _TEMPORARIES: set[str] = set()
 _LOCK = threading.RLock()  # reentrant: a signal's cleanup may run in the thread holding it
@@ -59,12 +63,16 @@ def atomic_write(path: str | os.PathLike, write: Callable[[IO], None], *,
     process ended by a signal removes it first (:func:`remove_temporaries`); one that a
     process killed outright left is removed by the next write of the same file
     (:func:`remove_stale_temporaries`)."""
+    path = file_path(path, "a file to write")
     _refuse_unwritable_name(path)
     try:
         _refuse_long_name(f"{path}", Path(path))
         _refuse_stream(f"{path}", Path(path))
         target = written_file(path)
         _refuse_long_name(f"{path}", target)
+        if PACKAGE in target.resolve().parents:  # save_map over a built-in map's file
+            raise JaxgaError(f"cannot write {path}: it is inside jaxga's own folder "
+                             f"{PACKAGE} (its code, built-in maps and presets)")
         folder = target.parent if str(target.parent) else Path(".")
         remove_stale_temporaries(target)
         fd, tmp = _new_temporary(folder, f"{_temporary_stem(target.name)}{os.getpid()}.")
@@ -259,6 +267,17 @@ def same_file(a: str | os.PathLike, b: str | os.PathLike) -> bool:
         return os.path.abspath(a) == os.path.abspath(b)
 
 
+def file_path(path: Any, what: str = "a file") -> Path:
+    """``path`` (a ``str`` or an ``os.PathLike`` such as :class:`pathlib.Path`) as a
+    :class:`~pathlib.Path`, or one :class:`JaxgaError` line naming ``what`` and what was
+    given: bytes, numbers, None and other objects are not file names here."""
+    name = os.fspath(path) if isinstance(path, os.PathLike) else path
+    if not isinstance(name, str):
+        raise JaxgaError(f"the name of {what} must be a str or a pathlib.Path, got "
+                         f"{shown_value(path)}")
+    return Path(name)
+
+
 def impossible_name(path: str | os.PathLike) -> str | None:
     """Why no file system can hold ``path``, or None: a NUL character, or a lone surrogate
     the file system encoding cannot write (``os``'s ValueError or UnicodeEncodeError
@@ -339,6 +358,12 @@ def folder_problem(folder: str | os.PathLike) -> str | None:
     bits lie for root, ``/proc`` and read-only mounts)."""
     folder = Path(folder)
     if not folder.is_dir():
+        try:  # a name too long, a folder without search permission: say which
+            os.stat(folder)
+        except (FileNotFoundError, NotADirectoryError):
+            pass
+        except OSError as e:
+            return f"folder {str(folder)!r} cannot be used ({_why(e)})"
         return f"folder {str(folder)!r} does not exist"
     try:
         fd, tmp = _new_temporary(folder, ".jaxga-probe.")
@@ -373,29 +398,38 @@ def check_outputs(outputs: Mapping[str, str | os.PathLike | None],
     given = [(option, Path(path)) for option, path in outputs.items() if path]
     sources = [(label, Path(path)) for label, path in inputs if path]
     for i, (option, path) in enumerate(given):
-        _refuse_unwritable_name(path, option)
-        _refuse_long_name(f"{option} {path}", path)
-        if path.is_dir():
-            raise JaxgaError(f"cannot write {option} {path}: it is a folder")
-        if path.exists() and not path.is_file():
-            raise JaxgaError(f"cannot write {option} {path}: it exists and is not a regular "
-                             "file (a device, a FIFO or a socket)")
-        _refuse_stream(f"{option} {path}", path)
-        for label, source in sources:
-            if same_file(path, source):
-                raise JaxgaError(f"cannot write {option} {path}: it is the {label} this "
-                                 "command reads")
-        for other, earlier in given[:i]:
-            if same_file(path, earlier):
-                raise JaxgaError(f"cannot write {option} {path}: {other} names the same "
-                                 "file")
-        target = written_file(path)
-        shown = f"{path}" if target == path else f"{path} (a link to {target})"
-        folder = target.parent if str(target.parent) else Path(".")
-        why = folder_problem(folder)
-        if why is not None:
-            raise JaxgaError(f"cannot write {option} {shown}: {why}")
-        _refuse_long_name(f"{option} {shown}", target)
-        if path.exists() and not os.access(path, os.W_OK):
-            raise JaxgaError(f"cannot write {option} {path}: the existing file cannot be "
-                             "replaced (read-only or immutable)")
+        try:
+            _check_output(option, path, given[:i], sources)
+        except OSError as e:  # a folder's name too long, a loop of links, ...
+            raise JaxgaError(f"cannot write {option} {path}: {_why(e)}") from None
+
+
+def _check_output(option: str, path: Path, earlier_outputs: list,
+                  sources: list) -> None:
+    """:func:`check_outputs` of one output, after ``earlier_outputs``."""
+    _refuse_unwritable_name(path, option)
+    _refuse_long_name(f"{option} {path}", path)
+    if path.is_dir():
+        raise JaxgaError(f"cannot write {option} {path}: it is a folder")
+    if path.exists() and not path.is_file():
+        raise JaxgaError(f"cannot write {option} {path}: it exists and is not a regular "
+                         "file (a device, a FIFO or a socket)")
+    _refuse_stream(f"{option} {path}", path)
+    for label, source in sources:
+        if same_file(path, source):
+            raise JaxgaError(f"cannot write {option} {path}: it is the {label} this "
+                             "command reads")
+    for other, earlier in earlier_outputs:
+        if same_file(path, earlier):
+            raise JaxgaError(f"cannot write {option} {path}: {other} names the same "
+                             "file")
+    target = written_file(path)
+    shown = f"{path}" if target == path else f"{path} (a link to {target})"
+    folder = target.parent if str(target.parent) else Path(".")
+    why = folder_problem(folder)
+    if why is not None:
+        raise JaxgaError(f"cannot write {option} {shown}: {why}")
+    _refuse_long_name(f"{option} {shown}", target)
+    if path.exists() and not os.access(path, os.W_OK):
+        raise JaxgaError(f"cannot write {option} {path}: the existing file cannot be "
+                         "replaced (read-only or immutable)")

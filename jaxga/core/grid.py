@@ -365,16 +365,24 @@ def blocked_array(blocked: Any) -> np.ndarray:
     return arr
 
 
-def check_xy(name: str, xy, w: int, h: int) -> tuple[int, int]:
-    """``xy`` as integer ``(x, y)`` on a ``w`` x ``h`` map, or a one-line
-    :class:`EndpointError` naming ``name`` (start, goal) and the problem."""
-    try:  # integers only: 1.5 or "30" are refused, not truncated or split; in order
+def as_xy(name: str, xy) -> tuple[int, int]:
+    """``xy`` as a pair of Python integers ``(x, y)``, or a one-line
+    :class:`EndpointError` naming ``name`` (start, goal): integers only, 1.5 or "30" are
+    refused, not truncated or split."""
+    try:
         if isinstance(xy, (str, bytes, AbstractSet, Mapping)):  # {3, 1}: which is x?
             raise TypeError
         x, y = (as_integer(v) for v in tuple(xy))
     except (TypeError, ValueError):
         raise EndpointError(f"{name} must be a pair of integers (x, y), got "
                             f"{shown_value(xy)}") from None
+    return x, y
+
+
+def check_xy(name: str, xy, w: int, h: int) -> tuple[int, int]:
+    """``xy`` as integer ``(x, y)`` on a ``w`` x ``h`` map (:func:`as_xy`), or a one-line
+    :class:`EndpointError` naming ``name`` (start, goal) and the problem."""
+    x, y = as_xy(name, xy)
     if not (0 <= x < w and 0 <= y < h):
         raise EndpointError(f"{name} ({x}, {y}) is off the {w} x {h} map")
     return x, y

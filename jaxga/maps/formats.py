@@ -35,6 +35,7 @@ readers return into a :class:`jaxga.Grid`.
 
 from __future__ import annotations
 
+import contextlib
 import io
 import os
 import re
@@ -46,7 +47,7 @@ import yaml
 
 from jaxga.core.errors import JaxgaError, MapFormatError
 from jaxga.core.fields import python_scalar, shown_value
-from jaxga.core.files import atomic_write, atomic_write_text, same_file
+from jaxga.core.files import atomic_write, atomic_write_text, check_outputs, file_path, same_file
 from jaxga.core.grid import Grid, blocked_array
 from jaxga.core.matplotlib_env import matplotlib_ready
 from jaxga.core.numerals import ASCII_SPACES, ascii_int
@@ -351,7 +352,7 @@ def save_map(grid: Grid | np.ndarray, path: Source, *, fmt: str | None = None,
     :data:`~jaxga.maps.ros.MAX_ORIGIN` m). Each file is written whole or not at all
     (:func:`jaxga.core.files.atomic_write`).
     """
-    p = Path(os.fspath(path))
+    p = file_path(path, "the map to save")
     suffix = p.suffix.lower()
     if fmt is None:
         fmt = {".map": "movingai", ".png": "png", ".ascii": "ascii", ".asc": "ascii",
@@ -383,18 +384,28 @@ def save_map(grid: Grid | np.ndarray, path: Source, *, fmt: str | None = None,
         res, (x0, y0, yaw) = _checked_frame(p, resolution, origin)
         image = p.with_suffix(".pgm")
         _check_image_is_ours(p, image)
+        # both files checked before either is written: a YAML that cannot be written (a
+        # folder of that name, a read-only file) must not leave a new image behind
+        check_outputs({"the map's YAML": p, "its image": image})
         pixels = np.where(blocked[::-1], 0, 254).astype(np.uint8)
         header = f"P5\n# CREATOR: jaxga {res!r} m/pix\n{w} {h}\n255\n".encode("ascii")
+        new_image = not image.exists()
         atomic_write(image, lambda f: f.write(header + pixels.tobytes()), binary=True)
         # the name as a double-quoted scalar in YAML's own escapes: a name with a leading
         # space, '#', ': ', a YAML indicator or a character beyond the BMP (JSON writes
         # those as surrogate pairs, two lone surrogates to YAML) is read back as written
         name = yaml.safe_dump(image.name, default_style='"', width=float("inf")).strip()
-        atomic_write_text(p, f"image: {name}\nmode: trinary\n"
-                             f"resolution: {_yaml_float(res)}\n"
-                             f"origin: [{_yaml_float(x0)}, {_yaml_float(y0)}, "
-                             f"{_yaml_float(yaw)}]\nnegate: 0\n"
-                             "occupied_thresh: 0.65\nfree_thresh: 0.196\n")
+        try:
+            atomic_write_text(p, f"image: {name}\nmode: trinary\n"
+                                 f"resolution: {_yaml_float(res)}\n"
+                                 f"origin: [{_yaml_float(x0)}, {_yaml_float(y0)}, "
+                                 f"{_yaml_float(yaw)}]\nnegate: 0\n"
+                                 "occupied_thresh: 0.65\nfree_thresh: 0.196\n")
+        except BaseException:  # a full disk, an interrupt: no image without its YAML
+            if new_image:
+                with contextlib.suppress(OSError):
+                    image.unlink()
+            raise
         return p
     if fmt == "01":
         lines = [" ".join("1" if b else "0" for b in row) for row in blocked]
@@ -429,14 +440,18 @@ def _check_name_reads_back(p: Path, suffix: str, fmt: str) -> None:
 
 def _checked_frame(p: Path, resolution: Any, origin: Any) -> tuple[float, tuple]:
     """``(resolution, (x, y, yaw))`` as finite floats a ROS map may have, else one line."""
-    try:
+    try:  # numbers only: "123" is not an origin (1, 2, 3), True not 1 m
+        if isinstance(origin, (str, bytes)) or any(
+                isinstance(v, (bool, np.bool_, str, bytes))
+                for v in (resolution, *tuple(origin))):
+            raise TypeError
         res = float(resolution)
         x0, y0, yaw = (float(v) for v in origin)
     except (TypeError, ValueError):
         raise MapFormatError(f"cannot save {p}: resolution must be a number and origin three "
                              f"numbers (x, y, yaw), got {shown_value(resolution)} and "
                              f"{shown_value(origin)}") from None
-    if isinstance(resolution, bool) or not MIN_RESOLUTION <= res <= MAX_RESOLUTION:
+    if not MIN_RESOLUTION <= res <= MAX_RESOLUTION:
         raise MapFormatError(f"cannot save {p}: resolution must be {MIN_RESOLUTION:g} to "
                              f"{MAX_RESOLUTION:g} m a cell, got {shown_value(resolution)}")
     if not all(np.isfinite(v) and abs(v) <= MAX_ORIGIN for v in (x0, y0, yaw)):

@@ -255,7 +255,7 @@ def endpoint_cells(frame: MapFrame | None, grid: Any, start: Any = None, goal: A
             if frame is None or not frame.has_metres:
                 raise EndpointError(f"the {name} in metres needs a map with a resolution "
                                     "and an origin (a ROS map_server .yaml)")
-            cell = frame.cell_of(_world_point(name, world), grid.blocked.shape,
+            cell = frame.cell_of(world_point(name, world), grid.blocked.shape,
                                  f"the {name}")
         h, w = grid.blocked.shape
         ends.append(getattr(grid, f"{name}_xy") if cell is None
@@ -263,7 +263,7 @@ def endpoint_cells(frame: MapFrame | None, grid: Any, start: Any = None, goal: A
     return ends[0], ends[1]
 
 
-def _world_point(name: str, point: Any) -> tuple[float, float]:
+def world_point(name: str, point: Any) -> tuple[float, float]:
     """``point`` as two finite floats (metres), or a one-line :class:`EndpointError`:
     strings, bools and NaN are refused, not converted."""
     try:

@@ -40,7 +40,8 @@ import numpy as np
 
 from jaxga.core.errors import EndpointError, MapFormatError
 from jaxga.core.fields import python_scalar, shown_value
-from jaxga.core.grid import Grid, check_corner_rule, too_large
+from jaxga.core.files import file_path
+from jaxga.core.grid import Grid, as_xy, check_corner_rule, too_large
 from jaxga.maps import builtin
 from jaxga.maps.builtin import default_corner_rule
 from jaxga.maps.formats import (
@@ -56,7 +57,7 @@ from jaxga.maps.formats import (
     parse_png,
     read_map_bytes,
 )
-from jaxga.maps.frame import MapFrame
+from jaxga.maps.frame import MapFrame, world_point
 from jaxga.maps.preprocess import check_coarse_endpoints, coarsen_blocked, inflate_blocked
 from jaxga.maps.ros import (
     RosMap,
@@ -156,7 +157,7 @@ def map_name(source: Source) -> str:
 
     if isinstance(source, str) and source in builtin.builtin_names():
         return source
-    path = Path(os.fspath(source))
+    path = file_path(source, "a map")
     if path.stem.lower() in GENERIC_STEMS:
         folder = path.resolve().parent.name
         return folder or path.stem
@@ -300,15 +301,23 @@ def load_map_info(source: Source, **options: Any) -> MapInfo:
             blocked = parse_01(text, label)
             file_start = file_goal = None
 
-    s = o.start if o.start is not None else file_start
-    g = o.goal if o.goal is not None else file_goal
+    if factor > max(blocked.shape):  # 2**63 would ask for blocks no array can hold
+        h0, w0 = blocked.shape
+        raise MapFormatError(f"{label}: coarsen {factor} is more than the map's longer side "
+                             f"({w0} x {h0} cells): a factor of {max(h0, w0)} already "
+                             "merges it into one cell")
+    try:  # integer pairs before any use (inflation and coarsening index with them)
+        s = as_xy("start", o.start) if o.start is not None else file_start
+        g = as_xy("goal", o.goal) if o.goal is not None else file_goal
+    except EndpointError as e:
+        raise EndpointError(f"{label}: {e}") from None
     for name, xy, world in (("start", o.start, o.start_world), ("goal", o.goal, o.goal_world)):
         if world is None or ros is None:  # without a frame: refused above
             continue
         if xy is not None:
             raise EndpointError(f"{label}: give the {name} in cells or in metres, not both")
         try:
-            cell = world_to_cell(ros, world, blocked.shape, f"the {name}")
+            cell = world_to_cell(ros, world_point(name, world), blocked.shape, f"the {name}")
         except EndpointError as e:
             raise EndpointError(f"{label}: {e}") from None
         s, g = (cell, g) if name == "start" else (s, cell)

@@ -230,8 +230,10 @@ def coarsen_blocked(blocked: np.ndarray, factor: int) -> np.ndarray:
     b = np.asarray(blocked, dtype=bool)
     if b.ndim != 2:
         raise ParameterError(f"a map must be a 2-D array, got shape {b.shape}")
-    k = int(factor)
     h, w = b.shape
+    # a factor past the map's longer side merges it into one cell, as that side does
+    # (and 2**63 would be a block no array can hold)
+    k = min(int(factor), max(h, w, 1))
     hc, wc = -(-h // k), -(-w // k)
     pad = np.zeros((hc * k, wc * k), dtype=bool)  # cells past the map are not obstacles
     pad[:h, :w] = b
@@ -253,7 +255,8 @@ def check_coarse_endpoints(start: tuple[int, int], goal: tuple[int, int], factor
     (sx, sy), (gx, gy) = (int(v) for v in start), (int(v) for v in goal)
     if (sx, sy) == (gx, gy) or (sx // k, sy // k) != (gx // k, gy // k):
         return
-    apart = next(f for f in range(k - 1, 0, -1)
+    # a factor past every coordinate puts both into cell (0, 0): start below those
+    apart = next(f for f in range(min(k - 1, max(sx, sy, gx, gy)), 0, -1)
                  if (sx // f, sy // f) != (gx // f, gy // f))
     raise EndpointError(
         f"{label + ': ' if label else ''}coarsened {k} x {k}, the start (map cell "

@@ -22,6 +22,8 @@ import re
 from pathlib import Path
 
 from jaxga.core.errors import MapFormatError
+from jaxga.core.fields import shown_value
+from jaxga.core.files import file_path
 from jaxga.core.grid import Grid
 from jaxga.core.numerals import ascii_float, ascii_int
 from jaxga.maps.inputs import SCENARIO_CAP, lines_of, read_input
@@ -88,7 +90,7 @@ def read_scen(path: str | os.PathLike) -> list[Scenario]:
     bytes, a missing ``version`` header, a line without 9 fields, a non-numeric field or
     a start or goal off its map, naming the file and line.
     """
-    p = Path(os.fspath(path))
+    p = file_path(path, "a scenario file")
     label = str(p)
     try:
         text = read_input(p, SCENARIO_CAP, what="scenario file", label=label,
@@ -109,6 +111,9 @@ def read_scen(path: str | os.PathLike) -> list[Scenario]:
 
 def parse_scen(text: str, label: str = "<scen>") -> list[Scenario]:
     """Parse the text of a ``.scen`` file (see :func:`read_scen`); ``label`` names it."""
+    if not isinstance(text, str):
+        raise MapFormatError(f"{label}: a scenario's text must be a str (decode bytes "
+                             f"first), got {shown_value(text)}")
     lines = lines_of(text)
     numbered = [(n, ln.strip("\r\n")) for n, ln in enumerate(lines, 1) if ln.strip()]
     if not numbered:
