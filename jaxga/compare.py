@@ -53,6 +53,7 @@ from jaxga.api.runs import checked_call
 from jaxga.config.presets import as_sets, overridden_keys, parse_set
 from jaxga.config.schema import Config
 from jaxga.core.errors import ParameterError
+from jaxga.core.fields import shown_value
 from jaxga.core.grid import Grid
 from jaxga.core.own_settings import own_settings
 from jaxga.engine import OFF_VALUES, unread_keys
@@ -178,12 +179,22 @@ class Comparison:
         return next(iter(self.results.values())).any_angle_optimum
 
     def values(self, label: str, metric: str | None = None) -> np.ndarray:
-        """Per-seed values of ``metric`` (default the main one) for ``label``; NaN = failed."""
+        """Per-seed values of ``metric`` (default the main one) for ``label``; NaN = failed.
+        An unknown label is refused in one line naming the labels."""
+        if not isinstance(label, str) or label not in self.results:
+            raise ParameterError(f"no preset labelled {shown_value(label)} in this "
+                                 f"comparison: its labels are {', '.join(self.results)}")
         return metric_values(self.results[label], metric or self.metric)
 
     def tests(self, metric: str | None = None) -> list[PairTest]:
-        """The pairwise tests on ``metric`` (default the main one)."""
+        """The pairwise tests on ``metric`` (default the main one); a metric the
+        comparison did not test is refused in one line naming those it did (not an empty
+        list, which would read as "no pair differs")."""
         m = metric or self.metric
+        if not isinstance(m, str) or m not in self.metrics:
+            raise ParameterError(f"this comparison tested {', '.join(self.metrics)}, not "
+                                 f"{shown_value(m)}: pass metrics=(...) to jaxga.compare "
+                                 "to test another")
         return [t for t in self.pairwise if t.metric == m]
 
     def preset_rows(self) -> list[dict[str, Any]]:

@@ -41,7 +41,10 @@ def seed_list(seeds: int | Sequence[int],
     try:
         if isinstance(seeds, (AbstractSet, Mapping)):  # no order: run i's seed is unknown
             raise TypeError
-        arr = seeds if isinstance(seeds, np.ndarray) else np.asarray(list(seeds))
+        listed = None if isinstance(seeds, np.ndarray) else list(seeds)
+        if listed is not None and any(isinstance(v, (bool, np.bool_)) for v in listed):
+            raise TypeError  # [2, True] is not seeds 2 and 1
+        arr = seeds if listed is None else np.asarray(listed)
     except TypeError:
         arr = None
     if arr is None or isinstance(seeds, (str, bytes)) or arr.ndim != 1:

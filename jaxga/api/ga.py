@@ -96,6 +96,7 @@ class GA(PureGA):
         super().__init__(algorithm, with_tables(grid))
         self.default_params: dict[str, jax.Array] = default_params(
             config, self.algorithm.islands)
+        self.param_keys = frozenset(self.default_params)
         warn_platform(jax.default_backend())  # where jit puts the user's calls
 
     @own_settings

@@ -27,7 +27,7 @@ from typing import Any
 from jaxga._runtime.seeds import seed_list
 from jaxga.api.problem import load_problem
 from jaxga.api.result import Result
-from jaxga.api.runs import run
+from jaxga.api.runs import check_call_options, run
 from jaxga.config.schema import SCHEMA, Config
 from jaxga.core.errors import ParameterError
 from jaxga.core.grid import Grid, check_corner_rule
@@ -106,6 +106,7 @@ class Planner:
                                      corner_rule=corner_rule)
         self.preset = preset
         self.seeds = _checked_seeds(seeds)
+        check_call_options(None, 1, None, any_angle_budget)  # refused now, not at a plan
         self.any_angle_budget = any_angle_budget
         config = load_problem(preset, self.map, None, None, (), overrides, None,
                               check_endpoints=False)[0]

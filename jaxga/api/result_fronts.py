@@ -12,6 +12,7 @@ from typing import Any
 import numpy as np
 
 from jaxga.core.errors import ParameterError
+from jaxga.core.fields import shown_value
 
 
 def json_number(x: float | None) -> float | None:
@@ -34,6 +35,22 @@ def check_front_point(names: tuple[str, ...], which: str | float) -> None:
             f"the front point {which!r} is chosen by its {need}, which the front does not "
             f"minimise (survival.objectives = {list(names)}): add {need!r} to them or take "
             f"the knee")
+
+
+def front_point_which(which: Any, name: str = "which") -> str | float:
+    """``which`` as :meth:`Result.front_point` takes it: ``"knee"``, ``"shortest"``,
+    ``"widest"`` or a least clearance (a real number >= 0, as a float), else a one-line
+    :class:`ParameterError` (a string of digits, a bool, NaN or None would otherwise be
+    read as another point, or as none)."""
+    if isinstance(which, str):
+        if which == "knee" or which in FRONT_POINT_OBJECTIVE:
+            return which
+    elif not isinstance(which, (bool, np.bool_)) and isinstance(which, (int, float, np.number)):
+        value = float(which)
+        if math.isfinite(value) and value >= 0:
+            return value
+    raise ParameterError(f"{name} must be 'knee', 'shortest', 'widest' or a least clearance "
+                         f"(a number >= 0), got {shown_value(which)}")
 
 
 @dataclasses.dataclass(frozen=True)
@@ -123,8 +140,13 @@ class FrontsOfResult:
         than three points). :class:`ParameterError` for ``min_clearance`` where the
         front does not minimise the clearance."""
         i = self.seed_index(i)
+        if min_clearance is not None:
+            min_clearance = front_point_which(min_clearance, "min_clearance")
+            if isinstance(min_clearance, str):
+                raise ParameterError(f"min_clearance must be a number >= 0, got "
+                                     f"{min_clearance!r} (front_point takes the names)")
         if self.front is not None and min_clearance is not None:
-            check_front_point(self.front.names, float(min_clearance))
+            check_front_point(self.front.names, min_clearance)
         points = self.front_points(i)
         if not points:
             return None
@@ -149,6 +171,7 @@ class FrontsOfResult:
         front does not minimise the objective the point is chosen by
         (:func:`check_front_point`)."""
         i = self.seed_index(i)
+        which = front_point_which(which)
         if self.front is not None:
             check_front_point(self.front.names, which)
         points = self.front_points(i)

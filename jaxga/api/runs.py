@@ -103,7 +103,7 @@ class CallOptions:
     any_angle_budget: float | str | None = "auto"
 
 
-def _check_call_options(progress, chunks, size_class=None, any_angle_budget="auto") -> None:
+def check_call_options(progress, chunks, size_class=None, any_angle_budget="auto") -> None:
     """The options of :func:`run` and :func:`sweep` that do not reach the configuration."""
     if size_class is not None and not isinstance(size_class, (bool, np.bool_)):
         raise ParameterError(f"size_class must be True, False or None (automatic), got "
@@ -195,7 +195,7 @@ def sweep(
     """
 
     _check_points(points)
-    _check_call_options(progress, chunks, size_class, any_angle_budget)
+    check_call_options(progress, chunks, size_class, any_angle_budget)
     if chunks != 1:
         warnings.warn("chunks is ignored: the generations run in compiled chunks of "
                       f"{GENERATION_CHUNK} and progress is reported after each",
@@ -735,7 +735,7 @@ def checked_call(preset: str | Config | Problem, grid: Grid | MapInfo | str | No
     every preset so before the first one runs)."""
     overrides = dict(options)
     named = {k: overrides.pop(k) for k in RUN_OPTIONS if k in overrides}
-    _check_call_options(named.get("progress"), named.get("chunks", 1),
+    check_call_options(named.get("progress"), named.get("chunks", 1),
                         named.get("size_class"), named.get("any_angle_budget", "auto"))
     problem = load_problem(preset, grid, named.get("corner_rule"), named.get("variant"),
                            named.get("sets", ()), overrides, named.get("generations"))

@@ -13,6 +13,8 @@ of the same algorithm, so seed ``s`` of a driver is ``GA.run(PRNGKey(s))``.
 from __future__ import annotations
 
 import dataclasses
+from collections.abc import Mapping
+from typing import Any
 
 import jax
 import jax.numpy as jnp
@@ -64,6 +66,28 @@ class PureGA:
     def __init__(self, algorithm: Algorithm, grid: Grid | None = None) -> None:
         self.algorithm = algorithm
         self.grid = grid
+        self.param_keys: frozenset[str] | None = None
+        """The keys every ``params`` of these methods must have, no more and no fewer
+        (:class:`jaxga.GA` sets its ``default_params``' keys); None: not checked."""
+
+    def _params(self, params: Any) -> Any:
+        """``params``, refused in one line where it is not a dict of the GA's parameters
+        (a key missing, or one the GA does not read: a misspelt key set by hand would be
+        ignored). Its values are not checked: they may be traced (:meth:`jaxga.GA.params`
+        is the checked way to set them)."""
+        if not isinstance(params, Mapping):
+            raise ParameterError(f"params must be the dict of the GA's parameters "
+                                 f"(GA.default_params, or GA.params(...) to change some), "
+                                 f"got {shown_value(params)}")
+        if self.param_keys is not None and set(params) != self.param_keys:
+            missing = sorted(self.param_keys - set(params))
+            unknown = sorted(map(str, set(params) - self.param_keys))
+            said = [f"{_some(missing)} missing"] if missing else []
+            said += [f"{_some(unknown)} not read by this GA"] if unknown else []
+            raise ParameterError(f"params has other keys than the GA's: {'; '.join(said)} "
+                                 "(start from GA.default_params; GA.params(...) sets "
+                                 "values, checked)")
+        return params
 
     def _grid(self, grid: Grid | None) -> Grid:
         if grid is not None and not isinstance(grid, Grid):
@@ -79,7 +103,8 @@ class PureGA:
         """:meth:`init` and what the initialisers did (per island: attempts' success
         rate, slots left empty, slots the fallback filled), as :func:`jaxga.run`
         reports them."""
-        return run_init(self.algorithm, prng.checked_key(key), self._grid(grid), params)
+        return run_init(self.algorithm, prng.checked_key(key), self._grid(grid),
+                        self._params(params))
 
     @own_settings
     def init(self, key: jax.Array, params: dict, grid: Grid | None = None) -> GAState:
@@ -94,7 +119,7 @@ class PureGA:
         """One generation (selection, crossover, mutation, simplification, evaluation,
         migration; the stagnation rule); pure. ``key``: this generation's key."""
         return generation(self.algorithm, prng.checked_key(key), self._grid(grid), state,
-                          params)
+                          self._params(params))
 
     @own_settings
     def evolve(self, key: jax.Array, state: GAState, params: dict,
@@ -117,7 +142,7 @@ class PureGA:
                 raise ParameterError(f"generations must be an integer >= 0, got "
                                      f"{shown_value(given)}")
         return run_evolve(self.algorithm, prng.checked_key(key), self._grid(grid), state,
-                          params, generations, count)
+                          self._params(params), generations, count)
 
     @own_settings
     def finish(self, state: GAState, params: dict, history: dict | None = None,
@@ -136,7 +161,8 @@ class PureGA:
         (turns, tangencies; their dtype is kept) and fitness 0 (``jaxga.run``'s
         ``Result`` shows NaN for all of them); :func:`jaxga.reference.shortest_path`
         says whether a path exists."""
-        out = finish(self.algorithm, self._grid(grid), state, history, params, initial_best)
+        out = finish(self.algorithm, self._grid(grid), state, history, self._params(params),
+                     initial_best)
         return no_path_as_nan(out)
 
     @own_settings
@@ -150,6 +176,12 @@ class PureGA:
         initial_best = state.best_fitness  # a best found at initialisation converges at 0
         state, history = self.evolve(key, state, params, generations, grid)
         return self.finish(state, params, history, initial_best, grid)
+
+
+def _some(names: list[str], shown: int = 4) -> str:
+    """The first ``shown`` of ``names``, and how many more."""
+    more = len(names) - shown
+    return ", ".join(names[:shown]) + (f" and {more} more" if more > 0 else "")
 
 
 def no_path_as_nan(out: RunOutputs) -> RunOutputs:
