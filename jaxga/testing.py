@@ -17,7 +17,9 @@ in ``[1, L]``; the same key gives the same result, under ``jax.vmap`` and ``jit`
 returns the parent bit for bit, and feasible, loop-free parents from start to goal give
 feasible, loop-free children from start to goal (continuous ones unless the operator makes
 waypoint paths); a ``shrinking`` operator never lengthens a path. Objectives: float32, one
-per path, finite, positive on feasible paths and 0 on infeasible ones.
+per path, finite, positive on feasible paths and 0 on infeasible ones, with no float
+reduction whose rounding follows the batch's shape (:func:`float_reductions`: a float sum
+is added in a fixed order, :func:`jaxga.core.objectives.ordered_sum`).
 """
 
 from __future__ import annotations
@@ -27,6 +29,7 @@ from collections.abc import Callable
 from typing import Any
 
 import jax
+import jax.extend.core
 import jax.numpy as jnp
 import numpy as np
 
@@ -54,6 +57,7 @@ from jaxga.operators.repair import connect
 
 P = 6
 """Individuals (or pairs) per check."""
+
 
 
 def some_value(field):
@@ -169,6 +173,36 @@ def check_fitness(op: registry.Operator, grid: Grid, pop: Population) -> None:
            "fitness must be > 0 for feasible paths and 0 for infeasible ones")
     _vmap_equals_alone(op, f, lambda c, n, ok: fn(grid, c, n, ok),
                        lambda i: (pop.cells[i], pop.length[i], feasible[i]))
+    reductions = float_reductions(lambda c, n, ok: fn(grid, c, n, ok), pop.cells[0],
+                                  pop.length[0], feasible[0])
+    _check(not reductions, op,
+           f"it adds floats with {', '.join(reductions)}, whose rounding follows the shape "
+           "of the batch it runs in (jnp.sum alone and in a population differ in the last "
+           "bit): add with jaxga.core.objectives.ordered_sum")
+
+
+ORDER_DEPENDENT = ("reduce_sum", "reduce_prod", "cumsum", "cumprod", "cumlogsumexp",
+                   "dot_general", "reduce_precision")
+"""Primitives whose floating-point result depends on the order XLA adds in, which it
+chooses by the shape of the whole batch (decision 044)."""
+
+
+def float_reductions(fn: Callable, *args: Any) -> list[str]:
+    """The primitives of :data:`ORDER_DEPENDENT` with a floating-point result that
+    ``fn(*args)`` binds (nested calls, loops and branches included): each rounds a row
+    otherwise alone than in a batch. Sorted names, each once."""
+    found: set[str] = set()
+
+    def walk(jaxpr: jax.extend.core.Jaxpr) -> None:
+        for eqn in jaxpr.eqns:
+            if eqn.primitive.name in ORDER_DEPENDENT and any(
+                    jnp.issubdtype(v.aval.dtype, jnp.inexact) for v in eqn.outvars):
+                found.add(eqn.primitive.name)
+            for sub in jax.extend.core.jaxprs_in_params(eqn.params):
+                walk(sub)
+
+    walk(jax.make_jaxpr(fn)(*args).jaxpr)
+    return sorted(found)
 
 
 def check_selection(op: registry.Operator, grid: Grid, key) -> None:
@@ -340,7 +374,7 @@ def check_operator(op: registry.Operator | str, fn: Callable | None = None, *,
             (:mod:`jaxga.operators.registry`), when ``op`` is a family name.
         grid: the map to check on (default: :func:`default_setting`'s).
         parents: ``P`` feasible, loop-free parents on ``grid`` (default:
-            :func:`default_setting`'s).
+            :func:`default_setting`'s, or :func:`random_parents` on a ``grid`` given).
         key: the PRNG key of the check (default ``PRNGKey(0)``).
         field_repair: check it as bound with ``repair.fallback = "field"``.
         **declaration: the rest of the :class:`~jaxga.operators.registry.Operator` built
@@ -358,13 +392,26 @@ def check_operator(op: registry.Operator | str, fn: Callable | None = None, *,
         if not callable(fn):
             raise TypeError(f"check_operator({op!r}, fn): fn must be a function, got "
                             f"{shown_value(fn)}")
+        declared = {k: v for k, v in declaration.items() if k not in ("name", "summary")}
         declaration.setdefault("name", getattr(fn, "__name__", "operator"))
         declaration.setdefault("summary", "an operator under test")
+        if isinstance(declaration.get("traits"), str):  # one trait
+            declaration["traits"] = frozenset((declaration["traits"],))
+        elif "traits" in declaration:
+            declaration["traits"] = frozenset(declaration["traits"])
         op = registry.Operator(family=op, fn=fn, **declaration)
-    if grid is None or parents is None:
-        default_grid, default_pop = default_setting()
-        grid = default_grid if grid is None else grid
+        current = registry.canonical(op.family, op.name)
+        if current is not None and any(
+                getattr(registry.operator(op.family, current), k) != getattr(op, k)
+                for k in declared):
+            raise ValueError(f"check_operator: {op.family} operator {op.name!r} is registered "
+                             f"with another {', '.join(sorted(declared))}: the registered "
+                             "one would be checked; drop these arguments or unregister it")
+    if grid is None:
+        grid, default_pop = default_setting()
         parents = default_pop if parents is None else parents
+    elif parents is None:  # parents on the user's map, not the default map's
+        parents = random_parents(grid, P, seed=5)
     if parents.cells.shape[0] != P:
         raise ValueError(f"check_operator needs {P} parents, got {parents.cells.shape[0]}")
     key = prng.seed_key(0) if key is None else key

@@ -19,6 +19,7 @@ from jaxga.config.presets import as_sets, load_preset, parse_set
 from jaxga.config.schema import MAP_RULE, Config, dotted, flatten, normalised
 from jaxga.core.address_space import address_space_refusal
 from jaxga.core.errors import EndpointError, ParameterError
+from jaxga.core.fields import shown_value
 from jaxga.core.grid import Grid, as_integer
 from jaxga.core.own_settings import own_settings
 from jaxga.engine import check_file_keys_read, check_overrides_read
@@ -76,15 +77,19 @@ def own_operators(overrides: dict) -> dict:
     ``simplify``, ``post``) registered under its name
     (:func:`jaxga.operators.registry.register_operator`, replacing an earlier one of that
     name) and chosen as ``<family>.method``."""
-    out = {}
+    out, given = {}, {}
     for key, value in overrides.items():
         family = "fitness" if key == "objective" else key
+        said = f"{key}={getattr(value, '__name__', None) or shown_value(value)}"
         if family in registry.FAMILIES and callable(value):
             op = _registered_fn(family, value) or registry.register_operator(
                 family, value, replace=True)
-            out[f"{family}__method"] = op.name
-        else:
-            out[key] = value
+            key, value = f"{family}__method", op.name
+        if key in given:  # objective= and fitness= or fitness__method=: which one runs?
+            raise ParameterError(f"two {key.removesuffix('__method')} operators given: "
+                                 f"{given[key]} and {said}; give one")
+        given[key] = said
+        out[key] = value
     return out
 
 

@@ -17,6 +17,9 @@ Python values.
 
 Conventions shared by all functions
 -----------------------------------
+* **Sums.** Floating-point sums are added in one fixed order (:func:`ordered_sum`,
+  re-exported here for objectives of your own): ``jnp.sum`` rounds by the shape of the
+  whole batch it runs in, so a path's value would depend on the runs beside it.
 * **Padding.** Nodes at or beyond ``length`` are replaced by the last valid cell before
   anything is computed (``length`` is clipped to ``[1, L]``), so the result depends only
   on ``cells[:length]`` even if the padding does not repeat the last cell (jaxga's paths
@@ -65,7 +68,7 @@ import jax
 import jax.numpy as jnp
 import numpy as np
 
-from jaxga._batching.numerics import ordered_sum
+from jaxga._batching.numerics import ordered_sum  # re-exported: for objectives of your own
 from jaxga.core.clearance import (
     clearance_band,
     min_clearance,
@@ -103,6 +106,7 @@ __all__ = [
     "min_clearance",
     "mpmga",
     "mpmga_penalty",
+    "ordered_sum",
     "path_length",
     "sga",
     "tangencies",
@@ -332,7 +336,8 @@ def imga_safety(
 def _imga_safety(grid: Grid, g: Geometry, penalty: Scalar, border_blocked: bool) -> jax.Array:
     obstacles = proximity_obstacles(grid, border_blocked)
     near = _near_obstacle(obstacles, border_blocked).reshape(-1)[g.cells]
-    return as_f32(penalty) * jnp.sum(near & g.node, dtype=F32)
+    # counted in int32 (exact, as the float sum of 0s and 1s was), added as one float
+    return as_f32(penalty) * jnp.sum(near & g.node, dtype=jnp.int32).astype(F32)
 
 
 _NEIGHBOURS = np.array(

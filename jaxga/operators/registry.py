@@ -47,6 +47,7 @@ from __future__ import annotations
 
 import dataclasses
 import functools
+import inspect
 from collections.abc import Callable, Mapping
 from typing import Any
 
@@ -257,6 +258,11 @@ def register(op: Operator) -> Operator:
     if unknown:
         raise ValueError(f"unknown trait(s) {', '.join(sorted(unknown))} ({', '.join(TRAITS)})")
     fields = schema_fields()
+    if not isinstance(op.params, Mapping) or not all(
+            isinstance(k, str) and isinstance(f, Field) for k, f in op.params.items()):
+        raise ValueError(f"{op.family} operator {op.name!r}: params maps each key "
+                         f"'{op.family}.<name>' to a jaxga.core.fields.Field (its type, "
+                         f"range and default), got {shown_value(op.params)}")
     for key, field in op.params.items():
         if not key.startswith(f"{op.family}."):
             raise ValueError(f"{op.family} operator {op.name!r}: parameter {key!r} is not "
@@ -287,8 +293,10 @@ def register_operator(family: str, fn: Callable, name: str | None = None, *,
     ``declaration``: the other fields of :class:`Operator` (``params``, ``traits``,
     ``options``, ...). Check it with :func:`jaxga.testing.check_operator`.
     """
+    if not callable(fn):
+        raise ValueError(f"a {family} operator is a function, got {shown_value(fn)}")
     name = name or getattr(fn, "__name__", None)
-    if not name or not name.isidentifier():
+    if not isinstance(name, str) or not name.isidentifier():
         raise ValueError(f"an operator needs a name that is an identifier, got {name!r}")
     current = canonical(family, name) if family in FAMILIES else None
     if current is not None and replace:
@@ -296,9 +304,38 @@ def register_operator(family: str, fn: Callable, name: str | None = None, *,
         if old.fn is None or is_jaxgas(old.fn):
             raise ValueError(f"{family} operator {name!r} is jaxga's own: choose another name")
         unregister(family, current)
-    traits = frozenset(declaration.pop("traits", ()))
+    traits = declaration.pop("traits", ())
+    traits = frozenset((traits,) if isinstance(traits, str) else traits)  # one trait
+    if family in FAMILIES:
+        _check_arguments(family, name, fn, binds=bool(
+            declaration.get("options") or {NEEDS_FITNESS, FIELD_REPAIR} & traits))
     return register(Operator(family, name, fn, summary or (fn.__doc__ or name).strip()
                              .split("\n")[0], traits=traits, **declaration))
+
+
+_ARGUMENTS = {"init": "key, grid, capacity", "fitness": "grid, cells, length, feasible",
+              "selection": "key, fitness, active",
+              "crossover": "key, grid, c1, l1, c2, l2", "mutation": "key, grid, cells, length",
+              "simplify": "key, grid, cells, length", "post": "grid, cells, length"}
+"""The positional arguments the engine passes an operator of each family (the contract
+of the module docstring)."""
+
+
+def _check_arguments(family: str, name: str, fn: Callable, binds: bool) -> None:
+    """Refuse, when it is registered, a function that cannot take its family's
+    positional arguments (:data:`_ARGUMENTS`): too few parameters, or (where nothing
+    binds keywords: no ``options``, no trait that binds one) more required ones than
+    the engine passes. A function whose signature Python cannot read is let through."""
+    try:
+        sig = inspect.signature(fn)
+    except (TypeError, ValueError):
+        return
+    args = _ARGUMENTS[family]
+    dummies = [None] * len(args.split(", "))
+    try:
+        sig.bind(*dummies) if not binds else sig.bind_partial(*dummies)
+    except TypeError as e:
+        raise ValueError(f"{family} operator {name!r} must take ({args}): {e}") from None
 
 
 class ContractError(ParameterError):
@@ -317,10 +354,17 @@ def is_jaxgas(fn: Callable | None) -> bool:
     return in_jaxga(getattr(fn, "__module__", None) or "")
 
 
+_DTYPES = {"i": {jnp.dtype(jnp.int32)}, "b": {jnp.dtype(bool)},
+           "f": {jnp.dtype(jnp.float32)}, "ib": {jnp.dtype(jnp.int32), jnp.dtype(bool)}}
+"""The dtypes each output kind of :func:`_returns` allows, exactly: cells of uint8 or
+int16 would wrap a map's cell indices, a float16 fitness round others' ties."""
+
+
 def _returns(family: str, args: tuple) -> tuple[str, list[tuple[tuple, str]]]:
     """A family's contract for what an operator returns on ``args`` (one individual or
     pair, as :meth:`Operator.bind` calls it): its words, and per output the shape and the
-    kind of dtype (``"i"`` integer, ``"f"`` floating, ``"b"`` bool)."""
+    dtypes it may have (:data:`_DTYPES`: ``"i"`` int32, ``"b"`` bool, ``"f"`` float32,
+    ``"ib"`` int32 or bool)."""
     def shape(x: Any) -> tuple:
         return tuple(getattr(x, "shape", ()))
 
@@ -332,7 +376,7 @@ def _returns(family: str, args: tuple) -> tuple[str, list[tuple[tuple, str]]]:
         return (f"(cells int32[{'capacity' if cap is None else cap}], length int32, ok bool)",
                 [((cap,), "i"), ((), "i"), ((), "b")])
     if family == "fitness":
-        return "one float32 per path", [((), "fi")]
+        return "one float32 per path", [((), "f")]
     if family == "selection":
         n = shape(args[1])[:1]
         return f"int32{list(n)}: one parent index per individual", [(n, "i")]
@@ -367,11 +411,11 @@ def _checking_returns(op: Operator, bound: Callable) -> Callable:
                               for x, a in zip(got, arrays))
             raise ContractError(f"{op.family} operator {op.name!r} must return {words}, "
                                 f"got ({shown})")
-        kinds = [a.dtype.kind.replace("u", "i") for a in arrays]
+        dtypes = [a.dtype for a in arrays]
         shapes = [tuple(a.shape) for a in arrays]
         if len(got) != len(want) or any(
                 len(s) != len(ws) or any(w is not None and a != w for a, w in zip(s, ws))
-                or k not in wk for s, k, (ws, wk) in zip(shapes, kinds, want)):
+                or d not in _DTYPES[wk] for s, d, (ws, wk) in zip(shapes, dtypes, want)):
             shown = ", ".join(f"{a.dtype}{list(a.shape)}" for a in arrays)
             raise ContractError(f"{op.family} operator {op.name!r} must return {words}, "
                                 f"got ({shown})")

@@ -12,7 +12,7 @@ import pytest
 import jaxga
 import jaxga.testing
 from jaxga.core.grid import index_to_xy, move_legal
-from jaxga.core.objectives import path_length
+from jaxga.core.objectives import ordered_sum, path_length
 from jaxga.core.paths import is_continuous
 from jaxga.operators import registry
 from jaxga.operators.postprocess import compact
@@ -38,7 +38,7 @@ def short_and_straight(grid, cells, length, feasible):
     step = jnp.diff(index_to_xy(cells, grid.width), axis=0)
     inside = jnp.arange(1, cells.shape[0] - 1) < length - 1
     turns = jnp.sum(inside & jnp.any(step[1:] != step[:-1], axis=1))
-    f = 1.0 / (1.0 + jnp.sum(jnp.hypot(*step.T.astype(jnp.float32))) + turns)
+    f = 1.0 / (1.0 + ordered_sum(jnp.hypot(*step.T.astype(jnp.float32))) + turns)
     return jnp.where(feasible, f, 0.0).astype(jnp.float32)
 
 
