@@ -20,12 +20,12 @@ from jaxga.api.result_fronts import front_point_which
 from jaxga.compare import Comparison
 from jaxga.core.errors import EndpointError, JaxgaError, MapFormatError, ParameterError
 from jaxga.core.fields import Field
-from jaxga.core.grid import Grid, index_to_xy, move_legal
+from jaxga.core.grid import Grid, index_to_xy
 from jaxga.core.objectives import ordered_sum
 from jaxga.maps import builtin_path, load_map, map_name, parse_scen, read_scen, save_map
 from jaxga.maps.preprocess import check_coarse_endpoints, coarsen_blocked
 from jaxga.operators import registry
-from jaxga.operators.postprocess import compact
+from tests.config.test_own_operators import drop_point
 
 MAP = "classic_ga_gapp3_20x20"
 
@@ -258,17 +258,6 @@ def test_the_pure_core_refuses_params_that_are_not_the_gas(ga, params, words):
 
 
 # ---------------------------------------------------------- a researcher's operators
-def drop_point(key, grid, cells, length):
-    """Delete one random interior node whose neighbours are one legal move apart."""
-    i = jnp.arange(cells.shape[0])
-    prev, nxt = jnp.roll(cells, 1), jnp.roll(cells, -1)
-    can = (i > 0) & (i < length - 1) & move_legal(grid, prev, nxt)
-    pick = jax.random.categorical(key, jnp.where(can, 0.0, -jnp.inf))
-    new, new_length = compact(cells, (i < length) & (i != pick))
-    ok = jnp.any(can)
-    return jnp.where(ok, new, cells), jnp.where(ok, new_length, length), ~ok
-
-
 def straight_summed(grid, cells, length, feasible):
     """1 / (1 + length), the length added by ``jnp.sum``."""
     step = jnp.diff(index_to_xy(cells, grid.width), axis=0).astype(jnp.float32)
