@@ -185,7 +185,7 @@ def read_path(path: str | os.PathLike) -> np.ndarray:
     can be checked again (``jaxga replan --path``). A one-line :class:`ParameterError` for
     anything else: another frame, a key given twice, a coordinate that is not a number
     (``true``), a CSV value not written in ASCII digits (``1_0``)."""
-    path = file_path(path, "a path file")
+    path = file_path(path, "a path file", ParameterError)
     label = os.fspath(path)
     fmt = PATH_FORMATS.get(path.suffix.lower())
     if fmt is None:

@@ -48,7 +48,7 @@ from jaxga.core.paths import (
     is_loop_free,
     remove_loops,
 )
-from jaxga.engine import binding, build, fitness_function
+from jaxga.engine import binding, build, default_capacity, fitness_function
 from jaxga.engine.maptables import with_tables
 from jaxga.maps import random_map
 from jaxga.operators import registry
@@ -182,7 +182,7 @@ def check_fitness(op: registry.Operator, grid: Grid, pop: Population) -> None:
 
 
 ORDER_DEPENDENT = ("reduce_sum", "reduce_prod", "cumsum", "cumprod", "cumlogsumexp",
-                   "dot_general", "reduce_precision")
+                   "dot_general", "scatter-add")
 """Primitives whose floating-point result depends on the order XLA adds in, which it
 chooses by the shape of the whole batch (decision 044)."""
 
@@ -410,8 +410,13 @@ def check_operator(op: registry.Operator | str, fn: Callable | None = None, *,
     if grid is None:
         grid, default_pop = default_setting()
         parents = default_pop if parents is None else parents
-    elif parents is None:  # parents on the user's map, not the default map's
-        parents = random_parents(grid, P, seed=5)
+    elif parents is None:  # parents on the user's map, not the default map's, sized for it
+        try:
+            parents = random_parents(grid, P, seed=5,
+                                     capacity=max(CAPACITY, default_capacity(grid)))
+        except RuntimeError:
+            raise ValueError("check_operator: no parents could be made on this grid (is "
+                             "the goal reachable from the start?): pass parents=") from None
     if parents.cells.shape[0] != P:
         raise ValueError(f"check_operator needs {P} parents, got {parents.cells.shape[0]}")
     key = prng.seed_key(0) if key is None else key

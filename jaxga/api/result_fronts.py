@@ -6,13 +6,14 @@ from __future__ import annotations
 
 import dataclasses
 import math
+import numbers
 from collections.abc import Mapping
 from typing import Any
 
 import numpy as np
 
 from jaxga.core.errors import ParameterError
-from jaxga.core.fields import shown_value
+from jaxga.core.fields import python_scalar, shown_value
 
 
 def json_number(x: float | None) -> float | None:
@@ -37,20 +38,32 @@ def check_front_point(names: tuple[str, ...], which: str | float) -> None:
             f"the knee")
 
 
-def front_point_which(which: Any, name: str = "which") -> str | float:
+def front_point_which(which: Any) -> str | float:
     """``which`` as :meth:`Result.front_point` takes it: ``"knee"``, ``"shortest"``,
-    ``"widest"`` or a least clearance (a real number >= 0, as a float), else a one-line
+    ``"widest"`` or a least clearance (:func:`least_clearance`), else a one-line
     :class:`ParameterError` (a string of digits, a bool, NaN or None would otherwise be
     read as another point, or as none)."""
-    if isinstance(which, str):
-        if which == "knee" or which in FRONT_POINT_OBJECTIVE:
-            return which
-    elif not isinstance(which, (bool, np.bool_)) and isinstance(which, (int, float, np.number)):
-        value = float(which)
-        if math.isfinite(value) and value >= 0:
-            return value
-    raise ParameterError(f"{name} must be 'knee', 'shortest', 'widest' or a least clearance "
+    if isinstance(which, str) and (which == "knee" or which in FRONT_POINT_OBJECTIVE):
+        return which
+    if not isinstance(which, str):
+        try:
+            return least_clearance(which, "which")
+        except ParameterError:
+            pass
+    raise ParameterError(f"which must be 'knee', 'shortest', 'widest' or a least clearance "
                          f"(a number >= 0), got {shown_value(which)}")
+
+
+def least_clearance(value: Any, name: str = "min_clearance") -> float:
+    """``value`` as a least clearance: a real number >= 0 (a NumPy or JAX scalar, a 0-d
+    array of one, a fraction), as a float; a one-line :class:`ParameterError` naming
+    ``name`` otherwise (a bool, a string, NaN)."""
+    number = python_scalar(value)
+    if not isinstance(number, bool) and isinstance(number, numbers.Real):
+        number = float(number)
+        if math.isfinite(number) and number >= 0:
+            return number
+    raise ParameterError(f"{name} must be a number >= 0, got {shown_value(value)}")
 
 
 @dataclasses.dataclass(frozen=True)
@@ -141,10 +154,7 @@ class FrontsOfResult:
         front does not minimise the clearance."""
         i = self.seed_index(i)
         if min_clearance is not None:
-            min_clearance = front_point_which(min_clearance, "min_clearance")
-            if isinstance(min_clearance, str):
-                raise ParameterError(f"min_clearance must be a number >= 0, got "
-                                     f"{min_clearance!r} (front_point takes the names)")
+            min_clearance = least_clearance(min_clearance)
         if self.front is not None and min_clearance is not None:
             check_front_point(self.front.names, min_clearance)
         points = self.front_points(i)

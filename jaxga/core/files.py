@@ -58,7 +58,8 @@ def atomic_write(path: str | os.PathLike, write: Callable[[IO], None], *,
     interrupt) removes the temporary file and leaves any previous ``path`` whole; an
     ``OSError`` becomes a :class:`JaxgaError` naming ``path``. A ``path`` that is, or
     links to, a process's stream (``/dev/stdout``, ``/proc/self/fd/1``) is refused: the
-    rename would replace the file the stream is redirected to. While the file is being
+    rename would replace the file the stream is redirected to, and so is a file inside
+    jaxga's own folder (:data:`PACKAGE`: a built-in map, a module). While the file is being
     written its temporary name (``.NAME.<pid>.<random>.tmp``) is registered, so that a
     process ended by a signal removes it first (:func:`remove_temporaries`); one that a
     process killed outright left is removed by the next write of the same file
@@ -267,14 +268,16 @@ def same_file(a: str | os.PathLike, b: str | os.PathLike) -> bool:
         return os.path.abspath(a) == os.path.abspath(b)
 
 
-def file_path(path: Any, what: str = "a file") -> Path:
+def file_path(path: Any, what: str = "a file",
+              error: type[JaxgaError] = JaxgaError) -> Path:
     """``path`` (a ``str`` or an ``os.PathLike`` such as :class:`pathlib.Path`) as a
-    :class:`~pathlib.Path`, or one :class:`JaxgaError` line naming ``what`` and what was
-    given: bytes, numbers, None and other objects are not file names here."""
+    :class:`~pathlib.Path`, or one ``error`` line (a :class:`JaxgaError`, or the one its
+    caller documents) naming ``what`` and what was given: bytes, numbers, None and other
+    objects are not file names here."""
     name = os.fspath(path) if isinstance(path, os.PathLike) else path
     if not isinstance(name, str):
-        raise JaxgaError(f"the name of {what} must be a str or a pathlib.Path, got "
-                         f"{shown_value(path)}")
+        raise error(f"the name of {what} must be a str or a pathlib.Path, got "
+                    f"{shown_value(path)}")
     return Path(name)
 
 
@@ -357,13 +360,13 @@ def folder_problem(folder: str | os.PathLike) -> str | None:
     """Why a new file cannot be made in ``folder``, or None when it can (a real try: mode
     bits lie for root, ``/proc`` and read-only mounts)."""
     folder = Path(folder)
-    if not folder.is_dir():
-        try:  # a name too long, a folder without search permission: say which
-            os.stat(folder)
-        except (FileNotFoundError, NotADirectoryError):
-            pass
-        except OSError as e:
-            return f"folder {str(folder)!r} cannot be used ({_why(e)})"
+    try:  # not Path.is_dir: it raises for a name too long or a folder out of reach
+        is_folder = stat.S_ISDIR(os.stat(folder).st_mode)
+    except (FileNotFoundError, NotADirectoryError):
+        is_folder = False
+    except OSError as e:  # a name too long, a loop of links, no search permission
+        return f"folder {str(folder)!r} cannot be used ({_why(e)})"
+    if not is_folder:
         return f"folder {str(folder)!r} does not exist"
     try:
         fd, tmp = _new_temporary(folder, ".jaxga-probe.")

@@ -349,10 +349,13 @@ def save_map(grid: Grid | np.ndarray, path: Source, *, fmt: str | None = None,
     than ``.png``, ``.map`` for a non-Moving AI file, a ROS map not named ``.yaml``); a
     resolution or origin a ROS map cannot have (:data:`jaxga.maps.ros.MIN_RESOLUTION` to
     :data:`~jaxga.maps.ros.MAX_RESOLUTION` m, origins within
-    :data:`~jaxga.maps.ros.MAX_ORIGIN` m). Each file is written whole or not at all
-    (:func:`jaxga.core.files.atomic_write`).
+    :data:`~jaxga.maps.ros.MAX_ORIGIN` m); a name that is not a ``str`` or a path. Each
+    file is written whole or not at all (:func:`jaxga.core.files.atomic_write`), and one
+    it cannot write is refused as a :class:`~jaxga.core.errors.JaxgaError` line (a
+    folder of that name, a read-only file, a file inside jaxga's own folder); a ROS
+    map's YAML and image are both checked before either is written.
     """
-    p = file_path(path, "the map to save")
+    p = file_path(path, "the map to save", MapFormatError)
     suffix = p.suffix.lower()
     if fmt is None:
         fmt = {".map": "movingai", ".png": "png", ".ascii": "ascii", ".asc": "ascii",

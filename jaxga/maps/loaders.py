@@ -157,7 +157,7 @@ def map_name(source: Source) -> str:
 
     if isinstance(source, str) and source in builtin.builtin_names():
         return source
-    path = file_path(source, "a map")
+    path = file_path(source, "a map", MapFormatError)
     if path.stem.lower() in GENERIC_STEMS:
         folder = path.resolve().parent.name
         return folder or path.stem
@@ -227,9 +227,11 @@ def load_map(
             a regular file or is larger than jaxga reads for a map
             (:func:`jaxga.maps.inputs.map_file_cap`); an image whose pixel data does not
             match its header (:func:`jaxga.maps.inputs.check_image_data`); an option with
-            no effect on the map's format.
-        EndpointError: an endpoint off the map, or start and goal merged or an endpoint
-            blocked by ``coarsen``. (Blocked endpoints are otherwise *not* checked here;
+            no effect on the map's format; a ``coarsen`` factor larger than the map's
+            longer side.
+        EndpointError: an endpoint that is not a pair of integers (or, in metres, of
+            numbers), off the map, or start and goal merged or an endpoint blocked by
+            ``coarsen``. (Blocked endpoints are otherwise *not* checked here;
             see :meth:`jaxga.Grid.check_endpoints`.)
     """
     return load_map_info(**locals()).grid  # every argument above, by name

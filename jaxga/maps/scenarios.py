@@ -90,7 +90,7 @@ def read_scen(path: str | os.PathLike) -> list[Scenario]:
     bytes, a missing ``version`` header, a line without 9 fields, a non-numeric field or
     a start or goal off its map, naming the file and line.
     """
-    p = file_path(path, "a scenario file")
+    p = file_path(path, "a scenario file", MapFormatError)
     label = str(p)
     try:
         text = read_input(p, SCENARIO_CAP, what="scenario file", label=label,

@@ -979,13 +979,13 @@ def test_hostile_python_arguments_are_one_line_errors(call, error, words):
 
 def test_a_numpy_scalar_budget_is_a_number_of_seconds():
     """np.float32(1) was refused where np.float64(1) was taken; a bool is not seconds."""
-    from jaxga.api.runs import _check_call_options
+    from jaxga.api.runs import check_call_options
 
     for budget in (np.float32(1), np.float64(2.5), np.int64(3), 0, 1.5, None, "auto"):
-        _check_call_options(None, 1, None, budget)
+        check_call_options(None, 1, None, budget)
     for bad in (np.bool_(True), True, np.float32("nan"), -1, "soon"):
         with pytest.raises(ParameterError, match="any_angle_budget must be"):
-            _check_call_options(None, 1, None, bad)
+            check_call_options(None, 1, None, bad)
 
 
 def test_a_request_whose_runs_cannot_fit_in_memory_is_refused(grid, monkeypatch):

@@ -16,7 +16,7 @@ import jaxga.testing
 from jaxga import export
 from jaxga._runtime.seeds import seed_list
 from jaxga.api.problem import own_operators
-from jaxga.api.result_fronts import front_point_which
+from jaxga.api.result_fronts import front_point_which, least_clearance
 from jaxga.compare import Comparison
 from jaxga.core.errors import EndpointError, JaxgaError, MapFormatError, ParameterError
 from jaxga.core.fields import Field
@@ -173,6 +173,26 @@ def test_no_writer_replaces_a_file_of_jaxgas_own():
     assert not path.with_suffix(".csv").exists()
 
 
+def test_a_file_name_that_is_not_text_raises_the_documented_error(tmp_path):
+    with pytest.raises(MapFormatError):
+        save_map(np.zeros((2, 2), bool), b"x.txt")
+    with pytest.raises(MapFormatError):
+        read_scen(b"x.scen")
+    with pytest.raises(ParameterError):
+        export.read_path(None)
+
+
+def test_a_folder_out_of_reach_is_said_so(tmp_path):
+    """A folder whose name is too long: Path.is_dir raised OSError on Python 3.11."""
+    from jaxga.core.files import check_outputs, folder_problem
+
+    long = tmp_path / ("a" * 300)
+    assert "cannot be used (File name too long)" in folder_problem(long)
+    assert "does not exist" in folder_problem(tmp_path / "missing")
+    with pytest.raises(JaxgaError, match="File name too long"):
+        check_outputs({"--json": long / "x.json"})
+
+
 def test_a_scenario_given_as_bytes_is_one_line():
     with pytest.raises(MapFormatError, match="must be a str"):
         parse_scen(b"version 1\n")
@@ -225,9 +245,18 @@ def test_a_front_point_that_is_no_point_is_refused(which):
 
 
 @pytest.mark.parametrize("which, value", [("knee", "knee"), ("widest", "widest"),
-                                          (0, 0.0), (np.float32(1.5), 1.5)])
+                                          (0, 0.0), (np.float32(1.5), 1.5),
+                                          (np.array(1.5), 1.5), (jnp.float32(2.0), 2.0)])
 def test_a_front_point_is_a_name_or_a_clearance(which, value):
+    """A 0-d NumPy or JAX array is the number it holds, as everywhere in the API."""
     assert front_point_which(which) == value
+
+
+def test_a_least_clearance_is_a_number():
+    assert least_clearance(np.array(0.5)) == 0.5
+    with pytest.raises(ParameterError) as e:
+        least_clearance("1.5")
+    assert _one_line(e) == "min_clearance must be a number >= 0, got '1.5'"
 
 
 @pytest.fixture(scope="module")
@@ -354,6 +383,17 @@ def test_check_operator_on_a_map_of_ones_own_makes_parents_there():
     jaxga.testing.check_operator("mutation", drop_point, grid=grid)
 
 
+def test_check_operator_on_a_larger_map_of_ones_own_sizes_its_parents():
+    """The parents made on a grid given took the default map's 64 cells, too few for a
+    path across a 40 x 40 map: "could not build valid parents" for any operator."""
+    grid = Grid.create(np.zeros((40, 40), bool), corner_rule="strict")
+    jaxga.testing.check_operator("mutation", drop_point, grid=grid)
+    walled = np.zeros((5, 5), bool)
+    walled[:, 2] = True
+    with pytest.raises(ValueError, match="no parents could be made on this grid"):
+        jaxga.testing.check_operator("mutation", drop_point, grid=Grid.create(walled))
+
+
 def test_check_operator_refuses_a_declaration_the_registered_operator_lacks(registered):
     registered.append(("mutation", "drop_point"))
     jaxga.register_operator("mutation", drop_point)
@@ -381,6 +421,11 @@ def test_float_reductions_are_found_in_loops_and_branches_not_in_integer_sums():
     assert jaxga.testing.float_reductions(
         lambda v: jax.lax.fori_loop(0, 3, lambda i, c: c + jnp.cumsum(v)[i], 0.0),
         x) == ["cumsum"]
+    assert jaxga.testing.float_reductions(
+        lambda v: jnp.zeros(2).at[jnp.array([0, 1, 1, 0, 1, 0, 0, 1])].add(v), x) == [
+        "scatter-add"]
+    assert jaxga.testing.float_reductions(  # rounding each value alone is no reduction
+        lambda v: jax.lax.reduce_precision(v, exponent_bits=5, mantissa_bits=10), x) == []
 
 
 def test_the_papers_objectives_add_in_a_fixed_order():
