@@ -42,11 +42,11 @@ def seed_list(seeds: int | Sequence[int],
         if isinstance(seeds, (AbstractSet, Mapping)):  # no order: run i's seed is unknown
             raise TypeError
         listed = None if isinstance(seeds, np.ndarray) else list(seeds)
-        if listed is not None and any(isinstance(v, (bool, np.bool_)) for v in listed):
-            raise TypeError  # [2, True] is not seeds 2 and 1
         arr = seeds if listed is None else np.asarray(listed)
     except TypeError:
-        arr = None
+        arr = listed = None
+    if listed is not None and any(isinstance(v, (bool, np.bool_)) for v in listed):
+        raise JaxgaError(f"seeds must be integers, got {listed!r}")  # [2, True]: not 2, 1
     if arr is None or isinstance(seeds, (str, bytes)) or arr.ndim != 1:
         raise JaxgaError(f"seeds must be a count or a list of integer seeds, got {seeds!r}")
     if arr.size == 0:
