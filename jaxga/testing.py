@@ -395,10 +395,8 @@ def check_operator(op: registry.Operator | str, fn: Callable | None = None, *,
         declared = {k: v for k, v in declaration.items() if k not in ("name", "summary")}
         declaration.setdefault("name", getattr(fn, "__name__", "operator"))
         declaration.setdefault("summary", "an operator under test")
-        if isinstance(declaration.get("traits"), str):  # one trait
-            declaration["traits"] = frozenset((declaration["traits"],))
-        elif "traits" in declaration:
-            declaration["traits"] = frozenset(declaration["traits"])
+        if "traits" in declaration:
+            declaration["traits"] = registry.as_traits(declaration["traits"])
         op = registry.Operator(family=op, fn=fn, **declaration)
         current = registry.canonical(op.family, op.name)
         if current is not None and any(

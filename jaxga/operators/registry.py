@@ -72,6 +72,7 @@ __all__ = [
     "MethodField",
     "Operator",
     "accepted_names",
+    "as_traits",
     "canonical",
     "initialiser",
     "names",
@@ -304,13 +305,18 @@ def register_operator(family: str, fn: Callable, name: str | None = None, *,
         if old.fn is None or is_jaxgas(old.fn):
             raise ValueError(f"{family} operator {name!r} is jaxga's own: choose another name")
         unregister(family, current)
-    traits = declaration.pop("traits", ())
-    traits = frozenset((traits,) if isinstance(traits, str) else traits)  # one trait
+    traits = as_traits(declaration.pop("traits", ()))
     if family in FAMILIES:
         _check_arguments(family, name, fn, binds=bool(
             declaration.get("options") or {NEEDS_FITNESS, FIELD_REPAIR} & traits))
     return register(Operator(family, name, fn, summary or (fn.__doc__ or name).strip()
                              .split("\n")[0], traits=traits, **declaration))
+
+
+def as_traits(traits: Any) -> frozenset[str]:
+    """An operator's traits as a frozenset: one trait may be given as its name (a string
+    is not the set of its letters)."""
+    return frozenset((traits,) if isinstance(traits, str) else traits)
 
 
 _ARGUMENTS = {"init": "key, grid, capacity", "fitness": "grid, cells, length, feasible",
