@@ -69,6 +69,7 @@ import io
 import itertools
 import json
 import math
+import numbers
 import os
 import re
 import socket
@@ -84,6 +85,7 @@ import numpy as np
 from jax.errors import JaxRuntimeError
 
 from jaxga.core.errors import DeviceWarning, JaxgaError
+from jaxga.core.fields import shown_value
 from jaxga.core.numerals import ascii_float, ascii_int
 
 ENV_DEVICES = "JAXGA_DEVICES"
@@ -123,12 +125,14 @@ def cores() -> int:
 def user_device_setting() -> str | None:
     """The user's own CPU device count setting, if any (``XLA_FLAGS`` or
     ``JAX_NUM_CPU_DEVICES``), as text for messages; None if there is none."""
-    flags = os.environ.get("XLA_FLAGS", "")
-    m = re.search(re.escape(_FORCE_FLAG) + r"=(\d+)", flags)
-    if m:
-        return f"XLA_FLAGS {_FORCE_FLAG}={m.group(1)}"
+    # the one JAX uses: JAX_NUM_CPU_DEVICES over XLA_FLAGS, and of a flag given twice
+    # the last, as XLA reads it
     if os.environ.get("JAX_NUM_CPU_DEVICES"):
         return f"JAX_NUM_CPU_DEVICES={os.environ['JAX_NUM_CPU_DEVICES']}"
+    flags = os.environ.get("XLA_FLAGS", "")
+    found = re.findall(re.escape(_FORCE_FLAG) + r"=(\S*)", flags)
+    if found:
+        return f"XLA_FLAGS {_FORCE_FLAG}={found[-1]}"
     return None
 
 
@@ -158,7 +162,8 @@ def set_local_devices(n: int | None = None, *, warn: bool = True) -> int | None:
     if n is None:
         setting = user_device_setting()
         if setting is not None:
-            count = int(setting.rsplit("=", 1)[1]) if setting[-1].isdigit() else 0
+            value = setting.rsplit("=", 1)[1]
+            count = int(value) if value.isascii() and value.isdigit() else 0
             if count > max_cpu_devices() and warn:  # kept (the user's JAX), but said
                 warnings.warn(
                     f"{setting} gives JAX {count} CPU devices on {cores()} core(s): "
@@ -167,6 +172,8 @@ def set_local_devices(n: int | None = None, *, warn: bool = True) -> int | None:
                     DeviceWarning, stacklevel=2)
             return None
         n = cores()
+    if isinstance(n, bool) or not isinstance(n, numbers.Integral):
+        raise JaxgaError(f"the device count must be a whole number, got {shown_value(n)}")
     n = int(n)
     if n < 1:
         raise JaxgaError(f"the device count must be >= 1, got {n}")
@@ -228,6 +235,7 @@ class _Session:
         self.timeout = float(timeout)
         self.gathers = itertools.count()
         self.broadcasts = itertools.count()
+        self.device_counts: list[int] | None = None
         self.beats: dict[int, str] = {}
         self._stop = threading.Event()
         self._thread = threading.Thread(target=self._monitor, name="jaxga-liveness",
@@ -393,12 +401,30 @@ def _current_session() -> _Session | None:
     return _session
 
 
+def process_device_counts() -> list[int]:
+    """Every process's count of local devices, in process order (``[local count]`` with
+    one process). Processes may differ (hosts with other core counts, other
+    ``--devices``): each publishes its own once per session and reads the others'."""
+    s = _current_session()
+    if s is None:
+        return [jax.local_device_count()]
+    if s.device_counts is None:
+        s.client.key_value_set(f"jaxga/devices/{s.process_id}", str(jax.local_device_count()))
+        s.device_counts = [
+            jax.local_device_count() if j == s.process_id
+            else int(s.wait_for(f"jaxga/devices/{j}", j, "its device count"))
+            for j in range(s.num_processes)]
+    return s.device_counts
+
+
 def run_share(n_runs: int) -> tuple[int, slice]:
     """``(padded run count, this process's slice)``: the runs padded to a multiple of
-    processes x local devices, split into equal contiguous shares in process order."""
+    processes x the least common multiple of the processes' local device counts, split
+    into equal contiguous shares in process order. Every process computes the same
+    split, whatever its own device count, so each run is computed exactly once."""
     s = _current_session()
     procs, me = (1, 0) if s is None else (s.num_processes, s.process_id)
-    unit = procs * jax.local_device_count()
+    unit = procs * math.lcm(*process_device_counts())
     total = math.ceil(n_runs / unit) * unit
     share = total // procs
     return total, slice(me * share, (me + 1) * share)

@@ -130,6 +130,22 @@ def test_two_processes_give_the_single_process_result(single_run, tmp_path):
     assert two == single_run
 
 
+def test_processes_with_other_device_counts_give_the_single_process_result(single_run,
+                                                                           tmp_path):
+    """Processes on hosts of other core counts (here ``--devices 2`` and ``--devices 3``)
+    split the runs alike, so every seed is computed once: before, each process took its
+    share from its own device count, and a seed came back as a copy of another's."""
+    with _Procs(tmp_path) as procs:
+        port = _free_port()
+        ps = [procs.start(f"p{i}", _cli(*RUN, "--devices", str(n), "--json", "mixed.json",
+                                        "--coordinator", f"127.0.0.1:{port}",
+                                        "--num-processes", "2", "--process-id", str(i)))
+              for i, n in enumerate((2, 3))]
+        rcs = [procs.wait(p) for p in ps]
+        assert rcs == [0, 0], [procs.output(p.name) for p in ps]
+    assert _runs(tmp_path / "mixed.json") == single_run
+
+
 DOE = ["doe", "--preset", "sga", "--map", MAP, "--corner-rule", "free", "--design", "L9",
        "--factor", "crossover.probability=0.5,0.7,0.9",
        "--factor", "mutation.probability=0.1,0.2,0.3", "--seeds", "2", "--generations", "5",
