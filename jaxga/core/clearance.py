@@ -12,8 +12,9 @@ from jaxga.core.dtypes import F32
 from jaxga.core.grid import Grid, proximity_obstacles
 from jaxga.core.path_geometry import Geometry, check_grid, geometry
 
-__all__ = ["CLEARANCE_CHUNK", "CLEARANCE_PIECE", "CLEARANCE_RADIUS", "clearance_band",
-           "min_clearance", "min_clearance_of", "tangencies", "tangencies_of"]
+__all__ = ["CLEARANCE_CHUNK", "CLEARANCE_PIECE", "CLEARANCE_RADIUS", "CLEARANCE_WIDE_RADIUS",
+           "clearance_band", "min_clearance", "min_clearance_of", "tangencies",
+           "tangencies_of"]
 
 
 def _box_clearance(
@@ -85,6 +86,11 @@ CLEARANCE_RADIUS = 4
 path's clearance costs ``O(L)`` on a map where it passes near obstacles (see
 :func:`clearance_band`)."""
 
+CLEARANCE_WIDE_RADIUS = 64
+"""The radius of the second, wider band searched where no segment comes within
+:data:`CLEARANCE_RADIUS` of an obstacle (a path across an open hall), so that only a
+path farther than this from every obstacle is measured against the whole map."""
+
 CLEARANCE_PIECE = 4
 """Major-axis cells per piece of a segment: each piece's share of the band is one fixed,
 small array of cells (:func:`_piece_band_clearance`); a step of a continuous path is one
@@ -101,13 +107,14 @@ def _piece_band_clearance(
     by: jax.Array,
     piece: jax.Array,
     blocked: jax.Array,
+    radius: int = CLEARANCE_RADIUS,
 ) -> tuple[jax.Array, jax.Array]:
     """:func:`_box_clearance` of segment ``a b`` against the cells of piece ``piece`` of the
-    band around it.
+    band of ``radius`` (static; ``R`` below) around it.
 
     The band, along the segment's major axis ``u`` (x when ``|dx| >= |dy|``, so the slope
-    is at most 1): the columns ``u0 - R - 1 .. u1 + R + 1`` (``R`` =
-    :data:`CLEARANCE_RADIUS`, ``u0 <= u1`` the segment's ends) and in each the rows within
+    is at most 1): the columns ``u0 - R - 1 .. u1 + R + 1`` (``u0 <= u1`` the segment's
+    ends) and in each the rows within
     ``2 R + 3`` of the line at the column clamped to ``[u0, u1]``. A cell whose square is
     within ``R + 1/4`` of the segment lies in the band: its centre is within ``R + 3/4``
     of the nearest point ``p`` on each axis, and the line at the clamped column is within
@@ -117,7 +124,7 @@ def _piece_band_clearance(
     the pieces ``0 .. ceil((u1 - u0) / P) - 1`` (at least one) cover the band.
     """
     h, w = blocked.shape
-    r, size = CLEARANCE_RADIUS, CLEARANCE_PIECE
+    r, size = radius, CLEARANCE_PIECE
     k = 2 * r + 3
     x_major = jnp.abs(bx - ax) >= jnp.abs(by - ay)
     au, av = jnp.where(x_major, ax, ay), jnp.where(x_major, ay, ax)
@@ -149,9 +156,10 @@ def clearance_band(grid: Grid, g: Geometry,
     last one. A segment whose band distance is at most the radius has its exact
     clearance; the others are farther, so when any segment is that close the minimum is
     exact, and touching cells always lie in the band. Otherwise (a path that stays away
-    from every obstacle) each straight run of the path (consecutive segments in one
-    direction, one segment to the map) is measured against the whole map, ``O(R H W)``
-    for a path of ``R`` runs.
+    from every obstacle) the pieces are measured again in a band of
+    :data:`CLEARANCE_WIDE_RADIUS`, the same way; only a path beyond that too has each
+    straight run (consecutive segments in one direction, one segment to the map)
+    measured against the whole map, ``O(R H W)`` for a path of ``R`` runs.
     """
     h, w = check_grid(grid)
     obstacles = proximity_obstacles(grid, border_blocked)
@@ -170,22 +178,38 @@ def clearance_band(grid: Grid, g: Geometry,
                        0)
     first = jnp.cumsum(pieces) - pieces  # each segment's first piece
     total = jnp.sum(pieces)
-    chunk = CLEARANCE_CHUNK
+    def band(radius: int, skip: jax.Array) -> tuple[jax.Array, jax.Array]:
+        """Every piece's band of ``radius`` (none where ``skip``): the least distance
+        and the int32 touch flags of the segments. A block holds about as many cells at
+        either radius (:data:`CLEARANCE_CHUNK` pieces of the first band)."""
+        cells = (CLEARANCE_PIECE + 2 * radius + 3) * (4 * radius + 7)
+        first_cells = (CLEARANCE_PIECE + 2 * CLEARANCE_RADIUS + 3) * (4 * CLEARANCE_RADIUS + 7)
+        chunk = max(1, CLEARANCE_CHUNK * first_cells // cells)
 
-    def block(state):
-        start, near, touch = state
-        t = start + jnp.arange(chunk, dtype=jnp.int32)
-        seg = jnp.clip(jnp.searchsorted(first, t, side="right") - 1, 0, n_seg - 1)
-        sub = tuple(v[seg] for v in segs)
-        d, hit = jax.vmap(lambda *s: _piece_band_clearance(*s, obstacles))(*sub, t - first[seg])
-        valid = t < total
-        return (start + chunk, jnp.minimum(near, jnp.min(jnp.where(valid, d, jnp.inf))),
-                touch.at[jnp.where(valid & hit, seg, n_seg)].set(1, mode="drop"))
+        def block(state):
+            start, near, touch = state
+            t = start + jnp.arange(chunk, dtype=jnp.int32)
+            seg = jnp.clip(jnp.searchsorted(first, t, side="right") - 1, 0, n_seg - 1)
+            sub = tuple(v[seg] for v in segs)
+            d, hit = jax.vmap(lambda *s: _piece_band_clearance(*s, obstacles, radius))(
+                *sub, t - first[seg])
+            valid = t < total
+            return (start + chunk, jnp.minimum(near, jnp.min(jnp.where(valid, d, jnp.inf))),
+                    touch.at[jnp.where(valid & hit, seg, n_seg)].set(1, mode="drop"))
 
-    _, near, touch = jax.lax.while_loop(
-        lambda s: s[0] < total, block,
-        # int32 flags, not bool: no bool table updated in a loop (docs/devices.md)
-        (jnp.int32(0), jnp.asarray(jnp.inf, F32), jnp.zeros((n_seg,), jnp.int32)))
+        _, near, touch = jax.lax.while_loop(
+            lambda s: s[0] < jnp.where(skip, 0, total), block,
+            # int32 flags, not bool: no bool table updated in a loop (docs/devices.md)
+            (jnp.int32(0), jnp.asarray(jnp.inf, F32), jnp.zeros((n_seg,), jnp.int32)))
+        return near, touch
+
+    near, touch = band(CLEARANCE_RADIUS, jnp.bool_(False))
+    # A path that stays beyond the first band (an open hall): the wider band, whose
+    # loop runs only for such a path (under vmap: while any path needs it). Each cell's
+    # distance is the segment's and the cell's alone (:func:`_box_clearance`), so the
+    # value is the one the whole map gives wherever it is at most the wider radius.
+    wide, _ = band(CLEARANCE_WIDE_RADIUS, near <= CLEARANCE_RADIUS)
+    near = jnp.minimum(near, wide)
 
     def whole_map(state: tuple[jax.Array, jax.Array]) -> tuple[jax.Array, jax.Array]:
         # masking the segments and the map with the carried flag (False in the body) makes
@@ -214,9 +238,9 @@ def clearance_band(grid: Grid, g: Geometry,
         starts = jnp.nonzero(begins, size=n_seg, fill_value=0)[0].astype(jnp.int32)
         n_runs = jnp.maximum(jnp.sum(begins, dtype=jnp.int32), 1)
 
-    # Runs its body only if this path (under vmap: any path) stays beyond the radius.
+    # Runs its body only if this path (under vmap: any path) stays beyond both bands.
     near, _ = jax.lax.while_loop(lambda s: ~s[1], whole_map,
-                                 (near.astype(F32), near <= CLEARANCE_RADIUS))
+                                 (near.astype(F32), near <= CLEARANCE_WIDE_RADIUS))
     return near, touch != 0
 
 

@@ -440,6 +440,34 @@ def test_clearance_bands_equal_the_whole_map():
                 np.testing.assert_array_equal(np.asarray(got), np.asarray(want))
 
 
+def test_clearance_beyond_the_first_band_equals_the_whole_map():
+    """A path across an open hall: beyond :data:`clearance.CLEARANCE_RADIUS` of every
+    obstacle it is measured in the wider band (its work bounded by the path), and only
+    beyond :data:`clearance.CLEARANCE_WIDE_RADIUS` against the whole map; every value
+    bit for bit the whole map's, an 8-connected staircase and long waypoint segments
+    alike."""
+    size = 160
+    b = np.zeros((size, size), bool)
+    b[2:5, 3:6] = True  # one obstacle near a corner of the open hall
+    grid = Grid.create(b, corner_rule="strict")
+    paths = [  # least distance to the obstacle about: 4-64 (the wide band), > 64 (whole map)
+        [(12, 12), (40, 20)],
+        [(20, 4), (21, 5), (22, 5), (23, 6), (24, 6), (25, 7), (26, 7)],
+        [(30, 40), (31, 41), (32, 41), (33, 42)],
+        [(150, 150), (100, 155), (140, 90)],
+        [(9, 3), (9, 10)],  # within the first band
+    ]
+    made = [make_path(p, cap=8, width=size) for p in paths]
+    band, whole = _band_and_whole(grid, jnp.stack([c for c, _ in made]),
+                                  jnp.stack([n for _, n in made]))
+    for got, want in zip(band, whole):
+        np.testing.assert_array_equal(np.asarray(got), np.asarray(want))
+    near = np.asarray(band[0])
+    assert (near[:3] > clearance.CLEARANCE_RADIUS).all()
+    assert (near[:3] <= clearance.CLEARANCE_WIDE_RADIUS).all()
+    assert near[3] > clearance.CLEARANCE_WIDE_RADIUS and near[4] <= clearance.CLEARANCE_RADIUS
+
+
 def test_metrics_bundle():
     """The reported metrics in one call, consistent with the single functions."""
     grid = make_grid(obstacles=[(3, 0), (0, 3)], goal=(4, 4))
