@@ -220,7 +220,7 @@ class FrontsOfResult:
         return (f"front ({', '.join(self.front.names)}; medians over {ok.size} seeds): "
                 f"{median('points'):g} points; shortest end {100 * median('shortest_gap'):.2f} "
                 f"% over the any-angle optimum; widest end: its cells {wide_text} from the "
-                f"walls planned on, "
+                f"map's obstacles (before inflation), "
                 f"{share}; hypervolume "
                 f"x{median('hypervolume_gain'):.3f} over the initial population's")
 

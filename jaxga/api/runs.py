@@ -139,9 +139,16 @@ def _point_configs(config: Config, points: Sequence[Mapping[str, Any]]) -> list[
             new = dict(static_config(cfg).items)
             old = dict(base.items)
             changed = sorted(k for k in new.keys() | old.keys() if new.get(k) != old.get(k))
+            if changed == ["generations"]:  # a run-time value, but one per call
+                raise ParameterError(
+                    f"sweep point {dict(point)} changes generations: the runs of one sweep "
+                    "share its generation count (given to sweep as generations=); run "
+                    "another count as another sweep, which reuses the compiled programs")
+            compiled = ", ".join(k for k in changed if k != "generations")
+            also = " (and generations, one per sweep)" if "generations" in changed else ""
             raise ParameterError(
-                f"sweep point {dict(point)} changes {', '.join(changed)}, which the "
-                "compiled program depends on: only dynamic keys (rates, weights, "
+                f"sweep point {dict(point)} changes {compiled}, which the "
+                f"compiled program depends on{also}: only dynamic keys (rates, weights, "
                 "temperatures, init.max_tries, init.fallback, termination.stagnation, "
                 "islands.interval, the per-island rates, AGACD's Delphi ratios; 'dynamic' "
                 "in jaxga presets --show) and population.size can be swept in one compiled "

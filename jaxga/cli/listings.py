@@ -30,16 +30,21 @@ def cmd_maps(args: argparse.Namespace) -> int:
 def sweep_kind(key: str) -> str:
     """``"dynamic"`` for a key a sweep varies in one compiled call (a traced parameter,
     or the population size: :func:`jaxga.config.schema.sweepable`), ``"static"`` for one
-    compiled in, ``""`` for metadata (name, paper, description)."""
+    compiled in, ``"per call"`` for the generation count (a run-time value of the
+    programs, one per call: a sweep has one), ``""`` for metadata (name, paper,
+    description)."""
     if key in ("name", "paper", "description"):
         return ""
+    if key == "generations":
+        return "per call"
     return "dynamic" if sweepable(key) else "static"
 
 
 def cmd_presets(args: argparse.Namespace) -> int:
     """``jaxga presets``: list the presets with their papers; ``--show NAME`` prints one
     preset's every setting, whether a sweep can vary it in one compiled call
-    (``dynamic``) or it is compiled in (``static``), and its source (the file and the
+    (``dynamic``), it is compiled in (``static``) or it is one per call
+    (``per call``: the generation count), and its source (the file and the
     comment next to the key, or the default)."""
 
     if args.show is not None:
@@ -47,7 +52,7 @@ def cmd_presets(args: argparse.Namespace) -> int:
         width = max(len(key) for key, _, _ in rows)
         for key, value, source in rows:
             text = json.dumps(value) if isinstance(value, (list, str, bool)) else str(value)
-            print(f"{key:{width}s} = {text:12s} {sweep_kind(key):7s} # {source}")
+            print(f"{key:{width}s} = {text:12s} {sweep_kind(key):8s} # {source}")
         return 0
     if args.variant is not None:
         raise JaxgaError("--variant goes with --show NAME")

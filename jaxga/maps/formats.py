@@ -549,6 +549,8 @@ def declared_size(raw: bytes, kind: str) -> tuple[int, int] | None:
         return image_size(raw)
     if kind == "ros":  # the image's size is checked once it is read
         return None
+    if b"\x00" in raw[:4096]:  # a binary file, not text: the parser says so
+        return None
     head = raw[:4096].decode("utf-8", errors="replace")
     if kind == "movingai":
         dims = {}
