@@ -48,26 +48,29 @@ def _span_matrices(n_ctrl: int) -> np.ndarray:
         np.float64
     )
 
-    def basis(t: float) -> np.ndarray:
-        n = len(knots) - 1
-        b = np.array([1.0 if knots[i] <= t < knots[i + 1] else 0.0 for i in range(n)])
+    def basis(t: float, s: int) -> np.ndarray:
+        """Cox-de Boor's values of the basis functions ``s .. s + 3`` at ``t`` in span
+        ``s`` (the only ones not zero there): the recurrence over the indices that feed
+        them (degree 0: ``s .. s + 6``), each value computed as over all of them."""
+        b = np.array([1.0 if knots[i] <= t < knots[i + 1] else 0.0 for i in range(s, s + 7)])
         for k in range(1, 4):
-            nb = np.zeros(n - k)
-            for i in range(n - k):
+            nb = np.zeros(len(b) - 1)
+            for j in range(len(b) - 1):
+                i = s + j
                 left = knots[i + k] - knots[i]
                 right = knots[i + k + 1] - knots[i + 1]
                 if left > 0:
-                    nb[i] += (t - knots[i]) / left * b[i]
+                    nb[j] += (t - knots[i]) / left * b[j]
                 if right > 0:
-                    nb[i] += (knots[i + k + 1] - t) / right * b[i + 1]
+                    nb[j] += (knots[i + k + 1] - t) / right * b[j + 1]
             b = nb
-        return b  # [n_ctrl]
+        return b  # [4]: functions s .. s + 3
 
     us = np.array([0.125, 0.375, 0.625, 0.875])
     vander = us[:, None] ** np.arange(4)[None, :]
     out = np.zeros((t_spans, 4, 4))
     for s in range(t_spans):
-        vals = np.stack([basis(s + u)[s : s + 4] for u in us])  # [4 pts, 4 ctrl]
+        vals = np.stack([basis(s + u, s) for u in us])  # [4 pts, 4 ctrl]
         out[s] = np.linalg.solve(vander, vals)
     return out.astype(np.float32)
 
