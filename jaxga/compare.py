@@ -4,8 +4,8 @@
 every preset with :func:`jaxga.api.run` and gives, per preset, the summary table of
 :meth:`Result.summary_rows` (AGACD Tables 8-9, Zhu & Pan Table 4), the success rate,
 the gap of the raw path to the exact 8-connected optimum (to the any-angle optimum for
-AGACD's waypoint paths, :attr:`Result.raw_gap`) and of the post-optimised path to the
-any-angle optimum, and the time per run; and, between every
+the waypoint paths of AGACD and Zhang's eq. 5, :attr:`Result.raw_gap`) and of the
+post-optimised path to the any-angle optimum, and the time per run; and, between every
 pair of presets, two-sided tests with effect sizes (:mod:`jaxga.stats`) on one or more
 metrics, Holm-corrected over the pairs of each metric, plus Fisher's exact test on the
 success rates.
@@ -63,10 +63,11 @@ __all__ = ["METRICS", "TESTS", "Comparison", "PairTest", "compare", "compare_res
            "metric_values"]
 
 GAP_NOTE = ("mean gaps over the successful seeds: raw gap = raw length (before "
-            "post-optimisation) / exact 8-connected optimum - 1 (any-angle optimum for "
-            "AGACD's waypoint paths); gap = post-optimised length / exact any-angle "
-            "optimum - 1 (or a lower bound of it where it was not computed: the JSON's "
-            "gap_basis); gap own fitness = optimum of the preset's fitness / fitness - 1")
+            "post-optimisation) / exact 8-connected optimum - 1 (any-angle optimum for the "
+            "waypoint paths of AGACD and Zhang's eq. 5); gap = post-optimised length / "
+            "exact any-angle optimum - 1 (or a lower bound of it where it was not "
+            "computed: the JSON's gap_basis); gap own fitness = optimum of the preset's "
+            "fitness / fitness - 1")
 """What the gap columns of the per-preset table measure (printed under it)."""
 
 METRICS = ("length", "raw_length", "gap", "raw_gap", "fitness_gap", "turns", "angle_sum",

@@ -69,7 +69,6 @@ import io
 import itertools
 import json
 import math
-import numbers
 import os
 import re
 import socket
@@ -86,6 +85,7 @@ from jax.errors import JaxRuntimeError
 
 from jaxga.core.errors import DeviceWarning, JaxgaError
 from jaxga.core.fields import shown_value
+from jaxga.core.grid import as_integer
 from jaxga.core.numerals import ascii_float, ascii_int
 
 ENV_DEVICES = "JAXGA_DEVICES"
@@ -127,7 +127,7 @@ def user_device_setting() -> str | None:
     ``JAX_NUM_CPU_DEVICES``), as text for messages; None if there is none."""
     # the one JAX uses: JAX_NUM_CPU_DEVICES over XLA_FLAGS, and of a flag given twice
     # the last, as XLA reads it
-    if os.environ.get("JAX_NUM_CPU_DEVICES"):
+    if os.environ.get("JAX_NUM_CPU_DEVICES", "-1").strip() != "-1":  # -1: JAX's unset
         return f"JAX_NUM_CPU_DEVICES={os.environ['JAX_NUM_CPU_DEVICES']}"
     flags = os.environ.get("XLA_FLAGS", "")
     found = re.findall(re.escape(_FORCE_FLAG) + r"=(\S*)", flags)
@@ -172,9 +172,11 @@ def set_local_devices(n: int | None = None, *, warn: bool = True) -> int | None:
                     DeviceWarning, stacklevel=2)
             return None
         n = cores()
-    if isinstance(n, bool) or not isinstance(n, numbers.Integral):
-        raise JaxgaError(f"the device count must be a whole number, got {shown_value(n)}")
-    n = int(n)
+    try:
+        n = as_integer(n)
+    except TypeError:
+        raise JaxgaError(f"the device count must be a whole number, got {shown_value(n)}") \
+            from None
     if n < 1:
         raise JaxgaError(f"the device count must be >= 1, got {n}")
     if n > max_cpu_devices():
@@ -418,16 +420,18 @@ def process_device_counts() -> list[int]:
 
 
 def run_share(n_runs: int) -> tuple[int, slice]:
-    """``(padded run count, this process's slice)``: the runs padded to a multiple of
-    processes x the least common multiple of the processes' local device counts, split
-    into equal contiguous shares in process order. Every process computes the same
-    split, whatever its own device count, so each run is computed exactly once."""
+    """``(padded run count, this process's slice)``: every device of every process takes
+    ``m = ceil(n_runs / devices)`` runs, so the runs are padded to ``m`` x all the
+    processes' devices and each process takes ``m`` x its own device count, contiguous,
+    in process order (processes of equal device counts: equal shares). Every process
+    computes the same split, whatever its own device count, so each run is computed
+    exactly once."""
     s = _current_session()
-    procs, me = (1, 0) if s is None else (s.num_processes, s.process_id)
-    unit = procs * math.lcm(*process_device_counts())
-    total = math.ceil(n_runs / unit) * unit
-    share = total // procs
-    return total, slice(me * share, (me + 1) * share)
+    me = 0 if s is None else s.process_id
+    counts = process_device_counts()
+    per_device = math.ceil(n_runs / sum(counts))
+    first = per_device * sum(counts[:me])
+    return per_device * sum(counts), slice(first, first + per_device * counts[me])
 
 
 def allgather_runs(tree: Any) -> Any:

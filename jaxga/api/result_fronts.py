@@ -212,6 +212,10 @@ class FrontsOfResult:
             return float(np.median(values)) if values else math.nan
 
         cell = None if self.frame is None else self.frame.cell_size
+        # what the clearance is measured from (jaxga._runtime.fields.front_obstacles)
+        own = self.frame is not None and self.frame.obstacles is not None \
+            and self.frame.coarsen == 1
+        walls = "map's obstacles (before inflation)" if own else "blocked cells planned on"
         wide = median("widest_clearance")
         wide_text = f"{wide * cell:.3f} m" if cell else f"{wide:.2f} cells"
         ratio = median("widest_ratio")
@@ -220,7 +224,7 @@ class FrontsOfResult:
         return (f"front ({', '.join(self.front.names)}; medians over {ok.size} seeds): "
                 f"{median('points'):g} points; shortest end {100 * median('shortest_gap'):.2f} "
                 f"% over the any-angle optimum; widest end: its cells {wide_text} from the "
-                f"map's obstacles (before inflation), "
+                f"{walls}, "
                 f"{share}; hypervolume "
                 f"x{median('hypervolume_gain'):.3f} over the initial population's")
 

@@ -184,8 +184,9 @@ def sweep(
     ``mutation.pm_low``, fitness weights, ``population.size``, ...) applied on top of the
     preset and ``overrides``. Dynamic keys become per-run arrays of a ``jax.vmap``; the
     population size becomes the engine's ``active`` count below a capacity equal to the
-    largest size swept. Keys that change the compiled program (operators, generations,
-    capacity) are refused with a :class:`ParameterError`. Run ``q * S + s`` is point
+    largest size swept. Keys that change the compiled program (operators, capacity) are
+    refused with a :class:`ParameterError`, as is a point's generation count (a run-time
+    value, but one per sweep: ``generations=``). Run ``q * S + s`` is point
     ``q`` with seed ``s``: every point sees the same seeds (common random numbers, as a
     designed experiment wants). Returns one :class:`Result` per point; their ``timing``
     is that of the whole sweep.

@@ -107,9 +107,9 @@ def add_parser(commands: argparse._SubParsersAction) -> None:
     p = commands.add_parser("presets", help="list the presets and their papers, or show one "
                        "preset's settings (--show NAME)")
     p.add_argument("--show", metavar="NAME", help="print every setting of this preset (or "
-                   "TOML file), 'dynamic' (a sweep varies it in one compiled call) or "
-                   "'static' (compiled in), with its source: the preset file and its "
-                   "comment, or default")
+                   "TOML file), 'dynamic' (a sweep varies it in one compiled call), "
+                   "'static' (compiled in) or 'per call' (the generation count: one per "
+                   "sweep), with its source: the preset file and its comment, or default")
     p.add_argument("--variant", help="with --show: apply this variant")
     p.set_defaults(func=cmd_presets)
 

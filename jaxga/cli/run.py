@@ -406,7 +406,8 @@ def add_parser(commands: argparse._SubParsersAction) -> None:
     refs.add_argument("--exact-optimum", action="store_true", help=EXACT_HELP)
     refs.add_argument("--no-reference", action="store_true",
                       help="skip the any-angle optimum and its lower bound (a plan that needs "
-                      "no gap; the gaps are then to the straight line from start to goal)")
+                      "no gap; gap is then to the straight line from start to goal, and so "
+                      "is raw_gap of waypoint paths)")
     p.add_argument("--json", metavar="OUT", help="write every run as JSON (paths in cells "
                    "and, on a map with a resolution, in metres)")
     p.add_argument("--path-out", metavar="FILE.csv|FILE.yaml",

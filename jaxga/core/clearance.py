@@ -157,9 +157,11 @@ def clearance_band(grid: Grid, g: Geometry,
     clearance; the others are farther, so when any segment is that close the minimum is
     exact, and touching cells always lie in the band. Otherwise (a path that stays away
     from every obstacle) the pieces are measured again in a band of
-    :data:`CLEARANCE_WIDE_RADIUS`, the same way; only a path beyond that too has each
-    straight run (consecutive segments in one direction, one segment to the map)
-    measured against the whole map, ``O(R H W)`` for a path of ``R`` runs.
+    :data:`CLEARANCE_WIDE_RADIUS`, the same way, where that costs less than the whole
+    map; a path beyond that band too, or on a map where the whole map costs less, has
+    each straight run (consecutive segments in one direction, one segment to the map)
+    measured against the whole map, ``O(R H W)`` for a path of ``R`` runs. A map without
+    obstacles searches nothing (``inf``).
     """
     h, w = check_grid(grid)
     obstacles = proximity_obstacles(grid, border_blocked)
@@ -203,13 +205,32 @@ def clearance_band(grid: Grid, g: Geometry,
             (jnp.int32(0), jnp.asarray(jnp.inf, F32), jnp.zeros((n_seg,), jnp.int32)))
         return near, touch
 
+    # The path's straight runs: consecutive moving segments in one direction lie on one
+    # line, so they are one segment to the map (an 8-connected path's hundreds of steps
+    # are a few dozen runs); zero-length segments inside a run change nothing.
+    if g.cells.shape[0] == 1:
+        starts, n_runs = jnp.zeros((1,), jnp.int32), jnp.int32(1)
+    else:
+        first_move = g.moving & (jnp.cumsum(g.moving.astype(jnp.int32)) == 1)
+        begins = g.moving & (g.turning | first_move) & (j < used)
+        starts = jnp.nonzero(begins, size=n_seg, fill_value=0)[0].astype(jnp.int32)
+        n_runs = jnp.maximum(jnp.sum(begins, dtype=jnp.int32), 1)
+
     near, touch = band(CLEARANCE_RADIUS, jnp.bool_(False))
+    none = ~jnp.any(obstacles)  # a map without obstacles: inf, with nothing to search
+    first_exact = (near <= CLEARANCE_RADIUS) | none
     # A path that stays beyond the first band (an open hall): the wider band, whose
-    # loop runs only for such a path (under vmap: while any path needs it). Each cell's
-    # distance is the segment's and the cell's alone (:func:`_box_clearance`), so the
-    # value is the one the whole map gives wherever it is at most the wider radius.
-    wide, _ = band(CLEARANCE_WIDE_RADIUS, near <= CLEARANCE_RADIUS)
+    # loop runs only for such a path (under vmap: while any path needs it), and only
+    # where it costs less than the whole map (a small map). Each cell's distance is the
+    # segment's and the cell's alone (:func:`_box_clearance`), so the value is the one
+    # the whole map gives wherever it is at most the wider radius.
+    r2 = CLEARANCE_WIDE_RADIUS
+    wide_cells = (CLEARANCE_PIECE + 2 * r2 + 3) * (4 * r2 + 7)
+    skip_wide = first_exact | (total.astype(F32) * wide_cells
+                               >= n_runs.astype(F32) * float(h * w))
+    wide, _ = band(r2, skip_wide)
     near = jnp.minimum(near, wide)
+    exact = first_exact | (~skip_wide & (near <= r2))
 
     def whole_map(state: tuple[jax.Array, jax.Array]) -> tuple[jax.Array, jax.Array]:
         # masking the segments and the map with the carried flag (False in the body) makes
@@ -227,20 +248,8 @@ def clearance_band(grid: Grid, g: Geometry,
         near = jax.lax.fori_loop(0, n_runs, run, jnp.asarray(jnp.inf, F32))
         return near.astype(F32), jnp.bool_(True)
 
-    # The path's straight runs: consecutive moving segments in one direction lie on one
-    # line, so they are one segment to the map (an 8-connected path's hundreds of steps
-    # are a few dozen runs); zero-length segments inside a run change nothing.
-    if g.cells.shape[0] == 1:
-        starts, n_runs = jnp.zeros((1,), jnp.int32), jnp.int32(1)
-    else:
-        first_move = g.moving & (jnp.cumsum(g.moving.astype(jnp.int32)) == 1)
-        begins = g.moving & (g.turning | first_move) & (j < used)
-        starts = jnp.nonzero(begins, size=n_seg, fill_value=0)[0].astype(jnp.int32)
-        n_runs = jnp.maximum(jnp.sum(begins, dtype=jnp.int32), 1)
-
-    # Runs its body only if this path (under vmap: any path) stays beyond both bands.
-    near, _ = jax.lax.while_loop(lambda s: ~s[1], whole_map,
-                                 (near.astype(F32), near <= CLEARANCE_WIDE_RADIUS))
+    # Runs its body only if this path (under vmap: any path) is not measured yet.
+    near, _ = jax.lax.while_loop(lambda s: ~s[1], whole_map, (near.astype(F32), exact))
     return near, touch != 0
 
 

@@ -27,36 +27,50 @@ import math
 
 import numpy as np
 
-__all__ = ["ObstacleClearance", "cell_clearance", "segment_square_distance"]
+__all__ = ["ObstacleClearance", "cell_clearance", "segment_square_distance",
+           "segments_square_distance"]
 
 
 def segment_square_distance(a: np.ndarray, b: np.ndarray, centres: np.ndarray) -> np.ndarray:
     """Exact distances from segment ``a b`` (points ``float[2]``) to the closed unit squares
-    centred at ``centres`` (``float[n, 2]``), float64.
+    centred at ``centres`` (``float[n, 2]``), float64 (:func:`segments_square_distance`
+    for one segment)."""
+    return segments_square_distance(np.asarray(a, np.float64)[None],
+                                    np.asarray(b, np.float64)[None], centres)[0]
+
+
+def segments_square_distance(a: np.ndarray, b: np.ndarray, centres: np.ndarray) -> np.ndarray:
+    """``float64[m, n]``: exact distances from each segment ``a[i] b[i]`` (``float[m, 2]``)
+    to each closed unit square centred at ``centres`` (``float[n, 2]``).
 
     Zero where a square touches the segment. For a square disjoint from it, the least of
     the distances from the segment's two endpoints to the square and from the square's
     four corners to the segment (exact for two disjoint convex polygons)."""
     a, b, c = (np.asarray(v, np.float64) for v in (a, b, centres))
+    a, b, c = a[:, None, :], b[:, None, :], c[None, :, :]  # [m, 1, 2], [1, n, 2]
     d = b - a
     lo, hi = c - 0.5, c + 0.5
 
     def point_box(p: np.ndarray) -> np.ndarray:
         e = np.maximum(np.maximum(lo - p, p - hi), 0.0)
-        return np.hypot(e[:, 0], e[:, 1])
+        return np.hypot(e[..., 0], e[..., 1])
 
     best = np.minimum(point_box(a), point_box(b))
-    len2 = float(d @ d)
+    len2 = d[..., 0] * d[..., 0] + d[..., 1] * d[..., 1]  # [m, 1]
+    positive = len2 > 0
+    safe = np.where(positive, len2, 1.0)
     for sx in (-0.5, 0.5):
         for sy in (-0.5, 0.5):
-            q = c + (sx, sy) - a
-            t = np.clip(q @ d / len2, 0.0, 1.0) if len2 > 0 else np.zeros(len(c))
-            best = np.minimum(best, np.hypot(q[:, 0] - t * d[0], q[:, 1] - t * d[1]))
+            q = c + np.array([sx, sy]) - a
+            t = np.where(positive, np.clip(
+                (q[..., 0] * d[..., 0] + q[..., 1] * d[..., 1]) / safe, 0.0, 1.0), 0.0)
+            best = np.minimum(best, np.hypot(q[..., 0] - t * d[..., 0],
+                                             q[..., 1] - t * d[..., 1]))
     # touching: the segment meets the square (separating-axis test on the square's axes
     # and the segment's normal)
-    over = (np.minimum(a, b) <= hi).all(axis=1) & (np.maximum(a, b) >= lo).all(axis=1)
-    side = np.abs(d[0] * (c[:, 1] - a[1]) - d[1] * (c[:, 0] - a[0]))
-    touch = over & (side <= 0.5 * (abs(d[0]) + abs(d[1])) + 1e-12)
+    over = ((np.minimum(a, b) <= hi).all(axis=-1) & (np.maximum(a, b) >= lo).all(axis=-1))
+    side = np.abs(d[..., 0] * (c[..., 1] - a[..., 1]) - d[..., 1] * (c[..., 0] - a[..., 0]))
+    touch = over & (side <= 0.5 * (np.abs(d[..., 0]) + np.abs(d[..., 1])) + 1e-12)
     return np.where(touch, 0.0, best)
 
 
@@ -108,6 +122,13 @@ def cell_clearance(blocked: np.ndarray, border_blocked: bool = False) -> np.ndar
     return out[1:-1, 1:-1] if border_blocked else out
 
 
+_SEGMENT_BLOCK = 64
+"""Segments of a path measured together by :meth:`ObstacleClearance.of_path`."""
+
+_SQUARE_BLOCK = 4096
+"""Obstacle squares per block of that measure (its arrays: segments x squares)."""
+
+
 class ObstacleClearance:
     """Exact clearance of paths from the obstacles of one map as loaded.
 
@@ -143,12 +164,14 @@ class ObstacleClearance:
         k = self.coarsen
         return (np.asarray(cells, np.float64) + 0.5) * k - 0.5
 
-    def _bound(self, p: np.ndarray) -> float:
-        """An upper bound of point ``p``'s distance to the obstacles (map cells)."""
+    def _bounds(self, pts: np.ndarray) -> np.ndarray:
+        """An upper bound of each point's distance to the obstacles (map cells): its
+        nearest cell centre's distance to the nearest obstacle's centre, plus the way to
+        that cell centre."""
         h, w = self.shape
-        x = min(max(int(round(p[0])), 0), w - 1)
-        y = min(max(int(round(p[1])), 0), h - 1)
-        return float(self._edt[y, x]) + math.hypot(p[0] - x, p[1] - y)
+        x = np.clip(np.round(pts[:, 0]), 0, w - 1).astype(np.int64)
+        y = np.clip(np.round(pts[:, 1]), 0, h - 1).astype(np.int64)
+        return self._edt[y, x] + np.hypot(pts[:, 0] - x, pts[:, 1] - y)
 
     def of_path(self, cells: np.ndarray) -> float:
         """The path's clearance in map cells: the least distance from the polyline
@@ -160,17 +183,24 @@ class ObstacleClearance:
         if len(pts) == 1:
             pts = np.concatenate([pts, pts])
         h, w = self.shape
+        bound = self._bounds(pts)
         best = math.inf
-        for a, b in zip(pts[:-1], pts[1:]):
-            reach = min(self._bound(a), self._bound(b), best)
-            x0 = max(int(math.floor(min(a[0], b[0]) - reach - 1)), 0)
-            x1 = min(int(math.ceil(max(a[0], b[0]) + reach + 1)), w - 1)
-            y0 = max(int(math.floor(min(a[1], b[1]) - reach - 1)), 0)
-            y1 = min(int(math.ceil(max(a[1], b[1]) + reach + 1)), h - 1)
+        # the segments in blocks: each block is measured against the boundary squares in
+        # the union of its segments' boxes (each segment's box holds every square nearer
+        # than its reach), so the least distance is each segment's own, exactly
+        for i in range(0, len(pts) - 1, _SEGMENT_BLOCK):
+            a, b = pts[i:i + _SEGMENT_BLOCK + 1][:-1], pts[i + 1:i + _SEGMENT_BLOCK + 1]
+            reach = np.minimum(np.minimum(bound[i:i + len(a)], bound[i + 1:i + 1 + len(a)]),
+                               best)
+            lo = np.floor(np.minimum(a, b) - reach[:, None] - 1).min(axis=0)
+            hi = np.ceil(np.maximum(a, b) + reach[:, None] + 1).max(axis=0)
+            x0, y0 = max(int(lo[0]), 0), max(int(lo[1]), 0)
+            x1, y1 = min(int(hi[0]), w - 1), min(int(hi[1]), h - 1)
             ys, xs = np.nonzero(self._boundary[y0:y1 + 1, x0:x1 + 1])
-            if len(xs):
-                centres = np.stack([xs + x0, ys + y0], axis=1)
-                best = min(best, float(segment_square_distance(a, b, centres).min()))
+            centres = np.stack([xs + x0, ys + y0], axis=1)
+            for j in range(0, len(centres), _SQUARE_BLOCK):
+                d = segments_square_distance(a, b, centres[j:j + _SQUARE_BLOCK])
+                best = min(best, float(d.min()))
         return best
 
     def of_path_m(self, cells: np.ndarray) -> float | None:

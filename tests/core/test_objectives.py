@@ -468,6 +468,40 @@ def test_clearance_beyond_the_first_band_equals_the_whole_map():
     assert near[3] > clearance.CLEARANCE_WIDE_RADIUS and near[4] <= clearance.CLEARANCE_RADIUS
 
 
+def test_a_band_of_either_radius_is_exact_up_to_its_radius():
+    """Each band's claim (:func:`clearance._piece_band_clearance`): over a segment's
+    pieces, a least distance at most the band's radius is the whole map's, bit for bit,
+    and a larger one only says that the whole map's is larger too; at the first band's
+    radius and at the wider one, on segments of every slope near and far from sparse
+    obstacles."""
+    rng = np.random.default_rng(7)
+    size = 150
+    b = rng.random((size, size)) < 0.0004
+    grid = Grid.create(b)
+    blocked = jnp.asarray(b)
+    pieces = jnp.arange(-(-size // clearance.CLEARANCE_PIECE), dtype=jnp.int32)
+    whole = jax.jit(lambda ax, ay, bx, by: clearance._segment_box_clearance(
+        ax, ay, bx, by, blocked)[0])
+    for radius in (clearance.CLEARANCE_RADIUS, clearance.CLEARANCE_WIDE_RADIUS):
+        band = jax.jit(lambda ax, ay, bx, by, n, r=radius: jnp.min(jnp.where(
+            pieces < n, jax.vmap(lambda k: clearance._piece_band_clearance(
+                ax, ay, bx, by, k, blocked, r)[0])(pieces), jnp.inf)))
+        seen = 0
+        for _ in range(40):
+            ax, ay, bx, by = (jnp.int32(v) for v in rng.integers(0, size, 4))
+            span = int(max(abs(bx - ax), abs(by - ay)))
+            n = max((span + clearance.CLEARANCE_PIECE - 1) // clearance.CLEARANCE_PIECE, 1)
+            got = float(band(ax, ay, bx, by, jnp.int32(n)))
+            want = float(whole(ax, ay, bx, by))
+            if got <= radius:
+                assert got == want
+                seen += 1
+            else:
+                assert want > radius
+        assert seen >= 5
+    assert grid.shape == (size, size)
+
+
 def test_metrics_bundle():
     """The reported metrics in one call, consistent with the single functions."""
     grid = make_grid(obstacles=[(3, 0), (0, 3)], goal=(4, 4))
