@@ -16,16 +16,23 @@ from jaxga.maps.frame import MapFrame
 from jaxga.operators.guide import with_front_fields, with_guide
 from jaxga.operators.init import CLEARANCE_WEIGHTS
 
-__all__ = ["front_band", "front_obstacles", "program_fields"]
+__all__ = ["front_band", "front_obstacles", "measures_own_obstacles", "program_fields"]
+
+
+def measures_own_obstacles(frame: MapFrame | None) -> bool:
+    """Whether a front's clearance on ``frame`` is measured from the map's own obstacles
+    before inflation (a map loaded without coarsening), not from the grid's blocked
+    cells (:func:`front_obstacles`)."""
+    return frame is not None and frame.obstacles is not None and frame.coarsen == 1
 
 
 def front_obstacles(frame: MapFrame | None, grid: Grid) -> np.ndarray | None:
     """What a front's clearance is measured from: the map's own obstacles before
     inflation (``frame.obstacles``, what :meth:`jaxga.api.Result.obstacle_clearance`
     and the baseline measure to) where they lie in the grid's cells (a map loaded
-    without coarsening), else None: the grid's blocked cells."""
-    if frame is None or frame.obstacles is None or frame.coarsen != 1 \
-            or frame.obstacles.shape != grid.shape:
+    without coarsening: :func:`measures_own_obstacles`), else None: the grid's blocked
+    cells."""
+    if not measures_own_obstacles(frame) or frame.obstacles.shape != grid.shape:
         return None
     return frame.obstacles
 

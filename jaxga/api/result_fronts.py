@@ -12,6 +12,7 @@ from typing import Any
 
 import numpy as np
 
+from jaxga._runtime.fields import measures_own_obstacles
 from jaxga.core.errors import ParameterError
 from jaxga.core.fields import python_scalar, shown_value
 
@@ -212,10 +213,8 @@ class FrontsOfResult:
             return float(np.median(values)) if values else math.nan
 
         cell = None if self.frame is None else self.frame.cell_size
-        # what the clearance is measured from (jaxga._runtime.fields.front_obstacles)
-        own = self.frame is not None and self.frame.obstacles is not None \
-            and self.frame.coarsen == 1
-        walls = "map's obstacles (before inflation)" if own else "blocked cells planned on"
+        walls = ("map's obstacles (before inflation)" if measures_own_obstacles(self.frame)
+                 else "blocked cells planned on")
         wide = median("widest_clearance")
         wide_text = f"{wide * cell:.3f} m" if cell else f"{wide:.2f} cells"
         ratio = median("widest_ratio")

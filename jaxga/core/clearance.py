@@ -100,6 +100,11 @@ CLEARANCE_CHUNK = 128
 """Pieces per block of :func:`clearance_band`'s loop."""
 
 
+def _band_cells(radius: int) -> int:
+    """Cells of one piece's band of ``radius`` (:func:`_piece_band_clearance`)."""
+    return (CLEARANCE_PIECE + 2 * radius + 3) * (4 * radius + 7)
+
+
 def _piece_band_clearance(
     ax: jax.Array,
     ay: jax.Array,
@@ -180,13 +185,12 @@ def clearance_band(grid: Grid, g: Geometry,
                        0)
     first = jnp.cumsum(pieces) - pieces  # each segment's first piece
     total = jnp.sum(pieces)
+
     def band(radius: int, skip: jax.Array) -> tuple[jax.Array, jax.Array]:
         """Every piece's band of ``radius`` (none where ``skip``): the least distance
         and the int32 touch flags of the segments. A block holds about as many cells at
         either radius (:data:`CLEARANCE_CHUNK` pieces of the first band)."""
-        cells = (CLEARANCE_PIECE + 2 * radius + 3) * (4 * radius + 7)
-        first_cells = (CLEARANCE_PIECE + 2 * CLEARANCE_RADIUS + 3) * (4 * CLEARANCE_RADIUS + 7)
-        chunk = max(1, CLEARANCE_CHUNK * first_cells // cells)
+        chunk = max(1, CLEARANCE_CHUNK * _band_cells(CLEARANCE_RADIUS) // _band_cells(radius))
 
         def block(state):
             start, near, touch = state
@@ -225,8 +229,7 @@ def clearance_band(grid: Grid, g: Geometry,
     # segment's and the cell's alone (:func:`_box_clearance`), so the value is the one
     # the whole map gives wherever it is at most the wider radius.
     r2 = CLEARANCE_WIDE_RADIUS
-    wide_cells = (CLEARANCE_PIECE + 2 * r2 + 3) * (4 * r2 + 7)
-    skip_wide = first_exact | (total.astype(F32) * wide_cells
+    skip_wide = first_exact | (total.astype(F32) * _band_cells(r2)
                                >= n_runs.astype(F32) * float(h * w))
     wide, _ = band(r2, skip_wide)
     near = jnp.minimum(near, wide)
