@@ -13,20 +13,25 @@ jittable and vmappable.
 from __future__ import annotations
 
 import functools
+from typing import Any
 
 import jax
 import jax.numpy as jnp
 import numpy as np
 
 from jaxga.core.dtypes import F32
+from jaxga.core.errors import ParameterError
+from jaxga.core.fields import shown_value
 
 __all__ = [
+    "control_points",
     "curve_points",
     "eval_grid",
     "eval_spans",
     "norm",
     "quadrature_matrices",
     "span_coefficients",
+    "steps_per_span",
 ]
 
 
@@ -132,10 +137,35 @@ def eval_grid(coef: jax.Array, per_span: int, midpoints: bool = False):
     return tuple(out)
 
 
+def control_points(control: Any, what: str) -> jax.Array:
+    """``control`` as ``float32[M, 2]`` with ``M >= 4`` (a clamped cubic B-spline has
+    ``M - 3`` spans), or a one-line :class:`~jaxga.core.errors.ParameterError` naming
+    ``what``; checked from the shape alone, so it works under ``jax.jit``."""
+    shape = np.shape(control) if hasattr(control, "shape") else None
+    if shape is None:
+        try:
+            shape = np.shape(np.asarray(control, float))
+        except (TypeError, ValueError):
+            shape = None
+    if shape is None or len(shape) != 2 or shape[1] != 2 or shape[0] < 4:
+        raise ParameterError(f"{what}: control points must have shape [M, 2] with M >= 4 "
+                             f"(a cubic B-spline), got {shown_value(control)}")
+    return jnp.asarray(control, F32)
+
+
+def steps_per_span(value: Any, what: str) -> int:
+    """A static count of samples (or sub-chords) per span: an integer >= 1, or a
+    one-line :class:`~jaxga.core.errors.ParameterError` naming ``what``."""
+    if isinstance(value, bool) or not isinstance(value, (int, np.integer)) or value < 1:
+        raise ParameterError(f"{what} must be an integer >= 1, got {shown_value(value)}")
+    return int(value)
+
+
 def curve_points(control: jax.Array, per_span: int = 16) -> jax.Array:
     """``float32[(M - 3) * per_span + 1, 2]``: the clamped cubic B-spline of ``control``
     sampled at ``per_span`` equal parameter steps per span (first point =
     ``control[0]``, last = ``control[-1]``). Jittable; ``per_span`` static."""
-    control = jnp.asarray(control, F32)
+    control = control_points(control, "curve_points")
+    per_span = steps_per_span(per_span, "curve_points: per_span")
     p, _, _ = eval_grid(span_coefficients(control), per_span)
     return p.at[0].set(control[0]).at[-1].set(control[-1])

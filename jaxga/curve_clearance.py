@@ -24,7 +24,14 @@ import jax
 import jax.numpy as jnp
 import numpy as np
 
-from jaxga.bspline import eval_grid, eval_spans, norm, span_coefficients
+from jaxga.bspline import (
+    control_points,
+    eval_grid,
+    eval_spans,
+    norm,
+    span_coefficients,
+    steps_per_span,
+)
 from jaxga.core.dtypes import F32
 from jaxga.core.errors import ParameterError
 from jaxga.core.grid import Grid, blocked_at
@@ -281,7 +288,10 @@ def verify_curve(
     certificate up to float32 rounding, which ``tol`` absorbs). Static arguments:
     ``per_span``, ``refine_chords``, ``refine_factor``.
     """
-    control = jnp.asarray(control, F32)
+    control = control_points(control, "verify_curve")
+    per_span = steps_per_span(per_span, "verify_curve: per_span")
+    refine_chords = steps_per_span(refine_chords, "verify_curve: refine_chords")
+    refine_factor = steps_per_span(refine_factor, "verify_curve: refine_factor")
     ver, *_ = verify_spans(jnp.asarray(grid.blocked, bool), span_coefficients(control), per_span,
                       refine_chords, refine_factor, tol)
     return ver

@@ -184,7 +184,9 @@ def read_path(path: str | os.PathLike) -> np.ndarray:
     positions, in the map's frame: :data:`MAP_FRAME`), so that the path a robot was given
     can be checked again (``jaxga replan --path``). A one-line :class:`ParameterError` for
     anything else: another frame, a key given twice, a coordinate that is not a number
-    (``true``), a CSV value not written in ASCII digits (``1_0``)."""
+    (``true``), a CSV value not written in ASCII digits (``1_0``). The empty path
+    written for a goal that was not reached reads back as ``float[0, 2]``; a CSV may start
+    with a UTF-8 byte-order mark."""
     path = file_path(path, "a path file", ParameterError)
     label = os.fspath(path)
     fmt = PATH_FORMATS.get(path.suffix.lower())
@@ -194,6 +196,7 @@ def read_path(path: str | os.PathLike) -> np.ndarray:
     try:
         text = read_input(path, PATH_JSON_CAP, what="path file",
                           error=ParameterError).decode("utf-8")
+        text = text.removeprefix("\ufeff")  # the byte-order mark spreadsheets write
     except FileNotFoundError:
         raise ParameterError(f"{label}: path file not found") from None
     except (OSError, UnicodeDecodeError) as e:
@@ -219,7 +222,6 @@ def read_path(path: str | os.PathLike) -> np.ndarray:
         what = "x,y rows" if fmt == "csv" else "a nav_msgs/Path (poses[].pose.position)"
         why = str(e).splitlines()[0] if str(e) else type(e).__name__
         raise ParameterError(f"{label}: not a path file of {what} ({why})") from None
-    if not len(out) or not np.isfinite(out).all():
-        raise ParameterError(f"{label}: the path is empty or holds a value that is not a "
-                             "finite number")
+    if not np.isfinite(out).all():
+        raise ParameterError(f"{label}: the path holds a value that is not a finite number")
     return out

@@ -22,7 +22,7 @@ needed 0.3-0.4 s (25 x 25) and under 1 s (50 x 50) per re-plan in Matlab.
    (the last path cell) is blocked or unreachable the result is an explicit no-path
    result (``success=False``, ``status`` and ``reason`` name the cause); nothing is
    raised from inside JAX;
-4. the preset (default ``mpmga``) runs ``seeds`` seeded runs in ONE compiled call
+4. the preset (default ``hybrid``) runs ``seeds`` seeded runs in ONE compiled call
    (:func:`jaxga.run`) from the robot's cell (or, with ``plan_from="blockage"``, from the
    last path cell before the blocked step) to the rejoin cell, with a small population
    and few generations. The best successful seed (shortest segment) is taken. Compiled
@@ -536,7 +536,8 @@ def _problem(grid: Grid, path: Any, new_obstacles: Any, position: XY | int,
              inflate: float) -> _Problem:
     """The checked :class:`_Problem` of :func:`replan`'s arguments."""
     h, w = grid.height, grid.width
-    cells = _dedupe(_as_xy_list(path, "path"))
+    given = _as_xy_list(path, "path")
+    cells = _dedupe(given)
     if not cells:
         raise ParameterError("path is empty")
     for c in cells:
@@ -547,10 +548,11 @@ def _problem(grid: Grid, path: Any, new_obstacles: Any, position: XY | int,
         added = inflate_blocked(added, inflate) & ~grid.blocked_np()
     blocked = grid.blocked_np() | added
     if isinstance(position, (int, np.integer)) and not isinstance(position, bool):
-        if not 0 <= int(position) < len(cells):
+        if not 0 <= int(position) < len(given):
             raise ParameterError(f"position index {position} is outside the path "
-                                 f"(0..{len(cells) - 1})")
-        i = int(position)
+                                 f"(0..{len(given) - 1})")
+        # the index is into the path as given; a cell repeated in a row is one waypoint
+        i = sum(given[k] != given[k - 1] for k in range(1, int(position) + 1))
         robot = cells[i]
     else:
         robot = _as_xy_list([position], "position")[0]

@@ -74,6 +74,8 @@ from __future__ import annotations
 
 import dataclasses
 import functools
+import math
+import numbers
 from collections.abc import Sequence
 from typing import Any, NamedTuple
 
@@ -106,6 +108,7 @@ from jaxga.polyline import (
 )
 
 __all__ = [
+    "RESAMPLE_TOLERANCE",
     "SmoothConfig",
     "SmoothResult",
     "plot_smooth",
@@ -250,18 +253,75 @@ class SmoothResult(NamedTuple):
 
 
 # ====================================================================== measures
-def resample_curve(points: np.ndarray, spacing: float = 1.0) -> np.ndarray:
-    """A dense curve ``float[N, 2]`` (cells) as points every ``spacing`` along its arc,
-    both ends kept: what a robot's path needs (a pose per cell or so), not the thousands
-    of evaluation points the curve was certified at. Each point lies on a chord of the
-    dense curve (host NumPy)."""
-    pts = np.asarray(points, float)
-    if len(pts) < 3 or not spacing > 0:
+RESAMPLE_TOLERANCE = 1e-3
+"""Cells: the farthest a chord of :func:`resample_curve`'s output may lie from the dense
+curve it replaces, so that the written path keeps the certified curve's clearance to
+within this."""
+
+
+def resample_curve(points: np.ndarray, spacing: float = 1.0,
+                   tolerance: float = RESAMPLE_TOLERANCE) -> np.ndarray:
+    """A dense curve ``float[N, 2]`` (cells) as points at most ``spacing`` apart along its
+    arc, both ends kept: what a robot's path needs (a pose per cell or so), not the
+    thousands of evaluation points the curve was certified at (host NumPy).
+
+    Each point lies on the dense curve's polyline. Where a chord between two points would
+    cut a bend by more than ``tolerance`` cells (a chord of length ``h`` on a bend of
+    curvature ``k`` lies up to ``h**2 k / 8`` inside it), the piece is halved along the
+    arc until none does, so every chord lies within ``tolerance`` of the dense curve and
+    the path keeps the curve's clearance to within that. A segment of 2 points is
+    divided evenly."""
+    pts = _finite_points(points, "resample_curve: points")
+    if not (isinstance(spacing, numbers.Real) and math.isfinite(spacing) and spacing > 0):
+        raise ParameterError(f"resample_curve: spacing must be a number > 0 (cells), got "
+                             f"{shown_value(spacing)}")
+    if not (isinstance(tolerance, numbers.Real) and math.isfinite(tolerance)
+            and tolerance > 0):
+        raise ParameterError(f"resample_curve: tolerance must be a number > 0 (cells), got "
+                             f"{shown_value(tolerance)}")
+    if len(pts) < 2:
         return pts
     arc = np.concatenate([[0.0], np.cumsum(np.hypot(*np.diff(pts, axis=0).T))])
-    n = max(int(np.ceil(arc[-1] / spacing)), 1)
-    at = np.linspace(0.0, arc[-1], n + 1)
+    at = np.linspace(0.0, arc[-1], max(int(np.ceil(arc[-1] / spacing)), 1) + 1)
+    for _ in range(64):  # each round halves the pieces too far from the curve
+        wide = _chords_off_curve(pts, arc, at, tolerance)
+        if not wide.any():
+            break
+        at = np.sort(np.concatenate([at, (at[:-1][wide] + at[1:][wide]) / 2]))
     return np.stack([np.interp(at, arc, pts[:, 0]), np.interp(at, arc, pts[:, 1])], axis=1)
+
+
+def _chords_off_curve(pts: np.ndarray, arc: np.ndarray, at: np.ndarray,
+                      tolerance: float) -> np.ndarray:
+    """``bool[len(at) - 1]``: the chords between the points at arc positions ``at`` that
+    pass farther than ``tolerance`` from a point of the dense polyline ``pts`` between
+    their ends (``arc``: its cumulative arc length)."""
+    ends = np.stack([np.interp(at, arc, pts[:, 0]), np.interp(at, arc, pts[:, 1])], axis=1)
+    inner = (arc > at[0]) & (arc < at[-1])
+    piece = np.searchsorted(at, arc[inner], side="right") - 1  # the chord each lies under
+    a, b, q = ends[piece], ends[piece + 1], pts[inner]
+    ab = b - a
+    t = np.clip(np.sum((q - a) * ab, axis=1) / np.maximum(np.sum(ab * ab, axis=1), 1e-300),
+                0.0, 1.0)
+    off = np.hypot(*(a + t[:, None] * ab - q).T)
+    worst = np.zeros(len(at) - 1)
+    np.maximum.at(worst, piece, off)
+    return worst > tolerance
+
+
+def _finite_points(points: Any, what: str) -> np.ndarray:
+    """``points`` as ``float[N, 2]`` of finite values, or a one-line
+    :class:`~jaxga.core.errors.ParameterError` naming ``what``."""
+    try:
+        pts = np.asarray(points, float)
+    except (TypeError, ValueError):
+        pts = None
+    if pts is None or pts.ndim != 2 or pts.shape[1] != 2:
+        raise ParameterError(f"{what} must be an array of [x, y] points (shape [N, 2]), got "
+                             f"{shown_value(points)}")
+    if not np.isfinite(pts).all():
+        raise ParameterError(f"{what}: every coordinate must be finite")
+    return pts
 
 
 def _curvature(d1: jax.Array, d2: jax.Array) -> tuple[jax.Array, jax.Array]:
@@ -346,7 +406,10 @@ def _smooth_one(grid: Grid, cells: jax.Array, length: jax.Array, field: Distance
     xy, n = polyline_xy(grid, cells, length)
     s0 = jnp.sum(norm(xy[1:] - xy[:-1]))
     bound = turning_curvature_bound(grid, cells, length)
-    cap = jnp.minimum(config.cap_factor * bound, config.curvature_limit)
+    # cap_factor x bound, where 0 x inf and inf x 0 are 0 (a cap of 0 / a straight path)
+    scaled = (jnp.where(bound > 0, config.cap_factor * bound, 0.0) if config.cap_factor > 0
+              else jnp.zeros_like(bound))
+    cap = jnp.minimum(scaled, config.curvature_limit)
 
     control0 = initial_control_points(grid, cells, length, config.n_ctrl)
     s0_safe = jnp.maximum(s0, 1e-3)

@@ -263,7 +263,11 @@ def read_robot_path(args: argparse.Namespace, info, rule: str) -> list[tuple[int
     blocked = info.grid.blocked_np()
     cells: list[tuple[int, int]] = []
     last = None
-    for k, point in enumerate(export.read_path(args.path)):
+    points = export.read_path(args.path)
+    if not len(points):
+        raise JaxgaError(f"--path {args.path} holds no points (the path file of a run that "
+                         "found no path): nothing to re-plan")
+    for k, point in enumerate(points):
         cell = info.frame.cell_of(tuple(point), info.grid.shape, f"--path point {k}")
         here = info.frame.cell_coordinates(tuple(point))
         if cells and cells[-1] != cell and not clear_np(blocked, rule, cells[-1], cell):

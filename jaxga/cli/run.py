@@ -310,7 +310,7 @@ def use_curve(curves, i: int) -> bool:
 def robot_path(result, i: int, curves) -> np.ndarray:
     """Seed ``i``'s path in metres for ``--path-out``: its smooth curve when it has a
     certified one, else its post-optimised waypoints."""
-    if use_curve(curves, i):  # a pose per planning cell of arc, not every evaluation point
+    if use_curve(curves, i):  # poses a cell apart or closer, within 0.001 cells of the curve
         return result.frame.to_world(resample_curve(curves[i]["points"]))
     return result.world_path(i)
 

@@ -27,6 +27,8 @@ import math
 
 import numpy as np
 
+from jaxga.maps.preprocess import blocks_to_map
+
 __all__ = ["ObstacleClearance", "cell_clearance", "segment_square_distance",
            "segments_square_distance"]
 
@@ -160,9 +162,10 @@ class ObstacleClearance:
 
     def map_points(self, cells: np.ndarray) -> np.ndarray:
         """Planning cells' centres ``(x, y)`` in map-cell coordinates (centres at
-        integers)."""
-        k = self.coarsen
-        return (np.asarray(cells, np.float64) + 0.5) * k - 0.5
+        integers): where :class:`~jaxga.maps.frame.MapFrame` puts them, in the middle of
+        a block's part on the map."""
+        return blocks_to_map(np.asarray(cells, np.float64) + 0.5, self.coarsen,
+                             self.shape) - 0.5
 
     def _bounds(self, pts: np.ndarray) -> np.ndarray:
         """An upper bound of each point's distance to the obstacles (map cells): its

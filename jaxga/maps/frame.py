@@ -13,7 +13,9 @@ merged into one). Three frames describe the same point:
   ``(0, 0)`` starts at the origin, as the map file's first cell does, so the world
   position of a point ``(x, y)`` in planning cells (centres at integer coordinates) is
   ``origin + R(yaw) ((x + 1/2, y + 1/2) K resolution)`` (REP 103 and ``map_server``'s
-  origin: the lower-left corner of the lower-left cell).
+  origin: the lower-left corner of the lower-left cell). A last row or column of blocks
+  that reaches past the map stands for its part on the map: its positions are drawn on
+  that part (:meth:`MapFrame.map_units`), so that no point of a path lies off the map.
 
 Every length in planning cells times :attr:`MapFrame.cell_size` is metres: a coarsened
 map's lengths are not K times too short.
@@ -31,6 +33,7 @@ import numpy as np
 from jaxga.core.errors import EndpointError
 from jaxga.core.grid import check_xy
 from jaxga.maps.clearance import ObstacleClearance
+from jaxga.maps.preprocess import blocks_to_map, map_to_blocks
 
 __all__ = ["MapFrame", "cells_crossed", "endpoint_cells", "world_decimals"]
 
@@ -110,11 +113,21 @@ class MapFrame:
         centres at integer coordinates). Needs a frame with metres."""
         if not self.has_metres:
             raise ValueError("this map has no resolution and origin: no world frame")
-        p = (np.asarray(points, float) + 0.5) * self.cell_size
+        p = blocks_to_map(np.asarray(points, float) + 0.5, self.coarsen, self.map_shape,
+                          self.resolution)
         c, s = math.cos(self.origin[2]), math.sin(self.origin[2])
         x = self.origin[0] + c * p[..., 0] - s * p[..., 1]
         y = self.origin[1] + s * p[..., 0] + c * p[..., 1]
         return np.stack([x, y], axis=-1)
+
+    def map_units(self, edges: np.ndarray) -> np.ndarray:
+        """Positions in planning cells counted from the grid's corner (planning cell
+        ``(x, y)`` covers ``[x, x + 1) x [y, y + 1)``) in map cells from the map's corner:
+        ``K`` times them, except in a last block that reaches past the map, which stands
+        for its part on the map (:func:`jaxga.maps.preprocess.blocks_to_map`)."""
+        if self.coarsen == 1:
+            return np.asarray(edges, float)
+        return blocks_to_map(edges, self.coarsen, self.map_shape)
 
     def _local(self, point: tuple[float, float]) -> tuple[float, float]:
         """``point`` (metres) along the map's own axes, from its origin (metres)."""
@@ -125,9 +138,15 @@ class MapFrame:
     def cell_coordinates(self, point: tuple[float, float]) -> tuple[float, float]:
         """World point ``point`` (metres) in planning cells, not rounded: planning cell
         ``(x, y)`` covers ``[x, x + 1) x [y, y + 1)`` (its centre at ``x + 0.5``), so
-        :meth:`cell_of` is the floor of this. A point within 1e-9 of a cell's edge counts
-        in the cell above it (the world coordinates of cell edges are rounded)."""
-        return tuple(v / self.cell_size + 1e-9 for v in self._local(point))
+        :meth:`cell_of` is the floor of this (the inverse of :meth:`to_world`, whose
+        centres are at ``x + 0.5`` here). A point within 1e-9 of a cell's edge counts in
+        the cell above it (the world coordinates of cell edges are rounded)."""
+        local = self._local(point)
+        if self.coarsen == 1:
+            return tuple(v / self.cell_size + 1e-9 for v in local)
+        blocks = map_to_blocks(np.asarray(local, float) / self.resolution, self.coarsen,
+                               self.map_shape)
+        return tuple(float(v) + 1e-9 for v in blocks)
 
     def cell_of(self, point: tuple[float, float], shape: tuple[int, int],
                 what: str = "point") -> tuple[int, int]:
@@ -142,7 +161,10 @@ class MapFrame:
         cells = self.cell_coordinates(point)
         # a point (or origin) so far away that the cell overflows is off the map too
         x, y = (int(math.floor(v)) if math.isfinite(v) else -1 for v in cells)
-        if not (0 <= x < w and 0 <= y < h):
+        # on the map's own extent too: a last block reaching past the map covers its part
+        on_map = all(math.isfinite(v) and 0 <= v / self.resolution + 1e-9 < n
+                     for v, n in zip(local, self.map_shape[::-1]))
+        if not (on_map and 0 <= x < w and 0 <= y < h):
             x0, y0, yaw = self.origin
             wide, high = self.map_shape[1] * self.resolution, self.map_shape[0] * self.resolution
             if not yaw:
@@ -159,14 +181,13 @@ class MapFrame:
 
     def map_cell(self, cells: np.ndarray) -> np.ndarray:
         """``int[..., 2]``: for planning cells ``(x, y)``, the map cell holding the
-        planning cell's centre (the middle of its block, kept on the map where a last
-        block reaches past it). The identity when not coarsened."""
+        planning cell's centre (the middle of its block; of its part on the map where a
+        last block reaches past it). The identity when not coarsened."""
         c = np.asarray(cells, np.int64)
         if self.coarsen == 1:
             return c
-        k = self.coarsen
         h, w = self.map_shape
-        out = c * k + k // 2
+        out = np.floor(self.map_units(c + 0.5)).astype(np.int64)
         return np.minimum(out, np.array([w - 1, h - 1]))
 
     def planning_cell(self, map_cells: np.ndarray) -> np.ndarray:

@@ -25,11 +25,13 @@ from jaxga.core.grid import DIRECTIONS, Grid, check_corner_rule
 __all__ = [
     "check_coarse_endpoints",
     "coarsen",
+    "blocks_to_map",
     "coarsen_blocked",
     "endpoints_connected",
     "fill_enclosed",
     "inflate",
     "legal_moves",
+    "map_to_blocks",
     "move_edges",
     "preprocess",
     "reachable",
@@ -219,6 +221,42 @@ def preprocess(grid: Grid, radius: float = 0.0, fill: bool = True) -> Grid:
 
 
 # ------------------------------------------------------------------------ coarsening
+def blocks_to_map(edges: np.ndarray, factor: int, shape: tuple[int, int],
+                  unit: float = 1.0) -> np.ndarray:
+    """``float[..., 2]``: positions ``(x, y)`` on a grid coarsened by ``factor``
+    (:func:`coarsen_blocked`), in coarse cells counted from the grid's corner (coarse cell
+    ``(x, y)`` covers ``[x, x + 1) x [y, y + 1)``), as positions in the cells of the map
+    of ``shape = (H, W)`` it was made from, counted the same way. A full block is ``factor``
+    map cells a side; a last block that reaches past the map stands for its part on the
+    map and is drawn there, so that no position of the coarse grid lies off the map
+    (its centre is the middle of that part). ``unit``: the length of a map cell to
+    give the positions in (metres), 1 for map cells. The inverse is
+    :func:`map_to_blocks`."""
+    return _scale_last_block(np.asarray(edges, np.float64) * (factor * unit), factor, shape,
+                             True, unit)
+
+
+def map_to_blocks(points: np.ndarray, factor: int, shape: tuple[int, int]) -> np.ndarray:
+    """The inverse of :func:`blocks_to_map`: positions in map cells (from the map's corner)
+    as positions in coarse cells."""
+    return _scale_last_block(np.asarray(points, np.float64), factor, shape, False) / factor
+
+
+def _scale_last_block(u: np.ndarray, k: int, shape: tuple[int, int], shrink: bool,
+                      unit: float = 1.0) -> np.ndarray:
+    """``u`` (map cells of length ``unit``) with the part beyond each axis's last whole
+    block scaled by the last block's share of the map (``shrink``) or back."""
+    out = np.array(u, np.float64, copy=True)
+    for axis, size in ((0, shape[1]), (1, shape[0])):
+        start = (size // k) * k * unit
+        part = size - (size // k) * k
+        if part and k > 1:
+            ratio = part / k if shrink else k / part
+            v = out[..., axis]
+            out[..., axis] = np.where(v > start, start + (v - start) * ratio, v)
+    return out
+
+
 def coarsen_blocked(blocked: np.ndarray, factor: int) -> np.ndarray:
     """``bool[ceil(H / k), ceil(W / k)]``: ``k x k`` blocks of cells merged into one cell,
     blocked when any of its cells is (row 0 = bottom, as the input). A path on the coarse

@@ -29,15 +29,17 @@ from jaxga.maps.preprocess import legal_moves, reachable_np
 def test_planning_cells_map_cells_and_metres_by_hand():
     """A 10 x 7 map (H 7, W 10) of 0.05 m cells, origin (-1, 2), coarsened 3 x 3: a
     planning cell is 0.15 m; planning cell (1, 1)'s centre is map cell (4, 4), planning
-    cell (1, 2)'s the world point (-1 + 1.5 * 0.15, 2 + 2.5 * 0.15); the last blocks
-    (x = 3: map cells 9..11, y = 2: rows 6..8) are named by their cells on the map, 9 and
-    6; a world point maps back to its planning cell."""
+    cell (1, 1)'s the world point (-1 + 1.5 * 0.15, 2 + 1.5 * 0.15); the last blocks
+    (x = 3: map cells 9..11, y = 2: rows 6..8) stand for their cells on the map, 9 and
+    6, are named by them and drawn in their middle (planning cell (1, 2) at row 6.5,
+    not 7.5, past the map's edge at 7); a world point maps back to its planning cell."""
     f = MapFrame(map_shape=(7, 10), coarsen=3, resolution=0.05, origin=(-1.0, 2.0, 0.0))
     assert f.cell_size == pytest.approx(0.15) and f.has_metres
-    np.testing.assert_allclose(f.to_world(np.array([1, 2])), [-1 + 1.5 * 0.15, 2 + 2.5 * 0.15])
+    np.testing.assert_allclose(f.to_world(np.array([1, 1])), [-1 + 1.5 * 0.15, 2 + 1.5 * 0.15])
+    np.testing.assert_allclose(f.to_world(np.array([1, 2])), [-1 + 1.5 * 0.15, 2 + 6.5 * 0.05])
     assert f.map_cell(np.array([[1, 1], [3, 2], [0, 0]])).tolist() == [[4, 4], [9, 6], [1, 1]]
     assert f.planning_cell(np.array([[4, 7], [9, 6]])).tolist() == [[1, 2], [3, 2]]
-    assert f.cell_of((-1 + 1.5 * 0.15, 2 + 2.5 * 0.15), (3, 4)) == (1, 2)
+    assert f.cell_of((-1 + 1.5 * 0.15, 2 + 6.5 * 0.05), (3, 4)) == (1, 2)
     assert f.metres(10.0) == pytest.approx(1.5)
     with pytest.raises(EndpointError, match=r"\(5, 2\) m is off the map: it covers x -1\.\.-0\.5"):
         f.cell_of((5.0, 2.0), (3, 4), "the goal")

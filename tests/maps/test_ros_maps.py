@@ -352,9 +352,10 @@ def test_a_ros_map_whose_yaml_or_image_is_a_fifo_is_refused_at_once(tmp_path):
 def test_a_blocked_endpoint_is_reported_in_the_maps_own_terms(office):
     """The office's cell (4, 3) is unknown (grey 205, blocked by default), centre (-1.775,
     -1.325) m: a run refuses a goal there naming the metres, and why it is blocked with
-    the way out; coarsened by 2 (coarse cell (2, 1), centre (-1.75, -1.35) m, around map
-    cell (4, 3)), also the map cell, not the coarse cell alone. The run refuses before
-    anything is compiled."""
+    the way out; coarsened by 2 (coarse cell (2, 1), around map cell (4, 3): the last
+    column of blocks holds one column of the 5-wide map, so its centre is that column's,
+    (-1.775, -1.35) m), also the map cell, not the coarse cell alone. The run refuses
+    before anything is compiled."""
     ends = dict(start_world=(-1.98, -1.49), goal_world=(-1.76, -1.31), corner_rule="strict")
     unknown = ("; the cell is unknown in the map (neither free nor occupied) and unknown "
                "cells are blocked: --unknown free (unknown='free') plans through them")
@@ -364,7 +365,7 @@ def test_a_blocked_endpoint_is_reported_in_the_maps_own_terms(office):
     with pytest.raises(EndpointError) as err:
         jaxga.run("sga", load_map_info(office, coarsen=2, **ends), seeds=1)
     assert str(err.value) == ("goal cell (2, 1) is blocked (the coarse cell around map cell "
-                              "(4, 3), centre (-1.750, -1.350) m)") + unknown
+                              "(4, 3), centre (-1.775, -1.350) m)") + unknown
     with pytest.raises(EndpointError) as err:  # an occupied cell: no such hint
         jaxga.run("sga", load_map_info(office, start_world=(-1.98, -1.49),
                                        goal_world=(-1.86, -1.36), corner_rule="strict"),

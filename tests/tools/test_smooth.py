@@ -27,12 +27,19 @@ from jaxga.cli.run import smooth_summary
 from jaxga.core.paths import from_coords
 from jaxga.curve_clearance import distance_field, verify_curve
 from jaxga.maps import load_map
+from jaxga.maps.clearance import segments_square_distance
 from jaxga.maps.frame import MapFrame
 from jaxga.maps.scenarios import read_scen
 from jaxga.polyline import polyline_points, turning_curvature_bound
 from jaxga.reference.any_angle import any_angle_shortest_path
 from jaxga.reference.optima import clear_np, shortest_path
-from jaxga.smooth import SmoothConfig, resample_curve, smooth, smooth_population
+from jaxga.smooth import (
+    RESAMPLE_TOLERANCE,
+    SmoothConfig,
+    resample_curve,
+    smooth,
+    smooth_population,
+)
 
 pytestmark = pytest.mark.slow  # smoothing on real paths (programs of their own)
 
@@ -244,6 +251,25 @@ def test_degenerate_paths():
                                                                  .n_points, 2), 5.0))
 
 
+def test_cap_factors_at_their_limits_give_a_number_not_a_fallback():
+    """cap = cap_factor x the turning bound, where inf x 0 (a straight path) and 0 x inf
+    (a path that turns back) are 0: both were NaN, a NaN loss and a silent fallback to
+    the polyline. With an infinite factor a straight path is the straight curve; with
+    a factor of 0 a path that turns back is smoothed (the cap is a penalty, not a
+    refusal), each with a finite loss."""
+    g = Grid.create(np.zeros((20, 20), bool), start=(2, 3), goal=(17, 3), corner_rule="free")
+    straight = pad_paths([np.array([[2, 3], [17, 3]])], 20)
+    r = jax.device_get(smooth(g, straight[0][0], straight[1][0],
+                              config=SmoothConfig(steps=20, cap_factor=float("inf"))))
+    assert np.isfinite(r.loss) and not r.used_fallback and r.clear
+    assert float(r.length) == pytest.approx(15.0, rel=1e-5)
+    back = pad_paths([np.array([[0, 3], [6, 3], [2, 3]])], 20)
+    r = jax.device_get(smooth(g, back[0][0], back[1][0],
+                              config=SmoothConfig(steps=20, cap_factor=0.0)))
+    assert float(r.curvature_bound) == np.inf
+    assert np.isfinite(r.loss) and not r.used_fallback
+
+
 def test_moving_ai_room_map():
     """tests/data/movingai: a 32 x 32 room map (strict rule), a Moving AI scenario."""
     scen = read_scen(DATA / "movingai" / "room-32-32-4-random-1.scen")[1]
@@ -382,20 +408,55 @@ def test_plot_smooth(cases):
     plt.close(fig)
 
 
-def test_a_curve_is_resampled_to_a_point_per_cell_of_arc():
+def test_a_curve_is_resampled_within_its_tolerance_of_the_curve():
     """A dense quarter circle of radius 10 (arc 5 pi, about 15.7 cells) in 4001 points:
-    17 points 0.98 cells apart along the arc, both ends kept, every one on the circle
-    within the chords' sagitta."""
+    points on the circle at most a cell apart, both ends kept, and every chord within
+    the tolerance of the curve. A chord of length h on that circle lies h**2 / 80 inside
+    it, so the 16 pieces of 0.98 cells (0.012 inside) are halved until 0.001 holds:
+    64 pieces of 0.245 cells."""
     t = np.linspace(0.0, np.pi / 2, 4001)
     dense = np.stack([10 * np.cos(t), 10 * np.sin(t)], axis=1)
     got = resample_curve(dense, 1.0)
-    assert got.shape == (17, 2)
+    assert got.shape == (65, 2)
     np.testing.assert_allclose(got[[0, -1]], dense[[0, -1]])
     np.testing.assert_allclose(np.hypot(*got.T), 10.0, atol=1e-6)
     steps = np.hypot(*np.diff(got, axis=0).T)
-    np.testing.assert_allclose(steps, steps[0], rtol=1e-6)
-    assert abs(steps[0] - 5 * np.pi / 16) < 1e-3
-    assert resample_curve(dense[:2], 1.0).shape == (2, 2)  # a segment stays as it is
+    np.testing.assert_allclose(steps, 5 * np.pi / 64, rtol=1e-3)
+    mid = (got[:-1] + got[1:]) / 2  # each chord's point farthest inside the circle
+    assert (10.0 - np.hypot(*mid.T)).max() <= RESAMPLE_TOLERANCE
+    coarse = resample_curve(dense, 1.0, tolerance=0.02)  # 0.012 inside is allowed
+    assert coarse.shape == (17, 2)
+    # a segment is divided evenly, a cell apart
+    np.testing.assert_allclose(resample_curve(np.array([[0.0, 0.0], [3.0, 4.0]])),
+                               [[0, 0], [0.6, 0.8], [1.2, 1.6], [1.8, 2.4], [2.4, 3.2],
+                                [3.0, 4.0]], atol=1e-12)
+
+
+def test_a_resampled_curve_keeps_its_clearance_past_a_corner():
+    """A unit circle about a point 0.97 / sqrt(2) beyond a blocked cell's corner clears
+    the cell by 0.03; chords a cell long cut that bend (0.125 inside) and touched the
+    cell. The resampled path clears it by at least 0.03 less the tolerance."""
+    o = np.array([4.5, 4.5]) + 0.97 * np.sqrt(0.5)
+    th = np.radians(np.linspace(120, 270, 3001))
+    dense = o + np.stack([np.cos(th), np.sin(th)], axis=1)
+    cell = np.array([[5.0, 5.0]])
+    assert segments_square_distance(dense[:-1], dense[1:], cell).min() > 0.0299
+    got = resample_curve(dense, 1.0)
+    assert segments_square_distance(got[:-1], got[1:], cell).min() >= 0.03 - RESAMPLE_TOLERANCE
+    np.testing.assert_allclose(got[[0, -1]], dense[[0, -1]])
+    assert np.hypot(*np.diff(got, axis=0).T).max() <= 1.0 + 1e-12
+
+
+@pytest.mark.parametrize("points, spacing, tolerance, message", [
+    (np.arange(6.0), 1.0, 1e-3, "shape \\[N, 2\\]"),
+    ([[0.0, 0.0], [np.nan, 1.0]], 1.0, 1e-3, "finite"),
+    ([[0.0, 0.0], [1.0, 1.0]], 0.0, 1e-3, "spacing must be a number > 0"),
+    ([[0.0, 0.0], [1.0, 1.0]], 1.0, float("inf"), "tolerance must be a number > 0"),
+])
+def test_resample_curve_refuses_what_is_not_a_curve_in_one_line(points, spacing, tolerance,
+                                                                 message):
+    with pytest.raises(ParameterError, match=message):
+        resample_curve(points, spacing, tolerance)
 
 
 def test_the_smooth_line_speaks_metres_on_a_map_with_a_resolution():
