@@ -52,6 +52,7 @@ from jaxga.api import json_number as _num
 from jaxga.api.runs import checked_call
 from jaxga.config.presets import as_sets, overridden_keys, parse_set
 from jaxga.config.schema import Config
+from jaxga.core.equality import ValueEquality
 from jaxga.core.errors import ParameterError
 from jaxga.core.fields import shown_value
 from jaxga.core.grid import Grid
@@ -149,8 +150,8 @@ def _stats(v: np.ndarray) -> tuple[float, float, float, float]:
             float(v.min()), float(v.max()))
 
 
-@dataclasses.dataclass
-class Comparison:
+@dataclasses.dataclass(eq=False)
+class Comparison(ValueEquality):
     """Results of several presets on one map, with pairwise tests (see module doc)."""
 
     results: dict[str, Result]

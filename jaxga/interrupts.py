@@ -32,12 +32,19 @@ __all__ = ["EXIT_CODES", "in_console_script", "install", "install_in_console_scr
 
 EXIT_CODES: dict[int, int] = {signal.SIGINT: 130, signal.SIGTERM: 143}
 """The exit status for each handled signal: 128 + its number, as a shell reports it
-(SIGHUP too where it exists: a closed terminal or a stopped session)."""
+(SIGHUP, SIGXCPU, SIGUSR1 and SIGUSR2 too where they exist). A signal the parent set to be
+ignored (``nohup``, a shell's background job) stays ignored."""
 
 _WORDS = {signal.SIGINT: "interrupted", signal.SIGTERM: "terminated"}
-if hasattr(signal, "SIGHUP"):  # not on Windows
-    EXIT_CODES[signal.SIGHUP] = 129
-    _WORDS[signal.SIGHUP] = "hung up"
+# not on Windows: a closed terminal; a CPU-time limit (``ulimit -t``, a batch queue's);
+# the warning signals of schedulers (Slurm's --signal, SGE's -notify), whose default
+# ends the process with no word and its temporary files left behind
+for _name, _word in (("SIGHUP", "hung up"), ("SIGXCPU", "CPU time limit reached"),
+                     ("SIGUSR1", "stopped by SIGUSR1"), ("SIGUSR2", "stopped by SIGUSR2")):
+    if hasattr(signal, _name):
+        _signum = getattr(signal, _name)
+        EXIT_CODES[_signum] = 128 + _signum
+        _WORDS[_signum] = _word
 _ONCE = threading.Lock()
 _WAKEUP: list[socket.socket] = []  # the socket pair of install(), kept open with the process
 _CLEANUP: list[Callable[[], None]] = []
@@ -81,9 +88,10 @@ def _watch(reader: socket.socket) -> None:
 
 
 def install(cleanup: Callable[[], None] | None = None) -> None:
-    """Make SIGINT, SIGTERM and SIGHUP end the process promptly (:func:`stop`), even while the
-    main thread is inside a long native call; ``cleanup`` (if given) runs first on such an
-    exit. Installs once (a later call only sets ``cleanup``); from the main thread only."""
+    """Make the signals of :data:`EXIT_CODES` end the process promptly (:func:`stop`), even
+    while the main thread is inside a long native call; ``cleanup`` (if given) runs first on
+    such an exit. A signal this process inherited as ignored is left ignored. Installs once
+    (a later call only sets ``cleanup``); from the main thread only."""
     if cleanup is not None:
         _CLEANUP[:] = [cleanup]
     if _WAKEUP or threading.current_thread() is not threading.main_thread():
@@ -92,7 +100,8 @@ def install(cleanup: Callable[[], None] | None = None) -> None:
     writer.setblocking(False)
     signal.set_wakeup_fd(writer.fileno(), warn_on_full_buffer=False)
     for signum in EXIT_CODES:
-        signal.signal(signum, _on_signal)
+        if signal.getsignal(signum) is not signal.SIG_IGN:  # nohup's, a background job's
+            signal.signal(signum, _on_signal)
     threading.Thread(target=_watch, args=(reader,), name="jaxga-signals", daemon=True).start()
     _WAKEUP[:] = [reader, writer]
 

@@ -26,11 +26,11 @@ import numpy as np
 
 from jaxga.core.errors import CacheWarning, JaxgaError, ParameterError
 from jaxga.core.fields import shown_value
-from jaxga.core.files import folder_problem
+from jaxga.core.files import folder_problem, home_folder
 from jaxga.core.numerals import ascii_int
 
 __all__ = ["ENV_VAR", "MIN_COMPILE_SECONDS", "cache_problem", "configure", "default_directory",
-           "env_directory", "expanded", "is_read_only", "jax_cache_folder",
+           "env_directory", "expanded", "is_read_only", "jax_cache_folder", "jax_cache_source",
            "store_directory", "use_compilation_cache", "warn_unusable"]
 
 ENV_VAR = "JAXGA_CACHE_DIR"
@@ -42,15 +42,22 @@ threshold): reading them back would save nothing."""
 
 
 def default_directory() -> str:
-    """``~/.cache/jaxga/jax``: the cache directory when ``$JAXGA_CACHE_DIR`` is not set."""
-    return str(Path.home() / ".cache" / "jaxga" / "jax")
+    """``~/.cache/jaxga/jax``: the cache directory when ``$JAXGA_CACHE_DIR`` is not set
+    (``~`` left as written where the home folder is not known: :func:`cache_problem`
+    says so)."""
+    return str((home_folder() or Path("~")) / ".cache" / "jaxga" / "jax")
 
 
 def expanded(path: str) -> str:
     """``path`` with ``~`` and ``$VARIABLE`` expanded as a shell would: a service file or a
     ``.env`` file passes ``JAXGA_CACHE_DIR=~/cache`` unexpanded. A variable that is not
-    set stays as written (:func:`cache_problem` refuses it)."""
-    return os.path.expandvars(os.path.expanduser(path)) if path else path
+    set, and ``~`` where the home folder is not known (:func:`~jaxga.core.files.home_folder`),
+    stay as written (:func:`cache_problem` refuses them)."""
+    if not path:
+        return path
+    if (path == "~" or path.startswith("~/")) and home_folder() is None:
+        return os.path.expandvars(path)
+    return os.path.expandvars(os.path.expanduser(path))
 
 
 _UNEXPANDED = re.compile(r"\$(\w+|\{[^}]*\})")
@@ -61,6 +68,8 @@ def cache_problem(path: str | os.PathLike) -> str | None:
     set or a home folder that is not known, it cannot be made a folder, or takes no new
     file: :func:`jaxga.core.files.folder_problem`), or None when it can."""
     text = os.fspath(path)
+    if isinstance(text, str) and text and not text.strip():
+        return "it holds only spaces, no folder's name"
     unset = _UNEXPANDED.search(text) if isinstance(text, str) else None
     if unset is not None:
         return f"it names the environment variable {unset.group(0)}, which is not set"
@@ -76,10 +85,14 @@ def cache_problem(path: str | os.PathLike) -> str | None:
 
 
 def env_directory() -> str:
-    """The folder ``$JAXGA_CACHE_DIR`` names (:func:`expanded`; "" when it is empty: no
-    folder), else :func:`default_directory`."""
+    """The folder ``$JAXGA_CACHE_DIR`` names (:func:`expanded`, without the spaces and
+    line ends around it; "" when it is empty: no folder), else
+    :func:`default_directory`."""
     value = os.environ.get(ENV_VAR)
-    return default_directory() if value is None else expanded(value)
+    if value is None:
+        return default_directory()
+    # the line end and spaces a .env file or a CRLF script leaves are no part of the name
+    return expanded(value.strip(" \t\r\n") or value)
 
 
 def _readable_folder(path: str | os.PathLike) -> bool:
@@ -244,6 +257,17 @@ def configure(cache_dir: str | os.PathLike | None | object = _UNSET, *,
     else:
         _configured.pop("jax", None)
     return path or None
+
+
+def jax_cache_source() -> str:
+    """What set the folder of JAX's persistent cache, for a message: jaxga's
+    (:data:`ENV_VAR` or its default folder) or the user's own setting."""
+    folder = jax.config.jax_compilation_cache_dir
+    if folder and folder == _configured.get("jax"):
+        return ENV_VAR if ENV_VAR in os.environ else "jaxga's default folder"
+    if os.environ.get("JAX_COMPILATION_CACHE_DIR"):
+        return "JAX_COMPILATION_CACHE_DIR"
+    return "JAX's jax_compilation_cache_dir"
 
 
 def jax_cache_folder() -> str | None:

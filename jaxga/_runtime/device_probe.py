@@ -33,7 +33,7 @@ import numpy as np
 from jaxga._runtime.lowering import jaxga_lowering
 from jaxga.core import prng
 from jaxga.core.errors import JaxgaError, PlatformWarning
-from jaxga.core.files import atomic_write_text
+from jaxga.core.files import atomic_write_text, home_folder
 from jaxga.core.grid import Grid
 from jaxga.core.path_geometry import geometry
 from jaxga.core.paths import has_endpoints, is_continuous, is_loop_free
@@ -202,10 +202,15 @@ def describe(device: jax.Device) -> str:
 
 
 # ------------------------------------------------------------------------ the gate
-def verdicts_path() -> Path:
-    """Where the verdicts of :func:`check_backend` are remembered (:data:`VERDICTS_ENV`)."""
-    return Path(os.environ.get(VERDICTS_ENV)
-                or Path.home() / ".cache" / "jaxga" / "device_verdicts.json")
+def verdicts_path() -> Path | None:
+    """Where the verdicts of :func:`check_backend` are remembered (:data:`VERDICTS_ENV`),
+    None where that is nowhere (no variable and no known home folder: every process
+    probes)."""
+    given = os.environ.get(VERDICTS_ENV)
+    if given:
+        return Path(given)
+    home = home_folder()
+    return None if home is None else home / ".cache" / "jaxga" / "device_verdicts.json"
 
 
 def _verdict_key(device: jax.Device) -> str:
@@ -219,7 +224,7 @@ MAX_VERDICTS_BYTES = 1 << 20
 def _remembered() -> dict:
     path = verdicts_path()
     try:  # a regular file only: a FIFO would block the run, /dev/zero never end
-        if not path.is_file() or path.stat().st_size > MAX_VERDICTS_BYTES:
+        if path is None or not path.is_file() or path.stat().st_size > MAX_VERDICTS_BYTES:
             return {}
         data = json.loads(path.read_text())
     except (OSError, ValueError, RecursionError):
@@ -230,9 +235,12 @@ def _remembered() -> dict:
 def _remember(key: str, line: str, agrees: bool) -> None:
     data = _remembered()
     data[key] = {"agrees": agrees, "verdict": line}
+    path = verdicts_path()
+    if path is None:  # no home folder: the next process probes again
+        return
     try:  # a first run on a fresh machine: ~/.cache/jaxga does not exist yet
-        verdicts_path().parent.mkdir(parents=True, exist_ok=True)
-        atomic_write_text(verdicts_path(), json.dumps(data, indent=1) + "\n")
+        path.parent.mkdir(parents=True, exist_ok=True)
+        atomic_write_text(path, json.dumps(data, indent=1) + "\n")
     except (OSError, JaxgaError) as err:  # not remembered: the next process probes again
         warnings.warn(f"the device verdict could not be saved ({err})", PlatformWarning,
                       stacklevel=3)

@@ -23,37 +23,13 @@ import jaxlib
 
 from jaxga._runtime.parallel import user_device_setting
 from jaxga.core.errors import ParameterError
-from jaxga.core.files import atomic_write_text
-from jaxga.core.own_settings import check_not_forked
+from jaxga.core.files import atomic_write_text, home_folder
+from jaxga.core.own_settings import check_jax_settings
 
 __all__ = ["check_jax_settings", "check_platform", "check_xla_flags", "xla_flags_verdicts"]
 
 XLA_FLAGS_PROBE_S = 120
 """Seconds the probe of ``XLA_FLAGS`` may take (a fresh process starting JAX's backend)."""
-
-
-def _given(variable: str) -> str:
-    value = os.environ.get(variable)
-    return f" (${variable}={value})" if value is not None else ""
-
-
-def check_jax_settings() -> None:
-    """Refuse JAX's 64-bit mode and a disabled ``jit`` (set by their environment variables
-    or by ``jax.config.update``) in one :class:`ParameterError` line each; and a process
-    forked from one whose JAX backend had started (``multiprocessing``'s default start
-    method on Linux, after a run, a Planner or a GA in the parent:
-    :func:`jaxga.core.own_settings.check_not_forked`)."""
-    check_not_forked()
-    if jax.config.jax_enable_x64:
-        raise ParameterError(
-            f"JAX's 64-bit mode is on{_given('JAX_ENABLE_X64')}: jaxga computes in 32 bits "
-            "(int32 cells, float32 fitness); turn it off for jaxga's runs (unset "
-            "JAX_ENABLE_X64, or jax.config.update('jax_enable_x64', False))")
-    if jax.config.jax_disable_jit:
-        raise ParameterError(
-            f"jit is disabled{_given('JAX_DISABLE_JIT')}: jaxga's runs are compiled "
-            "programs, which JAX cannot run with jit disabled; unset JAX_DISABLE_JIT (or "
-            "jax.config.update('jax_disable_jit', False))")
 
 
 def check_platform() -> None:
@@ -71,10 +47,12 @@ def check_platform() -> None:
         raise ParameterError(f"JAX could not start its backend ({why}){hint}") from None
 
 
-def xla_flags_verdicts() -> Path:
+def xla_flags_verdicts() -> Path | None:
     """Where the flags XLA accepted are remembered (per jaxlib version and platforms), so
-    that only the first command with new ``XLA_FLAGS`` pays for the probe."""
-    return Path.home() / ".cache" / "jaxga" / "xla_flags.json"
+    that only the first command with new ``XLA_FLAGS`` pays for the probe; None without a
+    known home folder (every command probes)."""
+    home = home_folder()
+    return None if home is None else home / ".cache" / "jaxga" / "xla_flags.json"
 
 
 def check_xla_flags() -> None:
@@ -89,7 +67,7 @@ def check_xla_flags() -> None:
     key = f"{flags}|{os.environ.get('JAX_PLATFORMS', '')}|jaxlib {jaxlib.__version__}"
     path = xla_flags_verdicts()
     try:
-        known = json.loads(path.read_text()) if path.is_file() else {}
+        known = json.loads(path.read_text()) if path is not None and path.is_file() else {}
     except (OSError, ValueError, RecursionError):  # a damaged file of verdicts: none known
         known = {}
     if isinstance(known, dict) and key in known:
@@ -109,6 +87,8 @@ def check_xla_flags() -> None:
         return
     known = known if isinstance(known, dict) else {}
     known[key] = True
+    if path is None:
+        return
     try:
         path.parent.mkdir(parents=True, exist_ok=True)
         atomic_write_text(path, json.dumps(known, indent=1) + "\n")

@@ -85,8 +85,9 @@ class GA(PureGA):
                  problem: Grid | MapInfo | str | None = None, *,
                  corner_rule: str | None = None, variant: str | None = None,
                  sets: Any = (), generations: int | None = None, **overrides: Any) -> None:
-        config, grid, map_name, frame, info, _ = load_problem(
-            preset, problem, corner_rule, variant, sets, overrides, generations)
+        self._problem = load_problem(preset, problem, corner_rule, variant, sets, overrides,
+                                     generations)
+        config, grid, map_name, frame, info, _ = self._problem
         self.map_name: str = map_name
         self.frame: MapFrame | None = frame
         self._layers = None if info is None else info.layers
@@ -98,6 +99,17 @@ class GA(PureGA):
             config, self.algorithm.islands)
         self.param_keys = frozenset(self.default_params)
         warn_platform(jax.default_backend())  # where jit puts the user's calls
+
+    def __reduce__(self) -> tuple:
+        """A GA is sent (pickled, to another process) as its problem and built again there:
+        its host work and tables are not sent, its :attr:`default_params` are the
+        problem's. An operator of your own is sent by name and must be registered in the
+        receiving process too (:func:`jaxga.register_operator`)."""
+        return (GA, (self._problem,))
+
+    def __repr__(self) -> str:
+        return (f"GA({self.config['name']!r} on {self.map_name!r}, "
+                f"{self.grid.width} x {self.grid.height} cells)")
 
     @own_settings
     def params(self, **values: Any) -> dict[str, jax.Array]:

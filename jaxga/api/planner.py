@@ -129,6 +129,12 @@ class Planner:
         if frame is not None:
             _ = frame.clearance  # the distance transform: once per map, not per plan
 
+    def __repr__(self) -> str:
+        preset = self.preset if isinstance(self.preset, str) else type(self.preset).__name__
+        seeds = self.seeds if isinstance(self.seeds, int) else len(self.seeds)
+        return (f"Planner({preset!r} on {self.map.name!r}, {self.map.grid.width} x "
+                f"{self.map.grid.height} cells, {seeds} seeds)")
+
     @own_settings
     def plan(self, start: tuple[int, int] | None = None, goal: tuple[int, int] | None = None,
              *, start_world: Point | None = None, goal_world: Point | None = None,

@@ -16,6 +16,7 @@ import numpy as np
 from jaxga._runtime.timeline import time_line
 from jaxga.api.result_fronts import Fronts, FrontsOfResult, json_number
 from jaxga.config.schema import Config
+from jaxga.core.equality import ValueEquality
 from jaxga.core.errors import ParameterError
 from jaxga.core.fields import shown_value
 from jaxga.core.grid import as_integer
@@ -54,8 +55,8 @@ def relative_gap(length: np.ndarray, optimum: float, success: np.ndarray) -> np.
     return np.where(success, gap, np.nan)
 
 
-@dataclasses.dataclass(frozen=True)
-class RunSetup:
+@dataclasses.dataclass(frozen=True, eq=False)
+class RunSetup(ValueEquality):
     """What was run (:attr:`Result.setup`): the preset, the map and the sizes."""
 
     preset: str
@@ -93,8 +94,8 @@ class RunSetup:
     results :func:`jaxga.compare_results` may compare."""
 
 
-@dataclasses.dataclass(frozen=True)
-class RunPaths:
+@dataclasses.dataclass(frozen=True, eq=False)
+class RunPaths(ValueEquality):
     """The best paths, per seed (:attr:`Result.paths`; :meth:`Result.path` reads one as
     ``(x, y)`` cells, :meth:`Result.world_path` in metres)."""
 
@@ -111,8 +112,8 @@ class RunPaths:
     scalar GA."""
 
 
-@dataclasses.dataclass(frozen=True)
-class RunOutcome:
+@dataclasses.dataclass(frozen=True, eq=False)
+class RunOutcome(ValueEquality):
     """What each seed found (:attr:`Result.outcome`): success and its causes, lengths,
     fitness, the paths' metrics, the convergence and what the initialisation did. A seed
     without a path has NaN lengths, fitness and metrics."""
@@ -151,8 +152,8 @@ class RunOutcome:
     """int[S]: initial individuals the fallback initialiser made."""
 
 
-@dataclasses.dataclass(frozen=True)
-class References:
+@dataclasses.dataclass(frozen=True, eq=False)
+class References(ValueEquality):
     """The exact references a result is measured against (:attr:`Result.references`; the
     gaps are :attr:`Result.gap`, :attr:`Result.raw_gap` and :attr:`Result.fitness_gap`)."""
 
@@ -183,8 +184,8 @@ RESULT_RECORDS = (RunSetup, RunPaths, RunOutcome, References)
 fields once."""
 
 
-@dataclasses.dataclass
-class Result(FrontsOfResult):
+@dataclasses.dataclass(eq=False)
+class Result(FrontsOfResult, ValueEquality):
     """Per-seed results of :func:`run` (NumPy arrays, leading axis = seeds).
 
     A seed that found no path has no length, fitness or metrics: they are NaN (never 0),

@@ -13,8 +13,7 @@ from typing import Any
 import jax
 
 from jaxga import interrupts
-from jaxga._runtime.compilation_cache import ENV_VAR as CACHE_ENV_VAR
-from jaxga._runtime.compilation_cache import configure
+from jaxga._runtime.compilation_cache import configure, jax_cache_source
 from jaxga._runtime.device_probe import DeviceDisagrees
 from jaxga._runtime.jax_settings import check_jax_settings, check_platform, check_xla_flags
 from jaxga._runtime.lowering import check_environment
@@ -74,7 +73,7 @@ def one_line_warnings(show: Callable[..., None]) -> Callable[..., None]:
                 said.add("cache")
                 folder = jax.config.jax_compilation_cache_dir
                 why = text.split(": ", 1)[-1].splitlines()[0][:160]
-                print(f"jaxga: warning: the compilation cache {folder} ({CACHE_ENV_VAR}) "
+                print(f"jaxga: warning: the compilation cache {folder} ({jax_cache_source()}) "
                       f"could not read or keep a program ({why}): such programs are "
                       "compiled and not kept", file=out)
         else:
@@ -91,6 +90,7 @@ def main(argv: Sequence[str] | None = None) -> int:
     try:
         with warnings.catch_warnings():
             warnings.showwarning = one_line_warnings(warnings.showwarning)
+            check_working_folder()
             check_environment()  # $JAXGA_THREEFRY, which `import jaxga` does not refuse
             check_jax_settings()  # JAX_ENABLE_X64, JAX_DISABLE_JIT
             check_xla_flags()  # before the backend starts: XLA ends the process on a bad flag
@@ -128,6 +128,21 @@ def main(argv: Sequence[str] | None = None) -> int:
     except KeyboardInterrupt:
         print("jaxga: interrupted", file=sys.stderr)
         return 130
+    except Warning as e:  # made an error by python -W error or PYTHONWARNINGS=error
+        print(f"jaxga: error: {shortened(str(e))} (a {type(e).__name__}, an error under "
+              "-W error / PYTHONWARNINGS)", file=sys.stderr)
+        return EXIT_BAD_INPUT
+
+
+def check_working_folder() -> None:
+    """Refuse, in one line, a working folder that no longer exists (removed after the
+    shell entered it): every relative name, an output's or a cache's, would fail later
+    with a bare "No such file or directory"."""
+    try:
+        os.getcwd()
+    except FileNotFoundError:
+        raise JaxgaError("the working folder no longer exists (it was removed after this "
+                         "shell entered it): cd to a folder that exists") from None
 
 
 def standard_streams() -> None:
@@ -146,32 +161,42 @@ def standard_streams() -> None:
     for name in ("stdout", "stderr"):  # `jaxga ... 2>&1 | head`: both meet the pipe
         stream = getattr(sys, name)
         if stream is not None and not isinstance(stream, ReaderMayLeave):
-            setattr(sys, name, ReaderMayLeave(stream))
+            setattr(sys, name, ReaderMayLeave(stream, name))
 
 
 class ReaderMayLeave:
     """Standard output or error whose reader may leave before the end (``jaxga presets |
-    head``):
-    at the first write or flush that finds the pipe broken, the descriptor is put on the
-    null device and the command goes on, its files written and its status its own; the
-    rest of the output is lost, as when stdout is closed (``>&-``). Python's own
-    ``BrokenPipeError`` would end the command as an error."""
+    head``), or that cannot be written (a full disk, ``>/dev/full``):
+    at the first write or flush that fails, the descriptor is put on the null device and
+    the command goes on, its files written and its status its own; the rest of the output
+    is lost, as when stdout is closed (``>&-``), and for stdout other than a closed pipe
+    one warning on stderr says so. Python's own ``BrokenPipeError`` or ``OSError`` would
+    end the command as an error, or hide it inside the report of another."""
 
-    def __init__(self, stream: Any) -> None:
+    def __init__(self, stream: Any, name: str = "") -> None:
         self._stream = stream
+        self._name = name
+        self._gone = False
 
-    def _lost(self) -> None:
+    def _lost(self, err: OSError) -> None:
+        said, self._gone = self._gone, True
         with contextlib.suppress(OSError, ValueError):
             null = os.open(os.devnull, os.O_WRONLY)
             os.dup2(null, self._stream.fileno())
             os.close(null)
+        if self._name == "stdout" and not said and not isinstance(err, BrokenPipeError):
+            # a full disk or a failing device: said once, where it can still be said
+            with contextlib.suppress(OSError, ValueError):
+                print(f"jaxga: warning: standard output cannot be written "
+                      f"({err.strerror or err}): the rest of it is lost; files are written",
+                      file=sys.stderr, flush=True)
 
     def write(self, text: str) -> int:
         """Write ``text``; where the reader has gone, to the null device."""
         try:
             return self._stream.write(text)
-        except BrokenPipeError:
-            self._lost()
+        except OSError as e:
+            self._lost(e)
             return len(text)
 
     def writelines(self, lines: Any) -> None:
@@ -183,8 +208,8 @@ class ReaderMayLeave:
         """Flush; where the reader has gone, what the buffer held goes to the null device."""
         try:
             self._stream.flush()
-        except BrokenPipeError:
-            self._lost()
+        except OSError as e:
+            self._lost(e)
             with contextlib.suppress(OSError, ValueError):
                 self._stream.flush()  # what the buffer held goes to the null device
 

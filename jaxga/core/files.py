@@ -268,6 +268,17 @@ def same_file(a: str | os.PathLike, b: str | os.PathLike) -> bool:
         return os.path.abspath(a) == os.path.abspath(b)
 
 
+def home_folder() -> Path | None:
+    """The user's home folder, or None where it is not known (no ``$HOME`` and no entry
+    in the password database: a container's arbitrary user) or is not an absolute path (a
+    relative ``$HOME`` would put jaxga's folders under every working folder)."""
+    try:
+        home = Path.home()
+    except (RuntimeError, KeyError, OSError):
+        return None
+    return home if home.is_absolute() else None
+
+
 def file_path(path: Any, what: str = "a file",
               error: type[JaxgaError] = JaxgaError) -> Path:
     """``path`` (a ``str`` or an ``os.PathLike`` such as :class:`pathlib.Path`) as a

@@ -37,6 +37,7 @@ import jax.numpy as jnp
 import numpy as np
 
 from jaxga.core.dtypes import on_device
+from jaxga.core.equality import ValueEquality
 from jaxga.core.errors import EndpointError, JaxgaError
 from jaxga.core.fields import shown_value
 
@@ -144,8 +145,8 @@ def check_corner_rule(rule: str) -> str:
 
 
 @jax.tree_util.register_dataclass
-@dataclasses.dataclass(frozen=True)
-class Grid:
+@dataclasses.dataclass(frozen=True, eq=False)
+class Grid(ValueEquality):
     """An occupancy grid with a start, a goal and a corner rule.
 
     Attributes:

@@ -18,12 +18,14 @@ import sys
 from pathlib import Path
 
 from jaxga.core.errors import JaxgaError
-from jaxga.core.files import folder_problem, temporary_folder
+from jaxga.core.files import folder_problem, home_folder, temporary_folder
 
 __all__ = ["matplotlib_ready"]
 
 
 def _usable(folder: Path) -> bool:
+    if not folder.is_absolute():  # it would be made under every working folder
+        return False
     try:
         folder.mkdir(parents=True, exist_ok=True)
     except OSError:
@@ -38,7 +40,7 @@ def _own_folders() -> list[Path]:
     given = os.environ.get("MPLCONFIGDIR")
     if given:
         return [Path(given).expanduser()]
-    home = Path.home()
+    home = home_folder() or Path("~")  # not known: a relative folder, not usable
     config = os.environ.get("XDG_CONFIG_HOME") or str(home / ".config")
     cache = os.environ.get("XDG_CACHE_HOME") or str(home / ".cache")
     return [Path(config) / "matplotlib", Path(cache) / "matplotlib"]

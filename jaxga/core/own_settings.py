@@ -41,7 +41,7 @@ import jax
 
 from jaxga.core.errors import ParameterError
 
-__all__ = ["check_not_forked", "own_settings"]
+__all__ = ["check_jax_settings", "check_not_forked", "own_settings"]
 
 F = TypeVar("F", bound=Callable[..., Any])
 
@@ -94,3 +94,29 @@ def own_settings(fn: F) -> F:
             return fn(*args, **kwargs)
 
     return under_own_settings  # type: ignore[return-value]
+
+
+def _given(variable: str) -> str:
+    value = os.environ.get(variable)
+    return f" (${variable}={value})" if value is not None else ""
+
+
+def check_jax_settings(jit: bool = True) -> None:
+    """Refuse JAX's 64-bit mode and (``jit``) a disabled ``jit`` (set by their environment
+    variables or by ``jax.config.update``) in one :class:`ParameterError` line each; and a
+    process forked from one whose JAX backend had started (``multiprocessing``'s default
+    start method on Linux, after a run, a Planner or a GA in the parent:
+    :func:`check_not_forked`). The pure core (:class:`jaxga.engine.run.PureGA`) checks
+    without ``jit``: its functions also run eagerly, as a user's code under
+    ``jax.disable_jit()`` does; the drivers' compiled programs cannot."""
+    check_not_forked()
+    if jax.config.jax_enable_x64:
+        raise ParameterError(
+            f"JAX's 64-bit mode is on{_given('JAX_ENABLE_X64')}: jaxga computes in 32 bits "
+            "(int32 cells, float32 fitness); turn it off for jaxga's runs (unset "
+            "JAX_ENABLE_X64, or jax.config.update('jax_enable_x64', False))")
+    if jit and jax.config.jax_disable_jit:
+        raise ParameterError(
+            f"jit is disabled{_given('JAX_DISABLE_JIT')}: jaxga's runs are compiled "
+            "programs, which JAX cannot run with jit disabled; unset JAX_DISABLE_JIT (or "
+            "jax.config.update('jax_disable_jit', False))")

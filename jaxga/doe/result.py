@@ -11,13 +11,14 @@ from typing import Any
 import numpy as np
 
 from jaxga.config.schema import Config
+from jaxga.core.equality import ValueEquality
 from jaxga.doe.checkpoint import json_float
 from jaxga.doe.design import Factor, design_points
 from jaxga.doe.fit import main_effects, point_means
 
 
-@dataclasses.dataclass
-class DoeResult:
+@dataclasses.dataclass(eq=False)
+class DoeResult(ValueEquality):
     """A finished designed experiment (see :func:`run_doe`)."""
 
     preset: str

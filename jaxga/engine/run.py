@@ -23,7 +23,7 @@ from jaxga.core import prng
 from jaxga.core.errors import ParameterError
 from jaxga.core.fields import shown_value
 from jaxga.core.grid import Grid, as_integer
-from jaxga.core.own_settings import own_settings
+from jaxga.core.own_settings import check_jax_settings, own_settings
 from jaxga.engine.algorithm import Algorithm
 from jaxga.engine.evolution import GAState, RunOutputs, evolve, finish, generation, init_state
 from jaxga.operators.init import InitStats
@@ -74,7 +74,9 @@ class PureGA:
         """``params``, refused in one line where it is not a dict of the GA's parameters
         (a key missing, or one the GA does not read: a misspelt key set by hand would be
         ignored). Its values are not checked: they may be traced (:meth:`jaxga.GA.params`
-        is the checked way to set them)."""
+        is the checked way to set them). JAX's 64-bit mode, turned on after the GA was
+        built, is refused too: the programs' int32 and float32 carries would change type."""
+        check_jax_settings(jit=False)
         if not isinstance(params, Mapping):
             raise ParameterError(f"params must be the dict of the GA's parameters "
                                  f"(GA.default_params, or GA.params(...) to change some), "

@@ -30,6 +30,7 @@ from typing import Any
 
 import numpy as np
 
+from jaxga.core.equality import ValueEquality
 from jaxga.core.errors import EndpointError
 from jaxga.core.grid import check_xy
 from jaxga.maps.clearance import ObstacleClearance
@@ -48,8 +49,8 @@ def world_decimals(step: float | None) -> int:
     return min(15, max(4, 2 - math.floor(math.log10(step))))
 
 
-@dataclasses.dataclass(frozen=True)
-class MapFrame:
+@dataclasses.dataclass(frozen=True, eq=False)
+class MapFrame(ValueEquality):
     """How planning cells relate to the map file's cells and to metres.
 
     Attributes:

@@ -38,6 +38,7 @@ from typing import Any
 
 import numpy as np
 
+from jaxga.core.equality import ValueEquality
 from jaxga.core.errors import EndpointError, MapFormatError
 from jaxga.core.fields import python_scalar, shown_value
 from jaxga.core.files import file_path
@@ -78,8 +79,8 @@ __all__ = [
 ]
 
 
-@dataclasses.dataclass(frozen=True)
-class MapLayers:
+@dataclasses.dataclass(frozen=True, eq=False)
+class MapLayers(ValueEquality):
     """What each planning cell is, for plots: exclusive ``bool[H, W]`` masks (row 0 at the
     bottom, the planning grid's shape), in the order of precedence of a coarsened cell.
 
@@ -105,8 +106,8 @@ class MapLayers:
         return MapLayers(wall, margin, unknown, self.unknown_blocked)
 
 
-@dataclasses.dataclass(frozen=True)
-class MapInfo:
+@dataclasses.dataclass(frozen=True, eq=False)
+class MapInfo(ValueEquality):
     """A loaded map together with where it came from.
 
     Attributes:
@@ -152,16 +153,19 @@ def map_name(source: Source) -> str:
     or the folder's name for a generic one (:data:`GENERIC_STEMS`).
 
     ``map_name("den312d") == "den312d"``, ``map_name("maps/arena.map") == "arena"``,
-    ``map_name("worlds/office/map.yaml") == "office"``. Does not read the file.
+    ``map_name("worlds/office/map.yaml") == "office"``; bytes of the file name that are
+    not UTF-8 are shown as escapes (``caf\\udce9``). Does not read the file.
     """
 
     if isinstance(source, str) and source in builtin.builtin_names():
         return source
     path = file_path(source, "a map", MapFormatError)
+    name = path.stem
     if path.stem.lower() in GENERIC_STEMS:
-        folder = path.resolve().parent.name
-        return folder or path.stem
-    return path.stem
+        name = path.resolve().parent.name or path.stem
+    # a file name's bytes that are not UTF-8 (lone surrogates in Python) shown escaped:
+    # a plot's title, a JSON parser and a terminal cannot take them
+    return name.encode("utf-8", "backslashreplace").decode("utf-8")
 
 
 def load_map(

@@ -232,7 +232,8 @@ class MethodField(Field):
         value = super().check(key, value)
         if canonical(self.family, value) is None:
             raise ParameterError(f"{key} = {shown_value(value)} is not one of "
-                                 f"{', '.join(names(self.family))}")
+                                 f"{', '.join(names(self.family))} (your own: register it in "
+                                 "this process)")
         return canonical(self.family, value)
 
 
