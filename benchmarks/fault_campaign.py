@@ -20,9 +20,10 @@ case declares what it expects; the outcome is classed automatically:
 * ``handled``: exit 0, nothing on stderr but jaxga's one-line warnings and progress, and
   the case's own check of the result passed (an output written and readable, a warning
   said, ...);
-* ``interrupted``: exit 130 / 143 / 129 after the signal the case sent (SIGINT, SIGTERM,
-  SIGHUP), within 10 s, with ``jaxga: interrupted`` / ``terminated`` / ``hung up`` last
-  and no warning or error before it
+* ``interrupted``: exit 128 + n after the signal n the case sent (130 / 143 / 129 for
+  SIGINT, SIGTERM, SIGHUP; SIGUSR1 too), within 10 s, with ``jaxga: interrupted`` /
+  ``terminated`` / ``hung up`` / ``stopped by SIGUSR1`` last and no warning or error
+  before it
   (progress and status lines are allowed);
 
 and the defects: ``traceback`` (a Python traceback on stderr), ``crash`` (killed by
@@ -323,6 +324,13 @@ def execute(case: Case, env: dict[str, str], cwd: Path) -> Outcome:
                    signalled=sent_at is not None)
 
 
+SIGNAL_EXITS = {128 + signum: f"jaxga: {words}" for signum, words in (
+    (signal.SIGINT, "interrupted"), (signal.SIGTERM, "terminated"), (signal.SIGHUP, "hung up"),
+    (signal.SIGUSR1, "stopped by SIGUSR1"), (signal.SIGUSR2, "stopped by SIGUSR2"),
+    (signal.SIGXCPU, "CPU time limit reached"))}
+"""The exit status of each signal jaxga ends on (128 + its number) and its last line."""
+
+
 def _jaxga_line(line: str) -> bool:
     return line.startswith("progress:") or line.startswith("jaxga: warning:")
 
@@ -351,11 +359,10 @@ def classify(case: Case, out: Outcome, damage: list[str]) -> tuple[str, str]:
     if damage:
         return "damaged file", "; ".join(damage)[:300]
     others = [ln for ln in err if not _jaxga_line(ln)]
-    if out.rc in (130, 143, 129):
+    if out.rc in SIGNAL_EXITS:
         if not out.signalled:
             return "other exit", f"exit {out.rc} without a signal"
-        words = {130: "jaxga: interrupted", 143: "jaxga: terminated",
-                 129: "jaxga: hung up"}[out.rc]
+        words = SIGNAL_EXITS[out.rc]
         if not err or err[-1].strip() != words:
             return "multi-line error", f"last line is not {words!r}"
         noisy = [ln for ln in others[:-1] if WARNING_LIKE.search(ln)]
@@ -402,7 +409,7 @@ def classify(case: Case, out: Outcome, damage: list[str]) -> tuple[str, str]:
 def damage_of(case: Case, before: dict, after: dict, cls_hint: int | None) -> list[str]:
     """What changed under the files folder that the case had no right to change."""
     allowed = {str(p) for p in case.outputs}
-    may_write = cls_hint in (0, 3, 130, 143, 129)  # a refusal writes nothing; no path does
+    may_write = cls_hint in (0, 3, *SIGNAL_EXITS)  # a refusal writes nothing; no path does
 
     def permitted(p: str) -> bool:
         if is_temporary(os.path.basename(p)):
@@ -1461,6 +1468,21 @@ def build(t: Path) -> list[Case]:
     add("json-name-of-300-bytes", "review of decision 058",
         run(CLASSIC, "--json", f / ("j" * 295 + ".json")),
         check=refused_saying("more than the 255"), quick=True)
+    # --- round fourteen (decision 062): the process a user or a scheduler starts --------
+    run_json = f / "r14.json"
+    add("stdout-full-during-a-run", "round fourteen", run(CLASSIC, "--json", run_json),
+        "handled", stdout="full", outputs=(run_json,),
+        check=all_of(wrote_json(run_json), warned("standard output cannot be written")),
+        note="exit 2 'No space left on device' before the JSON was written")
+    add("warnings-as-errors", "round fourteen", run(CLASSIC),
+        env={"PYTHONWARNINGS": "error", "JAXGA_CACHE_DIR": "/proc/jaxga-no-cache"},
+        check=refused_saying("an error under -W error"), quick=True,
+        note="a CacheWarning traceback")
+    add("cache-dir-of-spaces", "round fourteen", run(CLASSIC), "handled",
+        env={"JAXGA_CACHE_DIR": "  "}, check=warned("holds only spaces"),
+        note="made a folder named by two spaces in the working folder")
+    sig("sigusr1-during-compile", prev_run, signal.SIGUSR1, "progress: compile",
+        note="a scheduler's warning signal (Slurm --signal, SGE -notify): ended silently")
     return cases
 
 
@@ -1661,7 +1683,8 @@ def main() -> None:
         "shared compilation cache (compiled by `baseline`) except where a case names its "
         "own. refused = exit 2 and one `jaxga: error:` / `jaxga: bad start or goal:` line; "
         "no path = exit 3 and one `jaxga: no path:` line; handled = exit 0, the case's "
-        "check passed (output written, warning said); interrupted = exit 130 / 143 / 129 within "
+        "check passed (output written, warning said); interrupted = exit 128 + the signal's "
+        "number (130 / 143 / 129 / 138) within "
         f"{INTERRUPT_S:.0f} s of the signal. A defect is any other class (the script's "
         "docstring defines them); the files under `$T` are compared before and after each "
         "case (inputs and previous outputs unchanged, nothing left behind).\n\n"
