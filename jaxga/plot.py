@@ -122,7 +122,7 @@ class MapView:
             return p
         if self.world:
             return self.frame.to_world(p)  # type: ignore[union-attr]
-        return (p + 0.5) * self.frame.cell_size  # type: ignore[union-attr, operator]
+        return self.frame.local_metres(p)  # type: ignore[union-attr]
 
     def extent(self, shape: tuple[int, int]) -> tuple[float, float, float, float]:
         """``(left, right, bottom, top)`` of a map of ``shape = (H, W)`` planning cells:
@@ -188,6 +188,10 @@ def plot_map(grid: Grid, paths: Sequence[tuple[Sequence[tuple[int, int]], str]] 
     view = MapView(frame)
     codes = cell_classes(grid, layers)
     extent = view.extent(grid.shape)
+    if view.metres and frame.coarsen > 1:  # type: ignore[union-attr]
+        # drawn in map cells: a last block past the map's edge is narrower than the others
+        k, (h, w) = frame.coarsen, frame.map_shape  # type: ignore[union-attr]
+        codes = np.repeat(np.repeat(codes, k, axis=0), k, axis=1)[:h, :w]
     ax.imshow(_PALETTE[codes], origin="lower", extent=extent, interpolation="auto",
               gid="map-cells")
     for i, (path, label) in enumerate(paths):

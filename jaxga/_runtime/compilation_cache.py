@@ -26,7 +26,7 @@ import numpy as np
 
 from jaxga.core.errors import CacheWarning, JaxgaError, ParameterError
 from jaxga.core.fields import shown_value
-from jaxga.core.files import folder_problem, home_folder
+from jaxga.core.files import folder_problem, home_folder, jaxga_cache_home
 from jaxga.core.numerals import ascii_int
 
 __all__ = ["ENV_VAR", "MIN_COMPILE_SECONDS", "cache_problem", "configure", "default_directory",
@@ -45,7 +45,7 @@ def default_directory() -> str:
     """``~/.cache/jaxga/jax``: the cache directory when ``$JAXGA_CACHE_DIR`` is not set
     (``~`` left as written where the home folder is not known: :func:`cache_problem`
     says so)."""
-    return str((home_folder() or Path("~")) / ".cache" / "jaxga" / "jax")
+    return str(jaxga_cache_home("jax") or Path("~/.cache/jaxga/jax"))
 
 
 def expanded(path: str) -> str:

@@ -33,7 +33,7 @@ import numpy as np
 from jaxga._runtime.lowering import jaxga_lowering
 from jaxga.core import prng
 from jaxga.core.errors import JaxgaError, PlatformWarning
-from jaxga.core.files import atomic_write_text, home_folder
+from jaxga.core.files import atomic_write_text, jaxga_cache_home
 from jaxga.core.grid import Grid
 from jaxga.core.path_geometry import geometry
 from jaxga.core.paths import has_endpoints, is_continuous, is_loop_free
@@ -209,8 +209,7 @@ def verdicts_path() -> Path | None:
     given = os.environ.get(VERDICTS_ENV)
     if given:
         return Path(given)
-    home = home_folder()
-    return None if home is None else home / ".cache" / "jaxga" / "device_verdicts.json"
+    return jaxga_cache_home("device_verdicts.json")
 
 
 def _verdict_key(device: jax.Device) -> str:

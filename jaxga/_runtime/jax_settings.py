@@ -23,7 +23,7 @@ import jaxlib
 
 from jaxga._runtime.parallel import user_device_setting
 from jaxga.core.errors import ParameterError
-from jaxga.core.files import atomic_write_text, home_folder
+from jaxga.core.files import atomic_write_text, jaxga_cache_home
 from jaxga.core.own_settings import check_jax_settings
 
 __all__ = ["check_jax_settings", "check_platform", "check_xla_flags", "xla_flags_verdicts"]
@@ -51,8 +51,7 @@ def xla_flags_verdicts() -> Path | None:
     """Where the flags XLA accepted are remembered (per jaxlib version and platforms), so
     that only the first command with new ``XLA_FLAGS`` pays for the probe; None without a
     known home folder (every command probes)."""
-    home = home_folder()
-    return None if home is None else home / ".cache" / "jaxga" / "xla_flags.json"
+    return jaxga_cache_home("xla_flags.json")
 
 
 def check_xla_flags() -> None:

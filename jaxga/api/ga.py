@@ -102,10 +102,11 @@ class GA(PureGA):
 
     def __reduce__(self) -> tuple:
         """A GA is sent (pickled, to another process) as its problem and built again there:
-        its host work and tables are not sent, its :attr:`default_params` are the
-        problem's. An operator of your own is sent by name and must be registered in the
-        receiving process too (:func:`jaxga.register_operator`)."""
-        return (GA, (self._problem,))
+        its host work and tables are not sent, and its :attr:`default_params` are the
+        problem's (values reassigned by hand are not sent). An operator of your own is
+        sent by name and must be registered in the receiving process too
+        (:func:`jaxga.register_operator`)."""
+        return (type(self), (self._problem,))
 
     def __repr__(self) -> str:
         return (f"GA({self.config['name']!r} on {self.map_name!r}, "

@@ -161,35 +161,33 @@ def standard_streams() -> None:
     for name in ("stdout", "stderr"):  # `jaxga ... 2>&1 | head`: both meet the pipe
         stream = getattr(sys, name)
         if stream is not None and not isinstance(stream, ReaderMayLeave):
-            setattr(sys, name, ReaderMayLeave(stream, name))
+            setattr(sys, name, ReaderMayLeave(stream))
 
 
 class ReaderMayLeave:
     """Standard output or error whose reader may leave before the end (``jaxga presets |
     head``), or that cannot be written (a full disk, ``>/dev/full``):
     at the first write or flush that fails, the descriptor is put on the null device and
-    the command goes on, its files written and its status its own; the rest of the output
-    is lost, as when stdout is closed (``>&-``), and for stdout other than a closed pipe
-    one warning on stderr says so. Python's own ``BrokenPipeError`` or ``OSError`` would
-    end the command as an error, or hide it inside the report of another."""
+    the command goes on to write its files; the rest of the output is lost, as when
+    stdout is closed (``>&-``). A reader gone leaves the exit status the command's own; a
+    stdout that could not be written is an error when the command ends
+    (:func:`lost_output`). Python's own ``BrokenPipeError`` or ``OSError`` would end the
+    command at once, or hide inside the report of another."""
 
-    def __init__(self, stream: Any, name: str = "") -> None:
+    def __init__(self, stream: Any) -> None:
         self._stream = stream
-        self._name = name
-        self._gone = False
+        self.failure: OSError | None = None
+        """The first error other than a reader gone (a full disk, a failing device)."""
 
     def _lost(self, err: OSError) -> None:
-        said, self._gone = self._gone, True
+        if isinstance(err, BlockingIOError):  # a non-blocking stream that is full for now
+            raise err
+        if self.failure is None and not isinstance(err, BrokenPipeError):
+            self.failure = err
         with contextlib.suppress(OSError, ValueError):
             null = os.open(os.devnull, os.O_WRONLY)
             os.dup2(null, self._stream.fileno())
             os.close(null)
-        if self._name == "stdout" and not said and not isinstance(err, BrokenPipeError):
-            # a full disk or a failing device: said once, where it can still be said
-            with contextlib.suppress(OSError, ValueError):
-                print(f"jaxga: warning: standard output cannot be written "
-                      f"({err.strerror or err}): the rest of it is lost; files are written",
-                      file=sys.stderr, flush=True)
 
     def write(self, text: str) -> int:
         """Write ``text``; where the reader has gone, to the null device."""
@@ -217,6 +215,18 @@ class ReaderMayLeave:
         return getattr(self._stream, name)
 
 
+def lost_output() -> str | None:
+    """The one error line for a standard output that could not be written (a full disk),
+    or None: the command's files are written, its output is not, so it did not do all it
+    was asked."""
+    out = sys.stdout
+    failure = out.failure if isinstance(out, ReaderMayLeave) else None
+    if failure is None:
+        return None
+    return (f"jaxga: error: standard output could not be written "
+            f"({failure.strerror or failure}): the rest of it was lost (files were written)")
+
+
 def console() -> None:
     """The ``jaxga`` console script: :func:`main`, then, in a single-process run, an exit
     that skips the interpreter's teardown of JAX (its backends and threads: about a third
@@ -233,6 +243,11 @@ def console() -> None:
     for stream in (sys.stdout, sys.stderr):  # a stream that cannot take it: said already
         with contextlib.suppress(OSError, ValueError):
             stream.flush()
+    lost = lost_output()
+    if lost is not None:
+        with contextlib.suppress(OSError, ValueError):
+            print(lost, file=sys.stderr, flush=True)
+        code = code or EXIT_BAD_INPUT
     remove_temporaries()  # os._exit skips the interpreter's own exit handlers
     several = False
     with contextlib.suppress(Exception):  # several processes only through jax.distributed

@@ -36,6 +36,7 @@ from jaxga.core.fields import shown_value
 from jaxga.core.grid import CORNER_RULES, as_integer, check_corner_rule
 from jaxga.maps.frame import cells_crossed
 from jaxga.maps.inputs import PATH_JSON_CAP, read_input
+from jaxga.maps.preprocess import block_middle_cells
 from jaxga.plot import (
     plot_replan,
 )
@@ -164,9 +165,7 @@ def recorded_cells(cells: list[tuple[int, int]], recorded: Any, frame: Any,
     if was == now:
         return cells
     c = np.asarray(cells, np.int64)
-    middle = c * was + was // 2
-    if shape is not None:
-        middle = np.minimum(middle, np.array([shape[1] - 1, shape[0] - 1]))
+    middle = c * was + was // 2 if shape is None else block_middle_cells(c, was, shape)
     out: list[tuple[int, int]] = []
     for x, y in (middle // now).tolist():
         if not out or out[-1] != (x, y):

@@ -23,11 +23,13 @@ __all__ = ["ValueEquality", "values_equal"]
 
 
 _ARRAYS = (np.ndarray, np.generic, jax.Array)
+_NAN = object()  # what a NaN field hashes as
 
 
 def values_equal(a: Any, b: Any) -> bool:
     """Whether ``a`` and ``b`` hold the same values: arrays (NumPy or JAX) of one shape,
-    dtype and values, NaN equal to NaN; dataclasses of one type field by field;
+    dtype and values, NaN equal to NaN; dataclasses of one type field by field (the fields
+    they compare);
     mappings, lists and tuples item by item; anything else by ``==``."""
     if a is b:
         return True
@@ -37,7 +39,8 @@ def values_equal(a: Any, b: Any) -> bool:
                 and bool(np.array_equal(x, y, equal_nan=x.dtype.kind in "fc")))
     if dataclasses.is_dataclass(a) and not isinstance(a, type):
         return type(a) is type(b) and all(
-            values_equal(getattr(a, f.name), getattr(b, f.name)) for f in dataclasses.fields(a))
+            values_equal(getattr(a, f.name), getattr(b, f.name))
+            for f in dataclasses.fields(a) if f.compare)
     if isinstance(a, Mapping):
         return (isinstance(b, Mapping) and a.keys() == b.keys()
                 and all(values_equal(a[k], b[k]) for k in a))
@@ -50,10 +53,11 @@ def values_equal(a: Any, b: Any) -> bool:
 
 
 class ValueEquality:
-    """``==`` by value (:func:`values_equal`) for a dataclass declared with ``eq=False``
-    (its generated ``==`` would compare arrays element by element). Hashed as a
-    dataclass's own hash would be: a frozen one by its fields (a grid of shapes is a
-    program's key; one holding arrays is not hashable), any other not at all."""
+    """``==`` by value (:func:`values_equal`, over the fields the dataclass compares) for a
+    dataclass declared with ``eq=False`` (its generated ``==`` would compare arrays element
+    by element). Hashed as a dataclass's own hash would be: a frozen one by the fields it
+    hashes (a grid of shapes is a program's key; one holding arrays is not hashable),
+    any other not at all."""
 
     __slots__ = ()
 
@@ -66,4 +70,7 @@ class ValueEquality:
         params = getattr(type(self), "__dataclass_params__", None)
         if params is None or not params.frozen:
             raise TypeError(f"unhashable type: {type(self).__name__!r}")
-        return hash(tuple(getattr(self, f.name) for f in dataclasses.fields(self)))
+        # the fields the dataclass would hash; every NaN alike, as == takes them
+        return hash(tuple(_NAN if isinstance(v, float) and math.isnan(v) else v
+                          for v in (getattr(self, f.name) for f in dataclasses.fields(self)
+                                    if (f.compare if f.hash is None else f.hash))))

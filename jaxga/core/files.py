@@ -279,6 +279,13 @@ def home_folder() -> Path | None:
     return home if home.is_absolute() else None
 
 
+def jaxga_cache_home(name: str) -> Path | None:
+    """``~/.cache/jaxga/<name>``, where jaxga keeps what it remembers between processes,
+    or None without a known home folder (:func:`home_folder`)."""
+    home = home_folder()
+    return None if home is None else home / ".cache" / "jaxga" / name
+
+
 def file_path(path: Any, what: str = "a file",
               error: type[JaxgaError] = JaxgaError) -> Path:
     """``path`` (a ``str`` or an ``os.PathLike`` such as :class:`pathlib.Path`) as a

@@ -39,7 +39,7 @@ def _own_folders() -> list[Path]:
     ``get_cachedir`` choose them on Linux and macOS)."""
     given = os.environ.get("MPLCONFIGDIR")
     if given:
-        return [Path(given).expanduser()]
+        return [Path(given).expanduser().absolute()]  # as Matplotlib reads it
     home = home_folder() or Path("~")  # not known: a relative folder, not usable
     config = os.environ.get("XDG_CONFIG_HOME") or str(home / ".config")
     cache = os.environ.get("XDG_CACHE_HOME") or str(home / ".cache")

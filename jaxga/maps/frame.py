@@ -15,7 +15,7 @@ merged into one). Three frames describe the same point:
   ``origin + R(yaw) ((x + 1/2, y + 1/2) K resolution)`` (REP 103 and ``map_server``'s
   origin: the lower-left corner of the lower-left cell). A last row or column of blocks
   that reaches past the map stands for its part on the map: its positions are drawn on
-  that part (:meth:`MapFrame.map_units`), so that no point of a path lies off the map.
+  that part (:meth:`MapFrame.local_metres`), so that no point of a path lies off the map.
 
 Every length in planning cells times :attr:`MapFrame.cell_size` is metres: a coarsened
 map's lengths are not K times too short.
@@ -34,7 +34,7 @@ from jaxga.core.equality import ValueEquality
 from jaxga.core.errors import EndpointError
 from jaxga.core.grid import check_xy
 from jaxga.maps.clearance import ObstacleClearance
-from jaxga.maps.preprocess import blocks_to_map, map_to_blocks
+from jaxga.maps.preprocess import block_middle_cells, blocks_to_map, map_to_blocks
 
 __all__ = ["MapFrame", "cells_crossed", "endpoint_cells", "world_decimals"]
 
@@ -114,21 +114,19 @@ class MapFrame(ValueEquality):
         centres at integer coordinates). Needs a frame with metres."""
         if not self.has_metres:
             raise ValueError("this map has no resolution and origin: no world frame")
-        p = blocks_to_map(np.asarray(points, float) + 0.5, self.coarsen, self.map_shape,
-                          self.resolution)
+        p = self.local_metres(points)
         c, s = math.cos(self.origin[2]), math.sin(self.origin[2])
         x = self.origin[0] + c * p[..., 0] - s * p[..., 1]
         y = self.origin[1] + s * p[..., 0] + c * p[..., 1]
         return np.stack([x, y], axis=-1)
 
-    def map_units(self, edges: np.ndarray) -> np.ndarray:
-        """Positions in planning cells counted from the grid's corner (planning cell
-        ``(x, y)`` covers ``[x, x + 1) x [y, y + 1)``) in map cells from the map's corner:
-        ``K`` times them, except in a last block that reaches past the map, which stands
-        for its part on the map (:func:`jaxga.maps.preprocess.blocks_to_map`)."""
-        if self.coarsen == 1:
-            return np.asarray(edges, float)
-        return blocks_to_map(edges, self.coarsen, self.map_shape)
+    def local_metres(self, points: np.ndarray) -> np.ndarray:
+        """``float[..., 2]``: points in planning cells (centres at integers) in metres along
+        the map's own axes from its origin (before its yaw): ``K`` map cells a planning
+        cell, except in a last block that reaches past the map, which stands for its part
+        on the map (:func:`jaxga.maps.preprocess.blocks_to_map`)."""
+        return blocks_to_map(np.asarray(points, float) + 0.5, self.coarsen, self.map_shape,
+                             self.resolution)
 
     def _local(self, point: tuple[float, float]) -> tuple[float, float]:
         """``point`` (metres) along the map's own axes, from its origin (metres)."""
@@ -187,9 +185,7 @@ class MapFrame(ValueEquality):
         c = np.asarray(cells, np.int64)
         if self.coarsen == 1:
             return c
-        h, w = self.map_shape
-        out = np.floor(self.map_units(c + 0.5)).astype(np.int64)
-        return np.minimum(out, np.array([w - 1, h - 1]))
+        return block_middle_cells(c, self.coarsen, self.map_shape)
 
     def planning_cell(self, map_cells: np.ndarray) -> np.ndarray:
         """``int[..., 2]``: the planning cells holding map cells ``(x, y)``."""

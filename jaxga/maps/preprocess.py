@@ -25,6 +25,7 @@ from jaxga.core.grid import DIRECTIONS, Grid, check_corner_rule
 __all__ = [
     "check_coarse_endpoints",
     "coarsen",
+    "block_middle_cells",
     "blocks_to_map",
     "coarsen_blocked",
     "endpoints_connected",
@@ -234,6 +235,23 @@ def blocks_to_map(edges: np.ndarray, factor: int, shape: tuple[int, int],
     :func:`map_to_blocks`."""
     return _scale_last_block(np.asarray(edges, np.float64) * (factor * unit), factor, shape,
                              True, unit)
+
+
+def block_middle_cells(cells: np.ndarray, factor: int, shape: tuple[int, int]) -> np.ndarray:
+    """``int[..., 2]``: for coarse cells ``(x, y)``, the map cell holding the middle of each
+    block's part on the map of ``shape = (H, W)`` (where :func:`blocks_to_map` draws its
+    centre), in integers: ``x K + K // 2``, or ``x K + part // 2`` for a last block that
+    reaches past the map with ``part`` cells on it."""
+    c = np.asarray(cells, np.int64)
+    k = int(factor)
+    out = c * k + k // 2
+    for axis, size in ((0, shape[1]), (1, shape[0])):
+        start = (size // k) * k
+        if size - start:
+            v = c[..., axis]
+            out[..., axis] = np.where(v * k >= start, v * k + (size - start) // 2,
+                                      out[..., axis])
+    return np.minimum(out, np.array([shape[1] - 1, shape[0] - 1]))
 
 
 def map_to_blocks(points: np.ndarray, factor: int, shape: tuple[int, int]) -> np.ndarray:

@@ -45,6 +45,23 @@ def test_maps_and_grids_compare_by_value_and_keep_their_hash_rules():
     assert hash(shapes) == hash(copy.deepcopy(shapes))  # a program's key, as before
 
 
+def test_records_compare_and_hash_the_fields_their_dataclass_does():
+    """A map frame's obstacles are declared compare=False: frames that differ only there
+    are equal and hash alike, as before; a NaN field hashes alike in a record and its
+    pickle, as == takes them (a set holds one)."""
+    from jaxga.maps.frame import MapFrame
+
+    a = MapFrame(map_shape=(4, 5), resolution=0.1, origin=(0.0, 0.0, 0.0),
+                 obstacles=np.zeros((4, 5), bool))
+    b = MapFrame(map_shape=(4, 5), resolution=0.1, origin=(0.0, 0.0, 0.0),
+                 obstacles=np.ones((4, 5), bool))
+    assert a == b and hash(a) == hash(b)
+    assert a != MapFrame(map_shape=(4, 5), resolution=0.2, origin=(0.0, 0.0, 0.0))
+    refs = canonical.run("sga").references
+    again = pickle.loads(pickle.dumps(refs))
+    assert refs == again and len({refs, again}) == 1
+
+
 def test_values_equal_by_hand():
     assert values_equal({"a": [np.float32(np.nan), 1]}, {"a": [np.float32(np.nan), 1]})
     assert not values_equal(np.zeros(3, np.float32), np.zeros(3, np.float64))
@@ -53,23 +70,32 @@ def test_values_equal_by_hand():
     assert not values_equal([1, 2], (1, 2))
 
 
-def test_a_ga_is_sent_as_its_problem_and_built_again():
+@pytest.fixture(scope="module")
+def ga() -> jaxga.GA:
+    return jaxga.GA("sga", canonical.MAP, generations=5)
+
+
+class _MyGA(jaxga.GA):
+    """A user's subclass of GA."""
+
+
+def test_a_ga_is_sent_as_its_problem_and_built_again(ga):
     """Pickling a GA failed on a lambda inside the operators ("attribute lookup <lambda>
     on jaxga.operators.init failed"): it is sent as its problem and built again, with
-    the same configuration, map and parameters."""
-    ga = jaxga.GA("sga", canonical.MAP, generations=5)
+    the same configuration, map and parameters; a subclass comes back as itself."""
     back = pickle.loads(pickle.dumps(ga))
     assert type(back) is jaxga.GA and repr(back) == repr(ga) == (
         "GA('sga' on 'classic_ga_gapp3_20x20', 20 x 20 cells)")
     assert back.config == ga.config and back.grid == ga.grid
     assert values_equal(back.default_params, ga.default_params)
+    mine = pickle.loads(pickle.dumps(_MyGA("sga", canonical.MAP, generations=5)))
+    assert type(mine) is _MyGA and mine.grid == ga.grid
 
 
-def test_a_ga_used_after_64_bit_mode_was_turned_on_is_refused_in_one_line():
+def test_a_ga_used_after_64_bit_mode_was_turned_on_is_refused_in_one_line(ga):
     """GA(...) refused 64-bit mode, but a GA built before it was turned on failed deep in
     JAX (a scan's carry of int64) or returned int64 counts: every pure method refuses it
     in one line, before tracing anything."""
-    ga = jaxga.GA("sga", canonical.MAP, generations=2)
     key = jax.random.PRNGKey(0)
     jax.config.update("jax_enable_x64", True)
     try:

@@ -16,7 +16,7 @@ from jaxga.curve_clearance import verify_curve
 from jaxga.export import read_path, write_path
 from jaxga.maps.clearance import ObstacleClearance
 from jaxga.maps.frame import MapFrame
-from jaxga.maps.preprocess import blocks_to_map, map_to_blocks
+from jaxga.maps.preprocess import block_middle_cells, blocks_to_map, map_to_blocks
 from jaxga.replan import replan
 
 
@@ -50,6 +50,52 @@ def test_world_points_and_planning_cells_are_inverses_on_a_turned_coarsened_map(
     np.testing.assert_allclose(map_to_blocks(edges, 4, (7, 9)), pts + 0.5, atol=1e-12)
     # a full block keeps its bits: K times the planning position
     assert blocks_to_map(np.array([1.5, 0.5]), 4, (7, 9)).tolist() == [6.0, 2.0]
+
+
+def test_a_blocks_middle_cell_is_found_in_integers(tmp_path):
+    """The middle of a last block's part lies on a cell edge when the part is even; the
+    float floor chose the cell below for some factors (K = 47, part 6: 2, not 3). The
+    integer rule names the cell above, for every factor and part; replan's conversion
+    between coarsenings (it kept the old formula) uses it."""
+    for k in range(2, 65):
+        for part in range(1, k):
+            size = 3 * k + part
+            got = block_middle_cells(np.array([[3, 0]]), k, (k, size))
+            assert got.tolist() == [[3 * k + part // 2, k // 2]], (k, part)
+    assert block_middle_cells(np.array([[3, 3]]), 47, (147, 147)).tolist() == [[144, 144]]
+    from jaxga.cli.replan import read_path_json
+
+    path = tmp_path / "planned.json"
+    path.write_text('{"frame": {"coarsen": 5, "map_shape": [13, 13]}, '
+                    '"runs": [{"success": true, "length": 2.9, "path": [[0, 0], [2, 2]]}]}')
+    # block 2 of 13 cells by 5 is cells 10..12: middle 11, planning cell 5 at K = 2
+    assert read_path_json(str(path), None, frame=MapFrame(map_shape=(13, 13),
+                                                          coarsen=2)) == [(1, 1), (5, 5)]
+
+
+def test_the_plot_draws_a_coarsened_map_where_its_paths_are(tmp_path):
+    """The last block of a 10-cell side coarsened by 3 is one map cell wide: the plot's
+    cells are drawn in map cells over the map's extent, and a path's points (yaw 0 or
+    turned) at the middle of that cell, as --path-out writes them."""
+    import matplotlib
+
+    matplotlib.use("Agg")
+    from jaxga.plot import MapView, plot_map
+
+    blocked = np.zeros((4, 4), bool)
+    blocked[0, 3] = True  # the last block of the bottom row
+    g = Grid.create(blocked, start=(0, 3), goal=(3, 3))
+    for yaw in (0.0, 0.5):
+        f = MapFrame(map_shape=(10, 10), coarsen=3, resolution=1.0, origin=(0.0, 0.0, yaw))
+        view = MapView(f)  # yaw 0: the world frame; else metres along the map's axes
+        np.testing.assert_allclose(view.xy(np.array([3.0, 0.0])), [9.5, 1.5])
+        np.testing.assert_allclose(view.extent((4, 4)), (0.0, 10.0, 0.0, 10.0))
+        ax = plot_map(g, [([(0, 3), (3, 3)], "p")], frame=f)
+        image = next(a for a in ax.get_images() if a.get_gid() == "map-cells")
+        assert image.get_array().shape[:2] == (10, 10)
+        assert image.get_array()[0, 9].tolist() != image.get_array()[0, 8].tolist()
+        np.testing.assert_allclose(ax.lines[0].get_xydata(),
+                                   view.xy(np.array([[0, 3], [3, 3]], float)))
 
 
 def test_the_clearance_of_a_coarsened_path_is_measured_where_it_is_drawn():

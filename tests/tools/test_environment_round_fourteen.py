@@ -31,6 +31,7 @@ def _python(code: str) -> subprocess.CompletedProcess:
                           timeout=120, env=env, cwd=ROOT)
 
 
+@pytest.mark.slow  # processes of their own
 @pytest.mark.skipif(not hasattr(signal, "SIGUSR1"), reason="POSIX signals")
 def test_a_signal_ignored_at_start_stays_ignored_and_a_schedulers_signal_ends_cleanly():
     """nohup ignores SIGHUP and a script's background job SIGINT: the handlers leave
@@ -83,22 +84,28 @@ class _Full:
         return self.fd
 
 
-def test_a_stream_that_cannot_be_written_is_lost_not_an_error(capsys):
-    """stdout or stderr on a full disk ended the command (its JSON unwritten, a hidden
-    traceback): the output is lost, once said on stderr for stdout, and the command
-    goes on."""
+def test_a_stream_that_cannot_be_written_is_lost_then_named(monkeypatch, capsys):
+    """stdout or stderr on a full disk ended the command at once (its JSON unwritten, a
+    hidden traceback): the output is lost and the command goes on; a stdout that could
+    not be written is one error line when it ends (a listing whose only product is its
+    output did not succeed), a reader gone (EPIPE) is not, and a stream full for now
+    (EAGAIN) is not swallowed."""
     full = _Full()
     try:
-        out = entry.ReaderMayLeave(full, "stdout")
+        out = entry.ReaderMayLeave(full)
         assert out.write("summary\n") == len("summary\n")
         out.flush()
-        said = capsys.readouterr().err.strip().splitlines()
-        assert said == ["jaxga: warning: standard output cannot be written (No space left "
-                        "on device): the rest of it is lost; files are written"]
-        err = entry.ReaderMayLeave(_Full(), "stderr")
-        err.write("jaxga: error: ...\n")
-        err.flush()
-        assert capsys.readouterr().err == ""
+        assert capsys.readouterr().err == ""  # nothing said yet: the command goes on
+        monkeypatch.setattr(sys, "stdout", out)
+        assert entry.lost_output() == (
+            "jaxga: error: standard output could not be written (No space left on device): "
+            "the rest of it was lost (files were written)")
+        gone = entry.ReaderMayLeave(full)
+        gone._lost(BrokenPipeError(errno.EPIPE, "Broken pipe"))
+        monkeypatch.setattr(sys, "stdout", gone)
+        assert entry.lost_output() is None
+        with pytest.raises(BlockingIOError):
+            gone._lost(BlockingIOError(errno.EAGAIN, "Resource temporarily unavailable"))
     finally:
         os.close(full.fd)
 
@@ -155,6 +162,8 @@ def test_cache_folder_values_with_spaces_or_line_ends(monkeypatch, tmp_path):
 
 
 def test_matplotlib_folders_under_a_relative_xdg_folder_are_not_used(monkeypatch, tmp_path):
+    """A relative XDG folder would be made under every working folder: not used. A
+    relative MPLCONFIGDIR is the user's choice, read as Matplotlib reads it."""
     monkeypatch.delenv("MPLCONFIGDIR", raising=False)
     monkeypatch.chdir(tmp_path)
     monkeypatch.setenv("XDG_CONFIG_HOME", "rel2")
@@ -162,6 +171,9 @@ def test_matplotlib_folders_under_a_relative_xdg_folder_are_not_used(monkeypatch
     config, cache = matplotlib_env._own_folders()
     assert not matplotlib_env._usable(config) and matplotlib_env._usable(cache)
     assert not (tmp_path / "rel2").exists()
+    monkeypatch.setenv("MPLCONFIGDIR", "mine")
+    assert matplotlib_env._own_folders() == [tmp_path / "mine"]
+    assert matplotlib_env._usable(tmp_path / "mine")
 
 
 def test_a_jax_cache_set_by_the_user_is_named_as_theirs(monkeypatch):
