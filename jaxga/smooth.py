@@ -288,6 +288,12 @@ def resample_curve(points: np.ndarray, spacing: float = 1.0,
         if not wide.any():
             break
         at = np.sort(np.concatenate([at, (at[:-1][wide] + at[1:][wide]) / 2]))
+    return _on_arc(pts, arc, at)
+
+
+def _on_arc(pts: np.ndarray, arc: np.ndarray, at: np.ndarray) -> np.ndarray:
+    """The points of the polyline ``pts`` (cumulative arc length ``arc``) at arc positions
+    ``at``."""
     return np.stack([np.interp(at, arc, pts[:, 0]), np.interp(at, arc, pts[:, 1])], axis=1)
 
 
@@ -296,7 +302,7 @@ def _chords_off_curve(pts: np.ndarray, arc: np.ndarray, at: np.ndarray,
     """``bool[len(at) - 1]``: the chords between the points at arc positions ``at`` that
     pass farther than ``tolerance`` from a point of the dense polyline ``pts`` between
     their ends (``arc``: its cumulative arc length)."""
-    ends = np.stack([np.interp(at, arc, pts[:, 0]), np.interp(at, arc, pts[:, 1])], axis=1)
+    ends = _on_arc(pts, arc, at)
     inner = (arc > at[0]) & (arc < at[-1])
     piece = np.searchsorted(at, arc[inner], side="right") - 1  # the chord each lies under
     a, b, q = ends[piece], ends[piece + 1], pts[inner]
