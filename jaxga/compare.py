@@ -52,7 +52,7 @@ from jaxga.api import json_number as _num
 from jaxga.api.runs import checked_call
 from jaxga.config.presets import as_sets, overridden_keys, parse_set
 from jaxga.config.schema import Config
-from jaxga.core.equality import ValueEquality
+from jaxga.core.equality import MutableValueEquality
 from jaxga.core.errors import ParameterError
 from jaxga.core.fields import shown_value
 from jaxga.core.grid import Grid
@@ -151,7 +151,7 @@ def _stats(v: np.ndarray) -> tuple[float, float, float, float]:
 
 
 @dataclasses.dataclass(eq=False)
-class Comparison(ValueEquality):
+class Comparison(MutableValueEquality):
     """Results of several presets on one map, with pairwise tests (see module doc)."""
 
     results: dict[str, Result]

@@ -69,7 +69,7 @@ import numpy as np
 from jaxga import api
 from jaxga.config.presets import as_sets, overridden_keys
 from jaxga.config.schema import SCHEMA
-from jaxga.core.equality import ValueEquality
+from jaxga.core.equality import MutableValueEquality
 from jaxga.core.errors import EndpointError, JaxgaError, ParameterError
 from jaxga.core.fields import shown_value
 from jaxga.core.grid import Grid
@@ -111,7 +111,7 @@ for ``mpmga``: 3 islands of 10). The paper re-planned with its global settings."
 
 # =============================================================================== result
 @dataclasses.dataclass(eq=False)
-class ReplanResult(ValueEquality):
+class ReplanResult(MutableValueEquality):
     """The outcome of :func:`replan` (MPMGA 5.2.1 / 5.3.1).
 
     Attributes:

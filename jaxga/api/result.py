@@ -16,7 +16,7 @@ import numpy as np
 from jaxga._runtime.timeline import time_line
 from jaxga.api.result_fronts import Fronts, FrontsOfResult, json_number
 from jaxga.config.schema import Config
-from jaxga.core.equality import ValueEquality
+from jaxga.core.equality import MutableValueEquality, ValueEquality
 from jaxga.core.errors import ParameterError
 from jaxga.core.fields import shown_value
 from jaxga.core.grid import as_integer
@@ -185,7 +185,7 @@ fields once."""
 
 
 @dataclasses.dataclass(eq=False)
-class Result(FrontsOfResult, ValueEquality):
+class Result(FrontsOfResult, MutableValueEquality):
     """Per-seed results of :func:`run` (NumPy arrays, leading axis = seeds).
 
     A seed that found no path has no length, fitness or metrics: they are NaN (never 0),

@@ -6,7 +6,8 @@ of an array is ambiguous", and only the same object compared equal. Records that
 arrays with other values take :class:`ValueEquality` instead: equal when of one type and
 every field is equal, arrays by shape, dtype and values (NaN equal to NaN, as a failed
 run's NaN length read back from a file is the same result), hashed as the dataclass would
-be.
+be: a frozen record by its fields, a record the user may change (:class:`MutableValueEquality`)
+not at all, so ``isinstance(record, collections.abc.Hashable)`` tells the truth.
 """
 
 from __future__ import annotations
@@ -19,7 +20,7 @@ from typing import Any
 import jax
 import numpy as np
 
-__all__ = ["ValueEquality", "values_equal"]
+__all__ = ["MutableValueEquality", "ValueEquality", "values_equal"]
 
 
 _ARRAYS = (np.ndarray, np.generic, jax.Array)
@@ -74,3 +75,13 @@ class ValueEquality:
         return hash(tuple(_NAN if isinstance(v, float) and math.isnan(v) else v
                           for v in (getattr(self, f.name) for f in dataclasses.fields(self)
                                     if (f.compare if f.hash is None else f.hash))))
+
+
+class MutableValueEquality(ValueEquality):
+    """:class:`ValueEquality` for a record that is not frozen: ``==`` by value and no hash,
+    declared (``__hash__ = None``) as a dataclass with ``==`` declares it, so that
+    ``isinstance(record, collections.abc.Hashable)`` is False rather than True with a
+    ``hash()`` that raises."""
+
+    __slots__ = ()
+    __hash__ = None  # type: ignore[assignment]

@@ -11,14 +11,14 @@ from typing import Any
 import numpy as np
 
 from jaxga.config.schema import Config
-from jaxga.core.equality import ValueEquality
+from jaxga.core.equality import MutableValueEquality
 from jaxga.doe.checkpoint import json_float
 from jaxga.doe.design import Factor, design_points
 from jaxga.doe.fit import main_effects, point_means
 
 
 @dataclasses.dataclass(eq=False)
-class DoeResult(ValueEquality):
+class DoeResult(MutableValueEquality):
     """A finished designed experiment (see :func:`run_doe`)."""
 
     preset: str

@@ -34,6 +34,19 @@ def test_results_compare_by_value_with_their_copies_and_pickles():
     assert r.setup != "sga"  # another type: not equal, no error
 
 
+def test_records_a_user_may_change_say_they_are_not_hashable():
+    """A result (not frozen) raised on hash() yet passed isinstance(Hashable): a library
+    that keys a cache on hashable values took it and failed later; it is now declared
+    unhashable, as a dataclass with == is, and frozen records stay hashable."""
+    from collections.abc import Hashable
+
+    r = canonical.run("sga")
+    assert not isinstance(r, Hashable)
+    with pytest.raises(TypeError, match="unhashable"):
+        hash(r)
+    assert hash(r.references) == hash(copy.deepcopy(r.references))  # frozen, plain values
+
+
 def test_maps_and_grids_compare_by_value_and_keep_their_hash_rules():
     info = load_map_info(canonical.MAP)
     again = pickle.loads(pickle.dumps(info))
