@@ -248,7 +248,8 @@ def ends_in_metres(result) -> str:
             or "cell (" not in str(result.reason):
         return ""
     (sx, sy), (gx, gy) = frame.to_world(np.array([result.start, result.goal], float))
-    return f" (start ({sx:.3f}, {sy:.3f}) m, goal ({gx:.3f}, {gy:.3f}) m)"
+    m = frame.metres_text
+    return f" (start ({m(sx)}, {m(sy)}) m, goal ({m(gx)}, {m(gy)}) m)"
 
 
 def front_polyline(grid, path, obstacles: np.ndarray | None = None) -> np.ndarray:

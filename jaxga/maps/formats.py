@@ -67,7 +67,7 @@ from jaxga.maps.inputs import (
     read_input,
     several_frames,
 )
-from jaxga.maps.ros import MAX_ORIGIN, MAX_RESOLUTION, MIN_RESOLUTION
+from jaxga.maps.ros import MAX_ORIGIN, MAX_RESOLUTION, MIN_RESOLUTION, origin_in_cells_problem
 
 __all__ = [
     "FORMATS",
@@ -349,7 +349,8 @@ def save_map(grid: Grid | np.ndarray, path: Source, *, fmt: str | None = None,
     than ``.png``, ``.map`` for a non-Moving AI file, a ROS map not named ``.yaml``); a
     resolution or origin a ROS map cannot have (:data:`jaxga.maps.ros.MIN_RESOLUTION` to
     :data:`~jaxga.maps.ros.MAX_RESOLUTION` m, origins within
-    :data:`~jaxga.maps.ros.MAX_ORIGIN` m); a name that is not a ``str`` or a path. Each
+    :data:`~jaxga.maps.ros.MAX_ORIGIN` m and
+    :data:`~jaxga.maps.ros.MAX_ORIGIN_CELLS` cells); a name that is not a ``str`` or a path. Each
     file is written whole or not at all (:func:`jaxga.core.files.atomic_write`), and one
     it cannot write is refused as a :class:`~jaxga.core.errors.JaxgaError` line (a
     folder of that name, a read-only file, a file inside jaxga's own folder); a ROS
@@ -460,6 +461,8 @@ def _checked_frame(p: Path, resolution: Any, origin: Any) -> tuple[float, tuple]
     if not all(np.isfinite(v) and abs(v) <= MAX_ORIGIN for v in (x0, y0, yaw)):
         raise MapFormatError(f"cannot save {p}: the origin must be finite, within "
                              f"{MAX_ORIGIN:g} m, got {shown_value(origin)}")
+    if (far := origin_in_cells_problem(res, (x0, y0))) is not None:
+        raise MapFormatError(f"cannot save {p}: {far}")
     return res, (x0, y0, yaw)
 
 

@@ -138,14 +138,33 @@ class MapFrame(ValueEquality):
         """World point ``point`` (metres) in planning cells, not rounded: planning cell
         ``(x, y)`` covers ``[x, x + 1) x [y, y + 1)`` (its centre at ``x + 0.5``), so
         :meth:`cell_of` is the floor of this (the inverse of :meth:`to_world`, whose
-        centres are at ``x + 0.5`` here). A point within 1e-9 of a cell's edge counts in
-        the cell above it (the world coordinates of cell edges are rounded)."""
+        centres are at ``x + 0.5`` here). A point on a cell's edge counts in the cell above
+        it, to within what float64 can tell at the point's distance from 0
+        (:meth:`edge_tolerance`: a point written to two decimals on a map whose origin
+        lies 4,000 km out falls on the edge's wrong side by 1e-8 of a cell)."""
         local = self._local(point)
+        tol = self.edge_tolerance(point)
         if self.coarsen == 1:
-            return tuple(v / self.cell_size + 1e-9 for v in local)
+            return tuple(v / self.cell_size + tol for v in local)
         blocks = map_to_blocks(np.asarray(local, float) / self.resolution, self.coarsen,
                                self.map_shape)
-        return tuple(float(v) + 1e-9 for v in blocks)
+        return tuple(float(v) + tol for v in blocks)
+
+    def edge_tolerance(self, point: tuple[float, float]) -> float:
+        """How far (in map cells) a world point may lie below a cell's edge and still count
+        on it: 1e-9 of a cell (edges' coordinates are rounded), and more where the
+        point's or the origin's distance from 0 makes float64's rounding of the metres
+        larger (64 units in the last place of the largest coordinate; a millionth of a
+        cell where :data:`jaxga.maps.ros.MAX_ORIGIN_CELLS` allows)."""
+        far = max(abs(float(v)) for v in (*point, self.origin[0], self.origin[1])
+                  if math.isfinite(float(v))) if self.origin is not None else 0.0
+        return 1e-9 + 64 * np.finfo(float).eps * far / self.resolution
+
+    def metres_text(self, value: float) -> str:
+        """A coordinate in metres as text: to :attr:`world_decimals` and no further, with
+        no trailing zeros (``512347.33``, not ``512347``, as ``:g`` wrote it; ``5``)."""
+        return np.format_float_positional(float(value) + 0.0, precision=self.world_decimals,
+                                          unique=True, trim="-")
 
     def cell_of(self, point: tuple[float, float], shape: tuple[int, int],
                 what: str = "point") -> tuple[int, int]:
@@ -161,21 +180,23 @@ class MapFrame(ValueEquality):
         # a point (or origin) so far away that the cell overflows is off the map too
         x, y = (int(math.floor(v)) if math.isfinite(v) else -1 for v in cells)
         # on the map's own extent too: a last block reaching past the map covers its part
-        on_map = all(math.isfinite(v) and 0 <= v / self.resolution + 1e-9 < n
+        tol = self.edge_tolerance(point)
+        on_map = all(math.isfinite(v) and 0 <= v / self.resolution + tol < n
                      for v, n in zip(local, self.map_shape[::-1]))
         if not (on_map and 0 <= x < w and 0 <= y < h):
             x0, y0, yaw = self.origin
             wide, high = self.map_shape[1] * self.resolution, self.map_shape[0] * self.resolution
+            m = self.metres_text
             if not yaw:
                 raise EndpointError(
-                    f"{what} ({point[0]:g}, {point[1]:g}) m is off the map: it covers x "
-                    f"{x0:g}..{x0 + wide:g} m, y {y0:g}..{y0 + high:g} m")
+                    f"{what} ({m(point[0])}, {m(point[1])}) m is off the map: it covers x "
+                    f"{m(x0)}..{m(x0 + wide)} m, y {m(y0)}..{m(y0 + high)} m")
             # the map's rectangle is turned about its origin: its own axes show why
             raise EndpointError(
-                f"{what} ({point[0]:g}, {point[1]:g}) m is off the map: along the map's own "
-                f"axes (turned by its yaw, {yaw:g} rad, about its origin ({x0:g}, {y0:g}) m) "
-                f"the point lies at ({local[0]:.4g}, {local[1]:.4g}) m from the origin, and "
-                f"the map covers 0..{wide:g} m by 0..{high:g} m")
+                f"{what} ({m(point[0])}, {m(point[1])}) m is off the map: along the map's own "
+                f"axes (turned by its yaw, {yaw:g} rad, about its origin ({m(x0)}, {m(y0)}) "
+                f"m) the point lies at ({m(local[0])}, {m(local[1])}) m from the origin, and "
+                f"the map covers 0..{m(wide)} m by 0..{m(high)} m")
         return x, y
 
     def map_cell(self, cells: np.ndarray) -> np.ndarray:

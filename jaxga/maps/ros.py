@@ -117,6 +117,23 @@ MAX_ORIGIN = 1e12
 MIN_RESOLUTION = 1e-9
 """The fewest metres a map cell may span (a nanometre): points on a finer map could not
 be written apart in metres (a resolution of 1e-300 wrote every point as 0)."""
+MAX_ORIGIN_CELLS = 1e11
+"""The farthest an origin may lie from 0 in the map's own cells (``|x|`` and ``|y|`` over
+the resolution): float64 metres then name every cell centre to within 1e-4 of a cell.
+Each bound alone let a nanometre map lie 500 km out, where written cell centres read
+back in other cells."""
+
+
+def origin_in_cells_problem(resolution: float, origin: tuple[float, ...]) -> str | None:
+    """Why float64 metres cannot name the cells of a map of ``resolution`` whose origin is
+    ``origin`` (one phrase), or None when they can (:data:`MAX_ORIGIN_CELLS`)."""
+    far = max(abs(origin[0]), abs(origin[1]))
+    if far <= MAX_ORIGIN_CELLS * resolution:
+        return None
+    return (f"an origin {far:.6g} m from 0 is {far / resolution:.3g} cells of "
+            f"{resolution:g} m away, beyond the {MAX_ORIGIN_CELLS:.0e} cells at which "
+            "metres in float64 still name every cell: move the origin nearer 0 or use "
+            "coarser cells")
 
 
 def _number(value: Any, key: str, label: str) -> float:
@@ -214,6 +231,8 @@ def read_ros_yaml(path: str | Path, label: str | None = None, *,
     if max(abs(origin[0]), abs(origin[1])) > MAX_ORIGIN:
         raise MapFormatError(f"{label}: origin must lie within {MAX_ORIGIN:g} metres of 0, "
                              f"got {shown_value(list(origin[:2]))}")
+    if (far := origin_in_cells_problem(resolution, origin)) is not None:
+        raise MapFormatError(f"{label}: {far}")
     negate = data.get("negate", 0)
     if negate not in (0, 1) or isinstance(negate, float):
         raise MapFormatError(f"{label}: negate must be 0 or 1, got {shown_value(negate)}")
@@ -282,23 +301,32 @@ def occupancy(pixels: np.ndarray, meta: RosMap) -> np.ndarray:
     colour channels (ROS 2's ``map_io.cpp``: "To preserve existing behavior, average in
     alpha with color channels in Trinary mode"; a grey pixel is three equal channels
     there, where ROS 1 averages a grey and alpha image's two channels), so a transparent
-    white pixel is unknown, not free.
+    white pixel is unknown, not free. The arithmetic is nav2's to the last bit
+    (GraphicsMagick's 16-bit quanta, their mean over 65535, ``p = 1 - s``), so a shade
+    exactly at a threshold falls where nav2 puts it (grey 204 under ``free_thresh: 0.2``
+    is free: ``1 - 0.8`` is below 0.2); ROS 1's ``map_server``, which computes
+    ``(255 - mean) / 255``, can put such a pixel on the other side.
     """
     pixels = np.asarray(pixels)
     if pixels.ndim == 2:
         pixels = pixels[..., None]
     c = pixels.shape[2]
     has_alpha = c in (2, 4)
-    colour = pixels[..., : c - 1] if has_alpha else pixels
-    shade = colour.astype(np.float64).mean(axis=2)  # 0-255
+    # nav2's arithmetic to the last bit, so that a shade exactly at a threshold falls on
+    # the side nav2 puts it: GraphicsMagick's 16-bit quanta (an 8-bit value v is 257 v,
+    # a 16-bit one itself; grey counts as three equal channels), their sum over the
+    # channels, the mean over 65535, and p = 1 - shade
+    quanta = np.rint(pixels.astype(np.float64) * 257.0)
+    colour = quanta[..., : c - 1] if has_alpha else quanta
+    total = colour.sum(axis=2) * (3.0 / colour.shape[2])  # exact: 3 x a grey channel
+    channels = 3.0
     if has_alpha and meta.mode == "trinary":  # three colour channels and the alpha
-        shade = (3.0 * shade + pixels[..., -1].astype(np.float64)) / 4.0
+        total, channels = total + quanta[..., -1], 4.0
+    shade = total / channels / 65535.0  # 0-1
     if meta.mode == "raw":  # the pixel value itself, negate or not (nav2's map_io.cpp)
-        value = np.round(shade)
+        value = np.floor(shade * 255.0 + 0.5)  # std::round: halves away from zero
         return np.where(value > 100, -1, value).astype(np.int8)
-    if meta.negate:
-        shade = 255.0 - shade
-    p = (255.0 - shade) / 255.0
+    p = shade if meta.negate else 1.0 - shade
     out = np.full(p.shape, -1, np.int8)
     out[p > meta.occupied_thresh] = 100
     out[p < meta.free_thresh] = 0

@@ -365,7 +365,7 @@ def test_a_blocked_endpoint_is_reported_in_the_maps_own_terms(office):
     with pytest.raises(EndpointError) as err:
         jaxga.run("sga", load_map_info(office, coarsen=2, **ends), seeds=1)
     assert str(err.value) == ("goal cell (2, 1) is blocked (the coarse cell around map cell "
-                              "(4, 3), centre (-1.775, -1.350) m)") + unknown
+                              "(4, 3), centre (-1.775, -1.35) m)") + unknown
     with pytest.raises(EndpointError) as err:  # an occupied cell: no such hint
         jaxga.run("sga", load_map_info(office, start_world=(-1.98, -1.49),
                                        goal_world=(-1.86, -1.36), corner_rule="strict"),

@@ -1362,7 +1362,7 @@ def test_a_goal_out_of_reach_is_known_from_the_regions_and_named_in_metres(
     err = capsys.readouterr().err.strip()
     assert rc == EXIT_NO_PATH and "\n" not in err
     assert err == ("jaxga: no path: goal cell (15, 11) unreachable from start cell (1, 1) "
-                   "under corner rule 'strict' (start (-1.250, 1.750) m, goal (5.750, "
-                   "6.750) m)")
+                   "under corner rule 'strict' (start (-1.25, 1.75) m, goal (5.75, "
+                   "6.75) m)")
     found = optima.shortest_path_np(blocked[::-1], (1, 1), (15, 11), "strict")
     assert not found.found and found.status == "unreachable"
