@@ -1487,6 +1487,22 @@ def build(t: Path) -> list[Case]:
         note="made a folder named by two spaces in the working folder")
     sig("sigusr1-during-compile", prev_run, signal.SIGUSR1, "progress: compile",
         note="a scheduler's warning signal (Slurm --signal, SGE -notify): ended silently")
+    # --- round fifteen (decision 063): a robot's map far from 0 -------------------------
+    utm_blocked = np.zeros((40, 40), bool)
+    utm_blocked[25] = True  # the row just below the start's edge
+    save_map(utm_blocked, f / "utm.yaml", resolution=0.05, origin=(512345.6, 4123456.7, 0.0))
+    add("utm-start-on-a-cell-edge", "round fifteen",
+        ["optimum", "--map", f / "utm.yaml", "--start-world", "512346.2,4123458.0",
+         "--goal-world", "512347.3,4123458.6"], "handled", quick=True,
+        note="'start cell (12, 25) is blocked': float64's rounding of the UTM origin put "
+             "the edge's point in the cell below")
+    far = tb3 / "nanometre-far.yaml"
+    far.write_text(re.sub(r"origin:[^\n]*", "origin: [512345.6, 4123456.7, 0.0]",
+                          re.sub(r"resolution:[^\n]*", "resolution: 1.0e-9",
+                                 tb3_yaml.read_text())))
+    add("origin-too-many-cells-away", "round fifteen", ["optimum", "--map", far],
+        check=refused_saying("cells of 1e-09 m away"), quick=True,
+        note="loaded: written cell centres read back in other cells")
     return cases
 
 
