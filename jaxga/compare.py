@@ -128,10 +128,16 @@ class PairTest:
     median_b: float
 
     def to_json(self) -> dict[str, Any]:
-        """One entry of the ``pairwise`` / ``success_tests`` lists of the JSON layout."""
+        """One entry of the ``pairwise`` / ``success_tests`` lists of the JSON layout. An
+        infinite statistic (Fisher's odds ratio where one preset never failed and the
+        other did) is written ``"inf"`` / ``"-inf"``, which JSON has no number for; null
+        means no test."""
         r = self.result
+        statistic = (r.statistic if not math.isinf(r.statistic)
+                     else "inf" if r.statistic > 0 else "-inf")
         return {"metric": self.metric, "a": self.a, "b": self.b, "test": r.test,
-                "statistic": _num(r.statistic), "p_value": _num(r.p_value),
+                "statistic": statistic if isinstance(statistic, str) else _num(statistic),
+                "p_value": _num(r.p_value),
                 "p_holm": _num(self.p_holm), "a12": _num(r.a12),
                 "rank_biserial": _num(r.rank_biserial), "n_a": r.n_a, "n_b": r.n_b,
                 "median_a": _num(self.median_a), "median_b": _num(self.median_b)}
@@ -254,20 +260,33 @@ class Comparison(MutableValueEquality):
                          _p(t.p_holm)])
         return head, rows
 
+    def shared_seeds(self) -> np.ndarray | None:
+        """The seeds every preset ran, or None where their seeds differ
+        (:func:`compare_results` of runs made apart)."""
+        seeds = [np.asarray(r.seeds) for r in self.results.values()]
+        return seeds[0] if all(np.array_equal(s, seeds[0]) for s in seeds) else None
+
     def _header(self) -> str:
         r = next(iter(self.results.values()))
         test = ("two-sided Mann-Whitney U (independent samples), A12 = P(a > b) + "
                 "P(a = b)/2" if self.test == "mannwhitneyu" else
-                "two-sided Wilcoxon signed-rank (paired by seed)")
-        tests = self.tests()
-        made = sum(math.isfinite(t.result.p_value) for t in tests)
-        pairs = f"{len(tests)} pair{'s' if len(tests) != 1 else ''}"
-        family = (f"Holm-corrected over the {pairs} of each metric"
-                  if made == len(tests) else
-                  f"Holm-corrected over the pairs of each metric that could be tested "
-                  f"({made} of {len(tests)} for {self.metric}; a pair with a preset "
-                  "without a path has no test)")
-        return (f"map {r.map_name} (corner rule {r.corner_rule!r}), {len(r.seeds)} seeds; "
+                "two-sided Wilcoxon signed-rank (paired by seed; n and medians over the "
+                "pairs where both found a path, pairs of equal values carry no rank)")
+        counts = {m: (sum(math.isfinite(t.result.p_value) for t in self.tests(m)),
+                      len(self.tests(m))) for m in self.metrics}
+        made, total = counts[self.metric]
+        pairs = f"{total} pair{'s' if total != 1 else ''}"
+        if all(c == counts[self.metric] and c[0] == c[1] for c in counts.values()):
+            family = f"Holm-corrected over the {pairs} of each metric"
+        else:
+            each = ", ".join(f"{m} {k} of {n}" for m, (k, n) in counts.items())
+            family = ("Holm-corrected over the pairs of each metric that could be tested "
+                      f"({each}; a pair with a preset without a path, or without the "
+                      "metric, has no test)")
+        shared = self.shared_seeds()
+        seeds = (f"{len(shared)} seeds" if shared is not None else "seeds per preset: "
+                 + ", ".join(f"{k} {len(v.seeds)}" for k, v in self.results.items()))
+        return (f"map {r.map_name} (corner rule {r.corner_rule!r}), {seeds}; "
                 f"optimum: 8-connected {self.optimum:.4f}, {r.any_angle_text()}\ntests: "
                 f"{test}; failed seeds excluded; p {family}")
 
@@ -339,7 +358,9 @@ class Comparison(MutableValueEquality):
         return all(bool(r.success.all()) for r in self.results.values())
 
     def to_json(self) -> dict[str, Any]:
-        """The ``--json`` layout of ``jaxga compare`` (NaN written as null)."""
+        """The ``--json`` layout of ``jaxga compare`` (NaN written as null). ``seeds`` is
+        the seeds every preset ran (null where they differ); each preset's own are under
+        ``presets``."""
         r0 = next(iter(self.results.values()))
         presets = {}
         for row in self.preset_rows():
@@ -353,6 +374,7 @@ class Comparison(MutableValueEquality):
                 "summary": {name: {"mean": _num(m), "sd": _num(s), "min": _num(lo),
                                    "max": _num(hi)}
                             for name, m, s, lo, hi in r.summary_rows()},
+                "seeds": [int(v) for v in r.seeds],
                 "time_per_run_s": row["time_per_run_s"], "timing": dict(r.timing),
                 "values": {m: [_num(x) for x in metric_values(r, m)] for m in self.metrics},
                 "population_capacity": r.population_capacity,
@@ -362,7 +384,9 @@ class Comparison(MutableValueEquality):
             "map": r0.map_name, "corner_rule": r0.corner_rule,
             "start": None if r0.start is None else list(r0.start),
             "goal": None if r0.goal is None else list(r0.goal),
-            "seeds": [int(s) for s in r0.seeds], "optimum": _num(self.optimum),
+            "seeds": (None if (shared := self.shared_seeds()) is None
+                      else [int(v) for v in shared]),
+            "optimum": _num(self.optimum),
             "any_angle_optimum": _num(self.any_angle_optimum), "metric": self.metric,
             "metrics": list(self.metrics), "test": self.test, "alpha": self.alpha,
             "correction": "holm", "presets": presets,
@@ -461,7 +485,7 @@ def compare_results(
         raw = [mann_whitney(vals[a], vals[b]) if test == "mannwhitneyu"
                else wilcoxon_paired(vals[a], vals[b]) for a, b in pairs]
         adj = holm([t.p_value for t in raw])
-        pairwise += [PairTest(m, a, b, t, float(p), _median(vals[a]), _median(vals[b]))
+        pairwise += [PairTest(m, a, b, t, float(p), *_medians(vals[a], vals[b], test))
                      for (a, b), t, p in zip(pairs, raw, adj, strict=True)]
     fish = [fisher_success(int(results[a].success.sum()), len(results[a].seeds),
                            int(results[b].success.sum()), len(results[b].seeds))
@@ -495,6 +519,15 @@ def _checked_values(result: Result, label: str, metric: str) -> np.ndarray:
 def _median(v: np.ndarray) -> float:
     v = v[np.isfinite(v)]
     return float(np.median(v)) if v.size else math.nan
+
+
+def _medians(a: np.ndarray, b: np.ndarray, test: str) -> tuple[float, float]:
+    """The medians a test's row shows: of each sample's seeds that found a path, or, for
+    the paired test, of the pairs it tested (both seeds found a path)."""
+    if test == "wilcoxon":
+        both = np.isfinite(a) & np.isfinite(b)
+        a, b = a[both], b[both]
+    return _median(a), _median(b)
 
 
 def one_corner_rule(rules: Mapping[str, str]) -> str:

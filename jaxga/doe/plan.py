@@ -42,6 +42,22 @@ def checked_response(response: Any, direction: str | None) -> tuple[str, str]:
     return response, direction
 
 
+def check_response_factors(response: str, factors: Sequence[Factor]) -> None:
+    """Refuse the ``fitness`` response of a design whose factors change the fitness
+    formula itself (``fitness.*`` keys: weights, exponents, floors): its levels then
+    differ in what a fitness value means, so the predicted best would be the level that
+    scales fitness up (IMGA's ``1 / (aL + bS + cE)`` is largest at the smallest ``a``),
+    not the one that searches better; as :func:`jaxga.compare` offers no fitness between
+    presets. Any other response measures the path itself."""
+    formula = [f.name for f in factors if f.name.startswith("fitness.")]
+    if response == "fitness" and formula:
+        others = ", ".join(r for r in RESPONSES if r != "fitness")
+        raise ParameterError(
+            f"factor {', '.join(formula)} changes the fitness formula itself, so the "
+            "response 'fitness' would pick the level whose formula gives larger values, "
+            f"not a better search: choose another response ({others})")
+
+
 @dataclasses.dataclass(frozen=True)
 class DoePlan:
     """A designed experiment, checked before any point runs: its configuration and map,

@@ -296,9 +296,9 @@ def test_tests_that_could_not_be_made_are_not_counted_or_printed_as_nan(comparis
     c = compare_results({"a": none, "b": dataclasses.replace(none, preset="b"), "imga": imga})
     made = [t for t in c.tests() if math.isfinite(t.result.p_value)]
     assert len(made) == 0 and len(c.tests()) == 3
-    assert "that could be tested (0 of 3 for length" in c.summary()
+    assert "that could be tested (length 0 of 3, raw_length 0 of 3" in c.summary()
     c = compare_results({"a": none, "imga": imga, "imga2": dataclasses.replace(imga)})
-    assert "(1 of 3 for length" in c.summary()
+    assert "(length 1 of 3, raw_length 1 of 3" in c.summary()
     made = [t for t in c.tests() if math.isfinite(t.result.p_value)]
     assert len(made) == 1 and made[0].p_holm == made[0].result.p_value  # m = 1
     text = compare_results({"a": none, "b": dataclasses.replace(none)}).summary()
@@ -308,6 +308,70 @@ def test_tests_that_could_not_be_made_are_not_counted_or_printed_as_nan(comparis
     assert " - " in row
     full = compare_results({"sga": sga, "imga": imga}).summary()
     assert "Holm-corrected over the 1 pair of each metric" in full
+
+
+def _without_fitness_optimum(r):
+    """``r`` as a preset whose own fitness optimum is not computed (AGACD's case)."""
+    return dataclasses.replace(r, fitness_optimum=math.nan)
+
+
+def test_the_header_names_the_tested_pairs_of_every_metric(comparison):
+    """A preset without a fitness optimum has no fitness_gap test: the header said Holm
+    was over "the 3 pairs of each metric" while fitness_gap's one test was corrected over
+    1 pair; each metric's count is now given."""
+    sga, imga = comparison.results["sga"], comparison.results["imga"]
+    c = compare_results({"sga": sga, "none": _without_fitness_optimum(imga),
+                         "imga": imga}, metrics=("length", "fitness_gap"))
+    made = [t for t in c.tests("fitness_gap") if math.isfinite(t.result.p_value)]
+    assert len(made) == 1 and made[0].p_holm == made[0].result.p_value
+    assert "(length 3 of 3, fitness_gap 1 of 3;" in c.summary()
+    assert "(length 3 of 3, fitness_gap 1 of 3;" in c.to_markdown()
+
+
+def test_results_of_other_seeds_are_named_per_preset(comparison):
+    """compare_results of runs made apart: the header said the first preset's "N seeds"
+    and the JSON's seeds were the first preset's; each preset's seeds are now recorded,
+    the top-level list only when they share them."""
+    sga, imga = comparison.results["sga"], comparison.results["imga"]
+    other = dataclasses.replace(imga, seeds=imga.seeds + 100)
+    c = compare_results({"sga": sga, "later": other})
+    n = len(sga.seeds)
+    assert f"seeds per preset: sga {n}, later {n};" in c.summary()
+    doc = json.loads(json.dumps(c.to_json(), allow_nan=False))
+    assert doc["seeds"] is None
+    assert doc["presets"]["later"]["seeds"] == [int(v) + 100 for v in imga.seeds]
+    same = compare_results({"sga": sga, "imga": imga})
+    assert f"{n} seeds;" in same.summary()
+    assert same.to_json()["seeds"] == [int(v) for v in sga.seeds]
+
+
+def test_a_paired_tests_medians_are_those_of_the_pairs_it_tested(comparison):
+    """With two seeds of one preset failed, the Wilcoxon row's n was the pairs tested
+    but its medians were over every seed of the other preset."""
+    sga, imga = comparison.results["sga"], comparison.results["imga"]
+    success = np.asarray(sga.success).copy()
+    success[:2] = False
+    c = compare_results({"a": dataclasses.replace(sga, success=success), "imga": imga},
+                        test="wilcoxon", metrics=("length",))
+    t = c.tests()[0]
+    a, b = c.values("a"), c.values("imga")
+    both = np.isfinite(a) & np.isfinite(b)
+    assert t.result.n_a == t.result.n_b == int(both.sum()) == len(sga.seeds) - 2
+    assert (t.median_a, t.median_b) == (np.median(a[both]), np.median(b[both]))
+    mw = compare_results({"a": dataclasses.replace(sga, success=success), "imga": imga},
+                         metrics=("length",)).tests()[0]
+    assert mw.median_b == np.median(b[np.isfinite(b)])  # independent samples: each its own
+
+
+def test_an_infinite_odds_ratio_is_written_inf_not_null():
+    """Fisher's odds ratio of 6/6 against 2/6 is infinite: the JSON wrote null, which
+    elsewhere means "no test"."""
+    from jaxga.compare import PairTest
+
+    t = PairTest("success", "a", "b", fisher_success(6, 6, 2, 6), 0.06, 1.0, 1 / 3)
+    doc = json.loads(json.dumps(t.to_json(), allow_nan=False))
+    assert doc["statistic"] == "inf" and float(doc["statistic"]) == math.inf
+    assert doc["p_value"] == pytest.approx(scipy.stats.fisher_exact([[6, 0], [2, 4]])[1])
 
 
 def test_paired_wilcoxon_option(comparison):

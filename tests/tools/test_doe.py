@@ -264,6 +264,24 @@ def test_factor_validation_against_the_preset(preset, factor, words):
         check_factors(config, [factor])
 
 
+def test_a_fitness_response_is_refused_for_factors_of_the_fitness_formula(monkeypatch):
+    """IMGA's fitness is 1 / (aL + bS + cE): with fitness.a a factor and the response
+    fitness (the default), the predicted best was the smallest a, whatever the search
+    found. Refused before any point runs; the same factor with response length runs."""
+    from jaxga.doe import experiment
+
+    def never(*args, **kwargs):
+        raise AssertionError("a design point ran")
+
+    monkeypatch.setattr(experiment, "_run_points", never)
+    factor = [Factor("fitness.a", (3.0, 6.0, 9.0))]
+    with pytest.raises(ParameterError, match="fitness.a changes the fitness formula") as e:
+        run_doe("imga", MAP, factor, "full", seeds=2, generations=3)
+    assert "\n" not in str(e.value) and "length" in str(e.value)
+    with pytest.raises(AssertionError, match="a design point ran"):  # planned, then run
+        run_doe("imga", MAP, factor, "full", seeds=2, generations=3, response="length")
+
+
 @pytest.mark.parametrize("level", [10**400, 10**5000, float("inf")],
                          ids=["beyond-a-float", "beyond-pythons-repr", "inf"])
 def test_a_level_no_float_holds_is_refused_in_a_short_line(level):
