@@ -129,14 +129,12 @@ class PairTest:
 
     def to_json(self) -> dict[str, Any]:
         """One entry of the ``pairwise`` / ``success_tests`` lists of the JSON layout. An
-        infinite statistic (Fisher's odds ratio where one preset never failed and the
-        other did) is written ``"inf"`` / ``"-inf"``, which JSON has no number for; null
-        means no test."""
+        infinite odds ratio (one preset never failed, the other did) is written
+        ``"inf"``, which JSON has no number for; null is a value that is not a number
+        (no test, or an odds ratio of 0 / 0 where both always or never failed)."""
         r = self.result
-        statistic = (r.statistic if not math.isinf(r.statistic)
-                     else "inf" if r.statistic > 0 else "-inf")
         return {"metric": self.metric, "a": self.a, "b": self.b, "test": r.test,
-                "statistic": statistic if isinstance(statistic, str) else _num(statistic),
+                "statistic": "inf" if r.statistic == math.inf else _num(r.statistic),
                 "p_value": _num(r.p_value),
                 "p_holm": _num(self.p_holm), "a12": _num(r.a12),
                 "rank_biserial": _num(r.rank_biserial), "n_a": r.n_a, "n_b": r.n_b,
@@ -284,8 +282,9 @@ class Comparison(MutableValueEquality):
                       f"({each}; a pair with a preset without a path, or without the "
                       "metric, has no test)")
         shared = self.shared_seeds()
-        seeds = (f"{len(shared)} seeds" if shared is not None else "seeds per preset: "
-                 + ", ".join(f"{k} {len(v.seeds)}" for k, v in self.results.items()))
+        seeds = (f"{len(shared)} seeds" if shared is not None
+                 else "presets of different seeds: " + ", ".join(
+                     f"{k} {len(v.seeds)}" for k, v in self.results.items()))
         return (f"map {r.map_name} (corner rule {r.corner_rule!r}), {seeds}; "
                 f"optimum: 8-connected {self.optimum:.4f}, {r.any_angle_text()}\ntests: "
                 f"{test}; failed seeds excluded; p {family}")

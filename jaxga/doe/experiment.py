@@ -20,7 +20,7 @@ from jaxga.doe.checkpoint import decode
 from jaxga.doe.confirmation import run_confirmation
 from jaxga.doe.design import Factor
 from jaxga.doe.fit import fit_linear, point_means, predicted_best, seed_responses
-from jaxga.doe.plan import DoePlan, check_response_factors, checked_response, plan_doe
+from jaxga.doe.plan import DoePlan, checked_response, plan_doe
 from jaxga.doe.result import DoeResult
 
 
@@ -73,8 +73,7 @@ def run_doe(
     t_start = time.perf_counter()
     response, direction = checked_response(response, direction)
     plan = plan_doe(preset, grid, factors, design, seeds, generations, corner_rule, variant,
-                 sets, checkpoint, block, progress, overrides)
-    check_response_factors(response, plan.factors)
+                 sets, checkpoint, block, progress, overrides, response)
     results, reasons, sweep_s, compile_s = _run_points(plan, progress)
     all_responses = {k: np.stack([r[k] for r in results]) for k in results[0]}
     if not np.any(all_responses["success"]):  # nothing to fit: say why

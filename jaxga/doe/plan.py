@@ -82,9 +82,10 @@ def plan_doe(preset: str | Config, grid: Grid | str, factors: Any, design: str,
              seeds: int | Sequence[int], generations: int | None, corner_rule: str | None,
              variant: str | None, sets: Sequence[str], checkpoint: str | PathLike | None,
              block: int | None, progress: Callable[[int, int], None] | None,
-             overrides: Mapping[str, Any]) -> DoePlan:
-    """Check every argument and every design point's key combination; the
-    :class:`DoePlan` of :func:`run_doe`."""
+             overrides: Mapping[str, Any], response: str = "length") -> DoePlan:
+    """Check every argument and every design point's key combination, and ``response``
+    against the factors (:func:`check_response_factors`), before anything is built or
+    written; the :class:`DoePlan` of :func:`run_doe`."""
     sets = as_sets(sets)  # one string is one set
     if not isinstance(factors, (str, bytes, Mapping)) and isinstance(factors, Iterable):
         factors = tuple(factors)
@@ -92,6 +93,7 @@ def plan_doe(preset: str | Config, grid: Grid | str, factors: Any, design: str,
         raise ParameterError(f"factors must be a list of jaxga.doe.Factor (Factor(name, "
                              f"(low, mid, high)) or Factor.parse('NAME=LOW,MID,HIGH')), got "
                              f"{factors!r}")
+    check_response_factors(response, factors)
     if progress is not None and not callable(progress):
         raise ParameterError(f"progress must be a callable (done, total), got {progress!r}")
     if checkpoint is not None and not isinstance(checkpoint, (str, os.PathLike)):

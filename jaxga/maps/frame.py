@@ -151,19 +151,24 @@ class MapFrame(ValueEquality):
         return tuple(float(v) + tol for v in blocks)
 
     def edge_tolerance(self, point: tuple[float, float]) -> float:
-        """How far (in map cells) a world point may lie below a cell's edge and still count
-        on it: 1e-9 of a cell (edges' coordinates are rounded), and more where the
+        """How far (in planning cells) a world point may lie below a cell's edge and still
+        count on it: 1e-9 of a cell (edges' coordinates are rounded), and more where the
         point's or the origin's distance from 0 makes float64's rounding of the metres
-        larger (64 units in the last place of the largest coordinate; a millionth of a
-        cell where :data:`jaxga.maps.ros.MAX_ORIGIN_CELLS` allows)."""
-        far = max(abs(float(v)) for v in (*point, self.origin[0], self.origin[1])
-                  if math.isfinite(float(v))) if self.origin is not None else 0.0
-        return 1e-9 + 64 * np.finfo(float).eps * far / self.resolution
+        larger: 8 units in the last place of the largest coordinate (the rounding of the
+        origin, the point and their difference is about 2), at most 2e-4 of a map cell
+        (an origin :data:`jaxga.maps.ros.MAX_ORIGIN_CELLS` cells out)."""
+        coords = [abs(float(v)) for v in (*point, *(self.origin or (0.0, 0.0))[:2])]
+        far = max((v for v in coords if math.isfinite(v)), default=0.0)
+        return (1e-9 + 8 * np.finfo(float).eps * far / self.resolution) / self.coarsen
 
     def metres_text(self, value: float) -> str:
         """A coordinate in metres as text: to :attr:`world_decimals` and no further, with
-        no trailing zeros (``512347.33``, not ``512347``, as ``:g`` wrote it; ``5``)."""
-        return np.format_float_positional(float(value) + 0.0, precision=self.world_decimals,
+        no trailing zeros (``512347.33``, not ``512347``, as ``:g`` wrote it; ``5``); a
+        coordinate of 1e15 m or more (a typing slip) in exponent form."""
+        v = float(value)
+        if not abs(v) < 1e15:
+            return repr(v)
+        return np.format_float_positional(v + 0.0, precision=self.world_decimals,
                                           unique=True, trim="-")
 
     def cell_of(self, point: tuple[float, float], shape: tuple[int, int],
@@ -181,7 +186,7 @@ class MapFrame(ValueEquality):
         x, y = (int(math.floor(v)) if math.isfinite(v) else -1 for v in cells)
         # on the map's own extent too: a last block reaching past the map covers its part
         tol = self.edge_tolerance(point)
-        on_map = all(math.isfinite(v) and 0 <= v / self.resolution + tol < n
+        on_map = all(math.isfinite(v) and 0 <= v / self.resolution + tol * self.coarsen < n
                      for v, n in zip(local, self.map_shape[::-1]))
         if not (on_map and 0 <= x < w and 0 <= y < h):
             x0, y0, yaw = self.origin

@@ -389,6 +389,11 @@ _SIXTEEN_BIT = ("I;16", "I;16B", "I;16L", "I;16N")
 _EIGHT_BIT = ("L", "LA", "RGB", "RGBA")
 
 
+_PNG16_READ_AT_8 = {2: "colour", 4: "grey-and-alpha", 6: "colour-and-alpha"}
+"""PNG colour types whose 16-bit images Pillow decodes at 8 bits a channel (a 16-bit
+grey PNG keeps its 16 bits)."""
+
+
 def decode_image(raw: bytes, label: str) -> tuple[np.ndarray, int]:
     """``(pixels, full_scale)`` of an image file's bytes, decoded by Pillow: ``pixels`` is
     ``[H, W, C]`` (C = 1-4: grey, grey + alpha, RGB, RGBA; top row first) and
@@ -397,9 +402,10 @@ def decode_image(raw: bytes, label: str) -> tuple[np.ndarray, int]:
     bits); palette, bilevel and other colour modes are converted to RGBA.
 
     Refused in one line naming ``label``: an image Pillow cannot read, a floating-point
-    image (its values have no scale a map could be read against), and a 32-bit integer
-    image holding values over 16 bits. Callers check the data against the header first
-    (:func:`check_image_data`)."""
+    image (its values have no scale a map could be read against), a 32-bit integer
+    image holding values over 16 bits, and a 16-bit colour, grey-and-alpha or
+    colour-and-alpha PNG (Pillow keeps 8 bits of each channel). Callers check the data
+    against the header first (:func:`check_image_data`)."""
     from PIL import Image, UnidentifiedImageError  # here: Pillow's import is a tenth of a second
 
     try:
@@ -417,19 +423,21 @@ def decode_image(raw: bytes, label: str) -> tuple[np.ndarray, int]:
                 raise MapFormatError(
                     f"{label}: the image asks to be shown turned or mirrored (EXIF "
                     f"orientation {turned}): save it upright, without that tag")
+            header = png_header(raw)
+            if header is not None and header[2] == 16 and header[3] in _PNG16_READ_AT_8:
+                # Pillow keeps the high byte of each channel of these: a pixel near a
+                # threshold could read otherwise than map_server (16-bit quanta) reads it
+                raise MapFormatError(
+                    f"{label}: a 16-bit {_PNG16_READ_AT_8[header[3]]} PNG is read by Pillow "
+                    "at 8 bits a channel, so a pixel near a threshold could be read "
+                    "otherwise than at its full precision: save the map at 8 bits, or as "
+                    "16-bit grey")
             key = img.info.get("transparency")
             if img.mode in ("L", "RGB") and key is not None:
-                header = png_header(raw)
                 if header is not None and header[2] < 8 and isinstance(key, int):
                     # Pillow scales a 2- or 4-bit grey PNG's values to 8 bits (mode L),
                     # not its transparent value (a 1-bit one is mode 1: Pillow maps it)
                     img.info["transparency"] = key * 255 // (2 ** header[2] - 1)
-                if header is not None and header[2] == 16:
-                    # Pillow reads a 16-bit colour PNG as 8 bits but keeps its 16-bit
-                    # transparent colour: which pixels it names can no longer be told
-                    raise MapFormatError(
-                        f"{label}: a 16-bit colour PNG with a transparent colour (tRNS) "
-                        "is not read: save the map with an alpha channel, or at 8 bits")
                 # a tRNS colour, as a palette's: transparent pixels then count as white
                 # (free) for grey and colour images as for palettes and alpha channels
                 img = img.convert("RGBA")

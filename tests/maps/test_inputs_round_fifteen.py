@@ -7,7 +7,10 @@ Each test is cheap: no GA is compiled."""
 
 from __future__ import annotations
 
+import decimal
 import itertools
+import struct
+import zlib
 
 import numpy as np
 import pytest
@@ -16,6 +19,7 @@ from jaxga.core.errors import EndpointError, MapFormatError
 from jaxga.maps import load_map_info, save_map
 from jaxga.maps.frame import MapFrame
 from jaxga.maps.ros import RosMap, occupancy
+from tests.maps.test_maps import _png
 
 UTM = (512345.6, 4123456.7, 0.0)
 
@@ -32,9 +36,9 @@ def _nav2_cell(channels: tuple[int, ...], alpha: int | None, meta: RosMap) -> in
         total += q
     shade = (total / len(quanta)) / 65535.0
     occ = shade if meta.negate else 1.0 - shade
-    if meta.mode == "raw":
-        value = float(np.floor(shade * 255 + 0.5))
-        return int(value) if 0 <= value <= 100 else -1
+    if meta.mode == "raw":  # std::round: halves away from zero
+        value = int(decimal.Decimal(shade * 255).quantize(0, decimal.ROUND_HALF_UP))
+        return value if 0 <= value <= 100 else -1
     if meta.mode == "scale" and alpha is not None and alpha != 255:
         return -1
     if meta.occupied_thresh < occ:
@@ -91,8 +95,16 @@ def test_points_on_cell_edges_far_from_zero_count_in_the_cell_above():
     for k in range(400):
         x, y = (float(f"{o + k * 0.05:.2f}") for o in UTM[:2])
         assert frame.cell_of((x, y), (400, 400)) == (k, k)
-    # the cell below an edge is still the cell below: the tolerance is a millionth of one
-    assert frame.cell_of((512346.2 - 1e-4, 4123458.0 - 1e-4), (400, 400)) == (11, 25)
+    # a point 1e-7 m (2e-6 of a cell) below an edge is in the cell below: the tolerance
+    # here is 1.5e-7 of a cell; a coarsened frame's is as many map cells
+    assert frame.cell_of((512346.2 - 1e-7, 4123458.0 - 1e-7), (400, 400)) == (11, 25)
+    coarse = MapFrame(map_shape=(400, 400), coarsen=4, resolution=0.05, origin=UTM)
+    assert coarse.cell_of((512346.2, 4123458.0), (100, 100)) == (3, 6)
+    assert coarse.cell_of((512346.2 - 1e-7, 4123458.0 - 1e-7), (100, 100)) == (2, 6)
+    # at the farthest origin allowed the tolerance is 2e-4 of a cell, not more
+    far = MapFrame(map_shape=(40, 40), resolution=1e-9, origin=(100.0, 100.0, 0.0))
+    assert far.cell_of((100.0 + 9.9995e-9, 100.0), (40, 40)) == (9, 0)
+    assert far.edge_tolerance((float("nan"), float("inf"))) > 0  # no max() of nothing
 
 
 def test_a_ros_map_far_from_zero_loads_its_endpoints_on_the_edges_given(tmp_path):
@@ -113,6 +125,9 @@ def test_messages_name_far_coordinates_with_their_digits():
     assert str(err.value) == ("the goal (512347.33, 4123459.73) m is off the map: it covers "
                               "x 512345.6..512347.6 m, y 4123456.7..4123458.7 m")
     assert frame.metres_text(-0.0) == "0" and frame.metres_text(5.0) == "5"
+    with pytest.raises(EndpointError) as err:  # a slip of 1e300 m: not 300 digits
+        frame.cell_of((1e300, 4123457.0), (40, 40))
+    assert str(err.value).startswith("point (1e+300, 4123457) m is off the map")
 
 
 def test_an_origin_too_many_cells_from_zero_is_refused_in_one_line(tmp_path):
@@ -129,6 +144,37 @@ def test_an_origin_too_many_cells_from_zero_is_refused_in_one_line(tmp_path):
         save_map(np.zeros((4, 4), bool), tmp_path / "out.yaml", resolution=1e-6,
                  origin=(-1e9, 3e9, 0.0))
     assert not (tmp_path / "out.yaml").exists() and not (tmp_path / "out.pgm").exists()
-    # a UTM origin at centimetre cells is 8e7 cells out: loaded
+    # a UTM origin at centimetre cells is 8e7 cells out: loaded; 1e11 cells out, loaded
     save_map(np.zeros((4, 4), bool), tmp_path / "utm.yaml", resolution=0.05, origin=UTM)
     assert load_map_info(tmp_path / "utm.yaml").frame.origin == UTM
+    save_map(np.zeros((4, 4), bool), tmp_path / "edge.yaml", resolution=0.5,
+             origin=(5e10, -5e10, 0.0))
+    assert load_map_info(tmp_path / "edge.yaml").frame.origin == (5e10, -5e10, 0.0)
+    with pytest.raises(MapFormatError, match="1e\\+11 cells"):
+        save_map(np.zeros((4, 4), bool), tmp_path / "past.yaml", resolution=0.5,
+                 origin=(5.0001e10, 0.0, 0.0))
+
+
+@pytest.mark.parametrize("colour_type, channels", [(2, 3), (4, 2), (6, 4)],
+                         ids=["colour", "grey-and-alpha", "colour-and-alpha"])
+def test_a_16_bit_png_with_more_than_grey_is_refused(tmp_path, colour_type, channels):
+    """Pillow decodes a 16-bit colour or alpha PNG at 8 bits a channel: a pixel 0xCC00
+    read as 204 is free under free_thresh 0.2 where nav2 (p = 0.2031) has it unknown.
+    Refused in one line through a ROS YAML; 16-bit grey, which Pillow keeps at 16 bits,
+    is read. (A plain PNG map is thresholded by its luminance, read by matplotlib.)"""
+    pixels = np.full((2, 3, channels), 0xCC00, np.uint16)
+    rows = b"".join(b"\0" + row.astype(">u2").tobytes() for row in pixels)
+    (tmp_path / "deep.png").write_bytes(_png([
+        (b"IHDR", struct.pack(">IIBBBBB", 3, 2, 16, colour_type, 0, 0, 0)),
+        (b"IDAT", zlib.compress(rows)), (b"IEND", b"")]))
+    (tmp_path / "deep.yaml").write_text("image: deep.png\nresolution: 0.05\n"
+                                        "origin: [0.0, 0.0, 0.0]\nfree_thresh: 0.2\n")
+    with pytest.raises(MapFormatError, match="16-bit .*PNG is read by Pillow at 8") as e:
+        load_map_info(tmp_path / "deep.yaml")
+    assert "\n" not in str(e.value)
+    grey = np.full((2, 3), 0xCC00, np.uint16)
+    rows = b"".join(b"\0" + row.astype(">u2").tobytes() for row in grey)
+    (tmp_path / "deep.png").write_bytes(_png([
+        (b"IHDR", struct.pack(">IIBBBBB", 3, 2, 16, 0, 0, 0, 0)),
+        (b"IDAT", zlib.compress(rows)), (b"IEND", b"")]))
+    assert load_map_info(tmp_path / "deep.yaml").grid.blocked_np().all()  # p 0.2031: unknown

@@ -981,8 +981,9 @@ def test_a_16_bit_pngs_transparent_colour_is_read_or_refused(tmp_path):
     """A 16-bit grey PNG's transparent colour was dropped (an 8-bit one's is kept): its
     pixels of that value now read as transparent, so free, alone and through a ROS YAML
     (where map_server's trinary mode reads the colour and ignores the alpha). Pillow
-    reads a 16-bit colour PNG at 8 bits but keeps its 16-bit transparent colour, so the
-    pixels it names cannot be told: refused in one line (it was read silently opaque)."""
+    reads a 16-bit colour PNG at 8 bits (and keeps its 16-bit transparent colour, so the
+    pixels it names cannot be told): refused in one line (it was read silently opaque),
+    as every 16-bit PNG with more than a grey channel is (decision 063)."""
     grey = np.full((6, 8), 65535, np.int64)
     grey[1:5, 3] = 1000  # a dark wall, the transparent colour
     grey[0, 0] = 1001  # as dark, not transparent
@@ -996,7 +997,7 @@ def test_a_16_bit_pngs_transparent_colour_is_read_or_refused(tmp_path):
     assert load_map(tmp_path / "wall.yaml").blocked_np().sum() == 5  # trinary: colour
     (tmp_path / "colour.png").write_bytes(
         _png16(np.repeat(grey[..., None], 3, axis=2), 2, (1000, 1000, 1000)))
-    with pytest.raises(MapFormatError, match="a 16-bit colour PNG with a transparent") as e:
+    with pytest.raises(MapFormatError, match="a 16-bit colour PNG is read by Pillow at 8") as e:
         load_map(tmp_path / "colour.png")
     assert "\n" not in str(e.value)
 

@@ -336,7 +336,7 @@ def test_results_of_other_seeds_are_named_per_preset(comparison):
     other = dataclasses.replace(imga, seeds=imga.seeds + 100)
     c = compare_results({"sga": sga, "later": other})
     n = len(sga.seeds)
-    assert f"seeds per preset: sga {n}, later {n};" in c.summary()
+    assert f"presets of different seeds: sga {n}, later {n};" in c.summary()
     doc = json.loads(json.dumps(c.to_json(), allow_nan=False))
     assert doc["seeds"] is None
     assert doc["presets"]["later"]["seeds"] == [int(v) + 100 for v in imga.seeds]
@@ -346,21 +346,20 @@ def test_results_of_other_seeds_are_named_per_preset(comparison):
 
 
 def test_a_paired_tests_medians_are_those_of_the_pairs_it_tested(comparison):
-    """With two seeds of one preset failed, the Wilcoxon row's n was the pairs tested
-    but its medians were over every seed of the other preset."""
-    sga, imga = comparison.results["sga"], comparison.results["imga"]
-    success = np.asarray(sga.success).copy()
-    success[:2] = False
-    c = compare_results({"a": dataclasses.replace(sga, success=success), "imga": imga},
-                        test="wilcoxon", metrics=("length",))
-    t = c.tests()[0]
-    a, b = c.values("a"), c.values("imga")
-    both = np.isfinite(a) & np.isfinite(b)
-    assert t.result.n_a == t.result.n_b == int(both.sum()) == len(sga.seeds) - 2
-    assert (t.median_a, t.median_b) == (np.median(a[both]), np.median(b[both]))
-    mw = compare_results({"a": dataclasses.replace(sga, success=success), "imga": imga},
-                         metrics=("length",)).tests()[0]
-    assert mw.median_b == np.median(b[np.isfinite(b)])  # independent samples: each its own
+    """Lengths set by hand, a = (nan, nan, 10, 11, 12), b = (1, 2, 30, 31, 32): the
+    Wilcoxon row's n was the 3 pairs tested but its medians were over every seed of b
+    (30); they are now the tested pairs' (11, 31). Mann-Whitney keeps each sample's own
+    (b: 30)."""
+    sga = comparison.results["sga"]
+    seeds = np.arange(5)
+    base = dataclasses.replace(sga, seeds=seeds, success=np.ones(5, bool),
+                               length=np.array([1.0, 2.0, 30.0, 31.0, 32.0]))
+    a = dataclasses.replace(base, success=np.array([False, False, True, True, True]),
+                            length=np.array([np.nan, np.nan, 10.0, 11.0, 12.0]))
+    t = compare_results({"a": a, "b": base}, test="wilcoxon", metrics=("length",)).tests()[0]
+    assert (t.result.n_a, t.median_a, t.median_b) == (3, 11.0, 31.0)
+    mw = compare_results({"a": a, "b": base}, metrics=("length",)).tests()[0]
+    assert (mw.median_a, mw.median_b) == (11.0, 30.0)
 
 
 def test_an_infinite_odds_ratio_is_written_inf_not_null():

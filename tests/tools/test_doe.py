@@ -264,10 +264,12 @@ def test_factor_validation_against_the_preset(preset, factor, words):
         check_factors(config, [factor])
 
 
-def test_a_fitness_response_is_refused_for_factors_of_the_fitness_formula(monkeypatch):
+def test_a_fitness_response_is_refused_for_factors_of_the_fitness_formula(monkeypatch,
+                                                                          tmp_path):
     """IMGA's fitness is 1 / (aL + bS + cE): with fitness.a a factor and the response
     fitness (the default), the predicted best was the smallest a, whatever the search
-    found. Refused before any point runs; the same factor with response length runs."""
+    found. Refused before anything is built or written (no checkpoint folder); the same
+    factor with response length, and another factor with the fitness, run."""
     from jaxga.doe import experiment
 
     def never(*args, **kwargs):
@@ -276,10 +278,15 @@ def test_a_fitness_response_is_refused_for_factors_of_the_fitness_formula(monkey
     monkeypatch.setattr(experiment, "_run_points", never)
     factor = [Factor("fitness.a", (3.0, 6.0, 9.0))]
     with pytest.raises(ParameterError, match="fitness.a changes the fitness formula") as e:
-        run_doe("imga", MAP, factor, "full", seeds=2, generations=3)
+        run_doe("imga", MAP, factor, "full", seeds=2, generations=3,
+                checkpoint=tmp_path / "points")
     assert "\n" not in str(e.value) and "length" in str(e.value)
+    assert not (tmp_path / "points").exists()
     with pytest.raises(AssertionError, match="a design point ran"):  # planned, then run
         run_doe("imga", MAP, factor, "full", seeds=2, generations=3, response="length")
+    with pytest.raises(AssertionError, match="a design point ran"):
+        run_doe("imga", MAP, [Factor("mutation.probability", (0.1, 0.2, 0.3))], "full",
+                seeds=2, generations=3)
 
 
 @pytest.mark.parametrize("level", [10**400, 10**5000, float("inf")],
@@ -779,7 +786,7 @@ def test_every_design_point_is_checked_before_the_first_runs(monkeypatch):
     monkeypatch.setattr(jaxga.api, "sweep", lambda *a, **k: pytest.fail("a sweep ran"))
     with pytest.raises(ParameterError, match="fitness.v_t = 0.5 is above fitness.v = 0.25"):
         run_doe("iga_zhang", MAP, [Factor("fitness.v", (0.25, 0.5, 1.0))], "full", seeds=1,
-                generations=2, population__size=8)
+                generations=2, population__size=8, response="length")
 
 
 def test_angle_sum_is_the_smoothness_response(one_call):
