@@ -520,8 +520,12 @@ def test_ros_numbers_with_exponents_and_a_far_origin(tmp_path):
         "image: m.pgm\nresolution: 0.05\norigin: [1.0e+308, 1.0e+308, 0.0]\n")
     with pytest.raises(MapFormatError, match="origin must lie within 1e[+]12 metres"):
         load_map_info(tmp_path / "far.yaml", start_world=(0.0, 0.0), goal_world=(0.1, 0.1))
-    (tmp_path / "far.yaml").write_text(
+    (tmp_path / "far.yaml").write_text(  # 2e12 cells out: refused (decision 063)
         "image: m.pgm\nresolution: 0.05\norigin: [1.0e+11, 1.0e+11, 0.0]\n")
+    with pytest.raises(MapFormatError, match="2e[+]12 cells of 0.05 m away"):
+        load_map_info(tmp_path / "far.yaml", start_world=(0.0, 0.0), goal_world=(0.1, 0.1))
+    (tmp_path / "far.yaml").write_text(
+        "image: m.pgm\nresolution: 0.05\norigin: [1.0e+8, 1.0e+8, 0.0]\n")
     with pytest.raises(EndpointError, match="off the map"):
         load_map_info(tmp_path / "far.yaml", start_world=(0.0, 0.0), goal_world=(0.1, 0.1))
 
