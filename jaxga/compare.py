@@ -270,8 +270,9 @@ class Comparison(MutableValueEquality):
                 "P(a = b)/2" if self.test == "mannwhitneyu" else
                 "two-sided Wilcoxon signed-rank (paired by seed; n and medians over the "
                 "pairs where both found a path, pairs of equal values carry no rank)")
-        counts = {m: (sum(math.isfinite(t.result.p_value) for t in self.tests(m)),
-                      len(self.tests(m))) for m in self.metrics}
+        by_metric = {m: self.tests(m) for m in self.metrics}
+        counts = {m: (sum(math.isfinite(t.result.p_value) for t in tests), len(tests))
+                  for m, tests in by_metric.items()}
         made, total = counts[self.metric]
         pairs = f"{total} pair{'s' if total != 1 else ''}"
         if all(c == counts[self.metric] and c[0] == c[1] for c in counts.values()):

@@ -299,6 +299,6 @@ def _on_the_map(frame: MapFrame | None, grid: Grid) -> str:
                 where.append(f"the coarse cell around map cell {middle}")
             if frame.has_metres:
                 x, y = frame.to_world(np.asarray(xy, float))
-                where.append(f"centre ({frame.metres_text(x)}, {frame.metres_text(y)}) m")
+                where.append(f"centre ({frame.coordinate_text(x)}, {frame.coordinate_text(y)}) m")
             return f" ({', '.join(where)})"
     return ""

@@ -309,7 +309,7 @@ def world_ends(frame, grid) -> str:
     if frame is None or not frame.has_metres:
         return ""
     (sx, sy), (gx, gy) = frame.to_world(np.array([grid.start_xy, grid.goal_xy], float))
-    m = frame.metres_text
+    m = frame.coordinate_text
     return f", ({m(sx)}, {m(sy)}) -> ({m(gx)}, {m(gy)}) m"
 
 
@@ -329,7 +329,8 @@ def snap_notes(args: argparse.Namespace, info) -> list[str]:
             d = 3  # decimals enough to tell the centre from the point given
             while d < 6 and f"{x:.{d}f},{y:.{d}f}" == f"{world[0]:.{d}f},{world[1]:.{d}f}":
                 d += 1
-            given = f"({info.frame.metres_text(world[0])}, {info.frame.metres_text(world[1])})"
+            text = info.frame.coordinate_text
+            given = f"({text(world[0])}, {text(world[1])})"
             notes.append(f"note: the {name} {given} m is planned at the "
                          f"centre of its cell, ({x:.{d}f}, {y:.{d}f}) m, {away:.{d}f} m away")
     return notes

@@ -248,7 +248,7 @@ def ends_in_metres(result) -> str:
             or "cell (" not in str(result.reason):
         return ""
     (sx, sy), (gx, gy) = frame.to_world(np.array([result.start, result.goal], float))
-    m = frame.metres_text
+    m = frame.coordinate_text
     return f" (start ({m(sx)}, {m(sy)}) m, goal ({m(gx)}, {m(gy)}) m)"
 
 

@@ -142,8 +142,11 @@ class MapFrame(ValueEquality):
         it, to within what float64 can tell at the point's distance from 0
         (:meth:`edge_tolerance`: a point written to two decimals on a map whose origin
         lies 4,000 km out falls on the edge's wrong side by 1e-8 of a cell)."""
-        local = self._local(point)
-        tol = self.edge_tolerance(point)
+        return self._cells(self._local(point), self.edge_tolerance(point))
+
+    def _cells(self, local: tuple[float, float], tol: float) -> tuple[float, float]:
+        """:meth:`cell_coordinates` of a point already in metres along the map's axes
+        (:meth:`_local`), with its :meth:`edge_tolerance`."""
         if self.coarsen == 1:
             return tuple(v / self.cell_size + tol for v in local)
         blocks = map_to_blocks(np.asarray(local, float) / self.resolution, self.coarsen,
@@ -161,7 +164,7 @@ class MapFrame(ValueEquality):
         far = max((v for v in coords if math.isfinite(v)), default=0.0)
         return (1e-9 + 8 * np.finfo(float).eps * far / self.resolution) / self.coarsen
 
-    def metres_text(self, value: float) -> str:
+    def coordinate_text(self, value: float) -> str:
         """A coordinate in metres as text: to :attr:`world_decimals` and no further, with
         no trailing zeros (``512347.33``, not ``512347``, as ``:g`` wrote it; ``5``); a
         coordinate of 1e15 m or more (a typing slip) in exponent form."""
@@ -180,18 +183,18 @@ class MapFrame(ValueEquality):
             raise EndpointError(f"{what} in metres needs a map with a resolution and an "
                                 "origin (a ROS map_server .yaml)")
         local = self._local(point)
+        tol = self.edge_tolerance(point)
         h, w = shape
-        cells = self.cell_coordinates(point)
+        cells = self._cells(local, tol)
         # a point (or origin) so far away that the cell overflows is off the map too
         x, y = (int(math.floor(v)) if math.isfinite(v) else -1 for v in cells)
         # on the map's own extent too: a last block reaching past the map covers its part
-        tol = self.edge_tolerance(point)
         on_map = all(math.isfinite(v) and 0 <= v / self.resolution + tol * self.coarsen < n
                      for v, n in zip(local, self.map_shape[::-1]))
         if not (on_map and 0 <= x < w and 0 <= y < h):
             x0, y0, yaw = self.origin
             wide, high = self.map_shape[1] * self.resolution, self.map_shape[0] * self.resolution
-            m = self.metres_text
+            m = self.coordinate_text
             if not yaw:
                 raise EndpointError(
                     f"{what} ({m(point[0])}, {m(point[1])}) m is off the map: it covers x "

@@ -124,7 +124,7 @@ def test_messages_name_far_coordinates_with_their_digits():
         frame.cell_of((512347.33, 4123459.73), (40, 40), "the goal")
     assert str(err.value) == ("the goal (512347.33, 4123459.73) m is off the map: it covers "
                               "x 512345.6..512347.6 m, y 4123456.7..4123458.7 m")
-    assert frame.metres_text(-0.0) == "0" and frame.metres_text(5.0) == "5"
+    assert frame.coordinate_text(-0.0) == "0" and frame.coordinate_text(5.0) == "5"
     with pytest.raises(EndpointError) as err:  # a slip of 1e300 m: not 300 digits
         frame.cell_of((1e300, 4123457.0), (40, 40))
     assert str(err.value).startswith("point (1e+300, 4123457) m is off the map")
