@@ -205,7 +205,10 @@ def mpmga_penalty(grid: Grid, cells: jax.Array, length: jax.Array) -> jax.Array:
 
     Per interior node: 0 if the turn is 0, 5 if ``0 < turn < pi/2``, 25 if ``turn =
     pi/2``, 125 if ``turn > pi/2``; summed over the nodes (eq. 14). The comparisons are
-    exact: ``turn = pi/2`` iff ``dot = 0``, ``turn > pi/2`` iff ``dot < 0``.
+    exact: ``turn = pi/2`` iff ``dot = 0``, ``turn > pi/2`` iff ``dot < 0``. One
+    difference: eq. 9 sets ``theta = 0`` whenever the two slopes are equal, which
+    includes a 180-degree reversal (penalty 0); here a reversal is a turn of pi (125).
+    MPMGA's individuals are continuous loop-free paths, which cannot reverse.
     """
     return _mpmga_penalty(geometry(grid, cells, length))
 

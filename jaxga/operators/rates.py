@@ -7,7 +7,7 @@ a configuration and calls it like any other operator; it holds no branch of its 
 any paper's rule.
 
 * ``fixed``: ``<stage>.probability`` for every pair or individual (the papers' constant
-  rates; a per-island rate arrives through the parameters, MPMGA section 3.3);
+  rates; a per-island rate arrives through the parameters, MPMGA section 4.4 and Table 2);
 * ``agacd``: AGACD's adaptive rates (Hao et al. 2021, section 4.6): the crossover
   probability of a pair from the fitter parent, eq. 26-27
   (:func:`jaxga.operators.crossover.adaptive_pair_probability`), the mutation probability

@@ -162,8 +162,13 @@ def roulette_elite(
     best of a generation can be lost within it. This is one reading of Zhu & Pan's
     "the best individual in the previous generation will replace the worst individual
     in the constructed population after each iteration is completed": the constructed
-    population is the selected one (decision 057 records the reading). Under AGACD the
-    best is kept anyway: eq. 26 and 28 give it pc = pm = 0.
+    population is the selected one (decision 057 records the reading). Under AGACD,
+    eq. 26 and 28 give the best pc = pm = 0 only while the population has not converged
+    (``f_max > f_avg``) and no child of the crossover is fitter than it (eq. 28's
+    ``f_max`` is taken after crossover); a converged population gives it
+    ``pc = pc_low e^(-t/T)`` and ``pm = pm_high e^(t/T)``, so there too the best of a
+    generation may be lost within it. A run's best-so-far never drops: the engine keeps it
+    apart from the population.
     """
     fitness, active = _prepare(fitness, active)
     idx = roulette(key, fitness, active)
