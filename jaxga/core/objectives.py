@@ -281,6 +281,11 @@ def imga_energy(grid: Grid, cells: jax.Array, length: jax.Array) -> jax.Array:
       component across that axis is neutral: with the goal straight above, a sideways
       or up-sideways heading costs +1 and any downward heading +10 (symmetric in left and
       right, unlike flipping by a sign of +1).
+    * A heading along an axis of that frame lies on the edge of two quadrants, which
+      the paper does not assign. It counts in the first quadrant (+1) when its non-zero
+      component points towards the goal and in the third (+10) when it points away;
+      never in the second or fourth (+3): with the goal up and to the right, a step
+      right or up costs +1, a step left or down +10.
     * The goal is ``grid.goal`` (not the path's last cell).
     """
     return _imga_energy(grid, geometry(grid, cells, length))

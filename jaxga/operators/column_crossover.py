@@ -1,11 +1,16 @@
 """Zhu & Pan's non-common-point (column) crossover (section 4.4, Algorithm 2, Fig. 5).
 
 The child crosses the map column by column from the start's to the goal's: one free cell
-per column drawn between the two parents' cells in that column (:func:`column_ranges`,
-:func:`column_anchors`), joined by median insertion (:func:`column_child`); two roulette
-spins over both parents and the child fill the pair's two slots (:func:`column`). The pair
-signature and the conventions are those of :mod:`jaxga.operators.crossover`, where the
-operator is registered.
+in each column strictly between them, drawn between the two parents' cells in that column
+(:func:`column_ranges`, :func:`column_anchors`), joined by median insertion
+(:func:`column_child`); two roulette spins over both parents and the child fill the pair's
+two slots (:func:`column`). The pair signature and the conventions are those of
+:mod:`jaxga.operators.crossover`, where the operator is registered.
+
+Algorithm 2's loop runs over the columns up to the goal's (``i <= E_y``) and then appends
+the goal, while Fig. 5's child has no cell of its own in the goal's column; jaxga follows
+the figure: no cell is drawn for the goal's column, and the child joins the last interior
+column's cell to the goal.
 """
 
 from __future__ import annotations
