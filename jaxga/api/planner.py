@@ -64,6 +64,8 @@ class Planner:
         **overrides: configuration keys, as :func:`jaxga.run` takes them.
 
     Attributes:
+        map: the :class:`jaxga.maps.MapInfo` planned on. A new map (a costmap update):
+            :meth:`update_map`, or ``planner.map = ...``, which does the same.
         capacity: the path capacity of the planner's programs, the same for every start
             and goal: the most cells an optimal path of the map can have, times the
             preset's ``population.capacity_factor``
@@ -78,16 +80,61 @@ class Planner:
                  coarsen: int | None = None, unknown: str | None = None,
                  corner_rule: str | None = None, any_angle_budget: float | str | None = "auto",
                  **overrides: Any) -> None:
-        loading = [name for name, value in (
-            ("robot_radius", robot_radius), ("inflate", inflate), ("coarsen", coarsen),
-            ("unknown", unknown)) if value is not None]
+        self.preset = preset
+        self.seeds = _checked_seeds(seeds)
+        check_call_options(None, 1, None, any_angle_budget)  # refused now, not at a plan
+        self.any_angle_budget = any_angle_budget
+        self._loading = {"robot_radius": robot_radius, "inflate": inflate,
+                         "coarsen": coarsen, "unknown": unknown}
+        self._corner_rule = corner_rule
+        self._overrides = overrides
+        self._planned_on = self._prepared(map)
+
+    @own_settings
+    def update_map(self, map: str | Any) -> None:
+        """Plan on ``map`` from the next :meth:`plan` on (a robot's costmap updated, a new
+        floor): a file or built-in name (loaded with the planner's ``robot_radius``,
+        ``inflate``, ``coarsen``, ``unknown`` and ``corner_rule``), a loaded
+        :class:`jaxga.maps.MapInfo` or a :class:`jaxga.Grid`, as the constructor takes
+        them. The planner then equals one made on the new map with the same arguments:
+        its :attr:`capacity` follows the new map's longest optimal path, and where that
+        falls in another size class the next plan compiles its programs (once); give
+        ``population__capacity`` to the constructor to keep one capacity, and its
+        programs, through every update. A plan under way in another thread finishes on
+        the map it started with; a map refused leaves the planner as it was."""
+        self._planned_on = self._prepared(map)
+
+    @property
+    def map(self) -> MapInfo:
+        return self._planned_on[0]
+
+    @map.setter
+    def map(self, map: str | Any) -> None:
+        self.update_map(map)
+
+    @property
+    def capacity(self) -> int | None:
+        return self._planned_on[1]
+
+    @property
+    def overrides(self) -> dict:
+        """The configuration keys each plan runs with: the constructor's, and the
+        :attr:`capacity`."""
+        return dict(self._planned_on[2])
+
+    def _prepared(self, map: str | Any) -> tuple[MapInfo, int | None, dict]:
+        """``(map info, capacity, overrides)`` of a map: what a plan reads, made whole
+        before the planner takes it, so that a thread planning meanwhile sees the old map
+        or the new one, never parts of both."""
+        loading = [name for name, value in self._loading.items() if value is not None]
+        corner_rule = self._corner_rule
         if isinstance(map, MapInfo):
             if loading:  # they were ignored without a word
                 raise ParameterError(
                     f"{', '.join(loading)} given with a loaded map (a MapInfo), which they "
                     f"no longer change: load the map with them (jaxga.maps.load_map_info("
                     f"path, {loading[0]}=...)) or give the Planner the map's path")
-            self.map = map if corner_rule is None else dataclasses.replace(
+            info = map if corner_rule is None else dataclasses.replace(
                 map, grid=map.grid.replace(corner_rule=check_corner_rule(corner_rule)))
         elif isinstance(map, Grid):  # a map of the user's own, in cells
             if loading:
@@ -98,36 +145,29 @@ class Planner:
             grid = map.validated()
             if corner_rule is not None:
                 grid = grid.replace(corner_rule=check_corner_rule(corner_rule))
-            self.map = MapInfo(name="grid", path=Path("grid"), format="grid", builtin=False,
-                               grid=grid)
+            info = MapInfo(name="grid", path=Path("grid"), format="grid", builtin=False,
+                           grid=grid)
         else:
-            self.map = load_map_info(map, robot_radius=robot_radius, inflate=inflate,
-                                     coarsen=coarsen, unknown=unknown,
-                                     corner_rule=corner_rule)
-        self.preset = preset
-        self.seeds = _checked_seeds(seeds)
-        check_call_options(None, 1, None, any_angle_budget)  # refused now, not at a plan
-        self.any_angle_budget = any_angle_budget
-        config = load_problem(preset, self.map, None, None, (), overrides, None,
+            info = load_map_info(map, corner_rule=corner_rule, **self._loading)
+        overrides = self._overrides
+        config = load_problem(self.preset, info, None, None, (), overrides, None,
                               check_endpoints=False)[0]
-        self.capacity: int | None = None
+        capacity: int | None = None
         if not int(config["population.capacity"]) and not {
                 "population.capacity", "population__capacity"} & overrides.keys():
             # programs sized for the map's longest optimal path, not its size class's
-            self.capacity = map_capacity(self.map.grid,
-                                         float(config["population.capacity_factor"]))
+            capacity = map_capacity(info.grid, float(config["population.capacity_factor"]))
             most = SCHEMA["population.capacity"].high
-            if self.capacity > most:  # refused here, not at the first plan as an override
+            if capacity > most:  # refused here, not at the first plan as an override
                 raise ParameterError(
-                    f"Planner: the longest optimal path of this {self.map.grid.width} x "
-                    f"{self.map.grid.height} map may need {self.capacity:,} path cells, more "
+                    f"Planner: the longest optimal path of this {info.grid.width} x "
+                    f"{info.grid.height} map may need {capacity:,} path cells, more "
                     f"than jaxga's {most:,}: load it coarser (coarsen=2) or give "
                     "population__capacity")
-            overrides = {**overrides, "population__capacity": self.capacity}
-        self.overrides = overrides
-        frame = self.map.frame
-        if frame is not None:
-            _ = frame.clearance  # the distance transform: once per map, not per plan
+            overrides = {**overrides, "population__capacity": capacity}
+        if info.frame is not None:
+            _ = info.frame.clearance  # the distance transform: once per map, not per plan
+        return info, capacity, overrides
 
     def __repr__(self) -> str:
         preset = self.preset if isinstance(self.preset, str) else type(self.preset).__name__
@@ -146,13 +186,13 @@ class Planner:
         planner's; ``progress`` as :func:`jaxga.run`. A blocked or unreachable endpoint
         is a one-line error or a result with no path that names the cause, as for
         :func:`jaxga.run`."""
-        ends = endpoint_cells(self.map.frame, self.map.grid, start, goal, start_world,
-                              goal_world)
-        grid = self.map.grid.replace(start=ends[0], goal=ends[1])
-        problem = dataclasses.replace(self.map, grid=grid, defaulted=())  # both given
+        info, _, overrides = self._planned_on  # one map, whatever update_map does
+        ends = endpoint_cells(info.frame, info.grid, start, goal, start_world, goal_world)
+        grid = info.grid.replace(start=ends[0], goal=ends[1])
+        problem = dataclasses.replace(info, grid=grid, defaulted=())  # both given
         budget = self.any_angle_budget if any_angle_budget is None else any_angle_budget
         return run(self.preset, problem, self.seeds if seeds is None else seeds,
-                   progress=progress, any_angle_budget=budget, **self.overrides)
+                   progress=progress, any_angle_budget=budget, **overrides)
 
 
 class _Counted(Exception):

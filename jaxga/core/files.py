@@ -16,10 +16,13 @@ from __future__ import annotations
 import atexit
 import contextlib
 import errno
+import functools
+import hashlib
 import os
 import re
 import secrets
 import shutil
+import socket
 import stat
 import tempfile
 import threading
@@ -60,8 +63,8 @@ def atomic_write(path: str | os.PathLike, write: Callable[[IO], None], *,
     links to, a process's stream (``/dev/stdout``, ``/proc/self/fd/1``) is refused: the
     rename would replace the file the stream is redirected to, and so is a file inside
     jaxga's own folder (:data:`PACKAGE`: a built-in map, a module). While the file is being
-    written its temporary name (``.NAME.<pid>.<random>.tmp``) is registered, so that a
-    process ended by a signal removes it first (:func:`remove_temporaries`); one that a
+    written its temporary name (``.NAME.<pid>.<machine>.<random>.tmp``) is registered,
+    so that a process ended by a signal removes it first (:func:`remove_temporaries`); one that a
     process killed outright left is removed by the next write of the same file
     (:func:`remove_stale_temporaries`)."""
     path = file_path(path, "a file to write")
@@ -76,7 +79,8 @@ def atomic_write(path: str | os.PathLike, write: Callable[[IO], None], *,
                              f"{PACKAGE} (its code, built-in maps and presets)")
         folder = target.parent if str(target.parent) else Path(".")
         remove_stale_temporaries(target)
-        fd, tmp = _new_temporary(folder, f"{_temporary_stem(target.name)}{os.getpid()}.")
+        fd, tmp = _new_temporary(
+            folder, f"{_temporary_stem(target.name)}{os.getpid()}.{this_machine()}.")
     except OSError as e:  # a folder in the path that is a file, a path too long, ...
         raise JaxgaError(f"cannot write {path}: {_why(e)}") from None
     try:
@@ -125,10 +129,11 @@ NAME_MAX = 255
 
 
 def _temporary_stem(name: str) -> str:
-    """``.NAME.``, the start of a write's temporary name (``.NAME.<pid>.<random>.tmp``),
-    with ``NAME`` cut short where the whole would pass :data:`NAME_MAX` bytes: a name of
-    up to 255 bytes can be written."""
-    room = NAME_MAX - len("..") - 20 - len(".") - 8 - len(".tmp")  # a pid of <= 20 digits
+    """``.NAME.``, the start of a write's temporary name
+    (``.NAME.<pid>.<machine>.<random>.tmp``), with ``NAME`` cut short where the whole would
+    pass :data:`NAME_MAX` bytes: a name of up to 255 bytes can be written."""
+    # a pid of <= 20 digits, the machine's 8 and the random 8
+    room = NAME_MAX - len("..") - 20 - len(".") - 8 - len(".") - 8 - len(".tmp")
     whole = os.fsencode(name)
     if len(whole) <= room:
         return f".{name}."
@@ -158,14 +163,32 @@ def atomic_write_text(path: str | os.PathLike, text: str) -> None:
     atomic_write(path, lambda f: f.write(text))
 
 
-_TEMPORARY = re.compile(r"(?:(\d+)\.)?[a-z0-9_]{8}")
-"""The middle of a temporary file's name, ``.NAME.<pid>.<random>.tmp``: the writing
-process and eight random characters (hexadecimal digits; an older version's were
-:func:`tempfile.mkstemp`'s, and had no pid)."""
+_TEMPORARY = re.compile(r"(?:(\d+)\.)?(?:([0-9a-f]{8})\.)?[a-z0-9_]{8}")
+"""The middle of a temporary file's name, ``.NAME.<pid>.<machine>.<random>.tmp``: the
+writing process, its machine (:func:`this_machine`) and eight random characters
+(hexadecimal digits). Older versions wrote ``<pid>.<random>``, and before that
+:func:`tempfile.mkstemp`'s random characters alone."""
 
 OLD_TEMPORARY_S = 3600.0
-"""A temporary file without a process in its name is left by a killed write once it is
-this old (seconds)."""
+"""A temporary file whose process cannot be asked (another machine's or container's, or
+an older version's name) is left by a killed write once it is this old (seconds)."""
+
+
+@functools.cache
+def this_machine() -> str:
+    """Eight hexadecimal digits naming the process table a pid belongs to: this host's
+    name, its boot and its pid namespace. Two writers of one file in a shared folder (an
+    NFS home seen from cluster nodes, a volume of two containers) see other process tables:
+    a pid in a temporary name is asked only of the machine that wrote it, so a live write
+    elsewhere is never taken for a killed one here."""
+    parts = [socket.gethostname()]
+    for read in (lambda: Path("/proc/sys/kernel/random/boot_id").read_text(),
+                 lambda: os.readlink("/proc/self/ns/pid")):
+        try:
+            parts.append(read().strip())
+        except OSError:
+            parts.append("")
+    return hashlib.sha256("\0".join(parts).encode("utf-8", "replace")).hexdigest()[:8]
 
 
 def _alive(pid: int) -> bool:
@@ -183,10 +206,10 @@ def _alive(pid: int) -> bool:
 def remove_stale_temporaries(path: str | os.PathLike) -> list[str]:
     """Remove the temporary files of writes of ``path`` that a killed process left
     (``kill -9`` ends a process before it can remove them, :func:`remove_temporaries`):
-    those whose writing process has ended, and those of an older version (no process in
-    the name) older than :data:`OLD_TEMPORARY_S`. A write in progress in another process
-    is left alone. Returns the names removed; every failure is ignored (the write that
-    follows names its own)."""
+    those of this machine (:func:`this_machine`) whose writing process has ended, and
+    those of another machine, or of an older version, older than :data:`OLD_TEMPORARY_S`.
+    A write in progress in another process, here or elsewhere, is left alone. Returns the
+    names removed; every failure is ignored (the write that follows names its own)."""
     target = Path(path)
     folder = target.parent if str(target.parent) else Path(".")
     prefix = _temporary_stem(target.name)
@@ -201,7 +224,7 @@ def remove_stale_temporaries(path: str | os.PathLike) -> list[str]:
         if match is None or entry.path in _TEMPORARIES:
             continue
         try:
-            if match.group(1) is not None:
+            if match.group(1) is not None and match.group(2) == this_machine():
                 stale = not _alive(int(match.group(1)))
             else:
                 stale = time.time() - entry.stat().st_mtime > OLD_TEMPORARY_S

@@ -247,3 +247,126 @@ def test_map_options_with_a_loaded_map_are_refused_or_applied():
     assert strict.map.grid.corner_rule == "strict" and info.grid.corner_rule == "free"
     with pytest.raises(jaxga.JaxgaError, match="unknown corner rule 'diagonal'"):
         jaxga.Planner(info, "sga", corner_rule="diagonal")
+
+
+def _office_variant(office: str, folder, rows: range) -> str:
+    """The office map with its wall across ``rows`` instead, beside the original."""
+    import pathlib
+
+    src = pathlib.Path(office)
+    header = b"P5\n20 20\n255\n"
+    img = np.frombuffer(src.with_suffix(".pgm").read_bytes()[len(header):],
+                        np.uint8).reshape(20, 20).copy()
+    img[:, :] = 254
+    for y in rows:
+        img[19 - y, 0:14] = 0
+    (folder / "moved.pgm").write_bytes(header + img.tobytes())
+    (folder / "moved.yaml").write_text(src.read_text().replace("office.pgm", "moved.pgm"))
+    return str(folder / "moved.yaml")
+
+
+def test_a_map_update_plans_as_a_planner_made_on_the_new_map(office, tmp_path):
+    """A costmap update (``update_map``, or ``planner.map = ...``): loaded with the
+    planner's options, its capacity the new map's, its plans those of a planner made on
+    it; a map of the same size class compiles nothing; a map refused leaves the planner
+    as it was."""
+    options = {"robot_radius": 0.1, "corner_rule": "free", "seeds": 3,
+               "generations": canonical.GENERATIONS}
+    planner = jaxga.Planner(office, **options)
+    before = planner.plan((1, 1), (1, 18))
+    moved = _office_variant(office, tmp_path, range(6, 8))
+    fresh = jaxga.Planner(moved, **options)
+    COMPILES.clear()
+    planner.update_map(moved)
+    after = planner.plan((1, 1), (1, 18))
+    assert COMPILES == []  # the same 20 x 20 size class: the same programs
+    assert planner.map.path == fresh.map.path and planner.capacity == fresh.capacity
+    np.testing.assert_array_equal(planner.map.grid.blocked_np(), fresh.map.grid.blocked_np())
+    assert planner.map.grid.blocked_np()[7, 0] and not planner.map.grid.blocked_np()[11, 0]
+    np.testing.assert_array_equal(after.cells, fresh.plan((1, 1), (1, 18)).cells)
+    assert after.length.tolist() != before.length.tolist()  # the wall moved: other paths
+    planner.map = office  # the attribute does the same
+    np.testing.assert_array_equal(planner.plan((1, 1), (1, 18)).cells, before.cells)
+    with pytest.raises(jaxga.JaxgaError) as e:
+        planner.update_map(str(tmp_path / "missing.yaml"))
+    assert "\n" not in str(e.value) and planner.map.path.name == "office.yaml"
+    with pytest.raises(ParameterError, match="robot_radius given with a loaded map"):
+        planner.update_map(load_map_info(moved))  # loaded without the robot's radius
+    assert planner.map.path.name == "office.yaml"
+
+
+def test_a_map_update_resizes_the_capacity_as_a_new_planner_would(monkeypatch):
+    """The capacity is the new map's (a stale one left every seed short of path cells),
+    and a capacity the user gave stays through every update."""
+    from jaxga.api import planner as planner_module
+
+    def by_walls(grid, factor):
+        return 160 + 32 * int(grid.blocked_np().sum())
+
+    monkeypatch.setattr(planner_module, "map_capacity", by_walls)
+    open_map = jaxga.Grid.create(np.zeros((20, 20), bool))
+    walled = np.zeros((20, 20), bool)
+    walled[10, :15] = True
+    planner = jaxga.Planner(open_map, "sga")
+    assert planner.capacity == 160
+    assert planner.overrides["population__capacity"] == 160
+    planner.update_map(jaxga.Grid.create(walled))
+    assert planner.capacity == 160 + 32 * 15
+    assert planner.overrides["population__capacity"] == 160 + 32 * 15
+    pinned = jaxga.Planner(open_map, "sga", population__capacity=96)
+    pinned.map = jaxga.Grid.create(walled)
+    assert pinned.capacity is None and pinned.overrides["population__capacity"] == 96
+
+
+def test_a_plan_reads_one_map_while_another_thread_updates_it(office, tmp_path,
+                                                              monkeypatch):
+    """A plan takes the map, its frame and its capacity together: an update that lands
+    while it is being set up (here: inside the endpoint conversion) is for the next
+    plan, never half of this one."""
+    from jaxga.api import planner as planner_module
+
+    planner = jaxga.Planner(office, robot_radius=0.1, corner_rule="free")
+    moved = _office_variant(office, tmp_path, range(6, 8))
+    seen = []
+    real_endpoints = planner_module.endpoint_cells
+
+    def endpoints_then_update(*args):
+        if not seen:
+            planner.update_map(moved)
+        return real_endpoints(*args)
+
+    def recorded_run(preset, problem, seeds, **kw):
+        seen.append(problem.grid.blocked_np())
+        raise _Stop
+
+    monkeypatch.setattr(planner_module, "endpoint_cells", endpoints_then_update)
+    monkeypatch.setattr(planner_module, "run", recorded_run)
+    office_blocked = load_map_info(office, robot_radius=0.1).grid.blocked_np()
+    with pytest.raises(_Stop):
+        planner.plan((1, 1), (18, 18))
+    np.testing.assert_array_equal(seen[0], office_blocked)
+    assert planner.map.path.name == "moved.yaml"
+    with pytest.raises(_Stop):
+        planner.plan((1, 1), (18, 18))
+    assert not np.array_equal(seen[1], office_blocked)
+
+
+class _Stop(Exception):
+    """Ends a recorded plan before its runs."""
+
+
+def test_plans_from_several_threads_equal_the_same_plans_one_after_another(office):
+    """A multi-threaded executor's callbacks share one planner: each thread gets its own
+    pair's plan, bit for bit the plan of the same call made alone."""
+    import concurrent.futures
+
+    planner = jaxga.Planner(office, robot_radius=0.1, corner_rule="free", seeds=3,
+                            generations=canonical.GENERATIONS, any_angle_budget=0)
+    pairs = [((1, 1), (18, 18)), ((18, 2), (2, 16)), ((5, 17), (17, 8)), ((2, 2), (3, 17))]
+    alone = [planner.plan(s, g) for s, g in pairs]
+    with concurrent.futures.ThreadPoolExecutor(4) as pool:
+        together = list(pool.map(lambda pair: planner.plan(*pair), pairs * 2))
+    for (s, g), one, other in zip(pairs * 2, alone * 2, together, strict=True):
+        assert (other.start, other.goal) == (s, g)
+        np.testing.assert_array_equal(other.cells, one.cells)
+        np.testing.assert_array_equal(other.length, one.length)

@@ -13,6 +13,7 @@ from __future__ import annotations
 import errno
 import json
 import os
+import re
 import signal
 import stat
 import subprocess
@@ -573,28 +574,64 @@ def test_the_files_behind_an_input_are_inputs_too(tmp_path, capsys, monkeypatch)
 
 
 def test_a_temporary_file_a_killed_write_left_is_removed_by_the_next_write(tmp_path):
-    """``kill -9`` during a write leaves ``.NAME.<pid>.<random>.tmp``: the next write of
-    that file removes it; one of a process still writing, or of another file, stays."""
+    """``kill -9`` during a write leaves ``.NAME.<pid>.<machine>.<random>.tmp``: the next
+    write of that file removes it when the pid has ended on this machine; one of a process
+    still writing, of another file, or of another machine or container (whose pid cannot be
+    asked here) stays until it is an hour old, as an older version's names do."""
     target = tmp_path / "run.json"
+    here = files.this_machine()
+    elsewhere = "0123abcd" if here != "0123abcd" else "89abcdef"
     dead = subprocess.Popen([sys.executable, "-c", "pass"])
     dead.wait()
-    left = tmp_path / f".run.json.{dead.pid}.a1b2c3d4.tmp"
-    left.write_text("half a file")
-    writing = tmp_path / f".run.json.{os.getppid()}.zz9y8x7w.tmp"  # a live process
-    writing.write_text("in progress")
-    other = tmp_path / f".other.json.{dead.pid}.a1b2c3d4.tmp"
-    other.write_text("another file's")
-    old = tmp_path / ".run.json.q1w2e3r4.tmp"  # an older version's name, an hour old
-    old.write_text("old")
-    os.utime(old, (time.time() - 2 * files.OLD_TEMPORARY_S,) * 2)
-    recent = tmp_path / ".run.json.p0o9i8u7.tmp"
-    recent.write_text("recent")
+    hour_ago = (time.time() - 2 * files.OLD_TEMPORARY_S,) * 2
+
+    def left(name: str, text: str = "half a file", old: bool = False):
+        path = tmp_path / name
+        path.write_text(text)
+        if old:
+            os.utime(path, hour_ago)
+        return path
+
+    removed = [
+        left(f".run.json.{dead.pid}.{here}.a1b2c3d4.tmp"),  # killed here
+        left(f".run.json.{dead.pid}.{elsewhere}.b1b2c3d4.tmp", old=True),  # elsewhere, old
+        left(f".run.json.{dead.pid}.c1b2c3d4.tmp", old=True),  # an older version's, old
+        left(".run.json.q1w2e3r4.tmp", old=True),  # mkstemp's name, old
+    ]
+    kept = [
+        left(f".run.json.{os.getppid()}.{here}.zz9y8x7w.tmp"),  # a live process here
+        left(f".run.json.{dead.pid}.{elsewhere}.d1b2c3d4.tmp"),  # a live write elsewhere
+        left(f".run.json.{dead.pid}.e1b2c3d4.tmp"),  # an older version's, recent
+        left(".run.json.p0o9i8u7.tmp"),  # mkstemp's name, recent
+    ]
+    other = left(f".other.json.{dead.pid}.{here}.a1b2c3d4.tmp", "another file's")
     atomic_write_text(target, "{}")
     assert target.read_text() == "{}"
-    assert not left.exists() and not old.exists()
-    assert writing.exists() and other.exists() and recent.exists()
+    assert not any(p.exists() for p in removed)
+    assert other.exists()
     assert sorted(p.name for p in tmp_path.iterdir() if p.name.startswith(".run.json")) \
-        == sorted([writing.name, recent.name])
+        == sorted(p.name for p in kept)
+
+
+def test_a_write_names_its_temporary_file_by_process_and_machine(tmp_path, monkeypatch):
+    """The temporary name carries the writer's pid and :func:`files.this_machine`, which
+    differs between hosts, boots and pid namespaces (it hashes all three)."""
+    seen = []
+
+    def write(f):
+        seen.extend(p.name for p in tmp_path.iterdir())
+        f.write("{}")
+
+    files.atomic_write(tmp_path / "run.json", write)
+    assert seen == [f".run.json.{os.getpid()}.{files.this_machine()}.{seen[0][-12:-4]}.tmp"]
+    assert re.fullmatch(r"[0-9a-f]{8}", files.this_machine())
+    host = files.this_machine()
+    files.this_machine.cache_clear()
+    monkeypatch.setattr(files.socket, "gethostname", lambda: "another-node")
+    try:
+        assert files.this_machine() != host
+    finally:
+        files.this_machine.cache_clear()
 
 
 @pytest.mark.slow  # starts processes
