@@ -1013,10 +1013,23 @@ def build(t: Path) -> list[Case]:
     dead = subprocess.Popen(["true"])
     dead.wait()
     killed = write("killed.json", '{"previous": true}\n')
-    stale = write(f".killed.json.{dead.pid}.k1l2e3d4.tmp", '{"half": ')
+    from jaxga.core.files import OLD_TEMPORARY_S, this_machine
+
+    here = this_machine()
+    elsewhere = "0123abcd" if here != "0123abcd" else "89abcdef"
+    stale = write(f".killed.json.{dead.pid}.{here}.k1l2e3d4.tmp", '{"half": ')
     two("temporary-of-a-killed-write", ["run", "--map", CLASSIC, *QUIET, "--json", killed],
         "handled", outputs=(killed,), removes=(stale,), check=wrote_json(killed),
-        note="a .NAME.<pid>.<random>.tmp of a dead process beside the output")
+        note="a .NAME.<pid>.<machine>.<random>.tmp of a dead process beside the output")
+    shared = write("shared.json", '{"previous": true}\n')
+    live_elsewhere = write(f".shared.json.{dead.pid}.{elsewhere}.l1i2v3e4.tmp", '{"half": ')
+    old_elsewhere = write(f".shared.json.{dead.pid}.{elsewhere}.o1l2d3e4.tmp", '{"half": ')
+    hour_ago = time.time() - 2 * OLD_TEMPORARY_S
+    os.utime(old_elsewhere, (hour_ago, hour_ago))
+    two("temporary-of-another-machine", ["run", "--map", CLASSIC, *QUIET, "--json", shared],
+        "handled", outputs=(shared,), removes=(old_elsewhere,), check=wrote_json(shared),
+        note=f"a folder shared with another host: its recent write ({live_elsewhere.name}, "
+             "a pid this machine cannot ask) stays, its hour-old one goes")
     scratch = t / "scratch-mpl"
     scratch.mkdir()
     plot = f / "mpl.png"
