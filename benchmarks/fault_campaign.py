@@ -1024,8 +1024,9 @@ def build(t: Path) -> list[Case]:
     shared = write("shared.json", '{"previous": true}\n')
     live_elsewhere = write(f".shared.json.{dead.pid}.{elsewhere}.l1i2v3e4.tmp", '{"half": ')
     old_elsewhere = write(f".shared.json.{dead.pid}.{elsewhere}.o1l2d3e4.tmp", '{"half": ')
-    hour_ago = time.time() - 2 * OLD_TEMPORARY_S
+    hour_ago, tomorrow = time.time() - 2 * OLD_TEMPORARY_S, time.time() + 86400
     os.utime(old_elsewhere, (hour_ago, hour_ago))
+    os.utime(live_elsewhere, (tomorrow, tomorrow))  # still recent when the case runs
     two("temporary-of-another-machine", ["run", "--map", CLASSIC, *QUIET, "--json", shared],
         "handled", outputs=(shared,), removes=(old_elsewhere,), check=wrote_json(shared),
         note=f"a folder shared with another host: its recent write ({live_elsewhere.name}, "

@@ -18,11 +18,11 @@ no result.
 from __future__ import annotations
 
 import collections
-import contextlib
 import dataclasses
 import functools
 import gc
 import math
+import threading
 import warnings
 from collections.abc import Callable, Sequence
 from typing import Any
@@ -88,13 +88,28 @@ operator functions), most recently used last, at most ``3 * PROGRAM_CACHE_SIZE``
 program sets of :func:`compiled_programs` take each program from here first."""
 
 
+_RECENT_LOCK = threading.Lock()
+"""Held by every change of an entry's place in the caches below: threads planning at once
+(a robot node's executor) would otherwise drop an entry that another thread is moving."""
+
+
 def _keep_recent(cache: collections.OrderedDict, key: Any, value: Any, most: int) -> None:
     """Put ``value`` in ``cache`` as its most recently used entry, and drop the entries
     used longest ago past ``most``: no cache of a long session grows without bound."""
-    cache[key] = value
-    cache.move_to_end(key)
-    while len(cache) > most:
-        cache.popitem(last=False)
+    with _RECENT_LOCK:
+        cache[key] = value
+        cache.move_to_end(key)
+        while len(cache) > most:
+            cache.popitem(last=False)
+
+
+def _recent(cache: collections.OrderedDict, key: Any) -> Any:
+    """``cache``'s entry for ``key`` (None when it has none), made its most recently used."""
+    with _RECENT_LOCK:
+        value = cache.get(key)
+        if value is not None:
+            cache.move_to_end(key)
+        return value
 
 
 def _share(key: Any, program: Any) -> None:
@@ -133,9 +148,7 @@ class Programs:
                 if shared is not None:  # used again: most recently used among the shared
                     _share(shared, self._compiled[name])
                 continue
-            program = _SHARED_PROGRAMS.get(shared) if shared is not None else None
-            if program is not None:
-                _SHARED_PROGRAMS.move_to_end(shared)  # most recently used
+            program = _recent(_SHARED_PROGRAMS, shared) if shared is not None else None
             if program is None:
                 program, read = executables.load_or_compile(
                     self._keys[name], self._devices, functools.partial(self._lower, name),
@@ -210,15 +223,12 @@ def tables_for(grid: Any) -> Any:
     bare = dataclasses.replace(grid, guide=None)
     devices = jax.local_devices()[:1]
     key = executables.program_key("map tables", None, shape_spec(bare), None, 1, devices)
-    program = _TABLE_PROGRAMS.get(key) if key is not None else None
+    program = _recent(_TABLE_PROGRAMS, key) if key is not None else None
     if program is None:
         program, _ = executables.load_or_compile(key, devices,
                                                  lambda: compute_tables.lower(bare))
         if key is not None:
             _keep_recent(_TABLE_PROGRAMS, key, program, 3 * PROGRAM_CACHE_SIZE)
-    elif key is not None:
-        with contextlib.suppress(KeyError):  # another thread's entry may just have gone
-            _TABLE_PROGRAMS.move_to_end(key)
     return dataclasses.replace(grid, tables=program(bare))
 
 
@@ -514,7 +524,7 @@ def programs_for(algo: Algorithm, grid: Any, params: dict, n_runs: int,
                               n_runs, n_dev, operator_functions(algo))
     progs.compile_init(report)
     family = _family(algo, grid_spec, params)
-    sizes = _COMPILED_BUCKETS.get(family, set()) | {n_runs // n_dev}
+    sizes = (_recent(_COMPILED_BUCKETS, family) or set()) | {n_runs // n_dev}
     _keep_recent(_COMPILED_BUCKETS, family, sizes, 8 * PROGRAM_CACHE_SIZE)
     return progs
 

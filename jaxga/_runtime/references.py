@@ -27,6 +27,7 @@ import dataclasses
 import functools
 import hashlib
 import math
+import threading
 import time
 from collections.abc import Callable
 
@@ -146,6 +147,7 @@ class AnyAngleBounds:
 
 _CACHE: dict[bytes, AnyAngleBounds] = {}
 _CACHE_SIZE = 32
+_CACHE_LOCK = threading.Lock()  # threads planning at once evict one entry each
 
 
 MEMORY_NOTE = "any-angle optimum not computed (its search ran out of memory: try --coarsen)"
@@ -211,7 +213,8 @@ def _references(grid: Grid, octile: ReferencePath, budget_s: float | None,
         out = AnyAngleBounds(exact.length, lower, "", budget_s, np.asarray(exact.path))
     else:
         out = AnyAngleBounds(math.nan, lower, budget_note(budget_s), budget_s)
-    if len(_CACHE) >= _CACHE_SIZE:
-        _CACHE.pop(next(iter(_CACHE)))
-    _CACHE[digest] = out
+    with _CACHE_LOCK:
+        while len(_CACHE) >= _CACHE_SIZE:
+            _CACHE.pop(next(iter(_CACHE)))
+        _CACHE[digest] = out
     return out

@@ -20,7 +20,8 @@ Each plan is a :class:`jaxga.api.result.Result`, the same as :func:`jaxga.run` r
 from __future__ import annotations
 
 import dataclasses
-from collections.abc import Callable, Iterator
+import types
+from collections.abc import Callable, Iterator, Mapping
 from pathlib import Path
 from typing import Any
 
@@ -66,12 +67,14 @@ class Planner:
     Attributes:
         map: the :class:`jaxga.maps.MapInfo` planned on. A new map (a costmap update):
             :meth:`update_map`, or ``planner.map = ...``, which does the same.
-        capacity: the path capacity of the planner's programs, the same for every start
+        capacity: (read-only) the path capacity of the planner's programs, the same for every start
             and goal: the most cells an optimal path of the map can have, times the
             preset's ``population.capacity_factor``
             (:func:`jaxga.engine.algorithm.map_capacity`); None where the preset or the
             overrides set ``population.capacity``. A plan equals :func:`jaxga.run` on the
             same pair with ``population.capacity`` set to it.
+        overrides: (read-only) the configuration keys each plan runs with: the
+            constructor's, and ``population__capacity``. Other keys: a new planner.
     """
 
     @own_settings
@@ -88,21 +91,23 @@ class Planner:
                          "coarsen": coarsen, "unknown": unknown}
         self._corner_rule = corner_rule
         self._overrides = overrides
-        self._planned_on = self._prepared(map)
+        self._planned_on = self._prepared(map, loaded_refused=True)
 
     @own_settings
     def update_map(self, map: str | Any) -> None:
         """Plan on ``map`` from the next :meth:`plan` on (a robot's costmap updated, a new
-        floor): a file or built-in name (loaded with the planner's ``robot_radius``,
-        ``inflate``, ``coarsen``, ``unknown`` and ``corner_rule``), a loaded
-        :class:`jaxga.maps.MapInfo` or a :class:`jaxga.Grid`, as the constructor takes
-        them. The planner then equals one made on the new map with the same arguments:
-        its :attr:`capacity` follows the new map's longest optimal path, and where that
-        falls in another size class the next plan compiles its programs (once); give
-        ``population__capacity`` to the constructor to keep one capacity, and its
-        programs, through every update. A plan under way in another thread finishes on
-        the map it started with; a map refused leaves the planner as it was."""
-        self._planned_on = self._prepared(map)
+        floor). A file or built-in name is loaded with the planner's ``robot_radius``,
+        ``inflate``, ``coarsen``, ``unknown`` and ``corner_rule``. A map loaded already (a
+        :class:`jaxga.maps.MapInfo` or a :class:`jaxga.Grid`) is planned on as it is,
+        under the planner's ``corner_rule`` if it was given one: its caller loaded it
+        with the robot's radius (``jaxga.maps.load_map_info(path, robot_radius=...)``).
+        The planner then equals one made on the new map: its :attr:`capacity` follows the
+        new map's longest optimal path, and where that falls in another size class the
+        next plan compiles its programs (once); give ``population__capacity`` to the
+        constructor to keep one capacity, and its programs, through every update. A plan
+        under way in another thread finishes on the map it started with; a map refused
+        leaves the planner as it was."""
+        self._planned_on = self._prepared(map, loaded_refused=False)
 
     @property
     def map(self) -> MapInfo:
@@ -117,16 +122,33 @@ class Planner:
         return self._planned_on[1]
 
     @property
-    def overrides(self) -> dict:
-        """The configuration keys each plan runs with: the constructor's, and the
-        :attr:`capacity`."""
-        return dict(self._planned_on[2])
+    def overrides(self) -> Mapping[str, Any]:
+        return types.MappingProxyType(self._planned_on[2])
 
-    def _prepared(self, map: str | Any) -> tuple[MapInfo, int | None, dict]:
+    def __setstate__(self, state: dict) -> None:
+        """A planner pickled by a version whose ``map``, ``capacity`` and ``overrides``
+        were plain attributes unpickles as the same planner."""
+        if "_planned_on" not in state:
+            state = dict(state)
+            info, capacity = state.pop("map"), state.pop("capacity")
+            overrides = state.pop("overrides")
+            state["_planned_on"] = (info, capacity, overrides)
+            state["_overrides"] = {k: v for k, v in overrides.items()
+                                   if capacity is None or k != "population__capacity"}
+            state.setdefault("_loading", dict.fromkeys(
+                ("robot_radius", "inflate", "coarsen", "unknown")))
+            state.setdefault("_corner_rule", None)
+        self.__dict__.update(state)
+
+    def _prepared(self, map: str | Any, loaded_refused: bool
+                  ) -> tuple[MapInfo, int | None, dict]:
         """``(map info, capacity, overrides)`` of a map: what a plan reads, made whole
         before the planner takes it, so that a thread planning meanwhile sees the old map
-        or the new one, never parts of both."""
-        loading = [name for name, value in self._loading.items() if value is not None]
+        or the new one, never parts of both. ``loaded_refused``: the loading options were
+        given in the same call as a loaded map (the constructor), which they cannot
+        change."""
+        loading = [name for name, value in self._loading.items()
+                   if value is not None] if loaded_refused else []
         corner_rule = self._corner_rule
         if isinstance(map, MapInfo):
             if loading:  # they were ignored without a word

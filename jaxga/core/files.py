@@ -177,12 +177,14 @@ an older version's name) is left by a killed write once it is this old (seconds)
 @functools.cache
 def this_machine() -> str:
     """Eight hexadecimal digits naming the process table a pid belongs to: this host's
-    name, its boot and its pid namespace. Two writers of one file in a shared folder (an
-    NFS home seen from cluster nodes, a volume of two containers) see other process tables:
-    a pid in a temporary name is asked only of the machine that wrote it, so a live write
-    elsewhere is never taken for a killed one here."""
+    name and machine id, its boot and its pid namespace (each where the system has it).
+    Two writers of one file in a shared folder (an NFS home seen from cluster nodes, a
+    volume of two containers) see other process tables: a pid in a temporary name is
+    asked only of the machine that wrote it, so a live write elsewhere is never taken for
+    a killed one here."""
     parts = [socket.gethostname()]
-    for read in (lambda: Path("/proc/sys/kernel/random/boot_id").read_text(),
+    for read in (lambda: Path("/etc/machine-id").read_text(),
+                 lambda: Path("/proc/sys/kernel/random/boot_id").read_text(),
                  lambda: os.readlink("/proc/self/ns/pid")):
         try:
             parts.append(read().strip())

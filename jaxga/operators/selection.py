@@ -164,10 +164,11 @@ def roulette_elite(
     in the constructed population after each iteration is completed": the constructed
     population is the selected one (decision 057 records the reading). Under AGACD,
     eq. 26 and 28 give the best pc = pm = 0 only while the population has not converged
-    (``f_max > f_avg``) and no child of the crossover is fitter than it (eq. 28's
-    ``f_max`` is taken after crossover); a converged population gives it
-    ``pc = pc_low e^(-t/T)`` and ``pm = pm_high e^(t/T)``, so there too the best of a
-    generation may be lost within it. A run's best-so-far never drops: the engine keeps it
+    (``f_max`` above ``f_avg`` by more than a relative tolerance) and no child of the
+    crossover is fitter than it (eq. 28's ``f_max`` is taken after crossover); a
+    converged population gives it ``pc = pc_low e^(-t/T)`` and
+    ``pm = min(1, pm_high e^(t/T))``, so there too the best of a generation may be lost
+    within it. A run's best-so-far never drops: the engine keeps it
     apart from the population.
     """
     fitness, active = _prepare(fitness, active)

@@ -269,7 +269,7 @@ def test_a_map_update_plans_as_a_planner_made_on_the_new_map(office, tmp_path):
     """A costmap update (``update_map``, or ``planner.map = ...``): loaded with the
     planner's options, its capacity the new map's, its plans those of a planner made on
     it; a map of the same size class compiles nothing; a map refused leaves the planner
-    as it was."""
+    as it was; a map loaded already is planned on as it is."""
     options = {"robot_radius": 0.1, "corner_rule": "free", "seeds": 3,
                "generations": canonical.GENERATIONS}
     planner = jaxga.Planner(office, **options)
@@ -290,9 +290,37 @@ def test_a_map_update_plans_as_a_planner_made_on_the_new_map(office, tmp_path):
     with pytest.raises(jaxga.JaxgaError) as e:
         planner.update_map(str(tmp_path / "missing.yaml"))
     assert "\n" not in str(e.value) and planner.map.path.name == "office.yaml"
-    with pytest.raises(ParameterError, match="robot_radius given with a loaded map"):
-        planner.update_map(load_map_info(moved))  # loaded without the robot's radius
-    assert planner.map.path.name == "office.yaml"
+    planner.map = load_map_info(moved, robot_radius=0.1, corner_rule="free")
+    assert planner.map == fresh.map and planner.capacity == fresh.capacity
+    planner.update_map(load_map_info(moved, corner_rule="free"))  # as loaded: no radius
+    assert not planner.map.grid.blocked_np()[5, 0]  # the wall at rows 6-7, not inflated
+    assert fresh.map.grid.blocked_np()[5, 0]
+
+
+def test_a_planners_map_capacity_and_overrides_are_read_only_and_old_pickles_load(office):
+    """``capacity`` and ``overrides`` follow the map (update_map): a key written into
+    them is refused, not silently lost at the next update; a planner pickled when they
+    were plain attributes unpickles as the same planner."""
+    import pickle
+
+    planner = jaxga.Planner(office, robot_radius=0.1, corner_rule="free", seeds=3,
+                            generations=canonical.GENERATIONS)
+    with pytest.raises(TypeError):
+        planner.overrides["generations"] = 5
+    with pytest.raises(AttributeError):
+        planner.capacity = 96
+    old = jaxga.Planner.__new__(jaxga.Planner)
+    state = {k: v for k, v in vars(planner).items() if not k.startswith("_")}
+    state |= {"map": planner.map, "capacity": planner.capacity,
+              "overrides": dict(planner.overrides)}
+    old.__dict__.update(state)
+    again = pickle.loads(pickle.dumps(old))
+    assert again.map == planner.map and again.capacity == planner.capacity
+    assert dict(again.overrides) == dict(planner.overrides)
+    np.testing.assert_array_equal(again.plan((1, 1), (18, 18)).cells,
+                                  planner.plan((1, 1), (18, 18)).cells)
+    again.update_map(planner.map)
+    assert dict(again.overrides) == dict(planner.overrides)
 
 
 def test_a_map_update_resizes_the_capacity_as_a_new_planner_would(monkeypatch):
@@ -325,6 +353,8 @@ def test_a_plan_reads_one_map_while_another_thread_updates_it(office, tmp_path,
     plan, never half of this one."""
     from jaxga.api import planner as planner_module
 
+    monkeypatch.setattr(planner_module, "map_capacity",
+                        lambda grid, factor: 160 + int(grid.blocked_np()[7, 0]))
     planner = jaxga.Planner(office, robot_radius=0.1, corner_rule="free")
     moved = _office_variant(office, tmp_path, range(6, 8))
     seen = []
@@ -336,7 +366,7 @@ def test_a_plan_reads_one_map_while_another_thread_updates_it(office, tmp_path,
         return real_endpoints(*args)
 
     def recorded_run(preset, problem, seeds, **kw):
-        seen.append(problem.grid.blocked_np())
+        seen.append((problem.grid.blocked_np(), kw["population__capacity"]))
         raise _Stop
 
     monkeypatch.setattr(planner_module, "endpoint_cells", endpoints_then_update)
@@ -344,11 +374,12 @@ def test_a_plan_reads_one_map_while_another_thread_updates_it(office, tmp_path,
     office_blocked = load_map_info(office, robot_radius=0.1).grid.blocked_np()
     with pytest.raises(_Stop):
         planner.plan((1, 1), (18, 18))
-    np.testing.assert_array_equal(seen[0], office_blocked)
-    assert planner.map.path.name == "moved.yaml"
+    np.testing.assert_array_equal(seen[0][0], office_blocked)
+    assert seen[0][1] == 160  # the office's capacity, with the office
+    assert planner.map.path.name == "moved.yaml" and planner.capacity == 161
     with pytest.raises(_Stop):
         planner.plan((1, 1), (18, 18))
-    assert not np.array_equal(seen[1], office_blocked)
+    assert not np.array_equal(seen[1][0], office_blocked) and seen[1][1] == 161
 
 
 class _Stop(Exception):
@@ -361,7 +392,7 @@ def test_plans_from_several_threads_equal_the_same_plans_one_after_another(offic
     import concurrent.futures
 
     planner = jaxga.Planner(office, robot_radius=0.1, corner_rule="free", seeds=3,
-                            generations=canonical.GENERATIONS, any_angle_budget=0)
+                            generations=canonical.GENERATIONS)  # with the references
     pairs = [((1, 1), (18, 18)), ((18, 2), (2, 16)), ((5, 17), (17, 8)), ((2, 2), (3, 17))]
     alone = [planner.plan(s, g) for s, g in pairs]
     with concurrent.futures.ThreadPoolExecutor(4) as pool:
