@@ -135,9 +135,8 @@ class Planner:
             state["_planned_on"] = (info, capacity, overrides)
             state["_overrides"] = {k: v for k, v in overrides.items()
                                    if capacity is None or k != "population__capacity"}
-            state.setdefault("_loading", dict.fromkeys(
-                ("robot_radius", "inflate", "coarsen", "unknown")))
-            state.setdefault("_corner_rule", None)
+            state["_loading"] = None  # not kept then: a file cannot be loaded as before
+            state["_corner_rule"] = None
         self.__dict__.update(state)
 
     def _prepared(self, map: str | Any, loaded_refused: bool
@@ -147,6 +146,11 @@ class Planner:
         or the new one, never parts of both. ``loaded_refused``: the loading options were
         given in the same call as a loaded map (the constructor), which they cannot
         change."""
+        if self._loading is None and not isinstance(map, (MapInfo, Grid)):
+            raise ParameterError(
+                "this Planner was pickled by an older jaxga, which did not keep its "
+                "robot_radius, inflate, coarsen and unknown: give update_map a map loaded "
+                "with them (jaxga.maps.load_map_info(path, ...)), or make a new Planner")
         loading = [name for name, value in self._loading.items()
                    if value is not None] if loaded_refused else []
         corner_rule = self._corner_rule

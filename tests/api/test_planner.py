@@ -321,6 +321,10 @@ def test_a_planners_map_capacity_and_overrides_are_read_only_and_old_pickles_loa
                                   planner.plan((1, 1), (18, 18)).cells)
     again.update_map(planner.map)
     assert dict(again.overrides) == dict(planner.overrides)
+    with pytest.raises(ParameterError, match="pickled by an older jaxga, which did not "
+                                             "keep its robot_radius") as e:
+        again.update_map(office)  # its robot_radius is not known: not loaded without it
+    assert "\n" not in str(e.value) and again.map == planner.map
 
 
 def test_a_map_update_resizes_the_capacity_as_a_new_planner_would(monkeypatch):
