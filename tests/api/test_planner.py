@@ -250,14 +250,13 @@ def test_map_options_with_a_loaded_map_are_refused_or_applied():
 
 
 def _office_variant(office: str, folder, rows: range) -> str:
-    """The office map with its wall across ``rows`` instead, beside the original."""
+    """A map in the office's frame (its YAML) holding only a wall across ``rows``, x 0-13
+    (the office's wall moved, its pillar gone)."""
     import pathlib
 
     src = pathlib.Path(office)
     header = b"P5\n20 20\n255\n"
-    img = np.frombuffer(src.with_suffix(".pgm").read_bytes()[len(header):],
-                        np.uint8).reshape(20, 20).copy()
-    img[:, :] = 254
+    img = np.full((20, 20), 254, np.uint8)
     for y in rows:
         img[19 - y, 0:14] = 0
     (folder / "moved.pgm").write_bytes(header + img.tobytes())
