@@ -36,22 +36,28 @@ def _listen(event: str, duration: float, **_: object) -> None:
 jax.monitoring.register_event_duration_secs_listener(_listen)
 
 
+def _ros_map(folder, name: str, wall_rows: range, pillar: bool) -> str:
+    """A 20 x 20 ROS map ``folder/name.yaml`` at 0.1 m, origin (-1, -1): a wall across
+    ``wall_rows`` (x 0-13) and, with ``pillar``, a pillar at (15-16, 4-5)."""
+    img = np.full((20, 20), 254, np.uint8)  # free; rows from the top in the image
+    for y in wall_rows:
+        img[19 - y, 0:14] = 0
+    if pillar:
+        for y in (4, 5):
+            img[19 - y, 15:17] = 0
+    header = b"P5\n20 20\n255\n"
+    (folder / f"{name}.pgm").write_bytes(header + img.tobytes())
+    (folder / f"{name}.yaml").write_text(
+        f"image: {name}.pgm\nresolution: 0.1\norigin: [-1.0, -1.0, 0.0]\nnegate: 0\n"
+        "occupied_thresh: 0.65\nfree_thresh: 0.196\n")
+    return str(folder / f"{name}.yaml")
+
+
 @pytest.fixture(scope="module")
 def office(tmp_path_factory) -> str:
     """A 20 x 20 ROS map at 0.1 m: a wall across rows 10-11 (x 0-13), a pillar at
     (15-16, 4-5); origin (-1, -1)."""
-    img = np.full((20, 20), 254, np.uint8)  # free; rows from the top in the image
-    for y in (10, 11):
-        img[19 - y, 0:14] = 0
-    for y in (4, 5):
-        img[19 - y, 15:17] = 0
-    d = tmp_path_factory.mktemp("office")
-    header = b"P5\n20 20\n255\n"
-    (d / "office.pgm").write_bytes(header + img.tobytes())
-    (d / "office.yaml").write_text(
-        "image: office.pgm\nresolution: 0.1\norigin: [-1.0, -1.0, 0.0]\nnegate: 0\n"
-        "occupied_thresh: 0.65\nfree_thresh: 0.196\n")
-    return str(d / "office.yaml")
+    return _ros_map(tmp_path_factory.mktemp("office"), "office", range(10, 12), pillar=True)
 
 
 def test_a_new_pair_on_a_loaded_map_compiles_nothing(office):
@@ -249,21 +255,6 @@ def test_map_options_with_a_loaded_map_are_refused_or_applied():
         jaxga.Planner(info, "sga", corner_rule="diagonal")
 
 
-def _office_variant(office: str, folder, rows: range) -> str:
-    """A map in the office's frame (its YAML) holding only a wall across ``rows``, x 0-13
-    (the office's wall moved, its pillar gone)."""
-    import pathlib
-
-    src = pathlib.Path(office)
-    header = b"P5\n20 20\n255\n"
-    img = np.full((20, 20), 254, np.uint8)
-    for y in rows:
-        img[19 - y, 0:14] = 0
-    (folder / "moved.pgm").write_bytes(header + img.tobytes())
-    (folder / "moved.yaml").write_text(src.read_text().replace("office.pgm", "moved.pgm"))
-    return str(folder / "moved.yaml")
-
-
 def test_a_map_update_plans_as_a_planner_made_on_the_new_map(office, tmp_path):
     """A costmap update (``update_map``, or ``planner.map = ...``): loaded with the
     planner's options, its capacity the new map's, its plans those of a planner made on
@@ -273,7 +264,7 @@ def test_a_map_update_plans_as_a_planner_made_on_the_new_map(office, tmp_path):
                "generations": canonical.GENERATIONS}
     planner = jaxga.Planner(office, **options)
     before = planner.plan((1, 1), (1, 18))
-    moved = _office_variant(office, tmp_path, range(6, 8))
+    moved = _ros_map(tmp_path, "moved", range(6, 8), pillar=False)  # the wall moved
     fresh = jaxga.Planner(moved, **options)
     COMPILES.clear()
     planner.update_map(moved)
@@ -359,7 +350,7 @@ def test_a_plan_reads_one_map_while_another_thread_updates_it(office, tmp_path,
     monkeypatch.setattr(planner_module, "map_capacity",
                         lambda grid, factor: 160 + int(grid.blocked_np()[7, 0]))
     planner = jaxga.Planner(office, robot_radius=0.1, corner_rule="free")
-    moved = _office_variant(office, tmp_path, range(6, 8))
+    moved = _ros_map(tmp_path, "moved", range(6, 8), pillar=False)  # the wall moved
     seen = []
     real_endpoints = planner_module.endpoint_cells
 
