@@ -8,7 +8,7 @@ fields, the runs (the compiled programs take the endpoints as inputs and hold th
 longest optimal path, so a new pair compiles nothing) and the references within their
 budget::
 
-    planner = jaxga.Planner("map.yaml", robot_radius=0.2)
+    planner = jaxga.Planner("map.yaml", robot_radius=0.2)   # or an OccupancyGrid message
     plan = planner.plan(start_world=(1.0, 2.0), goal_world=(-3.5, 0.25))
     best = plan.best_seed()                  # None when no seed found a path
     plan.world_path(best)                    # float[k, 2], metres
@@ -47,8 +47,10 @@ class Planner:
 
     Args:
         map: a map file (a ROS ``map_server`` YAML, an image, a Moving AI map, ...), a
-            built-in map's name, a :class:`jaxga.maps.MapInfo` already loaded, or a
-            :class:`jaxga.Grid` (cells only: no metres, its own endpoints unused).
+            built-in map's name, an occupancy grid in memory (a ``nav_msgs/OccupancyGrid``
+            message, as a node receives its map, or a :class:`jaxga.maps.OccupancyGrid`),
+            a :class:`jaxga.maps.MapInfo` already loaded, or a :class:`jaxga.Grid` (cells
+            only: no metres, its own endpoints unused).
         preset: the preset (default ``"hybrid"``: a path on any map, close to the exact
             any-angle optimum), a TOML file or a :class:`Config`.
         seeds: runs per plan (the best of them is :meth:`Result.best_seed`).
@@ -96,8 +98,10 @@ class Planner:
     @own_settings
     def update_map(self, map: str | Any) -> None:
         """Plan on ``map`` from the next :meth:`plan` on (a robot's costmap updated, a new
-        floor). A file or built-in name is loaded with the planner's ``robot_radius``,
-        ``inflate``, ``coarsen``, ``unknown`` and ``corner_rule``. A map loaded already (a
+        floor). A file, a built-in name or an occupancy grid (a ``nav_msgs/OccupancyGrid``
+        message: ``planner.update_map(msg)`` in the map topic's callback) is loaded with
+        the planner's ``robot_radius``, ``inflate``, ``coarsen``, ``unknown`` and
+        ``corner_rule``. A map loaded already (a
         :class:`jaxga.maps.MapInfo` or a :class:`jaxga.Grid`) is planned on as it is,
         under the planner's ``corner_rule`` if it was given one: its caller loaded it
         with the robot's radius (``jaxga.maps.load_map_info(path, robot_radius=...)``).

@@ -25,6 +25,7 @@ from jaxga.core.own_settings import own_settings
 from jaxga.engine import check_file_keys_read, check_overrides_read
 from jaxga.maps import MapInfo, load_map, load_map_info
 from jaxga.maps.frame import MapFrame
+from jaxga.maps.occupancy_grid import OccupancyGrid, is_occupancy_message
 from jaxga.operators import registry
 
 __all__ = ["Problem", "check_one_corner_rule", "configured_rule", "load_problem",
@@ -161,9 +162,11 @@ def load_problem(preset: str | Config | Problem, grid: Grid | MapInfo | str | No
         raise ParameterError(f"unknown map option(s) {', '.join(map(repr, unknown))}: "
                              f"map_options takes {', '.join(known)} (the corner rule is "
                              "the call's corner_rule)")
-    if map_options and (isinstance(preset, Problem) or not isinstance(grid, (str, PathLike))):
-        raise ParameterError("map_options apply to a map file or a built-in map's name, "
-                             "not to a loaded map or a Problem: load it with them instead")
+    if map_options and (isinstance(preset, Problem) or not (
+            isinstance(grid, (str, PathLike, OccupancyGrid)) or is_occupancy_message(grid))):
+        raise ParameterError("map_options apply to a map file, a built-in map's name or an "
+                             "occupancy grid, not to a loaded map or a Problem: load it "
+                             "with them instead")
     if isinstance(preset, Problem):
         return _given_problem(preset, grid, corner_rule, variant, sets, overrides,
                               generations)

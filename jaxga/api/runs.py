@@ -645,9 +645,11 @@ def run(
             a :class:`jaxga.api.problem.Problem` (:func:`jaxga.problem`: a preset on a
             map, already checked), then without ``grid``, ``corner_rule``, ``variant``,
             ``sets`` or overrides (``generations`` may still be given).
-        grid: a :class:`Grid`, a map file or a built-in map name, or a
-            :class:`jaxga.maps.MapInfo` (``load_map_info(name, start=..., goal=...)``:
-            other endpoints, and the results keep the map's name where a Grid is "grid").
+        grid: a :class:`Grid`, a map file or a built-in map name, an occupancy grid in
+            memory (a ``nav_msgs/OccupancyGrid`` message or a
+            :class:`jaxga.maps.OccupancyGrid`), or a :class:`jaxga.maps.MapInfo`
+            (``load_map_info(name, start=..., goal=...)``: other endpoints, and the
+            results keep the map's name where a Grid is "grid").
             A map given by name is loaded with ``corner_rule``, else a ``map.corner_rule``
             the configuration sets, else the map's own rule
             (:func:`jaxga.maps.default_corner_rule`: free on the papers' classic maps,

@@ -30,6 +30,7 @@ from jaxga.maps.formats import (
 )
 from jaxga.maps.generators import maze_map, random_map, rectangles_map, rooms_map
 from jaxga.maps.loaders import MapInfo, load_map, load_map_info, map_name
+from jaxga.maps.occupancy_grid import OccupancyGrid
 from jaxga.maps.preprocess import (
     coarsen,
     coarsen_blocked,
@@ -46,6 +47,7 @@ __all__ = [
     "DATA_DIR",
     "FORMATS",
     "MapInfo",
+    "OccupancyGrid",
     "Scenario",
     "builtin_names",
     "builtin_path",

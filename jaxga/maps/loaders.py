@@ -59,6 +59,7 @@ from jaxga.maps.formats import (
     read_map_bytes,
 )
 from jaxga.maps.frame import MapFrame, world_point
+from jaxga.maps.occupancy_grid import OccupancyGrid, is_occupancy_message
 from jaxga.maps.preprocess import check_coarse_endpoints, coarsen_blocked, inflate_blocked
 from jaxga.maps.ros import (
     RosMap,
@@ -113,11 +114,14 @@ class MapInfo(ValueEquality):
     Attributes:
         name: short name for display: the built-in name, or the file name without its
             extension (see :func:`map_name`).
-        path: the file that was read.
-        format: one of :data:`FORMATS`; "grid" for a bare Grid given to the Planner.
+        path: the file that was read (an occupancy grid's name for one in memory).
+        format: one of :data:`FORMATS`; "occupancy_grid" for an occupancy grid in memory
+            (:class:`jaxga.maps.OccupancyGrid`, a ``nav_msgs/OccupancyGrid`` message);
+            "grid" for a bare Grid given to the Planner.
         builtin: True when ``source`` was the name of a built-in map.
         grid: the loaded :class:`~jaxga.Grid`.
-        ros: a ROS map's metadata (resolution in metres per map cell, origin), else None.
+        ros: a ROS map's metadata (resolution in metres per map cell, origin; an
+            occupancy grid's too, with no image), else None.
         frame: planning cells against the file's cells and metres (:mod:`jaxga.maps.frame`:
             the coarsening factor, the resolution and origin of a ROS map).
         layers: walls, inflation margin and unknown cells of the planning grid, for plots.
@@ -186,10 +190,13 @@ def load_map(
     """Load a map file or a built-in map as a :class:`~jaxga.Grid`.
 
     Args:
-        source: a path (``str`` or ``os.PathLike``) or the name of a built-in map (see
-            :func:`jaxga.maps.builtin_names`). A ``str`` that is a built-in name is the
-            built-in map even if a file of that name exists in the working directory
-            (write ``./name`` for the file); a ``Path`` is always a file.
+        source: a path (``str`` or ``os.PathLike``), the name of a built-in map (see
+            :func:`jaxga.maps.builtin_names`), or an occupancy grid in memory: a
+            :class:`jaxga.maps.OccupancyGrid` or a ``nav_msgs/OccupancyGrid`` message
+            (:mod:`jaxga.maps.occupancy_grid`), which takes the options of a ROS map.
+            A ``str`` that is a built-in name is the built-in map even if a file of that
+            name exists in the working directory (write ``./name`` for the file); a
+            ``Path`` is always a file.
         start: ``(x, y)`` start (y counted from the bottom); default: the file's ``S``
             marker (ASCII), else ``(0, 0)``.
         goal: ``(x, y)`` goal; default: the file's ``G`` marker, else ``(W - 1, H - 1)``.
@@ -207,8 +214,9 @@ def load_map(
         threshold: images (PNG, PGM, ...): a pixel with luminance below it (0 black, 1
             white) is blocked; default 0.5. Refused for any other format, on which it
             would have no effect (a ROS map's YAML sets its own thresholds).
-        unknown: ROS maps: ``"blocked"`` (default) or ``"free"`` for unknown cells.
-            Refused for any other format: only a ROS map has unknown cells.
+        unknown: ROS maps and occupancy grids: ``"blocked"`` (default) or ``"free"``
+            for unknown (and graded) cells. Refused for any other format: only these
+            have unknown cells.
         start_world: ROS maps: the start in metres (world frame); the cell that holds
             it (:func:`jaxga.maps.ros.world_to_cell`). Not with ``start``; refused on a
             map without a resolution and an origin.
@@ -258,20 +266,23 @@ def load_map_info(source: Source, **options: Any) -> MapInfo:
                              else o.corner_rule)
     if o.fmt is not None and o.fmt not in FORMATS:
         raise MapFormatError(f"unknown map format {o.fmt!r}: expected one of {', '.join(FORMATS)}")
+    factor = 1 if o.coarsen is None else _coarsen_factor(o.coarsen)
+    if isinstance(source, OccupancyGrid) or is_occupancy_message(source):
+        return _from_occupancy_grid(source, o, rule, factor)
     is_builtin = isinstance(source, str) and source in builtin.builtin_names()
     if is_builtin:
         path = builtin.builtin_path(source)  # type: ignore[arg-type]
     else:
         if not isinstance(source, (str, os.PathLike)):
-            hint = ("; an array becomes a map through jaxga.Grid.create(blocked)"
+            hint = ("; an array becomes a map through jaxga.Grid.create(blocked), or with "
+                    "its resolution and origin through jaxga.maps.OccupancyGrid"
                     if hasattr(source, "shape") else "")
-            raise MapFormatError(f"a map source must be a file path or a built-in map name, "
-                                 f"got {shown_value(source)}{hint}")
+            raise MapFormatError(f"a map source must be a file path or a built-in map name "
+                                 f"(or an occupancy grid), got {shown_value(source)}{hint}")
         path = Path(os.fspath(source))
     label = str(source) if is_builtin else str(path)
 
     bare_name = isinstance(source, str) and not is_builtin and Path(source).name == source
-    factor = 1 if o.coarsen is None else _coarsen_factor(o.coarsen)
     is_yaml = o.fmt == "ros" or (o.fmt is None and path.suffix.lower() in (".yaml", ".yml"))
     raw = read_map_bytes(path, label, builtin_hint=bare_name and not Path(source).suffix,
                       yaml=is_yaml, coarsen=factor)
@@ -307,6 +318,42 @@ def load_map_info(source: Source, **options: Any) -> MapInfo:
             blocked = parse_01(text, label)
             file_start = file_goal = None
 
+    return _assembled(blocked, unknown_cells, ros, file_start, file_goal, o, rule, factor,
+                      label, shown_name=map_name(source), path=path, kind=kind,
+                      is_builtin=is_builtin)
+
+
+def _from_occupancy_grid(source: Any, o: types.SimpleNamespace, rule: str,
+                         factor: int) -> MapInfo:
+    """:func:`load_map_info` of an :class:`OccupancyGrid` or a ``nav_msgs/OccupancyGrid``
+    message: its occupancies planned on as a ``map_server`` map's are."""
+    if o.fmt is not None:
+        raise MapFormatError(f"a map format (fmt={o.fmt!r}) has no effect on an occupancy "
+                             "grid, which is no file")
+    grid = source if isinstance(source, OccupancyGrid) else OccupancyGrid.from_message(source)
+    label = f"occupancy grid {grid.name!r}"
+    _check_options_apply("occupancy_grid", label, threshold=o.threshold, unknown=o.unknown,
+                         robot_radius=o.robot_radius, start_world=o.start_world,
+                         goal_world=o.goal_world)
+    message = too_large(-(-grid.width // factor), -(-grid.height // factor))
+    if message:
+        raise MapFormatError(f"{label}: {message}")
+    ros = RosMap(image=None, resolution=grid.resolution, origin=grid.origin)
+    top_first = grid.occupancy[::-1]  # ros_blocked reads an image's rows, top first
+    blocked = ros_blocked(top_first, "blocked" if o.unknown is None else o.unknown)
+    unknown_cells = np.ascontiguousarray(grid.occupancy == -1)
+    return _assembled(blocked, unknown_cells, ros, None, None, o, rule, factor, label,
+                      shown_name=grid.name, path=Path(grid.name), kind="occupancy_grid",
+                      is_builtin=False)
+
+
+def _assembled(blocked: np.ndarray, unknown_cells: np.ndarray | None, ros: RosMap | None,
+               file_start: XY | None, file_goal: XY | None, o: types.SimpleNamespace,
+               rule: str, factor: int, label: str, *, shown_name: str, path: Path, kind: str,
+               is_builtin: bool) -> MapInfo:
+    """The :class:`MapInfo` of a map's cells as read (``blocked``, row 0 the bottom, the
+    ROS map's unknown cells and metadata): the endpoints, inflation, layers, frame and
+    coarsening that :func:`load_map`'s options ask for."""
     if factor > max(blocked.shape):  # 2**63 would ask for blocks no array can hold
         h0, w0 = blocked.shape
         raise MapFormatError(f"{label}: coarsen {factor} is more than the map's longer side "
@@ -367,10 +414,9 @@ def load_map_info(source: Source, **options: Any) -> MapInfo:
         grid = Grid.create(blocked, start=s, goal=g, corner_rule=rule)
     except EndpointError as e:
         raise EndpointError(f"{label}: {e}") from None
-    name = map_name(source)
     defaulted = tuple(n for n, xy in (("start", s), ("goal", g)) if xy is None)
-    return MapInfo(name=name, path=path, format=kind, builtin=is_builtin, grid=grid, ros=ros,
-                   frame=frame, layers=layers, defaulted=defaulted)
+    return MapInfo(name=shown_name, path=path, format=kind, builtin=is_builtin, grid=grid,
+                   ros=ros, frame=frame, layers=layers, defaulted=defaulted)
 
 
 def _inflated(blocked: np.ndarray, ros: RosMap | None, cells: float | None,
@@ -420,7 +466,8 @@ def _coarsen_factor(value) -> int:
 
 
 _FORMAT_NAMES = {"01": "a 0/1 text map", "movingai": "a Moving AI map",
-                 "ascii": "an ASCII-art map", "png": "an image", "ros": "a ROS map_server map"}
+                 "ascii": "an ASCII-art map", "png": "an image", "ros": "a ROS map_server map",
+                 "occupancy_grid": "an occupancy grid"}
 
 
 def _check_options_apply(kind: str, label: str, *, threshold: float | None,
@@ -432,17 +479,18 @@ def _check_options_apply(kind: str, label: str, *, threshold: float | None,
     what = _FORMAT_NAMES.get(kind, f"a {kind} map")
     if threshold is not None and kind != "png":
         why = ("its YAML's occupied_thresh and free_thresh decide which pixels are "
-               "blocked" if kind == "ros" else "only an image's pixels are thresholded")
+               "blocked" if kind == "ros" else "its values are occupancies already"
+               if kind == "occupancy_grid" else "only an image's pixels are thresholded")
         raise MapFormatError(f"{label}: the image threshold (--threshold, threshold=) has no "
                              f"effect on {what}: {why}")
-    if unknown is not None and kind != "ros":
+    if unknown is not None and kind not in ("ros", "occupancy_grid"):
         why = ("an image's grey pixels are thresholded like the others (load the map's "
                "map_server .yaml to keep them apart)" if kind == "png"
                else "this map has none")
         raise MapFormatError(f"{label}: the setting for unknown cells (--unknown, unknown=) "
                              f"has no effect on {what}: only a ROS map_server map (.yaml) "
                              f"has unknown cells; {why}")
-    if kind == "ros":
+    if kind in ("ros", "occupancy_grid"):
         return
     if robot_radius is not None:
         raise MapFormatError(f"{label}: a robot radius in metres needs a map with a "

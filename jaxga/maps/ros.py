@@ -88,7 +88,8 @@ class RosMap:
     """The metadata of a ``map_server`` YAML file.
 
     Attributes:
-        image: the image file (absolute, or relative to the YAML's folder as written).
+        image: the image file (absolute, or relative to the YAML's folder as written);
+            None for an occupancy grid in memory (:mod:`jaxga.maps.occupancy_grid`).
         resolution: metres per cell (> 0).
         origin: ``(x, y, yaw)``: the lower-left cell's lower-left corner in metres and the
             map's rotation in radians.
@@ -99,7 +100,7 @@ class RosMap:
         mode: one of :data:`MODES`.
     """
 
-    image: Path
+    image: Path | None
     resolution: float
     origin: tuple[float, float, float]
     negate: bool = False

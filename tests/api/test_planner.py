@@ -36,15 +36,22 @@ def _listen(event: str, duration: float, **_: object) -> None:
 jax.monitoring.register_event_duration_secs_listener(_listen)
 
 
-def _ros_map(folder, name: str, wall_rows: range, pillar: bool) -> str:
-    """A 20 x 20 ROS map ``folder/name.yaml`` at 0.1 m, origin (-1, -1): a wall across
-    ``wall_rows`` (x 0-13) and, with ``pillar``, a pillar at (15-16, 4-5)."""
-    img = np.full((20, 20), 254, np.uint8)  # free; rows from the top in the image
-    for y in wall_rows:
-        img[19 - y, 0:14] = 0
+def _occupancy(wall_rows: range, pillar: bool) -> np.ndarray:
+    """A 20 x 20 map's occupancies as the map topic publishes them (row 0 the bottom, 0
+    free, 100 occupied): a wall across ``wall_rows`` (x 0-13) and, with ``pillar``, a
+    pillar at (15-16, 4-5)."""
+    occ = np.zeros((20, 20), np.int8)
+    occ[list(wall_rows), 0:14] = 100
     if pillar:
-        for y in (4, 5):
-            img[19 - y, 15:17] = 0
+        occ[4:6, 15:17] = 100
+    return occ
+
+
+def _ros_map(folder, name: str, wall_rows: range, pillar: bool) -> str:
+    """:func:`_occupancy`'s map as the ROS map ``folder/name.yaml`` at 0.1 m, origin
+    (-1, -1), as map_saver writes it."""
+    occupied = _occupancy(wall_rows, pillar)[::-1] == 100  # rows from the top in the image
+    img = np.where(occupied, 0, 254).astype(np.uint8)
     header = b"P5\n20 20\n255\n"
     (folder / f"{name}.pgm").write_bytes(header + img.tobytes())
     (folder / f"{name}.yaml").write_text(
@@ -285,6 +292,40 @@ def test_a_map_update_plans_as_a_planner_made_on_the_new_map(office, tmp_path):
     planner.update_map(load_map_info(moved, corner_rule="free"))  # as loaded: no radius
     assert not planner.map.grid.blocked_np()[5, 0]  # the wall at rows 6-7, not inflated
     assert fresh.map.grid.blocked_np()[5, 0]
+
+
+def _map_message(occupancy: np.ndarray):
+    """A nav_msgs/OccupancyGrid as rclpy delivers one: float32 resolution, int8 data."""
+    import array
+    from types import SimpleNamespace as Msg
+
+    h, w = occupancy.shape
+    pose = Msg(position=Msg(x=-1.0, y=-1.0, z=0.0), orientation=Msg(x=0.0, y=0.0, z=0.0, w=1.0))
+    return Msg(info=Msg(width=w, height=h, resolution=float(np.float32(RES)), origin=pose),
+               data=array.array("b", occupancy.ravel().tolist()))
+
+
+def test_a_planner_given_the_map_topic_plans_as_one_given_the_map_file(office, tmp_path):
+    """A node that receives its map as a nav_msgs/OccupancyGrid, at start and as
+    updates, plans as one given the map_server files the map was published from: the
+    same cells, capacity, programs and paths in metres."""
+    options = {"robot_radius": 0.1, "corner_rule": "free", "seeds": 3,
+               "generations": canonical.GENERATIONS}
+    ends = {"start_world": (-0.85, -0.82), "goal_world": (-0.85, 0.88)}
+    from_file = jaxga.Planner(office, **options)
+    expected = from_file.plan(**ends)
+    COMPILES.clear()
+    planner = jaxga.Planner(_map_message(_occupancy(range(10, 12), pillar=True)), **options)
+    plan = planner.plan(**ends)
+    assert COMPILES == [] and planner.capacity == from_file.capacity
+    assert planner.map.format == "occupancy_grid" and planner.map.resolution == RES
+    np.testing.assert_array_equal(planner.map.grid.blocked_np(), from_file.map.grid.blocked_np())
+    np.testing.assert_array_equal(plan.cells, expected.cells)
+    np.testing.assert_array_equal(plan.world_path(0), expected.world_path(0))
+    planner.update_map(_map_message(_occupancy(range(6, 8), pillar=False)))  # the wall moved
+    moved = jaxga.Planner(_ros_map(tmp_path, "moved", range(6, 8), pillar=False), **options)
+    np.testing.assert_array_equal(planner.plan(**ends).cells, moved.plan(**ends).cells)
+    assert planner.capacity == moved.capacity
 
 
 def test_a_planners_map_capacity_and_overrides_are_read_only_and_old_pickles_load(office):
