@@ -9,7 +9,9 @@ the programs XLA compiled during them (JAX's compile events: must be 0), their p
 (medians), and the quality: success over the seeds and the median over pairs and seeds
 of the post-optimised length over the exact any-angle optimum (computed here without a
 budget, outside the timing), and the least clearance from the map's own obstacles
-beyond the robot's radius.
+beyond the robot's radius. Then a costmap update, five times: the map as its topic
+publishes it (a ``nav_msgs/OccupancyGrid``) with a new obstacle, given to
+``Planner.update_map``, and a plan on it (:func:`map_updates`).
 
 Two settings: the planner's default references (the 8-connected optimum, the any-angle
 optimum within a budget of the runs' own time) and ``any_angle_budget=0`` (the any-angle
@@ -24,10 +26,13 @@ success; median gap <= 2 %; a 1165 x 945 map without coarsening (small_house ups
 from __future__ import annotations
 
 import argparse
+import array
+import math
 import resource
 import statistics
 import tempfile
 import time
+import types
 from pathlib import Path
 
 import jax.monitoring
@@ -124,15 +129,68 @@ def bench_map(name: str, path: Path, pairs_n: int, budget) -> tuple[list, list]:
         gaps += [100 * (v / optimum - 1) for v in plan.length[plan.success]]
         margins += [plan.clearance_margin_m(i) for i in np.flatnonzero(plan.success)]
         print(name, budget, k, s, g, f"{wall:.2f} s", plan.timing, flush=True)
+    update_s, after_s, after_compiled = map_updates(planner, pairs[1:])
     h, w = grid.blocked.shape
     row = [name, f"{w} x {h}", "auto" if budget == "auto" else f"{budget:g}",
            f"{load_s:.2f}", f"{first:.2f}", f"{statistics.median(walls):.2f}",
            f"{max(walls):.2f}", str(sum(compiles)), f"{ok}/{SEEDS * len(walls)}",
            f"{statistics.median(gaps):.3f}", f"{min(margins):+.3f}",
+           f"{update_s:.2f}", f"{after_s:.2f}", str(after_compiled),
            f"{resource.getrusage(resource.RUSAGE_SELF).ru_maxrss / 1e6:.2f}"]
     phase_row = [name, row[2], *(f"{statistics.median(p.get(f'{n}_s', 0.0) for p in phases):.3f}"
                                  for n in PHASES)]
     return row, phase_row
+
+
+UPDATES = 5
+BLOCK = 6
+"""Map updates per map, and the side (map cells) of the obstacle each one adds."""
+
+
+def map_message(occupancy: np.ndarray, info) -> types.SimpleNamespace:
+    """``occupancy`` (row 0 the bottom) as the ``nav_msgs/OccupancyGrid`` rclpy delivers:
+    ``int8`` data in an ``array.array``, a float32 resolution, the map's origin."""
+    msg = types.SimpleNamespace
+    h, w = occupancy.shape
+    x, y, yaw = info.ros.origin
+    pose = msg(position=msg(x=x, y=y, z=0.0),
+               orientation=msg(x=0.0, y=0.0, z=math.sin(yaw / 2), w=math.cos(yaw / 2)))
+    return msg(info=msg(width=w, height=h, resolution=float(np.float32(info.ros.resolution)),
+                        origin=pose),
+               data=array.array("b", occupancy.astype(np.int8).tobytes()))
+
+
+def map_updates(planner, pairs: list) -> tuple[float, float, int]:
+    """A costmap update, :data:`UPDATES` times: the planner's map as its topic
+    publishes it with an obstacle of :data:`BLOCK` x :data:`BLOCK` map cells added at a
+    free spot away from the pair's ends, given to ``update_map``, then the pair planned.
+    Returns the medians of the update's and the plan's walls, and the programs XLA
+    compiled during the plans."""
+    info = planner.map
+    layers = info.layers
+    base = np.where(layers.wall, 100, np.where(layers.unknown, -1, 0)).astype(np.int8)
+    rng = np.random.default_rng(1)
+    free = np.argwhere(~info.grid.blocked_np())
+    updates, plans, compiled = [], [], 0
+    for k in range(UPDATES):
+        s, g = pairs[k % len(pairs)]
+        while True:  # a spot whose block holds neither end
+            y, x = free[rng.integers(len(free))]
+            if all(max(abs(x - e[0]), abs(y - e[1])) > BLOCK + 8 for e in (s, g)):
+                break
+        occupancy = base.copy()
+        occupancy[y:y + BLOCK, x:x + BLOCK] = 100
+        message = map_message(occupancy, info)
+        t = time.perf_counter()
+        planner.update_map(message)
+        updates.append(time.perf_counter() - t)
+        COMPILES.clear()
+        t = time.perf_counter()
+        planner.plan(s, g)
+        plans.append(time.perf_counter() - t)
+        compiled += len(COMPILES)
+    planner.update_map(info)  # the map as it was
+    return statistics.median(updates), statistics.median(plans), compiled
 
 
 def main() -> None:
@@ -166,14 +224,21 @@ def main() -> None:
         "gap: median over pairs and seeds of the post-optimised length / exact any-angle "
         "optimum - 1 (computed outside the timing, without a budget); margin: the least "
         "clearance from the map's own obstacles (before inflation) beyond the robot's "
-        "radius, metres. any-angle budget: auto = the runs' own time (the default), 0 = "
+        "radius, metres. update s: median of "
+        f"{UPDATES} costmap updates, `planner.update_map(msg)` with the map as a "
+        f"`nav_msgs/OccupancyGrid` message (as rclpy delivers it) holding a new {BLOCK} x "
+        f"{BLOCK}-cell obstacle (inflated by the robot's radius as the file was); after s: "
+        "median wall of the plan that follows each update, and the programs compiled "
+        "during those plans (after compiled). any-angle budget: auto = the runs' own time "
+        "(the default), 0 = "
         "skipped (`--no-reference`); peak GB: the process's peak resident memory so far "
         "(maxrss, so far in the process: the maps run in this order). Maps: "
         "benchmarks/maps/SOURCE.md; small_house x 2 is small_house upscaled 2 x 2 into "
         "a 1165 x 945 map at 0.025 m (the size of the largest map the issue tried).\n\n"
         + markdown_table(["map", "cells", "any-angle budget", "load s", "plan 1 s",
                           "median s", "slowest s", "compiled", "success", "gap %",
-                          "margin m", "peak GB"], rows)
+                          "margin m", "update s", "after s", "after compiled", "peak GB"],
+                         rows)
         + "\n\n**Phases of plans 2-10** (medians, seconds, each plan's own time line)\n\n"
         + markdown_table(["map", "any-angle budget", *PHASES], phase_rows)
     )
