@@ -350,18 +350,20 @@ class Result(FrontsOfResult, MutableValueEquality):
         within its budget, or skipped) its Euclidean lower bound around the obstacles,
         else the straight line from start to goal (:attr:`straight_line`), a lower bound
         too: a gap is never measured against a length a path can beat."""
-        for value in (self.any_angle_optimum, self.lower_bound, self.straight_line):
-            if math.isfinite(value):
-                return float(value)
-        return math.nan
+        basis = {"any-angle optimum": self.any_angle_optimum,
+                 "lower bound": self.lower_bound, "straight line": self.straight_line}
+        return float(basis.get(self.gap_basis, math.nan))
 
     @property
     def gap_basis(self) -> str:
         """The name of :attr:`gap_reference`: ``"any-angle optimum"``, ``"lower bound"`` or
         ``"straight line"`` (for both, the gap is an upper bound of the gap to the
-        optimum, never below zero)."""
+        optimum, never below zero); ``"none"`` where no path exists (the goal
+        unreachable: no length to measure against) or the endpoints are not known."""
         if math.isfinite(self.any_angle_optimum):
             return "any-angle optimum"
+        if math.isinf(self.optimum):  # unreachable: a straight line would be no basis
+            return "none"
         if math.isfinite(self.lower_bound):
             return "lower bound"
         return "straight line" if math.isfinite(self.straight_line) else "none"
@@ -513,9 +515,14 @@ class Result(FrontsOfResult, MutableValueEquality):
                  "straight line": " (the any-angle optimum was not computed; the straight "
                                   "line from start to goal is a lower bound of it: at least "
                                   "the gap to that optimum)"}.get(self.gap_basis, "")
-        lines.append(f"gaps: gap = length / {self.gap_basis} - 1{bound}, raw_gap = "
-                     f"raw_length / {raw_basis} - 1, fitness_gap = fitness optimum / "
-                     "fitness - 1")
+        if self.gap_basis == "none":
+            why = ("no path exists" if math.isinf(self.optimum)
+                   else "the start and goal are not known")
+            lines.append(f"gaps: none ({why})")
+        else:
+            lines.append(f"gaps: gap = length / {self.gap_basis} - 1{bound}, raw_gap = "
+                         f"raw_length / {raw_basis} - 1, fitness_gap = fitness optimum / "
+                         "fitness - 1")
         lines.append(self._initial_population_text())
         metres = self.metres_text()
         if metres:

@@ -106,6 +106,13 @@ def test_a_result_measures_its_gap_against_what_was_computed():
     assert neither.gap_basis == "straight line"
     assert neither.gap[0] == pytest.approx(11 / 10 - 1)
     assert "the straight line from start to goal is a lower bound" in neither.summary()
+    # no path (the goal unreachable): nothing to measure against, whatever was skipped
+    unreachable = Result(**{**base, "optimum": math.inf, "success": np.array([False, False]),
+                            "length": np.full(2, np.nan)}, any_angle_optimum=math.nan,
+                         lower_bound=math.nan, start=(0, 0), goal=(6, 8))
+    assert unreachable.gap_basis == "none" and math.isnan(unreachable.gap_reference)
+    assert "gaps: none (no path exists)" in unreachable.summary()
+    assert unreachable.to_json()["gap_basis"] == "none"
 
 
 @pytest.mark.parametrize("rule", ["free", "no_squeeze", "strict"])
