@@ -378,10 +378,13 @@ class Comparison(MutableValueEquality):
                 "time_per_run_s": row["time_per_run_s"], "timing": dict(r.timing),
                 "values": {m: [_num(x) for x in metric_values(r, m)] for m in self.metrics},
                 "population_capacity": r.population_capacity,
+                "path_capacity": r.path_capacity, "size_class": r.size_class,
                 "config": None if r.config is None else r.config.as_dict(),
             }
         return {
-            "map": r0.map_name, "corner_rule": r0.corner_rule,
+            "map": r0.map_name, "map_digest": r0.map_digest,
+            "environment": dict(getattr(r0, "environment", {})),
+            "corner_rule": r0.corner_rule,
             "start": None if r0.start is None else list(r0.start),
             "goal": None if r0.goal is None else list(r0.goal),
             "seeds": (None if (shared := self.shared_seeds()) is None

@@ -24,6 +24,7 @@ import time
 import warnings
 from collections.abc import Callable, Sequence
 from pathlib import Path
+from typing import Any
 
 import jax
 import jax.numpy as jnp
@@ -199,6 +200,21 @@ def verdict_line(rows: Sequence[ProbeRow], device: jax.Device) -> str:
 def describe(device: jax.Device) -> str:
     """The device as a verdict names it: platform, kind, jaxlib version."""
     return f"{device.platform} ({device.device_kind}, jaxlib {jaxlib.__version__})"
+
+
+def run_environment() -> dict[str, Any]:
+    """What computes this process's runs, as their JSON records it: the versions of
+    jaxga, JAX, jaxlib, NumPy and Python, the default device (:func:`describe`) and the
+    number of local devices. Another backend may round otherwise (decision 040), and a
+    stored program belongs to one version: two results are compared knowing both."""
+    import platform
+
+    import jaxga
+
+    return {"jaxga": jaxga.__version__, "jax": jax.__version__,
+            "jaxlib": jaxlib.__version__, "numpy": np.__version__,
+            "python": platform.python_version(), "device": describe(jax.devices()[0]),
+            "local_devices": jax.local_device_count()}
 
 
 # ------------------------------------------------------------------------ the gate

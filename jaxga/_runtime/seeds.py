@@ -38,6 +38,13 @@ def seed_list(seeds: int | Sequence[int],
             raise JaxgaError(f"seeds must be at most 2**32 (seeds are 32-bit), got {seeds}")
         check_count(int(seeds))
         return np.arange(int(seeds))
+    if isinstance(seeds, jax.Array) and seeds.dtype == np.uint32 and seeds.shape[-1:] == (2,):
+        # jax.random.PRNGKey(7) is [0, 7]: read as seeds it would be runs 0 and 7
+        raise JaxgaError(
+            f"seeds must be a count or a list of integer seeds, got a uint32{list(seeds.shape)} "
+            "JAX array, the shape of a raw PRNG key (jax.random.PRNGKey): jaxga makes each "
+            "run's key from its seed; to mean these values as seeds, give a list or a "
+            "NumPy array")
     try:
         if isinstance(seeds, (AbstractSet, Mapping)):  # no order: run i's seed is unknown
             raise TypeError
@@ -47,6 +54,9 @@ def seed_list(seeds: int | Sequence[int],
         arr = listed = None
     if listed is not None and any(isinstance(v, (bool, np.bool_)) for v in listed):
         raise JaxgaError(f"seeds must be integers, got {listed!r}")  # [2, True]: not 2, 1
+    if listed and all(isinstance(v, (int, np.integer)) for v in listed):
+        # [np.uint64(2**32 - 1), -1] is float64 to NumPy: read each integer as it is
+        arr = np.array([int(v) for v in listed], dtype=object)
     if arr is None or isinstance(seeds, (str, bytes)) or arr.ndim != 1:
         raise JaxgaError(f"seeds must be a count or a list of integer seeds, got {seeds!r}")
     if arr.size == 0:

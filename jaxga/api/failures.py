@@ -10,6 +10,7 @@ import warnings
 
 import numpy as np
 
+from jaxga._runtime.device_probe import run_environment
 from jaxga._runtime.sweep_plan import InitOutcome, SweepPlan
 from jaxga.api.result import Result
 from jaxga.core.errors import InitialisationWarning
@@ -162,6 +163,6 @@ def no_path_result(config, map_name, grid, seeds, algo, reason, timing,
         population_capacity=population_capacity, init_fallback=np.zeros(s, np.int32),
         initial_fitness=np.zeros(s),
         causes=np.full(s, reason, dtype=object), path_capacity=algo.capacity, frame=frame,
-        map_digest=grid.cells_digest(),
+        map_digest=grid.cells_digest(), environment=run_environment(),
     )
 

@@ -286,6 +286,9 @@ class Result(FrontsOfResult, MutableValueEquality):
     (:mod:`jaxga.maps.frame`); None for a map given as a bare :class:`~jaxga.Grid`."""
     map_digest: str = ""
     """The planning map's :meth:`jaxga.Grid.cells_digest` ("" where not known)."""
+    environment: dict[str, Any] = dataclasses.field(default_factory=dict)
+    """What computed the runs: the versions of jaxga, JAX, jaxlib, NumPy and Python and the
+    device (:func:`jaxga._runtime.device_probe.run_environment`); empty where not known."""
 
     def _record(self, record: type) -> Any:
         return record(**{f.name: getattr(self, f.name) for f in dataclasses.fields(record)})
@@ -642,6 +645,7 @@ class Result(FrontsOfResult, MutableValueEquality):
             })
         return {
             "preset": self.preset, "map": self.map_name, "map_digest": self.map_digest,
+            "environment": dict(getattr(self, "environment", {})),  # {} from older pickles
             "corner_rule": self.corner_rule,
             "start": None if self.start is None else list(self.start),
             "goal": None if self.goal is None else list(self.goal),

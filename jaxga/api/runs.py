@@ -23,7 +23,7 @@ from jax.errors import JaxRuntimeError
 
 from jaxga._runtime import executables, parallel
 from jaxga._runtime.calls import RunCalls, evolve_in_chunks, this_process_runs
-from jaxga._runtime.device_probe import check_backend, needs_probe
+from jaxga._runtime.device_probe import check_backend, needs_probe, run_environment
 from jaxga._runtime.fields import front_obstacles, program_fields
 from jaxga._runtime.memory import (
     NO_PATH_BYTES_PER_RUN,
@@ -540,6 +540,7 @@ def _point_results(host: dict, hist: dict, plan: SweepPlan, start: InitOutcome,
         widest = maximin_reference(grid, front_obstacles(plan.frame, grid))
         maximin = widest.clearance if widest.found else math.nan
     results = []
+    environment = run_environment()
     for q, cfg in enumerate(configs):
         sl = slice(q * n_seeds, (q + 1) * n_seeds)
         h = jax.tree_util.tree_map(lambda a, sl=sl: a[sl], host)
@@ -568,7 +569,7 @@ def _point_results(host: dict, hist: dict, plan: SweepPlan, start: InitOutcome,
             initial_fitness=initial[sl].astype(float),
             optimum=float(octile.length), any_angle_optimum=bounds.optimum,
             lower_bound=bounds.lower_bound, any_angle_note=bounds.note, frame=plan.frame,
-            map_digest=digest,
+            map_digest=digest, environment=environment,
             timing=dict(timing), population=int(cfg["population.size"]) * algo.islands,
             generations=algo.generations, width=grid.width, config=cfg,
             point={k.replace("__", "."): v for k, v in points[q].items()},

@@ -12,6 +12,7 @@ from typing import Any
 import numpy as np
 
 from jaxga import api
+from jaxga._runtime.device_probe import run_environment
 from jaxga.config.schema import Config
 from jaxga.core.errors import NoPathError
 from jaxga.core.grid import Grid
@@ -93,7 +94,9 @@ def run_doe(
         timing={"compile_s": compile_s + confirm_compile_s, "sweep_s": sweep_s,
                 "confirmation_s": confirm_s, "total_s": time.perf_counter() - t_start},
         config=plan.config, population_capacity=plan.capacity,
-        corner_rule=plan.loaded.corner_rule,
+        corner_rule=plan.loaded.corner_rule, start=plan.loaded.start_xy,
+        goal=plan.loaded.goal_xy, map_digest=plan.loaded.cells_digest(),
+        path_capacity=plan.path_capacity, environment=run_environment(),
     )
 
 

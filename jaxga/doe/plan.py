@@ -76,6 +76,7 @@ class DoePlan:
     seeds: np.ndarray
     problem: Problem
     checkpoint: Checkpoint | None
+    path_capacity: int = 0
 
 
 def plan_doe(preset: str | Config, grid: Grid | str, factors: Any, design: str,
@@ -147,4 +148,4 @@ def plan_doe(preset: str | Config, grid: Grid | str, factors: Any, design: str,
             "capacity": capacity,
         })
     return DoePlan(config, loaded, map_name, factors, coded, points, capacity, block,
-                    seed_arr, problem, ckpt)
+                    seed_arr, problem, ckpt, largest.capacity)

@@ -45,6 +45,16 @@ class DoeResult(MutableValueEquality):
     population_capacity=...)`` with a point's values repeats its runs bit for bit."""
     corner_rule: str = ""
     """The corner rule the design ran under (the map's own unless one was named)."""
+    start: tuple[int, int] | None = None
+    """The start cell ``(x, y)`` every point ran from (y from the bottom)."""
+    goal: tuple[int, int] | None = None
+    """The goal cell ``(x, y)``."""
+    map_digest: str = ""
+    """The map's :meth:`jaxga.Grid.cells_digest` ("" where not known)."""
+    path_capacity: int = 0
+    """The cells a path can hold in every point's program."""
+    environment: dict[str, Any] = dataclasses.field(default_factory=dict)
+    """What computed the runs (:func:`jaxga._runtime.device_probe.run_environment`)."""
 
     @property
     def values(self) -> list[dict[str, Any]]:
@@ -78,7 +88,11 @@ class DoeResult(MutableValueEquality):
         best_values = {f.name: f.value(int(c)) for f, c in zip(self.factors, self.best_coded)}
         return {
             "preset": self.preset,
-            "map": self.map_name, "corner_rule": self.corner_rule,
+            "map": self.map_name, "map_digest": self.map_digest,
+            "environment": dict(getattr(self, "environment", {})),  # {}: older pickles
+            "corner_rule": self.corner_rule,
+            "start": None if self.start is None else list(self.start),
+            "goal": None if self.goal is None else list(self.goal),
             "response": self.response,
             "direction": self.direction,
             "design": self.design,
@@ -105,6 +119,7 @@ class DoeResult(MutableValueEquality):
             "timing": {k: float(v) for k, v in self.timing.items()},
             "generations": None if self.config is None else int(self.config["generations"]),
             "population_capacity": self.population_capacity,
+            "path_capacity": self.path_capacity,
             "config": None if self.config is None else self.config.as_dict(),
         }
 

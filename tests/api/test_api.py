@@ -9,10 +9,12 @@ import math
 import re
 import warnings
 
+import jax
 import numpy as np
 import pytest
 
 import jaxga._runtime as runtime
+from jaxga import __version__ as jaxga_version
 from jaxga import api, engine
 from jaxga import problem as make_problem
 from jaxga.compare import compare as jaxga_compare
@@ -107,11 +109,24 @@ def test_every_preset_returns_only_feasible_paths(preset_run, grid):
     assert js["config"] == r.config.as_dict() and js["config"]["generations"] == 3
     assert js["population_capacity"] == r.config["population.size"]  # per island
     assert js["raw_optimum"] == r.raw_optimum
+    assert js["map_digest"] == grid.cells_digest()  # the cells, whatever the map's name
+    _check_environment(js["environment"])
     for i, run in enumerate(js["runs"]):
         for key in ("angle_sum", "turns", "gap", "raw_gap", "fitness_gap"):
             want = r._column(key)[i] if key in ("angle_sum", "turns") else getattr(r, key)[i]
             assert run[key] == (float(want) if r.success[i] and np.isfinite(want) else None)
     json.dumps(js, allow_nan=False)
+
+
+def _check_environment(recorded: dict) -> None:
+    """A result's JSON names what computed it: the versions and this process's device."""
+    import jaxlib
+
+    assert recorded["jaxga"] == jaxga_version and recorded["jax"] == jax.__version__
+    assert recorded["jaxlib"] == jaxlib.__version__ and recorded["numpy"] == np.__version__
+    device = jax.devices()[0]
+    assert recorded["device"] == f"{device.platform} ({device.device_kind}, jaxlib " \
+        f"{jaxlib.__version__})" and recorded["local_devices"] == jax.local_device_count()
 
 
 def test_every_preset_is_deterministic(preset_run, grid):
@@ -907,11 +922,15 @@ def test_wrong_python_types_are_refused_with_a_jaxga_error(grid, monkeypatch, ca
     ([np.int64(1), 2**70], "[0, 2**32)"), ([1, 2**70, 1.5], "must be integers"),
     ([3, 1, 3, 3], "seeds must be distinct: seed 3 is given 3 times"),
     (np.array([7, 7]), "seed 7 is given 2 times"),
+    ([np.uint64(2**32 - 1), -1], "[0, 2**32)"),  # NumPy made them float64: "not integers"
+    (jax.random.PRNGKey(7), "the shape of a raw PRNG key"),  # was run as seeds 0 and 7
+    (jax.random.key_data(jax.random.key(0)), "the shape of a raw PRNG key"),
 ])
 def test_seeds_outside_32_bits_are_refused(grid, seeds, words):
     """Seeds are 32-bit: 2**32 would silently repeat seed 0, -1 seed 2**32 - 1; seeds that
     are not integers are refused, not truncated (1.5 would have run seed 1). A repeated
-    seed repeats its run exactly (a pseudo-replicate in every statistic): refused."""
+    seed repeats its run exactly (a pseudo-replicate in every statistic): refused. A raw
+    PRNG key is not two seeds."""
     with pytest.raises(JaxgaError, match=re.escape(words)):
         api.run("sga", grid, seeds=seeds, **SMALL)
 

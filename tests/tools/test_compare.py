@@ -216,10 +216,15 @@ def test_compare_json_layout(comparison):
             "metrics", "test", "alpha", "correction", "presets", "pairwise",
             "success_tests"} <= set(js)
     assert js["seeds"] == list(range(SEEDS)) and js["correction"] == "holm"
+    first = next(iter(comparison.results.values()))
+    assert js["map_digest"] == first.map_digest != ""  # the cells compared on
+    assert js["environment"] == first.environment != {}  # what computed them
     assert set(js["presets"]) == {"sga", "imga"}
     p = js["presets"]["imga"]
     assert {"preset", "population", "generations", "n_seeds", "n_success", "success_rate",
             "summary", "time_per_run_s", "timing", "values"} <= set(p)
+    imga = comparison.results["imga"]
+    assert (p["path_capacity"], p["size_class"]) == (imga.path_capacity, imga.size_class)
     assert set(p["summary"]["length"]) == {"mean", "sd", "min", "max"}
     assert all(len(v) == SEEDS for v in p["values"].values())
     assert len(js["pairwise"]) == len(js["metrics"])  # one pair per metric

@@ -404,6 +404,11 @@ def test_json_layout(one_call):
                 "predicted_best", "confirmation", "timing"):
         assert key in d
     assert d["preset"] == "agacd" and d["map"] == MAP and d["response"] == "fitness"
+    # what a re-run needs: the cells, endpoints and path capacity, and what computed it
+    grid = jaxga.maps.load_map(MAP)
+    assert d["map_digest"] == grid.cells_digest()
+    assert (d["start"], d["goal"]) == (list(grid.start_xy), list(grid.goal_xy))
+    assert d["path_capacity"] > 0 and d["environment"]["jaxga"] == jaxga.__version__
     names = [f.name for f in SMALL]
     assert list(d["factors"]) == names and d["factors"]["population.size"] == [10, 15, 20]
     assert len(d["points"]) == 9
