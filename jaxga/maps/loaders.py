@@ -173,7 +173,7 @@ def map_name(source: Source) -> str:
 
 
 def load_map(
-    source: Source,
+    source: Source | OccupancyGrid,
     *,
     start: XY | None = None,
     goal: XY | None = None,
@@ -249,7 +249,7 @@ def load_map(
     return load_map_info(**locals()).grid  # every argument above, by name
 
 
-def load_map_info(source: Source, **options: Any) -> MapInfo:
+def load_map_info(source: Source | OccupancyGrid, **options: Any) -> MapInfo:
     """:func:`load_map` with the same keyword options, returning a :class:`MapInfo` (name,
     path, format, grid, frame, layers) instead of the grid alone.
 
@@ -327,11 +327,11 @@ def _from_occupancy_grid(source: Any, o: types.SimpleNamespace, rule: str,
                          factor: int) -> MapInfo:
     """:func:`load_map_info` of an :class:`OccupancyGrid` or a ``nav_msgs/OccupancyGrid``
     message: its occupancies planned on as a ``map_server`` map's are."""
-    if o.fmt is not None:
-        raise MapFormatError(f"a map format (fmt={o.fmt!r}) has no effect on an occupancy "
-                             "grid, which is no file")
     grid = source if isinstance(source, OccupancyGrid) else OccupancyGrid.from_message(source)
     label = f"occupancy grid {grid.name!r}"
+    if o.fmt is not None:
+        raise MapFormatError(f"{label}: a map format (fmt={o.fmt!r}) has no effect on an "
+                             "occupancy grid, which is no file")
     _check_options_apply("occupancy_grid", label, threshold=o.threshold, unknown=o.unknown,
                          robot_radius=o.robot_radius, start_world=o.start_world,
                          goal_world=o.goal_world)
@@ -340,7 +340,10 @@ def _from_occupancy_grid(source: Any, o: types.SimpleNamespace, rule: str,
         raise MapFormatError(f"{label}: {message}")
     ros = RosMap(image=None, resolution=grid.resolution, origin=grid.origin)
     top_first = grid.occupancy[::-1]  # ros_blocked reads an image's rows, top first
-    blocked = ros_blocked(top_first, "blocked" if o.unknown is None else o.unknown)
+    try:
+        blocked = ros_blocked(top_first, "blocked" if o.unknown is None else o.unknown)
+    except MapFormatError as e:
+        raise MapFormatError(f"{label}: {e}") from None
     unknown_cells = np.ascontiguousarray(grid.occupancy == -1)
     return _assembled(blocked, unknown_cells, ros, None, None, o, rule, factor, label,
                       shown_name=grid.name, path=Path(grid.name), kind="occupancy_grid",

@@ -49,15 +49,21 @@ class OccupancyGrid:
             bottom of the map (the message's first row; the library's convention), or a
             flat sequence of ``width * height`` values, row-major from the bottom row,
             with ``width`` and ``height`` given (a message's ``data``; ``bytes`` are read
-            as the message's ``int8``).
+            as the message's ``int8``). The values are copied: the caller's array stays
+            writable, and a later change to it does not reach the grid.
         resolution: metres per cell. A float32 value (every message's) is read as the
             shortest decimal that gives it: a published ``0.05`` is
-            0.0500000007450580597 m, and plans in the frame of the map's file, 0.05.
-        origin: ``(x, y)`` or ``(x, y, yaw)``: the lower-left corner of cell (0, 0) in
-            metres and the map's rotation in radians, as a ``map_server`` YAML's origin.
+            0.0500000007450580597 m, and plans in the frame of the map's file, 0.05 (a
+            resolution with more digits than float32 holds, 0.0123456789, has lost them
+            in the message already: 0.012345679).
+        origin: a tuple, list or 1-D array ``(x, y)`` or ``(x, y, yaw)``: the lower-left
+            corner of cell (0, 0) in metres and the map's rotation in radians, as a
+            ``map_server`` YAML's origin (a message's quaternion gives a yaw in
+            ``(-pi, pi]``: a YAML's 3.5 is published as -2.78, the same rotation).
         width: cells per row, with a flat ``data``.
         height: rows, with a flat ``data``.
-        name: the map's name in outputs and errors.
+        name: the map's name in outputs and errors (one printable line; a message's is
+            given to :meth:`from_message`, then the grid to the loaders).
 
     Raises:
         MapFormatError: in one line naming the grid and the value: a shape that does not
@@ -75,11 +81,13 @@ class OccupancyGrid:
     def __init__(self, data: Any, resolution: float, origin: Any = (0.0, 0.0, 0.0), *,
                  width: int | None = None, height: int | None = None,
                  name: str = "occupancy_grid") -> None:
-        if not isinstance(name, str) or not name:
-            raise MapFormatError(f"an occupancy grid's name must be a non-empty string, "
-                                 f"got {shown_value(name)}")
-        label = f"occupancy grid {name!r}"
-        self.name = name
+        self._fill(data, resolution, origin, width, height, name, "occupancy grid")
+
+    def _fill(self, data: Any, resolution: Any, origin: Any, width: Any, height: Any,
+              name: Any, kind: str) -> None:
+        """Check and keep the grid; errors name it as ``kind 'name'``."""
+        self.name = _checked_name(name, kind)
+        label = f"{kind} {self.name!r}"
         self.occupancy = _occupancies(data, width, height, label)
         self.resolution = _resolution(resolution, label)
         self.origin = _origin(origin, self.resolution, label)
@@ -91,7 +99,8 @@ class OccupancyGrid:
         quaternion becomes its yaw; one turned out of the plane, or not of unit norm
         (within :data:`QUATERNION_TOLERANCE`), is refused. An all-zero quaternion, a
         message's default when its publisher set none, is taken as no rotation."""
-        label = f"OccupancyGrid message {name!r}"
+        kind = "OccupancyGrid message"
+        label = f"{kind} {_checked_name(name, kind)!r}"
         info = _field(message, "info", label)
         width = _field(info, "width", label, "info.")
         height = _field(info, "height", label, "info.")
@@ -104,11 +113,9 @@ class OccupancyGrid:
              for k in ("x", "y", "z", "w")]
         yaw = _yaw(q, label)
         data = _field(message, "data", label)
-        try:
-            return cls(data, resolution, (x, y, yaw), width=width, height=height, name=name)
-        except MapFormatError as e:  # the message named, not a grid made from it
-            raise MapFormatError(str(e).replace(f"occupancy grid {name!r}", label, 1)) \
-                from None
+        grid = cls.__new__(cls)
+        grid._fill(data, resolution, (x, y, yaw), width, height, name, kind)
+        return grid
 
     @property
     def width(self) -> int:
@@ -117,6 +124,15 @@ class OccupancyGrid:
     @property
     def height(self) -> int:
         return int(self.occupancy.shape[0])
+
+    def __eq__(self, other: object) -> bool:
+        if not isinstance(other, OccupancyGrid):
+            return NotImplemented
+        return (self.name, self.resolution, self.origin) == (
+            other.name, other.resolution, other.origin) and np.array_equal(
+            self.occupancy, other.occupancy)
+
+    __hash__ = None  # type: ignore[assignment]  (equal by value, and not immutable)
 
     def __repr__(self) -> str:
         return (f"OccupancyGrid({self.name!r}, {self.width} x {self.height} cells of "
@@ -129,6 +145,17 @@ def is_occupancy_message(source: Any) -> bool:
     if isinstance(source, Mapping):
         return "info" in source and "data" in source
     return hasattr(source, "info") and hasattr(source, "data")
+
+
+def _checked_name(name: Any, kind: str) -> str:
+    """A grid's name as outputs show it: one line, its undecodable bytes escaped (as
+    :func:`jaxga.maps.map_name` shows a file's)."""
+    shown = name.encode("utf-8", "backslashreplace").decode("utf-8") \
+        if isinstance(name, str) else ""
+    if not shown or not shown.isprintable():  # a line break would split a summary's line
+        raise MapFormatError(f"an {kind}'s name must be a non-empty string of printable "
+                             f"characters, got {shown_value(name)}")
+    return shown
 
 
 def _field(obj: Any, key: str, label: str, prefix: str = "") -> Any:
@@ -152,7 +179,8 @@ def _count(value: Any, what: str, label: str) -> int:
 
 def _occupancies(data: Any, width: Any, height: Any, label: str) -> np.ndarray:
     """``data`` as checked ``int8[height, width]`` occupancies (row 0 the bottom)."""
-    if isinstance(data, (bytes, bytearray, memoryview)):
+    if isinstance(data, (bytes, bytearray)) or (
+            isinstance(data, memoryview) and data.format in ("b", "B", "c")):
         values = np.frombuffer(bytes(data), np.int8)  # the message's int8, as sent
     else:
         try:
@@ -160,8 +188,7 @@ def _occupancies(data: Any, width: Any, height: Any, label: str) -> np.ndarray:
         except (ValueError, TypeError) as e:  # ragged nested lists
             raise MapFormatError(f"{label}: the data is not an array of occupancies "
                                  f"({str(e).splitlines()[0]})") from None
-    if values.dtype == object or not (np.issubdtype(values.dtype, np.integer)
-                                      or np.issubdtype(values.dtype, np.floating)):
+    if values.dtype.kind not in "iuf":  # not bool, complex, times, text or objects
         raise MapFormatError(f"{label}: occupancies must be integers from -1 to 100, got "
                              f"an array of {values.dtype}")
     if values.ndim == 1:
@@ -189,18 +216,22 @@ def _occupancies(data: Any, width: Any, height: Any, label: str) -> np.ndarray:
         y, x = (int(v) for v in np.argwhere(bad)[0])
         raise MapFormatError(f"{label}: cell ({x}, {y}) holds {values[y, x].item()!r}: an "
                              "occupancy is -1 (unknown), 0 (free) to 100 (occupied)")
-    out = np.ascontiguousarray(values, np.int8)
+    out = np.array(values, np.int8, order="C", copy=True)  # the caller's array left as it is
     out.setflags(write=False)
     return out
 
 
 def _number(value: Any, what: str, label: str) -> float:
     value = python_scalar(value)
-    if isinstance(value, bool) or not isinstance(value, (int, float)) or not math.isfinite(
-            value):
-        raise MapFormatError(f"{label}: {what} must be a finite number, got "
+    try:
+        number = float(value) if isinstance(value, (int, float)) and not isinstance(
+            value, bool) else math.nan
+    except OverflowError:  # an integer of hundreds of digits
+        number = math.nan
+    if not math.isfinite(number):
+        raise MapFormatError(f"{label}: {what} must be a finite int or float, got "
                              f"{shown_value(value)}")
-    return float(value)
+    return number
 
 
 def _resolution(value: Any, label: str) -> float:
@@ -218,10 +249,9 @@ def _resolution(value: Any, label: str) -> float:
 def _origin(value: Any, resolution: float, label: str) -> tuple[float, float, float]:
     """``(x, y, yaw)`` from ``(x, y)`` or ``(x, y, yaw)``, within a ``map_server`` YAML's
     bounds."""
-    try:
-        parts = [python_scalar(v) for v in value]
-    except TypeError:
-        parts = []
+    is_sequence = isinstance(value, (tuple, list)) or (
+        isinstance(value, np.ndarray) and value.ndim == 1)
+    parts = list(value) if is_sequence else []  # not a set's or a dict's order
     if len(parts) not in (2, 3):
         raise MapFormatError(f"{label}: the origin must be (x, y) or (x, y, yaw), got "
                              f"{shown_value(value)}")

@@ -106,6 +106,27 @@ def test_the_forms_of_a_messages_data_read_alike():
     assert load_map_info(grids[0]).grid.blocked_np()[3, 0] == 1  # top-left: occupied
 
 
+def test_the_callers_array_is_copied_not_locked_or_shared():
+    """The grid holds its own checked copy: the caller's array stays writable (a costmap
+    updated in place), and a later change to it, or to a message's data, does not reach
+    a grid already checked."""
+    costmap = OCCUPANCY.copy()
+    grid = OccupancyGrid(costmap, 0.05)
+    costmap[0, 0] = 100  # still writable
+    flat = array.array("b", OCCUPANCY.ravel().tolist())
+    from_flat = OccupancyGrid(flat, 0.05, width=5, height=4)
+    flat[1] = 7
+    np.testing.assert_array_equal(grid.occupancy, OCCUPANCY)
+    np.testing.assert_array_equal(from_flat.occupancy, OCCUPANCY)
+    assert grid == from_flat != OccupancyGrid(costmap, 0.05)
+
+
+def test_a_name_is_shown_on_one_line():
+    assert OccupancyGrid(OCCUPANCY, 0.05, name="caf\udce9").name == "caf\\udce9"
+    assert load_map_info(OccupancyGrid.from_message(_message(), name="floor 2")).name == \
+        "floor 2"
+
+
 def test_graded_cells_are_possibly_occupied_as_a_map_server_maps_are():
     """1-99 (a costmap's inflation, a scale-mode map's grey) and -1 are blocked unless
     unknown cells are planned as free; 100 always is."""
@@ -172,8 +193,19 @@ def _refused(make, kind: type = MapFormatError) -> str:
     (lambda: OccupancyGrid([["0", "1"]], 0.05), "integers from -1 to 100"),
     (lambda: OccupancyGrid([[0, 1], [0]], 0.05), "not an array of occupancies"),
     (lambda: OccupancyGrid(OCCUPANCY, 0.0), "resolution must be from"),
-    (lambda: OccupancyGrid(OCCUPANCY, math.nan), "resolution must be a finite number"),
-    (lambda: OccupancyGrid(OCCUPANCY, "0.05"), "resolution must be a finite number"),
+    (lambda: OccupancyGrid(OCCUPANCY, math.nan), "resolution must be a finite int or float"),
+    (lambda: OccupancyGrid(OCCUPANCY, "0.05"), "resolution must be a finite int or float"),
+    (lambda: OccupancyGrid(OCCUPANCY, 10**400), "resolution must be a finite int or float"),
+    (lambda: OccupancyGrid(OCCUPANCY, 0.05, (10**400, 0)), "origin must be a finite int"),
+    (lambda: OccupancyGrid(OCCUPANCY, 0.05, {1: 1, 2: 2}), "origin must be (x, y) or"),
+    (lambda: OccupancyGrid(OCCUPANCY, 0.05, {1.0, 2.0}), "origin must be (x, y) or"),
+    (lambda: OccupancyGrid(np.zeros((2, 2), "m8[s]"), 0.05), "got an array of timedelta64"),
+    (lambda: OccupancyGrid(np.zeros((2, 2), bool), 0.05), "got an array of bool"),
+    (lambda: OccupancyGrid(memoryview(np.array([100, 0], np.int16)), 0.05, width=4,
+                           height=1), "2 values for 4 x 1 cells"),  # not 4 bytes
+    (lambda: OccupancyGrid(OCCUPANCY, 0.05, name="a\nb"), "printable characters"),
+    (lambda: load_map_info(OccupancyGrid(OCCUPANCY, 0.05), unknown="maybe"),
+     "occupancy grid 'occupancy_grid': unknown cells must be one of blocked, free"),
     (lambda: OccupancyGrid(OCCUPANCY, 0.05, (1.0,)), "origin must be (x, y) or (x, y, yaw)"),
     (lambda: OccupancyGrid(OCCUPANCY, 0.05, (math.inf, 0.0)), "origin must be a finite"),
     (lambda: OccupancyGrid(OCCUPANCY, 0.05, (1e13, 0.0)), "within 1e+12 metres"),
@@ -189,7 +221,8 @@ def _refused(make, kind: type = MapFormatError) -> str:
      "OccupancyGrid message 'occupancy_grid': 3 values for 5 x 4 cells"),
     (lambda: load_map_info(OccupancyGrid(OCCUPANCY, 0.05), threshold=0.5),
      "has no effect on an occupancy grid: its values are occupancies already"),
-    (lambda: load_map_info(OccupancyGrid(OCCUPANCY, 0.05), fmt="ros"), "no effect on an "),
+    (lambda: load_map_info(OccupancyGrid(OCCUPANCY, 0.05), fmt="ros"),
+     "occupancy grid 'occupancy_grid': a map format (fmt='ros') has no effect"),
     (lambda: load_map_info(np.zeros((4, 5))), "jaxga.maps.OccupancyGrid"),
 ])
 def test_a_malformed_grid_is_refused_in_one_line_naming_it(make, words):
