@@ -10,6 +10,7 @@ from jaxga.api import GA, Result, run, sweep
 from jaxga.api.doctor import doctor
 from jaxga.api.planner import Planner
 from jaxga.api.problem import Problem, problem
+from jaxga.api.rerun import rerun
 from jaxga.compare import Comparison, compare
 from jaxga.core.errors import EndpointError, JaxgaError, MapFormatError, NoPathError, ParameterError
 from jaxga.core.grid import CORNER_RULES, Grid
@@ -36,6 +37,7 @@ __all__ = [
     "problem",
     "register_operator",
     "replan",
+    "rerun",
     "run",
     "sweep",
     "use_compilation_cache",

@@ -22,11 +22,11 @@ and each finished point is written to ``DIR`` at once (temp file + ``os.replace`
 restarted run with the same arguments skips the finished points. Every block uses the
 design's population capacity and the same number of runs (the last block is padded with
 copies of its last point), so one compiled program serves every block and a resumed run
-is bit for bit the uninterrupted run with the same ``block``. Another ``block`` runs the
-same GA runs (fitness, success, turns, convergence generation identical in the tests) but
-the float32 lengths and angle sums of the post-optimised paths may differ in the last bit
-(XLA rounds its vectorised reductions differently for another number of runs per call);
-``block`` is therefore part of the checkpoint's fingerprint.
+is bit for bit the uninterrupted run with the same ``block``. On the CPU another ``block``
+gives the same results bit for bit too (a run's float sums are taken in a fixed order,
+docs/devices.md); on a GPU the number of runs per call may round a run's sums otherwise
+(decision 040), so ``block`` stays part of the checkpoint's fingerprint, and a
+checkpoint's points are never mixed with another block's.
 ``DIR/manifest.json`` records what was run (preset configuration, map, factors, design,
 seeds, block, versions, the device); a checkpoint written by another configuration, or
 computed on another kind of device, is refused.
