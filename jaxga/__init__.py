@@ -14,6 +14,7 @@ from jaxga.api.rerun import rerun
 from jaxga.compare import Comparison, compare
 from jaxga.core.errors import EndpointError, JaxgaError, MapFormatError, NoPathError, ParameterError
 from jaxga.core.grid import CORNER_RULES, Grid
+from jaxga.core.version import VERSION
 from jaxga.operators.registry import Operator, register_operator
 from jaxga.replan import replan
 
@@ -42,4 +43,4 @@ __all__ = [
     "sweep",
     "use_compilation_cache",
 ]
-__version__ = "0.1.0"
+__version__ = VERSION

@@ -20,6 +20,7 @@ from __future__ import annotations
 import dataclasses
 import json
 import os
+import platform
 import time
 import warnings
 from collections.abc import Callable, Sequence
@@ -38,6 +39,7 @@ from jaxga.core.files import atomic_write_text, jaxga_cache_home
 from jaxga.core.grid import Grid
 from jaxga.core.path_geometry import geometry
 from jaxga.core.paths import has_endpoints, is_continuous, is_loop_free
+from jaxga.core.version import VERSION
 from jaxga.engine.maptables import with_tables
 from jaxga.maps import load_map_info
 from jaxga.operators.guide import with_guide
@@ -207,11 +209,7 @@ def run_environment() -> dict[str, Any]:
     jaxga, JAX, jaxlib, NumPy and Python, the default device (:func:`describe`) and the
     number of local devices. Another backend may round otherwise (decision 040), and a
     stored program belongs to one version: two results are compared knowing both."""
-    import platform
-
-    import jaxga
-
-    return {"jaxga": jaxga.__version__, "jax": jax.__version__,
+    return {"jaxga": VERSION, "jax": jax.__version__,
             "jaxlib": jaxlib.__version__, "numpy": np.__version__,
             "python": platform.python_version(), "device": describe(jax.devices()[0]),
             "local_devices": jax.local_device_count()}

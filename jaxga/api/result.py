@@ -92,6 +92,8 @@ class RunSetup(ValueEquality):
     map_digest: str
     """The planning map's :meth:`jaxga.Grid.cells_digest` ("" where not known): which
     results :func:`jaxga.compare_results` may compare."""
+    environment: dict[str, Any]
+    """What computed the runs: versions and device ({} where not known)."""
 
 
 @dataclasses.dataclass(frozen=True, eq=False)
