@@ -13,15 +13,11 @@ import pytest
 
 from jaxga import EndpointError, MapFormatError
 from jaxga.maps import OccupancyGrid, load_map_info
+from tests.maps.test_ros_maps import IMAGE
 
-# A 5 x 4 map, top row first as an image holds it: 254 free, 0 occupied, 205 unknown.
-IMAGE = np.array([
-    [0, 254, 254, 254, 205],
-    [254, 254, 0, 254, 205],
-    [254, 254, 0, 254, 254],
-    [254, 254, 254, 254, 254],
-], np.uint8)
-# The same cells as map_server publishes them: row 0 the bottom, -1 / 0 / 100.
+# IMAGE: test_ros_maps' 5 x 4 map as map_saver writes it (254 free, 0 occupied, 205
+# unknown), top row first. OCCUPANCY: the same cells as map_server publishes them, row 0
+# the bottom, -1 / 0 / 100.
 OCCUPANCY = np.select([IMAGE == 0, IMAGE == 205], [100, -1], 0).astype(np.int8)[::-1]
 YAML = """image: office.pgm
 resolution: 0.050000
