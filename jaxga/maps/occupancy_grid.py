@@ -119,10 +119,12 @@ class OccupancyGrid:
 
     @property
     def width(self) -> int:
+        """Cells per row."""
         return int(self.occupancy.shape[1])
 
     @property
     def height(self) -> int:
+        """Rows of cells."""
         return int(self.occupancy.shape[0])
 
     def __eq__(self, other: object) -> bool:
