@@ -206,13 +206,13 @@ def describe(device: jax.Device) -> str:
 
 def run_environment() -> dict[str, Any]:
     """What computes this process's runs, as their JSON records it: the versions of
-    jaxga, JAX, jaxlib, NumPy and Python, the default device (:func:`describe`) and the
-    number of local devices. Another backend may round otherwise (decision 040), and a
-    stored program belongs to one version: two results are compared knowing both."""
+    jaxga, JAX, jaxlib, NumPy and Python and the default device (:func:`describe`).
+    Another backend may round otherwise (decision 040), and a stored program belongs to
+    one version: two results are compared knowing both. The number of devices is not
+    recorded: a run's result does not depend on it (docs/devices.md)."""
     return {"jaxga": VERSION, "jax": jax.__version__,
             "jaxlib": jaxlib.__version__, "numpy": np.__version__,
-            "python": platform.python_version(), "device": describe(jax.devices()[0]),
-            "local_devices": jax.local_device_count()}
+            "python": platform.python_version(), "device": describe(jax.devices()[0])}
 
 
 # ------------------------------------------------------------------------ the gate

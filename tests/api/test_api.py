@@ -126,7 +126,7 @@ def _check_environment(recorded: dict) -> None:
     assert recorded["jaxlib"] == jaxlib.__version__ and recorded["numpy"] == np.__version__
     device = jax.devices()[0]
     assert recorded["device"] == f"{device.platform} ({device.device_kind}, jaxlib " \
-        f"{jaxlib.__version__})" and recorded["local_devices"] == jax.local_device_count()
+        f"{jaxlib.__version__})"
 
 
 def test_every_preset_is_deterministic(preset_run, grid):
