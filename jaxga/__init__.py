@@ -14,7 +14,7 @@ from jaxga.api.rerun import rerun
 from jaxga.compare import Comparison, compare
 from jaxga.core.errors import EndpointError, JaxgaError, MapFormatError, NoPathError, ParameterError
 from jaxga.core.grid import CORNER_RULES, Grid
-from jaxga.core.version import VERSION
+from jaxga.core.version import VERSION as __version__  # noqa: F401  (the package's version)
 from jaxga.operators.registry import Operator, register_operator
 from jaxga.replan import replan
 
@@ -43,4 +43,3 @@ __all__ = [
     "sweep",
     "use_compilation_cache",
 ]
-__version__ = VERSION
