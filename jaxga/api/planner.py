@@ -60,6 +60,8 @@ class Planner:
         inflate: or the growth in cells.
         coarsen: K x K map cells into one planning cell.
         unknown: how a ROS map's unknown cells are planned on.
+        occupied_from: the occupancy from which a ROS map's or an occupancy grid's cell
+            is blocked (``99`` for a costmap: its lethal and inscribed cells).
         corner_rule: the corner rule (default: the map's own; applied to a loaded MapInfo
             too, as :func:`jaxga.run` applies it).
         any_angle_budget: as :func:`jaxga.run`: seconds the any-angle reference may
@@ -83,14 +85,16 @@ class Planner:
     def __init__(self, map: str | Any, preset: str | Config = "hybrid", *, seeds: int = 8,
                  robot_radius: float | None = None, inflate: float | None = None,
                  coarsen: int | None = None, unknown: str | None = None,
-                 corner_rule: str | None = None, any_angle_budget: float | str | None = "auto",
+                 occupied_from: int | None = None, corner_rule: str | None = None,
+                 any_angle_budget: float | str | None = "auto",
                  **overrides: Any) -> None:
         self.preset = preset
         self.seeds = _checked_seeds(seeds)
         check_call_options(None, 1, None, any_angle_budget)  # refused now, not at a plan
         self.any_angle_budget = any_angle_budget
         self._loading = {"robot_radius": robot_radius, "inflate": inflate,
-                         "coarsen": coarsen, "unknown": unknown}
+                         "coarsen": coarsen, "unknown": unknown,
+                         "occupied_from": occupied_from}
         self._corner_rule = corner_rule
         self._overrides = overrides
         self._planned_on = self._prepared(map, loaded_refused=True)
@@ -100,8 +104,8 @@ class Planner:
         """Plan on ``map`` from the next :meth:`plan` on (a robot's costmap updated, a new
         floor). A file, a built-in name or an occupancy grid (a ``nav_msgs/OccupancyGrid``
         message: ``planner.update_map(msg)`` in the map topic's callback) is loaded with
-        the planner's ``robot_radius``, ``inflate``, ``coarsen``, ``unknown`` and
-        ``corner_rule``. A map loaded already (a
+        the planner's ``robot_radius``, ``inflate``, ``coarsen``, ``unknown``,
+        ``occupied_from`` and ``corner_rule``. A map loaded already (a
         :class:`jaxga.maps.MapInfo` or a :class:`jaxga.Grid`) is planned on as it is,
         under the planner's ``corner_rule`` if it was given one: its caller loaded it
         with the robot's radius (``jaxga.maps.load_map_info(path, robot_radius=...)``).
@@ -153,8 +157,9 @@ class Planner:
         if self._loading is None and not isinstance(map, (MapInfo, Grid)):
             raise ParameterError(
                 "this Planner was pickled by an older jaxga, which did not keep its "
-                "robot_radius, inflate, coarsen and unknown: give update_map a map loaded "
-                "with them (jaxga.maps.load_map_info(path, ...)), or make a new Planner")
+                "robot_radius, inflate, coarsen, unknown and occupied_from: give "
+                "update_map a map loaded with them (jaxga.maps.load_map_info(path, ...)), "
+                "or make a new Planner")
         loading = [name for name, value in self._loading.items()
                    if value is not None] if loaded_refused else []
         corner_rule = self._corner_rule

@@ -111,7 +111,8 @@ def problem(preset: str | Config, grid: Grid | MapInfo | str, *,
 
     ``map_options``: for a map file or a built-in map's name, the options of
     :func:`jaxga.maps.load_map` (``start``, ``goal``, ``start_world``, ``goal_world``,
-    ``robot_radius``, ``inflate``, ``coarsen``, ``threshold``, ``unknown``, ``fmt``; None
+    ``robot_radius``, ``inflate``, ``coarsen``, ``threshold``, ``unknown``,
+    ``occupied_from``, ``fmt``; None
     values are left out), applied under the corner rule the call names (its
     ``corner_rule``, else the preset's ``map.corner_rule``, else the map's own), so the
     preset is read once, as the command line does."""

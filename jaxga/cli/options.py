@@ -108,6 +108,11 @@ def add_source_arguments(p: argparse.ArgumentParser) -> None:
     p.add_argument("--unknown", choices=("blocked", "free"), default=None,
                    help="ROS maps: plan through unknown cells (free) or not (blocked, "
                    "default; refused for other formats)")
+    p.add_argument("--occupied-from", type=int, metavar="OCC", default=None,
+                   help="ROS maps: the occupancy (1-100) from which a cell is blocked; "
+                   "graded cells below it are free, unknown ones follow --unknown (99 "
+                   "plans on a costmap as costmap_2d does; default: graded cells go with "
+                   "the unknown ones; refused for other formats)")
     grow = p.add_mutually_exclusive_group()
     grow.add_argument("--inflate", type=float, metavar="CELLS",
                       help="grow the obstacles by this many cells (centre to centre)")
@@ -239,10 +244,12 @@ SOURCE_OPTIONS = ("start", "goal", "coarsen", "start_world", "goal_world", "infl
 
 def map_options(args: argparse.Namespace) -> dict:
     """The keyword arguments of :func:`jaxga.maps.load_map_info` given on the command
-    line (endpoints, coarsening, image threshold, ROS unknown cells, inflation); None
+    line (endpoints, coarsening, image threshold, ROS unknown and graded cells,
+    inflation); None
     for an option not given, so that the loader applies its default and refuses an
     option given for a format it has no effect on."""
-    return {k: getattr(args, k, None) for k in (*SOURCE_OPTIONS, "threshold", "unknown")}
+    return {k: getattr(args, k, None)
+            for k in (*SOURCE_OPTIONS, "threshold", "unknown", "occupied_from")}
 
 
 def plain_map(args: argparse.Namespace) -> bool:

@@ -64,6 +64,7 @@ from jaxga.maps.preprocess import check_coarse_endpoints, coarsen_blocked, infla
 from jaxga.maps.ros import (
     RosMap,
     cell_to_world,
+    check_occupied_from,
     occupancy,
     read_ros_image,
     read_ros_yaml,
@@ -182,6 +183,7 @@ def load_map(
     coarsen: int | None = None,
     threshold: float | None = None,
     unknown: str | None = None,
+    occupied_from: int | None = None,
     start_world: tuple[float, float] | None = None,
     goal_world: tuple[float, float] | None = None,
     inflate: float | None = None,
@@ -215,8 +217,14 @@ def load_map(
             white) is blocked; default 0.5. Refused for any other format, on which it
             would have no effect (a ROS map's YAML sets its own thresholds).
         unknown: ROS maps and occupancy grids: ``"blocked"`` (default) or ``"free"``
-            for unknown (and graded) cells. Refused for any other format: only these
-            have unknown cells.
+            for unknown (and, without ``occupied_from``, graded) cells. Refused for any
+            other format: only these have unknown cells.
+        occupied_from: ROS maps and occupancy grids: the occupancy (an integer 1-100)
+            from which a cell is blocked; the graded cells below it are free and unknown
+            cells follow ``unknown``. ``99`` plans on a costmap as ``costmap_2d``'s
+            planners do, its lethal 100 and inscribed 99 blocked
+            (:func:`jaxga.maps.ros.ros_blocked`). Default: every graded cell goes with
+            the unknown ones. Refused for any other format.
         start_world: ROS maps: the start in metres (world frame); the cell that holds
             it (:func:`jaxga.maps.ros.world_to_cell`). Not with ``start``; refused on a
             map without a resolution and an origin.
@@ -288,7 +296,8 @@ def load_map_info(source: Source | OccupancyGrid, **options: Any) -> MapInfo:
                       yaml=is_yaml, coarsen=factor)
     kind = o.fmt or detect_format(path, raw)
     _check_options_apply(kind, label, threshold=o.threshold, unknown=o.unknown,
-                         robot_radius=o.robot_radius, start_world=o.start_world,
+                         occupied_from=o.occupied_from, robot_radius=o.robot_radius,
+                         start_world=o.start_world,
                          goal_world=o.goal_world)
     size = declared_size(raw, kind)
     if size is not None:  # refuse a map too large from its header (decision 021)
@@ -304,7 +313,8 @@ def load_map_info(source: Source | OccupancyGrid, **options: Any) -> MapInfo:
     elif kind == "ros":
         ros = read_ros_yaml(path, label, data=raw)
         occ = occupancy(read_ros_image(ros, label, coarsen=factor), ros)
-        blocked = ros_blocked(occ, "blocked" if o.unknown is None else o.unknown)
+        blocked = ros_blocked(occ, "blocked" if o.unknown is None else o.unknown,
+                              o.occupied_from)
         unknown_cells = np.ascontiguousarray((occ == -1)[::-1])
         file_start = file_goal = None
     else:
@@ -333,7 +343,8 @@ def _from_occupancy_grid(source: Any, o: types.SimpleNamespace, rule: str,
         raise MapFormatError(f"{label}: a map format (fmt={o.fmt!r}) has no effect on an "
                              "occupancy grid, which is no file")
     _check_options_apply("occupancy_grid", label, threshold=o.threshold, unknown=o.unknown,
-                         robot_radius=o.robot_radius, start_world=o.start_world,
+                         occupied_from=o.occupied_from, robot_radius=o.robot_radius,
+                         start_world=o.start_world,
                          goal_world=o.goal_world)
     message = too_large(-(-grid.width // factor), -(-grid.height // factor))
     if message:
@@ -341,7 +352,8 @@ def _from_occupancy_grid(source: Any, o: types.SimpleNamespace, rule: str,
     ros = RosMap(image=None, resolution=grid.resolution, origin=grid.origin)
     top_first = grid.occupancy[::-1]  # ros_blocked reads an image's rows, top first
     try:
-        blocked = ros_blocked(top_first, "blocked" if o.unknown is None else o.unknown)
+        blocked = ros_blocked(top_first, "blocked" if o.unknown is None else o.unknown,
+                              o.occupied_from)
     except MapFormatError as e:
         raise MapFormatError(f"{label}: {e}") from None
     unknown_cells = np.ascontiguousarray(grid.occupancy == -1)
@@ -474,7 +486,8 @@ _FORMAT_NAMES = {"01": "a 0/1 text map", "movingai": "a Moving AI map",
 
 
 def _check_options_apply(kind: str, label: str, *, threshold: float | None,
-                         unknown: str | None, robot_radius: float | None,
+                         unknown: str | None, occupied_from: int | None,
+                         robot_radius: float | None,
                          start_world: tuple[float, float] | None,
                          goal_world: tuple[float, float] | None) -> None:
     """Refuse, in one line saying why, an option given for a map format on which it has
@@ -493,7 +506,17 @@ def _check_options_apply(kind: str, label: str, *, threshold: float | None,
         raise MapFormatError(f"{label}: the setting for unknown cells (--unknown, unknown=) "
                              f"has no effect on {what}: only a ROS map_server map (.yaml) "
                              f"has unknown cells; {why}")
+    if occupied_from is not None and kind not in ("ros", "occupancy_grid"):
+        raise MapFormatError(f"{label}: the occupancy from which a cell is blocked "
+                             f"(--occupied-from, occupied_from=) has no effect on {what}: "
+                             "only a ROS map_server map (.yaml) or an occupancy grid has "
+                             "occupancies")
     if kind in ("ros", "occupancy_grid"):
+        if occupied_from is not None:
+            try:
+                check_occupied_from(occupied_from)
+            except MapFormatError as e:
+                raise MapFormatError(f"{label}: {e}") from None
         return
     if robot_radius is not None:
         raise MapFormatError(f"{label}: a robot radius in metres needs a map with a "

@@ -16,7 +16,9 @@ message itself (ROS 1 or ROS 2, or the dictionary ``rosbridge`` and
 The cells are planned on as a ``map_server`` map's occupancies are
 (:func:`jaxga.maps.ros.ros_blocked`): 100 blocked, 0 free, unknown and graded cells
 blocked unless ``unknown="free"`` (graded cells, a costmap's inflation among them, are
-possibly occupied), so that a map published by ``map_server`` plans as its file does.
+possibly occupied), so that a map published by ``map_server`` plans as its file does;
+``occupied_from=99`` plans on a costmap as ``costmap_2d``'s planners do (its lethal and
+inscribed cells blocked, the inflation's cost below free).
 """
 
 from __future__ import annotations

@@ -33,7 +33,8 @@ its occupancy probability, and
 Planning: occupied cells are blocked; unknown cells are blocked too unless
 ``unknown="free"``; scale mode's graded cells count as unknown (jaxga plans on free and
 blocked cells only, and a cell that is possibly occupied is not driven through by
-default). Cell ``(x, y)`` covers the square of side ``resolution`` whose lower-left
+default), unless ``occupied_from`` names the occupancy from which a cell is blocked
+(:func:`ros_blocked`). Cell ``(x, y)`` covers the square of side ``resolution`` whose lower-left
 corner is at ``origin + R(yaw) (x resolution, y resolution)``; :func:`world_to_cell` and
 :func:`cell_to_world` convert (cell centres).
 """
@@ -66,6 +67,7 @@ from jaxga.maps.inputs import (
 __all__ = [
     "MODES",
     "UNKNOWN_AS",
+    "check_occupied_from",
     "RosMap",
     "UniqueKeyLoader",
     "cell_to_world",
@@ -340,16 +342,38 @@ def occupancy(pixels: np.ndarray, meta: RosMap) -> np.ndarray:
     return out
 
 
-def ros_blocked(occ: np.ndarray, unknown: str = "blocked") -> np.ndarray:
+def ros_blocked(occ: np.ndarray, unknown: str = "blocked",
+                occupied_from: int | None = None) -> np.ndarray:
     """Blocked cells for planning, ``bool[H, W]`` with ``y = 0`` the bottom row (the
-    image's rows flipped): occupied (100), and unknown (-1) or graded (1-99) cells unless
-    ``unknown="free"``."""
+    image's rows flipped).
+
+    Without ``occupied_from``: occupied (100), and unknown (-1) or graded (1-99) cells
+    unless ``unknown="free"``. With it (an integer 1-100): the cells whose occupancy is
+    at least ``occupied_from`` (a costmap's lethal 100 and inscribed 99 with
+    ``occupied_from=99``, as ``costmap_2d``'s planners block a cost of at least
+    ``INSCRIBED_INFLATED_OBSTACLE``), the graded cells below it free, and unknown (-1)
+    cells blocked unless ``unknown="free"``."""
     if unknown not in UNKNOWN_AS:
         raise MapFormatError(f"unknown cells must be one of {', '.join(UNKNOWN_AS)}, "
                              f"got {unknown!r}")
     occ = np.asarray(occ)
-    blocked = occ == 100 if unknown == "free" else occ != 0
+    if occupied_from is None:
+        blocked = occ == 100 if unknown == "free" else occ != 0
+    else:
+        blocked = occ >= check_occupied_from(occupied_from)
+        if unknown != "free":
+            blocked |= occ == -1
     return np.ascontiguousarray(blocked[::-1])
+
+
+def check_occupied_from(value: Any) -> int:
+    """``value`` as the occupancy (an integer 1-100) from which a cell is blocked;
+    :class:`~jaxga.core.errors.MapFormatError` in one line otherwise."""
+    if (isinstance(value, bool) or not isinstance(value, (int, np.integer))
+            or not 1 <= value <= 100):
+        raise MapFormatError(f"occupied_from (--occupied-from) must be an occupancy, an "
+                             f"integer from 1 to 100, got {shown_value(value)}")
+    return int(value)
 
 
 def _frame(meta: RosMap, shape: tuple[int, int] = (0, 0)) -> MapFrame:

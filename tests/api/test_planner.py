@@ -328,6 +328,30 @@ def test_a_planner_given_the_map_topic_plans_as_one_given_the_map_file(office, t
     assert planner.capacity == moved.capacity
 
 
+def test_a_planner_given_a_costmap_blocks_its_inscribed_cells_through_every_update():
+    """A costmap on the topic (lethal 100, inscribed 99, graded inflation below):
+    ``occupied_from=99`` blocks the lethal and inscribed cells and frees the inflation,
+    at the start and at every update; without it the inflation is blocked too."""
+    def costmap(rows: range) -> np.ndarray:
+        occ = _occupancy(rows, pillar=False)
+        occ[rows.start - 1, 0:14] = occ[rows.stop, 0:14] = 99  # inscribed
+        occ[rows.start - 2, 0:14] = occ[rows.stop + 1, 0:14] = 40  # inflated cost
+        occ[19, :] = -1  # not yet seen
+        return occ
+
+    for first, then in ((range(10, 12), range(6, 8)), (range(6, 8), range(12, 14))):
+        planner = jaxga.Planner(_map_message(costmap(first)), occupied_from=99,
+                                corner_rule="free", seeds=3)
+        for rows in (first, then):
+            if rows is then:
+                planner.update_map(_map_message(costmap(rows)))
+            occ = costmap(rows)
+            expected = (occ >= 99) | (occ == -1)
+            np.testing.assert_array_equal(planner.map.grid.blocked_np(), expected)
+    assert jaxga.Planner(_map_message(costmap(range(10, 12))), corner_rule="free",
+                         seeds=3).map.grid.blocked_np()[8, 0]  # the cost of 40 blocked
+
+
 def test_a_planners_map_capacity_and_overrides_are_read_only_and_old_pickles_load(office):
     """``capacity`` and ``overrides`` follow the map (update_map): a key written into
     them is refused, not silently lost at the next update; a planner pickled when they

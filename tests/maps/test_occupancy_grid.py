@@ -73,6 +73,7 @@ def _same_map(a, b) -> None:
 
 @pytest.mark.parametrize("options", [
     {}, {"unknown": "free"}, {"robot_radius": 0.05}, {"inflate": 1},
+    {"occupied_from": 99}, {"occupied_from": 100, "unknown": "free"},
     {"coarsen": 2, "start": (0, 0), "goal": (4, 0)},
     {"start_world": (-1.97, -1.47), "goal_world": (-1.78, -1.33)},
     {"corner_rule": "free", "start": (1, 0), "goal": (3, 1)},
@@ -133,6 +134,60 @@ def test_graded_cells_are_possibly_occupied_as_a_map_server_maps_are():
                          unknown="free")
     assert free.grid.blocked_np().tolist() == [[False, False, False, False, True, False]]
     assert blocked.layers.unknown.tolist() == [[False] * 5 + [True]]
+
+
+def test_a_costmap_blocks_from_the_occupancy_given():
+    """``occupied_from=99``: a costmap's lethal 100 and inscribed 99 blocked, its graded
+    inflation below free, unknown cells blocked unless ``unknown="free"``; the graded
+    cells are free space in the layers, not unknown."""
+    occ = np.array([[0, 1, 50, 98, 99, 100, -1]], np.int8)
+    rows = {}
+    for unknown in ("blocked", "free"):
+        info = load_map_info(OccupancyGrid(occ, 0.1), start=(0, 0), goal=(0, 0),
+                             unknown=unknown, occupied_from=99)
+        rows[unknown] = info.grid.blocked_np().tolist()[0]
+        assert info.layers.unknown.tolist() == [[False] * 6 + [True]]
+        assert info.layers.unknown_blocked == (unknown == "blocked")
+        assert info.layers.wall.tolist() == [[False] * 4 + [True, True, False]]
+    assert rows == {"blocked": [False] * 4 + [True] * 3,
+                    "free": [False] * 4 + [True, True, False]}
+    every = load_map_info(OccupancyGrid(occ, 0.1), start=(0, 0), goal=(0, 0),
+                          occupied_from=1, unknown="free")
+    assert every.grid.blocked_np().tolist() == [[False] + [True] * 5 + [False]]
+
+
+def test_a_scale_mode_maps_graded_cells_block_from_the_occupancy_given(tmp_path):
+    """A ``scale``-mode ROS map's graded grey: blocked from ``occupied_from`` on, the
+    same cells from the file as from the message its map_server publishes."""
+    from jaxga.maps.ros import occupancy, read_ros_image, read_ros_yaml
+
+    shades = np.array([[254, 200, 180, 150, 120, 100, 0]], np.uint8)
+    (tmp_path / "graded.pgm").write_bytes(b"P5\n7 1\n255\n" + shades.tobytes())
+    path = tmp_path / "graded.yaml"
+    path.write_text(YAML.replace("office.pgm", "graded.pgm").format(yaw="0.0")
+                    + "mode: scale\n")
+    ros = read_ros_yaml(path, "graded.yaml")
+    occ = occupancy(read_ros_image(ros, "graded.yaml"), ros)[::-1]
+    assert occ.min() == 0 and occ.max() == 100 and len(np.unique(occ)) == 7
+    for level in (1, 30, 60, 99, 100):
+        from_file = load_map_info(str(path), start=(0, 0), goal=(0, 0),
+                                  occupied_from=level)
+        assert from_file.grid.blocked_np().tolist() == (occ >= level).tolist()
+        message = load_map_info(OccupancyGrid(occ, 0.05, (-2.0, -1.5)), start=(0, 0),
+                                goal=(0, 0), occupied_from=level)
+        _same_map(message, from_file)
+
+
+@pytest.mark.parametrize("value", [0, 101, -1, True, 1.5, "99", None.__class__])
+def test_an_occupancy_that_is_not_1_to_100_is_refused_in_one_line(value):
+    with pytest.raises(MapFormatError, match="integer from 1 to 100") as e:
+        load_map_info(_message(), occupied_from=value)
+    assert "\n" not in str(e.value) and "occupancy_grid" in str(e.value)
+
+
+def test_an_occupancy_threshold_on_a_map_without_occupancies_is_refused():
+    with pytest.raises(MapFormatError, match="has no effect on a 0/1 text map"):
+        load_map_info("classic_ga_gapp3_20x20", occupied_from=99)
 
 
 def test_a_float32_resolution_is_the_decimal_the_map_was_saved_with():
