@@ -37,6 +37,7 @@ class SweepPlan:
     octile: Any
     seed_arr: np.ndarray
     size_class: bool = False
+    map_source: dict | None = None
     algo: Algorithm | None = None
     program_grid: Grid | None = None
     per_point: list[dict] = dataclasses.field(default_factory=list)

@@ -30,7 +30,8 @@ def unstarted_results(plan: SweepPlan, start: InitOutcome, timing: dict) -> list
         causes = failure_causes(success, success, start.rate[sl], start.from_fallback[sl],
                                 cfg, algo.capacity, len(plan.octile.path))
         r = no_path_result(cfg, plan.map_name, plan.grid, plan.seed_arr, algo,
-                           failure_reason(causes), timing, algo.population, plan.frame)
+                           failure_reason(causes), timing, algo.population, plan.frame,
+                           plan.map_source)
         results.append(dataclasses.replace(
             r, preset=plan.config["name"], init_success_rate=start.rate[sl],
             init_unfilled=start.unfilled[sl], optimum=float(plan.octile.length),
@@ -140,7 +141,7 @@ def failure_reason(causes: np.ndarray) -> str:
 
 
 def no_path_result(config, map_name, grid, seeds, algo, reason, timing,
-                   population_capacity, frame=None) -> Result:
+                   population_capacity, frame=None, map_source=None) -> Result:
     """The result of runs that cannot start: every seed failed with ``reason``."""
     s = len(seeds)
     empty = np.zeros((s, 1), np.int32)
@@ -150,7 +151,8 @@ def no_path_result(config, map_name, grid, seeds, algo, reason, timing,
         success=np.zeros(s, bool), reason=reason, cells=empty, n_cells=np.zeros(s, np.int32),
         raw_cells=empty, raw_n_cells=np.zeros(s, np.int32), length=nan, raw_length=nan,
         fitness=np.full(s, np.nan), convergence_generation=np.full(s, -1),
-        history={k: np.zeros((s, 0)) for k in ("best", "mean", "std")},
+        history={k: np.zeros((s, 0)) for k in ("best", "mean", "std")
+                 + ("hypervolume",) * bool(algo.stages.objectives)},  # a run's own keys
         metrics={k: nan.copy() for k in Metrics._fields},
         raw_metrics={k: nan.copy() for k in Metrics._fields}, failures=np.zeros((s, 3), np.int32),
         init_success_rate=np.zeros(s), init_unfilled=np.zeros(s, np.int32),
@@ -164,5 +166,6 @@ def no_path_result(config, map_name, grid, seeds, algo, reason, timing,
         initial_fitness=np.zeros(s),
         causes=np.full(s, reason, dtype=object), path_capacity=algo.capacity, frame=frame,
         map_digest=grid.cells_digest(), environment=run_environment(),
+        map_source=map_source,
     )
 

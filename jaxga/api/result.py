@@ -94,6 +94,9 @@ class RunSetup(ValueEquality):
     results :func:`jaxga.compare_results` may compare."""
     environment: dict[str, Any]
     """What computed the runs: versions and device ({} where not known)."""
+    map_source: dict[str, Any] | None
+    """Where the map came from and how it was loaded (:meth:`jaxga.maps.MapInfo.source_json`:
+    file, format, loading options); None for a bare grid or where not known."""
 
 
 @dataclasses.dataclass(frozen=True, eq=False)
@@ -291,6 +294,11 @@ class Result(FrontsOfResult, MutableValueEquality):
     environment: dict[str, Any] = dataclasses.field(default_factory=dict)
     """What computed the runs: the versions of jaxga, JAX, jaxlib, NumPy and Python and the
     device (:func:`jaxga._runtime.device_probe.run_environment`); empty where not known."""
+    map_source: dict[str, Any] | None = None
+    """Where the map came from and how it was loaded: its file (a built-in map's or an
+    occupancy grid's name), format and the options that shaped its cells
+    (:meth:`jaxga.maps.MapInfo.source_json`), so that :func:`jaxga.rerun` loads a file
+    again as it was; None for a bare :class:`~jaxga.Grid` or where not known."""
 
     def _record(self, record: type) -> Any:
         return record(**{f.name: getattr(self, f.name) for f in dataclasses.fields(record)})
@@ -512,8 +520,11 @@ class Result(FrontsOfResult, MutableValueEquality):
             lines[-1] = "no metrics: no seed found a path"
         else:
             for name, mean, sd, lo, hi in self.summary_rows():
-                sd_text = f"{'-':>10s}" if math.isnan(sd) else f"{sd:10.4f}"  # one seed
-                lines.append(f"{name:24s} {mean:10.4f} {sd_text} {lo:10.4f} {hi:10.4f}")
+                # "-": one seed's sd, or a gap not computed (a fitness optimum without
+                # a path to weigh: start = goal)
+                cols = [f"{'-':>10s}" if math.isnan(v) else f"{v:10.4f}"
+                        for v in (mean, sd, lo, hi)]
+                lines.append(f"{name:24s} {' '.join(cols)}")
         raw_basis = self.gap_basis if self._raw_waypoints() else "8-connected optimum"
         bound = {"lower bound": " (a lower bound of the any-angle optimum: at least the "
                                 "gap to that optimum)",
@@ -647,6 +658,7 @@ class Result(FrontsOfResult, MutableValueEquality):
             })
         return {
             "preset": self.preset, "map": self.map_name, "map_digest": self.map_digest,
+            "map_source": getattr(self, "map_source", None),  # None from older pickles
             "environment": dict(getattr(self, "environment", {})),  # {} from older pickles
             "corner_rule": self.corner_rule,
             "start": None if self.start is None else list(self.start),

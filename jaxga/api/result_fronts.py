@@ -67,6 +67,37 @@ def least_clearance(value: Any, name: str = "min_clearance") -> float:
     raise ParameterError(f"{name} must be a number >= 0, got {shown_value(value)}")
 
 
+def knee(points: Any) -> int:
+    """The index of the knee of ``points`` (``float[k, 2]``, two objectives, both
+    minimised; a front's first two): among the points that no other beats in both, the
+    one that lies farthest beyond the line between the two ends towards the ideal point
+    (each objective scaled to those points' range), the trade-off that gives most of
+    each; the end of least first objective (the shortest) where no point lies beyond the
+    line, or where fewer than three points are left. A point of the front that another
+    beats in these two (it is on the front for a third objective) is never the knee."""
+    xy = np.array(points, float).reshape(-1, 2)
+    for j in range(2):  # an objective without bound (a clearance with no obstacle): all tie
+        col = xy[:, j]
+        if not np.isfinite(col).all():
+            finite = col[np.isfinite(col)]
+            low, high = (finite.min() - 1, finite.max() + 1) if finite.size else (0, 0)
+            xy[:, j] = np.where(col == -np.inf, low, np.where(col == np.inf, high, col))
+    beaten = ((xy[None, :, :] <= xy[:, None, :]).all(-1)
+              & (xy[None, :, :] < xy[:, None, :]).any(-1)).any(1)
+    ends = np.flatnonzero(~beaten)
+    ends = ends[np.lexsort((ends, xy[ends, 1], xy[ends, 0]))]  # shortest first
+    if len(ends) < 3:
+        return int(ends[0])
+    z = xy[ends]
+    span = np.ptp(z, axis=0)
+    z = (z - z.min(axis=0)) / np.where(span > 0, span, 1.0)
+    # scaled, the ends are (0, 1) and (1, 0) (points no other beats, shortest first),
+    # the line x + y = 1 and the ideal point (0, 0) beyond it
+    beyond = 1.0 - z[:, 0] - z[:, 1]
+    best = int(np.argmax(beyond))
+    return int(ends[best] if beyond[best] > 1e-9 else ends[0])
+
+
 @dataclasses.dataclass(frozen=True)
 class Fronts:
     """The fronts of a multi-objective preset's seeds (decision 045): every distinct
@@ -87,6 +118,13 @@ class Fronts:
     initial_hypervolume: np.ndarray
     """float[S]: each seed's initial population's hypervolume, against the reference
     point of its history's ``hypervolume`` (fixed at initialisation)."""
+    reference: np.ndarray | None = None
+    """float[S, M]: each seed's reference point of its hypervolumes, as
+    :attr:`objectives` (the clearance positive): each objective's worst value over the
+    valid initial individuals moved a tenth of their range, plus ``1e-3 (1 + |worst|)``,
+    further (:func:`jaxga.engine.evolution.hypervolume_reference`). The volume is of the
+    points no longer than its length and no narrower than its clearance (of its
+    turning, no more). None in a result saved before it was kept."""
 
     def gain(self, history: Mapping[str, np.ndarray]) -> np.ndarray:
         """float[S]: each seed's last hypervolume over its initial population's: what the
@@ -149,10 +187,9 @@ class FrontsOfResult:
                      ) -> dict[str, Any] | None:
         """One point of seed ``i``'s front: the shortest that keeps at least
         ``min_clearance`` cells from the obstacles (None when no point does), or by
-        default the knee: the point farthest from the line between the two ends, each
-        objective scaled to the front's range (the shortest end when the front has fewer
-        than three points). :class:`ParameterError` for ``min_clearance`` where the
-        front does not minimise the clearance."""
+        default the knee of its first two objectives (:func:`knee`).
+        :class:`ParameterError` for ``min_clearance`` where the front does not minimise
+        the clearance."""
         i = self.seed_index(i)
         if min_clearance is not None:
             min_clearance = least_clearance(min_clearance)
@@ -165,14 +202,8 @@ class FrontsOfResult:
             return next((p for p in points if p.get("clearance", 0.0) >= min_clearance),
                         None)
         names = self.front.names[:2]
-        xy = np.array([[p[n] for n in names] for p in points], float)
-        if len(points) < 3:
-            return points[0]
-        span = np.ptp(xy, axis=0)
-        xy = (xy - xy.min(axis=0)) / np.where(span > 0, span, 1.0)
-        a, b = xy[0], xy[-1]
-        d = np.abs((b[0] - a[0]) * (a[1] - xy[:, 1]) - (a[0] - xy[:, 0]) * (b[1] - a[1]))
-        return points[int(np.argmax(d))]
+        sign = [-1.0 if n == "clearance" else 1.0 for n in names]  # both minimised
+        return points[knee([[s * p[n] for s, n in zip(sign, names)] for p in points])]
 
     def front_point(self, i: int, which: str | float = "knee") -> dict[str, Any] | None:
         """One point of seed ``i``'s front by name: ``"knee"`` (:meth:`front_choice`),
@@ -195,8 +226,11 @@ class FrontsOfResult:
         if which == "widest":
             return max(points, key=lambda p: (p["clearance"], -p["length"]))
         least = float(which)
-        cell = None if self.frame is None else self.frame.cell_size
-        return self.front_choice(i, min_clearance=least / cell if cell else least)
+        if self.frame is None or not self.frame.cell_size:
+            return self.front_choice(i, min_clearance=least)
+        # compared in metres: a point's own clearance_m, given back, keeps itself (its
+        # metres divided by the cell size may round below its cells)
+        return next((p for p in points if p["clearance_m"] >= least), None)
 
     def front_text(self) -> str:
         """The fronts in one line ("" without one): points per seed, the shortest end's
@@ -218,13 +252,15 @@ class FrontsOfResult:
         wide = median("widest_clearance")
         wide_text = f"{wide * cell:.3f} m" if cell else f"{wide:.2f} cells"
         ratio = median("widest_ratio")
-        share = ("no obstacle bounds the exact maximin clearance" if math.isnan(ratio)
-                 else f"{ratio:.3f} of the exact maximin clearance")
+        if self.maximin_clearance == math.inf:  # widest_clearance is None: no obstacle
+            widest = "widest end: the map has no obstacle to keep clear of"
+        else:
+            share = ("no obstacle bounds the exact maximin clearance" if math.isnan(ratio)
+                     else f"{ratio:.3f} of the exact maximin clearance")
+            widest = f"widest end: its cells {wide_text} from the {walls}, {share}"
         return (f"front ({', '.join(self.front.names)}; medians over {ok.size} seeds): "
                 f"{median('points'):g} points; shortest end {100 * median('shortest_gap'):.2f} "
-                f"% over the any-angle optimum; widest end: its cells {wide_text} from the "
-                f"{walls}, "
-                f"{share}; hypervolume "
+                f"% over the any-angle optimum; {widest}; hypervolume "
                 f"x{median('hypervolume_gain'):.3f} over the initial population's")
 
     def _front_json(self, i: int) -> dict[str, Any]:
@@ -234,5 +270,10 @@ class FrontsOfResult:
             return {}
         points = [{**{k: json_number(v) for k, v in p.items() if k != "path"},
                    "path": [list(c) for c in p["path"]]} for p in self.front_points(i)]
-        return {"front": points, "front_ends": self.front_ends(i)}
+        out = {"front": points, "front_ends": self.front_ends(i)}
+        if self.front.reference is not None:
+            out["hypervolume_reference"] = {
+                n: json_number(float(self.front.reference[self.seed_index(i), j]))
+                for j, n in enumerate(self.front.names)}
+        return out
 

@@ -321,8 +321,10 @@ def _plan_sweep(problem: Problem, points: Sequence[Mapping[str, Any]], seeds: An
     report("references", 0.0)
     with timeline.phase("references"):
         octile = octile_optimum(map_grid, guided=uses_guide(config))
+    source = None if problem.info is None else problem.info.source_json()
     problem = dict(config=config, configs=configs, points=points, map_name=map_name,
-                   frame=frame, grid=map_grid, capacity=capacity, octile=octile)
+                   frame=frame, grid=map_grid, capacity=capacity, octile=octile,
+                   map_source=source)
     if not octile.found:
         return SweepPlan(**problem, seed_arr=seed_list(seeds, lambda n: check_memory(
             n * len(configs), NO_PATH_BYTES_PER_RUN, "for their results")))
@@ -394,7 +396,8 @@ def _no_path_results(plan: SweepPlan, timeline: Timeline) -> list[Result]:
     """One "no path" result per point, naming the cause (nothing ran)."""
     return [no_path_result(c, plan.map_name, plan.grid, plan.seed_arr,
                            build(c, plan.grid)[0], plan.octile.reason, timeline.as_dict(),
-                           plan.capacity, plan.frame) for c in plan.configs]
+                           plan.capacity, plan.frame, plan.map_source)
+            for c in plan.configs]
 
 
 def _compile_init(plan: SweepPlan, timeline: Timeline,
@@ -569,7 +572,7 @@ def _point_results(host: dict, hist: dict, plan: SweepPlan, start: InitOutcome,
             initial_fitness=initial[sl].astype(float),
             optimum=float(octile.length), any_angle_optimum=bounds.optimum,
             lower_bound=bounds.lower_bound, any_angle_note=bounds.note, frame=plan.frame,
-            map_digest=digest, environment=environment,
+            map_digest=digest, environment=environment, map_source=plan.map_source,
             timing=dict(timing), population=int(cfg["population.size"]) * algo.islands,
             generations=algo.generations, width=grid.width, config=cfg,
             point={k.replace("__", "."): v for k, v in points[q].items()},
@@ -578,7 +581,7 @@ def _point_results(host: dict, hist: dict, plan: SweepPlan, start: InitOutcome,
             fitness_optimum_loop_free=plan.point_opt[q].loop_free,
             fitness_optimum_reason=("" if plan.point_opt[q].found
                                     else plan.point_opt[q].reason),
-            front=_fronts(h.front, algo), maximin_clearance=maximin,
+            front=_fronts(h.front, algo, maximin), maximin_clearance=maximin,
             start=grid.start_xy, goal=grid.goal_xy, population_capacity=algo.population,
             init_fallback=from_fallback[sl], causes=causes, path_capacity=algo.capacity,
             size_class=plan.size_class,
@@ -586,19 +589,25 @@ def _point_results(host: dict, hist: dict, plan: SweepPlan, start: InitOutcome,
     return results
 
 
-def _fronts(front: Front | None, algo: Algorithm) -> Fronts | None:
+def _fronts(front: Front | None, algo: Algorithm, maximin: float) -> Fronts | None:
     """A front's outputs (:class:`jaxga.engine.evolution.Front`) as the result keeps
-    them: the clearance positive, in cells."""
+    them: the clearance positive, in cells, and infinite on a map without obstacles
+    (``maximin``, the exact maximin clearance, infinite), where the runs read it capped
+    at ``H + W`` (:func:`jaxga.operators.guide.with_front_fields`)."""
     if front is None:
         return None
     names = algo.stages.objectives
     objectives = np.asarray(front.objectives, float).copy()
+    reference = np.asarray(front.reference, float).copy()
     for j, n in enumerate(names):
         if n == "clearance":
-            objectives[..., j] *= -1
+            objectives[..., j] = -objectives[..., j] if math.isfinite(maximin) or \
+                math.isnan(maximin) else math.inf
+            reference[..., j] *= -1
     return Fronts(names=names, mask=np.asarray(front.mask), cells=np.asarray(front.cells),
                   n_cells=np.asarray(front.n_cells), objectives=objectives,
-                  initial_hypervolume=np.asarray(front.initial_hypervolume, float))
+                  initial_hypervolume=np.asarray(front.initial_hypervolume, float),
+                  reference=reference)
 
 
 def checked_capacity(configs: Sequence[Config], requested: Any) -> int:

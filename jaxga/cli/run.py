@@ -210,8 +210,15 @@ def run_and_report(args: argparse.Namespace, timeline: Timeline,
                               decimals=result.frame.world_decimals)
         evolved = (f"{point['length_m']:.3f} m long as evolved, " if "length_m" in point
                    else "")
-        clear = (f", clearance {point['clearance_m']:.3f} m" if "clearance_m" in point
-                 else "")
+        clear = ""
+        if "clearance_m" in point and math.isfinite(point["clearance_m"]):
+            # the cells' clearance is the front's objective; the written line's own,
+            # between the cells, may be less (a diagonal passes nearer a corner)
+            clear = f", its cells' clearance {point['clearance_m']:.3f} m"
+            own = (None if result.frame.clearance is None
+                   else result.frame.clearance.of_path_m(line))
+            if own is not None and math.isfinite(own):
+                clear += f", the line's own {own:.3f} m"
         print(f"wrote {args.path_out} (seed {int(result.seeds[best])}, front point "
               f"{args.front_point}: {evolved}"
               f"{path_length(line) * result.frame.cell_size:.3f} m shortcut without "

@@ -53,6 +53,12 @@ class CacheWarning(RuntimeWarning):
     compiled without it, so only the speed differs (:mod:`jaxga._runtime.compilation_cache`)."""
 
 
+class EnvironmentWarning(RuntimeWarning):
+    """A saved result is run again (:func:`jaxga.rerun`) by other versions of jaxga, JAX,
+    jaxlib, NumPy or Python, or on another device, than its JSON records: the runs may
+    differ from the saved ones (docs/python.md)."""
+
+
 class PlatformWarning(RuntimeWarning):
     """The runs compute on a platform other than the CPU, where jaxga's results are not
     reproducible bit for bit: on a GPU a seed's result may differ from the CPU's and with

@@ -137,9 +137,10 @@ DIRECTIONS = np.array(
 
 def check_corner_rule(rule: str) -> str:
     """Return ``rule`` if it is one of :data:`CORNER_RULES`, else raise a clear error."""
-    if rule not in CORNER_RULES:
+    if not isinstance(rule, str) or rule not in CORNER_RULES:  # [] is unhashable
         raise JaxgaError(
-            f"unknown corner rule {rule!r}: expected one of {', '.join(CORNER_RULES)}"
+            f"unknown corner rule {shown_value(rule)}: expected one of "
+            f"{', '.join(CORNER_RULES)}"
         )
     return rule
 

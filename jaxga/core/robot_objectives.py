@@ -20,6 +20,7 @@ normalised, repeated nodes skipped); pure, float32, jit and vmap.
 
 from __future__ import annotations
 
+import math
 from typing import NamedTuple
 
 import jax
@@ -38,7 +39,9 @@ class RobotObjectives(NamedTuple):
     """One path's robot objectives (float32 scalars)."""
 
     length: jax.Array
-    """Euclidean length through the cell centres, in metres."""
+    """Euclidean length through the cell centres, in metres; the same bits for the same
+    steps in any order (orthogonal and diagonal steps counted), so that a front sees
+    two paths of one length as tied."""
     clearance: jax.Array
     """The least clearance of its cells, in metres (module docstring)."""
     intrusion: jax.Array
@@ -48,7 +51,8 @@ class RobotObjectives(NamedTuple):
     falls as a path moves out of the band, so a GA can climb it where the least
     clearance alone changes only at one cell."""
     turning: jax.Array
-    """The sum of its turn angles, in radians (AGACD eq. 10-17's smoothness)."""
+    """The sum of its turn angles, in radians (AGACD eq. 10-17's smoothness); the same
+    bits for the same turns in any order (turns by multiples of 45 degrees counted)."""
     max_turn: jax.Array
     """Its largest turn, in radians."""
 
@@ -75,14 +79,44 @@ def robot_objectives(grid: Grid, cells: jax.Array, length: jax.Array, field: jax
     steps = cell_steps * scale
     depth = jnp.maximum(jnp.asarray(band, F32) - clear, 0.0)
     intrusion = ordered_sum(steps * 0.5 * (depth[:-1] + depth[1:]), dtype=F32)
-    turns = turn_angles(grid, cells, length)  # angle_sum is their ordered sum
+    turns = turn_angles(grid, cells, length)
     return RobotObjectives(
-        length=ordered_sum(cell_steps) * scale,
+        length=_tied_length(g.dx * g.dx + g.dy * g.dy, cell_steps) * scale,
         clearance=least.astype(F32),
         intrusion=intrusion,
-        turning=ordered_sum(turns, dtype=F32),
+        turning=_tied_turning(turns),
         max_turn=jnp.max(turns).astype(F32),
     )
+
+
+def _tied_length(squared: jax.Array, steps: jax.Array) -> jax.Array:
+    """The sum of ``steps`` (their squared lengths ``squared``, integers), in cells, the
+    same bits for the same steps in any order: the orthogonal and the diagonal steps
+    counted (``n1 + n2 sqrt(2)``), the longer ones of a waypoint path summed in order.
+    An ordered float32 sum rounds by the order of its terms, so that two paths of equal
+    length could differ in the last bit and one "dominate" the other on a front."""
+    unit = jnp.sum(squared == 1, dtype=jnp.int32).astype(F32)
+    diagonal = jnp.sum(squared == 2, dtype=jnp.int32).astype(F32)
+    longer = ordered_sum(jnp.where(squared > 2, steps, 0.0), dtype=F32)
+    return unit + diagonal * jnp.float32(math.sqrt(2.0)) + longer
+
+
+_EIGHTH = math.pi / 4
+_SNAP = 1e-5
+"""Radians within which a turn angle is taken as its multiple of pi/4 (float32's atan2
+is within about 1e-7 of it)."""
+
+
+def _tied_turning(turns: jax.Array) -> jax.Array:
+    """The sum of the turn angles ``turns``, the same bits for the same turns in any
+    order (as :func:`_tied_length`): the turns by multiples of pi/4 (every turn of an
+    8-connected path) counted in eighths of a revolution, any other angle summed in
+    order."""
+    eighths = jnp.round(turns / jnp.float32(_EIGHTH))
+    snapped = jnp.abs(turns - eighths * jnp.float32(_EIGHTH)) <= _SNAP
+    counted = jnp.sum(jnp.where(snapped, eighths, 0.0).astype(jnp.int32), dtype=jnp.int32)
+    rest = ordered_sum(jnp.where(snapped, 0.0, turns), dtype=F32)
+    return counted.astype(F32) * jnp.float32(_EIGHTH) + rest
 
 
 def minimised(objectives: RobotObjectives, names: tuple[str, ...]) -> jax.Array:

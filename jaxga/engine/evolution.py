@@ -554,6 +554,9 @@ class Front:
     initial_hypervolume: jax.Array
     """float32: the initial population's hypervolume (the history's ``hypervolume``
     holds each generation's, against the same reference point)."""
+    reference: jax.Array
+    """float32[M]: the reference point of the hypervolumes, in the objectives'
+    minimised form (:func:`hypervolume_reference`)."""
 
 
 def final_front(state: GAState) -> Front:
@@ -562,7 +565,8 @@ def final_front(state: GAState) -> Front:
     unique = distinct(isl.objectives, isl.feasible)
     rank = nondominated_rank(isl.objectives, unique)
     return Front(mask=unique & (rank == 0), cells=isl.cells, n_cells=isl.length,
-                 objectives=isl.objectives, initial_hypervolume=state.initial_hypervolume)
+                 objectives=isl.objectives, initial_hypervolume=state.initial_hypervolume,
+                 reference=state.reference)
 
 
 @jax.tree_util.register_dataclass

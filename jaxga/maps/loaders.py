@@ -128,6 +128,11 @@ class MapInfo(ValueEquality):
         layers: walls, inflation margin and unknown cells of the planning grid, for plots.
         defaulted: the endpoints (``"start"``, ``"goal"``) that were neither given nor
             marked in the file, so took their default corners.
+        options: the options of :func:`load_map` that shaped its cells, as given
+            (``fmt``, ``coarsen``, ``threshold``, ``unknown``, ``occupied_from``,
+            ``inflate``, ``robot_radius``; endpoints and the corner rule are the
+            problem's), as ``(name, value)`` pairs: a saved result names them
+            (:meth:`source_json`), so that its map can be loaded again as it was.
     """
 
     name: str
@@ -139,12 +144,26 @@ class MapInfo(ValueEquality):
     frame: MapFrame | None = None
     layers: MapLayers | None = None
     defaulted: tuple[str, ...] = ()
+    options: tuple[tuple[str, Any], ...] = ()
+
+    def source_json(self) -> dict[str, Any]:
+        """Where the map came from and how it was loaded, as a result's JSON records it
+        (``map_source``): the file (a built-in map's or an occupancy grid's name), its
+        format, whether it is built in, and :attr:`options`."""
+        return {"path": str(self.path), "format": self.format, "builtin": self.builtin,
+                "options": {k: python_scalar(v) if not isinstance(v, (tuple, list))
+                            else list(v) for k, v in self.options}}
 
     @property
     def resolution(self) -> float | None:
         """Metres per PLANNING cell (a ROS map's ``resolution`` times the coarsening
         factor), None for the formats without one."""
         return None if self.frame is None else self.frame.cell_size
+
+
+LOADING_OPTIONS = ("fmt", "coarsen", "threshold", "unknown", "occupied_from", "inflate",
+                   "robot_radius")
+"""The options of :func:`load_map` that shape a map's cells (:attr:`MapInfo.options`)."""
 
 
 # --------------------------------------------------------------------------- public
@@ -430,8 +449,10 @@ def _assembled(blocked: np.ndarray, unknown_cells: np.ndarray | None, ros: RosMa
     except EndpointError as e:
         raise EndpointError(f"{label}: {e}") from None
     defaulted = tuple(n for n, xy in (("start", s), ("goal", g)) if xy is None)
+    options = tuple((k, getattr(o, k)) for k in LOADING_OPTIONS
+                    if getattr(o, k) is not None)
     return MapInfo(name=shown_name, path=path, format=kind, builtin=is_builtin, grid=grid,
-                   ros=ros, frame=frame, layers=layers, defaulted=defaulted)
+                   ros=ros, frame=frame, layers=layers, defaulted=defaulted, options=options)
 
 
 def _inflated(blocked: np.ndarray, ros: RosMap | None, cells: float | None,

@@ -15,6 +15,7 @@ import numpy as np
 import pytest
 
 import jaxga
+from jaxga.api.result_fronts import knee
 from jaxga.config.presets import load_preset
 from jaxga.core.errors import ParameterError
 from jaxga.core.grid import Grid
@@ -257,6 +258,25 @@ def test_front_choice_knee_and_least_clearance(front_run):
     with pytest.raises(ParameterError, match="chosen by its clearance"):
         other.front_choice(0, min_clearance=0.5)
     assert other.front_point(0, "knee") in other.front_points(0)
+
+
+def test_the_knee_is_the_point_farthest_beyond_the_line_towards_the_ideal():
+    """Hand-made fronts of (length, clearance), minimised as (length, -clearance): the
+    knee bulges towards the short-and-wide ideal; a point that another beats in these
+    two (on the front for its turning) is never it, however far from the line; a front
+    on the line, of two points or without obstacles (every clearance infinite) gives
+    the shortest end."""
+    front = [(41.142, 0.5), (41.971, 0.707), (43.385, 0.707), (43.728, 1.5),
+             (45.142, 2.121), (46.314, 2.5)]
+    minimised = [(length, -clear) for length, clear in front]
+    # (43.385, 0.707) lies farthest from the line, on the side away from the ideal
+    # (beaten by (41.971, 0.707)); (45.142, 2.121) lies 0.037 beyond it
+    assert knee(minimised) == 4
+    assert knee(minimised[::-1]) == 1  # the same point, whatever the order given
+    assert knee([(1, 0), (2, -1), (3, -2)]) == 0  # on the line
+    assert knee([(2, -1), (1, 0)]) == 1  # two points: the shortest
+    assert knee([(1, 0), (1.1, -0.9), (3, -1)]) == 1
+    assert knee([(3, -np.inf), (1, -np.inf), (2, -np.inf)]) == 1
 
 
 def test_a_front_measures_clearance_from_the_map_s_own_obstacles():
