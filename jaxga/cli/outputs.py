@@ -83,6 +83,10 @@ def check_outputs(args: argparse.Namespace) -> None:
     inputs = input_files(args)
     package = PACKAGE
     for option, path in outputs.items():
+        if path is not None and str(path) == "-":  # not standard output: a file named -
+            raise JaxgaError(f"cannot write {option} -: jaxga writes its outputs to files "
+                             "(standard output carries the summary); give a file name, "
+                             "./- for a file of that name")
         if path and str(path).endswith(("/", os.sep)):  # POSIX: a folder's name
             raise JaxgaError(f"cannot write {option} {path}: a name ending in '/' names a "
                              "folder, not a file")

@@ -13,6 +13,7 @@ import numpy as np
 
 from jaxga import api
 from jaxga._runtime.device_probe import run_environment
+from jaxga._runtime.size_classes import auto_size_class
 from jaxga.config.schema import Config
 from jaxga.core.errors import NoPathError
 from jaxga.core.grid import Grid
@@ -97,6 +98,7 @@ def run_doe(
         corner_rule=plan.loaded.corner_rule, start=plan.loaded.start_xy,
         goal=plan.loaded.goal_xy, map_digest=plan.loaded.cells_digest(),
         path_capacity=plan.path_capacity, environment=run_environment(),
+        size_class=auto_size_class(plan.loaded),  # the sweeps' automatic size class
     )
 
 

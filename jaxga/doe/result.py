@@ -53,6 +53,9 @@ class DoeResult(MutableValueEquality):
     """The map's :meth:`jaxga.Grid.cells_digest` ("" where not known)."""
     path_capacity: int = 0
     """The cells a path can hold in every point's program."""
+    size_class: bool = False
+    """Whether every point ran on the map padded to its size class (automatic: a side
+    over 64 cells); ``jaxga.run(..., size_class=...)`` with it repeats a point's runs."""
     environment: dict[str, Any] = dataclasses.field(default_factory=dict)
     """What computed the runs (:func:`jaxga._runtime.device_probe.run_environment`)."""
 
@@ -119,7 +122,7 @@ class DoeResult(MutableValueEquality):
             "timing": {k: float(v) for k, v in self.timing.items()},
             "generations": None if self.config is None else int(self.config["generations"]),
             "population_capacity": self.population_capacity,
-            "path_capacity": self.path_capacity,
+            "path_capacity": self.path_capacity, "size_class": self.size_class,
             "config": None if self.config is None else self.config.as_dict(),
         }
 

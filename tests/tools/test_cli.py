@@ -1162,6 +1162,7 @@ def test_inputs_that_do_not_match_are_refused_in_one_line(tmp_path, capsys):
         (["--map", str(art), "--threshold", "0.5"], "has no effect on a 0/1 text map"),
         (["--map", str(png), "--unknown", "blocked"], "has no effect on an image"),
         (["--map", str(png), "--occupied-from", "99"], "has no effect on an image"),
+        (["--map", str(art), "--json", "-"], "cannot write --json -: jaxga writes its outputs"),
         (["--map", str(art), "--coarsen", "2", "--start", "0,0", "--goal", "1,1"],
          "fall into one coarse cell (0, 0)"),
     ):

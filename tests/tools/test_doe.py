@@ -408,7 +408,8 @@ def test_json_layout(one_call):
     grid = jaxga.maps.load_map(MAP)
     assert d["map_digest"] == grid.cells_digest()
     assert (d["start"], d["goal"]) == (list(grid.start_xy), list(grid.goal_xy))
-    assert d["path_capacity"] > 0 and d["environment"]["jaxga"] == jaxga.__version__
+    assert d["path_capacity"] > 0 and d["size_class"] is False
+    assert d["environment"]["jaxga"] == jaxga.__version__
     names = [f.name for f in SMALL]
     assert list(d["factors"]) == names and d["factors"]["population.size"] == [10, 15, 20]
     assert len(d["points"]) == 9
