@@ -26,6 +26,7 @@ from pathlib import Path
 from typing import Any
 
 from jaxga._runtime.seeds import seed_list
+from jaxga._runtime.size_classes import auto_size_class, class_shape
 from jaxga.api.problem import load_problem
 from jaxga.api.result import Result
 from jaxga.api.runs import check_call_options, run
@@ -66,17 +67,24 @@ class Planner:
             too, as :func:`jaxga.run` applies it).
         any_angle_budget: as :func:`jaxga.run`: seconds the any-angle reference may
             take after each plan's runs (``"auto"``: at most their own time); 0 skips it.
+        size_class: as :func:`jaxga.run`: ``True`` plans on the map padded to its size
+            class, so that maps of other sizes in one class (a map that grows as it is
+            explored) share the compiled programs; ``None``, the default, pads maps with
+            a side over 64 cells.
         **overrides: configuration keys, as :func:`jaxga.run` takes them.
 
     Attributes:
         map: the :class:`jaxga.maps.MapInfo` planned on. A new map (a costmap update):
             :meth:`update_map`, or ``planner.map = ...``, which does the same.
-        capacity: (read-only) the path capacity of the planner's programs, the same for every start
-            and goal: the most cells an optimal path of the map can have, times the
-            preset's ``population.capacity_factor``
-            (:func:`jaxga.engine.algorithm.map_capacity`); None where the preset or the
-            overrides set ``population.capacity``. A plan equals :func:`jaxga.run` on the
-            same pair with ``population.capacity`` set to it.
+        capacity: (read-only) the path capacity of the planner's programs, the same for
+            every start and goal: the most cells an optimal path of the map can have,
+            times the preset's ``population.capacity_factor``
+            (:func:`jaxga.engine.algorithm.map_capacity`), and never less, through
+            :meth:`update_map`, than before on a map whose programs have the same shape
+            (a costmap updated: its programs are compiled again only when a map needs
+            more than every map before); None where the preset or the overrides set
+            ``population.capacity``. A plan equals :func:`jaxga.run` on the same pair
+            with ``population.capacity`` set to it.
         overrides: (read-only) the configuration keys each plan runs with: the
             constructor's, and ``population__capacity``. Other keys: a new planner.
     """
@@ -87,11 +95,12 @@ class Planner:
                  coarsen: int | None = None, unknown: str | None = None,
                  occupied_from: int | None = None, corner_rule: str | None = None,
                  any_angle_budget: float | str | None = "auto",
-                 **overrides: Any) -> None:
+                 size_class: bool | None = None, **overrides: Any) -> None:
         self.preset = preset
         self.seeds = _checked_seeds(seeds)
-        check_call_options(None, 1, None, any_angle_budget)  # refused now, not at a plan
+        check_call_options(None, 1, size_class, any_angle_budget)  # now, not at a plan
         self.any_angle_budget = any_angle_budget
+        self._size_class = size_class
         self._loading = {"robot_radius": robot_radius, "inflate": inflate,
                          "coarsen": coarsen, "unknown": unknown,
                          "occupied_from": occupied_from}
@@ -109,9 +118,11 @@ class Planner:
         :class:`jaxga.maps.MapInfo` or a :class:`jaxga.Grid`) is planned on as it is,
         under the planner's ``corner_rule`` if it was given one: its caller loaded it
         with the robot's radius (``jaxga.maps.load_map_info(path, robot_radius=...)``).
-        The planner then equals one made on the new map: its :attr:`capacity` follows the
-        new map's longest optimal path, and where that falls in another size class the
-        next plan compiles its programs (once); give ``population__capacity`` to the
+        The planner then plans as one made on the new map with ``population__capacity``
+        set to its :attr:`capacity`, which follows the new map's longest optimal path
+        but never shrinks on a map whose programs have the same shape (the same size,
+        or the same size class): a costmap update compiles nothing unless its map needs
+        more than every map before, and then once. Give ``population__capacity`` to the
         constructor to keep one capacity, and its programs, through every update. A plan
         under way in another thread finishes on the map it started with; a map refused
         leaves the planner as it was."""
@@ -192,6 +203,11 @@ class Planner:
                 "population.capacity", "population__capacity"} & overrides.keys():
             # programs sized for the map's longest optimal path, not its size class's
             capacity = map_capacity(info.grid, float(config["population.capacity_factor"]))
+            before = getattr(self, "_planned_on", None)  # None: the constructor's map
+            size_class = getattr(self, "_size_class", None)
+            if before is not None and before[1] is not None and _program_shape(
+                    before[0].grid, size_class) == _program_shape(info.grid, size_class):
+                capacity = max(capacity, before[1])  # its programs, no compile
             most = SCHEMA["population.capacity"].high
             if capacity > most:  # refused here, not at the first plan as an override
                 raise ParameterError(
@@ -227,7 +243,16 @@ class Planner:
         problem = dataclasses.replace(info, grid=grid, defaulted=())  # both given
         budget = self.any_angle_budget if any_angle_budget is None else any_angle_budget
         return run(self.preset, problem, self.seeds if seeds is None else seeds,
-                   progress=progress, any_angle_budget=budget, **overrides)
+                   progress=progress, any_angle_budget=budget,
+                   size_class=getattr(self, "_size_class", None), **overrides)
+
+
+def _program_shape(grid: Grid, size_class: bool | None) -> tuple[int, int]:
+    """The shape of the map a plan's programs run on: its size class's where the plan
+    pads it (``size_class``, as :func:`jaxga.run` reads it), else its own."""
+    padded = auto_size_class(grid) if size_class is None else size_class
+    shape = class_shape(grid.height, grid.width) if padded else None
+    return shape or grid.shape
 
 
 class _Counted(Exception):

@@ -286,6 +286,13 @@ def _blocked_hint(layers: Any, grid: Grid) -> str:
                 return ("; the cell is unknown in the map (neither free nor occupied) and "
                         "unknown cells are blocked: --unknown free (unknown='free') plans "
                         "through them")
+            graded = getattr(layers, "graded", None)  # None from older pickles
+            if graded is not None and graded.shape == grid.blocked.shape \
+                    and graded[xy[1], xy[0]]:
+                return ("; the cell holds a graded occupancy (1-99: a costmap's inflation "
+                        "cost, a scale-mode map's grey), blocked by the rule for graded "
+                        "cells: --occupied-from N (occupied_from=N) blocks only those of N "
+                        "and more (99 for a costmap: its lethal and inscribed cells)")
             return ""
     return ""
 

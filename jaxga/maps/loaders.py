@@ -92,12 +92,18 @@ class MapLayers(ValueEquality):
         margin: cells blocked only by the inflation (``--inflate``, ``--robot-radius``).
         unknown: a ROS map's unknown cells that are neither wall nor margin.
         unknown_blocked: whether unknown cells are planned on as blocked.
+        graded: the walls that are graded cells (occupancy 1-99: a costmap's inflation, a
+            scale-mode map's grey), not occupied ones, blocked by the default rule for
+            graded cells (``unknown``); a part of ``wall``, not exclusive of it; None for
+            a map without occupancies or loaded with ``occupied_from``. Tells why an
+            endpoint is blocked.
     """
 
     wall: np.ndarray
     margin: np.ndarray
     unknown: np.ndarray
     unknown_blocked: bool = True
+    graded: np.ndarray | None = None
 
     def coarsened(self, factor: int) -> MapLayers:
         """The layers of the map coarsened by ``factor``: a coarse cell is wall if any of
@@ -105,7 +111,8 @@ class MapLayers(ValueEquality):
         wall = coarsen_blocked(self.wall, factor)
         margin = coarsen_blocked(self.margin, factor) & ~wall
         unknown = coarsen_blocked(self.unknown, factor) & ~wall & ~margin
-        return MapLayers(wall, margin, unknown, self.unknown_blocked)
+        graded = None if self.graded is None else coarsen_blocked(self.graded, factor)
+        return MapLayers(wall, margin, unknown, self.unknown_blocked, graded)
 
 
 @dataclasses.dataclass(frozen=True, eq=False)
@@ -325,7 +332,7 @@ def load_map_info(source: Source | OccupancyGrid, **options: Any) -> MapInfo:
         if message:
             raise MapFormatError(f"{label}: {message}")
     ros = None
-    unknown_cells = None
+    unknown_cells = graded_cells = None
     if kind == "png":
         blocked = parse_png(path, label, 0.5 if o.threshold is None else o.threshold, raw)
         file_start = file_goal = None
@@ -335,6 +342,7 @@ def load_map_info(source: Source | OccupancyGrid, **options: Any) -> MapInfo:
         blocked = ros_blocked(occ, "blocked" if o.unknown is None else o.unknown,
                               o.occupied_from)
         unknown_cells = np.ascontiguousarray((occ == -1)[::-1])
+        graded_cells = np.ascontiguousarray(((occ >= 1) & (occ <= 99))[::-1])
         file_start = file_goal = None
     else:
         text = decode_text(raw, label)
@@ -349,7 +357,7 @@ def load_map_info(source: Source | OccupancyGrid, **options: Any) -> MapInfo:
 
     return _assembled(blocked, unknown_cells, ros, file_start, file_goal, o, rule, factor,
                       label, shown_name=map_name(source), path=path, kind=kind,
-                      is_builtin=is_builtin)
+                      is_builtin=is_builtin, graded_cells=graded_cells)
 
 
 def _from_occupancy_grid(source: Any, o: types.SimpleNamespace, rule: str,
@@ -376,15 +384,16 @@ def _from_occupancy_grid(source: Any, o: types.SimpleNamespace, rule: str,
     except MapFormatError as e:
         raise MapFormatError(f"{label}: {e}") from None
     unknown_cells = np.ascontiguousarray(grid.occupancy == -1)
+    graded_cells = np.ascontiguousarray((grid.occupancy >= 1) & (grid.occupancy <= 99))
     return _assembled(blocked, unknown_cells, ros, None, None, o, rule, factor, label,
                       shown_name=grid.name, path=Path(grid.name), kind="occupancy_grid",
-                      is_builtin=False)
+                      is_builtin=False, graded_cells=graded_cells)
 
 
 def _assembled(blocked: np.ndarray, unknown_cells: np.ndarray | None, ros: RosMap | None,
                file_start: XY | None, file_goal: XY | None, o: types.SimpleNamespace,
                rule: str, factor: int, label: str, *, shown_name: str, path: Path, kind: str,
-               is_builtin: bool) -> MapInfo:
+               is_builtin: bool, graded_cells: np.ndarray | None = None) -> MapInfo:
     """The :class:`MapInfo` of a map's cells as read (``blocked``, row 0 the bottom, the
     ROS map's unknown cells and metadata): the endpoints, inflation, layers, frame and
     coarsening that :func:`load_map`'s options ask for."""
@@ -415,7 +424,11 @@ def _assembled(blocked: np.ndarray, unknown_cells: np.ndarray | None, ros: RosMa
         wall=walls, margin=blocked & ~map_blocked,
         unknown=(np.zeros_like(blocked) if unknown_cells is None
                  else unknown_cells & ~walls & ~(blocked & ~map_blocked)),
-        unknown_blocked=o.unknown != "free")
+        unknown_blocked=o.unknown != "free",
+        # cells blocked by the default rule for graded ones; with occupied_from, by the
+        # caller's own threshold
+        graded=(None if graded_cells is None or o.occupied_from is not None
+                else graded_cells & walls))
     frame = MapFrame(map_shape=blocked.shape, coarsen=factor,
                      resolution=None if ros is None else ros.resolution,
                      origin=None if ros is None else ros.origin, obstacles=map_blocked,

@@ -24,6 +24,8 @@ inscribed cells blocked, the inflation's cost below free).
 from __future__ import annotations
 
 import math
+import os
+from array import array as array_type
 from collections.abc import Mapping
 from typing import Any
 
@@ -145,10 +147,20 @@ class OccupancyGrid:
 
 def is_occupancy_message(source: Any) -> bool:
     """Whether ``source`` looks like a ``nav_msgs/OccupancyGrid`` message: it has an
-    ``info`` and a ``data`` (as attributes, or as keys of a mapping)."""
+    ``info`` (as an attribute, or as a key of a mapping); a message without its ``data``
+    is then refused naming that field, not as a source of another kind."""
     if isinstance(source, Mapping):
-        return "info" in source and "data" in source
-    return hasattr(source, "info") and hasattr(source, "data")
+        return "info" in source
+    return not isinstance(source, (str, bytes, os.PathLike, tuple)) \
+        and hasattr(source, "info")  # a tuple: jaxga.problem's Problem has an info too
+
+
+def _holds_bool(data: Any) -> bool:
+    """Whether a list or tuple of occupancies (nested one level or more) holds a bool."""
+    if not isinstance(data, (list, tuple)):
+        return False
+    return any(isinstance(v, (bool, np.bool_)) or (isinstance(v, (list, tuple))
+                                                   and _holds_bool(v)) for v in data)
 
 
 def _checked_name(name: Any, kind: str) -> str:
@@ -187,6 +199,9 @@ def _occupancies(data: Any, width: Any, height: Any, label: str) -> np.ndarray:
             isinstance(data, memoryview) and data.format in ("b", "B", "c")):
         values = np.frombuffer(bytes(data), np.int8)  # the message's int8, as sent
     else:
+        if _holds_bool(data):  # np.asarray would make True an occupancy of 1
+            raise MapFormatError(f"{label}: occupancies must be integers from -1 to 100, "
+                                 "got a sequence holding true or false")
         try:
             values = np.asarray(data)
         except (ValueError, TypeError) as e:  # ragged nested lists
@@ -218,8 +233,12 @@ def _occupancies(data: Any, width: Any, height: Any, label: str) -> np.ndarray:
     bad = ~np.isin(values, np.arange(-1, 101))  # NaN, 1.5, 101 and -2 alike
     if bad.any():
         y, x = (int(v) for v in np.argwhere(bad)[0])
+        unsigned = ("; the data is unsigned (a message's data is int8, -1 for unknown: "
+                    "send it as int8)" if values.dtype.kind == "u" or (
+                        isinstance(data, array_type) and data.typecode in "BHILQ") else "")
         raise MapFormatError(f"{label}: cell ({x}, {y}) holds {values[y, x].item()!r}: an "
-                             "occupancy is -1 (unknown), 0 (free) to 100 (occupied)")
+                             f"occupancy is -1 (unknown), 0 (free) to 100 (occupied)"
+                             f"{unsigned}")
     out = np.array(values, np.int8, order="C", copy=True)  # the caller's array left as it is
     out.setflags(write=False)
     return out

@@ -352,6 +352,31 @@ def test_a_planner_given_a_costmap_blocks_its_inscribed_cells_through_every_upda
                          seeds=3).map.grid.blocked_np()[8, 0]  # the cost of 40 blocked
 
 
+def test_a_costmap_update_keeps_the_larger_capacity_of_programs_of_one_shape():
+    """The capacity follows a map's longest optimal path but never shrinks through
+    updates whose programs have the same shape: a costmap that opens again keeps the
+    programs its closed version compiled. A map of another shape takes its own."""
+    open_map = np.zeros((20, 20), np.int8)
+    serpentine = open_map.copy()
+    for row in range(2, 19, 4):  # walls that leave a gap at alternate ends
+        serpentine[row, 1:] = 100
+        if row + 2 < 20:
+            serpentine[row + 2, :19] = 100
+    planner = jaxga.Planner(_map_message(open_map), corner_rule="free", seeds=3)
+    small = planner.capacity
+    planner.update_map(_map_message(serpentine))
+    large = planner.capacity
+    assert large > small == jaxga.Planner(_map_message(open_map), corner_rule="free",
+                                          seeds=3).capacity
+    planner.update_map(_map_message(open_map))
+    assert planner.capacity == large and planner.overrides["population__capacity"] == large
+    planner.update_map(_map_message(np.zeros((12, 20), np.int8)))  # another shape
+    assert planner.capacity == jaxga.Planner(_map_message(np.zeros((12, 20), np.int8)),
+                                             corner_rule="free", seeds=3).capacity
+    with pytest.raises(jaxga.ParameterError, match="size_class"):
+        jaxga.Planner(_map_message(open_map), size_class="yes")
+
+
 def test_a_planners_map_capacity_and_overrides_are_read_only_and_old_pickles_load(office):
     """``capacity`` and ``overrides`` follow the map (update_map): a key written into
     them is refused, not silently lost at the next update; a planner pickled when they

@@ -190,6 +190,37 @@ def test_an_occupancy_threshold_on_a_map_without_occupancies_is_refused():
         load_map_info("classic_ga_gapp3_20x20", occupied_from=99)
 
 
+def test_an_endpoint_on_a_graded_cell_is_told_why_and_the_way_out():
+    """A robot in a costmap's inflation: its start is blocked by the rule for graded
+    cells, which the refusal names with occupied_from; loaded with it, it is planned."""
+    import jaxga
+
+    occ = np.zeros((40, 40), np.int8)
+    occ[5, 5], occ[6, 6] = 37, -1
+    options = {"start": (5, 5), "goal": (30, 30)}
+    text = _refused(lambda: jaxga.problem("sga", OccupancyGrid(occ, 0.05),
+                                          map_options=options), EndpointError)
+    assert "graded occupancy" in text and "occupied_from" in text
+    assert jaxga.problem("sga", OccupancyGrid(occ, 0.05), map_options={
+        **options, "occupied_from": 99}).grid.start_xy == (5, 5)
+    unknown = _refused(lambda: jaxga.problem("sga", OccupancyGrid(occ, 0.05), map_options={
+        **options, "start": (6, 6)}), EndpointError)
+    assert "unknown" in unknown and "graded" not in unknown
+
+
+def test_a_message_without_data_bools_and_unsigned_data_are_named():
+    """A message missing its data is told so (not taken for another kind of source); a
+    true among the values is no occupancy of 1; unsigned data is named as such."""
+    message = _as_dict(_message())
+    del message["data"]
+    assert "it has no field data" in _refused(lambda: load_map_info(message))
+    flat = [True] + [0] * 19
+    assert "true or false" in _refused(
+        lambda: OccupancyGrid(flat, 0.05, width=5, height=4))
+    unsigned = np.where(OCCUPANCY < 0, 255, OCCUPANCY).astype(np.uint8)
+    assert "the data is unsigned" in _refused(lambda: OccupancyGrid(unsigned, 0.05))
+
+
 def test_a_float32_resolution_is_the_decimal_the_map_was_saved_with():
     """A message's resolution is float32 (0.05 arrives as 0.0500000007450580597): read as
     the shortest decimal that gives it, so the cells' metres are the file's; a float64
