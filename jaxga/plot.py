@@ -534,7 +534,10 @@ def plot_front(result, grid: Grid | str, seed: int | None = None, axes=None,
     plot_map(grid, [], ax=a_map, layers=None if info is None else info.layers, frame=frame,
              include=[c for p in points for c in p["path"]])
     unit = frame.cell_size if view.metres else 1.0
-    clear = np.array([p["clearance"] for p in points]) * unit
+    clear = np.array([p["clearance"] for p in points], float) * unit
+    unbounded = bool(len(clear)) and bool(np.isinf(clear).all())  # no obstacle on the map
+    if unbounded:
+        clear = np.zeros_like(clear)  # drawn on the axis, and said so in the label
     colours = plt.get_cmap("viridis")(np.linspace(0, 1, max(len(points), 1)))
     order = np.argsort(clear, kind="stable")
     for rank, k in enumerate(order):
@@ -556,7 +559,8 @@ def plot_front(result, grid: Grid | str, seed: int | None = None, axes=None,
         a_front.plot([result.length[seed] * unit], [clear.min()], "r*", ms=11,
                      label="shortest end post-optimised")
     a_front.set_xlabel(f"length ({what})")
-    a_front.set_ylabel(f"least clearance ({what})")
+    a_front.set_ylabel(f"least clearance ({what})" if not unbounded else
+                       "least clearance: unbounded (no obstacle), drawn at 0")
     a_front.legend(fontsize=8)
     a_front.set_title("front: length against clearance", fontsize=9)
     return axes

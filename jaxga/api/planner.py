@@ -80,11 +80,12 @@ class Planner:
             every start and goal: the most cells an optimal path of the map can have,
             times the preset's ``population.capacity_factor``
             (:func:`jaxga.engine.algorithm.map_capacity`), and never less, through
-            :meth:`update_map`, than before on a map whose programs have the same shape
-            (a costmap updated: its programs are compiled again only when a map needs
-            more than every map before); None where the preset or the overrides set
-            ``population.capacity``. A plan equals :func:`jaxga.run` on the same pair
-            with ``population.capacity`` set to it.
+            :meth:`update_map`, than any map planned on before whose programs have the
+            same shape (a costmap updated: its programs are compiled again only when a
+            map needs more than every map of that shape before); None where the preset
+            or the overrides set ``population.capacity``. A plan equals
+            :func:`jaxga.run` on the same pair with ``population.capacity`` set to it
+            (and the planner's ``size_class``).
         overrides: (read-only) the configuration keys each plan runs with: the
             constructor's, and ``population__capacity``. Other keys: a new planner.
     """
@@ -120,12 +121,12 @@ class Planner:
         with the robot's radius (``jaxga.maps.load_map_info(path, robot_radius=...)``).
         The planner then plans as one made on the new map with ``population__capacity``
         set to its :attr:`capacity`, which follows the new map's longest optimal path
-        but never shrinks on a map whose programs have the same shape (the same size,
-        or the same size class): a costmap update compiles nothing unless its map needs
-        more than every map before, and then once. Give ``population__capacity`` to the
-        constructor to keep one capacity, and its programs, through every update. A plan
-        under way in another thread finishes on the map it started with; a map refused
-        leaves the planner as it was."""
+        but is never less than any map's before whose programs have the same shape (the
+        same size, or the same size class): a costmap update compiles nothing unless
+        its map needs more than every map of that shape before, and then once. Give
+        ``population__capacity`` to the constructor to keep one capacity, and its
+        programs, through every update. A plan under way in another thread finishes on
+        the map it started with; a map refused leaves the planner as it was."""
         self._planned_on = self._prepared(map, loaded_refused=False)
 
     @property
@@ -203,11 +204,9 @@ class Planner:
                 "population.capacity", "population__capacity"} & overrides.keys():
             # programs sized for the map's longest optimal path, not its size class's
             capacity = map_capacity(info.grid, float(config["population.capacity_factor"]))
-            before = getattr(self, "_planned_on", None)  # None: the constructor's map
-            size_class = getattr(self, "_size_class", None)
-            if before is not None and before[1] is not None and _program_shape(
-                    before[0].grid, size_class) == _program_shape(info.grid, size_class):
-                capacity = max(capacity, before[1])  # its programs, no compile
+            shape = _program_shape(info.grid, getattr(self, "_size_class", None))
+            largest = self.__dict__.setdefault("_largest", {})  # {} in an older pickle
+            capacity = max(capacity, largest.get(shape, 0))  # its programs: no compile
             most = SCHEMA["population.capacity"].high
             if capacity > most:  # refused here, not at the first plan as an override
                 raise ParameterError(
@@ -216,6 +215,7 @@ class Planner:
                     f"than jaxga's {most:,}: load it coarser (coarsen=2) or give "
                     "population__capacity")
             overrides = {**overrides, "population__capacity": capacity}
+            largest[shape] = capacity  # the most any map of this program shape needed
         if info.frame is not None:
             _ = info.frame.clearance  # the distance transform: once per map, not per plan
         return info, capacity, overrides

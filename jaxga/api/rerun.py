@@ -17,7 +17,7 @@ from jaxga._runtime.device_probe import run_environment
 from jaxga.api.result import Result
 from jaxga.api.runs import run
 from jaxga.config.schema import Config
-from jaxga.core.errors import EnvironmentWarning, ParameterError
+from jaxga.core.errors import EnvironmentWarning, JaxgaError, ParameterError
 from jaxga.core.fields import shown_value
 from jaxga.core.files import shown_name
 from jaxga.core.grid import Grid, check_corner_rule
@@ -86,9 +86,15 @@ def rerun(saved: Mapping[str, Any] | str | os.PathLike, map: Any, *,
     elif isinstance(map, Grid):
         info = map.replace(start=start, goal=goal, corner_rule=rule)
     else:
-        info = load_map_info(map, start=start, goal=goal, corner_rule=rule,
-                             **_loading_options(doc.get("map_source")))
+        options = _loading_options(doc.get("map_source"))
+        k = options.get("coarsen") or 1  # the saved endpoints are planning cells
+        info = load_map_info(map, start=(start[0] * k, start[1] * k),
+                             goal=(goal[0] * k, goal[1] * k), corner_rule=rule, **options)
     grid = info.grid if isinstance(info, MapInfo) else info
+    if (grid.start_xy, grid.goal_xy) != (start, goal):  # never other endpoints in silence
+        raise ParameterError(f"the map given puts the saved endpoints {start} and {goal} "
+                             f"at {grid.start_xy} and {grid.goal_xy}: load it as it was "
+                             f"loaded then ({_loaded_as(doc.get('map_source'))})")
     digest = doc["map_digest"]
     if grid.cells_digest() != digest:
         shown = digest if isinstance(digest, str) and len(digest) <= 128 \
@@ -138,7 +144,10 @@ def _run_settings(doc: Mapping[str, Any]) -> tuple:
     if not isinstance(rule, str):
         raise ParameterError(f"a saved result's corner_rule must be a name, got "
                              f"{shown_value(rule)}")
-    check_corner_rule(rule)
+    try:
+        check_corner_rule(rule)
+    except JaxgaError as e:
+        raise ParameterError(f"a saved result's {e}") from None
     capacity = _integer(doc["population_capacity"], "population_capacity")
     if not isinstance(doc["size_class"], bool):
         raise ParameterError(f"a saved result's size_class must be true or false, got "
@@ -165,11 +174,12 @@ def _loading_options(source: Any) -> dict[str, Any]:
 
 def _loaded_as(source: Any) -> str:
     """How the saved result's map was loaded, for a refusal's hint."""
-    if not isinstance(source, Mapping):
+    options = source.get("options") if isinstance(source, Mapping) else None
+    if not isinstance(options, Mapping):
         return "the same file and loading options: robot radius, inflation, coarsening, " \
                "unknown cells"
-    options = source.get("options") or {}
-    given = ", ".join(f"{k}={shown_value(v)}" for k, v in dict(options).items())
+    given = ", ".join(f"{k if k in LOADING_OPTIONS else shown_value(k)}={shown_value(v)}"
+                      for k, v in options.items())
     return (f"it was {shown_value(source.get('path'))}"
             + (f" with {given}" if given else " with no loading option"))
 
@@ -187,8 +197,12 @@ def _check_frame(saved: Any, frame: Any) -> None:
     if not isinstance(saved, Mapping):
         raise ParameterError(f"a saved result's frame must be an object, got "
                              f"{shown_value(saved)}")
-    now = {} if frame is None else frame.to_json()
-    differ = [k for k in FRAME_KEYS if saved.get(k) != now.get(k)]
+    if frame is None:  # a bare Grid: its cells are the saved ones; no metres, no blocks
+        now = {"coarsen": 1, "resolution": None, "origin": None}
+        differ = [k for k in now if saved.get(k, now[k]) != now[k]]
+    else:
+        now = frame.to_json()
+        differ = [k for k in FRAME_KEYS if saved.get(k) != now.get(k)]
     if differ:
         shown = "; ".join(f"{k} {shown_value(now.get(k))}, saved {shown_value(saved.get(k))}"
                           for k in differ)

@@ -84,7 +84,10 @@ def knee(points: Any) -> int:
             xy[:, j] = np.where(col == -np.inf, low, np.where(col == np.inf, high, col))
     beaten = ((xy[None, :, :] <= xy[:, None, :]).all(-1)
               & (xy[None, :, :] < xy[:, None, :]).any(-1)).any(1)
+    beaten |= np.isnan(xy).any(1)  # a point without a value is never the knee
     ends = np.flatnonzero(~beaten)
+    if not len(ends):
+        return 0
     ends = ends[np.lexsort((ends, xy[ends, 1], xy[ends, 0]))]  # shortest first
     if len(ends) < 3:
         return int(ends[0])

@@ -321,7 +321,8 @@ def _plan_sweep(problem: Problem, points: Sequence[Mapping[str, Any]], seeds: An
     report("references", 0.0)
     with timeline.phase("references"):
         octile = octile_optimum(map_grid, guided=uses_guide(config))
-    source = None if problem.info is None else problem.info.source_json()
+    info = problem.info  # a bare Grid (a Planner's "grid" too) has no source to record
+    source = None if info is None or info.format == "grid" else info.source_json()
     problem = dict(config=config, configs=configs, points=points, map_name=map_name,
                    frame=frame, grid=map_grid, capacity=capacity, octile=octile,
                    map_source=source)

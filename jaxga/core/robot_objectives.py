@@ -39,9 +39,10 @@ class RobotObjectives(NamedTuple):
     """One path's robot objectives (float32 scalars)."""
 
     length: jax.Array
-    """Euclidean length through the cell centres, in metres; the same bits for the same
-    steps in any order (orthogonal and diagonal steps counted), so that a front sees
-    two paths of one length as tied."""
+    """Euclidean length through the cell centres, in metres; on an 8-connected path the
+    same bits for the same steps in any order (orthogonal and diagonal steps counted),
+    so that a front sees two paths of one length as tied (a waypoint path's longer
+    steps are summed in order)."""
     clearance: jax.Array
     """The least clearance of its cells, in metres (module docstring)."""
     intrusion: jax.Array
@@ -52,7 +53,8 @@ class RobotObjectives(NamedTuple):
     clearance alone changes only at one cell."""
     turning: jax.Array
     """The sum of its turn angles, in radians (AGACD eq. 10-17's smoothness); the same
-    bits for the same turns in any order (turns by multiples of 45 degrees counted)."""
+    bits for the same turns in any order where they are multiples of 45 degrees (every
+    turn of an 8-connected path: counted); other angles are summed in order."""
     max_turn: jax.Array
     """Its largest turn, in radians."""
 

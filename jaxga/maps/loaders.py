@@ -111,7 +111,10 @@ class MapLayers(ValueEquality):
         wall = coarsen_blocked(self.wall, factor)
         margin = coarsen_blocked(self.margin, factor) & ~wall
         unknown = coarsen_blocked(self.unknown, factor) & ~wall & ~margin
-        graded = None if self.graded is None else coarsen_blocked(self.graded, factor)
+        # graded where a graded cell and no occupied one is: occupied_from then frees it
+        graded = None if self.graded is None else (
+            coarsen_blocked(self.graded, factor)
+            & ~coarsen_blocked(self.wall & ~self.graded, factor))
         return MapLayers(wall, margin, unknown, self.unknown_blocked, graded)
 
 

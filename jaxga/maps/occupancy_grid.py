@@ -150,17 +150,25 @@ def is_occupancy_message(source: Any) -> bool:
     ``info`` (as an attribute, or as a key of a mapping); a message without its ``data``
     is then refused naming that field, not as a source of another kind."""
     if isinstance(source, Mapping):
-        return "info" in source
-    return not isinstance(source, (str, bytes, os.PathLike, tuple)) \
-        and hasattr(source, "info")  # a tuple: jaxga.problem's Problem has an info too
+        return "info" in source and ("data" in source or _has(source["info"], "width"))
+    if isinstance(source, (str, bytes, os.PathLike, tuple)) or not hasattr(source, "info"):
+        return False  # a tuple: jaxga.problem's Problem has an info too
+    # an image's info dict, a table's info method: no map's metadata
+    return hasattr(source, "data") or _has(source.info, "width")
+
+
+def _has(obj: Any, key: str) -> bool:
+    return key in obj if isinstance(obj, Mapping) else hasattr(obj, key)
 
 
 def _holds_bool(data: Any) -> bool:
-    """Whether a list or tuple of occupancies (nested one level or more) holds a bool."""
+    """Whether a list or tuple of occupancies, flat or of rows (``[height, width]``: what
+    an array of them can be), holds a bool."""
     if not isinstance(data, (list, tuple)):
         return False
-    return any(isinstance(v, (bool, np.bool_)) or (isinstance(v, (list, tuple))
-                                                   and _holds_bool(v)) for v in data)
+    rows = data if data and isinstance(data[0], (list, tuple)) else [data]
+    kinds = {type(v) for row in rows if isinstance(row, (list, tuple)) for v in row}
+    return bool(kinds & {bool, np.bool_})
 
 
 def _checked_name(name: Any, kind: str) -> str:
@@ -199,14 +207,14 @@ def _occupancies(data: Any, width: Any, height: Any, label: str) -> np.ndarray:
             isinstance(data, memoryview) and data.format in ("b", "B", "c")):
         values = np.frombuffer(bytes(data), np.int8)  # the message's int8, as sent
     else:
-        if _holds_bool(data):  # np.asarray would make True an occupancy of 1
-            raise MapFormatError(f"{label}: occupancies must be integers from -1 to 100, "
-                                 "got a sequence holding true or false")
         try:
             values = np.asarray(data)
-        except (ValueError, TypeError) as e:  # ragged nested lists
+        except (ValueError, TypeError, RecursionError) as e:  # ragged nested lists
             raise MapFormatError(f"{label}: the data is not an array of occupancies "
                                  f"({str(e).splitlines()[0]})") from None
+        if values.dtype.kind in "iuf" and _holds_bool(data):  # True read as occupancy 1
+            raise MapFormatError(f"{label}: occupancies must be integers from -1 to 100, "
+                                 "got a sequence holding true or false")
     if values.dtype.kind not in "iuf":  # not bool, complex, times, text or objects
         raise MapFormatError(f"{label}: occupancies must be integers from -1 to 100, got "
                              f"an array of {values.dtype}")

@@ -93,6 +93,7 @@ def _edited(doc: dict, path: tuple, value) -> dict:
     (("population_capacity",), None, "population_capacity must be an integer"),
     (("corner_rule",), None, "corner_rule must be a name"),
     (("corner_rule",), "x" * 100_000, "unknown corner rule"),
+    (("corner_rule",), "foo", "a saved result's unknown corner rule 'foo'"),
     (("config",), "sga", "config must be an object"),
     (("start",), [1.0, 2], "start must be an integer"),
     (("environment",), "x", "environment must be an object"),
@@ -104,7 +105,7 @@ def test_a_value_edited_by_hand_is_refused_not_read_as_another_run(saved, path, 
     """A saved value of another type than a run writes is refused in one short line
     naming it, before anything runs: 7.9 is not seed 7, "false" no true size class."""
     doc = _edited(json.loads(saved[1].read_text()), path, value)
-    with pytest.raises(jaxga.JaxgaError) as e:
+    with pytest.raises(jaxga.ParameterError) as e:
         jaxga.rerun(doc, canonical.MAP)
     text = str(e.value)
     assert words in text and "\n" not in text and len(text) < 400
@@ -159,3 +160,32 @@ def test_a_robot_map_runs_again_from_its_file_with_the_options_it_was_loaded_wit
     with pytest.raises(jaxga.ParameterError, match="robot_radius=0.1") as e:
         jaxga.rerun(doc, load_map_info(office), any_angle_budget=0)
     assert "\n" not in str(e.value)
+
+
+def test_a_bare_grid_and_a_coarsened_file_run_the_saved_endpoints(saved, monkeypatch):
+    """A Grid of the saved cells runs again (it has no frame, and the saved one has no
+    metres); a coarsened map's saved endpoints are planning cells, loaded as such (not
+    divided by the factor again), and other endpoints are never run in silence."""
+    import jaxga.api.rerun as rerun_module
+
+    r, path = saved
+    _same_runs(jaxga.rerun(path, jaxga.maps.load_map(canonical.MAP), any_angle_budget=0), r)
+    coarse = load_map_info("room-32-32-4", coarsen=2, start=(6, 0), goal=(31, 25))
+    doc = _edited(json.loads(path.read_text()), ("map_source",),
+                  {"path": "room-32-32-4", "format": "movingai", "builtin": True,
+                   "options": {"coarsen": 2}})
+    doc.update(start=list(coarse.grid.start_xy), goal=list(coarse.grid.goal_xy),
+               map_digest=coarse.grid.cells_digest(), frame=coarse.frame.to_json())
+    ran = []
+    monkeypatch.setattr(rerun_module, "run", lambda config, info, *a, **k: ran.append(info))
+    jaxga.rerun(doc, "room-32-32-4")
+    assert (ran[0].grid.start_xy, ran[0].grid.goal_xy) == ((3, 0), (15, 12))
+    doc["map_source"]["options"] = {}  # the same file, not coarsened: other cells
+    with pytest.raises(jaxga.ParameterError, match="with no loading option"):
+        jaxga.rerun(doc, "room-32-32-4")
+    doc["map_source"]["options"] = [1, 2]  # a hand edit, refused in one line
+    with pytest.raises(jaxga.ParameterError, match="map_source.options must be"):
+        jaxga.rerun(doc, "room-32-32-4")
+    with pytest.raises(jaxga.ParameterError, match="other cells") as e:
+        jaxga.rerun(doc, load_map_info("room-32-32-4"))  # a MapInfo: the options unread
+    assert "loading options" in str(e.value) and "\n" not in str(e.value)

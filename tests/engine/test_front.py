@@ -277,6 +277,7 @@ def test_the_knee_is_the_point_farthest_beyond_the_line_towards_the_ideal():
     assert knee([(2, -1), (1, 0)]) == 1  # two points: the shortest
     assert knee([(1, 0), (1.1, -0.9), (3, -1)]) == 1
     assert knee([(3, -np.inf), (1, -np.inf), (2, -np.inf)]) == 1
+    assert knee([(1, -1), (2, -4), (3, -5), (2.5, np.nan)]) == 1  # no value: never it
 
 
 def test_a_front_measures_clearance_from_the_map_s_own_obstacles():

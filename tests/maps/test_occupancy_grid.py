@@ -206,6 +206,10 @@ def test_an_endpoint_on_a_graded_cell_is_told_why_and_the_way_out():
     unknown = _refused(lambda: jaxga.problem("sga", OccupancyGrid(occ, 0.05), map_options={
         **options, "start": (6, 6)}), EndpointError)
     assert "unknown" in unknown and "graded" not in unknown
+    occ[4, 5] = 100  # coarsened with an occupied cell: no threshold frees its block
+    lethal = _refused(lambda: jaxga.problem("sga", OccupancyGrid(occ, 0.05), map_options={
+        "start": (4, 4), "goal": (30, 30), "coarsen": 2}), EndpointError)
+    assert "graded" not in lethal and "occupied_from" not in lethal
 
 
 def test_a_message_without_data_bools_and_unsigned_data_are_named():
@@ -219,6 +223,14 @@ def test_a_message_without_data_bools_and_unsigned_data_are_named():
         lambda: OccupancyGrid(flat, 0.05, width=5, height=4))
     unsigned = np.where(OCCUPANCY < 0, 255, OCCUPANCY).astype(np.uint8)
     assert "the data is unsigned" in _refused(lambda: OccupancyGrid(unsigned, 0.05))
+    rows = [[0] * 5 for _ in range(3)] + [[0, False, 0, 0, 0]]
+    assert "true or false" in _refused(lambda: OccupancyGrid(rows, 0.05))
+    deep: list = [0]
+    for _ in range(5000):
+        deep = [deep]
+    assert "not an array of occupancies" in _refused(lambda: OccupancyGrid(deep, 0.05))
+    picture = types.SimpleNamespace(info={"dpi": (72, 72)}, size=(4, 4))  # PIL's .info
+    assert "a map source must be" in _refused(lambda: load_map_info(picture))
 
 
 def test_a_float32_resolution_is_the_decimal_the_map_was_saved_with():
