@@ -7,7 +7,6 @@ run, whatever runs beside it)."""
 from __future__ import annotations
 
 import dataclasses
-import json
 import os
 import warnings
 from collections.abc import Callable, Mapping
@@ -22,7 +21,7 @@ from jaxga.core.fields import shown_value
 from jaxga.core.files import shown_name
 from jaxga.core.grid import Grid, check_corner_rule
 from jaxga.maps import MapInfo, load_map_info
-from jaxga.maps.inputs import read_input
+from jaxga.maps.inputs import json_value, read_input
 from jaxga.maps.loaders import LOADING_OPTIONS
 
 __all__ = ["rerun"]
@@ -227,17 +226,6 @@ def _warn_environment(saved: Any) -> None:
                       stacklevel=3)
 
 
-def _refuse_twice(pairs: list[tuple[str, Any]]) -> dict[str, Any]:
-    """A JSON object's pairs as a dict, refusing a key given twice (JSON would keep the
-    last silently)."""
-    out: dict[str, Any] = {}
-    for k, v in pairs:
-        if k in out:
-            raise ValueError(f"the key {shown_value(k)} is given twice in one object")
-        out[k] = v
-    return out
-
-
 def _saved(saved: Any) -> Mapping[str, Any]:
     """The saved result's JSON object, read from a file (or from its text) when given
     one."""
@@ -259,8 +247,8 @@ def _saved(saved: Any) -> Mapping[str, Any]:
         except OSError as e:
             raise ParameterError(f"{label}: cannot be read ({e.strerror or e})") from None
     try:
-        doc = json.loads(text, object_pairs_hook=_refuse_twice)
-    except (ValueError, RecursionError) as e:  # JSON or UTF-8 errors, a key twice, nesting
+        doc = json_value(text)
+    except ValueError as e:  # JSON or UTF-8 errors, a key twice, nesting
         what = "not JSON" if isinstance(saved, str) and label.endswith("text") \
             else "not a JSON file"
         raise ParameterError(f"{label}: {what} ({str(e).splitlines()[0][:200]})") from None

@@ -602,8 +602,7 @@ def _fronts(front: Front | None, algo: Algorithm, maximin: float) -> Fronts | No
     reference = np.asarray(front.reference, float).copy()
     for j, n in enumerate(names):
         if n == "clearance":
-            objectives[..., j] = -objectives[..., j] if math.isfinite(maximin) or \
-                math.isnan(maximin) else math.inf
+            objectives[..., j] = math.inf if maximin == math.inf else -objectives[..., j]
             reference[..., j] *= -1
     return Fronts(names=names, mask=np.asarray(front.mask), cells=np.asarray(front.cells),
                   n_cells=np.asarray(front.n_cells), objectives=objectives,

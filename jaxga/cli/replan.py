@@ -3,7 +3,6 @@
 from __future__ import annotations
 
 import argparse
-import json
 import math
 import sys
 from typing import Any
@@ -35,7 +34,7 @@ from jaxga.core.errors import JaxgaError, ParameterError
 from jaxga.core.fields import shown_value
 from jaxga.core.grid import CORNER_RULES, as_integer, check_corner_rule
 from jaxga.maps.frame import cells_crossed
-from jaxga.maps.inputs import PATH_JSON_CAP, read_input
+from jaxga.maps.inputs import PATH_JSON_CAP, json_value, read_input
 from jaxga.maps.preprocess import block_middle_cells
 from jaxga.plot import (
     plot_replan,
@@ -79,11 +78,9 @@ def read_path_json(path: str, run_index: int | None, raw: bool = False,
         raise ParameterError(f"{path}: cannot read the path JSON file "
                              f"({e.strerror or e})") from None
     try:
-        data = json.loads(text.decode("utf-8"))
-    except ValueError as e:  # UnicodeDecodeError and JSONDecodeError
+        data = json_value(text.decode("utf-8"))
+    except ValueError as e:  # UnicodeDecodeError, JSONDecodeError, a key twice, nesting
         raise ParameterError(f"{path}: not valid JSON ({e})") from None
-    except RecursionError:
-        raise ParameterError(f"{path}: not a path JSON file (nested too deeply)") from None
     expected = (f"{path}: expected a list of [x, y] cells, an object with a \"path\" list, "
                 "or the JSON of `jaxga run`")
     which = "raw_path" if raw else "path"

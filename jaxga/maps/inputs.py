@@ -25,6 +25,7 @@ from __future__ import annotations
 import contextlib
 import errno
 import io
+import json
 import os
 import re
 import stat
@@ -36,6 +37,7 @@ from typing import Any
 import numpy as np
 
 from jaxga.core.errors import JaxgaError, MapFormatError
+from jaxga.core.fields import shown_value
 from jaxga.core.files import impossible_name, shown_name
 from jaxga.core.grid import MAX_MAP_CELLS
 
@@ -49,6 +51,7 @@ __all__ = [
     "check_image_data",
     "decode_image",
     "image_size",
+    "json_value",
     "lines_of",
     "map_file_cap",
     "map_file_cap_note",
@@ -106,6 +109,26 @@ def map_file_cap_note(coarsen: int = 1) -> str:
     return (f"{MAP_BYTES_PER_CELL} bytes a cell of the largest map jaxga plans on, "
             f"{MAX_MAP_CELLS:,} cells" + (f", coarsened {k} x {k}" if k > 1 else "")
             + ", and 1 MiB" + ("; --coarsen K reads K x K times more" if k == 1 else ""))
+
+
+def json_value(text: bytes | str) -> Any:
+    """The value of a JSON input (a saved result, a path file), read as ``json`` reads
+    it except that an object holding a key twice is refused (``json`` keeps the last
+    value in silence): :class:`ValueError` for that, for text that is not UTF-8 JSON and
+    for nesting deeper than Python parses ("nested too deeply"), for the caller to name
+    its file."""
+    def once(pairs: list[tuple[str, Any]]) -> dict[str, Any]:
+        out: dict[str, Any] = {}
+        for k, v in pairs:
+            if k in out:
+                raise ValueError(f"the key {shown_value(k)} is given twice in one object")
+            out[k] = v
+        return out
+
+    try:
+        return json.loads(text, object_pairs_hook=once)
+    except RecursionError:
+        raise ValueError("nested too deeply") from None
 
 
 def read_input(path: str | os.PathLike, cap: int, *, what: str = "file",
