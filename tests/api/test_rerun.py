@@ -143,6 +143,7 @@ def test_another_environment_is_named_in_a_warning(saved):
     assert "numpy" not in said[0]
 
 
+@pytest.mark.slow  # sga's programs for the office ROS map's own capacity
 def test_a_robot_map_runs_again_from_its_file_with_the_options_it_was_loaded_with(tmp_path):
     """The JSON records how the map was loaded (map_source): the file alone runs again
     with its robot radius and unknown cells; a map loaded otherwise is refused, the
